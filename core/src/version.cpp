@@ -1,0 +1,5 @@
+#include "stend/version.hpp"
+
+namespace stend {
+const char* version() { return STEND_VERSION; }
+}  // namespace stend
