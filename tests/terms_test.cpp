@@ -71,7 +71,7 @@ TEST(Terms, CorrectInvertsMeasure) {
   for (int i = 0; i < theta.size(); ++i) theta[i] = n(rng);
   for (int trial = 0; trial < 20; ++trial) {
     Stimulus<double> s = random_stimulus(rng);
-    s.specific_force = s.input;
+    s.specific_force = s.input;  // accelerometer: the input is the specific force
     Eigen::Vector3d y = m.measure<double>(theta.data(), s);
     Eigen::Vector3d u = m.correct(theta.data(), y, s);
     EXPECT_LT((u - s.input).norm(), 1e-9);

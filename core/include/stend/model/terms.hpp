@@ -13,6 +13,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/LU>
 #include <array>
 #include <cmath>
 #include <optional>
@@ -261,17 +262,32 @@ struct ErrorModel {
   }
 
   // Inverse (calibration): the input u that makes measure(θ, u) = y, with the rest of the
-  // stimulus as given. Fixed-point iteration; converges when the model's input Jacobian is
-  // near identity (|errors| ≪ 1), which any physical sensor satisfies.
+  // stimulus as given. Newton's method on the input with a central-difference Jacobian; for an
+  // accelerometer the specific force follows the input.
   Vec3<double> correct(const double* theta, const Vec3<double>& y, Stimulus<double> s,
                        int max_iterations = 20) const {
-    s.input = y;
+    const bool accel = instrument == Instrument::kAccelerometer;
+    auto eval = [&](const Vec3<double>& u) {
+      Stimulus<double> t = s;
+      t.input = u;
+      if (accel) t.specific_force = u;
+      return measure<double>(theta, t);
+    };
+    Vec3<double> u = y;
     for (int it = 0; it < max_iterations; ++it) {
-      const Vec3<double> r = measure<double>(theta, s) - y;
-      s.input -= r;
-      if (r.norm() <= 1e-12 * (1.0 + y.norm())) break;
+      const Vec3<double> r = eval(u) - y;
+      if (r.norm() <= 1e-13 * (1.0 + y.norm())) break;
+      Eigen::Matrix3d J;
+      for (int j = 0; j < 3; ++j) {
+        const double h = 1e-6 * (1.0 + std::abs(u[j]));
+        Vec3<double> up = u, um = u;
+        up[j] += h;
+        um[j] -= h;
+        J.col(j) = (eval(up) - eval(um)) / (2.0 * h);
+      }
+      u -= J.partialPivLu().solve(r);
     }
-    return s.input;
+    return u;
   }
 };
 
