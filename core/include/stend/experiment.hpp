@@ -1,0 +1,149 @@
+// The experiment model: what a researcher writes in experiment YAML, parsed and validated.
+// Everything the runner needs is resolved here (defaults filled, units converted where the key
+// names a non-SI unit, repeats and sweeps expanded), and every element remembers where in the
+// file it came from so later checks (against the limits plugins declare) can point at it.
+#pragma once
+
+#include <stend/sdk.hpp>
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+#include <yaml-cpp/yaml.h>
+
+namespace stend {
+
+struct SourceLocation {
+  std::string file;
+  int line = 0;    // 1-based; 0 = unknown
+  int column = 0;  // 1-based
+  std::string str() const;  // "file:line:column"
+};
+
+// Every experiment problem is one of these. what() reads
+//   "FILE:LINE:COL: error: MESSAGE"   (plus "\n  hint: …" when there is a hint)
+class ExperimentError : public std::runtime_error {
+ public:
+  ExperimentError(SourceLocation where, std::string key, std::string message, std::string hint = {});
+  const SourceLocation& where() const { return where_; }
+  const std::string& key() const { return key_; }  // dotted path, e.g. "procedure[2].dwell_s"
+  const std::string& message() const { return message_; }
+  const std::string& hint() const { return hint_; }
+
+ private:
+  SourceLocation where_;
+  std::string key_, message_, hint_;
+};
+
+// Something the plugin host knows about a plugin, enough to validate its configuration.
+class PluginCatalogue {
+ public:
+  virtual ~PluginCatalogue() = default;
+  // nullptr when no plugin of that name was loaded.
+  virtual const stend_plugin_info* find(const std::string& name) const = 0;
+  virtual std::vector<std::string> names() const = 0;  // for "did you mean"
+};
+
+// Validates a plugin `config:` mapping against the plugin's schema and fills defaults.
+// `node` may be null/undefined (all defaults). Errors name file:line:column of the offending key
+// or value, what was expected (type, unit, range, choices) and suggest the closest known key.
+Params params_from_yaml(const YAML::Node& node, const stend_plugin_info& plugin,
+                        const std::string& file, const std::string& key_path);
+
+struct PluginInstance {
+  std::string plugin;  // plugin name
+  Params params;       // validated config
+  SourceLocation where;
+};
+
+struct FixtureDecl : PluginInstance {
+  std::string id;  // unique within the bench, referenced by procedure steps
+  std::string on;  // id of the fixture it stands on; "" = the bench base
+};
+
+struct GravitySpec {
+  std::optional<double> value_mps2;  // explicit local g, if given
+  double latitude_deg = 0.0;
+  double height_m = 0.0;
+  double resolved_mps2 = 0.0;  // value_mps2 or normal gravity at latitude/height
+};
+
+struct AxisTarget {
+  std::string axis;  // fixture axis name
+  double value = 0;  // axis unit (deg for tables)
+};
+
+struct Orientation {
+  std::vector<AxisTarget> targets;
+  SourceLocation where;
+};
+
+struct Step {
+  enum class Kind { kSetTemperature, kOrientations, kRates, kRecord, kWait, kSetVibration };
+  Kind kind = Kind::kRecord;
+  SourceLocation where;
+  std::string label;     // optional `label:`; default the kind name
+  int repeat_index = 0;  // which pass of an enclosing `repeat` (0 when none)
+  std::string fixture;   // fixture id the step commands ("" for record/wait)
+
+  // set_temperature
+  double setpoint_c = 25.0, tolerance_c = 0.5, hold_s = 60.0, timeout_s = 3600.0;
+  bool record_settling = true;  // record sensor samples while settling
+  // orientations (expanded from list / grid / sweep)
+  std::vector<Orientation> orientations;
+  // rates: one axis of a table turning at each rate in turn
+  std::string axis;
+  std::vector<double> rates;  // axis unit per second (deg/s)
+  // orientations, rates, record, wait
+  double dwell_s = 0.0;   // settle time after the fixture reports settled, not recorded as data
+  double record_s = 0.0;  // recording time per orientation / rate / record step
+  // set_vibration
+  double amplitude_g = 0.0, frequency_hz = 0.0;
+  Eigen::Vector3d vibration_axis = Eigen::Vector3d::UnitZ();  // in the shaker's top frame
+};
+
+struct Outputs {
+  std::string directory = "runs";  // run folders are created inside, relative to the CWD
+  bool report = true;
+};
+
+struct Experiment {
+  std::string file;         // path as given
+  std::string name;         // [A-Za-z0-9_.-]+
+  std::string description;
+  std::uint64_t seed = 1;   // seeds every simulated noise source
+  std::string clock = "auto";  // "auto" | "simulated" | "wall"
+  std::vector<std::string> plugin_paths;  // resolved relative to the experiment file
+
+  GravitySpec gravity;
+  double base_heading_deg = 0.0;  // azimuth of the bench base x axis from east, for Earth rate
+  PluginInstance sensor;
+  std::vector<FixtureDecl> fixtures;  // in stacking order: each stands on an earlier one or base
+  Eigen::Matrix3d R_sensor_from_mount = Eigen::Matrix3d::Identity();  // mounting rotation
+
+  std::vector<Step> procedure;  // repeats expanded
+
+  YAML::Node processing;  // consumed by processing / estimators (validated there)
+  YAML::Node estimation;
+  Outputs outputs;
+
+  std::string resolved_yaml;  // the whole experiment, defaults filled in, as YAML text
+};
+
+// Stage 1: read the file, check structure, types, units and plugin configs (against the
+// catalogue's schemas). Throws ExperimentError for the first problem found.
+Experiment load_experiment(const std::string& path, const PluginCatalogue& catalogue);
+// Same from text (`file` is the name used in messages).
+Experiment parse_experiment(const std::string& yaml_text, const std::string& file,
+                            const PluginCatalogue& catalogue);
+
+// Stage 2: with the plugin objects created, check the procedure against the limits the fixtures
+// declare (axis names exist, targets within range, rates within max_rate, setpoints within the
+// chamber's range, step fixture ids exist and have the right role). `fixtures[i]` belongs to
+// exp.fixtures[i].
+void validate_against_bench(const Experiment& exp, const std::vector<const Fixture*>& fixtures);
+
+}  // namespace stend

@@ -1,0 +1,71 @@
+// The plugin host: finds plugin shared libraries on the search path, checks their ABI, and
+// creates sensors, fixtures and estimators from them.
+#pragma once
+
+#include <stend/experiment.hpp>
+#include <stend/sdk.hpp>
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace stend {
+
+template <class T>
+using PluginPtr = std::unique_ptr<T, std::function<void(T*)>>;
+
+struct SearchDir {
+  std::string path;
+  std::string origin;  // "experiment", "STEND_PLUGIN_PATH", "build tree", "install prefix"
+};
+
+// One file the host looked at.
+struct PluginRecord {
+  std::string file;
+  std::string origin;                        // SearchDir::origin it was found through
+  const stend_plugin_info* info = nullptr;   // null when refused
+  std::string refusal;                       // why it was refused (empty when loaded)
+  std::string shadowed_by;                   // set when an earlier file had the same name
+};
+
+class PluginHost : public PluginCatalogue {
+ public:
+  // Search order: `extra` (e.g. the experiment's plugin_paths), then STEND_PLUGIN_PATH (':'-
+  // separated), then the build tree's plugin dir, then the install prefix's. The first plugin of a
+  // name wins; later ones are listed as shadowed.
+  static std::vector<SearchDir> default_search_path(const std::vector<std::string>& extra = {});
+
+  PluginHost() = default;
+  ~PluginHost() override;
+  PluginHost(const PluginHost&) = delete;
+  PluginHost& operator=(const PluginHost&) = delete;
+
+  // Loads every `stend_*.so` found in `dirs` (non-recursive). Never throws for a bad file: it is
+  // recorded as refused with the reason (no entry point, ABI version or struct size mismatch,
+  // unresolved symbol / dlopen error, bad info fields, duplicate name).
+  void scan(const std::vector<SearchDir>& dirs);
+  // Loads one file explicitly (also used by tests). Returns its record.
+  const PluginRecord& load(const std::string& file, const std::string& origin);
+
+  const std::vector<PluginRecord>& records() const { return records_; }
+  const stend_plugin_info* find(const std::string& name) const override;
+  std::vector<std::string> names() const override;
+  const PluginRecord* record_of(const std::string& name) const;
+
+  // Create an object; throws std::runtime_error naming the plugin and its reason on failure,
+  // or when the plugin is of another kind.
+  PluginPtr<Sensor> create_sensor(const std::string& name, const Params& params) const;
+  PluginPtr<Fixture> create_fixture(const std::string& name, const Params& params) const;
+  PluginPtr<Estimator> create_estimator(const std::string& name, const Params& params) const;
+
+  // Human-readable table for `stend plugins`.
+  std::string describe() const;
+
+ private:
+  void* create(const std::string& name, stend_plugin_kind kind, const Params& params) const;
+  std::vector<PluginRecord> records_;
+  std::vector<void*> handles_;  // dlopen handles, closed in the destructor
+};
+
+}  // namespace stend

@@ -1,0 +1,126 @@
+// The recording: the only contract between acquisition and analysis.
+//
+// A run folder, readable without Stend (CSV + JSON; layout in docs/recording-format.md):
+//   run.json        header: format version, experiment name, stend version, plugins, sensor
+//                   identity and info, gravity, mounting, seed, clock, truth columns, start time;
+//                   rewritten at finish() with status "complete" | "interrupted" | "failed"
+//                   (a run killed mid-way keeps "running", which readers report as incomplete)
+//   experiment.yaml the resolved experiment
+//   imu.csv         one row per sample: t_s, ax_counts, ay_counts, az_counts, gx_counts, gy_counts,
+//                   gz_counts, temp_counts, ax_mps2, ay_mps2, az_mps2, gx_radps, gy_radps, gz_radps,
+//                   temp_c, flags
+//   truth.csv       bench truth snapshots: t_s, then header.truth_columns
+//   segments.csv    one row per closed segment (see Segment)
+//   events.csv      t_s, level, source, message — faults, retries, gaps, operator notes
+// Written incrementally through write(2): a SIGKILL loses at most the last ~1 s (run time or wall
+// time, whichever comes first), and a reader accepts a truncated last line.
+#pragma once
+
+#include <stend/sdk.hpp>
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace stend {
+
+inline constexpr int kRecordingFormatVersion = 1;
+
+struct PluginUse {
+  std::string role;  // "sensor" or the fixture id
+  std::string name, version, file;
+};
+
+struct RecordingHeader {
+  std::string experiment_name;
+  std::string experiment_file;
+  std::string stend_version;
+  std::vector<PluginUse> plugins;
+  SensorIdentity identity;
+  SensorInfo info;
+  double gravity_mps2 = 0.0;
+  double latitude_deg = 0.0;
+  double height_m = 0.0;
+  std::vector<double> mounting_R;  // 9 values, row-major R_sensor_from_mount
+  std::uint64_t seed = 0;
+  std::string clock;  // "simulated" | "wall"
+  std::vector<std::string> truth_columns;  // e.g. "table.angle.cmd_deg", "air_c", "f_x_mps2"
+  std::string start_time_utc;  // ISO 8601; filled by the writer when empty
+  std::string status = "running";
+};
+
+struct Segment {
+  int id = 0;
+  int step = 0;            // index into the procedure
+  std::string kind;        // "set_temperature", "orientation", "rate", "record", "wait", …
+  std::string label;
+  int repeat = 0;
+  int orientation = -1;    // index within the step (orientation k), −1 when not applicable
+  int orientation_count = 0;
+  double t_start_s = 0.0;  // recorded data interval
+  double t_end_s = 0.0;
+  bool settled = true;     // fixture/chamber were settled for the whole interval
+  bool complete = true;    // false when the run stopped inside the segment
+  std::string targets;     // "table.angle=10 deg; chamber.temperature=25 degC"
+  double setpoint_c = NAN; // chamber setpoint during the segment, NaN when none
+  double rate = NAN;       // commanded rate (axis unit/s), NaN when none
+};
+
+struct Event {
+  double t_s = 0.0;
+  std::string level;   // "info" | "warning" | "error"
+  std::string source;  // "sensor", a fixture id, "runner"
+  std::string message;
+};
+
+class RecordingWriter {
+ public:
+  // Creates `run_dir` (must not exist), writes run.json and experiment.yaml, opens the streams.
+  RecordingWriter(const std::filesystem::path& run_dir, RecordingHeader header,
+                  const std::string& resolved_experiment_yaml);
+  ~RecordingWriter();  // flushes; does not change the status
+  RecordingWriter(const RecordingWriter&) = delete;
+  RecordingWriter& operator=(const RecordingWriter&) = delete;
+
+  void add_samples(const ImuSample* samples, std::size_t count);
+  void add_truth(double t_s, const std::vector<double>& values);  // size = truth_columns
+  void add_segment(const Segment& s);
+  void add_event(const Event& e);  // written (and flushed) at once
+  // Call often with the run time; flushes to the OS when ≥ 1 s of run time or of wall time has
+  // passed since the last flush.
+  void tick(double run_time_s);
+  void flush();
+  // Final status and counts into run.json.
+  void finish(const std::string& status, const std::string& message = {});
+  const std::filesystem::path& dir() const { return dir_; }
+  std::uint64_t sample_count() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::filesystem::path dir_;
+};
+
+// Column-wise in-memory view of a recording, for analysis.
+struct Recording {
+  std::filesystem::path dir;
+  RecordingHeader header;
+  std::string status;        // from run.json; "running" means the writer never finished
+  bool complete() const { return status == "complete"; }
+  std::string experiment_yaml;
+  std::vector<ImuSample> samples;
+  std::vector<double> truth_t;
+  std::vector<std::vector<double>> truth;  // rows, each truth_columns.size()
+  std::vector<Segment> segments;
+  std::vector<Event> events;
+  std::size_t dropped_partial_lines = 0;  // truncated trailing lines ignored by the reader
+
+  // Throws std::runtime_error naming the file and line when something is unreadable.
+  static Recording open(const std::filesystem::path& run_dir);
+  // Column index of a truth column, −1 when absent.
+  int truth_column(const std::string& name) const;
+};
+
+}  // namespace stend
