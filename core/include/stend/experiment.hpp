@@ -101,8 +101,7 @@ struct Step {
   double dwell_s = 0.0;   // settle time after the fixture reports settled, not recorded as data
   double record_s = 0.0;  // recording time per orientation / rate / record step
   // set_vibration
-  double amplitude_g = 0.0, frequency_hz = 0.0;
-  Eigen::Vector3d vibration_axis = Eigen::Vector3d::UnitZ();  // in the shaker's top frame
+  double amplitude_g = 0.0, frequency_hz = 0.0;  // direction is the shaker's own config
 };
 
 struct Outputs {
@@ -122,6 +121,7 @@ struct Experiment {
   double base_heading_deg = 0.0;  // azimuth of the bench base x axis from east, for Earth rate
   PluginInstance sensor;
   std::vector<FixtureDecl> fixtures;  // in stacking order: each stands on an earlier one or base
+  std::string mounted_on;  // fixture id carrying the sensor; default the last fixture declared
   Eigen::Matrix3d R_sensor_from_mount = Eigen::Matrix3d::Identity();  // mounting rotation
 
   std::vector<Step> procedure;  // repeats expanded

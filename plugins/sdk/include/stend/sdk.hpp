@@ -19,6 +19,7 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -193,6 +194,9 @@ class Fixture {
   virtual Pose pose(double /*t_s*/) const { return {}; }
   // Chambers: air temperature and the temperature of the module they hold (degC).
   virtual bool thermal(double /*t_s*/, double& /*air_c*/, double& /*die_c*/) const { return false; }
+  // Extra measured quantities recorded as bench truth, e.g. {"heater_pwm", 120}. The names (with
+  // their unit in the name) must be the same on every call; values are the latest.
+  virtual void telemetry(std::vector<std::pair<std::string, double>>& /*out*/) const {}
   // Bring the fixture to rest / heater and cooler off. Must not throw.
   virtual void safe_state() noexcept = 0;
 };
