@@ -99,7 +99,7 @@ struct Step {
   std::vector<double> rates;  // axis unit per second (deg/s)
   // orientations, rates, record, wait
   double dwell_s = 0.0;   // settle time after the fixture reports settled, not recorded as data
-  double record_s = 0.0;  // recording time per orientation / rate / record step
+  double record_s = 0.0;  // recording time per orientation / rate; the duration_s of record and wait
   // set_vibration
   double amplitude_g = 0.0, frequency_hz = 0.0;  // direction is the shaker's own config
 };

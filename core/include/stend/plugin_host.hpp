@@ -17,7 +17,8 @@ using PluginPtr = std::unique_ptr<T, std::function<void(T*)>>;
 
 struct SearchDir {
   std::string path;
-  std::string origin;  // "experiment", "STEND_PLUGIN_PATH", "build tree", "install prefix"
+  std::string origin;  // "experiment", "STEND_PLUGIN_PATH", "build tree", "install prefix",
+                       // "next to the program"
 };
 
 // One file the host looked at.
@@ -32,7 +33,9 @@ struct PluginRecord {
 class PluginHost : public PluginCatalogue {
  public:
   // Search order: `extra` (e.g. the experiment's plugin_paths), then STEND_PLUGIN_PATH (':'-
-  // separated), then the build tree's plugin dir, then the install prefix's. The first plugin of a
+  // separated), then the build tree's plugin dir, then the install prefix's, then
+  // `../lib/stend/plugins` next to the running program (relocated installs). The last three are
+  // listed only when they exist; a directory reached twice is listed once. The first plugin of a
   // name wins; later ones are listed as shadowed.
   static std::vector<SearchDir> default_search_path(const std::vector<std::string>& extra = {});
 
@@ -52,6 +55,8 @@ class PluginHost : public PluginCatalogue {
   const stend_plugin_info* find(const std::string& name) const override;
   std::vector<std::string> names() const override;
   const PluginRecord* record_of(const std::string& name) const;
+  // Every directory scan() was given, in order (for `stend plugins`).
+  const std::vector<SearchDir>& search_path() const { return searched_; }
 
   // Create an object; throws std::runtime_error naming the plugin and its reason on failure,
   // or when the plugin is of another kind.
@@ -65,6 +70,7 @@ class PluginHost : public PluginCatalogue {
  private:
   void* create(const std::string& name, stend_plugin_kind kind, const Params& params) const;
   std::vector<PluginRecord> records_;
+  std::vector<SearchDir> searched_;
   std::vector<void*> handles_;  // dlopen handles, closed in the destructor
 };
 

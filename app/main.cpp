@@ -1,0 +1,178 @@
+// stend — drive a characterization bench from an experiment file and analyse its recordings.
+#include "stend/experiment.hpp"
+#include "stend/plugin_host.hpp"
+#include "stend/recording.hpp"
+#include "stend/runner.hpp"
+#include "stend/version.hpp"
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <iostream>
+#include <unistd.h>
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+extern "C" void on_sigint(int) {
+  if (g_stop.load()) {  // second Ctrl-C: stop now
+    std::signal(SIGINT, SIG_DFL);
+    std::raise(SIGINT);
+  }
+  g_stop.store(true);
+}
+
+std::string fmt_duration(double s) {
+  if (!std::isfinite(s)) return "?";
+  const long t = static_cast<long>(s + 0.5);
+  if (t >= 3600) return fmt::format("{}h{:02}m{:02}s", t / 3600, (t / 60) % 60, t % 60);
+  if (t >= 60) return fmt::format("{}m{:02}s", t / 60, t % 60);
+  return fmt::format("{}s", t);
+}
+
+// Loads plugins from the default search path plus the experiment's own plugin_paths (read
+// before full validation so that the experiment's plugins are known while validating it).
+void scan_plugins(stend::PluginHost& host, const std::vector<std::string>& extra) {
+  host.scan(stend::PluginHost::default_search_path(extra));
+}
+
+std::vector<std::string> experiment_plugin_paths(const std::string& file) {
+  std::vector<std::string> out;
+  try {
+    YAML::Node root = YAML::LoadFile(file);
+    if (root["experiment"] && root["experiment"]["plugin_paths"]) {
+      const auto base = std::filesystem::path(file).parent_path();
+      for (const auto& p : root["experiment"]["plugin_paths"]) out.push_back((base / p.as<std::string>()).string());
+    }
+  } catch (const std::exception&) {
+    // Malformed files are reported by the full validation with their location.
+  }
+  return out;
+}
+
+int cmd_plugins(const std::vector<std::string>& paths) {
+  stend::PluginHost host;
+  scan_plugins(host, paths);
+  std::cout << host.describe();
+  return 0;
+}
+
+int cmd_validate(const std::string& file) {
+  stend::PluginHost host;
+  scan_plugins(host, experiment_plugin_paths(file));
+  const stend::Experiment exp = stend::load_experiment(file, host);
+  stend::Bench bench(exp, host);  // stage 2: procedure against the fixtures' declared limits
+  std::size_t orientations = 0;
+  for (const auto& s : exp.procedure) orientations += s.orientations.size();
+  fmt::print("{}: ok — experiment '{}', sensor {}, {} fixture(s), {} step(s), {} orientation(s), g = {:.6f} m/s^2\n",
+             file, exp.name, exp.sensor.plugin, exp.fixtures.size(), exp.procedure.size(), orientations,
+             exp.gravity.resolved_mps2);
+  return 0;
+}
+
+void print_progress(const stend::RunProgress& p, bool tty) {
+  std::string item = p.item_count > 0 ? fmt::format(" {} {}/{}", p.step_kind == "rates" ? "rate" : "orientation", p.item, p.item_count) : "";
+  std::string temp = std::isfinite(p.air_c) ? fmt::format(" | air {:.2f} °C die {:.2f} °C", p.air_c, p.die_c) : "";
+  std::string line = fmt::format("step {}/{} {}{} [{}] | t {} | ~{} left{} | {} samples", p.step, p.step_count,
+                                 p.step_kind, item, p.phase, fmt_duration(p.run_time_s), fmt_duration(p.time_left_s()),
+                                 temp, p.samples);
+  if (tty) fmt::print(stderr, "\r\033[K{}", line);
+  else fmt::print(stderr, "{}\n", line);
+  std::fflush(stderr);
+}
+
+int cmd_run(const std::string& file, const std::string& output, const std::string& name, const std::string& clock,
+            bool quiet) {
+  stend::PluginHost host;
+  scan_plugins(host, experiment_plugin_paths(file));
+  const stend::Experiment exp = stend::load_experiment(file, host);
+
+  stend::RunOptions opt;
+  opt.output_dir = output;
+  opt.run_name = name;
+  opt.clock = clock;
+  opt.stop = &g_stop;
+  const bool tty = isatty(STDERR_FILENO) != 0;
+  if (!quiet) {
+    opt.progress_period_s = tty ? 0.2 : 5.0;
+    opt.on_progress = [tty](const stend::RunProgress& p) { print_progress(p, tty); };
+  }
+  std::signal(SIGINT, on_sigint);
+  std::signal(SIGTERM, on_sigint);
+  const stend::RunResult r = stend::run_experiment(exp, host, opt);
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  if (!quiet && tty) fmt::print(stderr, "\n");
+
+  fmt::print("run folder: {}\n", r.dir.string());
+  fmt::print("status:     {}{}\n", r.status, r.message.empty() ? "" : " — " + r.message);
+  fmt::print("recorded:   {} samples, {} segments, {} of run time in {:.2f} s wall ({:.0f}x real time)\n", r.samples,
+             r.segments, fmt_duration(r.run_time_s), r.wall_time_s, r.wall_time_s > 0 ? r.run_time_s / r.wall_time_s : 0.0);
+  return r.status == "complete" ? 0 : (r.status == "interrupted" ? 130 : 1);
+}
+
+int cmd_info(const std::string& dir) {
+  const stend::Recording rec = stend::Recording::open(dir);
+  const auto& h = rec.header;
+  fmt::print("recording:  {}\nexperiment: {} (stend {})\nstatus:     {}{}\n", rec.dir.string(), h.experiment_name,
+             h.stend_version, rec.status, rec.complete() ? "" : " (incomplete)");
+  fmt::print("sensor:     {} {} serial '{}' WHO_AM_I {} at {} Hz\n", h.identity.vendor, h.identity.model,
+             h.identity.serial, h.identity.who_am_i, h.info.output_rate_hz);
+  fmt::print("gravity:    {:.6f} m/s^2; clock {}; seed {}\n", h.gravity_mps2, h.clock, h.seed);
+  fmt::print("data:       {} samples", rec.samples.size());
+  if (!rec.samples.empty()) fmt::print(" from {:.3f} s to {:.3f} s", rec.samples.front().t_s, rec.samples.back().t_s);
+  fmt::print(", {} truth rows, {} segments, {} events\n", rec.truth_t.size(), rec.segments.size(), rec.events.size());
+  for (const auto& s : rec.segments)
+    fmt::print("  #{:<3} {:<15} {:>7.2f}–{:<8.2f} s {}{}{}  {}\n", s.id, s.kind, s.t_start_s, s.t_end_s,
+               s.settled ? "" : "[unsettled] ", s.complete ? "" : "[incomplete] ", s.label, s.targets);
+  for (const auto& e : rec.events) fmt::print("  event {:.3f} s {} {}: {}\n", e.t_s, e.level, e.source, e.message);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"stend — characterize MEMS inertial sensors on a lab bench"};
+  app.set_version_flag("--version", std::string("stend ") + stend::version());
+  app.require_subcommand(1);
+
+  std::vector<std::string> plugin_paths;
+  auto* plugins = app.add_subcommand("plugins", "List the plugins found on the search path and why any file was refused");
+  plugins->add_option("--path", plugin_paths, "Extra plugin directory (searched first)");
+
+  std::string file;
+  auto* validate = app.add_subcommand("validate", "Check an experiment file without running it");
+  validate->add_option("experiment", file, "Experiment YAML")->required();
+
+  std::string output, name, clock;
+  bool quiet = false;
+  auto* run = app.add_subcommand("run", "Run an experiment and record it");
+  run->add_option("experiment", file, "Experiment YAML")->required();
+  run->add_option("-o,--output", output, "Folder for run folders (default: the experiment's outputs.directory)");
+  run->add_option("--name", name, "Run folder name (default: <experiment>-<UTC time>)");
+  run->add_option("--clock", clock, "Override the clock")->check(CLI::IsMember({"simulated", "wall"}));
+  run->add_flag("-q,--quiet", quiet, "No progress display");
+
+  std::string dir;
+  auto* info = app.add_subcommand("info", "Summarize a recording (run folder)");
+  info->add_option("run", dir, "Run folder")->required();
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (*plugins) return cmd_plugins(plugin_paths);
+    if (*validate) return cmd_validate(file);
+    if (*run) return cmd_run(file, output, name, clock, quiet);
+    if (*info) return cmd_info(dir);
+  } catch (const stend::ExperimentError& e) {
+    fmt::print(stderr, "{}\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,58 @@
+// The runner: executes an experiment's procedure on a bench and writes the recording.
+#pragma once
+
+#include <stend/bench.hpp>
+#include <stend/clock.hpp>
+#include <stend/experiment.hpp>
+#include <stend/plugin_host.hpp>
+
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+
+namespace stend {
+
+struct RunProgress {
+  int step = 0, step_count = 0;   // 1-based step being executed
+  std::string step_kind;          // "orientations", "set_temperature", …
+  std::string phase;              // "moving", "settling", "dwell", "recording", "done"
+  int item = 0, item_count = 0;   // orientation / rate k of K (1-based), 0 when n/a
+  double run_time_s = 0.0;
+  double planned_total_s = 0.0;   // planned run time (settling steps at their hold time)
+  double air_c = NAN;             // chamber air temperature, NaN without a chamber
+  double die_c = NAN;
+  std::uint64_t samples = 0;
+  double time_left_s() const { return planned_total_s > run_time_s ? planned_total_s - run_time_s : 0.0; }
+};
+
+struct RunOptions {
+  std::filesystem::path output_dir;  // empty: the experiment's outputs.directory
+  std::string run_name;              // empty: "<experiment name>-<UTC yyyymmddThhmmssZ>"
+  double control_period_s = 0.01;    // fixtures advanced and sensor read every period
+  double truth_period_s = 0.1;       // bench-truth snapshots
+  double move_timeout_s = 600.0;     // a fixture that does not settle by then fails the run
+  int sensor_retries = 5;            // consecutive failed reads before the run fails
+  double progress_period_s = 0.2;    // wall seconds between progress callbacks
+  std::function<void(const RunProgress&)> on_progress;
+  const std::atomic<bool>* stop = nullptr;  // set (e.g. by SIGINT) to stop cleanly
+  std::string clock;                 // override the experiment's clock ("simulated" | "wall")
+};
+
+struct RunResult {
+  std::filesystem::path dir;
+  std::string status;   // "complete" | "interrupted" | "failed"
+  std::string message;  // why, when not complete
+  std::uint64_t samples = 0;
+  int segments = 0;
+  double run_time_s = 0.0;
+  double wall_time_s = 0.0;
+};
+
+// Runs the experiment. Throws ExperimentError for problems found before anything runs (stage-2
+// validation); once the run folder exists, faults end in a RunResult with status "failed" and
+// everything recorded so far kept.
+RunResult run_experiment(const Experiment& exp, const PluginHost& host, const RunOptions& options);
+
+}  // namespace stend

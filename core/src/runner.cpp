@@ -1,0 +1,406 @@
+#include "stend/runner.hpp"
+
+#include "stend/recording.hpp"
+#include "stend/version.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <stdexcept>
+
+namespace stend {
+
+namespace {
+
+const char* step_kind_name(Step::Kind k) {
+  switch (k) {
+    case Step::Kind::kSetTemperature: return "set_temperature";
+    case Step::Kind::kOrientations: return "orientations";
+    case Step::Kind::kRates: return "rates";
+    case Step::Kind::kRecord: return "record";
+    case Step::Kind::kWait: return "wait";
+    case Step::Kind::kSetVibration: return "set_vibration";
+  }
+  return "?";
+}
+
+std::string utc_stamp() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y%m%dT%H%M%SZ", &tm);
+  return buf;
+}
+
+// Planned run time of the procedure, for the progress display. Moves are counted at 2 s each
+// and temperature steps at their hold time, so this is an estimate.
+double planned_duration(const Experiment& exp) {
+  double t = 0.0;
+  for (const Step& s : exp.procedure) {
+    switch (s.kind) {
+      case Step::Kind::kSetTemperature: t += s.hold_s; break;
+      case Step::Kind::kOrientations:
+        t += static_cast<double>(s.orientations.size()) * (2.0 + s.dwell_s + s.record_s);
+        break;
+      case Step::Kind::kRates: t += static_cast<double>(s.rates.size()) * (2.0 + s.dwell_s + s.record_s); break;
+      case Step::Kind::kRecord:
+      case Step::Kind::kWait: t += s.record_s; break;
+      case Step::Kind::kSetVibration: break;
+    }
+  }
+  return t;
+}
+
+int axis_index(const Fixture& f, const std::string& name) {
+  const auto axes = f.axes();
+  for (std::size_t i = 0; i < axes.size(); ++i)
+    if (axes[i].name == name) return static_cast<int>(i);
+  throw std::runtime_error("fixture has no axis '" + name + "'");
+}
+
+class Stopped : public std::exception {
+ public:
+  const char* what() const noexcept override { return "stopped by request"; }
+};
+
+// One run: owns the loop state so the procedure reads as a list of steps.
+class Run {
+ public:
+  Run(const Experiment& exp, Bench& bench, Clock& clock, RecordingWriter& writer, const RunOptions& opt)
+      : exp_(exp), bench_(bench), clock_(clock), writer_(writer), opt_(opt) {
+    progress_.step_count = static_cast<int>(exp.procedure.size());
+    progress_.planned_total_s = planned_duration(exp);
+    wall_start_ = std::chrono::steady_clock::now();
+    last_progress_ = wall_start_ - std::chrono::hours(1);
+  }
+
+  void execute() {
+    bench_.sensor().start(0.0);
+    bench_.advance(0.0);
+    snapshot(0.0);
+    for (std::size_t i = 0; i < exp_.procedure.size(); ++i) {
+      const Step& s = exp_.procedure[i];
+      progress_.step = static_cast<int>(i) + 1;
+      progress_.step_kind = step_kind_name(s.kind);
+      progress_.item = progress_.item_count = 0;
+      run_step(static_cast<int>(i), s);
+    }
+    progress_.phase = "done";
+    report(true);
+  }
+
+  // Closes the open segment (if any) as incomplete, e.g. after a stop or a fault.
+  void abandon() {
+    if (open_) {
+      segment_.t_end_s = clock_.now_s();
+      segment_.complete = false;
+      writer_.add_segment(segment_);
+      ++segments_;
+      open_ = false;
+    }
+  }
+
+  std::uint64_t samples() const { return samples_; }
+  int segments() const { return segments_; }
+
+ private:
+  void run_step(int index, const Step& s) {
+    switch (s.kind) {
+      case Step::Kind::kSetTemperature: set_temperature(index, s); break;
+      case Step::Kind::kOrientations: orientations(index, s); break;
+      case Step::Kind::kRates: rates(index, s); break;
+      case Step::Kind::kRecord:
+        begin_segment(index, s, "record", -1, 0, "");
+        progress_.phase = "recording";
+        advance_for(s.record_s);
+        end_segment();
+        break;
+      case Step::Kind::kWait:
+        progress_.phase = "waiting";
+        advance_for(s.record_s);
+        break;
+      case Step::Kind::kSetVibration: {
+        Fixture& f = fixture(s.fixture);
+        f.command(static_cast<std::size_t>(axis_index(f, "frequency")), CommandMode::kSetpoint, s.frequency_hz);
+        f.command(static_cast<std::size_t>(axis_index(f, "amplitude")), CommandMode::kSetpoint, s.amplitude_g);
+        writer_.add_event({clock_.now_s(), "info", s.fixture,
+                           fmt::format("vibration {} g at {} Hz", s.amplitude_g, s.frequency_hz)});
+        break;
+      }
+    }
+  }
+
+  void set_temperature(int index, const Step& s) {
+    Fixture& chamber = fixture(s.fixture);
+    chamber.command(0, CommandMode::kSetpoint, s.setpoint_c);
+    setpoint_c_ = s.setpoint_c;
+    tolerance_c_ = s.tolerance_c;
+    progress_.phase = "settling";
+    if (s.record_settling) begin_segment(index, s, "set_temperature", -1, 0, fmt::format("{}.temperature={} degC", s.fixture, s.setpoint_c));
+    const double t0 = clock_.now_s();
+    double in_band_since = -1.0;  // run time the measurement entered the band, −1 when outside
+    while (true) {
+      const double t = clock_.now_s();
+      const bool in_band = std::abs(chamber.measured(0) - s.setpoint_c) <= s.tolerance_c;
+      if (!in_band) in_band_since = -1.0;
+      else if (in_band_since < 0.0) in_band_since = t;
+      if (in_band_since >= 0.0 && t - in_band_since >= s.hold_s) break;
+      if (t - t0 >= s.timeout_s) {
+        writer_.add_event({t, "warning", s.fixture,
+                           fmt::format("temperature did not settle at {} degC within {} s (measured {:.2f} degC); continuing, "
+                                       "segments are marked unsettled",
+                                       s.setpoint_c, s.timeout_s, chamber.measured(0))});
+        if (open_) segment_.settled = false;
+        break;
+      }
+      advance_for(opt_.control_period_s);
+    }
+    if (open_) end_segment();
+  }
+
+  void orientations(int index, const Step& s) {
+    Fixture& table = fixture(s.fixture);
+    progress_.item_count = static_cast<int>(s.orientations.size());
+    for (std::size_t k = 0; k < s.orientations.size(); ++k) {
+      progress_.item = static_cast<int>(k) + 1;
+      std::string targets;
+      for (const AxisTarget& a : s.orientations[k].targets) {
+        table.command(static_cast<std::size_t>(axis_index(table, a.axis)), CommandMode::kPosition, a.value);
+        targets += fmt::format("{}{}.{}={} deg", targets.empty() ? "" : "; ", s.fixture, a.axis, a.value);
+      }
+      move_and_record(index, s, table, "orientation", static_cast<int>(k), targets, NAN);
+    }
+  }
+
+  void rates(int index, const Step& s) {
+    Fixture& table = fixture(s.fixture);
+    const auto axis = static_cast<std::size_t>(axis_index(table, s.axis));
+    progress_.item_count = static_cast<int>(s.rates.size());
+    for (std::size_t k = 0; k < s.rates.size(); ++k) {
+      progress_.item = static_cast<int>(k) + 1;
+      table.command(axis, CommandMode::kRate, s.rates[k]);
+      move_and_record(index, s, table, "rate", static_cast<int>(k),
+                      fmt::format("{}.{} rate={} deg/s", s.fixture, s.axis, s.rates[k]), s.rates[k]);
+    }
+    table.command(axis, CommandMode::kRate, 0.0);
+    progress_.phase = "moving";
+    wait_settled(table, s.fixture);
+  }
+
+  void move_and_record(int index, const Step& s, Fixture& table, const char* kind, int k,
+                       const std::string& targets, double rate) {
+    progress_.phase = "moving";
+    wait_settled(table, s.fixture);
+    progress_.phase = "dwell";
+    advance_for(s.dwell_s);
+    begin_segment(index, s, kind, k, static_cast<int>(s.orientations.empty() ? s.rates.size() : s.orientations.size()), targets);
+    segment_.rate = rate;
+    progress_.phase = "recording";
+    const double t_end = clock_.now_s() + s.record_s;
+    while (clock_.now_s() < t_end - 1e-9) {
+      advance_to(std::min(t_end, clock_.now_s() + opt_.control_period_s));
+      if (!table.settled()) segment_.settled = false;
+    }
+    end_segment();
+  }
+
+  void wait_settled(Fixture& f, const std::string& id) {
+    const double t0 = clock_.now_s();
+    advance_for(opt_.control_period_s);  // let the command take effect
+    while (!f.settled()) {
+      if (clock_.now_s() - t0 > opt_.move_timeout_s)
+        throw std::runtime_error(fmt::format("fixture '{}' did not settle within {} s", id, opt_.move_timeout_s));
+      advance_for(opt_.control_period_s);
+    }
+  }
+
+  void begin_segment(int index, const Step& s, const char* kind, int k, int count, const std::string& targets) {
+    segment_ = Segment{};
+    segment_.id = segments_;
+    segment_.step = index;
+    segment_.kind = kind;
+    segment_.label = s.label;
+    segment_.repeat = s.repeat_index;
+    segment_.orientation = k;
+    segment_.orientation_count = count;
+    segment_.t_start_s = clock_.now_s();
+    segment_.targets = targets;
+    segment_.setpoint_c = setpoint_c_;
+    open_ = true;
+  }
+
+  void end_segment() {
+    segment_.t_end_s = clock_.now_s();
+    writer_.add_segment(segment_);
+    ++segments_;
+    open_ = false;
+    snapshot(segment_.t_end_s);
+  }
+
+  void advance_for(double duration_s) {
+    const double t_end = clock_.now_s() + duration_s;
+    while (clock_.now_s() < t_end - 1e-9) advance_to(std::min(t_end, clock_.now_s() + opt_.control_period_s));
+  }
+
+  // The one place time moves: fixtures, sensor, truth snapshots, durability, progress, stop.
+  void advance_to(double t) {
+    if (opt_.stop && opt_.stop->load()) throw Stopped();
+    clock_.wait_until(t);
+    bench_.advance(t);
+    read_sensor(t);
+    if (t >= next_truth_ - 1e-12) {
+      snapshot(t);
+      next_truth_ = t + opt_.truth_period_s;
+    }
+    if (open_ && bench_.chamber_index() >= 0 && std::isfinite(setpoint_c_) && segment_.kind != "set_temperature") {
+      const double m = bench_.fixture(static_cast<std::size_t>(bench_.chamber_index())).measured(0);
+      if (std::abs(m - setpoint_c_) > tolerance_c_) segment_.settled = false;
+    }
+    writer_.tick(t);
+    report(false);
+  }
+
+  void read_sensor(double t) {
+    buffer_.clear();
+    try {
+      bench_.sensor().acquire(t, bench_, buffer_);
+      failures_ = 0;
+    } catch (const std::exception& e) {
+      // Keep what arrived, report the fault, mark the gap, retry on the next period.
+      ++failures_;
+      writer_.add_event({t, "error", "sensor", fmt::format("read failed (attempt {} of {}): {}", failures_,
+                                                            opt_.sensor_retries, e.what())});
+      gap_ = true;
+      if (failures_ >= opt_.sensor_retries)
+        throw std::runtime_error(fmt::format("sensor failed {} times in a row: {}", failures_, e.what()));
+    }
+    if (!buffer_.empty()) {
+      if (gap_) {
+        buffer_.front().flags |= kGapBefore;
+        gap_ = false;
+      }
+      writer_.add_samples(buffer_.data(), buffer_.size());
+      samples_ += buffer_.size();
+    }
+  }
+
+  void snapshot(double t) {
+    bench_.truth_row(t, row_);
+    writer_.add_truth(t, row_);
+  }
+
+  Fixture& fixture(const std::string& id) {
+    const int i = bench_.fixture_index(id);
+    if (i < 0) throw std::runtime_error("no fixture '" + id + "'");
+    return bench_.fixture(static_cast<std::size_t>(i));
+  }
+
+  void report(bool force) {
+    if (!opt_.on_progress) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (!force && std::chrono::duration<double>(now - last_progress_).count() < opt_.progress_period_s) return;
+    last_progress_ = now;
+    progress_.run_time_s = clock_.now_s();
+    progress_.samples = samples_;
+    if (bench_.chamber_index() >= 0) {
+      double air = NAN, die = NAN;
+      bench_.fixture(static_cast<std::size_t>(bench_.chamber_index())).thermal(progress_.run_time_s, air, die);
+      progress_.air_c = air;
+      progress_.die_c = die;
+    }
+    opt_.on_progress(progress_);
+  }
+
+  const Experiment& exp_;
+  Bench& bench_;
+  Clock& clock_;
+  RecordingWriter& writer_;
+  const RunOptions& opt_;
+  RunProgress progress_;
+  std::chrono::steady_clock::time_point wall_start_, last_progress_;
+  std::vector<ImuSample> buffer_;
+  std::vector<double> row_;
+  Segment segment_;
+  bool open_ = false;
+  bool gap_ = false;
+  int failures_ = 0;
+  int segments_ = 0;
+  std::uint64_t samples_ = 0;
+  double next_truth_ = 0.0;
+  double setpoint_c_ = NAN;
+  double tolerance_c_ = INFINITY;
+};
+
+}  // namespace
+
+RunResult run_experiment(const Experiment& exp, const PluginHost& host, const RunOptions& options) {
+  Bench bench(exp, host);  // throws ExperimentError on stage-2 problems: nothing written yet
+
+  std::string clock_kind = options.clock.empty() ? exp.clock : options.clock;
+  if (clock_kind == "auto") clock_kind = bench.simulated() ? "simulated" : "wall";
+  std::unique_ptr<Clock> clock;
+  if (clock_kind == "simulated") clock = std::make_unique<SimulatedClock>();
+  else clock = std::make_unique<WallClock>();
+
+  RecordingHeader header;
+  header.experiment_name = exp.name;
+  header.experiment_file = exp.file;
+  header.stend_version = version();
+  auto use = [&](const std::string& role, const std::string& name) {
+    const PluginRecord* r = host.record_of(name);
+    header.plugins.push_back({role, name, r && r->info ? r->info->version : "", r ? r->file : ""});
+  };
+  use("sensor", exp.sensor.plugin);
+  for (const FixtureDecl& f : exp.fixtures) use(f.id, f.plugin);
+  header.identity = bench.sensor().identity();
+  header.info = bench.sensor().info();
+  header.gravity_mps2 = exp.gravity.resolved_mps2;
+  header.latitude_deg = exp.gravity.latitude_deg;
+  header.height_m = exp.gravity.height_m;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) header.mounting_R.push_back(exp.R_sensor_from_mount(r, c));
+  header.seed = exp.seed;
+  header.clock = clock_kind;
+  header.truth_columns = bench.truth_columns();
+
+  const std::filesystem::path out = options.output_dir.empty() ? std::filesystem::path(exp.outputs.directory) : options.output_dir;
+  std::filesystem::create_directories(out);
+  std::string name = options.run_name.empty() ? exp.name + "-" + utc_stamp() : options.run_name;
+  std::filesystem::path dir = out / name;
+  for (int n = 2; std::filesystem::exists(dir); ++n) dir = out / (name + "-" + std::to_string(n));
+
+  RecordingWriter writer(dir, header, exp.resolved_yaml);
+  RunResult result;
+  result.dir = dir;
+  const auto wall0 = std::chrono::steady_clock::now();
+  Run run(exp, bench, *clock, writer, options);
+  try {
+    run.execute();
+    result.status = "complete";
+  } catch (const Stopped&) {
+    result.status = "interrupted";
+    result.message = "stopped by request; everything recorded so far is kept";
+  } catch (const std::exception& e) {
+    result.status = "failed";
+    result.message = e.what();
+    writer.add_event({clock->now_s(), "error", "runner", e.what()});
+  }
+  if (result.status != "complete") run.abandon();
+  bench.safe_state();
+  try {
+    bench.sensor().stop();
+  } catch (const std::exception& e) {
+    writer.add_event({clock->now_s(), "warning", "sensor", std::string("stop failed: ") + e.what()});
+  }
+  writer.finish(result.status, result.message);
+  result.samples = run.samples();
+  result.segments = run.segments();
+  result.run_time_s = clock->now_s();
+  result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  return result;
+}
+
+}  // namespace stend

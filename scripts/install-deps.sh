@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Installs the Debian packages Stend builds against, skipping what is already there.
+set -euo pipefail
+packages=(
+  cmake ninja-build g++ pkg-config git
+  libeigen3-dev libceres-dev libyaml-cpp-dev nlohmann-json3-dev libfmt-dev libspdlog-dev
+  libcli11-dev libmodbus-dev libhidapi-dev libmatio-dev libhdf5-dev libsqlite3-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+echo "install-deps: installing ${missing[*]}"
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Install what is missing, build with warnings as errors, and run every test (ctest + GoogleTest).
+# STEND_SANITIZE=1 builds into build-asan with AddressSanitizer and UBSan instead.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/install-deps.sh
+if [ "${STEND_SANITIZE:-0}" = 1 ]; then
+  export STEND_BUILD_DIR=${STEND_BUILD_DIR:-build-asan}
+  scripts/build.sh -DSTEND_WERROR=ON -DSTEND_SANITIZE=ON -DSTEND_BUILD_BENCHMARKS=OFF
+else
+  scripts/build.sh -DSTEND_WERROR=ON
+fi
+build=${STEND_BUILD_DIR:-build}
+ctest --test-dir "$build" --output-on-failure -j "${STEND_JOBS:-$(nproc)}"
