@@ -1,0 +1,30 @@
+// Every shipped experiment validates completely: structure, plugin configs, and the procedure
+// against the limits the simulated fixtures declare.
+#include <gtest/gtest.h>
+
+#include "stend/bench.hpp"
+#include "stend/experiment.hpp"
+#include "stend/plugin_host.hpp"
+
+#include <filesystem>
+
+namespace fs = std::filesystem;
+
+TEST(Configs, EveryShippedExperimentValidates) {
+  stend::PluginHost host;
+  host.scan({{STEND_BUILD_PLUGIN_DIR, "build tree"}});
+  int n = 0;
+  for (const auto& entry : fs::directory_iterator(fs::path(STEND_SOURCE_DIR) / "configs")) {
+    if (entry.path().extension() != ".yaml") continue;
+    SCOPED_TRACE(entry.path().string());
+    try {
+      const stend::Experiment exp = stend::load_experiment(entry.path().string(), host);
+      stend::Bench bench(exp, host);
+      EXPECT_FALSE(exp.procedure.empty());
+      ++n;
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << e.what();
+    }
+  }
+  EXPECT_GE(n, 5);
+}
