@@ -46,6 +46,10 @@ const char* kind_word(long kind) {
   }
 }
 
+std::string with_article(const char* word) {
+  return std::string(std::strchr("aeiou", word[0]) ? "an " : "a ") + word;
+}
+
 // The kind field read without trusting it to hold a valid enumerator.
 long raw_kind(const stend_plugin_info& info) {
   std::underlying_type_t<stend_plugin_kind> raw{};
@@ -329,8 +333,9 @@ void* PluginHost::create(const std::string& name, stend_plugin_kind kind,
   const stend_plugin_info& info = *r->info;
   const long actual = raw_kind(info);
   if (actual != kind) {
-    throw std::runtime_error("plugin '" + name + "' (" + r->file + ") is a " + kind_word(actual) +
-                             " plugin, not a " + kind_word(kind));
+    throw std::runtime_error("plugin '" + name + "' (" + r->file + ") is " +
+                             with_article(kind_word(actual)) + " plugin, not " +
+                             with_article(kind_word(kind)));
   }
   char error[1024] = {};
   void* object = nullptr;
@@ -346,8 +351,8 @@ void* PluginHost::create(const std::string& name, stend_plugin_kind kind,
   }
   if (object == nullptr) {
     if (reason.empty()) reason = "no reason given";
-    throw std::runtime_error("plugin '" + name + "' (" + r->file + ") could not create a " +
-                             kind_word(kind) + ": " + reason);
+    throw std::runtime_error("plugin '" + name + "' (" + r->file + ") could not create " +
+                             with_article(kind_word(kind)) + ": " + reason);
   }
   return object;
 }

@@ -140,6 +140,11 @@ Experiment load_experiment(const std::string& path, const PluginCatalogue& catal
 Experiment parse_experiment(const std::string& yaml_text, const std::string& file,
                             const PluginCatalogue& catalogue);
 
+// Reads only `experiment.plugin_paths` (resolved like load_experiment does), so a host can add
+// them to its search path before loading plugins and validating the whole file. Throws
+// ExperimentError for an unreadable file, a YAML syntax error or a malformed plugin_paths.
+std::vector<std::string> experiment_plugin_paths(const std::string& path);
+
 // Stage 2: with the plugin objects created, check the procedure against the limits the fixtures
 // declare (axis names exist, targets within range, rates within max_rate, setpoints within the
 // chamber's range, step fixture ids exist and have the right role). `fixtures[i]` belongs to

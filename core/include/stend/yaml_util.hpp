@@ -29,6 +29,10 @@ std::string closest_match(const std::string& word, const std::vector<std::string
 // seconds"). Empty when nothing is close.
 std::string did_you_mean(const std::string& word, const std::vector<std::string>& candidates);
 
+// Two hint sentences joined: "did you mean 'x'?" + "Allowed keys: …" (a period added when the
+// first does not end a sentence). Either may be empty.
+std::string join_sentences(const std::string& first, const std::string& second);
+
 // "a, b, c"
 std::string join(const std::vector<std::string>& items, const std::string& separator = ", ");
 
@@ -38,14 +42,19 @@ std::string describe(const YAML::Node& node);
 // One YAML mapping read strictly. Construction checks the node is a mapping (null counts as an
 // empty mapping), that keys are plain scalars, unique and among `allowed` (+ `hidden`, accepted
 // but never suggested). Every error is an ExperimentError at the offending key or value.
+// `where_if_empty` is the location reported for a mapping that is absent or null (typically the
+// location of its key), since yaml-cpp marks a null value at the following line.
 class MapReader {
  public:
   MapReader(const YAML::Node& node, std::string file, std::string path, std::string what,
-            std::vector<std::string> allowed, std::vector<std::string> hidden = {});
+            std::vector<std::string> allowed, std::vector<std::string> hidden = {},
+            SourceLocation where_if_empty = {});
 
   bool has(const std::string& key) const;
   YAML::Node get(const std::string& key) const;  // undefined node when absent
   SourceLocation key_location(const std::string& key) const;
+  // Of the value; of the key when the value is null; of the mapping when the key is absent.
+  SourceLocation value_location(const std::string& key) const;
   SourceLocation location() const { return where_; }  // of the mapping
   const std::string& path() const { return path_; }
   const std::string& file() const { return file_; }
@@ -96,5 +105,13 @@ std::vector<double> as_numbers(const YAML::Node& node, const std::string& file,
 
 // Shortest text that reads back as exactly the same double ("0.1", "44", "-1e-09").
 std::string format_number(double value);
+
+// Emits a string so that it reads back as the same string (quoted when it would otherwise read
+// as null or be empty).
+void emit_string(YAML::Emitter& out, const std::string& text);
+
+// Emits validated plugin parameters as a mapping, in the order of the plugin's schema (keys the
+// schema does not name follow in alphabetical order); `plugin` may be null.
+void emit_params(YAML::Emitter& out, const Params& params, const stend_plugin_info* plugin);
 
 }  // namespace stend::yaml

@@ -1,0 +1,535 @@
+// Weighted linear least squares with uncertainty and identifiability analysis.
+// See stend/estimation/linear_lsq.hpp.
+#include "stend/estimation/linear_lsq.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numeric>
+#include <ostream>
+#include <sstream>
+#include <stdexcept>
+
+namespace stend::estimation {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// A parameter whose row of the (scaled, orthonormal) null-space basis has a norm above this is not
+// identifiable; two parameters whose null-space projector entry exceeds it are aliased.
+constexpr double kNullTolerance = 1e-7;
+// Columns with norm ≤ this × the largest column norm are treated as exactly zero (numerical dust
+// such as g·sin(0) computed through rotations would otherwise be rescaled to unit length).
+constexpr double kZeroColumnTolerance = 1e-12;
+
+// %.<digits>g, or %.<digits>f when fixed.
+std::string num(double v, int digits = 6, bool fixed = false) {
+  if (std::isnan(v)) return "n/a";
+  char buf[64];
+  if (fixed)
+    std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  else
+    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
+}
+
+// Regularised incomplete beta I_x(a, b): continued fraction (modified Lentz).
+double beta_cf(double a, double b, double x) {
+  constexpr double tiny = 1e-300, eps = 1e-16;
+  const double qab = a + b, qap = a + 1.0, qam = a - 1.0;
+  double c = 1.0, d = 1.0 - qab * x / qap;
+  if (std::abs(d) < tiny) d = tiny;
+  d = 1.0 / d;
+  double h = d;
+  for (int m = 1; m <= 1000; ++m) {
+    const double m2 = 2.0 * m;
+    double aa = m * (b - m) * x / ((qam + m2) * (a + m2));
+    d = 1.0 + aa * d;
+    if (std::abs(d) < tiny) d = tiny;
+    c = 1.0 + aa / c;
+    if (std::abs(c) < tiny) c = tiny;
+    d = 1.0 / d;
+    h *= d * c;
+    aa = -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2));
+    d = 1.0 + aa * d;
+    if (std::abs(d) < tiny) d = tiny;
+    c = 1.0 + aa / c;
+    if (std::abs(c) < tiny) c = tiny;
+    d = 1.0 / d;
+    const double del = d * c;
+    h *= del;
+    if (std::abs(del - 1.0) < eps) break;
+  }
+  return h;
+}
+
+double incomplete_beta(double a, double b, double x) {
+  if (x <= 0.0) return 0.0;
+  if (x >= 1.0) return 1.0;
+  const double lbt = std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) +
+                     b * std::log1p(-x);
+  const double bt = std::exp(lbt);
+  if (x < (a + 1.0) / (a + b + 2.0)) return bt * beta_cf(a, b, x) / a;
+  return 1.0 - bt * beta_cf(b, a, 1.0 - x) / b;
+}
+
+// Bisection for a monotone increasing cdf on (−∞, ∞), symmetric about 0.
+template <class Cdf>
+double symmetric_quantile(double p, Cdf cdf) {
+  if (!(p > 0.0 && p < 1.0)) throw std::domain_error("quantile: probability must lie in (0, 1)");
+  if (p == 0.5) return 0.0;
+  const double q = p > 0.5 ? p : 1.0 - p;
+  double lo = 0.0, hi = 1.0;
+  while (cdf(hi) < q && hi < 1e300) hi *= 2.0;
+  for (int i = 0; i < 400 && hi - lo > 1e-15 * hi; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (cdf(mid) < q ? lo : hi) = mid;
+  }
+  const double x = 0.5 * (lo + hi);
+  return p > 0.5 ? x : -x;
+}
+
+double normal_cdf(double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); }
+
+bool close(double a, double b, double rel, double abs_tol) {
+  if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
+  if (std::isinf(a) || std::isinf(b)) return a == b;
+  return std::abs(a - b) <= abs_tol + rel * std::max(std::abs(a), std::abs(b));
+}
+
+// Reduced row echelon form (rows = combinations), leading coefficient 1, dust set to zero.
+Eigen::MatrixXd rref(Eigen::MatrixXd M) {
+  const Eigen::Index rows = M.rows(), cols = M.cols();
+  Eigen::Index r = 0;
+  for (Eigen::Index c = 0; c < cols && r < rows; ++c) {
+    Eigen::Index piv;
+    const double best = M.col(c).tail(rows - r).cwiseAbs().maxCoeff(&piv);
+    if (best < 1e-12) continue;
+    piv += r;
+    M.row(r).swap(M.row(piv));
+    M.row(r) /= M(r, c);
+    for (Eigen::Index i = 0; i < rows; ++i)
+      if (i != r) M.row(i) -= M(i, c) * M.row(r);
+    ++r;
+  }
+  for (Eigen::Index i = 0; i < rows; ++i) {
+    const double mx = M.row(i).cwiseAbs().maxCoeff();
+    for (Eigen::Index j = 0; j < cols; ++j)
+      if (std::abs(M(i, j)) < 1e-10 * mx) M(i, j) = 0.0;
+  }
+  return M;
+}
+
+std::string combination_text(const std::vector<std::pair<int, double>>& coeffs,
+                             const std::vector<ParameterEstimate>& params) {
+  std::string s;
+  for (const auto& [idx, c] : coeffs) {
+    const double mag = std::abs(c);
+    if (s.empty()) {
+      if (c < 0) s += "-";
+    } else {
+      s += c < 0 ? " - " : " + ";
+    }
+    if (std::abs(mag - 1.0) > 1e-12) s += num(mag) + "*";
+    s += params[static_cast<std::size_t>(idx)].name;
+  }
+  return s;
+}
+
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(int n) : parent(static_cast<std::size_t>(n)) {
+    std::iota(parent.begin(), parent.end(), 0);
+  }
+  int find(int i) {
+    while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)];
+    return i;
+  }
+  void unite(int a, int b) { parent[static_cast<std::size_t>(find(a))] = find(b); }
+};
+
+}  // namespace
+
+double student_t_cdf(double t, double dof) {
+  if (!(dof > 0.0)) throw std::domain_error("Student t: degrees of freedom must be > 0");
+  if (std::isinf(dof)) return normal_cdf(t);
+  if (std::isinf(t)) return t > 0 ? 1.0 : 0.0;
+  const double x = dof / (dof + t * t);
+  const double tail = 0.5 * incomplete_beta(0.5 * dof, 0.5, x);
+  return t > 0 ? 1.0 - tail : tail;
+}
+
+double student_t_quantile(double p, double dof) {
+  if (!(dof > 0.0)) throw std::domain_error("Student t: degrees of freedom must be > 0");
+  return symmetric_quantile(p, [dof](double x) { return student_t_cdf(x, dof); });
+}
+
+double normal_quantile(double p) { return symmetric_quantile(p, normal_cdf); }
+
+int LsqResult::index(const std::string& name) const {
+  for (std::size_t i = 0; i < parameters.size(); ++i)
+    if (parameters[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+const ParameterEstimate& LsqResult::parameter(const std::string& name) const {
+  const int i = index(name);
+  if (i < 0) throw std::out_of_range("no parameter named '" + name + "' in this fit");
+  return parameters[static_cast<std::size_t>(i)];
+}
+
+Eigen::MatrixXd LsqResult::correlation() const {
+  const Eigen::Index p = covariance.rows();
+  Eigen::MatrixXd c(p, p);
+  for (Eigen::Index i = 0; i < p; ++i)
+    for (Eigen::Index j = 0; j < p; ++j)
+      c(i, j) = covariance(i, j) / std::sqrt(covariance(i, i) * covariance(j, j));
+  return c;
+}
+
+bool LsqResult::estimable(const Eigen::VectorXd& c, double tolerance) const {
+  if (!ok() || c.size() != parameter_count) return false;
+  if (null_space.cols() == 0) return true;
+  return (null_space.transpose() * c).norm() <= tolerance * c.norm();
+}
+
+Combination LsqResult::combination(const Eigen::VectorXd& c, double offset) const {
+  if (!ok()) throw std::domain_error("combination of a failed fit: " + message);
+  if (c.size() != parameter_count)
+    throw std::domain_error("combination: coefficient vector has the wrong size");
+  if (!estimable(c))
+    throw std::domain_error("combination is not estimable: it has a component along the null "
+                            "space of the design (the data cannot determine it)");
+  Combination out;
+  for (Eigen::Index i = 0; i < c.size(); ++i)
+    if (c[i] != 0.0) out.coefficients.emplace_back(static_cast<int>(i), c[i]);
+  out.text = combination_text(out.coefficients, parameters);
+  if (offset != 0.0) out.text += (offset < 0 ? " - " : " + ") + num(std::abs(offset));
+  out.value = c.dot(min_norm_solution) + offset;
+  out.std_error = std::sqrt(std::max(0.0, c.dot(pinv_covariance * c)));
+  out.lower = out.value - quantile * out.std_error;
+  out.upper = out.value + quantile * out.std_error;
+  return out;
+}
+
+LsqResult solve_lsq(const LsqProblem& pr, const LsqOptions& opt) {
+  LsqResult r;
+  r.confidence = opt.confidence;
+  r.method = opt.method;
+  const Eigen::Index k = pr.design.rows(), p = pr.design.cols();
+  r.observations = static_cast<int>(k);
+  r.parameter_count = static_cast<int>(p);
+  for (Eigen::Index j = 0; j < p; ++j) {
+    ParameterEstimate e;
+    const auto ju = static_cast<std::size_t>(j);
+    e.name = ju < pr.names.size() ? pr.names[ju] : "p" + std::to_string(j);
+    e.unit = ju < pr.units.size() ? pr.units[ju] : "";
+    e.value = e.std_error = e.lower = e.upper = kNaN;
+    r.parameters.push_back(e);
+  }
+  auto fail = [&](const std::string& msg) {
+    r.status = LsqStatus::kFailed;
+    r.message = msg;
+    for (auto& e : r.parameters) {
+      e.identifiable = false;
+      e.reason = "fit failed";
+    }
+    r.estimate.resize(0);
+    r.covariance.resize(0, 0);
+    return r;
+  };
+  std::string names;
+  for (const auto& e : r.parameters) names += (names.empty() ? "" : ", ") + e.name;
+
+  if (pr.observations.size() != k) return fail("observation vector length differs from design rows");
+  if (pr.weights.size() != 0 && pr.weights.size() != k)
+    return fail("weight vector length differs from design rows");
+  if ((!pr.names.empty() && pr.names.size() != static_cast<std::size_t>(p)) ||
+      (!pr.units.empty() && pr.units.size() != static_cast<std::size_t>(p)))
+    return fail("parameter names/units do not match the design's column count");
+  if (!(opt.confidence > 0.0 && opt.confidence < 1.0))
+    return fail("confidence level must lie in (0, 1)");
+  if (p == 0) return fail("no parameters to estimate");
+  if (k < p)
+    return fail("underdetermined: k = " + std::to_string(k) + " observations for p = " +
+                std::to_string(p) + " parameters (" + names +
+                "); a least-squares fit needs k >= p and should have k >> p. Add orientations, "
+                "axes or segments, or remove terms from the model.");
+  if (!pr.design.allFinite() || !pr.observations.allFinite())
+    return fail("design matrix or observations contain NaN or infinity");
+  Eigen::VectorXd sw = Eigen::VectorXd::Ones(k);
+  if (pr.weights.size() == k) {
+    for (Eigen::Index i = 0; i < k; ++i)
+      if (!(pr.weights[i] > 0.0) || !std::isfinite(pr.weights[i]))
+        return fail("weight " + std::to_string(i) + " is not a positive finite number");
+    sw = pr.weights.cwiseSqrt();
+  }
+  const Eigen::MatrixXd Aw = sw.asDiagonal() * pr.design;
+  const Eigen::VectorXd yw = sw.cwiseProduct(pr.observations);
+
+  // Column scaling.
+  Eigen::VectorXd scale = Aw.colwise().norm().transpose();
+  const double max_norm = scale.maxCoeff();
+  if (!(max_norm > 0.0)) return fail("every column of the design is zero: nothing is excited");
+  std::vector<bool> zero_col(static_cast<std::size_t>(p), false);
+  Eigen::MatrixXd As = Aw;
+  for (Eigen::Index j = 0; j < p; ++j) {
+    if (scale[j] <= kZeroColumnTolerance * max_norm) {
+      zero_col[static_cast<std::size_t>(j)] = true;
+      scale[j] = 1.0;
+      As.col(j).setZero();
+    } else {
+      As.col(j) /= scale[j];
+    }
+  }
+
+  Eigen::JacobiSVD<Eigen::MatrixXd, Eigen::ColPivHouseholderQRPreconditioner> svd(
+      As, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const Eigen::VectorXd s = svd.singularValues();
+  const Eigen::MatrixXd& U = svd.matrixU();
+  const Eigen::MatrixXd& V = svd.matrixV();
+  int rank = 0;
+  for (Eigen::Index i = 0; i < s.size(); ++i)
+    if (s[i] > opt.rank_tolerance * s[0]) ++rank;
+  r.rank = rank;
+  r.dof = static_cast<int>(k) - rank;
+  r.condition_number = rank == p ? s[0] / s[p - 1] : kInf;
+  r.condition_number_identified = s[0] / s[rank - 1];
+  if (r.dof <= 0 && !opt.known_variance)
+    return fail("no degrees of freedom left for the noise: k = " + std::to_string(k) +
+                " observations, rank " + std::to_string(rank) +
+                "; the residual variance (and so every uncertainty) cannot be estimated. Add "
+                "observations, or supply known inverse-variance weights.");
+
+  // Solution and covariance in scaled coordinates.
+  Eigen::VectorXd xs = Eigen::VectorXd::Zero(p);
+  Eigen::MatrixXd cov_unit = Eigen::MatrixXd::Zero(p, p);  // (A_sᵀA_s)⁺
+  bool solved_by_qr = false;
+  if (opt.method == LsqMethod::kQr && rank == p) {
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(As);
+    xs = qr.solve(yw);
+    const Eigen::MatrixXd R = qr.matrixR().topLeftCorner(p, p).triangularView<Eigen::Upper>();
+    // (RᵀR)⁻¹ = R⁻¹R⁻ᵀ by two triangular solves, then undo the column permutation.
+    const Eigen::MatrixXd Rinv = R.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(p, p));
+    const Eigen::MatrixXd C = Rinv * Rinv.transpose();
+    const auto& P = qr.colsPermutation();
+    cov_unit = P * C * P.transpose();
+    solved_by_qr = true;
+  } else {
+    for (int i = 0; i < rank; ++i) {
+      xs += V.col(i) * (U.col(i).dot(yw) / s[i]);
+      cov_unit += V.col(i) * V.col(i).transpose() / (s[i] * s[i]);
+    }
+    if (opt.method == LsqMethod::kQr)
+      r.warnings.push_back("QR was requested but the design is rank-deficient; solved by SVD "
+                           "(minimum-norm solution, identifiable parameters only)");
+  }
+  r.method = solved_by_qr ? LsqMethod::kQr : LsqMethod::kSvd;
+  const Eigen::VectorXd x = xs.cwiseQuotient(scale);
+  r.residuals = pr.observations - pr.design * x;
+  r.rss = (yw - Aw * x).squaredNorm();
+  r.sigma2 = opt.known_variance ? 1.0 : r.rss / r.dof;
+  r.quantile = (opt.known_variance || r.dof <= 0)
+                   ? normal_quantile(0.5 * (1.0 + opt.confidence))
+                   : student_t_quantile(0.5 * (1.0 + opt.confidence), r.dof);
+  const Eigen::VectorXd dinv = scale.cwiseInverse();
+  r.min_norm_solution = x;
+  r.pinv_covariance = r.sigma2 * dinv.asDiagonal() * cov_unit * dinv.asDiagonal();
+
+  // Null space (scaled), projector, identifiability.
+  const Eigen::MatrixXd Ns = V.rightCols(p - rank);
+  Eigen::MatrixXd Nu = dinv.asDiagonal() * Ns;  // unscaled null directions
+  if (Nu.cols() > 0) Nu = Eigen::HouseholderQR<Eigen::MatrixXd>(Nu).householderQ() *
+                          Eigen::MatrixXd::Identity(p, Nu.cols());
+  r.null_space = Nu;
+  const Eigen::MatrixXd P = Ns * Ns.transpose();
+  std::vector<bool> ident(static_cast<std::size_t>(p));
+  for (Eigen::Index j = 0; j < p; ++j)
+    ident[static_cast<std::size_t>(j)] = std::sqrt(std::max(0.0, P(j, j))) <= kNullTolerance;
+
+  r.estimate = Eigen::VectorXd::Constant(p, kNaN);
+  r.covariance = Eigen::MatrixXd::Constant(p, p, kNaN);
+  for (Eigen::Index i = 0; i < p; ++i) {
+    if (!ident[static_cast<std::size_t>(i)]) continue;
+    r.estimate[i] = x[i];
+    for (Eigen::Index j = 0; j < p; ++j)
+      if (ident[static_cast<std::size_t>(j)]) r.covariance(i, j) = r.pinv_covariance(i, j);
+  }
+  r.status = LsqStatus::kOk;
+  for (Eigen::Index j = 0; j < p; ++j) {
+    ParameterEstimate& e = r.parameters[static_cast<std::size_t>(j)];
+    e.identifiable = ident[static_cast<std::size_t>(j)];
+    if (!e.identifiable) continue;
+    e.value = x[j];
+    e.std_error = std::sqrt(std::max(0.0, r.pinv_covariance(j, j)));
+    e.lower = e.value - r.quantile * e.std_error;
+    e.upper = e.value + r.quantile * e.std_error;
+  }
+
+  // Groups of non-identifiable parameters connected through the null space.
+  UnionFind uf(static_cast<int>(p));
+  for (Eigen::Index i = 0; i < p; ++i)
+    for (Eigen::Index j = i + 1; j < p; ++j)
+      if (!ident[static_cast<std::size_t>(i)] && !ident[static_cast<std::size_t>(j)] &&
+          std::abs(P(i, j)) > kNullTolerance)
+        uf.unite(static_cast<int>(i), static_cast<int>(j));
+  std::vector<std::vector<int>> groups(static_cast<std::size_t>(p));
+  for (int j = 0; j < p; ++j)
+    if (!ident[static_cast<std::size_t>(j)]) groups[static_cast<std::size_t>(uf.find(j))].push_back(j);
+  std::vector<std::string> not_identified;
+  for (const auto& g : groups) {
+    if (g.empty()) continue;
+    const int m = static_cast<int>(g.size());
+    if (m == 1) {
+      const auto j = static_cast<std::size_t>(g[0]);
+      not_identified.push_back(r.parameters[j].name);
+      r.parameters[j].reason =
+          zero_col[j] ? "not excited: its regressor column is zero in every observation, so the "
+                        "data carry no information about it"
+                      : "not identifiable: its direction lies in the null space of the design";
+      continue;
+    }
+    AliasGroup ag;
+    ag.parameters = g;
+    Eigen::MatrixXd Pg(m, m);
+    for (int a = 0; a < m; ++a)
+      for (int b = 0; b < m; ++b) Pg(a, b) = P(g[static_cast<std::size_t>(a)], g[static_cast<std::size_t>(b)]);
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Pg);
+    std::vector<Eigen::VectorXd> nulls;
+    for (int a = 0; a < m; ++a)
+      if (es.eigenvalues()[a] > 0.5) {
+        Eigen::VectorXd n(m);
+        for (int b = 0; b < m; ++b) n[b] = es.eigenvectors()(b, a) * dinv[g[static_cast<std::size_t>(b)]];
+        n.normalize();
+        nulls.push_back(n);
+      }
+    ag.null_dimension = static_cast<int>(nulls.size());
+    ag.null_directions = nulls;
+    // Estimable combinations: the complement of the (unscaled) null directions within the group.
+    Eigen::MatrixXd Nt(ag.null_dimension, m);
+    for (int a = 0; a < ag.null_dimension; ++a) Nt.row(a) = nulls[static_cast<std::size_t>(a)].transpose();
+    Eigen::JacobiSVD<Eigen::MatrixXd> nsvd(Nt, Eigen::ComputeFullV);
+    const Eigen::MatrixXd comp = nsvd.matrixV().rightCols(m - ag.null_dimension);
+    const Eigen::MatrixXd combos = rref(comp.transpose());
+    std::string group_names;
+    for (int j : g) group_names += (group_names.empty() ? "" : ", ") + r.parameters[static_cast<std::size_t>(j)].name;
+    std::string identified_text;
+    for (Eigen::Index c = 0; c < combos.rows(); ++c) {
+      Eigen::VectorXd full = Eigen::VectorXd::Zero(p);
+      for (int b = 0; b < m; ++b) full[g[static_cast<std::size_t>(b)]] = combos(c, b);
+      Combination comb = r.combination(full);
+      identified_text += (identified_text.empty() ? "" : "; ") + comb.text;
+      ag.identified.push_back(comb);
+    }
+    for (int j : g) {
+      auto& e = r.parameters[static_cast<std::size_t>(j)];
+      std::string others;
+      for (int o : g)
+        if (o != j) others += (others.empty() ? "" : ", ") + r.parameters[static_cast<std::size_t>(o)].name;
+      e.reason = "aliased with " + others + ": the data identify only " + identified_text;
+      not_identified.push_back(e.name);
+    }
+    r.aliases.push_back(ag);
+  }
+
+  // Warnings.
+  if (static_cast<double>(k) < opt.observations_per_parameter_warning * static_cast<double>(p))
+    r.warnings.push_back("few observations: k = " + std::to_string(k) + " for p = " +
+                         std::to_string(p) + " parameters (k < " +
+                         num(opt.observations_per_parameter_warning) +
+                         "p); the residual variance and the intervals rest on " +
+                         std::to_string(r.dof) + " degrees of freedom (the paper asks for k >> p)");
+  if (rank < p) {
+    std::string list;
+    for (const auto& n : not_identified) list += (list.empty() ? "" : ", ") + n;
+    r.warnings.push_back("rank-deficient design: rank " + std::to_string(rank) + " < p = " +
+                         std::to_string(p) + "; not identifiable: " + list);
+  }
+  if (r.condition_number_identified > opt.condition_warning) {
+    // Weakest identified direction, unscaled.
+    Eigen::VectorXd w = dinv.cwiseProduct(V.col(rank - 1));
+    const double mx = w.cwiseAbs().maxCoeff();
+    std::vector<std::pair<int, double>> terms;
+    for (Eigen::Index j = 0; j < p; ++j)
+      if (std::abs(w[j]) > 0.1 * mx) terms.emplace_back(static_cast<int>(j), w[j] / mx);
+    r.warnings.push_back("ill-conditioned design (column-scaled condition number " +
+                         num(r.condition_number_identified, 3) +
+                         "): the weakest direction is " + combination_text(terms, r.parameters) +
+                         "; these parameters are strongly correlated and poorly determined");
+  }
+  return r;
+}
+
+std::ostream& operator<<(std::ostream& os, const ParameterEstimate& e) {
+  char buf[512];
+  if (e.identifiable) {
+    std::snprintf(buf, sizeof buf, "%-18s %14.7g %-14s %11.3g  [%.7g, %.7g]  yes", e.name.c_str(),
+                  e.value, e.unit.c_str(), e.std_error, e.lower, e.upper);
+    os << buf;
+  } else {
+    std::snprintf(buf, sizeof buf, "%-18s %14s %-14s %11s  %-26s  NO: ", e.name.c_str(),
+                  "not estimated", e.unit.c_str(), "-", "-");
+    os << buf << e.reason;
+  }
+  return os;
+}
+
+std::ostream& operator<<(std::ostream& os, const Combination& c) {
+  return os << c.text << " = " << num(c.value, 7) << " +/- " << num(c.std_error, 3)
+            << " [" << num(c.lower, 7) << ", " << num(c.upper, 7) << "]";
+}
+
+std::ostream& operator<<(std::ostream& os, const LsqResult& r) {
+  if (!r.ok()) return os << "FIT FAILED: " << r.message << "\n";
+  os << "least squares (" << (r.method == LsqMethod::kQr ? "QR" : "SVD") << "): k = "
+     << r.observations << ", p = " << r.parameter_count << ", rank = " << r.rank
+     << ", dof = " << r.dof << ", sigma = " << num(std::sqrt(r.sigma2), 4)
+     << ", cond = " << num(r.condition_number, 4)
+     << " (identified subspace " << num(r.condition_number_identified, 4) << ")\n";
+  char head[256];
+  std::snprintf(head, sizeof head, "%-18s %14s %-14s %11s  %-26s  %s\n", "parameter", "value",
+                "unit", "std error", (num(100 * r.confidence, 6) + "% interval").c_str(),
+                "identifiable");
+  os << head;
+  for (const auto& e : r.parameters) os << e << "\n";
+  for (const auto& a : r.aliases) {
+    os << "aliased group (" << a.null_dimension << " unobservable direction"
+       << (a.null_dimension == 1 ? "" : "s") << "):";
+    for (int j : a.parameters) os << " " << r.parameters[static_cast<std::size_t>(j)].name;
+    os << "\n";
+    for (const auto& c : a.identified) os << "  identified: " << c << "\n";
+  }
+  for (const auto& w : r.warnings) os << "warning: " << w << "\n";
+  return os;
+}
+
+bool approx_equal(const LsqResult& a, const LsqResult& b, double rel_tol, double abs_tol) {
+  if (a.status != b.status || a.parameters.size() != b.parameters.size()) return false;
+  if (!a.ok()) return a.message == b.message;
+  if (a.rank != b.rank || a.observations != b.observations || a.dof != b.dof) return false;
+  for (std::size_t i = 0; i < a.parameters.size(); ++i) {
+    const auto &x = a.parameters[i], &y = b.parameters[i];
+    if (x.name != y.name || x.unit != y.unit || x.identifiable != y.identifiable) return false;
+    if (!close(x.value, y.value, rel_tol, abs_tol) ||
+        !close(x.std_error, y.std_error, rel_tol, abs_tol) ||
+        !close(x.lower, y.lower, rel_tol, abs_tol) || !close(x.upper, y.upper, rel_tol, abs_tol))
+      return false;
+  }
+  if (a.aliases.size() != b.aliases.size()) return false;
+  for (std::size_t g = 0; g < a.aliases.size(); ++g) {
+    const auto &x = a.aliases[g], &y = b.aliases[g];
+    if (x.parameters != y.parameters || x.identified.size() != y.identified.size()) return false;
+    for (std::size_t c = 0; c < x.identified.size(); ++c)
+      if (!close(x.identified[c].value, y.identified[c].value, rel_tol, abs_tol) ||
+          !close(x.identified[c].std_error, y.identified[c].std_error, rel_tol, abs_tol))
+        return false;
+  }
+  return close(std::sqrt(a.sigma2), std::sqrt(b.sigma2), rel_tol, abs_tol);
+}
+
+}  // namespace stend::estimation

@@ -1,0 +1,237 @@
+// Allan-deviation noise characterization of inertial sensors (library stend_allan).
+//
+//   curve      overlapping ADEV at octave τ from the streaming estimator (stream.hpp), with
+//              chi-squared confidence intervals from the equivalent degrees of freedom (stats.hpp)
+//   model      the classical IEEE Std 952 / 1554 sum of independent terms,
+//                σ²(τ) = 3Q²/τ² + N²/τ + (2 ln2/π) B² + K²τ/3 + R²τ²/2,
+//              fitted by non-negative weighted least squares; a coefficient counts as identified
+//              only where its term dominates the model somewhere inside the measured τ range
+//   read-offs  the textbook slope lines: N = σ(1 s) on the −1/2 line, K = σ(3 s) on the +1/2
+//              line, B = σ_min / 0.664 at the flat minimum
+//   outputs    continuous-time densities with units, Kalibr IMU noise parameters, a text table,
+//              JSON
+//
+// Units: for an accelerometer channel in m/s²: N [m/s²/√Hz] (velocity random walk), K [m/s³/√Hz]
+// (acceleration random walk), B [m/s²], Q [m/s], R [m/s³]; for a gyroscope in rad/s: N
+// [rad/s/√Hz] (angle random walk), K [rad/s²/√Hz] (rate random walk), B [rad/s], Q [rad],
+// R [rad/s²]. Kalibr's accelerometer_noise_density / gyroscope_noise_density are N and
+// accelerometer_random_walk / gyroscope_random_walk are K.
+#pragma once
+
+#include <stend/allan/stats.hpp>
+#include <stend/allan/stream.hpp>
+#include <stend/recording.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <iosfwd>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace YAML {
+class Node;
+}
+
+namespace stend::allan {
+
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// √(2 ln 2 / π): the flicker (bias-instability) floor of the ADEV is 0.664·B.
+inline constexpr double kFlickerFloor = 0.66428200410814707;
+
+enum class Instrument { kAccelerometer, kGyroscope, kOther };
+const char* to_string(Instrument i);
+
+// Unit strings of one channel and of its noise coefficients.
+struct Units {
+  std::string signal;        // "m/s^2", "rad/s"
+  std::string quantization;  // Q: signal·s
+  std::string white;         // N: signal/√Hz
+  std::string bias;          // B: signal
+  std::string random_walk;   // K: signal/s/√Hz
+  std::string ramp;          // R: signal/s
+};
+// Accelerometer → m/s², gyroscope → rad/s; kOther uses `signal_unit` as given.
+Units units_for(Instrument instrument, const std::string& signal_unit = {});
+
+struct ChannelInfo {
+  std::string name;  // "ax", "gz", …
+  Instrument instrument = Instrument::kOther;
+  std::string unit;  // signal unit; empty = the instrument's SI unit
+};
+
+struct AllanOptions {
+  std::uint64_t max_m = OverlappingAllanStream::kDefaultMaxM;  // largest averaging factor
+  double confidence = stats::kOneSigma;  // two-sided level of the ADEV intervals
+  // EDF from the noise type that dominates the fitted model at each τ (true), or white noise
+  // everywhere (false).
+  bool edf_from_model = true;
+  double slope_tolerance = 0.15;  // |local slope − target| for the read-off regions
+  double min_readoff_edf = 3.0;   // points with fewer EDF are not used for read-offs
+  int min_readoff_points = 2;     // a slope region needs at least this many points
+  // Part of a recording to analyse (run time, s); NaN = from the start / to the end.
+  double t_begin_s = kNaN;
+  double t_end_s = kNaN;
+};
+
+// Options from a YAML mapping whose keys are the field names above (max_m, confidence,
+// edf_from_model, slope_tolerance, min_readoff_edf, min_readoff_points, t_begin_s, t_end_s);
+// see example/allan.yaml. Throws std::runtime_error naming file:line:column and the key for
+// unknown keys, wrong types and out-of-range values.
+AllanOptions options_from_yaml(const YAML::Node& node, const std::string& file = {});
+
+struct AllanPoint {
+  double tau_s = 0.0;
+  std::uint64_t m = 0;      // averaging factor
+  std::uint64_t terms = 0;  // second differences used
+  double avar = 0.0;        // signal unit²
+  double adev = 0.0;        // signal unit
+  double edf = kNaN;        // equivalent degrees of freedom
+  NoiseType noise = NoiseType::kWhite;  // noise type the EDF assumes
+  double adev_lo = kNaN;    // confidence interval (AllanCurve::confidence)
+  double adev_hi = kNaN;
+};
+
+struct AllanCurve {
+  ChannelInfo channel;
+  Units units;
+  double rate_hz = 0.0;
+  std::uint64_t samples = 0;
+  double confidence = stats::kOneSigma;
+  std::vector<AllanPoint> points;
+};
+
+// One coefficient of the model. It is `identified` when its term dominates the fitted model
+// somewhere inside the measured τ range (its slope region exists) and the fitted value is at
+// least twice its standard uncertainty; only then is `value` set. Otherwise `upper_bound` says
+// how large it could be without the term alone exceeding any measured ADEV upper limit.
+struct Coefficient {
+  const char* symbol = "";  // "Q", "N", "B", "K", "R"
+  const char* name = "";    // "quantization", "white noise", …
+  std::string unit;
+  double value = kNaN;
+  double sigma = kNaN;          // 1-σ from the fit covariance (see README: approximate)
+  double fitted = 0.0;          // the NNLS estimate, whether identified or not
+  double fitted_sigma = kNaN;   // its 1-σ (NaN when the term is not in the NNLS support)
+  bool dominates = false;       // the term dominates the model somewhere in [τ_min, τ_max]
+  bool identified = false;      // dominates and fitted ≥ 2·fitted_sigma
+  double tau_lo_s = kNaN;       // where it dominates
+  double tau_hi_s = kNaN;
+  double upper_bound = kNaN;
+};
+
+// A slope-line read-off.
+struct Readoff {
+  const char* name = "";
+  std::string unit;
+  bool found = false;
+  double value = kNaN;  // when found; for B not found, an upper bound (see note)
+  double lo = kNaN, hi = kNaN;  // interval at the curve's confidence
+  double tau_lo_s = kNaN, tau_hi_s = kNaN;  // points used (B: τ of the minimum)
+  std::string note;
+};
+
+inline Coefficient named(const char* symbol, const char* name) {
+  Coefficient c;
+  c.symbol = symbol;
+  c.name = name;
+  return c;
+}
+inline Readoff named_readoff(const char* name) {
+  Readoff r;
+  r.name = name;
+  return r;
+}
+
+struct NoiseModel {
+  Coefficient quantization = named("Q", "quantization");
+  Coefficient white = named("N", "white noise density");
+  Coefficient bias_instability = named("B", "bias instability");
+  Coefficient random_walk = named("K", "random walk density");
+  Coefficient rate_ramp = named("R", "rate ramp");
+  Readoff white_line = named_readoff("N (-1/2 line at 1 s)");
+  Readoff random_walk_line = named_readoff("K (+1/2 line at 3 s)");
+  Readoff bias_floor = named_readoff("B (minimum / 0.664)");
+  bool ok = false;
+  std::string message;        // why the fit failed / warnings
+  double chi2_reduced = kNaN;  // weighted residual χ² per degree of freedom
+  int dof = 0;
+  double tau_min_s = kNaN, tau_max_s = kNaN;
+
+  // σ² of the fitted model (all fitted terms, identified or not) at τ.
+  double avar(double tau_s) const;
+  NoiseType dominant(double tau_s) const;
+  const Coefficient* coefficients() const { return &quantization; }  // 5 in a row
+};
+
+// Curve from the stream's octaves; EDF and intervals assume white noise until a model is fitted.
+AllanCurve make_curve(const std::vector<OctaveVariance>& octaves, std::uint64_t samples,
+                      double rate_hz, const ChannelInfo& channel, double confidence);
+// Fills edf / noise / adev_lo / adev_hi of every point; the noise type from `model` (dominant
+// term at τ) or white noise when model is null.
+void assign_intervals(AllanCurve& curve, const NoiseModel* model);
+// Fits the model to the curve and makes the read-offs. Does not change the curve.
+NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& options = {});
+
+struct ChannelResult {
+  AllanCurve curve;
+  NoiseModel model;
+};
+
+// One channel, one pass: the stream, the curve, the fit, the intervals from the fitted model.
+ChannelResult analyze(const double* y, std::size_t n, std::size_t stride, double rate_hz,
+                      const ChannelInfo& channel, const AllanOptions& options = {});
+// From a stream that has already seen the data.
+ChannelResult analyze(const OverlappingAllanStream& stream, double rate_hz,
+                      const ChannelInfo& channel, const AllanOptions& options = {});
+
+// Kalibr's IMU noise parameters (imu.yaml). Each value is the mean over the three axes of the
+// fitted coefficient where identified, else of the read-off; `*_identified` is true when all
+// three axes identified it. A random walk that no axis identified is reported as its upper bound
+// with `*_is_upper_bound` set — never as a default.
+struct KalibrParameters {
+  double accelerometer_noise_density = kNaN;  // m/s²/√Hz
+  double accelerometer_random_walk = kNaN;    // m/s³/√Hz
+  double gyroscope_noise_density = kNaN;      // rad/s/√Hz
+  double gyroscope_random_walk = kNaN;        // rad/s²/√Hz
+  double update_rate = kNaN;                  // Hz
+  bool accelerometer_noise_identified = false;
+  bool accelerometer_random_walk_identified = false;
+  bool gyroscope_noise_identified = false;
+  bool gyroscope_random_walk_identified = false;
+  bool accelerometer_random_walk_is_upper_bound = false;
+  bool gyroscope_random_walk_is_upper_bound = false;
+};
+
+struct AllanReport {
+  std::string source;
+  double rate_hz = 0.0;
+  std::uint64_t samples = 0;
+  double t_begin_s = kNaN, t_end_s = kNaN;
+  std::vector<ChannelResult> channels;  // ax ay az gx gy gz (gyro only when present)
+  KalibrParameters kalibr;
+  std::vector<std::string> warnings;    // gaps, irregular sampling, …
+};
+
+// All accelerometer and gyroscope axes of a recording (SI values), within options.t_begin_s …
+// t_end_s. The rate is the header's output rate, or the median sample interval when it is 0.
+AllanReport analyze_recording(const Recording& recording, const AllanOptions& options = {});
+KalibrParameters kalibr_parameters(const std::vector<ChannelResult>& channels, double rate_hz);
+
+// Text and JSON.
+std::ostream& operator<<(std::ostream& os, const AllanPoint& p);
+std::ostream& operator<<(std::ostream& os, const AllanCurve& c);
+std::ostream& operator<<(std::ostream& os, const Coefficient& c);
+std::ostream& operator<<(std::ostream& os, const Readoff& r);
+std::ostream& operator<<(std::ostream& os, const NoiseModel& m);
+std::ostream& operator<<(std::ostream& os, const ChannelResult& r);
+std::ostream& operator<<(std::ostream& os, const KalibrParameters& k);
+std::ostream& operator<<(std::ostream& os, const AllanReport& r);
+// The per-axis summary table (one row per channel: N, K, B, Q, R and the read-offs).
+void write_summary_table(std::ostream& os, const AllanReport& report);
+void write_json(std::ostream& os, const AllanReport& report, int indent = 2);
+void write_json(std::ostream& os, const ChannelResult& result, int indent = 2);
+// Kalibr imu.yaml noise block (with the identification status as comments).
+void write_kalibr_yaml(std::ostream& os, const KalibrParameters& k);
+
+}  // namespace stend::allan

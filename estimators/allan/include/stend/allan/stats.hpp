@@ -1,0 +1,289 @@
+// Statistics for Allan deviation confidence intervals (header-only):
+//   - regularized incomplete gamma P(a, x), normal and chi-squared quantiles;
+//   - equivalent degrees of freedom (EDF) of the fully overlapping Allan variance for the
+//     power-law noise types, by Greenhall's algorithm (C. A. Greenhall, W. J. Riley,
+//     "Uncertainty of stability variances based on finite differences", PTTI 2003), with the
+//     simple closed forms of NIST SP 1065 (Table 5) as an alternative;
+//   - the chi-squared confidence interval of a deviation with a given EDF.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+namespace stend::allan {
+
+// Power-law noise of the *rate* signal y (gyro rate, acceleration), S_y(f) ∝ f^α. The names are
+// the inertial-sensor terms; in frequency-stability terms α = 2 white PM, 1 flicker PM,
+// 0 white FM, −1 flicker FM, −2 random-walk FM.
+enum class NoiseType {
+  kQuantization = 2,      // white PM: ADEV slope −1 (quantization noise, Q)
+  kFlickerPhase = 1,      // flicker PM: slope ≈ −1
+  kWhite = 0,             // white FM: slope −1/2 (angle / velocity random walk, N)
+  kFlicker = -1,          // flicker FM: slope 0 (bias instability, B)
+  kRandomWalk = -2,       // random-walk FM: slope +1/2 (rate random walk, K)
+};
+
+inline int alpha_of(NoiseType t) { return static_cast<int>(t); }
+
+inline const char* to_string(NoiseType t) {
+  switch (t) {
+    case NoiseType::kQuantization: return "quantization (white PM)";
+    case NoiseType::kFlickerPhase: return "flicker PM";
+    case NoiseType::kWhite: return "white (white FM)";
+    case NoiseType::kFlicker: return "flicker (flicker FM)";
+    case NoiseType::kRandomWalk: return "random walk (RW FM)";
+  }
+  return "?";
+}
+
+namespace stats {
+
+// Regularized lower incomplete gamma function P(a, x), a > 0, x ≥ 0.
+inline double gamma_p(double a, double x) {
+  if (!(a > 0.0) || x < 0.0 || std::isnan(x)) {
+    throw std::domain_error("gamma_p: need a > 0 and x ≥ 0");
+  }
+  if (x == 0.0) return 0.0;
+  if (std::isinf(x)) return 1.0;
+  const double log_prefactor = a * std::log(x) - x - std::lgamma(a);
+  if (x < a + 1.0) {
+    // Series: P = e^{−x} x^a / Γ(a+1) · Σ x^n / ((a+1)…(a+n)).
+    double term = 1.0 / a, sum = term;
+    for (int n = 1; n < 100000000; ++n) {
+      term *= x / (a + n);
+      sum += term;
+      if (std::abs(term) < std::abs(sum) * 1e-17) break;
+    }
+    return std::min(1.0, sum * std::exp(log_prefactor));
+  }
+  // Continued fraction for Q (modified Lentz).
+  const double tiny = 1e-300;
+  double b = x + 1.0 - a, c = 1.0 / tiny, d = 1.0 / b, h = d;
+  for (int i = 1; i < 100000000; ++i) {
+    const double an = -i * (i - a);
+    b += 2.0;
+    d = an * d + b;
+    if (std::abs(d) < tiny) d = tiny;
+    c = b + an / c;
+    if (std::abs(c) < tiny) c = tiny;
+    d = 1.0 / d;
+    const double del = d * c;
+    h *= del;
+    if (std::abs(del - 1.0) < 1e-16) break;
+  }
+  return std::max(0.0, 1.0 - std::exp(log_prefactor) * h);
+}
+
+// Chi-squared CDF with nu degrees of freedom (nu > 0, not necessarily an integer).
+inline double chi2_cdf(double x, double nu) { return x <= 0.0 ? 0.0 : gamma_p(0.5 * nu, 0.5 * x); }
+
+// Standard normal quantile: rational start (Abramowitz–Stegun 26.2.23) refined by Newton steps
+// on erfc, accurate to a few ulp for 1e-300 < p < 1 − 1e-16.
+inline double normal_quantile(double p) {
+  if (!(p > 0.0 && p < 1.0)) throw std::domain_error("normal_quantile: p must be in (0, 1)");
+  const double q = p < 0.5 ? p : 1.0 - p;
+  const double t = std::sqrt(-2.0 * std::log(q));
+  double z = t - (2.515517 + 0.802853 * t + 0.010328 * t * t) /
+                     (1.0 + 1.432788 * t + 0.189269 * t * t + 0.001308 * t * t * t);
+  if (p < 0.5) z = -z;
+  for (int i = 0; i < 8; ++i) {
+    const double cdf = 0.5 * std::erfc(-z / std::sqrt(2.0));
+    const double pdf = std::exp(-0.5 * z * z) / std::sqrt(2.0 * std::numbers::pi);
+    if (pdf <= 0.0) break;
+    const double step = (cdf - p) / pdf;
+    z -= step;
+    if (std::abs(step) < 1e-15 * std::max(1.0, std::abs(z))) break;
+  }
+  return z;
+}
+
+// Chi-squared quantile: x with chi2_cdf(x, nu) = p. Wilson–Hilferty start, then safeguarded
+// Newton iterations on the regularized gamma function (bisection when a step leaves the
+// bracket). For nu > 1e7 the Wilson–Hilferty value itself is returned (relative error < 1e-9).
+inline double chi2_quantile(double p, double nu) {
+  if (!(p > 0.0 && p < 1.0)) throw std::domain_error("chi2_quantile: p must be in (0, 1)");
+  if (!(nu > 0.0) || std::isinf(nu)) throw std::domain_error("chi2_quantile: nu must be > 0");
+  const double z = normal_quantile(p);
+  const double h = 2.0 / (9.0 * nu);
+  const double wh = nu * std::pow(std::max(0.0, 1.0 - h + z * std::sqrt(h)), 3);
+  if (nu > 1e7) return wh;
+  const double a = 0.5 * nu;
+  // Work in s = x/2 with P(a, s) = p.
+  double lo = 0.0, hi = std::max(1.0, 2.0 * a);
+  while (gamma_p(a, hi) < p) {
+    lo = hi;
+    hi *= 2.0;
+  }
+  double s = 0.5 * wh;
+  if (!(s > lo && s < hi)) {
+    // Small-s asymptote P ≈ s^a / Γ(a+1) for the lower tail, else the bracket midpoint.
+    s = std::exp((std::log(p) + std::lgamma(a + 1.0)) / a);
+    if (!(s > lo && s < hi)) s = 0.5 * (lo + hi);
+  }
+  for (int it = 0; it < 200; ++it) {
+    const double f = gamma_p(a, s) - p;
+    if (f == 0.0) break;
+    if (f < 0.0) lo = s; else hi = s;
+    const double log_pdf = (a - 1.0) * std::log(s) - s - std::lgamma(a);
+    const double pdf = std::exp(log_pdf);
+    double next = (pdf > 0.0 && std::isfinite(pdf)) ? s - f / pdf : 0.5 * (lo + hi);
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    if (std::abs(next - s) <= 1e-14 * s || hi - lo <= 1e-15 * hi) {
+      s = next;
+      break;
+    }
+    s = next;
+  }
+  return 2.0 * s;
+}
+
+namespace greenhall {
+
+inline long double sw(long double t, int alpha) {
+  const long double at = std::fabs(t);
+  switch (alpha) {
+    case 2: return -at;
+    case 1: return t == 0 ? 0.0L : t * t * std::log(at);
+    case 0: return at * at * at;
+    case -1: return t == 0 ? 0.0L : t * t * t * t * std::log(at);
+    case -2: return at * at * at * at * at;
+    case -3: return t == 0 ? 0.0L : t * t * t * t * t * t * std::log(at);
+    case -4: return at * at * at * at * at * at * at;
+    default: throw std::domain_error("greenhall: alpha out of range");
+  }
+}
+// F = 0 stands for F = ∞.
+inline long double sx(long double t, long double F, int alpha) {
+  if (F == 0) return sw(t, alpha + 2);
+  return F * F * (2 * sw(t, alpha) - sw(t - 1 / F, alpha) - sw(t + 1 / F, alpha));
+}
+inline long double sz(long double t, long double F, int alpha) {  // d = 2 (Allan)
+  return 6 * sx(t, F, alpha) - 4 * sx(t - 1, F, alpha) - 4 * sx(t + 1, F, alpha) +
+         sx(t - 2, F, alpha) + sx(t + 2, F, alpha);
+}
+inline long double basic_sum(long double J, long double M, long double S, long double F,
+                             int alpha) {
+  const long double s0 = sz(0, F, alpha);
+  long double sum = s0 * s0;
+  const long double sJ = sz(J / S, F, alpha);
+  sum += (1 - J / M) * sJ * sJ;
+  for (long double j = 1; j < J; j += 1) {
+    const long double v = sz(j / S, F, alpha);
+    sum += 2 * (1 - j / M) * v * v;
+  }
+  return sum;
+}
+
+}  // namespace greenhall
+
+// EDF of the fully overlapping Allan variance at averaging factor m from N *phase* points
+// (N rate samples give N + 1 phase points), for noise type `type`. Greenhall's algorithm
+// (d = 2, unmodified, S = m overlapping; F = ∞ for α ≤ 0, see below). NaN when no difference
+// exists.
+inline double edf_overlapping_adev(NoiseType type, double n_phase, double m) {
+  const int alpha = alpha_of(type);
+  constexpr int d = 2;
+  const long double N = n_phase, mm = m;
+  const long double L = 1 + mm * d;  // m/F + m·d with F = m
+  if (!(N >= L)) return std::numeric_limits<double>::quiet_NaN();
+  const long double S = mm;
+  const long double M = 1 + std::floor(S * (N - L) / mm);
+  const long double J = std::min(M, (d + 1) * S);
+  constexpr long double J_max = 100;
+  const long double r = M / S;
+  long double inv = 0;
+  using greenhall::basic_sum;
+  using greenhall::sz;
+  if (alpha <= 0) {
+    if (J <= J_max) {
+      // F = ∞ (phase point samples). Our phase is x_k = Σ y_i of rate samples that are
+      // averages over τ0, i.e. exact samples of the integrated signal; with F = ∞ the result
+      // equals the exact EDF of discrete white noise (Greenhall's table uses F = m for m ≤ 33,
+      // which models phase averaged over τ0 and overstates the EDF at m = 1 by ~17 %).
+      const long double s0 = sz(0, 0, alpha);
+      inv = basic_sum(J, M, S, 0, alpha) / (s0 * s0 * M);
+    } else if (r > d + 1) {
+      long double a0 = 0, a1 = 0;  // Greenhall–Riley Table 2, d = 2
+      switch (alpha) {
+        case 0: a0 = 2.0L / 3.0L; a1 = 1.0L / 3.0L; break;
+        case -1: a0 = 0.852L; a1 = 0.375L; break;
+        default: a0 = 1.079L; a1 = 0.368L; break;  // −2
+      }
+      inv = (a0 - a1 / r) / r;
+    } else {
+      const long double mp = J_max / r;
+      const long double s0 = sz(0, 0, alpha);
+      inv = basic_sum(J_max, J_max, mp, 0, alpha) / (s0 * s0 * J_max);
+    }
+  } else if (alpha == 1) {
+    constexpr long double b0 = 15.23L, b1 = 12.0L;  // Table 3, d = 2
+    if (J <= J_max) {
+      const long double s0 = sz(0, mm, 1);
+      inv = basic_sum(J, M, S, mm, 1) / (s0 * s0 * M);
+    } else if (r > d + 1) {
+      constexpr long double a0 = 790.0L, a1 = 410.0L;
+      const long double b = b0 + b1 * std::log(mm);
+      inv = (a0 - a1 / r) / (b * b * r);
+    } else {
+      const long double mp = J_max / r;
+      const long double b = b0 + b1 * std::log(mm);
+      inv = basic_sum(J_max, J_max, mp, mp, 1) / (b * b * J_max);
+    }
+  } else {  // alpha == 2
+    const long double K = std::ceil(r);
+    if (K <= d) {
+      // Few differences (M ≤ 2m): fall back to the NIST SP 1065 closed form.
+      const double e = static_cast<double>((N + 1) * (N - 2 * mm) / (2 * (N - mm)));
+      return e > 0 ? e : std::numeric_limits<double>::quiet_NaN();
+    }
+    const long double a0 = 70.0L / 36.0L;  // C(4d, 2d) / C(2d, d)²
+    const long double a1 = d / 2.0L;
+    inv = (a0 - a1 / r) / M;
+  }
+  return inv > 0 ? static_cast<double>(1 / inv) : std::numeric_limits<double>::quiet_NaN();
+}
+
+// The simple closed forms of NIST SP 1065 Table 5 (Howe, Allan, Barnes 1981) for the
+// overlapping Allan variance; N phase points, averaging factor m.
+inline double edf_overlapping_adev_simple(NoiseType type, double N, double m) {
+  switch (type) {
+    case NoiseType::kQuantization: return (N + 1) * (N - 2 * m) / (2 * (N - m));
+    case NoiseType::kFlickerPhase:
+      return std::exp(std::sqrt(std::log((N - 1) / (2 * m)) * std::log((2 * m + 1) * (N - 1) / 4)));
+    case NoiseType::kWhite:
+      return (3 * (N - 1) / (2 * m) - 2 * (N - 2) / N) * (4 * m * m) / (4 * m * m + 5);
+    case NoiseType::kFlicker:
+      return m == 1 ? 2 * (N - 2) / (2.3 * N - 4.9) : 5 * N * N / (4 * m * (N + 3 * m));
+    case NoiseType::kRandomWalk:
+      return (N - 2) / (m * (N - 3) * (N - 3)) * ((N - 1) * (N - 1) - 3 * m * (N - 1) + 4 * m * m);
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+// Two-sided confidence interval of a deviation `dev` estimated with `edf` degrees of freedom:
+// dev·sqrt(edf/χ²_{(1+c)/2}) … dev·sqrt(edf/χ²_{(1−c)/2}) (NIST SP 1065 eq. 45).
+struct Interval {
+  double lo = std::numeric_limits<double>::quiet_NaN();
+  double hi = std::numeric_limits<double>::quiet_NaN();
+};
+inline Interval deviation_interval(double dev, double edf, double confidence) {
+  if (!(confidence > 0.0 && confidence < 1.0)) {
+    throw std::domain_error("deviation_interval: confidence must be in (0, 1)");
+  }
+  Interval out;
+  if (!(edf > 0.0) || !std::isfinite(edf) || !std::isfinite(dev)) return out;
+  const double tail = 0.5 * (1.0 - confidence);
+  out.lo = dev * std::sqrt(edf / chi2_quantile(1.0 - tail, edf));
+  out.hi = dev * std::sqrt(edf / chi2_quantile(tail, edf));
+  return out;
+}
+
+// The one-sigma confidence level, erf(1/√2).
+inline constexpr double kOneSigma = 0.682689492137085897;
+
+}  // namespace stats
+}  // namespace stend::allan

@@ -1,0 +1,855 @@
+#include <stend/allan/allan.hpp>
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+#include <fmt/ostream.h>
+#include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <ostream>
+#include <sstream>
+#include <stdexcept>
+
+namespace stend::allan {
+
+namespace {
+
+constexpr int kTerms = 5;  // Q N B K R
+constexpr double kStandardGravity = 9.80665;
+
+// Regressor of the model: σ²(τ) = Σ_j c_j · basis_j(τ), c = (Q², N², B², K², R²).
+std::array<double, kTerms> basis(double tau) {
+  return {3.0 / (tau * tau), 1.0 / tau, kFlickerFloor * kFlickerFloor, tau / 3.0,
+          tau * tau / 2.0};
+}
+
+NoiseType noise_of_term(int j) {
+  switch (j) {
+    case 0: return NoiseType::kQuantization;
+    case 1: return NoiseType::kWhite;
+    case 2: return NoiseType::kFlicker;
+    default: return NoiseType::kRandomWalk;  // K, and the ramp R (closest EDF model)
+  }
+}
+
+Coefficient* coefficient(NoiseModel& m, int j) { return &m.quantization + j; }
+const Coefficient* coefficient(const NoiseModel& m, int j) { return &m.quantization + j; }
+
+std::string fmt_value(double v) { return std::isfinite(v) ? fmt::format("{:.4g}", v) : "-"; }
+
+}  // namespace
+
+const char* to_string(Instrument i) {
+  switch (i) {
+    case Instrument::kAccelerometer: return "accelerometer";
+    case Instrument::kGyroscope: return "gyroscope";
+    case Instrument::kOther: return "other";
+  }
+  return "?";
+}
+
+Units units_for(Instrument instrument, const std::string& signal_unit) {
+  Units u;
+  switch (instrument) {
+    case Instrument::kAccelerometer:
+      if (signal_unit.empty() || signal_unit == "m/s^2") {
+        return {"m/s^2", "m/s", "m/s^2/sqrt(Hz)", "m/s^2", "m/s^3/sqrt(Hz)", "m/s^3"};
+      }
+      break;
+    case Instrument::kGyroscope:
+      if (signal_unit.empty() || signal_unit == "rad/s") {
+        return {"rad/s", "rad", "rad/s/sqrt(Hz)", "rad/s", "rad/s^2/sqrt(Hz)", "rad/s^2"};
+      }
+      break;
+    case Instrument::kOther: break;
+  }
+  const std::string s = signal_unit.empty() ? "unit" : signal_unit;
+  return {s, s + "*s", s + "/sqrt(Hz)", s, s + "/s/sqrt(Hz)", s + "/s"};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Options
+
+AllanOptions options_from_yaml(const YAML::Node& node, const std::string& file) {
+  auto where = [&](const YAML::Node& n) {
+    const YAML::Mark m = n.Mark();
+    std::string loc = file.empty() ? std::string("<yaml>") : file;
+    if (m.line >= 0) loc += fmt::format(":{}:{}", m.line + 1, m.column + 1);
+    return loc;
+  };
+  AllanOptions o;
+  if (!node || node.IsNull()) return o;
+  if (!node.IsMap()) throw std::runtime_error(where(node) + ": Allan options must be a mapping");
+  static const std::vector<std::string> keys = {"max_m", "confidence", "edf_from_model",
+                                                "slope_tolerance", "min_readoff_edf",
+                                                "min_readoff_points", "t_begin_s", "t_end_s"};
+  for (const auto& kv : node) {
+    const std::string key = kv.first.as<std::string>();
+    const YAML::Node& v = kv.second;
+    auto fail = [&](const std::string& what) {
+      throw std::runtime_error(fmt::format("{}: allan option '{}': {}", where(v), key, what));
+    };
+    auto number = [&]() {
+      try {
+        return v.as<double>();
+      } catch (const YAML::Exception&) {
+        fail("expected a number, got '" + (v.IsScalar() ? v.Scalar() : std::string("a non-scalar")) + "'");
+      }
+      return 0.0;
+    };
+    if (key == "max_m") {
+      const double m = number();
+      if (!(m >= 1.0) || m > 9.2e18 || m != std::floor(m)) fail("must be an integer >= 1 (samples)");
+      o.max_m = static_cast<std::uint64_t>(m);
+    } else if (key == "confidence") {
+      o.confidence = number();
+      if (!(o.confidence > 0.0 && o.confidence < 1.0)) fail("must be in (0, 1), e.g. 0.683 or 0.95");
+    } else if (key == "edf_from_model") {
+      try {
+        o.edf_from_model = v.as<bool>();
+      } catch (const YAML::Exception&) {
+        fail("expected true or false");
+      }
+    } else if (key == "slope_tolerance") {
+      o.slope_tolerance = number();
+      if (!(o.slope_tolerance > 0.0 && o.slope_tolerance < 0.5)) fail("must be in (0, 0.5)");
+    } else if (key == "min_readoff_edf") {
+      o.min_readoff_edf = number();
+      if (!(o.min_readoff_edf >= 0.0)) fail("must be >= 0");
+    } else if (key == "min_readoff_points") {
+      const double n = number();
+      if (!(n >= 1.0 && n <= 64.0) || n != std::floor(n)) fail("must be an integer in 1 … 64");
+      o.min_readoff_points = static_cast<int>(n);
+    } else if (key == "t_begin_s") {
+      o.t_begin_s = number();
+    } else if (key == "t_end_s") {
+      o.t_end_s = number();
+    } else {
+      std::string all;
+      for (const auto& k : keys) all += (all.empty() ? "" : ", ") + k;
+      throw std::runtime_error(fmt::format("{}: unknown allan option '{}' (known: {})",
+                                           where(kv.first), key, all));
+    }
+  }
+  if (std::isfinite(o.t_begin_s) && std::isfinite(o.t_end_s) && !(o.t_end_s > o.t_begin_s)) {
+    throw std::runtime_error(where(node) + ": allan options: t_end_s must be after t_begin_s");
+  }
+  return o;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Model
+
+double NoiseModel::avar(double tau_s) const {
+  const auto b = basis(tau_s);
+  double v = 0.0;
+  for (int j = 0; j < kTerms; ++j) {
+    const double c = coefficient(*this, j)->fitted;
+    v += c * c * b[j];
+  }
+  return v;
+}
+
+NoiseType NoiseModel::dominant(double tau_s) const {
+  const auto b = basis(tau_s);
+  int best = 1;
+  double best_v = 0.0;
+  for (int j = 0; j < kTerms; ++j) {
+    const double c = coefficient(*this, j)->fitted;
+    const double v = c * c * b[j];
+    if (v > best_v) {
+      best_v = v;
+      best = j;
+    }
+  }
+  return noise_of_term(best);
+}
+
+AllanCurve make_curve(const std::vector<OctaveVariance>& octaves, std::uint64_t samples,
+                      double rate_hz, const ChannelInfo& channel, double confidence) {
+  if (!(rate_hz > 0.0)) throw std::invalid_argument("Allan curve: the sample rate must be > 0");
+  AllanCurve c;
+  c.channel = channel;
+  c.units = units_for(channel.instrument, channel.unit);
+  if (c.channel.unit.empty()) c.channel.unit = c.units.signal;
+  c.rate_hz = rate_hz;
+  c.samples = samples;
+  c.confidence = confidence;
+  for (const auto& o : octaves) {
+    AllanPoint p;
+    p.m = o.m;
+    p.terms = o.terms;
+    p.tau_s = static_cast<double>(o.m) / rate_hz;
+    p.avar = o.avar;
+    p.adev = std::sqrt(std::max(0.0, o.avar));
+    c.points.push_back(p);
+  }
+  assign_intervals(c, nullptr);
+  return c;
+}
+
+void assign_intervals(AllanCurve& curve, const NoiseModel* model) {
+  const double n_phase = static_cast<double>(curve.samples) + 1.0;
+  for (auto& p : curve.points) {
+    p.noise = model && model->ok ? model->dominant(p.tau_s) : NoiseType::kWhite;
+    p.edf = stats::edf_overlapping_adev(p.noise, n_phase, static_cast<double>(p.m));
+    const auto ci = stats::deviation_interval(p.adev, p.edf, curve.confidence);
+    p.adev_lo = ci.lo;
+    p.adev_hi = ci.hi;
+  }
+}
+
+namespace {
+
+struct FitPoint {
+  double tau, avar, adev, edf, lo, hi;
+  std::array<double, kTerms> a;
+};
+
+// Non-negative least squares min ‖W(A c − b)‖, c ≥ 0, for 5 unknowns: the optimum is the
+// unconstrained solution on its support, so every support is tried (31 small solves).
+struct NnlsResult {
+  std::array<double, kTerms> c{};
+  std::array<bool, kTerms> active{};
+  double chi2 = 0.0;
+  Eigen::MatrixXd cov;  // over the active columns, in c units
+};
+
+NnlsResult nnls(const std::vector<FitPoint>& pts, const std::vector<double>& w) {
+  const int n = static_cast<int>(pts.size());
+  Eigen::MatrixXd A(n, kTerms);
+  Eigen::VectorXd b(n);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < kTerms; ++j) A(i, j) = w[i] * pts[i].a[j];
+    b(i) = w[i] * pts[i].avar;
+  }
+  Eigen::VectorXd scale(kTerms);
+  for (int j = 0; j < kTerms; ++j) {
+    scale(j) = A.col(j).norm();
+    if (scale(j) > 0.0) A.col(j) /= scale(j);
+  }
+  NnlsResult best;
+  best.chi2 = b.squaredNorm();  // empty support
+  for (int mask = 1; mask < (1 << kTerms); ++mask) {
+    std::vector<int> cols;
+    for (int j = 0; j < kTerms; ++j) {
+      if (mask & (1 << j)) cols.push_back(j);
+    }
+    const int k = static_cast<int>(cols.size());
+    if (k > n) continue;
+    Eigen::MatrixXd As(n, k);
+    for (int q = 0; q < k; ++q) As.col(q) = A.col(cols[q]);
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(As);
+    qr.setThreshold(1e-12);
+    if (qr.rank() < k) continue;
+    const Eigen::VectorXd x = qr.solve(b);
+    if ((x.array() <= 0.0).any()) continue;
+    const double r = (As * x - b).squaredNorm();
+    if (r < best.chi2) {
+      best = NnlsResult{};
+      best.chi2 = r;
+      for (int q = 0; q < k; ++q) {
+        best.c[cols[q]] = x(q) / scale(cols[q]);
+        best.active[cols[q]] = true;
+      }
+      const Eigen::MatrixXd AtA = As.transpose() * As;
+      Eigen::MatrixXd cov = AtA.inverse();
+      for (int p = 0; p < k; ++p) {
+        for (int q = 0; q < k; ++q) cov(p, q) /= scale(cols[p]) * scale(cols[q]);
+      }
+      best.cov = cov;
+    }
+  }
+  return best;
+}
+
+void local_slopes(const std::vector<FitPoint>& pts, std::vector<double>& slope) {
+  const std::size_t n = pts.size();
+  slope.assign(n, kNaN);
+  if (n < 2) return;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t a = i == 0 ? 0 : i - 1;
+    const std::size_t b = i + 1 == n ? n - 1 : i + 1;
+    slope[i] = (std::log(pts[b].adev) - std::log(pts[a].adev)) /
+               (std::log(pts[b].tau) - std::log(pts[a].tau));
+  }
+}
+
+// Read-off on a slope line: value_i = adev_i · (τ_ref/τ_i)^target, pooled over the points
+// whose local slope is within tolerance of `target` (log-mean weighted by EDF).
+Readoff slope_readoff(const char* name, const std::string& unit, const std::vector<FitPoint>& pts,
+                      const std::vector<double>& slope, double target, double tau_ref,
+                      const AllanOptions& opt) {
+  Readoff r;
+  r.name = name;
+  r.unit = unit;
+  double sw = 0.0, swl = 0.0;
+  int count = 0;
+  std::size_t best = pts.size();
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    if (!(pts[i].edf >= opt.min_readoff_edf)) continue;
+    if (!(std::abs(slope[i] - target) <= opt.slope_tolerance)) continue;
+    const double v = pts[i].adev * std::pow(tau_ref / pts[i].tau, target);
+    sw += pts[i].edf;
+    swl += pts[i].edf * std::log(v);
+    ++count;
+    if (best == pts.size() || pts[i].edf > pts[best].edf) best = i;
+    if (!std::isfinite(r.tau_lo_s)) r.tau_lo_s = pts[i].tau;
+    r.tau_hi_s = pts[i].tau;
+  }
+  if (count < std::max(1, opt.min_readoff_points)) {
+    r.note = fmt::format(
+        "no slope {:+.1f} region (>= {} points with |slope - {:+.1f}| <= {:.2f} and edf >= {:g}) "
+        "in the measured tau range",
+        target, std::max(1, opt.min_readoff_points), target, opt.slope_tolerance, opt.min_readoff_edf);
+    r.tau_lo_s = r.tau_hi_s = kNaN;
+    return r;
+  }
+  r.found = true;
+  r.value = std::exp(swl / sw);
+  r.lo = r.value * pts[best].lo / pts[best].adev;
+  r.hi = r.value * pts[best].hi / pts[best].adev;
+  return r;
+}
+
+}  // namespace
+
+NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
+  NoiseModel model;
+  const Units& u = curve.units;
+  model.quantization.unit = u.quantization;
+  model.white.unit = u.white;
+  model.bias_instability.unit = u.bias;
+  model.random_walk.unit = u.random_walk;
+  model.rate_ramp.unit = u.ramp;
+  model.white_line.unit = u.white;
+  model.random_walk_line.unit = u.random_walk;
+  model.bias_floor.unit = u.bias;
+
+  std::vector<FitPoint> pts;
+  for (const auto& p : curve.points) {
+    if (!(p.avar > 0.0) || !std::isfinite(p.avar) || p.terms < 1) continue;
+    pts.push_back({p.tau_s, p.avar, p.adev, kNaN, kNaN, kNaN, basis(p.tau_s)});
+  }
+  if (pts.size() < 2) {
+    model.message = fmt::format("fit failed: {} usable Allan point(s), need at least 2",
+                                pts.size());
+    return model;
+  }
+  model.tau_min_s = pts.front().tau;
+  model.tau_max_s = pts.back().tau;
+  const double n_phase = static_cast<double>(curve.samples) + 1.0;
+  auto m_of = [&](const FitPoint& p) { return std::round(p.tau * curve.rate_hz); };
+  for (auto& p : pts) p.edf = stats::edf_overlapping_adev(NoiseType::kWhite, n_phase, m_of(p));
+
+  // Iteratively reweighted: Var(σ̂²) ≈ 2σ⁴/EDF with σ² from the current model.
+  NnlsResult fit;
+  std::vector<double> w(pts.size());
+  for (int iter = 0; iter < 8; ++iter) {
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      double v = pts[i].avar;
+      if (iter > 0) {
+        double mv = 0.0;
+        for (int j = 0; j < kTerms; ++j) mv += fit.c[j] * pts[i].a[j];
+        if (mv > 0.0) v = mv;
+      }
+      const double edf = std::isfinite(pts[i].edf) && pts[i].edf > 0 ? pts[i].edf : 1.0;
+      w[i] = std::sqrt(edf / 2.0) / v;
+    }
+    fit = nnls(pts, w);
+    for (int j = 0; j < kTerms; ++j) coefficient(model, j)->fitted = std::sqrt(fit.c[j]);
+    if (opt.edf_from_model && iter >= 2) {
+      model.ok = true;  // dominant() needs it
+      for (auto& p : pts) p.edf = stats::edf_overlapping_adev(model.dominant(p.tau), n_phase, m_of(p));
+    }
+  }
+  model.ok = true;
+  int active = 0;
+  for (int j = 0; j < kTerms; ++j) active += fit.active[j] ? 1 : 0;
+  model.dof = static_cast<int>(pts.size()) - active;
+  model.chi2_reduced = model.dof > 0 ? fit.chi2 / model.dof : kNaN;
+  const double inflate = std::isfinite(model.chi2_reduced) ? std::max(1.0, model.chi2_reduced) : 1.0;
+
+  // Uncertainties: σ(c) from the covariance, σ(√c) = σ(c) / (2√c).
+  {
+    int q = 0;
+    for (int j = 0; j < kTerms; ++j) {
+      if (!fit.active[j]) continue;
+      const double var_c = fit.cov(q, q) * inflate;
+      ++q;
+      Coefficient* c = coefficient(model, j);
+      c->fitted_sigma = c->fitted > 0 ? std::sqrt(std::max(0.0, var_c)) / (2.0 * c->fitted) : kNaN;
+    }
+  }
+
+  // Intervals of the points with the final EDF (for upper bounds and read-offs).
+  for (auto& p : pts) {
+    const auto ci = stats::deviation_interval(p.adev, p.edf, curve.confidence);
+    p.lo = ci.lo;
+    p.hi = ci.hi;
+  }
+
+  // Identification: where does each term dominate inside [τ_min, τ_max]?
+  const int grid = 400;
+  const double l0 = std::log(model.tau_min_s), l1 = std::log(model.tau_max_s);
+  for (int g = 0; g <= grid; ++g) {
+    const double tau = std::exp(l0 + (l1 - l0) * g / grid);
+    const auto b = basis(tau);
+    int best = -1;
+    double best_v = 0.0;
+    for (int j = 0; j < kTerms; ++j) {
+      const double v = fit.c[j] * b[j];
+      if (v > best_v) {
+        best_v = v;
+        best = j;
+      }
+    }
+    if (best < 0) continue;
+    Coefficient* c = coefficient(model, best);
+    c->dominates = true;
+    if (!std::isfinite(c->tau_lo_s)) c->tau_lo_s = tau;
+    c->tau_hi_s = tau;
+  }
+  for (int j = 0; j < kTerms; ++j) {
+    Coefficient* c = coefficient(model, j);
+    c->identified = c->dominates && std::isfinite(c->fitted_sigma) && c->fitted >= 2.0 * c->fitted_sigma;
+    if (c->identified) {
+      c->value = c->fitted;
+      c->sigma = c->fitted_sigma;
+    }
+    // Largest coefficient compatible with every measured upper limit (term alone).
+    double bound = std::numeric_limits<double>::infinity();
+    for (const auto& p : pts) {
+      const double hi = std::isfinite(p.hi) ? p.hi : p.adev;
+      bound = std::min(bound, hi * hi / p.a[j]);
+    }
+    c->upper_bound = std::sqrt(bound);
+  }
+
+  // Slope-line read-offs.
+  std::vector<double> slope;
+  local_slopes(pts, slope);
+  model.white_line = slope_readoff(model.white_line.name, u.white, pts, slope, -0.5, 1.0, opt);
+  model.random_walk_line =
+      slope_readoff(model.random_walk_line.name, u.random_walk, pts, slope, 0.5, 3.0, opt);
+  {
+    Readoff& r = model.bias_floor;
+    r.unit = u.bias;
+    std::size_t imin = 0;
+    for (std::size_t i = 1; i < pts.size(); ++i) {
+      if (pts[i].adev < pts[imin].adev) imin = i;
+    }
+    r.tau_lo_s = r.tau_hi_s = pts[imin].tau;
+    r.value = pts[imin].adev / kFlickerFloor;
+    r.lo = pts[imin].lo / kFlickerFloor;
+    r.hi = pts[imin].hi / kFlickerFloor;
+    if (imin + 1 == pts.size()) {
+      r.note = fmt::format("ADEV still falling at tau_max = {:.4g} s: no flat minimum; B <= {:.4g} {}",
+                           pts[imin].tau, r.value, u.bias);
+    } else if (imin == 0) {
+      r.note = "ADEV rises from the smallest tau: no flat minimum";
+    } else {
+      r.found = true;
+    }
+  }
+  if (model.dof <= 0) model.message = "as many active terms as points: no residual check";
+  return model;
+}
+
+ChannelResult analyze(const OverlappingAllanStream& stream, double rate_hz,
+                      const ChannelInfo& channel, const AllanOptions& options) {
+  ChannelResult r;
+  r.curve = make_curve(stream.octaves(), stream.samples(), rate_hz, channel, options.confidence);
+  r.model = fit_noise_model(r.curve, options);
+  if (options.edf_from_model && r.model.ok) assign_intervals(r.curve, &r.model);
+  return r;
+}
+
+ChannelResult analyze(const double* y, std::size_t n, std::size_t stride, double rate_hz,
+                      const ChannelInfo& channel, const AllanOptions& options) {
+  OverlappingAllanStream s(options.max_m, n);
+  s.add(y, n, stride == 0 ? 1 : stride);
+  return analyze(s, rate_hz, channel, options);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Recordings and Kalibr
+
+KalibrParameters kalibr_parameters(const std::vector<ChannelResult>& channels, double rate_hz) {
+  KalibrParameters k;
+  k.update_rate = rate_hz;
+  for (Instrument inst : {Instrument::kAccelerometer, Instrument::kGyroscope}) {
+    double n_sum = 0.0, k_sum = 0.0;
+    int n_count = 0, k_count = 0, axes = 0;
+    bool n_all = true, k_all = true, k_bound = false;
+    for (const auto& c : channels) {
+      if (c.curve.channel.instrument != inst) continue;
+      ++axes;
+      const NoiseModel& m = c.model;
+      if (m.white.identified) {
+        n_sum += m.white.value;
+        ++n_count;
+      } else if (m.white_line.found) {
+        n_sum += m.white_line.value;
+        ++n_count;
+        n_all = false;
+      } else {
+        n_all = false;
+      }
+      if (m.random_walk.identified) {
+        k_sum += m.random_walk.value;
+      } else if (m.random_walk_line.found) {
+        k_sum += m.random_walk_line.value;
+        k_all = false;
+      } else {
+        k_sum += m.random_walk.upper_bound;
+        k_all = false;
+        k_bound = true;
+      }
+      ++k_count;
+    }
+    if (axes == 0) continue;
+    const double nd = n_count > 0 ? n_sum / n_count : kNaN;
+    const double rw = k_count > 0 ? k_sum / k_count : kNaN;
+    if (inst == Instrument::kAccelerometer) {
+      k.accelerometer_noise_density = nd;
+      k.accelerometer_random_walk = rw;
+      k.accelerometer_noise_identified = n_all && n_count == axes;
+      k.accelerometer_random_walk_identified = k_all;
+      k.accelerometer_random_walk_is_upper_bound = k_bound;
+    } else {
+      k.gyroscope_noise_density = nd;
+      k.gyroscope_random_walk = rw;
+      k.gyroscope_noise_identified = n_all && n_count == axes;
+      k.gyroscope_random_walk_identified = k_all;
+      k.gyroscope_random_walk_is_upper_bound = k_bound;
+    }
+  }
+  return k;
+}
+
+AllanReport analyze_recording(const Recording& rec, const AllanOptions& options) {
+  AllanReport report;
+  report.source = rec.dir.string();
+  if (!rec.header.experiment_name.empty()) report.source += " (" + rec.header.experiment_name + ")";
+  std::size_t i0 = 0, i1 = rec.samples.size();
+  if (std::isfinite(options.t_begin_s)) {
+    while (i0 < i1 && rec.samples[i0].t_s < options.t_begin_s) ++i0;
+  }
+  if (std::isfinite(options.t_end_s)) {
+    while (i1 > i0 && rec.samples[i1 - 1].t_s > options.t_end_s) --i1;
+  }
+  const std::size_t n = i1 - i0;
+  if (n < 2) {
+    throw std::runtime_error(fmt::format("Allan: {} has {} sample(s) in the selected time range",
+                                         report.source, n));
+  }
+  report.samples = n;
+  report.t_begin_s = rec.samples[i0].t_s;
+  report.t_end_s = rec.samples[i1 - 1].t_s;
+
+  // Rate: the header's, or the median interval.
+  std::vector<double> dt;
+  dt.reserve(n - 1);
+  for (std::size_t i = i0 + 1; i < i1; ++i) dt.push_back(rec.samples[i].t_s - rec.samples[i - 1].t_s);
+  std::vector<double> sorted = dt;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2),
+                   sorted.end());
+  const double median_dt = sorted[sorted.size() / 2];
+  double rate = rec.header.info.output_rate_hz;
+  if (!(rate > 0.0)) {
+    if (!(median_dt > 0.0)) {
+      throw std::runtime_error(fmt::format(
+          "Allan: {}: no output rate in the header and the timestamps do not increase",
+          report.source));
+    }
+    rate = 1.0 / median_dt;
+  }
+  report.rate_hz = rate;
+  std::size_t gaps = 0, irregular = 0;
+  for (std::size_t i = i0 + 1; i < i1; ++i) {
+    if (rec.samples[i].flags & kGapBefore) ++gaps;
+    const double d = dt[i - i0 - 1];
+    if (d > 1.5 / rate || d < 0.5 / rate) ++irregular;
+  }
+  if (gaps > 0) {
+    report.warnings.push_back(fmt::format(
+        "{} sample(s) flagged with lost samples before them; Allan deviation assumes uniform "
+        "sampling, so intervals near those gaps are distorted",
+        gaps));
+  }
+  if (irregular > 0) {
+    report.warnings.push_back(fmt::format(
+        "{} sample interval(s) deviate by more than 50 % from 1/rate = {:.6g} s", irregular,
+        1.0 / rate));
+  }
+
+  const bool gyro = rec.header.info.has_gyro;
+  const char* names[6] = {"ax", "ay", "az", "gx", "gy", "gz"};
+  std::vector<double> buf(OverlappingAllanStream::kBlock);
+  for (int ch = 0; ch < (gyro ? 6 : 3); ++ch) {
+    OverlappingAllanStream s(options.max_m, n);
+    for (std::size_t i = i0; i < i1;) {
+      const std::size_t take = std::min(buf.size(), i1 - i);
+      for (std::size_t t = 0; t < take; ++t) {
+        const ImuSample& smp = rec.samples[i + t];
+        buf[t] = ch < 3 ? smp.accel_mps2[ch] : smp.gyro_radps[ch - 3];
+      }
+      s.add(buf.data(), take);
+      i += take;
+    }
+    ChannelInfo info;
+    info.name = names[ch];
+    info.instrument = ch < 3 ? Instrument::kAccelerometer : Instrument::kGyroscope;
+    report.channels.push_back(analyze(s, rate, info, options));
+  }
+  report.kalibr = kalibr_parameters(report.channels, rate);
+  return report;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Text
+
+std::ostream& operator<<(std::ostream& os, const AllanPoint& p) {
+  os << fmt::format("tau {:.6g} s (m {}): adev {:.5g} [{:.5g}, {:.5g}], edf {:.4g} ({})", p.tau_s,
+                    p.m, p.adev, p.adev_lo, p.adev_hi, p.edf, to_string(p.noise));
+  return os;
+}
+
+std::ostream& operator<<(std::ostream& os, const AllanCurve& c) {
+  os << fmt::format("Allan deviation of {} ({}, {}), {} samples at {:.6g} Hz, {:.1f} % intervals\n",
+                    c.channel.name, to_string(c.channel.instrument), c.units.signal, c.samples,
+                    c.rate_hz, 100.0 * c.confidence);
+  os << fmt::format("  {:>12} {:>10} {:>12} {:>12} {:>12} {:>10}  {}\n", "tau [s]", "m", "adev",
+                    "lo", "hi", "edf", "noise (EDF)");
+  for (const auto& p : c.points) {
+    os << fmt::format("  {:>12.6g} {:>10} {:>12.5g} {:>12.5g} {:>12.5g} {:>10.4g}  {}\n", p.tau_s,
+                      p.m, p.adev, p.adev_lo, p.adev_hi, p.edf, to_string(p.noise));
+  }
+  return os;
+}
+
+std::ostream& operator<<(std::ostream& os, const Coefficient& c) {
+  if (c.identified) {
+    os << fmt::format("{} ({}) = {:.4g} ± {:.2g} {}  [dominates {:.3g} … {:.3g} s]", c.symbol,
+                      c.name, c.value, c.sigma, c.unit, c.tau_lo_s, c.tau_hi_s);
+  } else if (c.dominates) {
+    os << fmt::format("{} ({}): not identified — dominates {:.3g} … {:.3g} s but the fit "
+                      "{:.3g} ± {:.2g} is not significant; <= {:.3g} {}",
+                      c.symbol, c.name, c.tau_lo_s, c.tau_hi_s, c.fitted, c.fitted_sigma,
+                      c.upper_bound, c.unit);
+  } else {
+    os << fmt::format("{} ({}): not identified (no slope region in the measured tau range); "
+                      "<= {:.3g} {}",
+                      c.symbol, c.name, c.upper_bound, c.unit);
+  }
+  return os;
+}
+
+std::ostream& operator<<(std::ostream& os, const Readoff& r) {
+  if (r.found) {
+    os << fmt::format("{} = {:.4g} {} [{:.4g}, {:.4g}] from tau {:.3g} … {:.3g} s", r.name, r.value,
+                      r.unit, r.lo, r.hi, r.tau_lo_s, r.tau_hi_s);
+  } else {
+    os << fmt::format("{}: not found — {}", r.name, r.note);
+  }
+  return os;
+}
+
+std::ostream& operator<<(std::ostream& os, const NoiseModel& m) {
+  if (!m.ok) return os << "noise model: FIT FAILED — " << m.message << "\n";
+  os << fmt::format("noise model over tau {:.3g} … {:.3g} s (reduced chi2 {:.3g}, {} dof):\n",
+                    m.tau_min_s, m.tau_max_s, m.chi2_reduced, m.dof);
+  for (int j = 0; j < kTerms; ++j) os << "  " << *coefficient(m, j) << "\n";
+  os << "  read-offs: " << m.white_line << "\n";
+  os << "             " << m.random_walk_line << "\n";
+  os << "             " << m.bias_floor << "\n";
+  if (!m.message.empty()) os << "  note: " << m.message << "\n";
+  return os;
+}
+
+std::ostream& operator<<(std::ostream& os, const ChannelResult& r) {
+  return os << r.curve << r.model;
+}
+
+namespace {
+std::string kalibr_line(const char* key, double v, const char* unit, bool identified,
+                        bool upper) {
+  std::string status = identified ? "identified" : (upper ? "UPPER BOUND: not identified"
+                                                          : "from slope read-off / partial");
+  if (!std::isfinite(v)) status = "NOT AVAILABLE";
+  return fmt::format("{}: {}  # [{}] {}\n", key, std::isfinite(v) ? fmt::format("{:.6g}", v) : "null",
+                     unit, status);
+}
+}  // namespace
+
+void write_kalibr_yaml(std::ostream& os, const KalibrParameters& k) {
+  os << "# IMU noise parameters (Kalibr imu.yaml) from the Allan deviation, mean over axes\n";
+  os << kalibr_line("accelerometer_noise_density", k.accelerometer_noise_density,
+                    "m/s^2/sqrt(Hz)", k.accelerometer_noise_identified, false);
+  os << kalibr_line("accelerometer_random_walk", k.accelerometer_random_walk, "m/s^3/sqrt(Hz)",
+                    k.accelerometer_random_walk_identified,
+                    k.accelerometer_random_walk_is_upper_bound);
+  os << kalibr_line("gyroscope_noise_density", k.gyroscope_noise_density, "rad/s/sqrt(Hz)",
+                    k.gyroscope_noise_identified, false);
+  os << kalibr_line("gyroscope_random_walk", k.gyroscope_random_walk, "rad/s^2/sqrt(Hz)",
+                    k.gyroscope_random_walk_identified, k.gyroscope_random_walk_is_upper_bound);
+  os << fmt::format("update_rate: {:.6g}  # [Hz]\n", k.update_rate);
+}
+
+std::ostream& operator<<(std::ostream& os, const KalibrParameters& k) {
+  write_kalibr_yaml(os, k);
+  return os;
+}
+
+void write_summary_table(std::ostream& os, const AllanReport& r) {
+  os << fmt::format("{:<4} {:>12} {:>12} {:>12} {:>12} {:>12} | {:>12} {:>12} {:>12}  {}\n", "axis",
+                    "N", "K", "B", "Q", "R", "N@1s line", "K@3s line", "B=min/.664", "units");
+  auto cell = [](const Coefficient& c) {
+    return c.identified ? fmt::format("{:.4g}", c.value) : fmt::format("<={:.3g}", c.upper_bound);
+  };
+  auto rcell = [](const Readoff& x) {
+    return x.found ? fmt::format("{:.4g}", x.value)
+                   : (std::isfinite(x.value) ? fmt::format("<={:.3g}", x.value) : std::string("-"));
+  };
+  for (const auto& c : r.channels) {
+    const auto& m = c.model;
+    const auto& u = c.curve.units;
+    os << fmt::format("{:<4} {:>12} {:>12} {:>12} {:>12} {:>12} | {:>12} {:>12} {:>12}  N {}, K {}, B {}, Q {}, R {}\n",
+                      c.curve.channel.name, cell(m.white), cell(m.random_walk),
+                      cell(m.bias_instability), cell(m.quantization), cell(m.rate_ramp),
+                      rcell(m.white_line), rcell(m.random_walk_line), rcell(m.bias_floor), u.white,
+                      u.random_walk, u.bias, u.quantization, u.ramp);
+  }
+  // Datasheet units.
+  for (const auto& c : r.channels) {
+    const auto& m = c.model;
+    const double n = m.white.identified ? m.white.value : m.white_line.value;
+    const double b = m.bias_floor.value;
+    if (c.curve.channel.instrument == Instrument::kGyroscope) {
+      const double deg = 180.0 / std::numbers::pi;
+      os << fmt::format("{:<4} ARW {} deg/sqrt(h), bias instability {} deg/h{}\n",
+                        c.curve.channel.name, fmt_value(n * deg * 60.0), fmt_value(b * deg * 3600.0),
+                        m.bias_floor.found ? "" : " (upper bound)");
+    } else if (c.curve.channel.instrument == Instrument::kAccelerometer) {
+      os << fmt::format("{:<4} VRW {} m/s/sqrt(h) = {} ug/sqrt(Hz), bias instability {} ug{}\n",
+                        c.curve.channel.name, fmt_value(n * 60.0),
+                        fmt_value(n / kStandardGravity * 1e6),
+                        fmt_value(b / kStandardGravity * 1e6),
+                        m.bias_floor.found ? "" : " (upper bound)");
+    }
+  }
+}
+
+std::ostream& operator<<(std::ostream& os, const AllanReport& r) {
+  os << fmt::format("Allan analysis of {}: {} samples at {:.6g} Hz, t = {:.6g} … {:.6g} s\n",
+                    r.source, r.samples, r.rate_hz, r.t_begin_s, r.t_end_s);
+  for (const auto& w : r.warnings) os << "WARNING: " << w << "\n";
+  for (const auto& c : r.channels) os << "\n" << c;
+  os << "\n";
+  write_summary_table(os, r);
+  os << "\n";
+  write_kalibr_yaml(os, r.kalibr);
+  return os;
+}
+
+// ---------------------------------------------------------------------------------------------
+// JSON
+
+namespace {
+using nlohmann::json;
+
+json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+json to_json(const Coefficient& c) {
+  return {{"symbol", c.symbol},   {"name", c.name},
+          {"unit", c.unit},       {"identified", c.identified},
+          {"value", num(c.value)}, {"sigma", num(c.sigma)},
+          {"fitted", num(c.fitted)}, {"fitted_sigma", num(c.fitted_sigma)},
+          {"dominates", c.dominates}, {"upper_bound", num(c.upper_bound)},
+          {"dominates_tau_s", c.dominates ? json::array({c.tau_lo_s, c.tau_hi_s}) : json(nullptr)}};
+}
+
+json to_json(const Readoff& r) {
+  return {{"name", r.name},     {"unit", r.unit},   {"found", r.found},
+          {"value", num(r.value)}, {"lo", num(r.lo)}, {"hi", num(r.hi)},
+          {"tau_s", json::array({num(r.tau_lo_s), num(r.tau_hi_s)})},
+          {"note", r.note}};
+}
+
+json to_json(const ChannelResult& r) {
+  json pts = json::array();
+  for (const auto& p : r.curve.points) {
+    pts.push_back({{"tau_s", p.tau_s},      {"m", p.m},           {"terms", p.terms},
+                   {"avar", num(p.avar)},   {"adev", num(p.adev)}, {"adev_lo", num(p.adev_lo)},
+                   {"adev_hi", num(p.adev_hi)}, {"edf", num(p.edf)},
+                   {"noise", to_string(p.noise)}});
+  }
+  const NoiseModel& m = r.model;
+  json model = {{"ok", m.ok},
+                {"message", m.message},
+                {"chi2_reduced", num(m.chi2_reduced)},
+                {"dof", m.dof},
+                {"tau_range_s", json::array({num(m.tau_min_s), num(m.tau_max_s)})},
+                {"Q", to_json(m.quantization)},
+                {"N", to_json(m.white)},
+                {"B", to_json(m.bias_instability)},
+                {"K", to_json(m.random_walk)},
+                {"R", to_json(m.rate_ramp)},
+                {"readoffs",
+                 {{"N_line", to_json(m.white_line)},
+                  {"K_line", to_json(m.random_walk_line)},
+                  {"B_floor", to_json(m.bias_floor)}}}};
+  return {{"channel", r.curve.channel.name},
+          {"instrument", to_string(r.curve.channel.instrument)},
+          {"unit", r.curve.units.signal},
+          {"rate_hz", r.curve.rate_hz},
+          {"samples", r.curve.samples},
+          {"confidence", r.curve.confidence},
+          {"points", pts},
+          {"model", model}};
+}
+
+json to_json(const KalibrParameters& k) {
+  return {{"accelerometer_noise_density", num(k.accelerometer_noise_density)},
+          {"accelerometer_random_walk", num(k.accelerometer_random_walk)},
+          {"gyroscope_noise_density", num(k.gyroscope_noise_density)},
+          {"gyroscope_random_walk", num(k.gyroscope_random_walk)},
+          {"update_rate", num(k.update_rate)},
+          {"units",
+           {{"accelerometer_noise_density", "m/s^2/sqrt(Hz)"},
+            {"accelerometer_random_walk", "m/s^3/sqrt(Hz)"},
+            {"gyroscope_noise_density", "rad/s/sqrt(Hz)"},
+            {"gyroscope_random_walk", "rad/s^2/sqrt(Hz)"},
+            {"update_rate", "Hz"}}},
+          {"accelerometer_noise_identified", k.accelerometer_noise_identified},
+          {"accelerometer_random_walk_identified", k.accelerometer_random_walk_identified},
+          {"accelerometer_random_walk_is_upper_bound", k.accelerometer_random_walk_is_upper_bound},
+          {"gyroscope_noise_identified", k.gyroscope_noise_identified},
+          {"gyroscope_random_walk_identified", k.gyroscope_random_walk_identified},
+          {"gyroscope_random_walk_is_upper_bound", k.gyroscope_random_walk_is_upper_bound}};
+}
+}  // namespace
+
+void write_json(std::ostream& os, const ChannelResult& result, int indent) {
+  os << to_json(result).dump(indent) << "\n";
+}
+
+void write_json(std::ostream& os, const AllanReport& r, int indent) {
+  json ch = json::array();
+  for (const auto& c : r.channels) ch.push_back(to_json(c));
+  json j = {{"source", r.source},
+            {"rate_hz", r.rate_hz},
+            {"samples", r.samples},
+            {"t_range_s", json::array({num(r.t_begin_s), num(r.t_end_s)})},
+            {"warnings", r.warnings},
+            {"channels", ch},
+            {"kalibr", to_json(r.kalibr)}};
+  os << j.dump(indent) << "\n";
+}
+
+}  // namespace stend::allan

@@ -1,0 +1,150 @@
+// Statistics behind the Allan intervals: chi-squared quantiles against table values, the
+// regularized gamma function, and the EDF against the exact EDF of Gaussian second differences.
+#include <stend/allan/stats.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+using namespace stend::allan;
+using namespace stend::allan::stats;
+
+namespace {
+
+// Exact EDF of s = (1/M) Σ d_k² when d_t = Σ_i k_i w_{t−i} with w white Gaussian:
+// EDF = 2 E[s]² / Var[s] = M² c0² / Σ_{k,l} c(k−l)².
+double exact_edf(const std::vector<double>& kernel, long M) {
+  const long L = static_cast<long>(kernel.size());
+  auto c = [&](long j) {
+    double s = 0.0;
+    for (long i = 0; i + j < L; ++i) s += kernel[static_cast<std::size_t>(i)] * kernel[static_cast<std::size_t>(i + j)];
+    return s;
+  };
+  const double c0 = c(0);
+  double sum = static_cast<double>(M) * c0 * c0;
+  for (long j = 1; j < std::min(M, L); ++j) {
+    const double cj = c(j);
+    sum += 2.0 * static_cast<double>(M - j) * cj * cj;
+  }
+  return static_cast<double>(M) * static_cast<double>(M) * c0 * c0 / sum;
+}
+
+// Second difference x_k − 2x_{k−m} + x_{k−2m} of the phase as a filter on the *rate* samples
+// (white rate noise) and on the rate increments (random-walk rate).
+std::vector<double> white_kernel(long m) {
+  std::vector<double> h(static_cast<std::size_t>(2 * m));
+  for (long i = 0; i < m; ++i) {
+    h[static_cast<std::size_t>(i)] = 1.0;
+    h[static_cast<std::size_t>(m + i)] = -1.0;
+  }
+  return h;
+}
+std::vector<double> random_walk_kernel(long m) {
+  auto h = white_kernel(m);
+  double acc = 0.0;
+  for (auto& v : h) {
+    acc += v;
+    v = acc;
+  }
+  return h;
+}
+
+}  // namespace
+
+TEST(ChiSquared, MatchesTableValues) {
+  struct Row {
+    double p, nu, x;
+  };
+  // Standard chi-squared table (7 significant digits).
+  const Row table[] = {{0.025, 1, 0.000982069}, {0.975, 1, 5.023886},  {0.05, 10, 3.940299},
+                       {0.95, 10, 18.30704},     {0.5, 2, 1.386294},    {0.01, 100, 70.06489},
+                       {0.99, 100, 135.8067},    {0.1, 5, 1.610308},    {0.9, 5, 9.236357},
+                       {0.005, 1000, 888.5635},  {0.995, 1000, 1118.948}, {0.05, 3, 0.3518463},
+                       {0.95, 3, 7.814728},      {0.001, 20, 5.921040}, {0.999, 20, 45.31475}};
+  for (const auto& r : table) {
+    EXPECT_NEAR(chi2_quantile(r.p, r.nu) / r.x, 1.0, 2e-6) << "p=" << r.p << " nu=" << r.nu;
+  }
+}
+
+TEST(ChiSquared, InvertsTheCdfForNonIntegerAndLargeDegrees) {
+  for (double nu : {0.3, 1.7, 7.5, 50.5, 1e4, 1e6}) {
+    for (double p : {1e-6, 0.0228, 0.1587, 0.5, 0.8413, 0.9772, 0.999999}) {
+      const double x = chi2_quantile(p, nu);
+      EXPECT_NEAR(chi2_cdf(x, nu), p, 1e-9 * std::max(1.0, p / (1 - p)) + 1e-12)
+          << "nu=" << nu << " p=" << p;
+    }
+  }
+  // Wilson–Hilferty regime: the median of χ²(ν) is ≈ ν(1 − 2/(9ν))³.
+  const double nu = 5e7;
+  EXPECT_NEAR(chi2_quantile(0.5, nu) / (nu * std::pow(1 - 2 / (9 * nu), 3)), 1.0, 1e-12);
+}
+
+TEST(ChiSquared, RejectsBadArguments) {
+  EXPECT_THROW(chi2_quantile(0.0, 3), std::domain_error);
+  EXPECT_THROW(chi2_quantile(1.0, 3), std::domain_error);
+  EXPECT_THROW(chi2_quantile(0.5, 0), std::domain_error);
+  EXPECT_THROW(normal_quantile(1.5), std::domain_error);
+}
+
+TEST(NormalQuantile, KnownValues) {
+  EXPECT_NEAR(normal_quantile(0.975), 1.959963984540054, 1e-12);
+  EXPECT_NEAR(normal_quantile(0.5), 0.0, 1e-15);
+  EXPECT_NEAR(normal_quantile(0.8413447460685429), 1.0, 1e-12);
+  EXPECT_NEAR(normal_quantile(1e-10), -6.361340902404056, 1e-9);
+}
+
+TEST(GammaP, KnownValues) {
+  EXPECT_NEAR(gamma_p(1.0, 1.0), 1.0 - std::exp(-1.0), 1e-15);
+  EXPECT_NEAR(gamma_p(0.5, 2.0), std::erf(std::sqrt(2.0)), 1e-14);
+  EXPECT_NEAR(gamma_p(3.0, 2.0), 1.0 - std::exp(-2.0) * (1 + 2 + 2), 1e-14);
+}
+
+TEST(Edf, WhiteNoiseMatchesExactEdf) {
+  for (long N : {151L, 1001L, 20001L}) {
+    for (long m : {1L, 2L, 4L, 8L, 16L, 32L, 64L}) {
+      if (2 * m >= N) continue;
+      const double exact = exact_edf(white_kernel(m), N - 2 * m);
+      EXPECT_NEAR(edf_overlapping_adev(NoiseType::kWhite, static_cast<double>(N), static_cast<double>(m)) / exact,
+                  1.0, 0.005)
+          << "N=" << N << " m=" << m;
+      // The NIST SP 1065 closed form is close for white noise as well.
+      EXPECT_NEAR(edf_overlapping_adev_simple(NoiseType::kWhite, static_cast<double>(N), static_cast<double>(m)) / exact,
+                  1.0, 0.08);
+    }
+  }
+}
+
+TEST(Edf, RandomWalkMatchesExactEdfBeyondTheFirstOctaves) {
+  // Greenhall's model is the continuous random walk; the sampled one differs at m ≤ 4 only.
+  for (long N : {1001L, 20001L}) {
+    for (long m : {8L, 16L, 32L, 64L}) {
+      const double exact = exact_edf(random_walk_kernel(m), N - 2 * m);
+      EXPECT_NEAR(edf_overlapping_adev(NoiseType::kRandomWalk, static_cast<double>(N), static_cast<double>(m)) / exact,
+                  1.0, 0.02)
+          << "N=" << N << " m=" << m;
+    }
+  }
+}
+
+TEST(Edf, LargeRecordsUseTheAsymptoticTable) {
+  // r = M/m > 3 and J > 100: edf = r / (a0 − a1/r), white noise a0 = 2/3, a1 = 1/3.
+  const double N = 1e6 + 1, m = 1000, M = N - 2 * m, r = M / m;
+  EXPECT_NEAR(edf_overlapping_adev(NoiseType::kWhite, N, m), r / (2.0 / 3.0 - 1.0 / 3.0 / r), 1e-6);
+  for (auto t : {NoiseType::kQuantization, NoiseType::kFlickerPhase, NoiseType::kWhite,
+                 NoiseType::kFlicker, NoiseType::kRandomWalk}) {
+    const double e = edf_overlapping_adev(t, N, m);
+    EXPECT_TRUE(std::isfinite(e) && e > 0) << to_string(t);
+  }
+  EXPECT_TRUE(std::isnan(edf_overlapping_adev(NoiseType::kWhite, 10, 5)));  // no difference
+}
+
+TEST(Interval, CoversTheEstimateAndShrinksWithEdf) {
+  const auto a = deviation_interval(1.0, 10, kOneSigma);
+  const auto b = deviation_interval(1.0, 1000, kOneSigma);
+  EXPECT_LT(a.lo, 1.0);
+  EXPECT_GT(a.hi, 1.0);
+  EXPECT_LT(b.hi - b.lo, a.hi - a.lo);
+  // ±1/√(2·edf) for large edf.
+  EXPECT_NEAR(b.hi - 1.0, 1.0 / std::sqrt(2.0 * 1000), 2e-3);
+}

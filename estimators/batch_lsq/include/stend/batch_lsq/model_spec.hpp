@@ -1,0 +1,57 @@
+// The model specification of a batch least-squares fit, read from YAML:
+//
+//   instrument: accelerometer          # or gyroscope
+//   axes: [z]                          # output axes whose equations enter the fit (default x, y, z)
+//   terms:                             # the error-model vocabulary (stend/model/terms.hpp)
+//     - bias
+//     - scale
+//     - cross_axis: {}
+//     - bias_temperature: {order: 2, reference_c: 25}
+//   extraction:                        # static extraction per segment (paper step 3)
+//     filter_order: 6                  # Butterworth order
+//     cutoff_hz: 1.0                   # −3 dB frequency
+//     settle_s: 2.0                    # discarded at each end of the segment
+//     zero_phase: true                 # forward-backward filtering
+//   segments: [orientation]            # which segment kinds are static points
+//   weighting: none                    # or segment_noise (1/σ² of each segment's mean)
+//   confidence: 0.95                   # interval level
+//
+// Errors are stend::ExperimentError with "FILE:LINE:COLUMN: error: …" messages.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "stend/model/terms.hpp"
+#include "stend/signal/static_extraction.hpp"
+
+namespace stend::batch_lsq {
+
+enum class Weighting {
+  kNone,          // unit weights; σ² from the residuals (the paper's batch LSQ)
+  kSegmentNoise,  // weights 1/se² from each segment's white-noise standard error, still rescaled
+                  // by the residual variance
+};
+
+struct ModelSpec {
+  model::ErrorModel model;
+  std::vector<int> axes = {0, 1, 2};  // 0 = x, 1 = y, 2 = z
+  signal::StaticExtractionSettings extraction;
+  std::vector<std::string> segment_kinds = {"orientation"};
+  Weighting weighting = Weighting::kNone;
+  double confidence = 0.95;
+  std::string source;  // file the spec came from ("" when built in code)
+};
+
+ModelSpec parse_model_spec(const std::string& yaml_text, const std::string& source_name = "<model>");
+ModelSpec load_model_spec(const std::filesystem::path& file);
+
+// Back to YAML (round-trips through parse_model_spec).
+std::string to_yaml(const ModelSpec& spec);
+
+const char* instrument_name(model::Instrument inst);  // "accelerometer" | "gyroscope"
+const char* weighting_name(Weighting w);               // "none" | "segment_noise"
+char axis_name(int axis);                              // 'x' 'y' 'z'
+
+}  // namespace stend::batch_lsq

@@ -1,0 +1,226 @@
+// Text table and JSON ("stend.fit/1") output of a batch_lsq fit.
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <ostream>
+#include <stdexcept>
+
+#include "stend/batch_lsq/batch_lsq.hpp"
+
+namespace stend::batch_lsq {
+
+namespace {
+
+// %.<digits>g, or %.<digits>f when fixed.
+std::string num(double v, int digits = 6, bool fixed = false) {
+  if (std::isnan(v)) return "n/a";
+  char buf[64];
+  if (fixed)
+    std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  else
+    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
+}
+
+nlohmann::ordered_json number_or_null(double v) {
+  if (!std::isfinite(v)) return nullptr;
+  return v;
+}
+
+std::string term_text(const model::TermSpec& t) {
+  std::string s = model::term_name(t.kind);
+  if (t.kind == model::TermKind::kBiasTemperature || t.kind == model::TermKind::kScaleTemperature)
+    s += "(order " + std::to_string(t.order) + ", T0 " + num(t.reference_c) + " degC)";
+  return s;
+}
+
+nlohmann::ordered_json combination_json(const estimation::Combination& c,
+                                 const std::vector<estimation::ParameterEstimate>& params) {
+  nlohmann::ordered_json coeffs = nlohmann::ordered_json::object();
+  for (const auto& [idx, v] : c.coefficients) coeffs[params[static_cast<std::size_t>(idx)].name] = v;
+  return {{"text", c.text},
+          {"coefficients", coeffs},
+          {"value", number_or_null(c.value)},
+          {"std_error", number_or_null(c.std_error)},
+          {"interval", {number_or_null(c.lower), number_or_null(c.upper)}}};
+}
+
+}  // namespace
+
+void print_table(std::ostream& os, const FitResult& fr) {
+  const ModelSpec& s = fr.spec;
+  os << "batch_lsq " << kEstimatorVersion << " — " << instrument_name(s.model.instrument)
+     << ", axes [";
+  for (std::size_t i = 0; i < s.axes.size(); ++i) os << (i ? ", " : "") << axis_name(s.axes[i]);
+  os << "], terms:";
+  for (const auto& t : s.model.terms) os << " " << term_text(t);
+  os << "\n";
+  if (!fr.recording_dir.empty())
+    os << "recording: " << fr.recording_dir << " (experiment '" << fr.experiment_name
+       << "', status " << fr.recording_status << ")\n";
+  if (!fr.extracted)
+    os << "static extraction: none (the points were given directly); weighting "
+       << weighting_name(s.weighting) << "\n";
+  else
+    os << "static extraction: Butterworth order " << s.extraction.filter_order << ", cutoff "
+     << num(s.extraction.cutoff_hz) << " Hz, " << (s.extraction.zero_phase ? "zero-phase" : "causal")
+     << ", settle " << num(s.extraction.settle_s) << " s discarded at each end; weighting "
+     << weighting_name(s.weighting) << "\n";
+  if (!fr.ok) {
+    os << "FIT FAILED: " << fr.message << "\n";
+    for (const auto& n : fr.notes) os << "note: " << n << "\n";
+    return;
+  }
+  os << "points: " << fr.points.size() << " orientations x " << s.axes.size() << " axes = "
+     << fr.lsq.observations << " equations, " << fr.lsq.parameter_count << " parameters, rank "
+     << fr.lsq.rank << ", dof " << fr.lsq.dof << "\n";
+  os << fr.lsq;
+  if (!fr.excluded.empty()) {
+    os << "not in this fit (cannot affect the fitted axes):";
+    for (const auto& e : fr.excluded) os << " " << e;
+    os << "\n";
+  }
+  os << "residual RMS:";
+  for (int a : s.axes)
+    os << "  " << axis_name(a) << " " << num(fr.residual_rms[a], 4) << " " << fr.unit << " ("
+       << num(fr.residual_rms_display[a], 4) << " " << fr.display_unit << ")";
+  os << "\nresidual standard deviation (dof-corrected): " << num(std::sqrt(fr.lsq.sigma2), 4)
+     << " " << fr.unit << "\n";
+  for (const auto& n : fr.notes) os << "note: " << n << "\n";
+}
+
+std::string to_json(const FitResult& fr, int indent) {
+  using json = nlohmann::ordered_json;
+  const ModelSpec& s = fr.spec;
+  json j;
+  j["schema"] = kFitSchema;
+  j["estimator"] = {{"name", kEstimatorName}, {"version", kEstimatorVersion}};
+  j["status"] = fr.ok ? "ok" : "failed";
+  j["message"] = fr.message;
+  j["recording"] = {{"dir", fr.recording_dir},
+                    {"experiment", fr.experiment_name},
+                    {"status", fr.recording_status}};
+  json terms = json::array();
+  for (const auto& t : s.model.terms) {
+    json tj = {{"kind", model::term_name(t.kind)}};
+    if (t.kind == model::TermKind::kBiasTemperature || t.kind == model::TermKind::kScaleTemperature) {
+      tj["order"] = t.order;
+      tj["reference_c"] = t.reference_c;
+    }
+    terms.push_back(tj);
+  }
+  json axes = json::array();
+  for (int a : s.axes) axes.push_back(std::string(1, axis_name(a)));
+  j["model"] = {{"instrument", instrument_name(s.model.instrument)},
+                {"axes", axes},
+                {"terms", terms},
+                {"source", s.source}};
+  j["extraction"] = {{"applied", fr.extracted},
+                     {"filter", "butterworth"},
+                     {"order", s.extraction.filter_order},
+                     {"cutoff_hz", s.extraction.cutoff_hz},
+                     {"settle_s", s.extraction.settle_s},
+                     {"zero_phase", s.extraction.zero_phase},
+                     {"segment_kinds", s.segment_kinds}};
+  j["weighting"] = weighting_name(s.weighting);
+  j["units"] = {{"residual", fr.unit}, {"residual_display", fr.display_unit}};
+  j["notes"] = fr.notes;
+  j["excluded_parameters"] = fr.excluded;
+  json pts = json::array();
+  for (const auto& p : fr.points) {
+    json m = json::array(), se = json::array(), in = json::array();
+    for (int a = 0; a < 3; ++a) {
+      m.push_back(number_or_null(p.measured[a]));
+      se.push_back(number_or_null(p.measured_std_error[a]));
+      in.push_back(number_or_null(p.stimulus.input[a]));
+    }
+    pts.push_back({{"segment", p.segment_id},
+                   {"label", p.label},
+                   {"t_start_s", p.t_start_s},
+                   {"t_end_s", p.t_end_s},
+                   {"samples", p.samples_used},
+                   {"measured", m},
+                   {"measured_std_error", se},
+                   {"true_input", in},
+                   {"temperature_c", number_or_null(p.stimulus.temperature_c)}});
+  }
+  j["points"] = pts;
+  if (!fr.ok) return j.dump(indent);
+
+  const auto& r = fr.lsq;
+  j["solution"] = {{"method", r.method == estimation::LsqMethod::kQr ? "qr" : "svd"},
+                   {"observations", r.observations},
+                   {"parameters", r.parameter_count},
+                   {"rank", r.rank},
+                   {"dof", r.dof},
+                   {"rss", r.rss},
+                   {"sigma", std::sqrt(r.sigma2)},
+                   {"confidence", r.confidence},
+                   {"quantile", r.quantile},
+                   {"condition_number", number_or_null(r.condition_number)},
+                   {"condition_number_identified", number_or_null(r.condition_number_identified)}};
+  json params = json::array();
+  for (std::size_t i = 0; i < r.parameters.size(); ++i) {
+    const auto& e = r.parameters[i];
+    json pj = {{"name", e.name},
+               {"unit", e.unit},
+               {"index", fr.param_index[i]},
+               {"identifiable", e.identifiable}};
+    if (e.identifiable) {
+      pj["value"] = e.value;
+      pj["std_error"] = e.std_error;
+      pj["interval"] = {e.lower, e.upper};
+    } else {
+      pj["value"] = nullptr;
+      pj["std_error"] = nullptr;
+      pj["interval"] = nullptr;
+      pj["reason"] = e.reason;
+    }
+    params.push_back(pj);
+  }
+  j["parameters"] = params;
+  json corr = json::array();
+  const Eigen::MatrixXd c = r.correlation();
+  for (Eigen::Index a = 0; a < c.rows(); ++a) {
+    json row = json::array();
+    for (Eigen::Index b = 0; b < c.cols(); ++b) row.push_back(number_or_null(c(a, b)));
+    corr.push_back(row);
+  }
+  j["correlation"] = corr;
+  json aliases = json::array();
+  for (const auto& g : r.aliases) {
+    json names = json::array();
+    for (int idx : g.parameters) names.push_back(r.parameters[static_cast<std::size_t>(idx)].name);
+    json comb = json::array();
+    for (const auto& cb : g.identified) comb.push_back(combination_json(cb, r.parameters));
+    aliases.push_back({{"parameters", names},
+                       {"null_dimension", g.null_dimension},
+                       {"identified_combinations", comb}});
+  }
+  j["aliases"] = aliases;
+  j["warnings"] = r.warnings;
+  json rms = json::object(), rms_d = json::object();
+  for (int a : s.axes) {
+    rms[std::string(1, axis_name(a))] = fr.residual_rms[a];
+    rms_d[std::string(1, axis_name(a))] = fr.residual_rms_display[a];
+  }
+  json res = json::array();
+  for (const auto& x : fr.residuals)
+    res.push_back({{"point", x.point},
+                   {"axis", std::string(1, axis_name(x.axis))},
+                   {"observed", x.observed},
+                   {"fitted", x.fitted},
+                   {"residual", x.residual}});
+  j["residuals"] = {{"rms", rms}, {"rms_display", rms_d}, {"rows", res}};
+  return j.dump(indent);
+}
+
+void write_json(const std::filesystem::path& file, const FitResult& fit) {
+  std::ofstream out(file);
+  if (!out) throw std::runtime_error("cannot write fit JSON '" + file.string() + "'");
+  out << to_json(fit) << "\n";
+  if (!out) throw std::runtime_error("error while writing fit JSON '" + file.string() + "'");
+}
+
+}  // namespace stend::batch_lsq

@@ -1,0 +1,809 @@
+// Recording store: round trip, tolerance of interrupted writes, durability under SIGKILL, scale.
+#include <stend/recording.hpp>
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/mman.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <new>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+namespace fs = std::filesystem;
+using stend::Event;
+using stend::ImuSample;
+using stend::Recording;
+using stend::RecordingHeader;
+using stend::RecordingWriter;
+using stend::Segment;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Bit-exact equality, with every NaN equal to every NaN (the CSV keeps no NaN payload).
+bool same(double a, double b) {
+  if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void spit(const fs::path& p, const std::string& s) {
+  std::ofstream out(p, std::ios::binary | std::ios::trunc);
+  out << s;
+}
+
+double monotonic_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+RecordingHeader make_header() {
+  RecordingHeader h;
+  h.experiment_name = "six-position, \"quoted\" & ünïcode";
+  h.experiment_file = "/lab/configs/six_position.yaml";
+  h.stend_version = "0.1.0";
+  h.plugins = {{"sensor", "sim_imu", "0.1.0", "/usr/lib/stend/plugins/libsim_imu.so"},
+               {"table", "sim_table", "0.2.0", "libsim_table.so"}};
+  h.identity = {"InvenSense", "MPU-6050", "SN-0042", "0x68"};
+  h.info.output_rate_hz = 1000.0;
+  h.info.accel_range_mps2 = 2 * 9.80665;
+  h.info.gyro_range_radps = 250.0 * M_PI / 180.0;
+  h.info.accel_lsb_mps2 = 9.80665 / 16384.0;
+  h.info.gyro_lsb_radps = M_PI / 180.0 / 131.0;
+  h.info.temperature_lsb_c = 1.0 / 340.0;
+  h.info.has_gyro = true;
+  h.info.has_temperature = false;
+  h.gravity_mps2 = 9.8153872;
+  h.latitude_deg = 55.7558;
+  h.height_m = 151.3;
+  h.mounting_R = {0, -1, 0, 1, 0, 0, 0, 0, 1};
+  h.seed = 0xFEDCBA9876543210ull;  // above 2^63: must survive JSON
+  h.clock = "simulated";
+  h.truth_columns = {"table.angle.cmd_deg", "air_c", "f_x_mps2", "odd, name \"x\""};
+  h.start_time_utc = "2024-03-01T10:00:00.000Z";
+  return h;
+}
+
+std::uint64_t splitmix(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+// Sample k (1-based) of a deterministic 1 kHz stream: cheap to regenerate for checking.
+ImuSample make_sample(std::uint64_t k) {
+  ImuSample s;
+  s.t_s = static_cast<double>(k) / 1000.0;
+  const double lsb_a = 9.80665 / 16384.0, lsb_g = M_PI / 180.0 / 131.0;
+  std::uint64_t h = splitmix(k);
+  auto noise = [&h]() {  // roughly ±100 counts
+    h = splitmix(h);
+    return static_cast<std::int32_t>(h % 201) - 100;
+  };
+  for (int i = 0; i < 3; ++i) {
+    s.accel_counts[i] = noise() + (i == 2 ? 16384 : 0);
+    s.gyro_counts[i] = noise();
+    // Odd samples: SI = f(counts), as a sensor converts (repeated values, the writer's text
+    // cache); even samples: every value distinct.
+    s.accel_mps2[i] = s.accel_counts[i] * lsb_a +
+                      (k % 2 == 0 ? 1e-9 * static_cast<double>(h % 1000003) : 0.0);
+    s.gyro_radps[i] = s.gyro_counts[i] * lsb_g;
+  }
+  s.temperature_counts = -1234 + static_cast<std::int32_t>(k % 7);
+  s.temperature_c = s.temperature_counts / 340.0 + 36.53;
+  s.flags = k % 5 == 0 ? static_cast<std::uint32_t>(stend::kGapBefore) : 0u;
+  return s;
+}
+
+void expect_same_sample(const ImuSample& a, const ImuSample& b, std::size_t i) {
+  ASSERT_TRUE(same(a.t_s, b.t_s)) << "sample " << i;
+  for (int k = 0; k < 3; ++k) {
+    ASSERT_EQ(a.accel_counts[k], b.accel_counts[k]) << "sample " << i;
+    ASSERT_EQ(a.gyro_counts[k], b.gyro_counts[k]) << "sample " << i;
+    ASSERT_TRUE(same(a.accel_mps2[k], b.accel_mps2[k])) << "sample " << i << " axis " << k;
+    ASSERT_TRUE(same(a.gyro_radps[k], b.gyro_radps[k])) << "sample " << i << " axis " << k;
+  }
+  ASSERT_EQ(a.temperature_counts, b.temperature_counts) << "sample " << i;
+  ASSERT_TRUE(same(a.temperature_c, b.temperature_c)) << "sample " << i;
+  ASSERT_EQ(a.flags, b.flags) << "sample " << i;
+}
+
+class RecordingTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    static int counter = 0;
+    root_ = fs::temp_directory_path() /
+            ("stend_recording_test_" + std::to_string(::getpid()) + "_" +
+             std::to_string(counter++));
+    fs::remove_all(root_);
+    fs::create_directories(root_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(root_, ec);
+  }
+  fs::path root_;
+};
+
+// A small complete recording with awkward values everywhere.
+struct Written {
+  RecordingHeader header;
+  std::string yaml;
+  std::vector<ImuSample> samples;
+  std::vector<double> truth_t;
+  std::vector<std::vector<double>> truth;
+  std::vector<Segment> segments;
+  std::vector<Event> events;
+};
+
+Written write_small(const fs::path& dir, bool finish = true) {
+  Written w;
+  w.header = make_header();
+  w.yaml = "name: six-position\nprocedure:\n  - record: {duration_s: 10}\n";
+  for (std::uint64_t k = 1; k <= 2000; ++k) w.samples.push_back(make_sample(k));
+  // Edge values must round-trip bit-exactly too.
+  ImuSample& e = w.samples[10];
+  e.accel_mps2 = {-0.0, std::numeric_limits<double>::denorm_min(),
+                  std::numeric_limits<double>::max()};
+  e.gyro_radps = {std::numeric_limits<double>::lowest(), std::numeric_limits<double>::min(),
+                  0.1 + 0.2};
+  e.temperature_c = kNaN;
+  e.accel_counts[0] = std::numeric_limits<std::int32_t>::min();
+  e.accel_counts[1] = std::numeric_limits<std::int32_t>::max();
+  e.flags = 0xFFFFFFFFu;
+  w.samples[11].gyro_radps = {kInf, -kInf, 1e300};
+  w.samples[12].t_s = 86400.0 * 3 + 0.000001;  // µs over days (out of order on purpose)
+
+  for (int k = 0; k < 50; ++k) {
+    w.truth_t.push_back(0.1 * k);
+    w.truth.push_back({10.0 * k, 25.0 + 0.01 * k, k == 3 ? kNaN : -9.80665 / 3.0, -0.0});
+  }
+
+  Segment s1;
+  s1.id = 0;
+  s1.step = 0;
+  s1.kind = "set_temperature";
+  s1.label = "soak, 25 \"degC\"";
+  s1.t_start_s = 0.0;
+  s1.t_end_s = 600.25;
+  s1.targets = "chamber.temperature=25 degC";
+  s1.setpoint_c = 25.0;
+  Segment s2;
+  s2.id = 1;
+  s2.step = 2;
+  s2.kind = "orientation";
+  s2.label = "";
+  s2.repeat = 3;
+  s2.orientation = 4;
+  s2.orientation_count = 6;
+  s2.t_start_s = 600.25;
+  s2.t_end_s = 1.0 / 3.0;
+  s2.settled = false;
+  s2.complete = false;
+  s2.targets = "table.angle=10 deg; table.tilt=-90 deg\nsecond line";
+  s2.rate = -12.5;
+  w.segments = {s1, s2};
+
+  w.events = {{0.0, "info", "runner", "start"},
+              {1.5, "warning", "chamber", "overshoot 0.3 degC, retrying \"soon\""},
+              {2.25, "error", "sensor", "line one\nline two\r\nline three"},
+              {3.0, "info", "operator", ""}};
+
+  RecordingWriter writer(dir, w.header, w.yaml);
+  writer.add_samples(w.samples.data(), 1000);
+  writer.tick(1.0);
+  writer.add_samples(w.samples.data() + 1000, w.samples.size() - 1000);
+  for (std::size_t i = 0; i < w.truth.size(); ++i) writer.add_truth(w.truth_t[i], w.truth[i]);
+  for (const auto& s : w.segments) writer.add_segment(s);
+  for (const auto& ev : w.events) writer.add_event(ev);
+  EXPECT_EQ(writer.sample_count(), w.samples.size());
+  EXPECT_EQ(writer.dir(), dir);
+  if (finish) writer.finish("complete", "all steps done");
+  return w;
+}
+
+}  // namespace
+
+TEST_F(RecordingTest, RoundTripIsExact) {
+  const fs::path dir = root_ / "run";
+  const Written w = write_small(dir);
+  for (const char* f : {"run.json", "experiment.yaml", "imu.csv", "truth.csv", "segments.csv",
+                        "events.csv"}) {
+    EXPECT_TRUE(fs::exists(dir / f)) << f;
+  }
+  EXPECT_FALSE(fs::exists(dir / "run.json.tmp"));
+
+  const Recording r = Recording::open(dir);
+  EXPECT_EQ(r.dir, dir);
+  EXPECT_EQ(r.status, "complete");
+  EXPECT_TRUE(r.complete());
+  EXPECT_EQ(r.dropped_partial_lines, 0u);
+  EXPECT_EQ(r.experiment_yaml, w.yaml);
+
+  const RecordingHeader& h = r.header;
+  EXPECT_EQ(h.experiment_name, w.header.experiment_name);
+  EXPECT_EQ(h.experiment_file, w.header.experiment_file);
+  EXPECT_EQ(h.stend_version, w.header.stend_version);
+  ASSERT_EQ(h.plugins.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(h.plugins[i].role, w.header.plugins[i].role);
+    EXPECT_EQ(h.plugins[i].name, w.header.plugins[i].name);
+    EXPECT_EQ(h.plugins[i].version, w.header.plugins[i].version);
+    EXPECT_EQ(h.plugins[i].file, w.header.plugins[i].file);
+  }
+  EXPECT_EQ(h.identity.vendor, "InvenSense");
+  EXPECT_EQ(h.identity.model, "MPU-6050");
+  EXPECT_EQ(h.identity.serial, "SN-0042");
+  EXPECT_EQ(h.identity.who_am_i, "0x68");
+  EXPECT_TRUE(same(h.info.output_rate_hz, w.header.info.output_rate_hz));
+  EXPECT_TRUE(same(h.info.accel_range_mps2, w.header.info.accel_range_mps2));
+  EXPECT_TRUE(same(h.info.gyro_range_radps, w.header.info.gyro_range_radps));
+  EXPECT_TRUE(same(h.info.accel_lsb_mps2, w.header.info.accel_lsb_mps2));
+  EXPECT_TRUE(same(h.info.gyro_lsb_radps, w.header.info.gyro_lsb_radps));
+  EXPECT_TRUE(same(h.info.temperature_lsb_c, w.header.info.temperature_lsb_c));
+  EXPECT_TRUE(h.info.has_gyro);
+  EXPECT_FALSE(h.info.has_temperature);
+  EXPECT_TRUE(same(h.gravity_mps2, w.header.gravity_mps2));
+  EXPECT_TRUE(same(h.latitude_deg, w.header.latitude_deg));
+  EXPECT_TRUE(same(h.height_m, w.header.height_m));
+  EXPECT_EQ(h.mounting_R, w.header.mounting_R);
+  EXPECT_EQ(h.seed, w.header.seed);
+  EXPECT_EQ(h.clock, "simulated");
+  EXPECT_EQ(h.truth_columns, w.header.truth_columns);
+  EXPECT_EQ(h.start_time_utc, w.header.start_time_utc);
+  EXPECT_EQ(h.status, "complete");
+
+  ASSERT_EQ(r.samples.size(), w.samples.size());
+  for (std::size_t i = 0; i < w.samples.size(); ++i) {
+    expect_same_sample(r.samples[i], w.samples[i], i);
+    if (HasFatalFailure()) return;
+  }
+  ASSERT_EQ(r.truth_t.size(), w.truth_t.size());
+  ASSERT_EQ(r.truth.size(), w.truth.size());
+  for (std::size_t i = 0; i < w.truth.size(); ++i) {
+    EXPECT_TRUE(same(r.truth_t[i], w.truth_t[i]));
+    ASSERT_EQ(r.truth[i].size(), 4u);
+    for (std::size_t k = 0; k < 4; ++k) EXPECT_TRUE(same(r.truth[i][k], w.truth[i][k])) << i;
+  }
+  EXPECT_EQ(r.truth_column("air_c"), 1);
+  EXPECT_EQ(r.truth_column("odd, name \"x\""), 3);
+  EXPECT_EQ(r.truth_column("nope"), -1);
+
+  ASSERT_EQ(r.segments.size(), w.segments.size());
+  for (std::size_t i = 0; i < w.segments.size(); ++i) {
+    const Segment &a = r.segments[i], &b = w.segments[i];
+    EXPECT_EQ(a.id, b.id);
+    EXPECT_EQ(a.step, b.step);
+    EXPECT_EQ(a.kind, b.kind);
+    EXPECT_EQ(a.label, b.label);
+    EXPECT_EQ(a.repeat, b.repeat);
+    EXPECT_EQ(a.orientation, b.orientation);
+    EXPECT_EQ(a.orientation_count, b.orientation_count);
+    EXPECT_TRUE(same(a.t_start_s, b.t_start_s));
+    EXPECT_TRUE(same(a.t_end_s, b.t_end_s));
+    EXPECT_EQ(a.settled, b.settled);
+    EXPECT_EQ(a.complete, b.complete);
+    EXPECT_EQ(a.targets, b.targets);
+    EXPECT_TRUE(same(a.setpoint_c, b.setpoint_c)) << i;
+    EXPECT_TRUE(same(a.rate, b.rate)) << i;
+  }
+  EXPECT_TRUE(std::isnan(r.segments[0].rate));
+  EXPECT_TRUE(std::isnan(r.segments[1].setpoint_c));
+
+  ASSERT_EQ(r.events.size(), w.events.size());
+  for (std::size_t i = 0; i < w.events.size(); ++i) {
+    EXPECT_TRUE(same(r.events[i].t_s, w.events[i].t_s));
+    EXPECT_EQ(r.events[i].level, w.events[i].level);
+    EXPECT_EQ(r.events[i].source, w.events[i].source);
+    EXPECT_EQ(r.events[i].message, w.events[i].message);
+  }
+}
+
+TEST_F(RecordingTest, FilesAreSelfDescribing) {
+  const fs::path dir = root_ / "run";
+  const Written w = write_small(dir);
+  // run.json is plain JSON with units in the key names and the finish fields.
+  const auto j = nlohmann::json::parse(slurp(dir / "run.json"));
+  EXPECT_EQ(j.at("format_version"), stend::kRecordingFormatVersion);
+  EXPECT_EQ(j.at("status"), "complete");
+  EXPECT_EQ(j.at("status_message"), "all steps done");
+  EXPECT_EQ(j.at("sample_count"), w.samples.size());
+  EXPECT_EQ(j.at("event_count"), w.events.size());
+  EXPECT_TRUE(j.at("end_time_utc").is_string());
+  EXPECT_EQ(j.at("sensor").at("info").at("output_rate_hz"), 1000.0);
+  EXPECT_EQ(j.at("seed").get<std::uint64_t>(), 0xFEDCBA9876543210ull);
+
+  const std::string imu = slurp(dir / "imu.csv");
+  EXPECT_EQ(imu.substr(0, imu.find('\n')),
+            "t_s,ax_counts,ay_counts,az_counts,gx_counts,gy_counts,gz_counts,temp_counts,"
+            "ax_mps2,ay_mps2,az_mps2,gx_radps,gy_radps,gz_radps,temp_c,flags");
+  // NaN is an empty field; the t_s column keeps µs over days.
+  EXPECT_NE(imu.find(",,4294967295\n"), std::string::npos);
+  EXPECT_NE(imu.find("\n259200.000001,"), std::string::npos);
+  const std::string truth = slurp(dir / "truth.csv");
+  EXPECT_EQ(truth.substr(0, truth.find('\n')),
+            "t_s,table.angle.cmd_deg,air_c,f_x_mps2,\"odd, name \"\"x\"\"\"");
+  const std::string seg = slurp(dir / "segments.csv");
+  EXPECT_EQ(seg.substr(0, seg.find('\n')),
+            "id,step,kind,label,repeat,orientation,orientation_count,t_start_s,t_end_s,settled,"
+            "complete,targets,setpoint_c,rate_per_s");
+  EXPECT_NE(seg.find("\"soak, 25 \"\"degC\"\"\""), std::string::npos);
+  EXPECT_EQ(slurp(dir / "experiment.yaml"), w.yaml);
+}
+
+TEST_F(RecordingTest, UnfinishedRunStaysRunning) {
+  const fs::path dir = root_ / "run";
+  const Written w = write_small(dir, /*finish=*/false);  // writer destroyed without finish()
+  const Recording r = Recording::open(dir);
+  EXPECT_EQ(r.status, "running");
+  EXPECT_FALSE(r.complete());
+  EXPECT_EQ(r.samples.size(), w.samples.size());  // the destructor flushed
+  EXPECT_EQ(r.segments.size(), 2u);
+  const auto j = nlohmann::json::parse(slurp(dir / "run.json"));
+  EXPECT_FALSE(j.contains("end_time_utc"));
+}
+
+TEST_F(RecordingTest, FinishStatusesAndMisuse) {
+  {
+    RecordingWriter w(root_ / "a", make_header(), "");
+    EXPECT_THROW(w.finish("done"), std::invalid_argument);
+    EXPECT_THROW(w.add_truth(0.0, {1.0}), std::invalid_argument);  // 4 columns expected
+    w.finish("interrupted", "operator pressed Ctrl-C");
+    ImuSample s;
+    EXPECT_THROW(w.add_samples(&s, 1), std::logic_error);
+    EXPECT_THROW(w.add_event({0.0, "info", "runner", "late"}), std::logic_error);
+  }
+  const Recording a = Recording::open(root_ / "a");
+  EXPECT_EQ(a.status, "interrupted");
+  EXPECT_FALSE(a.complete());
+  EXPECT_TRUE(a.samples.empty());
+  EXPECT_EQ(a.experiment_yaml, "");
+  {
+    RecordingWriter w(root_ / "b", make_header(), "x: 1\n");
+    w.finish("failed", "sensor stopped answering");
+  }
+  EXPECT_EQ(Recording::open(root_ / "b").status, "failed");
+
+  RecordingHeader bad = make_header();
+  bad.mounting_R = {1, 0, 0};
+  EXPECT_THROW(RecordingWriter(root_ / "c", bad, ""), std::invalid_argument);
+  bad = make_header();
+  bad.truth_columns = {"air_c", "air_c"};
+  EXPECT_THROW(RecordingWriter(root_ / "d", bad, ""), std::invalid_argument);
+}
+
+TEST_F(RecordingTest, InvalidUtf8InHeaderDoesNotBreakRunJson) {
+  RecordingHeader h = make_header();
+  h.identity.serial = "SN\xff\xfe";  // raw bytes read from a device
+  { RecordingWriter w(root_ / "run", h, ""); }
+  const Recording r = Recording::open(root_ / "run");
+  EXPECT_EQ(r.header.identity.serial.substr(0, 2), "SN");
+  EXPECT_EQ(r.header.identity.model, "MPU-6050");
+}
+
+TEST_F(RecordingTest, StartTimeFilledWhenEmpty) {
+  RecordingHeader h = make_header();
+  h.start_time_utc.clear();
+  { RecordingWriter w(root_ / "run", h, ""); }
+  const Recording r = Recording::open(root_ / "run");
+  ASSERT_EQ(r.header.start_time_utc.size(), 24u) << r.header.start_time_utc;  // ...T..:..:..mmmZ
+  EXPECT_EQ(r.header.start_time_utc[10], 'T');
+  EXPECT_EQ(r.header.start_time_utc.back(), 'Z');
+}
+
+TEST_F(RecordingTest, ExistingRunDirectoryIsRefused) {
+  const fs::path dir = root_ / "run";
+  write_small(dir);
+  const std::string before = slurp(dir / "imu.csv");
+  try {
+    RecordingWriter w(dir, make_header(), "");
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(dir.string()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("already exists"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(slurp(dir / "imu.csv"), before);  // untouched
+  EXPECT_EQ(Recording::open(dir).status, "complete");
+  // An empty directory counts as existing too.
+  fs::create_directories(root_ / "empty");
+  EXPECT_THROW(RecordingWriter(root_ / "empty", make_header(), ""), std::runtime_error);
+  // Parents are created.
+  EXPECT_NO_THROW(RecordingWriter(root_ / "deep" / "er" / "run", make_header(), ""));
+  // A trailing slash names the same folder.
+  EXPECT_NO_THROW(RecordingWriter(root_ / "slash" / "", make_header(), ""));
+  EXPECT_TRUE(fs::exists(root_ / "slash" / "imu.csv"));
+  EXPECT_THROW(RecordingWriter(root_ / "slash" / "", make_header(), ""), std::runtime_error);
+}
+
+TEST_F(RecordingTest, TruncatedLastLineIsTolerated) {
+  const fs::path dir = root_ / "run";
+  const Written w = write_small(dir);
+  // Cut each CSV inside its last record, as a SIGKILL during write(2) would.
+  for (const char* name : {"imu.csv", "truth.csv", "segments.csv", "events.csv"}) {
+    const fs::path p = dir / name;
+    const auto size = fs::file_size(p);
+    fs::resize_file(p, size - 3);
+  }
+  const Recording r = Recording::open(dir);
+  EXPECT_EQ(r.dropped_partial_lines, 4u);
+  ASSERT_EQ(r.samples.size(), w.samples.size() - 1);
+  for (std::size_t i = 0; i < r.samples.size(); ++i) {
+    expect_same_sample(r.samples[i], w.samples[i], i);
+    if (HasFatalFailure()) return;
+  }
+  EXPECT_EQ(r.truth.size(), w.truth.size() - 1);
+  EXPECT_EQ(r.segments.size(), 1u);
+  ASSERT_EQ(r.events.size(), 3u);
+  EXPECT_EQ(r.events[2].message, w.events[2].message);
+
+  // Cut inside a quoted multi-line message: still only that record is lost.
+  std::string ev = slurp(dir / "events.csv");
+  const auto cut = ev.find("line two");
+  ASSERT_NE(cut, std::string::npos);
+  spit(dir / "events.csv", ev.substr(0, cut + 4));
+  const Recording r2 = Recording::open(dir);
+  EXPECT_EQ(r2.events.size(), 2u);
+  EXPECT_EQ(r2.dropped_partial_lines, 4u);
+
+  // A file cut exactly at a line boundary loses nothing and drops nothing.
+  std::string imu = slurp(dir / "imu.csv");
+  imu.resize(imu.rfind('\n') + 1);
+  spit(dir / "imu.csv", imu);
+  const Recording r3 = Recording::open(dir);
+  EXPECT_EQ(r3.samples.size(), w.samples.size() - 1);
+  EXPECT_EQ(r3.dropped_partial_lines, 3u);
+
+  // Even the header line may be cut (killed right after creation).
+  spit(dir / "imu.csv", "t_s,ax_co");
+  const Recording r4 = Recording::open(dir);
+  EXPECT_TRUE(r4.samples.empty());
+  EXPECT_EQ(r4.dropped_partial_lines, 4u);
+}
+
+TEST_F(RecordingTest, MissingOptionalFilesAreEmpty) {
+  const fs::path dir = root_ / "run";
+  const Written w = write_small(dir);
+  for (const char* f : {"truth.csv", "segments.csv", "events.csv", "experiment.yaml"}) {
+    fs::remove(dir / f);
+  }
+  const Recording r = Recording::open(dir);
+  EXPECT_EQ(r.samples.size(), w.samples.size());
+  EXPECT_TRUE(r.truth.empty());
+  EXPECT_TRUE(r.truth_t.empty());
+  EXPECT_TRUE(r.segments.empty());
+  EXPECT_TRUE(r.events.empty());
+  EXPECT_TRUE(r.experiment_yaml.empty());
+
+  fs::remove(dir / "imu.csv");
+  EXPECT_THROW(Recording::open(dir), std::runtime_error);
+  EXPECT_THROW(Recording::open(root_ / "does_not_exist"), std::runtime_error);
+}
+
+namespace {
+// Expects Recording::open to throw a runtime_error whose message holds every needle.
+void expect_open_error(const fs::path& dir, std::initializer_list<std::string> needles) {
+  try {
+    (void)Recording::open(dir);
+    ADD_FAILURE() << "expected an error mentioning " << *needles.begin();
+  } catch (const std::runtime_error& e) {
+    for (const auto& n : needles) {
+      EXPECT_NE(std::string(e.what()).find(n), std::string::npos)
+          << "'" << n << "' not in: " << e.what();
+    }
+  }
+}
+}  // namespace
+
+TEST_F(RecordingTest, CorruptionInTheMiddleNamesFileAndLine) {
+  const fs::path dir = root_ / "run";
+  write_small(dir);
+  const std::string imu = slurp(dir / "imu.csv");
+  const std::string truth = slurp(dir / "truth.csv");
+  const std::string seg = slurp(dir / "segments.csv");
+  const std::string json = slurp(dir / "run.json");
+
+  auto line_start = [](const std::string& s, int line) {  // 1-based
+    std::size_t p = 0;
+    for (int i = 1; i < line; ++i) p = s.find('\n', p) + 1;
+    return p;
+  };
+
+  // A garbage value on line 100 of imu.csv.
+  std::string bad = imu;
+  bad[line_start(bad, 100) + 3] = 'x';
+  spit(dir / "imu.csv", bad);
+  expect_open_error(dir, {"imu.csv:100:"});
+
+  // A short row on line 57.
+  bad = imu;
+  const auto p57 = line_start(bad, 57);
+  bad.erase(p57, bad.find('\n', p57) - p57);
+  bad.insert(p57, "0.056,1,2");
+  spit(dir / "imu.csv", bad);
+  expect_open_error(dir, {"imu.csv:57:", "16"});
+
+  // A wrong header.
+  spit(dir / "imu.csv", "time,ax\n" + imu.substr(imu.find('\n') + 1));
+  expect_open_error(dir, {"imu.csv:1:", "header"});
+  spit(dir / "imu.csv", imu);
+
+  // A count that is not an integer names the column.
+  bad = imu;
+  const auto p3 = line_start(bad, 3);
+  const auto c1 = bad.find(',', p3);
+  bad.insert(c1 + 1, "1.5");
+  spit(dir / "imu.csv", bad);
+  expect_open_error(dir, {"imu.csv:3:", "ax_counts"});
+  spit(dir / "imu.csv", imu);
+
+  // truth.csv whose header disagrees with run.json.
+  spit(dir / "truth.csv", "t_s,a,b\n" + truth.substr(truth.find('\n') + 1));
+  expect_open_error(dir, {"truth.csv:1:", "truth_columns"});
+  bad = truth;
+  bad.insert(line_start(bad, 5), "1,2\n");
+  spit(dir / "truth.csv", bad);
+  expect_open_error(dir, {"truth.csv:5:"});
+  spit(dir / "truth.csv", truth);
+
+  // segments.csv: a bad boolean on the second record.
+  bad = seg;
+  const auto q = bad.find(",0,0,\"table");
+  ASSERT_NE(q, std::string::npos);
+  bad.replace(q, 5, ",no,0,");
+  spit(dir / "segments.csv", bad);
+  expect_open_error(dir, {"segments.csv:3:", "settled"});
+  // A stray quote in the middle of an unquoted field.
+  spit(dir / "segments.csv", seg.substr(0, line_start(seg, 2)) + "1,2,ab\"c\n" +
+                                 seg.substr(line_start(seg, 2)));
+  expect_open_error(dir, {"segments.csv:2:"});
+  spit(dir / "segments.csv", seg);
+
+  // run.json: broken JSON names the line; a newer format is refused with advice.
+  spit(dir / "run.json", json.substr(0, 40) + "\n\n  ]" + json.substr(40));
+  expect_open_error(dir, {"run.json:", "JSON"});
+  auto j = nlohmann::json::parse(json);
+  j["format_version"] = 99;
+  spit(dir / "run.json", j.dump(2));
+  expect_open_error(dir, {"run.json", "99", "upgrade"});
+  j = nlohmann::json::parse(json);
+  j["sensor"]["info"]["output_rate_hz"] = "fast";
+  spit(dir / "run.json", j.dump(2));
+  expect_open_error(dir, {"run.json", "sensor.info.output_rate_hz"});
+  spit(dir / "run.json", json);
+
+  // experiment.yaml that is not YAML names file, line and column.
+  spit(dir / "experiment.yaml", "name: x\nprocedure: [a, b\n");
+  expect_open_error(dir, {"experiment.yaml:"});
+}
+
+TEST_F(RecordingTest, TickFlushesAfterOneSecondOfRunTime) {
+  const fs::path dir = root_ / "run";
+  RecordingWriter w(dir, make_header(), "");
+  const auto header_size = fs::file_size(dir / "imu.csv");
+  std::vector<ImuSample> s;
+  for (std::uint64_t k = 1; k <= 3000; ++k) s.push_back(make_sample(k));
+  w.add_samples(s.data(), 1);  // t = 0.001: the first data leaves at once
+  w.tick(0.001);
+  const auto after_first = fs::file_size(dir / "imu.csv");
+  EXPECT_GT(after_first, header_size);
+  w.add_samples(s.data() + 1, 899);  // up to t = 0.9
+  w.tick(0.9);
+  EXPECT_EQ(fs::file_size(dir / "imu.csv"), after_first);  // buffered (< 1 s since the flush)
+  w.add_samples(s.data() + 900, 200);  // up to t = 1.1
+  w.tick(1.1);
+  EXPECT_GT(fs::file_size(dir / "imu.csv"), after_first);  // ≥ 1 s of run time: written
+  EXPECT_EQ(Recording::open(dir).samples.size(), 1100u);  // readable while the writer lives
+
+  // Events leave immediately.
+  w.add_event({1.0, "info", "operator", "note"});
+  const Recording r = Recording::open(dir);
+  ASSERT_EQ(r.events.size(), 1u);
+  EXPECT_EQ(r.events[0].message, "note");
+
+  // Wall time alone also flushes (a slow real-time run).
+  w.add_samples(s.data() + 1100, 10);
+  w.tick(1.11);
+  const auto before = fs::file_size(dir / "imu.csv");
+  std::this_thread::sleep_for(std::chrono::milliseconds(1050));
+  w.add_samples(s.data() + 1110, 10);
+  w.tick(1.12);
+  EXPECT_GT(fs::file_size(dir / "imu.csv"), before);
+}
+
+// ---------------------------------------------------------------------------------------------
+// SIGKILL: the child records at a simulated 1 kHz; after each tick(t) it publishes t (and the
+// wall time) in shared memory. The parent kills it without warning and reads what is on disk.
+
+namespace {
+
+struct TickLog {
+  std::atomic<double> last_tick{-1.0};
+  std::atomic<int> n{0};
+  static constexpr int kMax = 8192;
+  double wall_s[kMax];
+  double run_s[kMax];
+};
+
+// Never returns. Runs `batch` samples per tick, sleeping `sleep_us` between batches.
+[[noreturn]] void child_record(const fs::path& dir, TickLog* log, int batch, int sleep_us) {
+  try {
+    RecordingHeader h = make_header();
+    h.clock = "wall";
+    RecordingWriter w(dir, h, "name: killed\n");
+    std::vector<ImuSample> buf(static_cast<std::size_t>(batch));
+    std::uint64_t k = 0;
+    for (;;) {
+      for (auto& s : buf) s = make_sample(++k);
+      w.add_samples(buf.data(), buf.size());
+      const double t = static_cast<double>(k) / 1000.0;
+      if (k % 200 == 0) w.add_truth(t, {0.0, 25.0, 9.8, 0.0});
+      w.tick(t);
+      log->last_tick.store(t, std::memory_order_release);
+      const int i = log->n.load(std::memory_order_relaxed);
+      if (i < TickLog::kMax) {
+        log->wall_s[i] = monotonic_s();
+        log->run_s[i] = t;
+        log->n.store(i + 1, std::memory_order_release);
+      }
+      if (sleep_us > 0) ::usleep(static_cast<useconds_t>(sleep_us));
+    }
+  } catch (...) {
+    ::_exit(3);
+  }
+}
+
+struct Killed {
+  Recording rec;
+  double last_tick = -1.0;
+  double kill_wall_s = 0.0;
+  std::vector<std::pair<double, double>> ticks;  // (wall, run)
+};
+
+Killed run_and_kill(const fs::path& dir, int batch, int sleep_us, double run_wall_s) {
+  void* mem = ::mmap(nullptr, sizeof(TickLog), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS,
+                     -1, 0);
+  if (mem == MAP_FAILED) throw std::runtime_error("mmap failed");
+  auto* log = new (mem) TickLog();
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) throw std::runtime_error("fork failed");
+  if (pid == 0) child_record(dir, log, batch, sleep_us);
+
+  // Wait for the first tick, then let it run.
+  const double t0 = monotonic_s();
+  while (log->last_tick.load() < 0.0 && monotonic_s() - t0 < 20.0) ::usleep(1000);
+  const double started = monotonic_s();
+  while (monotonic_s() - started < run_wall_s) ::usleep(5000);
+  Killed k;
+  k.kill_wall_s = monotonic_s();
+  ::kill(pid, SIGKILL);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL)
+      << "child ended otherwise (status " << status << ")";
+  k.last_tick = log->last_tick.load();
+  for (int i = 0; i < log->n.load(); ++i) k.ticks.emplace_back(log->wall_s[i], log->run_s[i]);
+  ::munmap(mem, sizeof(TickLog));
+  k.rec = Recording::open(dir);  // must not throw
+  return k;
+}
+
+void expect_clean_samples(const Recording& r) {
+  for (std::size_t i = 0; i < r.samples.size(); ++i) {
+    // Every row on disk is exactly what the child generated, in order, strictly increasing.
+    const ImuSample expected = make_sample(i + 1);
+    expect_same_sample(r.samples[i], expected, i);
+    if (::testing::Test::HasFatalFailure()) return;
+    if (i > 0) {
+      ASSERT_GT(r.samples[i].t_s, r.samples[i - 1].t_s);
+    }
+  }
+}
+
+}  // namespace
+
+TEST_F(RecordingTest, SigkillLosesAtMostOneSecondOfRunTime) {
+  // ~20x real time: 10 samples (10 ms) per tick, ~0.5 ms sleep.
+  const fs::path dir = root_ / "killed";
+  const Killed k = run_and_kill(dir, 10, 500, 0.8);
+  const Recording& r = k.rec;
+  EXPECT_EQ(r.status, "running");
+  EXPECT_FALSE(r.complete());
+  EXPECT_EQ(r.experiment_yaml, "name: killed\n");
+  EXPECT_LE(r.dropped_partial_lines, 2u);
+  ASSERT_GT(k.last_tick, 1.0) << "the child did not get going";
+  ASSERT_FALSE(r.samples.empty());
+  expect_clean_samples(r);
+  const double last = r.samples.back().t_s;
+  EXPECT_GE(last, k.last_tick - 1.0) << "lost more than 1 s of run time";
+  EXPECT_LE(last, k.last_tick + 1.0);  // nothing invented either
+  for (std::size_t i = 0; i < r.truth_t.size(); ++i) ASSERT_LT(r.truth_t[i], last + 1.0);
+  std::printf("[          ] killed at run time %.3f s; %zu samples survive, last at %.3f s\n",
+              k.last_tick, r.samples.size(), last);
+}
+
+TEST_F(RecordingTest, SigkillLosesAtMostOneSecondOfWallTime) {
+  // Slower than real time (a real bench waiting on a device): run time alone would not
+  // reach 1 s before the kill, so only the wall-time rule can have written the data.
+  const fs::path dir = root_ / "killed";
+  const Killed k = run_and_kill(dir, 5, 20000, 2.3);
+  const Recording& r = k.rec;
+  EXPECT_EQ(r.status, "running");
+  ASSERT_FALSE(r.samples.empty());
+  expect_clean_samples(r);
+  // Whatever had been ticked more than ~1 s of wall time before the kill is on disk.
+  // (0.25 s of slack for scheduling on a loaded machine.)
+  double must_have = 0.0;
+  for (const auto& [wall, run] : k.ticks) {
+    if (wall <= k.kill_wall_s - 1.25) must_have = std::max(must_have, run);
+  }
+  ASSERT_GT(must_have, 0.1) << "the child did not get going";
+  EXPECT_LT(k.last_tick, 1.0) << "run time passed 1 s: this test no longer isolates wall time";
+  EXPECT_GE(r.samples.back().t_s, must_have);
+  std::printf("[          ] killed at run time %.3f s; last sample %.3f s (needed >= %.3f)\n",
+              k.last_tick, r.samples.back().t_s, must_have);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST_F(RecordingTest, OneHourAtOneKilohertzWritesAndReadsBack) {
+  constexpr std::size_t kRows = 3'600'000;
+  const fs::path dir = root_ / "hour";
+  // Generate one second at a time, as the runner would.
+  std::vector<ImuSample> second(1000);
+  using clock = std::chrono::steady_clock;
+  clock::duration write_time{};
+  std::uint64_t k = 0;
+  {
+    RecordingWriter w(dir, make_header(), "name: hour\n");
+    while (k < kRows) {
+      for (auto& s : second) s = make_sample(++k);
+      const auto t0 = clock::now();
+      for (std::size_t b = 0; b < second.size(); b += 10) {
+        w.add_samples(second.data() + b, 10);
+        w.tick(second[b + 9].t_s);
+      }
+      write_time += clock::now() - t0;
+    }
+    const auto t0 = clock::now();
+    w.finish("complete");
+    write_time += clock::now() - t0;
+    EXPECT_EQ(w.sample_count(), kRows);
+  }
+  const auto t1 = clock::now();
+  const Recording r = Recording::open(dir);
+  const auto read_time = clock::now() - t1;
+  ASSERT_EQ(r.samples.size(), kRows);
+  EXPECT_TRUE(r.complete());
+  for (std::size_t i = 0; i < kRows; ++i) {
+    expect_same_sample(r.samples[i], make_sample(i + 1), i);
+    if (HasFatalFailure()) return;
+  }
+  const double ws = std::chrono::duration<double>(write_time).count();
+  const double rs = std::chrono::duration<double>(read_time).count();
+  std::printf("[          ] %zu rows (%.0f MB): write %.1f ns/row (%.0fx real time), read %.1f "
+              "ns/row\n",
+              kRows, static_cast<double>(fs::file_size(dir / "imu.csv")) / 1e6,
+              ws * 1e9 / kRows, 3600.0 / ws, rs * 1e9 / kRows);
+}
