@@ -40,20 +40,6 @@ void scan_plugins(stend::PluginHost& host, const std::vector<std::string>& extra
   host.scan(stend::PluginHost::default_search_path(extra));
 }
 
-std::vector<std::string> experiment_plugin_paths(const std::string& file) {
-  std::vector<std::string> out;
-  try {
-    YAML::Node root = YAML::LoadFile(file);
-    if (root["experiment"] && root["experiment"]["plugin_paths"]) {
-      const auto base = std::filesystem::path(file).parent_path();
-      for (const auto& p : root["experiment"]["plugin_paths"]) out.push_back((base / p.as<std::string>()).string());
-    }
-  } catch (const std::exception&) {
-    // Malformed files are reported by the full validation with their location.
-  }
-  return out;
-}
-
 int cmd_plugins(const std::vector<std::string>& paths) {
   stend::PluginHost host;
   scan_plugins(host, paths);
@@ -63,7 +49,7 @@ int cmd_plugins(const std::vector<std::string>& paths) {
 
 int cmd_validate(const std::string& file) {
   stend::PluginHost host;
-  scan_plugins(host, experiment_plugin_paths(file));
+  scan_plugins(host, stend::experiment_plugin_paths(file));
   const stend::Experiment exp = stend::load_experiment(file, host);
   stend::Bench bench(exp, host);  // stage 2: procedure against the fixtures' declared limits
   std::size_t orientations = 0;
@@ -88,7 +74,7 @@ void print_progress(const stend::RunProgress& p, bool tty) {
 int cmd_run(const std::string& file, const std::string& output, const std::string& name, const std::string& clock,
             bool quiet) {
   stend::PluginHost host;
-  scan_plugins(host, experiment_plugin_paths(file));
+  scan_plugins(host, stend::experiment_plugin_paths(file));
   const stend::Experiment exp = stend::load_experiment(file, host);
 
   stend::RunOptions opt;

@@ -36,5 +36,5 @@ function(stend_add_gtest name)
     STEND_SHARED_DATA_DIR="${PROJECT_SOURCE_DIR}/../shared/data"
     STEND_BUILD_PLUGIN_DIR="${STEND_BUILD_PLUGIN_DIR}"
     STEND_BINARY_DIR="${PROJECT_BINARY_DIR}")
-  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 600)
+  gtest_discover_tests(${name} TEST_PREFIX "${name}." DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 600)
 endfunction()

@@ -391,6 +391,8 @@ TEST_F(RecordingTest, FinishStatusesAndMisuse) {
   bad = make_header();
   bad.truth_columns = {"air_c", "air_c"};
   EXPECT_THROW(RecordingWriter(root_ / "d", bad, ""), std::invalid_argument);
+  EXPECT_THROW(RecordingWriter(root_ / "e", make_header(), "a: [1, 2\n"), std::invalid_argument);
+  EXPECT_FALSE(fs::exists(root_ / "e"));
 }
 
 TEST_F(RecordingTest, InvalidUtf8InHeaderDoesNotBreakRunJson) {

@@ -369,6 +369,14 @@ RecordingWriter::RecordingWriter(const fs::path& run_dir, RecordingHeader header
       }
     }
   }
+  try {
+    // The reader checks experiment.yaml too; refuse now rather than write an unreadable run.
+    (void)YAML::Load(resolved_experiment_yaml);
+  } catch (const YAML::Exception& e) {
+    throw std::invalid_argument(fmt::format(
+        "recording: the resolved experiment is not valid YAML (line {}, column {}): {}",
+        e.mark.line + 1, e.mark.column + 1, e.msg));
+  }
   if (header.start_time_utc.empty()) header.start_time_utc = utc_now_iso();
   header.status = "running";
 

@@ -46,8 +46,8 @@ double planned_duration(const Experiment& exp) {
         t += static_cast<double>(s.orientations.size()) * (2.0 + s.dwell_s + s.record_s);
         break;
       case Step::Kind::kRates: t += static_cast<double>(s.rates.size()) * (2.0 + s.dwell_s + s.record_s); break;
-      case Step::Kind::kRecord:
-      case Step::Kind::kWait: t += s.record_s; break;
+      case Step::Kind::kRecord: t += s.record_s; break;
+      case Step::Kind::kWait: t += s.dwell_s; break;
       case Step::Kind::kSetVibration: break;
     }
   }
@@ -120,7 +120,7 @@ class Run {
         break;
       case Step::Kind::kWait:
         progress_.phase = "waiting";
-        advance_for(s.record_s);
+        advance_for(s.dwell_s);
         break;
       case Step::Kind::kSetVibration: {
         Fixture& f = fixture(s.fixture);

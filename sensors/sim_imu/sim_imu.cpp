@@ -2,6 +2,7 @@
 
 #include <stend/sim/param_reader.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -213,7 +214,8 @@ void SimImu::acquire(double t_s, const TruthSource& truth, std::vector<ImuSample
   const double last = std::floor((t_s - t0_ + 1e-9) * c_.output_rate_hz);
   if (last < static_cast<double>(next_k_)) return;
   const auto k_end = static_cast<std::int64_t>(last);
-  out.reserve(out.size() + static_cast<std::size_t>(k_end - next_k_ + 1));
+  const std::size_t need = out.size() + static_cast<std::size_t>(k_end - next_k_ + 1);
+  if (out.capacity() < need) out.reserve(std::max(need, 2 * out.capacity()));  // keep growth geometric
   for (; next_k_ <= k_end; ++next_k_) {
     const double t = t0_ + static_cast<double>(next_k_) / c_.output_rate_hz;
     out.emplace_back();

@@ -121,7 +121,7 @@ struct Experiment {
   double base_heading_deg = 0.0;  // azimuth of the bench base x axis from east, for Earth rate
   PluginInstance sensor;
   std::vector<FixtureDecl> fixtures;  // in stacking order: each stands on an earlier one or base
-  std::string mounted_on;  // fixture id carrying the sensor; default the last fixture declared
+  std::string mounted_on;  // fixture id carrying the sensor, or "base"; default the last fixture declared
   Eigen::Matrix3d R_sensor_from_mount = Eigen::Matrix3d::Identity();  // mounting rotation
 
   std::vector<Step> procedure;  // repeats expanded

@@ -198,7 +198,7 @@ void print_table2_report(std::ostream& os, const Table2Reproduction& r) {
     const auto& b = r.cases[1].fit.lsq;
     char line[512];
     os << "=== Side by side (h = 0); the paper reports no uncertainty\n";
-    std::snprintf(line, sizeof line, "%-10s %-8s %22s %22s %10s\n", "parameter", "paper",
+    std::snprintf(line, sizeof line, "%-10s %-13s %24s %24s %6s\n", "parameter", "paper",
                   "g(47.2 N) value +/- se", "g = 9.80665 value +/- se", "unit");
     os << line;
     struct Row {
@@ -218,7 +218,7 @@ void print_table2_report(std::ostream& os, const Table2Reproduction& r) {
         return e.identifiable ? num(e.value, 5, true) + " +/- " + num(e.std_error, 5, true)
                               : std::string("NOT IDENTIFIABLE");
       };
-      std::snprintf(line, sizeof line, "%-10s %-8s %22s %22s %10s\n", row.name,
+      std::snprintf(line, sizeof line, "%-10s %-13s %24s %24s %6s\n", row.name,
                     (std::string(row.paper_name) + "=" + num(row.paper)).c_str(), cell(pa).c_str(),
                     cell(pb).c_str(), row.unit);
       os << line;

@@ -90,6 +90,11 @@ void print_table(std::ostream& os, const FitResult& fr) {
   for (const auto& n : fr.notes) os << "note: " << n << "\n";
 }
 
+std::ostream& operator<<(std::ostream& os, const FitResult& fit) {
+  print_table(os, fit);
+  return os;
+}
+
 std::string to_json(const FitResult& fr, int indent) {
   using json = nlohmann::ordered_json;
   const ModelSpec& s = fr.spec;

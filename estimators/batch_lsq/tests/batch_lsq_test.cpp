@@ -333,6 +333,29 @@ TEST(BatchLsq, BiasAndBiasTemperatureAtOneTemperatureAreAliased) {
               15.0, 1e-12);
 }
 
+TEST(BatchLsq, SegmentNoiseWeighting) {
+  std::mt19937 rng(21);
+  const Recording rec = synth_recording(bsc_model(), theta_bsc(), table_forces(9.81), rng);
+  ModelSpec spec = parse_model_spec(kSpec);
+  const FitResult plain = fit_recording(rec, spec);
+  spec.weighting = Weighting::kSegmentNoise;
+  const FitResult weighted = fit_recording(rec, spec);
+  ASSERT_TRUE(plain.ok && weighted.ok) << weighted.message;
+  // Equal noise everywhere: the weights are nearly uniform, so the estimates barely move.
+  for (int j = 0; j < 12; ++j)
+    EXPECT_NEAR(weighted.lsq.estimate[j], plain.lsq.estimate[j], 0.2 * plain.lsq.parameters[static_cast<std::size_t>(j)].std_error);
+  EXPECT_EQ(nlohmann::json::parse(to_json(weighted))["weighting"], "segment_noise");
+  // Points without a noise estimate cannot be weighted: refused with a reason.
+  std::vector<StaticPoint> pts = weighted.points;
+  pts[3].measured_std_error[1] = std::numeric_limits<double>::quiet_NaN();
+  const FitResult bad = fit_points(pts, spec);
+  EXPECT_FALSE(bad.ok);
+  EXPECT_NE(bad.message.find("segment_noise"), std::string::npos) << bad.message;
+  std::ostringstream os;
+  os << bad;
+  EXPECT_NE(os.str().find("FIT FAILED"), std::string::npos);
+}
+
 TEST(BatchLsq, RefusesTooFewOrientations) {
   std::mt19937 rng(2);
   const std::vector<Eigen::Vector3d> two = {Eigen::Vector3d(0, 0, 9.81), Eigen::Vector3d(0, 0, -9.81)};

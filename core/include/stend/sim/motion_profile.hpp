@@ -12,6 +12,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -266,6 +268,21 @@ class SimAxis {
   bool settled() const { return settled_since_ != kNever && now_ - settled_since_ >= c_.settle_time_s - 1e-9; }
   const MotionPlan& plan() const { return plan_; }
 
+  // On a continuous axis: x with whole turns removed so that it lies in [min, max] (x itself when
+  // it already does; otherwise the sign-keeping remainder when that fits).
+  double wrap(double x) const {
+    if (x >= c_.min && x <= c_.max) return x;
+    double r = std::fmod(x, c_.full_turn);
+    if (r < c_.min) r += c_.full_turn;
+    if (r > c_.max) r -= c_.full_turn;
+    if (r < c_.min || r > c_.max) {
+      r = std::fmod(x - c_.min, c_.full_turn);
+      if (r < 0.0) r += c_.full_turn;
+      r += c_.min;
+    }
+    return r;
+  }
+
   // Decelerate at the acceleration limit and hold where the axis comes to rest.
   void safe_state(double now) noexcept {
     const AxisState s = plan_.at(now);
@@ -294,22 +311,6 @@ class SimAxis {
     double r = p;
     if (c_.encoder_noise > 0.0) r += c_.encoder_noise * rng_.normal();
     if (c_.encoder_resolution > 0.0) r = std::round(r / c_.encoder_resolution) * c_.encoder_resolution;
-    return r;
-  }
-
- public:
-  // On a continuous axis: x with whole turns removed so that it lies in [min, max] (x itself when
-  // it already does; otherwise the sign-keeping remainder when that fits).
-  double wrap(double x) const {
-    if (x >= c_.min && x <= c_.max) return x;
-    double r = std::fmod(x, c_.full_turn);
-    if (r < c_.min) r += c_.full_turn;
-    if (r > c_.max) r -= c_.full_turn;
-    if (r < c_.min || r > c_.max) {
-      r = std::fmod(x - c_.min, c_.full_turn);
-      if (r < 0.0) r += c_.full_turn;
-      r += c_.min;
-    }
     return r;
   }
 

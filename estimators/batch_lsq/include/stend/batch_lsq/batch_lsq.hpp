@@ -99,6 +99,7 @@ FitResult fit_recording(const Recording& recording, const ModelSpec& spec);
 // interval, identifiable yes/no + reason), aliased groups, residual RMS per axis, condition
 // number, warnings and notes. A failed fit prints FIT FAILED and the reason, no numbers.
 void print_table(std::ostream& os, const FitResult& fit);
+std::ostream& operator<<(std::ostream& os, const FitResult& fit);  // = print_table
 
 // JSON document of schema "stend.fit/1" (estimators/batch_lsq/README.md).
 std::string to_json(const FitResult& fit, int indent = 2);
