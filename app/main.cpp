@@ -1,4 +1,5 @@
 // stend — drive a characterization bench from an experiment file and analyse its recordings.
+#include "stend/batch_lsq/batch_lsq.hpp"
 #include "stend/experiment.hpp"
 #include "stend/plugin_host.hpp"
 #include "stend/recording.hpp"
@@ -9,6 +10,8 @@
 #include <fmt/format.h>
 
 #include <atomic>
+#include <fstream>
+#include <sstream>
 #include <csignal>
 #include <cstdio>
 #include <iostream>
@@ -17,6 +20,8 @@
 namespace {
 
 std::atomic<bool> g_stop{false};
+
+bool fit_run(const std::filesystem::path& run_dir, const std::string& model_file, const std::string& json_out);
 
 extern "C" void on_sigint(int) {
   if (g_stop.load()) {  // second Ctrl-C: stop now
@@ -98,7 +103,35 @@ int cmd_run(const std::string& file, const std::string& output, const std::strin
   fmt::print("status:     {}{}\n", r.status, r.message.empty() ? "" : " — " + r.message);
   fmt::print("recorded:   {} samples, {} segments, {} of run time in {:.2f} s wall ({:.0f}x real time)\n", r.samples,
              r.segments, fmt_duration(r.run_time_s), r.wall_time_s, r.wall_time_s > 0 ? r.run_time_s / r.wall_time_s : 0.0);
-  return r.status == "complete" ? 0 : (r.status == "interrupted" ? 130 : 1);
+  if (r.status != "complete") return r.status == "interrupted" ? 130 : 1;
+  if (exp.estimation && exp.estimation["model"]) {
+    // The experiment names its model: fit it now, relative paths from the experiment's folder.
+    std::filesystem::path model = exp.estimation["model"].as<std::string>();
+    if (model.is_relative()) model = std::filesystem::path(file).parent_path() / model;
+    fmt::print("\n");
+    if (!fit_run(r.dir, model.string(), "")) return 3;
+  }
+  return 0;
+}
+
+// Fits a model to a recording, prints the table and writes fit.json (schema stend.fit/1) and
+// fit.txt into the run folder. Returns false when the fit failed (it says why, with no numbers).
+bool fit_run(const std::filesystem::path& run_dir, const std::string& model_file, const std::string& json_out) {
+  const stend::batch_lsq::ModelSpec spec = stend::batch_lsq::load_model_spec(model_file);
+  const stend::Recording rec = stend::Recording::open(run_dir);
+  const stend::batch_lsq::FitResult fit = stend::batch_lsq::fit_recording(rec, spec);
+  std::ostringstream text;
+  stend::batch_lsq::print_table(text, fit);
+  std::cout << text.str();
+  const std::filesystem::path json = json_out.empty() ? run_dir / "fit.json" : std::filesystem::path(json_out);
+  stend::batch_lsq::write_json(json, fit);
+  std::ofstream(run_dir / "fit.txt") << text.str();
+  fmt::print("results:    {}\n", json.string());
+  return fit.ok;
+}
+
+int cmd_fit(const std::string& dir, const std::string& model, const std::string& json) {
+  return fit_run(dir, model, json) ? 0 : 3;
 }
 
 int cmd_info(const std::string& dir) {
@@ -147,12 +180,19 @@ int main(int argc, char** argv) {
   auto* info = app.add_subcommand("info", "Summarize a recording (run folder)");
   info->add_option("run", dir, "Run folder")->required();
 
+  std::string model, json;
+  auto* fit = app.add_subcommand("fit", "Fit an error model to a recording: values, standard errors, identifiability");
+  fit->add_option("run", dir, "Run folder")->required();
+  fit->add_option("-m,--model", model, "Model YAML (instrument, axes, terms, extraction)")->required();
+  fit->add_option("--json", json, "Where to write the results (default RUN/fit.json)");
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (*plugins) return cmd_plugins(plugin_paths);
     if (*validate) return cmd_validate(file);
     if (*run) return cmd_run(file, output, name, clock, quiet);
     if (*info) return cmd_info(dir);
+    if (*fit) return cmd_fit(dir, model, json);
   } catch (const stend::ExperimentError& e) {
     fmt::print(stderr, "{}\n", e.what());
     return 2;
