@@ -11,6 +11,7 @@
 #include <csignal>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <fstream>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -47,7 +48,7 @@ double mean_over(const stend::Recording& rec, double t0, double t1, int axis) {
       sum += s.accel_mps2[axis];
       ++n;
     }
-  return n ? sum / n : NAN;
+  return n ? sum / n : std::numeric_limits<double>::quiet_NaN();
 }
 
 }  // namespace
