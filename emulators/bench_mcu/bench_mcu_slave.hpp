@@ -1,0 +1,76 @@
+// Emulated bench microcontroller: reads an MPU-6050 register model on every data-ready, buffers
+// the samples in a FIFO ring and serves them as a MODBUS RTU slave (libmodbus) on the master end
+// of a pseudo-terminal pair; the driver opens device_path(), the slave end, like /dev/ttyUSB0.
+// Register map: docs/bench-mcu-modbus.md (sensors/mpu6050/bench_mcu_map.hpp).
+// Fault injection for tests: corrupted replies (bad CRC) and periods of silence.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "mpu6050_model.hpp"
+
+namespace stend::emu {
+
+struct BenchMcuConfig {
+  int slave_id = 1;
+  std::size_t fifo_depth = 1024;  // samples buffered in the MCU's RAM
+  std::uint64_t seed = 1;         // fault-injection random stream
+};
+
+struct BenchMcuStats {
+  std::uint64_t requests = 0, replies = 0, corrupted = 0, ignored = 0, exceptions = 0;
+};
+
+class BenchMcuSlave {
+ public:
+  BenchMcuSlave(BenchMcuConfig config, Mpu6050Model mpu);  // opens the pty, starts the thread
+  ~BenchMcuSlave();
+  BenchMcuSlave(const BenchMcuSlave&) = delete;
+  BenchMcuSlave& operator=(const BenchMcuSlave&) = delete;
+
+  const std::string& device_path() const { return device_path_; }
+  // Each read reply (FC 03/04) gets one data byte flipped with this probability.
+  void set_corrupt_probability(double p) { corrupt_p_.store(p); }
+  // Read and drop every request for `d` from now (the sensor keeps sampling into the FIFO).
+  void go_silent(std::chrono::milliseconds d);
+  BenchMcuStats stats() const;
+
+ private:
+  void run();
+  void produce();
+  void handle(const std::uint8_t* req, int len);
+  bool window(int address, int count);
+  void apply_ctrl();
+
+  BenchMcuConfig c_;
+  Mpu6050Model mpu_;
+  std::string device_path_;
+  int master_fd_ = -1, slave_fd_ = -1;
+  void* ctx_ = nullptr;      // modbus_t*
+  void* mapping_ = nullptr;  // modbus_mapping_t*
+  std::chrono::steady_clock::time_point power_on_;
+
+  // MCU state (slave thread only)
+  std::deque<std::array<std::int16_t, 7>> fifo_;
+  std::uint32_t front_seq_ = 0;  // sequence number of fifo_.front()
+  std::uint32_t next_seq_ = 0;   // sequence number of the next sample
+  std::uint32_t overflows_ = 0;
+  bool overflow_flag_ = false;
+  bool running_ = false;
+  std::uint64_t rng_;
+
+  std::atomic<double> corrupt_p_{0.0};
+  std::atomic<std::int64_t> silent_until_ns_{0};
+  std::atomic<bool> stop_{false};
+  mutable std::mutex stats_mutex_;
+  BenchMcuStats stats_;
+  std::thread thread_;
+};
+
+}  // namespace stend::emu

@@ -1,0 +1,53 @@
+// Calibrates an accelerometer from a public session and prints the report.
+//   stend_ceres_calibrate imucal  <annotated_session.csv>   [--json]   (known orientations, 6 positions)
+//   stend_ceres_calibrate mpu6050 <calibration_session.csv> [--json]   (unknown orientations, |g| only)
+#include <stend/ceres_nonlinear/calibration.hpp>
+#include <stend/importers.hpp>
+
+#include <cstring>
+#include <iostream>
+#include <string>
+
+using namespace stend;
+using namespace stend::ceres_nonlinear;
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::cerr << "usage: " << argv[0] << " <imucal|mpu6050> <file.csv> [--json]\n";
+    return 2;
+  }
+  const std::string kind = argv[1];
+  const bool json = argc > 3 && std::strcmp(argv[3], "--json") == 0;
+  try {
+    CalibrationResult r;
+    if (kind == "imucal") {
+      const Recording rec = import::import_imucal_session(argv[2]);
+      std::vector<StaticInterval> ivs;
+      std::vector<Eigen::Vector3d> truth;
+      for (const auto& iv : intervals_from_segments(rec, "orientation", 0.5)) {
+        // x_p: x axis up → the accelerometer reads +g on x; x_a: down → −g.
+        Eigen::Vector3d f = Eigen::Vector3d::Zero();
+        f[iv.label[0] - 'x'] = (iv.label[2] == 'p' ? 1.0 : -1.0) * 9.81;
+        ivs.push_back(iv);
+        truth.push_back(f);
+      }
+      CalibrationOptions o;
+      o.gravity_mps2 = 9.81;
+      r = calibrate_accelerometer_known_orientations(ivs, truth, o);
+    } else if (kind == "mpu6050") {
+      const Recording rec = import::import_mpu6050_multipos(argv[2]);
+      CalibrationOptions o;
+      o.gravity_mps2 = 9.81;
+      o.detector.init_duration_s = 30.0;
+      r = calibrate_accelerometer_unknown_orientations(rec, o);
+    } else {
+      std::cerr << "unknown session kind '" << kind << "' (imucal or mpu6050)\n";
+      return 2;
+    }
+    std::cout << (json ? r.to_json() : r.report()) << "\n";
+    return r.ok ? 0 : 1;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 1;
+  }
+}

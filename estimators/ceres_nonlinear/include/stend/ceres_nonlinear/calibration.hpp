@@ -1,0 +1,144 @@
+// Nonlinear (Ceres) calibration of a 3-axis accelerometer from static intervals, plus the gyro bias.
+//
+// Model: the error-model vocabulary (stend/model/terms.hpp) with the terms bias, scale and
+// cross_axis,  y = u + b + diag(s)·u + M·u  (M: off-diagonal cross-axis terms), evaluated only
+// through ErrorModel::measure<T> / ErrorModel::correct.
+//
+// (a) Orientations unknown, only |g| known (IMU-TK / Ferraris style): for every static interval
+//     with mean reading ȳ_k the residual is  |u_k(θ)| − g  with u_k the input that the model maps
+//     to ȳ_k. A rotation of the sensor frame is unobservable, so three cross-axis terms are held
+//     at zero (default: cross_xy, cross_xz, cross_yz — the x sensing axis defines the frame, the y
+//     sensing axis lies in its x-y plane): 9 parameters, at least 10 intervals (9 + 1 for noise).
+// (b) Orientations known (the table's truth columns f_x_mps2 f_y_mps2 f_z_mps2, or given
+//     vectors): residual ȳ_k − measure(θ, f_k), all 12 parameters.
+//
+// Uncertainty: ceres::Covariance (dense SVD) scaled by σ² = RSS / (n − p); intervals θ̂ ± t·se
+// (Student t, n − p degrees of freedom). Identifiability: SVD of the Jacobian at the solution
+// (columns scaled by a nominal size: g for a bias, 1 for a dimensionless term); a direction whose
+// singular value is below rank_tolerance·σ_max, or whose standard error exceeds max_std_error
+// (relative), makes the fit fail with the parameters that span it named. A failed fit (too few
+// intervals, no convergence, not identifiable, ceres::Covariance failure) has ok = false, a
+// message, and NaN values: never an identity calibration.
+#pragma once
+
+#include <stend/model/terms.hpp>
+#include <stend/recording.hpp>
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace stend::ceres_nonlinear {
+
+// ---------------------------------------------------------------------------------------------
+// Static intervals
+
+struct StaticDetectorOptions {
+  double window_s = 1.0;          // centred sliding window for the variance
+  double min_duration_s = 1.0;    // shorter still runs are ignored (hand-held poses are short)
+  // Sum of the three accelerometer variances over the window [(m/s^2)^2] below which a sample is
+  // static. <= 0: automatic = threshold_multiplier × (that variance over the first
+  // init_duration_s when > 0, else its 10th percentile over the whole recording).
+  double variance_threshold = 0.0;
+  double threshold_multiplier = 6.0;
+  double init_duration_s = 0.0;
+  double trim_s = 0.0;            // dropped at each end of a detected interval
+};
+
+struct StaticInterval {
+  std::size_t first = 0, last = 0;  // sample indices, inclusive
+  double t_start_s = 0.0, t_end_s = 0.0;
+  std::size_t count = 0;
+  Eigen::Vector3d accel_mean = Eigen::Vector3d::Zero();  // m/s^2 (the recording's SI values)
+  Eigen::Vector3d accel_std = Eigen::Vector3d::Zero();   // per-sample standard deviation
+  Eigen::Vector3d gyro_mean = Eigen::Vector3d::Zero();   // rad/s
+  std::string label;
+};
+
+// Mean and spread of samples first..last (inclusive).
+StaticInterval make_interval(const Recording& rec, std::size_t first, std::size_t last,
+                             std::string label = {});
+// Sliding-window variance detector. Samples flagged kGapBefore split intervals.
+std::vector<StaticInterval> detect_static_intervals(const Recording& rec,
+                                                    const StaticDetectorOptions& options = {});
+// The recording's own segments of the given kind (default "orientation"), trimmed by trim_s.
+std::vector<StaticInterval> intervals_from_segments(const Recording& rec,
+                                                    const std::string& kind = "orientation",
+                                                    double trim_s = 0.0);
+
+// ---------------------------------------------------------------------------------------------
+// Calibration
+
+enum class Loss { kNone, kHuber, kCauchy };
+
+struct CalibrationOptions {
+  StaticDetectorOptions detector;
+  bool use_segments = false;       // recording's "orientation" segments instead of detection
+  double gravity_mps2 = 0.0;       // 0: the recording header's; both 0 → error
+  Loss loss = Loss::kNone;
+  double loss_scale_mps2 = 0.05;   // Huber / Cauchy scale
+  double confidence = 0.95;
+  int max_iterations = 200;
+  double rank_tolerance = 1e-8;    // σ_k / σ_max of the scaled Jacobian
+  double max_std_error = 0.05;     // relative (a bias in units of g, scale/cross in 1)
+  // Unknown orientations: cross-axis terms held at zero (names from the vocabulary).
+  std::vector<std::string> fixed_cross_axis = {"cross_xy", "cross_xz", "cross_yz"};
+  bool estimate_gyro_bias = true;
+};
+
+struct Parameter {
+  std::string name, unit;
+  double value = 0.0, std_error = 0.0, lower = 0.0, upper = 0.0;  // NaN when not identifiable
+  bool identifiable = false;
+  bool fixed = false;              // held at zero by construction (not estimated)
+  std::string reason;
+};
+
+struct CalibrationResult {
+  bool ok = false;
+  std::string message;             // why it failed; empty on success
+  std::string method;              // "unknown_orientations" | "known_orientations"
+  model::ErrorModel model;         // bias, scale, cross_axis (accelerometer)
+  std::vector<double> theta;       // model.size() values (NaN when the fit failed)
+  std::vector<Parameter> parameters;       // all model parameters (fixed ones marked)
+  std::vector<Parameter> gyro_parameters;  // gyro_bias_x/y/z when estimated
+  std::vector<std::string> not_identifiable;  // parameter names
+  std::vector<StaticInterval> intervals;
+  double gravity_mps2 = 0.0;
+  int observations = 0, estimated = 0, dof = 0, iterations = 0;
+  double sigma = 0.0;              // residual standard deviation [m/s^2]
+  double quantile = 0.0;
+  // RMS over the intervals of |ȳ| − g (raw) and |correct(ȳ)| − g (calibrated) [m/s^2].
+  double rms_norm_before = 0.0, rms_norm_after = 0.0;
+  std::string solver_report;
+
+  const Parameter& parameter(const std::string& name) const;  // throws when absent
+  // Calibrated specific force for a reading (throws std::logic_error when !ok).
+  Eigen::Vector3d correct(const Eigen::Vector3d& y) const;
+  std::string report() const;
+  std::string to_json() const;
+};
+
+// The model these functions fit: bias, scale, cross_axis for an accelerometer (12 parameters).
+model::ErrorModel accelerometer_model();
+
+CalibrationResult calibrate_accelerometer_unknown_orientations(const Recording& rec,
+                                                               const CalibrationOptions& options = {});
+CalibrationResult calibrate_accelerometer_unknown_orientations(
+    const std::vector<StaticInterval>& intervals, double gravity_mps2,
+    const CalibrationOptions& options = {});
+
+// Truth from the columns f_x_mps2, f_y_mps2, f_z_mps2 (mean of the truth rows inside each
+// interval; intervals without truth rows are dropped).
+CalibrationResult calibrate_accelerometer_known_orientations(const Recording& rec,
+                                                             const CalibrationOptions& options = {});
+// truth_f[k]: the true specific force of interval k in the sensor frame [m/s^2].
+CalibrationResult calibrate_accelerometer_known_orientations(
+    const std::vector<StaticInterval>& intervals, const std::vector<Eigen::Vector3d>& truth_f,
+    const CalibrationOptions& options = {});
+
+const char* loss_name(Loss l);
+Loss loss_from_name(const std::string& name);  // "none" | "huber" | "cauchy"; throws otherwise
+
+}  // namespace stend::ceres_nonlinear

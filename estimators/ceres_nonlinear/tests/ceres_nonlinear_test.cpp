@@ -1,0 +1,372 @@
+// Tests of the Ceres accelerometer calibration: simulated recovery and interval coverage,
+// failure modes (too few intervals, degenerate design), static detection, and the two public
+// sessions compared against their projects' own calibrations.
+#include <stend/ceres_nonlinear/calibration.hpp>
+#include <stend/importers.hpp>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace stend;
+using namespace stend::ceres_nonlinear;
+
+namespace {
+
+constexpr double kG = 9.80665;
+
+// Truth in the vocabulary's order: bias xyz, scale xyz, cross xy xz yx yz zx zy. The cross terms
+// xy, xz, yz are 0 (the frame convention of the unknown-orientation fit).
+std::vector<double> truth_theta(bool full_cross) {
+  return {0.12, -0.08, 0.2, 0.015, -0.02, 0.008,
+          full_cross ? 0.004 : 0.0, full_cross ? -0.003 : 0.0, 0.006,
+          full_cross ? 0.002 : 0.0, -0.005, 0.003};
+}
+
+Eigen::Vector3d random_unit(std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  Eigen::Vector3d v(n(rng), n(rng), n(rng));
+  return v.normalized();
+}
+
+// One static interval: `samples` readings measure(θ, f) + white noise, averaged.
+StaticInterval simulate_interval(const model::ErrorModel& m, const std::vector<double>& theta,
+                                 const Eigen::Vector3d& f, int samples, double noise,
+                                 std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0.0, noise);
+  model::Stimulus<double> s;
+  s.input = f;
+  s.specific_force = f;
+  const Eigen::Vector3d y = m.measure<double>(theta.data(), s);
+  StaticInterval iv;
+  for (int k = 0; k < samples; ++k) iv.accel_mean += y + Eigen::Vector3d(n(rng), n(rng), n(rng));
+  iv.accel_mean /= samples;
+  iv.count = static_cast<std::size_t>(samples);
+  iv.gyro_mean = Eigen::Vector3d(0.01, -0.02, 0.005) + Eigen::Vector3d(n(rng), n(rng), n(rng)) * 1e-3;
+  return iv;
+}
+
+std::vector<StaticInterval> simulate(const std::vector<Eigen::Vector3d>& dirs, const std::vector<double>& theta,
+                                     int samples, double noise, std::mt19937_64& rng) {
+  const auto m = accelerometer_model();
+  std::vector<StaticInterval> out;
+  for (const auto& d : dirs) out.push_back(simulate_interval(m, theta, d * kG, samples, noise, rng));
+  return out;
+}
+
+std::vector<Eigen::Vector3d> random_dirs(int n, std::mt19937_64& rng) {
+  std::vector<Eigen::Vector3d> d;
+  for (int i = 0; i < n; ++i) d.push_back(random_unit(rng));
+  return d;
+}
+
+bool has_data(const std::string& rel) {
+  return std::filesystem::exists(std::filesystem::path(STEND_SHARED_DATA_DIR) / rel);
+}
+
+// RMS over every sample of the intervals of |a(sample)| − g, and over the interval means.
+template <typename F>
+std::pair<double, double> norm_rms(const Recording& rec, const std::vector<StaticInterval>& ivs, double g,
+                                   F calibrate) {
+  double ss = 0.0, ssm = 0.0;
+  std::size_t n = 0;
+  for (const auto& iv : ivs) {
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (std::size_t i = iv.first; i <= iv.last; ++i) {
+      const Eigen::Vector3d a = calibrate(rec.samples[i]);
+      ss += std::pow(a.norm() - g, 2);
+      mean += a;
+      ++n;
+    }
+    mean /= static_cast<double>(iv.count);
+    ssm += std::pow(mean.norm() - g, 2);
+  }
+  return {std::sqrt(ss / static_cast<double>(n)), std::sqrt(ssm / static_cast<double>(ivs.size()))};
+}
+
+std::vector<double> read_numbers(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::vector<double> v;
+  std::string tok;
+  while (std::getline(in, tok, '\n')) {
+    std::stringstream ss(tok);
+    std::string f;
+    while (std::getline(ss, f, ',')) v.push_back(std::stod(f));
+  }
+  return v;
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------------------------------------
+
+TEST(CeresNonlinear, UnknownOrientationsRecoversTruth) {
+  std::mt19937_64 rng(7);
+  const auto theta = truth_theta(false);
+  const auto ivs = simulate(random_dirs(20, rng), theta, 200, 0.02, rng);
+  const auto r = calibrate_accelerometer_unknown_orientations(ivs, kG);
+  ASSERT_TRUE(r.ok) << r.report();
+  EXPECT_EQ(r.estimated, 9);
+  for (std::size_t i = 0; i < theta.size(); ++i) {
+    const auto& p = r.parameters[i];
+    if (p.fixed) continue;
+    EXPECT_TRUE(p.identifiable) << p.name;
+    EXPECT_LE(p.lower, theta[i]) << p.name << "\n" << r.report();
+    EXPECT_GE(p.upper, theta[i]) << p.name << "\n" << r.report();
+    EXPECT_LT(p.std_error, 2e-3) << p.name;
+  }
+  EXPECT_LT(r.rms_norm_after, r.rms_norm_before);
+  // Gyro bias: the mean of the interval means.
+  EXPECT_NEAR(r.parameter("gyro_bias_y").value, -0.02, 2e-3);
+  EXPECT_NE(r.to_json().find("\"cross_yx\""), std::string::npos);
+}
+
+TEST(CeresNonlinear, KnownOrientationsRecoversAllTwelve) {
+  std::mt19937_64 rng(11);
+  const auto theta = truth_theta(true);
+  const auto dirs = random_dirs(20, rng);
+  const auto ivs = simulate(dirs, theta, 200, 0.02, rng);
+  std::vector<Eigen::Vector3d> f;
+  for (const auto& d : dirs) f.push_back(d * kG);
+  const auto r = calibrate_accelerometer_known_orientations(ivs, f);
+  ASSERT_TRUE(r.ok) << r.report();
+  EXPECT_EQ(r.estimated, 12);
+  for (std::size_t i = 0; i < theta.size(); ++i) {
+    EXPECT_LE(r.parameters[i].lower, theta[i]) << r.parameters[i].name;
+    EXPECT_GE(r.parameters[i].upper, theta[i]) << r.parameters[i].name;
+  }
+}
+
+TEST(CeresNonlinear, CoverageOfNinetyFivePercentIntervals) {
+  const auto theta = truth_theta(false);
+  const int seeds = 200;
+  std::vector<int> inside(theta.size(), 0);
+  int fits = 0;
+  for (int seed = 0; seed < seeds; ++seed) {
+    std::mt19937_64 rng(1000 + static_cast<std::uint64_t>(seed));
+    const auto ivs = simulate(random_dirs(20, rng), theta, 20, 0.05, rng);
+    const auto r = calibrate_accelerometer_unknown_orientations(ivs, kG);
+    ASSERT_TRUE(r.ok) << "seed " << seed << ": " << r.message;
+    ++fits;
+    for (std::size_t i = 0; i < theta.size(); ++i)
+      if (r.parameters[i].lower <= theta[i] && theta[i] <= r.parameters[i].upper) ++inside[i];
+  }
+  const auto m = accelerometer_model().params();
+  std::cout << "[coverage] " << fits << " fits, 95% intervals containing the truth:";
+  for (std::size_t i = 0; i < theta.size(); ++i) {
+    const auto r0 = calibrate_accelerometer_unknown_orientations(std::vector<StaticInterval>{}, kG);
+    if (r0.parameters[i].fixed) continue;
+    const double c = 100.0 * inside[i] / seeds;
+    std::cout << " " << m[i].name << "=" << c << "%";
+    EXPECT_GE(c, 90.0) << m[i].name;
+    EXPECT_LE(c, 98.0) << m[i].name;
+  }
+  std::cout << "\n";
+}
+
+TEST(CeresNonlinear, TooFewIntervalsIsAnError) {
+  std::mt19937_64 rng(3);
+  const auto ivs = simulate(random_dirs(6, rng), truth_theta(false), 100, 0.02, rng);
+  const auto r = calibrate_accelerometer_unknown_orientations(ivs, kG);
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.message.find("too few static intervals"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("9 accelerometer parameters"), std::string::npos) << r.message;
+  for (const auto& p : r.parameters)
+    if (!p.fixed) {
+      EXPECT_TRUE(std::isnan(p.value)) << p.name;
+    }
+  EXPECT_THROW(r.correct(Eigen::Vector3d(0, 0, kG)), std::logic_error);
+}
+
+TEST(CeresNonlinear, DegenerateDesignNamesNonIdentifiableParameters) {
+  // Every orientation is a rotation about the sensor's z axis held horizontal: gravity stays in
+  // the x-y plane, so nothing excites the z row.
+  std::mt19937_64 rng(5);
+  std::vector<Eigen::Vector3d> dirs;
+  for (int k = 0; k < 20; ++k) {
+    const double a = 2.0 * M_PI * k / 20.0;
+    dirs.emplace_back(std::cos(a), std::sin(a), 0.0);
+  }
+  const auto ivs = simulate(dirs, truth_theta(false), 200, 0.02, rng);
+  const auto r = calibrate_accelerometer_unknown_orientations(ivs, kG);
+  ASSERT_FALSE(r.ok) << r.report();
+  EXPECT_NE(r.message.find("not identifiable"), std::string::npos) << r.message;
+  EXPECT_EQ(r.not_identifiable.size(), 4u) << r.message;
+  for (const char* name : {"bias_z", "scale_z", "cross_zx", "cross_zy"}) {
+    EXPECT_NE(r.message.find(name), std::string::npos) << r.message;
+    EXPECT_FALSE(r.parameter(name).identifiable);
+    EXPECT_TRUE(std::isnan(r.parameter(name).value));
+  }
+  for (const auto& p : r.parameters)
+    if (!p.fixed) {
+      EXPECT_TRUE(std::isnan(p.value)) << p.name << " printed a number for a failed fit";
+    }
+  std::cout << "[degenerate] " << r.message << "\n";
+
+  // Known orientations, same design: the z column of the model is not excited either.
+  std::vector<Eigen::Vector3d> f;
+  for (const auto& d : dirs) f.push_back(d * kG);
+  const auto k = calibrate_accelerometer_known_orientations(ivs, f);
+  ASSERT_FALSE(k.ok);
+  EXPECT_NE(k.message.find("scale_z"), std::string::npos) << k.message;
+  EXPECT_NE(k.message.find("rank-deficient"), std::string::npos) << k.message;
+  std::cout << "[degenerate, known orientations] " << k.message << "\n";
+}
+
+TEST(CeresNonlinear, RobustLossResistsAnOutlierInterval) {
+  std::mt19937_64 rng(21);
+  const auto theta = truth_theta(false);
+  auto ivs = simulate(random_dirs(24, rng), theta, 200, 0.02, rng);
+  ivs[3].accel_mean += Eigen::Vector3d(0.8, -0.5, 0.6);  // someone bumped the bench
+  CalibrationOptions o;
+  o.loss = Loss::kCauchy;
+  o.loss_scale_mps2 = 0.01;
+  const auto robust = calibrate_accelerometer_unknown_orientations(ivs, kG, o);
+  const auto plain = calibrate_accelerometer_unknown_orientations(ivs, kG);
+  ASSERT_TRUE(robust.ok) << robust.report();
+  double e_r = 0.0, e_p = 0.0;
+  for (std::size_t i = 0; i < theta.size(); ++i) {
+    e_r += std::pow(robust.theta[i] - theta[i], 2);
+    if (plain.ok) e_p += std::pow(plain.theta[i] - theta[i], 2);
+  }
+  if (plain.ok) {
+    EXPECT_LT(e_r, e_p);
+  }
+  EXPECT_LT(std::abs(robust.parameter("scale_x").value - theta[3]), 3e-3);
+}
+
+TEST(CeresNonlinear, DetectsStaticIntervalsInASimulatedRecording) {
+  // 12 still poses of 4 s separated by 2 s of motion at 100 Hz.
+  Recording rec;
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> n(0.0, 0.02);
+  const auto m = accelerometer_model();
+  const auto theta = truth_theta(false);
+  double t = 0.0;
+  Eigen::Vector3d prev = Eigen::Vector3d::UnitZ();
+  for (int pose = 0; pose < 12; ++pose) {
+    const Eigen::Vector3d d = random_unit(rng);
+    for (int k = 0; k < 200; ++k, t += 0.01) {  // motion: slerp-ish blend plus shaking
+      const double w = k / 200.0;
+      ImuSample s;
+      s.t_s = t;
+      model::Stimulus<double> st;
+      st.input = ((1 - w) * prev + w * d).normalized() * kG + Eigen::Vector3d::Constant(std::sin(20 * t));
+      s.accel_mps2 = m.measure<double>(theta.data(), st) + Eigen::Vector3d(n(rng), n(rng), n(rng));
+      rec.samples.push_back(s);
+    }
+    for (int k = 0; k < 400; ++k, t += 0.01) {
+      ImuSample s;
+      s.t_s = t;
+      model::Stimulus<double> st;
+      st.input = d * kG;
+      s.accel_mps2 = m.measure<double>(theta.data(), st) + Eigen::Vector3d(n(rng), n(rng), n(rng));
+      rec.samples.push_back(s);
+    }
+    prev = d;
+  }
+  rec.header.gravity_mps2 = kG;
+  StaticDetectorOptions d;
+  d.window_s = 0.5;
+  d.min_duration_s = 2.0;
+  const auto ivs = detect_static_intervals(rec, d);
+  EXPECT_EQ(ivs.size(), 12u);
+  CalibrationOptions o;
+  o.detector = d;
+  const auto r = calibrate_accelerometer_unknown_orientations(rec, o);
+  ASSERT_TRUE(r.ok) << r.report();
+  EXPECT_EQ(r.intervals.size(), 12u);
+  EXPECT_NEAR(r.parameter("scale_y").value, theta[4], 4 * r.parameter("scale_y").std_error + 1e-4);
+}
+
+// ------------------------------------------------------------------------------------------------
+// Real data.
+
+TEST(CeresNonlinearRealData, ImucalSessionAgainstReferenceCalibration) {
+  if (!has_data("imucal/annotated_session.csv") || !has_data("imucal/example_cal.json"))
+    GTEST_SKIP() << "shared data absent: " << STEND_SHARED_DATA_DIR
+                 << "/imucal (the imucal example session is kept beside the project, not in it)";
+  const auto dir = std::filesystem::path(STEND_SHARED_DATA_DIR) / "imucal";
+  const Recording rec = import::import_imucal_session(dir / "annotated_session.csv");
+  const double g = 9.81;  // imucal's expected_g
+  const auto ivs = intervals_from_segments(rec, "orientation", 0.5);
+  ASSERT_EQ(ivs.size(), 6u);
+  std::vector<Eigen::Vector3d> f;
+  for (const auto& iv : ivs) {
+    Eigen::Vector3d v = Eigen::Vector3d::Zero();
+    v[iv.label[0] - 'x'] = iv.label[2] == 'p' ? g : -g;
+    f.push_back(v);
+  }
+  CalibrationOptions o;
+  o.gravity_mps2 = g;
+  const auto r = calibrate_accelerometer_known_orientations(ivs, f, o);
+  ASSERT_TRUE(r.ok) << r.report();
+  std::cout << r.report();
+
+  // Reference: raw = R·K·true + b (counts) → true = K⁻¹ R⁻¹ (raw − b).
+  std::ifstream in(dir / "example_cal.json");
+  const auto js = nlohmann::json::parse(in);
+  Eigen::Matrix3d K, R;
+  Eigen::Vector3d b;
+  for (int i = 0; i < 3; ++i) {
+    b[i] = js["b_a"][static_cast<std::size_t>(i)].get<double>();
+    for (int j = 0; j < 3; ++j) {
+      K(i, j) = js["K_a"][static_cast<std::size_t>(i)][static_cast<std::size_t>(j)].get<double>();
+      R(i, j) = js["R_a"][static_cast<std::size_t>(i)][static_cast<std::size_t>(j)].get<double>();
+    }
+  }
+  const Eigen::Matrix3d inv = (R * K).inverse();
+  const auto ref = norm_rms(rec, ivs, g, [&](const ImuSample& s) {
+    const Eigen::Vector3d raw(s.accel_counts[0], s.accel_counts[1], s.accel_counts[2]);
+    return Eigen::Vector3d(inv * (raw - b));
+  });
+  const auto ours = norm_rms(rec, ivs, g, [&](const ImuSample& s) { return r.correct(s.accel_mps2); });
+  std::cout << "[imucal] RMS |a|-g per sample: ours " << ours.first << " m/s^2, reference " << ref.first
+            << " m/s^2; over interval means: ours " << ours.second << ", reference " << ref.second << "\n";
+  EXPECT_LE(ours.first, ref.first * 1.001 + 1e-4);
+  EXPECT_LE(ours.second, ref.second * 1.05 + 1e-3);
+}
+
+TEST(CeresNonlinearRealData, Mpu6050SessionAgainstReferenceCalibration) {
+  if (!has_data("mpu6050_multipos/calibration_session.csv") ||
+      !has_data("mpu6050_multipos/reference_params_acc.csv"))
+    GTEST_SKIP() << "shared data absent: " << STEND_SHARED_DATA_DIR
+                 << "/mpu6050_multipos (kept beside the project, not in it)";
+  const auto dir = std::filesystem::path(STEND_SHARED_DATA_DIR) / "mpu6050_multipos";
+  const Recording rec = import::import_mpu6050_multipos(dir / "calibration_session.csv");
+  const double g = 9.81;
+  CalibrationOptions o;
+  o.gravity_mps2 = g;
+  o.detector.init_duration_s = 30.0;
+  o.detector.trim_s = 0.2;
+  const auto r = calibrate_accelerometer_unknown_orientations(rec, o);
+  std::cout << r.report();
+  ASSERT_TRUE(r.ok) << r.report();
+  EXPECT_GE(r.intervals.size(), 10u);
+
+  const auto p = read_numbers(dir / "reference_params_acc.csv");
+  ASSERT_EQ(p.size(), 9u);
+  Eigen::Matrix3d T;
+  T << 1, -p[0], p[1], 0, 1, -p[2], 0, 0, 1;
+  const Eigen::Matrix3d K = Eigen::Vector3d(p[3], p[4], p[5]).asDiagonal();
+  const Eigen::Vector3d b(p[6], p[7], p[8]);
+  const auto ref = norm_rms(rec, r.intervals, g, [&](const ImuSample& s) {
+    const Eigen::Vector3d raw(s.accel_counts[0], s.accel_counts[1], s.accel_counts[2]);
+    return Eigen::Vector3d(T * K * (raw - b));
+  });
+  const auto ours = norm_rms(rec, r.intervals, g, [&](const ImuSample& s) { return r.correct(s.accel_mps2); });
+  std::cout << "[mpu6050] " << r.intervals.size() << " static intervals; RMS |a|-g per sample: ours "
+            << ours.first << " m/s^2, reference " << ref.first << " m/s^2; over interval means: ours "
+            << ours.second << ", reference " << ref.second << "\n";
+  EXPECT_LE(ours.first, ref.first * 1.001 + 1e-4);
+  EXPECT_LE(ours.second, ref.second + 1e-4);
+}

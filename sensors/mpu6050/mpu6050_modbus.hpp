@@ -1,0 +1,79 @@
+// mpu6050_modbus: an InvenSense MPU-6050 read by the bench microcontroller and polled by the PC
+// over MODBUS RTU (register map: docs/bench-mcu-modbus.md). See README.md.
+#pragma once
+
+#include <stend/sdk.hpp>
+#include <stend/transport/modbus_rtu.hpp>
+
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace stend::mpu6050 {
+
+struct Mpu6050ModbusConfig {
+  std::string device;
+  int baud = 921600;
+  int slave_id = 1;
+  int accel_range_g = 2;      // 2, 4, 8, 16
+  int gyro_range_dps = 250;   // 250, 500, 1000, 2000
+  int dlpf_hz = 0;            // 0 (off: 260 Hz, 8 kHz gyro rate), 184, 94, 44, 21, 10, 5
+  double output_rate_hz = 1000.0;
+  int timeout_ms = 100;
+  int retries = 3;
+
+  static Mpu6050ModbusConfig from(const Params& p);  // throws std::invalid_argument
+};
+
+// Link health since start(), for reports and tests.
+struct LinkReport {
+  std::uint64_t samples = 0;        // delivered
+  std::uint64_t samples_lost = 0;   // sequence numbers skipped
+  std::uint64_t gaps = 0;           // samples flagged kGapBefore
+  std::uint64_t window_reads = 0;
+  std::uint64_t payload_bytes = 0;  // 14 per sample delivered
+  transport::ModbusStats bus;       // retries, CRC errors, time-outs, wire bytes
+  std::vector<std::string> events;  // one line per retried fault, gap or failure
+};
+
+class Mpu6050Modbus final : public Sensor {
+ public:
+  static constexpr std::uint16_t kExpectedWhoAmI = 0x68;
+
+  explicit Mpu6050Modbus(const Params& p);
+  explicit Mpu6050Modbus(Mpu6050ModbusConfig c);
+  ~Mpu6050Modbus() override;
+
+  SensorIdentity identity() const override;
+  SensorInfo info() const override;
+  void start(double t0_s) override;
+  void acquire(double t_s, const TruthSource& truth, std::vector<ImuSample>& out) override;
+  void stop() override;
+
+  const LinkReport& report() const;
+  const Mpu6050ModbusConfig& config() const { return c_; }
+
+ private:
+  void open();
+  bool read_window(int max_samples);  // appends to pending_; false when the FIFO is drained
+  std::string where() const;
+
+  Mpu6050ModbusConfig c_;
+  int smplrt_div_ = 0, dlpf_cfg_ = 0;
+  double period_s_ = 1e-3;
+  std::unique_ptr<transport::ModbusRtuClient> bus_;
+  std::string who_am_i_;
+  double t0_ = 0.0;
+  std::uint32_t next_seq_ = 0;  // sequence number of the next sample expected
+  bool gap_pending_ = false;
+  int estimate_ = 0;            // samples known to wait (0: estimate from the clock)
+  std::chrono::steady_clock::time_point last_poll_{};
+  std::deque<ImuSample> pending_;  // read but later than the last acquire's t_s
+  std::uint64_t faults_seen_ = 0;
+  mutable LinkReport report_;
+};
+
+}  // namespace stend::mpu6050
