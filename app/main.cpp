@@ -1,6 +1,8 @@
 // stend — drive a characterization bench from an experiment file and analyse its recordings.
+#include "stend/allan/allan.hpp"
 #include "stend/batch_lsq/batch_lsq.hpp"
 #include "stend/experiment.hpp"
+#include "stend/importers.hpp"
 #include "stend/plugin_host.hpp"
 #include "stend/recording.hpp"
 #include "stend/runner.hpp"
@@ -114,24 +116,77 @@ int cmd_run(const std::string& file, const std::string& output, const std::strin
   return 0;
 }
 
-// Fits a model to a recording, prints the table and writes fit.json (schema stend.fit/1) and
-// fit.txt into the run folder. Returns false when the fit failed (it says why, with no numbers).
-bool fit_run(const std::filesystem::path& run_dir, const std::string& model_file, const std::string& json_out) {
-  const stend::batch_lsq::ModelSpec spec = stend::batch_lsq::load_model_spec(model_file);
-  const stend::Recording rec = stend::Recording::open(run_dir);
-  const stend::batch_lsq::FitResult fit = stend::batch_lsq::fit_recording(rec, spec);
-  std::ostringstream text;
-  stend::batch_lsq::print_table(text, fit);
-  std::cout << text.str();
-  const std::filesystem::path json = json_out.empty() ? run_dir / "fit.json" : std::filesystem::path(json_out);
-  stend::batch_lsq::write_json(json, fit);
-  std::ofstream(run_dir / "fit.txt") << text.str();
-  fmt::print("results:    {}\n", json.string());
-  return fit.ok;
+// A recording from a run folder, or a dataset file through its importer:
+//   --format run|imucal|mpu6050_multipos|mat|imutk (imutk: "ACC_FILE,GYRO_FILE"), or auto.
+stend::Recording open_recording(const std::string& input, std::string format) {
+  namespace fs = std::filesystem;
+  if (format.empty() || format == "auto") {
+    if (fs::is_directory(input)) format = "run";
+    else if (fs::path(input).extension() == ".mat") format = "mat";
+    else {
+      std::ifstream in(input);
+      std::string first;
+      std::getline(in, first);
+      if (first.rfind("part,samples", 0) == 0) format = "imucal";
+      else if (first.rfind("Fs,", 0) == 0) format = "mpu6050_multipos";
+      else
+        throw std::runtime_error(input + ": cannot tell the format; give --format run|imucal|mpu6050_multipos|mat|imutk");
+    }
+  }
+  if (format == "run") return stend::Recording::open(input);
+  if (format == "imucal") return stend::import::import_imucal_session(input);
+  if (format == "mpu6050_multipos") return stend::import::import_mpu6050_multipos(input);
+  if (format == "mat") return stend::import::import_mat(input);
+  if (format == "imutk") {
+    const auto comma = input.find(',');
+    if (comma == std::string::npos) throw std::runtime_error("--format imutk takes ACC_FILE,GYRO_FILE");
+    return stend::import::import_imutk(input.substr(0, comma), input.substr(comma + 1));
+  }
+  throw std::runtime_error("unknown format '" + format + "'");
 }
 
-int cmd_fit(const std::string& dir, const std::string& model, const std::string& json) {
-  return fit_run(dir, model, json) ? 0 : 3;
+// Fits the model to a recording, prints the report and writes the results JSON (+ a text copy)
+// into `out_dir`. Models with a top-level `allan:` mapping run the Allan analysis; the others are
+// batch least-squares model specifications. Returns false when the fit failed (it says why).
+bool fit_recording(const stend::Recording& rec, const std::string& model_file, const std::filesystem::path& out_dir,
+                   const std::string& json_out) {
+  const YAML::Node root = YAML::LoadFile(model_file);
+  std::ostringstream text;
+  std::filesystem::path json = json_out;
+  bool ok = true;
+  std::string json_text;
+  if (root.IsMap() && root["allan"]) {
+    const stend::allan::AllanReport report =
+        stend::allan::analyze_recording(rec, stend::allan::options_from_yaml(root["allan"], model_file));
+    stend::allan::write_summary_table(text, report);
+    std::ostringstream j;
+    stend::allan::write_json(j, report);
+    json_text = j.str();
+    if (json.empty()) json = out_dir / "allan.json";
+  } else {
+    const stend::batch_lsq::FitResult fit =
+        stend::batch_lsq::fit_recording(rec, stend::batch_lsq::load_model_spec(model_file));
+    stend::batch_lsq::print_table(text, fit);
+    json_text = stend::batch_lsq::to_json(fit);
+    ok = fit.ok;
+    if (json.empty()) json = out_dir / "fit.json";
+  }
+  std::cout << text.str();
+  std::ofstream(json) << json_text << "\n";
+  std::filesystem::path txt = json;
+  std::ofstream(txt.replace_extension(".txt")) << text.str();
+  fmt::print("results:    {}\n", json.string());
+  return ok;
+}
+
+bool fit_run(const std::filesystem::path& run_dir, const std::string& model_file, const std::string& json_out) {
+  return fit_recording(stend::Recording::open(run_dir), model_file, run_dir, json_out);
+}
+
+int cmd_fit(const std::string& input, const std::string& format, const std::string& model, const std::string& json) {
+  const stend::Recording rec = open_recording(input, format);
+  const bool is_run = std::filesystem::is_directory(input);
+  return fit_recording(rec, model, is_run ? std::filesystem::path(input) : std::filesystem::current_path(), json) ? 0 : 3;
 }
 
 int cmd_info(const std::string& dir) {
@@ -181,8 +236,10 @@ int main(int argc, char** argv) {
   info->add_option("run", dir, "Run folder")->required();
 
   std::string model, json;
-  auto* fit = app.add_subcommand("fit", "Fit an error model to a recording: values, standard errors, identifiability");
-  fit->add_option("run", dir, "Run folder")->required();
+  std::string format = "auto";
+  auto* fit = app.add_subcommand("fit", "Fit an error model (or the Allan noise model) to a recording or dataset");
+  fit->add_option("input", dir, "Run folder, or a dataset file (imucal, MPU-6050 multi-position, .mat, IMU-TK)")->required();
+  fit->add_option("--format", format, "run | imucal | mpu6050_multipos | mat | imutk (ACC,GYRO) | auto");
   fit->add_option("-m,--model", model, "Model YAML (instrument, axes, terms, extraction)")->required();
   fit->add_option("--json", json, "Where to write the results (default RUN/fit.json)");
 
@@ -192,7 +249,7 @@ int main(int argc, char** argv) {
     if (*validate) return cmd_validate(file);
     if (*run) return cmd_run(file, output, name, clock, quiet);
     if (*info) return cmd_info(dir);
-    if (*fit) return cmd_fit(dir, model, json);
+    if (*fit) return cmd_fit(dir, format, model, json);
   } catch (const stend::ExperimentError& e) {
     fmt::print(stderr, "{}\n", e.what());
     return 2;
