@@ -77,10 +77,13 @@ struct DynamicNormCost {
   }
 };
 
+// Residual rows: `W` (3×3) maps ȳ − measure(θ, f) to whitened residuals (identity when the
+// orientations are exact; otherwise along-gravity / across-gravity split, see the options).
 struct KnownCost {
   const model::ErrorModel* m;
   std::vector<int> free_index;
   Eigen::Vector3d y, f;
+  Eigen::Matrix3d W;
   template <typename T>
   bool operator()(const T* const p, T* residual) const {
     T theta[kFull];
@@ -88,8 +91,9 @@ struct KnownCost {
     model::Stimulus<T> s;
     s.input = f.cast<T>();
     s.specific_force = s.input;
-    const model::Vec3<T> pred = m->measure<T>(theta, s);
-    for (int i = 0; i < 3; ++i) residual[i] = pred[i] - T(y[i]);
+    const model::Vec3<T> d = m->measure<T>(theta, s) - y.cast<T>();
+    const model::Vec3<T> w = W.cast<T>() * d;
+    for (int i = 0; i < 3; ++i) residual[i] = w[i];
     return true;
   }
 };
@@ -596,7 +600,20 @@ CalibrationResult calibrate_accelerometer_known_orientations(const std::vector<S
   std::vector<double> x(kFull, 0.0);
   ceres::Problem problem;
   for (std::size_t k = 0; k < intervals.size(); ++k) {
-    auto* f = new KnownCost{&r.model, free_index, intervals[k].accel_mean, truth_f[k]};
+    Eigen::Matrix3d W = Eigen::Matrix3d::Identity();
+    if (o.orientation_sigma_deg > 0.0 && truth_f[k].norm() > 0.0) {
+      // Tilt of the true orientation ~ N(0, σ_tilt²): the residual across gravity gets the extra
+      // variance (g·σ_tilt)², the one along gravity only the noise of the mean.
+      const Eigen::Vector3d e0 = truth_f[k].normalized();
+      const Eigen::Vector3d e1 = e0.unitOrthogonal(), e2 = e0.cross(e1);
+      const double n_sd = std::max(1e-6, intervals[k].accel_std.mean() /
+                                             std::sqrt(static_cast<double>(std::max<std::size_t>(1, intervals[k].count))));
+      const double t_sd = std::hypot(n_sd, g * o.orientation_sigma_deg * M_PI / 180.0);
+      W.row(0) = e0.transpose() / n_sd;
+      W.row(1) = e1.transpose() / t_sd;
+      W.row(2) = e2.transpose() / t_sd;
+    }
+    auto* f = new KnownCost{&r.model, free_index, intervals[k].accel_mean, truth_f[k], W};
     problem.AddResidualBlock(new ceres::AutoDiffCostFunction<KnownCost, 3, kFull>(f), make_loss(o), x.data());
   }
   solve(problem, x, free_index, 3 * n, o, r);

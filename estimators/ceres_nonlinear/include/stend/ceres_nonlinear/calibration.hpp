@@ -85,6 +85,11 @@ struct CalibrationOptions {
   // Unknown orientations: cross-axis terms held at zero (names from the vocabulary).
   std::vector<std::string> fixed_cross_axis = {"cross_xy", "cross_xz", "cross_yz"};
   bool estimate_gyro_bias = true;
+  // Known orientations: how well the true orientations are known [deg, 1σ tilt]. 0 = exactly
+  // (unweighted residuals). > 0: each interval's residual is whitened — along gravity by the noise
+  // of the mean (accel_std/√count), across gravity by √(noise² + (g·σ_tilt)²) — so a slightly tilted
+  // position spoils the cross-axis terms it informs, not the bias and scale (Ferraris-like).
+  double orientation_sigma_deg = 0.0;
 };
 
 struct Parameter {
