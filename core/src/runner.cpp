@@ -390,6 +390,8 @@ RunResult run_experiment(const Experiment& exp, const PluginHost& host, const Ru
   }
   if (result.status != "complete") run.abandon();
   bench.safe_state();
+  if (result.status != "complete")
+    writer.add_event({clock->now_s(), "warning", "runner", "run " + result.status + "; fixtures put in their safe state"});
   try {
     bench.sensor().stop();
   } catch (const std::exception& e) {

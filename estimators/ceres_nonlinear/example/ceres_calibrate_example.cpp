@@ -32,7 +32,8 @@ int main(int argc, char** argv) {
         truth.push_back(f);
       }
       CalibrationOptions o;
-      o.gravity_mps2 = 9.81;
+      o.gravity_mps2 = 9.81;           // imucal's expected_g
+      o.orientation_sigma_deg = 1.0;   // hand-placed positions: ~1° tilts
       r = calibrate_accelerometer_known_orientations(ivs, truth, o);
     } else if (kind == "mpu6050") {
       const Recording rec = import::import_mpu6050_multipos(argv[2]);

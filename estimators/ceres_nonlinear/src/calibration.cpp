@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <numbers>
 #include <stdexcept>
 
 namespace stend::ceres_nonlinear {
@@ -452,7 +453,8 @@ std::string CalibrationResult::report() const {
   s += fmt::format("status: {}\n", ok ? "ok" : "FAILED — " + message);
   s += fmt::format("static intervals: {}, residuals: {}, estimated parameters: {}, dof: {}, g = {} m/s^2\n",
                    intervals.size(), observations, estimated, dof, gravity_mps2);
-  s += fmt::format("residual sigma: {} m/s^2, solver: {}\n", fmt_num(sigma), solver_report);
+  s += fmt::format("residual sigma: {} {}, solver: {}\n", fmt_num(sigma),
+                   whitened ? "(whitened residuals; 1 = as expected)" : "m/s^2", solver_report);
   s += fmt::format("RMS of |a| - g over the intervals: raw {} m/s^2, calibrated {} m/s^2\n",
                    fmt_num(rms_norm_before), fmt_num(rms_norm_after));
   s += fmt::format("{:<14} {:>14} {:>12} {:>14} {:>14}  {:<8} {}\n", "parameter", "value",
@@ -483,7 +485,7 @@ std::string CalibrationResult::to_json() const {
   j["observations"] = observations;
   j["estimated"] = estimated;
   j["dof"] = dof;
-  j["sigma_mps2"] = num(sigma);
+  j[whitened ? "sigma_whitened" : "sigma_mps2"] = num(sigma);
   j["rms_norm_before_mps2"] = num(rms_norm_before);
   j["rms_norm_after_mps2"] = num(rms_norm_after);
   j["solver"] = solver_report;
@@ -577,6 +579,7 @@ CalibrationResult calibrate_accelerometer_known_orientations(const std::vector<S
     g /= static_cast<double>(std::max<std::size_t>(1, truth_f.size()));
   }
   r.gravity_mps2 = g;
+  r.whitened = o.orientation_sigma_deg > 0.0;
   std::vector<int> free_index(kFull);
   for (int i = 0; i < kFull; ++i) free_index[static_cast<std::size_t>(i)] = i;
   init_parameters(r, free_index);
@@ -608,7 +611,7 @@ CalibrationResult calibrate_accelerometer_known_orientations(const std::vector<S
       const Eigen::Vector3d e1 = e0.unitOrthogonal(), e2 = e0.cross(e1);
       const double n_sd = std::max(1e-6, intervals[k].accel_std.mean() /
                                              std::sqrt(static_cast<double>(std::max<std::size_t>(1, intervals[k].count))));
-      const double t_sd = std::hypot(n_sd, g * o.orientation_sigma_deg * M_PI / 180.0);
+      const double t_sd = std::hypot(n_sd, g * o.orientation_sigma_deg * std::numbers::pi / 180.0);
       W.row(0) = e0.transpose() / n_sd;
       W.row(1) = e1.transpose() / t_sd;
       W.row(2) = e2.transpose() / t_sd;

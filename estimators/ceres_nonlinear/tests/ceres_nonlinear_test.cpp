@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <numbers>
 #include <random>
 #include <sstream>
 #include <string>
@@ -193,7 +194,7 @@ TEST(CeresNonlinear, DegenerateDesignNamesNonIdentifiableParameters) {
   std::mt19937_64 rng(5);
   std::vector<Eigen::Vector3d> dirs;
   for (int k = 0; k < 20; ++k) {
-    const double a = 2.0 * M_PI * k / 20.0;
+    const double a = 2.0 * std::numbers::pi * k / 20.0;
     dirs.emplace_back(std::cos(a), std::sin(a), 0.0);
   }
   const auto ivs = simulate(dirs, truth_theta(false), 200, 0.02, rng);
@@ -333,8 +334,8 @@ TEST(CeresNonlinearRealData, ImucalSessionAgainstReferenceCalibration) {
   const auto ours = norm_rms(rec, ivs, g, [&](const ImuSample& s) { return r.correct(s.accel_mps2); });
   std::cout << "[imucal] RMS |a|-g per sample: ours " << ours.first << " m/s^2, reference " << ref.first
             << " m/s^2; over interval means: ours " << ours.second << ", reference " << ref.second << "\n";
-  EXPECT_LE(ours.first, ref.first * 1.001 + 1e-4);
-  EXPECT_LE(ours.second, ref.second * 1.05 + 1e-3);
+  EXPECT_LE(ours.first, ref.first * 1.001);
+  EXPECT_LE(ours.second, ref.second * 1.001);
 }
 
 TEST(CeresNonlinearRealData, Mpu6050SessionAgainstReferenceCalibration) {
@@ -360,14 +361,24 @@ TEST(CeresNonlinearRealData, Mpu6050SessionAgainstReferenceCalibration) {
   T << 1, -p[0], p[1], 0, 1, -p[2], 0, 0, 1;
   const Eigen::Matrix3d K = Eigen::Vector3d(p[3], p[4], p[5]).asDiagonal();
   const Eigen::Vector3d b(p[6], p[7], p[8]);
-  const auto ref = norm_rms(rec, r.intervals, g, [&](const ImuSample& s) {
-    const Eigen::Vector3d raw(s.accel_counts[0], s.accel_counts[1], s.accel_counts[2]);
-    return Eigen::Vector3d(T * K * (raw - b));
-  });
+  // As documented (a = T·K·(raw − b)) the reference is off by ~1.8 m/s^2: its bias file holds the
+  // negated offsets (b ≈ (−711, 358, 1840) counts while the still data show (+718, −358, −1835)).
+  // Both signs are reported; the comparison uses the better one.
+  auto ref_with = [&](double sign) {
+    return norm_rms(rec, r.intervals, g, [&](const ImuSample& s) {
+      const Eigen::Vector3d raw(s.accel_counts[0], s.accel_counts[1], s.accel_counts[2]);
+      return Eigen::Vector3d(T * K * (raw - sign * b));
+    });
+  };
+  const auto ref_minus = ref_with(1.0), ref_plus = ref_with(-1.0);
+  const auto ref = ref_plus.first < ref_minus.first ? ref_plus : ref_minus;
+  std::cout << "[mpu6050] reference as documented (raw - b): per sample " << ref_minus.first
+            << " m/s^2, means " << ref_minus.second << "; with (raw + b): per sample " << ref_plus.first
+            << " m/s^2, means " << ref_plus.second << "\n";
   const auto ours = norm_rms(rec, r.intervals, g, [&](const ImuSample& s) { return r.correct(s.accel_mps2); });
   std::cout << "[mpu6050] " << r.intervals.size() << " static intervals; RMS |a|-g per sample: ours "
             << ours.first << " m/s^2, reference " << ref.first << " m/s^2; over interval means: ours "
             << ours.second << ", reference " << ref.second << "\n";
-  EXPECT_LE(ours.first, ref.first * 1.001 + 1e-4);
-  EXPECT_LE(ours.second, ref.second + 1e-4);
+  EXPECT_LE(ours.first, ref.first * 1.001);
+  EXPECT_LE(ours.second, ref.second * 1.001);
 }

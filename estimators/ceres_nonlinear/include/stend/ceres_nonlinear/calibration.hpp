@@ -112,7 +112,8 @@ struct CalibrationResult {
   std::vector<StaticInterval> intervals;
   double gravity_mps2 = 0.0;
   int observations = 0, estimated = 0, dof = 0, iterations = 0;
-  double sigma = 0.0;              // residual standard deviation [m/s^2]
+  double sigma = 0.0;              // residual standard deviation [m/s^2] (whitened: 1 = as expected)
+  bool whitened = false;           // known orientations with orientation_sigma_deg > 0
   double quantile = 0.0;
   // RMS over the intervals of |ȳ| − g (raw) and |correct(ȳ)| − g (calibrated) [m/s^2].
   double rms_norm_before = 0.0, rms_norm_after = 0.0;
