@@ -3,6 +3,7 @@
 #include "stend/batch_lsq/batch_lsq.hpp"
 #include "stend/experiment.hpp"
 #include "stend/importers.hpp"
+#include "stend/temp_poly/temp_poly.hpp"
 #include "stend/plugin_host.hpp"
 #include "stend/recording.hpp"
 #include "stend/runner.hpp"
@@ -145,17 +146,32 @@ stend::Recording open_recording(const std::string& input, std::string format) {
   throw std::runtime_error("unknown format '" + format + "'");
 }
 
+// Which estimator a model file is for: `allan` (top-level `allan:` mapping), `temp_poly`
+// (temperature-model options: `selection:` / `max_order:`), otherwise `batch_lsq`.
+std::string estimator_of(const YAML::Node& root) {
+  if (root.IsMap() && root["allan"]) return "allan";
+  if (root.IsMap() && (root["selection"] || root["max_order"])) return "temp_poly";
+  return "batch_lsq";
+}
+
 // Fits the model to a recording, prints the report and writes the results JSON (+ a text copy)
-// into `out_dir`. Models with a top-level `allan:` mapping run the Allan analysis; the others are
-// batch least-squares model specifications. Returns false when the fit failed (it says why).
+// into `out_dir`. Returns false when the fit failed (it says why, with no numbers).
 bool fit_recording(const stend::Recording& rec, const std::string& model_file, const std::filesystem::path& out_dir,
-                   const std::string& json_out) {
+                   const std::string& json_out, std::string estimator = "auto") {
   const YAML::Node root = YAML::LoadFile(model_file);
+  if (estimator == "auto") estimator = estimator_of(root);
   std::ostringstream text;
   std::filesystem::path json = json_out;
   bool ok = true;
   std::string json_text;
-  if (root.IsMap() && root["allan"]) {
+  if (estimator == "temp_poly") {
+    const stend::temp_poly::TempPolyResult r =
+        stend::temp_poly::fit_temperature_model(rec, stend::temp_poly::load_options(model_file));
+    stend::temp_poly::print_report(text, r);
+    json_text = stend::temp_poly::to_json(r);
+    ok = r.ok;
+    if (json.empty()) json = out_dir / "temp_poly.json";
+  } else if (estimator == "allan") {
     const stend::allan::AllanReport report =
         stend::allan::analyze_recording(rec, stend::allan::options_from_yaml(root["allan"], model_file));
     stend::allan::write_summary_table(text, report);
@@ -183,10 +199,14 @@ bool fit_run(const std::filesystem::path& run_dir, const std::string& model_file
   return fit_recording(stend::Recording::open(run_dir), model_file, run_dir, json_out);
 }
 
-int cmd_fit(const std::string& input, const std::string& format, const std::string& model, const std::string& json) {
+int cmd_fit(const std::string& input, const std::string& format, const std::string& model, const std::string& json,
+            const std::string& estimator) {
   const stend::Recording rec = open_recording(input, format);
   const bool is_run = std::filesystem::is_directory(input);
-  return fit_recording(rec, model, is_run ? std::filesystem::path(input) : std::filesystem::current_path(), json) ? 0 : 3;
+  return fit_recording(rec, model, is_run ? std::filesystem::path(input) : std::filesystem::current_path(), json,
+                       estimator)
+             ? 0
+             : 3;
 }
 
 int cmd_info(const std::string& dir) {
@@ -241,6 +261,9 @@ int main(int argc, char** argv) {
   fit->add_option("input", dir, "Run folder, or a dataset file (imucal, MPU-6050 multi-position, .mat, IMU-TK)")->required();
   fit->add_option("--format", format, "run | imucal | mpu6050_multipos | mat | imutk (ACC,GYRO) | auto");
   fit->add_option("-m,--model", model, "Model YAML (instrument, axes, terms, extraction)")->required();
+  std::string estimator = "auto";
+  fit->add_option("--estimator", estimator, "batch_lsq | temp_poly | allan | auto (from the model file)")
+      ->check(CLI::IsMember({"auto", "batch_lsq", "temp_poly", "allan"}));
   fit->add_option("--json", json, "Where to write the results (default RUN/fit.json)");
 
   CLI11_PARSE(app, argc, argv);
@@ -249,7 +272,7 @@ int main(int argc, char** argv) {
     if (*validate) return cmd_validate(file);
     if (*run) return cmd_run(file, output, name, clock, quiet);
     if (*info) return cmd_info(dir);
-    if (*fit) return cmd_fit(dir, format, model, json);
+    if (*fit) return cmd_fit(dir, format, model, json, estimator);
   } catch (const stend::ExperimentError& e) {
     fmt::print(stderr, "{}\n", e.what());
     return 2;
