@@ -1,9 +1,7 @@
 // stend — drive a characterization bench from an experiment file and analyse its recordings.
-#include "stend/allan/allan.hpp"
-#include "stend/batch_lsq/batch_lsq.hpp"
+#include "commands.hpp"
+
 #include "stend/experiment.hpp"
-#include "stend/importers.hpp"
-#include "stend/temp_poly/temp_poly.hpp"
 #include "stend/plugin_host.hpp"
 #include "stend/recording.hpp"
 #include "stend/runner.hpp"
@@ -24,7 +22,8 @@ namespace {
 
 std::atomic<bool> g_stop{false};
 
-bool fit_run(const std::filesystem::path& run_dir, const std::string& model_file, const std::string& json_out);
+using stend::cli::fit_recording;
+using stend::cli::open_recording;
 
 extern "C" void on_sigint(int) {
   if (g_stop.load()) {  // second Ctrl-C: stop now
@@ -112,91 +111,11 @@ int cmd_run(const std::string& file, const std::string& output, const std::strin
     std::filesystem::path model = exp.estimation["model"].as<std::string>();
     if (model.is_relative()) model = std::filesystem::path(file).parent_path() / model;
     fmt::print("\n");
-    if (!fit_run(r.dir, model.string(), "")) return 3;
+    if (!fit_recording(stend::Recording::open(r.dir), model.string(), r.dir, "")) return 3;
   }
+  const auto report = stend::cli::write_run_report(r.dir);
+  if (!report.empty()) fmt::print("report:     {}\n", report.string());
   return 0;
-}
-
-// A recording from a run folder, or a dataset file through its importer:
-//   --format run|imucal|mpu6050_multipos|mat|imutk (imutk: "ACC_FILE,GYRO_FILE"), or auto.
-stend::Recording open_recording(const std::string& input, std::string format) {
-  namespace fs = std::filesystem;
-  if (format.empty() || format == "auto") {
-    if (fs::is_directory(input)) format = "run";
-    else if (fs::path(input).extension() == ".mat") format = "mat";
-    else {
-      std::ifstream in(input);
-      std::string first;
-      std::getline(in, first);
-      if (first.rfind("part,samples", 0) == 0) format = "imucal";
-      else if (first.rfind("Fs,", 0) == 0) format = "mpu6050_multipos";
-      else
-        throw std::runtime_error(input + ": cannot tell the format; give --format run|imucal|mpu6050_multipos|mat|imutk");
-    }
-  }
-  if (format == "run") return stend::Recording::open(input);
-  if (format == "imucal") return stend::import::import_imucal_session(input);
-  if (format == "mpu6050_multipos") return stend::import::import_mpu6050_multipos(input);
-  if (format == "mat") return stend::import::import_mat(input);
-  if (format == "imutk") {
-    const auto comma = input.find(',');
-    if (comma == std::string::npos) throw std::runtime_error("--format imutk takes ACC_FILE,GYRO_FILE");
-    return stend::import::import_imutk(input.substr(0, comma), input.substr(comma + 1));
-  }
-  throw std::runtime_error("unknown format '" + format + "'");
-}
-
-// Which estimator a model file is for: `allan` (top-level `allan:` mapping), `temp_poly`
-// (temperature-model options: `selection:` / `max_order:`), otherwise `batch_lsq`.
-std::string estimator_of(const YAML::Node& root) {
-  if (root.IsMap() && root["allan"]) return "allan";
-  if (root.IsMap() && (root["selection"] || root["max_order"])) return "temp_poly";
-  return "batch_lsq";
-}
-
-// Fits the model to a recording, prints the report and writes the results JSON (+ a text copy)
-// into `out_dir`. Returns false when the fit failed (it says why, with no numbers).
-bool fit_recording(const stend::Recording& rec, const std::string& model_file, const std::filesystem::path& out_dir,
-                   const std::string& json_out, std::string estimator = "auto") {
-  const YAML::Node root = YAML::LoadFile(model_file);
-  if (estimator == "auto") estimator = estimator_of(root);
-  std::ostringstream text;
-  std::filesystem::path json = json_out;
-  bool ok = true;
-  std::string json_text;
-  if (estimator == "temp_poly") {
-    const stend::temp_poly::TempPolyResult r =
-        stend::temp_poly::fit_temperature_model(rec, stend::temp_poly::load_options(model_file));
-    stend::temp_poly::print_report(text, r);
-    json_text = stend::temp_poly::to_json(r);
-    ok = r.ok;
-    if (json.empty()) json = out_dir / "temp_poly.json";
-  } else if (estimator == "allan") {
-    const stend::allan::AllanReport report =
-        stend::allan::analyze_recording(rec, stend::allan::options_from_yaml(root["allan"], model_file));
-    stend::allan::write_summary_table(text, report);
-    std::ostringstream j;
-    stend::allan::write_json(j, report);
-    json_text = j.str();
-    if (json.empty()) json = out_dir / "allan.json";
-  } else {
-    const stend::batch_lsq::FitResult fit =
-        stend::batch_lsq::fit_recording(rec, stend::batch_lsq::load_model_spec(model_file));
-    stend::batch_lsq::print_table(text, fit);
-    json_text = stend::batch_lsq::to_json(fit);
-    ok = fit.ok;
-    if (json.empty()) json = out_dir / "fit.json";
-  }
-  std::cout << text.str();
-  std::ofstream(json) << json_text << "\n";
-  std::filesystem::path txt = json;
-  std::ofstream(txt.replace_extension(".txt")) << text.str();
-  fmt::print("results:    {}\n", json.string());
-  return ok;
-}
-
-bool fit_run(const std::filesystem::path& run_dir, const std::string& model_file, const std::string& json_out) {
-  return fit_recording(stend::Recording::open(run_dir), model_file, run_dir, json_out);
 }
 
 int cmd_fit(const std::string& input, const std::string& format, const std::string& model, const std::string& json,
@@ -262,12 +181,21 @@ int main(int argc, char** argv) {
   fit->add_option("--format", format, "run | imucal | mpu6050_multipos | mat | imutk (ACC,GYRO) | auto");
   fit->add_option("-m,--model", model, "Model YAML (instrument, axes, terms, extraction)")->required();
   std::string estimator = "auto";
-  fit->add_option("--estimator", estimator, "batch_lsq | temp_poly | allan | auto (from the model file)")
-      ->check(CLI::IsMember({"auto", "batch_lsq", "temp_poly", "allan"}));
+  fit->add_option("--estimator", estimator, "batch_lsq | temp_poly | allan | ceres_nonlinear | auto (from the model file)")
+      ->check(CLI::IsMember({"auto", "batch_lsq", "temp_poly", "allan", "ceres_nonlinear"}));
   fit->add_option("--json", json, "Where to write the results (default RUN/fit.json)");
+
+  std::vector<stend::cli::Command> commands;
+  stend::cli::add_gap_command(app, commands);
+  stend::cli::add_report_command(app, commands);
+  stend::cli::add_compare_command(app, commands);
+  stend::cli::add_export_command(app, commands);
+  stend::cli::add_emulate_command(app, commands);
 
   CLI11_PARSE(app, argc, argv);
   try {
+    for (const auto& c : commands)
+      if (*c.sub) return c.run();
     if (*plugins) return cmd_plugins(plugin_paths);
     if (*validate) return cmd_validate(file);
     if (*run) return cmd_run(file, output, name, clock, quiet);

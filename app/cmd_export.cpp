@@ -1,0 +1,17 @@
+// `stend export` — placeholder until issue 6 lands; it is registered so the CLI shape is fixed.
+#include "commands.hpp"
+
+#include <cstdio>
+
+namespace stend::cli {
+
+void add_export_command(CLI::App& app, std::vector<Command>& out) {
+  auto* sub = app.add_subcommand("export", "(not yet available)");
+  sub->allow_extras();
+  out.push_back({sub, [] {
+                   std::fputs("stend export: not yet available in this build\n", stderr);
+                   return 1;
+                 }});
+}
+
+}  // namespace stend::cli
