@@ -1,0 +1,2 @@
+// placeholder: reports, results database and exports land here (issue 6).
+namespace stend::reporting {}
