@@ -1,16 +1,229 @@
-// `stend emulate` — placeholder until issue 4 lands; it is registered so the CLI shape is fixed.
+// `stend emulate` — start the emulated peers of the real drivers from the command line, print where
+// to connect, and serve until Ctrl-C (or --duration-s):
+//   stend emulate table     ACUTROL-style text-command table on 127.0.0.1 (1 or 3 axes)
+//   stend emulate chamber   ATmega328 chamber (MODBUS RTU on a pty) or Watlow F4 (MODBUS TCP)
+//   stend emulate bench-mcu the bench microcontroller with an MPU-6050 (MODBUS RTU on a pty)
+//   stend emulate world     table + chamber + bench MCU sharing one simulated world, the twin of
+//                           an in-process experiment (--twin), optionally writing a copy of a
+//                           drivers experiment with the emulators' devices and port filled in.
 #include "commands.hpp"
 
+#include "stend/experiment.hpp"
+#include "stend/plugin_host.hpp"
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
 #include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "bench_world.hpp"
+#include "chamber_emulator.hpp"
+#include "table_text_server.hpp"
 
 namespace stend::cli {
+namespace {
+
+std::atomic<bool> g_emulate_stop{false};
+extern "C" void on_emulate_signal(int) { g_emulate_stop.store(true); }
+
+// Serves until a signal or `duration_s` (0 = forever); `tick` runs every 100 ms.
+void serve(double duration_s, const std::function<void(double)>& tick = {}) {
+  g_emulate_stop = false;
+  std::signal(SIGINT, on_emulate_signal);
+  std::signal(SIGTERM, on_emulate_signal);
+  std::fputs("serving; Ctrl-C to stop\n", stdout);
+  std::fflush(stdout);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!g_emulate_stop.load()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (tick) tick(t);
+    if (duration_s > 0.0 && t >= duration_s) break;
+  }
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+}
+
+sim::AxisConfig table_axis(const std::string& name, double rate, double accel) {
+  sim::AxisConfig a;
+  a.name = name;
+  a.unit = "deg";
+  a.max_rate = rate;
+  a.max_accel = accel;
+  if (name == "tilt") {
+    a.min = -90.0;
+    a.max = 90.0;
+  }
+  return a;
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw std::runtime_error("cannot read " + path);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+void replace_all(std::string& s, const std::string& from, const std::string& to) {
+  for (std::size_t p = s.find(from); p != std::string::npos; p = s.find(from, p + to.size())) s.replace(p, from.size(), to);
+}
+
+}  // namespace
 
 void add_emulate_command(CLI::App& app, std::vector<Command>& out) {
-  auto* sub = app.add_subcommand("emulate", "(not yet available)");
-  sub->allow_extras();
-  out.push_back({sub, [] {
-                   std::fputs("stend emulate: not yet available in this build\n", stderr);
-                   return 1;
+  auto* sub = app.add_subcommand("emulate", "Serve emulated devices (table, chamber, bench MCU, a whole bench) for the real drivers");
+  sub->require_subcommand(1);
+
+  // ---- table ----
+  struct TableOpts {
+    int axes = 1, port = 5025;
+    double speed = 1.0, rate = 100.0, accel = 200.0, duration = 0.0;
+  };
+  auto t = std::make_shared<TableOpts>();
+  auto* table = sub->add_subcommand("table", "Rate table speaking the ACUTROL-style text dialect (docs/text-command-tables.md)");
+  table->add_option("--axes", t->axes, "1 (angle) or 3 (azimuth, tilt, rotation)")->check(CLI::IsMember({1, 3}));
+  table->add_option("--port", t->port, "TCP port on 127.0.0.1 (0: any free port)");
+  table->add_option("--speed", t->speed, "emulated seconds per wall second");
+  table->add_option("--max-rate-dps", t->rate, "axis speed limit, deg/s");
+  table->add_option("--max-accel-dps2", t->accel, "axis acceleration limit, deg/s^2");
+  table->add_option("--duration-s", t->duration, "stop after this long (0: until Ctrl-C)");
+  out.push_back({table, [t] {
+                   emu::TableTextConfig c;
+                   c.port = t->port;
+                   c.speed = t->speed;
+                   if (t->axes == 1) c.axes = {table_axis("angle", t->rate, t->accel)};
+                   else
+                     for (const char* n : {"azimuth", "tilt", "rotation"}) c.axes.push_back(table_axis(n, t->rate, t->accel));
+                   emu::TableTextServer server(c);
+                   std::printf("table (%d axis%s, ACUTROL-style text): tcp 127.0.0.1:%d\n", t->axes, t->axes == 1 ? "" : "es",
+                               server.port());
+                   std::printf("  driver config: {preset: acutrol, host: 127.0.0.1, port: %d}\n", server.port());
+                   serve(t->duration);
+                   return 0;
+                 }});
+
+  // ---- chamber ----
+  struct ChamberOpts {
+    std::string protocol = "atmega328", fault = "none";
+    int port = 0;
+    double speed = 1.0, initial = 22.0, fault_after = 0.0, duration = 0.0;
+    bool published = false;
+  };
+  auto c = std::make_shared<ChamberOpts>();
+  auto* chamber = sub->add_subcommand("chamber", "Thermochamber controller (docs/thermochamber-modbus.md) on the sim plant and the paper's PID");
+  chamber->add_option("--protocol", c->protocol, "atmega328 (MODBUS RTU on a pty) | watlow_f4 (MODBUS TCP)")
+      ->check(CLI::IsMember({"atmega328", "watlow_f4"}));
+  chamber->add_option("--port", c->port, "watlow_f4: TCP port on 127.0.0.1 (0: any free port)");
+  chamber->add_option("--speed", c->speed, "emulated seconds per wall second");
+  chamber->add_option("--initial-c", c->initial, "air temperature at power-on, degC");
+  chamber->add_flag("--published-firmware", c->published, "no sensor check, no trips (the paper's firmware)");
+  chamber->add_option("--fault", c->fault, "inject: none | sensor_open | sensor_stuck | sensor_85 | runaway")
+      ->check(CLI::IsMember({"none", "sensor_open", "sensor_stuck", "sensor_85", "runaway"}));
+  chamber->add_option("--fault-after-s", c->fault_after, "wall seconds before the fault");
+  chamber->add_option("--duration-s", c->duration, "stop after this long (0: until Ctrl-C)");
+  out.push_back({chamber, [c] {
+                   emu::ChamberEmuConfig ec;
+                   ec.plant.initial_c = c->initial;
+                   ec.speed = c->speed;
+                   ec.firmware_guards = !c->published;
+                   std::unique_ptr<emu::ChamberServerBase> server;
+                   if (c->protocol == "atmega328") {
+                     auto s = std::make_unique<emu::AtmegaChamberSlave>(ec);
+                     std::printf("chamber (ATmega328, MODBUS RTU slave 1): %s\n", s->device_path().c_str());
+                     std::printf("  driver config: {protocol: atmega328, transport: rtu, device: %s}\n", s->device_path().c_str());
+                     server = std::move(s);
+                   } else {
+                     auto s = std::make_unique<emu::WatlowChamberServer>(ec, c->port);
+                     std::printf("chamber (Watlow F4, MODBUS TCP unit 1): tcp 127.0.0.1:%d\n", s->port());
+                     std::printf("  driver config: {protocol: watlow_f4, transport: tcp, port: %d}\n", s->port());
+                     server = std::move(s);
+                   }
+                   bool injected = c->fault == "none";
+                   serve(c->duration, [&](double now) {
+                     if (injected || now < c->fault_after) return;
+                     injected = true;
+                     server->with_firmware([&](emu::ChamberFirmware& f) {
+                       if (c->fault == "sensor_open") f.inject_sensor_fault(emu::SensorFault::kDisconnected);
+                       if (c->fault == "sensor_stuck") f.inject_sensor_fault(emu::SensorFault::kStuck);
+                       if (c->fault == "sensor_85") f.inject_sensor_fault(emu::SensorFault::kPowerOn);
+                       if (c->fault == "runaway") f.inject_heater_stuck_on(true);
+                       return 0;
+                     });
+                     std::printf("fault injected: %s\n", c->fault.c_str());
+                     std::fflush(stdout);
+                   });
+                   return 0;
+                 }});
+
+  // ---- bench-mcu ----
+  struct McuOpts {
+    double tilt_deg = 0.0, duration = 0.0;
+  };
+  auto m = std::make_shared<McuOpts>();
+  auto* mcu = sub->add_subcommand("bench-mcu", "Bench microcontroller with an MPU-6050 (docs/bench-mcu-modbus.md), static stimulus");
+  mcu->add_option("--tilt-deg", m->tilt_deg, "the sensor tilted about y by this angle (gravity 9.80665 m/s^2)");
+  mcu->add_option("--duration-s", m->duration, "stop after this long (0: until Ctrl-C)");
+  out.push_back({mcu, [m] {
+                   BenchTruth truth;
+                   const double a = m->tilt_deg * 3.14159265358979323846 / 180.0;
+                   truth.specific_force_mps2 = {-9.80665 * std::sin(a), 0.0, 9.80665 * std::cos(a)};
+                   sim::SimImuConfig physics;
+                   physics.seed = 1;
+                   emu::BenchMcuSlave slave(emu::BenchMcuConfig{}, emu::Mpu6050Model(physics, truth));
+                   std::printf("bench MCU (MODBUS RTU slave 1, MPU-6050): %s\n", slave.device_path().c_str());
+                   std::printf("  sensor config: {plugin: mpu6050_modbus, config: {device: %s}}\n", slave.device_path().c_str());
+                   serve(m->duration);
+                   return 0;
+                 }});
+
+  // ---- world ----
+  struct WorldOpts {
+    std::string twin;
+    std::vector<std::string> write_config;
+    double chamber_speed = 50.0, duration = 0.0;
+    int table_port = 5025;
+  };
+  auto w = std::make_shared<WorldOpts>();
+  auto* world = sub->add_subcommand("world", "Table + chamber + bench MCU in one simulated world, the twin of an in-process bench");
+  world->add_option("--twin", w->twin, "in-process experiment whose bench (sim_imu, sim_one_axis_table, sim_thermochamber) the world copies")
+      ->required();
+  world->add_option("--chamber-speed", w->chamber_speed, "the chamber's plant runs this many times faster than the wall clock");
+  world->add_option("--table-port", w->table_port, "TCP port of the table on 127.0.0.1 (0: any free port)");
+  world->add_option("--write-config", w->write_config,
+                    "IN OUT: copy the drivers experiment IN to OUT with /dev/ttyUSB0 (bench MCU), /dev/ttyUSB1 (chamber) "
+                    "and port 5025 (table) replaced by the emulators'")
+      ->expected(2);
+  world->add_option("--duration-s", w->duration, "stop after this long (0: until Ctrl-C)");
+  out.push_back({world, [w] {
+                   PluginHost host;
+                   host.scan(PluginHost::default_search_path({}));
+                   const Experiment twin = load_experiment(w->twin, host);
+                   auto cfg = emu::BenchWorldConfig::from_experiment(twin, w->chamber_speed);
+                   cfg.table_port = w->table_port;
+                   emu::BenchWorld bw(cfg);
+                   std::printf("bench world, twin of %s:\n", w->twin.c_str());
+                   std::printf("  bench MCU (MPU-6050, MODBUS RTU): %s\n", bw.mcu_device().c_str());
+                   std::printf("  chamber (ATmega328, MODBUS RTU):  %s  (plant at %gx)\n", bw.chamber_device().c_str(), w->chamber_speed);
+                   std::printf("  table (ACUTROL-style text):       tcp 127.0.0.1:%d\n", bw.table_port());
+                   if (w->write_config.size() == 2) {
+                     std::string text = slurp(w->write_config[0]);
+                     replace_all(text, "/dev/ttyUSB0", bw.mcu_device());
+                     replace_all(text, "/dev/ttyUSB1", bw.chamber_device());
+                     replace_all(text, "port: 5025", "port: " + std::to_string(bw.table_port()));
+                     // Relative paths in the copy (estimation model) are resolved from its new folder.
+                     const auto from = std::filesystem::absolute(w->write_config[0]).parent_path();
+                     replace_all(text, "model: models/", "model: " + (from / "models").string() + "/");
+                     std::ofstream o(w->write_config[1]);
+                     o << text;
+                     if (!o) throw std::runtime_error("cannot write " + w->write_config[1]);
+                     std::printf("  wrote %s: run it with `stend run %s`\n", w->write_config[1].c_str(), w->write_config[1].c_str());
+                   }
+                   serve(w->duration);
+                   return 0;
                  }});
 }
 

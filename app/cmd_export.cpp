@@ -1,16 +1,31 @@
-// `stend export` — placeholder until issue 6 lands; it is registered so the CLI shape is fixed.
+// `stend export RUN --to kalibr|matlab|imutk|px4|json [-o FILE]` — a run's results in another
+// tool's format (see reporting/include/stend/reporting/exports.hpp and docs/reports.md).
 #include "commands.hpp"
 
-#include <cstdio>
+#include "stend/reporting/exports.hpp"
+
+#include <fmt/format.h>
 
 namespace stend::cli {
 
 void add_export_command(CLI::App& app, std::vector<Command>& out) {
-  auto* sub = app.add_subcommand("export", "(not yet available)");
-  sub->allow_extras();
+  auto* sub = app.add_subcommand("export", "Export a run's results: Kalibr imu.yaml, MATLAB .mat (accelparams / "
+                                           "gyroparams), IMU-TK calib files, PX4 thermal parameters, results JSON");
+  static std::string run, format, output;
+  static stend::reporting::ExportOptions opt;
+  sub->add_option("run", run, "Run folder")->required();
+  sub->add_option("--to", format, "kalibr | matlab | imutk | px4 | json")
+      ->required()
+      ->check(CLI::IsMember({"kalibr", "matlab", "imutk", "px4", "json"}));
+  sub->add_option("-o,--output", output, "Output file (imutk: path prefix for _acc.calib / _gyro.calib); default RUN/export/");
+  sub->add_option("--rostopic", opt.rostopic, "Kalibr: the IMU's ROS topic (default /imu0)");
+  sub->add_option("--px4-id", opt.px4_device_id, "PX4: the sensor's device id for TC_A0_ID / TC_G0_ID (default 0)");
+  sub->add_option("--px4-instance", opt.px4_instance, "PX4: calibration slot n of TC_An / TC_Gn (default 0)");
   out.push_back({sub, [] {
-                   std::fputs("stend export: not yet available in this build\n", stderr);
-                   return 1;
+                   const auto r = stend::reporting::export_run(run, format, output, opt);
+                   for (const auto& f : r.files) fmt::print("wrote {}\n", f.string());
+                   for (const auto& w : r.warnings) fmt::print(stderr, "warning: {}\n", w);
+                   return 0;
                  }});
 }
 

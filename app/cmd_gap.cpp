@@ -1,17 +1,117 @@
-// `stend gap` — placeholder until issue 5 lands; it is registered so the CLI shape is fixed.
-#include "commands.hpp"
+// `stend gap RUN_OR_DATASET --model MODEL.yaml` — sim-to-real gap diagnosis (diagnosis/, issue 5),
+// and `stend gap validate` — the diagnoser checked on withheld effects.
+#include <fmt/core.h>
 
-#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "commands.hpp"
+#include "stend/batch_lsq/model_spec.hpp"
+#include "stend/gap/gap.hpp"
+#include "stend/gap/validate.hpp"
 
 namespace stend::cli {
 
+namespace {
+
+struct GapArgs {
+  std::string input, format = "auto", model, json, fold_by = "auto";
+  int max_steps = 4, max_folds = 12;
+  double alpha = 0.05;
+  // validate
+  int seeds = 20, null_runs = 40, oov_runs = 20, positions = 0;
+  std::vector<double> sizes = {1, 2, 5, 10};
+  std::vector<std::string> only;
+  std::string vjson;
+  std::uint64_t seed = 1;
+};
+
+gap::FoldBy fold_of(const std::string& s) {
+  if (s == "orientation") return gap::FoldBy::kOrientation;
+  if (s == "temperature") return gap::FoldBy::kTemperature;
+  if (s == "ramp") return gap::FoldBy::kRamp;
+  return gap::FoldBy::kAuto;
+}
+
+int run_gap(const GapArgs& a) {
+  if (a.input.empty() || a.model.empty()) {
+    fmt::print(stderr, "stend gap: give RUN_OR_DATASET and --model MODEL.yaml (or `stend gap validate`)\n");
+    return 2;
+  }
+  const stend::Recording rec = open_recording(a.input, a.format);
+  const batch_lsq::ModelSpec spec = batch_lsq::load_model_spec(a.model);
+  const gap::GapInput in = gap::build_input(rec, spec);
+  gap::GapOptions opt;
+  opt.fold_by = fold_of(a.fold_by);
+  opt.max_steps = a.max_steps;
+  opt.max_folds = a.max_folds;
+  opt.alpha = a.alpha;
+  const gap::GapReport rep = gap::diagnose(in, opt);
+  std::ostringstream text;
+  gap::print_report(text, rep);
+  std::cout << text.str();
+  std::filesystem::path json = a.json;
+  if (json.empty())
+    json = std::filesystem::is_directory(a.input) ? std::filesystem::path(a.input) / "gap.json"
+                                                  : std::filesystem::path("gap.json");
+  std::ofstream(json) << gap::to_json(rep) << "\n";
+  std::filesystem::path txt = json;
+  std::ofstream(txt.replace_extension(".txt")) << text.str();
+  fmt::print("results:    {}\n", json.string());
+  return rep.ok ? 0 : 3;
+}
+
+int run_validate(const GapArgs& a) {
+  gap::ValidateOptions o;
+  o.seeds = a.seeds;
+  o.sizes = a.sizes;
+  o.null_runs = a.null_runs;
+  o.oov_runs = a.oov_runs;
+  o.only = a.only;
+  o.seed = a.seed;
+  o.gap.alpha = a.alpha;
+  if (a.positions > 0) o.design = gap::many_positions_design(a.positions);
+  const gap::ValidationReport r = gap::run_validation(o);
+  gap::print_validation(std::cout, r);
+  if (!a.vjson.empty()) {
+    std::ofstream(a.vjson) << gap::validation_json(r) << "\n";
+    fmt::print("results:    {}\n", a.vjson);
+  }
+  const bool pass = !(r.top1_at5 < 0.9) && !(r.false_positive_rate > 0.05) && !(r.closed_at5 < 0.8);
+  fmt::print("targets:    {}\n", pass ? "met" : "NOT met");
+  return pass ? 0 : 1;
+}
+
+}  // namespace
+
 void add_gap_command(CLI::App& app, std::vector<Command>& out) {
-  auto* sub = app.add_subcommand("gap", "(not yet available)");
-  sub->allow_extras();
-  out.push_back({sub, [] {
-                   std::fputs("stend gap: not yet available in this build\n", stderr);
-                   return 1;
-                 }});
+  auto args = std::make_shared<GapArgs>();
+  auto* sub = app.add_subcommand("gap", "Sim-to-real gap: where the twin disagrees with a recording, which "
+                                        "unmodelled effect explains it, how far it shrinks held out");
+  sub->add_option("input", args->input, "Run folder, or a dataset file (imucal, MPU-6050 multi-position, .mat, IMU-TK)");
+  sub->add_option("--format", args->format, "run | imucal | mpu6050_multipos | mat | imutk (ACC,GYRO) | auto");
+  sub->add_option("-m,--model", args->model, "Model YAML (batch_lsq format: instrument, axes, terms, extraction)");
+  sub->add_option("--json", args->json, "Where to write gap.json (default RUN/gap.json, or ./gap.json for a dataset)");
+  sub->add_option("--fold-by", args->fold_by, "Held-out groups: auto | orientation | temperature | ramp")
+      ->check(CLI::IsMember({"auto", "orientation", "temperature", "ramp"}));
+  sub->add_option("--max-steps", args->max_steps, "Forward-selection steps (default 4)");
+  sub->add_option("--max-folds", args->max_folds, "Held-out folds, groups dealt round-robin beyond (default 12; 0 = one per group)");
+  sub->add_option("--alpha", args->alpha, "Family-wise significance level (Bonferroni over candidates)");
+
+  auto* val = sub->add_subcommand("validate", "Check the diagnoser on planted, null and out-of-vocabulary effects");
+  val->add_option("--seeds", args->seeds, "Runs per candidate and size (default 20)");
+  val->add_option("--sizes", args->sizes, "Planted sizes, multiples of the noise floor (default 1 2 5 10)")->delimiter(',');
+  val->add_option("--null", args->null_runs, "Null runs (default 40)");
+  val->add_option("--oov", args->oov_runs, "Out-of-vocabulary runs (default 20)");
+  val->add_option("--only", args->only, "Only these candidates (comma separated)")->delimiter(',');
+  val->add_option("--positions", args->positions, "Use an N-position single-temperature design instead of the default");
+  val->add_option("--seed", args->seed, "Master seed");
+  val->add_option("--json", args->vjson, "Write the validation figures as JSON");
+
+  out.push_back({sub, [args, val] { return *val ? run_validate(*args) : run_gap(*args); }});
 }
 
 }  // namespace stend::cli

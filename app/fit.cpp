@@ -3,6 +3,8 @@
 
 #include "stend/allan/allan.hpp"
 #include "stend/batch_lsq/batch_lsq.hpp"
+#include "stend/ceres_nonlinear/model_file.hpp"
+#include "stend/plugin_host.hpp"
 #include "stend/importers.hpp"
 #include "stend/temp_poly/temp_poly.hpp"
 
@@ -78,7 +80,32 @@ bool fit_recording(const stend::Recording& rec, const std::string& model_file, c
     json_text = j.str();
     if (json.empty()) json = out_dir / "allan.json";
   } else if (estimator == "ceres_nonlinear") {
-    throw std::runtime_error("the ceres_nonlinear estimator is not routed through `stend fit` yet");
+    const auto f = stend::ceres_nonlinear::fit_model_file(rec, stend::ceres_nonlinear::load_model_file(model_file));
+    text << f.text;
+    json_text = f.json;
+    ok = f.ok;
+    if (json.empty()) json = out_dir / "ceres.json";
+  } else if (estimator != "batch_lsq") {
+    // Not built in: an estimator plugin of that name on the search path (out-of-tree estimators).
+    stend::PluginHost host;
+    host.scan(stend::PluginHost::default_search_path());
+    const stend_plugin_info* info = host.find(estimator);
+    if (info == nullptr || info->kind != STEND_KIND_ESTIMATOR)
+      throw std::runtime_error("no estimator '" + estimator + "': not built in (batch_lsq, temp_poly, allan, "
+                               "ceres_nonlinear) and no estimator plugin of that name on the search path "
+                               "(`stend plugins` lists what is found; STEND_PLUGIN_PATH adds a folder)");
+    auto plugin = host.create_estimator(estimator, stend::Params{});
+    stend::EstimatorRequest request;
+    request.recording = &rec;
+    request.input = rec.dir.string();
+    request.model_file = model_file;
+    request.output_dir = out_dir.string();
+    const stend::EstimatorResult r = plugin->fit(request);
+    text << r.text;
+    if (!r.ok) text << estimator << ": FAILED — " << r.message << "\n";
+    json_text = r.json;
+    ok = r.ok;
+    if (json.empty()) json = out_dir / (r.json_name.empty() ? estimator + ".json" : r.json_name);
   } else {
     const stend::batch_lsq::FitResult fit =
         stend::batch_lsq::fit_recording(rec, stend::batch_lsq::load_model_spec(model_file));

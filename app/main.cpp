@@ -181,8 +181,9 @@ int main(int argc, char** argv) {
   fit->add_option("--format", format, "run | imucal | mpu6050_multipos | mat | imutk (ACC,GYRO) | auto");
   fit->add_option("-m,--model", model, "Model YAML (instrument, axes, terms, extraction)")->required();
   std::string estimator = "auto";
-  fit->add_option("--estimator", estimator, "batch_lsq | temp_poly | allan | ceres_nonlinear | auto (from the model file)")
-      ->check(CLI::IsMember({"auto", "batch_lsq", "temp_poly", "allan", "ceres_nonlinear"}));
+  fit->add_option("--estimator", estimator,
+                  "batch_lsq | temp_poly | allan | ceres_nonlinear | auto (from the model file) | the name of an "
+                  "estimator plugin on the search path");
   fit->add_option("--json", json, "Where to write the results (default RUN/fit.json)");
 
   std::vector<stend::cli::Command> commands;

@@ -6,6 +6,7 @@ packages=(
   libeigen3-dev libceres-dev libyaml-cpp-dev nlohmann-json3-dev libfmt-dev libspdlog-dev
   libcli11-dev libmodbus-dev libhidapi-dev libmatio-dev libhdf5-dev libsqlite3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  zlib1g-dev chromium  # reporting: PNG check of report screenshots; headless-browser test of the reports
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -230,7 +230,7 @@ struct RefusalCase {
 
 TEST_F(PluginHostTestPlugins, EachBrokenPluginIsRefusedNamingFileAndReason) {
   const std::vector<RefusalCase> cases = {
-      {"bad_abi", {"plugin ABI 999, host ABI 1: rebuild the plugin against this Stend's SDK"}},
+      {"bad_abi", {"plugin ABI 999, host ABI " + std::to_string(STEND_PLUGIN_ABI_VERSION) + ": rebuild the plugin against this Stend's SDK"}},
       {"bad_size",
        {"plugin info struct is " + std::to_string(sizeof(stend_plugin_info) + 16) + " bytes",
         "host expects " + std::to_string(sizeof(stend_plugin_info)), "struct_size"}},
@@ -368,7 +368,7 @@ TEST_F(PluginHostTestPlugins, DescribeListsLoadedRefusedShadowedAndSearchPath) {
   EXPECT_CONTAINS(text, "test sensor: truth plus an offset");
   EXPECT_CONTAINS(text, "1.2.3");
   EXPECT_CONTAINS(text, "Refused (");
-  EXPECT_CONTAINS(text, test_plugin("bad_abi") + ": plugin ABI 999, host ABI 1");
+  EXPECT_CONTAINS(text, test_plugin("bad_abi") + ": plugin ABI 999, host ABI " + std::to_string(STEND_PLUGIN_ABI_VERSION));
   EXPECT_CONTAINS(text, "Shadowed (1):");
   EXPECT_CONTAINS(text, test_plugin("dup_b"));
   EXPECT_CONTAINS(text, "shadowed by " + test_plugin("dup_a"));

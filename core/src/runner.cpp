@@ -79,7 +79,7 @@ class Run {
 
   void execute() {
     bench_.sensor().start(0.0);
-    bench_.advance(0.0);
+    advance_fixtures(0.0);
     snapshot(0.0);
     for (std::size_t i = 0; i < exp_.procedure.size(); ++i) {
       const Step& s = exp_.procedure[i];
@@ -249,8 +249,9 @@ class Run {
   void advance_to(double t) {
     if (opt_.stop && opt_.stop->load()) throw Stopped();
     clock_.wait_until(t);
-    bench_.advance(t);
+    advance_fixtures(t);
     read_sensor(t);
+    for (std::size_t i = 0; i < bench_.fixture_count(); ++i) bench_.fixture(i).observe(buffer_.data(), buffer_.size());
     if (t >= next_truth_ - 1e-12) {
       snapshot(t);
       next_truth_ = t + opt_.truth_period_s;
@@ -261,6 +262,39 @@ class Run {
     }
     writer_.tick(t);
     report(false);
+  }
+
+  // Every fixture advanced to t. A link fault (FixtureLinkFault) is ridden out: reported once
+  // when it starts (and when its text changes), the open segment marked unsettled (the truth
+  // repeats the last known state), reported again when the link is back, and fatal only after
+  // RunOptions::fixture_outage_s. Any other exception ends the run.
+  void advance_fixtures(double t) {
+    outage_since_.resize(bench_.fixture_count(), -1.0);
+    outage_text_.resize(bench_.fixture_count());
+    for (std::size_t i = 0; i < bench_.fixture_count(); ++i) {
+      const std::string& id = bench_.fixture_id(i);
+      try {
+        bench_.fixture(i).advance(t);
+        if (outage_since_[i] >= 0.0) {
+          writer_.add_event({t, "warning", id,
+                             fmt::format("link back after {:.3f} s; bench truth from {:.3f} s to {:.3f} s repeats the "
+                                         "last known state (gap)",
+                                         t - outage_since_[i], outage_since_[i], t)});
+          outage_since_[i] = -1.0;
+          outage_text_[i].clear();
+        }
+      } catch (const FixtureLinkFault& e) {
+        if (outage_since_[i] < 0.0) outage_since_[i] = t;
+        if (outage_text_[i] != e.what()) {
+          writer_.add_event({t, "error", id, fmt::format("link fault, retrying: {}", e.what())});
+          outage_text_[i] = e.what();
+        }
+        if (open_) segment_.settled = false;
+        if (t - outage_since_[i] > opt_.fixture_outage_s)
+          throw std::runtime_error(fmt::format("fixture '{}' unreachable for {:.1f} s: {}", id, t - outage_since_[i],
+                                               e.what()));
+      }
+    }
   }
 
   void read_sensor(double t) {
@@ -322,6 +356,8 @@ class Run {
   RunProgress progress_;
   std::chrono::steady_clock::time_point wall_start_, last_progress_;
   std::vector<ImuSample> buffer_;
+  std::vector<double> outage_since_;       // per fixture: run time its link failed, −1 when up
+  std::vector<std::string> outage_text_;   // per fixture: the fault text last reported
   std::vector<double> row_;
   Segment segment_;
   bool open_ = false;

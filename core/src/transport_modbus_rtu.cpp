@@ -1,5 +1,5 @@
-// MODBUS RTU client (see stend/transport/modbus_rtu.hpp). Lives in sensors/mpu6050 until
-// stend_core links libmodbus; then it moves to core/src/transport_modbus_rtu.cpp unchanged.
+// MODBUS client shared by RTU and TCP (retry loop, error texts, counters) and the RTU client
+// (see stend/transport/modbus_rtu.hpp; the TCP client is in transport_modbus_tcp.cpp).
 #include <stend/transport/modbus_rtu.hpp>
 
 #include <modbus.h>
@@ -22,7 +22,8 @@ std::string hex4(int v) {
 
 }  // namespace
 
-ModbusRtuClient::ModbusRtuClient(ModbusRtuConfig config) : c_(std::move(config)) {
+ModbusRtuClient::ModbusRtuClient(ModbusRtuConfig config)
+    : ModbusClient("MODBUS RTU", config.retries, config.backoff_initial_ms), c_(std::move(config)) {
   modbus_t* ctx = modbus_new_rtu(c_.device.c_str(), c_.baud, c_.parity, c_.data_bits, c_.stop_bits);
   if (ctx == nullptr) {
     throw ModbusError("MODBUS RTU: cannot create a context for device " + c_.device + " at " +
@@ -46,13 +47,14 @@ ModbusRtuClient::ModbusRtuClient(ModbusRtuConfig config) : c_(std::move(config))
   }
   const int ms = c_.response_timeout_ms;
   modbus_set_response_timeout(ctx, static_cast<uint32_t>(ms / 1000), static_cast<uint32_t>((ms % 1000) * 1000));
-  ctx_ = ctx;
+  set_context(ctx);
 }
 
 ModbusRtuClient::~ModbusRtuClient() {
-  if (ctx_ != nullptr) {
-    modbus_close(ctx_of(ctx_));
-    modbus_free(ctx_of(ctx_));
+  if (context() != nullptr) {
+    modbus_close(ctx_of(context()));
+    modbus_free(ctx_of(context()));
+    set_context(nullptr);
   }
 }
 
@@ -60,17 +62,24 @@ std::string ModbusRtuClient::where() const {
   return "device " + c_.device + ", slave " + std::to_string(c_.slave_id);
 }
 
+std::string ModbusRtuClient::recover(int /*err*/) {
+  modbus_flush(ctx_of(context()));  // drop a late or partial reply before the retry
+  return "";
+}
+
+ModbusClient::~ModbusClient() = default;
+
 template <class F>
-void ModbusRtuClient::transact(const char* function, int address, int count, std::size_t req_bytes,
-                               std::size_t rep_bytes, F&& f) {
-  int wait_ms = c_.backoff_initial_ms;
+void ModbusClient::transact(const char* function, int address, int count, std::size_t req_pdu, std::size_t rep_pdu,
+                            F&& f) {
+  int wait_ms = backoff_initial_ms_;
   for (int attempt = 0;; ++attempt) {
     errno = 0;
     const int rc = f();
     if (rc >= 0) {
       ++stats_.transactions;
-      stats_.request_bytes += req_bytes;
-      stats_.reply_bytes += rep_bytes;
+      stats_.request_bytes += req_pdu + frame_overhead();
+      stats_.reply_bytes += rep_pdu + frame_overhead();
       return;
     }
     const int err = errno;
@@ -87,44 +96,52 @@ void ModbusRtuClient::transact(const char* function, int address, int count, std
       exception_code = err - MODBUS_ENOBASE;
       ++stats_.exceptions;
     }
-    std::string what = "MODBUS RTU " + where() + ": " + function + " at register " + hex4(address) +
+    std::string what = protocol_ + " " + where() + ": " + function + " at register " + hex4(address) +
                        " (count " + std::to_string(count) + ") failed: " + modbus_strerror(err);
     if (kind == ModbusError::Kind::kException) {
       what += " (slave exception code " + std::to_string(exception_code) + ")";
     }
     const bool transient = kind != ModbusError::Kind::kException;
-    if (transient && attempt < c_.retries) {
+    if (transient && attempt < retries_) {
       stats_.last_error = what + " — retrying";
       ++stats_.retries;
       std::this_thread::sleep_for(std::chrono::milliseconds(wait_ms));
       wait_ms *= 2;
-      modbus_flush(ctx_of(ctx_));  // drop a late or partial reply before the retry
+      const std::string why = recover(err);
+      if (!why.empty()) stats_.last_error += " (" + why + ")";
       continue;
     }
     if (transient) what += " after " + std::to_string(attempt + 1) + " attempts";
+    if (transient) (void)recover(err);  // leave the link usable for the next call
     stats_.last_error = what;
     ++stats_.failures;
     throw ModbusError(what, kind, exception_code);
   }
 }
 
-std::vector<std::uint16_t> ModbusRtuClient::read_input_registers(int address, int count) {
+std::vector<std::uint16_t> ModbusClient::read_input_registers(int address, int count) {
   std::vector<std::uint16_t> out(static_cast<std::size_t>(count));
-  transact("read input registers (FC 04)", address, count, 8, 5 + 2 * static_cast<std::size_t>(count),
+  transact("read input registers (FC 04)", address, count, 5, 2 + 2 * static_cast<std::size_t>(count),
            [&] { return modbus_read_input_registers(ctx_of(ctx_), address, count, out.data()); });
   return out;
 }
 
-std::vector<std::uint16_t> ModbusRtuClient::read_holding_registers(int address, int count) {
+std::vector<std::uint16_t> ModbusClient::read_holding_registers(int address, int count) {
   std::vector<std::uint16_t> out(static_cast<std::size_t>(count));
-  transact("read holding registers (FC 03)", address, count, 8, 5 + 2 * static_cast<std::size_t>(count),
+  transact("read holding registers (FC 03)", address, count, 5, 2 + 2 * static_cast<std::size_t>(count),
            [&] { return modbus_read_registers(ctx_of(ctx_), address, count, out.data()); });
   return out;
 }
 
-void ModbusRtuClient::write_register(int address, std::uint16_t value) {
-  transact("write register (FC 06)", address, 1, 8, 8,
+void ModbusClient::write_register(int address, std::uint16_t value) {
+  transact("write register (FC 06)", address, 1, 5, 5,
            [&] { return modbus_write_register(ctx_of(ctx_), address, value); });
+}
+
+void ModbusClient::write_registers(int address, const std::vector<std::uint16_t>& values) {
+  const int n = static_cast<int>(values.size());
+  transact("write registers (FC 16)", address, n, 6 + 2 * values.size(), 5,
+           [&] { return modbus_write_registers(ctx_of(ctx_), address, n, values.data()); });
 }
 
 }  // namespace stend::transport

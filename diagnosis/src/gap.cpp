@@ -1,2 +1,791 @@
-// placeholder: the gap diagnoser lands here (issue 5).
-namespace stend::gap {}
+// stend gap, steps 2–6: the twin, where, which, how far. See stend/gap/gap.hpp.
+#include "stend/gap/gap.hpp"
+
+#include <Eigen/QR>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <set>
+#include <sstream>
+
+#include "stend/estimation/linear_lsq.hpp"
+#include "stats.hpp"
+
+namespace stend::gap {
+
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+using model::TermKind;
+using model::TermSpec;
+
+std::string term_label(const TermSpec& t) {
+  std::string s = model::term_name(t.kind);
+  if (t.kind == TermKind::kBiasTemperature || t.kind == TermKind::kScaleTemperature)
+    s += "(order " + std::to_string(t.order) + ")";
+  return s;
+}
+
+// Rows of the problem: one per (segment, fitted axis).
+struct Rows {
+  std::vector<int> seg, axis;
+  VectorXd y, w;  // Δ = measured − true input; weights 1/floor²
+  std::vector<std::vector<int>> folds;  // row indices held out together
+  std::vector<std::string> fold_names;
+};
+
+// Design columns of one term over all rows, from the vocabulary's regressor.
+MatrixXd term_block(const GapInput& in, const Rows& rows, const TermSpec& t) {
+  model::ErrorModel m;
+  m.instrument = in.spec.model.instrument;
+  m.terms = {t};
+  MatrixXd B(rows.y.size(), m.size());
+  std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>> per_seg(in.segments.size());
+  for (std::size_t s = 0; s < in.segments.size(); ++s) per_seg[s] = m.regressor(in.segments[s].point.stimulus);
+  for (Eigen::Index r = 0; r < rows.y.size(); ++r)
+    B.row(r) = per_seg[static_cast<std::size_t>(rows.seg[static_cast<std::size_t>(r)])].row(rows.axis[static_cast<std::size_t>(r)]);
+  return B;
+}
+
+struct Fit {
+  estimation::LsqResult lsq;
+  double rss = kNaN;  // weighted
+  int rank = 0;
+};
+
+Fit solve(const MatrixXd& A, const VectorXd& y, const VectorXd& w, const std::vector<std::string>& names = {},
+          const std::vector<std::string>& units = {}) {
+  estimation::LsqProblem pr;
+  pr.design = A;
+  pr.observations = y;
+  pr.weights = w;
+  pr.names = names;
+  pr.units = units;
+  estimation::LsqOptions o;
+  o.observations_per_parameter_warning = 0.0;
+  Fit f;
+  f.lsq = estimation::solve_lsq(pr, o);
+  if (f.lsq.ok()) {
+    f.rss = f.lsq.rss;
+    f.rank = f.lsq.rank;
+  }
+  return f;
+}
+
+struct Heldout {
+  VectorXd err;    // NaN where the row is not predictable from its training fold
+  VectorXd var0;   // variance of the prediction error if the model were right [unit²]
+};
+
+// Leave-one-group-out: fit on the other folds, predict the held-out rows (only where the row is
+// estimable from the training design: no guessing across aliases).
+Heldout cross_validate(const MatrixXd& A, const Rows& rows) {
+  const Eigen::Index n = rows.y.size();
+  Heldout h;
+  h.err = VectorXd::Constant(n, kNaN);
+  h.var0 = VectorXd::Constant(n, kNaN);
+  std::vector<char> out(static_cast<std::size_t>(n));
+  for (const auto& fold : rows.folds) {
+    std::fill(out.begin(), out.end(), 0);
+    for (int r : fold) out[static_cast<std::size_t>(r)] = 1;
+    const Eigen::Index k = n - static_cast<Eigen::Index>(fold.size());
+    MatrixXd At(k, A.cols());
+    VectorXd yt(k), wt(k);
+    Eigen::Index j = 0;
+    for (Eigen::Index r = 0; r < n; ++r)
+      if (!out[static_cast<std::size_t>(r)]) {
+        At.row(j) = A.row(r);
+        yt[j] = rows.y[r];
+        wt[j] = rows.w[r];
+        ++j;
+      }
+    const Fit f = solve(At, yt, wt);
+    if (!f.lsq.ok()) continue;
+    const double s2 = f.lsq.sigma2 > 0 ? f.lsq.sigma2 : 1.0;
+    for (int r : fold) {
+      const VectorXd a = A.row(r).transpose();
+      if (a.norm() > 0 && f.lsq.null_space.cols() > 0 &&
+          (f.lsq.null_space.transpose() * a).norm() > 1e-7 * a.norm())
+        continue;
+      h.err[r] = rows.y[r] - a.dot(f.lsq.min_norm_solution);
+      // pinv_covariance = σ²·(AᵀWA)⁺ with relative weights 1/floor²: divide σ² out.
+      h.var0[r] = 1.0 / rows.w[r] + a.dot(f.lsq.pinv_covariance * a) / s2;
+    }
+  }
+  return h;
+}
+
+// RMS over the rows finite in both, and the floor RMS over the same rows.
+struct CvCompare {
+  double before = kNaN, after = kNaN, floor = kNaN;
+  int n = 0;
+};
+CvCompare compare(const Heldout& a, const Heldout& b) {
+  double sa = 0, sb = 0, sf = 0;
+  int n = 0;
+  for (Eigen::Index r = 0; r < a.err.size(); ++r)
+    if (std::isfinite(a.err[r]) && std::isfinite(b.err[r])) {
+      sa += a.err[r] * a.err[r];
+      sb += b.err[r] * b.err[r];
+      sf += b.var0[r];
+      ++n;
+    }
+  CvCompare c;
+  c.n = n;
+  if (n > 0) {
+    c.before = std::sqrt(sa / n);
+    c.after = std::sqrt(sb / n);
+    c.floor = std::sqrt(sf / n);
+  }
+  return c;
+}
+
+double rms_finite(const VectorXd& e, double* floor_rms = nullptr, const VectorXd* var0 = nullptr) {
+  double s = 0, sf = 0;
+  int n = 0;
+  for (Eigen::Index r = 0; r < e.size(); ++r)
+    if (std::isfinite(e[r])) {
+      s += e[r] * e[r];
+      if (var0) sf += (*var0)[r];
+      ++n;
+    }
+  if (floor_rms) *floor_rms = n ? std::sqrt(sf / n) : kNaN;
+  return n ? std::sqrt(s / n) : kNaN;
+}
+
+// Held-out errors consistent with the floor? χ² of Σ e²/var0 at the 95 % level.
+bool at_noise_floor(const Heldout& h) {
+  double chi = 0;
+  int n = 0;
+  for (Eigen::Index r = 0; r < h.err.size(); ++r)
+    if (std::isfinite(h.err[r]) && h.var0[r] > 0) {
+      chi += h.err[r] * h.err[r] / h.var0[r];
+      ++n;
+    }
+  return n > 0 && stats::chi2_sf(chi, n) > 0.05;
+}
+
+// Column-scaled numerical rank.
+int rank_of(const MatrixXd& A) {
+  if (A.cols() == 0) return 0;
+  MatrixXd S = A;
+  for (Eigen::Index j = 0; j < S.cols(); ++j) {
+    const double nj = S.col(j).norm();
+    if (nj > 0) S.col(j) /= nj;
+  }
+  Eigen::ColPivHouseholderQR<MatrixXd> qr(S);
+  qr.setThreshold(1e-9);
+  return static_cast<int>(qr.rank());
+}
+
+MatrixXd hstack(const MatrixXd& a, const MatrixXd& b) {
+  MatrixXd m(std::max(a.rows(), b.rows()), a.cols() + b.cols());
+  if (a.cols()) m.leftCols(a.cols()) = a;
+  if (b.cols()) m.rightCols(b.cols()) = b;
+  return m;
+}
+
+MatrixXd scale_rows(const MatrixXd& A, const VectorXd& w) {
+  return w.cwiseSqrt().asDiagonal() * A;
+}
+
+struct Eval {
+  CandidateResult res;
+  Heldout cv;
+};
+
+// One candidate against the current set of terms.
+Eval evaluate(const GapInput& in, const Rows& rows, const std::vector<TermSpec>& current, const MatrixXd& A0,
+              const Fit& f0, const Heldout& cv0, const Candidate& c, const MatrixXd& C) {
+  Eval e;
+  CandidateResult& r = e.res;
+  r.term = c.name;
+  r.spec = c.term;
+  if (C.cols() == 0 || C.norm() == 0.0) {
+    r.reason = "not excited by this experiment (its regressor is zero in every segment)";
+    return e;
+  }
+  const MatrixXd A1 = hstack(A0, C);
+  model::ErrorModel m;
+  m.instrument = in.spec.model.instrument;
+  m.terms = current;
+  m.terms.push_back(c.term);
+  std::vector<std::string> names, units;
+  for (const auto& p : m.params()) {
+    names.push_back(p.name);
+    units.push_back(p.unit);
+  }
+  const Fit f1 = solve(A1, rows.y, rows.w, names, units);
+  if (!f1.lsq.ok()) {
+    r.reason = "fit with it failed: " + f1.lsq.message;
+    return e;
+  }
+  r.added_rank = f1.rank - f0.rank;
+  const int p0 = static_cast<int>(A0.cols());
+  // Aliases with the model's own terms, from the joint design's null space.
+  std::set<std::string> al;
+  for (const auto& g : f1.lsq.aliases) {
+    bool mine = false;
+    for (int idx : g.parameters) mine = mine || idx >= p0;
+    if (!mine) continue;
+    for (int idx : g.parameters)
+      if (idx < p0) {
+        int off = 0;
+        for (const auto& t : current) {
+          const int np = model::param_count(t);
+          if (idx >= off && idx < off + np) al.insert(term_label(t));
+          off += np;
+        }
+      }
+  }
+  for (const auto& a : al) r.aliases.push_back(a + " (in the model)");
+  for (const auto& a : al) {
+    for (const auto& t : current)
+      if (term_label(t) == a) r.separate.push_back(separating_experiment(c.term.kind, t.kind));
+  }
+  if (r.added_rank <= 0) {
+    r.reason = "aliased with the model's own terms: this experiment cannot see it beyond them";
+    return e;
+  }
+  r.evaluated = true;
+  const int k = static_cast<int>(rows.y.size());
+  const int dof1 = k - f1.rank;
+  if (dof1 > 0 && f1.rss > 0) {
+    // Segment means are not independent when the bias wanders slowly (instability, random walk):
+    // the lag-1 autocorrelation ρ of the residuals WITH the candidate (consecutive segments, same
+    // axis) shrinks the evidence to an effective (1 − ρ)/(1 + ρ) share of the segments.
+    double num = 0, den = 0;
+    const VectorXd& res = f1.lsq.residuals;
+    for (Eigen::Index i = 0; i < res.size(); ++i) {
+      den += rows.w[i] * res[i] * res[i];
+      for (Eigen::Index j = i + 1; j < res.size() && rows.seg[static_cast<std::size_t>(j)] <= rows.seg[static_cast<std::size_t>(i)] + 1; ++j)
+        if (rows.seg[static_cast<std::size_t>(j)] == rows.seg[static_cast<std::size_t>(i)] + 1 &&
+            rows.axis[static_cast<std::size_t>(j)] == rows.axis[static_cast<std::size_t>(i)])
+          num += std::sqrt(rows.w[i] * rows.w[j]) * res[i] * res[j];
+    }
+    const double rho = den > 0 ? std::clamp(num / den, 0.0, 0.9) : 0.0;
+    const double eff = (1 - rho) / (1 + rho);
+    r.f_stat = ((f0.rss - f1.rss) / r.added_rank) / (f1.rss / dof1) * eff;
+    r.p_value = stats::f_sf(std::max(0.0, r.f_stat), r.added_rank, std::max(1.0, dof1 * eff));
+    r.delta_bic = k * std::log(f1.rss / f0.rss) + r.added_rank * std::log(static_cast<double>(k));
+    // Second test, robust to slowly correlated segment means: the candidate's component orthogonal
+    // to the model, with a Newey–West (Bartlett, L = segments/4) long-run variance of its
+    // per-segment scores (residuals with the candidate); χ²_q. The candidate must pass both.
+    const VectorXd sw = rows.w.cwiseSqrt();
+    const MatrixXd Aw0 = sw.asDiagonal() * A0;
+    MatrixXd Ct = sw.asDiagonal() * C;
+    if (Aw0.cols() > 0) {
+      Eigen::ColPivHouseholderQR<MatrixXd> qr(Aw0);
+      qr.setThreshold(1e-10);
+      const MatrixXd Q = MatrixXd(qr.householderQ()).leftCols(qr.rank());
+      Ct -= Q * (Q.transpose() * Ct);
+    }
+    Eigen::JacobiSVD<MatrixXd> svd(Ct, Eigen::ComputeThinU);
+    const VectorXd sv = svd.singularValues();
+    int q = 0;
+    while (q < sv.size() && sv[q] > 1e-8 * sv[0]) ++q;
+    if (q > 0) {
+      const MatrixXd Z = svd.matrixU().leftCols(q);
+      const VectorXd beta = Z.transpose() * (sw.asDiagonal() * rows.y);
+      const VectorXd e1 = sw.asDiagonal() * f1.lsq.residuals;
+      const int T = rows.seg.empty() ? 0 : rows.seg.back() + 1;
+      MatrixXd g = MatrixXd::Zero(q, T);
+      for (Eigen::Index i = 0; i < e1.size(); ++i) g.col(rows.seg[static_cast<std::size_t>(i)]) += Z.row(i).transpose() * e1[i];
+      const int L = std::max(1, T / 4);
+      MatrixXd S = g * g.transpose();
+      for (int l = 1; l <= L && l < T; ++l) {
+        const MatrixXd G = g.leftCols(T - l) * g.rightCols(T - l).transpose();
+        S += (1.0 - l / (L + 1.0)) * (G + G.transpose());
+      }
+      // Small-sample: scale by T/(T − rank) like the residual variance.
+      S *= static_cast<double>(T) / std::max(1, T - f1.rank / std::max(1, k / std::max(1, T)));
+      const double wald = beta.dot(S.ldlt().solve(beta));
+      const double p_hac = std::isfinite(wald) ? stats::chi2_sf(wald, q) : 1.0;
+      r.p_value = std::max(r.p_value, p_hac);
+    }
+  }
+  e.cv = cross_validate(A1, rows);
+  const CvCompare cc = compare(cv0, e.cv);
+  r.heldout_rms_before = cc.before;
+  r.heldout_rms = cc.after;
+  if (cc.n > 0 && cc.before > 0) r.heldout_improvement = 1.0 - cc.after / cc.before;
+  // Effect size: the candidate parameter with the largest |value|/se.
+  double best = -1;
+  for (int j = p0; j < static_cast<int>(A1.cols()); ++j) {
+    const auto& pe = f1.lsq.parameters[static_cast<std::size_t>(j)];
+    if (!pe.identifiable || !(pe.std_error > 0)) continue;
+    const double z = std::abs(pe.value) / pe.std_error;
+    if (z > best) {
+      best = z;
+      r.size = pe.value;
+      r.size_param = pe.name;
+      r.size_unit = pe.unit;
+      r.ci_lo = pe.lower;
+      r.ci_hi = pe.upper;
+    }
+  }
+  // Axis on which the fitted contribution is largest.
+  VectorXd th = f1.lsq.min_norm_solution.tail(C.cols());
+  const VectorXd contrib = C * th;
+  double ax[3] = {0, 0, 0};
+  for (Eigen::Index i = 0; i < contrib.size(); ++i) ax[rows.axis[static_cast<std::size_t>(i)]] += contrib[i] * contrib[i];
+  const int amax = static_cast<int>(std::max_element(ax, ax + 3) - ax);
+  r.axis = std::string(1, "xyz"[amax]);
+  return e;
+}
+
+std::string fmt(double v, int prec = 4) {
+  if (!std::isfinite(v)) return "n/a";
+  std::ostringstream os;
+  os.precision(prec);
+  os << v;
+  return os.str();
+}
+
+}  // namespace
+
+std::vector<Candidate> default_candidates(const model::ErrorModel& m) {
+  std::vector<Candidate> out;
+  const bool gyro = m.instrument == model::Instrument::kGyroscope;
+  std::vector<TermKind> kinds(model::kAllTermKinds.begin(), model::kAllTermKinds.end());
+  kinds.insert(kinds.end(), model::kGapTermKinds.begin(), model::kGapTermKinds.end());
+  for (TermKind k : kinds) {
+    if (k == TermKind::kBias) continue;  // every model has it (a model without bias is checked too)
+    if (k == TermKind::kGSensitivity && !gyro) continue;
+    if ((k == TermKind::kGravityError || k == TermKind::kTableAngleOffset || k == TermKind::kTableAxisTilt ||
+         k == TermKind::kLeverArm) && gyro)
+      continue;
+    const int have = m.find(k);
+    if (k == TermKind::kBiasTemperature || k == TermKind::kScaleTemperature) {
+      const int cur = have >= 0 ? m.terms[static_cast<std::size_t>(have)].order : 0;
+      for (int order = cur + 1; order <= std::min(3, cur + 2); ++order) {
+        TermSpec t{k, order, 25.0};
+        out.push_back({term_label(t), t});
+      }
+      continue;
+    }
+    if (have >= 0) continue;
+    TermSpec t{k, 1, 25.0};
+    out.push_back({term_label(t), t});
+  }
+  if (m.find(TermKind::kBias) < 0) out.insert(out.begin(), {"bias", TermSpec{TermKind::kBias, 1, 25.0}});
+  return out;
+}
+
+std::string separating_experiment(TermKind a, TermKind b) {
+  auto is = [&](TermKind x, TermKind y) { return (a == x && b == y) || (a == y && b == x); };
+  auto in = [](TermKind x, std::initializer_list<TermKind> set) {
+    return std::find(set.begin(), set.end(), x) != set.end();
+  };
+  const auto mag = {TermKind::kScale, TermKind::kNonlinearK3, TermKind::kOddQuadratic, TermKind::kGravityError,
+                    TermKind::kNonlinearK2, TermKind::kBias};
+  std::string A = model::term_name(a), B = model::term_name(b);
+  if (in(a, mag) && in(b, mag))
+    return A + " vs " + B + ": add positions where the axis sees other inputs than 0 and ±g (tilts of 30°, 45°, "
+           "60° about two axes, i.e. a tumble), or a centrifuge / a second known reference for g";
+  if (is(TermKind::kBiasTemperature, TermKind::kTimeDrift) || is(TermKind::kScaleTemperature, TermKind::kTimeDrift))
+    return A + " vs " + B + ": visit the temperatures in a different order (down-sweep after the up-sweep) or "
+           "repeat one temperature at the end";
+  if (is(TermKind::kThermalLag, TermKind::kThermalHysteresis))
+    return A + " vs " + B + ": ramp at two different rates, and hold long enough that dT/dt reaches 0";
+  if (a == TermKind::kThermalHysteresis || b == TermKind::kThermalHysteresis)
+    return A + " vs " + B + ": approach the same temperatures from above and from below";
+  if (a == TermKind::kLeverArm || b == TermKind::kLeverArm)
+    return A + " vs " + B + ": rate segments at several rates (centripetal grows with ω²)";
+  if (in(a, {TermKind::kTableAngleOffset, TermKind::kTableAxisTilt}) ||
+      in(b, {TermKind::kTableAngleOffset, TermKind::kTableAxisTilt}))
+    return A + " vs " + B + ": remount the sensor rotated by 90° on the table (sensor terms move with the "
+           "sensor, table terms stay with the table)";
+  if (a == TermKind::kCrossAxis || b == TermKind::kCrossAxis)
+    return A + " vs " + B + ": tumble positions that excite two axes at once (45° tilts)";
+  if (a == TermKind::kTimeDrift || b == TermKind::kTimeDrift)
+    return A + " vs " + B + ": repeat the first positions at the end of the run";
+  return A + " vs " + B + ": add segments where their regressors differ (other orientations/temperatures)";
+}
+
+GapReport diagnose(const GapInput& in, const GapOptions& opt) {
+  GapReport rep;
+  const bool accel = in.spec.model.instrument == model::Instrument::kAccelerometer;
+  rep.unit = accel ? "m/s^2" : "rad/s";
+  rep.display_unit = accel ? "mg" : "deg/h";
+  rep.display_per_unit = accel ? 1000.0 / batch_lsq::kStandardGravity : 180.0 / M_PI * 3600.0;
+  rep.model_name = in.spec.source.empty() ? "<model>" : in.spec.source;
+  rep.source = in.source;
+  rep.segments = in.segments;
+  rep.floor_source = in.floor_source;
+  rep.notes = in.notes;
+  if (!in.truth_source.empty()) rep.notes.insert(rep.notes.begin(), "truth: " + in.truth_source);
+
+  // 1. Fit the model as given (batch_lsq) and replay through the twin.
+  std::vector<batch_lsq::StaticPoint> pts;
+  for (const auto& s : in.segments) pts.push_back(s.point);
+  rep.fit = batch_lsq::fit_points(pts, in.spec);
+  if (!rep.fit.ok) {
+    rep.message = "the model could not be fitted: " + rep.fit.message;
+    return rep;
+  }
+  const model::ErrorModel& M = in.spec.model;
+  VectorXd theta = VectorXd::Zero(M.size());
+  for (std::size_t j = 0; j < rep.fit.param_index.size(); ++j)
+    theta[rep.fit.param_index[j]] = rep.fit.lsq.min_norm_solution[static_cast<Eigen::Index>(j)];
+  std::vector<bool> fitted(3, false);
+  for (int a : in.spec.axes) fitted[static_cast<std::size_t>(a)] = true;
+
+  Rows rows;
+  std::vector<double> floor2(3, 0.0);
+  std::vector<int> floor_n(3, 0);
+  for (const auto& s : in.segments)
+    for (int a = 0; a < 3; ++a)
+      if (fitted[static_cast<std::size_t>(a)] && std::isfinite(s.mean_std_error[a])) {
+        floor2[static_cast<std::size_t>(a)] += s.mean_std_error[a] * s.mean_std_error[a];
+        ++floor_n[static_cast<std::size_t>(a)];
+      }
+  for (int a = 0; a < 3; ++a)
+    if (floor_n[static_cast<std::size_t>(a)]) rep.floor[a] = std::sqrt(floor2[static_cast<std::size_t>(a)] / floor_n[static_cast<std::size_t>(a)]);
+  std::vector<double> yv, wv;
+  for (std::size_t s = 0; s < in.segments.size(); ++s) {
+    const auto& d = in.segments[s];
+    const Eigen::Vector3d twin = M.measure<double>(theta.data(), d.point.stimulus);
+    Eigen::Vector3d res = Eigen::Vector3d::Constant(kNaN);
+    for (int a = 0; a < 3; ++a) {
+      if (!fitted[static_cast<std::size_t>(a)]) continue;
+      res[a] = d.point.measured[a] - twin[a];
+      rows.seg.push_back(static_cast<int>(s));
+      rows.axis.push_back(a);
+      yv.push_back(d.point.measured[a] - d.point.stimulus.input[a]);
+      const double fl = std::isfinite(rep.floor[a]) && rep.floor[a] > 0 ? rep.floor[a] : 1.0;
+      wv.push_back(1.0 / (fl * fl));
+    }
+    rep.residual.push_back(res);
+  }
+  rows.y = Eigen::Map<VectorXd>(yv.data(), static_cast<Eigen::Index>(yv.size()));
+  rows.w = Eigen::Map<VectorXd>(wv.data(), static_cast<Eigen::Index>(wv.size()));
+  const Eigen::Index K = rows.y.size();
+
+  // Gap per axis, noise ratio.
+  for (int a = 0; a < 3; ++a) {
+    if (!fitted[static_cast<std::size_t>(a)]) continue;
+    double s2 = 0;
+    int n = 0;
+    std::vector<double> stds;
+    for (std::size_t s = 0; s < rep.residual.size(); ++s) {
+      s2 += rep.residual[s][a] * rep.residual[s][a];
+      ++n;
+      if (std::isfinite(in.segments[s].raw_std[a])) stds.push_back(in.segments[s].raw_std[a]);
+    }
+    rep.gap_rms[a] = std::sqrt(s2 / n);
+    if (!stds.empty()) {
+      double ref = in.twin_sample_std[a];
+      if (!std::isfinite(ref)) {
+        std::nth_element(stds.begin(), stds.begin() + static_cast<std::ptrdiff_t>(stds.size() / 2), stds.end());
+        ref = stds[stds.size() / 2];
+      }
+      double q = 0;
+      for (double v : stds) q += v * v;
+      rep.noise_ratio[a] = std::sqrt(q / static_cast<double>(stds.size())) / ref;
+    }
+  }
+  if (!std::isfinite(in.twin_sample_std[0]))
+    rep.notes.push_back("noise ratio: segment std against the recording's median segment std (no twin noise "
+                        "settings known for this source)");
+  else
+    rep.notes.push_back("noise ratio: segment std against the twin's white noise (sim_imu noise density and "
+                        "low-pass of the run's experiment)");
+
+  // 2. Where.
+  {
+    double total = 0;
+    for (Eigen::Index r = 0; r < K; ++r) {
+      const double e = rep.residual[static_cast<std::size_t>(rows.seg[static_cast<std::size_t>(r)])][rows.axis[static_cast<std::size_t>(r)]];
+      total += e * e;
+    }
+    auto add_dim = [&](const std::string& dim, auto key_of) {
+      std::map<std::string, std::pair<double, int>> acc;
+      for (Eigen::Index r = 0; r < K; ++r) {
+        const auto s = static_cast<std::size_t>(rows.seg[static_cast<std::size_t>(r)]);
+        const int a = rows.axis[static_cast<std::size_t>(r)];
+        const double e = rep.residual[s][a];
+        auto& v = acc[key_of(s, a)];
+        v.first += e * e;
+        ++v.second;
+      }
+      std::vector<Place> ps;
+      for (auto& [k, v] : acc)
+        ps.push_back({dim, k, total > 0 ? v.first / total : 0.0, std::sqrt(v.first / v.second), v.second});
+      std::sort(ps.begin(), ps.end(), [](const Place& x, const Place& y) { return x.share > y.share; });
+      rep.where.insert(rep.where.end(), ps.begin(), ps.end());
+    };
+    add_dim("axis", [&](std::size_t, int a) { return std::string(1, "xyz"[a]); });
+    add_dim("orientation", [&](std::size_t s, int) { return in.segments[s].orientation_name; });
+    add_dim("temperature", [&](std::size_t s, int) {
+      const auto& d = in.segments[s];
+      const double t = std::isfinite(d.setpoint_c) ? d.setpoint_c : d.point.stimulus.temperature_c;
+      std::string dir = d.ramp_direction > 0 ? " (heating)" : d.ramp_direction < 0 ? " (cooling)" : "";
+      return fmt(std::round(t * 10) / 10, 4) + " degC" + dir;
+    });
+    add_dim("time_since_change", [&](std::size_t s, int) {
+      const double t = in.segments[s].time_since_change_s;
+      if (!std::isfinite(t)) return std::string("unknown");
+      return std::string(t < 30 ? "< 30 s" : t < 120 ? "30-120 s" : t < 600 ? "120-600 s" : ">= 600 s");
+    });
+    add_dim("averaging_time", [&](std::size_t s, int) {
+      const double t = in.segments[s].averaging_s;
+      return std::string(t < 5 ? "< 5 s" : t < 20 ? "5-20 s" : t < 60 ? "20-60 s" : ">= 60 s");
+    });
+  }
+
+  // 3. Folds.
+  std::map<int, int> tcount, ocount, dcount;
+  for (const auto& s : in.segments) {
+    ++tcount[s.temperature_group];
+    ++ocount[s.orientation];
+    ++dcount[s.ramp_direction];
+  }
+  FoldBy fb = opt.fold_by;
+  if (fb == FoldBy::kAuto) fb = tcount.size() >= 3 ? FoldBy::kTemperature : FoldBy::kOrientation;
+  if (fb == FoldBy::kRamp && dcount.size() < 2) fb = FoldBy::kOrientation;
+  rep.fold_by = fb == FoldBy::kTemperature ? "temperature" : fb == FoldBy::kRamp ? "ramp direction" : "orientation";
+  {
+    std::map<int, std::vector<int>> groups;
+    for (Eigen::Index r = 0; r < K; ++r) {
+      const auto& s = in.segments[static_cast<std::size_t>(rows.seg[static_cast<std::size_t>(r)])];
+      const int g = fb == FoldBy::kTemperature ? s.temperature_group : fb == FoldBy::kRamp ? s.ramp_direction : s.orientation;
+      groups[g].push_back(static_cast<int>(r));
+    }
+    // At most max_folds folds: groups dealt round-robin.
+    const std::size_t nf = opt.max_folds > 0 ? std::min<std::size_t>(static_cast<std::size_t>(opt.max_folds), groups.size())
+                                             : groups.size();
+    rows.folds.assign(nf, {});
+    std::size_t i = 0;
+    for (auto& [g, v] : groups) {
+      auto& f = rows.folds[i++ % nf];
+      f.insert(f.end(), v.begin(), v.end());
+    }
+    rep.folds = static_cast<int>(nf);
+  }
+  if (rep.folds < 2) {
+    rep.message = "the held-out comparison needs at least two " + rep.fold_by + " groups";
+    return rep;
+  }
+
+  // 4. Which: candidates against the model as given.
+  std::vector<Candidate> cands = opt.candidates.empty() ? default_candidates(M) : opt.candidates;
+  std::vector<TermSpec> current = M.terms;
+  MatrixXd A0(K, 0);
+  for (const auto& t : current) A0 = hstack(A0, term_block(in, rows, t));
+  std::vector<MatrixXd> blocks;
+  for (const auto& c : cands) blocks.push_back(term_block(in, rows, c.term));
+  Fit f0 = solve(A0, rows.y, rows.w);
+  if (!f0.lsq.ok()) {
+    rep.message = "baseline fit failed: " + f0.lsq.message;
+    return rep;
+  }
+  Heldout cv0 = cross_validate(A0, rows);
+  {
+    Step s0;
+    s0.heldout_rms = rms_finite(cv0.err, &s0.floor_rms, &cv0.var0);
+    s0.in_sample_rms = std::sqrt((rows.y - A0 * f0.lsq.min_norm_solution).squaredNorm() / static_cast<double>(K));
+    rep.steps.push_back(s0);
+  }
+  const bool floor0 = at_noise_floor(cv0);
+
+  std::vector<Eval> evals;
+  for (std::size_t i = 0; i < cands.size(); ++i)
+    evals.push_back(evaluate(in, rows, current, A0, f0, cv0, cands[i], blocks[i]));
+  int m_eval = 0;
+  for (const auto& e : evals) m_eval += e.res.evaluated ? 1 : 0;
+  const double alpha_each = opt.alpha / std::max(1, m_eval);
+  for (auto& e : evals) {
+    auto& r = e.res;
+    r.significant = r.evaluated && std::isfinite(r.p_value) && r.p_value < alpha_each && r.delta_bic < 0 &&
+                    r.heldout_improvement > 0;
+  }
+  // Pairwise aliases among candidates: rank of the joint design.
+  if (opt.check_aliases) {
+    const MatrixXd As = scale_rows(A0, rows.w);
+    const int r0 = rank_of(As);
+    std::vector<int> rc(cands.size(), 0);
+    for (std::size_t i = 0; i < cands.size(); ++i)
+      if (evals[i].res.evaluated) rc[i] = rank_of(hstack(As, scale_rows(blocks[i], rows.w)));
+    for (std::size_t i = 0; i < cands.size(); ++i) {
+      if (!evals[i].res.evaluated) continue;
+      for (std::size_t j = i + 1; j < cands.size(); ++j) {
+        if (!evals[j].res.evaluated) continue;
+        if (cands[i].term.kind == cands[j].term.kind) continue;
+        const int rij = rank_of(hstack(hstack(As, scale_rows(blocks[i], rows.w)), scale_rows(blocks[j], rows.w)));
+        if (rij < rc[i] + rc[j] - r0) {
+          evals[i].res.aliases.push_back(cands[j].name);
+          evals[j].res.aliases.push_back(cands[i].name);
+          const std::string sep = separating_experiment(cands[i].term.kind, cands[j].term.kind);
+          evals[i].res.separate.push_back(sep);
+          evals[j].res.separate.push_back(sep);
+        }
+      }
+    }
+  }
+
+  // Noise and output-stage candidates (they cannot move the static means' fit; judged on the
+  // noise itself — output_stage.hpp / noise.hpp parameters).
+  std::vector<CandidateResult> noise;
+  {
+    CandidateResult q;
+    q.term = "quantization";
+    q.noise_stage = true;
+    q.size_unit = rep.unit;
+    if (in.lsb > 0) {
+      std::vector<double> stds;
+      for (const auto& s : in.segments)
+        for (int a : in.spec.axes)
+          if (std::isfinite(s.raw_std[a])) stds.push_back(s.raw_std[a]);
+      std::sort(stds.begin(), stds.end());
+      const double med = stds.empty() ? kNaN : stds[stds.size() / 2];
+      q.evaluated = true;
+      q.size = in.lsb;
+      q.size_param = "lsb";
+      q.ci_lo = q.ci_hi = in.lsb;
+      q.significant = std::isfinite(med) && med < 0.5 * in.lsb;
+      q.reason = "median sample std " + fmt(med) + " " + rep.unit + " = " + fmt(med / in.lsb, 3) +
+                 " LSB" + (q.significant ? ": too little noise to dither, means are biased by up to LSB/2"
+                                         : ": noise dithers the quantizer, means unbiased");
+    } else {
+      q.reason = "LSB unknown for this source";
+    }
+    noise.push_back(q);
+    CandidateResult s;
+    s.term = "saturation";
+    s.noise_stage = true;
+    s.evaluated = in.range > 0;
+    double peak = 0;
+    for (const auto& d : in.segments)
+      for (int a : in.spec.axes) peak = std::max(peak, std::abs(d.point.measured[a]));
+    s.size = peak;
+    s.size_param = "largest static mean";
+    s.size_unit = rep.unit;
+    s.significant = in.saturated_segments > 0 || (in.range > 0 && peak > 0.98 * in.range);
+    s.reason = std::to_string(in.saturated_segments) + " segment(s) skipped for saturated samples; largest |mean| " +
+               fmt(peak) + " of range " + (in.range > 0 ? fmt(in.range) : std::string("unknown"));
+    noise.push_back(s);
+    // Coloured noise: scatter of segment means about the best model vs the within-segment floor.
+    CandidateResult c;
+    c.term = "coloured_noise";
+    c.noise_stage = true;
+    c.evaluated = true;
+    c.size_unit = rep.unit;
+    double white2 = 0, bm2 = 0;
+    int n = 0;
+    for (const auto& d : in.segments)
+      for (int a : in.spec.axes)
+        if (std::isfinite(d.point.measured_std_error[a]) && std::isfinite(d.mean_std_error[a])) {
+          white2 += d.point.measured_std_error[a] * d.point.measured_std_error[a];
+          bm2 += d.mean_std_error[a] * d.mean_std_error[a];
+          ++n;
+        }
+    c.size = n ? std::sqrt(bm2 / white2) : kNaN;
+    c.size_param = "batch-means / white standard error of a segment mean";
+    c.size_unit = "1";
+    c.reason = "a ratio well above 1 means correlated noise (bias instability, random walk, or the sensor's "
+               "low-pass) inside segments; the floor already uses the batch-means value";
+    noise.push_back(c);
+  }
+
+  // 5. How far: forward selection on the held-out gap.
+  std::vector<CandidateResult> first = {};
+  for (const auto& e : evals) first.push_back(e.res);
+  std::stable_sort(first.begin(), first.end(), [](const CandidateResult& a, const CandidateResult& b) {
+    const double x = std::isfinite(a.heldout_improvement) ? a.heldout_improvement : -1e300;
+    const double y = std::isfinite(b.heldout_improvement) ? b.heldout_improvement : -1e300;
+    if (a.significant != b.significant) return a.significant;
+    return x > y;
+  });
+  rep.candidates = first;
+  rep.candidates.insert(rep.candidates.end(), noise.begin(), noise.end());
+
+  Heldout cv_cur = cv0;
+  MatrixXd A_cur = A0;
+  Fit f_cur = f0;
+  std::vector<bool> used(cands.size(), false);
+  bool floor_now = floor0;
+  for (int step = 1; step <= opt.max_steps && !floor_now; ++step) {
+    std::vector<Eval> ev;
+    int best = -1;
+    double best_imp = 0;
+    int m = 0;
+    for (std::size_t i = 0; i < cands.size(); ++i) {
+      if (used[i]) {
+        ev.emplace_back();
+        continue;
+      }
+      ev.push_back(step == 1 ? evals[i] : evaluate(in, rows, current, A_cur, f_cur, cv_cur, cands[i], blocks[i]));
+      if (ev.back().res.evaluated) ++m;
+    }
+    for (std::size_t i = 0; i < cands.size(); ++i) {
+      const auto& r = ev[i].res;
+      if (used[i] || !r.evaluated) continue;
+      const bool sig = std::isfinite(r.p_value) && r.p_value < opt.alpha / std::max(1, m) && r.delta_bic < 0 &&
+                       r.heldout_improvement > 0;
+      if (sig && r.heldout_improvement > best_imp) {
+        best_imp = r.heldout_improvement;
+        best = static_cast<int>(i);
+      }
+    }
+    if (best < 0) break;
+    used[static_cast<std::size_t>(best)] = true;
+    current.push_back(cands[static_cast<std::size_t>(best)].term);
+    A_cur = hstack(A_cur, blocks[static_cast<std::size_t>(best)]);
+    f_cur = solve(A_cur, rows.y, rows.w);
+    cv_cur = ev[static_cast<std::size_t>(best)].cv;
+    Step s;
+    s.step = step;
+    s.added = cands[static_cast<std::size_t>(best)].name;
+    s.heldout_rms = rms_finite(cv_cur.err, &s.floor_rms, &cv_cur.var0);
+    s.in_sample_rms = std::sqrt((rows.y - A_cur * f_cur.lsq.min_norm_solution).squaredNorm() / static_cast<double>(K));
+    rep.steps.push_back(s);
+    rep.selected.push_back(s.added);
+    floor_now = at_noise_floor(cv_cur);
+  }
+  rep.at_floor = floor_now;
+  double fl = 0;
+  rep.unexplained_heldout_rms = rms_finite(cv_cur.err, &fl, &cv_cur.var0);
+  rep.unexplained_over_floor = fl > 0 ? rep.unexplained_heldout_rms / fl : kNaN;
+
+  // The named explanation: the first selected term, when it closed enough of the excess gap.
+  if (rep.steps.size() >= 2) {
+    const Step& s0 = rep.steps[0];
+    const Step& s1 = rep.steps[1];
+    const double excess = s0.heldout_rms * s0.heldout_rms - s0.floor_rms * s0.floor_rms;
+    const double closed = s0.heldout_rms * s0.heldout_rms - s1.heldout_rms * s1.heldout_rms;
+    if (excess > 0 && closed >= opt.explain_fraction * excess) rep.explanation = s1.added;
+  }
+  std::ostringstream st;
+  const double dpu = rep.display_per_unit;
+  if (floor0) {
+    st << "The model as given is at the noise floor on held-out data (" << fmt(rep.steps[0].heldout_rms * dpu, 3)
+       << " " << rep.display_unit << " held-out RMS vs " << fmt(rep.steps[0].floor_rms * dpu, 3)
+       << " expected from noise): no gap to explain.";
+  } else if (rep.selected.empty()) {
+    st << "UNEXPLAINED: the held-out gap is " << fmt(rep.unexplained_heldout_rms * dpu, 3) << " "
+       << rep.display_unit << " RMS, " << fmt(rep.unexplained_over_floor, 3)
+       << "x the noise floor, and no candidate in the vocabulary explains it significantly.";
+  } else {
+    if (rep.explanation.empty())
+      st << "PARTLY EXPLAINED: ";
+    st << "Adding ";
+    for (std::size_t i = 0; i < rep.selected.size(); ++i) st << (i ? ", then " : "") << rep.selected[i];
+    st << " takes the held-out gap from " << fmt(rep.steps[0].heldout_rms * dpu, 3) << " to "
+       << fmt(rep.unexplained_heldout_rms * dpu, 3) << " " << rep.display_unit << " RMS ("
+       << fmt(rep.unexplained_over_floor, 3) << "x the noise floor). ";
+    if (rep.at_floor)
+      st << "What remains is at the noise floor.";
+    else
+      st << "UNEXPLAINED remainder: " << fmt(rep.unexplained_over_floor, 3)
+         << "x the noise floor is left that no further candidate explains significantly.";
+  }
+  rep.statement = st.str();
+  rep.ok = true;
+  return rep;
+}
+
+}  // namespace stend::gap

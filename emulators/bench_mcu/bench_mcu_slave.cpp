@@ -40,7 +40,10 @@ std::uint64_t splitmix(std::uint64_t& s) {
 }  // namespace
 
 BenchMcuSlave::BenchMcuSlave(BenchMcuConfig config, Mpu6050Model mpu)
-    : c_(config), mpu_(std::move(mpu)), rng_(config.seed) {
+    : BenchMcuSlave(config, std::move(mpu), nullptr) {}
+
+BenchMcuSlave::BenchMcuSlave(BenchMcuConfig config, Mpu6050Model mpu, std::shared_ptr<EmulatedI2cBus> i2c_bus)
+    : c_(config), mpu_(std::move(mpu)), i2c_bus_(std::move(i2c_bus)), rng_(config.seed) {
   char name[256] = {};
   if (openpty(&master_fd_, &slave_fd_, name, nullptr, nullptr) != 0) {
     throw std::runtime_error(std::string("bench MCU emulator: openpty failed: ") + std::strerror(errno));
@@ -53,7 +56,7 @@ BenchMcuSlave::BenchMcuSlave(BenchMcuConfig config, Mpu6050Model mpu)
 
   // The context's device name is never opened: the slave talks on the pty's master end.
   modbus_t* ctx = modbus_new_rtu(device_path_.c_str(), 921600, 'N', 8, 1);
-  modbus_mapping_t* mapping = modbus_mapping_new(0, 0, map::kHoldCount,
+  modbus_mapping_t* mapping = modbus_mapping_new(0, 0, map::kHoldMapSize,
                                                  map::kInWindowBase + static_cast<int>(map::kWindowSeqModulo) + map::kWindowMaxWords);
   if (ctx == nullptr || mapping == nullptr) throw std::runtime_error("bench MCU emulator: libmodbus allocation failed");
   modbus_set_slave(ctx, c_.slave_id);
@@ -141,6 +144,56 @@ void BenchMcuSlave::apply_ctrl() {
   running_ = run;
 }
 
+// The I2C window: one transaction on the MCU's bus per write of I2C_CMD.
+void BenchMcuSlave::run_i2c_command() {
+  const std::uint16_t* hold = MAP(mapping_)->tab_registers;
+  std::uint16_t* in = MAP(mapping_)->tab_input_registers;
+  const std::uint16_t cmd = hold[map::kHoldI2cCmd];
+  const auto tag = static_cast<std::uint16_t>(cmd & 0xFF00);
+  const auto addr = static_cast<std::uint8_t>(hold[map::kHoldI2cAddr] & 0x7F);
+  auto reg = static_cast<std::uint8_t>(hold[map::kHoldI2cReg] & 0xFF);
+  const int len = hold[map::kHoldI2cLen];
+  std::fill(in + map::kInI2cStatus, in + map::kInI2cData + map::kI2cMaxRead / 2, 0);
+  auto done = [&](std::uint16_t result, const std::uint8_t* data, int n) {
+    in[map::kInI2cStatus] = static_cast<std::uint16_t>(tag | result);
+    in[map::kInI2cCount] = static_cast<std::uint16_t>(n);
+    for (int i = 0; i < n; ++i) {
+      std::uint16_t& w = in[map::kInI2cData + i / 2];
+      w = static_cast<std::uint16_t>(i % 2 == 0 ? (w & 0x00FF) | (data[i] << 8) : (w & 0xFF00) | data[i]);
+    }
+  };
+  const int op = cmd & 0xFF;
+  const bool read = op == map::kI2cCmdRead || op == map::kI2cCmdReadNoReg;
+  if ((read && (len < 1 || len > map::kI2cMaxRead)) || (op == map::kI2cCmdWrite && len > map::kI2cMaxWrite) ||
+      (!read && op != map::kI2cCmdWrite)) {
+    done(map::kI2cBadRequest, nullptr, 0);
+    return;
+  }
+  std::vector<std::uint8_t> w{reg};
+  if (op == map::kI2cCmdWrite) {
+    for (int i = 0; i < len; ++i) w.push_back(static_cast<std::uint8_t>(hold[map::kHoldI2cWdata + i] & 0xFF));
+  }
+  std::vector<std::uint8_t> r(read ? static_cast<std::size_t>(len) : 0);
+  if (addr == c_.mpu_address) {  // the MCU's own MPU-6050
+    if (op == map::kI2cCmdWrite) {
+      for (std::size_t i = 1; i < w.size(); ++i) mpu_.write(static_cast<std::uint8_t>(reg + i - 1), w[i]);
+    } else {
+      mpu_.i2c_read(reg, r.data(), r.size());
+    }
+    done(map::kI2cOk, r.data(), static_cast<int>(r.size()));
+    return;
+  }
+  I2cSegment segs[2];
+  std::size_t n = 0;
+  if (op != map::kI2cCmdReadNoReg) segs[n++] = {addr, false, w.data(), w.size()};
+  if (read) segs[n++] = {addr, true, r.data(), r.size()};
+  if (!i2c_bus_ || !i2c_bus_->transfer(segs, n)) {
+    done(map::kI2cNackAddress, nullptr, 0);
+    return;
+  }
+  done(map::kI2cOk, r.data(), static_cast<int>(r.size()));
+}
+
 bool BenchMcuSlave::window(int address, int count) {
   std::uint16_t* in = MAP(mapping_)->tab_input_registers + address;
   std::fill(in, in + count, 0);
@@ -197,6 +250,8 @@ void BenchMcuSlave::handle(const std::uint8_t* req, int len) {
       in[map::kInFirmware] = map::kFirmwareVersion;
       if (address <= map::kInStatus) overflow_flag_ = false;
       ok = true;
+    } else if (address >= map::kInI2cStatus && address + count <= map::kInI2cData + map::kI2cMaxRead / 2) {
+      ok = true;  // I2C window: STATUS, COUNT, DATA as left by the last command
     } else if (address >= map::kInWindowBase && address < map::kInWindowBase + static_cast<int>(map::kWindowSeqModulo) &&
                count >= map::kWindowHeaderWords && count <= map::kWindowMaxWords) {
       ok = window(address, count);
@@ -209,7 +264,7 @@ void BenchMcuSlave::handle(const std::uint8_t* req, int len) {
     }
   }
   const bool read = fc == MODBUS_FC_READ_INPUT_REGISTERS ||
-                    (fc == MODBUS_FC_READ_HOLDING_REGISTERS && address + count <= map::kHoldCount);
+                    (fc == MODBUS_FC_READ_HOLDING_REGISTERS && address + count <= map::kHoldMapSize);
   if (read && static_cast<double>(splitmix(rng_) >> 11) * 0x1.0p-53 < corrupt_p_.load()) {
     const std::uint16_t* src = fc == MODBUS_FC_READ_INPUT_REGISTERS ? MAP(mapping_)->tab_input_registers
                                                                     : MAP(mapping_)->tab_registers;
@@ -230,7 +285,10 @@ void BenchMcuSlave::handle(const std::uint8_t* req, int len) {
     return;
   }
   modbus_reply(M(ctx_), req, len, MAP(mapping_));
-  if (fc == MODBUS_FC_WRITE_SINGLE_REGISTER || fc == MODBUS_FC_WRITE_MULTIPLE_REGISTERS) apply_ctrl();
+  if (fc == MODBUS_FC_WRITE_SINGLE_REGISTER || fc == MODBUS_FC_WRITE_MULTIPLE_REGISTERS) {
+    apply_ctrl();
+    if (address <= map::kHoldI2cCmd && address + (fc == MODBUS_FC_WRITE_SINGLE_REGISTER ? 1 : count) > map::kHoldI2cCmd) run_i2c_command();
+  }
   std::lock_guard<std::mutex> lock(stats_mutex_);
   ++stats_.replies;
 }

@@ -2,6 +2,9 @@
 // the samples in a FIFO ring and serves them as a MODBUS RTU slave (libmodbus) on the master end
 // of a pseudo-terminal pair; the driver opens device_path(), the slave end, like /dev/ttyUSB0.
 // Register map: docs/bench-mcu-modbus.md (sensors/mpu6050/bench_mcu_map.hpp).
+// I2C passthrough window (docs/bench-mcu-modbus.md): commands written to holding register
+// I2C_CMD run on the MCU's I2C bus — the MPU-6050 model at `mpu_address` and, when given, the
+// targets of an emulated I2C bus (emulators/i2c) — with status and data in input registers.
 // Fault injection for tests: corrupted replies (bad CRC) and periods of silence.
 #pragma once
 
@@ -9,10 +12,12 @@
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
 
+#include "i2c_bus_model.hpp"
 #include "mpu6050_model.hpp"
 
 namespace stend::emu {
@@ -21,6 +26,7 @@ struct BenchMcuConfig {
   int slave_id = 1;
   std::size_t fifo_depth = 1024;  // samples buffered in the MCU's RAM
   std::uint64_t seed = 1;         // fault-injection random stream
+  std::uint8_t mpu_address = 0x68;  // the MPU-6050's 7-bit address on the MCU's I2C bus
 };
 
 struct BenchMcuStats {
@@ -30,6 +36,8 @@ struct BenchMcuStats {
 class BenchMcuSlave {
  public:
   BenchMcuSlave(BenchMcuConfig config, Mpu6050Model mpu);  // opens the pty, starts the thread
+  // The same, with more sensors on the MCU's I2C bus, reachable through the I2C window.
+  BenchMcuSlave(BenchMcuConfig config, Mpu6050Model mpu, std::shared_ptr<EmulatedI2cBus> i2c_bus);
   ~BenchMcuSlave();
   BenchMcuSlave(const BenchMcuSlave&) = delete;
   BenchMcuSlave& operator=(const BenchMcuSlave&) = delete;
@@ -47,9 +55,11 @@ class BenchMcuSlave {
   void handle(const std::uint8_t* req, int len);
   bool window(int address, int count);
   void apply_ctrl();
+  void run_i2c_command();
 
   BenchMcuConfig c_;
   Mpu6050Model mpu_;
+  std::shared_ptr<EmulatedI2cBus> i2c_bus_;  // may be null
   std::string device_path_;
   int master_fd_ = -1, slave_fd_ = -1;
   void* ctx_ = nullptr;      // modbus_t*

@@ -2,6 +2,8 @@
 // Shared by the driver (sensors/mpu6050) and its emulator (emulators/bench_mcu).
 #pragma once
 
+#include <stend/transport/i2c_bench_mcu.hpp>  // the I2C passthrough window (kHoldI2c*, kInI2c*)
+
 #include <cstdint>
 
 namespace stend::bench_mcu {
@@ -12,7 +14,7 @@ inline constexpr int kHoldSmplrtDiv = 0x0001;    // MPU-6050 SMPLRT_DIV (0..255)
 inline constexpr int kHoldDlpfCfg = 0x0002;      // MPU-6050 CONFIG.DLPF_CFG (0..6)
 inline constexpr int kHoldGyroFsSel = 0x0003;    // 0..3 → ±250/500/1000/2000 °/s
 inline constexpr int kHoldAccelFsSel = 0x0004;   // 0..3 → ±2/4/8/16 g
-inline constexpr int kHoldCount = 5;
+inline constexpr int kHoldCount = 5;             // MPU-6050 streaming block; the I2C window follows at 0x0010
 inline constexpr std::uint16_t kCtrlRun = 1u << 0;
 inline constexpr std::uint16_t kCtrlFifoReset = 1u << 1;
 

@@ -38,6 +38,9 @@ struct RunOptions {
   std::function<void(const RunProgress&)> on_progress;
   const std::atomic<bool>* stop = nullptr;  // set (e.g. by SIGINT) to stop cleanly
   std::string clock;                 // override the experiment's clock ("simulated" | "wall")
+  // A fixture whose link fails (FixtureLinkFault) is retried every period for this long (run
+  // time) before the run fails; the gap is reported in events.csv and marks segments unsettled.
+  double fixture_outage_s = 30.0;
 };
 
 struct RunResult {

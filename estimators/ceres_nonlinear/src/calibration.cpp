@@ -5,8 +5,10 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <Eigen/Geometry>
 #include <Eigen/SVD>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -99,6 +101,55 @@ struct KnownCost {
   }
 };
 
+// Rotations of the table chain, templated for Jets (geometry.hpp's Rx/Ry are double-only; same
+// convention: passive, frame rotated by a about x / y).
+template <typename T>
+Eigen::Matrix<T, 3, 3> rot_x(const T& a) {
+  using std::cos;
+  using std::sin;
+  const T c = cos(a), s = sin(a);
+  Eigen::Matrix<T, 3, 3> R;
+  R << T(1), T(0), T(0), T(0), c, s, T(0), -s, c;
+  return R;
+}
+template <typename T>
+Eigen::Matrix<T, 3, 3> rot_y(const T& a) {
+  using std::cos;
+  using std::sin;
+  const T c = cos(a), s = sin(a);
+  Eigen::Matrix<T, 3, 3> R;
+  R << c, T(0), -s, T(0), T(1), T(0), s, T(0), c;
+  return R;
+}
+
+// Known orientations from the table encoders with angle zero offsets: p = [12 model parameters,
+// offsets in deg for the axes flagged in offset_tilt / offset_rotation (in that order)].
+//   f = M · Ry(δ + dδ) · Rx(h + dh) · [0, 0, g]     (the azimuth does not move gravity)
+struct KnownOffsetCost {
+  const model::ErrorModel* m;
+  Eigen::Vector3d y;
+  double tilt_deg, rotation_deg, g;
+  Eigen::Matrix3d M, W;
+  bool offset_tilt, offset_rotation;
+  template <typename T>
+  bool operator()(T const* const* p, T* residual) const {
+    const T* x = p[0];
+    int k = kFull;
+    const T d2r = T(std::numbers::pi / 180.0);
+    T h = T(tilt_deg), d = T(rotation_deg);
+    if (offset_tilt) h = h + x[k++];
+    if (offset_rotation) d = d + x[k++];
+    const Eigen::Matrix<T, 3, 1> up(T(0), T(0), T(g));
+    const model::Vec3<T> f = M.cast<T>() * (rot_y<T>(d * d2r) * (rot_x<T>(h * d2r) * up));
+    model::Stimulus<T> s;
+    s.input = f;
+    s.specific_force = f;
+    const model::Vec3<T> r = W.cast<T>() * (m->measure<T>(x, s) - y.cast<T>());
+    for (int i = 0; i < 3; ++i) residual[i] = r[i];
+    return true;
+  }
+};
+
 ceres::LossFunction* make_loss(const CalibrationOptions& o) {
   switch (o.loss) {
     case Loss::kHuber: return new ceres::HuberLoss(o.loss_scale_mps2);
@@ -108,8 +159,14 @@ ceres::LossFunction* make_loss(const CalibrationOptions& o) {
   return nullptr;
 }
 
-double nominal_size(const std::string& name, double g) {
-  return name.rfind("bias", 0) == 0 ? g : 1.0;
+// Nominal size of a parameter for the identifiability scaling: a bias in units of g (accel) or
+// 1 rad/s (gyro), g-sensitivity in 1/g, an angle offset in 1 rad = 57.3 deg, the rest 1.
+double nominal_size(const std::string& name, const CalibrationResult& r) {
+  const double g = r.gravity_mps2 > 0.0 ? r.gravity_mps2 : 9.80665;
+  if (name.rfind("bias", 0) == 0) return r.model.instrument == model::Instrument::kAccelerometer ? g : 1.0;
+  if (name.rfind("gsens", 0) == 0) return 1.0 / g;
+  if (name.rfind("table_offset", 0) == 0) return 180.0 / std::numbers::pi;
+  return 1.0;
 }
 
 void fail_all(CalibrationResult& r, const std::string& message) {
@@ -207,11 +264,17 @@ void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<in
       J(row, crs.cols[static_cast<std::size_t>(k)]) = crs.values[static_cast<std::size_t>(k)];
   Eigen::VectorXd scale(p);
   for (int k = 0; k < p; ++k)
-    scale[k] = nominal_size(r.parameters[static_cast<std::size_t>(free_index[static_cast<std::size_t>(k)])].name,
-                            r.gravity_mps2);
+    scale[k] = nominal_size(r.parameters[static_cast<std::size_t>(free_index[static_cast<std::size_t>(k)])].name, r);
   const Eigen::MatrixXd Js = J * scale.asDiagonal();
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(Js, Eigen::ComputeFullV);
   const Eigen::VectorXd sv = svd.singularValues();
+  r.condition_number = sv.size() > 0 && sv[sv.size() - 1] > 0.0 ? sv[0] / sv[sv.size() - 1]
+                                                                 : std::numeric_limits<double>::infinity();
+  if (!std::isfinite(cost) || !J.allFinite()) {
+    fail_all(r, "non-finite residuals or Jacobian at the solution (NaN or Inf in the data or the "
+                "fit diverged); check the recording for invalid samples");
+    return;
+  }
   const double rss = 2.0 * cost;
   r.sigma = r.dof > 0 ? std::sqrt(rss / r.dof) : kNaN;
   std::vector<std::string> weak;
@@ -278,12 +341,14 @@ void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<in
   }
   // Ceres fills the block row-major; C is symmetric so the storage order does not matter.
   C *= r.sigma * r.sigma;
+  r.covariance = C;
+  r.free_index = free_index;
   r.quantile = estimation::student_t_quantile(0.5 + 0.5 * o.confidence, r.dof);
-  r.theta.assign(kFull, 0.0);
+  r.theta.assign(static_cast<std::size_t>(r.model.size()), 0.0);
   for (int k = 0; k < p; ++k) {
     const auto idx = static_cast<std::size_t>(free_index[static_cast<std::size_t>(k)]);
     auto& prm = r.parameters[idx];
-    r.theta[idx] = x[static_cast<std::size_t>(k)];
+    if (idx < r.theta.size()) r.theta[idx] = x[static_cast<std::size_t>(k)];
     prm.value = x[static_cast<std::size_t>(k)];
     prm.std_error = std::sqrt(std::max(0.0, C(k, k)));
     prm.lower = prm.value - r.quantile * prm.std_error;
@@ -302,6 +367,42 @@ void norm_rms(CalibrationResult& r) {
   const double n = static_cast<double>(std::max<std::size_t>(1, r.intervals.size()));
   r.rms_norm_before = std::sqrt(b / n);
   r.rms_norm_after = r.ok ? std::sqrt(a / n) : kNaN;
+  // Per axis: (|c| − g)·ĉ, the part of the mean that is not gravity.
+  Eigen::Vector3d pb = Eigen::Vector3d::Zero(), pa = Eigen::Vector3d::Zero();
+  for (const auto& iv : r.intervals) {
+    const Eigen::Vector3d c = iv.accel_mean;
+    if (c.norm() > 0.0) pb += ((c.norm() - r.gravity_mps2) * c.normalized()).cwiseAbs2();
+    if (r.ok) {
+      const Eigen::Vector3d u = r.correct(iv.accel_mean);
+      if (u.norm() > 0.0) pa += ((u.norm() - r.gravity_mps2) * u.normalized()).cwiseAbs2();
+    }
+  }
+  r.rms_axis_before = (pb / n).cwiseSqrt();
+  r.rms_axis_after = r.ok ? Eigen::Vector3d((pa / n).cwiseSqrt()) : Eigen::Vector3d::Constant(kNaN);
+}
+
+// Per-axis RMS of reading − truth, raw and calibrated (known orientations, rate table).
+void axis_rms_against(CalibrationResult& r, const std::vector<Eigen::Vector3d>& truth,
+                      const std::vector<Eigen::Vector3d>& reading, const std::vector<Eigen::Vector3d>& f) {
+  Eigen::Vector3d pb = Eigen::Vector3d::Zero(), pa = Eigen::Vector3d::Zero();
+  const std::size_t n = std::min(truth.size(), reading.size());
+  for (std::size_t k = 0; k < n; ++k) {
+    pb += (reading[k] - truth[k]).cwiseAbs2();
+    if (r.ok) {
+      model::Stimulus<double> st;
+      st.specific_force = k < f.size() ? f[k] : truth[k];
+      pa += (r.model.correct(r.theta.data(), reading[k], st) - truth[k]).cwiseAbs2();
+    }
+  }
+  const double d = static_cast<double>(std::max<std::size_t>(1, n));
+  r.rms_axis_before = (pb / d).cwiseSqrt();
+  r.rms_axis_after = r.ok ? Eigen::Vector3d((pa / d).cwiseSqrt()) : Eigen::Vector3d::Constant(kNaN);
+}
+
+bool finite_intervals(const std::vector<StaticInterval>& ivs) {
+  for (const auto& iv : ivs)
+    if (!iv.accel_mean.allFinite() || !iv.gyro_mean.allFinite()) return false;
+  return true;
 }
 
 std::string fmt_num(double v) { return std::isfinite(v) ? fmt::format("{:.6g}", v) : "—"; }
@@ -351,9 +452,15 @@ StaticInterval make_interval(const Recording& rec, std::size_t first, std::size_
   const double n = static_cast<double>(iv.count);
   iv.accel_mean /= n;
   iv.gyro_mean /= n;
-  for (std::size_t i = first; i <= last; ++i)
+  Eigen::Vector3d g2 = Eigen::Vector3d::Zero();
+  for (std::size_t i = first; i <= last; ++i) {
     s2 += (rec.samples[i].accel_mps2 - iv.accel_mean).cwiseAbs2();
-  if (iv.count > 1) iv.accel_std = (s2 / (n - 1.0)).cwiseSqrt();
+    g2 += (rec.samples[i].gyro_radps - iv.gyro_mean).cwiseAbs2();
+  }
+  if (iv.count > 1) {
+    iv.accel_std = (s2 / (n - 1.0)).cwiseSqrt();
+    iv.gyro_std = (g2 / (n - 1.0)).cwiseSqrt();
+  }
   return iv;
 }
 
@@ -407,8 +514,10 @@ std::vector<StaticInterval> detect_static_intervals(const Recording& rec, const 
     while (j + 1 < n && var[j + 1] <= threshold && !(rec.samples[j + 1].flags & kGapBefore)) ++j;
     if (j >= i + 2 * trim + 1) {
       const std::size_t a = i + trim, b = j - trim;
-      if (rec.samples[b].t_s - rec.samples[a].t_s >= o.min_duration_s)
-        out.push_back(make_interval(rec, a, b, fmt::format("static_{}", out.size())));
+      if (rec.samples[b].t_s - rec.samples[a].t_s >= o.min_duration_s) {
+        StaticInterval iv = make_interval(rec, a, b, fmt::format("static_{}", out.size()));
+        if (!(o.max_gyro_radps > 0.0) || iv.gyro_mean.norm() <= o.max_gyro_radps) out.push_back(std::move(iv));
+      }
     }
     i = j + 1;
   }
@@ -449,20 +558,45 @@ Eigen::Vector3d CalibrationResult::correct(const Eigen::Vector3d& y) const {
 }
 
 std::string CalibrationResult::report() const {
-  std::string s = fmt::format("Ceres accelerometer calibration ({})\n", method);
+  const bool gyro = model.instrument == model::Instrument::kGyroscope;
+  std::string s = fmt::format("Ceres {} calibration ({})\n", gyro ? "gyroscope" : "accelerometer", method);
   s += fmt::format("status: {}\n", ok ? "ok" : "FAILED — " + message);
-  s += fmt::format("static intervals: {}, residuals: {}, estimated parameters: {}, dof: {}, g = {} m/s^2\n",
-                   intervals.size(), observations, estimated, dof, gravity_mps2);
-  s += fmt::format("residual sigma: {} {}, solver: {}\n", fmt_num(sigma),
-                   whitened ? "(whitened residuals; 1 = as expected)" : "m/s^2", solver_report);
-  s += fmt::format("RMS of |a| - g over the intervals: raw {} m/s^2, calibrated {} m/s^2\n",
-                   fmt_num(rms_norm_before), fmt_num(rms_norm_after));
-  s += fmt::format("{:<14} {:>14} {:>12} {:>14} {:>14}  {:<8} {}\n", "parameter", "value",
-                   "std error", "95% lower", "95% upper", "unit", "note");
+  s += fmt::format("{} intervals: {}, residuals: {}, estimated parameters: {}, dof: {}, condition number {}{}\n",
+                   method == "rate_table" ? "rate and static" : "static", intervals.size(), observations, estimated,
+                   dof, fmt_num(condition_number),
+                   gyro ? std::string() : fmt::format(", g = {} m/s^2", gravity_mps2));
+  const char* sigma_unit = whitened ? "(whitened residuals; 1 = as expected)"
+                           : method == "integration" ? "rad (gravity direction)"
+                           : gyro ? "rad/s" : "m/s^2";
+  s += fmt::format("residual sigma: {} {}, solver: {}\n", fmt_num(sigma), sigma_unit, solver_report);
+  if (!gyro) {
+    s += fmt::format("RMS of |a| - g over the intervals: raw {} m/s^2, calibrated {} m/s^2\n",
+                     fmt_num(rms_norm_before), fmt_num(rms_norm_after));
+    s += fmt::format("residual RMS per axis (x y z), calibrated: {} {} {} m/s^2 = {} {} {} mg; raw: {} {} {} mg\n",
+                     fmt_num(rms_axis_after[0]), fmt_num(rms_axis_after[1]), fmt_num(rms_axis_after[2]),
+                     fmt_num(rms_axis_after[0] / 9.80665e-3), fmt_num(rms_axis_after[1] / 9.80665e-3),
+                     fmt_num(rms_axis_after[2] / 9.80665e-3), fmt_num(rms_axis_before[0] / 9.80665e-3),
+                     fmt_num(rms_axis_before[1] / 9.80665e-3), fmt_num(rms_axis_before[2] / 9.80665e-3));
+  } else if (method == "integration") {
+    s += fmt::format("gravity-direction mismatch after each move (RMS): raw {} rad, calibrated {} rad; per axis "
+                     "calibrated {} {} {} rad\n",
+                     fmt_num(rms_norm_before), fmt_num(rms_norm_after), fmt_num(rms_axis_after[0]),
+                     fmt_num(rms_axis_after[1]), fmt_num(rms_axis_after[2]));
+  } else {
+    const double dps = 180.0 / std::numbers::pi;
+    s += fmt::format("residual RMS per axis (x y z), calibrated: {} {} {} rad/s = {} {} {} deg/s; raw: {} {} {} deg/s\n",
+                     fmt_num(rms_axis_after[0]), fmt_num(rms_axis_after[1]), fmt_num(rms_axis_after[2]),
+                     fmt_num(rms_axis_after[0] * dps), fmt_num(rms_axis_after[1] * dps),
+                     fmt_num(rms_axis_after[2] * dps), fmt_num(rms_axis_before[0] * dps),
+                     fmt_num(rms_axis_before[1] * dps), fmt_num(rms_axis_before[2] * dps));
+  }
+  s += fmt::format("{:<22} {:>14} {:<14} {:>12} {:>14} {:>14}  {:<12} {}\n", "parameter", "value", "unit",
+                   "std error", "95% lower", "95% upper", "identifiable", "note");
   auto row = [&](const Parameter& p) {
-    s += fmt::format("{:<14} {:>14} {:>12} {:>14} {:>14}  {:<8} {}\n", p.name, fmt_num(p.value),
-                     fmt_num(p.std_error), fmt_num(p.lower), fmt_num(p.upper), p.unit,
-                     p.fixed ? "fixed" : (p.identifiable ? "" : p.reason));
+    s += fmt::format("{:<22} {:>14} {:<14} {:>12} {:>14} {:>14}  {:<12} {}\n", p.name, fmt_num(p.value), p.unit,
+                     fmt_num(p.std_error), fmt_num(p.lower), fmt_num(p.upper),
+                     p.fixed ? "fixed" : (p.identifiable ? "yes" : "no"),
+                     p.fixed ? p.reason : (p.identifiable ? "" : p.reason));
   };
   for (const auto& p : parameters) row(p);
   for (const auto& p : gyro_parameters) row(p);
@@ -486,8 +620,26 @@ std::string CalibrationResult::to_json() const {
   j["estimated"] = estimated;
   j["dof"] = dof;
   j[whitened ? "sigma_whitened" : "sigma_mps2"] = num(sigma);
-  j["rms_norm_before_mps2"] = num(rms_norm_before);
-  j["rms_norm_after_mps2"] = num(rms_norm_after);
+  const bool gyro = model.instrument == model::Instrument::kGyroscope;
+  j["instrument"] = gyro ? "gyroscope" : "accelerometer";
+  if (!gyro) {
+    j["rms_norm_before_mps2"] = num(rms_norm_before);
+    j["rms_norm_after_mps2"] = num(rms_norm_after);
+  } else {
+    j[method == "integration" ? "rms_direction_before_rad" : "rms_before_radps"] = num(rms_norm_before);
+    j[method == "integration" ? "rms_direction_after_rad" : "rms_after_radps"] = num(rms_norm_after);
+  }
+  const std::string au = method == "integration" ? "rad" : gyro ? "radps" : "mps2";
+  j["rms_axis_before_" + au] = {num(rms_axis_before[0]), num(rms_axis_before[1]), num(rms_axis_before[2])};
+  j["rms_axis_after_" + au] = {num(rms_axis_after[0]), num(rms_axis_after[1]), num(rms_axis_after[2])};
+  if (!gyro) {
+    j["rms_axis_before_mg"] = {num(rms_axis_before[0] / 9.80665e-3), num(rms_axis_before[1] / 9.80665e-3),
+                               num(rms_axis_before[2] / 9.80665e-3)};
+    j["rms_axis_after_mg"] = {num(rms_axis_after[0] / 9.80665e-3), num(rms_axis_after[1] / 9.80665e-3),
+                              num(rms_axis_after[2] / 9.80665e-3)};
+  }
+  j["condition_number"] = num(condition_number);
+  j["confidence_quantile"] = num(quantile);
   j["solver"] = solver_report;
   j["not_identifiable"] = not_identifiable;
   j["parameters"] = json::array();
@@ -529,6 +681,11 @@ CalibrationResult calibrate_accelerometer_unknown_orientations(const std::vector
     norm_rms(r);
     return r;
   }
+  if (!finite_intervals(intervals)) {
+    fail_all(r, "non-finite (NaN) readings in a static interval");
+    norm_rms(r);
+    return r;
+  }
   if (n < p + 1) {
     fail_all(r, fmt::format("too few static intervals: {} found, need at least {} for {} accelerometer "
                             "parameters plus one degree of freedom for the noise ({} minimum to "
@@ -565,9 +722,13 @@ CalibrationResult calibrate_accelerometer_unknown_orientations(const Recording& 
   return calibrate_accelerometer_unknown_orientations(ivs, g, o);
 }
 
-CalibrationResult calibrate_accelerometer_known_orientations(const std::vector<StaticInterval>& intervals,
-                                                             const std::vector<Eigen::Vector3d>& truth_f,
-                                                             const CalibrationOptions& o) {
+namespace {
+
+// Known orientations, shared by the truth-vector and the encoder-angle (offset) variants.
+// `angles` (tilt, rotation deg per interval) and M are used only when offsets are estimated.
+CalibrationResult known_impl(const std::vector<StaticInterval>& intervals, const std::vector<Eigen::Vector3d>& truth_f,
+                             const std::vector<std::array<double, 2>>& angles, const Eigen::Matrix3d& M,
+                             const CalibrationOptions& o) {
   CalibrationResult r;
   r.method = "known_orientations";
   r.model = accelerometer_model();
@@ -580,27 +741,46 @@ CalibrationResult calibrate_accelerometer_known_orientations(const std::vector<S
   }
   r.gravity_mps2 = g;
   r.whitened = o.orientation_sigma_deg > 0.0;
-  std::vector<int> free_index(kFull);
-  for (int i = 0; i < kFull; ++i) free_index[static_cast<std::size_t>(i)] = i;
-  init_parameters(r, free_index);
+  bool off_tilt = false, off_rot = false;
+  for (const auto& a : o.table_offsets) {
+    if (a == "tilt") off_tilt = true;
+    else if (a == "rotation") off_rot = true;
+    else if (a == "azimuth")
+      throw std::invalid_argument("table offset 'azimuth' cannot be estimated: gravity does not depend on the "
+                                  "azimuth angle (only tilt and rotation)");
+    else
+      throw std::invalid_argument("unknown table offset axis '" + a + "' (expected tilt or rotation)");
+  }
+  const int n_off = (off_tilt ? 1 : 0) + (off_rot ? 1 : 0);
+  const int p = kFull + n_off;
+  std::vector<int> free_index(static_cast<std::size_t>(p));
+  for (int i = 0; i < p; ++i) free_index[static_cast<std::size_t>(i)] = i;
+  init_parameters(r, std::vector<int>(free_index.begin(), free_index.begin() + kFull));
+  for (const char* ax : {"tilt", "rotation"}) {
+    if ((std::string(ax) == "tilt" && !off_tilt) || (std::string(ax) == "rotation" && !off_rot)) continue;
+    Parameter prm;
+    prm.name = std::string("table_offset_") + ax;
+    prm.unit = "deg";
+    r.parameters.push_back(prm);
+  }
   gyro_bias(r, o);
   const int n = static_cast<int>(intervals.size());
   r.observations = 3 * n;
-  r.estimated = kFull;
-  r.dof = 3 * n - kFull;
-  if (truth_f.size() != intervals.size()) {
-    fail_all(r, "known orientations: one truth vector per static interval is needed");
+  r.estimated = p;
+  r.dof = 3 * n - p;
+  auto done = [&](const std::string& why) {
+    fail_all(r, why);
     norm_rms(r);
     return r;
-  }
-  if (3 * n < kFull + 1) {
-    fail_all(r, fmt::format("too few static intervals: {} found, need at least 5 (3 equations each) for "
-                            "12 accelerometer parameters plus noise",
-                            n));
-    norm_rms(r);
-    return r;
-  }
-  std::vector<double> x(kFull, 0.0);
+  };
+  if (truth_f.size() != intervals.size() || (n_off > 0 && angles.size() != intervals.size()))
+    return done("known orientations: one truth vector (or encoder angle pair) per static interval is needed");
+  if (!finite_intervals(intervals)) return done("non-finite (NaN) readings in a static interval");
+  if (3 * n < p + 1)
+    return done(fmt::format("too few static intervals: {} found, need at least {} (3 equations each) for {} "
+                            "parameters plus noise",
+                            n, (p + 1 + 2) / 3, p));
+  std::vector<double> x(static_cast<std::size_t>(p), 0.0);
   ceres::Problem problem;
   for (std::size_t k = 0; k < intervals.size(); ++k) {
     Eigen::Matrix3d W = Eigen::Matrix3d::Identity();
@@ -616,12 +796,54 @@ CalibrationResult calibrate_accelerometer_known_orientations(const std::vector<S
       W.row(1) = e1.transpose() / t_sd;
       W.row(2) = e2.transpose() / t_sd;
     }
-    auto* f = new KnownCost{&r.model, free_index, intervals[k].accel_mean, truth_f[k], W};
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<KnownCost, 3, kFull>(f), make_loss(o), x.data());
+    if (n_off == 0) {
+      auto* f = new KnownCost{&r.model, free_index, intervals[k].accel_mean, truth_f[k], W};
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<KnownCost, 3, kFull>(f), make_loss(o), x.data());
+    } else {
+      auto* c = new ceres::DynamicAutoDiffCostFunction<KnownOffsetCost, 4>(new KnownOffsetCost{
+          &r.model, intervals[k].accel_mean, angles[k][0], angles[k][1], g, M, W, off_tilt, off_rot});
+      c->AddParameterBlock(p);
+      c->SetNumResiduals(3);
+      problem.AddResidualBlock(c, make_loss(o), x.data());
+    }
   }
   solve(problem, x, free_index, 3 * n, o, r);
   norm_rms(r);
+  // Per axis against the (offset-corrected) truth.
+  std::vector<Eigen::Vector3d> truth = truth_f, reading;
+  if (n_off > 0 && r.ok) {
+    const double dh = off_tilt ? x[kFull] : 0.0, dd = off_rot ? x[static_cast<std::size_t>(kFull + (off_tilt ? 1 : 0))] : 0.0;
+    for (std::size_t k = 0; k < truth.size(); ++k)
+      truth[k] = M * (rot_y<double>((angles[k][1] + dd) * std::numbers::pi / 180.0) *
+                      (rot_x<double>((angles[k][0] + dh) * std::numbers::pi / 180.0) * Eigen::Vector3d(0, 0, g)));
+  }
+  for (const auto& iv : intervals) reading.push_back(iv.accel_mean);
+  axis_rms_against(r, truth, reading, truth);
   return r;
+}
+
+// Mean of the truth columns `cols` over the truth rows inside [t0, t1]; false when none.
+bool truth_mean(const Recording& rec, const std::array<int, 3>& cols, double t0, double t1, Eigen::Vector3d& out) {
+  out.setZero();
+  int m = 0;
+  for (std::size_t i = 0; i < rec.truth_t.size(); ++i) {
+    if (rec.truth_t[i] < t0 || rec.truth_t[i] > t1) continue;
+    for (int a = 0; a < 3; ++a) out[a] += rec.truth[i][static_cast<std::size_t>(cols[static_cast<std::size_t>(a)])];
+    ++m;
+  }
+  if (m == 0) return false;
+  out /= static_cast<double>(m);
+  return true;
+}
+
+}  // namespace
+
+CalibrationResult calibrate_accelerometer_known_orientations(const std::vector<StaticInterval>& intervals,
+                                                             const std::vector<Eigen::Vector3d>& truth_f,
+                                                             const CalibrationOptions& o) {
+  if (!o.table_offsets.empty())
+    throw std::invalid_argument("table_offsets need the encoder angles: use the recording overload");
+  return known_impl(intervals, truth_f, {}, Eigen::Matrix3d::Identity(), o);
 }
 
 CalibrationResult calibrate_accelerometer_known_orientations(const Recording& rec, const CalibrationOptions& o) {
@@ -629,35 +851,505 @@ CalibrationResult calibrate_accelerometer_known_orientations(const Recording& re
             cz = rec.truth_column("f_z_mps2");
   auto ivs = o.use_segments ? intervals_from_segments(rec, "orientation", o.detector.trim_s)
                             : detect_static_intervals(rec, o.detector);
-  if (cx < 0 || cy < 0 || cz < 0) {
+  CalibrationOptions o2 = o;
+  if (!(o2.gravity_mps2 > 0.0)) o2.gravity_mps2 = rec.header.gravity_mps2;
+  const bool offsets = !o.table_offsets.empty();
+  const int ct = rec.truth_column(o.table_fixture + ".tilt.meas_deg"),
+            cr = rec.truth_column(o.table_fixture + ".rotation.meas_deg");
+  auto fail_missing = [&](const std::string& why) {
     CalibrationResult r;
     r.method = "known_orientations";
     r.model = accelerometer_model();
     r.intervals = ivs;
     init_parameters(r, {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11});
-    fail_all(r, "known orientations need the truth columns f_x_mps2, f_y_mps2, f_z_mps2; this recording "
-                "has none (use calibrate_accelerometer_unknown_orientations)");
+    fail_all(r, why);
     return r;
-  }
+  };
+  if (!offsets && (cx < 0 || cy < 0 || cz < 0))
+    return fail_missing("known orientations need the truth columns f_x_mps2, f_y_mps2, f_z_mps2; this recording "
+                        "has none (use calibrate_accelerometer_unknown_orientations)");
+  if (offsets && (ct < 0 || cr < 0))
+    return fail_missing(fmt::format("table offsets need the encoder columns {0}.tilt.meas_deg and "
+                                    "{0}.rotation.meas_deg (a three-axis table with fixture id '{0}'); "
+                                    "set table_fixture",
+                                    o.table_fixture));
+  if (offsets && !(o2.gravity_mps2 > 0.0))
+    return fail_missing("table offsets need gravity: set gravity_mps2 (the recording header has none)");
+  Eigen::Matrix3d M = Eigen::Matrix3d::Identity();
+  if (rec.header.mounting_R.size() == 9)
+    for (int i = 0; i < 9; ++i) M(i / 3, i % 3) = rec.header.mounting_R[static_cast<std::size_t>(i)];
   std::vector<StaticInterval> kept;
   std::vector<Eigen::Vector3d> truth;
+  std::vector<std::array<double, 2>> angles;
   for (const auto& iv : ivs) {
-    Eigen::Vector3d f = Eigen::Vector3d::Zero();
+    Eigen::Vector3d f;
+    if (offsets) {
+      Eigen::Vector3d a;
+      if (!truth_mean(rec, {ct, cr, ct}, iv.t_start_s, iv.t_end_s, a)) continue;
+      angles.push_back({a[0], a[1]});
+      f = M * (rot_y<double>(a[1] * std::numbers::pi / 180.0) *
+               (rot_x<double>(a[0] * std::numbers::pi / 180.0) * Eigen::Vector3d(0, 0, o2.gravity_mps2)));
+    } else if (!truth_mean(rec, {cx, cy, cz}, iv.t_start_s, iv.t_end_s, f)) {
+      continue;
+    }
+    kept.push_back(iv);
+    truth.push_back(f);
+  }
+  return known_impl(kept, truth, angles, M, o2);
+}
+
+// ============================================================================================
+// Gyroscope
+
+model::ErrorModel gyroscope_model(bool g_sensitivity) {
+  model::ErrorModel m;
+  m.instrument = model::Instrument::kGyroscope;
+  m.terms = {{model::TermKind::kBias}, {model::TermKind::kScale}, {model::TermKind::kCrossAxis}};
+  if (g_sensitivity) m.terms.push_back({model::TermKind::kGSensitivity});
+  return m;
+}
+
+namespace {
+
+// The solve() machinery reads its settings from CalibrationOptions.
+CalibrationOptions as_calibration_options(const GyroOptions& g, double loss_scale) {
+  CalibrationOptions o;
+  o.loss = g.loss;
+  o.loss_scale_mps2 = loss_scale;
+  o.confidence = g.confidence;
+  o.max_iterations = g.max_iterations;
+  o.rank_tolerance = g.rank_tolerance;
+  o.max_std_error = g.max_std_error;
+  o.estimate_gyro_bias = false;
+  return o;
+}
+
+// Rate-table residual ȳ − measure(θ, ω, f); p = the model's full parameter vector (12 or 21).
+template <int N>
+struct RateCost {
+  const model::ErrorModel* m;
+  Eigen::Vector3d y, w, f;
+  template <typename T>
+  bool operator()(const T* const p, T* residual) const {
+    model::Stimulus<T> s;
+    s.input = w.cast<T>();
+    s.specific_force = f.cast<T>();
+    const model::Vec3<T> d = m->measure<T>(p, s) - y.cast<T>();
+    for (int i = 0; i < 3; ++i) residual[i] = d[i];
+    return true;
+  }
+};
+
+// Static-interval residual for stage 1 of the integration method: ȳ − measure(θ, 0, f) with only
+// bias (and G) free; `base` holds the full vector (scale and cross at 0).
+struct StaticGyroCost {
+  const model::ErrorModel* m;
+  std::vector<int> free_index;
+  int full;
+  Eigen::Vector3d y, f;
+  template <typename T>
+  bool operator()(T const* const* p, T* residual) const {
+    std::vector<T> theta(static_cast<std::size_t>(full), T(0));
+    for (std::size_t k = 0; k < free_index.size(); ++k) theta[static_cast<std::size_t>(free_index[k])] = p[0][k];
+    model::Stimulus<T> s;
+    s.specific_force = f.cast<T>();
+    const model::Vec3<T> d = m->measure<T>(theta.data(), s) - y.cast<T>();
+    for (int i = 0; i < 3; ++i) residual[i] = d[i];
+    return true;
+  }
+};
+
+// Stage 2 of the integration method: p = scale(3) + cross(6). `d` are the readings with the
+// stage-1 bias and G·f removed (rad/s), `dt` the sample steps. The corrected rate is A⁻¹·d with
+// A e_j = measure(θ, e_j) − measure(θ, 0) (affine terms; only measure<T> is used). The gravity
+// direction g0 (sensor frame at the start) is carried through v̇ = −ω × v (passive) with a
+// third-order rotation step on the trapezoidal rate; residual = [e1·v, e2·v], e1 e2 ⊥ ĝ_end.
+struct PairCost {
+  const model::ErrorModel* m;
+  std::vector<double> base;  // full θ with bias and G from stage 1
+  const Eigen::Vector3d* d;  // samples first..last
+  const double* dt;          // dt[i] = t[i+1] − t[i]
+  std::size_t count;
+  Eigen::Vector3d g0, e1, e2;
+  template <typename T>
+  bool operator()(const T* const p, T* residual) const {
+    std::vector<T> theta(base.size());
+    for (std::size_t i = 0; i < base.size(); ++i) theta[i] = T(base[i]);
+    for (int k = 0; k < 9; ++k) theta[static_cast<std::size_t>(3 + k)] = p[k];
+    model::Stimulus<T> s;
+    const model::Vec3<T> b = m->measure<T>(theta.data(), s);
+    Eigen::Matrix<T, 3, 3> A;
+    for (int j = 0; j < 3; ++j) {
+      s.input = model::Vec3<T>::Zero();
+      s.input[j] = T(1);
+      A.col(j) = m->measure<T>(theta.data(), s) - b;
+    }
+    // 3×3 inverse by cofactors (Jets).
+    const model::Vec3<T> c0 = A.col(0), c1 = A.col(1), c2 = A.col(2);
+    const T det = c0.dot(c1.cross(c2));
+    Eigen::Matrix<T, 3, 3> Ai;
+    Ai.row(0) = c1.cross(c2).transpose() / det;
+    Ai.row(1) = c2.cross(c0).transpose() / det;
+    Ai.row(2) = c0.cross(c1).transpose() / det;
+    model::Vec3<T> v = g0.cast<T>();
+    model::Vec3<T> w_prev = Ai * d[0].cast<T>();
+    for (std::size_t i = 0; i + 1 < count; ++i) {
+      const model::Vec3<T> w_next = Ai * d[i + 1].cast<T>();
+      const model::Vec3<T> th = (w_prev + w_next) * T(0.5 * dt[i]);
+      const model::Vec3<T> a1 = th.cross(v);
+      const model::Vec3<T> a2 = th.cross(a1);
+      const model::Vec3<T> a3 = th.cross(a2);
+      const model::Vec3<T> a4 = th.cross(a3);
+      const model::Vec3<T> a5 = th.cross(a4);
+      // exp(−[θ]×)·v to fifth order (error θ⁶/720: < 1e-10 rad per step at 0.05 rad).
+      v = v - a1 + a2 * T(0.5) - a3 * T(1.0 / 6.0) + a4 * T(1.0 / 24.0) - a5 * T(1.0 / 120.0);
+      w_prev = w_next;
+    }
+    residual[0] = v.dot(e1.cast<T>());
+    residual[1] = v.dot(e2.cast<T>());
+    return true;
+  }
+};
+
+void gyro_parameters_init(CalibrationResult& r) {
+  std::vector<int> all(static_cast<std::size_t>(r.model.size()));
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+  init_parameters(r, all);
+}
+
+}  // namespace
+
+CalibrationResult calibrate_gyro_rate_table(const std::vector<StaticInterval>& intervals,
+                                            const std::vector<Eigen::Vector3d>& truth_w,
+                                            const std::vector<Eigen::Vector3d>& truth_f, const GyroOptions& go) {
+  CalibrationResult r;
+  r.method = "rate_table";
+  r.model = gyroscope_model(go.estimate_g_sensitivity);
+  r.intervals = intervals;
+  double g = 0.0;
+  for (const auto& f : truth_f) g += f.norm();
+  r.gravity_mps2 = truth_f.empty() ? 0.0 : g / static_cast<double>(truth_f.size());
+  gyro_parameters_init(r);
+  const int p = r.model.size();
+  const int n = static_cast<int>(intervals.size());
+  r.observations = 3 * n;
+  r.estimated = p;
+  r.dof = 3 * n - p;
+  auto done = [&](const std::string& why) {
+    fail_all(r, why);
+    return r;
+  };
+  if (truth_w.size() != intervals.size() || truth_f.size() != intervals.size())
+    return done("rate table: one truth rate and specific force per interval is needed");
+  if (!finite_intervals(intervals)) return done("non-finite (NaN) readings in an interval");
+  for (std::size_t k = 0; k < truth_w.size(); ++k)
+    if (!truth_w[k].allFinite() || !truth_f[k].allFinite()) return done("non-finite truth in an interval");
+  if (3 * n < p + 1)
+    return done(fmt::format("too few intervals: {} rate or static intervals, need at least {} (3 equations each) "
+                            "for {} gyro parameters plus noise",
+                            n, (p + 3) / 3, p));
+  std::vector<double> x(static_cast<std::size_t>(p), 0.0);
+  ceres::Problem problem;
+  const CalibrationOptions o = as_calibration_options(go, go.loss_scale_radps);
+  for (std::size_t k = 0; k < intervals.size(); ++k) {
+    ceres::CostFunction* cf;
+    if (p == 12)
+      cf = new ceres::AutoDiffCostFunction<RateCost<12>, 3, 12>(
+          new RateCost<12>{&r.model, intervals[k].gyro_mean, truth_w[k], truth_f[k]});
+    else
+      cf = new ceres::AutoDiffCostFunction<RateCost<21>, 3, 21>(
+          new RateCost<21>{&r.model, intervals[k].gyro_mean, truth_w[k], truth_f[k]});
+    problem.AddResidualBlock(cf, make_loss(o), x.data());
+  }
+  std::vector<int> free_index(static_cast<std::size_t>(p));
+  for (int i = 0; i < p; ++i) free_index[static_cast<std::size_t>(i)] = i;
+  solve(problem, x, free_index, 3 * n, o, r);
+  std::vector<Eigen::Vector3d> reading;
+  double before = 0.0, after = 0.0;
+  for (std::size_t k = 0; k < intervals.size(); ++k) {
+    reading.push_back(intervals[k].gyro_mean);
+    before += (intervals[k].gyro_mean - truth_w[k]).squaredNorm();
+    if (r.ok) {
+      model::Stimulus<double> st;
+      st.specific_force = truth_f[k];
+      after += (r.model.correct(r.theta.data(), intervals[k].gyro_mean, st) - truth_w[k]).squaredNorm();
+    }
+  }
+  r.rms_norm_before = std::sqrt(before / std::max(1, n));
+  r.rms_norm_after = r.ok ? std::sqrt(after / std::max(1, n)) : kNaN;
+  axis_rms_against(r, truth_w, reading, truth_f);
+  return r;
+}
+
+CalibrationResult calibrate_gyro_rate_table(const Recording& rec, const GyroOptions& go) {
+  const std::array<int, 3> cw = {rec.truth_column("w_x_radps"), rec.truth_column("w_y_radps"),
+                                 rec.truth_column("w_z_radps")};
+  const std::array<int, 3> cf = {rec.truth_column("f_x_mps2"), rec.truth_column("f_y_mps2"),
+                                 rec.truth_column("f_z_mps2")};
+  std::vector<StaticInterval> ivs, kept;
+  for (const char* kind : {"orientation", "rate"})
+    for (auto& iv : intervals_from_segments(rec, kind, go.trim_s)) {
+      iv.label = std::string(kind) + ": " + iv.label;
+      ivs.push_back(iv);
+    }
+  std::sort(ivs.begin(), ivs.end(), [](const StaticInterval& a, const StaticInterval& b) { return a.t_start_s < b.t_start_s; });
+  std::vector<Eigen::Vector3d> w, f;
+  const bool have = *std::min_element(cw.begin(), cw.end()) >= 0 && *std::min_element(cf.begin(), cf.end()) >= 0;
+  if (have)
+    for (const auto& iv : ivs) {
+      Eigen::Vector3d a, b;
+      if (!truth_mean(rec, cw, iv.t_start_s, iv.t_end_s, a) || !truth_mean(rec, cf, iv.t_start_s, iv.t_end_s, b)) continue;
+      kept.push_back(iv);
+      w.push_back(a);
+      f.push_back(b);
+    }
+  CalibrationResult r = calibrate_gyro_rate_table(kept, w, f, go);
+  if (!have) {
+    fail_all(r, "the rate-table gyro calibration needs the truth columns w_x_radps.. and f_x_mps2..; this "
+                "recording has none (use the integration method)");
+  } else if (std::none_of(kept.begin(), kept.end(), [](const StaticInterval& iv) { return iv.label.rfind("rate", 0) == 0; }) && !r.ok) {
+    r.message = "no rate segments in the recording (add a `rates:` step): " + r.message;
+  }
+  return r;
+}
+
+CalibrationResult calibrate_gyro_integration(const Recording& rec, const CalibrationResult& accel, const GyroOptions& go) {
+  CalibrationResult r;
+  r.method = "integration";
+  r.model = gyroscope_model(go.estimate_g_sensitivity);
+  r.gravity_mps2 = accel.gravity_mps2;
+  gyro_parameters_init(r);
+  std::vector<StaticInterval> ivs = accel.intervals;
+  std::sort(ivs.begin(), ivs.end(), [](const StaticInterval& a, const StaticInterval& b) { return a.first < b.first; });
+  r.intervals = ivs;
+  const int full = r.model.size();
+  auto done = [&](const std::string& why) {
+    fail_all(r, why);
+    return r;
+  };
+  if (!accel.ok) return done("the gyro integration needs the accelerometer calibration first, which failed: " + accel.message);
+  if (!finite_intervals(ivs)) return done("non-finite (NaN) readings in a static interval");
+  const int n = static_cast<int>(ivs.size());
+  if (n < 7)
+    return done(fmt::format("too few static intervals: {} found, need at least 7 (6 moves, 2 residuals each) for "
+                            "9 gyro scale and cross-axis parameters plus noise",
+                            n));
+  for (const auto& iv : ivs)
+    if (iv.last >= rec.samples.size()) return done("the accelerometer calibration's intervals do not index this recording");
+  const CalibrationOptions o1 = as_calibration_options(go, go.loss_scale_radps);
+  const CalibrationOptions o2 = as_calibration_options(go, go.loss_scale_rad);
+
+  // Stage 1: bias (+ G) from the static intervals, f = calibrated specific force.
+  std::vector<Eigen::Vector3d> fk;
+  for (const auto& iv : ivs) fk.push_back(accel.correct(iv.accel_mean));
+  std::vector<int> s1_index = {0, 1, 2};
+  if (go.estimate_g_sensitivity)
+    for (int i = 12; i < 21; ++i) s1_index.push_back(i);
+  const int p1 = static_cast<int>(s1_index.size());
+  std::vector<double> x1(static_cast<std::size_t>(p1), 0.0);
+  ceres::Problem prob1;
+  for (std::size_t k = 0; k < ivs.size(); ++k) {
+    auto* c = new ceres::DynamicAutoDiffCostFunction<StaticGyroCost, 4>(
+        new StaticGyroCost{&r.model, s1_index, full, ivs[k].gyro_mean, fk[k]});
+    c->AddParameterBlock(p1);
+    c->SetNumResiduals(3);
+    prob1.AddResidualBlock(c, make_loss(o1), x1.data());
+  }
+  CalibrationResult r1 = r;
+  if (3 * n < p1 + 1) return done("too few static intervals for the gyro bias and g-sensitivity");
+  solve(prob1, x1, s1_index, 3 * n, o1, r1);
+  if (!r1.ok) {
+    r.not_identifiable = r1.not_identifiable;
+    return done("stage 1 (bias" + std::string(go.estimate_g_sensitivity ? " and g-sensitivity" : "") +
+                " from the static intervals): " + r1.message);
+  }
+
+  // Stage 2: scale and cross-axis from the rotations between consecutive intervals.
+  std::vector<double> base = r1.theta;
+  std::vector<Eigen::Vector3d> d(rec.samples.size());
+  std::vector<double> dt(rec.samples.size(), 0.0);
+  // Calibrated specific force of every sample, for G·f during the turns.
+  std::vector<Eigen::Vector3d> f_cal;
+  if (go.estimate_g_sensitivity) {
+    f_cal.resize(rec.samples.size());
+    for (std::size_t i = 0; i < rec.samples.size(); ++i) f_cal[i] = accel.correct(rec.samples[i].accel_mps2);
+  }
+  {
+    std::vector<double> zero(base.size(), 0.0);
+    for (int i : s1_index) zero[static_cast<std::size_t>(i)] = base[static_cast<std::size_t>(i)];
+    for (std::size_t i = 0; i < rec.samples.size(); ++i) {
+      model::Stimulus<double> st;
+      // G·f during the motion: the calibrated accelerometer reading (gravity plus motion).
+      if (go.estimate_g_sensitivity) st.specific_force = f_cal[i];
+      d[i] = rec.samples[i].gyro_radps - r.model.measure<double>(zero.data(), st);
+      if (i + 1 < rec.samples.size()) dt[i] = rec.samples[i + 1].t_s - rec.samples[i].t_s;
+    }
+  }
+  std::vector<double> x2(9, 0.0);
+  ceres::Problem prob2;
+  int pairs = 0;
+  std::vector<Eigen::Vector3d> gdir;
+  for (const auto& f : fk) gdir.push_back(f.normalized());
+  for (std::size_t k = 0; k + 1 < ivs.size(); ++k) {
+    const std::size_t a = ivs[k].last, b = ivs[k + 1].first;
+    if (b <= a) continue;
+    bool gap = false;
+    for (std::size_t i = a + 1; i <= b; ++i) gap = gap || (rec.samples[i].flags & kGapBefore);
+    if (gap) continue;  // lost samples: the rotation cannot be integrated across them
+    const Eigen::Vector3d e1 = gdir[k + 1].unitOrthogonal(), e2 = gdir[k + 1].cross(e1);
+    auto* c = new ceres::AutoDiffCostFunction<PairCost, 2, 9>(
+        new PairCost{&r.model, base, &d[a], &dt[a], b - a + 1, gdir[k], e1, e2});
+    prob2.AddResidualBlock(c, make_loss(o2), x2.data());
+    ++pairs;
+  }
+  if (2 * pairs < 10)
+    return done(fmt::format("too few moves between static intervals: {} usable, need at least 5 (2 residuals each) "
+                            "for 9 gyro scale and cross-axis parameters plus noise",
+                            pairs));
+  std::vector<int> s2_index = {3, 4, 5, 6, 7, 8, 9, 10, 11};
+  CalibrationResult r2 = r;
+  solve(prob2, x2, s2_index, 2 * pairs, o2, r2);
+  // Merge: bias (+ G) from stage 1, scale and cross-axis from stage 2.
+  r.parameters = r2.parameters;
+  for (int i : s1_index) r.parameters[static_cast<std::size_t>(i)] = r1.parameters[static_cast<std::size_t>(i)];
+  r.observations = 2 * pairs;
+  r.estimated = 9;
+  r.dof = 2 * pairs - 9;
+  r.sigma = r2.sigma;
+  r.quantile = r2.quantile;
+  r.iterations = r1.iterations + r2.iterations;
+  r.condition_number = r2.condition_number;
+  r.not_identifiable = r2.not_identifiable;
+  r.solver_report = "stage 1 (bias" + std::string(go.estimate_g_sensitivity ? ", g-sensitivity" : "") +
+                    fmt::format(", {} static intervals, sigma {:.3g} rad/s): ", n, r1.sigma) + r1.solver_report +
+                    fmt::format("; stage 2 (scale, cross-axis, {} moves): ", pairs) + r2.solver_report;
+  if (!r2.ok) return done("stage 2 (scale and cross-axis from the integrated rotations): " + r2.message);
+  r.ok = true;
+  r.theta = r1.theta;
+  for (int i : s2_index) r.theta[static_cast<std::size_t>(i)] = r2.theta[static_cast<std::size_t>(i)];
+
+  // Uncertainty passed on by the accelerometer calibration and stage 1 (delta method, forward
+  // differences of the pair residuals): z = [accelerometer free parameters, stage-1 parameters].
+  {
+    const std::size_t na = accel.free_index.size(), nz = na + s1_index.size();
+    struct Pair {
+      std::size_t k, a, b;
+    };
+    std::vector<Pair> pl;
+    for (std::size_t k = 0; k + 1 < ivs.size(); ++k) {
+      const std::size_t a = ivs[k].last, b = ivs[k + 1].first;
+      if (b <= a) continue;
+      bool gap = false;
+      for (std::size_t i = a + 1; i <= b; ++i) gap = gap || (rec.samples[i].flags & kGapBefore);
+      if (!gap) pl.push_back({k, a, b});
+    }
+    // Residuals for upstream z and stage-2 x. The bias-corrected rates are recomputed only when a
+    // stage-1 parameter (or, with G, anything upstream) moved; otherwise the cached ones are used.
+    std::vector<std::vector<Eigen::Vector3d>> rate_cache(pl.size());
+
+    auto residuals = [&](const Eigen::VectorXd& z, const std::vector<double>& x, bool rates_moved) {
+      std::vector<double> ta = accel.theta, tb(static_cast<std::size_t>(full), 0.0);
+      for (std::size_t j = 0; j < na; ++j) ta[static_cast<std::size_t>(accel.free_index[j])] = z[static_cast<Eigen::Index>(j)];
+      for (std::size_t j = 0; j < s1_index.size(); ++j)
+        tb[static_cast<std::size_t>(s1_index[j])] = z[static_cast<Eigen::Index>(na + j)];
+      auto cal = [&](const Eigen::Vector3d& y) { return accel.model.correct(ta.data(), y, model::Stimulus<double>{}); };
+      std::vector<double> base2 = tb;
+      Eigen::VectorXd out(static_cast<Eigen::Index>(2 * pl.size()));
+      std::vector<Eigen::Vector3d> fresh;
+      for (std::size_t q = 0; q < pl.size(); ++q) {
+        const auto& P = pl[q];
+        const bool use_cache = !rates_moved && !rate_cache[q].empty();
+        std::vector<Eigen::Vector3d>& dw = use_cache ? rate_cache[q] : fresh;
+        if (!use_cache) dw.assign(P.b - P.a + 1, Eigen::Vector3d::Zero());
+        for (std::size_t i = P.a; !use_cache && i <= P.b; ++i) {
+          model::Stimulus<double> st;
+          // G·f during the turns with the baseline calibrated f (the accelerometer's uncertainty
+          // reaches the rates through G·δf only at second order).
+          if (go.estimate_g_sensitivity) st.specific_force = f_cal[i];
+          dw[i - P.a] = rec.samples[i].gyro_radps - r.model.measure<double>(tb.data(), st);
+        }
+        const Eigen::Vector3d g0 = cal(ivs[P.k].accel_mean).normalized(), g1 = cal(ivs[P.k + 1].accel_mean).normalized();
+        const Eigen::Vector3d e1 = g1.unitOrthogonal(), e2 = g1.cross(e1);
+        const PairCost c{&r.model, base2, dw.data(), &dt[P.a], P.b - P.a + 1, g0, e1, e2};
+        double res[2];
+        c(x.data(), res);
+        out[static_cast<Eigen::Index>(2 * q)] = res[0];
+        out[static_cast<Eigen::Index>(2 * q + 1)] = res[1];
+        if (rate_cache[q].empty()) rate_cache[q] = dw;
+      }
+      return out;
+    };
+    Eigen::VectorXd z0(static_cast<Eigen::Index>(nz));
+    for (std::size_t j = 0; j < na; ++j) z0[static_cast<Eigen::Index>(j)] = accel.theta[static_cast<std::size_t>(accel.free_index[j])];
+    for (std::size_t j = 0; j < s1_index.size(); ++j) z0[static_cast<Eigen::Index>(na + j)] = x1[j];
+    Eigen::MatrixXd Cz = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(nz), static_cast<Eigen::Index>(nz));
+    const bool have_cov = accel.covariance.rows() == static_cast<Eigen::Index>(na) &&
+                          r1.covariance.rows() == static_cast<Eigen::Index>(s1_index.size());
+    if (have_cov) {
+      Cz.topLeftCorner(static_cast<Eigen::Index>(na), static_cast<Eigen::Index>(na)) = accel.covariance;
+      Cz.bottomRightCorner(r1.covariance.rows(), r1.covariance.cols()) = r1.covariance;
+      const Eigen::VectorXd r0 = residuals(z0, x2, true);
+      Eigen::MatrixXd Rz(r0.size(), static_cast<Eigen::Index>(nz)), J2(r0.size(), 9);
+      for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(nz); ++j) {
+        const double h = 1e-6 * std::max(1.0, std::abs(z0[j]));
+        Eigen::VectorXd z = z0;
+        z[j] += h;
+        Rz.col(j) = (residuals(z, x2, j >= static_cast<Eigen::Index>(na)) - r0) / h;
+      }
+      for (int j = 0; j < 9; ++j) {
+        std::vector<double> x = x2;
+        x[static_cast<std::size_t>(j)] += 1e-7;
+        J2.col(j) = (residuals(z0, x, false) - r0) / 1e-7;
+      }
+      const Eigen::MatrixXd S = -(J2.transpose() * J2).ldlt().solve(J2.transpose() * Rz);
+      const Eigen::MatrixXd C = r2.covariance + S * Cz * S.transpose();
+      r.covariance = C;
+      r.free_index = s2_index;
+      for (int k = 0; k < 9; ++k) {
+        auto& prm = r.parameters[static_cast<std::size_t>(s2_index[static_cast<std::size_t>(k)])];
+        prm.std_error = std::sqrt(std::max(0.0, C(k, k)));
+        prm.lower = prm.value - r.quantile * prm.std_error;
+        prm.upper = prm.value + r.quantile * prm.std_error;
+      }
+    }
+  }
+  // Gravity-direction mismatch after each move, raw (θ = 0, readings as they are) and calibrated.
+  auto mismatch = [&](const std::vector<double>& th, bool raw) {
+    Eigen::Vector3d acc = Eigen::Vector3d::Zero();
+    double sum = 0.0;
     int m = 0;
-    for (std::size_t i = 0; i < rec.truth_t.size(); ++i) {
-      if (rec.truth_t[i] < iv.t_start_s || rec.truth_t[i] > iv.t_end_s) continue;
-      const auto& row = rec.truth[i];
-      f += Eigen::Vector3d(row[static_cast<std::size_t>(cx)], row[static_cast<std::size_t>(cy)],
-                           row[static_cast<std::size_t>(cz)]);
+    for (std::size_t k = 0; k + 1 < ivs.size(); ++k) {
+      const std::size_t a = ivs[k].last, b = ivs[k + 1].first;
+      if (b <= a) continue;
+      Eigen::Vector3d v = raw ? ivs[k].accel_mean.normalized() : gdir[k];
+      auto rate = [&](std::size_t i) {
+        model::Stimulus<double> st;
+        if (go.estimate_g_sensitivity && !raw) st.specific_force = f_cal[i];
+        return raw ? Eigen::Vector3d(rec.samples[i].gyro_radps) : r.model.correct(th.data(), rec.samples[i].gyro_radps, st);
+      };
+      Eigen::Vector3d wp = rate(a);
+      for (std::size_t i = a; i < b; ++i) {
+        const Eigen::Vector3d wn = rate(i + 1);
+        const Eigen::Vector3d t = (wp + wn) * 0.5 * (rec.samples[i + 1].t_s - rec.samples[i].t_s);
+        const double ang = t.norm();
+        if (ang > 0.0) v = Eigen::AngleAxisd(-ang, t / ang).toRotationMatrix() * v;
+        wp = wn;
+      }
+      const Eigen::Vector3d target = raw ? ivs[k + 1].accel_mean.normalized() : gdir[k + 1];
+      acc += (v - target).cwiseAbs2();
+      sum += (v - target).squaredNorm();
       ++m;
     }
-    if (m == 0) continue;
-    kept.push_back(iv);
-    truth.push_back(f / static_cast<double>(m));
-  }
-  CalibrationOptions o2 = o;
-  if (!(o2.gravity_mps2 > 0.0)) o2.gravity_mps2 = rec.header.gravity_mps2;
-  return calibrate_accelerometer_known_orientations(kept, truth, o2);
+    const double dm = std::max(1, m);
+    return std::make_pair(std::sqrt(sum / dm), Eigen::Vector3d((acc / dm).cwiseSqrt()));
+  };
+  const auto bef = mismatch(std::vector<double>(static_cast<std::size_t>(full), 0.0), true);
+  const auto aft = mismatch(r.theta, false);
+  r.rms_norm_before = bef.first;
+  r.rms_norm_after = aft.first;
+  r.rms_axis_before = bef.second;
+  r.rms_axis_after = aft.second;
+  return r;
 }
 
 }  // namespace stend::ceres_nonlinear

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <array>
 #include <cmath>
@@ -37,6 +38,22 @@ struct Stimulus {
   T temperature_c = T(25);                   // die temperature [degC]
   T temperature_rate_cps = T(0);             // d(die temperature)/dt [degC/s]
   T time_s = T(0);                           // since the start of the run [s]
+  // Appended for the gap diagnoser's candidates (stend gap). Every default makes the terms that
+  // read them contribute nothing, so a stimulus that does not set them behaves as before.
+  // +1 when the current temperature was approached from below (heating), −1 from above
+  // (cooling), 0 unknown / first temperature [1].
+  T temperature_direction = T(0);
+  // Unit vector opposite to local gravity, sensor frame ("up"); zero when unknown [1].
+  Vec3<T> gravity_up = Vec3<T>::Zero();
+  // Angular rate and angular acceleration of the sensor frame, sensor axes [rad/s], [rad/s^2].
+  Vec3<T> angular_rate = Vec3<T>::Zero();
+  Vec3<T> angular_accel = Vec3<T>::Zero();
+  // ∂f/∂(angle of table axis k) for up to three table axes, sensor frame [(m/s^2)/rad]: how the
+  // specific force would change if that axis's angle read zero δ_k too high. Zero when unknown.
+  std::array<Vec3<T>, 3> table_df_dangle = {Vec3<T>::Zero(), Vec3<T>::Zero(), Vec3<T>::Zero()};
+  // ∂f/∂(tilt of the table base about base x, base y), sensor frame [(m/s^2)/rad]. Zero when
+  // unknown.
+  std::array<Vec3<T>, 2> table_df_dtilt = {Vec3<T>::Zero(), Vec3<T>::Zero()};
 };
 
 enum class TermKind {
@@ -51,6 +68,13 @@ enum class TermKind {
   kThermalLag,        // l_i · dT/dt  (die lag / hysteresis)  [unit/(degC/s)]
   kTimeDrift,         // r_i · t                              [unit/s]
   kGSensitivity,      // Σ_j G_ij · f_j  (gyro only)          [(rad/s)/(m/s^2)]
+  // Appended (gap diagnosis candidates). Bench-side effects are written as what they do to the
+  // sensor's reading, to first order, through the stimulus fields above.
+  kThermalHysteresis, // h_i · temperature_direction          [unit]
+  kGravityError,      // δg · gravity_up (the local g assumed wrong by δg) [m/s^2], 1 parameter
+  kTableAngleOffset,  // Σ_k δ_k · table_df_dangle_k  (zero offsets of the table axes) [rad], 3
+  kTableAxisTilt,     // Σ_k ε_k · table_df_dtilt_k   (base tilted about base x, y)    [rad], 2
+  kLeverArm,          // ω×(ω×r) + ω̇×r  (centripetal + tangential at offset r)       [m], 3
 };
 
 inline constexpr std::array<TermKind, 11> kAllTermKinds = {
@@ -58,6 +82,13 @@ inline constexpr std::array<TermKind, 11> kAllTermKinds = {
     TermKind::kNonlinearK2, TermKind::kNonlinearK3,     TermKind::kOddQuadratic,
     TermKind::kBiasTemperature, TermKind::kScaleTemperature, TermKind::kThermalLag,
     TermKind::kTimeDrift,   TermKind::kGSensitivity};
+
+// The terms appended for the gap diagnoser (bench-side effects and hysteresis). Kept out of
+// kAllTermKinds so that code iterating the sensor terms (model files, existing tests) is unchanged;
+// term_from_name knows them.
+inline constexpr std::array<TermKind, 5> kGapTermKinds = {
+    TermKind::kThermalHysteresis, TermKind::kGravityError, TermKind::kTableAngleOffset,
+    TermKind::kTableAxisTilt, TermKind::kLeverArm};
 
 // One term as used in a model: its kind plus the structural settings that are not estimated.
 struct TermSpec {
@@ -84,12 +115,19 @@ inline const char* term_name(TermKind k) {
     case TermKind::kThermalLag: return "thermal_lag";
     case TermKind::kTimeDrift: return "time_drift";
     case TermKind::kGSensitivity: return "g_sensitivity";
+    case TermKind::kThermalHysteresis: return "thermal_hysteresis";
+    case TermKind::kGravityError: return "gravity_error";
+    case TermKind::kTableAngleOffset: return "table_angle_offset";
+    case TermKind::kTableAxisTilt: return "table_axis_tilt";
+    case TermKind::kLeverArm: return "lever_arm";
   }
   return "?";
 }
 
 inline std::optional<TermKind> term_from_name(std::string_view name) {
   for (TermKind k : kAllTermKinds)
+    if (name == term_name(k)) return k;
+  for (TermKind k : kGapTermKinds)
     if (name == term_name(k)) return k;
   return std::nullopt;
 }
@@ -100,6 +138,8 @@ inline int param_count(const TermSpec& t) {
     case TermKind::kGSensitivity: return 9;
     case TermKind::kBiasTemperature:
     case TermKind::kScaleTemperature: return 3 * t.order;
+    case TermKind::kGravityError: return 1;
+    case TermKind::kTableAxisTilt: return 2;
     default: return 3;
   }
 }
@@ -145,6 +185,12 @@ inline std::vector<ParamInfo> param_info(const TermSpec& t, Instrument inst) {
           out.push_back({std::string("gsens_") + ax[i] + ax[j], "rad/s/(m/s^2)"});
       return out;
     }
+    case TermKind::kThermalHysteresis: return per_axis("hysteresis", u);
+    case TermKind::kGravityError: return {{"gravity_error", "m/s^2"}};
+    case TermKind::kTableAngleOffset:
+      return {{"table_offset_1", "rad"}, {"table_offset_2", "rad"}, {"table_offset_3", "rad"}};
+    case TermKind::kTableAxisTilt: return {{"table_tilt_x", "rad"}, {"table_tilt_y", "rad"}};
+    case TermKind::kLeverArm: return per_axis("lever_arm", "m");
   }
   return {};
 }
@@ -196,6 +242,16 @@ Vec3<T> contribution(const TermSpec& t, const T* p, const Stimulus<T>& s) {
       const Vec3<T>& f = s.specific_force;
       for (int i = 0; i < 3; ++i) d[i] = p[3 * i] * f[0] + p[3 * i + 1] * f[1] + p[3 * i + 2] * f[2];
       return d;
+    }
+    case TermKind::kThermalHysteresis: return Vec3<T>(p[0], p[1], p[2]) * s.temperature_direction;
+    case TermKind::kGravityError: return s.gravity_up * p[0];
+    case TermKind::kTableAngleOffset:
+      return s.table_df_dangle[0] * p[0] + s.table_df_dangle[1] * p[1] + s.table_df_dangle[2] * p[2];
+    case TermKind::kTableAxisTilt: return s.table_df_dtilt[0] * p[0] + s.table_df_dtilt[1] * p[1];
+    case TermKind::kLeverArm: {
+      const Vec3<T> r(p[0], p[1], p[2]);
+      const Vec3<T>& w = s.angular_rate;
+      return w.cross(w.cross(r)) + s.angular_accel.cross(r);
     }
   }
   return Vec3<T>::Zero();

@@ -18,7 +18,8 @@
 extern "C" {
 #endif
 
-#define STEND_PLUGIN_ABI_VERSION 1u
+/* 2: Fixture::observe() and stend::FixtureLinkFault added to sdk.hpp */
+#define STEND_PLUGIN_ABI_VERSION 2u
 #define STEND_PLUGIN_ENTRY_SYMBOL "stend_plugin_entry"
 
 typedef enum stend_plugin_kind {

@@ -199,12 +199,48 @@ class Fixture {
   virtual void telemetry(std::vector<std::pair<std::string, double>>& /*out*/) const {}
   // Bring the fixture to rest / heater and cooler off. Must not throw.
   virtual void safe_state() noexcept = 0;
+  // The sensor samples the runner just received (run clock), e.g. for a manual fixture that
+  // waits until the operator's placement is still. Default: ignored.
+  virtual void observe(const ImuSample* /*samples*/, std::size_t /*count*/) {}
 };
 
-// Estimators are defined by the estimator plugins' own interface (see estimators/).
+// Thrown by Fixture::advance() when the link to the device failed but the fixture
+// itself is in a known, safe condition (time-out, garbled reply, peer gone): the runner records
+// an event with the text, marks the recording's truth as a gap, keeps the sensor running and tries
+// again on the next period, for up to RunOptions::fixture_outage_s. Any other exception from a
+// fixture (a runaway chamber, a limit hit) ends the run at once.
+class __attribute__((visibility("default"))) FixtureLinkFault : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Estimators: fit a model to a recording. The host (`stend fit --estimator NAME`) opens the run
+// folder or dataset and hands the recording over; an estimator plugin links stend_core for the
+// Recording type (stend/recording.hpp) and parses its own section of the model YAML.
+struct Recording;  // stend/recording.hpp
+
+struct EstimatorRequest {
+  const Recording* recording = nullptr;  // the opened recording (never null when fit() is called)
+  std::string input;                     // where it came from (run folder or dataset file)
+  std::string model_file;                // the model YAML (path); errors name file:line:col
+  std::string output_dir;                // where the host writes the results (run folder or cwd)
+};
+
+struct EstimatorResult {
+  bool ok = false;           // false: the fit failed; `message` says why and no numbers are given
+  std::string message;
+  std::string json;          // results with a versioned "schema" field
+  std::string text;          // the report table (parameter, value, unit, std error, interval, …)
+  std::string json_name;     // default results file name, e.g. "ceres.json"
+};
+
 class Estimator {
  public:
   virtual ~Estimator() = default;
+  // Throws stend::ExperimentError (bad model file) or std::exception (unreadable input); a fit
+  // that ran but failed returns ok = false.
+  virtual EstimatorResult fit(const EstimatorRequest& request) = 0;
 };
 
 namespace detail {

@@ -25,7 +25,9 @@
 #include <stend/recording.hpp>
 
 #include <Eigen/Core>
+#include <Eigen/Dense>
 #include <cstddef>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -44,6 +46,9 @@ struct StaticDetectorOptions {
   double threshold_multiplier = 6.0;
   double init_duration_s = 0.0;
   double trim_s = 0.0;            // dropped at each end of a detected interval
+  // > 0: drop intervals whose mean gyro reading exceeds this norm [rad/s] — a turn about the
+  // vertical at constant rate leaves the accelerometer still (used before gyro integration).
+  double max_gyro_radps = 0.0;
 };
 
 struct StaticInterval {
@@ -53,6 +58,7 @@ struct StaticInterval {
   Eigen::Vector3d accel_mean = Eigen::Vector3d::Zero();  // m/s^2 (the recording's SI values)
   Eigen::Vector3d accel_std = Eigen::Vector3d::Zero();   // per-sample standard deviation
   Eigen::Vector3d gyro_mean = Eigen::Vector3d::Zero();   // rad/s
+  Eigen::Vector3d gyro_std = Eigen::Vector3d::Zero();    // per-sample standard deviation
   std::string label;
 };
 
@@ -90,6 +96,16 @@ struct CalibrationOptions {
   // of the mean (accel_std/√count), across gravity by √(noise² + (g·σ_tilt)²) — so a slightly tilted
   // position spoils the cross-axis terms it informs, not the bias and scale (Ferraris-like).
   double orientation_sigma_deg = 0.0;
+  // Known orientations from the table's encoders: table angle zero offsets estimated as extra
+  // parameters `table_offset_<axis>` [deg] (true angle = encoder + offset). Axes of a three-axis
+  // table chain R = Ry(rotation)·Rx(tilt)·Rz(azimuth) (sim_three_axis_table, the paper's Table 1):
+  // "tilt", "rotation". Gravity does not depend on the azimuth, so its offset is never identifiable;
+  // the rotation offset turns every position by the same rotation about the plate's y axis, which
+  // the cross-axis terms absorb (not identifiable with all 12 terms: the fit says so). The tilt
+  // offset is identifiable when the rotation angle varies. Needs the truth columns
+  // `<table_fixture>.tilt.meas_deg`, `<table_fixture>.rotation.meas_deg` and the header's mounting.
+  std::vector<std::string> table_offsets;
+  std::string table_fixture = "table";
 };
 
 struct Parameter {
@@ -103,10 +119,11 @@ struct Parameter {
 struct CalibrationResult {
   bool ok = false;
   std::string message;             // why it failed; empty on success
-  std::string method;              // "unknown_orientations" | "known_orientations"
-  model::ErrorModel model;         // bias, scale, cross_axis (accelerometer)
+  std::string method;              // "unknown_orientations" | "known_orientations" | "rate_table" | "integration"
+  model::ErrorModel model;         // bias, scale, cross_axis (accelerometer); gyro: [+ g_sensitivity]
   std::vector<double> theta;       // model.size() values (NaN when the fit failed)
-  std::vector<Parameter> parameters;       // all model parameters (fixed ones marked)
+  std::vector<Parameter> parameters;       // all model parameters (fixed ones marked), then
+                                           // table_offset_<axis> [deg] when estimated
   std::vector<Parameter> gyro_parameters;  // gyro_bias_x/y/z when estimated
   std::vector<std::string> not_identifiable;  // parameter names
   std::vector<StaticInterval> intervals;
@@ -116,7 +133,20 @@ struct CalibrationResult {
   bool whitened = false;           // known orientations with orientation_sigma_deg > 0
   double quantile = 0.0;
   // RMS over the intervals of |ȳ| − g (raw) and |correct(ȳ)| − g (calibrated) [m/s^2].
+  // Gyro: RMS of the residual raw (θ = 0) and calibrated [rad/s for rate_table, rad (gravity
+  // direction mismatch) for integration].
   double rms_norm_before = 0.0, rms_norm_after = 0.0;
+  // Per-axis RMS over the intervals, raw and calibrated, in the instrument unit (m/s^2, rad/s).
+  // Known orientations / rate table: correct(ȳ) − truth. Unknown orientations: the part of the
+  // calibrated mean along its own direction that is not g, (|c| − g)·ĉ, split on the axes.
+  // Integration: the gravity-direction mismatch per axis [rad] (NaN "before" when not computed).
+  Eigen::Vector3d rms_axis_before = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  Eigen::Vector3d rms_axis_after = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  // Covariance of the estimated parameters (scaled by σ², order of free_index = their positions
+  // in `parameters`); empty when the fit failed.
+  Eigen::MatrixXd covariance;
+  std::vector<int> free_index;
+  double condition_number = 0.0;   // of the scaled Jacobian at the solution (σ_max/σ_min)
   std::string solver_report;
 
   const Parameter& parameter(const std::string& name) const;  // throws when absent
@@ -143,6 +173,57 @@ CalibrationResult calibrate_accelerometer_known_orientations(const Recording& re
 CalibrationResult calibrate_accelerometer_known_orientations(
     const std::vector<StaticInterval>& intervals, const std::vector<Eigen::Vector3d>& truth_f,
     const CalibrationOptions& options = {});
+
+// ---------------------------------------------------------------------------------------------
+// Gyroscope
+//
+// Model: the vocabulary's bias, scale, cross_axis (12 parameters) and, with
+// estimate_g_sensitivity, g_sensitivity (9 more: gsens_ij, gyro axis i to specific force f_j):
+//   y = ω + b + diag(s)·ω + M·ω + G·f,   evaluated only through ErrorModel::measure<T>.
+//
+// (a) Rate table (known rates): for every rate segment (and every static orientation segment,
+//     ω = the truth's Earth rate) the mean reading ȳ_k against measure(θ, ω_k, f_k) with ω_k, f_k
+//     the means of the truth columns w_*_radps, f_*_mps2 inside the interval. Scale and cross-axis
+//     need rates about three independent sensor directions; G needs static positions in several
+//     gravity directions.
+// (b) Integration between static intervals (IMU-TK style; orientations unknown). Two stages:
+//     1. bias (and G) from the static intervals: ȳ_k = measure(θ, ω = 0, f_k) with f_k the
+//        calibrated specific force (Earth rotation, ≤ 7.3e-5 rad/s, is not modelled and goes into
+//        the bias and the residual);
+//     2. scale and cross-axis with bias and G held at stage 1: the gravity direction ĝ_k (calibrated
+//        accelerometer) carried by the rotation integrated from the corrected gyro readings between
+//        intervals k and k+1 must equal ĝ_{k+1}; two residuals per pair (the components normal to
+//        ĝ_{k+1}). A rotation about gravity is invisible in one pair, so the motions must turn about
+//        varied axes. All six cross-axis terms are identifiable: the accelerometer defines the frame.
+//     The stage-2 covariance adds what the upstream estimates pass on (delta method): the
+//     accelerometer calibration (through ĝ_k) and the stage-1 bias / G (through the corrected
+//     rates), C = C₂ + S·C_up·Sᵀ with S = −(J₂ᵀJ₂)⁻¹J₂ᵀ·∂r/∂z (finite differences).
+struct GyroOptions {
+  Loss loss = Loss::kNone;
+  double loss_scale_radps = 0.01;  // rate table: Huber / Cauchy scale of a residual [rad/s]
+  double loss_scale_rad = 0.01;    // integration: of a direction residual [rad]
+  double confidence = 0.95;
+  int max_iterations = 200;
+  double rank_tolerance = 1e-8;
+  double max_std_error = 0.05;     // relative (bias in rad/s, G in 1/g, scale/cross in 1)
+  bool estimate_g_sensitivity = false;
+  double trim_s = 0.5;             // rate table: dropped at each end of a segment
+};
+
+model::ErrorModel gyroscope_model(bool g_sensitivity);
+
+// Rate table from a recording: segments of kind "rate" and "orientation" (trimmed by trim_s) with
+// the truth columns w_x_radps.. and f_x_mps2..; fails when the recording has none.
+CalibrationResult calibrate_gyro_rate_table(const Recording& rec, const GyroOptions& options = {});
+// truth_w[k], truth_f[k]: true rate [rad/s] and specific force [m/s^2] of interval k (sensor frame).
+CalibrationResult calibrate_gyro_rate_table(const std::vector<StaticInterval>& intervals,
+                                            const std::vector<Eigen::Vector3d>& truth_w,
+                                            const std::vector<Eigen::Vector3d>& truth_f,
+                                            const GyroOptions& options = {});
+// Integration between the static intervals of a successful accelerometer calibration (its
+// intervals index rec.samples). Fails when `accel` failed or fewer than 7 intervals remain.
+CalibrationResult calibrate_gyro_integration(const Recording& rec, const CalibrationResult& accel,
+                                             const GyroOptions& options = {});
 
 const char* loss_name(Loss l);
 Loss loss_from_name(const std::string& name);  // "none" | "huber" | "cauchy"; throws otherwise

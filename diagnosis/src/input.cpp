@@ -1,0 +1,318 @@
+// stend gap, step 1: from a recording to static segments with their truth stimulus, groups and
+// noise floor. The extraction is batch_lsq's (extract_points); this file only adds what the
+// diagnoser needs around it.
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+
+#include "stend/geometry.hpp"
+#include "stend/gap/gap.hpp"
+
+namespace stend::gap {
+
+namespace {
+
+int column(const Recording& r, const std::string& name) { return r.truth_column(name); }
+
+// Column whose name ends with `suffix` (e.g. ".tilt.meas_deg"), −1 when none.
+int column_ending(const Recording& r, const std::string& suffix) {
+  for (std::size_t i = 0; i < r.header.truth_columns.size(); ++i) {
+    const std::string& c = r.header.truth_columns[i];
+    if (c.size() >= suffix.size() && c.compare(c.size() - suffix.size(), suffix.size(), suffix) == 0)
+      return static_cast<int>(i);
+  }
+  return -1;
+}
+
+// Mean of a truth column over [t0, t1]; the last snapshot before t0 when none inside.
+double truth_mean(const Recording& r, int col, double t0, double t1) {
+  if (col < 0 || r.truth_t.empty()) return kNaN;
+  const auto lo = std::lower_bound(r.truth_t.begin(), r.truth_t.end(), t0) - r.truth_t.begin();
+  const auto hi = std::upper_bound(r.truth_t.begin(), r.truth_t.end(), t1) - r.truth_t.begin();
+  double sum = 0.0;
+  int n = 0;
+  for (auto i = lo; i < hi; ++i) {
+    sum += r.truth[static_cast<std::size_t>(i)][static_cast<std::size_t>(col)];
+    ++n;
+  }
+  if (n > 0) return sum / n;
+  if (lo > 0) return r.truth[static_cast<std::size_t>(lo - 1)][static_cast<std::size_t>(col)];
+  return kNaN;
+}
+
+// Truth from a dataset's annotations: segments labelled <axis>_p / <axis>_a (imucal: that axis
+// pointing up / down) hold f = ±g along the axis, zero rate. Returns false when the labels do
+// not say.
+bool add_annotation_truth(Recording& r, std::string& how) {
+  static const std::regex kLabel("^([xyz])_([pa])$");
+  const double g = r.header.gravity_mps2 > 0.0 ? r.header.gravity_mps2 : 9.81;
+  std::vector<std::pair<double, std::vector<double>>> snaps;
+  for (const Segment& s : r.segments) {
+    std::smatch m;
+    if (s.kind != "orientation" || !std::regex_match(s.label, m, kLabel)) continue;
+    std::vector<double> row(6, 0.0);
+    row[static_cast<std::size_t>(m[1].str()[0] - 'x')] = (m[2].str() == "p" ? 1.0 : -1.0) * g;
+    snaps.push_back({s.t_start_s, row});
+    snaps.push_back({0.5 * (s.t_start_s + s.t_end_s), row});
+    snaps.push_back({s.t_end_s, row});
+  }
+  if (snaps.empty()) return false;
+  std::sort(snaps.begin(), snaps.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  r.header.truth_columns = {"f_x_mps2", "f_y_mps2", "f_z_mps2", "w_x_radps", "w_y_radps", "w_z_radps"};
+  r.truth_t.clear();
+  r.truth.clear();
+  for (auto& [t, row] : snaps) {
+    if (!r.truth_t.empty() && !(t > r.truth_t.back())) continue;
+    r.truth_t.push_back(t);
+    r.truth.push_back(row);
+  }
+  std::ostringstream os;
+  os << "dataset annotations (<axis>_p = axis up: +g, <axis>_a = axis down: -g, g = " << g
+     << " m/s^2, rate 0)";
+  how = os.str();
+  return true;
+}
+
+std::string orientation_name(const Eigen::Vector3d& up) {
+  for (int a = 0; a < 3; ++a)
+    if (std::abs(up[a]) > 0.995) return std::string(up[a] > 0 ? "+" : "-") + "xyz"[a] + " up";
+  char buf[80];
+  std::snprintf(buf, sizeof buf, "up=(%.2f,%.2f,%.2f)", up[0], up[1], up[2]);
+  return buf;
+}
+
+// Equivalent noise bandwidth of the sim sensor's 2nd-order Butterworth low-pass (π/(2·2·sin(π/4))
+// = 1.1107·fc), capped at Nyquist.
+double sim_twin_std(const YAML::Node& cfg, bool accel, double rate_hz) {
+  const double density =
+      cfg[accel ? "accel_noise_density" : "gyro_noise_density"]
+          ? cfg[accel ? "accel_noise_density" : "gyro_noise_density"].as<double>()
+          : (accel ? 0.00392266 : 8.7266e-5);
+  const double lp = cfg["lowpass_hz"] ? cfg["lowpass_hz"].as<double>() : 0.0;
+  double bw = 0.5 * rate_hz;
+  if (lp > 0.0) bw = std::min(bw, 1.1107 * lp);
+  return density * std::sqrt(bw);
+}
+
+}  // namespace
+
+Eigen::Vector3d table_stimulus(model::Stimulus<double>& st, double az, double h, double dl,
+                               const Eigen::Matrix3d& mount, double g) {
+  auto force = [&](double a0, double a1, double a2, double ex, double ey) {
+    const Eigen::Vector3d gb = geometry::Rx(ex) * geometry::Ry(ey) * Eigen::Vector3d(0, 0, g);
+    return Eigen::Vector3d(mount * geometry::Ry(a2) * geometry::Rx(a1) * geometry::Rz(a0) * gb);
+  };
+  const double e = 1e-6;
+  const double ang[3] = {az, h, dl};
+  for (int k = 0; k < 3; ++k) {
+    double up_a[3] = {ang[0], ang[1], ang[2]}, dn_a[3] = {ang[0], ang[1], ang[2]};
+    up_a[k] += e;
+    dn_a[k] -= e;
+    st.table_df_dangle[static_cast<std::size_t>(k)] =
+        (force(up_a[0], up_a[1], up_a[2], 0, 0) - force(dn_a[0], dn_a[1], dn_a[2], 0, 0)) / (2 * e);
+  }
+  st.table_df_dtilt[0] = (force(az, h, dl, e, 0) - force(az, h, dl, -e, 0)) / (2 * e);
+  st.table_df_dtilt[1] = (force(az, h, dl, 0, e) - force(az, h, dl, 0, -e)) / (2 * e);
+  return force(az, h, dl, 0, 0);
+}
+
+GapInput build_input(const Recording& recording_in, const batch_lsq::ModelSpec& spec) {
+  GapInput in;
+  in.spec = spec;
+  in.source = recording_in.dir.string();
+  const bool accel = spec.model.instrument == model::Instrument::kAccelerometer;
+  const Recording* rec = &recording_in;
+  Recording augmented;
+  in.truth_source = "truth columns";
+  if (column(recording_in, accel ? "f_x_mps2" : "w_x_radps") < 0) {
+    augmented = recording_in;
+    std::string how;
+    if (!add_annotation_truth(augmented, how))
+      throw std::runtime_error("'" + recording_in.dir.string() +
+                               "' has no truth columns and no annotation the gap diagnoser can turn "
+                               "into truth (labels x_p … z_a); nothing to compare the twin with. Sessions "
+                               "with unknown orientations (only |g| known, e.g. mpu6050_multipos) need the "
+                               "magnitude form of the gap, which this version does not have");
+    rec = &augmented;
+    in.truth_source = how;
+  }
+  std::vector<std::string> notes;
+  std::vector<batch_lsq::StaticPoint> points = batch_lsq::extract_points(*rec, spec, &notes);
+  for (const auto& n : notes)
+    if (n.find("saturated") != std::string::npos) ++in.saturated_segments;
+  in.notes = notes;
+  if (points.size() < 2)
+    throw std::runtime_error("'" + in.source + "': only " + std::to_string(points.size()) +
+                             " static segment(s) could be extracted; the gap needs several");
+
+  in.lsb = accel ? rec->header.info.accel_lsb_mps2 : rec->header.info.gyro_lsb_radps;
+  in.range = accel ? rec->header.info.accel_range_mps2 : rec->header.info.gyro_range_radps;
+
+  // Twin noise of a simulated run: the sim sensor's own noise settings.
+  if (!rec->experiment_yaml.empty()) {
+    try {
+      const YAML::Node root = YAML::Load(rec->experiment_yaml);
+      const YAML::Node sensor = root["bench"]["sensor"];
+      if (sensor && sensor["plugin"] && sensor["plugin"].as<std::string>() == "sim_imu") {
+        const YAML::Node cfg = sensor["config"] ? sensor["config"] : YAML::Node(YAML::NodeType::Map);
+        const double rate = cfg["output_rate_hz"] ? cfg["output_rate_hz"].as<double>() : 1000.0;
+        in.twin_sample_std = Eigen::Vector3d::Constant(sim_twin_std(cfg, accel, rate));
+      }
+    } catch (const std::exception&) {
+      // no twin noise settings: the recording's median segment std is the reference
+    }
+  }
+
+  // Truth columns for the bench-side stimulus fields.
+  const int fcol[3] = {column(*rec, "f_x_mps2"), column(*rec, "f_y_mps2"), column(*rec, "f_z_mps2")};
+  const int wcol[3] = {column(*rec, "w_x_radps"), column(*rec, "w_y_radps"), column(*rec, "w_z_radps")};
+  const int tab[3] = {column_ending(*rec, ".azimuth.meas_deg"), column_ending(*rec, ".tilt.meas_deg"),
+                      column_ending(*rec, ".rotation.meas_deg")};
+  const bool three_axis = tab[0] >= 0 && tab[1] >= 0 && tab[2] >= 0;
+  Eigen::Matrix3d mount = Eigen::Matrix3d::Identity();
+  if (rec->header.mounting_R.size() == 9)
+    for (int i = 0; i < 9; ++i) mount(i / 3, i % 3) = rec->header.mounting_R[static_cast<std::size_t>(i)];
+  bool table_ok = three_axis;
+  const double g = rec->header.gravity_mps2 > 0.0 ? rec->header.gravity_mps2 : 9.80665;
+
+  // Time-ordered walk over the recording's segments for ramp direction and last changes.
+  std::vector<const Segment*> segs;
+  for (const auto& s : rec->segments) segs.push_back(&s);
+  std::sort(segs.begin(), segs.end(), [](const Segment* a, const Segment* b) { return a->t_start_s < b->t_start_s; });
+
+  const double deg = geometry::kDegToRad;
+  for (const auto& p : points) {
+    SegmentData d;
+    d.point = p;
+    const Segment* seg = nullptr;
+    for (const auto* s : segs)
+      if (s->id == p.segment_id) seg = s;
+    auto& st = d.point.stimulus;
+    Eigen::Vector3d f, w;
+    for (int a = 0; a < 3; ++a) {
+      f[a] = truth_mean(*rec, fcol[a], p.t_start_s, p.t_end_s);
+      w[a] = truth_mean(*rec, wcol[a], p.t_start_s, p.t_end_s);
+    }
+    if (f.allFinite() && f.norm() > 0.5) {
+      st.specific_force = f;
+      if (accel) st.gravity_up = f / f.norm();  // static: specific force is "up"
+    }
+    // Rates below 1e-3 rad/s (the Earth's 7e-5 rad/s on a static table) cannot show a lever arm
+    // (ω²·1 m < 1e-6 m/s²): left at zero so the lever_arm candidate reads "not excited".
+    if (w.allFinite() && w.norm() > 1e-3) st.angular_rate = w;
+    if (!accel && w.allFinite()) st.input = w;
+    const Eigen::Vector3d up = f.allFinite() && f.norm() > 0 ? Eigen::Vector3d(f / f.norm()) : Eigen::Vector3d::Zero();
+    d.orientation_name = orientation_name(up);
+    // Table geometry (sim three-axis table: R = Ry(δ)·Rx(h)·Rz(az)), checked against the truth.
+    if (table_ok) {
+      const double az = truth_mean(*rec, tab[0], p.t_start_s, p.t_end_s) * deg;
+      const double h = truth_mean(*rec, tab[1], p.t_start_s, p.t_end_s) * deg;
+      const double dl = truth_mean(*rec, tab[2], p.t_start_s, p.t_end_s) * deg;
+      model::Stimulus<double> probe = st;
+      const Eigen::Vector3d f0 = table_stimulus(probe, az, h, dl, mount, g);
+      if (!f.allFinite() || (f0 - f).norm() > 0.02 * g) {
+        table_ok = false;
+      } else {
+        st.table_df_dangle = probe.table_df_dangle;
+        st.table_df_dtilt = probe.table_df_dtilt;
+      }
+    }
+    // Ramp direction, setpoint and last changes.
+    double cur_sp = kNaN, prev_sp = kNaN, t_temp_change = kNaN, t_orient_change = kNaN;
+    int dir = 0;
+    const Segment* prev_orient = nullptr;
+    for (const auto* s : segs) {
+      if (s->t_start_s > p.t_start_s) break;
+      if (s->kind == "set_temperature" && std::isfinite(s->setpoint_c)) {
+        if (!std::isfinite(cur_sp) || std::abs(s->setpoint_c - cur_sp) > 0.1) {
+          prev_sp = cur_sp;
+          cur_sp = s->setpoint_c;
+          t_temp_change = s->t_start_s;
+          dir = std::isfinite(prev_sp) ? (cur_sp > prev_sp ? 1 : -1) : 0;
+        }
+      }
+      if (s != seg && seg && s->kind == seg->kind) prev_orient = s;
+    }
+    if (prev_orient) t_orient_change = prev_orient->t_end_s;
+    if (seg) t_orient_change = std::isfinite(t_orient_change) ? t_orient_change : seg->t_start_s;
+    d.setpoint_c = seg && std::isfinite(seg->setpoint_c) ? seg->setpoint_c : cur_sp;
+    d.ramp_direction = dir;
+    st.temperature_direction = dir;
+    double last = std::isfinite(t_orient_change) ? t_orient_change : 0.0;
+    if (std::isfinite(t_temp_change)) last = std::max(last, t_temp_change);
+    d.time_since_change_s = p.t_start_s - last;
+    d.averaging_s = p.t_end_s - p.t_start_s;
+    // Noise floor of the mean: batch means (8 blocks) over the raw samples in the kept window.
+    const auto& S = rec->samples;
+    auto lo = std::lower_bound(S.begin(), S.end(), p.t_start_s, [](const ImuSample& s, double t) { return s.t_s < t; });
+    auto hi = std::upper_bound(S.begin(), S.end(), p.t_end_s, [](double t, const ImuSample& s) { return t < s.t_s; });
+    const auto n = static_cast<std::size_t>(hi - lo);
+    for (int a = 0; a < 3; ++a) {
+      if (n < 16) break;
+      double sum = 0, sum2 = 0;
+      for (auto it = lo; it != hi; ++it) {
+        const double v = accel ? it->accel_mps2[a] : it->gyro_radps[a];
+        sum += v;
+        sum2 += v * v;
+      }
+      const double mean = sum / static_cast<double>(n);
+      const double var = std::max(0.0, sum2 / static_cast<double>(n) - mean * mean);
+      d.raw_std[a] = std::sqrt(var * static_cast<double>(n) / static_cast<double>(n - 1));
+      constexpr int kB = 8;
+      double bsum2 = 0.0;
+      for (int b = 0; b < kB; ++b) {
+        const auto b0 = lo + static_cast<std::ptrdiff_t>(n * static_cast<std::size_t>(b) / kB);
+        const auto b1 = lo + static_cast<std::ptrdiff_t>(n * static_cast<std::size_t>(b + 1) / kB);
+        double bs = 0.0;
+        for (auto it = b0; it != b1; ++it) bs += accel ? it->accel_mps2[a] : it->gyro_radps[a];
+        const double bm = bs / static_cast<double>(b1 - b0) - mean;
+        bsum2 += bm * bm;
+      }
+      const double se_bm = std::sqrt(bsum2 / (kB - 1) / kB);
+      const double se_white = d.raw_std[a] / std::sqrt(static_cast<double>(n));
+      d.mean_std_error[a] = std::max(se_bm, se_white);
+    }
+    if (!d.mean_std_error.allFinite()) d.mean_std_error = p.measured_std_error;
+    in.segments.push_back(d);
+  }
+  if (three_axis && !table_ok)
+    in.notes.push_back("table angle columns found but the sim three-axis table chain does not reproduce the "
+                       "truth specific force: table offset/tilt candidates not excited");
+  if (!three_axis)
+    in.notes.push_back("no three-axis table angle columns: the table offset/tilt candidates are not excited");
+  if (!table_ok)
+    for (auto& d : in.segments) {
+      for (auto& v : d.point.stimulus.table_df_dangle) v.setZero();
+      for (auto& v : d.point.stimulus.table_df_dtilt) v.setZero();
+    }
+
+  // Orientation groups by gravity direction; temperature groups by setpoint (else die, 2 °C).
+  std::map<std::string, int> og;
+  for (auto& d : in.segments) {
+    auto it = og.find(d.orientation_name);
+    if (it == og.end()) it = og.emplace(d.orientation_name, static_cast<int>(og.size())).first;
+    d.orientation = it->second;
+  }
+  std::vector<double> levels;
+  for (auto& d : in.segments) {
+    const double t = std::isfinite(d.setpoint_c) ? d.setpoint_c : d.point.stimulus.temperature_c;
+    int k = -1;
+    for (std::size_t i = 0; i < levels.size(); ++i)
+      if (std::abs(levels[i] - t) <= 2.0) k = static_cast<int>(i);
+    if (k < 0) {
+      levels.push_back(t);
+      k = static_cast<int>(levels.size()) - 1;
+    }
+    d.temperature_group = k;
+  }
+  in.floor_source = "batch means of 8 blocks inside each segment's kept window (Allan-type, robust to "
+                    "short-term correlation; never below the white-noise standard error)";
+  return in;
+}
+
+}  // namespace stend::gap

@@ -1,0 +1,103 @@
+#include "bench_world.hpp"
+
+#include <stend/geometry.hpp>
+
+#include <stdexcept>
+
+#include "sim_one_axis_table.hpp"
+#include "sim_thermochamber.hpp"
+
+namespace stend::emu {
+
+BenchWorldConfig BenchWorldConfig::from_experiment(const Experiment& e, double chamber_speed) {
+  BenchWorldConfig c;
+  if (e.sensor.plugin != "sim_imu")
+    throw std::invalid_argument("bench world: the twin's sensor must be sim_imu (got '" + e.sensor.plugin + "')");
+  c.imu = sim::SimImuConfig::from(e.sensor.params);
+  // A noise stream independent of the in-process bench's (which uses salt 1): the two runs are
+  // two experiments on the same sensor model, not a replay.
+  if (c.imu.seed == 0) c.imu.seed = static_cast<std::int64_t>((e.seed * 1000003u + 101) & 0x7fffffffffffffffULL);
+  bool table = false, chamber = false;
+  for (const FixtureDecl& f : e.fixtures) {
+    if (f.plugin == "sim_one_axis_table") {
+      const sim::OneAxisTableConfig t = sim::OneAxisTableConfig::from(f.params);
+      sim::AxisConfig& a = c.table_axis;
+      a.name = "angle";
+      a.unit = "deg";
+      a.min = t.min_deg;
+      a.max = t.max_deg;
+      a.max_rate = t.max_rate_dps;
+      a.max_accel = t.max_accel_dps2;
+      a.initial = t.initial_deg;
+      a.settle_tolerance = t.settle_tolerance_deg;
+      a.settle_rate_tolerance = t.settle_rate_tolerance_dps;
+      a.settle_time_s = t.settle_time_s;
+      a.encoder_resolution = t.encoder_resolution_deg;
+      a.encoder_noise = t.encoder_noise_deg;
+      c.table_tilt_deg = t.axis_tilt_deg;
+      table = true;
+    } else if (f.plugin == "sim_thermochamber") {
+      c.chamber.plant = sim::ThermochamberConfig::from(f.params);
+      chamber = true;
+    } else {
+      throw std::invalid_argument("bench world: no emulator for fixture plugin '" + f.plugin +
+                                  "' (the world has sim_one_axis_table and sim_thermochamber)");
+    }
+  }
+  if (!table || !chamber)
+    throw std::invalid_argument("bench world: the twin needs a sim_one_axis_table and a sim_thermochamber");
+  if (!e.mounted_on.empty() && e.mounted_on != "base") {
+    const int i = [&] {
+      for (std::size_t k = 0; k < e.fixtures.size(); ++k)
+        if (e.fixtures[k].id == e.mounted_on) return static_cast<int>(k);
+      return -1;
+    }();
+    if (i < 0) throw std::invalid_argument("bench world: mounting on an unknown fixture");
+  }
+  c.chamber.speed = chamber_speed;
+  c.gravity_mps2 = e.gravity.resolved_mps2;
+  c.latitude_deg = e.gravity.latitude_deg;
+  c.heading_deg = e.base_heading_deg;
+  c.R_sensor_from_mount = e.R_sensor_from_mount;
+  return c;
+}
+
+BenchWorld::BenchWorld(const BenchWorldConfig& c) : c_(c) {
+  Rh_ = geometry::Rx(c.table_tilt_deg * geometry::kDegToRad);
+  earth_local_ = geometry::Rz(c.heading_deg * geometry::kDegToRad) * geometry::earth_rate_local(c.latitude_deg);
+  TableTextConfig tc;
+  tc.axes = {c.table_axis};
+  tc.port = c.table_port;
+  tc.identity = "Stend,BenchWorldTable,0,0.1";
+  table_ = std::make_unique<TableTextServer>(tc);
+  chamber_ = std::make_unique<AtmegaChamberSlave>(c.chamber);
+  BenchMcuConfig mc;
+  mcu_epoch_ = std::chrono::steady_clock::now();
+  mcu_ = std::make_unique<BenchMcuSlave>(
+      mc, Mpu6050Model(c.imu, Mpu6050Model::TruthFn([this](double t) { return truth(t); })));
+}
+
+BenchWorld::~BenchWorld() { mcu_.reset(); }
+
+BenchTruth BenchWorld::truth(double t) {
+  BenchTruth b;
+  b.t_s = t;
+  // The table's emulated time for this instant (the table runs at wall speed).
+  const double table_t = table_->emulated_now() -
+                         std::chrono::duration<double>(std::chrono::steady_clock::now() - mcu_epoch_).count() + t;
+  const sim::AxisState s = table_->state_at(0, table_t);
+  const double d = s.position * geometry::kDegToRad;
+  const Eigen::Matrix3d R = c_.R_sensor_from_mount * geometry::Ry(d) * Rh_;
+  b.R_sensor_from_local = R;
+  b.specific_force_mps2 = R * Eigen::Vector3d(0.0, 0.0, c_.gravity_mps2);
+  b.angular_rate_radps = c_.R_sensor_from_mount * Eigen::Vector3d(0.0, s.velocity * geometry::kDegToRad, 0.0) +
+                         R * earth_local_;
+  chamber_->with_firmware([&](ChamberFirmware& f) {
+    b.air_temperature_c = f.air_c();
+    b.die_temperature_c = f.die_c();
+    return 0;
+  });
+  return b;
+}
+
+}  // namespace stend::emu

@@ -1,0 +1,84 @@
+// `stend emulate`: each emulator started from the command line says where it listens, and the
+// real transports find there the device the register maps describe.
+#include <gtest/gtest.h>
+
+#include <stend/transport/modbus_rtu.hpp>
+#include <stend/transport/modbus_tcp.hpp>
+#include <stend/transport/text_command.hpp>
+
+#include <cstdio>
+#include <regex>
+#include <string>
+
+namespace {
+
+// Starts `stend emulate ARGS` and returns the first line matching `pattern` (its group 1).
+struct Emulator {
+  FILE* pipe = nullptr;
+  explicit Emulator(const std::string& args) {
+    pipe = popen((std::string(STEND_BINARY_DIR) + "/bin/stend emulate " + args).c_str(), "r");
+  }
+  std::string wait_for(const std::string& pattern) {
+    char line[512];
+    const std::regex re(pattern);
+    while (pipe && std::fgets(line, sizeof line, pipe)) {
+      std::smatch m;
+      const std::string s = line;
+      if (std::regex_search(s, m, re)) return m[1].str();
+    }
+    return "";
+  }
+  ~Emulator() {
+    if (pipe) pclose(pipe);  // the emulator exits after --duration-s
+  }
+};
+
+TEST(EmulateCli, WatlowChamberAnswersPvAndSetpointRegistersOnlyOnItsPort) {
+  Emulator e("chamber --protocol watlow_f4 --port 0 --initial-c 23.4 --duration-s 2");
+  const std::string port = e.wait_for("tcp 127\\.0\\.0\\.1:([0-9]+)");
+  ASSERT_FALSE(port.empty());
+  stend::transport::ModbusTcpConfig c;
+  c.port = std::stoi(port);
+  c.retries = 1;
+  stend::transport::ModbusTcpClient bus(c);
+  EXPECT_EQ(static_cast<std::int16_t>(bus.read_holding_registers(100, 1)[0]), 234);  // PV, tenths of °C
+  bus.write_register(300, 305);
+  EXPECT_EQ(bus.read_holding_registers(300, 1)[0], 305);
+  try {
+    (void)bus.read_holding_registers(101, 1);
+    FAIL() << "register 101 is not in the F4 map";
+  } catch (const stend::transport::ModbusError& err) {
+    EXPECT_EQ(err.exception_code(), 2) << err.what();
+    EXPECT_NE(std::string(err.what()).find("register 0x0065"), std::string::npos) << err.what();
+  }
+}
+
+TEST(EmulateCli, AtmegaChamberOnAPtyReportsFirmwareAndReading) {
+  Emulator e("chamber --protocol atmega328 --initial-c 30 --duration-s 2");
+  const std::string dev = e.wait_for("(/dev/pts/[0-9]+)");
+  ASSERT_FALSE(dev.empty());
+  stend::transport::ModbusRtuConfig c;
+  c.device = dev;
+  c.baud = 115200;
+  stend::transport::ModbusRtuClient bus(c);
+  const auto in = bus.read_input_registers(0, 10);
+  EXPECT_EQ(in[8], 0x0100);                                // FIRMWARE
+  EXPECT_EQ(static_cast<std::int16_t>(in[1]), 30 * 16);    // TEMP_RAW, 1/16 °C
+  EXPECT_EQ(in[0] & 1u, 0u) << "the loop must be off until RUN";
+}
+
+TEST(EmulateCli, TableAnswersTheAcutrolDialect) {
+  Emulator e("table --axes 3 --port 0 --duration-s 2");
+  const std::string port = e.wait_for("tcp 127\\.0\\.0\\.1:([0-9]+)");
+  ASSERT_FALSE(port.empty());
+  stend::transport::TextCommandConfig c;
+  c.host = "127.0.0.1";
+  c.port = std::stoi(port);
+  stend::transport::TextCommandClient link(c);
+  EXPECT_EQ(link.query(":POS? 3"), "0.000000");
+  link.send(":POS 2,120");  // tilt travel is ±90°
+  EXPECT_EQ(link.query(":SYST:ERR?").rfind("-222,", 0), 0u);
+  EXPECT_EQ(link.query(":SYST:ERR?"), "0,\"No error\"");
+}
+
+}  // namespace

@@ -1,0 +1,53 @@
+// The ceres_nonlinear estimator driven by a model YAML file (`stend fit RUN --model FILE`):
+//
+//   ceres_nonlinear:
+//     accelerometer: unknown_orientations   # unknown_orientations | known_orientations | none
+//     gyroscope: integration                # integration | rate_table | bias_only | none
+//     intervals: detect                     # detect | segments (the recording's orientation segments)
+//     ...                                   # options: see README.md, "Model file"
+//
+// Every key is checked (unknown keys with "did you mean", wrong types, ranges); errors are
+// stend::ExperimentError naming file:line:col and what was expected.
+#pragma once
+
+#include <stend/ceres_nonlinear/calibration.hpp>
+#include <stend/experiment.hpp>  // ExperimentError
+#include <stend/recording.hpp>
+
+#include <string>
+#include <yaml-cpp/yaml.h>
+
+namespace stend::ceres_nonlinear {
+
+inline constexpr const char* kResultsSchema = "stend.ceres_nonlinear.results/1";
+
+struct ModelFileOptions {
+  std::string accelerometer = "unknown_orientations";
+  std::string gyroscope = "integration";
+  std::string intervals = "detect";
+  CalibrationOptions accel;
+  GyroOptions gyro;
+};
+
+// Reads the `ceres_nonlinear:` mapping of `root` (loaded from `file`).
+ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& file);
+ModelFileOptions load_model_file(const std::string& file);
+
+// The options as text with units (echoed at the top of the report) and as JSON.
+std::string describe_options(const ModelFileOptions& o);
+std::string options_json(const ModelFileOptions& o);
+
+struct ModelFileFit {
+  bool ok = false;
+  std::string message;
+  CalibrationResult accel, gyro;
+  bool has_accel = false, has_gyro = false;
+  std::string text;  // options echo + both reports
+  std::string json;  // versioned: {"schema": kResultsSchema, ...}
+};
+
+// Runs what the options ask for: accelerometer first (the integration method needs it), then the
+// gyroscope. ok only when every requested part succeeded.
+ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& options);
+
+}  // namespace stend::ceres_nonlinear

@@ -1,0 +1,241 @@
+#include <stend/ceres_nonlinear/model_file.hpp>
+#include <stend/yaml_util.hpp>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <numbers>
+
+namespace stend::ceres_nonlinear {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+std::vector<std::string> string_list(const yaml::MapReader& m, const std::string& key,
+                                     const std::vector<std::string>& allowed) {
+  const YAML::Node v = m.get(key);
+  if (!v.IsSequence()) m.fail_value(key, "expected a list of names, e.g. [" + yaml::join(allowed) + "]");
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const std::string s = yaml::as_string(v[i], m.file(), m.child_path(key) + fmt::format("[{}]", i));
+    if (std::find(allowed.begin(), allowed.end(), s) == allowed.end())
+      throw ExperimentError(yaml::location_of(v[i], m.file()), m.child_path(key),
+                            "unknown name '" + s + "'",
+                            yaml::join_sentences(yaml::did_you_mean(s, allowed), "Allowed: " + yaml::join(allowed)));
+    out.push_back(s);
+  }
+  return out;
+}
+
+std::string choice(const yaml::MapReader& m, const std::string& key, const std::string& fallback,
+                   const std::vector<std::string>& allowed) {
+  const std::string s = m.string(key, fallback);
+  if (std::find(allowed.begin(), allowed.end(), s) == allowed.end())
+    m.fail_value(key, "expected one of " + yaml::join(allowed) + ", got '" + s + "'",
+                 yaml::did_you_mean(s, allowed));
+  return s;
+}
+
+double positive(const yaml::MapReader& m, const std::string& key, double fallback, const std::string& unit,
+                bool allow_zero = false) {
+  const double v = m.number(key, fallback, unit);
+  if (!(allow_zero ? v >= 0.0 : v > 0.0))
+    m.fail_value(key, std::string("must be ") + (allow_zero ? ">= 0" : "> 0") + (unit.empty() ? "" : " (" + unit + ")"));
+  return v;
+}
+
+}  // namespace
+
+ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& file) {
+  ModelFileOptions o;
+  const yaml::MapReader top(root, file, "", "model file", {"ceres_nonlinear"}, {"description", "name"});
+  top.require("ceres_nonlinear", "the ceres_nonlinear estimator's options");
+  const yaml::MapReader m(top.get("ceres_nonlinear"), file, "ceres_nonlinear", "ceres_nonlinear options",
+                          {"accelerometer", "gyroscope", "intervals", "detector", "segment_trim_s", "gravity_mps2",
+                           "loss", "loss_scale_mps2", "gyro_loss_scale_radps", "gyro_loss_scale_rad", "confidence",
+                           "max_iterations", "rank_tolerance", "max_std_error", "fixed_cross_axis",
+                           "orientation_sigma_deg", "table_offsets", "table_fixture", "gyro_g_sensitivity"},
+                          {}, top.value_location("ceres_nonlinear"));
+  o.accelerometer = choice(m, "accelerometer", o.accelerometer, {"unknown_orientations", "known_orientations", "none"});
+  o.gyroscope = choice(m, "gyroscope", o.gyroscope, {"integration", "rate_table", "bias_only", "none"});
+  o.intervals = choice(m, "intervals", o.intervals, {"detect", "segments"});
+  if (o.accelerometer == "none" && (o.gyroscope == "integration" || o.gyroscope == "bias_only"))
+    m.fail_value("gyroscope", "'" + o.gyroscope + "' needs the accelerometer calibration first (accelerometer: none)",
+                 "use gyroscope: rate_table, or an accelerometer method");
+  if (o.accelerometer == "none" && o.gyroscope == "none") m.fail_value("accelerometer", "nothing to fit: both are none");
+  auto& a = o.accel;
+  a.use_segments = o.intervals == "segments";
+  if (m.has("detector")) {
+    const yaml::MapReader d(m.get("detector"), file, m.child_path("detector"), "static-interval detector",
+                            {"window_s", "min_duration_s", "variance_threshold_m2ps4", "threshold_multiplier",
+                             "init_duration_s", "trim_s", "max_gyro_dps"},
+                            {}, m.value_location("detector"));
+    a.detector.window_s = positive(d, "window_s", a.detector.window_s, "in seconds");
+    a.detector.min_duration_s = positive(d, "min_duration_s", a.detector.min_duration_s, "in seconds", true);
+    a.detector.variance_threshold = positive(d, "variance_threshold_m2ps4", 0.0, "in (m/s^2)^2", true);
+    a.detector.threshold_multiplier = positive(d, "threshold_multiplier", a.detector.threshold_multiplier, "");
+    a.detector.init_duration_s = positive(d, "init_duration_s", a.detector.init_duration_s, "in seconds", true);
+    a.detector.trim_s = positive(d, "trim_s", a.detector.trim_s, "in seconds", true);
+    a.detector.max_gyro_radps = positive(d, "max_gyro_dps", 3.0, "in deg/s", true) * kDeg;
+  } else {
+    a.detector.max_gyro_radps = 3.0 * kDeg;
+  }
+  o.gyro.trim_s = positive(m, "segment_trim_s", o.gyro.trim_s, "in seconds", true);
+  if (a.use_segments) a.detector.trim_s = o.gyro.trim_s;
+  a.gravity_mps2 = positive(m, "gravity_mps2", 0.0, "in m/s^2", true);
+  a.loss = loss_from_name(choice(m, "loss", "none", {"none", "huber", "cauchy"}));
+  o.gyro.loss = a.loss;
+  a.loss_scale_mps2 = positive(m, "loss_scale_mps2", a.loss_scale_mps2, "in m/s^2");
+  o.gyro.loss_scale_radps = positive(m, "gyro_loss_scale_radps", o.gyro.loss_scale_radps, "in rad/s");
+  o.gyro.loss_scale_rad = positive(m, "gyro_loss_scale_rad", o.gyro.loss_scale_rad, "in rad");
+  a.confidence = m.number("confidence", a.confidence, "");
+  if (!(a.confidence > 0.0 && a.confidence < 1.0)) m.fail_value("confidence", "must be in (0, 1), e.g. 0.95");
+  o.gyro.confidence = a.confidence;
+  const std::int64_t it = m.integer("max_iterations", a.max_iterations);
+  if (it < 1 || it > 100000) m.fail_value("max_iterations", "must be an integer in 1..100000");
+  a.max_iterations = o.gyro.max_iterations = static_cast<int>(it);
+  a.rank_tolerance = o.gyro.rank_tolerance = positive(m, "rank_tolerance", a.rank_tolerance, "(ratio of singular values)");
+  a.max_std_error = o.gyro.max_std_error = positive(m, "max_std_error", a.max_std_error, "(relative)");
+  if (m.has("fixed_cross_axis"))
+    a.fixed_cross_axis = string_list(m, "fixed_cross_axis",
+                                     {"cross_xy", "cross_xz", "cross_yx", "cross_yz", "cross_zx", "cross_zy"});
+  a.orientation_sigma_deg = positive(m, "orientation_sigma_deg", 0.0, "in degrees", true);
+  if (m.has("table_offsets")) {
+    a.table_offsets = string_list(m, "table_offsets", {"tilt", "rotation"});
+    if (o.accelerometer != "known_orientations")
+      m.fail_key("table_offsets", "table angle offsets are estimated only with accelerometer: known_orientations");
+  }
+  a.table_fixture = m.string("table_fixture", a.table_fixture);
+  o.gyro.estimate_g_sensitivity = m.boolean("gyro_g_sensitivity", false);
+  a.estimate_gyro_bias = o.gyroscope == "bias_only";
+  return o;
+}
+
+ModelFileOptions load_model_file(const std::string& file) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(file);
+  } catch (const YAML::BadFile&) {
+    throw ExperimentError(SourceLocation{file, 0, 0}, "", "cannot open the model file");
+  } catch (const YAML::ParserException& e) {
+    throw ExperimentError(SourceLocation{file, e.mark.line + 1, e.mark.column + 1}, "", "YAML syntax error: " + e.msg);
+  }
+  return options_from_yaml(root, file);
+}
+
+std::string describe_options(const ModelFileOptions& o) {
+  const auto& a = o.accel;
+  std::string s = "options:\n";
+  s += fmt::format("  accelerometer: {}, gyroscope: {}, intervals: {}\n", o.accelerometer, o.gyroscope, o.intervals);
+  if (o.intervals == "detect")
+    s += fmt::format("  detector: window {} s, min duration {} s, threshold {}, trim {} s, max gyro {:.3g} deg/s\n",
+                     a.detector.window_s, a.detector.min_duration_s,
+                     a.detector.variance_threshold > 0.0
+                         ? fmt::format("{} (m/s^2)^2", a.detector.variance_threshold)
+                         : fmt::format("auto ({} x {})", a.detector.threshold_multiplier,
+                                       a.detector.init_duration_s > 0.0
+                                           ? fmt::format("variance of the first {} s", a.detector.init_duration_s)
+                                           : std::string("10th percentile of the window variance")),
+                     a.detector.trim_s, a.detector.max_gyro_radps / kDeg);
+  else
+    s += fmt::format("  segments trimmed by {} s at each end\n", o.gyro.trim_s);
+  s += fmt::format("  gravity: {}\n", a.gravity_mps2 > 0.0 ? fmt::format("{} m/s^2", a.gravity_mps2) : "from the recording");
+  s += fmt::format("  loss: {} (scale {} m/s^2, gyro {} rad/s, integration {} rad)\n", loss_name(a.loss),
+                   a.loss_scale_mps2, o.gyro.loss_scale_radps, o.gyro.loss_scale_rad);
+  s += fmt::format("  confidence {}, max iterations {}, rank tolerance {:g}, max relative std error {}\n", a.confidence,
+                   a.max_iterations, a.rank_tolerance, a.max_std_error);
+  if (o.accelerometer == "unknown_orientations")
+    s += fmt::format("  fixed cross-axis terms: {}\n", yaml::join(a.fixed_cross_axis));
+  if (o.accelerometer == "known_orientations")
+    s += fmt::format("  orientation sigma {} deg, table offsets: {} (fixture '{}')\n", a.orientation_sigma_deg,
+                     a.table_offsets.empty() ? std::string("none") : yaml::join(a.table_offsets), a.table_fixture);
+  if (o.gyroscope == "integration" || o.gyroscope == "rate_table")
+    s += fmt::format("  gyro g-sensitivity: {}\n", o.gyro.estimate_g_sensitivity ? "estimated" : "not modelled");
+  return s;
+}
+
+std::string options_json(const ModelFileOptions& o) {
+  const auto& a = o.accel;
+  nlohmann::json j = {
+      {"accelerometer", o.accelerometer},
+      {"gyroscope", o.gyroscope},
+      {"intervals", o.intervals},
+      {"detector",
+       {{"window_s", a.detector.window_s},
+        {"min_duration_s", a.detector.min_duration_s},
+        {"variance_threshold_m2ps4", a.detector.variance_threshold},
+        {"threshold_multiplier", a.detector.threshold_multiplier},
+        {"init_duration_s", a.detector.init_duration_s},
+        {"trim_s", a.detector.trim_s},
+        {"max_gyro_dps", a.detector.max_gyro_radps / kDeg}}},
+      {"segment_trim_s", o.gyro.trim_s},
+      {"gravity_mps2", a.gravity_mps2},
+      {"loss", loss_name(a.loss)},
+      {"loss_scale_mps2", a.loss_scale_mps2},
+      {"gyro_loss_scale_radps", o.gyro.loss_scale_radps},
+      {"gyro_loss_scale_rad", o.gyro.loss_scale_rad},
+      {"confidence", a.confidence},
+      {"max_iterations", a.max_iterations},
+      {"rank_tolerance", a.rank_tolerance},
+      {"max_std_error", a.max_std_error},
+      {"fixed_cross_axis", a.fixed_cross_axis},
+      {"orientation_sigma_deg", a.orientation_sigma_deg},
+      {"table_offsets", a.table_offsets},
+      {"table_fixture", a.table_fixture},
+      {"gyro_g_sensitivity", o.gyro.estimate_g_sensitivity}};
+  return j.dump();
+}
+
+ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& o) {
+  ModelFileFit f;
+  f.ok = true;
+  std::string text = describe_options(o);
+  nlohmann::json j;
+  j["schema"] = kResultsSchema;
+  j["estimator"] = "ceres_nonlinear";
+  j["options"] = nlohmann::json::parse(options_json(o));
+  std::vector<std::string> failures;
+  if (o.accelerometer != "none") {
+    f.accel = o.accelerometer == "known_orientations" ? calibrate_accelerometer_known_orientations(rec, o.accel)
+                                                      : calibrate_accelerometer_unknown_orientations(rec, o.accel);
+    f.has_accel = true;
+    text += "\n" + f.accel.report();
+    j["accelerometer"] = nlohmann::json::parse(f.accel.to_json());
+    if (!f.accel.ok) failures.push_back("accelerometer: " + f.accel.message);
+  }
+  if (o.gyroscope == "integration" || o.gyroscope == "rate_table") {
+    f.gyro = o.gyroscope == "rate_table" ? calibrate_gyro_rate_table(rec, o.gyro)
+                                         : calibrate_gyro_integration(rec, f.accel, o.gyro);
+    f.has_gyro = true;
+    text += "\n" + f.gyro.report();
+    j["gyroscope"] = nlohmann::json::parse(f.gyro.to_json());
+    if (!f.gyro.ok) failures.push_back("gyroscope: " + f.gyro.message);
+  }
+  // Flat parameter list in the shape report tools read (`stend.fit/1`-like): accel_* / gyro_*.
+  auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  j["confidence"] = o.accel.confidence;
+  j["parameters"] = nlohmann::json::array();
+  auto add = [&](const std::string& prefix, const Parameter& p) {
+    const std::string name = p.name.rfind("table_offset", 0) == 0 || p.name.rfind("gyro_", 0) == 0 ? p.name : prefix + p.name;
+    j["parameters"].push_back({{"name", name}, {"unit", p.unit}, {"value", num(p.value)}, {"std_error", num(p.std_error)},
+                               {"interval", {num(p.lower), num(p.upper)}}, {"identifiable", p.identifiable},
+                               {"fixed", p.fixed}, {"reason", p.reason}});
+  };
+  if (f.has_accel) {
+    for (const auto& p : f.accel.parameters) add("accel_", p);
+    for (const auto& p : f.accel.gyro_parameters) add("", p);
+  }
+  if (f.has_gyro)
+    for (const auto& p : f.gyro.parameters) add("gyro_", p);
+  f.ok = failures.empty();
+  for (const auto& s : failures) f.message += (f.message.empty() ? "" : "; ") + s;
+  j["ok"] = f.ok;
+  j["message"] = f.message;
+  text += f.ok ? "\nceres_nonlinear: ok\n" : "\nceres_nonlinear: FAILED — " + f.message + "\n";
+  f.text = text;
+  f.json = j.dump(2);
+  return f;
+}
+
+}  // namespace stend::ceres_nonlinear

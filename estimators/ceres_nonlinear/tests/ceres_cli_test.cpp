@@ -1,0 +1,184 @@
+// `stend fit` with the ceres_nonlinear estimator on a simulated run of configs/multi_position_38.yaml
+// (38 positions, rate steps about three axes, planted accelerometer and gyro errors, table tilt
+// offset 0.2°), the estimator plugins listed by `stend plugins`, and an out-of-tree estimator
+// plugin reached through `--estimator NAME`.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+struct Output {
+  int code = -1;
+  std::string text;
+};
+
+Output stend(const std::string& args, const std::string& env = {}) {
+  const std::string cmd = env + " " + std::string(STEND_BINARY_DIR) + "/bin/stend " + args + " 2>&1";
+  Output out;
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return out;
+  std::array<char, 4096> buf{};
+  while (fgets(buf.data(), static_cast<int>(buf.size()), pipe)) out.text += buf.data();
+  const int status = pclose(pipe);
+  out.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return out;
+}
+
+const std::string src = STEND_SOURCE_DIR;
+
+// One simulated run shared by the tests (about 55,000 samples).
+const fs::path& run_dir() {
+  static const fs::path dir = [] {
+    const fs::path out = fs::temp_directory_path() / ("stend-ceres-cli-" + std::to_string(getpid()));
+    const Output o = stend("run " + src + "/configs/multi_position_38.yaml --quiet --output " + out.string() + " --name mp38");
+    EXPECT_EQ(o.code, 0) << o.text;
+    return out / "mp38";
+  }();
+  return dir;
+}
+
+json read_json(const fs::path& p) {
+  std::ifstream in(p);
+  return json::parse(in);
+}
+
+std::map<std::string, json> by_name(const json& params) {
+  std::map<std::string, json> m;
+  for (const auto& p : params) m[p["name"].get<std::string>()] = p;
+  return m;
+}
+
+// Planted values of configs/multi_position_38.yaml.
+const std::map<std::string, double> kAccelTruth = {
+    {"bias_x", 0.05},      {"bias_y", -0.03},     {"bias_z", 0.027},    {"scale_x", 0.002},
+    {"scale_y", -0.001},   {"scale_z", 0.0007},   {"cross_xy", 0.001},  {"cross_xz", -0.002},
+    {"cross_yx", 0.0015},  {"cross_yz", 0.003},   {"cross_zx", 0.0055}, {"cross_zy", 0.0002}};
+const std::map<std::string, double> kGyroTruth = {
+    {"bias_x", 0.01},      {"bias_y", -0.015},    {"bias_z", 0.02},     {"scale_x", 0.01},
+    {"scale_y", -0.008},   {"scale_z", 0.012},    {"cross_xy", 0.004},  {"cross_xz", -0.003},
+    {"cross_yx", 0.005},   {"cross_yz", 0.002},   {"cross_zx", -0.004}, {"cross_zy", 0.006},
+    {"gsens_xx", 1e-4},    {"gsens_xy", 0},       {"gsens_xz", 0},      {"gsens_yx", 0},
+    {"gsens_yy", -1e-4},   {"gsens_yz", 0},       {"gsens_zx", 5e-5},   {"gsens_zy", 0},
+    {"gsens_zz", 1e-4}};
+
+// |value − truth| within 4 standard errors (a 95 % check on 35 numbers would fail by chance).
+void expect_near_truth(const json& p, double truth) {
+  ASSERT_TRUE(p["value"].is_number()) << p.dump();
+  const double v = p["value"].get<double>(), se = p["std_error"].get<double>();
+  EXPECT_TRUE(p["identifiable"].get<bool>()) << p.dump();
+  EXPECT_NEAR(v, truth, 4.0 * se) << p["name"] << " " << v << " ± " << se;
+}
+
+}  // namespace
+
+TEST(CeresCli, KnownOrientationsRateTableRecoversThePlantedErrors) {
+  const fs::path run = run_dir();
+  const Output o = stend("fit " + run.string() + " --model " + src + "/estimators/ceres_nonlinear/examples/known_orientations.yaml");
+  EXPECT_EQ(o.code, 0) << o.text;
+  for (const char* s : {"options:", "table offsets: tilt", "std error", "95% lower", "identifiable", "mg", "deg/s",
+                        "condition number", "ceres_nonlinear: ok"})
+    EXPECT_NE(o.text.find(s), std::string::npos) << s << "\n" << o.text;
+  ASSERT_TRUE(fs::exists(run / "ceres.json"));
+  ASSERT_TRUE(fs::exists(run / "ceres.txt"));
+  const json j = read_json(run / "ceres.json");
+  EXPECT_EQ(j["schema"], "stend.ceres_nonlinear.results/1");
+  EXPECT_TRUE(j["ok"].get<bool>()) << j["message"];
+  const auto acc = by_name(j["accelerometer"]["parameters"]);
+  for (const auto& [name, truth] : kAccelTruth) expect_near_truth(acc.at(name), truth);
+  expect_near_truth(acc.at("table_offset_tilt"), 0.2);
+  const auto gyr = by_name(j["gyroscope"]["parameters"]);
+  for (const auto& [name, truth] : kGyroTruth) expect_near_truth(gyr.at(name), truth);
+  EXPECT_EQ(j["accelerometer"]["rms_axis_after_mg"].size(), 3u);
+}
+
+TEST(CeresCli, UnknownOrientationsIntegrationCalibratesWithoutTruth) {
+  const fs::path run = run_dir();
+  const fs::path out = run / "ceres_unknown.json";
+  const Output o = stend("fit " + run.string() + " --model " + src +
+                         "/estimators/ceres_nonlinear/examples/unknown_orientations.yaml --json " + out.string());
+  EXPECT_EQ(o.code, 0) << o.text;
+  const json j = read_json(out);
+  ASSERT_TRUE(j["ok"].get<bool>()) << j["message"];
+  EXPECT_GE(j["accelerometer"]["intervals"].size(), 38u);
+  EXPECT_LT(j["accelerometer"]["rms_norm_after_mps2"].get<double>(), 0.2 * j["accelerometer"]["rms_norm_before_mps2"].get<double>());
+  EXPECT_LT(j["gyroscope"]["rms_direction_after_rad"].get<double>(), 0.2 * j["gyroscope"]["rms_direction_before_rad"].get<double>());
+  // Scale factors do not depend on the frame convention: within 4σ plus 3e-4 (the accelerometer
+  // frame is the sensor's only to ~1e-3 rad here).
+  const auto gyr = by_name(j["gyroscope"]["parameters"]);
+  for (const char* name : {"scale_x", "scale_y", "scale_z"}) {
+    const double v = gyr.at(name)["value"].get<double>(), se = gyr.at(name)["std_error"].get<double>();
+    EXPECT_NEAR(v, kGyroTruth.at(name), 4.0 * se + 3e-4) << name;
+  }
+  // The bias holds Earth rotation projected on the axes (≤ 7.3e-5 rad/s) beside the planted one.
+  for (const char* name : {"bias_x", "bias_y", "bias_z"})
+    EXPECT_NEAR(gyr.at(name)["value"].get<double>(), kGyroTruth.at(name), 2e-4) << name;
+}
+
+TEST(CeresCli, BadOptionNamesFileLineAndExitsTwo) {
+  const fs::path dir = fs::temp_directory_path() / ("stend-ceres-bad-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const fs::path model = dir / "bad.yaml";
+  std::ofstream(model) << "ceres_nonlinear:\n  accelerometer: unknown_orientations\n  detector: {window_s: 1, trim: 0.5}\n";
+  const Output o = stend("fit " + run_dir().string() + " --model " + model.string());
+  EXPECT_EQ(o.code, 2) << o.text;
+  EXPECT_NE(o.text.find(model.string() + ":3:"), std::string::npos) << o.text;
+  EXPECT_NE(o.text.find("trim_s"), std::string::npos) << o.text;
+  fs::remove_all(dir);
+}
+
+TEST(CeresCli, TooFewPositionsFailsWithExitThreeAndNoNumbers) {
+  const fs::path dir = fs::temp_directory_path() / ("stend-ceres-few-" + std::to_string(getpid()));
+  const Output r = stend("run " + src + "/configs/six_position.yaml --quiet --output " + dir.string() + " --name six");
+  ASSERT_EQ(r.code, 0) << r.text;
+  const Output o = stend("fit " + (dir / "six").string() + " --model " + src +
+                         "/estimators/ceres_nonlinear/examples/unknown_orientations.yaml");
+  EXPECT_EQ(o.code, 3) << o.text;
+  EXPECT_NE(o.text.find("too few static intervals"), std::string::npos) << o.text;
+  const json j = read_json(dir / "six" / "ceres.json");
+  EXPECT_FALSE(j["ok"].get<bool>());
+  for (const auto& p : j["accelerometer"]["parameters"])
+    if (!p["fixed"].get<bool>()) {
+      EXPECT_TRUE(p["value"].is_null()) << p.dump();
+    }
+  fs::remove_all(dir);
+}
+
+TEST(CeresCli, PluginsListTheFourEstimators) {
+  const Output o = stend("plugins");
+  EXPECT_EQ(o.code, 0) << o.text;
+  for (const char* name : {"batch_lsq", "temp_poly", "allan", "ceres_nonlinear"})
+    EXPECT_NE(o.text.find(name), std::string::npos) << name << "\n" << o.text;
+  EXPECT_NE(o.text.find("estimator"), std::string::npos) << o.text;
+}
+
+TEST(CeresCli, UnknownEstimatorNameRoutesToAnEstimatorPlugin) {
+  const fs::path run = run_dir();
+  const std::string env = "STEND_PLUGIN_PATH=" + std::string(STEND_CERES_TEST_PLUGIN_DIR);
+  const fs::path out = run / "mean.json";
+  const Output o = stend("fit " + run.string() + " --model " + src +
+                         "/estimators/ceres_nonlinear/examples/known_orientations.yaml --estimator mean_accel --json " +
+                         out.string(), env);
+  EXPECT_EQ(o.code, 0) << o.text;
+  EXPECT_NE(o.text.find("mean_accel:"), std::string::npos) << o.text;
+  const json j = read_json(out);
+  EXPECT_EQ(j["schema"], "test.mean_accel/1");
+  EXPECT_GT(j["samples"].get<int>(), 50000);
+  const Output missing = stend("fit " + run.string() + " --model " + src +
+                               "/estimators/ceres_nonlinear/examples/known_orientations.yaml --estimator no_such_estimator");
+  EXPECT_NE(missing.code, 0);
+  EXPECT_NE(missing.text.find("no estimator 'no_such_estimator'"), std::string::npos) << missing.text;
+}

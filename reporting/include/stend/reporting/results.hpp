@@ -1,0 +1,65 @@
+// What a run folder says about one unit: sensor identity, the procedure fingerprint, and every
+// fitted parameter (with standard error, interval and identifiability) from the results files the
+// estimators wrote into the folder (fit.json, temp_poly.json, allan.json, ceres.json).
+// The same record feeds the results database, `stend compare` and the results-JSON export
+// (schema "stend.results/1", docs/reports.md).
+#pragma once
+
+#include <nlohmann/json_fwd.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace stend::reporting {
+
+inline constexpr const char* kResultsSchema = "stend.results/1";
+
+struct ParameterResult {
+  std::string estimator;  // "batch_lsq", "temp_poly", "allan", "ceres_nonlinear"
+  std::string name;       // the vocabulary's name ("bias_z", "bias_tc1_x") or Allan "N_ax", "K_gz"
+  std::string unit;
+  bool identifiable = false;
+  double value = NAN;      // NaN when not identifiable
+  double std_error = NAN;  // 1 σ
+  double lo = NAN, hi = NAN;  // interval at `confidence`
+  double confidence = NAN;
+  std::string reason;  // why not identifiable (or an upper bound), "" otherwise
+};
+
+struct EstimatorUse {
+  std::string name, version;
+  std::string file;    // results file in the run folder ("fit.json")
+  std::string status;  // "ok" | "failed"
+  std::string message;
+};
+
+struct RunResults {
+  std::filesystem::path dir;  // absolute
+  std::string run_name;       // folder name
+  std::string experiment, run_status, start_time_utc, stend_version;
+  std::string vendor, model, serial;
+  std::string procedure_fingerprint;  // sha256 hex of procedure_canonical ("" without experiment.yaml)
+  std::string procedure_canonical;
+  std::vector<EstimatorUse> estimators;
+  std::vector<ParameterResult> parameters;
+  std::vector<std::string> notes;  // e.g. a results file that did not parse
+
+  const ParameterResult* find(const std::string& estimator, const std::string& name) const;
+};
+
+// Reads run.json, experiment.yaml and the results files present. Throws std::runtime_error when
+// run.json is missing or unreadable; a results file that does not parse becomes a note.
+RunResults load_run_results(const std::filesystem::path& run_dir);
+
+// Parameters of one results document ("stend.fit/1", "stend.temp_poly/1", Allan, ceres) — the
+// estimator name comes from the document. Exposed for tests.
+std::vector<ParameterResult> parameters_of(const nlohmann::json& doc, const std::string& file_stem,
+                                           EstimatorUse* use);
+
+// The results JSON (schema stend.results/1, docs/reports.md). Non-finite numbers are null.
+nlohmann::json to_json(const RunResults& r);
+RunResults from_json(const nlohmann::json& j);
+
+}  // namespace stend::reporting

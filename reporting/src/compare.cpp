@@ -1,0 +1,192 @@
+// Comparison of units and vendors under one procedure (see compare.hpp).
+#include "stend/reporting/compare.hpp"
+
+#include "stend/estimation/linear_lsq.hpp"
+#include "stend/reporting/run_report.hpp"
+#include "stend/reporting/svg_plot.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace stend::reporting {
+
+namespace {
+
+std::string g(double v) { return std::isfinite(v) ? fmt::format("{:.5g}", v) : "—"; }
+std::string vendor_key(const RunResults& r) { return r.model.empty() ? r.vendor : r.vendor + " " + r.model; }
+
+}  // namespace
+
+const ParameterComparison* Comparison::find(const std::string& estimator, const std::string& name) const {
+  for (const auto& p : parameters)
+    if (p.name == name && (estimator.empty() || p.estimator == estimator)) return &p;
+  return nullptr;
+}
+
+Comparison compare_runs(const std::vector<RunResults>& runs) {
+  if (runs.empty()) throw ComparisonRefused("nothing to compare: no runs were selected");
+  std::map<std::string, std::vector<std::string>> by_fp;
+  for (const auto& r : runs) by_fp[r.procedure_fingerprint].push_back(r.run_name);
+  if (by_fp.size() > 1 || by_fp.begin()->first.empty()) {
+    std::string msg =
+        "refusing to compare: the runs were not measured with the same procedure, so their parameters are not "
+        "comparable (a different procedure excites, heats and averages the unit differently). Procedure "
+        "fingerprints:";
+    for (const auto& [fp, names] : by_fp) {
+      msg += "\n  " + (fp.empty() ? std::string("(none: no experiment.yaml)") : fp.substr(0, 16)) + ": ";
+      for (std::size_t i = 0; i < names.size(); ++i) msg += (i ? ", " : "") + names[i];
+    }
+    msg += "\nCompare one group at a time (stend compare --procedure FINGERPRINT).";
+    throw ComparisonRefused(msg);
+  }
+  Comparison c;
+  c.fingerprint = by_fp.begin()->first;
+  c.runs = runs;
+  std::stable_sort(c.runs.begin(), c.runs.end(), [](const RunResults& a, const RunResults& b) {
+    return std::tie(a.vendor, a.model, a.serial, a.run_name) < std::tie(b.vendor, b.model, b.serial, b.run_name);
+  });
+  // Parameters in order of first appearance.
+  std::vector<std::pair<std::string, std::string>> keys;
+  for (const auto& r : c.runs)
+    for (const auto& p : r.parameters)
+      if (std::find(keys.begin(), keys.end(), std::make_pair(p.estimator, p.name)) == keys.end())
+        keys.emplace_back(p.estimator, p.name);
+  for (const auto& [est, name] : keys) {
+    ParameterComparison pc;
+    pc.estimator = est;
+    pc.name = name;
+    std::map<std::string, std::vector<const UnitValue*>> groups;
+    for (const auto& r : c.runs)
+      if (const ParameterResult* p = r.find(est, name)) {
+        pc.unit = p->unit;
+        pc.units.push_back({r.run_name, vendor_key(r), r.model, r.serial, *p});
+      }
+    std::vector<std::string> order;
+    for (const auto& u : pc.units) {
+      if (!groups.count(u.vendor)) order.push_back(u.vendor);
+      groups[u.vendor].push_back(&u);
+    }
+    for (const auto& v : order) {
+      VendorStats s;
+      s.vendor = v;
+      std::vector<double> vals, ses;
+      for (const UnitValue* u : groups[v]) {
+        ++s.units;
+        if (!u->p.identifiable || !std::isfinite(u->p.value)) continue;
+        ++s.identified;
+        vals.push_back(u->p.value);
+        if (std::isfinite(u->p.std_error)) ses.push_back(u->p.std_error);
+      }
+      if (!vals.empty()) {
+        double sum = 0.0;
+        for (double x : vals) sum += x;
+        s.mean = sum / static_cast<double>(vals.size());
+      }
+      if (vals.size() >= 2) {
+        double ss = 0.0;
+        for (double x : vals) ss += (x - s.mean) * (x - s.mean);
+        s.spread_sd = std::sqrt(ss / static_cast<double>(vals.size() - 1));
+        const double n = static_cast<double>(vals.size());
+        const double t = estimation::student_t_quantile(0.975, n - 1.0);
+        s.mean_lo = s.mean - t * s.spread_sd / std::sqrt(n);
+        s.mean_hi = s.mean + t * s.spread_sd / std::sqrt(n);
+      }
+      if (!ses.empty()) {
+        std::sort(ses.begin(), ses.end());
+        const std::size_t m = ses.size() / 2;
+        s.median_std_error = ses.size() % 2 ? ses[m] : 0.5 * (ses[m - 1] + ses[m]);
+      }
+      pc.vendors.push_back(s);
+    }
+    c.parameters.push_back(std::move(pc));
+  }
+  return c;
+}
+
+std::string comparison_text(const Comparison& c) {
+  std::string o = fmt::format("procedure fingerprint {} — {} run(s)\n", c.fingerprint, c.runs.size());
+  o += fmt::format("{:<11} {:<18} {:<22} {:>5} {:>13} {:>11} {:>29} {:>11}  {}\n", "estimator", "parameter", "vendor",
+                   "units", "mean", "unit SD", "95% interval of the mean", "median SE", "unit");
+  for (const auto& p : c.parameters)
+    for (const auto& v : p.vendors)
+      o += fmt::format("{:<11} {:<18} {:<22} {:>2}/{:<2} {:>13} {:>11} {:>29} {:>11}  {}\n", p.estimator, p.name, v.vendor,
+                       v.identified, v.units, g(v.mean), g(v.spread_sd),
+                       std::isfinite(v.mean_lo) ? fmt::format("[{}, {}]", g(v.mean_lo), g(v.mean_hi)) : "—",
+                       g(v.median_std_error), p.unit);
+  return o;
+}
+
+std::string comparison_html(const Comparison& c) {
+  using svg::escape;
+  std::string b = "<h1>Stend comparison of units and vendors</h1>\n";
+  b += fmt::format("<p>{} run(s), all measured with procedure fingerprint <code>{}</code>. Vendor mean intervals are "
+                   "95 % Student-t intervals from the unit-to-unit spread; each unit's interval is its own fit's.</p>\n",
+                   c.runs.size(), escape(c.fingerprint));
+  b += "<table><tr><th>run</th><th>vendor</th><th>model</th><th>serial</th><th>estimators</th></tr>\n";
+  for (const auto& r : c.runs) {
+    std::string e;
+    for (const auto& x : r.estimators) e += (e.empty() ? "" : ", ") + x.name + " " + x.version;
+    b += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n", escape(r.run_name),
+                     escape(r.vendor), escape(r.model), escape(r.serial), escape(e));
+  }
+  b += "</table>\n<h2>Summary</h2>\n<table><tr><th>estimator</th><th>parameter</th><th>vendor</th><th>identified / "
+       "units</th><th>mean</th><th>unit-to-unit SD</th><th>95 % interval of the mean</th><th>median unit SE</th>"
+       "<th>unit</th></tr>\n";
+  for (const auto& p : c.parameters)
+    for (const auto& v : p.vendors)
+      b += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}/{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>"
+                       "<td>{}</td></tr>\n",
+                       escape(p.estimator), escape(p.name), escape(v.vendor), v.identified, v.units, g(v.mean),
+                       g(v.spread_sd),
+                       std::isfinite(v.mean_lo) ? fmt::format("[{}, {}]", g(v.mean_lo), g(v.mean_hi)) : "—",
+                       g(v.median_std_error), escape(p.unit));
+  b += "</table>\n<h2>Parameters by unit</h2>\n";
+  for (const auto& p : c.parameters) {
+    bool any = false;
+    for (const auto& u : p.units) any = any || u.p.identifiable;
+    if (!any) continue;
+    svg::Plot plot;
+    plot.title = p.estimator + ": " + p.name;
+    plot.y_label = p.name + " [" + p.unit + "]";
+    plot.x_label = "unit (grouped by vendor)";
+    plot.width = 520;
+    plot.height = 320;
+    std::map<std::string, std::size_t> color;
+    for (const auto& v : p.vendors) color.emplace(v.vendor, color.size());
+    std::map<std::string, svg::Series> units, means, bands;
+    std::vector<std::string> order;
+    for (std::size_t i = 0; i < p.units.size(); ++i) {
+      const UnitValue& u = p.units[i];
+      plot.x_categories.push_back(u.serial.empty() ? u.run_name : u.serial);
+      if (!units.count(u.vendor)) {
+        order.push_back(u.vendor);
+        units[u.vendor] = {u.vendor, svg::Style::kPoints, {}, {}, {}, {}, svg::palette(color[u.vendor]), false, 1.0};
+      }
+      auto& s = units[u.vendor];
+      s.x.push_back(static_cast<double>(i));
+      s.y.push_back(u.p.value);
+      s.y_lo.push_back(u.p.lo);
+      s.y_hi.push_back(u.p.hi);
+    }
+    for (const auto& v : p.vendors) {
+      const auto& s = units[v.vendor];
+      if (s.x.empty()) continue;
+      const double x0 = s.x.front() - 0.3, x1 = s.x.back() + 0.3;
+      svg::Series m{"", svg::Style::kLine, {x0, x1}, {v.mean, v.mean}, {}, {}, svg::palette(color[v.vendor]), true, 1.0};
+      svg::Series band{"", svg::Style::kBand, {x0, x1}, {}, {v.mean_lo, v.mean_lo}, {v.mean_hi, v.mean_hi},
+                       svg::palette(color[v.vendor]), false, 0.18};
+      plot.series.push_back(band);
+      plot.series.push_back(m);
+    }
+    for (const auto& v : order) plot.series.push_back(units[v]);
+    b += "<figure>" + plot.render() + "<figcaption>" + escape(p.name) +
+         ": each unit's value with its own interval; dashed: vendor mean, shaded: its 95 % interval.</figcaption>"
+         "</figure>\n";
+  }
+  return html_page("Stend comparison", b);
+}
+
+}  // namespace stend::reporting

@@ -1,0 +1,601 @@
+// The per-run HTML report (see run_report.hpp).
+#include "stend/reporting/run_report.hpp"
+
+#include "stend/allan/allan.hpp"
+#include "stend/model/terms.hpp"
+#include "stend/reporting/results.hpp"
+#include "stend/reporting/svg_plot.hpp"
+#include "fitted_model.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace stend::reporting {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using svg::escape;
+using svg::Plot;
+using svg::Series;
+using svg::Style;
+using detail::contribution;
+using detail::fitted_model;
+using detail::FittedModel;
+
+namespace {
+
+constexpr double kNaN = NAN;
+const char* kAxes = "xyz";
+
+double num(const json& j, const char* key) {
+  if (!j.is_object() || !j.contains(key) || !j[key].is_number()) return kNaN;
+  return j[key].get<double>();
+}
+double at(const json& a, std::size_t i) {
+  if (!a.is_array() || i >= a.size() || !a[i].is_number()) return kNaN;
+  return a[i].get<double>();
+}
+std::string str(const json& j, const char* key) {
+  if (!j.is_object() || !j.contains(key) || !j[key].is_string()) return {};
+  return j[key].get<std::string>();
+}
+int axis_index(const std::string& a) {
+  if (a == "x") return 0;
+  if (a == "y") return 1;
+  if (a == "z") return 2;
+  return -1;
+}
+std::string g(double v) { return std::isfinite(v) ? fmt::format("{:.6g}", v) : "—"; }
+std::string g3(double v) { return std::isfinite(v) ? fmt::format("{:.3g}", v) : "—"; }
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Loads RUN/<name> when present; a parse failure becomes an error paragraph in `body`.
+bool load(const fs::path& dir, const char* name, json& out, std::string& body) {
+  const fs::path f = dir / name;
+  if (!fs::exists(f)) return false;
+  try {
+    out = json::parse(read_text(f));
+    return true;
+  } catch (const std::exception& e) {
+    body += fmt::format("<p class=\"bad\">{}: not readable ({})</p>\n", escape(name), escape(e.what()));
+    return false;
+  }
+}
+
+std::string figure(const Plot& p, const std::string& caption) {
+  return "<figure>" + p.render() + "<figcaption>" + escape(caption) + "</figcaption></figure>\n";
+}
+
+// Parameter table of a "stend.fit/1"-shaped document.
+std::string parameter_table(const json& fit) {
+  if (!fit.contains("parameters") || !fit["parameters"].is_array()) return {};
+  double conf = num(fit.value("solution", json::object()), "confidence");
+  if (!std::isfinite(conf)) conf = num(fit, "confidence");
+  std::string o = fmt::format(
+      "<table class=\"params\"><tr><th>parameter</th><th>value</th><th>unit</th><th>std error</th><th>{} "
+      "interval</th><th>identifiable</th></tr>\n",
+      std::isfinite(conf) ? fmt::format("{:.0f} %", 100 * conf) : "");
+  for (const auto& p : fit["parameters"]) {
+    const bool id = p.value("identifiable", false);
+    std::string interval = "—";
+    if (p.contains("interval") && p["interval"].is_array())
+      interval = fmt::format("[{}, {}]", g(at(p["interval"], 0)), g(at(p["interval"], 1)));
+    o += fmt::format("<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                     id ? "" : " class=\"nid\"", escape(str(p, "name")), id ? g(num(p, "value")) : "not estimated",
+                     escape(str(p, "unit")), g(num(p, "std_error")), interval,
+                     id ? "yes" : "NO: " + escape(str(p, "reason")));
+  }
+  o += "</table>\n";
+  if (fit.contains("aliases") && fit["aliases"].is_array())
+    for (const auto& a : fit["aliases"]) {
+      std::string names;
+      for (const auto& n : a.value("parameters", json::array())) names += (names.empty() ? "" : ", ") + n.get<std::string>();
+      o += fmt::format("<p class=\"warn\">aliased (the data cannot separate them): {}", escape(names));
+      for (const auto& c : a.value("identified_combinations", json::array()))
+        o += fmt::format("; identified: {} = {} ± {}", escape(str(c, "text")), g(num(c, "value")), g(num(c, "std_error")));
+      o += "</p>\n";
+    }
+  for (const auto& w : fit.value("warnings", json::array()))
+    if (w.is_string()) o += "<p class=\"warn\">warning: " + escape(w.get<std::string>()) + "</p>\n";
+  return o;
+}
+
+// Display scale of residuals: mg for accelerometers, deg/h for gyroscopes.
+double display_scale(const json& fit) {
+  const json res = fit.value("residuals", json::object());
+  const json rms = res.value("rms", json::object()), disp = res.value("rms_display", json::object());
+  for (auto it = rms.begin(); it != rms.end(); ++it) {
+    const double a = it->is_number() ? it->get<double>() : kNaN;
+    const double b = disp.contains(it.key()) && disp[it.key()].is_number() ? disp[it.key()].get<double>() : kNaN;
+    if (std::isfinite(a) && std::isfinite(b) && a > 0) return b / a;
+  }
+  return 1.0;
+}
+
+// Residual against orientation and static means against truth for a fit document.
+std::string fit_plots(const json& fit, const std::string& what) {
+  if (!fit.contains("points") || !fit.contains("residuals")) return {};
+  const json& points = fit["points"];
+  const json rows = fit["residuals"].value("rows", json::array());
+  const std::string unit = fit.value("units", json::object()).value("residual", "m/s^2");
+  const std::string dunit = fit.value("units", json::object()).value("residual_display", unit);
+  const double ds = display_scale(fit);
+  std::string o;
+  // Residual against orientation: one series per fitted axis, x = orientation (point) number.
+  Plot r;
+  r.title = what + ": residual against orientation";
+  r.x_label = "orientation (segment id)";
+  r.y_label = "residual [" + dunit + "]";
+  r.width = 760;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    r.x_categories.push_back(fmt::format("{}", points[i].value("segment", static_cast<int>(i))));
+  std::map<std::string, Series> by_axis;
+  for (const auto& row : rows) {
+    const std::string ax = str(row, "axis");
+    auto& s = by_axis[ax];
+    s.name = "axis " + ax;
+    s.style = Style::kLinePoints;
+    s.x.push_back(num(row, "point"));
+    s.y.push_back(num(row, "residual") * ds);
+  }
+  for (auto& [ax, s] : by_axis) {
+    const int k = axis_index(ax);
+    s.color = svg::palette(k < 0 ? 3 : static_cast<std::size_t>(k));
+    r.series.push_back(s);
+  }
+  r.lines.push_back({true, 0.0, "", "#555"});
+  const double sigma = num(fit.value("solution", json::object()), "sigma");
+  if (std::isfinite(sigma)) {
+    r.lines.push_back({true, sigma * ds, "+σ", "#999"});
+    r.lines.push_back({true, -sigma * ds, "−σ", "#999"});
+  }
+  o += figure(r, "Residual Δ − fitted of each static orientation (σ: residual standard deviation of the fit).");
+  // Static means against truth: per fitted axis, (measured − true) against the true input.
+  std::set<std::string> axes;
+  for (const auto& row : rows) axes.insert(str(row, "axis"));
+  for (const std::string& ax : axes) {
+    const int k = axis_index(ax);
+    if (k < 0) continue;
+    const auto uk = static_cast<std::size_t>(k);
+    Plot p;
+    p.title = what + ": static mean − truth, axis " + ax;
+    p.x_label = "true input, axis " + ax + " [" + unit + "]";
+    p.y_label = "measured − true [" + dunit + "]";
+    Series meas{"measured mean ± 2 SE", Style::kPoints, {}, {}, {}, {}, svg::palette(uk), false, 1.0};
+    Series fitted{"fitted model", Style::kPoints, {}, {}, {}, {}, "#000", false, 0.55};
+    for (const auto& pt : points) {
+      const double u = at(pt.value("true_input", json::array()), uk);
+      const double m = at(pt.value("measured", json::array()), uk);
+      const double se = at(pt.value("measured_std_error", json::array()), uk);
+      meas.x.push_back(u);
+      meas.y.push_back((m - u) * ds);
+      meas.y_lo.push_back((m - u - 2 * se) * ds);
+      meas.y_hi.push_back((m - u + 2 * se) * ds);
+    }
+    for (const auto& row : rows) {
+      if (str(row, "axis") != ax) continue;
+      const auto pi = static_cast<std::size_t>(std::max(0.0, num(row, "point")));
+      if (pi >= points.size()) continue;
+      fitted.x.push_back(at(points[pi].value("true_input", json::array()), uk));
+      fitted.y.push_back(num(row, "fitted") * ds);
+    }
+    p.series = {meas, fitted};
+    o += figure(p, "Each static orientation's low-passed mean minus the bench truth, against the truth; black: the "
+                   "fitted error model at the same stimulus.");
+  }
+  return o;
+}
+
+std::string fit_section(const json& fit, const std::string& file) {
+  std::string o;
+  // "estimator": {name, version} (stend.fit/1) or a plain name (ceres_nonlinear).
+  const json est = fit.contains("estimator") && fit["estimator"].is_string()
+                       ? json{{"name", fit["estimator"].get<std::string>()}}
+                       : fit.value("estimator", json::object());
+  o += fmt::format("<h2>Error-model fit — {} {} <span class=\"file\">({})</span></h2>\n", escape(str(est, "name")),
+                   escape(str(est, "version")), escape(file));
+  if (str(fit, "status") == "failed" || fit.value("ok", true) == false) {
+    return o + "<p class=\"bad\">FIT FAILED: " + escape(str(fit, "message")) + " — no numbers are reported.</p>\n";
+  }
+  const json sol = fit.value("solution", json::object());
+  const json model = fit.value("model", json::object());
+  std::string terms;
+  for (const auto& t : model.value("terms", json::array())) terms += (terms.empty() ? "" : ", ") + str(t, "kind");
+  if (fit.contains("solution")) o += fmt::format(
+      "<p>{} model, terms: {}. Observations k = {}, parameters p = {}, rank {}, dof {}, σ = {} {}, "
+      "condition number {} (identified subspace {}).</p>\n",
+      escape(str(model, "instrument")), escape(terms), g(num(sol, "observations")), g(num(sol, "parameters")),
+      g(num(sol, "rank")), g(num(sol, "dof")), g(num(sol, "sigma")),
+      escape(fit.value("units", json::object()).value("residual", "")), g(num(sol, "condition_number")),
+      g(num(sol, "condition_number_identified")));
+  o += parameter_table(fit);
+  o += fit_plots(fit, str(est, "name"));
+  return o;
+}
+
+// ---- temperature -------------------------------------------------------------------------------
+
+std::string temp_section(const json& tp) {
+  std::string o = "<h2>Temperature model — temp_poly <span class=\"file\">(temp_poly.json)</span></h2>\n";
+  if (!tp.value("ok", false))
+    return o + "<p class=\"bad\">TEMPERATURE FIT REFUSED OR FAILED: " + escape(str(tp, "message")) +
+           " — no numbers are reported.</p>\n";
+  const double vmin = at(tp.value("valid_range_c", json::array()), 0), vmax = at(tp.value("valid_range_c", json::array()), 1);
+  o += fmt::format("<p>Reference temperature T0 = {} °C; coefficients valid over {} … {} °C (die temperature).</p>\n",
+                   g(num(tp, "reference_c")), g(vmin), g(vmax));
+  const std::string unit = str(tp, "unit");
+  const bool accel = unit != "rad/s";
+  const double ds = accel ? 1000.0 / 9.80665 : 180.0 / M_PI * 3600.0;
+  const std::string dunit = accel ? "mg" : "deg/h";
+  for (const auto& ax : tp.value("axes", json::array())) {
+    const std::string a = str(ax, "axis");
+    const int k = axis_index(a);
+    o += fmt::format("<h3>axis {}</h3>\n", escape(a));
+    if (!ax.value("ok", false) || !ax.contains("fit") || ax["fit"].is_null()) {
+      o += "<p class=\"bad\">axis failed: " + escape(str(ax, "message")) + "</p>\n";
+      continue;
+    }
+    const json& fit = ax["fit"];
+    // Order selection table.
+    o += fmt::format("<p>chosen polynomial order: <b>{}</b></p><table><tr><th>order</th><th>BIC</th><th>CV MSE</th>"
+                     "<th>rank</th><th>note</th></tr>\n",
+                     ax.value("chosen_order", -1));
+    for (const auto& s : ax.value("scores", json::array()))
+      o += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n", s.value("order", -1),
+                       g(num(s, "bic")), g(num(s, "cv_mse")), g(num(s, "rank")), escape(str(s, "note")));
+    o += "</table>\n" + parameter_table(fit);
+    const FittedModel fm = fitted_model(fit);
+    if (!fm.ok || k < 0) continue;
+    const auto uk = static_cast<std::size_t>(k);
+    double tlo = vmin, thi = vmax;
+    const json points = fit.value("points", json::array());
+    for (const auto& p : points) {
+      tlo = std::min(tlo, num(p, "temperature_c"));
+      thi = std::max(thi, num(p, "temperature_c"));
+    }
+    if (!std::isfinite(tlo) || !std::isfinite(thi) || !(thi > tlo)) continue;
+    // Zero offset against temperature: curve with its interval band, and partial residuals
+    // (residual + fitted offset at the point's temperature) for every static orientation.
+    Series band{"interval", Style::kBand, {}, {}, {}, {}, svg::palette(uk), false, 0.25};
+    Series curve{"fitted zero offset", Style::kLine, {}, {}, {}, {}, svg::palette(uk), false, 1.0};
+    Series sband{"interval", Style::kBand, {}, {}, {}, {}, svg::palette(uk), false, 0.25};
+    Series scurve{"fitted scale error", Style::kLine, {}, {}, {}, {}, svg::palette(uk), false, 1.0};
+    const model::Vec3<double> zero = model::Vec3<double>::Zero();
+    model::Vec3<double> unit_in = zero;
+    unit_in[k] = 1.0;
+    for (int i = 0; i <= 80; ++i) {
+      const double T = tlo + (thi - tlo) * i / 80.0;
+      const auto [b, bse] = contribution(fm, k, zero, T);
+      curve.x.push_back(T);
+      curve.y.push_back(b * ds);
+      band.x.push_back(T);
+      band.y_lo.push_back((b - fm.quantile * bse) * ds);
+      band.y_hi.push_back((b + fm.quantile * bse) * ds);
+      const auto [sc, sse] = contribution(fm, k, unit_in, T, &zero);
+      scurve.x.push_back(T);
+      scurve.y.push_back(sc * 1e6);
+      sband.x.push_back(T);
+      sband.y_lo.push_back((sc - fm.quantile * sse) * 1e6);
+      sband.y_hi.push_back((sc + fm.quantile * sse) * 1e6);
+    }
+    Series pts{"observations (partial residuals)", Style::kPoints, {}, {}, {}, {}, "#222", false, 0.7};
+    for (const auto& row : fit.value("residuals", json::object()).value("rows", json::array())) {
+      if (str(row, "axis") != a) continue;
+      const auto pi = static_cast<std::size_t>(std::max(0.0, num(row, "point")));
+      if (pi >= points.size()) continue;
+      const double T = num(points[pi], "temperature_c");
+      pts.x.push_back(T);
+      pts.y.push_back((contribution(fm, k, zero, T).first + num(row, "residual")) * ds);
+    }
+    Plot p;
+    p.title = "zero offset against temperature, axis " + a;
+    p.x_label = "die temperature [°C]";
+    p.y_label = "zero offset [" + dunit + "]";
+    p.series = {band, curve, pts};
+    o += figure(p, fmt::format("Fitted bias polynomial (order {}) with its {:.0f} % interval band; points: each static "
+                               "orientation's residual added to the fitted offset at its temperature.",
+                               ax.value("chosen_order", -1), 100 * num(fit.value("solution", json::object()), "confidence")));
+    Plot s;
+    s.title = "scale-factor error against temperature, axis " + a;
+    s.x_label = "die temperature [°C]";
+    s.y_label = "scale-factor error [ppm]";
+    s.series = {sband, scurve};
+    o += figure(s, "Fitted scale-factor error (scale + scale_temperature terms) with its interval band.");
+    // Hysteresis.
+    const json hy = ax.value("hysteresis", json::array());
+    if (!hy.empty()) {
+      o += "<table><tr><th>level [°C]</th><th>cooling − heating</th><th>std error</th><th>interval</th><th>significant</th></tr>\n";
+      for (const auto& h : hy)
+        o += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>[{}, {}]</td><td>{}</td></tr>\n",
+                         g(num(h, "temperature_c")), g(num(h, "value")), g(num(h, "std_error")), g(num(h, "lower")),
+                         g(num(h, "upper")), h.value("significant", false) ? "YES" : "no");
+      o += "</table>\n";
+    }
+  }
+  return o;
+}
+
+// ---- Allan ---------------------------------------------------------------------------------------
+
+std::string allan_section(const json& al) {
+  std::string o = "<h2>Noise — Allan deviation <span class=\"file\">(allan.json)</span></h2>\n";
+  o += fmt::format("<p>{} samples at {} Hz ({}).</p>\n", g(num(al, "samples")), g(num(al, "rate_hz")),
+                   escape(str(al, "source")));
+  for (const auto& w : al.value("warnings", json::array()))
+    if (w.is_string()) o += "<p class=\"warn\">warning: " + escape(w.get<std::string>()) + "</p>\n";
+  for (const char* inst : {"accelerometer", "gyroscope"}) {
+    Plot p;
+    p.x_log = p.y_log = true;
+    p.width = 760;
+    p.height = 440;
+    p.title = std::string(inst) + " Allan deviation";
+    p.x_label = "averaging time τ [s]";
+    std::string table;
+    std::size_t color = 0;
+    for (const auto& ch : al.value("channels", json::array())) {
+      if (str(ch, "instrument") != inst) continue;
+      p.y_label = "Allan deviation [" + str(ch, "unit") + "]";
+      const std::string c = svg::palette(color++);
+      Series band{"", Style::kBand, {}, {}, {}, {}, c, false, 0.2};
+      Series pts{str(ch, "channel"), Style::kPoints, {}, {}, {}, {}, c, false, 1.0};
+      for (const auto& pt : ch.value("points", json::array())) {
+        band.x.push_back(num(pt, "tau_s"));
+        band.y_lo.push_back(num(pt, "adev_lo"));
+        band.y_hi.push_back(num(pt, "adev_hi"));
+        pts.x.push_back(num(pt, "tau_s"));
+        pts.y.push_back(num(pt, "adev"));
+      }
+      p.series.push_back(band);
+      p.series.push_back(pts);
+      const json m = ch.value("model", json::object());
+      if (!m.value("ok", false)) {
+        table += fmt::format("<tr><td>{}</td><td colspan=\"5\" class=\"bad\">model fit failed: {}</td></tr>\n",
+                             escape(str(ch, "channel")), escape(str(m, "message")));
+        continue;
+      }
+      // The fitted model through the Allan library's own formula.
+      allan::NoiseModel nm;
+      nm.quantization.fitted = num(m.value("Q", json::object()), "fitted");
+      nm.white.fitted = num(m.value("N", json::object()), "fitted");
+      nm.bias_instability.fitted = num(m.value("B", json::object()), "fitted");
+      nm.random_walk.fitted = num(m.value("K", json::object()), "fitted");
+      nm.rate_ramp.fitted = num(m.value("R", json::object()), "fitted");
+      for (auto* coef : {&nm.quantization, &nm.white, &nm.bias_instability, &nm.random_walk, &nm.rate_ramp})
+        if (!std::isfinite(coef->fitted)) coef->fitted = 0.0;
+      const json tr = m.value("tau_range_s", json::array());
+      const double t0 = at(tr, 0), t1 = at(tr, 1);
+      Series model{"", Style::kLine, {}, {}, {}, {}, c, true, 1.0};
+      Series nline{"", Style::kLine, {}, {}, {}, {}, "#555", true, 0.6};
+      Series kline{"", Style::kLine, {}, {}, {}, {}, "#999", true, 0.6};
+      const json N = m.value("N", json::object()), K = m.value("K", json::object()), B = m.value("B", json::object());
+      if (std::isfinite(t0) && std::isfinite(t1) && t1 > t0) {
+        for (int i = 0; i <= 60; ++i) {
+          const double tau = t0 * std::pow(t1 / t0, i / 60.0);
+          model.x.push_back(tau);
+          model.y.push_back(std::sqrt(nm.avar(tau)));
+          // Slope lines of the identified coefficients: −½ (N/√τ), +½ (K·√(τ/3)).
+          if (N.value("identified", false)) {
+            nline.x.push_back(tau);
+            nline.y.push_back(num(N, "value") / std::sqrt(tau));
+          }
+          if (K.value("identified", false)) {
+            kline.x.push_back(tau);
+            kline.y.push_back(num(K, "value") * std::sqrt(tau / 3.0));
+          }
+        }
+      }
+      p.series.push_back(model);
+      if (!nline.x.empty()) p.series.push_back(nline);
+      if (!kline.x.empty()) p.series.push_back(kline);
+      auto cell = [](const json& coef) {
+        if (coef.value("identified", false))
+          return fmt::format("{} ± {}", g3(num(coef, "value")), g3(num(coef, "sigma")));
+        return fmt::format("≤ {} (not identified)", g3(num(coef, "upper_bound")));
+      };
+      table += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n", escape(str(ch, "channel")),
+                           cell(N), cell(K), cell(B), escape(str(N, "unit") + ", " + str(K, "unit") + ", " + str(B, "unit")));
+    }
+    if (color == 0) continue;
+    o += figure(p, "Overlapping Allan deviation with its confidence band (shaded), the fitted noise model (dashed, "
+                   "same color) and the slope lines of identified coefficients (grey dashed: −½ white noise N/√τ, "
+                   "light grey: +½ random walk K·√(τ/3)).");
+    o += "<table><tr><th>channel</th><th>N (white)</th><th>K (random walk)</th><th>B (bias instability)</th>"
+         "<th>units N, K, B</th></tr>\n" + table + "</table>\n";
+  }
+  if (al.contains("kalibr")) {
+    const json& kb = al["kalibr"];
+    o += fmt::format(
+        "<p>Kalibr: accelerometer_noise_density {}{}, accelerometer_random_walk {}{}, gyroscope_noise_density {}{}, "
+        "gyroscope_random_walk {}{}, update_rate {} Hz (<code>stend export RUN --to kalibr</code>).</p>\n",
+        g3(num(kb, "accelerometer_noise_density")), kb.value("accelerometer_noise_identified", false) ? "" : " (not identified)",
+        g3(num(kb, "accelerometer_random_walk")), kb.value("accelerometer_random_walk_is_upper_bound", false) ? " (UPPER BOUND)" : "",
+        g3(num(kb, "gyroscope_noise_density")), kb.value("gyroscope_noise_identified", false) ? "" : " (not identified)",
+        g3(num(kb, "gyroscope_random_walk")), kb.value("gyroscope_random_walk_is_upper_bound", false) ? " (UPPER BOUND)" : "",
+        g(num(kb, "update_rate")));
+  }
+  return o;
+}
+
+// ---- gap -------------------------------------------------------------------------------------------
+
+std::string gap_section(const json& gp) {
+  std::string o = fmt::format("<h2>Sim-to-real gap — {} <span class=\"file\">(gap.json)</span></h2>\n",
+                              escape(str(gp, "model")));
+  const json gap = gp.value("gap", json::object());
+  const json floor = gp.value("noise_floor", json::object());
+  std::string rms, ratio;
+  for (int k = 0; k < 3; ++k) {
+    rms += fmt::format("{}{} {}", k ? ", " : "", kAxes[k], g3(at(gap.value("static_rms_mps2", json::array()), static_cast<std::size_t>(k))));
+    ratio += fmt::format("{}{} {}", k ? ", " : "", kAxes[k],
+                         g3(at(gap.value("static_rms_over_floor", json::array()), static_cast<std::size_t>(k))));
+  }
+  o += fmt::format("<p>Static residual RMS [m/s²]: {}; over the noise floor: {} (floor source: {}).</p>\n", rms, ratio,
+                   escape(str(floor, "source")));
+  // Where: share of the gap by dimension and place.
+  const json where = gp.value("where", json::array());
+  if (!where.empty()) {
+    Plot p;
+    p.title = "where the gap lies";
+    p.y_label = "share of the residual energy";
+    p.x_label = "dimension : place";
+    p.width = 760;
+    Series bars{"share", Style::kBars, {}, {}, {}, {}, svg::palette(3), false, 0.85};
+    for (std::size_t i = 0; i < where.size(); ++i) {
+      p.x_categories.push_back(str(where[i], "dimension") + ":" + str(where[i], "place"));
+      bars.x.push_back(static_cast<double>(i));
+      bars.y.push_back(num(where[i], "share"));
+    }
+    bars.name.clear();
+    p.series = {bars};
+    o += figure(p, "Localization: the share of the residual each (dimension, place) holds.");
+  }
+  // Segments: residual per axis against temperature and time since the last change.
+  const json segs = gp.value("segments", json::array());
+  if (!segs.empty()) {
+    for (const char* dim : {"temperature_c", "time_since_change_s"}) {
+      Plot p;
+      p.title = std::string("segment residual against ") + (dim[0] == 't' && dim[1] == 'e' ? "temperature" : "time since change");
+      p.x_label = dim[1] == 'e' ? "temperature [°C]" : "time since the last change [s]";
+      p.y_label = "residual [mg]";
+      for (int k = 0; k < 3; ++k) {
+        Series s{fmt::format("axis {}", kAxes[k]), Style::kPoints, {}, {}, {}, {}, svg::palette(static_cast<std::size_t>(k)), false, 0.8};
+        for (const auto& sg : segs) {
+          s.x.push_back(num(sg, dim));
+          s.y.push_back(at(sg.value("axis_residual_mps2", json::array()), static_cast<std::size_t>(k)) * 1000.0 / 9.80665);
+        }
+        p.series.push_back(s);
+      }
+      p.lines.push_back({true, 0.0, "", "#555"});
+      o += figure(p, "Twin-minus-recording residual of each static segment, per axis.");
+    }
+  }
+  // Shrink: held-out RMS as candidate terms are added.
+  const json steps = gp.value("steps", json::array());
+  if (!steps.empty()) {
+    Plot p;
+    p.title = "how far the gap shrinks";
+    p.y_label = "RMS [m/s²]";
+    p.x_label = "model after step";
+    p.width = 760;
+    Series held{"held-out RMS", Style::kLinePoints, {}, {}, {}, {}, svg::palette(0), false, 1.0};
+    Series ins{"in-sample RMS", Style::kLinePoints, {}, {}, {}, {}, svg::palette(1), true, 1.0};
+    Series fl{"noise floor", Style::kLine, {}, {}, {}, {}, "#777", true, 1.0};
+    for (std::size_t i = 0; i < steps.size(); ++i) {
+      const std::string added = str(steps[i], "added");
+      p.x_categories.push_back(added.empty() ? fmt::format("step {}", i) : "+" + added);
+      held.x.push_back(static_cast<double>(i));
+      held.y.push_back(num(steps[i], "heldout_rms_mps2"));
+      ins.x.push_back(static_cast<double>(i));
+      ins.y.push_back(num(steps[i], "in_sample_rms_mps2"));
+      fl.x.push_back(static_cast<double>(i));
+      fl.y.push_back(num(steps[i], "noise_floor_mps2"));
+    }
+    p.series = {held, ins, fl};
+    p.y_include_zero = true;
+    o += figure(p, "Residual RMS on data not used to fit (held-out) as each candidate term is added, against the "
+                   "noise floor.");
+  }
+  const json cands = gp.value("candidates", json::array());
+  if (!cands.empty()) {
+    o += "<table><tr><th>term</th><th>axis</th><th>held-out improvement</th><th>ΔBIC</th><th>p</th><th>size</th>"
+         "<th>95 % interval</th><th>aliases</th><th>significant</th></tr>\n";
+    for (const auto& c : cands) {
+      std::string al;
+      for (const auto& a : c.value("aliases", json::array())) al += (al.empty() ? "" : ", ") + (a.is_string() ? a.get<std::string>() : a.dump());
+      o += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} {}</td><td>[{}, {}]</td>"
+                       "<td>{}</td><td>{}</td></tr>\n",
+                       escape(str(c, "term")), escape(str(c, "axis")), g3(num(c, "heldout_improvement")),
+                       g3(num(c, "delta_bic")), g3(num(c, "p_value")), g3(num(c, "size")), escape(str(c, "size_unit")),
+                       g3(at(c.value("ci95", json::array()), 0)), g3(at(c.value("ci95", json::array()), 1)), escape(al),
+                       c.value("significant", false) ? "YES" : "no");
+    }
+    o += "</table>\n";
+  }
+  const json un = gp.value("unexplained", json::object());
+  if (!un.empty())
+    o += fmt::format("<p><b>Unexplained:</b> held-out RMS {} m/s² = {} × floor. {}</p>\n", g3(num(un, "heldout_rms_mps2")),
+                     g3(num(un, "over_floor")), escape(str(un, "statement")));
+  return o;
+}
+
+}  // namespace
+
+std::string html_page(const std::string& title, const std::string& body) {
+  return "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>" + escape(title) +
+         "</title>\n<style>\n"
+         "body{font-family:sans-serif;max-width:1100px;margin:1em auto;padding:0 1em;color:#222}\n"
+         "h1{font-size:1.5em}h2{font-size:1.2em;border-bottom:1px solid #ccc;margin-top:2em}h3{font-size:1.05em}\n"
+         "table{border-collapse:collapse;margin:.5em 0;font-size:.9em}td,th{border:1px solid #ccc;padding:2px 6px;"
+         "text-align:left}th{background:#f2f2f2}\n"
+         "tr.nid td{color:#a00}.bad{color:#b00;font-weight:bold}.warn{color:#a60}.file{color:#888;font-weight:normal;"
+         "font-size:.8em}\n"
+         "figure{display:inline-block;margin:.5em 1em .5em 0;vertical-align:top}figcaption{font-size:.8em;color:#555;"
+         "max-width:760px}\n"
+         "code{background:#f4f4f4;padding:0 3px}\n"
+         "</style></head><body>\n" +
+         body + "</body></html>\n";
+}
+
+std::string run_report_html(const fs::path& run_dir) {
+  const RunResults rr = load_run_results(run_dir);
+  std::string body;
+  body += fmt::format("<h1>Stend report — {}</h1>\n", escape(rr.run_name));
+  body += "<table class=\"meta\">\n";
+  auto row = [&](const std::string& k, const std::string& v) {
+    body += "<tr><th>" + escape(k) + "</th><td>" + escape(v) + "</td></tr>\n";
+  };
+  row("experiment", rr.experiment);
+  row("run folder", rr.dir.string());
+  row("status", rr.run_status);
+  row("started (UTC)", rr.start_time_utc);
+  row("sensor", rr.vendor + " " + rr.model + (rr.serial.empty() ? "" : " serial " + rr.serial));
+  row("procedure fingerprint", rr.procedure_fingerprint.empty() ? "—" : rr.procedure_fingerprint);
+  std::string ests;
+  for (const auto& e : rr.estimators)
+    ests += (ests.empty() ? "" : "; ") + e.name + " " + e.version + " (" + e.file + ", " + e.status + ")";
+  row("estimators", ests.empty() ? "none: no results file in this folder (run `stend fit RUN -m MODEL`)" : ests);
+  row("stend", rr.stend_version);
+  body += "</table>\n";
+  if (rr.run_status != "complete")
+    body += "<p class=\"bad\">This recording is not complete (status " + escape(rr.run_status) +
+            "): results describe the data present only.</p>\n";
+  for (const auto& n : rr.notes) body += "<p class=\"warn\">" + escape(n) + "</p>\n";
+  json doc;
+  if (load(rr.dir, "fit.json", doc, body)) body += fit_section(doc, "fit.json");
+  if (load(rr.dir, "ceres.json", doc, body)) body += fit_section(doc, "ceres.json");
+  if (load(rr.dir, "temp_poly.json", doc, body)) body += temp_section(doc);
+  if (load(rr.dir, "allan.json", doc, body)) body += allan_section(doc);
+  if (load(rr.dir, "gap.json", doc, body)) body += gap_section(doc);
+  body += "<p class=\"file\">Written by stend report. Plots are inline SVG; this file needs nothing else.</p>\n";
+  return html_page("Stend report — " + rr.run_name, body);
+}
+
+fs::path write_run_report(const fs::path& run_dir) {
+  const std::string html = run_report_html(run_dir);
+  const fs::path out = run_dir / "report.html";
+  const fs::path tmp = run_dir / "report.html.tmp";
+  {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if (!f) throw std::runtime_error(tmp.string() + ": cannot write");
+    f << html;
+    if (!f) throw std::runtime_error(tmp.string() + ": write failed");
+  }
+  fs::rename(tmp, out);
+  return out;
+}
+
+}  // namespace stend::reporting

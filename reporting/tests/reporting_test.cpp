@@ -1,0 +1,252 @@
+// Unit tests of the reporting library: SVG plotting, procedure fingerprint, results database,
+// comparison statistics and refusal.
+#include "stend/reporting/compare.hpp"
+#include "stend/reporting/fingerprint.hpp"
+#include "stend/reporting/results.hpp"
+#include "stend/reporting/results_db.hpp"
+#include "stend/reporting/svg_plot.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <regex>
+
+namespace rp = stend::reporting;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("stend_reporting_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+}  // namespace
+
+TEST(Svg, LinearTicksAreNiceAndCoverTheRange) {
+  const auto t = rp::svg::nice_ticks(-0.013, 0.047, false);
+  ASSERT_GE(t.size(), 4u);
+  const double step = t[1] - t[0];
+  for (std::size_t i = 1; i < t.size(); ++i) EXPECT_NEAR(t[i] - t[i - 1], step, 1e-12);
+  const double mant = step / std::pow(10.0, std::floor(std::log10(step)));
+  EXPECT_TRUE(std::abs(mant - 1) < 1e-9 || std::abs(mant - 2) < 1e-9 || std::abs(mant - 5) < 1e-9) << step;
+  EXPECT_GE(t.front(), -0.013);
+  EXPECT_LE(t.back(), 0.047);
+  EXPECT_LE(t.front() - step, -0.013);  // no nice tick left out at either end
+  EXPECT_GE(t.back() + step, 0.047);
+}
+
+TEST(Svg, LogTicksAreDecades) {
+  const auto t = rp::svg::nice_ticks(0.01, 1000.0, true);
+  ASSERT_EQ(t.size(), 6u);
+  for (std::size_t i = 0; i < t.size(); ++i) EXPECT_NEAR(std::log10(t[i]), -2.0 + static_cast<double>(i), 1e-12);
+  const auto narrow = rp::svg::nice_ticks(1.0, 30.0, true);  // < 2 decades: 1, 2, 5 steps
+  EXPECT_EQ(narrow, (std::vector<double>{1, 2, 5, 10, 20}));
+}
+
+TEST(Svg, RenderEscapesTextAndSkipsBadData) {
+  rp::svg::Plot p;
+  p.title = "a < b & \"c\"";
+  p.x_log = p.y_log = true;
+  rp::svg::Series s;
+  s.name = "curve<1>";
+  s.style = rp::svg::Style::kLinePoints;
+  s.x = {0.1, 1.0, -1.0, 10.0, NAN};
+  s.y = {1.0, 0.5, 2.0, 0.0, 1.0};  // x<0, y=0 and NaN are unusable on log axes
+  p.series.push_back(s);
+  const std::string out = p.render();
+  EXPECT_NE(out.find("a &lt; b &amp; &quot;c&quot;"), std::string::npos);
+  EXPECT_NE(out.find("curve&lt;1&gt;"), std::string::npos);
+  EXPECT_EQ(out.find("nan"), std::string::npos);
+  EXPECT_EQ(out.find("inf"), std::string::npos);
+  // Exactly the two usable points are drawn.
+  const std::regex circle("<circle ");
+  EXPECT_EQ(std::distance(std::sregex_iterator(out.begin(), out.end(), circle), std::sregex_iterator()), 2);
+  rp::svg::Plot empty;
+  EXPECT_NE(empty.render().find("no data"), std::string::npos);
+}
+
+TEST(Fingerprint, Sha256KnownVectors) {
+  EXPECT_EQ(rp::sha256_hex(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(rp::sha256_hex("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(rp::sha256_hex("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq"),
+            "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+  EXPECT_EQ(rp::sha256_hex(std::string(1000000, 'a')),
+            "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+}
+
+TEST(Fingerprint, IndependentOfIdentityNameSeedKeyOrderAndNumberSpelling) {
+  const std::string a = R"(
+experiment: {name: unit_a, seed: 1, description: first}
+bench:
+  sensor: {plugin: sim_imu, config: {vendor: Acme, serial: A-1, accel_bias_mps2: [0.1, 0, 0]}}
+  fixtures: [{id: table, plugin: sim_three_axis_table}]
+  mounting: {on: table}
+procedure:
+  - set_temperature: {fixture: chamber, setpoint_c: 25, hold_s: 60, label: "warm"}
+  - orientations: {fixture: table, list: [{tilt_deg: 0, rotation_deg: 0}], dwell_s: 5, record_s: 10}
+)";
+  const std::string b = R"(
+procedure:
+  - set_temperature: {hold_s: 60.0, setpoint_c: 2.5e1, fixture: chamber, label: "other words"}
+  - orientations: {record_s: 10, dwell_s: 5, fixture: table, list: [{rotation_deg: 0, tilt_deg: 0}]}
+experiment: {name: unit_b, seed: 99}
+bench:
+  mounting: {on: table}
+  fixtures: [{plugin: sim_three_axis_table, id: table}]
+  sensor: {plugin: sim_imu, config: {vendor: Borealis, serial: B-7, accel_bias_mps2: [-0.3, 0, 0]}}
+)";
+  EXPECT_EQ(rp::procedure_fingerprint(a), rp::procedure_fingerprint(b));
+  std::string c = a;
+  c.replace(c.find("dwell_s: 5"), 10, "dwell_s: 6");
+  EXPECT_NE(rp::procedure_fingerprint(a), rp::procedure_fingerprint(c));
+  std::string d = a;
+  d.replace(d.find("sim_three_axis_table"), 20, "sim_one_axis_table");
+  EXPECT_NE(rp::procedure_fingerprint(a), rp::procedure_fingerprint(d));
+  EXPECT_EQ(rp::procedure_fingerprint(a).size(), 64u);
+  EXPECT_THROW(rp::procedure_fingerprint("experiment: {name: x}\n"), std::runtime_error);
+}
+
+namespace {
+
+rp::RunResults unit(const std::string& vendor, const std::string& serial, const std::string& fp, double v, double se) {
+  rp::RunResults r;
+  r.dir = "/runs/" + vendor + "-" + serial;
+  r.run_name = vendor + "-" + serial;
+  r.vendor = vendor;
+  r.model = "M";
+  r.serial = serial;
+  r.procedure_fingerprint = fp;
+  r.estimators.push_back({"temp_poly", "0.1.0", "temp_poly.json", "ok", ""});
+  rp::ParameterResult p;
+  p.estimator = "temp_poly";
+  p.name = "bias_z";
+  p.unit = "m/s^2";
+  p.identifiable = true;
+  p.value = v;
+  p.std_error = se;
+  p.lo = v - 2 * se;
+  p.hi = v + 2 * se;
+  p.confidence = 0.95;
+  r.parameters.push_back(p);
+  rp::ParameterResult q = p;
+  q.name = "cross_zy";
+  q.identifiable = false;
+  q.value = q.std_error = q.lo = q.hi = NAN;
+  q.reason = "not excited";
+  r.parameters.push_back(q);
+  return r;
+}
+
+}  // namespace
+
+TEST(ResultsDb, RoundTripReplaceAndNull) {
+  const fs::path d = temp_dir("db");
+  {
+    rp::ResultsDb db(d / "r.sqlite");
+    db.add(unit("Acme", "1", "ff00", 0.01, 0.001));
+    db.add(unit("Acme", "1", "ff00", 0.02, 0.001));  // same folder: replaced, not duplicated
+    db.add(unit("Bor", "2", "ee11", -0.03, 0.002));
+  }
+  rp::ResultsDb db(d / "r.sqlite");
+  const auto all = db.all();
+  ASSERT_EQ(all.size(), 2u);
+  EXPECT_EQ(all[0].vendor, "Acme");
+  EXPECT_DOUBLE_EQ(all[0].parameters[0].value, 0.02);
+  EXPECT_DOUBLE_EQ(all[0].parameters[0].lo, 0.018);
+  EXPECT_EQ(all[0].estimators.at(0).name, "temp_poly");
+  EXPECT_EQ(all[0].estimators.at(0).version, "0.1.0");
+  EXPECT_FALSE(all[0].parameters[1].identifiable);
+  EXPECT_TRUE(std::isnan(all[0].parameters[1].value));  // stored as NULL, never a default
+  EXPECT_EQ(all[0].parameters[1].reason, "not excited");
+  EXPECT_EQ(db.with_fingerprint("ee11").size(), 1u);
+  EXPECT_EQ(db.find_run("Bor-2").serial, "2");
+  fs::remove_all(d);
+}
+
+TEST(Compare, VendorStatisticsAndRefusal) {
+  std::vector<rp::RunResults> runs;
+  const double a[] = {0.010, 0.012, 0.014}, b[] = {-0.020, -0.024};
+  for (int i = 0; i < 3; ++i) runs.push_back(unit("Acme", std::to_string(i), "fp1", a[i], 0.001));
+  for (int i = 0; i < 2; ++i) runs.push_back(unit("Bor", std::to_string(i), "fp1", b[i], 0.002));
+  const rp::Comparison c = rp::compare_runs(runs);
+  const auto* p = c.find("temp_poly", "bias_z");
+  ASSERT_NE(p, nullptr);
+  ASSERT_EQ(p->vendors.size(), 2u);
+  EXPECT_NEAR(p->vendors[0].mean, 0.012, 1e-15);
+  EXPECT_NEAR(p->vendors[0].spread_sd, 0.002, 1e-15);
+  // t(0.975, 2) = 4.302652729911275: interval of the mean = mean ± t·SD/√3.
+  EXPECT_NEAR(p->vendors[0].mean_hi - p->vendors[0].mean, 4.302652729911275 * 0.002 / std::sqrt(3.0), 1e-9);
+  EXPECT_NEAR(p->vendors[1].mean, -0.022, 1e-15);
+  EXPECT_NEAR(p->vendors[1].median_std_error, 0.002, 1e-15);
+  const auto* nid = c.find("temp_poly", "cross_zy");
+  ASSERT_NE(nid, nullptr);
+  EXPECT_EQ(nid->vendors[0].identified, 0);
+  EXPECT_TRUE(std::isnan(nid->vendors[0].mean));
+  EXPECT_NE(rp::comparison_html(c).find("<svg"), std::string::npos);
+
+  runs.push_back(unit("Corvid", "9", "fp2", 0.0, 0.001));
+  try {
+    rp::compare_runs(runs);
+    FAIL() << "compared runs of different procedures";
+  } catch (const rp::ComparisonRefused& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("fp1"), std::string::npos) << m;
+    EXPECT_NE(m.find("fp2"), std::string::npos) << m;
+    EXPECT_NE(m.find("Corvid-9"), std::string::npos) << m;
+    EXPECT_NE(m.find("Acme-0"), std::string::npos) << m;
+  }
+}
+
+TEST(Results, JsonRoundTrip) {
+  const rp::RunResults r = unit("Acme", "5", "abcd", 0.5, 0.01);
+  const auto j = rp::to_json(r);
+  EXPECT_EQ(j["schema"], "stend.results/1");
+  EXPECT_TRUE(j["parameters"][1]["value"].is_null());
+  const rp::RunResults back = rp::from_json(nlohmann::json::parse(j.dump()));
+  EXPECT_EQ(back.serial, "5");
+  EXPECT_EQ(back.procedure_fingerprint, "abcd");
+  EXPECT_DOUBLE_EQ(back.parameters[0].value, 0.5);
+  EXPECT_DOUBLE_EQ(back.parameters[0].hi, 0.52);
+  EXPECT_FALSE(back.parameters[1].identifiable);
+}
+
+TEST(Results, ParametersOfEachEstimatorDocument) {
+  // ceres_nonlinear: flat parameter list, "estimator" as a plain name, top-level confidence.
+  const auto ceres = nlohmann::json::parse(R"json({"schema":"stend.ceres_nonlinear.results/1","estimator":"ceres_nonlinear",
+    "confidence":0.95,"ok":true,"message":"","parameters":[
+    {"name":"accel_bias_x","unit":"m/s^2","value":0.01,"std_error":0.001,"interval":[0.008,0.012],"identifiable":true},
+    {"name":"accel_cross_zy","unit":"1","value":null,"std_error":null,"interval":[null,null],"identifiable":false,
+     "reason":"fixed by the frame convention"}]})json");
+  rp::EstimatorUse use;
+  auto ps = rp::parameters_of(ceres, "ceres", &use);
+  ASSERT_EQ(ps.size(), 2u);
+  EXPECT_EQ(use.name, "ceres_nonlinear");
+  EXPECT_EQ(use.status, "ok");
+  EXPECT_DOUBLE_EQ(ps[0].confidence, 0.95);
+  EXPECT_DOUBLE_EQ(ps[0].hi, 0.012);
+  EXPECT_FALSE(ps[1].identifiable);
+  EXPECT_TRUE(std::isnan(ps[1].value));
+  EXPECT_EQ(ps[1].reason, "fixed by the frame convention");
+  // A failed fit contributes no numbers.
+  const auto failed = nlohmann::json::parse(
+      R"json({"schema":"stend.fit/1","estimator":{"name":"batch_lsq","version":"0.1.0"},"status":"failed","message":"k < p"})json");
+  EXPECT_TRUE(rp::parameters_of(failed, "fit", &use).empty());
+  EXPECT_EQ(use.status, "failed");
+  EXPECT_EQ(use.message, "k < p");
+  // Allan: identified coefficients get value ± 1.96 σ; the others only an upper bound.
+  const auto allan = nlohmann::json::parse(R"json({"channels":[{"channel":"gz","instrument":"gyroscope","model":{"ok":true,
+    "N":{"identified":true,"value":1e-4,"sigma":1e-6,"unit":"rad/s/sqrt(Hz)","upper_bound":2e-4},
+    "K":{"identified":false,"value":null,"sigma":null,"unit":"rad/s^2/sqrt(Hz)","upper_bound":3e-6},
+    "B":{"identified":false,"value":null,"sigma":null,"unit":"rad/s","upper_bound":null}}}],"kalibr":{}})json");
+  ps = rp::parameters_of(allan, "allan", &use);
+  ASSERT_EQ(ps.size(), 3u);
+  EXPECT_EQ(ps[0].name, "N_gz");
+  EXPECT_NEAR(ps[0].hi - ps[0].value, 1.959963984540054e-6, 1e-18);
+  EXPECT_FALSE(ps[1].identifiable);
+  EXPECT_NE(ps[1].reason.find("upper bound 3e-06"), std::string::npos) << ps[1].reason;
+}
