@@ -1,10 +1,13 @@
 // stend gap, steps 2–6: the twin, where, which, how far. See stend/gap/gap.hpp.
 #include "stend/gap/gap.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <set>
@@ -192,6 +195,189 @@ MatrixXd scale_rows(const MatrixXd& A, const VectorXd& w) {
   return w.cwiseSqrt().asDiagonal() * A;
 }
 
+// Slowly wandering bias (Gauss–Markov, correlation time of minutes) correlates segment means over
+// many segments: lag-1 and HAC corrections underestimate what a slow regressor sees. Covariance of
+// the segment-mean rows of one axis: floor²·(δ_ij + λ·exp(−|t_i − t_j|/τ)), times the segment
+// mid-times [s]; λ, τ by restricted likelihood (REML) on a grid with the fixed effects of the most
+// general model (the model plus every candidate), so a planted effect cannot inflate it.
+struct GlsPoint {
+  double lambda = 0.0, tau_s = 0.0;
+  std::vector<Eigen::LLT<MatrixXd>> chol;  // of the per-axis correlation (floor² divided out)
+};
+struct Gls {
+  bool ok = false;
+  double lambda = 0.0, tau_s = 0.0;            // REML estimate
+  std::vector<std::vector<Eigen::Index>> idx;  // rows per axis
+  std::vector<GlsPoint> region;                // covariances in the 95 % likelihood region
+};
+// Per step: whitened model basis and whitened residual for every covariance of the region.
+struct GlsStep {
+  std::vector<MatrixXd> Q;
+  std::vector<VectorXd> r0;
+  Eigen::Index p0 = 0;
+};
+
+MatrixXd gls_corr(const std::vector<double>& t, double lambda, double tau) {
+  const auto n = static_cast<Eigen::Index>(t.size());
+  MatrixXd V = MatrixXd::Identity(n, n);
+  if (lambda > 0)
+    for (Eigen::Index i = 0; i < n; ++i)
+      for (Eigen::Index j = 0; j < n; ++j)
+        V(i, j) += lambda * std::exp(-std::abs(t[static_cast<std::size_t>(i)] - t[static_cast<std::size_t>(j)]) / tau);
+  return V;
+}
+
+// Whiten the rows of X (all rows, per-axis blocks) with the stored factors; weights sqrt(w) first.
+MatrixXd gls_whiten(const Gls& g, const GlsPoint& pt, const Rows& rows, const MatrixXd& X) {
+  MatrixXd out(X.rows(), X.cols());
+  for (std::size_t a = 0; a < g.idx.size(); ++a) {
+    const auto& id = g.idx[a];
+    MatrixXd B(static_cast<Eigen::Index>(id.size()), X.cols());
+    for (std::size_t i = 0; i < id.size(); ++i) B.row(static_cast<Eigen::Index>(i)) = X.row(id[i]) * std::sqrt(rows.w[id[i]]);
+    B = pt.chol[a].matrixL().solve(B);
+    for (std::size_t i = 0; i < id.size(); ++i) out.row(id[i]) = B.row(static_cast<Eigen::Index>(i));
+  }
+  return out;
+}
+
+Gls estimate_gls(const GapInput& in, const Rows& rows, const MatrixXd& Xfull) {
+  Gls g;
+  const Eigen::Index K = rows.y.size();
+  std::vector<std::vector<double>> t;
+  std::map<int, std::size_t> axis_slot;
+  for (Eigen::Index r = 0; r < K; ++r) {
+    const int a = rows.axis[static_cast<std::size_t>(r)];
+    if (!axis_slot.count(a)) {
+      axis_slot[a] = g.idx.size();
+      g.idx.emplace_back();
+      t.emplace_back();
+    }
+    const auto& p = in.segments[static_cast<std::size_t>(rows.seg[static_cast<std::size_t>(r)])].point;
+    g.idx[axis_slot[a]].push_back(r);
+    t[axis_slot[a]].push_back(0.5 * (p.t_start_s + p.t_end_s));
+  }
+  double span = 0;
+  for (const auto& ta : t)
+    if (!ta.empty()) span = std::max(span, *std::max_element(ta.begin(), ta.end()) - *std::min_element(ta.begin(), ta.end()));
+  // Dense per-axis factors: beyond 600 segments the cost (n³ per grid point) is not spent and
+  // the lag-1 and Newey–West tests stand alone.
+  std::size_t nmax = 0;
+  for (const auto& ta : t) nmax = std::max(nmax, ta.size());
+  if (!(span > 0) || Xfull.cols() == 0 || nmax > 600) return g;
+  // Orthonormal basis of the weighted fixed-effect column space (REML is basis invariant).
+  const VectorXd sw = rows.w.cwiseSqrt();
+  MatrixXd Xs = Xfull;
+  for (Eigen::Index j = 0; j < Xs.cols(); ++j) {
+    const double nj = Xs.col(j).norm();
+    if (nj > 0) Xs.col(j) /= nj;
+  }
+  Eigen::ColPivHouseholderQR<MatrixXd> qr(Xs);
+  qr.setThreshold(1e-9);
+  const Eigen::Index p = qr.rank();
+  if (p >= K - 5) return g;
+  const MatrixXd Q = MatrixXd(qr.householderQ()).leftCols(p);
+  double best = -std::numeric_limits<double>::infinity();
+  std::vector<std::array<double, 3>> tried;  // λ, τ, log-likelihood
+  const double lambdas[] = {0.0, 0.05, 0.15, 0.4, 1.0};
+  const double taus[] = {0.03, 0.1, 0.3};  // × span
+  for (double lam : lambdas)
+    for (double tf : taus) {
+      if (lam == 0.0 && tf != taus[0]) continue;
+      const double tau = tf * span;
+      MatrixXd M = MatrixXd::Zero(p, p);
+      VectorXd b = VectorXd::Zero(p);
+      double yy = 0, logdet = 0;
+      bool fine = true;
+      for (std::size_t a = 0; a < g.idx.size() && fine; ++a) {
+        const auto& id = g.idx[a];
+        Eigen::LLT<MatrixXd> llt(gls_corr(t[a], lam, tau));
+        if (llt.info() != Eigen::Success) {
+          fine = false;
+          break;
+        }
+        MatrixXd Qa(static_cast<Eigen::Index>(id.size()), p);
+        VectorXd ya(static_cast<Eigen::Index>(id.size()));
+        for (std::size_t i = 0; i < id.size(); ++i) {
+          Qa.row(static_cast<Eigen::Index>(i)) = Q.row(id[i]);
+          ya[static_cast<Eigen::Index>(i)] = rows.y[id[i]] * sw[id[i]];
+        }
+        // Q spans the unweighted columns; rows are scaled by sqrt(w) like y (w is constant per axis).
+        Qa *= sw[id[0]];
+        Qa = llt.matrixL().solve(Qa);
+        ya = llt.matrixL().solve(ya);
+        M += Qa.transpose() * Qa;
+        b += Qa.transpose() * ya;
+        yy += ya.squaredNorm();
+        logdet += 2.0 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
+      }
+      if (!fine) continue;
+      Eigen::LLT<MatrixXd> lm(M);
+      if (lm.info() != Eigen::Success) continue;
+      const double q = yy - b.dot(lm.solve(b));
+      if (!(q > 0)) continue;
+      const double ll = -0.5 * (static_cast<double>(K - p) * std::log(q) + logdet +
+                                2.0 * lm.matrixL().toDenseMatrix().diagonal().array().log().sum());
+      tried.push_back({lam, tau, ll});
+      if (ll > best) {
+        best = ll;
+        g.lambda = lam;
+        g.tau_s = tau;
+      }
+    }
+  if (!std::isfinite(best)) return g;
+  // The estimate is weak (a wander of a fraction of the floor): test under every covariance the
+  // data do not reject (profile log-likelihood within χ²₂(95 %)/2 of the best) and keep the largest p.
+  for (const auto& tr : tried) {
+    if (tr[2] < best - 3.0 || tr[0] == 0.0) continue;
+    GlsPoint pt;
+    pt.lambda = tr[0];
+    pt.tau_s = tr[1];
+    for (std::size_t a = 0; a < g.idx.size(); ++a) pt.chol.emplace_back(gls_corr(t[a], pt.lambda, pt.tau_s));
+    g.region.push_back(std::move(pt));
+  }
+  g.ok = !g.region.empty();
+  return g;
+}
+
+GlsStep gls_prepare(const Gls& g, const Rows& rows, const MatrixXd& A0) {
+  GlsStep st;
+  for (const auto& pt : g.region) {
+    VectorXd r0 = gls_whiten(g, pt, rows, rows.y);
+    MatrixXd Q(rows.y.size(), 0);
+    if (A0.cols() > 0) {
+      Eigen::ColPivHouseholderQR<MatrixXd> qr(gls_whiten(g, pt, rows, A0));
+      qr.setThreshold(1e-10);
+      st.p0 = qr.rank();
+      Q = MatrixXd(qr.householderQ()).leftCols(st.p0);
+      r0 -= Q * (Q.transpose() * r0);
+    }
+    st.Q.push_back(std::move(Q));
+    st.r0.push_back(std::move(r0));
+  }
+  return st;
+}
+
+// GLS partial F test of candidate columns C against the model, the largest p over the region.
+double gls_p_value(const Gls& g, const GlsStep& st, const Rows& rows, const MatrixXd& C) {
+  double pmax = 0.0;
+  for (std::size_t k = 0; k < g.region.size(); ++k) {
+    MatrixXd Cw = gls_whiten(g, g.region[k], rows, C);
+    if (st.Q[k].cols() > 0) Cw -= st.Q[k] * (st.Q[k].transpose() * Cw);
+    Eigen::JacobiSVD<MatrixXd> svd(Cw, Eigen::ComputeThinU);
+    const VectorXd sv = svd.singularValues();
+    int q = 0;
+    while (q < sv.size() && sv[q] > 1e-8 * sv[0]) ++q;
+    const Eigen::Index dof = rows.y.size() - st.p0 - q;
+    if (q == 0 || dof <= 0) return 1.0;
+    const VectorXd beta = svd.matrixU().leftCols(q).transpose() * st.r0[k];
+    const double rss1 = st.r0[k].squaredNorm() - beta.squaredNorm();
+    if (!(rss1 > 0)) return 1.0;
+    const double F = (beta.squaredNorm() / q) / (rss1 / static_cast<double>(dof));
+    pmax = std::max(pmax, stats::f_sf(F, q, static_cast<double>(dof)));
+  }
+  return pmax;
+}
+
 struct Eval {
   CandidateResult res;
   Heldout cv;
@@ -199,7 +385,8 @@ struct Eval {
 
 // One candidate against the current set of terms.
 Eval evaluate(const GapInput& in, const Rows& rows, const std::vector<TermSpec>& current, const MatrixXd& A0,
-              const Fit& f0, const Heldout& cv0, const Candidate& c, const MatrixXd& C) {
+              const Fit& f0, const Heldout& cv0, const Candidate& c, const MatrixXd& C,
+              const Gls* gls = nullptr, const GlsStep* gst = nullptr) {
   Eval e;
   CandidateResult& r = e.res;
   r.term = c.name;
@@ -306,6 +493,8 @@ Eval evaluate(const GapInput& in, const Rows& rows, const std::vector<TermSpec>&
       const double p_hac = std::isfinite(wald) ? stats::chi2_sf(wald, q) : 1.0;
       r.p_value = std::max(r.p_value, p_hac);
     }
+    // Third: GLS F test under the long-memory covariance of the segment means (when found).
+    if (gls && gst && gls->ok) r.p_value = std::max(r.p_value, gls_p_value(*gls, *gst, rows, C));
   }
   e.cv = cross_validate(A1, rows);
   const CvCompare cc = compare(cv0, e.cv);
@@ -584,6 +773,10 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
     return rep;
   }
   Heldout cv0 = cross_validate(A0, rows);
+  MatrixXd Xall = A0;
+  for (const auto& b : blocks) Xall = hstack(Xall, b);
+  const Gls gls = estimate_gls(in, rows, Xall);
+  GlsStep gst = gls_prepare(gls, rows, A0);
   {
     Step s0;
     s0.heldout_rms = rms_finite(cv0.err, &s0.floor_rms, &cv0.var0);
@@ -594,7 +787,7 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
 
   std::vector<Eval> evals;
   for (std::size_t i = 0; i < cands.size(); ++i)
-    evals.push_back(evaluate(in, rows, current, A0, f0, cv0, cands[i], blocks[i]));
+    evals.push_back(evaluate(in, rows, current, A0, f0, cv0, cands[i], blocks[i], &gls, &gst));
   int m_eval = 0;
   for (const auto& e : evals) m_eval += e.res.evaluated ? 1 : 0;
   const double alpha_each = opt.alpha / std::max(1, m_eval);
@@ -709,6 +902,7 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
   std::vector<bool> used(cands.size(), false);
   bool floor_now = floor0;
   for (int step = 1; step <= opt.max_steps && !floor_now; ++step) {
+    if (step > 1) gst = gls_prepare(gls, rows, A_cur);
     std::vector<Eval> ev;
     int best = -1;
     double best_imp = 0;
@@ -718,7 +912,7 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
         ev.emplace_back();
         continue;
       }
-      ev.push_back(step == 1 ? evals[i] : evaluate(in, rows, current, A_cur, f_cur, cv_cur, cands[i], blocks[i]));
+      ev.push_back(step == 1 ? evals[i] : evaluate(in, rows, current, A_cur, f_cur, cv_cur, cands[i], blocks[i], &gls, &gst));
       if (ev.back().res.evaluated) ++m;
     }
     for (std::size_t i = 0; i < cands.size(); ++i) {
