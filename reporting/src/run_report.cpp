@@ -453,6 +453,7 @@ std::string gap_section(const json& gp) {
     p.y_label = "share of the residual energy";
     p.x_label = "dimension : place";
     p.width = 760;
+    p.height = 520;  // room for the slanted (dimension : place) labels
     Series bars{"share", Style::kBars, {}, {}, {}, {}, svg::palette(3), false, 0.85};
     for (std::size_t i = 0; i < where.size(); ++i) {
       p.x_categories.push_back(str(where[i], "dimension") + ":" + str(where[i], "place"));

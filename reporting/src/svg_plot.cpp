@@ -137,7 +137,13 @@ std::vector<double> nice_ticks(double lo, double hi, bool log_axis, int target) 
 
 std::string Plot::render() const {
   const double W = width, H = height;
-  const double left = 78, right = 16, top = title.empty() ? 14 : 32, bottom = 50;
+  // Category labels too long for their slot are drawn slanted; the bottom margin makes room.
+  std::size_t longest_category = 0;
+  for (const auto& c : x_categories) longest_category = std::max(longest_category, c.size());
+  const double slot = x_categories.empty() ? 0.0 : (width - 94.0) / static_cast<double>(std::min<std::size_t>(x_categories.size(), 12));
+  const bool slanted = !x_categories.empty() && 6.0 * static_cast<double>(longest_category) > slot;
+  const double left = 78, right = 16, top = title.empty() ? 14 : 32,
+               bottom = slanted ? 50 + std::min(170.0, 4.0 * static_cast<double>(longest_category)) : 50;
   // Legend entries decide the right margin: a legend box inside the plot, top right.
   double xlo = std::numeric_limits<double>::infinity(), xhi = -xlo, ylo = xlo, yhi = -xlo;
   bool any = false;
@@ -205,8 +211,12 @@ std::string Plot::render() const {
       const double X = ax.map(static_cast<double>(i));
       o += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{0}\" y2=\"{2}\" stroke=\"#333\"/>", num(X), num(py1),
                        num(py1 + 4));
-      o += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n", num(X), num(py1 + 16),
-                       escape(x_categories[i]));
+      if (slanted)
+        o += fmt::format("<text x=\"{0}\" y=\"{1}\" text-anchor=\"end\" transform=\"rotate(-40 {0} {1})\">{2}</text>\n",
+                         num(X), num(py1 + 12), escape(x_categories[i]));
+      else
+        o += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n", num(X), num(py1 + 16),
+                         escape(x_categories[i]));
     }
   } else {
     for (double v : nice_ticks(xlo, xhi, x_log)) {
