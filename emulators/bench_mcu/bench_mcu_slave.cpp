@@ -1,41 +1,21 @@
 #include "bench_mcu_slave.hpp"
 
 #include <modbus.h>
-#include <pty.h>
-#include <termios.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
-#include <cstring>
 #include <stdexcept>
 #include <vector>
 
 #include "bench_mcu_map.hpp"
+#include "stend/emulators/splitmix.hpp"
+#include "stend/emulators/steady_ns.hpp"
 
 namespace stend::emu {
 namespace {
 
 namespace map = stend::bench_mcu;
 
-modbus_t* M(void* p) { return static_cast<modbus_t*>(p); }
 modbus_mapping_t* MAP(void* p) { return static_cast<modbus_mapping_t*>(p); }
-
-std::uint16_t crc16(const std::uint8_t* p, std::size_t n) {
-  std::uint16_t crc = 0xFFFF;
-  for (std::size_t i = 0; i < n; ++i) {
-    crc = static_cast<std::uint16_t>(crc ^ p[i]);
-    for (int b = 0; b < 8; ++b) crc = (crc & 1) ? static_cast<std::uint16_t>((crc >> 1) ^ 0xA001) : static_cast<std::uint16_t>(crc >> 1);
-  }
-  return crc;
-}
-
-std::uint64_t splitmix(std::uint64_t& s) {
-  std::uint64_t z = (s += 0x9E3779B97F4A7C15ULL);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31);
-}
 
 }  // namespace
 
@@ -43,26 +23,11 @@ BenchMcuSlave::BenchMcuSlave(BenchMcuConfig config, Mpu6050Model mpu)
     : BenchMcuSlave(config, std::move(mpu), nullptr) {}
 
 BenchMcuSlave::BenchMcuSlave(BenchMcuConfig config, Mpu6050Model mpu, std::shared_ptr<EmulatedI2cBus> i2c_bus)
-    : c_(config), mpu_(std::move(mpu)), i2c_bus_(std::move(i2c_bus)), rng_(config.seed) {
-  char name[256] = {};
-  if (openpty(&master_fd_, &slave_fd_, name, nullptr, nullptr) != 0) {
-    throw std::runtime_error(std::string("bench MCU emulator: openpty failed: ") + std::strerror(errno));
-  }
-  device_path_ = name;
-  termios t{};
-  tcgetattr(slave_fd_, &t);
-  cfmakeraw(&t);
-  tcsetattr(slave_fd_, TCSANOW, &t);
-
-  // The context's device name is never opened: the slave talks on the pty's master end.
-  modbus_t* ctx = modbus_new_rtu(device_path_.c_str(), 921600, 'N', 8, 1);
+    : c_(config), mpu_(std::move(mpu)), i2c_bus_(std::move(i2c_bus)), rtu_("bench MCU emulator", 921600, config.slave_id),
+      rng_(config.seed) {
   modbus_mapping_t* mapping = modbus_mapping_new(0, 0, map::kHoldMapSize,
                                                  map::kInWindowBase + static_cast<int>(map::kWindowSeqModulo) + map::kWindowMaxWords);
-  if (ctx == nullptr || mapping == nullptr) throw std::runtime_error("bench MCU emulator: libmodbus allocation failed");
-  modbus_set_slave(ctx, c_.slave_id);
-  modbus_set_socket(ctx, master_fd_);
-  modbus_set_indication_timeout(ctx, 0, 20000);
-  ctx_ = ctx;
+  if (mapping == nullptr) throw std::runtime_error("bench MCU emulator: libmodbus allocation failed");
   mapping_ = mapping;
   power_on_ = std::chrono::steady_clock::now();
   thread_ = std::thread([this] { run(); });
@@ -72,14 +37,10 @@ BenchMcuSlave::~BenchMcuSlave() {
   stop_ = true;
   if (thread_.joinable()) thread_.join();
   modbus_mapping_free(MAP(mapping_));
-  modbus_free(M(ctx_));
-  ::close(master_fd_);
-  ::close(slave_fd_);
 }
 
 void BenchMcuSlave::go_silent(std::chrono::milliseconds d) {
-  const auto until = std::chrono::steady_clock::now() + d;
-  silent_until_ns_ = std::chrono::duration_cast<std::chrono::nanoseconds>(until.time_since_epoch()).count();
+  silent_until_ns_ = steady_ns_after(d);
 }
 
 BenchMcuStats BenchMcuSlave::stats() const {
@@ -90,14 +51,9 @@ BenchMcuStats BenchMcuSlave::stats() const {
 void BenchMcuSlave::run() {
   std::vector<std::uint8_t> req(MODBUS_RTU_MAX_ADU_LENGTH);
   while (!stop_) {
-    const int rc = modbus_receive(M(ctx_), req.data());
-    const int err = errno;
+    const int rc = rtu_.receive(req.data());  // a broken frame is flushed there
     produce();
-    if (rc > 0) {
-      handle(req.data(), rc);
-    } else if (rc < 0 && err != ETIMEDOUT) {
-      modbus_flush(M(ctx_));  // broken frame: drop what is left of it
-    }
+    if (rc > 0) handle(req.data(), rc);
   }
 }
 
@@ -226,13 +182,12 @@ void BenchMcuSlave::handle(const std::uint8_t* req, int len) {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.requests;
   }
-  const auto now_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
-  if (now_ns < silent_until_ns_.load()) {
+  if (steady_now_ns() < silent_until_ns_.load()) {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.ignored;
     return;
   }
-  const int hl = modbus_get_header_length(M(ctx_));
+  const int hl = modbus_get_header_length(rtu_.ctx());
   const int fc = req[hl];
   const int address = (req[hl + 1] << 8) | req[hl + 2];
   const int count = (req[hl + 3] << 8) | req[hl + 4];
@@ -257,7 +212,7 @@ void BenchMcuSlave::handle(const std::uint8_t* req, int len) {
       ok = window(address, count);
     }
     if (!ok) {
-      modbus_reply_exception(M(ctx_), req, MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
+      modbus_reply_exception(rtu_.ctx(), req, MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
       std::lock_guard<std::mutex> lock(stats_mutex_);
       ++stats_.exceptions;
       return;
@@ -265,26 +220,15 @@ void BenchMcuSlave::handle(const std::uint8_t* req, int len) {
   }
   const bool read = fc == MODBUS_FC_READ_INPUT_REGISTERS ||
                     (fc == MODBUS_FC_READ_HOLDING_REGISTERS && address + count <= map::kHoldMapSize);
-  if (read && static_cast<double>(splitmix(rng_) >> 11) * 0x1.0p-53 < corrupt_p_.load()) {
+  if (read && splitmix_unit(rng_) < corrupt_p_.load()) {
     const std::uint16_t* src = fc == MODBUS_FC_READ_INPUT_REGISTERS ? MAP(mapping_)->tab_input_registers
                                                                     : MAP(mapping_)->tab_registers;
-    std::vector<std::uint8_t> frame{static_cast<std::uint8_t>(c_.slave_id), static_cast<std::uint8_t>(fc),
-                                    static_cast<std::uint8_t>(2 * count)};
-    for (int i = 0; i < count; ++i) {
-      frame.push_back(static_cast<std::uint8_t>(src[address + i] >> 8));
-      frame.push_back(static_cast<std::uint8_t>(src[address + i] & 0xFF));
-    }
-    const std::uint16_t crc = crc16(frame.data(), frame.size());
-    frame.push_back(static_cast<std::uint8_t>(crc & 0xFF));
-    frame.push_back(static_cast<std::uint8_t>(crc >> 8));
-    frame[3 + splitmix(rng_) % static_cast<std::uint64_t>(2 * count)] ^= 0x5A;  // line noise on a data byte
-    const ssize_t w = ::write(master_fd_, frame.data(), frame.size());
-    (void)w;
+    write_corrupted_read_reply(rtu_.master_fd(), c_.slave_id, fc, src, address, count, rng_);
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.corrupted;
     return;
   }
-  modbus_reply(M(ctx_), req, len, MAP(mapping_));
+  modbus_reply(rtu_.ctx(), req, len, MAP(mapping_));
   if (fc == MODBUS_FC_WRITE_SINGLE_REGISTER || fc == MODBUS_FC_WRITE_MULTIPLE_REGISTERS) {
     apply_ctrl();
     if (address <= map::kHoldI2cCmd && address + (fc == MODBUS_FC_WRITE_SINGLE_REGISTER ? 1 : count) > map::kHoldI2cCmd) run_i2c_command();

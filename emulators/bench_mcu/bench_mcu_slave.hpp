@@ -19,6 +19,7 @@
 
 #include "i2c_bus_model.hpp"
 #include "mpu6050_model.hpp"
+#include "stend/emulators/pty_modbus_slave.hpp"
 
 namespace stend::emu {
 
@@ -42,7 +43,7 @@ class BenchMcuSlave {
   BenchMcuSlave(const BenchMcuSlave&) = delete;
   BenchMcuSlave& operator=(const BenchMcuSlave&) = delete;
 
-  const std::string& device_path() const { return device_path_; }
+  const std::string& device_path() const { return rtu_.device_path(); }
   // Each read reply (FC 03/04) gets one data byte flipped with this probability.
   void set_corrupt_probability(double p) { corrupt_p_.store(p); }
   // Read and drop every request for `d` from now (the sensor keeps sampling into the FIFO).
@@ -60,9 +61,7 @@ class BenchMcuSlave {
   BenchMcuConfig c_;
   Mpu6050Model mpu_;
   std::shared_ptr<EmulatedI2cBus> i2c_bus_;  // may be null
-  std::string device_path_;
-  int master_fd_ = -1, slave_fd_ = -1;
-  void* ctx_ = nullptr;      // modbus_t*
+  PtyModbusRtu rtu_;          // the pty pair and the RTU context (emulators/common)
   void* mapping_ = nullptr;  // modbus_mapping_t*
   std::chrono::steady_clock::time_point power_on_;
 

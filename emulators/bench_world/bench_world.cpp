@@ -21,19 +21,7 @@ BenchWorldConfig BenchWorldConfig::from_experiment(const Experiment& e, double c
   for (const FixtureDecl& f : e.fixtures) {
     if (f.plugin == "sim_one_axis_table") {
       const sim::OneAxisTableConfig t = sim::OneAxisTableConfig::from(f.params);
-      sim::AxisConfig& a = c.table_axis;
-      a.name = "angle";
-      a.unit = "deg";
-      a.min = t.min_deg;
-      a.max = t.max_deg;
-      a.max_rate = t.max_rate_dps;
-      a.max_accel = t.max_accel_dps2;
-      a.initial = t.initial_deg;
-      a.settle_tolerance = t.settle_tolerance_deg;
-      a.settle_rate_tolerance = t.settle_rate_tolerance_dps;
-      a.settle_time_s = t.settle_time_s;
-      a.encoder_resolution = t.encoder_resolution_deg;
-      a.encoder_noise = t.encoder_noise_deg;
+      c.table_axis = t.axis();
       c.table_tilt_deg = t.axis_tilt_deg;
       table = true;
     } else if (f.plugin == "sim_thermochamber") {

@@ -1,22 +1,16 @@
 #include "chamber_emulator.hpp"
 
-#include <arpa/inet.h>
 #include <modbus.h>
-#include <netinet/in.h>
-#include <poll.h>
-#include <pty.h>
-#include <sys/socket.h>
-#include <termios.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
-#include <cstring>
 #include <stdexcept>
 #include <vector>
 
 #include "chamber_map.hpp"
+#include "stend/emulators/splitmix.hpp"
+#include "stend/emulators/steady_ns.hpp"
 
 namespace stend::emu {
 namespace {
@@ -26,32 +20,10 @@ namespace map = stend::chamber_map;
 modbus_t* M(void* p) { return static_cast<modbus_t*>(p); }
 modbus_mapping_t* MAP(void* p) { return static_cast<modbus_mapping_t*>(p); }
 
-std::uint16_t crc16(const std::uint8_t* p, std::size_t n) {
-  std::uint16_t crc = 0xFFFF;
-  for (std::size_t i = 0; i < n; ++i) {
-    crc = static_cast<std::uint16_t>(crc ^ p[i]);
-    for (int b = 0; b < 8; ++b)
-      crc = (crc & 1) ? static_cast<std::uint16_t>((crc >> 1) ^ 0xA001) : static_cast<std::uint16_t>(crc >> 1);
-  }
-  return crc;
-}
-
-std::uint64_t splitmix(std::uint64_t& s) {
-  std::uint64_t z = (s += 0x9E3779B97F4A7C15ULL);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31);
-}
-
 std::uint16_t s16(double v) {
   return static_cast<std::uint16_t>(static_cast<std::int16_t>(std::clamp(std::round(v), -32768.0, 32767.0)));
 }
 double from_s16(std::uint16_t v) { return static_cast<double>(static_cast<std::int16_t>(v)); }
-
-std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 }  // namespace
 
@@ -60,7 +32,6 @@ ChamberFirmware::ChamberFirmware(const ChamberEmuConfig& c) : c_(c) {
   const auto& p = c.plant;
   if (!(p.control_period_s > 0.0 && p.heat_capacity_j_per_c > 0.0 && p.conductance_w_per_c > 0.0))
     throw std::invalid_argument("chamber emulator: control period, heat capacity and conductance must be > 0");
-  tau_air_ = p.heat_capacity_j_per_c / p.conductance_w_per_c;
   air_ = p.initial_c;
   die_ = p.initial_c + p.self_heating_c;
   raw_ = static_cast<std::int16_t>(std::round(air_ * 16.0));
@@ -163,27 +134,7 @@ void ChamberFirmware::control() {
 
 void ChamberFirmware::integrate(double dt) {
   // sim_thermochamber's plant, solved exactly for constant PWMs.
-  const auto& p = c_.plant;
-  const int heater = heater_stuck_ ? 255 : heater_;
-  const double e = p.ambient_c + (p.internal_load_w + p.heater_power_w * heater / 255.0 -
-                                  p.peltier_cooling_w * peltier_ / 255.0) /
-                                     p.conductance_w_per_c;
-  const double ea = std::exp(-dt / tau_air_);
-  const double air0 = air_;
-  air_ = e + (air0 - e) * ea;
-  const double target = e + p.self_heating_c;
-  const double td = p.die_lag_s;
-  if (td <= 0.0) {
-    die_ = air_ + p.self_heating_c;
-    return;
-  }
-  const double ed = std::exp(-dt / td);
-  if (std::abs(tau_air_ - td) > 1e-6 * td) {
-    const double k = (air0 - e) * tau_air_ / (tau_air_ - td);
-    die_ = target + k * ea + (die_ - target - k) * ed;
-  } else {
-    die_ = target + (die_ - target) * ed + (air0 - e) * (dt / td) * ed;
-  }
+  sim::plant_step(c_.plant, heater_stuck_ ? 255 : heater_, peltier_, dt, air_, die_);
 }
 
 void ChamberFirmware::advance_to(double t_s) {
@@ -214,7 +165,7 @@ double ChamberServerBase::emulated_now() const {
 }
 
 void ChamberServerBase::go_silent(std::chrono::milliseconds d) {
-  silent_until_ns_ = now_ns() + std::chrono::duration_cast<std::chrono::nanoseconds>(d).count();
+  silent_until_ns_ = steady_ns_after(d);
 }
 
 void ChamberServerBase::reply_exception(int n, int code) {
@@ -222,7 +173,7 @@ void ChamberServerBase::reply_exception(int n, int code) {
   exceptions_left_ = n;
 }
 
-bool ChamberServerBase::silent() const { return now_ns() < silent_until_ns_.load(); }
+bool ChamberServerBase::silent() const { return steady_now_ns() < silent_until_ns_.load(); }
 
 ChamberEmuStats ChamberServerBase::stats() const {
   std::lock_guard<std::mutex> lock(stats_mutex_);
@@ -275,20 +226,9 @@ void ChamberServerBase::handle(void* ctx, const std::uint8_t* req, int len, bool
     return;
   }
   const bool read = fc == MODBUS_FC_READ_HOLDING_REGISTERS || fc == MODBUS_FC_READ_INPUT_REGISTERS;
-  if (rtu && read && static_cast<double>(splitmix(rng_) >> 11) * 0x1.0p-53 < corrupt_p_.load()) {
+  if (rtu && read && splitmix_unit(rng_) < corrupt_p_.load()) {
     const std::uint16_t* src = fc == MODBUS_FC_READ_INPUT_REGISTERS ? mp->tab_input_registers : mp->tab_registers;
-    std::vector<std::uint8_t> frame{static_cast<std::uint8_t>(c_.slave_id), static_cast<std::uint8_t>(fc),
-                                    static_cast<std::uint8_t>(2 * n)};
-    for (int i = 0; i < n; ++i) {
-      frame.push_back(static_cast<std::uint8_t>(src[address + i] >> 8));
-      frame.push_back(static_cast<std::uint8_t>(src[address + i] & 0xFF));
-    }
-    const std::uint16_t crc = crc16(frame.data(), frame.size());
-    frame.push_back(static_cast<std::uint8_t>(crc & 0xFF));
-    frame.push_back(static_cast<std::uint8_t>(crc >> 8));
-    frame[3 + splitmix(rng_) % static_cast<std::uint64_t>(2 * n)] ^= 0x5A;  // line noise on a data byte
-    const ssize_t wr = ::write(fd, frame.data(), frame.size());
-    (void)wr;
+    write_corrupted_read_reply(fd, c_.slave_id, fc, src, address, n, rng_);
     count(&ChamberEmuStats::corrupted);
     return;
   }
@@ -304,42 +244,23 @@ void ChamberServerBase::handle(void* ctx, const std::uint8_t* req, int len, bool
 }
 
 // ------------------------------------------------------------------------------------------------
-AtmegaChamberSlave::AtmegaChamberSlave(const ChamberEmuConfig& c) : ChamberServerBase(c) {
-  char name[256] = {};
-  if (openpty(&master_fd_, &slave_fd_, name, nullptr, nullptr) != 0)
-    throw std::runtime_error(std::string("chamber emulator: openpty failed: ") + std::strerror(errno));
-  device_path_ = name;
-  termios t{};
-  tcgetattr(slave_fd_, &t);
-  cfmakeraw(&t);
-  tcsetattr(slave_fd_, TCSANOW, &t);
-  modbus_t* ctx = modbus_new_rtu(device_path_.c_str(), 115200, 'N', 8, 1);
-  if (ctx == nullptr) throw std::runtime_error("chamber emulator: libmodbus allocation failed");
-  modbus_set_slave(ctx, c_.slave_id);
-  modbus_set_socket(ctx, master_fd_);
-  modbus_set_indication_timeout(ctx, 0, 20000);
-  ctx_ = ctx;
+AtmegaChamberSlave::AtmegaChamberSlave(const ChamberEmuConfig& c)
+    : ChamberServerBase(c), rtu_("chamber emulator", 115200, c.slave_id) {
   thread_ = std::thread([this] { run(); });
 }
 
 AtmegaChamberSlave::~AtmegaChamberSlave() {
   stop_ = true;
   if (thread_.joinable()) thread_.join();
-  modbus_free(M(ctx_));
-  ::close(master_fd_);
-  ::close(slave_fd_);
 }
 
 void AtmegaChamberSlave::run() {
   std::vector<std::uint8_t> req(MODBUS_RTU_MAX_ADU_LENGTH);
   while (!stop_) {
-    const int rc = modbus_receive(M(ctx_), req.data());
-    const int err = errno;
+    const int rc = rtu_.receive(req.data());  // a broken frame (−1) is flushed there
     if (rc > 0) {
-      handle(ctx_, req.data(), rc, false, master_fd_, true);
-    } else if (rc < 0 && err != ETIMEDOUT) {
-      modbus_flush(M(ctx_));
-    } else {
+      handle(rtu_.ctx(), req.data(), rc, false, rtu_.master_fd(), true);
+    } else if (rc == 0) {
       std::lock_guard<std::mutex> lock(mutex_);
       fw_.advance_to(emulated_now());
     }
@@ -347,50 +268,21 @@ void AtmegaChamberSlave::run() {
 }
 
 // ------------------------------------------------------------------------------------------------
-WatlowChamberServer::WatlowChamberServer(const ChamberEmuConfig& c, int port) : ChamberServerBase(c), port_(port) {
+WatlowChamberServer::WatlowChamberServer(const ChamberEmuConfig& c, int port)
+    : ChamberServerBase(c),
+      tcp_("chamber emulator", LoopbackTcpOptions{.port = port, .newest_only = true, .poll_ms = 20, .down_sleep_ms = 10}) {
   modbus_t* ctx = modbus_new_tcp("127.0.0.1", 0);
   if (ctx == nullptr) throw std::runtime_error("chamber emulator: libmodbus allocation failed");
   modbus_set_slave(ctx, c_.slave_id);
   modbus_set_indication_timeout(ctx, 0, 200000);
   ctx_ = ctx;
-  if (!listen_now()) {
-    modbus_free(M(ctx_));
-    throw std::runtime_error("chamber emulator: cannot listen on 127.0.0.1:" + std::to_string(port) + ": " +
-                             std::strerror(errno));
-  }
   thread_ = std::thread([this] { run(); });
 }
 
 WatlowChamberServer::~WatlowChamberServer() {
   stop_ = true;
   if (thread_.joinable()) thread_.join();
-  if (client_fd_ >= 0) ::close(client_fd_);
-  if (listen_fd_ >= 0) ::close(listen_fd_);
   modbus_free(M(ctx_));
-}
-
-bool WatlowChamberServer::listen_now() {
-  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  if (fd < 0) return false;
-  const int one = 1;
-  ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(static_cast<std::uint16_t>(port_));
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || ::listen(fd, 4) != 0) {
-    ::close(fd);
-    return false;
-  }
-  socklen_t len = sizeof a;
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-  port_ = ntohs(a.sin_port);
-  listen_fd_ = fd;
-  return true;
-}
-
-void WatlowChamberServer::disconnect_for(std::chrono::milliseconds d) {
-  down_until_ns_ = now_ns() + std::chrono::duration_cast<std::chrono::nanoseconds>(d).count();
 }
 
 void WatlowChamberServer::run() {
@@ -400,38 +292,20 @@ void WatlowChamberServer::run() {
       std::lock_guard<std::mutex> lock(mutex_);
       fw_.advance_to(emulated_now());
     }
-    if (now_ns() < down_until_ns_.load()) {  // the peer is gone: nothing listens, nothing answers
-      if (client_fd_ >= 0) ::close(client_fd_);
-      if (listen_fd_ >= 0) ::close(listen_fd_);
-      client_fd_ = listen_fd_ = -1;
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    const auto ev = tcp_.wait();
+    if (!ev) continue;
+    if (ev->listener) {
+      if (ev->accepted_fd >= 0) count(&ChamberEmuStats::connections);
       continue;
     }
-    if (listen_fd_ < 0 && !listen_now()) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-      continue;
-    }
-    pollfd p[2] = {{listen_fd_, POLLIN, 0}, {client_fd_, POLLIN, 0}};
-    const int r = ::poll(p, client_fd_ >= 0 ? 2 : 1, 20);
-    if (r <= 0) continue;
-    if (p[0].revents & POLLIN) {
-      const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
-      if (fd >= 0) {
-        if (client_fd_ >= 0) ::close(client_fd_);  // one master at a time: the newest wins
-        client_fd_ = fd;
-        count(&ChamberEmuStats::connections);
-      }
-      continue;
-    }
-    if (client_fd_ >= 0 && (p[1].revents & (POLLIN | POLLHUP | POLLERR))) {
-      modbus_set_socket(M(ctx_), client_fd_);
-      const int rc = modbus_receive(M(ctx_), req.data());
-      if (rc > 0) {
-        handle(ctx_, req.data(), rc, true, client_fd_, false);
-      } else if (rc < 0 && errno != ETIMEDOUT) {
-        ::close(client_fd_);
-        client_fd_ = -1;
-      }
+    if (ev->readable.empty()) continue;
+    const int fd = ev->readable.front();  // the one master
+    modbus_set_socket(M(ctx_), fd);
+    const int rc = modbus_receive(M(ctx_), req.data());
+    if (rc > 0) {
+      handle(ctx_, req.data(), rc, true, fd, false);
+    } else if (rc < 0 && errno != ETIMEDOUT) {
+      tcp_.drop(fd);
     }
   }
 }

@@ -11,6 +11,8 @@
 #pragma once
 
 #include "sim_thermochamber.hpp"  // fixtures/sim_thermochamber: ThermochamberConfig (the plant)
+#include "stend/emulators/pty_modbus_slave.hpp"  // emulators/common: the RTU slave's pty pair
+#include "stend/emulators/tcp_server.hpp"        // emulators/common: the loopback accept/serve loop
 
 #include <array>
 #include <atomic>
@@ -68,7 +70,7 @@ class ChamberFirmware {
   ChamberEmuConfig c_;
   std::array<std::uint16_t, 12> hold_{};
   double now_ = 0.0, next_control_ = 0.0, last_master_ = 0.0;
-  double air_, die_, tau_air_;
+  double air_, die_;  // plant air and die temperatures [°C]
   std::int16_t raw_ = 0, stuck_raw_ = 0;
   bool running_ = false;
   double integral_ = 0.0, err_prev_ = 0.0, u_ = 0.0;
@@ -131,13 +133,11 @@ class AtmegaChamberSlave final : public ChamberServerBase {
  public:
   explicit AtmegaChamberSlave(const ChamberEmuConfig& c);  // opens the pty, starts the thread
   ~AtmegaChamberSlave() override;
-  const std::string& device_path() const { return device_path_; }
+  const std::string& device_path() const { return rtu_.device_path(); }
 
  private:
   void run();
-  std::string device_path_;
-  int master_fd_ = -1, slave_fd_ = -1;
-  void* ctx_ = nullptr;
+  PtyModbusRtu rtu_;
   std::thread thread_;
 };
 
@@ -146,17 +146,14 @@ class WatlowChamberServer final : public ChamberServerBase {
   // port 0: an ephemeral port (see port()).
   explicit WatlowChamberServer(const ChamberEmuConfig& c, int port = 0);
   ~WatlowChamberServer() override;
-  int port() const { return port_; }
+  int port() const { return tcp_.port(); }
   // Closes the connection and the listening socket; listens again on the same port after `d`.
-  void disconnect_for(std::chrono::milliseconds d);
+  void disconnect_for(std::chrono::milliseconds d) { tcp_.disconnect_for(d); }
 
  private:
   void run();
-  bool listen_now();
-  int port_ = 0;
-  int listen_fd_ = -1, client_fd_ = -1;
-  void* ctx_ = nullptr;
-  std::atomic<std::int64_t> down_until_ns_{0};
+  LoopbackTcpServer tcp_;  // one master at a time: the newest connection wins
+  void* ctx_ = nullptr;    // modbus_t*, framing only: its socket is set to the master's fd per request
   std::thread thread_;
 };
 

@@ -1,25 +1,17 @@
 #include "table_text_server.hpp"
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <stdexcept>
+
+#include "stend/emulators/steady_ns.hpp"
 
 namespace stend::emu {
 namespace {
-
-std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 std::string trim(const std::string& s) {
   const auto b = s.find_first_not_of(" \t\r\n");
@@ -39,27 +31,29 @@ std::string num(double v) {
   return b;
 }
 
+// The config, refused before anything listens.
+TableTextConfig checked(TableTextConfig c) {
+  if (c.axes.empty()) throw std::invalid_argument("table emulator: no axes");
+  if (!(c.speed > 0.0)) throw std::invalid_argument("table emulator: speed must be > 0");
+  return c;
+}
+
 }  // namespace
 
-TableTextServer::TableTextServer(TableTextConfig c) : c_(std::move(c)), t0_(std::chrono::steady_clock::now()) {
-  if (c_.axes.empty()) throw std::invalid_argument("table emulator: no axes");
-  if (!(c_.speed > 0.0)) throw std::invalid_argument("table emulator: speed must be > 0");
+TableTextServer::TableTextServer(TableTextConfig c)
+    : c_(checked(std::move(c))),
+      t0_(std::chrono::steady_clock::now()),
+      tcp_("table emulator", LoopbackTcpOptions{.port = c_.port, .poll_ms = 5, .down_sleep_ms = 5}) {
   for (std::size_t i = 0; i < c_.axes.size(); ++i) {
     axes_.emplace_back(c_.axes[i], c_.seed + i);
     axes_.back().start_at(0.0);
   }
-  port_ = c_.port;
-  if (!listen_now())
-    throw std::runtime_error("table emulator: cannot listen on 127.0.0.1:" + std::to_string(c_.port) + ": " +
-                             std::strerror(errno));
   thread_ = std::thread([this] { run(); });
 }
 
 TableTextServer::~TableTextServer() {
   stop_ = true;
   if (thread_.joinable()) thread_.join();
-  for (int fd : clients_) ::close(fd);
-  if (listen_fd_ >= 0) ::close(listen_fd_);
 }
 
 double TableTextServer::emulated_now() const {
@@ -87,32 +81,9 @@ double TableTextServer::commanded(std::size_t i) const {
 }
 
 void TableTextServer::go_silent(std::chrono::milliseconds d) {
-  silent_until_ns_ = now_ns() + std::chrono::duration_cast<std::chrono::nanoseconds>(d).count();
-}
-void TableTextServer::disconnect_for(std::chrono::milliseconds d) {
-  down_until_ns_ = now_ns() + std::chrono::duration_cast<std::chrono::nanoseconds>(d).count();
+  silent_until_ns_ = steady_ns_after(d);
 }
 void TableTextServer::garble_next(int replies) { garble_ = replies; }
-
-bool TableTextServer::listen_now() {
-  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  if (fd < 0) return false;
-  const int one = 1;
-  ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(static_cast<std::uint16_t>(port_));
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || ::listen(fd, 4) != 0) {
-    ::close(fd);
-    return false;
-  }
-  socklen_t len = sizeof a;
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-  port_ = ntohs(a.sin_port);
-  listen_fd_ = fd;
-  return true;
-}
 
 std::string TableTextServer::execute(const std::string& raw) {
   const std::string line = trim(raw);
@@ -169,47 +140,27 @@ void TableTextServer::run() {
       std::lock_guard<std::mutex> lock(mutex_);
       advance_locked();
     }
-    if (now_ns() < down_until_ns_.load()) {
-      for (int fd : clients_) ::close(fd);
-      clients_.clear();
-      inbox_.clear();
-      if (listen_fd_ >= 0) ::close(listen_fd_);
-      listen_fd_ = -1;
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-      continue;
+    const auto ev = tcp_.wait();
+    if (!ev) continue;
+    if (ev->accepted_fd >= 0) {
+      inbox_[ev->accepted_fd].clear();  // a new connection (its fd number may be a closed one's)
+      connections_.fetch_add(1);
     }
-    if (listen_fd_ < 0 && !listen_now()) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-      continue;
-    }
-    std::vector<pollfd> p;
-    p.push_back({listen_fd_, POLLIN, 0});
-    for (int fd : clients_) p.push_back({fd, POLLIN, 0});
-    if (::poll(p.data(), p.size(), 5) <= 0) continue;
-    if (p[0].revents & POLLIN) {
-      const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
-      if (fd >= 0) {
-        clients_.push_back(fd);
-        inbox_.emplace_back();
-        connections_.fetch_add(1);
-      }
-    }
-    for (std::size_t k = 1; k < p.size(); ++k) {
-      if (!(p[k].revents & (POLLIN | POLLHUP | POLLERR))) continue;
-      const std::size_t ci = k - 1;
+    for (const int fd : ev->readable) {
       char buf[512];
-      const ssize_t n = ::read(clients_[ci], buf, sizeof buf);
+      const ssize_t n = ::read(fd, buf, sizeof buf);
       if (n <= 0) {
-        ::close(clients_[ci]);
-        clients_[ci] = -1;
+        tcp_.drop(fd);
+        inbox_.erase(fd);
         continue;
       }
-      inbox_[ci].append(buf, static_cast<std::size_t>(n));
+      std::string& inbox = inbox_[fd];
+      inbox.append(buf, static_cast<std::size_t>(n));
       std::size_t nl;
-      while ((nl = inbox_[ci].find('\n')) != std::string::npos) {
-        const std::string line = inbox_[ci].substr(0, nl);
-        inbox_[ci].erase(0, nl + 1);
-        if (now_ns() < silent_until_ns_.load()) continue;
+      while ((nl = inbox.find('\n')) != std::string::npos) {
+        const std::string line = inbox.substr(0, nl);
+        inbox.erase(0, nl + 1);
+        if (steady_now_ns() < silent_until_ns_.load()) continue;
         std::string reply;
         {
           std::lock_guard<std::mutex> lock(mutex_);
@@ -222,14 +173,8 @@ void TableTextServer::run() {
           reply = "#\x7f~" + reply.substr(0, reply.size() / 2) + "?!";
         }
         reply += "\r\n";
-        const ssize_t w = ::send(clients_[ci], reply.data(), reply.size(), MSG_NOSIGNAL);
+        const ssize_t w = ::send(fd, reply.data(), reply.size(), MSG_NOSIGNAL);
         (void)w;
-      }
-    }
-    for (std::size_t ci = clients_.size(); ci-- > 0;) {
-      if (clients_[ci] < 0) {
-        clients_.erase(clients_.begin() + static_cast<std::ptrdiff_t>(ci));
-        inbox_.erase(inbox_.begin() + static_cast<std::ptrdiff_t>(ci));
       }
     }
   }

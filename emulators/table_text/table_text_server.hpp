@@ -13,10 +13,13 @@
 
 #include <stend/sim/motion_profile.hpp>
 
+#include "stend/emulators/tcp_server.hpp"  // emulators/common: the loopback accept/serve loop
+
 #include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <map>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -39,7 +42,7 @@ class TableTextServer {
   TableTextServer(const TableTextServer&) = delete;
   TableTextServer& operator=(const TableTextServer&) = delete;
 
-  int port() const { return port_; }
+  int port() const { return tcp_.port(); }
   double emulated_now() const;
   // Exact state of axis i (0-based) at the current emulated time (thread-safe).
   sim::AxisState state(std::size_t i) const;
@@ -48,14 +51,13 @@ class TableTextServer {
   double commanded(std::size_t i) const;
 
   void go_silent(std::chrono::milliseconds d);
-  void disconnect_for(std::chrono::milliseconds d);
+  void disconnect_for(std::chrono::milliseconds d) { tcp_.disconnect_for(d); }
   void garble_next(int replies);  // the next replies come back as line noise
   std::uint64_t connections() const { return connections_.load(); }
   std::uint64_t commands() const { return commands_.load(); }
 
  private:
   void run();
-  bool listen_now();
   std::string execute(const std::string& line);  // reply ("" = none); locked by the caller
   void advance_locked() const;
 
@@ -64,11 +66,9 @@ class TableTextServer {
   mutable std::vector<sim::SimAxis> axes_;
   std::deque<std::string> errors_;
   std::chrono::steady_clock::time_point t0_;
-  int port_ = 0;
-  int listen_fd_ = -1;
-  std::vector<int> clients_;
-  std::vector<std::string> inbox_;
-  std::atomic<std::int64_t> silent_until_ns_{0}, down_until_ns_{0};
+  LoopbackTcpServer tcp_;               // the listener and its clients (any number)
+  std::map<int, std::string> inbox_;    // per client fd: bytes received after the last full line
+  std::atomic<std::int64_t> silent_until_ns_{0};
   std::atomic<int> garble_{0};
   std::atomic<std::uint64_t> connections_{0}, commands_{0};
   std::atomic<bool> stop_{false};

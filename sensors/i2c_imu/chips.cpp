@@ -3,6 +3,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <initializer_list>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -24,15 +26,17 @@ std::int32_t be16(const std::uint8_t* p) { return static_cast<std::int16_t>((p[0
 
 void sleep_ms(int ms) { std::this_thread::sleep_for(std::chrono::milliseconds(ms)); }
 
-std::string list(std::initializer_list<double> v) {
+// "a, b, c" with %g.
+std::string list(const double* v, std::size_t n) {
   std::string s;
-  for (double x : v) {
+  for (std::size_t i = 0; i < n; ++i) {
     char b[32];
-    std::snprintf(b, sizeof b, "%g", x);
+    std::snprintf(b, sizeof b, "%g", v[i]);
     s += (s.empty() ? "" : ", ") + std::string(b);
   }
   return s;
 }
+std::string list(std::initializer_list<double> v) { return list(v.begin(), v.size()); }
 
 // Index of `value` in `allowed`, or throws naming the allowed values.
 template <std::size_t N>
@@ -40,39 +44,84 @@ int pick(const char* plugin, const char* key, double value, const double (&allow
   for (std::size_t i = 0; i < N; ++i) {
     if (std::abs(allowed[i] - value) <= 1e-9 * std::max(1.0, std::abs(value))) return static_cast<int>(i);
   }
-  std::string s;
-  for (double x : allowed) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%g", x);
-    s += (s.empty() ? "" : ", ") + std::string(b);
-  }
-  char got[32];
-  std::snprintf(got, sizeof got, "%g", value);
-  throw std::invalid_argument(std::string(plugin) + ": " + key + " must be one of " + s + " (got " + got + ")");
+  throw std::invalid_argument(std::string(plugin) + ": " + key + " must be one of " + list(allowed, N) + " (got " +
+                              list({value}) + ")");
 }
 
-// Writes, then reads back: a register that does not keep its value means a wrong or broken part.
-void write_checked(I2cDevice& d, const char* plugin, std::uint8_t reg, std::uint8_t value, const char* name) {
-  d.write_reg(reg, value);
-  const std::uint8_t got = d.read_reg(reg);
-  if (got != value) {
-    throw I2cError(std::string(plugin) + ": " + d.where() + ": " + name + " (" + i2c_hex(reg) + ") reads back " + i2c_hex(got) +
-                       " after writing " + i2c_hex(value) + "; the device is not the configured part or is faulty",
-                   I2cError::Kind::kProtocol);
+// One write of a chip's register sequence (configure, FIFO set-up), as the datasheet gives it.
+struct RegWrite {
+  std::uint8_t reg;
+  std::uint8_t value;
+  std::uint8_t verify_mask;  // bits that must read back as written; kNoReadBack: commands, resets
+  const char* name;          // the datasheet's register name, for messages
+  int wait_ms;               // [ms] after the write (and its read-back): reset or start-up time
+};
+constexpr std::uint8_t kAllBits = 0xFF, kNoReadBack = 0x00;
+
+// Writes `seq` in order, reading back every register with a verify_mask: a register that does not
+// keep its value means a wrong or broken part (I2cError naming plugin, bus/address, register,
+// expected and actual value).
+void apply(I2cDevice& d, const char* plugin, std::initializer_list<RegWrite> seq) {
+  for (const RegWrite& w : seq) {
+    d.write_reg(w.reg, w.value);
+    if (w.verify_mask != kNoReadBack) {
+      const std::uint8_t got = d.read_reg(w.reg);
+      if ((got & w.verify_mask) != (w.value & w.verify_mask)) {
+        throw I2cError(std::string(plugin) + ": " + d.where() + ": " + w.name + " (" + i2c_hex(w.reg) + ") reads back " +
+                           i2c_hex(got) + " after writing " + i2c_hex(w.value) +
+                           (w.verify_mask == kAllBits ? std::string() : " (bits " + i2c_hex(w.verify_mask) + ")") +
+                           "; the device is not the configured part or is faulty",
+                       I2cError::Kind::kProtocol);
+      }
+    }
+    if (w.wait_ms > 0) sleep_ms(w.wait_ms);
   }
+}
+
+// What identifies a part on the bus: the ChipDriver getters of every chip below.
+struct ChipIdentity {
+  const char* plugin;            // "mpu6050_i2c"
+  const char* vendor;
+  const char* model;
+  std::uint8_t default_address;  // 7-bit
+  std::uint8_t id_register;
+  const char* id_register_name;  // "WHO_AM_I"
+  std::uint8_t expected_id;
+};
+
+class IdentifiedChip : public ChipDriver {
+ public:
+  explicit IdentifiedChip(const ChipIdentity& id) : id_(id) {}
+  const char* plugin() const override { return id_.plugin; }
+  const char* vendor() const override { return id_.vendor; }
+  const char* model() const override { return id_.model; }
+  std::uint8_t default_address() const override { return id_.default_address; }
+  std::uint8_t id_register() const override { return id_.id_register; }
+  const char* id_register_name() const override { return id_.id_register_name; }
+  std::uint8_t expected_id() const override { return id_.expected_id; }
+
+ private:
+  ChipIdentity id_;
+};
+
+// SensorInfo of an accelerometer + gyroscope part with 16-bit outputs: full scale = range, so one
+// LSB is range / 32768. Rate [Hz], ranges [g] and [deg/s] as configured, temperature [°C/LSB].
+SensorInfo full_scale_info(double rate_hz, double accel_range_g, double gyro_range_dps, double temperature_lsb_c) {
+  SensorInfo i;
+  i.output_rate_hz = rate_hz;
+  i.accel_range_mps2 = accel_range_g * kG;
+  i.gyro_range_radps = gyro_range_dps * kDegToRad;
+  i.accel_lsb_mps2 = i.accel_range_mps2 / 32768.0;
+  i.gyro_lsb_radps = i.gyro_range_radps / 32768.0;
+  i.temperature_lsb_c = temperature_lsb_c;
+  return i;
 }
 
 // ---------------------------------------------------------------------------------------------
 // InvenSense MPU-6050 (register map RM-MPU-6000A-00 rev 4.2)
-class Mpu6050 final : public ChipDriver {
+class Mpu6050 final : public IdentifiedChip {
  public:
-  const char* plugin() const override { return "mpu6050_i2c"; }
-  const char* vendor() const override { return "InvenSense"; }
-  const char* model() const override { return "MPU-6050"; }
-  std::uint8_t default_address() const override { return 0x68; }
-  std::uint8_t id_register() const override { return 0x75; }
-  const char* id_register_name() const override { return "WHO_AM_I"; }
-  std::uint8_t expected_id() const override { return 0x68; }
+  Mpu6050() : IdentifiedChip({"mpu6050_i2c", "InvenSense", "MPU-6050", 0x68, 0x75, "WHO_AM_I", 0x68}) {}
   std::string id_hint(std::uint8_t a) const override {
     switch (a) {
       case 0x70: return "0x70 is an MPU-6500";
@@ -99,24 +148,18 @@ class Mpu6050 final : public ChipDriver {
     rate_ = base / (1.0 + div);
   }
   SensorInfo info() const override {
-    SensorInfo i;
-    i.output_rate_hz = rate_;
-    i.accel_range_mps2 = 2.0 * (1 << afs_) * kG;
-    i.gyro_range_radps = 250.0 * (1 << fs_) * kDegToRad;
-    i.accel_lsb_mps2 = i.accel_range_mps2 / 32768.0;
-    i.gyro_lsb_radps = i.gyro_range_radps / 32768.0;
-    i.temperature_lsb_c = 1.0 / 340.0;
-    return i;
+    return full_scale_info(rate_, 2.0 * (1 << afs_), 250.0 * (1 << fs_), 1.0 / 340.0);
   }
   double temperature_offset_c() const override { return 36.53; }  // T = raw/340 + 36.53 °C
   void configure(I2cDevice& d) override {
-    d.write_reg(0x6B, 0x80);  // PWR_MGMT_1.DEVICE_RESET
-    sleep_ms(100);            // datasheet: wait for the reset to finish
-    d.write_reg(0x6B, 0x01);  // wake, clock = PLL with the X gyro
-    write_checked(d, plugin(), 0x19, static_cast<std::uint8_t>(div_), "SMPLRT_DIV");
-    write_checked(d, plugin(), 0x1A, static_cast<std::uint8_t>(dlpf_), "CONFIG");
-    write_checked(d, plugin(), 0x1B, static_cast<std::uint8_t>(fs_ << 3), "GYRO_CONFIG");
-    write_checked(d, plugin(), 0x1C, static_cast<std::uint8_t>(afs_ << 3), "ACCEL_CONFIG");
+    apply(d, plugin(), {
+        {0x6B, 0x80, kNoReadBack, "PWR_MGMT_1", 100},  // DEVICE_RESET; datasheet: wait for the reset to finish
+        {0x6B, 0x01, kNoReadBack, "PWR_MGMT_1", 0},    // wake, clock = PLL with the X gyro
+        {0x19, static_cast<std::uint8_t>(div_), kAllBits, "SMPLRT_DIV", 0},
+        {0x1A, static_cast<std::uint8_t>(dlpf_), kAllBits, "CONFIG", 0},
+        {0x1B, static_cast<std::uint8_t>(fs_ << 3), kAllBits, "GYRO_CONFIG", 0},
+        {0x1C, static_cast<std::uint8_t>(afs_ << 3), kAllBits, "ACCEL_CONFIG", 0},
+    });
     const std::uint8_t pwr = d.read_reg(0x6B);
     if (pwr & 0x40) throw I2cError(std::string(plugin()) + ": " + d.where() + ": still asleep after wake (PWR_MGMT_1 " + i2c_hex(pwr) + ")", I2cError::Kind::kProtocol);
   }
@@ -164,15 +207,9 @@ class Mpu6050 final : public ChipDriver {
 
 // ---------------------------------------------------------------------------------------------
 // Analog Devices ADXL345 (datasheet rev. E)
-class Adxl345 final : public ChipDriver {
+class Adxl345 final : public IdentifiedChip {
  public:
-  const char* plugin() const override { return "adxl345"; }
-  const char* vendor() const override { return "Analog Devices"; }
-  const char* model() const override { return "ADXL345"; }
-  std::uint8_t default_address() const override { return 0x53; }
-  std::uint8_t id_register() const override { return 0x00; }
-  const char* id_register_name() const override { return "DEVID"; }
-  std::uint8_t expected_id() const override { return 0xE5; }
+  Adxl345() : IdentifiedChip({"adxl345", "Analog Devices", "ADXL345", 0x53, 0x00, "DEVID", 0xE5}) {}
   void validate(const I2cImuConfig& c) override {
     static constexpr double kA[] = {2, 4, 8, 16};
     static constexpr double kOdr[] = {6.25, 12.5, 25, 50, 100, 200, 400, 800, 1600, 3200};
@@ -191,11 +228,13 @@ class Adxl345 final : public ChipDriver {
     return i;
   }
   void configure(I2cDevice& d) override {
-    d.write_reg(0x2D, 0x00);  // POWER_CTL: standby while configuring
-    write_checked(d, plugin(), 0x31, static_cast<std::uint8_t>(0x08 | range_), "DATA_FORMAT");  // FULL_RES, right-justified
-    write_checked(d, plugin(), 0x2C, static_cast<std::uint8_t>(rate_code_), "BW_RATE");
-    d.write_reg(0x38, 0x00);  // FIFO_CTL: bypass (fifo_start() switches to stream)
-    write_checked(d, plugin(), 0x2D, 0x08, "POWER_CTL");  // Measure
+    apply(d, plugin(), {
+        {0x2D, 0x00, kNoReadBack, "POWER_CTL", 0},  // standby while configuring
+        {0x31, static_cast<std::uint8_t>(0x08 | range_), kAllBits, "DATA_FORMAT", 0},  // FULL_RES, right-justified
+        {0x2C, static_cast<std::uint8_t>(rate_code_), kAllBits, "BW_RATE", 0},
+        {0x38, 0x00, kNoReadBack, "FIFO_CTL", 0},  // bypass (fifo_start() switches to stream)
+        {0x2D, 0x08, kAllBits, "POWER_CTL", 0},    // Measure
+    });
   }
   void stop(I2cDevice& d) override { d.write_reg(0x2D, 0x00); }
   bool poll(I2cDevice& d, RawSample& s) override {
@@ -234,15 +273,9 @@ class Adxl345 final : public ChipDriver {
 
 // ---------------------------------------------------------------------------------------------
 // STMicroelectronics LSM6DSO (datasheet DS12140 rev 2)
-class Lsm6dso final : public ChipDriver {
+class Lsm6dso final : public IdentifiedChip {
  public:
-  const char* plugin() const override { return "lsm6dso"; }
-  const char* vendor() const override { return "STMicroelectronics"; }
-  const char* model() const override { return "LSM6DSO"; }
-  std::uint8_t default_address() const override { return 0x6A; }
-  std::uint8_t id_register() const override { return 0x0F; }
-  const char* id_register_name() const override { return "WHO_AM_I"; }
-  std::uint8_t expected_id() const override { return 0x6C; }
+  Lsm6dso() : IdentifiedChip({"lsm6dso", "STMicroelectronics", "LSM6DSO", 0x6A, 0x0F, "WHO_AM_I", 0x6C}) {}
   std::string id_hint(std::uint8_t a) const override {
     if (a == 0x69) return "0x69 is an LSM6DS3";
     if (a == 0x6A) return "0x6A is an LSM6DSL";
@@ -271,11 +304,12 @@ class Lsm6dso final : public ChipDriver {
   SensorInfo info() const override { return info_; }
   double temperature_offset_c() const override { return 25.0; }  // 0 LSB = 25 °C, 256 LSB/°C
   void configure(I2cDevice& d) override {
-    d.write_reg(0x12, 0x01);  // CTRL3_C.SW_RESET
-    sleep_ms(1);
-    write_checked(d, plugin(), 0x12, 0x44, "CTRL3_C");  // BDU, IF_INC
-    write_checked(d, plugin(), 0x10, ctrl1_, "CTRL1_XL");
-    write_checked(d, plugin(), 0x11, ctrl2_, "CTRL2_G");
+    apply(d, plugin(), {
+        {0x12, 0x01, kNoReadBack, "CTRL3_C", 1},  // SW_RESET
+        {0x12, 0x44, kAllBits, "CTRL3_C", 0},     // BDU, IF_INC
+        {0x10, ctrl1_, kAllBits, "CTRL1_XL", 0},  // ODR_XL, FS_XL
+        {0x11, ctrl2_, kAllBits, "CTRL2_G", 0},   // ODR_G, FS_G / FS_125
+    });
   }
   void stop(I2cDevice& d) override {
     d.write_reg(0x10, 0x00);
@@ -296,7 +330,7 @@ class Lsm6dso final : public ChipDriver {
   // word (tag + 6 bytes each); the temperature (not batched) is read once per drain.
   bool supports_fifo() const override { return true; }
   void fifo_start(I2cDevice& d) override {
-    write_checked(d, plugin(), 0x09, static_cast<std::uint8_t>((odr_ << 4) | odr_), "FIFO_CTRL3");  // BDR_GY, BDR_XL
+    apply(d, plugin(), {{0x09, static_cast<std::uint8_t>((odr_ << 4) | odr_), kAllBits, "FIFO_CTRL3", 0}});  // BDR_GY, BDR_XL
     fifo_reset(d);
   }
   void fifo_reset(I2cDevice& d) override {
@@ -342,15 +376,9 @@ class Lsm6dso final : public ChipDriver {
 
 // ---------------------------------------------------------------------------------------------
 // Bosch BMI160 (datasheet BST-BMI160-DS000 rev 0.9)
-class Bmi160 final : public ChipDriver {
+class Bmi160 final : public IdentifiedChip {
  public:
-  const char* plugin() const override { return "bmi160"; }
-  const char* vendor() const override { return "Bosch Sensortec"; }
-  const char* model() const override { return "BMI160"; }
-  std::uint8_t default_address() const override { return 0x68; }
-  std::uint8_t id_register() const override { return 0x00; }
-  const char* id_register_name() const override { return "CHIP_ID"; }
-  std::uint8_t expected_id() const override { return 0xD1; }
+  Bmi160() : IdentifiedChip({"bmi160", "Bosch Sensortec", "BMI160", 0x68, 0x00, "CHIP_ID", 0xD1}) {}
   std::string id_hint(std::uint8_t a) const override {
     if (a == 0x00) return "0x00 at register 0x00 with an address of 0x68/0x69 is typical of an InvenSense part (MPU-6050: use mpu6050_i2c)";
     if (a == 0xD8) return "0xD8 is a BMI270? (BMI270 CHIP_ID is 0x24); check the part";
@@ -366,33 +394,28 @@ class Bmi160 final : public ChipDriver {
     acc_range_ = static_cast<std::uint8_t>(kAcc[a]);
     gyr_range_ = static_cast<std::uint8_t>(4 - w);  // 0 = ±2000 … 4 = ±125
     odr_ = static_cast<std::uint8_t>(6 + o);       // 100·2^(odr−8) Hz
-    info_ = {};
-    info_.output_rate_hz = kOdr[o];
-    info_.accel_range_mps2 = kA[a] * kG;
-    info_.gyro_range_radps = kW[w] * kDegToRad;
-    info_.accel_lsb_mps2 = info_.accel_range_mps2 / 32768.0;
-    info_.gyro_lsb_radps = info_.gyro_range_radps / 32768.0;
-    info_.temperature_lsb_c = 1.0 / 512.0;
+    info_ = full_scale_info(kOdr[o], kA[a], kW[w], 1.0 / 512.0);
   }
   SensorInfo info() const override { return info_; }
   double temperature_offset_c() const override { return 23.0; }  // 0x0000 = 23 °C, 1/512 K/LSB
   void configure(I2cDevice& d) override {
-    d.write_reg(0x7E, 0xB6);  // CMD: soft reset
-    sleep_ms(1);
-    d.write_reg(0x7E, 0x11);  // accelerometer normal mode
-    sleep_ms(4);
-    d.write_reg(0x7E, 0x15);  // gyroscope normal mode (start-up up to 80 ms)
-    sleep_ms(80);
+    apply(d, plugin(), {
+        {0x7E, 0xB6, kNoReadBack, "CMD", 1},   // soft reset
+        {0x7E, 0x11, kNoReadBack, "CMD", 4},   // accelerometer normal mode
+        {0x7E, 0x15, kNoReadBack, "CMD", 80},  // gyroscope normal mode (start-up up to 80 ms)
+    });
     const std::uint8_t pmu = d.read_reg(0x03);
     if ((pmu & 0x3C) != 0x14) {
       throw I2cError(std::string(plugin()) + ": " + d.where() + ": PMU_STATUS reads " + i2c_hex(pmu) +
                          " after the normal-mode commands, expected accel and gyro normal (0x14)",
                      I2cError::Kind::kProtocol);
     }
-    write_checked(d, plugin(), 0x40, static_cast<std::uint8_t>(0x20 | odr_), "ACC_CONF");  // acc_bwp normal
-    write_checked(d, plugin(), 0x41, acc_range_, "ACC_RANGE");
-    write_checked(d, plugin(), 0x42, static_cast<std::uint8_t>(0x20 | odr_), "GYR_CONF");
-    write_checked(d, plugin(), 0x43, gyr_range_, "GYR_RANGE");
+    apply(d, plugin(), {
+        {0x40, static_cast<std::uint8_t>(0x20 | odr_), kAllBits, "ACC_CONF", 0},  // acc_bwp normal, acc_odr
+        {0x41, acc_range_, kAllBits, "ACC_RANGE", 0},
+        {0x42, static_cast<std::uint8_t>(0x20 | odr_), kAllBits, "GYR_CONF", 0},  // gyr_bwp normal, gyr_odr
+        {0x43, gyr_range_, kAllBits, "GYR_RANGE", 0},
+    });
   }
   void stop(I2cDevice& d) override {
     d.write_reg(0x7E, 0x14);
@@ -415,8 +438,10 @@ class Bmi160 final : public ChipDriver {
   // once per drain and given to every frame of it.
   bool supports_fifo() const override { return true; }
   void fifo_start(I2cDevice& d) override {
-    write_checked(d, plugin(), 0x51, 0x20, "INT_EN_1");          // ffull: report overflows in INT_STATUS_1
-    write_checked(d, plugin(), 0x47, 0xC0, "FIFO_CONFIG_1");     // gyro and accel, no header
+    apply(d, plugin(), {
+        {0x51, 0x20, kAllBits, "INT_EN_1", 0},       // ffull: report overflows in INT_STATUS_1
+        {0x47, 0xC0, kAllBits, "FIFO_CONFIG_1", 0},  // gyro and accel, no header
+    });
     fifo_reset(d);
   }
   void fifo_reset(I2cDevice& d) override {
@@ -452,15 +477,9 @@ class Bmi160 final : public ChipDriver {
 
 // ---------------------------------------------------------------------------------------------
 // TDK InvenSense ICM-42688-P (datasheet DS-000347 rev 1.7), user bank 0
-class Icm42688p final : public ChipDriver {
+class Icm42688p final : public IdentifiedChip {
  public:
-  const char* plugin() const override { return "icm42688p"; }
-  const char* vendor() const override { return "TDK InvenSense"; }
-  const char* model() const override { return "ICM-42688-P"; }
-  std::uint8_t default_address() const override { return 0x68; }
-  std::uint8_t id_register() const override { return 0x75; }
-  const char* id_register_name() const override { return "WHO_AM_I"; }
-  std::uint8_t expected_id() const override { return 0x47; }
+  Icm42688p() : IdentifiedChip({"icm42688p", "TDK InvenSense", "ICM-42688-P", 0x68, 0x75, "WHO_AM_I", 0x47}) {}
   std::string id_hint(std::uint8_t a) const override {
     if (a == 0x68) return "0x68 is an MPU-6050: use the mpu6050_i2c plugin";
     if (a == 0x42) return "0x42 is an ICM-42605";
@@ -476,24 +495,18 @@ class Icm42688p final : public ChipDriver {
     const int o = pick(plugin(), "output_rate_hz", c.output_rate_hz, kOdr);
     gyro0_ = static_cast<std::uint8_t>((w << 5) | kOdrCode[o]);
     accel0_ = static_cast<std::uint8_t>((a << 5) | kOdrCode[o]);
-    info_ = {};
-    info_.output_rate_hz = kOdr[o];
-    info_.accel_range_mps2 = kA[a] * kG;
-    info_.gyro_range_radps = kW[w] * kDegToRad;
-    info_.accel_lsb_mps2 = info_.accel_range_mps2 / 32768.0;
-    info_.gyro_lsb_radps = info_.gyro_range_radps / 32768.0;
-    info_.temperature_lsb_c = 1.0 / 132.48;
+    info_ = full_scale_info(kOdr[o], kA[a], kW[w], 1.0 / 132.48);
   }
   SensorInfo info() const override { return info_; }
   double temperature_offset_c() const override { return 25.0; }  // T = raw/132.48 + 25 °C
   void configure(I2cDevice& d) override {
-    d.write_reg(0x76, 0x00);  // REG_BANK_SEL: bank 0
-    d.write_reg(0x11, 0x01);  // DEVICE_CONFIG: soft reset
-    sleep_ms(1);
-    write_checked(d, plugin(), 0x4F, gyro0_, "GYRO_CONFIG0");
-    write_checked(d, plugin(), 0x50, accel0_, "ACCEL_CONFIG0");
-    write_checked(d, plugin(), 0x4E, 0x0F, "PWR_MGMT0");  // gyro and accel low-noise mode
-    sleep_ms(45);  // gyro start-up
+    apply(d, plugin(), {
+        {0x76, 0x00, kNoReadBack, "REG_BANK_SEL", 0},  // bank 0
+        {0x11, 0x01, kNoReadBack, "DEVICE_CONFIG", 1},  // soft reset
+        {0x4F, gyro0_, kAllBits, "GYRO_CONFIG0", 0},    // GYRO_FS_SEL, GYRO_ODR
+        {0x50, accel0_, kAllBits, "ACCEL_CONFIG0", 0},  // ACCEL_FS_SEL, ACCEL_ODR
+        {0x4E, 0x0F, kAllBits, "PWR_MGMT0", 45},        // gyro and accel low-noise mode; gyro start-up
+    });
   }
   void stop(I2cDevice& d) override { d.write_reg(0x4E, 0x00); }
   bool poll(I2cDevice& d, RawSample& s) override {
@@ -510,9 +523,11 @@ class Icm42688p final : public ChipDriver {
   // FIFO: stream mode, packet 3 (16 bytes: header, accel, gyro, int8 temperature, timestamp).
   bool supports_fifo() const override { return true; }
   void fifo_start(I2cDevice& d) override {
-    d.write_reg(0x16, 0x00);  // FIFO_CONFIG: bypass while configuring
-    write_checked(d, plugin(), 0x5F, 0x07, "FIFO_CONFIG1");  // accel, gyro, temperature
-    write_checked(d, plugin(), 0x16, 0x40, "FIFO_CONFIG");   // stream-to-FIFO
+    apply(d, plugin(), {
+        {0x16, 0x00, kNoReadBack, "FIFO_CONFIG", 0},  // bypass while configuring
+        {0x5F, 0x07, kAllBits, "FIFO_CONFIG1", 0},    // accel, gyro, temperature
+        {0x16, 0x40, kAllBits, "FIFO_CONFIG", 0},     // stream-to-FIFO
+    });
     fifo_reset(d);
   }
   void fifo_reset(I2cDevice& d) override {
