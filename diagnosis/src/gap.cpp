@@ -14,7 +14,10 @@
 #include <sstream>
 
 #include "stend/estimation/linear_lsq.hpp"
+#include "magnitude.hpp"
+#include "noise_stage.hpp"
 #include "stats.hpp"
+#include "text.hpp"
 
 namespace stend::gap {
 
@@ -36,6 +39,9 @@ std::string term_label(const TermSpec& t) {
 struct Rows {
   std::vector<int> seg, axis;
   VectorXd y, w;  // Δ = measured − true input; weights 1/floor²
+  // Magnitude form only: the direction each row projects the segment's three axes on (û);
+  // empty otherwise (row = one sensor axis).
+  std::vector<Eigen::Vector3d> dir;
   std::vector<std::vector<int>> folds;  // row indices held out together
   std::vector<std::string> fold_names;
 };
@@ -48,8 +54,13 @@ MatrixXd term_block(const GapInput& in, const Rows& rows, const TermSpec& t) {
   MatrixXd B(rows.y.size(), m.size());
   std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>> per_seg(in.segments.size());
   for (std::size_t s = 0; s < in.segments.size(); ++s) per_seg[s] = m.regressor(in.segments[s].point.stimulus);
-  for (Eigen::Index r = 0; r < rows.y.size(); ++r)
-    B.row(r) = per_seg[static_cast<std::size_t>(rows.seg[static_cast<std::size_t>(r)])].row(rows.axis[static_cast<std::size_t>(r)]);
+  for (Eigen::Index r = 0; r < rows.y.size(); ++r) {
+    const auto& R = per_seg[static_cast<std::size_t>(rows.seg[static_cast<std::size_t>(r)])];
+    if (rows.dir.empty())
+      B.row(r) = R.row(rows.axis[static_cast<std::size_t>(r)]);
+    else
+      B.row(r) = rows.dir[static_cast<std::size_t>(r)].transpose() * R;
+  }
   return B;
 }
 
@@ -516,23 +527,35 @@ Eval evaluate(const GapInput& in, const Rows& rows, const std::vector<TermSpec>&
       r.ci_hi = pe.upper;
     }
   }
+  // Under a time-correlated covariance of the segment means (GLS region found) the interval of
+  // that parameter comes from the whitened fit; the widest over the likelihood region is kept, as
+  // for the p value (independent-mean intervals under-cover when the bias wanders).
+  if (gls && gls->ok && !r.size_param.empty()) {
+    const VectorXd ones = VectorXd::Ones(rows.y.size());
+    double widest = r.ci_hi - r.ci_lo;
+    for (const auto& pt : gls->region) {
+      const Fit fg = solve(gls_whiten(*gls, pt, rows, A1), gls_whiten(*gls, pt, rows, rows.y), ones, names, units);
+      if (!fg.lsq.ok()) continue;
+      const int j = fg.lsq.index(r.size_param);
+      if (j < 0) continue;
+      const auto& pe = fg.lsq.parameters[static_cast<std::size_t>(j)];
+      if (!pe.identifiable || !(pe.upper - pe.lower > widest)) continue;
+      widest = pe.upper - pe.lower;
+      r.size = pe.value;
+      r.ci_lo = pe.lower;
+      r.ci_hi = pe.upper;
+    }
+  }
   // Axis on which the fitted contribution is largest.
   VectorXd th = f1.lsq.min_norm_solution.tail(C.cols());
   const VectorXd contrib = C * th;
   double ax[3] = {0, 0, 0};
   for (Eigen::Index i = 0; i < contrib.size(); ++i) ax[rows.axis[static_cast<std::size_t>(i)]] += contrib[i] * contrib[i];
   const int amax = static_cast<int>(std::max_element(ax, ax + 3) - ax);
-  r.axis = std::string(1, "xyz"[amax]);
+  r.axis = in.magnitude ? "|f|" : std::string(1, "xyz"[amax]);
   return e;
 }
 
-std::string fmt(double v, int prec = 4) {
-  if (!std::isfinite(v)) return "n/a";
-  std::ostringstream os;
-  os.precision(prec);
-  os << v;
-  return os.str();
-}
 
 }  // namespace
 
@@ -572,6 +595,14 @@ std::string separating_experiment(TermKind a, TermKind b) {
   const auto mag = {TermKind::kScale, TermKind::kNonlinearK3, TermKind::kOddQuadratic, TermKind::kGravityError,
                     TermKind::kNonlinearK2, TermKind::kBias};
   std::string A = model::term_name(a), B = model::term_name(b);
+  // A wrong local g is a common scale of a static design (tumbles do not help); a known input apart
+  // from gravity does: the centripetal ω×(ω×r) on a rate table, the offset r known (stend gap validate).
+  if (is(TermKind::kGravityError, TermKind::kLeverArm))
+    return A + " vs " + B + ": remount the sensor at a second known offset from the rate axis (with one mount, g "
+           "and the radius both off by the same fraction look like a common scale)";
+  if (is(TermKind::kGravityError, TermKind::kScale))
+    return A + " vs " + B + ": an input of known size apart from gravity — the accelerometer off the axis of a "
+           "rate table (centripetal ω²r at known offsets, two mounts), or a second reference for g";
   if (in(a, mag) && in(b, mag))
     return A + " vs " + B + ": add positions where the axis sees other inputs than 0 and ±g (tilts of 30°, 45°, "
            "60° about two axes, i.e. a tumble), or a centrifuge / a second known reference for g";
@@ -601,6 +632,7 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
   rep.unit = accel ? "m/s^2" : "rad/s";
   rep.display_unit = accel ? "mg" : "deg/h";
   rep.display_per_unit = accel ? 1000.0 / batch_lsq::kStandardGravity : 180.0 / M_PI * 3600.0;
+  rep.magnitude = in.magnitude;
   rep.model_name = in.spec.source.empty() ? "<model>" : in.spec.source;
   rep.source = in.source;
   rep.segments = in.segments;
@@ -608,10 +640,15 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
   rep.notes = in.notes;
   if (!in.truth_source.empty()) rep.notes.insert(rep.notes.begin(), "truth: " + in.truth_source);
 
-  // 1. Fit the model as given (batch_lsq) and replay through the twin.
-  std::vector<batch_lsq::StaticPoint> pts;
-  for (const auto& s : in.segments) pts.push_back(s.point);
-  rep.fit = batch_lsq::fit_points(pts, in.spec);
+  // 1. Fit the model as given (batch_lsq; in the magnitude form the |f| rows below) and replay
+  // through the twin.
+  if (in.magnitude) {
+    rep.fit = fit_magnitude_rows(in);
+  } else {
+    std::vector<batch_lsq::StaticPoint> pts;
+    for (const auto& s : in.segments) pts.push_back(s.point);
+    rep.fit = batch_lsq::fit_points(pts, in.spec);
+  }
   if (!rep.fit.ok) {
     rep.message = "the model could not be fitted: " + rep.fit.message;
     return rep;
@@ -622,16 +659,25 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
     theta[rep.fit.param_index[j]] = rep.fit.lsq.min_norm_solution[static_cast<Eigen::Index>(j)];
   std::vector<bool> fitted(3, false);
   for (int a : in.spec.axes) fitted[static_cast<std::size_t>(a)] = true;
+  if (in.magnitude) fitted = {true, false, false};  // slot 0 holds the |f| row
 
   Rows rows;
   std::vector<double> floor2(3, 0.0);
   std::vector<int> floor_n(3, 0);
   for (const auto& s : in.segments)
-    for (int a = 0; a < 3; ++a)
-      if (fitted[static_cast<std::size_t>(a)] && std::isfinite(s.mean_std_error[a])) {
-        floor2[static_cast<std::size_t>(a)] += s.mean_std_error[a] * s.mean_std_error[a];
-        ++floor_n[static_cast<std::size_t>(a)];
+    if (in.magnitude) {
+      const double se = magnitude_std_error(s);
+      if (std::isfinite(se)) {
+        floor2[0] += se * se;
+        ++floor_n[0];
       }
+    } else {
+      for (int a = 0; a < 3; ++a)
+        if (fitted[static_cast<std::size_t>(a)] && std::isfinite(s.mean_std_error[a])) {
+          floor2[static_cast<std::size_t>(a)] += s.mean_std_error[a] * s.mean_std_error[a];
+          ++floor_n[static_cast<std::size_t>(a)];
+        }
+    }
   for (int a = 0; a < 3; ++a)
     if (floor_n[static_cast<std::size_t>(a)]) rep.floor[a] = std::sqrt(floor2[static_cast<std::size_t>(a)] / floor_n[static_cast<std::size_t>(a)]);
   std::vector<double> yv, wv;
@@ -639,6 +685,18 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
     const auto& d = in.segments[s];
     const Eigen::Vector3d twin = M.measure<double>(theta.data(), d.point.stimulus);
     Eigen::Vector3d res = Eigen::Vector3d::Constant(kNaN);
+    if (in.magnitude) {
+      const Eigen::Vector3d u = d.point.stimulus.specific_force.normalized();
+      res[0] = u.dot(d.point.measured - twin);
+      rows.seg.push_back(static_cast<int>(s));
+      rows.axis.push_back(0);
+      rows.dir.push_back(u);
+      yv.push_back(u.dot(d.point.measured - d.point.stimulus.input));
+      const double fl = std::isfinite(rep.floor[0]) && rep.floor[0] > 0 ? rep.floor[0] : 1.0;
+      wv.push_back(1.0 / (fl * fl));
+      rep.residual.push_back(res);
+      continue;
+    }
     for (int a = 0; a < 3; ++a) {
       if (!fitted[static_cast<std::size_t>(a)]) continue;
       res[a] = d.point.measured[a] - twin[a];
@@ -663,7 +721,9 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
     for (std::size_t s = 0; s < rep.residual.size(); ++s) {
       s2 += rep.residual[s][a] * rep.residual[s][a];
       ++n;
-      if (std::isfinite(in.segments[s].raw_std[a])) stds.push_back(in.segments[s].raw_std[a]);
+      // Magnitude form: the noise of all three axes, pooled into the |f| slot.
+      for (int b = in.magnitude ? 0 : a; b <= (in.magnitude ? 2 : a); ++b)
+        if (std::isfinite(in.segments[s].raw_std[b])) stds.push_back(in.segments[s].raw_std[b]);
     }
     rep.gap_rms[a] = std::sqrt(s2 / n);
     if (!stds.empty()) {
@@ -707,7 +767,7 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
       std::sort(ps.begin(), ps.end(), [](const Place& x, const Place& y) { return x.share > y.share; });
       rep.where.insert(rep.where.end(), ps.begin(), ps.end());
     };
-    add_dim("axis", [&](std::size_t, int a) { return std::string(1, "xyz"[a]); });
+    add_dim("axis", [&](std::size_t, int a) { return in.magnitude ? std::string("|f|") : std::string(1, "xyz"[a]); });
     add_dim("orientation", [&](std::size_t s, int) { return in.segments[s].orientation_name; });
     add_dim("temperature", [&](std::size_t s, int) {
       const auto& d = in.segments[s];
@@ -821,68 +881,8 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
   }
 
   // Noise and output-stage candidates (they cannot move the static means' fit; judged on the
-  // noise itself — output_stage.hpp / noise.hpp parameters).
-  std::vector<CandidateResult> noise;
-  {
-    CandidateResult q;
-    q.term = "quantization";
-    q.noise_stage = true;
-    q.size_unit = rep.unit;
-    if (in.lsb > 0) {
-      std::vector<double> stds;
-      for (const auto& s : in.segments)
-        for (int a : in.spec.axes)
-          if (std::isfinite(s.raw_std[a])) stds.push_back(s.raw_std[a]);
-      std::sort(stds.begin(), stds.end());
-      const double med = stds.empty() ? kNaN : stds[stds.size() / 2];
-      q.evaluated = true;
-      q.size = in.lsb;
-      q.size_param = "lsb";
-      q.ci_lo = q.ci_hi = in.lsb;
-      q.significant = std::isfinite(med) && med < 0.5 * in.lsb;
-      q.reason = "median sample std " + fmt(med) + " " + rep.unit + " = " + fmt(med / in.lsb, 3) +
-                 " LSB" + (q.significant ? ": too little noise to dither, means are biased by up to LSB/2"
-                                         : ": noise dithers the quantizer, means unbiased");
-    } else {
-      q.reason = "LSB unknown for this source";
-    }
-    noise.push_back(q);
-    CandidateResult s;
-    s.term = "saturation";
-    s.noise_stage = true;
-    s.evaluated = in.range > 0;
-    double peak = 0;
-    for (const auto& d : in.segments)
-      for (int a : in.spec.axes) peak = std::max(peak, std::abs(d.point.measured[a]));
-    s.size = peak;
-    s.size_param = "largest static mean";
-    s.size_unit = rep.unit;
-    s.significant = in.saturated_segments > 0 || (in.range > 0 && peak > 0.98 * in.range);
-    s.reason = std::to_string(in.saturated_segments) + " segment(s) skipped for saturated samples; largest |mean| " +
-               fmt(peak) + " of range " + (in.range > 0 ? fmt(in.range) : std::string("unknown"));
-    noise.push_back(s);
-    // Coloured noise: scatter of segment means about the best model vs the within-segment floor.
-    CandidateResult c;
-    c.term = "coloured_noise";
-    c.noise_stage = true;
-    c.evaluated = true;
-    c.size_unit = rep.unit;
-    double white2 = 0, bm2 = 0;
-    int n = 0;
-    for (const auto& d : in.segments)
-      for (int a : in.spec.axes)
-        if (std::isfinite(d.point.measured_std_error[a]) && std::isfinite(d.mean_std_error[a])) {
-          white2 += d.point.measured_std_error[a] * d.point.measured_std_error[a];
-          bm2 += d.mean_std_error[a] * d.mean_std_error[a];
-          ++n;
-        }
-    c.size = n ? std::sqrt(bm2 / white2) : kNaN;
-    c.size_param = "batch-means / white standard error of a segment mean";
-    c.size_unit = "1";
-    c.reason = "a ratio well above 1 means correlated noise (bias instability, random walk, or the sensor's "
-               "low-pass) inside segments; the floor already uses the batch-means value";
-    noise.push_back(c);
-  }
+  // raw samples — tests, levels and sizes in noise_stage.hpp).
+  std::vector<CandidateResult> noise = noise_stage::candidates(in, in.spec.axes, rep.unit, opt.alpha);
 
   // 5. How far: forward selection on the held-out gap.
   std::vector<CandidateResult> first = {};

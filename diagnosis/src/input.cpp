@@ -12,6 +12,7 @@
 
 #include "stend/geometry.hpp"
 #include "stend/gap/gap.hpp"
+#include "noise_stage.hpp"
 
 namespace stend::gap {
 
@@ -132,12 +133,8 @@ GapInput build_input(const Recording& recording_in, const batch_lsq::ModelSpec& 
   if (column(recording_in, accel ? "f_x_mps2" : "w_x_radps") < 0) {
     augmented = recording_in;
     std::string how;
-    if (!add_annotation_truth(augmented, how))
-      throw std::runtime_error("'" + recording_in.dir.string() +
-                               "' has no truth columns and no annotation the gap diagnoser can turn "
-                               "into truth (labels x_p … z_a); nothing to compare the twin with. Sessions "
-                               "with unknown orientations (only |g| known, e.g. mpu6050_multipos) need the "
-                               "magnitude form of the gap, which this version does not have");
+    // No truth and no annotations: orientations unknown, only |g| — the magnitude form.
+    if (!add_annotation_truth(augmented, how)) return build_magnitude_input(recording_in, spec);
     rec = &augmented;
     in.truth_source = how;
   }
@@ -278,6 +275,7 @@ GapInput build_input(const Recording& recording_in, const batch_lsq::ModelSpec& 
       d.mean_std_error[a] = std::max(se_bm, se_white);
     }
     if (!d.mean_std_error.allFinite()) d.mean_std_error = p.measured_std_error;
+    noise_stage::segment_evidence(d, S.data() + (lo - S.begin()), S.data() + (hi - S.begin()), accel);
     in.segments.push_back(d);
   }
   if (three_axis && !table_ok)
@@ -310,6 +308,7 @@ GapInput build_input(const Recording& recording_in, const batch_lsq::ModelSpec& 
     }
     d.temperature_group = k;
   }
+  noise_stage::recording_evidence(in, *rec);  // clipped samples, Allan of a long window
   in.floor_source = "batch means of 8 blocks inside each segment's kept window (Allan-type, robust to "
                     "short-term correlation; never below the white-noise standard error)";
   return in;

@@ -36,6 +36,8 @@ std::string to_json(const GapReport& r, int indent) {
   j["source"] = r.source;
   j["status"] = r.ok ? "ok" : "failed";
   j["message"] = r.message;
+  // "axes": the three sensor axes; "magnitude": one |f| row per segment (slot 0 of every vector).
+  j["form"] = r.magnitude ? "magnitude" : "axes";
   j["units"] = {{"gap", r.unit}, {"display", r.display_unit}, {"display_per_unit", r.display_per_unit}};
   j["noise_floor"] = {{"static_mean_mps2", vec3(r.floor)}, {"source", r.floor_source}};
   Eigen::Vector3d over;
@@ -118,10 +120,14 @@ void print_report(std::ostream& os, const GapReport& r) {
   const char* du = r.display_unit.c_str();
   os << "\n1. THE GAP (recording − twin with the fitted model), static segment means\n";
   os << "   noise floor of a segment mean: " << r.floor_source << "\n";
+  if (r.magnitude)
+    os << "   magnitude form: orientations unknown, only |g| known; one row per segment (the mean along the\n"
+          "   estimated gravity direction); rotations of the sensor frame cannot be seen\n";
   os << "   axis   gap RMS [" << r.unit << "]   [" << du << "]   floor [" << du << "]   gap/floor   noise ratio\n";
   for (int a = 0; a < 3; ++a) {
     if (!std::isfinite(r.gap_rms[a])) continue;
-    os << "   " << "xyz"[a] << "      " << f(r.gap_rms[a], "%-12.4g") << "      " << f(r.gap_rms[a] * k, "%-7.3f")
+    os << "   " << (r.magnitude ? std::string("|f|") : std::string(1, "xyz"[a])) << (r.magnitude ? "    " : "      ")
+       << f(r.gap_rms[a], "%-12.4g") << "      " << f(r.gap_rms[a] * k, "%-7.3f")
        << "  " << f(r.floor[a] * k, "%-9.4f") << "   " << f(r.gap_rms[a] / r.floor[a], "%-9.2f") << "   "
        << f(r.noise_ratio[a], "%.2f") << "\n";
   }

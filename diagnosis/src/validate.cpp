@@ -8,12 +8,15 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <ostream>
 #include <set>
 
 #include "stend/geometry.hpp"
+#include "segment_mean_noise.hpp"
 #include "stend/model/noise.hpp"
+#include "noise_stage.hpp"
 
 namespace stend::gap {
 
@@ -89,9 +92,8 @@ GapInput generate(const ValidationDesign& d, const batch_lsq::ModelSpec& fit_mod
   const double sigma = model::WhiteNoise::sigma_from_density(d.noise_density, dt);
   const double se = white_floor(d);
   const double bi = d.bias_instability > 0 ? d.bias_instability : 0.3 * se;
-  Eigen::Vector3d gm;
-  for (int a = 0; a < 3; ++a) gm[a] = bi * rng.normal();
-  double t = 0.0, t_prev_mid = 0.0;
+  SegmentMeanNoise mean_noise(rng, se, sigma, bi, d.bias_correlation_s);
+  double t = 0.0;
   double die = 22.0, prev_sp = kNaN;
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   int seg_id = 0;
@@ -132,22 +134,8 @@ GapInput generate(const ValidationDesign& d, const batch_lsq::ModelSpec& fit_mod
       st.temperature_direction = dir;
       Eigen::Vector3d y = truth.model.measure<double>(truth.theta.data(), st);
       if (!truth.extra.empty()) y += truth.extra[static_cast<std::size_t>(p.segment_id) % truth.extra.size()];
-      // Bias instability between segment mid-times (exact GM step), white noise of the mean.
-      const double phi = std::exp(-(mid - t_prev_mid) / d.bias_correlation_s);
-      t_prev_mid = mid;
-      for (int a = 0; a < 3; ++a) {
-        gm[a] = phi * gm[a] + bi * std::sqrt(1 - phi * phi) * rng.normal();
-        y[a] += gm[a] + se * rng.normal();
-        double chi = 0;
-        for (int k = 0; k < 7; ++k) {
-          const double z = rng.normal();
-          chi += z * z;
-        }
-        s.mean_std_error[a] = se * std::sqrt(chi / 7.0);
-        s.raw_std[a] = sigma;
-      }
+      mean_noise.apply(rng, mid, y, s);
       p.measured = y;
-      p.measured_std_error = Eigen::Vector3d::Constant(se);
       p.label = "T" + std::to_string(static_cast<int>(sp)) + " h" + std::to_string(static_cast<int>(h)) + " d" +
                 std::to_string(static_cast<int>(dl));
       char name[64];
@@ -170,30 +158,61 @@ GapInput generate(const ValidationDesign& d, const batch_lsq::ModelSpec& fit_mod
   return in;
 }
 
-ValidationReport run_validation(const ValidateOptions& o) {
-  const auto t0 = std::chrono::steady_clock::now();
-  ValidationReport rep;
-  const ValidationDesign& d = o.design;
-  const batch_lsq::ModelSpec fit_model = validation_model();
-  const double floor = white_floor(d);
-  rep.floor_mps2 = floor;
-  model::Rng prng(o.seed * 7919 + 17);
-  std::uint64_t seed = o.seed * 1000003;
+namespace {
 
-  // The true model's own part: bias + scale at plausible MEMS values.
+// One designed experiment as the validation sees it: how to simulate it, the model fitted, what is
+// planted, and how many null / out-of-vocabulary runs it gets.
+struct Experiment {
+  std::string name;                    // CandidateValidation::experiment
+  std::string tag;                     // short key for the confusion matrix ("" = none)
+  batch_lsq::ModelSpec fit_model;
+  std::function<GapInput(const Planted&, std::uint64_t)> make;
+  double floor = 0;                    // averaged white floor of a segment mean [unit]
+  double bias_sigma = 0.05, scale_sigma = 0.002;  // the true model's own part [unit], [1]
+  std::vector<std::string> plant;      // term kinds to plant; empty = every candidate kind
+  bool list_not_excited = true;        // keep rows (no runs) for candidates this design cannot excite
+  int null_runs = 0, oov_runs = 0;
+  std::size_t oov_period = 1;          // segments per repeat of the out-of-vocabulary pattern
+  std::size_t oov_segments = 0;
+};
+
+// Counters behind the summary figures (totals and per experiment).
+struct Tally {
+  int top1_n = 0, top1_ok = 0, cov_n = 0, cov_ok = 0, closed_n = 0;
+  double closed_sum = 0;
+};
+
+// Declares aliases and identifiability from a probe of the design (rank only), plants each candidate at
+// each size in the experiment, fits the model without it and diagnoses blind; appends the
+// CandidateValidation rows, the confusion entries and the null / out-of-vocabulary runs.
+void validate_experiment(const Experiment& ex, const ValidateOptions& o, model::Rng& prng, std::uint64_t& seed,
+                         ValidationReport& rep, Tally& total) {
+  const batch_lsq::ModelSpec& fit_model = ex.fit_model;
+  const model::Instrument inst = fit_model.model.instrument;
+  const double floor = ex.floor;
+  ExperimentValidation ev;
+  ev.experiment = ex.name;
+  ev.unit = inst == model::Instrument::kGyroscope ? "rad/s" : "m/s^2";
+  ev.floor = floor;
+  Tally tally;
+
+  // The true model's own part (the fitted model's terms) at plausible MEMS values.
   auto base_truth = [&](model::Rng& r) {
     Planted p;
     p.model = fit_model.model;
-    p.theta = VectorXd(p.model.size());
-    for (int i = 0; i < 3; ++i) p.theta[i] = 0.05 * r.normal();
-    for (int i = 3; i < 6; ++i) p.theta[i] = 0.002 * r.normal();
+    p.theta = VectorXd::Zero(p.model.size());
+    for (std::size_t k = 0; k < p.model.terms.size(); ++k) {
+      const int off = p.model.offset(k), n = model::param_count(p.model.terms[k]);
+      const double s = p.model.terms[k].kind == TermKind::kBias ? ex.bias_sigma : ex.scale_sigma;
+      for (int i = 0; i < n; ++i) p.theta[off + i] = s * r.normal();
+    }
     return p;
   };
 
   // Alias pairs and identifiability, declared beforehand from the design (no noise involved).
   GapOptions gopt = o.gap;
   std::vector<Candidate> cands = default_candidates(fit_model.model);
-  const GapInput probe = generate(d, fit_model, base_truth(prng), seed++);
+  const GapInput probe = ex.make(base_truth(prng), seed++);
   GapOptions aopt = gopt;
   aopt.check_aliases = true;
   aopt.max_steps = 0;
@@ -219,26 +238,32 @@ ValidationReport run_validation(const ValidateOptions& o) {
   std::vector<Candidate> plant;
   std::set<int> kinds;
   for (const auto& c : cands) {
+    const std::string kname = model::term_name(c.term.kind);
     if (!o.only.empty() && std::find(o.only.begin(), o.only.end(), c.name) == o.only.end() &&
-        std::find(o.only.begin(), o.only.end(), std::string(model::term_name(c.term.kind))) == o.only.end())
+        std::find(o.only.begin(), o.only.end(), kname) == o.only.end())
       continue;
+    if (!ex.plant.empty() && std::find(ex.plant.begin(), ex.plant.end(), kname) == ex.plant.end()) continue;
     const bool temp = c.term.kind == TermKind::kBiasTemperature || c.term.kind == TermKind::kScaleTemperature;
     if (temp && c.term.order != 2) continue;
     if (kinds.count(static_cast<int>(c.term.kind))) continue;
     kinds.insert(static_cast<int>(c.term.kind));
+    if (rows_block(probe, c.term).norm() == 0.0) {
+      ev.not_excited.push_back(c.name);
+      if (!ex.list_not_excited) continue;
+    }
     plant.push_back(c);
   }
 
-  int top1_n = 0, top1_ok = 0, cov_n = 0, cov_ok = 0, closed_n = 0;
-  double closed_sum = 0;
   for (const auto& c : plant) {
     CandidateValidation cv;
     cv.term = c.name;
+    cv.experiment = ex.name;
     const auto dit = declared.find(c.name);
     cv.identifiable = dit != declared.end() && dit->second.evaluated;
     if (dit != declared.end()) cv.aliases = dit->second.aliases;
     const MatrixXd C = rows_block(probe, c.term);
-    const auto info = model::param_info(c.term, model::Instrument::kAccelerometer);
+    const auto info = model::param_info(c.term, inst);
+    const std::string key = ex.tag.empty() ? c.name : c.name + " [" + ex.tag + "]";
     for (double m : o.sizes) {
       CandidateValidation::BySize bs;
       bs.size = m;
@@ -259,7 +284,7 @@ ValidationReport run_validation(const ValidateOptions& o) {
         VectorXd full(truth.theta.size() + th.size());
         full << truth.theta, th;
         truth.theta = full;
-        const GapInput in = generate(d, fit_model, truth, seed++);
+        const GapInput in = ex.make(truth, seed++);
         const GapReport r = diagnose(in, gopt);
         if (!r.ok) continue;
         ++bs.runs;
@@ -278,13 +303,13 @@ ValidationReport run_validation(const ValidateOptions& o) {
         rank_sum += rank > 0 ? rank : pos + 1;
         if (!r.steps.empty()) {
           const double h0 = r.steps.front().heldout_rms, f0 = r.steps.front().floor_rms;
-          const double ex = h0 * h0 - f0 * f0;
+          const double exq = h0 * h0 - f0 * f0;
           const double cl = h0 * h0 - r.unexplained_heldout_rms * r.unexplained_heldout_rms;
-          const double frac = ex > 0 ? std::clamp(cl / ex, 0.0, 1.0) : 1.0;
+          const double frac = exq > 0 ? std::clamp(cl / exq, 0.0, 1.0) : 1.0;
           closed += frac;
           if (cv.identifiable && m >= 5) {
-            closed_sum += frac;
-            ++closed_n;
+            tally.closed_sum += frac;
+            ++tally.closed_n;
           }
         }
         for (const auto& cr : r.candidates)
@@ -300,16 +325,16 @@ ValidationReport run_validation(const ValidateOptions& o) {
                   ++ratio_n;
                 }
                 if (cv.identifiable && m >= 5) {
-                  ++cov_n;
-                  cov_ok += in_ci ? 1 : 0;
+                  ++tally.cov_n;
+                  tally.cov_ok += in_ci ? 1 : 0;
                 }
               }
           }
         if (m >= 5) {
-          rep.confusion[c.name][named] += 1;
+          rep.confusion[key][named] += 1;
           if (cv.identifiable) {
-            ++top1_n;
-            top1_ok += (strict || alias_ok) ? 1 : 0;
+            ++tally.top1_n;
+            tally.top1_ok += (strict || alias_ok) ? 1 : 0;
           }
         }
       }
@@ -322,45 +347,171 @@ ValidationReport run_validation(const ValidateOptions& o) {
     }
     rep.candidates.push_back(cv);
   }
-  rep.top1_at5 = top1_n ? static_cast<double>(top1_ok) / top1_n : kNaN;
-  rep.coverage = cov_n ? static_cast<double>(cov_ok) / cov_n : kNaN;
-  rep.closed_at5 = closed_n ? closed_sum / closed_n : kNaN;
 
   // Null runs.
-  for (int i = 0; i < o.null_runs; ++i) {
-    const GapReport r = diagnose(generate(d, fit_model, base_truth(prng), seed++), gopt);
+  for (int i = 0; i < ex.null_runs; ++i) {
+    const GapReport r = diagnose(ex.make(base_truth(prng), seed++), gopt);
     if (!r.ok) continue;
-    ++rep.null_runs;
-    rep.null_false_positives += r.selected.empty() ? 0 : 1;
-    if (!r.selected.empty()) ++rep.null_named[r.selected.front()];
+    ++ev.null_runs;
+    ev.null_false_positives += r.selected.empty() ? 0 : 1;
+    if (!r.selected.empty()) ++rep.null_named[r.selected.front() + (ex.tag.empty() ? "" : " [" + ex.tag + "]")];
   }
-  rep.false_positive_rate = rep.null_runs ? static_cast<double>(rep.null_false_positives) / rep.null_runs : kNaN;
 
-  // Out of vocabulary: the z reading jumps by 8× the floor at one table position only (a part that
-  // shifts at that position), something no term of the vocabulary describes.
-  for (int i = 0; i < o.oov_runs; ++i) {
+  // Out of vocabulary: the z reading jumps by 8× the floor in one segment of every repeat of the
+  // pattern (a part that shifts at that table position), something no term of the vocabulary
+  // describes. The first 6 segments of a repeat are left clean.
+  for (int i = 0; i < ex.oov_runs; ++i) {
     Planted p = base_truth(prng);
-    const std::size_t per = d.positions.size();
-    p.extra.assign(per * d.setpoints_c.size(), Eigen::Vector3d::Zero());
+    const std::size_t per = ex.oov_period;
+    p.extra.assign(ex.oov_segments, Eigen::Vector3d::Zero());
     const std::size_t where = 6 + static_cast<std::size_t>(i) % (per > 6 ? per - 6 : 1);
     for (std::size_t s = 0; s < p.extra.size(); ++s)
       if (s % per == where % per) p.extra[s][2] = 8.0 * floor * (i % 2 ? 1.0 : -1.0);
-    const GapReport r = diagnose(generate(d, fit_model, p, seed++), gopt);
+    const GapReport r = diagnose(ex.make(p, seed++), gopt);
     if (!r.ok) continue;
-    ++rep.oov_runs;
-    if (r.explanation.empty() && !r.at_floor) ++rep.oov_unexplained;
-    if (!r.explanation.empty()) ++rep.oov_wrong_name;
+    ++ev.oov_runs;
+    if (r.explanation.empty() && !r.at_floor) ++ev.oov_unexplained;
+    if (!r.explanation.empty()) ++ev.oov_wrong_name;
+  }
+
+  ev.planted_at5 = tally.top1_n;
+  ev.top1_ok_at5 = tally.top1_ok;
+  ev.top1_at5 = tally.top1_n ? static_cast<double>(tally.top1_ok) / tally.top1_n : kNaN;
+  ev.coverage = tally.cov_n ? static_cast<double>(tally.cov_ok) / tally.cov_n : kNaN;
+  ev.closed_at5 = tally.closed_n ? tally.closed_sum / tally.closed_n : kNaN;
+  total.top1_n += tally.top1_n;
+  total.top1_ok += tally.top1_ok;
+  total.cov_n += tally.cov_n;
+  total.cov_ok += tally.cov_ok;
+  total.closed_n += tally.closed_n;
+  total.closed_sum += tally.closed_sum;
+  rep.null_runs += ev.null_runs;
+  rep.null_false_positives += ev.null_false_positives;
+  rep.oov_runs += ev.oov_runs;
+  rep.oov_unexplained += ev.oov_unexplained;
+  rep.oov_wrong_name += ev.oov_wrong_name;
+  rep.experiments.push_back(ev);
+}
+
+}  // namespace
+
+ValidationReport run_validation(const ValidateOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  ValidationReport rep;
+  const ValidationDesign& d = o.design;
+  rep.floor_mps2 = white_floor(d);
+  model::Rng prng(o.seed * 7919 + 17);
+  std::uint64_t seed = o.seed * 1000003;
+  Tally total;
+
+  std::vector<Experiment> exps;
+  {
+    Experiment e;
+    e.name = "static tumble x temperature, accel bias+scale";
+    e.fit_model = validation_model();
+    e.make = [&d, fm = e.fit_model](const Planted& p, std::uint64_t s) { return generate(d, fm, p, s); };
+    e.floor = white_floor(d);
+    e.null_runs = o.null_runs;
+    e.oov_runs = o.oov_runs;
+    e.oov_period = d.positions.size();
+    e.oov_segments = d.positions.size() * d.setpoints_c.size();
+    exps.push_back(e);
+  }
+  const RateDesign& rd = o.rate_design;
+  if (o.more_designs) {
+    // Scale itself, and a wrong local g (a common scale on a static design: declared alias).
+    Experiment e;
+    e.name = "static tumble x temperature, accel bias only";
+    e.tag = "static, bias only";
+    e.fit_model = validation_model();
+    e.fit_model.model.terms = {TermSpec{TermKind::kBias, 1, 25.0}};
+    e.fit_model.source = "bias (validation model)";
+    e.make = [&d, fm = e.fit_model](const Planted& p, std::uint64_t s) { return generate(d, fm, p, s); };
+    e.floor = white_floor(d);
+    e.plant = {"scale", "gravity_error"};
+    exps.push_back(e);
+
+    Experiment g;
+    g.name = "rate table, gyro bias+scale";
+    g.tag = "rate, gyro";
+    g.fit_model = rate_model(model::Instrument::kGyroscope);
+    g.make = [&rd, fm = g.fit_model](const Planted& p, std::uint64_t s) { return generate_rate(rd, fm, p, s); };
+    g.floor = rate_white_floor(rd, model::Instrument::kGyroscope);
+    g.bias_sigma = 0.01;  // rad/s (≈ 0.6 deg/s)
+    g.list_not_excited = false;
+    g.null_runs = o.rate_null_runs >= 0 ? o.rate_null_runs : (o.null_runs + 1) / 2;
+    g.oov_runs = o.rate_oov_runs >= 0 ? o.rate_oov_runs : (o.oov_runs + 1) / 2;
+    g.oov_period = rd.axes.size() * rd.rates_dps.size();
+    g.oov_segments = g.oov_period;
+    exps.push_back(g);
+
+    // The accelerometer off the axis: the centripetal ω×(ω×r) at a known r is an input of known
+    // size apart from gravity, so a wrong local g no longer hides in the scale; with one mount it
+    // still hides in scale + a radius error (g and r off by the same fraction), a second mount at
+    // another known offset separates that too.
+    Experiment a;
+    const RateDesign& ra = o.rate_accel_design;
+    a.name = ra.remount_offsets_m.empty() ? "rate table, accel bias+scale (off axis)"
+                                          : "rate table, accel bias+scale (off axis, two mounts)";
+    a.tag = "rate, accel";
+    a.fit_model = rate_model(model::Instrument::kAccelerometer);
+    a.make = [&ra, fm = a.fit_model](const Planted& p, std::uint64_t s) { return generate_rate(ra, fm, p, s); };
+    a.floor = rate_white_floor(ra, model::Instrument::kAccelerometer);
+    a.plant = {"lever_arm", "gravity_error"};
+    a.list_not_excited = false;
+    exps.push_back(a);
+  }
+  for (const auto& e : exps) validate_experiment(e, o, prng, seed, rep, total);
+  rep.top1_at5 = total.top1_n ? static_cast<double>(total.top1_ok) / total.top1_n : kNaN;
+  rep.coverage = total.cov_n ? static_cast<double>(total.cov_ok) / total.cov_n : kNaN;
+  rep.closed_at5 = total.closed_n ? total.closed_sum / total.closed_n : kNaN;
+  rep.false_positive_rate = rep.null_runs ? static_cast<double>(rep.null_false_positives) / rep.null_runs : kNaN;
+  {  // Noise-stage candidates, sample level (validate_noise.cpp).
+    const auto tn = std::chrono::steady_clock::now();
+    rep.noise_stage = run_noise_validation(o);
+    rep.noise_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - tn).count();
   }
   rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return rep;
 }
 
+bool targets_met(const ValidationReport& r) {
+  int noise_null_runs = 0, noise_null_flags = 0;
+  for (const auto& n : r.noise_stage)
+    if (n.experiment == "null")
+      for (const auto& b : n.by_size) {
+        noise_null_runs += b.runs;
+        noise_null_flags += b.detected;  // runs in which any noise candidate fired
+      }
+  const bool noise_ok = noise_null_runs == 0 || noise_null_flags <= 0.05 * noise_null_runs;
+  return !(r.top1_at5 < 0.9) && !(r.closed_at5 < 0.8) && !(r.false_positive_rate > 0.05) && r.oov_wrong_name == 0 &&
+         noise_ok;
+}
+
 void print_validation(std::ostream& os, const ValidationReport& r) {
   char line[512];
-  os << "stend gap validate — segment-level generator, model bias + scale, averaged noise floor "
-     << r.floor_mps2 * 1000 / 9.80665 << " mg (" << r.floor_mps2 << " m/s^2)\n\n";
-  os << "planted effect                 ident  size  runs  top-1  strict  mean rank  closed  recovered/planted  CI cover\n";
-  for (const auto& c : r.candidates)
+  // The floor of a segment mean in the experiment's display unit (mg or deg/h).
+  auto floor_text = [](const ExperimentValidation& e) {
+    char b[128];
+    if (e.unit == "rad/s")
+      std::snprintf(b, sizeof b, "%.3g deg/h (%.3g rad/s)", e.floor * 180.0 / M_PI * 3600.0, e.floor);
+    else
+      std::snprintf(b, sizeof b, "%.3g mg (%.3g m/s^2)", e.floor * 1000 / 9.80665, e.floor);
+    return std::string(b);
+  };
+  os << "stend gap validate — segment-level generator; per experiment: the fitted model, the planted effect "
+        "withheld from it, sizes in multiples of the averaged noise floor of a segment mean\n";
+  const std::string header =
+      "planted effect                 ident  size  runs  top-1  strict  mean rank  closed  recovered/planted  CI cover\n";
+  std::string current = "\x01";
+  for (const auto& c : r.candidates) {
+    if (c.experiment != current) {
+      current = c.experiment;
+      os << "\n== " << (c.experiment.empty() ? std::string("(experiment)") : c.experiment);
+      for (const auto& e : r.experiments)
+        if (e.experiment == c.experiment) os << " — floor " << floor_text(e);
+      os << "\n" << header;
+    }
     for (const auto& b : c.by_size) {
       std::snprintf(line, sizeof line, "%-30s %-5s  %4gx  %4d  %5.2f  %6.2f  %9.2f  %6.2f  %17.3f  %8s\n", c.term.c_str(),
                     c.identifiable ? "yes" : "no", b.size, b.runs, b.runs ? double(b.top1) / b.runs : 0.0,
@@ -368,13 +519,28 @@ void print_validation(std::ostream& os, const ValidationReport& r) {
                     b.coverage_n ? (std::to_string(b.covered) + "/" + std::to_string(b.coverage_n)).c_str() : "-");
       os << line;
     }
-  os << "\nalias pairs declared beforehand (joint-design rank):\n";
+  }
+  os << "\nalias pairs declared beforehand (joint-design rank, per experiment):\n";
   for (const auto& c : r.candidates)
     if (!c.aliases.empty()) {
-      os << "  " << c.term << ":";
+      os << "  " << c.term << " [" << c.experiment << "]:";
       for (const auto& a : c.aliases) os << " " << a << ";";
       os << "\n";
     }
+  os << "\nper experiment (top-1 / closed / coverage over identifiable plants >= 5x floor):\n";
+  for (const auto& e : r.experiments) {
+    std::snprintf(line, sizeof line,
+                  "  %-52s top-1 %5.3f (%d/%d)  closed %5.3f  coverage %5.3f  null %d (fp %d)  oov %d (unexplained %d, "
+                  "named %d)\n",
+                  e.experiment.c_str(), e.top1_at5, e.top1_ok_at5, e.planted_at5, e.closed_at5, e.coverage, e.null_runs,
+                  e.null_false_positives, e.oov_runs, e.oov_unexplained, e.oov_wrong_name);
+    os << line;
+    if (!e.not_excited.empty()) {
+      os << "    not excited by this design (not planted):";
+      for (const auto& n : e.not_excited) os << " " << n;
+      os << "\n";
+    }
+  }
   os << "\nconfusion (planted >= 5x floor → first named):\n";
   for (const auto& [p, m] : r.confusion) {
     os << "  " << p << " →";
@@ -396,6 +562,7 @@ void print_validation(std::ostream& os, const ValidationReport& r) {
     for (const auto& [n, k] : r.null_named) os << " " << n << ":" << k;
     os << "\n";
   }
+  noise_stage::print_validation(os, r.noise_stage, r.noise_seconds);
 }
 
 std::string validation_json(const ValidationReport& r, int indent) {
@@ -412,9 +579,19 @@ std::string validation_json(const ValidationReport& r, int indent) {
                     {"mean_rank", num(b.mean_rank)}, {"closed", num(b.closed)},
                     {"recovered_over_planted", num(b.recovered_ratio)}, {"ci_covered", b.covered},
                     {"ci_checked", b.coverage_n}});
-    cs.push_back({{"term", c.term}, {"identifiable", c.identifiable}, {"aliases", c.aliases}, {"by_size", sz}});
+    cs.push_back({{"term", c.term}, {"experiment", c.experiment}, {"identifiable", c.identifiable},
+                  {"aliases", c.aliases}, {"by_size", sz}});
   }
   j["candidates"] = cs;
+  json ex = json::array();
+  for (const auto& e : r.experiments)
+    ex.push_back({{"experiment", e.experiment}, {"unit", e.unit}, {"noise_floor", e.floor},
+                  {"planted_at_5x", e.planted_at5}, {"top1_ok_at_5x", e.top1_ok_at5}, {"top1_at_5x", num(e.top1_at5)},
+                  {"closed_at_5x", num(e.closed_at5)}, {"coverage_at_5x", num(e.coverage)},
+                  {"null_runs", e.null_runs}, {"null_false_positives", e.null_false_positives},
+                  {"oov_runs", e.oov_runs}, {"oov_unexplained", e.oov_unexplained},
+                  {"oov_wrong_name", e.oov_wrong_name}, {"not_excited", e.not_excited}});
+  j["experiments"] = ex;
   j["confusion"] = r.confusion;
   j["summary"] = {{"top1_at_5x", num(r.top1_at5)},
                   {"closed_at_5x", num(r.closed_at5)},
@@ -427,6 +604,7 @@ std::string validation_json(const ValidationReport& r, int indent) {
                   {"oov_unexplained", r.oov_unexplained},
                   {"oov_wrong_name", r.oov_wrong_name},
                   {"seconds", r.seconds}};
+  noise_stage::add_json(j, r.noise_stage, r.noise_seconds);
   return j.dump(indent);
 }
 

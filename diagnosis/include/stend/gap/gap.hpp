@@ -51,6 +51,17 @@ struct SegmentData {
   // window (robust to short-term correlation), never below the white-noise standard error.
   Eigen::Vector3d mean_std_error = Eigen::Vector3d::Constant(kNaN);
   Eigen::Vector3d raw_std = Eigen::Vector3d::Constant(kNaN);  // sample std in the window
+  // Noise-stage evidence from the raw samples of the kept window (build_input), per axis.
+  // Within-segment white-noise test: the window cut into 64 sub-blocks in 8 groups of 8; sums of
+  // squares of the sub-block means between the 8 groups (7 dof) and within them (56 dof), each
+  // times the sub-block length [unit²·samples] so that segments of different length pool. Under
+  // white noise (also low-passed white noise, sub-blocks ≫ the filter's memory) the ratio
+  // (between/7)/(within/56) is F(7, 56); noise correlated over seconds inflates it.
+  Eigen::Vector3d ss_between = Eigen::Vector3d::Constant(kNaN);
+  Eigen::Vector3d ss_within = Eigen::Vector3d::Constant(kNaN);
+  Eigen::Vector3d distinct_values = Eigen::Vector3d::Constant(kNaN);  // distinct sample values
+  Eigen::Vector3d value_step = Eigen::Vector3d::Constant(kNaN);  // smallest non-zero spacing [unit]
+  std::size_t raw_samples = 0;  // samples in the kept window
 };
 
 // A candidate effect: one vocabulary term (settings included) the model lacks.
@@ -76,6 +87,32 @@ struct GapInput {
   // Twin noise: the white-noise std of one sample the twin would produce, per axis [unit]; NaN
   // when the model file gives none (then the recording's median segment std is the reference).
   Eigen::Vector3d twin_sample_std = Eigen::Vector3d::Constant(kNaN);
+  // Magnitude form: only |g| is known (orientations not recorded, e.g. a hand-held IMU-TK style
+  // session). Each segment is ONE row: the measured mean projected on the estimated gravity
+  // direction û (stimulus.specific_force = g·û, see magnitude_form); the other two directions are
+  // taken up by the unknown orientation, so rotations of the sensor frame are not seen.
+  bool magnitude = false;
+  // Output-stage evidence over every sample of the static segments (extracted or skipped), per
+  // axis: samples clipped (the saturation flag when the recording sets it, else |value| within
+  // LSB/2 of the range, or — range unknown — a run of ≥ 3 identical samples at the window's extreme
+  // value within 2.5 std of its mean).
+  Eigen::Vector3d clipped_samples = Eigen::Vector3d::Zero();
+  Eigen::Vector3d static_samples = Eigen::Vector3d::Zero();
+  // Long static stretch (the longest kept window, when ≥ 100 s): overlapping Allan deviation per
+  // axis (estimators/allan, 95 % EDF intervals). NaN when there is none.
+  double allan_window_s = 0.0;
+  Eigen::Vector3d allan_white = Eigen::Vector3d::Constant(kNaN);         // N fitted [unit/√Hz]
+  Eigen::Vector3d allan_random_walk = Eigen::Vector3d::Constant(kNaN);   // K fitted [unit/√s]
+  Eigen::Vector3d allan_random_walk_se = Eigen::Vector3d::Constant(kNaN);
+  // Flat part: the largest Allan deviation above the white part / 0.664 (the flicker floor), [unit],
+  // with its 95 % interval from that point's EDF.
+  Eigen::Vector3d allan_bias_instability = Eigen::Vector3d::Constant(kNaN);
+  Eigen::Vector3d allan_bias_instability_lo = Eigen::Vector3d::Constant(kNaN);
+  Eigen::Vector3d allan_bias_instability_hi = Eigen::Vector3d::Constant(kNaN);
+  // Log-log slope of the Allan variance above white over the last four octaves of τ, and its
+  // standard error: +1 random walk, 0 flat (bias instability), < 0 a Gauss–Markov past its peak.
+  Eigen::Vector3d allan_slope = Eigen::Vector3d::Constant(kNaN);
+  Eigen::Vector3d allan_slope_se = Eigen::Vector3d::Constant(kNaN);
 };
 
 // The sim three-axis table's chain f = M·Ry(δ)·Rx(h)·Rz(az)·Rx(εx)·Ry(εy)·[0, 0, g] (angles in
@@ -89,6 +126,18 @@ Eigen::Vector3d table_stimulus(model::Stimulus<double>& st, double az, double h,
 // the sim three-axis table's tilt/rotation/azimuth columns; temperature_direction), groups, noise
 // floor. Throws std::runtime_error when no static point can be made (says why).
 GapInput build_input(const Recording& recording, const batch_lsq::ModelSpec& spec);
+
+// Magnitude form of an input whose truth directions are unknown: every segment's truth becomes
+// g·û, û the direction that the model as given (fitted on |f| rows, linearized about û) maps onto
+// the measured mean; fit and direction are iterated to a fixed point. Sets input.magnitude.
+// `gravity` [m/s²] is the local g the session assumes. Accelerometer models only.
+GapInput magnitude_form(GapInput input, double gravity);
+
+// From a recording with no truth columns and no orientation annotations: static intervals by the
+// sliding-variance detector (ceres_nonlinear's, IMU-TK style), batch_lsq extraction on them, the
+// noise floor as build_input, then magnitude_form. Throws std::runtime_error saying why when no
+// usable interval is found or the instrument is a gyroscope (no rate truth to compare with).
+GapInput build_magnitude_input(const Recording& recording, const batch_lsq::ModelSpec& spec);
 
 // How the held-out folds are formed.
 enum class FoldBy { kAuto, kOrientation, kTemperature, kRamp };
@@ -144,6 +193,7 @@ struct Place {
 struct GapReport {
   bool ok = false;
   std::string message;
+  bool magnitude = false;          // one row per segment (|f|): see GapInput::magnitude
   std::string model_name, source, unit, display_unit;
   double display_per_unit = 1.0;   // mg per m/s² (or deg/h per rad/s)
   batch_lsq::FitResult fit;        // the model as given

@@ -1,0 +1,18 @@
+// Magnitude form of the gap (orientations unknown, only |g| known): helpers shared by
+// input_magnitude.cpp (building the form) and gap.cpp (diagnosing it). See GapInput::magnitude.
+#pragma once
+
+#include "stend/gap/gap.hpp"
+
+namespace stend::gap {
+
+// Standard error of the segment mean along the estimated gravity direction û [m/s²]:
+// sqrt(Σ_a û_a²·se_a²) (axes' noise taken as independent).
+double magnitude_std_error(const SegmentData& segment);
+
+// The model as given, fitted on one row per segment: û·(measured − g·û) = û·R(θ; stimulus)·θ
+// (R the vocabulary's regressor), uniform weights 1/floor². FitResult holds every model
+// parameter (param_index = 0…p−1); rotations of the sensor frame come out not identifiable.
+batch_lsq::FitResult fit_magnitude_rows(const GapInput& input);
+
+}  // namespace stend::gap

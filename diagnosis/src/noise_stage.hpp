@@ -1,0 +1,56 @@
+// stend gap: the noise- and output-stage candidates (quantization, saturation, coloured noise).
+// Internal to stend_gap. They cannot move the static means' fit, so they are judged on the raw
+// samples (evidence gathered by build_input through the functions below) — each a test with a
+// stated false-positive level, an effect size and an interval:
+//
+//   coloured_noise  within-segment white-noise test: 64 sub-block means per (segment, axis) in 8
+//                   groups; pooled over segments, between-group over within-group mean square is
+//                   F(7K, 56K) under white (or low-passed white) noise. Level alpha/3, Bonferroni
+//                   over the fitted axes. Size: variance ratio of an 8-batch mean against white,
+//                   with its F interval. When a kept window ≥ 100 s exists, the overlapping Allan
+//                   deviation (estimators/allan) names the kind from the slope of the Allan
+//                   variance above white over the last four octaves: > 0.5 random walk (K, the
+//                   Allan fit's value ± 1.96 σ), else bias instability (B = largest Allan
+//                   deviation above white / 0.664, with that point's 95 % EDF interval).
+//   quantization    the noise does not dither the quantizer: the first Fourier harmonic of the
+//                   rounding error averaged over Gaussian noise of the sample std σ̂ bounds the
+//                   bias of a mean by (LSB/π)·exp(−2π²σ̂²/LSB²); significant when that bound
+//                   exceeds the mean's noise floor on any (segment, axis). Size: the LSB (header,
+//                   else the smallest spacing of the sample values), interval: spacings seen.
+//   saturation      clipped samples in the static segments, skipped ones included (the sensor's
+//                   flag when the recording uses it, else |value| ≥ range − LSB/2, or with the
+//                   range unknown a run of ≥ 3 identical extreme values); significant on any
+//                   clipped sample (unclipped Gaussian noise ≥ 5 std from the range clips with
+//                   probability < 3e-7 a sample). Size: fraction clipped on the worst axis, Wilson
+//                   95 % interval; evidence: largest |mean| and its headroom in sample std.
+#pragma once
+
+#include <nlohmann/json_fwd.hpp>
+
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "stend/gap/gap.hpp"
+#include "stend/gap/validate.hpp"
+
+namespace stend::gap::noise_stage {
+
+// Sub-block ANOVA, distinct values and value spacing of one segment's kept window, per axis:
+// fills SegmentData::ss_between, ss_within, distinct_values, value_step, raw_samples.
+void segment_evidence(SegmentData& d, const ImuSample* first, const ImuSample* last, bool accel);
+
+// Clipped samples over the static segments of `spec`'s kinds, and the Allan analysis of the
+// longest kept window when ≥ 100 s: fills GapInput::clipped_samples, static_samples, allan_*.
+void recording_evidence(GapInput& in, const Recording& recording);
+
+// The three candidates, in the order quantization, saturation, coloured_noise.
+// `alpha`: the family-wise level of the diagnosis (each noise candidate is tested at alpha/3).
+std::vector<CandidateResult> candidates(const GapInput& in, const std::vector<int>& axes, const std::string& unit,
+                                        double alpha);
+
+// The noise-stage section of `stend gap validate` (validate_noise.cpp): text and JSON.
+void print_validation(std::ostream& os, const std::vector<NoiseStageValidation>& v, double seconds);
+void add_json(nlohmann::json& j, const std::vector<NoiseStageValidation>& v, double seconds);
+
+}  // namespace stend::gap::noise_stage
