@@ -485,11 +485,17 @@ Eval evaluate(const GapInput& in, const Rows& rows, const std::vector<TermSpec>&
     const VectorXd sv = svd.singularValues();
     int q = 0;
     while (q < sv.size() && sv[q] > 1e-8 * sv[0]) ++q;
-    if (q > 0) {
+    // The long-run variance of q scores needs many more segments than q: the scores sum to zero
+    // (residuals are orthogonal to the candidate), so with few segments S is singular or noise.
+    // Below 5q segments the test is skipped and said so (the F test stands alone there).
+    const int T = rows.seg.empty() ? 0 : rows.seg.back() + 1;
+    if (q > 0 && T < 5 * q)
+      r.reason = "Newey-West test skipped: " + std::to_string(T) + " segments for " + std::to_string(q) +
+                 " parameters (needs >= " + std::to_string(5 * q) + ")";
+    if (q > 0 && T >= 5 * q) {
       const MatrixXd Z = svd.matrixU().leftCols(q);
       const VectorXd beta = Z.transpose() * (sw.asDiagonal() * rows.y);
       const VectorXd e1 = sw.asDiagonal() * f1.lsq.residuals;
-      const int T = rows.seg.empty() ? 0 : rows.seg.back() + 1;
       MatrixXd g = MatrixXd::Zero(q, T);
       for (Eigen::Index i = 0; i < e1.size(); ++i) g.col(rows.seg[static_cast<std::size_t>(i)]) += Z.row(i).transpose() * e1[i];
       const int L = std::max(1, T / 4);

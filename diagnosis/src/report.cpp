@@ -159,6 +159,7 @@ void print_report(std::ostream& os, const GapReport& r) {
                   f(c.delta_bic, "%.1f").c_str(), f(c.p_value, "%.2g").c_str(), f(c.size).c_str(),
                   c.size_unit.c_str(), f(c.ci_lo).c_str(), f(c.ci_hi).c_str(), c.significant ? "  SIGNIFICANT" : "");
     os << line;
+    if (!c.reason.empty()) os << "         " << c.reason << "\n";
     if (!c.aliases.empty()) {
       os << "         cannot be told apart here from:";
       for (const auto& a : c.aliases) os << " " << a << ";";
