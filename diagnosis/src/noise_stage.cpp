@@ -281,8 +281,10 @@ std::vector<CandidateResult> candidates(const GapInput& in, const std::vector<in
     q.reason = "LSB " + fmt(lsb) + " " + unit + " (" + lsb_from + "); median sample std " + fmt(med_std / lsb, 3) +
                " LSB; " + std::to_string(flagged) + "/" + std::to_string(total) +
                " segment-axes where the undithered-rounding bias bound (LSB/pi)exp(-2pi^2 std^2/LSB^2) exceeds "
-               "the mean's floor (worst: std " + fmt(worst_std / lsb, 3) + " LSB, bound/floor " + fmt(worst, 3) +
-               ", floor " + fmt(worst_floor) + ")" +
+               "the mean's floor " +
+               (worst > 0 ? "(worst: std " + fmt(worst_std / lsb, 3) + " LSB, bound/floor " + fmt(worst, 3) + ", floor " +
+                                fmt(worst_floor) + ")"
+                          : std::string("(the bound underflows: far below every floor)")) +
                (q.significant ? ": the noise does not dither the quantizer, means biased by up to LSB/2"
                               : ": the noise dithers the quantizer, means unbiased");
   } else {

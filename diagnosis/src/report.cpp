@@ -174,7 +174,13 @@ void print_report(std::ostream& os, const GapReport& r) {
   for (const auto& c : r.candidates)
     if (c.noise_stage)
       os << "     " << c.term << (c.significant ? " [SUSPECT]" : "") << ": " << c.reason
-         << (std::isfinite(c.size) ? " (" + c.size_param + " " + f(c.size) + " " + c.size_unit + ")" : "") << "\n";
+         << (std::isfinite(c.size) ? " (" + c.size_param + " = " + f(c.size) +
+                                         (std::isfinite(c.ci_lo) && c.ci_lo != c.ci_hi
+                                              ? " [" + f(c.ci_lo) + ", " + f(c.ci_hi) + "]"
+                                              : std::string()) +
+                                         (c.size_unit == "1" ? std::string() : " " + c.size_unit) + ")"
+                                   : "")
+         << "\n";
   os << "\n4. HOW FAR — forward selection on the held-out gap\n";
   for (const auto& s : r.steps)
     os << "   step " << s.step << "  " << (s.added.empty() ? std::string("(model as given)") : "+ " + s.added)
