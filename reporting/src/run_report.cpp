@@ -437,10 +437,17 @@ std::string gap_section(const json& gp) {
                               escape(str(gp, "model")));
   const json gap = gp.value("gap", json::object());
   const json floor = gp.value("noise_floor", json::object());
+  // Magnitude form (orientations unknown): one |f| row per segment, in slot 0 of every vector.
+  const bool magnitude = str(gp, "form") == "magnitude";
+  const int n_axes = magnitude ? 1 : 3;
+  auto axis_label = [&](int k) { return magnitude ? std::string("|f|") : std::string(1, kAxes[k]); };
+  if (magnitude)
+    o += "<p>Magnitude form: the orientations were not recorded, only |g| is known; each segment is its mean "
+         "along the estimated gravity direction, and rotations of the sensor frame cannot be seen.</p>\n";
   std::string rms, ratio;
-  for (int k = 0; k < 3; ++k) {
-    rms += fmt::format("{}{} {}", k ? ", " : "", kAxes[k], g3(at(gap.value("static_rms_mps2", json::array()), static_cast<std::size_t>(k))));
-    ratio += fmt::format("{}{} {}", k ? ", " : "", kAxes[k],
+  for (int k = 0; k < n_axes; ++k) {
+    rms += fmt::format("{}{} {}", k ? ", " : "", axis_label(k), g3(at(gap.value("static_rms_mps2", json::array()), static_cast<std::size_t>(k))));
+    ratio += fmt::format("{}{} {}", k ? ", " : "", axis_label(k),
                          g3(at(gap.value("static_rms_over_floor", json::array()), static_cast<std::size_t>(k))));
   }
   o += fmt::format("<p>Static residual RMS [m/s²]: {}; over the noise floor: {} (floor source: {}).</p>\n", rms, ratio,
@@ -472,8 +479,8 @@ std::string gap_section(const json& gp) {
       p.title = std::string("segment residual against ") + (dim[0] == 't' && dim[1] == 'e' ? "temperature" : "time since change");
       p.x_label = dim[1] == 'e' ? "temperature [°C]" : "time since the last change [s]";
       p.y_label = "residual [mg]";
-      for (int k = 0; k < 3; ++k) {
-        Series s{fmt::format("axis {}", kAxes[k]), Style::kPoints, {}, {}, {}, {}, svg::palette(static_cast<std::size_t>(k)), false, 0.8};
+      for (int k = 0; k < n_axes; ++k) {
+        Series s{fmt::format("axis {}", axis_label(k)), Style::kPoints, {}, {}, {}, {}, svg::palette(static_cast<std::size_t>(k)), false, 0.8};
         for (const auto& sg : segs) {
           s.x.push_back(num(sg, dim));
           s.y.push_back(at(sg.value("axis_residual_mps2", json::array()), static_cast<std::size_t>(k)) * 1000.0 / 9.80665);

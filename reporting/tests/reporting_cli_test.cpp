@@ -213,6 +213,28 @@ TEST_F(Cli, TemperatureAndAllanPlots) {
   EXPECT_NE(allan.find(">100</text>"), std::string::npos);
 }
 
+// A magnitude-form gap.json (orientations unknown, one |f| row per segment in slot 0): the report
+// says so and plots the |f| residual only, not three sensor axes.
+TEST_F(Cli, MagnitudeFormGapIsPlottedAsOneRowPerSegment) {
+  const fs::path run = dir / "paper_gap_magnitude";
+  fs::remove_all(run);
+  fs::copy(dir / "paper", run);
+  std::string doc = kGapFixture;
+  const std::string schema = "\"schema\":\"stend.gap/1\",";
+  doc.replace(doc.find(schema), schema.size(), schema + "\"form\":\"magnitude\",");
+  write(run / "gap.json", doc);
+  ASSERT_EQ(sh("'" + kStend.string() + "' report '" + run.string() + "' --no-db", dir / "gapm.log"), 0)
+      << read(dir / "gapm.log");
+  const std::string all = read(run / "report.html");
+  const auto at = all.find("Sim-to-real gap");
+  ASSERT_NE(at, std::string::npos);
+  const std::string html = all.substr(at);  // the gap section (the fit's section has axis z plots)
+  EXPECT_NE(html.find("Magnitude form"), std::string::npos);
+  EXPECT_NE(html.find("axis |f|"), std::string::npos);
+  EXPECT_EQ(html.find("axis y"), std::string::npos);
+  EXPECT_EQ(html.find("axis z"), std::string::npos);
+}
+
 TEST_F(Cli, GapChartsFromGapJsonAndChromiumRendersThem) {
   const fs::path run = dir / "paper_gap";
   fs::remove_all(run);
