@@ -58,6 +58,9 @@ GapInput generate_rate(const RateDesign& d, const batch_lsq::ModelSpec& fit_mode
   const double se = rate_white_floor(d, inst);
   const double bi = d.bias_instability > 0 ? d.bias_instability : 0.3 * se;
   SegmentMeanNoise mean_noise(rng, se, sigma, bi, d.bias_correlation_s);
+  model::ErrorModel lever;
+  lever.instrument = model::Instrument::kAccelerometer;
+  lever.terms = {model::TermSpec{model::TermKind::kLeverArm, 1, 25.0}};
   double t = 0.0;
   int seg_id = 0;
   std::vector<Eigen::Vector3d> mounts = {d.offset_m};
@@ -81,9 +84,10 @@ GapInput generate_rate(const RateDesign& d, const batch_lsq::ModelSpec& fit_mode
       // Constant rate about the vertical: ω, gravity and the centripetal term are constant in the
       // sensor frame, ω̇ = 0. Specific force at the sensor = ω×(ω×r) + g·up.
       const Eigen::Vector3d w = rate_dps * geometry::kDegToRad * up;
-      const Eigen::Vector3d f = w.cross(w.cross(offset)) + d.gravity * up;
       st.angular_rate = w;
       st.angular_accel = Eigen::Vector3d::Zero();
+      // The known mount's centripetal term through the vocabulary's lever_arm regressor (θ = r).
+      const Eigen::Vector3d f = lever.regressor(st) * offset + d.gravity * up;
       st.specific_force = f;
       st.input = gyro ? w : f;
       st.gravity_up = up;

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include "stend/experiment.hpp"
 #include "stend/gap/gap.hpp"
@@ -43,6 +44,19 @@ PluginHost& host() {
     scanned = true;
   }
   return h;
+}
+
+// Runs an experiment (path relative to the source tree) on the simulated bench with the real
+// runner, reads the run folder back and builds the gap input for a diagnosis/examples model.
+GapInput sim_input(const std::string& experiment, const std::string& model) {
+  TempDir tmp;
+  const Experiment exp = load_experiment(std::string(STEND_SOURCE_DIR) + "/" + experiment, host());
+  RunOptions opt;
+  opt.output_dir = tmp.path;
+  const RunResult run = run_experiment(exp, host(), opt);
+  if (run.status != "complete") throw std::runtime_error(experiment + ": run " + run.status + ": " + run.message);
+  return build_input(Recording::open(run.dir),
+                     batch_lsq::load_model_spec(std::string(STEND_SOURCE_DIR) + "/diagnosis/examples/" + model));
 }
 
 Planted with_term(const model::TermSpec& t, const Eigen::VectorXd& th) {
@@ -172,17 +186,7 @@ TEST(Gap, OutOfVocabularyEffectStaysUnexplained) {
 // End to end through the simulated bench: sim_imu with a planted cross-axis matrix, run by the
 // real runner into a run folder, read back, diagnosed with a model that lacks cross_axis.
 TEST(GapSimBench, PlantedCrossAxisInTheSimulatorIsNamedFirst) {
-  TempDir tmp;
-  const Experiment exp =
-      load_experiment(std::string(STEND_SOURCE_DIR) + "/diagnosis/examples/six_position_cross_axis.yaml", host());
-  RunOptions opt;
-  opt.output_dir = tmp.path;
-  const RunResult run = run_experiment(exp, host(), opt);
-  ASSERT_EQ(run.status, "complete") << run.message;
-  const Recording rec = Recording::open(run.dir);
-  const batch_lsq::ModelSpec spec =
-      batch_lsq::load_model_spec(std::string(STEND_SOURCE_DIR) + "/diagnosis/examples/bias_scale.yaml");
-  const GapInput in = build_input(rec, spec);
+  const GapInput in = sim_input("diagnosis/examples/six_position_cross_axis.yaml", "bias_scale.yaml");
   EXPECT_EQ(in.segments.size(), 10u);
   // The three-axis table chain reproduces the truth: table candidates are excited.
   EXPECT_GT(in.segments[2].point.stimulus.table_df_dangle[2].norm(), 1.0);
@@ -197,14 +201,7 @@ TEST(GapSimBench, PlantedCrossAxisInTheSimulatorIsNamedFirst) {
 }
 
 TEST(GapSimBench, SixPositionWithTheRightModelHasNoGapToExplain) {
-  TempDir tmp;
-  const Experiment exp = load_experiment(std::string(STEND_SOURCE_DIR) + "/configs/six_position.yaml", host());
-  RunOptions opt;
-  opt.output_dir = tmp.path;
-  const RunResult run = run_experiment(exp, host(), opt);
-  ASSERT_EQ(run.status, "complete") << run.message;
-  const GapReport r = diagnose(build_input(Recording::open(run.dir), batch_lsq::load_model_spec(
-                                                                       std::string(STEND_SOURCE_DIR) + "/diagnosis/examples/bias_scale.yaml")));
+  const GapReport r = diagnose(sim_input("configs/six_position.yaml", "bias_scale.yaml"));
   ASSERT_TRUE(r.ok) << r.message;
   EXPECT_TRUE(r.selected.empty()) << r.statement;
 }
@@ -301,14 +298,7 @@ TEST(GapRealData, Mpu6050MultiposWithoutScaleNamesScaleInTheMagnitudeForm) {
 // polynomials of order 2 and 1) diagnosed with a bias + scale model: the temperature terms are
 // found in that order, held out by temperature, and the held-out gap falls by > 90 %.
 TEST(GapSimBench, TemperatureSweepNamesTheTemperaturePolynomials) {
-  TempDir tmp;
-  const Experiment exp = load_experiment(std::string(STEND_SOURCE_DIR) + "/configs/temperature_sweep.yaml", host());
-  RunOptions opt;
-  opt.output_dir = tmp.path;
-  const RunResult run = run_experiment(exp, host(), opt);
-  ASSERT_EQ(run.status, "complete") << run.message;
-  const GapReport r = diagnose(build_input(Recording::open(run.dir), batch_lsq::load_model_spec(
-                                                                       std::string(STEND_SOURCE_DIR) + "/diagnosis/examples/bias_scale.yaml")));
+  const GapReport r = diagnose(sim_input("configs/temperature_sweep.yaml", "bias_scale.yaml"));
   ASSERT_TRUE(r.ok) << r.message;
   EXPECT_EQ(r.fold_by, "temperature");
   ASSERT_GE(r.selected.size(), 2u) << r.statement;
