@@ -1,4 +1,4 @@
-// `stend gap RUN_OR_DATASET --model MODEL.yaml` — sim-to-real gap diagnosis (diagnosis/, issue 5),
+// `stend gap RUN_OR_DATASET --model MODEL.yaml` — sim-to-real gap diagnosis (diagnosis/),
 // and `stend gap validate` — the diagnoser checked on withheld effects.
 #include <fmt/core.h>
 
@@ -10,8 +10,8 @@
 
 #include "commands.hpp"
 #include "stend/batch_lsq/model_spec.hpp"
-#include "stend/gap/gap.hpp"
-#include "stend/gap/validate.hpp"
+#include "stend/diagnosis/gap.hpp"
+#include "stend/diagnosis/validate.hpp"
 
 namespace stend::cli {
 
@@ -30,11 +30,11 @@ struct GapArgs {
   int noise_seeds = 10, noise_null_runs = 40;  // noise-stage experiments (sample level)
 };
 
-gap::FoldBy fold_of(const std::string& s) {
-  if (s == "orientation") return gap::FoldBy::kOrientation;
-  if (s == "temperature") return gap::FoldBy::kTemperature;
-  if (s == "ramp") return gap::FoldBy::kRamp;
-  return gap::FoldBy::kAuto;
+diagnosis::FoldBy fold_of(const std::string& s) {
+  if (s == "orientation") return diagnosis::FoldBy::kOrientation;
+  if (s == "temperature") return diagnosis::FoldBy::kTemperature;
+  if (s == "ramp") return diagnosis::FoldBy::kRamp;
+  return diagnosis::FoldBy::kAuto;
 }
 
 int run_gap(const GapArgs& a) {
@@ -44,21 +44,21 @@ int run_gap(const GapArgs& a) {
   }
   const stend::Recording rec = open_recording(a.input, a.format);
   const batch_lsq::ModelSpec spec = batch_lsq::load_model_spec(a.model);
-  const gap::GapInput in = gap::build_input(rec, spec);
-  gap::GapOptions opt;
+  const diagnosis::GapInput in = diagnosis::build_input(rec, spec);
+  diagnosis::GapOptions opt;
   opt.fold_by = fold_of(a.fold_by);
   opt.max_steps = a.max_steps;
   opt.max_folds = a.max_folds;
   opt.alpha = a.alpha;
-  const gap::GapReport rep = gap::diagnose(in, opt);
+  const diagnosis::GapReport rep = diagnosis::diagnose(in, opt);
   std::ostringstream text;
-  gap::print_report(text, rep);
+  diagnosis::print_report(text, rep);
   std::cout << text.str();
   std::filesystem::path json = a.json;
   if (json.empty())
     json = std::filesystem::is_directory(a.input) ? std::filesystem::path(a.input) / "gap.json"
                                                   : std::filesystem::path("gap.json");
-  std::ofstream(json) << gap::to_json(rep) << "\n";
+  std::ofstream(json) << diagnosis::to_json(rep) << "\n";
   std::filesystem::path txt = json;
   std::ofstream(txt.replace_extension(".txt")) << text.str();
   fmt::print("results:    {}\n", json.string());
@@ -66,7 +66,7 @@ int run_gap(const GapArgs& a) {
 }
 
 int run_validate(const GapArgs& a) {
-  gap::ValidateOptions o;
+  diagnosis::ValidateOptions o;
   o.seeds = a.seeds;
   o.sizes = a.sizes;
   o.null_runs = a.null_runs;
@@ -76,14 +76,14 @@ int run_validate(const GapArgs& a) {
   o.noise_seeds = a.noise_seeds;
   o.noise_null_runs = a.noise_null_runs;
   o.gap.alpha = a.alpha;
-  if (a.positions > 0) o.design = gap::many_positions_design(a.positions);
-  const gap::ValidationReport r = gap::run_validation(o);
-  gap::print_validation(std::cout, r);
+  if (a.positions > 0) o.design = diagnosis::many_positions_design(a.positions);
+  const diagnosis::ValidationReport r = diagnosis::run_validation(o);
+  diagnosis::print_validation(std::cout, r);
   if (!a.vjson.empty()) {
-    std::ofstream(a.vjson) << gap::validation_json(r) << "\n";
+    std::ofstream(a.vjson) << diagnosis::validation_json(r) << "\n";
     fmt::print("results:    {}\n", a.vjson);
   }
-  const bool pass = gap::targets_met(r);
+  const bool pass = diagnosis::targets_met(r);
   fmt::print("targets:    {}\n", pass ? "met" : "NOT met");
   return pass ? 0 : 1;
 }

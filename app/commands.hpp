@@ -39,11 +39,11 @@ bool fit_recording(const stend::Recording& rec, const std::string& model_file, c
                    const std::string& json_out, std::string estimator = "auto");
 
 // ---- subcommands in their own files ------------------------------------------------------------
-void add_gap_command(CLI::App& app, std::vector<Command>& out);      // cmd_gap.cpp     (issue 5)
-void add_report_command(CLI::App& app, std::vector<Command>& out);   // cmd_report.cpp  (issue 6)
-void add_compare_command(CLI::App& app, std::vector<Command>& out);  // cmd_compare.cpp (issue 6)
-void add_export_command(CLI::App& app, std::vector<Command>& out);   // cmd_export.cpp  (issue 6)
-void add_emulate_command(CLI::App& app, std::vector<Command>& out);  // cmd_emulate.cpp (issue 4)
+void add_gap_command(CLI::App& app, std::vector<Command>& out);      // cmd_gap.cpp
+void add_report_command(CLI::App& app, std::vector<Command>& out);   // cmd_report.cpp
+void add_compare_command(CLI::App& app, std::vector<Command>& out);  // cmd_compare.cpp
+void add_export_command(CLI::App& app, std::vector<Command>& out);   // cmd_export.cpp
+void add_emulate_command(CLI::App& app, std::vector<Command>& out);  // cmd_emulate.cpp
 
 // Builds RUN/report.html from what the run folder holds (called at the end of `stend run`).
 // Returns the report path, or an empty path when no report could be written (says why on stderr).

@@ -5,7 +5,7 @@
 #include "stend/batch_lsq/batch_lsq.hpp"
 #include "stend/ceres_nonlinear/model_file.hpp"
 #include "stend/plugin_host.hpp"
-#include "stend/importers.hpp"
+#include "stend/io/importers.hpp"
 #include "stend/temp_poly/temp_poly.hpp"
 
 #include <fmt/format.h>
@@ -34,13 +34,13 @@ stend::Recording open_recording(const std::string& input, std::string format) {
     }
   }
   if (format == "run") return stend::Recording::open(input);
-  if (format == "imucal") return stend::import::import_imucal_session(input);
-  if (format == "mpu6050_multipos") return stend::import::import_mpu6050_multipos(input);
-  if (format == "mat") return stend::import::import_mat(input);
+  if (format == "imucal") return stend::io::import_imucal_session(input);
+  if (format == "mpu6050_multipos") return stend::io::import_mpu6050_multipos(input);
+  if (format == "mat") return stend::io::import_mat(input);
   if (format == "imutk") {
     const auto comma = input.find(',');
     if (comma == std::string::npos) throw std::runtime_error("--format imutk takes ACC_FILE,GYRO_FILE");
-    return stend::import::import_imutk(input.substr(0, comma), input.substr(comma + 1));
+    return stend::io::import_imutk(input.substr(0, comma), input.substr(comma + 1));
   }
   throw std::runtime_error("unknown format '" + format + "'");
 }

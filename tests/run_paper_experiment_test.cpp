@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "stend/experiment.hpp"
-#include "stend/geometry.hpp"
+#include "stend/physics/geometry.hpp"
 #include "stend/plugin_host.hpp"
 #include "stend/recording.hpp"
 #include "stend/runner.hpp"
@@ -66,7 +66,7 @@ TEST(PaperExperiment, RunsOnSimulatedBenchAndRecordsTruth) {
   const stend::Recording rec = stend::Recording::open(r.dir);
   EXPECT_TRUE(rec.complete());
   EXPECT_EQ(rec.header.identity.model, "MPU-6050");
-  EXPECT_NEAR(rec.header.gravity_mps2, stend::geometry::normal_gravity(47.21, 40), 1e-9);
+  EXPECT_NEAR(rec.header.gravity_mps2, stend::physics::normal_gravity(47.21, 40), 1e-9);
 
   std::vector<stend::Segment> orient;
   for (const auto& s : rec.segments)
@@ -85,7 +85,7 @@ TEST(PaperExperiment, RunsOnSimulatedBenchAndRecordsTruth) {
     EXPECT_EQ(seg.orientation, static_cast<int>(k));
     EXPECT_TRUE(seg.settled) << "segment " << k;
     EXPECT_GE(seg.t_end_s - seg.t_start_s, 10.0 - 1e-6);
-    const double delta = 2.0 * static_cast<double>(k) * stend::geometry::kDegToRad;
+    const double delta = 2.0 * static_cast<double>(k) * stend::physics::kDegToRad;
     // Bench truth inside the segment: gravity through the paper's direction cosines (h = 0).
     for (std::size_t i = 0; i < rec.truth_t.size(); ++i) {
       if (rec.truth_t[i] <= seg.t_start_s || rec.truth_t[i] > seg.t_end_s) continue;

@@ -1,6 +1,6 @@
 #include "stend/bench.hpp"
 
-#include "stend/geometry.hpp"
+#include "stend/physics/geometry.hpp"
 
 #include <stdexcept>
 
@@ -44,8 +44,8 @@ Bench::Bench(const Experiment& exp, const PluginHost& host) : exp_(exp) {
       id = exp.fixtures[static_cast<std::size_t>(i)].on;
     }
   }
-  const double heading = exp.base_heading_deg * geometry::kDegToRad;
-  earth_rate_local_ = geometry::Rz(heading) * geometry::earth_rate_local(exp.gravity.latitude_deg);
+  const double heading = exp.base_heading_deg * physics::kDegToRad;
+  earth_rate_local_ = physics::Rz(heading) * physics::earth_rate_local(exp.gravity.latitude_deg);
 }
 
 Bench::~Bench() = default;

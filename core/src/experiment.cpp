@@ -2,7 +2,7 @@
 // plugin configs; stage 2: procedure against the fixtures' declared limits), and resolved.
 // The format is documented in docs/experiment-format.md; keep the two in step.
 #include <stend/experiment.hpp>
-#include <stend/geometry.hpp>
+#include <stend/physics/geometry.hpp>
 #include <stend/yaml_util.hpp>
 
 #include <Eigen/LU>
@@ -294,7 +294,7 @@ class Parser {
         m.fail_value("height_m",
                      "height " + format_number(g.height_m) + " m is outside [-500, 10000]",
                      "height_m is the height above the ellipsoid in metres");
-      g.resolved_mps2 = geometry::normal_gravity(g.latitude_deg, g.height_m);
+      g.resolved_mps2 = physics::normal_gravity(g.latitude_deg, g.height_m);
     }
     if (m.has("resolved_mps2")) {
       const double r = m.number("resolved_mps2", 0.0, "in m/s^2");
@@ -451,7 +451,7 @@ class Parser {
         m.fail_value("rpy_deg",
                      "expected [roll, pitch, yaw] in degrees for 'rpy_deg', got " +
                          std::to_string(rpy.size()) + " numbers");
-      exp_.R_sensor_from_mount = geometry::from_rpy_deg(rpy[0], rpy[1], rpy[2]);
+      exp_.R_sensor_from_mount = physics::from_rpy_deg(rpy[0], rpy[1], rpy[2]);
     }
     if (m.has("matrix")) {
       const YAML::Node node = m.get("matrix");

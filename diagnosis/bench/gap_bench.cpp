@@ -3,12 +3,12 @@
 //   build-*/bin/gap_bench   (or build-*/diagnosis/gap_bench)
 #include <benchmark/benchmark.h>
 
-#include "stend/gap/gap.hpp"
-#include "stend/gap/validate.hpp"
+#include "stend/diagnosis/gap.hpp"
+#include "stend/diagnosis/validate.hpp"
 
 namespace {
 
-using namespace stend::gap;
+using namespace stend::diagnosis;
 
 GapInput input(int positions, bool planted) {
   Planted p;

@@ -1,5 +1,5 @@
-// stend gap, steps 2–6: the twin, where, which, how far. See stend/gap/gap.hpp.
-#include "stend/gap/gap.hpp"
+// stend gap, steps 2–6: the twin, where, which, how far. See stend/diagnosis/gap.hpp.
+#include "stend/diagnosis/gap.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/QR>
@@ -19,7 +19,7 @@
 #include "stats.hpp"
 #include "text.hpp"
 
-namespace stend::gap {
+namespace stend::diagnosis {
 
 namespace {
 
@@ -988,4 +988,4 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
   return rep;
 }
 
-}  // namespace stend::gap
+}  // namespace stend::diagnosis

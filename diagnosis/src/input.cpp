@@ -10,11 +10,11 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "stend/geometry.hpp"
-#include "stend/gap/gap.hpp"
+#include "stend/physics/geometry.hpp"
+#include "stend/diagnosis/gap.hpp"
 #include "noise_stage.hpp"
 
-namespace stend::gap {
+namespace stend::diagnosis {
 
 namespace {
 
@@ -105,8 +105,8 @@ double sim_twin_std(const YAML::Node& cfg, bool accel, double rate_hz) {
 Eigen::Vector3d table_stimulus(model::Stimulus<double>& st, double az, double h, double dl,
                                const Eigen::Matrix3d& mount, double g) {
   auto force = [&](double a0, double a1, double a2, double ex, double ey) {
-    const Eigen::Vector3d gb = geometry::Rx(ex) * geometry::Ry(ey) * Eigen::Vector3d(0, 0, g);
-    return Eigen::Vector3d(mount * geometry::Ry(a2) * geometry::Rx(a1) * geometry::Rz(a0) * gb);
+    const Eigen::Vector3d gb = physics::Rx(ex) * physics::Ry(ey) * Eigen::Vector3d(0, 0, g);
+    return Eigen::Vector3d(mount * physics::Ry(a2) * physics::Rx(a1) * physics::Rz(a0) * gb);
   };
   const double e = 1e-6;
   const double ang[3] = {az, h, dl};
@@ -182,7 +182,7 @@ GapInput build_input(const Recording& recording_in, const batch_lsq::ModelSpec& 
   for (const auto& s : rec->segments) segs.push_back(&s);
   std::sort(segs.begin(), segs.end(), [](const Segment* a, const Segment* b) { return a->t_start_s < b->t_start_s; });
 
-  const double deg = geometry::kDegToRad;
+  const double deg = physics::kDegToRad;
   for (const auto& p : points) {
     SegmentData d;
     d.point = p;
@@ -314,4 +314,4 @@ GapInput build_input(const Recording& recording_in, const batch_lsq::ModelSpec& 
   return in;
 }
 
-}  // namespace stend::gap
+}  // namespace stend::diagnosis

@@ -11,7 +11,7 @@
 #include "stend/ceres_nonlinear/calibration.hpp"
 #include "stend/estimation/linear_lsq.hpp"
 
-namespace stend::gap {
+namespace stend::diagnosis {
 
 namespace {
 
@@ -181,4 +181,4 @@ GapInput build_magnitude_input(const Recording& rec, const batch_lsq::ModelSpec&
   return magnitude_form(std::move(in), g);
 }
 
-}  // namespace stend::gap
+}  // namespace stend::diagnosis

@@ -2,9 +2,9 @@
 // input_magnitude.cpp (building the form) and gap.cpp (diagnosing it). See GapInput::magnitude.
 #pragma once
 
-#include "stend/gap/gap.hpp"
+#include "stend/diagnosis/gap.hpp"
 
-namespace stend::gap {
+namespace stend::diagnosis {
 
 // Standard error of the segment mean along the estimated gravity direction û [m/s²]:
 // sqrt(Σ_a û_a²·se_a²) (axes' noise taken as independent).
@@ -15,4 +15,4 @@ double magnitude_std_error(const SegmentData& segment);
 // parameter (param_index = 0…p−1); rotations of the sensor frame come out not identifiable.
 batch_lsq::FitResult fit_magnitude_rows(const GapInput& input);
 
-}  // namespace stend::gap
+}  // namespace stend::diagnosis

@@ -9,7 +9,7 @@
 #include "text.hpp"
 #include "stend/allan/allan.hpp"
 
-namespace stend::gap::noise_stage {
+namespace stend::diagnosis::noise_stage {
 
 namespace {
 
@@ -430,4 +430,4 @@ std::vector<CandidateResult> candidates(const GapInput& in, const std::vector<in
   return out;
 }
 
-}  // namespace stend::gap::noise_stage
+}  // namespace stend::diagnosis::noise_stage

@@ -1,5 +1,5 @@
 // stend gap: the noise- and output-stage candidates (quantization, saturation, coloured noise).
-// Internal to stend_gap. They cannot move the static means' fit, so they are judged on the raw
+// Internal to stend_diagnosis. They cannot move the static means' fit, so they are judged on the raw
 // samples (evidence gathered by build_input through the functions below) — each a test with a
 // stated false-positive level, an effect size and an interval:
 //
@@ -31,10 +31,10 @@
 #include <string>
 #include <vector>
 
-#include "stend/gap/gap.hpp"
-#include "stend/gap/validate.hpp"
+#include "stend/diagnosis/gap.hpp"
+#include "stend/diagnosis/validate.hpp"
 
-namespace stend::gap::noise_stage {
+namespace stend::diagnosis::noise_stage {
 
 // Sub-block ANOVA, distinct values and value spacing of one segment's kept window, per axis:
 // fills SegmentData::ss_between, ss_within, distinct_values, value_step, raw_samples.
@@ -53,4 +53,4 @@ std::vector<CandidateResult> candidates(const GapInput& in, const std::vector<in
 void print_validation(std::ostream& os, const std::vector<NoiseStageValidation>& v, double seconds);
 void add_json(nlohmann::json& j, const std::vector<NoiseStageValidation>& v, double seconds);
 
-}  // namespace stend::gap::noise_stage
+}  // namespace stend::diagnosis::noise_stage

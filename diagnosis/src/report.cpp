@@ -6,9 +6,9 @@
 #include <ostream>
 #include <string>
 
-#include "stend/gap/gap.hpp"
+#include "stend/diagnosis/gap.hpp"
 
-namespace stend::gap {
+namespace stend::diagnosis {
 
 namespace {
 
@@ -193,4 +193,4 @@ void print_report(std::ostream& os, const GapReport& r) {
   }
 }
 
-}  // namespace stend::gap
+}  // namespace stend::diagnosis

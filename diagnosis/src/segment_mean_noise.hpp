@@ -7,10 +7,10 @@
 #include <Eigen/Core>
 #include <cmath>
 
-#include "stend/gap/gap.hpp"
+#include "stend/diagnosis/gap.hpp"
 #include "stend/model/noise.hpp"
 
-namespace stend::gap {
+namespace stend::diagnosis {
 
 class SegmentMeanNoise {
  public:
@@ -45,4 +45,4 @@ class SegmentMeanNoise {
   double t_prev_s_ = 0.0;
 };
 
-}  // namespace stend::gap
+}  // namespace stend::diagnosis

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-namespace stend::gap::stats {
+namespace stend::diagnosis::stats {
 
 // Regularized lower incomplete gamma P(a, x).
 inline double gamma_p(double a, double x) {
@@ -85,4 +85,4 @@ inline double f_sf(double f, double d1, double d2) {
   return beta_i(0.5 * d2, 0.5 * d1, d2 / (d2 + d1 * f));
 }
 
-}  // namespace stend::gap::stats
+}  // namespace stend::diagnosis::stats

@@ -5,7 +5,7 @@
 #include <sstream>
 #include <string>
 
-namespace stend::gap {
+namespace stend::diagnosis {
 
 // `prec` significant digits; "n/a" for NaN or infinity.
 inline std::string fmt(double v, int prec = 4) {
@@ -16,4 +16,4 @@ inline std::string fmt(double v, int prec = 4) {
   return os.str();
 }
 
-}  // namespace stend::gap
+}  // namespace stend::diagnosis

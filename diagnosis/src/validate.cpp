@@ -1,5 +1,5 @@
 // `stend gap validate`: planted effects, null runs, out-of-vocabulary runs. See validate.hpp.
-#include "stend/gap/validate.hpp"
+#include "stend/diagnosis/validate.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -13,12 +13,12 @@
 #include <ostream>
 #include <set>
 
-#include "stend/geometry.hpp"
+#include "stend/physics/geometry.hpp"
 #include "segment_mean_noise.hpp"
 #include "stend/model/noise.hpp"
 #include "noise_stage.hpp"
 
-namespace stend::gap {
+namespace stend::diagnosis {
 
 namespace {
 
@@ -65,8 +65,8 @@ ValidationDesign many_positions_design(int n) {
     const double z = 1.0 - 2.0 * (k + 0.5) / n, r = std::sqrt(1 - z * z), phi = golden * k;
     const Eigen::Vector3d up(r * std::cos(phi), r * std::sin(phi), z);
     // f = g·[−sin δ cos h, sin h, cos δ cos h]
-    const double h = std::asin(std::clamp(up[1], -1.0, 1.0)) / geometry::kDegToRad;
-    const double dl = std::atan2(-up[0], up[2]) / geometry::kDegToRad;
+    const double h = std::asin(std::clamp(up[1], -1.0, 1.0)) / physics::kDegToRad;
+    const double dl = std::atan2(-up[0], up[2]) / physics::kDegToRad;
     d.positions.push_back({h, dl});
   }
   return d;
@@ -124,7 +124,7 @@ GapInput generate(const ValidationDesign& d, const batch_lsq::ModelSpec& fit_mod
       const double decay = std::exp(-(mid - t_change) / d.die_lag_s);
       die = sp + (die_start - sp) * decay;
       auto& st = p.stimulus;
-      const Eigen::Vector3d f = table_stimulus(st, 0.0, h * geometry::kDegToRad, dl * geometry::kDegToRad, I, d.gravity);
+      const Eigen::Vector3d f = table_stimulus(st, 0.0, h * physics::kDegToRad, dl * physics::kDegToRad, I, d.gravity);
       st.input = f;
       st.specific_force = f;
       st.gravity_up = f / f.norm();
@@ -608,4 +608,4 @@ std::string validation_json(const ValidationReport& r, int indent) {
   return j.dump(indent);
 }
 
-}  // namespace stend::gap
+}  // namespace stend::diagnosis

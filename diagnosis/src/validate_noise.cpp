@@ -17,11 +17,11 @@
 
 #include "noise_stage.hpp"
 #include "stend/allan/allan.hpp"
-#include "stend/gap/validate.hpp"
+#include "stend/diagnosis/validate.hpp"
 #include "stend/model/noise.hpp"
 #include "stend/model/output_stage.hpp"
 
-namespace stend::gap {
+namespace stend::diagnosis {
 
 namespace {
 
@@ -334,4 +334,4 @@ void add_json(nlohmann::json& j, const std::vector<NoiseStageValidation>& v, dou
 
 }  // namespace noise_stage
 
-}  // namespace stend::gap
+}  // namespace stend::diagnosis

@@ -4,12 +4,12 @@
 #include <cmath>
 #include <cstdio>
 
-#include "stend/gap/validate.hpp"
-#include "stend/geometry.hpp"
+#include "stend/diagnosis/validate.hpp"
+#include "stend/physics/geometry.hpp"
 #include "segment_mean_noise.hpp"
 #include "stend/model/noise.hpp"
 
-namespace stend::gap {
+namespace stend::diagnosis {
 
 RateDesign default_rate_design() {
   RateDesign d;
@@ -83,7 +83,7 @@ GapInput generate_rate(const RateDesign& d, const batch_lsq::ModelSpec& fit_mode
       auto& st = p.stimulus;
       // Constant rate about the vertical: ω, gravity and the centripetal term are constant in the
       // sensor frame, ω̇ = 0. Specific force at the sensor = ω×(ω×r) + g·up.
-      const Eigen::Vector3d w = rate_dps * geometry::kDegToRad * up;
+      const Eigen::Vector3d w = rate_dps * physics::kDegToRad * up;
       st.angular_rate = w;
       st.angular_accel = Eigen::Vector3d::Zero();
       // The known mount's centripetal term through the vocabulary's lever_arm regressor (θ = r).
@@ -117,4 +117,4 @@ GapInput generate_rate(const RateDesign& d, const batch_lsq::ModelSpec& fit_mode
   return in;
 }
 
-}  // namespace stend::gap
+}  // namespace stend::diagnosis

@@ -10,11 +10,11 @@
 #include <sstream>
 #include <string>
 
-#include "sim_imu.hpp"  // the real simulated sensor (sensors/sim_imu), compiled into this test
-#include "stend/gap/gap.hpp"
-#include "stend/gap/validate.hpp"
+#include <stend/sim/imu.hpp>  // the real simulated sensor (sim/)
+#include "stend/diagnosis/gap.hpp"
+#include "stend/diagnosis/validate.hpp"
 
-namespace stend::gap {
+namespace stend::diagnosis {
 namespace {
 
 struct Outcome {
@@ -142,7 +142,7 @@ TEST(GapNoiseStage, ValidationReportHasTheNoiseSection) {
   EXPECT_EQ(j["noise_stage"].size(), 5u);
 }
 
-// End to end through the real simulated sensor (sensors/sim_imu: its noise, saturation and
+// End to end through the real simulated sensor (sim/: its noise, saturation and
 // quantizer as configured): six 30-s positions and 600 s +z up at 100 Hz, recorded, read back by
 // build_input and diagnosed.
 class PiecewiseTruth : public TruthSource {
@@ -256,4 +256,4 @@ TEST(GapNoiseStage, EndToEndThroughTheSimulatedSensor) {
 }
 
 }  // namespace
-}  // namespace stend::gap
+}  // namespace stend::diagnosis

@@ -11,15 +11,15 @@
 #include <stdexcept>
 
 #include "stend/experiment.hpp"
-#include "stend/gap/gap.hpp"
-#include "stend/gap/validate.hpp"
-#include "stend/importers.hpp"
+#include "stend/diagnosis/gap.hpp"
+#include "stend/diagnosis/validate.hpp"
+#include "stend/io/importers.hpp"
 #include "stend/plugin_host.hpp"
 #include "stend/runner.hpp"
 
 namespace fs = std::filesystem;
 using namespace stend;
-using namespace stend::gap;
+using namespace stend::diagnosis;
 
 namespace {
 
@@ -210,7 +210,7 @@ TEST(GapSimBench, SixPositionWithTheRightModelHasNoGapToExplain) {
 TEST(GapRealData, ImucalWithoutCrossAxisNamesCrossAxisFirst) {
   const fs::path csv = fs::path(STEND_SHARED_DATA_DIR) / "imucal" / "annotated_session.csv";
   if (!fs::exists(csv)) GTEST_SKIP() << "../shared/data/imucal is absent (" << csv << "); real-data check skipped";
-  const Recording rec = import::import_imucal_session(csv);
+  const Recording rec = io::import_imucal_session(csv);
   const batch_lsq::ModelSpec spec =
       batch_lsq::load_model_spec(std::string(STEND_SOURCE_DIR) + "/diagnosis/examples/imucal_bias_scale.yaml");
   const GapInput in = build_input(rec, spec);
@@ -266,7 +266,7 @@ TEST(GapMagnitude, PlantedCrossAxisIsNamedAndOnlyItsSymmetricPartIsSeen) {
 TEST(GapRealData, Mpu6050MultiposWithoutScaleNamesScaleInTheMagnitudeForm) {
   const fs::path csv = fs::path(STEND_SHARED_DATA_DIR) / "mpu6050_multipos" / "calibration_session.csv";
   if (!fs::exists(csv)) GTEST_SKIP() << "../shared/data/mpu6050_multipos is absent (" << csv << "); skipped";
-  const Recording rec = import::import_mpu6050_multipos(csv);
+  const Recording rec = io::import_mpu6050_multipos(csv);
   const batch_lsq::ModelSpec spec = batch_lsq::load_model_spec(std::string(STEND_SOURCE_DIR) +
                                                                "/diagnosis/examples/mpu6050_multipos_bias.yaml");
   const GapInput in = build_input(rec, spec);

@@ -11,9 +11,9 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "stend/gap/validate.hpp"
+#include "stend/diagnosis/validate.hpp"
 
-using namespace stend::gap;
+using namespace stend::diagnosis;
 
 namespace {
 

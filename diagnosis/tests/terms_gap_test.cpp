@@ -7,8 +7,8 @@
 
 #include <random>
 
-#include "stend/gap/gap.hpp"
-#include "stend/geometry.hpp"
+#include "stend/diagnosis/gap.hpp"
+#include "stend/physics/geometry.hpp"
 #include "stend/model/terms.hpp"
 
 using namespace stend::model;
@@ -127,31 +127,31 @@ TEST(GapTerms, LeverArmIsCentripetalPlusTangential) {
 }
 
 TEST(GapTerms, TableOffsetAndTiltAreFirstOrderGeometry) {
-  // The table derivatives from stend::gap::table_stimulus, times a small offset, equal the change
+  // The table derivatives from stend::diagnosis::table_stimulus, times a small offset, equal the change
   // of the specific force when the table really stands δ further / the base really is tilted.
-  const double g = 9.81, deg = stend::geometry::kDegToRad;
+  const double g = 9.81, deg = stend::physics::kDegToRad;
   ErrorModel m;
   m.terms = {{TermKind::kTableAngleOffset, 1, 25.0}, {TermKind::kTableAxisTilt, 1, 25.0}};
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   for (auto [h, d] : {std::pair{0.0, 0.0}, {30.0, 45.0}, {-60.0, 120.0}, {90.0, 10.0}}) {
     Stimulus<double> s;
-    const Eigen::Vector3d f0 = stend::gap::table_stimulus(s, 0.0, h * deg, d * deg, I, g);
+    const Eigen::Vector3d f0 = stend::diagnosis::table_stimulus(s, 0.0, h * deg, d * deg, I, g);
     s.input = f0;
     const double delta = 1e-4;  // rad
     // rotation-axis zero offset
     double th[5] = {0, 0, delta, 0, 0};
     Stimulus<double> moved;
-    const Eigen::Vector3d f1 = stend::gap::table_stimulus(moved, 0.0, h * deg, d * deg + delta, I, g);
+    const Eigen::Vector3d f1 = stend::diagnosis::table_stimulus(moved, 0.0, h * deg, d * deg + delta, I, g);
     EXPECT_LT(((m.measure<double>(th, s) - f0) - (f1 - f0)).norm(), 1e-6 * g);
     // tilt offset
     th[1] = delta;
     th[2] = 0;
-    const Eigen::Vector3d f2 = stend::gap::table_stimulus(moved, 0.0, h * deg + delta, d * deg, I, g);
+    const Eigen::Vector3d f2 = stend::diagnosis::table_stimulus(moved, 0.0, h * deg + delta, d * deg, I, g);
     EXPECT_LT(((m.measure<double>(th, s) - f0) - (f2 - f0)).norm(), 1e-6 * g);
     // base tilt about x: the same as gravity rotated by Rx(ε) in the base frame
     double tt[5] = {0, 0, 0, delta, 0};
-    const Eigen::Vector3d f3 = stend::geometry::Ry(d * deg) * stend::geometry::Rx(h * deg) *
-                               stend::geometry::Rx(delta) * Eigen::Vector3d(0, 0, g);
+    const Eigen::Vector3d f3 = stend::physics::Ry(d * deg) * stend::physics::Rx(h * deg) *
+                               stend::physics::Rx(delta) * Eigen::Vector3d(0, 0, g);
     EXPECT_LT(((m.measure<double>(tt, s) - f0) - (f3 - f0)).norm(), 1e-6 * g);
   }
 }

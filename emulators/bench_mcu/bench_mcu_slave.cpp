@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "bench_mcu_map.hpp"
+#include <stend/devices/bench_mcu_map.hpp>
 #include "stend/emulators/splitmix.hpp"
 #include "stend/emulators/steady_ns.hpp"
 

@@ -1,11 +1,11 @@
 #include "bench_world.hpp"
 
-#include <stend/geometry.hpp>
+#include <stend/physics/geometry.hpp>
 
 #include <stdexcept>
 
-#include "sim_one_axis_table.hpp"
-#include "sim_thermochamber.hpp"
+#include <stend/sim/one_axis_table.hpp>
+#include <stend/sim/thermochamber.hpp>
 
 namespace stend::emu {
 
@@ -51,8 +51,8 @@ BenchWorldConfig BenchWorldConfig::from_experiment(const Experiment& e, double c
 }
 
 BenchWorld::BenchWorld(const BenchWorldConfig& c) : c_(c) {
-  Rh_ = geometry::Rx(c.table_tilt_deg * geometry::kDegToRad);
-  earth_local_ = geometry::Rz(c.heading_deg * geometry::kDegToRad) * geometry::earth_rate_local(c.latitude_deg);
+  Rh_ = physics::Rx(c.table_tilt_deg * physics::kDegToRad);
+  earth_local_ = physics::Rz(c.heading_deg * physics::kDegToRad) * physics::earth_rate_local(c.latitude_deg);
   TableTextConfig tc;
   tc.axes = {c.table_axis};
   tc.port = c.table_port;
@@ -74,11 +74,11 @@ BenchTruth BenchWorld::truth(double t) {
   const double table_t = table_->emulated_now() -
                          std::chrono::duration<double>(std::chrono::steady_clock::now() - mcu_epoch_).count() + t;
   const sim::AxisState s = table_->state_at(0, table_t);
-  const double d = s.position * geometry::kDegToRad;
-  const Eigen::Matrix3d R = c_.R_sensor_from_mount * geometry::Ry(d) * Rh_;
+  const double d = s.position * physics::kDegToRad;
+  const Eigen::Matrix3d R = c_.R_sensor_from_mount * physics::Ry(d) * Rh_;
   b.R_sensor_from_local = R;
   b.specific_force_mps2 = R * Eigen::Vector3d(0.0, 0.0, c_.gravity_mps2);
-  b.angular_rate_radps = c_.R_sensor_from_mount * Eigen::Vector3d(0.0, s.velocity * geometry::kDegToRad, 0.0) +
+  b.angular_rate_radps = c_.R_sensor_from_mount * Eigen::Vector3d(0.0, s.velocity * physics::kDegToRad, 0.0) +
                          R * earth_local_;
   chamber_->with_firmware([&](ChamberFirmware& f) {
     b.air_temperature_c = f.air_c();

@@ -20,7 +20,7 @@
 
 #include "bench_mcu_slave.hpp"
 #include "chamber_emulator.hpp"
-#include "sim_imu.hpp"
+#include <stend/sim/imu.hpp>
 #include "table_text_server.hpp"
 
 namespace stend::emu {

@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "chamber_map.hpp"
+#include <stend/devices/chamber_map.hpp>
 #include "stend/emulators/splitmix.hpp"
 #include "stend/emulators/steady_ns.hpp"
 

@@ -10,7 +10,7 @@
 // corruption (RTU), silence, slave exceptions, a TCP peer that disappears and comes back.
 #pragma once
 
-#include "sim_thermochamber.hpp"  // fixtures/sim_thermochamber: ThermochamberConfig (the plant)
+#include <stend/sim/thermochamber.hpp>  // sim/: ThermochamberConfig (the plant)
 #include "stend/emulators/pty_modbus_slave.hpp"  // emulators/common: the RTU slave's pty pair
 #include "stend/emulators/tcp_server.hpp"        // emulators/common: the loopback accept/serve loop
 

@@ -1,6 +1,6 @@
 #include "hid_bridge_models.hpp"
 
-#include <stend/transport/i2c.hpp>
+#include <stend/devices/i2c.hpp>
 
 #include <algorithm>
 #include <chrono>

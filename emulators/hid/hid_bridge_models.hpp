@@ -10,7 +10,7 @@
 // Fault injection: lose a reply with a probability; unplug (every call fails like hidapi does).
 #pragma once
 
-#include <stend/transport/hid.hpp>
+#include <stend/devices/hid.hpp>
 
 #include <array>
 #include <atomic>

@@ -6,7 +6,7 @@
 // Fault injection: each ioctl fails with `fault_errno` with probability `p`.
 #pragma once
 
-#include <stend/transport/i2c_dev.hpp>
+#include <stend/devices/i2c_dev.hpp>
 
 #include <atomic>
 #include <cerrno>

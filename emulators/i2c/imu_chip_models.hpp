@@ -44,7 +44,7 @@
 
 #include "i2c_bus_model.hpp"
 #include "mpu6050_model.hpp"
-#include "sim_imu.hpp"
+#include <stend/sim/imu.hpp>
 
 namespace stend::emu {
 

@@ -21,7 +21,7 @@
 #include <functional>
 #include <memory>
 
-#include "sim_imu.hpp"
+#include <stend/sim/imu.hpp>
 
 namespace stend::emu {
 

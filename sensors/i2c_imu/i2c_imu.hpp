@@ -5,8 +5,8 @@
 #pragma once
 
 #include <stend/sdk.hpp>
-#include <stend/transport/i2c.hpp>
-#include <stend/transport/i2c_route.hpp>
+#include <stend/devices/i2c.hpp>
+#include <stend/devices/i2c_route.hpp>
 
 #include <chrono>
 #include <cstdint>

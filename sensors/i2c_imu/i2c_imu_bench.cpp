@@ -3,7 +3,7 @@
 //   build/bin/i2c_imu_bench
 #include <benchmark/benchmark.h>
 
-#include <stend/transport/i2c_hid.hpp>
+#include <stend/devices/i2c_hid.hpp>
 
 #include <memory>
 #include <string>

@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "bench_mcu_map.hpp"
+#include <stend/devices/bench_mcu_map.hpp>
 
 namespace stend::mpu6050 {
 namespace {

@@ -3,7 +3,7 @@
 #pragma once
 
 #include <stend/sdk.hpp>
-#include <stend/transport/modbus_rtu.hpp>
+#include <stend/devices/modbus_rtu.hpp>
 
 #include <chrono>
 #include <cstdint>

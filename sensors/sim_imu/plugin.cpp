@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "sim_imu.hpp"
+#include <stend/sim/imu.hpp>
 
 namespace {
 

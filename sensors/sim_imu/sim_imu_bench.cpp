@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "sim_imu.hpp"
+#include <stend/sim/imu.hpp>
 
 namespace {
 

@@ -2,9 +2,9 @@
 // real transports find there the device the register maps describe.
 #include <gtest/gtest.h>
 
-#include <stend/transport/modbus_rtu.hpp>
-#include <stend/transport/modbus_tcp.hpp>
-#include <stend/transport/text_command.hpp>
+#include <stend/devices/modbus_rtu.hpp>
+#include <stend/devices/modbus_tcp.hpp>
+#include <stend/devices/text_command.hpp>
 
 #include <cstdio>
 #include <regex>

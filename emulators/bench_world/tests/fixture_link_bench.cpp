@@ -2,9 +2,9 @@
 // what bounds a fixture's poll_period_s. Run: build-*/bin/fixture_link_bench
 #include <benchmark/benchmark.h>
 
-#include <stend/transport/modbus_rtu.hpp>
-#include <stend/transport/modbus_tcp.hpp>
-#include <stend/transport/text_command.hpp>
+#include <stend/devices/modbus_rtu.hpp>
+#include <stend/devices/modbus_tcp.hpp>
+#include <stend/devices/text_command.hpp>
 
 #include "chamber_emulator.hpp"
 #include "table_text_server.hpp"

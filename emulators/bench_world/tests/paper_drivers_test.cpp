@@ -1,4 +1,4 @@
-// Acceptance (issue 4): the paper's experiment through the real drivers — mpu6050_modbus, evo10l,
+// Acceptance: the paper's experiment through the real drivers — mpu6050_modbus, evo10l,
 // thermochamber — against the emulated bench world, the twin of configs/paper_mpu6050_z.yaml's
 // in-process simulated bench, gives the same fitted parameters as the same procedure on the
 // in-process bench, within the reported uncertainty. Runs ≈ 40 s of wall time.

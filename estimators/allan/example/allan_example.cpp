@@ -7,7 +7,7 @@
 // Example (the figures in README.md):
 //   stend_allan_example ../shared/data/mpu6050_multipos/static_449s.csv
 #include <stend/allan/allan.hpp>
-#include <stend/importers.hpp>
+#include <stend/io/importers.hpp>
 
 #include <cstdlib>
 #include <cstring>
@@ -43,9 +43,9 @@ int main(int argc, char** argv) {
   try {
     stend::Recording rec;
     if (format == "mpu6050") {
-      rec = stend::import::import_mpu6050_multipos(file);
+      rec = stend::io::import_mpu6050_multipos(file);
     } else if (format == "imucal") {
-      rec = stend::import::import_imucal_session(file);
+      rec = stend::io::import_imucal_session(file);
     } else {
       std::cerr << "stend_allan_example: unknown format '" << format << "' (mpu6050, imucal)\n";
       return 2;

@@ -2,7 +2,7 @@
 // coefficients recovered from simulated noise of known density, interval coverage, and the
 // MPU-6050 static record from ../shared/data.
 #include <stend/allan/allan.hpp>
-#include <stend/importers.hpp>
+#include <stend/io/importers.hpp>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -391,7 +391,7 @@ TEST(AllanRealData, Mpu6050Static449s) {
     GTEST_SKIP() << "real-data test skipped: " << file
                  << " not found (the shared data folder ../shared/data is absent in this checkout)";
   }
-  const auto rec = stend::import::import_mpu6050_multipos(file);
+  const auto rec = stend::io::import_mpu6050_multipos(file);
   const auto report = analyze_recording(rec);
   std::cout << report;
   ASSERT_EQ(report.channels.size(), 6u);

@@ -7,8 +7,8 @@
 #include <limits>
 #include <stdexcept>
 
-#include "stend/geometry.hpp"
-#include "stend/signal/static_extraction.hpp"
+#include "stend/physics/geometry.hpp"
+#include "stend/processing/static_extraction.hpp"
 
 namespace stend::batch_lsq {
 
@@ -130,8 +130,8 @@ std::vector<StaticPoint> extract_points(const Recording& rec, const ModelSpec& s
       p.label = seg.kind + " " + std::to_string(seg.orientation + 1);
     try {
       for (int a = 0; a < 3; ++a) {
-        const signal::StaticValue v =
-            signal::extract_static(t, x[a], seg.t_start_s, seg.t_end_s, spec.extraction);
+        const processing::StaticValue v =
+            processing::extract_static(t, x[a], seg.t_start_s, seg.t_end_s, spec.extraction);
         p.measured[a] = v.mean;
         p.measured_std_error[a] = v.white_std_error;
         p.t_start_s = v.t_first_s;
@@ -222,7 +222,7 @@ FitResult fit_points(const std::vector<StaticPoint>& points, const ModelSpec& sp
   fr.unit = accel ? "m/s^2" : "rad/s";
   fr.display_unit = accel ? "mg" : "deg/h";
   const double display_factor =
-      accel ? 1e3 / kStandardGravity : 180.0 / geometry::kPi * 3600.0;
+      accel ? 1e3 / kStandardGravity : 180.0 / physics::kPi * 3600.0;
 
   if (spec.axes.empty() || spec.model.terms.empty()) {
     fr.message = "the model specification has no axes or no terms";

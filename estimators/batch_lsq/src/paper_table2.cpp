@@ -8,7 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "stend/geometry.hpp"
+#include "stend/physics/geometry.hpp"
 
 #ifndef STEND_BATCH_LSQ_SOURCE_DIR
 #define STEND_BATCH_LSQ_SOURCE_DIR "."
@@ -96,8 +96,8 @@ std::vector<StaticPoint> table2_points(const std::vector<Table2Row>& rows, doubl
     StaticPoint p;
     p.segment_id = static_cast<int>(i);
     p.label = num(rows[i].angle_deg) + " deg";
-    const Eigen::Matrix3d C = geometry::paper_table(tilt_h_deg * geometry::kDegToRad,
-                                                    rows[i].angle_deg * geometry::kDegToRad);
+    const Eigen::Matrix3d C = physics::paper_table(tilt_h_deg * physics::kDegToRad,
+                                                    rows[i].angle_deg * physics::kDegToRad);
     const Eigen::Vector3d f = C * Eigen::Vector3d(0.0, 0.0, g_mps2);
     p.stimulus.input = f;
     p.stimulus.specific_force = f;
@@ -112,7 +112,7 @@ std::vector<StaticPoint> table2_points(const std::vector<Table2Row>& rows, doubl
 Table2Reproduction reproduce_table2(const std::vector<Table2Row>& rows) {
   Table2Reproduction out;
   out.rows = rows;
-  const double g_local = geometry::normal_gravity(kPaperLatitudeDeg, 0.0);
+  const double g_local = physics::normal_gravity(kPaperLatitudeDeg, 0.0);
   const ModelSpec spec = table2_model();
   struct Setup {
     std::string label;
@@ -132,7 +132,7 @@ Table2Reproduction reproduce_table2(const std::vector<Table2Row>& rows) {
     if (c.fit.ok) {
       const auto& l = c.fit.lsq;
       Eigen::VectorXd a = Eigen::VectorXd::Zero(l.parameter_count);
-      const double gz = s.g * std::cos(s.h * geometry::kDegToRad);
+      const double gz = s.g * std::cos(s.h * physics::kDegToRad);
       a[l.index("scale_z")] = gz;
       c.g_one_plus_scale = l.combination(a, gz);
       c.g_one_plus_scale.text = "g*cos(h)*(1 + scale_z)";
@@ -150,7 +150,7 @@ Table2Reproduction reproduce_table2(const std::vector<Table2Row>& rows) {
   auto rms_for = [&](double g, double sign) {
     double ss = 0;
     for (const auto& r : rows) {
-      const double d = r.angle_deg * geometry::kDegToRad;
+      const double d = r.angle_deg * physics::kDegToRad;
       const double pred = g * std::cos(d) * (1 + pp.scale) - sign * pp.cross_zx * g * std::sin(d) + pp.bias_mps2;
       ss += (r.a_z_mps2 - pred) * (r.a_z_mps2 - pred);
     }
@@ -159,7 +159,7 @@ Table2Reproduction reproduce_table2(const std::vector<Table2Row>& rows) {
   auto best_g_for = [&](double sign) {
     double num_ = 0, den = 0;
     for (const auto& r : rows) {
-      const double d = r.angle_deg * geometry::kDegToRad;
+      const double d = r.angle_deg * physics::kDegToRad;
       const double c = std::cos(d) * (1 + pp.scale) - sign * pp.cross_zx * std::sin(d);
       num_ += (r.a_z_mps2 - pp.bias_mps2) * c;
       den += c * c;

@@ -13,7 +13,7 @@
 
 #include "stend/batch_lsq/batch_lsq.hpp"
 #include "stend/experiment.hpp"
-#include "stend/geometry.hpp"
+#include "stend/physics/geometry.hpp"
 
 using namespace stend;
 using namespace stend::batch_lsq;
@@ -44,7 +44,7 @@ std::vector<Eigen::Vector3d> table_forces(double g) {
   std::vector<Eigen::Vector3d> f;
   for (double h : {0.0, 50.0, -60.0})
     for (double d : {0.0, 90.0, 180.0, 270.0})
-      f.push_back(geometry::paper_table(h * geometry::kDegToRad, d * geometry::kDegToRad) *
+      f.push_back(physics::paper_table(h * physics::kDegToRad, d * physics::kDegToRad) *
                   Eigen::Vector3d(0, 0, g));
   return f;
 }
@@ -95,7 +95,7 @@ Recording synth_recording(const model::ErrorModel& m, const Eigen::VectorXd& the
       ImuSample smp;
       smp.t_s = t;
       for (int a = 0; a < 3; ++a)
-        smp.accel_mps2[a] = y[a] + o.noise * n(rng) + o.vibration * std::sin(2 * geometry::kPi * 17.0 * t + a);
+        smp.accel_mps2[a] = y[a] + o.noise * n(rng) + o.vibration * std::sin(2 * physics::kPi * 17.0 * t + a);
       smp.temperature_c = o.die_c + 0.1;
       rec.samples.push_back(smp);
     }
@@ -270,7 +270,7 @@ TEST(BatchLsq, RotationAboutOneAxisLeavesCrossZyUnidentifiable) {
   for (double d = 0; d <= 44; d += 2) {
     StaticPoint p;
     p.stimulus.input = p.stimulus.specific_force =
-        geometry::paper_table(0.0, d * geometry::kDegToRad) * Eigen::Vector3d(0, 0, 9.81);
+        physics::paper_table(0.0, d * physics::kDegToRad) * Eigen::Vector3d(0, 0, 9.81);
     p.measured = m.measure<double>(th.data(), p.stimulus) + Eigen::Vector3d(n(rng), n(rng), n(rng));
     p.label = std::to_string(d);
     pts.push_back(p);

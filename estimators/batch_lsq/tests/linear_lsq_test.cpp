@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "stend/estimation/linear_lsq.hpp"
-#include "stend/geometry.hpp"
+#include "stend/physics/geometry.hpp"
 #include "stend/model/terms.hpp"
 
 using namespace stend;
@@ -194,7 +194,7 @@ TEST(LinearLsq, IntervalCoverageFewDegreesOfFreedomAndWeights) {
   int idx = 0;
   for (double deg : {0.0, 45.0, 90.0, 135.0, 180.0, 225.0, 270.0, 315.0}) {
     const double h = (idx++ % 3 - 1) * 0.4;  // tilts −0.4, 0, 0.4 rad: f_y varies
-    const Eigen::Vector3d f = geometry::paper_table(h, deg * geometry::kDegToRad) *
+    const Eigen::Vector3d f = physics::paper_table(h, deg * physics::kDegToRad) *
                               Eigen::Vector3d(0, 0, 9.81);
     model::Stimulus<double> s;
     s.input = s.specific_force = f;
@@ -246,7 +246,7 @@ TEST(LinearLsq, ZeroColumnIsNotIdentifiableAndPrintsNoValue) {
   for (double deg = 0; deg < 360; deg += 15) {
     model::Stimulus<double> s;
     s.input = s.specific_force =
-        geometry::paper_table(0.0, deg * geometry::kDegToRad) * Eigen::Vector3d(0, 0, 9.81);
+        physics::paper_table(0.0, deg * physics::kDegToRad) * Eigen::Vector3d(0, 0, 9.81);
     st.push_back(s);
   }
   LsqProblem full = synthetic(m, theta, st, 0.005, rng, {2});

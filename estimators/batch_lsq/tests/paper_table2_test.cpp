@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "stend/batch_lsq/paper_table2.hpp"
-#include "stend/geometry.hpp"
+#include "stend/physics/geometry.hpp"
 
 using namespace stend;
 using namespace stend::batch_lsq;
@@ -176,7 +176,7 @@ TEST(PaperTable2, ConstantTiltAliasesMu34WithTheBias) {
   const auto& g = c.fit.lsq.aliases[0];
   ASSERT_EQ(g.identified.size(), 1u);
   ASSERT_EQ(g.identified[0].coefficients.size(), 2u);
-  const double gsinh = c.g_mps2 * std::sin(1.0 * geometry::kDegToRad);
+  const double gsinh = c.g_mps2 * std::sin(1.0 * physics::kDegToRad);
   EXPECT_EQ(c.fit.lsq.parameters[static_cast<std::size_t>(g.identified[0].coefficients[0].first)].name, "bias_z");
   EXPECT_NEAR(g.identified[0].coefficients[0].second, 1.0, 1e-12);
   EXPECT_NEAR(g.identified[0].coefficients[1].second, gsinh, 1e-9);

@@ -7,10 +7,10 @@
 #include <random>
 #include <vector>
 
-#include "stend/signal/butterworth.hpp"
-#include "stend/signal/static_extraction.hpp"
+#include "stend/processing/butterworth.hpp"
+#include "stend/processing/static_extraction.hpp"
 
-using namespace stend::signal;
+using namespace stend::processing;
 using std::numbers::pi;
 
 namespace {

@@ -2,7 +2,7 @@
 //   stend_ceres_calibrate imucal  <annotated_session.csv>   [--json]   (known orientations, 6 positions)
 //   stend_ceres_calibrate mpu6050 <calibration_session.csv> [--json]   (unknown orientations, |g| only)
 #include <stend/ceres_nonlinear/calibration.hpp>
-#include <stend/importers.hpp>
+#include <stend/io/importers.hpp>
 
 #include <cstring>
 #include <iostream>
@@ -21,7 +21,7 @@ int main(int argc, char** argv) {
   try {
     CalibrationResult r;
     if (kind == "imucal") {
-      const Recording rec = import::import_imucal_session(argv[2]);
+      const Recording rec = io::import_imucal_session(argv[2]);
       std::vector<StaticInterval> ivs;
       std::vector<Eigen::Vector3d> truth;
       for (const auto& iv : intervals_from_segments(rec, "orientation", 0.5)) {
@@ -36,7 +36,7 @@ int main(int argc, char** argv) {
       o.orientation_sigma_deg = 1.0;   // hand-placed positions: ~1° tilts
       r = calibrate_accelerometer_known_orientations(ivs, truth, o);
     } else if (kind == "mpu6050") {
-      const Recording rec = import::import_mpu6050_multipos(argv[2]);
+      const Recording rec = io::import_mpu6050_multipos(argv[2]);
       CalibrationOptions o;
       o.gravity_mps2 = 9.81;
       o.detector.init_duration_s = 30.0;

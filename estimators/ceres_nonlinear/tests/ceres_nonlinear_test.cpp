@@ -2,7 +2,7 @@
 // failure modes (too few intervals, degenerate design), static detection, and the two public
 // sessions compared against their projects' own calibrations.
 #include <stend/ceres_nonlinear/calibration.hpp>
-#include <stend/importers.hpp>
+#include <stend/io/importers.hpp>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -297,7 +297,7 @@ TEST(CeresNonlinearRealData, ImucalSessionAgainstReferenceCalibration) {
     GTEST_SKIP() << "shared data absent: " << STEND_SHARED_DATA_DIR
                  << "/imucal (the imucal example session is kept beside the project, not in it)";
   const auto dir = std::filesystem::path(STEND_SHARED_DATA_DIR) / "imucal";
-  const Recording rec = import::import_imucal_session(dir / "annotated_session.csv");
+  const Recording rec = io::import_imucal_session(dir / "annotated_session.csv");
   const double g = 9.81;  // imucal's expected_g
   const auto ivs = intervals_from_segments(rec, "orientation", 0.5);
   ASSERT_EQ(ivs.size(), 6u);
@@ -344,7 +344,7 @@ TEST(CeresNonlinearRealData, Mpu6050SessionAgainstReferenceCalibration) {
     GTEST_SKIP() << "shared data absent: " << STEND_SHARED_DATA_DIR
                  << "/mpu6050_multipos (kept beside the project, not in it)";
   const auto dir = std::filesystem::path(STEND_SHARED_DATA_DIR) / "mpu6050_multipos";
-  const Recording rec = import::import_mpu6050_multipos(dir / "calibration_session.csv");
+  const Recording rec = io::import_mpu6050_multipos(dir / "calibration_session.csv");
   const double g = 9.81;
   CalibrationOptions o;
   o.gravity_mps2 = g;

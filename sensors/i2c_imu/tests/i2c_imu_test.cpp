@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <stend/experiment.hpp>
-#include <stend/transport/i2c_hid.hpp>
+#include <stend/devices/i2c_hid.hpp>
 
 #include <dlfcn.h>
 

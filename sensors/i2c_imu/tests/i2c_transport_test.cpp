@@ -1,14 +1,14 @@
-// The I2C routes (core/src/transport_i2c*.cpp) against emulated peers: the i2c-dev driver code
+// The I2C routes (devices/src/i2c*.cpp) against emulated peers: the i2c-dev driver code
 // building struct i2c_msg arrays and mapping errno, the MCP2221A / CP2112 report encoders and
 // decoders, and the bench MCU's MODBUS I2C window — each talking to register models on an
 // emulated I2C bus.
 #include <gtest/gtest.h>
 
-#include <stend/transport/i2c.hpp>
-#include <stend/transport/i2c_bench_mcu.hpp>
-#include <stend/transport/i2c_dev.hpp>
-#include <stend/transport/i2c_hid.hpp>
-#include <stend/transport/i2c_route.hpp>
+#include <stend/devices/i2c.hpp>
+#include <stend/devices/i2c_bench_mcu.hpp>
+#include <stend/devices/i2c_dev.hpp>
+#include <stend/devices/i2c_hid.hpp>
+#include <stend/devices/i2c_route.hpp>
 
 #include <cerrno>
 #include <memory>

@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <stend/experiment.hpp>
-#include <stend/transport/modbus_rtu.hpp>
+#include <stend/devices/modbus_rtu.hpp>
 
 #include <chrono>
 #include <cmath>

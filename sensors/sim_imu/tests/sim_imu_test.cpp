@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <stend/experiment.hpp>
-#include <stend/geometry.hpp>
+#include <stend/physics/geometry.hpp>
 #include <stend/model/terms.hpp>
 
 #include <cmath>
@@ -12,7 +12,7 @@
 #include <vector>
 #include <yaml-cpp/yaml.h>
 
-#include "sim_imu.hpp"
+#include <stend/sim/imu.hpp>
 
 extern "C" const stend_plugin_info* stend_plugin_entry(void);
 
@@ -86,7 +86,7 @@ Stats stats(const std::vector<ImuSample>& s, F f) {
 
 Eigen::Matrix3d random_rotation(std::mt19937& rng) {
   std::uniform_real_distribution<double> u(-3.14159, 3.14159);
-  return stend::geometry::Rz(u(rng)) * stend::geometry::Ry(u(rng)) * stend::geometry::Rx(u(rng));
+  return stend::physics::Rz(u(rng)) * stend::physics::Ry(u(rng)) * stend::physics::Rx(u(rng));
 }
 
 }  // namespace

@@ -2,7 +2,7 @@
 // procedure (Aksenov, eq. (7)–(9) and the calibration steps), made honest:
 //   1. per static segment (kind "orientation" by default): the constant part of each output axis
 //      by a Butterworth low-pass (order, cutoff_hz stated), settle_s discarded at both ends,
-//      averaged (stend/signal/static_extraction.hpp);
+//      averaged (stend/processing/static_extraction.hpp);
 //   2. the truth over the same window from the recording's truth columns (f_*_mps2 / w_*_radps,
 //      die_c), giving Δa = measured − true input per axis;
 //   3. one design row per (orientation, fitted axis) from ErrorModel::regressor at the mean truth

@@ -24,7 +24,7 @@
 #include <vector>
 
 #include "stend/model/terms.hpp"
-#include "stend/signal/static_extraction.hpp"
+#include "stend/processing/static_extraction.hpp"
 
 namespace stend::batch_lsq {
 
@@ -37,7 +37,7 @@ enum class Weighting {
 struct ModelSpec {
   model::ErrorModel model;
   std::vector<int> axes = {0, 1, 2};  // 0 = x, 1 = y, 2 = z
-  signal::StaticExtractionSettings extraction;
+  processing::StaticExtractionSettings extraction;
   std::vector<std::string> segment_kinds = {"orientation"};
   Weighting weighting = Weighting::kNone;
   double confidence = 0.95;

@@ -1,7 +1,7 @@
 // Reproduction of the paper's Table 2 fit (Aksenov: MPU6050, Z channel, table angle 0…44°, one
 // temperature) with the error-model vocabulary: accelerometer, axis z, terms bias, scale and
 // cross_axis (→ bias_z, scale_z, cross_zx, cross_zy = the paper's Δa_z, δM, μ33, μ34), specific
-// force f = g·[−sin δ cos h, sin h, cos δ cos h] (stend::geometry::paper_table).
+// force f = g·[−sin δ cos h, sin h, cos δ cos h] (stend::physics::paper_table).
 // See docs/paper-reproduction.md for the discussion of every difference.
 #pragma once
 

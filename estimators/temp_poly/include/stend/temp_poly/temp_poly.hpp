@@ -46,7 +46,7 @@ struct TempPolyOptions {
   bool cross_axis = false;        // add the temperature-independent cross_axis term
   double confidence = 0.95;
   // Static extraction and segment kinds (the batch_lsq defaults).
-  signal::StaticExtractionSettings extraction;
+  processing::StaticExtractionSettings extraction;
   std::vector<std::string> segment_kinds = {"orientation"};
 };
 

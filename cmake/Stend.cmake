@@ -1,0 +1,70 @@
+# Build helpers shared by every folder.
+
+# stend_add_library(NAME [SHARED|INTERFACE] [SOURCES ...] [PUBLIC ...] [PRIVATE ...])
+# One folder's library `stend_NAME` (alias Stend::NAME): static unless SHARED or INTERFACE (all code
+# is position-independent, CMAKE_POSITION_INDEPENDENT_CODE); its headers in the folder's include/ (stend/NAME/... by convention); the
+# project's warnings. PUBLIC/PRIVATE are the libraries it depends on — the library arrows of
+# docs/architecture.md.
+function(stend_add_library name)
+  cmake_parse_arguments(ARG "SHARED;INTERFACE" "" "SOURCES;PUBLIC;PRIVATE" ${ARGN})
+  set(target stend_${name})
+  if(ARG_INTERFACE)
+    add_library(${target} INTERFACE)
+    target_include_directories(${target} INTERFACE
+      $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
+      $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
+    target_link_libraries(${target} INTERFACE ${ARG_PUBLIC})
+  else()
+    if(ARG_SHARED)
+      add_library(${target} SHARED ${ARG_SOURCES})
+    else()
+      add_library(${target} STATIC ${ARG_SOURCES})
+    endif()
+    target_include_directories(${target} PUBLIC
+      $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
+      $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
+    target_link_libraries(${target} PUBLIC ${ARG_PUBLIC} PRIVATE stend_warnings ${ARG_PRIVATE})
+  endif()
+  add_library(Stend::${name} ALIAS ${target})
+endfunction()
+
+# stend_add_plugin(NAME SOURCES ... [LIBRARIES ...])
+# Builds a Stend plugin shared library `stend_NAME.so` into the plugin directory of the build
+# tree (and installs it into the install tree's plugin directory). In-tree plugins link the
+# libraries they need (stend_sim, stend_devices, stend_core); out-of-tree plugins use the installed SDK's stend_add_plugin (same signature).
+function(stend_add_plugin name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;LIBRARIES" ${ARGN})
+  set(target stend_plugin_${name})
+  add_library(${target} MODULE ${ARG_SOURCES})
+  target_link_libraries(${target} PRIVATE stend_sdk stend_warnings ${ARG_LIBRARIES})
+  set_target_properties(${target} PROPERTIES
+    PREFIX "" OUTPUT_NAME stend_${name}
+    LIBRARY_OUTPUT_DIRECTORY ${STEND_BUILD_PLUGIN_DIR}
+    CXX_VISIBILITY_PRESET hidden VISIBILITY_INLINES_HIDDEN ON)
+  install(TARGETS ${target} LIBRARY DESTINATION ${STEND_PLUGIN_INSTALL_DIR})
+endfunction()
+
+# Adds every immediate subfolder of the current source dir that has a CMakeLists.txt.
+macro(stend_add_plugin_folders)
+  file(GLOB _stend_children LIST_DIRECTORIES true RELATIVE ${CMAKE_CURRENT_SOURCE_DIR} *)
+  list(SORT _stend_children)
+  foreach(_child IN LISTS _stend_children)
+    if(IS_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/${_child} AND EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/${_child}/CMakeLists.txt)
+      add_subdirectory(${_child})
+    endif()
+  endforeach()
+endmacro()
+
+# stend_add_gtest(NAME SOURCES ... [LIBRARIES ...]) — one GoogleTest executable registered with
+# ctest. Tests find ../shared/data through STEND_SHARED_DATA_DIR and skip when it is absent.
+function(stend_add_gtest name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;LIBRARIES" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE stend_core stend_warnings GTest::gtest GTest::gtest_main ${ARG_LIBRARIES})
+  target_compile_definitions(${name} PRIVATE
+    STEND_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+    STEND_SHARED_DATA_DIR="${PROJECT_SOURCE_DIR}/../shared/data"
+    STEND_BUILD_PLUGIN_DIR="${STEND_BUILD_PLUGIN_DIR}"
+    STEND_BINARY_DIR="${PROJECT_BINARY_DIR}")
+  gtest_discover_tests(${name} TEST_PREFIX "${name}." DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 600)
+endfunction()

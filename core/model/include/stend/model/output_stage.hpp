@@ -1,0 +1,159 @@
+// Output stage of the error-model vocabulary: what happens to a sensor's analog value between the
+// error terms (terms.hpp) plus noise (noise.hpp) and the digital word it reports.
+//
+//   y_analog ─► low-pass (optional, the sensor's digital low-pass filter) ─► saturation at full
+//            scale (flagged) ─► quantization to an LSB, rounded to nearest, clamped to the word
+//
+// Streaming, one sample at a time, no allocation. Offline (whole-record, zero-phase) filtering
+// belongs to stend/processing/butterworth.hpp; the biquad here is the same bilinear Butterworth design
+// run causally, as a sensor's own filter runs.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+
+namespace stend::model {
+
+// ---------------------------------------------------------------------------------------------
+// Quantization to an integer count of `lsb`, rounded to nearest (a tie rounds up:
+// floor(x/lsb + ½)), clamped to [min_count, max_count]. NaN input gives min_count and reports
+// clamping.
+class Quantizer {
+ public:
+  Quantizer() = default;
+  // A signed two's-complement word of `bits` bits (2…32): counts in [−2^(bits−1), 2^(bits−1)−1].
+  Quantizer(double lsb, int bits) {
+    if (!(bits >= 2 && bits <= 32)) throw std::invalid_argument("quantizer: word length must be 2..32 bits");
+    const std::int64_t half = std::int64_t{1} << (bits - 1);
+    init(lsb, -half, half - 1);
+  }
+  Quantizer(double lsb, std::int64_t min_count, std::int64_t max_count) { init(lsb, min_count, max_count); }
+
+  double lsb() const { return lsb_; }
+  std::int64_t min_count() const { return min_; }
+  std::int64_t max_count() const { return max_; }
+
+  // Counts for value x; *clamped (if given) is set true when the word limits were hit.
+  std::int32_t counts(double x, bool* clamped = nullptr) const {
+    const double v = x * inv_lsb_ + 0.5;  // counts = floor(v)
+    if (!(v >= min_d_)) {                 // also NaN
+      if (clamped) *clamped = true;
+      return static_cast<std::int32_t>(min_);
+    }
+    if (v >= max_d_ + 1.0) {
+      if (clamped) *clamped = true;
+      return static_cast<std::int32_t>(max_);
+    }
+    auto t = static_cast<std::int64_t>(v);  // truncation; inline floor below
+    if (static_cast<double>(t) > v) --t;
+    return static_cast<std::int32_t>(t);
+  }
+  double value(std::int64_t counts) const { return static_cast<double>(counts) * lsb_; }
+  double quantize(double x, bool* clamped = nullptr) const { return value(counts(x, clamped)); }
+
+ private:
+  void init(double lsb, std::int64_t min_count, std::int64_t max_count) {
+    if (!(std::isfinite(lsb) && lsb > 0.0)) throw std::invalid_argument("quantizer: LSB must be > 0");
+    if (!(min_count < max_count) || min_count < std::numeric_limits<std::int32_t>::min() ||
+        max_count > std::numeric_limits<std::int32_t>::max())
+      throw std::invalid_argument("quantizer: count range must be a non-empty part of int32");
+    lsb_ = lsb;
+    inv_lsb_ = 1.0 / lsb;
+    min_ = min_count;
+    max_ = max_count;
+    min_d_ = static_cast<double>(min_count);
+    max_d_ = static_cast<double>(max_count);
+  }
+  double lsb_ = 1.0, inv_lsb_ = 1.0;
+  std::int64_t min_ = std::numeric_limits<std::int32_t>::min(), max_ = std::numeric_limits<std::int32_t>::max();
+  double min_d_ = static_cast<double>(std::numeric_limits<std::int32_t>::min());
+  double max_d_ = static_cast<double>(std::numeric_limits<std::int32_t>::max());
+};
+
+// ---------------------------------------------------------------------------------------------
+// Saturation at ±full_scale (an analog front end / ADC input range). apply() clamps and reports
+// whether it did; |x| == full_scale is not saturated. NaN saturates (to +full_scale).
+class Saturation {
+ public:
+  Saturation() = default;  // infinite full scale: never saturates
+  explicit Saturation(double full_scale) : fs_(full_scale) {
+    if (!(full_scale > 0.0)) throw std::invalid_argument("saturation: full scale must be > 0");
+  }
+  double full_scale() const { return fs_; }
+  double apply(double x, bool& saturated) const {
+    if (x > fs_ || std::isnan(x)) {
+      saturated = true;
+      return fs_;
+    }
+    if (x < -fs_) {
+      saturated = true;
+      return -fs_;
+    }
+    return x;
+  }
+
+ private:
+  double fs_ = std::numeric_limits<double>::infinity();
+};
+
+// ---------------------------------------------------------------------------------------------
+// Second-order IIR section, a0 = 1, transposed direct form II.
+class Biquad {
+ public:
+  Biquad() = default;  // identity (b0 = 1)
+  Biquad(double b0, double b1, double b2, double a1, double a2) : b0_(b0), b1_(b1), b2_(b2), a1_(a1), a2_(a2) {}
+
+  // Low-pass of quality factor q, −3 dB at cutoff_hz for q = 1/√2, bilinear transform with the
+  // cutoff pre-warped (K = tan(π·fc/fs)). Throws unless 0 < cutoff_hz < sample_rate_hz/2.
+  static Biquad lowpass(double cutoff_hz, double sample_rate_hz, double q) {
+    if (!(sample_rate_hz > 0.0 && cutoff_hz > 0.0 && cutoff_hz < 0.5 * sample_rate_hz))
+      throw std::invalid_argument("low-pass: cutoff must be in (0, sample rate / 2)");
+    if (!(q > 0.0)) throw std::invalid_argument("low-pass: quality factor must be > 0");
+    constexpr double kPi = 3.14159265358979323846;
+    const double k = std::tan(kPi * cutoff_hz / sample_rate_hz);
+    const double k2 = k * k;
+    const double norm = 1.0 / (1.0 + k / q + k2);
+    const double b0 = k2 * norm;
+    return Biquad(b0, 2.0 * b0, b0, 2.0 * (k2 - 1.0) * norm, (1.0 - k / q + k2) * norm);
+  }
+  // 2nd-order Butterworth low-pass (q = 1/√2): |H(f)|² = 1 / (1 + (tan(πf/fs)/tan(πfc/fs))⁴).
+  static Biquad butterworth_lowpass(double cutoff_hz, double sample_rate_hz) {
+    return lowpass(cutoff_hz, sample_rate_hz, 0.70710678118654752440);
+  }
+
+  double operator()(double x) {
+    const double y = b0_ * x + s1_;
+    s1_ = b1_ * x - a1_ * y + s2_;
+    s2_ = b2_ * x - a2_ * y;
+    return y;
+  }
+  // State as if the input had been x forever (output = DC gain · x). Avoids a start-up transient.
+  void reset(double x = 0.0) {
+    const double y = dc_gain() * x;
+    s2_ = b2_ * x - a2_ * y;
+    s1_ = b1_ * x - a1_ * y + s2_;
+  }
+  double dc_gain() const { return (b0_ + b1_ + b2_) / (1.0 + a1_ + a2_); }
+  // |H| at frequency f_hz for sample rate fs_hz.
+  double magnitude(double f_hz, double fs_hz) const {
+    constexpr double kPi = 3.14159265358979323846;
+    const double w = 2.0 * kPi * f_hz / fs_hz;
+    const double c1 = std::cos(w), s1 = std::sin(w), c2 = std::cos(2 * w), s2 = std::sin(2 * w);
+    const double nr = b0_ + b1_ * c1 + b2_ * c2, ni = -(b1_ * s1 + b2_ * s2);
+    const double dr = 1.0 + a1_ * c1 + a2_ * c2, di = -(a1_ * s1 + a2_ * s2);
+    return std::sqrt((nr * nr + ni * ni) / (dr * dr + di * di));
+  }
+  double b0() const { return b0_; }
+  double b1() const { return b1_; }
+  double b2() const { return b2_; }
+  double a1() const { return a1_; }
+  double a2() const { return a2_; }
+
+ private:
+  double b0_ = 1.0, b1_ = 0.0, b2_ = 0.0, a1_ = 0.0, a2_ = 0.0;
+  double s1_ = 0.0, s2_ = 0.0;
+};
+
+}  // namespace stend::model

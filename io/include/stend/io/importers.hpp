@@ -1,0 +1,175 @@
+// Importers: other tools' files → an in-memory stend::Recording, so every analysis command works
+// on public datasets as on our own run folders.
+//
+// Every importer fills
+//   samples   t_s, raw counts where the file has them (else 0) and SI values (m/s², rad/s, °C);
+//             kGapBefore where the file's own sample index or timestamps show lost samples
+//   header    identity (what the dataset says, else empty), info (output rate, ranges and LSBs
+//             where known), gravity_mps2 when the dataset states it (else 0 = unknown),
+//             clock "wall", status "complete", experiment_name "import:<format>",
+//             experiment_file = the source file
+//   segments  the dataset's own annotations: kind "orientation" (a static position; label = the
+//             dataset's name for it) or "rotation" (a turn), t_start_s … t_end_s = first … last
+//             sample time of the annotated part
+//   events    one "info" event (source "import") stating the file and every assumption made
+//   dir       the source file
+// and throws ImportError, whose message names the file and the 1-based line, for malformed input.
+#pragma once
+
+#include <stend/recording.hpp>
+
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace stend::io {
+
+class ImportError : public std::runtime_error {
+ public:
+  // line = 0 when the problem is not tied to a line.
+  ImportError(const std::filesystem::path& file, std::size_t line, const std::string& message);
+  const std::filesystem::path& file() const { return file_; }
+  std::size_t line() const { return line_; }
+
+ private:
+  std::filesystem::path file_;
+  std::size_t line_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// (a) Generic delimited text with a column mapping.
+
+// A column by its name in the column-name line, or by 0-based index.
+struct CsvColumn {
+  std::string name;
+  int index = -1;
+  CsvColumn() = default;
+  CsvColumn(int i) : index(i) {}                    // NOLINT(google-explicit-constructor)
+  CsvColumn(const char* n) : name(n ? n : "") {}    // NOLINT(google-explicit-constructor)
+  CsvColumn(std::string n) : name(std::move(n)) {}  // NOLINT(google-explicit-constructor)
+  bool empty() const { return name.empty() && index < 0; }
+};
+
+struct CsvMapping {
+  char delimiter = ',';         // ' ' = any run of spaces/tabs
+  std::size_t skip_lines = 0;   // lines before the column-name line (or before the data)
+  bool column_names = true;     // the first line after skip_lines names the columns
+  std::string comment_prefix = "#";  // data lines starting with it are ignored ("" = none)
+
+  CsvColumn time;               // empty: fixed rate, t = i / rate_hz
+  double time_scale_s = 1.0;    // seconds per time unit (1e-3 for ms, 1e-9 for ns)
+  double rate_hz = 0.0;         // required without a time column; else 0 = from the timestamps
+
+  std::array<CsvColumn, 3> accel;   // x y z (required)
+  std::array<CsvColumn, 3> gyro;    // x y z (all empty = no gyroscope)
+  CsvColumn temperature;            // optional
+
+  // File value → SI: value · scale (m/s² resp. rad/s per file unit; °C = value·scale + offset).
+  double accel_scale = 1.0;
+  double gyro_scale = 1.0;
+  double temperature_scale = 1.0;
+  double temperature_offset_c = 0.0;
+  // The file holds raw integer counts: they are stored as counts too, and the scales are the
+  // LSBs (header.info.accel_lsb_mps2 / gyro_lsb_radps / temperature_lsb_c).
+  bool counts = false;
+
+  SensorIdentity identity;
+  double accel_range_mps2 = 0.0;  // header.info, 0 = unknown
+  double gyro_range_radps = 0.0;
+  double gravity_mps2 = 0.0;      // 0 = unknown
+};
+
+Recording import_csv(const std::filesystem::path& file, const CsvMapping& mapping);
+
+// ---------------------------------------------------------------------------------------------
+// (b) imucal annotated session (mad-lab-fau/imucal example_data/annotated_session.csv):
+// columns part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z in raw counts; `samples` is the sample
+// index (t = samples / rate). Parts x_p x_a y_p y_a z_p z_a (axis pointing up / down) become
+// "orientation" segments, x_rot y_rot z_rot (360° turns about the axis) "rotation" segments.
+//
+// Scale: the file has counts only. The defaults are the nominal ±16 g (2048 LSB/g) and
+// ±2000 °/s (16.4 LSB/(°/s)) settings that imucal's own calibration of this session
+// (example_cal.json: K_a ≈ 208.5 / 208.0 / 214.8 counts per m/s², K_g ≈ 16.68 / 16.19 / 16.25
+// counts per °/s) matches to within 3 %; SI values are therefore approximate (uncalibrated).
+struct ImucalOptions {
+  double rate_hz = 204.8;
+  double accel_lsb_per_g = 2048.0;
+  double gyro_lsb_per_dps = 16.4;
+  double gravity_mps2 = 9.81;  // the value imucal's Ferraris calibration assumes (expected_g)
+};
+Recording import_imucal_session(const std::filesystem::path& csv, const ImucalOptions& options = {});
+
+// ---------------------------------------------------------------------------------------------
+// (c) MPU-6050 multi-position session (tomisuarez2/ImuCalibration): a header of `key,value`
+// lines (Fs,100 / Logging Type / Initialization time,36.5 / Waiting time) and the column-name
+// line ax,ay,az,gx,gy,gz, then raw counts. ±2 g → 16384 LSB/g, ±250 °/s → 131 LSB/(°/s);
+// t = i / Fs. The only annotation is the initial still interval (Initialization time > 0):
+// one "orientation" segment labelled "initialization" from 0 to that time.
+struct Mpu6050MultiposOptions {
+  double accel_lsb_per_g = 16384.0;
+  double gyro_lsb_per_dps = 131.0;
+};
+Recording import_mpu6050_multipos(const std::filesystem::path& csv,
+                                  const Mpu6050MultiposOptions& options = {});
+
+// ---------------------------------------------------------------------------------------------
+// (d) IMU-TK text format: one file per triad, one sample per line `t x y z` (whitespace, comma or
+// semicolon separated; '#' comments and blank lines ignored). The accelerometer file defines
+// the samples; gyro samples are matched by timestamp (identical within time_tolerance_s) or,
+// when the files have different timestamps, linearly interpolated at the accelerometer times
+// (accelerometer samples outside the gyro's time span are dropped, and an event says so).
+struct ImuTkOptions {
+  double time_scale_s = 1.0;  // seconds per timestamp unit (IMU-TK: sec, ms, µs or ns)
+  double accel_scale = 1.0;   // m/s² per file unit
+  double gyro_scale = 1.0;    // rad/s per file unit
+  bool counts = false;        // values are raw counts (stored as counts; scales = LSBs)
+  double rate_hz = 0.0;       // 0 = from the median accelerometer interval
+  double time_tolerance_s = -1.0;  // < 0: 1 % of the median interval
+  SensorIdentity identity;
+  double gravity_mps2 = 0.0;
+};
+// gyro_file may be empty (accelerometer only).
+Recording import_imutk(const std::filesystem::path& acc_file,
+                       const std::filesystem::path& gyro_file, const ImuTkOptions& options = {});
+// Writes `t x y z` lines (SI values, or counts when `counts`), full double precision.
+void export_imutk(const Recording& recording, const std::filesystem::path& acc_file,
+                  const std::filesystem::path& gyro_file, bool counts = false);
+
+// ---------------------------------------------------------------------------------------------
+// (e) MATLAB .mat (v5; v7.3 too when matio was built with HDF5), through matio.
+//
+// Accepted layout — top-level variables, or the fields of one struct variable (the one named
+// `struct_name`, else the first struct in the file):
+//   t | time | timestamp      N-vector, time in seconds · time_scale_s   } one of the two
+//   fs | rate_hz | rate       scalar sample rate (t = i / fs)             }
+//   acc | accel | accelerometer         N×3 (or 3×N) m/s² · accel_scale       (required)
+//   gyro | gyr | gyroscope              N×3 (or 3×N) rad/s · gyro_scale       (optional)
+//   temp | temperature                  N-vector, °C                           (optional)
+//   acc_counts, gyro_counts             N×3 integer counts                     (optional)
+//   acc_lsb, gyro_lsb                   scalars: SI per count (give SI from counts when
+//                                       acc / gyro are absent)
+//   segments                            struct array with fields kind, label (char),
+//                                       t_start_s, t_end_s (double)             (optional)
+// Any numeric class (double, single, integers) is accepted. Names are matched exactly.
+struct MatOptions {
+  std::string struct_name;  // empty: top-level variables, else the first struct
+  double time_scale_s = 1.0;
+  double accel_scale = 1.0;
+  double gyro_scale = 1.0;
+  SensorIdentity identity;
+  double gravity_mps2 = 0.0;
+};
+Recording import_mat(const std::filesystem::path& file, const MatOptions& options = {});
+// Writes the layout above (t, fs, acc, gyro, temp, acc_counts, gyro_counts, acc_lsb, gyro_lsb,
+// segments) in MAT v5: as top-level variables, or as the fields of one struct variable named
+// `struct_name` when it is not empty.
+void export_mat(const Recording& recording, const std::filesystem::path& file,
+                const std::string& struct_name = {});
+// False when stend_core was built without matio (import_mat / export_mat then throw).
+bool mat_supported();
+
+}  // namespace stend::io

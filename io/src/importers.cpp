@@ -1,0 +1,1071 @@
+#include <stend/io/importers.hpp>
+#include <stend/version.hpp>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <numbers>
+#include <sstream>
+#include <string_view>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+// MATLAB files go through matio, when stend_core is built with it: core/CMakeLists.txt links
+// PkgConfig::MATIO and defines STEND_HAVE_MATIO. Without it the .mat functions say so.
+#if defined(STEND_HAVE_MATIO) && __has_include(<matio.h>)
+#include <matio.h>
+#define STEND_IMPORT_MATIO 1
+#else
+#define STEND_IMPORT_MATIO 0
+#endif
+
+namespace stend::io {
+
+namespace fs = std::filesystem;
+
+ImportError::ImportError(const fs::path& file, std::size_t line, const std::string& message)
+    : std::runtime_error(file.string() + (line > 0 ? ":" + std::to_string(line) : std::string()) +
+                         ": " + message),
+      file_(file),
+      line_(line) {}
+
+namespace {
+
+constexpr double kStandardGravity = 9.80665;
+constexpr double kDegToRad = std::numbers::pi / 180.0;
+
+// ---------------------------------------------------------------------------------------------
+// Text helpers
+
+class LineReader {
+ public:
+  explicit LineReader(const fs::path& file) : file_(file), in_(file, std::ios::binary) {
+    if (!in_) {
+      throw ImportError(file, 0, std::string("cannot open: ") + std::strerror(errno) +
+                                     " (check the path)");
+    }
+  }
+  bool next(std::string& line) {
+    if (!std::getline(in_, line)) return false;
+    ++line_;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line_ == 1 && line.size() >= 3 && static_cast<unsigned char>(line[0]) == 0xEF &&
+        static_cast<unsigned char>(line[1]) == 0xBB && static_cast<unsigned char>(line[2]) == 0xBF) {
+      line.erase(0, 3);  // UTF-8 byte-order mark
+    }
+    return true;
+  }
+  std::size_t line() const { return line_; }
+  const fs::path& file() const { return file_; }
+  [[noreturn]] void fail(const std::string& message) const { throw ImportError(file_, line_, message); }
+
+ private:
+  fs::path file_;
+  std::ifstream in_;
+  std::size_t line_ = 0;
+};
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
+  return s;
+}
+
+std::string unquote(std::string_view s) {
+  s = trim(s);
+  if (s.size() >= 2 && s.front() == '"' && s.back() == '"') s = s.substr(1, s.size() - 2);
+  return std::string(s);
+}
+
+bool is_blank(std::string_view s) { return trim(s).empty(); }
+
+// Splits on `delim`; ' ' splits on runs of spaces and tabs.
+std::vector<std::string_view> split(std::string_view line, char delim) {
+  std::vector<std::string_view> out;
+  if (delim == ' ') {
+    std::size_t i = 0;
+    while (i < line.size()) {
+      while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+      if (i >= line.size()) break;
+      std::size_t j = i;
+      while (j < line.size() && line[j] != ' ' && line[j] != '\t') ++j;
+      out.push_back(line.substr(i, j - i));
+      i = j;
+    }
+    return out;
+  }
+  std::size_t start = 0;
+  for (std::size_t i = 0; i <= line.size(); ++i) {
+    if (i == line.size() || line[i] == delim) {
+      out.push_back(trim(line.substr(start, i - start)));
+      start = i + 1;
+    }
+  }
+  return out;
+}
+
+// Whitespace, comma or semicolon separated (IMU-TK files come in all three).
+std::vector<std::string_view> split_any(std::string_view line) {
+  std::vector<std::string_view> out;
+  std::size_t i = 0;
+  auto sep = [](char c) { return c == ' ' || c == '\t' || c == ',' || c == ';'; };
+  while (i < line.size()) {
+    while (i < line.size() && sep(line[i])) ++i;
+    if (i >= line.size()) break;
+    std::size_t j = i;
+    while (j < line.size() && !sep(line[j])) ++j;
+    out.push_back(line.substr(i, j - i));
+    i = j;
+  }
+  return out;
+}
+
+bool parse_double(std::string_view s, double& out) {
+  s = trim(s);
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  if (s.empty()) return false;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+  return ec == std::errc() && p == s.data() + s.size();
+}
+
+double number(const LineReader& r, std::string_view field, const std::string& what) {
+  double v = 0.0;
+  if (!parse_double(field, v)) {
+    r.fail("column '" + what + "': '" + std::string(field) + "' is not a number");
+  }
+  return v;
+}
+
+std::int32_t to_counts(const LineReader& r, double v, const std::string& what) {
+  if (!std::isfinite(v) || std::abs(v - std::round(v)) > 1e-6 || std::abs(v) > 2147483647.0) {
+    r.fail("column '" + what + "': " + std::to_string(v) +
+           " is not an integer count (set counts = false for values in physical units)");
+  }
+  return static_cast<std::int32_t>(std::lround(v));
+}
+
+double median_interval(const std::vector<ImuSample>& s) {
+  if (s.size() < 2) return 0.0;
+  std::vector<double> dt;
+  dt.reserve(s.size() - 1);
+  for (std::size_t i = 1; i < s.size(); ++i) dt.push_back(s[i].t_s - s[i - 1].t_s);
+  std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
+  return dt[dt.size() / 2];
+}
+
+// Flags samples that follow an interval longer than 1.5 periods; returns how many.
+std::size_t flag_time_gaps(std::vector<ImuSample>& s, double rate_hz) {
+  if (!(rate_hz > 0.0)) return 0;
+  std::size_t gaps = 0;
+  for (std::size_t i = 1; i < s.size(); ++i) {
+    if (s[i].t_s - s[i - 1].t_s > 1.5 / rate_hz) {
+      s[i].flags |= kGapBefore;
+      ++gaps;
+    }
+  }
+  return gaps;
+}
+
+std::string fmt_g(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+Recording new_recording(const fs::path& file, const std::string& format) {
+  Recording rec;
+  rec.dir = file;
+  rec.status = "complete";
+  rec.header.status = "complete";
+  rec.header.experiment_name = "import:" + format;
+  rec.header.experiment_file = file.string();
+  rec.header.stend_version = stend::version();
+  rec.header.clock = "wall";
+  return rec;
+}
+
+void add_import_event(Recording& rec, const std::string& message) {
+  Event e;
+  e.t_s = rec.samples.empty() ? 0.0 : rec.samples.front().t_s;
+  e.level = "info";
+  e.source = "import";
+  e.message = message;
+  rec.events.push_back(std::move(e));
+}
+
+Segment make_segment(int id, const std::string& kind, const std::string& label, double t0,
+                     double t1) {
+  Segment s;
+  s.id = id;
+  s.step = id;
+  s.kind = kind;
+  s.label = label;
+  s.t_start_s = t0;
+  s.t_end_s = t1;
+  s.settled = true;
+  s.complete = true;
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// IMU-TK helpers
+
+struct Triad {
+  std::vector<double> t, x, y, z;
+  std::vector<std::size_t> line;
+};
+
+Triad read_triad_file(const fs::path& file, double time_scale) {
+  LineReader r(file);
+  Triad out;
+  std::string line;
+  while (r.next(line)) {
+    std::string_view v = trim(line);
+    if (v.empty() || v.front() == '#' || v.front() == '%') continue;
+    const auto f = split_any(v);
+    if (f.size() != 4) {
+      r.fail("expected 4 values 't x y z', found " + std::to_string(f.size()));
+    }
+    const double t = number(r, f[0], "t") * time_scale;
+    if (!out.t.empty() && !(t > out.t.back())) {
+      r.fail("timestamp " + fmt_g(t) + " s does not increase (previous " + fmt_g(out.t.back()) +
+             " s)");
+    }
+    out.t.push_back(t);
+    out.x.push_back(number(r, f[1], "x"));
+    out.y.push_back(number(r, f[2], "y"));
+    out.z.push_back(number(r, f[3], "z"));
+    out.line.push_back(r.line());
+  }
+  if (out.t.empty()) throw ImportError(file, 0, "no samples (expected lines 't x y z')");
+  return out;
+}
+
+void write_number(std::string& out, double v) {
+  char buf[32];
+  const auto [p, ec] = std::to_chars(buf, buf + sizeof buf, v);
+  out.append(buf, ec == std::errc() ? p : buf);
+}
+
+}  // namespace
+
+// =============================================================================================
+// (a) generic CSV
+
+Recording import_csv(const fs::path& file, const CsvMapping& map) {
+  LineReader r(file);
+  std::string line;
+  for (std::size_t i = 0; i < map.skip_lines; ++i) {
+    if (!r.next(line)) r.fail("file ends inside the " + std::to_string(map.skip_lines) + " header line(s) to skip");
+  }
+  std::vector<std::string> names;
+  if (map.column_names) {
+    bool got = false;
+    while (!got && r.next(line)) got = !is_blank(line);
+    if (!got) r.fail("no column-name line");
+    for (auto f : split(line, map.delimiter)) names.push_back(unquote(f));
+  }
+  const std::size_t names_line = r.line();
+  auto resolve = [&](const CsvColumn& c, const std::string& role) -> int {
+    if (c.empty()) return -1;
+    if (c.index >= 0) return c.index;
+    if (!map.column_names) {
+      throw ImportError(file, 0, "column '" + c.name + "' (" + role +
+                                     ") is given by name but the mapping has column_names = false");
+    }
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      if (names[i] == c.name) return static_cast<int>(i);
+    }
+    std::string have;
+    for (const auto& n : names) have += (have.empty() ? "" : ", ") + n;
+    throw ImportError(file, names_line, "no column named '" + c.name + "' (" + role +
+                                            "); the columns are: " + have);
+  };
+  const char* axes[3] = {"x", "y", "z"};
+  std::array<int, 3> acc{}, gyr{};
+  bool has_gyro = false;
+  for (int k = 0; k < 3; ++k) {
+    if (map.accel[k].empty()) {
+      throw ImportError(file, 0, std::string("the mapping has no accelerometer ") + axes[k] + " column");
+    }
+    acc[k] = resolve(map.accel[k], std::string("accel ") + axes[k]);
+    gyr[k] = resolve(map.gyro[k], std::string("gyro ") + axes[k]);
+    has_gyro = has_gyro || gyr[k] >= 0;
+  }
+  if (has_gyro && (gyr[0] < 0 || gyr[1] < 0 || gyr[2] < 0)) {
+    throw ImportError(file, 0, "the mapping names only some gyroscope columns (give x, y and z or none)");
+  }
+  const int tcol = resolve(map.time, "time");
+  const int tempcol = resolve(map.temperature, "temperature");
+  if (tcol < 0 && !(map.rate_hz > 0.0)) {
+    throw ImportError(file, 0, "the mapping has neither a time column nor a rate_hz > 0");
+  }
+  int needed = std::max({tcol, tempcol, acc[0], acc[1], acc[2], gyr[0], gyr[1], gyr[2]}) + 1;
+  auto column_name = [&](int idx) {
+    return idx >= 0 && static_cast<std::size_t>(idx) < names.size() ? names[static_cast<std::size_t>(idx)]
+                                                                    : "#" + std::to_string(idx);
+  };
+
+  Recording rec = new_recording(file, "csv");
+  while (r.next(line)) {
+    if (is_blank(line)) continue;
+    if (!map.comment_prefix.empty() && trim(line).substr(0, map.comment_prefix.size()) == map.comment_prefix) {
+      continue;
+    }
+    const auto f = split(line, map.delimiter);
+    if (static_cast<int>(f.size()) < needed) {
+      r.fail("expected at least " + std::to_string(needed) + " fields, found " + std::to_string(f.size()));
+    }
+    ImuSample s;
+    const std::size_t i = rec.samples.size();
+    s.t_s = tcol >= 0 ? number(r, f[static_cast<std::size_t>(tcol)], column_name(tcol)) * map.time_scale_s
+                      : static_cast<double>(i) / map.rate_hz;
+    for (int k = 0; k < 3; ++k) {
+      const std::string an = column_name(acc[k]);
+      const double a = number(r, f[static_cast<std::size_t>(acc[k])], an);
+      if (map.counts) s.accel_counts[k] = to_counts(r, a, an);
+      s.accel_mps2[k] = a * map.accel_scale;
+      if (has_gyro) {
+        const std::string gn = column_name(gyr[k]);
+        const double g = number(r, f[static_cast<std::size_t>(gyr[k])], gn);
+        if (map.counts) s.gyro_counts[k] = to_counts(r, g, gn);
+        s.gyro_radps[k] = g * map.gyro_scale;
+      }
+    }
+    if (tempcol >= 0) {
+      const std::string tn = column_name(tempcol);
+      const double v = number(r, f[static_cast<std::size_t>(tempcol)], tn);
+      if (map.counts) s.temperature_counts = to_counts(r, v, tn);
+      s.temperature_c = v * map.temperature_scale + map.temperature_offset_c;
+    }
+    if (tcol >= 0 && !rec.samples.empty() && !(s.t_s > rec.samples.back().t_s)) {
+      r.fail("time " + fmt_g(s.t_s) + " s does not increase (previous " +
+             fmt_g(rec.samples.back().t_s) + " s)");
+    }
+    rec.samples.push_back(s);
+  }
+  if (rec.samples.empty()) throw ImportError(file, 0, "no data lines");
+
+  SensorInfo& info = rec.header.info;
+  info.output_rate_hz = map.rate_hz > 0.0 ? map.rate_hz : 1.0 / median_interval(rec.samples);
+  info.has_gyro = has_gyro;
+  info.has_temperature = tempcol >= 0;
+  info.accel_range_mps2 = map.accel_range_mps2;
+  info.gyro_range_radps = map.gyro_range_radps;
+  if (map.counts) {
+    info.accel_lsb_mps2 = map.accel_scale;
+    info.gyro_lsb_radps = has_gyro ? map.gyro_scale : 0.0;
+    info.temperature_lsb_c = tempcol >= 0 ? map.temperature_scale : 0.0;
+  }
+  rec.header.identity = map.identity;
+  rec.header.gravity_mps2 = map.gravity_mps2;
+  const std::size_t gaps = tcol >= 0 ? flag_time_gaps(rec.samples, info.output_rate_hz) : 0;
+  add_import_event(rec, "imported " + std::to_string(rec.samples.size()) + " samples from " +
+                            file.string() + " (generic CSV; " +
+                            (map.counts ? "counts" : "physical units") + ", accel scale " +
+                            fmt_g(map.accel_scale) + ", gyro scale " + fmt_g(map.gyro_scale) +
+                            (tcol >= 0 ? ", time column" : ", fixed rate " + fmt_g(map.rate_hz) + " Hz") +
+                            (gaps ? ", " + std::to_string(gaps) + " gap(s) flagged" : "") + ")");
+  return rec;
+}
+
+// =============================================================================================
+// (b) imucal annotated session
+
+Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) {
+  LineReader r(file);
+  std::string line;
+  if (!r.next(line)) throw ImportError(file, 0, "empty file (expected the column-name line)");
+  std::vector<std::string> names;
+  for (auto f : split(line, ',')) names.push_back(unquote(f));
+  const char* required[8] = {"part", "samples", "acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"};
+  std::array<std::size_t, 8> col{};
+  for (int k = 0; k < 8; ++k) {
+    const auto it = std::find(names.begin(), names.end(), required[k]);
+    if (it == names.end()) {
+      r.fail(std::string("no column '") + required[k] +
+             "' (expected part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z)");
+    }
+    col[static_cast<std::size_t>(k)] = static_cast<std::size_t>(it - names.begin());
+  }
+  const std::size_t needed = *std::max_element(col.begin(), col.end()) + 1;
+
+  struct Row {
+    std::int64_t index;
+    std::string part;
+    std::array<std::int32_t, 6> counts;
+    std::size_t line;
+  };
+  std::vector<Row> rows;
+  while (r.next(line)) {
+    if (is_blank(line)) continue;
+    const auto f = split(line, ',');
+    if (f.size() < needed) {
+      r.fail("expected " + std::to_string(names.size()) + " fields, found " + std::to_string(f.size()));
+    }
+    Row row;
+    row.part = unquote(f[col[0]]);
+    if (row.part.empty()) r.fail("empty 'part'");
+    const double idx = number(r, f[col[1]], "samples");
+    if (idx < 0 || idx != std::floor(idx)) r.fail("'samples' must be a non-negative integer index");
+    row.index = static_cast<std::int64_t>(idx);
+    for (int k = 0; k < 6; ++k) {
+      row.counts[static_cast<std::size_t>(k)] =
+          to_counts(r, number(r, f[col[static_cast<std::size_t>(k + 2)]], required[k + 2]), required[k + 2]);
+    }
+    row.line = r.line();
+    rows.push_back(std::move(row));
+  }
+  if (rows.empty()) throw ImportError(file, 0, "no data lines");
+  // The file is grouped by part; time order is the sample index.
+  std::stable_sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) { return a.index < b.index; });
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    if (rows[i].index == rows[i - 1].index) {
+      throw ImportError(file, rows[i].line, "sample index " + std::to_string(rows[i].index) +
+                                                " also appears on line " + std::to_string(rows[i - 1].line));
+    }
+  }
+
+  Recording rec = new_recording(file, "imucal");
+  const double acc_lsb = kStandardGravity / opt.accel_lsb_per_g;
+  const double gyr_lsb = kDegToRad / opt.gyro_lsb_per_dps;
+  std::size_t gaps = 0;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    ImuSample s;
+    s.t_s = static_cast<double>(rows[i].index) / opt.rate_hz;
+    for (int k = 0; k < 3; ++k) {
+      s.accel_counts[k] = rows[i].counts[static_cast<std::size_t>(k)];
+      s.gyro_counts[k] = rows[i].counts[static_cast<std::size_t>(k + 3)];
+      s.accel_mps2[k] = s.accel_counts[k] * acc_lsb;
+      s.gyro_radps[k] = s.gyro_counts[k] * gyr_lsb;
+    }
+    if (i > 0 && rows[i].index != rows[i - 1].index + 1) {
+      s.flags |= kGapBefore;
+      ++gaps;
+    }
+    rec.samples.push_back(s);
+  }
+
+  // One segment per contiguous run of a part.
+  int id = 0, orientation = 0;
+  std::vector<std::size_t> orientation_segments;
+  for (std::size_t i = 0; i < rows.size();) {
+    std::size_t j = i;
+    while (j + 1 < rows.size() && rows[j + 1].part == rows[i].part) ++j;
+    const std::string& part = rows[i].part;
+    const bool rotation = part.size() > 4 && part.compare(part.size() - 4, 4, "_rot") == 0;
+    Segment seg = make_segment(id++, rotation ? "rotation" : "orientation", part,
+                               rec.samples[i].t_s, rec.samples[j].t_s);
+    const std::string axis = part.substr(0, 1);
+    if (rotation) {
+      seg.targets = "360 deg turn about " + axis;
+    } else {
+      seg.orientation = orientation++;
+      if (part.size() == 3 && part[1] == '_' && part[2] == 'p') seg.targets = "+" + axis + " up";
+      if (part.size() == 3 && part[1] == '_' && part[2] == 'a') seg.targets = "+" + axis + " down";
+      orientation_segments.push_back(rec.segments.size());
+    }
+    rec.segments.push_back(seg);
+    i = j + 1;
+  }
+  for (std::size_t k : orientation_segments) rec.segments[k].orientation_count = orientation;
+
+  SensorInfo& info = rec.header.info;
+  info.output_rate_hz = opt.rate_hz;
+  info.accel_lsb_mps2 = acc_lsb;
+  info.gyro_lsb_radps = gyr_lsb;
+  info.accel_range_mps2 = 32768.0 * acc_lsb;
+  info.gyro_range_radps = 32768.0 * gyr_lsb;
+  info.has_gyro = true;
+  info.has_temperature = false;
+  rec.header.identity.model = "imucal example session";
+  rec.header.gravity_mps2 = opt.gravity_mps2;
+  add_import_event(
+      rec, "imported " + std::to_string(rec.samples.size()) + " samples from " + file.string() +
+               " (imucal annotated session; rate " + fmt_g(opt.rate_hz) +
+               " Hz; counts converted with the nominal " + fmt_g(opt.accel_lsb_per_g) +
+               " LSB/g and " + fmt_g(opt.gyro_lsb_per_dps) +
+               " LSB/(deg/s), which imucal's own calibration of this session (example_cal.json) "
+               "matches within 3 % — SI values are uncalibrated approximations; gravity " +
+               fmt_g(opt.gravity_mps2) + " m/s^2 is imucal's expected_g" +
+               (gaps ? "; " + std::to_string(gaps) + " gap(s) in the sample index" : "") + ")");
+  return rec;
+}
+
+// =============================================================================================
+// (c) MPU-6050 multi-position session
+
+Recording import_mpu6050_multipos(const fs::path& file, const Mpu6050MultiposOptions& opt) {
+  LineReader r(file);
+  std::string line;
+  std::map<std::string, double> header;
+  std::map<std::string, std::size_t> header_line;
+  std::vector<std::string> names;
+  while (r.next(line)) {
+    if (is_blank(line)) continue;
+    const auto f = split(line, ',');
+    double v = 0.0;
+    if (f.size() == 2 && !parse_double(f[0], v)) {
+      if (!parse_double(f[1], v)) r.fail("header value '" + std::string(f[1]) + "' is not a number");
+      header[unquote(f[0])] = v;
+      header_line[unquote(f[0])] = r.line();
+      continue;
+    }
+    for (auto n : f) names.push_back(unquote(n));
+    break;
+  }
+  if (names.empty()) throw ImportError(file, r.line(), "no column-name line (expected ax,ay,az,gx,gy,gz)");
+  const std::size_t names_line = r.line();
+  const char* required[6] = {"ax", "ay", "az", "gx", "gy", "gz"};
+  std::array<std::size_t, 6> col{};
+  for (int k = 0; k < 6; ++k) {
+    const auto it = std::find(names.begin(), names.end(), required[k]);
+    if (it == names.end()) {
+      throw ImportError(file, names_line, std::string("no column '") + required[k] +
+                                              "' (expected ax,ay,az,gx,gy,gz after the header)");
+    }
+    col[static_cast<std::size_t>(k)] = static_cast<std::size_t>(it - names.begin());
+  }
+  const auto fs_it = header.find("Fs");
+  if (fs_it == header.end() || !(fs_it->second > 0.0)) {
+    throw ImportError(file, fs_it == header.end() ? 1 : header_line["Fs"],
+                      "no sample rate: expected a header line 'Fs,<Hz>' with a positive rate");
+  }
+  const double rate = fs_it->second;
+  const std::size_t needed = *std::max_element(col.begin(), col.end()) + 1;
+
+  Recording rec = new_recording(file, "mpu6050_multipos");
+  const double acc_lsb = kStandardGravity / opt.accel_lsb_per_g;
+  const double gyr_lsb = kDegToRad / opt.gyro_lsb_per_dps;
+  while (r.next(line)) {
+    if (is_blank(line)) continue;
+    const auto f = split(line, ',');
+    if (f.size() < needed) {
+      r.fail("expected " + std::to_string(names.size()) + " fields, found " + std::to_string(f.size()));
+    }
+    ImuSample s;
+    s.t_s = static_cast<double>(rec.samples.size()) / rate;
+    for (int k = 0; k < 3; ++k) {
+      s.accel_counts[k] = to_counts(r, number(r, f[col[static_cast<std::size_t>(k)]], required[k]), required[k]);
+      s.gyro_counts[k] =
+          to_counts(r, number(r, f[col[static_cast<std::size_t>(k + 3)]], required[k + 3]), required[k + 3]);
+      s.accel_mps2[k] = s.accel_counts[k] * acc_lsb;
+      s.gyro_radps[k] = s.gyro_counts[k] * gyr_lsb;
+    }
+    rec.samples.push_back(s);
+  }
+  if (rec.samples.empty()) throw ImportError(file, 0, "no data lines after the column names");
+
+  SensorInfo& info = rec.header.info;
+  info.output_rate_hz = rate;
+  info.accel_lsb_mps2 = acc_lsb;
+  info.gyro_lsb_radps = gyr_lsb;
+  info.accel_range_mps2 = 32768.0 * acc_lsb;
+  info.gyro_range_radps = 32768.0 * gyr_lsb;
+  info.has_gyro = true;
+  info.has_temperature = false;
+  rec.header.identity.vendor = "InvenSense";
+  rec.header.identity.model = "MPU-6050";
+
+  std::string hdr;
+  for (const auto& [k, v] : header) hdr += (hdr.empty() ? "" : ", ") + k + " = " + fmt_g(v);
+  const auto init = header.find("Initialization time");
+  if (init != header.end() && init->second > 0.0) {
+    const double t_end = std::min(init->second, rec.samples.back().t_s);
+    Segment seg = make_segment(0, "orientation", "initialization", 0.0, t_end);
+    seg.orientation = 0;
+    seg.targets = "held still (Initialization time " + fmt_g(init->second) + " s)";
+    rec.segments.push_back(seg);
+  }
+  add_import_event(rec, "imported " + std::to_string(rec.samples.size()) + " samples from " +
+                            file.string() + " (MPU-6050 multi-position session; header: " + hdr +
+                            "; counts converted with " + fmt_g(opt.accel_lsb_per_g) + " LSB/g (+-2 g) and " +
+                            fmt_g(opt.gyro_lsb_per_dps) +
+                            " LSB/(deg/s) (+-250 deg/s), 1 g = 9.80665 m/s^2; no orientation "
+                            "annotations beyond the initial still interval)");
+  return rec;
+}
+
+// =============================================================================================
+// (d) IMU-TK
+
+Recording import_imutk(const fs::path& acc_file, const fs::path& gyro_file, const ImuTkOptions& opt) {
+  const Triad acc = read_triad_file(acc_file, opt.time_scale_s);
+  const bool has_gyro = !gyro_file.empty();
+  Triad gyr;
+  if (has_gyro) gyr = read_triad_file(gyro_file, opt.time_scale_s);
+
+  Recording rec = new_recording(acc_file, "imutk");
+  auto counts_of = [&](const Triad& tr, std::size_t i, double v, const fs::path& f) -> std::int32_t {
+    if (!std::isfinite(v) || std::abs(v - std::round(v)) > 1e-6 || std::abs(v) > 2147483647.0) {
+      throw ImportError(f, tr.line[i], fmt_g(v) + " is not an integer count (counts = true)");
+    }
+    return static_cast<std::int32_t>(std::lround(v));
+  };
+  for (std::size_t i = 0; i < acc.t.size(); ++i) {
+    ImuSample s;
+    s.t_s = acc.t[i];
+    const double a[3] = {acc.x[i], acc.y[i], acc.z[i]};
+    for (int k = 0; k < 3; ++k) {
+      if (opt.counts) s.accel_counts[k] = counts_of(acc, i, a[k], acc_file);
+      s.accel_mps2[k] = a[k] * opt.accel_scale;
+    }
+    rec.samples.push_back(s);
+  }
+  const double median_dt = median_interval(rec.samples);
+  const double tol = opt.time_tolerance_s >= 0.0 ? opt.time_tolerance_s : 0.01 * median_dt;
+  std::string merge_note;
+  if (has_gyro) {
+    bool same_times = gyr.t.size() == acc.t.size();
+    for (std::size_t i = 0; same_times && i < acc.t.size(); ++i) {
+      same_times = std::abs(gyr.t[i] - acc.t[i]) <= tol;
+    }
+    if (same_times) {
+      for (std::size_t i = 0; i < acc.t.size(); ++i) {
+        const double g[3] = {gyr.x[i], gyr.y[i], gyr.z[i]};
+        for (int k = 0; k < 3; ++k) {
+          if (opt.counts) rec.samples[i].gyro_counts[k] = counts_of(gyr, i, g[k], gyro_file);
+          rec.samples[i].gyro_radps[k] = g[k] * opt.gyro_scale;
+        }
+      }
+      merge_note = "gyro samples matched by timestamp";
+    } else {
+      // Linear interpolation of the gyro at the accelerometer times; counts are the rounded
+      // interpolated values.
+      std::vector<ImuSample> kept;
+      std::size_t j = 0, dropped = 0;
+      for (auto& s : rec.samples) {
+        if (s.t_s < gyr.t.front() - tol || s.t_s > gyr.t.back() + tol) {
+          ++dropped;
+          continue;
+        }
+        while (j + 1 < gyr.t.size() && gyr.t[j + 1] < s.t_s) ++j;
+        const std::size_t j1 = std::min(j + 1, gyr.t.size() - 1);
+        const double span = gyr.t[j1] - gyr.t[j];
+        const double u = span > 0.0 ? std::clamp((s.t_s - gyr.t[j]) / span, 0.0, 1.0) : 0.0;
+        const double g[3] = {gyr.x[j] + u * (gyr.x[j1] - gyr.x[j]), gyr.y[j] + u * (gyr.y[j1] - gyr.y[j]),
+                             gyr.z[j] + u * (gyr.z[j1] - gyr.z[j])};
+        for (int k = 0; k < 3; ++k) {
+          if (opt.counts) s.gyro_counts[k] = static_cast<std::int32_t>(std::lround(g[k]));
+          s.gyro_radps[k] = g[k] * opt.gyro_scale;
+        }
+        kept.push_back(s);
+      }
+      if (kept.empty()) {
+        throw ImportError(gyro_file, 0, "the gyro timestamps (" + fmt_g(gyr.t.front()) + " … " +
+                                            fmt_g(gyr.t.back()) + " s) do not overlap the accelerometer's (" +
+                                            fmt_g(acc.t.front()) + " … " + fmt_g(acc.t.back()) +
+                                            " s); check time_scale_s");
+      }
+      rec.samples = std::move(kept);
+      merge_note = "gyro linearly interpolated at the accelerometer times (the files' timestamps differ)" +
+                   (dropped ? "; " + std::to_string(dropped) + " accelerometer sample(s) outside the gyro's time span dropped"
+                            : std::string());
+    }
+  }
+
+  SensorInfo& info = rec.header.info;
+  info.output_rate_hz = opt.rate_hz > 0.0 ? opt.rate_hz : (median_dt > 0.0 ? 1.0 / median_dt : 0.0);
+  info.has_gyro = has_gyro;
+  info.has_temperature = false;
+  if (opt.counts) {
+    info.accel_lsb_mps2 = opt.accel_scale;
+    info.gyro_lsb_radps = has_gyro ? opt.gyro_scale : 0.0;
+  }
+  rec.header.identity = opt.identity;
+  rec.header.gravity_mps2 = opt.gravity_mps2;
+  const std::size_t gaps = flag_time_gaps(rec.samples, info.output_rate_hz);
+  add_import_event(rec, "imported " + std::to_string(rec.samples.size()) + " samples from " +
+                            acc_file.string() + (has_gyro ? " and " + gyro_file.string() : std::string()) +
+                            " (IMU-TK text; time scale " + fmt_g(opt.time_scale_s) + " s/unit, " +
+                            (opt.counts ? "counts" : "physical units") + ", accel scale " +
+                            fmt_g(opt.accel_scale) + ", gyro scale " + fmt_g(opt.gyro_scale) +
+                            (merge_note.empty() ? "" : "; " + merge_note) +
+                            (gaps ? "; " + std::to_string(gaps) + " gap(s) flagged" : "") + ")");
+  return rec;
+}
+
+void export_imutk(const Recording& rec, const fs::path& acc_file, const fs::path& gyro_file,
+                  bool counts) {
+  auto write = [&](const fs::path& file, bool gyro) {
+    std::string out;
+    out.reserve(rec.samples.size() * 80);
+    for (const auto& s : rec.samples) {
+      write_number(out, s.t_s);
+      for (int k = 0; k < 3; ++k) {
+        out += ' ';
+        if (counts) {
+          out += std::to_string(gyro ? s.gyro_counts[k] : s.accel_counts[k]);
+        } else {
+          write_number(out, gyro ? s.gyro_radps[k] : s.accel_mps2[k]);
+        }
+      }
+      out += '\n';
+    }
+    std::ofstream f(file, std::ios::binary);
+    if (!f) throw ImportError(file, 0, std::string("cannot create: ") + std::strerror(errno));
+    f.write(out.data(), static_cast<std::streamsize>(out.size()));
+    if (!f) throw ImportError(file, 0, "write failed");
+  };
+  write(acc_file, false);
+  if (!gyro_file.empty()) write(gyro_file, true);
+}
+
+// =============================================================================================
+// (e) MATLAB .mat
+
+#if STEND_IMPORT_MATIO
+
+bool mat_supported() { return true; }
+
+namespace {
+
+struct MatFileCloser {
+  void operator()(mat_t* m) const {
+    if (m) Mat_Close(m);
+  }
+};
+struct MatVarFree {
+  void operator()(matvar_t* v) const {
+    if (v) Mat_VarFree(v);
+  }
+};
+using MatFile = std::unique_ptr<mat_t, MatFileCloser>;
+using MatVar = std::unique_ptr<matvar_t, MatVarFree>;
+
+// Numeric content of a variable as doubles (column-major), with its dims.
+bool numeric(const matvar_t* v, std::vector<double>& out, std::size_t& rows, std::size_t& cols) {
+  if (!v || v->isComplex || v->rank != 2 || !v->data) return false;
+  rows = v->dims[0];
+  cols = v->dims[1];
+  const std::size_t n = rows * cols;
+  out.resize(n);
+  auto copy = [&](auto* p) {
+    for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<double>(p[i]);
+  };
+  switch (v->class_type) {
+    case MAT_C_DOUBLE: copy(static_cast<const double*>(v->data)); return true;
+    case MAT_C_SINGLE: copy(static_cast<const float*>(v->data)); return true;
+    case MAT_C_INT8: copy(static_cast<const std::int8_t*>(v->data)); return true;
+    case MAT_C_UINT8: copy(static_cast<const std::uint8_t*>(v->data)); return true;
+    case MAT_C_INT16: copy(static_cast<const std::int16_t*>(v->data)); return true;
+    case MAT_C_UINT16: copy(static_cast<const std::uint16_t*>(v->data)); return true;
+    case MAT_C_INT32: copy(static_cast<const std::int32_t*>(v->data)); return true;
+    case MAT_C_UINT32: copy(static_cast<const std::uint32_t*>(v->data)); return true;
+    case MAT_C_INT64: copy(static_cast<const std::int64_t*>(v->data)); return true;
+    case MAT_C_UINT64: copy(static_cast<const std::uint64_t*>(v->data)); return true;
+    default: return false;
+  }
+}
+
+std::string text(const matvar_t* v) {
+  if (!v || v->class_type != MAT_C_CHAR || !v->data) return {};
+  std::size_t n = 1;
+  for (int i = 0; i < v->rank; ++i) n *= v->dims[i];
+  std::string s;
+  if (v->data_size == 2 || v->data_type == MAT_T_UINT16 || v->data_type == MAT_T_UTF16) {
+    const auto* p = static_cast<const std::uint16_t*>(v->data);
+    for (std::size_t i = 0; i < n; ++i) s += p[i] < 128 ? static_cast<char>(p[i]) : '?';
+  } else {
+    const auto* p = static_cast<const char*>(v->data);
+    s.assign(p, n);
+  }
+  return s;
+}
+
+// The variables of the file (top level or one struct's fields), by name.
+class MatSource {
+ public:
+  MatSource(const fs::path& file, const std::string& struct_name) : file_(file) {
+    mat_.reset(Mat_Open(file.c_str(), MAT_ACC_RDONLY));
+    if (!mat_) throw ImportError(file, 0, "matio cannot open it as a MATLAB file (missing, or not a .mat)");
+    std::size_t n = 0;
+    char** dir = Mat_GetDir(mat_.get(), &n);
+    if (!dir) throw ImportError(file, 0, "matio cannot list its variables");
+    std::vector<std::string> names(dir, dir + n);
+    if (!struct_name.empty()) {
+      root_.reset(Mat_VarRead(mat_.get(), struct_name.c_str()));
+      if (!root_ || root_->class_type != MAT_C_STRUCT) {
+        throw ImportError(file, 0, "no struct variable named '" + struct_name + "'");
+      }
+      return;
+    }
+    for (const auto& nm : names) {
+      MatVar v(Mat_VarRead(mat_.get(), nm.c_str()));
+      if (!v) continue;
+      top_[nm] = std::move(v);
+    }
+    bool has_acc = top_.count("acc") || top_.count("accel") || top_.count("accelerometer") ||
+                   top_.count("acc_counts");
+    if (!has_acc) {
+      for (auto& [nm, v] : top_) {
+        if (v->class_type == MAT_C_STRUCT) {
+          root_ = std::move(v);
+          top_.clear();
+          break;
+        }
+      }
+    }
+  }
+  const matvar_t* get(std::initializer_list<const char*> names) const {
+    for (const char* n : names) {
+      if (root_) {
+        matvar_t* f = Mat_VarGetStructFieldByName(root_.get(), n, 0);
+        if (f) return f;
+      } else {
+        auto it = top_.find(n);
+        if (it != top_.end()) return it->second.get();
+      }
+    }
+    return nullptr;
+  }
+  const fs::path& file() const { return file_; }
+
+ private:
+  fs::path file_;
+  MatFile mat_;
+  MatVar root_;
+  std::map<std::string, MatVar> top_;
+};
+
+// N×3 or 3×N → rows of 3 (returns false when absent).
+bool triad(const MatSource& src, std::initializer_list<const char*> names, std::vector<std::array<double, 3>>& out,
+           std::string& which) {
+  const matvar_t* v = src.get(names);
+  if (!v) return false;
+  which = v->name ? v->name : *names.begin();
+  std::vector<double> d;
+  std::size_t r = 0, c = 0;
+  if (!numeric(v, d, r, c)) throw ImportError(src.file(), 0, "'" + which + "' is not a real numeric matrix");
+  if (c == 3) {
+    out.resize(r);
+    for (std::size_t i = 0; i < r; ++i) out[i] = {d[i], d[i + r], d[i + 2 * r]};
+  } else if (r == 3) {
+    out.resize(c);
+    for (std::size_t i = 0; i < c; ++i) out[i] = {d[3 * i], d[3 * i + 1], d[3 * i + 2]};
+  } else {
+    throw ImportError(src.file(), 0, "'" + which + "' is " + std::to_string(r) + "x" + std::to_string(c) +
+                                         ", expected N x 3");
+  }
+  return true;
+}
+
+bool vector_of(const MatSource& src, std::initializer_list<const char*> names, std::vector<double>& out,
+               std::string& which) {
+  const matvar_t* v = src.get(names);
+  if (!v) return false;
+  which = v->name ? v->name : *names.begin();
+  std::size_t r = 0, c = 0;
+  if (!numeric(v, out, r, c) || (r != 1 && c != 1)) {
+    throw ImportError(src.file(), 0, "'" + which + "' is not a real numeric vector");
+  }
+  return true;
+}
+
+MatVar make_double(const char* name, std::size_t rows, std::size_t cols, const double* data) {
+  std::size_t dims[2] = {rows, cols};
+  return MatVar(Mat_VarCreate(name, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, const_cast<double*>(data), 0));
+}
+MatVar make_int32(const char* name, std::size_t rows, std::size_t cols, const std::int32_t* data) {
+  std::size_t dims[2] = {rows, cols};
+  return MatVar(Mat_VarCreate(name, MAT_C_INT32, MAT_T_INT32, 2, dims, const_cast<std::int32_t*>(data), 0));
+}
+MatVar make_text(const char* name, const std::string& s) {
+  std::size_t dims[2] = {1, s.size()};
+  return MatVar(Mat_VarCreate(name, MAT_C_CHAR, MAT_T_UINT8, 2, dims, const_cast<char*>(s.data()), 0));
+}
+
+}  // namespace
+
+Recording import_mat(const fs::path& file, const MatOptions& opt) {
+  MatSource src(file, opt.struct_name);
+  std::vector<std::array<double, 3>> acc, gyr, acc_counts, gyr_counts;
+  std::string acc_name, gyr_name, acc_counts_name, gyr_counts_name, t_name, fs_name, temp_name, lsb_name;
+  const bool have_acc = triad(src, {"acc", "accel", "accelerometer"}, acc, acc_name);
+  const bool have_acc_counts = triad(src, {"acc_counts"}, acc_counts, acc_counts_name);
+  const bool have_gyr = triad(src, {"gyro", "gyr", "gyroscope"}, gyr, gyr_name);
+  const bool have_gyr_counts = triad(src, {"gyro_counts", "gyr_counts"}, gyr_counts, gyr_counts_name);
+  std::vector<double> t, rate_v, temp, acc_lsb_v, gyr_lsb_v;
+  const bool have_t = vector_of(src, {"t", "time", "timestamp"}, t, t_name);
+  const bool have_fs = vector_of(src, {"fs", "rate_hz", "rate"}, rate_v, fs_name);
+  const bool have_temp = vector_of(src, {"temp", "temperature"}, temp, temp_name);
+  const bool have_acc_lsb = vector_of(src, {"acc_lsb"}, acc_lsb_v, lsb_name);
+  const bool have_gyr_lsb = vector_of(src, {"gyro_lsb", "gyr_lsb"}, gyr_lsb_v, lsb_name);
+  if (!have_acc && !(have_acc_counts && have_acc_lsb)) {
+    throw ImportError(file, 0, "no accelerometer: expected a variable/field 'acc' (N x 3, m/s^2), or "
+                               "'acc_counts' with 'acc_lsb'");
+  }
+  const std::size_t n = have_acc ? acc.size() : acc_counts.size();
+  auto check_len = [&](std::size_t len, const std::string& name) {
+    if (len != n) {
+      throw ImportError(file, 0, "'" + name + "' has " + std::to_string(len) + " rows, the accelerometer " +
+                                     std::to_string(n));
+    }
+  };
+  if (have_acc_counts) check_len(acc_counts.size(), acc_counts_name);
+  if (have_gyr) check_len(gyr.size(), gyr_name);
+  if (have_gyr_counts) check_len(gyr_counts.size(), gyr_counts_name);
+  if (have_temp) check_len(temp.size(), temp_name);
+  if (have_t) check_len(t.size(), t_name);
+  if (!have_t && !(have_fs && rate_v.size() == 1 && rate_v[0] > 0.0)) {
+    throw ImportError(file, 0, "no time: expected 't' (N-vector, s) or a positive scalar 'fs' (Hz)");
+  }
+  const double acc_lsb = have_acc_lsb && !acc_lsb_v.empty() ? acc_lsb_v[0] : 0.0;
+  const double gyr_lsb = have_gyr_lsb && !gyr_lsb_v.empty() ? gyr_lsb_v[0] : 0.0;
+  const bool has_gyro = have_gyr || (have_gyr_counts && gyr_lsb > 0.0);
+
+  Recording rec = new_recording(file, "mat");
+  rec.samples.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    ImuSample& s = rec.samples[i];
+    s.t_s = have_t ? t[i] * opt.time_scale_s : static_cast<double>(i) / rate_v[0];
+    if (have_t && i > 0 && !(s.t_s > rec.samples[i - 1].t_s)) {
+      throw ImportError(file, 0, "'" + t_name + "' does not increase at element " + std::to_string(i + 1));
+    }
+    for (int k = 0; k < 3; ++k) {
+      const auto uk = static_cast<std::size_t>(k);
+      if (have_acc_counts) s.accel_counts[k] = static_cast<std::int32_t>(std::lround(acc_counts[i][uk]));
+      s.accel_mps2[k] = have_acc ? acc[i][uk] * opt.accel_scale : acc_counts[i][uk] * acc_lsb;
+      if (have_gyr_counts) s.gyro_counts[k] = static_cast<std::int32_t>(std::lround(gyr_counts[i][uk]));
+      if (have_gyr) {
+        s.gyro_radps[k] = gyr[i][uk] * opt.gyro_scale;
+      } else if (has_gyro) {
+        s.gyro_radps[k] = gyr_counts[i][uk] * gyr_lsb;
+      }
+    }
+    if (have_temp) s.temperature_c = temp[i];
+  }
+  // Segments (struct array with kind, label, t_start_s, t_end_s).
+  if (const matvar_t* segs = src.get({"segments"}); segs && segs->class_type == MAT_C_STRUCT) {
+    std::size_t count = 1;
+    for (int d = 0; d < segs->rank; ++d) count *= segs->dims[d];
+    auto* sv = const_cast<matvar_t*>(segs);
+    for (std::size_t i = 0; i < count; ++i) {
+      std::vector<double> a, b;
+      std::size_t r = 0, c = 0;
+      matvar_t* t0 = Mat_VarGetStructFieldByName(sv, "t_start_s", i);
+      matvar_t* t1 = Mat_VarGetStructFieldByName(sv, "t_end_s", i);
+      if (!numeric(t0, a, r, c) || a.size() != 1 || !numeric(t1, b, r, c) || b.size() != 1) {
+        throw ImportError(file, 0, "segments(" + std::to_string(i + 1) +
+                                       ") needs scalar fields t_start_s and t_end_s");
+      }
+      Segment seg = make_segment(static_cast<int>(i), text(Mat_VarGetStructFieldByName(sv, "kind", i)),
+                                 text(Mat_VarGetStructFieldByName(sv, "label", i)), a[0], b[0]);
+      rec.segments.push_back(seg);
+    }
+  }
+  SensorInfo& info = rec.header.info;
+  const double median_dt = median_interval(rec.samples);
+  info.output_rate_hz = have_fs && rate_v.size() == 1 && rate_v[0] > 0.0 ? rate_v[0]
+                        : (median_dt > 0.0 ? 1.0 / median_dt : 0.0);
+  info.has_gyro = has_gyro;
+  info.has_temperature = have_temp;
+  info.accel_lsb_mps2 = acc_lsb;
+  info.gyro_lsb_radps = gyr_lsb;
+  rec.header.identity = opt.identity;
+  rec.header.gravity_mps2 = opt.gravity_mps2;
+  const std::size_t gaps = have_t ? flag_time_gaps(rec.samples, info.output_rate_hz) : 0;
+  add_import_event(rec, "imported " + std::to_string(n) + " samples from " + file.string() +
+                            " (MATLAB file" + (opt.struct_name.empty() ? "" : ", struct " + opt.struct_name) +
+                            "; accel from '" + (have_acc ? acc_name : acc_counts_name) + "'" +
+                            (has_gyro ? ", gyro from '" + (have_gyr ? gyr_name : gyr_counts_name) + "'" : ", no gyro") +
+                            (have_t ? ", time '" + t_name + "'" : ", rate '" + fs_name + "'") +
+                            (gaps ? "; " + std::to_string(gaps) + " gap(s) flagged" : "") + ")");
+  return rec;
+}
+
+void export_mat(const Recording& rec, const fs::path& file, const std::string& struct_name) {
+  MatFile mat(Mat_CreateVer(file.c_str(), nullptr, MAT_FT_MAT5));
+  if (!mat) throw ImportError(file, 0, "matio cannot create it");
+  const std::size_t n = rec.samples.size();
+  std::vector<double> t(n), acc(3 * n), gyr(3 * n), temp(n);
+  std::vector<std::int32_t> acc_c(3 * n), gyr_c(3 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const ImuSample& s = rec.samples[i];
+    t[i] = s.t_s;
+    temp[i] = s.temperature_c;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const int ik = static_cast<int>(k);
+      acc[i + k * n] = s.accel_mps2[ik];
+      gyr[i + k * n] = s.gyro_radps[ik];
+      acc_c[i + k * n] = s.accel_counts[k];
+      gyr_c[i + k * n] = s.gyro_counts[k];
+    }
+  }
+  const double fs_hz = rec.header.info.output_rate_hz;
+  const double acc_lsb = rec.header.info.accel_lsb_mps2, gyr_lsb = rec.header.info.gyro_lsb_radps;
+  // Top level: each variable is written at once. In a struct: collected, then one struct.
+  std::vector<std::pair<std::string, MatVar>> fields;
+  auto write = [&](MatVar v, const char* what) {
+    if (!v) throw ImportError(file, 0, std::string("matio failed to create '") + what + "'");
+    if (!struct_name.empty()) {
+      fields.emplace_back(what, std::move(v));
+      return;
+    }
+    if (Mat_VarWrite(mat.get(), v.get(), MAT_COMPRESSION_NONE) != 0) {
+      throw ImportError(file, 0, std::string("matio failed to write '") + what + "'");
+    }
+  };
+  write(make_double("t", n, 1, t.data()), "t");
+  write(make_double("fs", 1, 1, &fs_hz), "fs");
+  write(make_double("acc", n, 3, acc.data()), "acc");
+  write(make_int32("acc_counts", n, 3, acc_c.data()), "acc_counts");
+  write(make_double("acc_lsb", 1, 1, &acc_lsb), "acc_lsb");
+  if (rec.header.info.has_gyro) {
+    write(make_double("gyro", n, 3, gyr.data()), "gyro");
+    write(make_int32("gyro_counts", n, 3, gyr_c.data()), "gyro_counts");
+    write(make_double("gyro_lsb", 1, 1, &gyr_lsb), "gyro_lsb");
+  }
+  if (rec.header.info.has_temperature) write(make_double("temp", n, 1, temp.data()), "temp");
+  if (!rec.segments.empty()) {
+    const char* segment_fields[] = {"kind", "label", "t_start_s", "t_end_s", nullptr};
+    std::size_t dims[2] = {rec.segments.size(), 1};
+    MatVar s(Mat_VarCreateStruct2("segments", 2, dims, segment_fields));
+    if (!s) throw ImportError(file, 0, "matio failed to create 'segments'");
+    for (std::size_t i = 0; i < rec.segments.size(); ++i) {
+      const Segment& seg = rec.segments[i];
+      Mat_VarSetStructFieldByName(s.get(), "kind", i, make_text("kind", seg.kind).release());
+      Mat_VarSetStructFieldByName(s.get(), "label", i, make_text("label", seg.label).release());
+      Mat_VarSetStructFieldByName(s.get(), "t_start_s", i, make_double("t_start_s", 1, 1, &seg.t_start_s).release());
+      Mat_VarSetStructFieldByName(s.get(), "t_end_s", i, make_double("t_end_s", 1, 1, &seg.t_end_s).release());
+    }
+    write(std::move(s), "segments");
+  }
+  if (!struct_name.empty()) {
+    std::vector<const char*> names;
+    for (const auto& f : fields) names.push_back(f.first.c_str());
+    names.push_back(nullptr);
+    std::size_t dims[2] = {1, 1};
+    MatVar root(Mat_VarCreateStruct2(struct_name.c_str(), 2, dims, names.data()));
+    if (!root) throw ImportError(file, 0, "matio failed to create struct '" + struct_name + "'");
+    for (auto& f : fields) Mat_VarSetStructFieldByName(root.get(), f.first.c_str(), 0, f.second.release());
+    if (Mat_VarWrite(mat.get(), root.get(), MAT_COMPRESSION_NONE) != 0) {
+      throw ImportError(file, 0, "matio failed to write struct '" + struct_name + "'");
+    }
+  }
+}
+
+#else  // built without matio
+
+namespace {
+constexpr const char* kNoMatio =
+    "MATLAB files need matio, and this stend_core was built without it (install libmatio-dev; "
+    "io/CMakeLists.txt links PkgConfig::MATIO and defines STEND_HAVE_MATIO)";
+}
+
+bool mat_supported() { return false; }
+
+Recording import_mat(const fs::path& file, const MatOptions&) { throw ImportError(file, 0, kNoMatio); }
+void export_mat(const Recording&, const fs::path& file, const std::string&) {
+  throw ImportError(file, 0, kNoMatio);
+}
+
+#endif
+
+}  // namespace stend::io

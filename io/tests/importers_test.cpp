@@ -1,0 +1,461 @@
+// Importers: the public datasets in ../shared/data (skipped when absent), generic CSV, and the
+// IMU-TK and MATLAB round trips on files this test writes.
+#include <stend/io/importers.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <numbers>
+#include <random>
+#include <string>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+using namespace stend;
+using namespace stend::io;
+
+namespace {
+
+constexpr double kG = 9.80665;
+
+fs::path shared_data() { return fs::path(STEND_SHARED_DATA_DIR); }
+
+#define SKIP_WITHOUT(file)                                                                      \
+  if (!fs::exists(file)) {                                                                      \
+    GTEST_SKIP() << "real-data test skipped: " << (file)                                        \
+                 << " not found (the shared data folder ../shared/data is absent here)";       \
+  }
+
+// Mean |a| over the samples inside [t0, t1].
+double mean_norm(const Recording& r, double t0, double t1) {
+  double s = 0.0;
+  int n = 0;
+  for (const auto& x : r.samples) {
+    if (x.t_s < t0 || x.t_s > t1) continue;
+    s += x.accel_mps2.norm();
+    ++n;
+  }
+  return n ? s / n : std::nan("");
+}
+
+// Integral of one gyro axis over [t0, t1] (rad), after removing the mean of the first `still_s`
+// seconds before t0 … the turn segments have no still part, so plain integral.
+double integral(const Recording& r, int axis, double t0, double t1) {
+  double s = 0.0;
+  const double dt = 1.0 / r.header.info.output_rate_hz;
+  for (const auto& x : r.samples) {
+    if (x.t_s >= t0 && x.t_s <= t1) s += x.gyro_radps[axis] * dt;
+  }
+  return s;
+}
+
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    path_ = fs::temp_directory_path() /
+            ("stend_importers_" + std::to_string(::getpid()) + "_" + info->name());
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  fs::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  fs::path path_;
+};
+
+void write_file(const fs::path& p, const std::string& text) {
+  std::ofstream f(p, std::ios::binary);
+  f << text;
+}
+
+std::string error_of(const std::function<void()>& fn) {
+  try {
+    fn();
+  } catch (const ImportError& e) {
+    return e.what();
+  }
+  return "(no ImportError)";
+}
+
+Recording synthetic(std::size_t n, double rate, bool with_counts) {
+  Recording r;
+  r.header.info.output_rate_hz = rate;
+  r.header.info.has_gyro = true;
+  r.header.info.accel_lsb_mps2 = kG / 2048.0;
+  r.header.info.gyro_lsb_radps = std::numbers::pi / 180.0 / 16.4;
+  std::mt19937_64 gen(5);
+  std::normal_distribution<double> normal;
+  for (std::size_t i = 0; i < n; ++i) {
+    ImuSample s;
+    s.t_s = 0.5 + static_cast<double>(i) / rate;
+    for (int k = 0; k < 3; ++k) {
+      if (with_counts) {
+        s.accel_counts[k] = static_cast<std::int32_t>(std::lround(normal(gen) * 1000));
+        s.gyro_counts[k] = static_cast<std::int32_t>(std::lround(normal(gen) * 100));
+        s.accel_mps2[k] = s.accel_counts[k] * r.header.info.accel_lsb_mps2;
+        s.gyro_radps[k] = s.gyro_counts[k] * r.header.info.gyro_lsb_radps;
+      } else {
+        s.accel_mps2[k] = normal(gen) * 3.0 + (k == 2 ? kG : 0.0);
+        s.gyro_radps[k] = normal(gen) * 0.01;
+      }
+    }
+    r.samples.push_back(s);
+  }
+  Segment a;
+  a.kind = "orientation";
+  a.label = "z up";
+  a.t_start_s = 0.5;
+  a.t_end_s = 1.5;
+  Segment b = a;
+  b.kind = "rotation";
+  b.label = "x_rot";
+  b.t_start_s = 2.0;
+  b.t_end_s = 3.25;
+  r.segments = {a, b};
+  return r;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// (c) MPU-6050 multi-position session
+
+TEST(ImportMpu6050, CalibrationSession) {
+  const auto file = shared_data() / "mpu6050_multipos" / "calibration_session.csv";
+  SKIP_WITHOUT(file);
+  const Recording r = import_mpu6050_multipos(file);
+  EXPECT_EQ(r.samples.size(), 10245u);  // 10250 lines − the 5-line header (with column names)
+  EXPECT_EQ(r.header.info.output_rate_hz, 100.0);
+  EXPECT_DOUBLE_EQ(r.header.info.accel_lsb_mps2, kG / 16384.0);
+  EXPECT_DOUBLE_EQ(r.header.info.gyro_lsb_radps, std::numbers::pi / 180.0 / 131.0);
+  EXPECT_EQ(r.header.identity.model, "MPU-6050");
+  EXPECT_TRUE(r.complete());
+  EXPECT_DOUBLE_EQ(r.samples[1].t_s, 0.01);
+  EXPECT_EQ(r.samples[0].accel_counts[2], 15032);
+  EXPECT_EQ(r.samples[0].gyro_counts[0], -447);
+  // The only annotation: the initial still interval from the header (36.5 s).
+  ASSERT_EQ(r.segments.size(), 1u);
+  EXPECT_EQ(r.segments[0].kind, "orientation");
+  EXPECT_EQ(r.segments[0].label, "initialization");
+  EXPECT_DOUBLE_EQ(r.segments[0].t_end_s, 36.5);
+  // Still: |a| ≈ g. This unit is uncalibrated (its reference calibration has a z offset of
+  // ~1840 counts ≈ 0.11 g), so the nominal scale gives 0.91 g: within 12 %.
+  EXPECT_NEAR(mean_norm(r, r.segments[0].t_start_s, r.segments[0].t_end_s) / kG, 1.0, 0.12);
+  ASSERT_EQ(r.events.size(), 1u);
+  EXPECT_NE(r.events[0].message.find("Initialization time = 36.5"), std::string::npos);
+}
+
+TEST(ImportMpu6050, Static449s) {
+  const auto file = shared_data() / "mpu6050_multipos" / "static_449s.csv";
+  SKIP_WITHOUT(file);
+  const Recording r = import_mpu6050_multipos(file);
+  EXPECT_EQ(r.samples.size(), 44930u);
+  EXPECT_EQ(r.header.info.output_rate_hz, 100.0);
+  EXPECT_TRUE(r.segments.empty());  // Initialization time −1: no annotation
+  EXPECT_NEAR(r.samples.back().t_s, 449.29, 1e-9);
+  EXPECT_NEAR(mean_norm(r, 0, 1e9) / kG, 1.0, 0.12);
+}
+
+TEST(ImportMpu6050, MalformedInputNamesFileAndLine) {
+  TempDir dir;
+  const auto bad = dir / "bad.csv";
+  write_file(bad, "Fs,100\nLogging Type,0\nInitialization time,2\nWaiting time,3\nax,ay,az,gx,gy,gz\n"
+                  "1,2,3,4,5,6\n1,2,x3,4,5,6\n");
+  const std::string e = error_of([&] { import_mpu6050_multipos(bad); });
+  EXPECT_NE(e.find("bad.csv:7:"), std::string::npos) << e;
+  EXPECT_NE(e.find("'az'"), std::string::npos) << e;
+
+  write_file(bad, "Logging Type,0\nax,ay,az,gx,gy,gz\n1,2,3,4,5,6\n");
+  EXPECT_NE(error_of([&] { import_mpu6050_multipos(bad); }).find("Fs"), std::string::npos);
+
+  write_file(bad, "Fs,100\nax,ay,az,gx,gy\n1,2,3,4,5\n");
+  EXPECT_NE(error_of([&] { import_mpu6050_multipos(bad); }).find("bad.csv:2: no column 'gz'"), std::string::npos);
+
+  write_file(bad, "Fs,100\nax,ay,az,gx,gy,gz\n1,2,3,4,5,6\n1,2,3,4,5\n");
+  EXPECT_NE(error_of([&] { import_mpu6050_multipos(bad); }).find("bad.csv:4:"), std::string::npos);
+
+  EXPECT_NE(error_of([&] { import_mpu6050_multipos(dir / "missing.csv"); }).find("missing.csv"),
+            std::string::npos);
+}
+
+// ---------------------------------------------------------------------------------------------
+// (b) imucal annotated session
+
+TEST(ImportImucal, AnnotatedSession) {
+  const auto file = shared_data() / "imucal" / "annotated_session.csv";
+  SKIP_WITHOUT(file);
+  const Recording r = import_imucal_session(file);
+  EXPECT_EQ(r.samples.size(), 9414u);
+  EXPECT_DOUBLE_EQ(r.header.info.output_rate_hz, 204.8);
+  EXPECT_DOUBLE_EQ(r.header.gravity_mps2, 9.81);
+  // Time order, not file order (the file is grouped by part).
+  for (std::size_t i = 1; i < r.samples.size(); ++i) {
+    ASSERT_LT(r.samples[i - 1].t_s, r.samples[i].t_s);
+    ASSERT_EQ(r.samples[i].flags & kGapBefore, 0u);
+  }
+  const char* expected[9] = {"x_p", "x_a", "y_p", "y_a", "z_p", "z_a", "x_rot", "y_rot", "z_rot"};
+  ASSERT_EQ(r.segments.size(), 9u);
+  int orientations = 0;
+  for (std::size_t i = 0; i < 9; ++i) {
+    const Segment& s = r.segments[i];
+    EXPECT_EQ(s.label, expected[i]);
+    const bool rot = i >= 6;
+    EXPECT_EQ(s.kind, rot ? "rotation" : "orientation");
+    if (!rot) {
+      EXPECT_EQ(s.orientation, orientations++);
+      EXPECT_EQ(s.orientation_count, 6);
+      // Static positions: |a| ≈ g with the nominal 2048 LSB/g (uncalibrated: within 6 %).
+      EXPECT_NEAR(mean_norm(r, s.t_start_s, s.t_end_s) / 9.81, 1.0, 0.06) << s.label;
+      // The axis named by the part carries ±g: x_p → +x up (+g), x_a → x down (−g).
+      const int axis = s.label[0] - 'x';
+      double mean = 0.0;
+      int n = 0;
+      for (const auto& x : r.samples) {
+        if (x.t_s >= s.t_start_s && x.t_s <= s.t_end_s) {
+          mean += x.accel_mps2[axis];
+          ++n;
+        }
+      }
+      mean /= n;
+      EXPECT_NEAR(mean / 9.81, s.label[2] == 'p' ? 1.0 : -1.0, 0.06) << s.label;
+    } else {
+      // 360° turns about the named axis with the nominal 16.4 LSB/(°/s) (within 3 %).
+      const int axis = s.label[0] - 'x';
+      const double turn = integral(r, axis, s.t_start_s, s.t_end_s) * 180.0 / std::numbers::pi;
+      EXPECT_NEAR(turn / 360.0, 1.0, 0.03) << s.label;
+    }
+  }
+  EXPECT_DOUBLE_EQ(r.segments[0].t_start_s, 0.0);
+  EXPECT_DOUBLE_EQ(r.segments[0].t_end_s, 1027 / 204.8);
+  EXPECT_DOUBLE_EQ(r.segments[8].t_end_s, 9413 / 204.8);
+}
+
+TEST(ImportImucal, MalformedInput) {
+  TempDir dir;
+  const auto bad = dir / "session.csv";
+  write_file(bad, "part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\nx_p,0,1,2,3,4,5,6\nx_p,1,1,2,3.5,4,5,6\n");
+  const std::string e = error_of([&] { import_imucal_session(bad); });
+  EXPECT_NE(e.find("session.csv:3:"), std::string::npos) << e;
+  EXPECT_NE(e.find("not an integer count"), std::string::npos) << e;
+  write_file(bad, "part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y\n");
+  EXPECT_NE(error_of([&] { import_imucal_session(bad); }).find("no column 'gyr_z'"), std::string::npos);
+  write_file(bad, "part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\nx_p,0,1,2,3,4,5,6\nx_a,0,1,2,3,4,5,6\n");
+  EXPECT_NE(error_of([&] { import_imucal_session(bad); }).find("session.csv:3: sample index 0 also appears on line 2"),
+            std::string::npos);
+}
+
+// ---------------------------------------------------------------------------------------------
+// (a) generic CSV
+
+TEST(ImportCsv, MappingReproducesTheMpu6050Importer) {
+  const auto file = shared_data() / "mpu6050_multipos" / "calibration_session.csv";
+  SKIP_WITHOUT(file);
+  CsvMapping m;
+  m.skip_lines = 4;  // Fs, Logging Type, Initialization time, Waiting time
+  m.rate_hz = 100.0;
+  m.accel = {"ax", "ay", "az"};
+  m.gyro = {"gx", "gy", "gz"};
+  m.counts = true;
+  m.accel_scale = kG / 16384.0;
+  m.gyro_scale = std::numbers::pi / 180.0 / 131.0;
+  const Recording a = import_csv(file, m);
+  const Recording b = import_mpu6050_multipos(file);
+  ASSERT_EQ(a.samples.size(), b.samples.size());
+  for (std::size_t i = 0; i < a.samples.size(); i += 97) {
+    EXPECT_EQ(a.samples[i].t_s, b.samples[i].t_s);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(a.samples[i].accel_counts[k], b.samples[i].accel_counts[k]);
+      EXPECT_EQ(a.samples[i].gyro_radps[k], b.samples[i].gyro_radps[k]);
+    }
+  }
+  EXPECT_EQ(a.header.info.accel_lsb_mps2, m.accel_scale);
+}
+
+TEST(ImportCsv, TimeColumnUnitsDelimiterAndErrors) {
+  TempDir dir;
+  const auto f = dir / "log.txt";
+  write_file(f,
+             "# exported by some logger\n"
+             "time_ms; temp; wx; wy; wz; fx; fy; fz\n"
+             "1000; 25.5; 0.1; 0.2; 0.3; 0; 0; 1\n"
+             "# a comment inside the data\n"
+             "1010; 25.5; 0.1; 0.2; 0.3; 0; 0; 1.01\n"
+             "\n"
+             "1020; 25.6; 0.1; 0.2; 0.3; 0; 0; 0.99\n"
+             "1040; 25.6; 0.1; 0.2; 0.3; 0; 0; 1\n");
+  CsvMapping m;
+  m.delimiter = ';';
+  m.skip_lines = 1;
+  m.time = "time_ms";
+  m.time_scale_s = 1e-3;
+  m.accel = {5, 6, 7};  // by index
+  m.gyro = {"wx", "wy", "wz"};
+  m.temperature = "temp";
+  m.accel_scale = kG;  // file in g
+  m.gyro_scale = std::numbers::pi / 180.0;  // file in °/s
+  const Recording r = import_csv(f, m);
+  ASSERT_EQ(r.samples.size(), 4u);
+  EXPECT_DOUBLE_EQ(r.samples[1].t_s, 1.01);
+  EXPECT_DOUBLE_EQ(r.samples[1].accel_mps2.z(), 1.01 * kG);
+  EXPECT_DOUBLE_EQ(r.samples[0].gyro_radps.y(), 0.2 * std::numbers::pi / 180.0);
+  EXPECT_DOUBLE_EQ(r.samples[2].temperature_c, 25.6);
+  EXPECT_NEAR(r.header.info.output_rate_hz, 100.0, 1e-9);  // median interval
+  EXPECT_FALSE(r.samples[2].flags & kGapBefore);
+  EXPECT_TRUE(r.samples[3].flags & kGapBefore);  // 20 ms at a 10 ms rate
+  EXPECT_TRUE(r.header.info.has_temperature);
+
+  // Errors name the file and line.
+  write_file(f, "t,ax,ay,az\n0,1,2,3\n0.01,1,2\n");
+  CsvMapping s;
+  s.time = "t";
+  s.accel = {"ax", "ay", "az"};
+  std::string e = error_of([&] { import_csv(f, s); });
+  EXPECT_NE(e.find("log.txt:3:"), std::string::npos) << e;
+  write_file(f, "t,ax,ay,az\n0,1,2,3\n0.01,1,2,abc\n");
+  e = error_of([&] { import_csv(f, s); });
+  EXPECT_NE(e.find("log.txt:3: column 'az': 'abc' is not a number"), std::string::npos) << e;
+  write_file(f, "t,ax,ay,az\n0,1,2,3\n0,1,2,3\n");
+  EXPECT_NE(error_of([&] { import_csv(f, s); }).find("log.txt:3: time 0 s does not increase"), std::string::npos);
+  s.accel = {"ax", "ay", "acc_z"};
+  e = error_of([&] { import_csv(f, s); });
+  EXPECT_NE(e.find("no column named 'acc_z'"), std::string::npos) << e;
+  EXPECT_NE(e.find("t, ax, ay, az"), std::string::npos) << e;
+  CsvMapping no_time;
+  no_time.accel = {1, 2, 3};
+  EXPECT_NE(error_of([&] { import_csv(f, no_time); }).find("rate_hz"), std::string::npos);
+}
+
+// ---------------------------------------------------------------------------------------------
+// (d) IMU-TK
+
+TEST(ImportImuTk, RoundTripSiAndCounts) {
+  TempDir dir;
+  const Recording src = synthetic(1000, 100.0, true);
+  // Physical units: exact (shortest round-trip text).
+  export_imutk(src, dir / "acc.txt", dir / "gyro.txt");
+  const Recording si = import_imutk(dir / "acc.txt", dir / "gyro.txt");
+  ASSERT_EQ(si.samples.size(), src.samples.size());
+  for (std::size_t i = 0; i < src.samples.size(); ++i) {
+    ASSERT_EQ(si.samples[i].t_s, src.samples[i].t_s);
+    ASSERT_EQ(si.samples[i].accel_mps2, src.samples[i].accel_mps2);
+    ASSERT_EQ(si.samples[i].gyro_radps, src.samples[i].gyro_radps);
+  }
+  EXPECT_NEAR(si.header.info.output_rate_hz, 100.0, 1e-6);
+  EXPECT_TRUE(si.header.info.has_gyro);
+  // Counts, with the LSBs as scales.
+  export_imutk(src, dir / "acc_c.txt", dir / "gyro_c.txt", true);
+  ImuTkOptions o;
+  o.counts = true;
+  o.accel_scale = src.header.info.accel_lsb_mps2;
+  o.gyro_scale = src.header.info.gyro_lsb_radps;
+  const Recording c = import_imutk(dir / "acc_c.txt", dir / "gyro_c.txt", o);
+  ASSERT_EQ(c.samples.size(), src.samples.size());
+  for (std::size_t i = 0; i < src.samples.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_EQ(c.samples[i].accel_counts[k], src.samples[i].accel_counts[k]);
+      ASSERT_EQ(c.samples[i].gyro_counts[k], src.samples[i].gyro_counts[k]);
+    }
+    ASSERT_EQ(c.samples[i].accel_mps2, src.samples[i].accel_mps2);
+  }
+  EXPECT_EQ(c.header.info.accel_lsb_mps2, o.accel_scale);
+  // Accelerometer only.
+  const Recording a = import_imutk(dir / "acc.txt", {});
+  EXPECT_FALSE(a.header.info.has_gyro);
+  EXPECT_EQ(a.samples.size(), 1000u);
+}
+
+TEST(ImportImuTk, GyroOnOtherTimestampsIsInterpolated) {
+  TempDir dir;
+  // Accelerometer at 0, 0.01, …; gyro at 0.005, 0.015, … with a ramp ω = t.
+  std::string acc, gyr;
+  for (int i = 0; i < 100; ++i) {
+    acc += std::to_string(i * 0.01) + " 0 0 9.81\n";
+    const double t = 0.005 + i * 0.01;
+    gyr += std::to_string(t) + "," + std::to_string(t) + "," + std::to_string(2 * t) + ",0\n";
+  }
+  write_file(dir / "a.txt", acc);
+  write_file(dir / "g.txt", gyr);
+  const Recording r = import_imutk(dir / "a.txt", dir / "g.txt");
+  // t = 0 lies before the first gyro sample (dropped); the last accel sample (0.99) is inside.
+  ASSERT_EQ(r.samples.size(), 99u);
+  for (const auto& s : r.samples) {
+    ASSERT_NEAR(s.gyro_radps.x(), s.t_s, 1e-9);
+    ASSERT_NEAR(s.gyro_radps.y(), 2 * s.t_s, 1e-9);
+  }
+  EXPECT_NE(r.events[0].message.find("interpolated"), std::string::npos);
+  EXPECT_NE(r.events[0].message.find("1 accelerometer sample(s)"), std::string::npos);
+}
+
+TEST(ImportImuTk, MalformedLineNamesFileAndLine) {
+  TempDir dir;
+  write_file(dir / "a.txt", "# IMU-TK\n0 1 2 3\n0.01 1 2\n");
+  std::string e = error_of([&] { import_imutk(dir / "a.txt", {}); });
+  EXPECT_NE(e.find("a.txt:3: expected 4 values"), std::string::npos) << e;
+  write_file(dir / "a.txt", "0 1 2 3\n0.01 1 2 3\n0.005 1 2 3\n");
+  e = error_of([&] { import_imutk(dir / "a.txt", {}); });
+  EXPECT_NE(e.find("a.txt:3: timestamp"), std::string::npos) << e;
+  write_file(dir / "a.txt", "0 1 2 3\n1e-2 1 2 three\n");
+  e = error_of([&] { import_imutk(dir / "a.txt", {}); });
+  EXPECT_NE(e.find("a.txt:2: column 'z'"), std::string::npos) << e;
+}
+
+// ---------------------------------------------------------------------------------------------
+// (e) MATLAB .mat
+
+TEST(ImportMat, RoundTripTopLevelAndStruct) {
+  if (!mat_supported()) {
+    GTEST_SKIP() << "MATLAB support unavailable: stend_core was built without matio "
+                    "(io/CMakeLists.txt must link PkgConfig::MATIO and define STEND_HAVE_MATIO)";
+  }
+  TempDir dir;
+  const Recording src = synthetic(500, 200.0, true);
+  for (const std::string& st : {std::string(), std::string("imu")}) {
+    const auto file = dir / ("r" + st + ".mat");
+    export_mat(src, file, st);
+    MatOptions o;
+    o.struct_name = st;
+    const Recording r = import_mat(file, o);
+    ASSERT_EQ(r.samples.size(), src.samples.size()) << st;
+    for (std::size_t i = 0; i < src.samples.size(); ++i) {
+      ASSERT_EQ(r.samples[i].t_s, src.samples[i].t_s);
+      ASSERT_EQ(r.samples[i].accel_mps2, src.samples[i].accel_mps2);
+      ASSERT_EQ(r.samples[i].gyro_radps, src.samples[i].gyro_radps);
+      for (int k = 0; k < 3; ++k) {
+        ASSERT_EQ(r.samples[i].accel_counts[k], src.samples[i].accel_counts[k]);
+        ASSERT_EQ(r.samples[i].gyro_counts[k], src.samples[i].gyro_counts[k]);
+      }
+    }
+    EXPECT_EQ(r.header.info.output_rate_hz, 200.0);
+    EXPECT_EQ(r.header.info.accel_lsb_mps2, src.header.info.accel_lsb_mps2);
+    ASSERT_EQ(r.segments.size(), 2u);
+    EXPECT_EQ(r.segments[1].kind, "rotation");
+    EXPECT_EQ(r.segments[1].label, "x_rot");
+    EXPECT_EQ(r.segments[1].t_end_s, 3.25);
+  }
+  // Without a struct name the first struct in the file is used.
+  const Recording any = import_mat(dir / "rimu.mat");
+  EXPECT_EQ(any.samples.size(), 500u);
+}
+
+TEST(ImportMat, ErrorsNameTheFile) {
+  if (!mat_supported()) {
+    GTEST_SKIP() << "MATLAB support unavailable: stend_core was built without matio";
+  }
+  TempDir dir;
+  write_file(dir / "not.mat", "this is not a MATLAB file\n");
+  EXPECT_NE(error_of([&] { import_mat(dir / "not.mat"); }).find("not.mat"), std::string::npos);
+  Recording empty_gyro = synthetic(10, 100.0, false);
+  export_mat(empty_gyro, dir / "ok.mat");
+  MatOptions o;
+  o.struct_name = "nothere";
+  EXPECT_NE(error_of([&] { import_mat(dir / "ok.mat", o); }).find("no struct variable named 'nothere'"),
+            std::string::npos);
+}

@@ -1,0 +1,45 @@
+// Static extraction: the constant part of a signal over a segment, as in the paper's calibration
+// procedure (step 3): low-pass with a Butterworth filter, discard a settling time at each end of
+// the segment, average what remains.
+#pragma once
+
+#include <cstddef>
+#include <span>
+#include <string>
+
+namespace stend::processing {
+
+struct StaticExtractionSettings {
+  int filter_order = 6;     // Butterworth order (the paper: 6)
+  double cutoff_hz = 1.0;   // −3 dB frequency of the low-pass
+  double settle_s = 2.0;    // discarded at the start AND at the end of the segment, after filtering
+  bool zero_phase = true;   // forward-backward (no delay) or causal forward filtering
+};
+
+struct StaticValue {
+  double mean = 0.0;          // the constant part: mean of the filtered signal over the kept window
+  double filtered_std = 0.0;  // spread of the filtered signal over the kept window
+  double raw_mean = 0.0;      // mean of the unfiltered samples over the kept window
+  double raw_std = 0.0;       // sample standard deviation of the unfiltered samples, kept window
+  // raw_std / sqrt(n_used): the standard error of the mean IF the noise is white. Coloured noise
+  // (flicker, bias instability, random walk) makes the true error larger.
+  double white_std_error = 0.0;
+  std::size_t n_segment = 0;  // samples inside [t_start, t_end]
+  std::size_t n_used = 0;     // samples inside the kept window
+  double t_first_s = 0.0;     // first and last kept sample times
+  double t_last_s = 0.0;
+  double sample_rate_hz = 0.0;  // from the median sample interval of the segment
+};
+
+// `t` (strictly increasing, seconds) and `x` have the same length. Uses the samples with
+// t_start ≤ t ≤ t_end, filters them at the sample rate estimated from their median interval, keeps
+// t_start + settle_s ≤ t ≤ t_end − settle_s, and averages. Throws std::invalid_argument with a
+// message saying what to change when the segment has too few samples, the kept window is empty
+// (settle_s too long for the segment), or the cutoff is not below the Nyquist frequency.
+StaticValue extract_static(std::span<const double> t, std::span<const double> x, double t_start_s,
+                           double t_end_s, const StaticExtractionSettings& settings);
+
+// Estimated sample rate from the median of the positive intervals of t (0 when < 2 samples).
+double median_sample_rate(std::span<const double> t);
+
+}  // namespace stend::processing

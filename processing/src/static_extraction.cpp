@@ -1,0 +1,94 @@
+// Static extraction of a segment's constant part. See stend/processing/static_extraction.hpp.
+#include "stend/processing/static_extraction.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <vector>
+
+#include "stend/processing/butterworth.hpp"
+
+namespace stend::processing {
+
+namespace {
+std::string num(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+}  // namespace
+
+double median_sample_rate(std::span<const double> t) {
+  std::vector<double> dt;
+  for (std::size_t i = 1; i < t.size(); ++i)
+    if (t[i] > t[i - 1]) dt.push_back(t[i] - t[i - 1]);
+  if (dt.empty()) return 0.0;
+  const auto mid = dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2);
+  std::nth_element(dt.begin(), mid, dt.end());
+  return 1.0 / *mid;
+}
+
+StaticValue extract_static(std::span<const double> t, std::span<const double> x, double t_start_s,
+                           double t_end_s, const StaticExtractionSettings& settings) {
+  if (t.size() != x.size())
+    throw std::invalid_argument("extract_static: time and value arrays differ in length");
+  if (!(t_end_s > t_start_s))
+    throw std::invalid_argument("extract_static: segment [" + num(t_start_s) + ", " +
+                                num(t_end_s) + "] s is empty");
+  if (!(settings.settle_s >= 0.0))
+    throw std::invalid_argument("extract_static: settle_s must be >= 0");
+  const auto lo = std::lower_bound(t.begin(), t.end(), t_start_s);
+  const auto hi = std::upper_bound(t.begin(), t.end(), t_end_s);
+  const std::size_t i0 = static_cast<std::size_t>(lo - t.begin());
+  const std::size_t i1 = static_cast<std::size_t>(hi - t.begin());
+  StaticValue out;
+  out.n_segment = i1 > i0 ? i1 - i0 : 0;
+  const std::string where = "segment [" + num(t_start_s) + ", " + num(t_end_s) + "] s";
+  if (out.n_segment < 8)
+    throw std::invalid_argument(where + " holds " + std::to_string(out.n_segment) +
+                                " samples; static extraction needs at least 8");
+  const std::span<const double> ts = t.subspan(i0, out.n_segment);
+  const std::span<const double> xs = x.subspan(i0, out.n_segment);
+  out.sample_rate_hz = median_sample_rate(ts);
+  SosFilter f;
+  try {
+    f = butterworth_lowpass(settings.filter_order, settings.cutoff_hz, out.sample_rate_hz);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(where + " (sample rate " + num(out.sample_rate_hz) +
+                                " Hz): " + e.what() + "; lower cutoff_hz");
+  }
+  const std::vector<double> y =
+      settings.zero_phase ? filtfilt(f, xs) : filter(f, xs, InitialState::kSteadyState);
+
+  const double keep_lo = t_start_s + settings.settle_s, keep_hi = t_end_s - settings.settle_s;
+  double sum = 0.0, raw_sum = 0.0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < ts.size(); ++i) {
+    if (ts[i] < keep_lo || ts[i] > keep_hi) continue;
+    if (n == 0) out.t_first_s = ts[i];
+    out.t_last_s = ts[i];
+    sum += y[i];
+    raw_sum += xs[i];
+    ++n;
+  }
+  if (n < 2)
+    throw std::invalid_argument(where + ": discarding settle_s = " + num(settings.settle_s) +
+                                " s at each end leaves " + std::to_string(n) +
+                                " samples; shorten settle_s or lengthen the segment");
+  out.n_used = n;
+  out.mean = sum / static_cast<double>(n);
+  out.raw_mean = raw_sum / static_cast<double>(n);
+  double ss = 0.0, raw_ss = 0.0;
+  for (std::size_t i = 0; i < ts.size(); ++i) {
+    if (ts[i] < keep_lo || ts[i] > keep_hi) continue;
+    ss += (y[i] - out.mean) * (y[i] - out.mean);
+    raw_ss += (xs[i] - out.raw_mean) * (xs[i] - out.raw_mean);
+  }
+  out.filtered_std = std::sqrt(ss / static_cast<double>(n - 1));
+  out.raw_std = std::sqrt(raw_ss / static_cast<double>(n - 1));
+  out.white_std_error = out.raw_std / std::sqrt(static_cast<double>(n));
+  return out;
+}
+
+}  // namespace stend::processing

@@ -1,0 +1,76 @@
+// Simulated one-axis turntable in the role of the paper's iXblue EVO-10-L: a rotation axis tilted
+// beforehand by h (fixed configuration), turned by δ under a trapezoidal speed profile.
+//
+// Frames: base = the bench (or the fixture below), z up. Top = the table plate:
+//   R_top_from_base = A(δ_true) · Rx(h),   A(δ) = Mᵀ·Ry(δ)·M  (= Ry(δ) without misalignment)
+// which is the paper's Table 1 (stend::physics::paper_table(h, δ)). With h = 0 the specific force
+// of gravity on the plate is g·[−sin δ, 0, cos δ]. The plate turns about its own y axis (n = Mᵀ·e_y
+// when the axis is misaligned): ω_top = δ̇·n. See README.md.
+#pragma once
+
+#include <stend/sdk.hpp>
+#include <stend/sim/motion_profile.hpp>
+
+#include <Eigen/Core>
+#include <cstdint>
+
+namespace stend::sim {
+
+struct OneAxisTableConfig {
+  double axis_tilt_deg = 0.0;  // the paper's h, set beforehand
+  double min_deg = -360.0, max_deg = 360.0;
+  double max_rate_dps = 500.0, max_accel_dps2 = 200.0;
+  double initial_deg = 0.0;
+  Eigen::Vector3d lever_arm_m = Eigen::Vector3d::Zero();  // mounting point, top frame
+  double settle_tolerance_deg = 0.01;
+  double settle_rate_tolerance_dps = 0.01;
+  double settle_time_s = 0.5;
+  double encoder_resolution_deg = 1e-4;
+  double encoder_noise_deg = 0.0;
+  // Unmodelled imperfections (for gap diagnosis): true angle = encoder angle + angle_offset_deg;
+  // the rotation axis is tilted from nominal by small rotations about the tilted frame's x and z.
+  double angle_offset_deg = 0.0;
+  double axis_misalignment_x_deg = 0.0;
+  double axis_misalignment_z_deg = 0.0;
+  std::int64_t seed = 0;
+
+  static OneAxisTableConfig from(const Params& p);
+  // The motion of the one axis "angle" (deg): limits, profile, settling, encoder — as
+  // SimOneAxisTable moves it and as emulators/bench_world serves it.
+  AxisConfig axis() const;
+};
+
+class SimOneAxisTable final : public Fixture {
+ public:
+  explicit SimOneAxisTable(const Params& p);
+  explicit SimOneAxisTable(const OneAxisTableConfig& c);
+
+  FixtureRole role() const override { return FixtureRole::kTable; }
+  std::vector<AxisSpec> axes() const override { return {axis_.spec()}; }
+  void command(std::size_t axis, CommandMode mode, double value) override;
+  void advance(double t_s) override;
+  double measured(std::size_t axis) const override;
+  double commanded(std::size_t axis) const override;
+  bool settled() const override { return axis_.settled(); }
+  Pose pose(double t_s) const override;
+  void telemetry(std::vector<std::pair<std::string, double>>& out) const override;
+  void safe_state() noexcept override;
+
+  const SimAxis& axis() const { return axis_; }
+  const OneAxisTableConfig& config() const { return c_; }
+
+ private:
+  void check_axis(std::size_t axis) const;
+
+  OneAxisTableConfig c_;
+  SimAxis axis_;
+  Eigen::Matrix3d Rh_ = Eigen::Matrix3d::Identity();  // Rx(h)
+  double ch_ = 1.0, sh_ = 0.0;                         // cos h, sin h
+  Eigen::Matrix3d M_ = Eigen::Matrix3d::Identity();   // axis misalignment
+  Eigen::Vector3d n_ = Eigen::Vector3d::UnitY();      // rotation axis in the top frame
+  bool misaligned_ = false;
+  double now_ = 0.0;
+  bool started_ = false;
+};
+
+}  // namespace stend::sim

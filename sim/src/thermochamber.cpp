@@ -1,0 +1,226 @@
+#include <stend/sim/thermochamber.hpp>
+
+#include <stend/sim/param_reader.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace stend::sim {
+
+namespace {
+constexpr std::uint64_t kFallbackSeed = 0xC4A3BE5ULL;
+constexpr double kRangeMargin_c = 0.5;  // setpoints must lie this far inside what the plant can hold
+
+std::string fmt(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.1f", v);
+  return b;
+}
+}  // namespace
+
+ThermochamberConfig ThermochamberConfig::from(const Params& p) {
+  ThermochamberConfig c;
+  ParamReader r(p, "sim_thermochamber");
+  c.control_period_s = r.number("control_period_s", c.control_period_s);
+  c.ambient_c = r.number("ambient_c", c.ambient_c);
+  c.initial_c = r.number("initial_c", c.initial_c);
+  c.heat_capacity_j_per_c = r.number("heat_capacity_j_per_c", c.heat_capacity_j_per_c);
+  c.conductance_w_per_c = r.number("conductance_w_per_c", c.conductance_w_per_c);
+  c.internal_load_w = r.number("internal_load_w", c.internal_load_w);
+  c.heater_power_w = r.number("heater_power_w", c.heater_power_w);
+  c.peltier_cooling_w = r.number("peltier_cooling_w", c.peltier_cooling_w);
+  c.die_lag_s = r.number("die_lag_s", c.die_lag_s);
+  c.self_heating_c = r.number("self_heating_c", c.self_heating_c);
+  c.sensor_noise_c = r.number("sensor_noise_c", c.sensor_noise_c);
+  c.min_c = r.number("min_c", c.min_c);
+  c.max_c = r.number("max_c", c.max_c);
+  c.settle_tolerance_c = r.number("settle_tolerance_c", c.settle_tolerance_c);
+  c.settle_time_s = r.number("settle_time_s", c.settle_time_s);
+  c.max_step_s = r.number("max_step_s", c.max_step_s);
+  c.seed = r.integer("seed", c.seed);
+  r.finish();
+  return c;
+}
+
+SimThermochamber::SimThermochamber(const Params& p) : SimThermochamber(ThermochamberConfig::from(p)) {}
+
+SimThermochamber::SimThermochamber(const ThermochamberConfig& c)
+    : c_(c), rng_(c.seed == 0 ? kFallbackSeed : static_cast<std::uint64_t>(c.seed)) {
+  auto require = [](bool ok, const std::string& what) {
+    if (!ok) throw std::invalid_argument("sim_thermochamber: " + what);
+  };
+  require(c.control_period_s > 0.0, "control_period_s must be > 0");
+  require(c.heat_capacity_j_per_c > 0.0 && c.conductance_w_per_c > 0.0,
+          "heat_capacity_j_per_c and conductance_w_per_c must be > 0");
+  require(c.heater_power_w >= 0.0 && c.peltier_cooling_w >= 0.0 && c.internal_load_w >= 0.0,
+          "heater, Peltier and internal powers must be >= 0");
+  require(c.die_lag_s >= 0.0, "die_lag_s must be >= 0");
+  require(c.sensor_noise_c >= 0.0, "sensor_noise_c must be >= 0");
+  require(c.min_c < c.max_c, "min_c must be < max_c");
+  require(c.settle_tolerance_c > 0.0 && c.settle_time_s >= 0.0, "settle tolerance must be > 0, time >= 0");
+  require(c.max_step_s > 0.0 && c.max_step_s <= 0.1, "max_step_s must be in (0, 0.1] s");
+  const AxisSpec a = axes()[0];
+  require(a.min < a.max, "the plant cannot hold any setpoint within [min_c, max_c]: it holds " +
+                             fmt(coldest_c()) + " … " + fmt(hottest_c()) +
+                             " degC (change peltier_cooling_w, heater_power_w, internal_load_w or ambient_c)");
+  air_ = c.initial_c;
+  die_ = c.initial_c + c.self_heating_c;
+  measured_ = std::round(air_ * 16.0) / 16.0;
+  knots_.reserve(64);
+  knots_.push_back({0.0, air_, die_});
+}
+
+double SimThermochamber::equilibrium_c(int heater_pwm, int peltier_pwm) const {
+  return plant_equilibrium_c(c_, heater_pwm, peltier_pwm);
+}
+
+std::vector<AxisSpec> SimThermochamber::axes() const {
+  AxisSpec a;
+  a.name = "temperature";
+  a.unit = "degC";
+  // The configured limits, narrowed to what this plant can actually hold.
+  a.min = std::max(c_.min_c, coldest_c() + kRangeMargin_c);
+  a.max = std::min(c_.max_c, hottest_c() - kRangeMargin_c);
+  a.supports_rate = false;
+  return {a};
+}
+
+void SimThermochamber::command(std::size_t axis, CommandMode mode, double value) {
+  if (axis != 0)
+    throw std::invalid_argument("sim_thermochamber: no axis " + std::to_string(axis) +
+                                " (it has one axis, 'temperature')");
+  if (mode == CommandMode::kRate)
+    throw std::invalid_argument("sim_thermochamber: the temperature axis takes setpoints, not rates");
+  const AxisSpec a = axes()[0];
+  if (!(value >= a.min && value <= a.max)) {
+    std::string why = "sim_thermochamber: setpoint " + fmt(value) + " degC outside " + fmt(a.min) + " … " +
+                      fmt(a.max) + " degC";
+    if (value < c_.min_c || value > c_.max_c)
+      why += " (min_c/max_c)";
+    else
+      why += " (the plant holds " + fmt(coldest_c()) + " … " + fmt(hottest_c()) + " degC at ambient " +
+             fmt(c_.ambient_c) + " degC; raise peltier_cooling_w or heater_power_w)";
+    throw std::invalid_argument(why);
+  }
+  if (!active_) {  // the controller starts from a fresh state
+    integral_ = 0.0;
+    err_prev_ = 0.0;
+  }
+  active_ = true;
+  setpoint_ = value;
+  in_band_ = false;
+}
+
+double SimThermochamber::read_sensor() {
+  double t = air_;
+  if (c_.sensor_noise_c > 0.0) t += c_.sensor_noise_c * rng_.normal();
+  // DS18B20 12-bit: a signed count of 1/16 °C, −55 … +125 °C.
+  const double raw = std::clamp(std::round(t * 16.0), -55.0 * 16.0, 125.0 * 16.0);
+  return raw / 16.0;
+}
+
+void SimThermochamber::control(double t) {
+  measured_ = read_sensor();
+  if (!active_) {
+    heater_pwm_ = peltier_pwm_ = 0;
+    return;
+  }
+  // The published loop.
+  const double err = measured_ - setpoint_;
+  integral_ = std::clamp(integral_ + 0.05 * err, -20.0, 20.0);
+  double u = 100.0 * err + 24.0 * integral_ - 20.0 * (err - err_prev_);
+  err_prev_ = err;
+  u = std::clamp(u, -255.0, 255.0);
+  if (u > 0.0) {
+    peltier_pwm_ = static_cast<int>(std::min(u + 20.0, 255.0));
+    heater_pwm_ = 0;
+  } else {
+    peltier_pwm_ = 0;
+    heater_pwm_ = static_cast<int>(-u / 16.0);
+  }
+  const bool in = std::abs(measured_ - setpoint_) <= c_.settle_tolerance_c;
+  if (in && !in_band_) in_band_since_ = t;
+  in_band_ = in;
+}
+
+void SimThermochamber::integrate(double dt) { plant_step(c_, heater_pwm_, peltier_pwm_, dt, air_, die_); }
+
+void SimThermochamber::advance(double t_s) {
+  if (!started_) {
+    started_ = true;
+    now_ = t_s;
+    next_control_ = t_s;
+    knots_.assign(1, {t_s, air_, die_});
+  } else {
+    if (!(t_s > now_)) return;
+    knots_.clear();
+    knots_.push_back({now_, air_, die_});
+  }
+  for (;;) {
+    if (now_ >= next_control_ - 1e-9) {
+      control(now_);
+      next_control_ += c_.control_period_s;
+    }
+    if (now_ >= t_s) break;
+    const double end = std::min({t_s, next_control_, now_ + c_.max_step_s});
+    integrate(end - now_);
+    now_ = end;
+    knots_.push_back({now_, air_, die_});
+  }
+}
+
+bool SimThermochamber::thermal(double t_s, double& air_c, double& die_c) const {
+  const Knot& first = knots_.front();
+  const Knot& last = knots_.back();
+  if (t_s <= first.t) {
+    air_c = first.air;
+    die_c = first.die;
+    return true;
+  }
+  if (t_s >= last.t) {
+    air_c = last.air;
+    die_c = last.die;
+    return true;
+  }
+  const auto it = std::upper_bound(knots_.begin(), knots_.end(), t_s,
+                                   [](double t, const Knot& k) { return t < k.t; });
+  const Knot& b = *it;
+  const Knot& a = *(it - 1);
+  const double w = (t_s - a.t) / (b.t - a.t);
+  air_c = a.air + w * (b.air - a.air);
+  die_c = a.die + w * (b.die - a.die);
+  return true;
+}
+
+double SimThermochamber::measured(std::size_t axis) const {
+  if (axis != 0) throw std::invalid_argument("sim_thermochamber: no axis " + std::to_string(axis));
+  return measured_;
+}
+
+double SimThermochamber::commanded(std::size_t axis) const {
+  if (axis != 0) throw std::invalid_argument("sim_thermochamber: no axis " + std::to_string(axis));
+  return active_ ? setpoint_ : std::numeric_limits<double>::quiet_NaN();
+}
+
+bool SimThermochamber::settled() const {
+  return active_ && in_band_ && now_ - in_band_since_ >= c_.settle_time_s - 1e-9;
+}
+
+void SimThermochamber::telemetry(std::vector<std::pair<std::string, double>>& out) const {
+  out.emplace_back("air_measured_c", measured_);
+  out.emplace_back("heater_pwm", heater_pwm_);
+  out.emplace_back("peltier_pwm", peltier_pwm_);
+  out.emplace_back("pid_integral", integral_);
+}
+
+void SimThermochamber::safe_state() noexcept {
+  active_ = false;
+  heater_pwm_ = peltier_pwm_ = 0;
+  in_band_ = false;
+}
+
+}  // namespace stend::sim

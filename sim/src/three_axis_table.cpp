@@ -1,0 +1,137 @@
+#include <stend/sim/three_axis_table.hpp>
+
+#include <stend/physics/geometry.hpp>
+#include <stend/sim/param_reader.hpp>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace stend::sim {
+
+namespace {
+constexpr double kDeg = physics::kDegToRad;
+constexpr std::uint64_t kFallbackSeed = 0x3A7AB1EULL;
+const char* const kNames[3] = {"azimuth", "tilt", "rotation"};
+}  // namespace
+
+ThreeAxisTableConfig ThreeAxisTableConfig::from(const Params& p) {
+  ThreeAxisTableConfig c;
+  ParamReader r(p, "sim_three_axis_table");
+  c.min_deg = r.vec3("min_deg", c.min_deg);
+  c.max_deg = r.vec3("max_deg", c.max_deg);
+  c.max_rate_dps = r.vec3("max_rate_dps", c.max_rate_dps);
+  c.max_accel_dps2 = r.vec3("max_accel_dps2", c.max_accel_dps2);
+  c.initial_deg = r.vec3("initial_deg", c.initial_deg);
+  c.angle_offset_deg = r.vec3("angle_offset_deg", c.angle_offset_deg);
+  c.lever_arm_m = r.vec3("lever_arm_m", c.lever_arm_m);
+  c.settle_tolerance_deg = r.number("settle_tolerance_deg", c.settle_tolerance_deg);
+  c.settle_rate_tolerance_dps = r.number("settle_rate_tolerance_dps", c.settle_rate_tolerance_dps);
+  c.settle_time_s = r.number("settle_time_s", c.settle_time_s);
+  c.encoder_resolution_deg = r.number("encoder_resolution_deg", c.encoder_resolution_deg);
+  c.encoder_noise_deg = r.number("encoder_noise_deg", c.encoder_noise_deg);
+  c.seed = r.integer("seed", c.seed);
+  r.finish();
+  return c;
+}
+
+SimThreeAxisTable::SimThreeAxisTable(const Params& p) : SimThreeAxisTable(ThreeAxisTableConfig::from(p)) {}
+
+SimThreeAxisTable::SimThreeAxisTable(const ThreeAxisTableConfig& c) : c_(c) {
+  const std::uint64_t seed = c.seed == 0 ? kFallbackSeed : static_cast<std::uint64_t>(c.seed);
+  for (int i = 0; i < 3; ++i) {
+    AxisConfig a;
+    a.name = kNames[i];
+    a.unit = "deg";
+    a.min = c.min_deg[i];
+    a.max = c.max_deg[i];
+    a.max_rate = c.max_rate_dps[i];
+    a.max_accel = c.max_accel_dps2[i];
+    a.initial = c.initial_deg[i];
+    a.settle_tolerance = c.settle_tolerance_deg;
+    a.settle_rate_tolerance = c.settle_rate_tolerance_dps;
+    a.settle_time_s = c.settle_time_s;
+    a.encoder_resolution = c.encoder_resolution_deg;
+    a.encoder_noise = c.encoder_noise_deg;
+    try {
+      axes_[static_cast<std::size_t>(i)] = SimAxis(a, seed + static_cast<std::uint64_t>(i));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("sim_three_axis_table: ") + e.what());
+    }
+  }
+}
+
+std::vector<AxisSpec> SimThreeAxisTable::axes() const {
+  return {axes_[0].spec(), axes_[1].spec(), axes_[2].spec()};
+}
+
+const SimAxis& SimThreeAxisTable::checked(std::size_t axis) const {
+  if (axis >= 3)
+    throw std::invalid_argument("sim_three_axis_table: no axis " + std::to_string(axis) +
+                                " (axes: 0 azimuth, 1 tilt, 2 rotation)");
+  return axes_[axis];
+}
+
+void SimThreeAxisTable::command(std::size_t axis, CommandMode mode, double value) {
+  checked(axis);
+  axes_[axis].command(mode, value, now_);
+}
+
+void SimThreeAxisTable::advance(double t_s) {
+  if (!started_) {
+    started_ = true;
+    for (auto& a : axes_) a.start_at(t_s);
+  } else if (t_s < now_) {
+    return;
+  }
+  now_ = t_s;
+  for (auto& a : axes_) a.advance(t_s);
+}
+
+double SimThreeAxisTable::measured(std::size_t axis) const { return checked(axis).measured(); }
+double SimThreeAxisTable::commanded(std::size_t axis) const { return checked(axis).commanded(); }
+
+bool SimThreeAxisTable::settled() const {
+  return axes_[0].settled() && axes_[1].settled() && axes_[2].settled();
+}
+
+Pose SimThreeAxisTable::pose(double t_s) const {
+  const AxisState az = axes_[kAzimuth].at(t_s), h = axes_[kTilt].at(t_s), d = axes_[kRotation].at(t_s);
+  const Eigen::Matrix3d Rd = physics::Ry((d.position + c_.angle_offset_deg[2]) * kDeg);
+  const Eigen::Matrix3d Rh = physics::Rx((h.position + c_.angle_offset_deg[1]) * kDeg);
+  const Eigen::Matrix3d Rdh = Rd * Rh;
+  Pose p;
+  p.R_top_from_base = Rdh * physics::Rz((az.position + c_.angle_offset_deg[0]) * kDeg);
+  // ω = A·az' + B·h' + C·δ' with A = Rd·Rh·e_z, B = Rd·e_x, C = e_y (each axis's rate carried
+  // into the top frame by the rotations inside it).
+  const Eigen::Vector3d A = Rdh.col(2), B = Rd.col(0), C = Eigen::Vector3d::UnitY();
+  const double wa = az.velocity * kDeg, wh = h.velocity * kDeg, wd = d.velocity * kDeg;
+  const Eigen::Vector3d w = A * wa + B * wh + C * wd;
+  p.omega_top_radps = w;
+  if (c_.lever_arm_m.squaredNorm() > 0.0) {
+    // ω̇ = A·az'' + Ȧ·az' + B·h'' + Ḃ·h' + C·δ'', with Ṙ = −[ω_rel]×·R for each passive factor:
+    //   Ȧ = −δ'·e_y × A − Rd·(h'·e_x × Rh·e_z),   Ḃ = −δ'·e_y × B.
+    const Eigen::Vector3d wy(0.0, wd, 0.0);
+    const Eigen::Vector3d Adot = -wy.cross(A) - Rd * Eigen::Vector3d(wh, 0.0, 0.0).cross(Rh.col(2));
+    const Eigen::Vector3d Bdot = -wy.cross(B);
+    const Eigen::Vector3d alpha = A * (az.acceleration * kDeg) + Adot * wa + B * (h.acceleration * kDeg) +
+                                  Bdot * wh + C * (d.acceleration * kDeg);
+    const Eigen::Vector3d& r = c_.lever_arm_m;
+    p.accel_top_mps2 = w.cross(w.cross(r)) + alpha.cross(r);
+  }
+  return p;
+}
+
+void SimThreeAxisTable::telemetry(std::vector<std::pair<std::string, double>>& out) const {
+  for (std::size_t i = 0; i < 3; ++i) {
+    const AxisState s = axes_[i].at(now_);
+    const double truth = axes_[i].continuous() ? axes_[i].wrap(s.position) : s.position;
+    out.emplace_back(std::string(kNames[i]) + "_true_deg", truth + c_.angle_offset_deg[static_cast<int>(i)]);
+  }
+}
+
+void SimThreeAxisTable::safe_state() noexcept {
+  for (auto& a : axes_) a.safe_state(now_);
+}
+
+}  // namespace stend::sim

@@ -1,0 +1,128 @@
+#include <stend/sim/vibration.hpp>
+
+#include <stend/sim/param_reader.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+namespace stend::sim {
+
+namespace {
+constexpr double kTwoPi = 6.283185307179586476925;
+std::string num(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
+}  // namespace
+
+VibrationConfig VibrationConfig::from(const Params& p) {
+  VibrationConfig c;
+  ParamReader r(p, "sim_vibration");
+  c.direction = r.vec3("direction", c.direction);
+  c.max_amplitude_g = r.number("max_amplitude_g", c.max_amplitude_g);
+  c.min_frequency_hz = r.number("min_frequency_hz", c.min_frequency_hz);
+  c.max_frequency_hz = r.number("max_frequency_hz", c.max_frequency_hz);
+  c.initial_frequency_hz = r.number("initial_frequency_hz", c.initial_frequency_hz);
+  r.finish();
+  return c;
+}
+
+SimVibration::SimVibration(const Params& p) : SimVibration(VibrationConfig::from(p)) {}
+
+SimVibration::SimVibration(const VibrationConfig& c) : c_(c) {
+  auto require = [](bool ok, const std::string& what) {
+    if (!ok) throw std::invalid_argument("sim_vibration: " + what);
+  };
+  require(c.direction.allFinite() && c.direction.norm() > 1e-12, "direction must be a non-zero vector");
+  require(c.max_amplitude_g > 0.0, "max_amplitude_g must be > 0");
+  require(c.min_frequency_hz > 0.0 && c.min_frequency_hz < c.max_frequency_hz,
+          "need 0 < min_frequency_hz < max_frequency_hz");
+  require(c.initial_frequency_hz >= c.min_frequency_hz && c.initial_frequency_hz <= c.max_frequency_hz,
+          "initial_frequency_hz outside [min_frequency_hz, max_frequency_hz]");
+  dir_ = c.direction.normalized();
+  cur_.frequency_hz = c.initial_frequency_hz;
+  prev_ = cur_;
+}
+
+std::vector<AxisSpec> SimVibration::axes() const {
+  AxisSpec a;
+  a.name = "amplitude";
+  a.unit = "g";
+  a.min = 0.0;
+  a.max = c_.max_amplitude_g;
+  AxisSpec f;
+  f.name = "frequency";
+  f.unit = "Hz";
+  f.min = c_.min_frequency_hz;
+  f.max = c_.max_frequency_hz;
+  return {a, f};
+}
+
+double SimVibration::phase(double t_s) const {
+  const Segment& s = segment_at(t_s);
+  return s.phase0 + kTwoPi * s.frequency_hz * (t_s - s.t0);
+}
+
+void SimVibration::install(const Segment& s) {
+  if (cur_.t0 < s.t0) prev_ = cur_;  // keep the history for times before the command
+  cur_ = s;
+}
+
+void SimVibration::command(std::size_t axis, CommandMode mode, double value) {
+  if (axis > kFrequency)
+    throw std::invalid_argument("sim_vibration: no axis " + std::to_string(axis) + " (0 amplitude, 1 frequency)");
+  if (mode == CommandMode::kRate)
+    throw std::invalid_argument("sim_vibration: amplitude and frequency take values, not rates");
+  const AxisSpec a = axes()[axis];
+  if (!(value >= a.min && value <= a.max))
+    throw std::invalid_argument("sim_vibration: " + a.name + " " + num(value) + " " + a.unit + " outside [" +
+                                num(a.min) + ", " + num(a.max) + "] " + a.unit);
+  Segment s = cur_;
+  s.phase0 = std::fmod(phase(now_), kTwoPi);
+  s.t0 = now_;
+  if (axis == kAmplitude)
+    s.amplitude_g = value;
+  else
+    s.frequency_hz = value;
+  install(s);
+}
+
+void SimVibration::advance(double t_s) {
+  if (!started_) {  // commands before the first advance take effect there
+    started_ = true;
+    cur_.t0 = prev_.t0 = t_s;
+  } else if (t_s < now_) {
+    return;
+  }
+  now_ = t_s;
+}
+
+double SimVibration::measured(std::size_t axis) const { return commanded(axis); }
+
+double SimVibration::commanded(std::size_t axis) const {
+  if (axis > kFrequency) throw std::invalid_argument("sim_vibration: no axis " + std::to_string(axis));
+  return axis == kAmplitude ? cur_.amplitude_g : cur_.frequency_hz;
+}
+
+Pose SimVibration::pose(double t_s) const {
+  const Segment& s = segment_at(t_s);
+  Pose p;
+  if (s.amplitude_g != 0.0) {
+    const double ph = s.phase0 + kTwoPi * s.frequency_hz * (t_s - s.t0);
+    p.accel_top_mps2 = (s.amplitude_g * kG0 * std::sin(ph)) * dir_;
+  }
+  return p;
+}
+
+void SimVibration::safe_state() noexcept {
+  Segment s = cur_;
+  s.phase0 = std::fmod(phase(now_), kTwoPi);
+  s.t0 = now_;
+  s.amplitude_g = 0.0;
+  install(s);
+}
+
+}  // namespace stend::sim
