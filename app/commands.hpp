@@ -27,16 +27,12 @@ struct Command {
 //   format = run | imucal | mpu6050_multipos | mat | imutk ("ACC_FILE,GYRO_FILE") | auto.
 stend::Recording open_recording(const std::string& input, std::string format);
 
-// Which estimator a model file is for: `allan` (top-level `allan:` mapping), `temp_poly`
-// (`selection:` / `max_order:`), `ceres_nonlinear` (top-level `ceres_nonlinear:` mapping),
-// otherwise `batch_lsq`.
-std::string estimator_of(const YAML::Node& model_root);
-
-// Fits `model_file` to `rec`, prints the report to stdout and writes the results JSON (+ a .txt
-// copy) to `json_out`, or to out_dir/<fit|temp_poly|allan|ceres>.json when empty. Returns false
-// when the fit failed (it says why, with no numbers).
+// Fits `model_file` to `rec` with the estimator named `estimator` ("auto": the one the model file
+// is written for, through the estimator registry), prints the report to stdout and writes the
+// results JSON (+ a .txt copy) to `json_out`, or to out_dir/<the estimator's results file> when
+// empty. Returns false when the fit failed (it says why, with no numbers).
 bool fit_recording(const stend::Recording& rec, const std::string& model_file, const std::filesystem::path& out_dir,
-                   const std::string& json_out, std::string estimator = "auto");
+                   const std::string& json_out, const std::string& estimator = "auto");
 
 // ---- subcommands in their own files ------------------------------------------------------------
 void add_gap_command(CLI::App& app, std::vector<Command>& out);      // cmd_gap.cpp

@@ -68,3 +68,12 @@ function(stend_add_gtest name)
     STEND_BINARY_DIR="${PROJECT_BINARY_DIR}")
   gtest_discover_tests(${name} TEST_PREFIX "${name}." DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 600)
 endfunction()
+
+# stend_add_estimator(NAME LIBRARY lib) — lists the estimator of folder estimators/NAME in the
+# built-in registry: its library defines stend::NAME::estimator_entry() (registry.hpp). The
+# registry code is generated from these calls in estimators/CMakeLists.txt.
+function(stend_add_estimator name)
+  cmake_parse_arguments(ARG "" "LIBRARY" "" ${ARGN})
+  set_property(GLOBAL APPEND PROPERTY STEND_ESTIMATORS ${name})
+  set_property(GLOBAL APPEND PROPERTY STEND_ESTIMATOR_LIBRARIES ${ARG_LIBRARY})
+endfunction()

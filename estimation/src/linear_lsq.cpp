@@ -465,20 +465,6 @@ LsqResult solve_lsq(const LsqProblem& pr, const LsqOptions& opt) {
   return r;
 }
 
-std::ostream& operator<<(std::ostream& os, const ParameterEstimate& e) {
-  char buf[512];
-  if (e.identifiable) {
-    std::snprintf(buf, sizeof buf, "%-18s %14.7g %-14s %11.3g  [%.7g, %.7g]  yes", e.name.c_str(),
-                  e.value, e.unit.c_str(), e.std_error, e.lower, e.upper);
-    os << buf;
-  } else {
-    std::snprintf(buf, sizeof buf, "%-18s %14s %-14s %11s  %-26s  NO: ", e.name.c_str(),
-                  "not estimated", e.unit.c_str(), "-", "-");
-    os << buf << e.reason;
-  }
-  return os;
-}
-
 std::ostream& operator<<(std::ostream& os, const Combination& c) {
   return os << c.text << " = " << num(c.value, 7) << " +/- " << num(c.std_error, 3)
             << " [" << num(c.lower, 7) << ", " << num(c.upper, 7) << "]";
@@ -491,11 +477,7 @@ std::ostream& operator<<(std::ostream& os, const LsqResult& r) {
      << ", dof = " << r.dof << ", sigma = " << num(std::sqrt(r.sigma2), 4)
      << ", cond = " << num(r.condition_number, 4)
      << " (identified subspace " << num(r.condition_number_identified, 4) << ")\n";
-  char head[256];
-  std::snprintf(head, sizeof head, "%-18s %14s %-14s %11s  %-26s  %s\n", "parameter", "value",
-                "unit", "std error", (num(100 * r.confidence, 6) + "% interval").c_str(),
-                "identifiable");
-  os << head;
+  print_parameter_header(os, r.confidence);
   for (const auto& e : r.parameters) os << e << "\n";
   for (const auto& a : r.aliases) {
     os << "aliased group (" << a.null_dimension << " unobservable direction"
@@ -513,12 +495,7 @@ bool approx_equal(const LsqResult& a, const LsqResult& b, double rel_tol, double
   if (!a.ok()) return a.message == b.message;
   if (a.rank != b.rank || a.observations != b.observations || a.dof != b.dof) return false;
   for (std::size_t i = 0; i < a.parameters.size(); ++i) {
-    const auto &x = a.parameters[i], &y = b.parameters[i];
-    if (x.name != y.name || x.unit != y.unit || x.identifiable != y.identifiable) return false;
-    if (!close(x.value, y.value, rel_tol, abs_tol) ||
-        !close(x.std_error, y.std_error, rel_tol, abs_tol) ||
-        !close(x.lower, y.lower, rel_tol, abs_tol) || !close(x.upper, y.upper, rel_tol, abs_tol))
-      return false;
+    if (!a.parameters[i].equals(b.parameters[i], rel_tol, abs_tol)) return false;
   }
   if (a.aliases.size() != b.aliases.size()) return false;
   for (std::size_t g = 0; g < a.aliases.size(); ++g) {

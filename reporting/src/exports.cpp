@@ -2,6 +2,7 @@
 #include "stend/reporting/exports.hpp"
 
 #include "fitted_model.hpp"
+#include "stend/estimation/summary.hpp"
 #include "stend/reporting/results.hpp"
 
 #include <fmt/format.h>
@@ -39,10 +40,7 @@ std::optional<json> load_json(const fs::path& f) {
   }
 }
 
-bool doc_ok(const json& d) {
-  if (d.contains("status") && d["status"].is_string()) return d["status"] == "ok";
-  return d.value("ok", false);
-}
+bool doc_ok(const json& d) { return estimation::status_of(d) == estimation::FitStatus::kOk; }
 
 std::string instrument_of(const json& fit) { return jstr(fit.value("model", json::object()), "instrument"); }
 
@@ -80,7 +78,7 @@ InstrumentModels models_for(const fs::path& run, const std::string& instrument, 
         im.calib_source[static_cast<std::size_t>(k)] = file;
       }
   }
-  if (auto tp = load_json(run / "temp_poly.json"); tp && tp->value("ok", false) &&
+  if (auto tp = load_json(run / "temp_poly.json"); tp && doc_ok(*tp) &&
                                                   jstr(tp->value("options", json::object()), "instrument") == instrument) {
     im.reference_c = jnum(*tp, "reference_c");
     const json vr = tp->value("valid_range_c", json::array());

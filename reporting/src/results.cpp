@@ -1,6 +1,7 @@
 // Run-folder results: identity, fingerprint and parameters of every estimator (see results.hpp).
 #include "stend/reporting/results.hpp"
 
+#include "stend/estimators/builtin.hpp"
 #include "stend/reporting/fingerprint.hpp"
 
 #include <fmt/format.h>
@@ -35,33 +36,6 @@ std::string read_text(const fs::path& p) {
   return s.str();
 }
 
-// "stend.fit/1"-shaped parameters (batch_lsq, ceres_nonlinear and each temp_poly axis).
-void fit_parameters(const json& fit, const std::string& estimator, std::vector<ParameterResult>& out) {
-  if (!fit.is_object() || !fit.contains("parameters") || !fit["parameters"].is_array()) return;
-  double confidence = NAN;
-  if (fit.contains("solution") && fit["solution"].is_object()) confidence = num_or_nan(fit["solution"], "confidence");
-  if (!std::isfinite(confidence)) confidence = num_or_nan(fit, "confidence");
-  for (const auto& p : fit["parameters"]) {
-    ParameterResult r;
-    r.estimator = estimator;
-    r.name = str_or(p, "name");
-    r.unit = str_or(p, "unit");
-    r.identifiable = p.value("identifiable", false);
-    r.value = num_or_nan(p, "value");
-    r.std_error = num_or_nan(p, "std_error");
-    if (p.contains("interval") && p["interval"].is_array() && p["interval"].size() == 2 &&
-        p["interval"][0].is_number() && p["interval"][1].is_number()) {
-      r.lo = p["interval"][0].get<double>();
-      r.hi = p["interval"][1].get<double>();
-    }
-    r.confidence = confidence;
-    r.reason = str_or(p, "reason");
-    if (!r.identifiable && r.reason.empty()) r.reason = "not identifiable";
-    if (!r.identifiable) r.value = r.std_error = r.lo = r.hi = NAN;  // never a default
-    out.push_back(std::move(r));
-  }
-}
-
 }  // namespace
 
 const ParameterResult* RunResults::find(const std::string& estimator, const std::string& name) const {
@@ -71,63 +45,26 @@ const ParameterResult* RunResults::find(const std::string& estimator, const std:
 }
 
 std::vector<ParameterResult> parameters_of(const json& doc, const std::string& file_stem, EstimatorUse* use) {
-  std::vector<ParameterResult> out;
+  const estimation::FitSummary summary = estimators::builtin().summarize(doc, file_stem + ".json");
   EstimatorUse u;
-  const std::string schema = str_or(doc, "schema");
-  if (doc.contains("estimator") && doc["estimator"].is_string()) u.name = doc["estimator"].get<std::string>();
-  if (doc.contains("estimator") && doc["estimator"].is_object()) {
-    u.name = str_or(doc["estimator"], "name");
-    u.version = str_or(doc["estimator"], "version");
-  }
-  if (schema.rfind("stend.temp_poly/", 0) == 0) {
-    if (u.name.empty()) u.name = "temp_poly";
-    const bool ok = doc.value("ok", false);
-    u.status = ok ? "ok" : "failed";
-    u.message = str_or(doc, "message");
-    if (ok && doc.contains("axes"))
-      for (const auto& ax : doc["axes"])
-        if (ax.value("ok", false) && ax.contains("fit")) fit_parameters(ax["fit"], u.name, out);
-  } else if (doc.contains("channels") && doc.contains("kalibr")) {  // allan.json
-    if (u.name.empty()) u.name = "allan";
-    u.status = "ok";
-    for (const auto& ch : doc["channels"]) {
-      const std::string c = str_or(ch, "channel");
-      if (!ch.contains("model") || !ch["model"].is_object()) continue;
-      const json& m = ch["model"];
-      if (!m.value("ok", false)) {
-        u.message += fmt::format("{}: {}; ", c, str_or(m, "message"));
-        continue;
-      }
-      for (const char* sym : {"N", "K", "B"}) {
-        if (!m.contains(sym)) continue;
-        const json& k = m[sym];
-        ParameterResult r;
-        r.estimator = u.name;
-        r.name = std::string(sym) + "_" + c;
-        r.unit = str_or(k, "unit");
-        r.identifiable = k.value("identified", false);
-        r.confidence = 0.95;
-        if (r.identifiable) {
-          r.value = num_or_nan(k, "value");
-          r.std_error = num_or_nan(k, "sigma");
-          r.lo = r.value - 1.959963984540054 * r.std_error;  // normal, the fit's 1-σ (approximate)
-          r.hi = r.value + 1.959963984540054 * r.std_error;
-        } else {
-          const double ub = num_or_nan(k, "upper_bound");
-          r.reason = std::isfinite(ub) ? fmt::format("not identified; upper bound {:.4g} {}", ub, r.unit)
-                                       : "not identified";
-        }
-        out.push_back(std::move(r));
-      }
-    }
-  } else {  // stend.fit/1 (batch_lsq) or a ceres document with the same parameter shape
-    if (u.name.empty()) u.name = file_stem == "ceres" ? "ceres_nonlinear" : file_stem == "fit" ? "batch_lsq" : file_stem;
-    const std::string status = doc.contains("status") && doc["status"].is_string() ? doc["status"].get<std::string>()
-                               : doc.value("ok", true)                              ? "ok"
-                                                                                    : "failed";
-    u.status = status == "ok" ? "ok" : "failed";
-    u.message = str_or(doc, "message");
-    if (u.status == "ok") fit_parameters(doc, u.name, out);
+  u.name = summary.estimator.empty() ? file_stem : summary.estimator;
+  u.version = summary.version;
+  u.status = estimation::to_string(summary.status);
+  u.message = summary.message;
+  std::vector<ParameterResult> out;
+  for (const auto& p : summary.parameters) {
+    ParameterResult r;
+    r.estimator = u.name;
+    r.name = p.name;
+    r.unit = p.unit;
+    r.identifiable = p.identifiable;
+    r.value = p.value;
+    r.std_error = p.std_error;
+    r.lo = p.lower;
+    r.hi = p.upper;
+    r.confidence = summary.confidence;
+    r.reason = p.reason;
+    out.push_back(std::move(r));
   }
   if (use) *use = u;
   return out;
@@ -164,8 +101,10 @@ RunResults load_run_results(const fs::path& run_dir) {
   } else {
     r.notes.push_back("no experiment.yaml: no procedure fingerprint");
   }
-  for (const char* stem : {"fit", "ceres", "temp_poly", "allan"}) {
-    const fs::path f = r.dir / (std::string(stem) + ".json");
+  const estimation::Registry registry = estimators::builtin();
+  for (const auto& entry : registry.entries()) {
+    const fs::path f = r.dir / entry.results_file;
+    const std::string stem = f.stem().string();
     if (!fs::exists(f)) continue;
     try {
       EstimatorUse use;

@@ -2,6 +2,7 @@
 #include "stend/reporting/run_report.hpp"
 
 #include "stend/allan/allan.hpp"
+#include "stend/estimation/summary.hpp"
 #include "stend/model/terms.hpp"
 #include "stend/reporting/results.hpp"
 #include "stend/reporting/svg_plot.hpp"
@@ -208,7 +209,7 @@ std::string fit_section(const json& fit, const std::string& file) {
                        : fit.value("estimator", json::object());
   o += fmt::format("<h2>Error-model fit — {} {} <span class=\"file\">({})</span></h2>\n", escape(str(est, "name")),
                    escape(str(est, "version")), escape(file));
-  if (str(fit, "status") == "failed" || fit.value("ok", true) == false) {
+  if (estimation::status_of(fit) != estimation::FitStatus::kOk) {
     return o + "<p class=\"bad\">FIT FAILED: " + escape(str(fit, "message")) + " — no numbers are reported.</p>\n";
   }
   const json sol = fit.value("solution", json::object());
@@ -231,7 +232,7 @@ std::string fit_section(const json& fit, const std::string& file) {
 
 std::string temp_section(const json& tp) {
   std::string o = "<h2>Temperature model — temp_poly <span class=\"file\">(temp_poly.json)</span></h2>\n";
-  if (!tp.value("ok", false))
+  if (estimation::status_of(tp) != estimation::FitStatus::kOk)
     return o + "<p class=\"bad\">TEMPERATURE FIT REFUSED OR FAILED: " + escape(str(tp, "message")) +
            " — no numbers are reported.</p>\n";
   const double vmin = at(tp.value("valid_range_c", json::array()), 0), vmax = at(tp.value("valid_range_c", json::array()), 1);

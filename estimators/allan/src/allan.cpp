@@ -842,7 +842,10 @@ void write_json(std::ostream& os, const ChannelResult& result, int indent) {
 void write_json(std::ostream& os, const AllanReport& r, int indent) {
   json ch = json::array();
   for (const auto& c : r.channels) ch.push_back(to_json(c));
-  json j = {{"source", r.source},
+  json j = {{"schema", kSchema},
+            {"estimator", {{"name", kEstimatorName}, {"version", kEstimatorVersion}}},
+            {"status", "ok"},
+            {"source", r.source},
             {"rate_hz", r.rate_hz},
             {"samples", r.samples},
             {"t_range_s", json::array({num(r.t_begin_s), num(r.t_end_s)})},

@@ -193,7 +193,7 @@ ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& o) {
   std::string text = describe_options(o);
   nlohmann::json j;
   j["schema"] = kResultsSchema;
-  j["estimator"] = "ceres_nonlinear";
+  j["estimator"] = {{"name", kEstimatorName}, {"version", kEstimatorVersion}};
   j["options"] = nlohmann::json::parse(options_json(o));
   std::vector<std::string> failures;
   if (o.accelerometer != "none") {
@@ -230,7 +230,7 @@ ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& o) {
     for (const auto& p : f.gyro.parameters) add("gyro_", p);
   f.ok = failures.empty();
   for (const auto& s : failures) f.message += (f.message.empty() ? "" : "; ") + s;
-  j["ok"] = f.ok;
+  j["status"] = f.ok ? "ok" : "failed";
   j["message"] = f.message;
   text += f.ok ? "\nceres_nonlinear: ok\n" : "\nceres_nonlinear: FAILED — " + f.message + "\n";
   f.text = text;

@@ -94,7 +94,7 @@ std::string to_json(const TempPolyResult& r, int indent) {
   json j;
   j["schema"] = kSchema;
   j["estimator"] = {{"name", kEstimatorName}, {"version", kEstimatorVersion}};
-  j["ok"] = r.ok;
+  j["status"] = r.ok ? "ok" : "failed";
   j["message"] = r.message;
   j["recording"] = {{"dir", r.recording_dir}, {"experiment", r.experiment_name}};
   json axes_opt = json::array();

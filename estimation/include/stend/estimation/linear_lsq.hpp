@@ -23,6 +23,8 @@
 // left for the noise (k = rank without known variance), or on non-finite input.
 #pragma once
 
+#include <stend/estimation/summary.hpp>
+
 #include <Eigen/Core>
 #include <iosfwd>
 #include <string>
@@ -60,14 +62,6 @@ struct LsqProblem {
 struct Combination {
   std::vector<std::pair<int, double>> coefficients;  // (parameter index, coefficient), nonzero only
   std::string text;                                  // e.g. "bias_z + 10·bias_tc1_z"
-  double value = 0.0, std_error = 0.0, lower = 0.0, upper = 0.0;
-};
-
-struct ParameterEstimate {
-  std::string name, unit;
-  bool identifiable = false;
-  std::string reason;  // why not identifiable ("" when identifiable)
-  // NaN when not identifiable: never a default presented as a result.
   double value = 0.0, std_error = 0.0, lower = 0.0, upper = 0.0;
 };
 
@@ -129,7 +123,6 @@ LsqResult solve_lsq(const LsqProblem& problem, const LsqOptions& options = {});
 // std error, interval, identifiable + reason), aliased groups with their identified
 // combinations, warnings.
 std::ostream& operator<<(std::ostream& os, const LsqResult& r);
-std::ostream& operator<<(std::ostream& os, const ParameterEstimate& p);
 std::ostream& operator<<(std::ostream& os, const Combination& c);
 
 // Same status, rank, identifiability pattern and names; values, standard errors and bounds equal

@@ -35,6 +35,9 @@ class Node;
 
 namespace stend::allan {
 
+inline constexpr const char* kEstimatorName = "allan";
+inline constexpr const char* kEstimatorVersion = "0.1.0";
+inline constexpr const char* kSchema = "stend.allan/1";
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // √(2 ln 2 / π): the flicker (bias-instability) floor of the ADEV is 0.664·B.
 inline constexpr double kFlickerFloor = 0.66428200410814707;

@@ -20,6 +20,8 @@
 namespace stend::ceres_nonlinear {
 
 inline constexpr const char* kResultsSchema = "stend.ceres_nonlinear.results/1";
+inline constexpr const char* kEstimatorName = "ceres_nonlinear";
+inline constexpr const char* kEstimatorVersion = "0.2.0";
 
 struct ModelFileOptions {
   std::string accelerometer = "unknown_orientations";

@@ -1,0 +1,69 @@
+// The estimator registry: the one way the program, the diagnosis and the reports reach an
+// estimator, built in or plugin alike.
+//
+// Each estimator folder (estimators/<name>/) defines `stend::<name>::estimator_entry()` and lists
+// itself with stend_add_estimator() in its CMakeLists.txt; the build generates the registry of
+// built-in estimators from those calls (stend/estimators/builtin.hpp, library stend_estimators),
+// so adding an estimator needs no edit anywhere else. Estimator plugins found on the plugin
+// search path join the registry under their own name.
+//
+// A model file is matched to its estimator by the entries' `claims` (e.g. a top-level `allan:`
+// mapping), or named with `--estimator NAME`.
+#pragma once
+
+#include <stend/estimation/summary.hpp>
+#include <stend/plugin_host.hpp>
+#include <stend/sdk.hpp>
+
+#include <nlohmann/json_fwd.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace stend::estimation {
+
+struct EstimatorEntry {
+  std::string name;          // as in `stend fit --estimator NAME` and the results' "estimator"
+  std::string version;
+  std::string description;   // one line
+  std::string results_file;  // default results file in the run folder, e.g. "fit.json"
+  // Whether a model file (its parsed YAML root) is written for this estimator. Null: reached by
+  // name only. `fallback`: claims what no other entry claims (batch_lsq's plain model files).
+  std::function<bool(const YAML::Node& model_root)> claims;
+  bool fallback = false;
+  // A new estimator object (the same class its plugin exports).
+  std::function<PluginPtr<Estimator>()> create;
+  // Reads this estimator's results document back as the typed summary (reports, database,
+  // compare). Null: the document has the summary fields (estimation::summary_from_json).
+  std::function<FitSummary(const nlohmann::json& doc)> summarize;
+};
+
+class Registry {
+ public:
+  // Adds an entry; throws std::logic_error on a second entry of the same name.
+  void add(EstimatorEntry entry);
+  // Estimator plugins found by `host` whose names are not already registered; `host` must
+  // outlive the registry and every estimator created through it.
+  void add_plugins(const PluginHost& host);
+
+  const EstimatorEntry* find(const std::string& name) const;  // nullptr when absent
+  // The entry a model file is for: the one claiming it, else the fallback. Throws
+  // std::runtime_error naming the file when none or several claim it.
+  const EstimatorEntry& for_model(const YAML::Node& model_root, const std::string& model_file) const;
+  // The entry whose results a document is: its "estimator" name, else the one whose results
+  // file is `file_name`. nullptr when neither matches.
+  const EstimatorEntry* for_results(const nlohmann::json& doc, const std::string& file_name) const;
+  // The summary of a results document through its entry (summary_from_json without one).
+  FitSummary summarize(const nlohmann::json& doc, const std::string& file_name) const;
+
+  const std::vector<EstimatorEntry>& entries() const { return entries_; }
+  std::string names() const;  // "batch_lsq, temp_poly, …" for messages
+
+ private:
+  std::vector<EstimatorEntry> entries_;
+};
+
+}  // namespace stend::estimation

@@ -1,0 +1,77 @@
+// The typed result every estimator gives: a status, and each fitted parameter with its unit,
+// standard error, interval and whether the data identified it. Each estimator keeps its own
+// detailed result type and results document; this is the part the program, the reports, the
+// results database and `stend compare` read, whichever estimator wrote it.
+//
+// JSON (the fields every results document carries, read back by summary_from_json):
+//   "status": "ok" | "failed", "message": "…",
+//   "parameters": [{"name", "unit", "value", "std_error", "interval": [lo, hi],
+//                   "identifiable", "reason"}, …],   non-finite numbers are null
+//   "confidence": 0.95   (or "solution": {"confidence": …})
+#pragma once
+
+#include <nlohmann/json_fwd.hpp>
+
+#include <cmath>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace stend::estimation {
+
+enum class FitStatus {
+  kOk,      // the fit ran and its numbers are results
+  kFailed,  // the fit failed: `message` says why, and no number is a result
+};
+const char* to_string(FitStatus s);             // "ok" | "failed"
+FitStatus fit_status_from_string(const std::string& s);  // anything but "ok" is kFailed
+
+// One parameter of a fit (the linear solver's, every estimator's summary, the reports').
+struct ParameterEstimate {
+  std::string name;  // the vocabulary's name ("bias_z", "bias_tc1_x") or Allan "N_ax", "K_gz"
+  std::string unit;
+  bool identifiable = false;
+  std::string reason;  // why not identifiable (or an upper bound); "" when identified
+  // NaN when not identifiable: never a default presented as a result.
+  double value = NAN, std_error = NAN;  // std_error: 1 σ
+  double lower = NAN, upper = NAN;      // interval at the fit's confidence
+
+  // One table row: name, value, unit, std error, [lower, upper], "yes" or "NO: reason".
+  void print(std::ostream& os) const;
+  // Same name, unit and identifiability; numbers equal within |a − b| ≤ abs_tol +
+  // rel_tol·max(|a|, |b|) (NaN matches NaN).
+  bool equals(const ParameterEstimate& other, double rel_tol = 1e-9, double abs_tol = 0.0) const;
+};
+std::ostream& operator<<(std::ostream& os, const ParameterEstimate& p);  // = print
+// The header of print()'s table, for an interval at `confidence`.
+void print_parameter_header(std::ostream& os, double confidence);
+
+struct FitSummary {
+  std::string estimator;  // registry name: "batch_lsq", "temp_poly", "allan", "ceres_nonlinear", …
+  std::string version;
+  FitStatus status = FitStatus::kFailed;
+  std::string message;       // why it failed, or "" when it did not
+  double confidence = NAN;   // of the intervals
+  std::vector<ParameterEstimate> parameters;  // empty when failed
+  std::vector<std::string> notes;             // e.g. per-channel failures of an otherwise ok fit
+
+  bool ok() const { return status == FitStatus::kOk; }
+  const ParameterEstimate* find(const std::string& name) const;
+
+  // One line: "batch_lsq 0.1.0: ok — 9 parameters, 7 identified" or "…: FAILED — why".
+  std::string BriefReport() const;
+  // BriefReport, then the parameter table and the notes.
+  std::string FullReport() const;
+  void print(std::ostream& os) const;  // = FullReport
+  bool equals(const FitSummary& other, double rel_tol = 1e-9, double abs_tol = 0.0) const;
+};
+
+// The summary fields of a results document (see the top of this file), written and read in this
+// one place. A failed fit's parameters are not read: it has no numbers. summary_from_json also
+// accepts documents whose success is the older `"ok": true|false`.
+nlohmann::json to_json(const FitSummary& s);
+FitSummary summary_from_json(const nlohmann::json& doc);
+// Whether a results document says its fit succeeded: its "status" (or the older "ok").
+FitStatus status_of(const nlohmann::json& doc);
+
+}  // namespace stend::estimation

@@ -1,0 +1,78 @@
+// The estimator registry (see stend/estimation/registry.hpp).
+#include "stend/estimation/registry.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <stdexcept>
+
+namespace stend::estimation {
+
+void Registry::add(EstimatorEntry entry) {
+  if (find(entry.name) != nullptr) throw std::logic_error("estimator '" + entry.name + "' registered twice");
+  entries_.push_back(std::move(entry));
+}
+
+void Registry::add_plugins(const PluginHost& host) {
+  for (const PluginRecord& rec : host.records()) {
+    if (rec.info == nullptr || rec.info->kind != STEND_KIND_ESTIMATOR || !rec.shadowed_by.empty()) continue;
+    if (find(rec.info->name) != nullptr) continue;  // built in: the same code, linked
+    EstimatorEntry e;
+    e.name = rec.info->name;
+    e.version = rec.info->version;
+    e.description = rec.info->description;
+    e.results_file = e.name + ".json";
+    e.create = [&host, name = e.name] { return host.create_estimator(name, Params{}); };
+    entries_.push_back(std::move(e));
+  }
+}
+
+const EstimatorEntry* Registry::find(const std::string& name) const {
+  for (const auto& e : entries_)
+    if (e.name == name) return &e;
+  return nullptr;
+}
+
+const EstimatorEntry& Registry::for_model(const YAML::Node& root, const std::string& model_file) const {
+  const EstimatorEntry* claimed = nullptr;
+  const EstimatorEntry* fallback = nullptr;
+  for (const auto& e : entries_) {
+    if (e.fallback) fallback = &e;
+    if (!e.claims || !e.claims(root)) continue;
+    if (claimed != nullptr)
+      throw std::runtime_error(model_file + ": both '" + claimed->name + "' and '" + e.name +
+                               "' read this model file; name one with --estimator");
+    claimed = &e;
+  }
+  if (claimed != nullptr) return *claimed;
+  if (fallback != nullptr) return *fallback;
+  throw std::runtime_error(model_file + ": no estimator reads this model file (estimators: " + names() +
+                           "); name one with --estimator");
+}
+
+const EstimatorEntry* Registry::for_results(const nlohmann::json& doc, const std::string& file_name) const {
+  std::string name;
+  if (doc.contains("estimator") && doc["estimator"].is_string()) name = doc["estimator"];
+  if (doc.contains("estimator") && doc["estimator"].is_object()) name = doc["estimator"].value("name", "");
+  if (const EstimatorEntry* e = find(name)) return e;
+  for (const auto& e : entries_)
+    if (e.results_file == file_name) return &e;
+  return nullptr;
+}
+
+FitSummary Registry::summarize(const nlohmann::json& doc, const std::string& file_name) const {
+  const EstimatorEntry* e = for_results(doc, file_name);
+  FitSummary s = e != nullptr && e->summarize ? e->summarize(doc) : summary_from_json(doc);
+  if (e != nullptr) {
+    if (s.estimator.empty()) s.estimator = e->name;
+    if (s.version.empty()) s.version = e->version;
+  }
+  return s;
+}
+
+std::string Registry::names() const {
+  std::string out;
+  for (const auto& e : entries_) out += (out.empty() ? "" : ", ") + e.name;
+  return out;
+}
+
+}  // namespace stend::estimation

@@ -1,0 +1,166 @@
+// The typed estimator result (see stend/estimation/summary.hpp).
+#include "stend/estimation/summary.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <ostream>
+#include <sstream>
+
+namespace stend::estimation {
+
+using nlohmann::json;
+
+namespace {
+
+double number_or_nan(const json& j, const char* key) {
+  if (!j.is_object() || !j.contains(key) || !j[key].is_number()) return NAN;
+  return j[key].get<double>();
+}
+std::string string_or_empty(const json& j, const char* key) {
+  if (!j.is_object() || !j.contains(key) || !j[key].is_string()) return {};
+  return j[key].get<std::string>();
+}
+json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+bool close(double a, double b, double rel_tol, double abs_tol) {
+  if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
+  return std::abs(a - b) <= abs_tol + rel_tol * std::max(std::abs(a), std::abs(b));
+}
+
+double confidence_of(const json& doc) {
+  const double c = number_or_nan(doc.value("solution", json::object()), "confidence");
+  return std::isfinite(c) ? c : number_or_nan(doc, "confidence");
+}
+
+ParameterEstimate parameter_from_json(const json& p) {
+  ParameterEstimate e;
+  e.name = string_or_empty(p, "name");
+  e.unit = string_or_empty(p, "unit");
+  e.identifiable = p.value("identifiable", false);
+  e.reason = string_or_empty(p, "reason");
+  if (!e.identifiable) {
+    if (e.reason.empty()) e.reason = "not identifiable";
+    return e;  // never a default as a result
+  }
+  e.value = number_or_nan(p, "value");
+  e.std_error = number_or_nan(p, "std_error");
+  const json iv = p.value("interval", json::array());
+  if (iv.is_array() && iv.size() == 2 && iv[0].is_number() && iv[1].is_number()) {
+    e.lower = iv[0].get<double>();
+    e.upper = iv[1].get<double>();
+  }
+  return e;
+}
+
+}  // namespace
+
+const char* to_string(FitStatus s) { return s == FitStatus::kOk ? "ok" : "failed"; }
+
+FitStatus fit_status_from_string(const std::string& s) { return s == "ok" ? FitStatus::kOk : FitStatus::kFailed; }
+
+void ParameterEstimate::print(std::ostream& os) const {
+  if (identifiable)
+    os << fmt::format("{:<18} {:>14.7g} {:<14} {:>11.3g}  [{:.7g}, {:.7g}]  yes", name, value, unit, std_error, lower,
+                      upper);
+  else
+    os << fmt::format("{:<18} {:>14} {:<14} {:>11}  {:<26}  NO: {}", name, "not estimated", unit, "-", "-", reason);
+}
+
+std::ostream& operator<<(std::ostream& os, const ParameterEstimate& p) {
+  p.print(os);
+  return os;
+}
+
+void print_parameter_header(std::ostream& os, double confidence) {
+  os << fmt::format("{:<18} {:>14} {:<14} {:>11}  {:<26}  {}\n", "parameter", "value", "unit", "std error",
+                    fmt::format("{:.6g}% interval", 100 * confidence), "identifiable");
+}
+
+bool ParameterEstimate::equals(const ParameterEstimate& o, double rel_tol, double abs_tol) const {
+  return name == o.name && unit == o.unit && identifiable == o.identifiable &&
+         close(value, o.value, rel_tol, abs_tol) && close(std_error, o.std_error, rel_tol, abs_tol) &&
+         close(lower, o.lower, rel_tol, abs_tol) && close(upper, o.upper, rel_tol, abs_tol);
+}
+
+const ParameterEstimate* FitSummary::find(const std::string& name) const {
+  for (const auto& p : parameters)
+    if (p.name == name) return &p;
+  return nullptr;
+}
+
+std::string FitSummary::BriefReport() const {
+  const std::string who = version.empty() ? estimator : estimator + " " + version;
+  if (!ok()) return fmt::format("{}: FAILED — {}", who, message.empty() ? "no reason given" : message);
+  const auto identified = std::count_if(parameters.begin(), parameters.end(),
+                                        [](const ParameterEstimate& p) { return p.identifiable; });
+  return fmt::format("{}: ok — {} parameters, {} identified", who, parameters.size(), identified);
+}
+
+std::string FitSummary::FullReport() const {
+  std::ostringstream os;
+  print(os);
+  return os.str();
+}
+
+void FitSummary::print(std::ostream& os) const {
+  os << BriefReport() << "\n";
+  if (!ok()) return;
+  print_parameter_header(os, confidence);
+  for (const auto& p : parameters) os << p << "\n";
+  for (const auto& n : notes) os << "note: " << n << "\n";
+}
+
+bool FitSummary::equals(const FitSummary& o, double rel_tol, double abs_tol) const {
+  if (estimator != o.estimator || version != o.version || status != o.status || message != o.message ||
+      !close(confidence, o.confidence, rel_tol, abs_tol) || parameters.size() != o.parameters.size() ||
+      notes != o.notes)
+    return false;
+  for (std::size_t i = 0; i < parameters.size(); ++i)
+    if (!parameters[i].equals(o.parameters[i], rel_tol, abs_tol)) return false;
+  return true;
+}
+
+FitStatus status_of(const json& doc) {
+  if (doc.contains("status") && doc["status"].is_string()) return fit_status_from_string(doc["status"]);
+  return doc.value("ok", false) ? FitStatus::kOk : FitStatus::kFailed;
+}
+
+json to_json(const FitSummary& s) {
+  json j;
+  j["estimator"] = {{"name", s.estimator}, {"version", s.version}};
+  j["status"] = to_string(s.status);
+  j["message"] = s.message;
+  j["confidence"] = finite_or_null(s.confidence);
+  j["parameters"] = json::array();
+  for (const auto& p : s.parameters)
+    j["parameters"].push_back({{"name", p.name},
+                               {"unit", p.unit},
+                               {"identifiable", p.identifiable},
+                               {"value", finite_or_null(p.value)},
+                               {"std_error", finite_or_null(p.std_error)},
+                               {"interval", {finite_or_null(p.lower), finite_or_null(p.upper)}},
+                               {"reason", p.reason}});
+  j["notes"] = s.notes;
+  return j;
+}
+
+FitSummary summary_from_json(const json& doc) {
+  FitSummary s;
+  if (doc.contains("estimator") && doc["estimator"].is_string()) s.estimator = doc["estimator"];
+  if (doc.contains("estimator") && doc["estimator"].is_object()) {
+    s.estimator = string_or_empty(doc["estimator"], "name");
+    s.version = string_or_empty(doc["estimator"], "version");
+  }
+  s.status = status_of(doc);
+  s.message = string_or_empty(doc, "message");
+  s.confidence = confidence_of(doc);
+  for (const auto& n : doc.value("notes", json::array()))
+    if (n.is_string()) s.notes.push_back(n);
+  if (!s.ok()) return s;
+  for (const auto& p : doc.value("parameters", json::array())) s.parameters.push_back(parameter_from_json(p));
+  return s;
+}
+
+}  // namespace stend::estimation

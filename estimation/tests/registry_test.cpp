@@ -1,0 +1,128 @@
+// The estimator registry and the typed estimator summary.
+#include <gtest/gtest.h>
+
+#include <stend/estimation/registry.hpp>
+#include <stend/estimation/summary.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <sstream>
+
+namespace se = stend::estimation;
+
+namespace {
+
+class Constant final : public stend::Estimator {
+ public:
+  stend::EstimatorResult fit(const stend::EstimatorRequest&) override { return {true, {}, "{}", "", ""}; }
+};
+
+se::EstimatorEntry entry(const std::string& name, const char* key, bool fallback = false) {
+  se::EstimatorEntry e;
+  e.name = name;
+  e.version = "1.0";
+  e.results_file = name + ".json";
+  e.fallback = fallback;
+  if (key != nullptr) e.claims = [key](const YAML::Node& root) { return root.IsMap() && root[key]; };
+  e.create = [] { return stend::PluginPtr<stend::Estimator>(new Constant(), [](stend::Estimator* p) { delete p; }); };
+  return e;
+}
+
+se::Registry three() {
+  se::Registry r;
+  r.add(entry("plain", nullptr, true));
+  r.add(entry("noise", "noise"));
+  r.add(entry("nonlinear", "nonlinear"));
+  return r;
+}
+
+}  // namespace
+
+TEST(Registry, ModelFileGoesToTheEstimatorThatClaimsIt) {
+  const se::Registry r = three();
+  EXPECT_EQ(r.for_model(YAML::Load("noise: {tau: 1}"), "m.yaml").name, "noise");
+  EXPECT_EQ(r.for_model(YAML::Load("nonlinear: {}"), "m.yaml").name, "nonlinear");
+  EXPECT_EQ(r.for_model(YAML::Load("terms: [bias]"), "m.yaml").name, "plain");  // the fallback
+}
+
+TEST(Registry, AmbiguousOrUnclaimedModelFileIsRefusedWithTheFileName) {
+  const se::Registry r = three();
+  try {
+    r.for_model(YAML::Load("noise: {}\nnonlinear: {}"), "both.yaml");
+    FAIL() << "two claims accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("both.yaml"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--estimator"), std::string::npos) << e.what();
+  }
+  se::Registry no_fallback;
+  no_fallback.add(entry("noise", "noise"));
+  EXPECT_THROW(no_fallback.for_model(YAML::Load("terms: [bias]"), "m.yaml"), std::runtime_error);
+}
+
+TEST(Registry, NamesAreUnique) {
+  se::Registry r = three();
+  EXPECT_THROW(r.add(entry("noise", "other")), std::logic_error);
+  EXPECT_EQ(r.names(), "plain, noise, nonlinear");
+  EXPECT_EQ(r.find("absent"), nullptr);
+}
+
+TEST(Registry, ResultsAreReadByTheEstimatorThatWroteThem) {
+  se::Registry r = three();
+  se::EstimatorEntry custom = entry("custom", "custom");
+  custom.summarize = [](const nlohmann::json& doc) {
+    se::FitSummary s;
+    s.status = se::FitStatus::kOk;
+    s.parameters.push_back({"k", "1", true, "", doc.at("k").get<double>(), 0.1, 0.8, 1.2});
+    return s;
+  };
+  r.add(custom);
+  // By the document's estimator name, else by the results file's name.
+  const auto by_name = r.summarize(nlohmann::json::parse(R"({"estimator": "custom", "k": 1.0})"), "other.json");
+  ASSERT_EQ(by_name.parameters.size(), 1u);
+  EXPECT_EQ(by_name.estimator, "custom");
+  EXPECT_EQ(by_name.version, "1.0");
+  const auto by_file = r.summarize(nlohmann::json::parse(R"({"k": 2.0})"), "custom.json");
+  EXPECT_DOUBLE_EQ(by_file.parameters.at(0).value, 2.0);
+}
+
+TEST(Summary, JsonRoundTripKeepsEveryField) {
+  se::FitSummary s;
+  s.estimator = "batch_lsq";
+  s.version = "0.1.0";
+  s.status = se::FitStatus::kOk;
+  s.confidence = 0.95;
+  s.parameters.push_back({"bias_z", "m/s^2", true, "", 0.01, 0.001, 0.008, 0.012});
+  s.parameters.push_back({"scale_z", "1", false, "aliased with bias_z", NAN, NAN, NAN, NAN});
+  s.notes.push_back("segment 3 skipped");
+  const se::FitSummary back = se::summary_from_json(nlohmann::json::parse(se::to_json(s).dump()));
+  EXPECT_TRUE(back.equals(s)) << back.FullReport() << "\n" << s.FullReport();
+  EXPECT_EQ(back.BriefReport(), "batch_lsq 0.1.0: ok — 2 parameters, 1 identified");
+  // equals sees a changed number.
+  se::FitSummary moved = s;
+  moved.parameters[0].value = 0.0100001;
+  EXPECT_FALSE(moved.equals(s));
+  EXPECT_TRUE(moved.equals(s, 1e-4));
+}
+
+TEST(Summary, FailedFitHasNoNumbersAndSaysWhy) {
+  const auto doc = nlohmann::json::parse(
+      R"({"estimator": {"name": "x", "version": "2"}, "status": "failed", "message": "k < p",
+          "parameters": [{"name": "a", "identifiable": true, "value": 1.0}]})");
+  const se::FitSummary s = se::summary_from_json(doc);
+  EXPECT_FALSE(s.ok());
+  EXPECT_TRUE(s.parameters.empty());
+  EXPECT_EQ(s.BriefReport(), "x 2: FAILED — k < p");
+  EXPECT_EQ(s.FullReport(), "x 2: FAILED — k < p\n");
+}
+
+TEST(Summary, NotIdentifiedParameterNeverCarriesANumber) {
+  const auto doc = nlohmann::json::parse(
+      R"({"status": "ok", "parameters": [{"name": "a", "identifiable": false, "value": 0.0, "std_error": 0.0}]})");
+  const se::FitSummary s = se::summary_from_json(doc);
+  ASSERT_EQ(s.parameters.size(), 1u);
+  EXPECT_TRUE(std::isnan(s.parameters[0].value));
+  EXPECT_EQ(s.parameters[0].reason, "not identifiable");
+  std::ostringstream row;
+  row << s.parameters[0];
+  EXPECT_NE(row.str().find("not estimated"), std::string::npos) << row.str();
+}

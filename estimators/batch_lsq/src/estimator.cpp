@@ -1,0 +1,34 @@
+// batch_lsq as an Estimator and its registry entry (see stend/batch_lsq/estimator.hpp).
+#include "stend/batch_lsq/estimator.hpp"
+
+#include "stend/batch_lsq/batch_lsq.hpp"
+
+#include <sstream>
+#include <stdexcept>
+
+namespace stend::batch_lsq {
+
+BatchLsqEstimator::BatchLsqEstimator(const Params& p) {
+  if (p.has("results_file")) results_file_ = p.string("results_file");
+}
+
+EstimatorResult BatchLsqEstimator::fit(const EstimatorRequest& req) {
+  if (req.recording == nullptr) throw std::invalid_argument("batch_lsq: no recording given");
+  const FitResult r = fit_recording(*req.recording, load_model_spec(req.model_file));
+  std::ostringstream text;
+  print_table(text, r);
+  return {r.ok, r.message, to_json(r), text.str(), results_file_};
+}
+
+estimation::EstimatorEntry estimator_entry() {
+  estimation::EstimatorEntry e;
+  e.name = kEstimatorName;
+  e.version = kEstimatorVersion;
+  e.description = kDescription;
+  e.results_file = kResultsFile;
+  e.fallback = true;
+  e.create = [] { return PluginPtr<Estimator>(new BatchLsqEstimator(), [](Estimator* p) { delete p; }); };
+  return e;
+}
+
+}  // namespace stend::batch_lsq

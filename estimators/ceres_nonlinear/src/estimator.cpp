@@ -1,0 +1,31 @@
+// ceres_nonlinear as an Estimator and its registry entry (see stend/ceres_nonlinear/estimator.hpp).
+#include "stend/ceres_nonlinear/estimator.hpp"
+
+#include "stend/ceres_nonlinear/model_file.hpp"
+
+#include <stdexcept>
+
+namespace stend::ceres_nonlinear {
+
+CeresNonlinearEstimator::CeresNonlinearEstimator(const Params& p) {
+  if (p.has("results_file")) results_file_ = p.string("results_file");
+}
+
+EstimatorResult CeresNonlinearEstimator::fit(const EstimatorRequest& req) {
+  if (req.recording == nullptr) throw std::invalid_argument("ceres_nonlinear: no recording given");
+  const ModelFileFit f = fit_model_file(*req.recording, load_model_file(req.model_file));
+  return {f.ok, f.message, f.json, f.text, results_file_};
+}
+
+estimation::EstimatorEntry estimator_entry() {
+  estimation::EstimatorEntry e;
+  e.name = kEstimatorName;
+  e.version = kEstimatorVersion;
+  e.description = kDescription;
+  e.results_file = kResultsFile;
+  e.claims = [](const YAML::Node& root) { return root.IsMap() && root["ceres_nonlinear"]; };
+  e.create = [] { return PluginPtr<Estimator>(new CeresNonlinearEstimator(), [](Estimator* p) { delete p; }); };
+  return e;
+}
+
+}  // namespace stend::ceres_nonlinear

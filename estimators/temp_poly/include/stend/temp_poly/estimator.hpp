@@ -1,0 +1,28 @@
+// temp_poly behind the SDK's Estimator interface: the same class is the built-in registry's entry
+// and the estimator plugin stend_temp_poly.so.
+#pragma once
+
+#include <stend/estimation/registry.hpp>
+#include <stend/sdk.hpp>
+
+namespace stend::temp_poly {
+
+inline constexpr const char* kResultsFile = "temp_poly.json";
+inline constexpr const char* kDescription =
+    "Bias and scale versus temperature (polynomial order by cross-validation or BIC)";
+
+class TempPolyEstimator final : public Estimator {
+ public:
+  explicit TempPolyEstimator(const Params& params = {});
+  // Fits the model file (load_options) to the recording: the report and stend.temp_poly/1.
+  EstimatorResult fit(const EstimatorRequest& request) override;
+
+ private:
+  std::string results_file_ = kResultsFile;
+};
+
+// Registry entry: claims model files with temperature-model options (`selection:`, `max_order:`);
+// its summary lists every fitted axis' parameters.
+estimation::EstimatorEntry estimator_entry();
+
+}  // namespace stend::temp_poly
