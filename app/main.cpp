@@ -1,6 +1,7 @@
 // stend — drive a characterization bench from an experiment file and analyse its recordings.
 #include "commands.hpp"
 
+#include "stend/estimators/builtin.hpp"
 #include "stend/experiment.hpp"
 #include "stend/plugin_host.hpp"
 #include "stend/recording.hpp"
@@ -182,8 +183,8 @@ int main(int argc, char** argv) {
   fit->add_option("-m,--model", model, "Model YAML (instrument, axes, terms, extraction)")->required();
   std::string estimator = "auto";
   fit->add_option("--estimator", estimator,
-                  "batch_lsq | temp_poly | allan | ceres_nonlinear | auto (from the model file) | the name of an "
-                  "estimator plugin on the search path");
+                  "auto (the one the model file is written for) | " + stend::estimators::builtin().names() +
+                      " | the name of an estimator plugin on the search path");
   fit->add_option("--json", json, "Where to write the results (default RUN/fit.json)");
 
   std::vector<stend::cli::Command> commands;
