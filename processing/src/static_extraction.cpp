@@ -17,6 +17,7 @@ std::string num(double v) {
   std::snprintf(buf, sizeof buf, "%.6g", v);
   return buf;
 }
+
 // The segment's samples through the configured low-pass (a copy when Filter::kNone).
 std::vector<double> low_pass(std::span<const double> xs, const StaticExtractionSettings& settings,
                              double sample_rate_hz, const std::string& where) {
@@ -25,8 +26,8 @@ std::vector<double> low_pass(std::span<const double> xs, const StaticExtractionS
   try {
     f = butterworth_lowpass(settings.filter_order, settings.cutoff_hz, sample_rate_hz);
   } catch (const std::invalid_argument& e) {
-    throw SkipError(SkipReason::kFilter, where + " (sample rate " + num(sample_rate_hz) +
-                                             " Hz): " + e.what() + "; lower cutoff_hz");
+    throw SkipError(SkipReason::kFilter, where + " (sample rate " + num(sample_rate_hz) + " Hz): " +
+                                             e.what() + "; lower cutoff_hz");
   }
   return settings.zero_phase ? filtfilt(f, xs) : filter(f, xs, InitialState::kSteadyState);
 }
@@ -50,8 +51,8 @@ StaticValue extract_static(std::span<const double> t, std::span<const double> x,
   if (t.size() != x.size())
     throw std::invalid_argument("extract_static: time and value arrays differ in length");
   if (!(t_end_s > t_start_s))
-    throw SkipError(SkipReason::kTooFewSamples, "extract_static: segment [" + num(t_start_s) + ", " +
-                                num(t_end_s) + "] s is empty");
+    throw SkipError(SkipReason::kTooFewSamples,
+                    "extract_static: segment [" + num(t_start_s) + ", " + num(t_end_s) + "] s is empty");
   if (!(settings.settle_s >= 0.0))
     throw std::invalid_argument("extract_static: settle_s must be >= 0");
   const auto lo = std::lower_bound(t.begin(), t.end(), t_start_s);
@@ -63,7 +64,7 @@ StaticValue extract_static(std::span<const double> t, std::span<const double> x,
   const std::string where = "segment [" + num(t_start_s) + ", " + num(t_end_s) + "] s";
   if (out.n_segment < 8)
     throw SkipError(SkipReason::kTooFewSamples, where + " holds " + std::to_string(out.n_segment) +
-                                " samples; static extraction needs at least 8");
+                                                    " samples; static extraction needs at least 8");
   const std::span<const double> ts = t.subspan(i0, out.n_segment);
   const std::span<const double> xs = x.subspan(i0, out.n_segment);
   out.sample_rate_hz = median_sample_rate(ts);
@@ -81,9 +82,9 @@ StaticValue extract_static(std::span<const double> t, std::span<const double> x,
     ++n;
   }
   if (n < 2)
-    throw SkipError(SkipReason::kTooFewSamples, where + ": discarding settle_s = " + num(settings.settle_s) +
-                                " s at each end leaves " + std::to_string(n) +
-                                " samples; shorten settle_s or lengthen the segment");
+    throw SkipError(SkipReason::kTooFewSamples,
+                    where + ": discarding settle_s = " + num(settings.settle_s) + " s at each end leaves " +
+                        std::to_string(n) + " samples; shorten settle_s or lengthen the segment");
   out.n_used = n;
   out.mean = sum / static_cast<double>(n);
   out.raw_mean = raw_sum / static_cast<double>(n);

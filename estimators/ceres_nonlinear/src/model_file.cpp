@@ -67,16 +67,17 @@ ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& fi
   auto& a = o.accel;
   a.processing.detector.max_gyro_radps = 3.0 * kDeg;  // a turn about the vertical is not a pose
   processing::read_options(m, a.processing);
+  // segment_trim_s: dropped at each end of a segment — the rate table's, and the accelerometer
+  // fits' on segments unless the file states their extraction.settle_s.
+  auto& rate_table = o.gyro.processing;
+  const std::string settle = "extraction.settle_s";
   if (m.has("segment_trim_s")) {
-    const double trim = positive(m, "segment_trim_s", 0.0, "in seconds", true);
-    o.gyro.processing.extraction.settle_s = trim;
-    o.gyro.processing.stated.insert("extraction.settle_s");
-    if (a.processing.intervals == processing::IntervalSource::kSegments) {
-      a.processing.extraction.settle_s = trim;
-      a.processing.stated.insert("extraction.settle_s");
-    }
-  } else if (a.processing.intervals == processing::IntervalSource::kSegments) {
-    a.processing.extraction.settle_s = o.gyro.processing.extraction.settle_s;
+    rate_table.extraction.settle_s = positive(m, "segment_trim_s", 0.0, "in seconds", true);
+    rate_table.stated.insert(settle);
+  }
+  if (a.processing.intervals == processing::IntervalSource::kSegments && a.processing.stated.count(settle) == 0) {
+    a.processing.extraction.settle_s = rate_table.extraction.settle_s;
+    if (rate_table.stated.count(settle) > 0) a.processing.stated.insert(settle);
   }
   a.gravity_mps2 = positive(m, "gravity_mps2", 0.0, "in m/s^2", true);
   a.loss = loss_from_name(choice(m, "loss", "none", {"none", "huber", "cauchy"}));
