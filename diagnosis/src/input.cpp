@@ -1,6 +1,6 @@
 // stend gap, step 1: from a recording to static segments with their truth stimulus, groups and
-// noise floor. The extraction is batch_lsq's (extract_points); this file only adds what the
-// diagnoser needs around it.
+// noise floor. The static points and truth means are the processing stage's (through batch_lsq's
+// extract_points); this file only adds what the diagnoser needs around them.
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -12,6 +12,7 @@
 
 #include "stend/physics/geometry.hpp"
 #include "stend/diagnosis/gap.hpp"
+#include "stend/processing/truth.hpp"
 #include "noise_stage.hpp"
 
 namespace stend::diagnosis {
@@ -28,22 +29,6 @@ int column_ending(const Recording& r, const std::string& suffix) {
       return static_cast<int>(i);
   }
   return -1;
-}
-
-// Mean of a truth column over [t0, t1]; the last snapshot before t0 when none inside.
-double truth_mean(const Recording& r, int col, double t0, double t1) {
-  if (col < 0 || r.truth_t.empty()) return kNaN;
-  const auto lo = std::lower_bound(r.truth_t.begin(), r.truth_t.end(), t0) - r.truth_t.begin();
-  const auto hi = std::upper_bound(r.truth_t.begin(), r.truth_t.end(), t1) - r.truth_t.begin();
-  double sum = 0.0;
-  int n = 0;
-  for (auto i = lo; i < hi; ++i) {
-    sum += r.truth[static_cast<std::size_t>(i)][static_cast<std::size_t>(col)];
-    ++n;
-  }
-  if (n > 0) return sum / n;
-  if (lo > 0) return r.truth[static_cast<std::size_t>(lo - 1)][static_cast<std::size_t>(col)];
-  return kNaN;
 }
 
 // Truth from a dataset's annotations: segments labelled <axis>_p / <axis>_a (imucal: that axis
@@ -138,11 +123,11 @@ GapInput build_input(const Recording& recording_in, const batch_lsq::ModelSpec& 
     rec = &augmented;
     in.truth_source = how;
   }
-  std::vector<std::string> notes;
-  std::vector<batch_lsq::StaticPoint> points = batch_lsq::extract_points(*rec, spec, &notes);
-  for (const auto& n : notes)
-    if (n.find("saturated") != std::string::npos) ++in.saturated_segments;
-  in.notes = notes;
+  processing::Extraction extraction;
+  std::vector<batch_lsq::StaticPoint> points = batch_lsq::extract_points(*rec, spec, &extraction);
+  in.spec.processing = extraction.options;
+  in.saturated_segments = extraction.count(processing::SkipReason::kSaturated);
+  in.notes = extraction.notes;
   if (points.size() < 2)
     throw std::runtime_error("'" + in.source + "': only " + std::to_string(points.size()) +
                              " static segment(s) could be extracted; the gap needs several");
@@ -192,8 +177,8 @@ GapInput build_input(const Recording& recording_in, const batch_lsq::ModelSpec& 
     auto& st = d.point.stimulus;
     Eigen::Vector3d f, w;
     for (int a = 0; a < 3; ++a) {
-      f[a] = truth_mean(*rec, fcol[a], p.t_start_s, p.t_end_s);
-      w[a] = truth_mean(*rec, wcol[a], p.t_start_s, p.t_end_s);
+      f[a] = processing::truth_mean(*rec, fcol[a], p.t_start_s, p.t_end_s);
+      w[a] = processing::truth_mean(*rec, wcol[a], p.t_start_s, p.t_end_s);
     }
     if (f.allFinite() && f.norm() > 0.5) {
       st.specific_force = f;
@@ -207,9 +192,9 @@ GapInput build_input(const Recording& recording_in, const batch_lsq::ModelSpec& 
     d.orientation_name = orientation_name(up);
     // Table geometry (sim three-axis table: R = Ry(δ)·Rx(h)·Rz(az)), checked against the truth.
     if (table_ok) {
-      const double az = truth_mean(*rec, tab[0], p.t_start_s, p.t_end_s) * deg;
-      const double h = truth_mean(*rec, tab[1], p.t_start_s, p.t_end_s) * deg;
-      const double dl = truth_mean(*rec, tab[2], p.t_start_s, p.t_end_s) * deg;
+      const double az = processing::truth_mean(*rec, tab[0], p.t_start_s, p.t_end_s) * deg;
+      const double h = processing::truth_mean(*rec, tab[1], p.t_start_s, p.t_end_s) * deg;
+      const double dl = processing::truth_mean(*rec, tab[2], p.t_start_s, p.t_end_s) * deg;
       model::Stimulus<double> probe = st;
       const Eigen::Vector3d f0 = table_stimulus(probe, az, h, dl, mount, g);
       if (!f.allFinite() || (f0 - f).norm() > 0.02 * g) {

@@ -8,8 +8,8 @@
 #include <stdexcept>
 
 #include "magnitude.hpp"
-#include "stend/ceres_nonlinear/calibration.hpp"
 #include "stend/estimation/linear_lsq.hpp"
+#include "stend/processing/static_detector.hpp"
 
 namespace stend::diagnosis {
 
@@ -133,13 +133,13 @@ GapInput build_magnitude_input(const Recording& rec, const batch_lsq::ModelSpec&
                              "' has no rate truth: a gyroscope gap needs a rate table's truth columns "
                              "(w_x_radps …); sessions with unknown orientations give only |g|");
   const double g = rec.header.gravity_mps2 > 0.0 ? rec.header.gravity_mps2 : batch_lsq::kStandardGravity;
-  ceres_nonlinear::StaticDetectorOptions det;
+  processing::StaticDetectorOptions det;
   // The still interval at the start (an importer's "initialization" segment) sets the threshold.
   for (const auto& s : rec.segments)
     if (s.label == "initialization" && s.t_end_s > s.t_start_s) det.init_duration_s = s.t_end_s - s.t_start_s;
   // Long enough for the extraction to keep something after settle_s at both ends.
-  det.min_duration_s = 2.0 * spec.extraction.settle_s + 1.0;
-  const auto ivs = ceres_nonlinear::detect_static_intervals(rec, det);
+  det.min_duration_s = 2.0 * spec.processing.extraction.settle_s + 1.0;
+  const auto ivs = processing::detect_static_intervals(rec, det);
   if (ivs.size() < 2)
     throw std::runtime_error("'" + rec.dir.string() + "': " + std::to_string(ivs.size()) +
                              " static interval(s) long enough for the extraction (settle_s at both ends) "
@@ -163,7 +163,7 @@ GapInput build_magnitude_input(const Recording& rec, const batch_lsq::ModelSpec&
     s.label = label.str();
     aug.segments.push_back(s);
     // Provisional truth: the raw direction at |g| (magnitude_form replaces it).
-    const Eigen::Vector3d f = g * iv.accel_mean.normalized();
+    const Eigen::Vector3d f = g * iv.accel_mean_mps2.normalized();
     const std::vector<double> row = {f[0], f[1], f[2], 0.0, 0.0, 0.0};
     for (double t : {iv.t_start_s, 0.5 * (iv.t_start_s + iv.t_end_s), iv.t_end_s})
       if (aug.truth_t.empty() || t > aug.truth_t.back()) {

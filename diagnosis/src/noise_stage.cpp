@@ -110,7 +110,8 @@ void recording_evidence(GapInput& in, const Recording& rec) {
   // may be an unclipped sample rounded up); otherwise by the value.
   const bool flags_used = std::any_of(S.begin(), S.end(), [&](const ImuSample& x) { return (x.flags & flag) != 0; });
   for (const auto& seg : rec.segments) {
-    if (std::find(in.spec.segment_kinds.begin(), in.spec.segment_kinds.end(), seg.kind) == in.spec.segment_kinds.end())
+    const auto& kinds = in.spec.processing.segment_kinds;
+    if (std::find(kinds.begin(), kinds.end(), seg.kind) == kinds.end())
       continue;
     const auto lo = std::lower_bound(S.begin(), S.end(), seg.t_start_s,
                                      [](const ImuSample& s, double t) { return s.t_s < t; });

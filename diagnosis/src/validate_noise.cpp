@@ -50,7 +50,7 @@ double median(std::vector<double> v) {
 Recording noise_stage_run(const NoisePlant& plant, std::uint64_t seed, NoiseRunTruth* truth_out) {
   const double dt = 1.0 / kRate;
   const batch_lsq::ModelSpec spec = validation_model();
-  const double settle = spec.extraction.settle_s;
+  const double settle = spec.processing.extraction.settle_s;
   NoiseRunTruth tr;
   tr.sigma = model::WhiteNoise::sigma_from_density(kDensity, dt);
   tr.floor = tr.sigma / std::sqrt((kRecord - 2 * settle) * kRate);

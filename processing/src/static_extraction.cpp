@@ -17,7 +17,24 @@ std::string num(double v) {
   std::snprintf(buf, sizeof buf, "%.6g", v);
   return buf;
 }
+
+// The segment's samples through the configured low-pass (a copy when Filter::kNone).
+std::vector<double> low_pass(std::span<const double> xs, const StaticExtractionSettings& settings,
+                             double sample_rate_hz, const std::string& where) {
+  if (settings.filter == Filter::kNone) return {xs.begin(), xs.end()};
+  SosFilter f;
+  try {
+    f = butterworth_lowpass(settings.filter_order, settings.cutoff_hz, sample_rate_hz);
+  } catch (const std::invalid_argument& e) {
+    throw SkipError(SkipReason::kFilter, where + " (sample rate " + num(sample_rate_hz) + " Hz): " +
+                                             e.what() + "; lower cutoff_hz");
+  }
+  return settings.zero_phase ? filtfilt(f, xs) : filter(f, xs, InitialState::kSteadyState);
+}
+
 }  // namespace
+
+const char* filter_name(Filter filter) { return filter == Filter::kNone ? "none" : "butterworth"; }
 
 double median_sample_rate(std::span<const double> t) {
   std::vector<double> dt;
@@ -34,8 +51,8 @@ StaticValue extract_static(std::span<const double> t, std::span<const double> x,
   if (t.size() != x.size())
     throw std::invalid_argument("extract_static: time and value arrays differ in length");
   if (!(t_end_s > t_start_s))
-    throw std::invalid_argument("extract_static: segment [" + num(t_start_s) + ", " +
-                                num(t_end_s) + "] s is empty");
+    throw SkipError(SkipReason::kTooFewSamples,
+                    "extract_static: segment [" + num(t_start_s) + ", " + num(t_end_s) + "] s is empty");
   if (!(settings.settle_s >= 0.0))
     throw std::invalid_argument("extract_static: settle_s must be >= 0");
   const auto lo = std::lower_bound(t.begin(), t.end(), t_start_s);
@@ -46,20 +63,12 @@ StaticValue extract_static(std::span<const double> t, std::span<const double> x,
   out.n_segment = i1 > i0 ? i1 - i0 : 0;
   const std::string where = "segment [" + num(t_start_s) + ", " + num(t_end_s) + "] s";
   if (out.n_segment < 8)
-    throw std::invalid_argument(where + " holds " + std::to_string(out.n_segment) +
-                                " samples; static extraction needs at least 8");
+    throw SkipError(SkipReason::kTooFewSamples, where + " holds " + std::to_string(out.n_segment) +
+                                                    " samples; static extraction needs at least 8");
   const std::span<const double> ts = t.subspan(i0, out.n_segment);
   const std::span<const double> xs = x.subspan(i0, out.n_segment);
   out.sample_rate_hz = median_sample_rate(ts);
-  SosFilter f;
-  try {
-    f = butterworth_lowpass(settings.filter_order, settings.cutoff_hz, out.sample_rate_hz);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(where + " (sample rate " + num(out.sample_rate_hz) +
-                                " Hz): " + e.what() + "; lower cutoff_hz");
-  }
-  const std::vector<double> y =
-      settings.zero_phase ? filtfilt(f, xs) : filter(f, xs, InitialState::kSteadyState);
+  const std::vector<double> y = low_pass(xs, settings, out.sample_rate_hz, where);
 
   const double keep_lo = t_start_s + settings.settle_s, keep_hi = t_end_s - settings.settle_s;
   double sum = 0.0, raw_sum = 0.0;
@@ -73,9 +82,9 @@ StaticValue extract_static(std::span<const double> t, std::span<const double> x,
     ++n;
   }
   if (n < 2)
-    throw std::invalid_argument(where + ": discarding settle_s = " + num(settings.settle_s) +
-                                " s at each end leaves " + std::to_string(n) +
-                                " samples; shorten settle_s or lengthen the segment");
+    throw SkipError(SkipReason::kTooFewSamples,
+                    where + ": discarding settle_s = " + num(settings.settle_s) + " s at each end leaves " +
+                        std::to_string(n) + " samples; shorten settle_s or lengthen the segment");
   out.n_used = n;
   out.mean = sum / static_cast<double>(n);
   out.raw_mean = raw_sum / static_cast<double>(n);

@@ -88,9 +88,9 @@ ModelSpec parse_model_spec(const std::string& yaml_text, const std::string& sour
   ModelSpec spec;
   spec.source = source_name;
   const std::string& f = source_name;
-  yaml::MapReader top(root, f, "", "model specification",
-                      {"instrument", "axes", "terms", "extraction", "segments", "weighting",
-                       "confidence"});
+  std::vector<std::string> keys = {"instrument", "axes", "terms", "weighting", "confidence"};
+  keys.insert(keys.end(), processing::kOptionKeys.begin(), processing::kOptionKeys.end());
+  yaml::MapReader top(root, f, "", "model specification", keys);
   top.require("instrument", "accelerometer or gyroscope");
   top.require("terms", "a list of error-model terms");
   const std::string inst = top.string("instrument", "");
@@ -136,43 +136,8 @@ ModelSpec parse_model_spec(const std::string& yaml_text, const std::string& sour
     spec.model.terms.push_back(t);
   }
 
-  if (top.has("extraction")) {
-    yaml::MapReader ex(top.get("extraction"), f, "extraction", "static extraction settings",
-                       {"filter_order", "cutoff_hz", "settle_s", "zero_phase"}, {},
-                       top.key_location("extraction"));
-    const std::int64_t order = ex.integer("filter_order", spec.extraction.filter_order);
-    if (order < 1 || order > 20)
-      ex.fail_value("filter_order", "Butterworth order " + std::to_string(order) +
-                                        " is outside 1..20", "the paper uses 6");
-    spec.extraction.filter_order = static_cast<int>(order);
-    spec.extraction.cutoff_hz = ex.number("cutoff_hz", spec.extraction.cutoff_hz, "in hertz");
-    if (!(spec.extraction.cutoff_hz > 0.0))
-      ex.fail_value("cutoff_hz", "the cutoff frequency must be positive");
-    spec.extraction.settle_s = ex.number("settle_s", spec.extraction.settle_s, "in seconds");
-    if (!(spec.extraction.settle_s >= 0.0))
-      ex.fail_value("settle_s", "the settling time must not be negative");
-    spec.extraction.zero_phase = ex.boolean("zero_phase", spec.extraction.zero_phase);
-  }
-
-  if (top.has("segments")) {
-    const YAML::Node seg = top.get("segments");
-    if (!seg.IsSequence() || seg.size() == 0)
-      top.fail_value("segments", "expected a non-empty list of segment kinds such as [orientation]");
-    spec.segment_kinds.clear();
-    const std::vector<std::string> kinds = {"orientation", "rate", "record", "set_temperature",
-                                            "wait"};
-    for (std::size_t i = 0; i < seg.size(); ++i) {
-      const std::string path = "segments[" + std::to_string(i) + "]";
-      const std::string k = yaml::as_string(seg[i], f, path);
-      if (std::find(kinds.begin(), kinds.end(), k) == kinds.end())
-        throw ExperimentError(yaml::location_of(seg[i], f), path,
-                              "unknown segment kind '" + k + "'",
-                              yaml::did_you_mean(k, kinds) + "segment kinds: " + yaml::join(kinds));
-      spec.segment_kinds.push_back(k);
-    }
-  } else if (spec.model.instrument == model::Instrument::kGyroscope) {
-    spec.segment_kinds = {"rate", "orientation"};
-  }
+  if (spec.model.instrument == model::Instrument::kGyroscope) spec.processing.segment_kinds = {"rate", "orientation"};
+  processing::read_options(top, spec.processing);
 
   if (top.has("weighting")) {
     const std::string w = top.string("weighting", "none");
@@ -221,13 +186,7 @@ std::string to_yaml(const ModelSpec& spec) {
     }
   }
   out << YAML::EndSeq;
-  out << YAML::Key << "extraction" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "filter_order" << YAML::Value << spec.extraction.filter_order;
-  out << YAML::Key << "cutoff_hz" << YAML::Value << YAML::Precision(17) << spec.extraction.cutoff_hz;
-  out << YAML::Key << "settle_s" << YAML::Value << YAML::Precision(17) << spec.extraction.settle_s;
-  out << YAML::Key << "zero_phase" << YAML::Value << spec.extraction.zero_phase;
-  out << YAML::EndMap;
-  out << YAML::Key << "segments" << YAML::Value << YAML::Flow << spec.segment_kinds;
+  processing::emit_options(out, spec.processing);
   out << YAML::Key << "weighting" << YAML::Value << weighting_name(spec.weighting);
   out << YAML::Key << "confidence" << YAML::Value << YAML::Precision(17) << spec.confidence;
   out << YAML::EndMap;

@@ -50,6 +50,7 @@ nlohmann::ordered_json combination_json(const estimation::Combination& c,
 
 void print_table(std::ostream& os, const FitResult& fr) {
   const ModelSpec& s = fr.spec;
+  const processing::StaticExtractionSettings& ex = s.processing.extraction;
   os << "batch_lsq " << kEstimatorVersion << " — " << instrument_name(s.model.instrument)
      << ", axes [";
   for (std::size_t i = 0; i < s.axes.size(); ++i) os << (i ? ", " : "") << axis_name(s.axes[i]);
@@ -62,10 +63,13 @@ void print_table(std::ostream& os, const FitResult& fr) {
   if (!fr.extracted)
     os << "static extraction: none (the points were given directly); weighting "
        << weighting_name(s.weighting) << "\n";
+  else if (ex.filter == processing::Filter::kNone)
+    os << "static extraction: plain mean (no filter), settle " << num(ex.settle_s)
+       << " s discarded at each end; weighting " << weighting_name(s.weighting) << "\n";
   else
-    os << "static extraction: Butterworth order " << s.extraction.filter_order << ", cutoff "
-     << num(s.extraction.cutoff_hz) << " Hz, " << (s.extraction.zero_phase ? "zero-phase" : "causal")
-     << ", settle " << num(s.extraction.settle_s) << " s discarded at each end; weighting "
+    os << "static extraction: Butterworth order " << ex.filter_order << ", cutoff "
+     << num(ex.cutoff_hz) << " Hz, " << (ex.zero_phase ? "zero-phase" : "causal")
+     << ", settle " << num(ex.settle_s) << " s discarded at each end; weighting "
      << weighting_name(s.weighting) << "\n";
   if (!fr.ok) {
     os << "FIT FAILED: " << fr.message << "\n";
@@ -98,6 +102,7 @@ std::ostream& operator<<(std::ostream& os, const FitResult& fit) {
 std::string to_json(const FitResult& fr, int indent) {
   using json = nlohmann::ordered_json;
   const ModelSpec& s = fr.spec;
+  const processing::StaticExtractionSettings& ex = s.processing.extraction;
   json j;
   j["schema"] = kFitSchema;
   j["estimator"] = {{"name", kEstimatorName}, {"version", kEstimatorVersion}};
@@ -122,12 +127,12 @@ std::string to_json(const FitResult& fr, int indent) {
                 {"terms", terms},
                 {"source", s.source}};
   j["extraction"] = {{"applied", fr.extracted},
-                     {"filter", "butterworth"},
-                     {"order", s.extraction.filter_order},
-                     {"cutoff_hz", s.extraction.cutoff_hz},
-                     {"settle_s", s.extraction.settle_s},
-                     {"zero_phase", s.extraction.zero_phase},
-                     {"segment_kinds", s.segment_kinds}};
+                     {"filter", processing::filter_name(ex.filter)},
+                     {"order", ex.filter_order},
+                     {"cutoff_hz", ex.cutoff_hz},
+                     {"settle_s", ex.settle_s},
+                     {"zero_phase", ex.zero_phase},
+                     {"segment_kinds", s.processing.segment_kinds}};
   j["weighting"] = weighting_name(s.weighting);
   j["units"] = {{"residual", fr.unit}, {"residual_display", fr.display_unit}};
   j["notes"] = fr.notes;

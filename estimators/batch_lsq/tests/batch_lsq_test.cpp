@@ -143,10 +143,10 @@ confidence: 0.9
   EXPECT_EQ(s.model.terms[3].kind, model::TermKind::kBiasTemperature);
   EXPECT_EQ(s.model.terms[3].order, 2);
   EXPECT_EQ(s.model.terms[3].reference_c, 30.0);
-  EXPECT_EQ(s.extraction.cutoff_hz, 0.25);
-  EXPECT_EQ(s.extraction.settle_s, 4.0);
-  EXPECT_FALSE(s.extraction.zero_phase);
-  EXPECT_EQ(s.segment_kinds, (std::vector<std::string>{"orientation", "record"}));
+  EXPECT_EQ(s.processing.extraction.cutoff_hz, 0.25);
+  EXPECT_EQ(s.processing.extraction.settle_s, 4.0);
+  EXPECT_FALSE(s.processing.extraction.zero_phase);
+  EXPECT_EQ(s.processing.segment_kinds, (std::vector<std::string>{"orientation", "record"}));
   EXPECT_EQ(s.weighting, Weighting::kSegmentNoise);
   EXPECT_EQ(s.confidence, 0.9);
   // Round trip.
@@ -158,7 +158,7 @@ confidence: 0.9
 TEST(ModelSpec, ExampleFileParses) {
   const ModelSpec s = load_model_spec(fs::path(STEND_SOURCE_DIR) / "estimators/batch_lsq/examples/paper_z_channel.yaml");
   EXPECT_EQ(s.axes, std::vector<int>{2});
-  EXPECT_EQ(s.extraction.filter_order, 6);
+  EXPECT_EQ(s.processing.extraction.filter_order, 6);
   const ModelSpec t = load_model_spec(fs::path(STEND_SOURCE_DIR) / "estimators/batch_lsq/examples/accelerometer_full.yaml");
   EXPECT_EQ(t.axes.size(), 3u);
 }
@@ -196,6 +196,29 @@ TEST(ModelSpec, ErrorsNameFileLineAndColumn) {
 
   e = parse_error("instrument: accelerometer\n");
   EXPECT_NE(e.find("missing required key 'terms'"), std::string::npos) << e;
+}
+
+TEST(BatchLsq, TheExperimentsProcessingSectionFillsWhatTheModelDoesNotState) {
+  std::mt19937 rng(7);
+  Recording rec = synth_recording(bsc_model(), theta_bsc(), table_forces(9.81), rng);
+  rec.experiment_yaml = "name: synthetic\nprocessing:\n  extraction: {settle_s: 3, cutoff_hz: 0.25}\n";
+  // kSpec states cutoff_hz 0.5 and settle_s 2: both win.
+  FitResult fr = fit_recording(rec, parse_model_spec(kSpec));
+  ASSERT_TRUE(fr.ok) << fr.message;
+  EXPECT_EQ(fr.spec.processing.extraction.settle_s, 2.0);
+  EXPECT_EQ(fr.spec.processing.extraction.cutoff_hz, 0.5);
+  // A spec that states neither: the experiment's settle_s (3 s at each end of a 12 s dwell).
+  fr = fit_recording(rec, parse_model_spec("instrument: accelerometer\nterms: [bias, scale, cross_axis]\n"));
+  ASSERT_TRUE(fr.ok) << fr.message;
+  EXPECT_EQ(fr.spec.processing.extraction.settle_s, 3.0);
+  EXPECT_EQ(fr.spec.processing.extraction.cutoff_hz, 0.25);
+  EXPECT_NEAR(fr.points[0].t_end_s - fr.points[0].t_start_s, 12.0 - 6.0, 0.02);
+  EXPECT_EQ(nlohmann::json::parse(to_json(fr))["extraction"]["settle_s"], 3.0);
+  // A bad key there fails the fit, naming the run's experiment.yaml.
+  rec.experiment_yaml = "processing:\n  extraction: {settle: 3}\n";
+  fr = fit_recording(rec, parse_model_spec(kSpec));
+  EXPECT_FALSE(fr.ok);
+  EXPECT_NE(fr.message.find("experiment.yaml:2:"), std::string::npos) << fr.message;
 }
 
 TEST(BatchLsq, FitsAnInMemoryRecording) {

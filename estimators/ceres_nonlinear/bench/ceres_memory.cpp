@@ -34,8 +34,8 @@ int main(int argc, char** argv) {
   const synthetic::Record r = synthetic::make(spec);
   const double with_record = vm_hwm_mib();
   CalibrationOptions o;
-  o.detector.trim_s = 0.5;
-  o.detector.max_gyro_radps = 0.05;
+  o.processing.detector.trim_s = 0.5;
+  o.processing.detector.max_gyro_radps = 0.05;
   const auto t0 = std::chrono::steady_clock::now();
   const CalibrationResult a = calibrate_accelerometer_unknown_orientations(r.recording, o);
   const CalibrationResult g = calibrate_gyro_integration(r.recording, a);

@@ -18,8 +18,8 @@ namespace {
 
 CalibrationOptions accel_options() {
   CalibrationOptions o;
-  o.detector.trim_s = 0.5;
-  o.detector.max_gyro_radps = 0.05;
+  o.processing.detector.trim_s = 0.5;
+  o.processing.detector.max_gyro_radps = 0.05;
   o.estimate_gyro_bias = false;
   return o;
 }

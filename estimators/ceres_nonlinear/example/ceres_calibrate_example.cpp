@@ -24,7 +24,10 @@ int main(int argc, char** argv) {
       const Recording rec = io::import_imucal_session(argv[2]);
       std::vector<StaticInterval> ivs;
       std::vector<Eigen::Vector3d> truth;
-      for (const auto& iv : intervals_from_segments(rec, "orientation", 0.5)) {
+      processing::ProcessingOptions segments = default_interval_options();
+      segments.intervals = processing::IntervalSource::kSegments;
+      segments.extraction.settle_s = 0.5;  // dropped at each end of a segment
+      for (const auto& iv : static_intervals(rec, segments)) {
         // x_p: x axis up → the accelerometer reads +g on x; x_a: down → −g.
         Eigen::Vector3d f = Eigen::Vector3d::Zero();
         f[iv.label[0] - 'x'] = (iv.label[2] == 'p' ? 1.0 : -1.0) * 9.81;
@@ -39,7 +42,7 @@ int main(int argc, char** argv) {
       const Recording rec = io::import_mpu6050_multipos(argv[2]);
       CalibrationOptions o;
       o.gravity_mps2 = 9.81;
-      o.detector.init_duration_s = 30.0;
+      o.processing.detector.init_duration_s = 30.0;
       r = calibrate_accelerometer_unknown_orientations(rec, o);
     } else {
       std::cerr << "unknown session kind '" << kind << "' (imucal or mpu6050)\n";

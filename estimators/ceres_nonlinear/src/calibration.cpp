@@ -464,82 +464,62 @@ StaticInterval make_interval(const Recording& rec, std::size_t first, std::size_
   return iv;
 }
 
-std::vector<StaticInterval> detect_static_intervals(const Recording& rec, const StaticDetectorOptions& o) {
-  const std::size_t n = rec.samples.size();
-  std::vector<StaticInterval> out;
-  if (n < 3) return out;
-  const double dt = (rec.samples.back().t_s - rec.samples.front().t_s) / static_cast<double>(n - 1);
-  if (!(dt > 0.0)) throw std::invalid_argument("detect_static_intervals: sample times do not increase");
-  const auto half = static_cast<std::size_t>(std::max(1.0, std::round(0.5 * o.window_s / dt)));
-  // Prefix sums of the centred values (numerically safe).
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (const auto& s : rec.samples) mean += s.accel_mps2;
-  mean /= static_cast<double>(n);
-  std::vector<Eigen::Vector3d> s1(n + 1, Eigen::Vector3d::Zero()), s2(n + 1, Eigen::Vector3d::Zero());
-  for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d d = rec.samples[i].accel_mps2 - mean;
-    s1[i + 1] = s1[i] + d;
-    s2[i + 1] = s2[i] + d.cwiseAbs2();
-  }
-  auto var_between = [&](std::size_t a, std::size_t b) {  // samples a..b-1
-    const double m = static_cast<double>(b - a);
-    const Eigen::Vector3d mu = (s1[b] - s1[a]) / m;
-    return ((s2[b] - s2[a]) / m - mu.cwiseAbs2()).sum() * m / std::max(1.0, m - 1.0);
-  };
-  std::vector<double> var(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t a = i >= half ? i - half : 0, b = std::min(n, i + half + 1);
-    var[i] = var_between(a, b);
-  }
-  double threshold = o.variance_threshold;
-  if (!(threshold > 0.0)) {
-    double base;
-    if (o.init_duration_s > 0.0) {
-      std::size_t b = 0;
-      while (b < n && rec.samples[b].t_s - rec.samples[0].t_s <= o.init_duration_s) ++b;
-      base = var_between(0, std::max<std::size_t>(b, 2));
-    } else {
-      std::vector<double> sorted = var;
-      const auto k = static_cast<std::ptrdiff_t>(sorted.size() / 10);
-      std::nth_element(sorted.begin(), sorted.begin() + k, sorted.end());
-      base = sorted[static_cast<std::size_t>(k)];
-    }
-    threshold = o.threshold_multiplier * base;
-  }
-  const auto trim = static_cast<std::size_t>(std::round(o.trim_s / dt));
-  std::size_t i = 0;
-  while (i < n) {
-    if (!(var[i] <= threshold)) { ++i; continue; }
-    std::size_t j = i;
-    while (j + 1 < n && var[j + 1] <= threshold && !(rec.samples[j + 1].flags & kGapBefore)) ++j;
-    if (j >= i + 2 * trim + 1) {
-      const std::size_t a = i + trim, b = j - trim;
-      if (rec.samples[b].t_s - rec.samples[a].t_s >= o.min_duration_s) {
-        StaticInterval iv = make_interval(rec, a, b, fmt::format("static_{}", out.size()));
-        if (!(o.max_gyro_radps > 0.0) || iv.gyro_mean.norm() <= o.max_gyro_radps) out.push_back(std::move(iv));
-      }
-    }
-    i = j + 1;
+StaticInterval to_interval(const processing::StaticPoint& p) {
+  StaticInterval iv;
+  iv.first = p.first;
+  iv.last = p.last;
+  iv.t_start_s = p.t_start_s;
+  iv.t_end_s = p.t_end_s;
+  iv.count = p.samples_used;
+  iv.accel_mean = p.accel.mean;
+  iv.accel_std = p.accel.sample_std;
+  iv.gyro_mean = p.gyro.mean;
+  iv.gyro_std = p.gyro.sample_std;
+  iv.label = p.segment.label;
+  return iv;
+}
+
+processing::ProcessingOptions default_interval_options() {
+  processing::ProcessingOptions o;
+  o.intervals = processing::IntervalSource::kDetect;
+  o.extraction.filter = processing::Filter::kNone;
+  o.extraction.settle_s = 0.0;
+  return o;
+}
+
+processing::ProcessingOptions rate_table_interval_options() {
+  processing::ProcessingOptions o;
+  o.intervals = processing::IntervalSource::kSegments;
+  o.segment_kinds = {"orientation", "rate"};
+  o.extraction.filter = processing::Filter::kNone;
+  o.extraction.settle_s = 0.5;
+  o.stated = {"intervals", "segments"};
+  return o;
+}
+
+namespace {
+
+struct Extracted {
+  std::vector<StaticInterval> intervals;
+  std::vector<std::vector<double>> truth;  // per interval, the means of the requested columns
+};
+
+Extracted extract_intervals(const Recording& rec, const processing::ProcessingOptions& o,
+                            std::vector<std::string> truth_columns = {}) {
+  processing::Request request;
+  request.truth_columns = std::move(truth_columns);
+  Extracted out;
+  for (const auto& p : processing::extract(rec, o, request).points) {
+    out.intervals.push_back(to_interval(p));
+    out.truth.push_back(p.truth);
   }
   return out;
 }
 
-std::vector<StaticInterval> intervals_from_segments(const Recording& rec, const std::string& kind,
-                                                    double trim_s) {
-  std::vector<StaticInterval> out;
-  for (const auto& seg : rec.segments) {
-    if (seg.kind != kind) continue;
-    std::size_t a = rec.samples.size(), b = 0;
-    for (std::size_t i = 0; i < rec.samples.size(); ++i) {
-      const double t = rec.samples[i].t_s;
-      if (t >= seg.t_start_s + trim_s && t <= seg.t_end_s - trim_s) {
-        a = std::min(a, i);
-        b = std::max(b, i);
-      }
-    }
-    if (a < rec.samples.size() && b > a) out.push_back(make_interval(rec, a, b, seg.label));
-  }
-  return out;
+}  // namespace
+
+std::vector<StaticInterval> static_intervals(const Recording& rec, const processing::ProcessingOptions& options) {
+  return extract_intervals(rec, options).intervals;
 }
 
 // ============================================================================================
@@ -717,9 +697,7 @@ CalibrationResult calibrate_accelerometer_unknown_orientations(const std::vector
 CalibrationResult calibrate_accelerometer_unknown_orientations(const Recording& rec,
                                                                const CalibrationOptions& o) {
   const double g = o.gravity_mps2 > 0.0 ? o.gravity_mps2 : rec.header.gravity_mps2;
-  const auto ivs = o.use_segments ? intervals_from_segments(rec, "orientation", o.detector.trim_s)
-                                  : detect_static_intervals(rec, o.detector);
-  return calibrate_accelerometer_unknown_orientations(ivs, g, o);
+  return calibrate_accelerometer_unknown_orientations(static_intervals(rec, o.processing), g, o);
 }
 
 namespace {
@@ -822,20 +800,6 @@ CalibrationResult known_impl(const std::vector<StaticInterval>& intervals, const
   return r;
 }
 
-// Mean of the truth columns `cols` over the truth rows inside [t0, t1]; false when none.
-bool truth_mean(const Recording& rec, const std::array<int, 3>& cols, double t0, double t1, Eigen::Vector3d& out) {
-  out.setZero();
-  int m = 0;
-  for (std::size_t i = 0; i < rec.truth_t.size(); ++i) {
-    if (rec.truth_t[i] < t0 || rec.truth_t[i] > t1) continue;
-    for (int a = 0; a < 3; ++a) out[a] += rec.truth[i][static_cast<std::size_t>(cols[static_cast<std::size_t>(a)])];
-    ++m;
-  }
-  if (m == 0) return false;
-  out /= static_cast<double>(m);
-  return true;
-}
-
 }  // namespace
 
 CalibrationResult calibrate_accelerometer_known_orientations(const std::vector<StaticInterval>& intervals,
@@ -847,28 +811,29 @@ CalibrationResult calibrate_accelerometer_known_orientations(const std::vector<S
 }
 
 CalibrationResult calibrate_accelerometer_known_orientations(const Recording& rec, const CalibrationOptions& o) {
-  const int cx = rec.truth_column("f_x_mps2"), cy = rec.truth_column("f_y_mps2"),
-            cz = rec.truth_column("f_z_mps2");
-  auto ivs = o.use_segments ? intervals_from_segments(rec, "orientation", o.detector.trim_s)
-                            : detect_static_intervals(rec, o.detector);
   CalibrationOptions o2 = o;
   if (!(o2.gravity_mps2 > 0.0)) o2.gravity_mps2 = rec.header.gravity_mps2;
   const bool offsets = !o.table_offsets.empty();
-  const int ct = rec.truth_column(o.table_fixture + ".tilt.meas_deg"),
-            cr = rec.truth_column(o.table_fixture + ".rotation.meas_deg");
+  // The truth of each interval: the table's encoder angles [deg], or the specific force [m/s^2].
+  const std::vector<std::string> columns =
+      offsets ? std::vector<std::string>{o.table_fixture + ".tilt.meas_deg", o.table_fixture + ".rotation.meas_deg"}
+              : std::vector<std::string>{"f_x_mps2", "f_y_mps2", "f_z_mps2"};
+  const bool have = std::all_of(columns.begin(), columns.end(),
+                                [&](const std::string& c) { return rec.truth_column(c) >= 0; });
+  const Extracted ex = extract_intervals(rec, o.processing, have ? columns : std::vector<std::string>{});
   auto fail_missing = [&](const std::string& why) {
     CalibrationResult r;
     r.method = "known_orientations";
     r.model = accelerometer_model();
-    r.intervals = ivs;
+    r.intervals = ex.intervals;
     init_parameters(r, {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11});
     fail_all(r, why);
     return r;
   };
-  if (!offsets && (cx < 0 || cy < 0 || cz < 0))
+  if (!offsets && !have)
     return fail_missing("known orientations need the truth columns f_x_mps2, f_y_mps2, f_z_mps2; this recording "
                         "has none (use calibrate_accelerometer_unknown_orientations)");
-  if (offsets && (ct < 0 || cr < 0))
+  if (offsets && !have)
     return fail_missing(fmt::format("table offsets need the encoder columns {0}.tilt.meas_deg and "
                                     "{0}.rotation.meas_deg (a three-axis table with fixture id '{0}'); "
                                     "set table_fixture",
@@ -878,24 +843,20 @@ CalibrationResult calibrate_accelerometer_known_orientations(const Recording& re
   Eigen::Matrix3d M = Eigen::Matrix3d::Identity();
   if (rec.header.mounting_R.size() == 9)
     for (int i = 0; i < 9; ++i) M(i / 3, i % 3) = rec.header.mounting_R[static_cast<std::size_t>(i)];
-  std::vector<StaticInterval> kept;
   std::vector<Eigen::Vector3d> truth;
   std::vector<std::array<double, 2>> angles;
-  for (const auto& iv : ivs) {
+  for (const std::vector<double>& a : ex.truth) {
     Eigen::Vector3d f;
     if (offsets) {
-      Eigen::Vector3d a;
-      if (!truth_mean(rec, {ct, cr, ct}, iv.t_start_s, iv.t_end_s, a)) continue;
       angles.push_back({a[0], a[1]});
       f = M * (rot_y<double>(a[1] * std::numbers::pi / 180.0) *
                (rot_x<double>(a[0] * std::numbers::pi / 180.0) * Eigen::Vector3d(0, 0, o2.gravity_mps2)));
-    } else if (!truth_mean(rec, {cx, cy, cz}, iv.t_start_s, iv.t_end_s, f)) {
-      continue;
+    } else {
+      f = Eigen::Vector3d(a[0], a[1], a[2]);
     }
-    kept.push_back(iv);
     truth.push_back(f);
   }
-  return known_impl(kept, truth, angles, M, o2);
+  return known_impl(ex.intervals, truth, angles, M, o2);
 }
 
 // ============================================================================================
@@ -1082,27 +1043,25 @@ CalibrationResult calibrate_gyro_rate_table(const std::vector<StaticInterval>& i
 }
 
 CalibrationResult calibrate_gyro_rate_table(const Recording& rec, const GyroOptions& go) {
-  const std::array<int, 3> cw = {rec.truth_column("w_x_radps"), rec.truth_column("w_y_radps"),
-                                 rec.truth_column("w_z_radps")};
-  const std::array<int, 3> cf = {rec.truth_column("f_x_mps2"), rec.truth_column("f_y_mps2"),
-                                 rec.truth_column("f_z_mps2")};
-  std::vector<StaticInterval> ivs, kept;
-  for (const char* kind : {"orientation", "rate"})
-    for (auto& iv : intervals_from_segments(rec, kind, go.trim_s)) {
-      iv.label = std::string(kind) + ": " + iv.label;
-      ivs.push_back(iv);
-    }
-  std::sort(ivs.begin(), ivs.end(), [](const StaticInterval& a, const StaticInterval& b) { return a.t_start_s < b.t_start_s; });
+  const std::vector<std::string> columns = {"w_x_radps", "w_y_radps", "w_z_radps", "f_x_mps2", "f_y_mps2", "f_z_mps2"};
+  const bool have = std::all_of(columns.begin(), columns.end(),
+                                [&](const std::string& c) { return rec.truth_column(c) >= 0; });
+  std::vector<StaticInterval> kept;
   std::vector<Eigen::Vector3d> w, f;
-  const bool have = *std::min_element(cw.begin(), cw.end()) >= 0 && *std::min_element(cf.begin(), cf.end()) >= 0;
-  if (have)
-    for (const auto& iv : ivs) {
-      Eigen::Vector3d a, b;
-      if (!truth_mean(rec, cw, iv.t_start_s, iv.t_end_s, a) || !truth_mean(rec, cf, iv.t_start_s, iv.t_end_s, b)) continue;
-      kept.push_back(iv);
-      w.push_back(a);
-      f.push_back(b);
+  if (have) {
+    processing::Request request;
+    request.truth_columns = columns;
+    std::vector<processing::StaticPoint> points = processing::extract(rec, go.processing, request).points;
+    std::stable_sort(points.begin(), points.end(), [](const processing::StaticPoint& a, const processing::StaticPoint& b) {
+      return a.t_start_s < b.t_start_s;
+    });
+    for (const auto& p : points) {
+      kept.push_back(to_interval(p));
+      kept.back().label = p.segment.kind + ": " + p.segment.label;
+      w.emplace_back(p.truth[0], p.truth[1], p.truth[2]);
+      f.emplace_back(p.truth[3], p.truth[4], p.truth[5]);
     }
+  }
   CalibrationResult r = calibrate_gyro_rate_table(kept, w, f, go);
   if (!have) {
     fail_all(r, "the rate-table gyro calibration needs the truth columns w_x_radps.. and f_x_mps2..; this "

@@ -51,38 +51,34 @@ ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& fi
   ModelFileOptions o;
   const yaml::MapReader top(root, file, "", "model file", {"ceres_nonlinear"}, {"description", "name"});
   top.require("ceres_nonlinear", "the ceres_nonlinear estimator's options");
-  const yaml::MapReader m(top.get("ceres_nonlinear"), file, "ceres_nonlinear", "ceres_nonlinear options",
-                          {"accelerometer", "gyroscope", "intervals", "detector", "segment_trim_s", "gravity_mps2",
-                           "loss", "loss_scale_mps2", "gyro_loss_scale_radps", "gyro_loss_scale_rad", "confidence",
-                           "max_iterations", "rank_tolerance", "max_std_error", "fixed_cross_axis",
-                           "orientation_sigma_deg", "table_offsets", "table_fixture", "gyro_g_sensitivity"},
-                          {}, top.value_location("ceres_nonlinear"));
+  std::vector<std::string> keys = {"accelerometer", "gyroscope", "segment_trim_s", "gravity_mps2", "loss",
+                                   "loss_scale_mps2", "gyro_loss_scale_radps", "gyro_loss_scale_rad", "confidence",
+                                   "max_iterations", "rank_tolerance", "max_std_error", "fixed_cross_axis",
+                                   "orientation_sigma_deg", "table_offsets", "table_fixture", "gyro_g_sensitivity"};
+  keys.insert(keys.end(), processing::kOptionKeys.begin(), processing::kOptionKeys.end());
+  const yaml::MapReader m(top.get("ceres_nonlinear"), file, "ceres_nonlinear", "ceres_nonlinear options", keys, {},
+                          top.value_location("ceres_nonlinear"));
   o.accelerometer = choice(m, "accelerometer", o.accelerometer, {"unknown_orientations", "known_orientations", "none"});
   o.gyroscope = choice(m, "gyroscope", o.gyroscope, {"integration", "rate_table", "bias_only", "none"});
-  o.intervals = choice(m, "intervals", o.intervals, {"detect", "segments"});
   if (o.accelerometer == "none" && (o.gyroscope == "integration" || o.gyroscope == "bias_only"))
     m.fail_value("gyroscope", "'" + o.gyroscope + "' needs the accelerometer calibration first (accelerometer: none)",
                  "use gyroscope: rate_table, or an accelerometer method");
   if (o.accelerometer == "none" && o.gyroscope == "none") m.fail_value("accelerometer", "nothing to fit: both are none");
   auto& a = o.accel;
-  a.use_segments = o.intervals == "segments";
-  if (m.has("detector")) {
-    const yaml::MapReader d(m.get("detector"), file, m.child_path("detector"), "static-interval detector",
-                            {"window_s", "min_duration_s", "variance_threshold_m2ps4", "threshold_multiplier",
-                             "init_duration_s", "trim_s", "max_gyro_dps"},
-                            {}, m.value_location("detector"));
-    a.detector.window_s = positive(d, "window_s", a.detector.window_s, "in seconds");
-    a.detector.min_duration_s = positive(d, "min_duration_s", a.detector.min_duration_s, "in seconds", true);
-    a.detector.variance_threshold = positive(d, "variance_threshold_m2ps4", 0.0, "in (m/s^2)^2", true);
-    a.detector.threshold_multiplier = positive(d, "threshold_multiplier", a.detector.threshold_multiplier, "");
-    a.detector.init_duration_s = positive(d, "init_duration_s", a.detector.init_duration_s, "in seconds", true);
-    a.detector.trim_s = positive(d, "trim_s", a.detector.trim_s, "in seconds", true);
-    a.detector.max_gyro_radps = positive(d, "max_gyro_dps", 3.0, "in deg/s", true) * kDeg;
-  } else {
-    a.detector.max_gyro_radps = 3.0 * kDeg;
+  a.processing.detector.max_gyro_radps = 3.0 * kDeg;  // a turn about the vertical is not a pose
+  processing::read_options(m, a.processing);
+  // segment_trim_s: dropped at each end of a segment — the rate table's, and the accelerometer
+  // fits' on segments unless the file states their extraction.settle_s.
+  auto& rate_table = o.gyro.processing;
+  const std::string settle = "extraction.settle_s";
+  if (m.has("segment_trim_s")) {
+    rate_table.extraction.settle_s = positive(m, "segment_trim_s", 0.0, "in seconds", true);
+    rate_table.stated.insert(settle);
   }
-  o.gyro.trim_s = positive(m, "segment_trim_s", o.gyro.trim_s, "in seconds", true);
-  if (a.use_segments) a.detector.trim_s = o.gyro.trim_s;
+  if (a.processing.intervals == processing::IntervalSource::kSegments && a.processing.stated.count(settle) == 0) {
+    a.processing.extraction.settle_s = rate_table.extraction.settle_s;
+    if (rate_table.stated.count(settle) > 0) a.processing.stated.insert(settle);
+  }
   a.gravity_mps2 = positive(m, "gravity_mps2", 0.0, "in m/s^2", true);
   a.loss = loss_from_name(choice(m, "loss", "none", {"none", "huber", "cauchy"}));
   o.gyro.loss = a.loss;
@@ -126,20 +122,23 @@ ModelFileOptions load_model_file(const std::string& file) {
 
 std::string describe_options(const ModelFileOptions& o) {
   const auto& a = o.accel;
+  const auto& d = a.processing.detector;
   std::string s = "options:\n";
-  s += fmt::format("  accelerometer: {}, gyroscope: {}, intervals: {}\n", o.accelerometer, o.gyroscope, o.intervals);
-  if (o.intervals == "detect")
+  const processing::IntervalSource source = a.processing.intervals;
+  s += fmt::format("  accelerometer: {}, gyroscope: {}, intervals: {}\n", o.accelerometer, o.gyroscope,
+                   processing::interval_source_name(source));
+  if (source != processing::IntervalSource::kSegments)
     s += fmt::format("  detector: window {} s, min duration {} s, threshold {}, trim {} s, max gyro {:.3g} deg/s\n",
-                     a.detector.window_s, a.detector.min_duration_s,
-                     a.detector.variance_threshold > 0.0
-                         ? fmt::format("{} (m/s^2)^2", a.detector.variance_threshold)
-                         : fmt::format("auto ({} x {})", a.detector.threshold_multiplier,
-                                       a.detector.init_duration_s > 0.0
-                                           ? fmt::format("variance of the first {} s", a.detector.init_duration_s)
+                     d.window_s, d.min_duration_s,
+                     d.variance_threshold > 0.0
+                         ? fmt::format("{} (m/s^2)^2", d.variance_threshold)
+                         : fmt::format("auto ({} x {})", d.threshold_multiplier,
+                                       d.init_duration_s > 0.0
+                                           ? fmt::format("variance of the first {} s", d.init_duration_s)
                                            : std::string("10th percentile of the window variance")),
-                     a.detector.trim_s, a.detector.max_gyro_radps / kDeg);
+                     d.trim_s, d.max_gyro_radps / kDeg);
   else
-    s += fmt::format("  segments trimmed by {} s at each end\n", o.gyro.trim_s);
+    s += fmt::format("  segments trimmed by {} s at each end\n", a.processing.extraction.settle_s);
   s += fmt::format("  gravity: {}\n", a.gravity_mps2 > 0.0 ? fmt::format("{} m/s^2", a.gravity_mps2) : "from the recording");
   s += fmt::format("  loss: {} (scale {} m/s^2, gyro {} rad/s, integration {} rad)\n", loss_name(a.loss),
                    a.loss_scale_mps2, o.gyro.loss_scale_radps, o.gyro.loss_scale_rad);
@@ -157,19 +156,20 @@ std::string describe_options(const ModelFileOptions& o) {
 
 std::string options_json(const ModelFileOptions& o) {
   const auto& a = o.accel;
+  const auto& d = a.processing.detector;
   nlohmann::json j = {
       {"accelerometer", o.accelerometer},
       {"gyroscope", o.gyroscope},
-      {"intervals", o.intervals},
+      {"intervals", processing::interval_source_name(a.processing.intervals)},
       {"detector",
-       {{"window_s", a.detector.window_s},
-        {"min_duration_s", a.detector.min_duration_s},
-        {"variance_threshold_m2ps4", a.detector.variance_threshold},
-        {"threshold_multiplier", a.detector.threshold_multiplier},
-        {"init_duration_s", a.detector.init_duration_s},
-        {"trim_s", a.detector.trim_s},
-        {"max_gyro_dps", a.detector.max_gyro_radps / kDeg}}},
-      {"segment_trim_s", o.gyro.trim_s},
+       {{"window_s", d.window_s},
+        {"min_duration_s", d.min_duration_s},
+        {"variance_threshold_m2ps4", d.variance_threshold},
+        {"threshold_multiplier", d.threshold_multiplier},
+        {"init_duration_s", d.init_duration_s},
+        {"trim_s", d.trim_s},
+        {"max_gyro_dps", d.max_gyro_radps / kDeg}}},
+      {"segment_trim_s", o.gyro.processing.extraction.settle_s},
       {"gravity_mps2", a.gravity_mps2},
       {"loss", loss_name(a.loss)},
       {"loss_scale_mps2", a.loss_scale_mps2},
@@ -187,7 +187,10 @@ std::string options_json(const ModelFileOptions& o) {
   return j.dump();
 }
 
-ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& o) {
+ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& options) {
+  ModelFileOptions o = options;
+  o.accel.processing = processing::resolve(o.accel.processing, rec);
+  o.gyro.processing = processing::resolve(o.gyro.processing, rec);
   ModelFileFit f;
   f.ok = true;
   std::string text = describe_options(o);

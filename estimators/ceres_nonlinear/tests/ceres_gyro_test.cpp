@@ -147,8 +147,8 @@ TEST(CeresGyro, IntegrationRecoversTruthOnA38PositionRecord) {
   spec.seed = 11;
   const synthetic::Record rec = synthetic::make(spec);
   CalibrationOptions ao;
-  ao.detector.trim_s = 0.5;
-  ao.detector.max_gyro_radps = 0.05;
+  ao.processing.detector.trim_s = 0.5;
+  ao.processing.detector.max_gyro_radps = 0.05;
   const CalibrationResult a = calibrate_accelerometer_unknown_orientations(rec.recording, ao);
   ASSERT_TRUE(a.ok) << a.message;
   EXPECT_EQ(a.intervals.size(), 38u);
@@ -284,7 +284,7 @@ TEST(CeresGyro, KnownOrientationsEstimateTheTiltOffsetAndRefuseTheRotationOffset
       t += 0.01;
     }
   CalibrationOptions o;
-  o.use_segments = true;
+  o.processing.intervals = processing::IntervalSource::kSegments;
   o.table_offsets = {"tilt"};
   const CalibrationResult r = calibrate_accelerometer_known_orientations(rec, o);
   ASSERT_TRUE(r.ok) << r.message;
@@ -341,4 +341,33 @@ TEST(CeresModelFile, BadKeysNameFileLineColumnAndSuggest) {
   EXPECT_EQ(o.gyro.loss, Loss::kHuber);
   EXPECT_NE(describe_options(o).find("table offsets: tilt"), std::string::npos);
   std::filesystem::remove_all(dir);
+}
+
+TEST(CeresModelFile, IntervalKeysAreTheProcessingStagesAndTheExperimentFillsTheRest) {
+  const double deg = std::numbers::pi / 180.0;
+  const ModelFileOptions d = options_from_yaml(YAML::Load("ceres_nonlinear: {}\n"), "m.yaml");
+  EXPECT_EQ(d.accel.processing.intervals, processing::IntervalSource::kDetect);
+  EXPECT_EQ(d.accel.processing.extraction.filter, processing::Filter::kNone);
+  EXPECT_EQ(d.accel.processing.extraction.settle_s, 0.0);
+  EXPECT_NEAR(d.accel.processing.detector.max_gyro_radps, 3.0 * deg, 1e-15);
+  EXPECT_EQ(d.gyro.processing.segment_kinds, (std::vector<std::string>{"orientation", "rate"}));
+  EXPECT_EQ(d.gyro.processing.extraction.settle_s, 0.5);
+
+  const ModelFileOptions s = options_from_yaml(
+      YAML::Load("ceres_nonlinear:\n  intervals: segments\n  segment_trim_s: 0.3\n  detector: {window_s: 0.5}\n"),
+      "m.yaml");
+  EXPECT_EQ(s.accel.processing.intervals, processing::IntervalSource::kSegments);
+  EXPECT_EQ(s.accel.processing.extraction.settle_s, 0.3);
+  EXPECT_EQ(s.gyro.processing.extraction.settle_s, 0.3);
+  EXPECT_EQ(s.accel.processing.detector.window_s, 0.5);
+
+  // The run's experiment says settle_s 1 and a detector window of 2 s: the model file's
+  // segment_trim_s and window_s win, the rest comes from the experiment.
+  Recording rec;
+  rec.experiment_yaml = "processing:\n  extraction: {settle_s: 1}\n  detector: {window_s: 2, min_duration_s: 4}\n";
+  const processing::ProcessingOptions used = processing::resolve(s.accel.processing, rec);
+  EXPECT_EQ(used.extraction.settle_s, 0.3);
+  EXPECT_EQ(used.detector.window_s, 0.5);
+  EXPECT_EQ(used.detector.min_duration_s, 4.0);
+  EXPECT_EQ(processing::resolve(d.accel.processing, rec).extraction.settle_s, 1.0);
 }

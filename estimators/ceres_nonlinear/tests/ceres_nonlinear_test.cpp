@@ -276,13 +276,13 @@ TEST(CeresNonlinear, DetectsStaticIntervalsInASimulatedRecording) {
     prev = d;
   }
   rec.header.gravity_mps2 = kG;
-  StaticDetectorOptions d;
+  processing::StaticDetectorOptions d;
   d.window_s = 0.5;
   d.min_duration_s = 2.0;
-  const auto ivs = detect_static_intervals(rec, d);
+  const auto ivs = processing::detect_static_intervals(rec, d);
   EXPECT_EQ(ivs.size(), 12u);
   CalibrationOptions o;
-  o.detector = d;
+  o.processing.detector = d;
   const auto r = calibrate_accelerometer_unknown_orientations(rec, o);
   ASSERT_TRUE(r.ok) << r.report();
   EXPECT_EQ(r.intervals.size(), 12u);
@@ -299,7 +299,10 @@ TEST(CeresNonlinearRealData, ImucalSessionAgainstReferenceCalibration) {
   const auto dir = std::filesystem::path(STEND_SHARED_DATA_DIR) / "imucal";
   const Recording rec = io::import_imucal_session(dir / "annotated_session.csv");
   const double g = 9.81;  // imucal's expected_g
-  const auto ivs = intervals_from_segments(rec, "orientation", 0.5);
+  processing::ProcessingOptions segments = default_interval_options();
+  segments.intervals = processing::IntervalSource::kSegments;
+  segments.extraction.settle_s = 0.5;
+  const auto ivs = static_intervals(rec, segments);
   ASSERT_EQ(ivs.size(), 6u);
   std::vector<Eigen::Vector3d> f;
   for (const auto& iv : ivs) {
@@ -348,8 +351,8 @@ TEST(CeresNonlinearRealData, Mpu6050SessionAgainstReferenceCalibration) {
   const double g = 9.81;
   CalibrationOptions o;
   o.gravity_mps2 = g;
-  o.detector.init_duration_s = 30.0;
-  o.detector.trim_s = 0.2;
+  o.processing.detector.init_duration_s = 30.0;
+  o.processing.detector.trim_s = 0.2;
   const auto r = calibrate_accelerometer_unknown_orientations(rec, o);
   std::cout << r.report();
   ASSERT_TRUE(r.ok) << r.report();

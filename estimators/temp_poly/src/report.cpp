@@ -178,10 +178,11 @@ TempPolyOptions parse_options(const std::string& yaml_text, const std::string& f
     throw ExperimentError({f, e.mark.line + 1, e.mark.column + 1}, "", "YAML syntax error: " + e.msg);
   }
   TempPolyOptions o;
-  yaml::MapReader top(root, f, "", "temp_poly options",
-                      {"instrument", "axes", "selection", "max_order", "order", "reference_c",
-                       "min_span_c", "level_tolerance_c", "bias_temperature", "scale_temperature",
-                       "cross_axis", "confidence", "extraction", "segments"});
+  std::vector<std::string> keys = {"instrument", "axes", "selection", "max_order", "order", "reference_c",
+                                   "min_span_c", "level_tolerance_c", "bias_temperature", "scale_temperature",
+                                   "cross_axis", "confidence"};
+  keys.insert(keys.end(), processing::kOptionKeys.begin(), processing::kOptionKeys.end());
+  yaml::MapReader top(root, f, "", "temp_poly options", keys);
   const std::string inst = top.string("instrument", "accelerometer");
   if (inst == "accelerometer") o.instrument = model::Instrument::kAccelerometer;
   else if (inst == "gyroscope") o.instrument = model::Instrument::kGyroscope;
@@ -217,23 +218,7 @@ TempPolyOptions parse_options(const std::string& yaml_text, const std::string& f
   o.cross_axis = top.boolean("cross_axis", o.cross_axis);
   o.confidence = top.number("confidence", o.confidence, "");
   if (!(o.confidence > 0 && o.confidence < 1)) top.fail_value("confidence", "confidence must be in (0, 1)");
-  if (top.has("extraction")) {
-    yaml::MapReader ex(top.get("extraction"), f, "extraction", "static extraction",
-                       {"filter_order", "cutoff_hz", "settle_s", "zero_phase"}, {}, top.value_location("extraction"));
-    o.extraction.filter_order = static_cast<int>(ex.integer("filter_order", o.extraction.filter_order));
-    o.extraction.cutoff_hz = ex.number("cutoff_hz", o.extraction.cutoff_hz, "in hertz");
-    o.extraction.settle_s = ex.number("settle_s", o.extraction.settle_s, "in seconds");
-    o.extraction.zero_phase = ex.boolean("zero_phase", o.extraction.zero_phase);
-    if (o.extraction.filter_order < 1 || !(o.extraction.cutoff_hz > 0) || o.extraction.settle_s < 0)
-      top.fail_value("extraction", "filter_order ≥ 1, cutoff_hz > 0 and settle_s ≥ 0 are required");
-  }
-  if (top.has("segments")) {
-    const YAML::Node seg = top.get("segments");
-    if (!seg.IsSequence() || seg.size() == 0) top.fail_value("segments", "expected a list of segment kinds");
-    o.segment_kinds.clear();
-    for (std::size_t i = 0; i < seg.size(); ++i)
-      o.segment_kinds.push_back(yaml::as_string(seg[i], f, "segments[" + std::to_string(i) + "]"));
-  }
+  processing::read_options(top, o.processing);
   return o;
 }
 

@@ -73,8 +73,7 @@ batch_lsq::ModelSpec candidate_spec(const TempPolyOptions& o, int order, int axi
       spec.model.terms.push_back({model::TermKind::kScaleTemperature, order, o.reference_c});
   }
   spec.axes = axis >= 0 ? std::vector<int>{axis} : o.axes;
-  spec.extraction = o.extraction;
-  spec.segment_kinds = o.segment_kinds;
+  spec.processing = o.processing;
   spec.weighting = batch_lsq::Weighting::kNone;
   spec.confidence = o.confidence;
   spec.source = "temp_poly";
@@ -345,23 +344,24 @@ TempPolyResult fit_temperature_points(const std::vector<batch_lsq::StaticPoint>&
 }
 
 TempPolyResult fit_temperature_model(const Recording& rec, const TempPolyOptions& o) {
-  std::vector<std::string> notes;
+  processing::Extraction ex;
   std::vector<batch_lsq::StaticPoint> points;
   TempPolyResult r;
   try {
-    points = batch_lsq::extract_points(rec, candidate_spec(o, 0, -1), &notes);
+    points = batch_lsq::extract_points(rec, candidate_spec(o, 0, -1), &ex);
   } catch (const std::exception& e) {
     r.options = o;
     r.reference_c = o.reference_c;
     r.message = e.what();
-    r.notes = notes;
     r.recording_dir = rec.dir.string();
     r.experiment_name = rec.header.experiment_name;
     return r;
   }
-  r = fit_temperature_points(points, o);
+  TempPolyOptions used = o;
+  used.processing = ex.options;
+  r = fit_temperature_points(points, used);
   if (!r.ok && points.empty()) r.message = "no usable static segment in the recording; " + r.message;
-  r.notes.insert(r.notes.begin(), notes.begin(), notes.end());
+  r.notes.insert(r.notes.begin(), ex.notes.begin(), ex.notes.end());
   if (!rec.complete())
     r.notes.push_back("the recording's status is '" + rec.status + "', not 'complete'");
   r.recording_dir = rec.dir.string();

@@ -84,7 +84,7 @@ TEST(TempPolySweep, RecoversPlantedCoefficientsOnSimulatedBench) {
   stend::temp_poly::TempPolyOptions o;
   o.selection = "bic";
   o.max_order = 3;
-  o.extraction.settle_s = 1.0;
+  o.processing.extraction.settle_s = 1.0;
   const auto r = stend::temp_poly::fit_temperature_model(rec, o);
   ASSERT_TRUE(r.ok) << r.message << "\n" << r;
   ASSERT_EQ(r.levels.size(), 4u) << r;

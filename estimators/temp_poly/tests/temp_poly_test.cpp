@@ -249,7 +249,7 @@ TEST(TempPoly, ParsesOptionsAndRejectsBadKeys) {
   EXPECT_EQ(o.max_order, 2);
   EXPECT_EQ(o.axes, (std::vector<int>{0, 2}));
   EXPECT_DOUBLE_EQ(o.reference_c, 20.0);
-  EXPECT_DOUBLE_EQ(o.extraction.settle_s, 1.0);
+  EXPECT_DOUBLE_EQ(o.processing.extraction.settle_s, 1.0);
   EXPECT_THROW(temp_poly::parse_options("selection: aic\n"), ExperimentError);
   EXPECT_THROW(temp_poly::parse_options("max_ordr: 2\n"), ExperimentError);
   const auto ex = temp_poly::load_options(std::string(STEND_SOURCE_DIR) +

@@ -82,7 +82,7 @@ struct GapInput {
   std::string floor_source; // how the noise floor was obtained
   double lsb = 0.0;         // one count of the instrument [unit], 0 unknown
   double range = 0.0;       // full scale [unit], 0 unknown
-  std::size_t saturated_segments = 0;  // skipped by the extraction for saturated samples
+  std::size_t saturated_segments = 0;  // skipped by processing for saturated samples (SkipReason)
   std::vector<std::string> notes;
   // Twin noise: the white-noise std of one sample the twin would produce, per axis [unit]; NaN
   // when the model file gives none (then the recording's median segment std is the reference).
@@ -134,7 +134,7 @@ GapInput build_input(const Recording& recording, const batch_lsq::ModelSpec& spe
 GapInput magnitude_form(GapInput input, double gravity);
 
 // From a recording with no truth columns and no orientation annotations: static intervals by the
-// sliding-variance detector (ceres_nonlinear's, IMU-TK style), batch_lsq extraction on them, the
+// sliding-variance detector (the processing stage's, IMU-TK style), extraction on them, the
 // noise floor as build_input, then magnitude_form. Throws std::runtime_error saying why when no
 // usable interval is found or the instrument is a gyroscope (no rate truth to compare with).
 GapInput build_magnitude_input(const Recording& recording, const batch_lsq::ModelSpec& spec);

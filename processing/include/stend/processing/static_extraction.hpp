@@ -1,15 +1,22 @@
 // Static extraction: the constant part of a signal over a segment, as in the paper's calibration
 // procedure (step 3): low-pass with a Butterworth filter, discard a settling time at each end of
-// the segment, average what remains.
+// the segment, average what remains. With Filter::kNone the mean is the plain mean of the kept
+// samples (what the Ceres calibrations use).
 #pragma once
 
 #include <cstddef>
 #include <span>
 #include <string>
 
+#include "stend/processing/skip.hpp"
+
 namespace stend::processing {
 
+enum class Filter { kNone, kButterworth };
+const char* filter_name(Filter filter);  // "none" | "butterworth"
+
 struct StaticExtractionSettings {
+  Filter filter = Filter::kButterworth;
   int filter_order = 6;     // Butterworth order (the paper: 6)
   double cutoff_hz = 1.0;   // −3 dB frequency of the low-pass
   double settle_s = 2.0;    // discarded at the start AND at the end of the segment, after filtering
@@ -18,7 +25,8 @@ struct StaticExtractionSettings {
 
 struct StaticValue {
   double mean = 0.0;          // the constant part: mean of the filtered signal over the kept window
-  double filtered_std = 0.0;  // spread of the filtered signal over the kept window
+                              // (Filter::kNone: = raw_mean)
+  double filtered_std = 0.0;  // spread of the filtered signal over the kept window (kNone: raw_std)
   double raw_mean = 0.0;      // mean of the unfiltered samples over the kept window
   double raw_std = 0.0;       // sample standard deviation of the unfiltered samples, kept window
   // raw_std / sqrt(n_used): the standard error of the mean IF the noise is white. Coloured noise
@@ -33,9 +41,11 @@ struct StaticValue {
 
 // `t` (strictly increasing, seconds) and `x` have the same length. Uses the samples with
 // t_start ≤ t ≤ t_end, filters them at the sample rate estimated from their median interval, keeps
-// t_start + settle_s ≤ t ≤ t_end − settle_s, and averages. Throws std::invalid_argument with a
-// message saying what to change when the segment has too few samples, the kept window is empty
-// (settle_s too long for the segment), or the cutoff is not below the Nyquist frequency.
+// t_start + settle_s ≤ t ≤ t_end − settle_s, and averages. Throws SkipError (a
+// std::invalid_argument) with a message saying what to change when the segment has fewer than 8
+// samples or its kept window fewer than 2 (settle_s too long for the segment) — kTooFewSamples —,
+// or the cutoff is not below the Nyquist frequency — kFilter; std::invalid_argument for
+// arrays of different lengths or a negative settle_s.
 StaticValue extract_static(std::span<const double> t, std::span<const double> x, double t_start_s,
                            double t_end_s, const StaticExtractionSettings& settings);
 

@@ -2,9 +2,10 @@
 // procedure (Aksenov, eq. (7)–(9) and the calibration steps), made honest:
 //   1. per static segment (kind "orientation" by default): the constant part of each output axis
 //      by a Butterworth low-pass (order, cutoff_hz stated), settle_s discarded at both ends,
-//      averaged (stend/processing/static_extraction.hpp);
+//      averaged — the processing stage (stend/processing/static_points.hpp), whose rules skip
+//      unsettled, incomplete, saturated and too short segments;
 //   2. the truth over the same window from the recording's truth columns (f_*_mps2 / w_*_radps,
-//      die_c), giving Δa = measured − true input per axis;
+//      die_c; processing's truth mean), giving Δa = measured − true input per axis;
 //   3. one design row per (orientation, fitted axis) from ErrorModel::regressor at the mean truth
 //      stimulus — never a re-written term formula;
 //   4. weighted linear least squares by SVD on the column-scaled design
@@ -26,6 +27,7 @@
 #include "stend/batch_lsq/model_spec.hpp"
 #include "stend/estimation/linear_lsq.hpp"
 #include "stend/model/terms.hpp"
+#include "stend/processing/static_points.hpp"
 #include "stend/recording.hpp"
 
 namespace stend::batch_lsq {
@@ -35,7 +37,8 @@ inline constexpr const char* kEstimatorName = "batch_lsq";
 inline constexpr const char* kEstimatorVersion = "0.1.0";
 inline constexpr double kStandardGravity = 9.80665;  // for mg
 
-// One static orientation: what the sensor read (constant part) and what the bench applied.
+// One static orientation: what the sensor read (constant part) and what the bench applied — this
+// estimator's view of a processing::StaticPoint.
 struct StaticPoint {
   int segment_id = -1;
   std::string label;
@@ -82,11 +85,14 @@ struct FitResult {
   Eigen::VectorXd theta_full() const;
 };
 
-// Step 1–2 for every usable segment. Segments that are unsettled, incomplete, saturated, too
-// short or without truth are skipped with a note. Throws std::runtime_error when the recording
-// lacks what the model needs (truth columns), naming the missing columns and those present.
+// Step 1–2 for every usable segment, through the processing stage with spec.processing (completed
+// by the recording's experiment `processing:` section). Segments that are unsettled, incomplete,
+// saturated, too short or without truth are skipped; `extraction` (optional) receives the stage's
+// result: the skips with their reasons, the notes, the options used. Throws std::runtime_error
+// when the recording lacks what the model needs (truth columns), naming the missing columns and
+// those present, or its sample times do not increase.
 std::vector<StaticPoint> extract_points(const Recording& recording, const ModelSpec& spec,
-                                        std::vector<std::string>* notes = nullptr);
+                                        processing::Extraction* extraction = nullptr);
 
 // Steps 3–4 on given points (synthetic data, tables typed from papers, or extract_points).
 FitResult fit_points(const std::vector<StaticPoint>& points, const ModelSpec& spec);

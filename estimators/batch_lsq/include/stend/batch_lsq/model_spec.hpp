@@ -16,6 +16,11 @@
 //   weighting: none                    # or segment_noise (1/σ² of each segment's mean)
 //   confidence: 0.95                   # interval level
 //
+// extraction, segments (and intervals, detector) are the processing stage's keys
+// (stend/processing/options.hpp); those the file does not state come from the recording's
+// experiment `processing:` section when it gives them, else from the defaults above (a gyroscope's
+// segments default to [rate, orientation]).
+//
 // Errors are stend::ExperimentError with "FILE:LINE:COLUMN: error: …" messages.
 #pragma once
 
@@ -24,7 +29,7 @@
 #include <vector>
 
 #include "stend/model/terms.hpp"
-#include "stend/processing/static_extraction.hpp"
+#include "stend/processing/options.hpp"
 
 namespace stend::batch_lsq {
 
@@ -37,8 +42,7 @@ enum class Weighting {
 struct ModelSpec {
   model::ErrorModel model;
   std::vector<int> axes = {0, 1, 2};  // 0 = x, 1 = y, 2 = z
-  processing::StaticExtractionSettings extraction;
-  std::vector<std::string> segment_kinds = {"orientation"};
+  processing::ProcessingOptions processing;  // static intervals and extraction (paper steps 1–3)
   Weighting weighting = Weighting::kNone;
   double confidence = 0.95;
   std::string source;  // file the spec came from ("" when built in code)

@@ -22,6 +22,7 @@
 #pragma once
 
 #include <stend/model/terms.hpp>
+#include <stend/processing/static_points.hpp>
 #include <stend/recording.hpp>
 
 #include <Eigen/Core>
@@ -34,22 +35,7 @@
 namespace stend::ceres_nonlinear {
 
 // ---------------------------------------------------------------------------------------------
-// Static intervals
-
-struct StaticDetectorOptions {
-  double window_s = 1.0;          // centred sliding window for the variance
-  double min_duration_s = 1.0;    // shorter still runs are ignored (hand-held poses are short)
-  // Sum of the three accelerometer variances over the window [(m/s^2)^2] below which a sample is
-  // static. <= 0: automatic = threshold_multiplier × (that variance over the first
-  // init_duration_s when > 0, else its 10th percentile over the whole recording).
-  double variance_threshold = 0.0;
-  double threshold_multiplier = 6.0;
-  double init_duration_s = 0.0;
-  double trim_s = 0.0;            // dropped at each end of a detected interval
-  // > 0: drop intervals whose mean gyro reading exceeds this norm [rad/s] — a turn about the
-  // vertical at constant rate leaves the accelerometer still (used before gyro integration).
-  double max_gyro_radps = 0.0;
-};
+// Static intervals — from the processing stage (stend/processing/static_points.hpp)
 
 struct StaticInterval {
   std::size_t first = 0, last = 0;  // sample indices, inclusive
@@ -65,13 +51,21 @@ struct StaticInterval {
 // Mean and spread of samples first..last (inclusive).
 StaticInterval make_interval(const Recording& rec, std::size_t first, std::size_t last,
                              std::string label = {});
-// Sliding-window variance detector. Samples flagged kGapBefore split intervals.
-std::vector<StaticInterval> detect_static_intervals(const Recording& rec,
-                                                    const StaticDetectorOptions& options = {});
-// The recording's own segments of the given kind (default "orientation"), trimmed by trim_s.
-std::vector<StaticInterval> intervals_from_segments(const Recording& rec,
-                                                    const std::string& kind = "orientation",
-                                                    double trim_s = 0.0);
+// A processing point (both instruments extracted) in this estimator's form.
+StaticInterval to_interval(const processing::StaticPoint& point);
+
+// How the accelerometer fits find their static intervals unless told otherwise: detected in the
+// samples (processing::StaticDetectorOptions), each the plain mean of its samples — no low-pass,
+// nothing discarded beyond the detector's trim_s. For the recording's orientation segments set
+// intervals = kSegments and extraction.settle_s to the time dropped at each end.
+processing::ProcessingOptions default_interval_options();
+// The rate table's intervals: the recording's orientation and rate segments, plain means, 0.5 s
+// dropped at each end; the interval source and the segment kinds are the method's (stated).
+processing::ProcessingOptions rate_table_interval_options();
+
+// The static intervals of a recording as the processing stage finds them (skipped ones left out).
+std::vector<StaticInterval> static_intervals(const Recording& rec,
+                                             const processing::ProcessingOptions& options = default_interval_options());
 
 // ---------------------------------------------------------------------------------------------
 // Calibration
@@ -79,8 +73,7 @@ std::vector<StaticInterval> intervals_from_segments(const Recording& rec,
 enum class Loss { kNone, kHuber, kCauchy };
 
 struct CalibrationOptions {
-  StaticDetectorOptions detector;
-  bool use_segments = false;       // recording's "orientation" segments instead of detection
+  processing::ProcessingOptions processing = default_interval_options();  // the static intervals
   double gravity_mps2 = 0.0;       // 0: the recording header's; both 0 → error
   Loss loss = Loss::kNone;
   double loss_scale_mps2 = 0.05;   // Huber / Cauchy scale
@@ -165,8 +158,8 @@ CalibrationResult calibrate_accelerometer_unknown_orientations(
     const std::vector<StaticInterval>& intervals, double gravity_mps2,
     const CalibrationOptions& options = {});
 
-// Truth from the columns f_x_mps2, f_y_mps2, f_z_mps2 (mean of the truth rows inside each
-// interval; intervals without truth rows are dropped).
+// Truth from the columns f_x_mps2, f_y_mps2, f_z_mps2 (processing's truth mean over each
+// interval; intervals without truth are dropped).
 CalibrationResult calibrate_accelerometer_known_orientations(const Recording& rec,
                                                              const CalibrationOptions& options = {});
 // truth_f[k]: the true specific force of interval k in the sensor frame [m/s^2].
@@ -207,13 +200,13 @@ struct GyroOptions {
   double rank_tolerance = 1e-8;
   double max_std_error = 0.05;     // relative (bias in rad/s, G in 1/g, scale/cross in 1)
   bool estimate_g_sensitivity = false;
-  double trim_s = 0.5;             // rate table: dropped at each end of a segment
+  processing::ProcessingOptions processing = rate_table_interval_options();  // rate table intervals
 };
 
 model::ErrorModel gyroscope_model(bool g_sensitivity);
 
-// Rate table from a recording: segments of kind "rate" and "orientation" (trimmed by trim_s) with
-// the truth columns w_x_radps.. and f_x_mps2..; fails when the recording has none.
+// Rate table from a recording: segments of kind "rate" and "orientation" (options.processing)
+// with the truth columns w_x_radps.. and f_x_mps2..; fails when the recording has none.
 CalibrationResult calibrate_gyro_rate_table(const Recording& rec, const GyroOptions& options = {});
 // truth_w[k], truth_f[k]: true rate [rad/s] and specific force [m/s^2] of interval k (sensor frame).
 CalibrationResult calibrate_gyro_rate_table(const std::vector<StaticInterval>& intervals,

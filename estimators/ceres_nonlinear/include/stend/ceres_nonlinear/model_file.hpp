@@ -3,7 +3,8 @@
 //   ceres_nonlinear:
 //     accelerometer: unknown_orientations   # unknown_orientations | known_orientations | none
 //     gyroscope: integration                # integration | rate_table | bias_only | none
-//     intervals: detect                     # detect | segments (the recording's orientation segments)
+//     intervals: detect                     # detect | segments | auto (processing's keys: intervals,
+//                                           #   segments, extraction, detector)
 //     ...                                   # options: see README.md, "Model file"
 //
 // Every key is checked (unknown keys with "did you mean", wrong types, ranges); errors are
@@ -26,7 +27,6 @@ inline constexpr const char* kEstimatorVersion = "0.2.0";
 struct ModelFileOptions {
   std::string accelerometer = "unknown_orientations";
   std::string gyroscope = "integration";
-  std::string intervals = "detect";
   CalibrationOptions accel;
   GyroOptions gyro;
 };
@@ -49,7 +49,9 @@ struct ModelFileFit {
 };
 
 // Runs what the options ask for: accelerometer first (the integration method needs it), then the
-// gyroscope. ok only when every requested part succeeded.
+// gyroscope. ok only when every requested part succeeded. Processing keys the model file does not
+// state come from the recording's experiment `processing:` section (processing::resolve); the
+// echoed options are the ones used.
 ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& options);
 
 }  // namespace stend::ceres_nonlinear

@@ -45,9 +45,8 @@ struct TempPolyOptions {
   bool scale_temperature = true;  // fit scale_temperature (the paper's k_t, k_tt on A_i)
   bool cross_axis = false;        // add the temperature-independent cross_axis term
   double confidence = 0.95;
-  // Static extraction and segment kinds (the batch_lsq defaults).
-  processing::StaticExtractionSettings extraction;
-  std::vector<std::string> segment_kinds = {"orientation"};
+  // Static intervals and extraction (the processing stage's keys and defaults).
+  processing::ProcessingOptions processing;
 };
 
 // One temperature level: the points whose die temperatures cluster together.

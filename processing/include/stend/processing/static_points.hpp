@@ -1,0 +1,94 @@
+// The processing stage: a recording → static points. Every estimator and the diagnosis take their
+// static data from here, so the rules are written once:
+//   1. intervals: the recording's segments of the requested kinds, or intervals detected in the
+//      samples (ProcessingOptions::intervals);
+//   2. a segment is skipped when it is incomplete (the run stopped inside it) or unsettled
+//      (fixtures / chamber not settled for the whole segment);
+//   3. each requested axis is reduced by extract_static (low-pass, settle_s discarded at each
+//      end, mean; at least 8 samples in the interval and 2 in the kept window);
+//   4. an interval with a saturated sample of a requested instrument inside the kept window is
+//      skipped; gaps there (kGapBefore) are noted, not skipped;
+//   5. the truth over the kept window (stend/processing/truth.hpp): the means of the requested
+//      truth columns — an interval without any truth snapshot inside or before is skipped —, and
+//      the temperature: the die truth (column die_c) and its slope, else the sensor's reading.
+// Every skip comes back typed (SkipReason) with a human note.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "stend/processing/options.hpp"
+#include "stend/processing/skip.hpp"
+#include "stend/recording.hpp"
+
+namespace stend::processing {
+
+inline constexpr const char* kDieTemperatureColumn = "die_c";  // truth column, degC
+inline constexpr const char* kDetectedKind = "detected";       // Segment::kind of a detected interval
+
+// What the caller needs from each interval.
+struct Request {
+  bool accel = true;  // extract the accelerometer axes (their saturation flag skips an interval)
+  bool gyro = true;   // extract the gyroscope axes (likewise)
+  // Mean of each over every point's window, in this order; each must be a truth column of the
+  // recording. When not empty, an interval without truth is skipped.
+  std::vector<std::string> truth_columns;
+};
+
+// One instrument's three axes over a point's kept window, in the recording's SI unit.
+struct AxesValue {
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  Eigen::Vector3d mean = Eigen::Vector3d::Constant(kNaN);        // the static value (filtered)
+  Eigen::Vector3d sample_std = Eigen::Vector3d::Constant(kNaN);  // of the raw samples
+  // sample_std / √n: the standard error of the mean if the noise is white (coloured noise makes
+  // the true error larger).
+  Eigen::Vector3d std_error = Eigen::Vector3d::Constant(kNaN);
+};
+
+enum class TemperatureSource { kDie, kSensor };
+
+struct StaticPoint {
+  // The interval: a segment of the recording, or a detected interval (kind kDetectedKind, id =
+  // its index among the detected ones, label "static_<id>").
+  Segment segment;
+  std::size_t first = 0, last = 0;        // the kept window: sample indices, inclusive
+  double t_start_s = 0.0, t_end_s = 0.0;  // times of its first and last samples
+  std::size_t samples_used = 0;
+  std::size_t gaps = 0;  // samples flagged kGapBefore inside the kept window (after its first)
+  AxesValue accel;       // m/s^2; NaN unless requested
+  AxesValue gyro;        // rad/s; NaN unless requested
+  double temperature_c = AxesValue::kNaN;
+  double temperature_rate_cps = 0.0;  // slope of the die truth over the window (0 otherwise)
+  TemperatureSource temperature_source = TemperatureSource::kSensor;
+  std::vector<double> truth;  // means of Request::truth_columns
+};
+
+struct Skip {
+  Segment segment;
+  SkipReason reason = SkipReason::kTooFewSamples;
+  std::string note;  // "skipped segment 3 (orientation, …): the fixtures/chamber were not settled"
+};
+
+struct Extraction {
+  ProcessingOptions options;  // as used: the caller's, completed by the experiment's section
+  std::vector<StaticPoint> points;
+  std::vector<Skip> skipped;
+  // Every remark in order: data-source remarks, each skip's note, gaps in kept windows, no
+  // segment of the requested kinds.
+  std::vector<std::string> notes;
+  std::size_t count(SkipReason reason) const;  // skips with that reason
+};
+
+// The stage. `options` are resolved against the recording's experiment (resolve()). Throws
+// std::invalid_argument when the resolved options are invalid, nothing is requested, or a
+// requested truth column is missing; std::runtime_error when the sample times do not strictly
+// increase; ExperimentError for a bad experiment `processing:` section.
+Extraction extract(const Recording& rec, const ProcessingOptions& options, const Request& request);
+
+// "segment 3 (orientation 'x up', orientation 1/6, 12–20 s)", as the notes name a segment.
+std::string describe(const Segment& segment);
+
+}  // namespace stend::processing

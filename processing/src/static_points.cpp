@@ -1,0 +1,243 @@
+// Recording → static points. See stend/processing/static_points.hpp.
+#include "stend/processing/static_points.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "stend/processing/static_detector.hpp"
+#include "stend/processing/truth.hpp"
+
+namespace stend::processing {
+
+namespace {
+
+std::string num(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+std::string join(const std::vector<std::string>& items) {
+  std::string out;
+  for (const auto& s : items) out += (out.empty() ? "" : ", ") + s;
+  return out;
+}
+
+void require_increasing_times(const Recording& rec) {
+  for (std::size_t i = 1; i < rec.samples.size(); ++i)
+    if (!(rec.samples[i].t_s > rec.samples[i - 1].t_s))
+      throw std::runtime_error("recording '" + rec.dir.string() + "': sample times are not " +
+                               "strictly increasing at sample " + std::to_string(i) + " (t = " +
+                               num(rec.samples[i].t_s) + " s)");
+}
+
+std::vector<Segment> segments_of_kinds(const Recording& rec, const std::vector<std::string>& kinds,
+                                       std::vector<std::string>& notes) {
+  std::vector<Segment> out;
+  for (const Segment& s : rec.segments)
+    if (std::find(kinds.begin(), kinds.end(), s.kind) != kinds.end()) out.push_back(s);
+  if (out.empty()) {
+    std::vector<std::string> present;
+    for (const auto& s : rec.segments)
+      if (std::find(present.begin(), present.end(), s.kind) == present.end()) present.push_back(s.kind);
+    notes.push_back("the recording has no segment of kind " + join(kinds) + " (kinds present: " +
+                    (present.empty() ? "none" : join(present)) + ")");
+  }
+  return out;
+}
+
+std::vector<Segment> detected_segments(const Recording& rec, const StaticDetectorOptions& o) {
+  std::vector<Segment> out;
+  for (const DetectedInterval& iv : detect_static_intervals(rec, o)) {
+    Segment s;
+    s.id = static_cast<int>(out.size());
+    s.kind = kDetectedKind;
+    s.label = "static_" + std::to_string(s.id);
+    s.t_start_s = iv.t_start_s;
+    s.t_end_s = iv.t_end_s;
+    out.push_back(s);
+  }
+  return out;
+}
+
+// Step 1: the intervals, as segments.
+std::vector<Segment> intervals(const Recording& rec, const ProcessingOptions& o, std::vector<std::string>& notes) {
+  IntervalSource source = o.intervals;
+  if (source == IntervalSource::kAuto)
+    source = rec.segments.empty() ? IntervalSource::kDetect : IntervalSource::kSegments;
+  if (source == IntervalSource::kSegments) return segments_of_kinds(rec, o.segment_kinds, notes);
+  std::vector<Segment> found = detected_segments(rec, o.detector);
+  if (o.intervals == IntervalSource::kAuto)
+    notes.push_back("the recording has no segments: " + std::to_string(found.size()) +
+                    " static intervals detected in the samples (sliding variance, window " +
+                    num(o.detector.window_s) + " s, at least " + num(o.detector.min_duration_s) + " s)");
+  return found;
+}
+
+// Steps 2–5 for one interval.
+class PointBuilder {
+ public:
+  PointBuilder(const Recording& rec, const ProcessingOptions& o, const Request& req, Extraction& out)
+      : rec_(rec), o_(o), req_(req), out_(out) {
+    for (const auto& name : req.truth_columns) {
+      const int c = rec.truth_column(name);
+      if (c < 0)
+        throw std::invalid_argument("processing: the recording has no truth column '" + name + "'");
+      columns_.push_back(c);
+    }
+    die_ = rec.truth_column(kDieTemperatureColumn);
+    if (die_ >= 0) columns_.push_back(die_);
+    saturation_ = (req.accel ? kAccelSaturated : 0u) | (req.gyro ? kGyroSaturated : 0u);
+  }
+
+  void add(const Segment& seg) {
+    const std::string what = describe(seg);
+    if (!seg.complete) return skip(seg, SkipReason::kIncomplete, what + ": incomplete (the run stopped inside it)");
+    if (!seg.settled) return skip(seg, SkipReason::kUnsettled, what + ": the fixtures/chamber were not settled");
+    StaticPoint p;
+    p.segment = seg;
+    try {
+      extract_axes(p);
+    } catch (const SkipError& e) {
+      return skip(seg, e.reason(), what + ": " + e.what());
+    }
+    const Window w = scan_window(p);
+    if (w.saturated > 0)
+      return skip(seg, SkipReason::kSaturated, what + ": " + std::to_string(w.saturated) + " saturated sample(s)");
+    if (p.gaps > 0)
+      out_.notes.push_back(what + ": " + std::to_string(p.gaps) +
+                           " gap(s) in the kept window; the filter assumed uniform sampling");
+    if (!add_truth(p, w.sensor_temperature_c))
+      return skip(seg, SkipReason::kNoTruth, what + ": no truth snapshot at or before its window");
+    out_.points.push_back(std::move(p));
+  }
+
+ private:
+  // Step 3: the requested instruments' axes over the segment's samples; sets the kept window.
+  void extract_axes(StaticPoint& p) const {
+    const auto& S = rec_.samples;
+    const auto lo = std::lower_bound(S.begin(), S.end(), p.segment.t_start_s,
+                                     [](const ImuSample& s, double t) { return s.t_s < t; });
+    const auto hi = std::upper_bound(S.begin(), S.end(), p.segment.t_end_s,
+                                     [](double t, const ImuSample& s) { return t < s.t_s; });
+    const auto first = static_cast<std::size_t>(lo - S.begin());
+    std::vector<double> t;
+    for (auto it = lo; it < hi; ++it) t.push_back(it->t_s);
+    if (req_.accel) p.accel = axes(first, t, [](const ImuSample& s, int a) { return s.accel_mps2[a]; }, p);
+    if (req_.gyro) p.gyro = axes(first, t, [](const ImuSample& s, int a) { return s.gyro_radps[a]; }, p);
+  }
+
+  // One instrument's three axes over the segment's samples (times `t`, the first at index
+  // `first`).
+  template <typename Axis>
+  AxesValue axes(std::size_t first, const std::vector<double>& t, Axis axis, StaticPoint& p) const {
+    std::vector<double> x(t.size());
+    AxesValue v;
+    for (int a = 0; a < 3; ++a) {
+      for (std::size_t i = 0; i < x.size(); ++i) x[i] = axis(rec_.samples[first + i], a);
+      const StaticValue s = extract_static(t, x, p.segment.t_start_s, p.segment.t_end_s, o_.extraction);
+      v.mean[a] = s.mean;
+      v.sample_std[a] = s.raw_std;
+      v.std_error[a] = s.white_std_error;
+      p.t_start_s = s.t_first_s;
+      p.t_end_s = s.t_last_s;
+      p.samples_used = s.n_used;
+    }
+    p.first = first + static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), p.t_start_s) - t.begin());
+    p.last = p.first + p.samples_used - 1;
+    return v;
+  }
+
+  // Step 4: flags and the sensor's temperature over the kept window; sets p.gaps.
+  struct Window {
+    std::size_t saturated = 0;
+    double sensor_temperature_c = 0.0;  // mean
+  };
+  Window scan_window(StaticPoint& p) const {
+    Window w;
+    for (std::size_t i = p.first; i <= p.last; ++i) {
+      const ImuSample& s = rec_.samples[i];
+      if (s.flags & saturation_) ++w.saturated;
+      if (i > p.first && (s.flags & kGapBefore)) ++p.gaps;
+      w.sensor_temperature_c += s.temperature_c;
+    }
+    w.sensor_temperature_c /= static_cast<double>(p.samples_used);
+    return w;
+  }
+
+  // Step 5: truth means and temperature over the kept window; false when truth was requested and
+  // there is none.
+  bool add_truth(StaticPoint& p, double sensor_temperature_c) const {
+    const TruthMean truth = truth_mean(rec_, columns_, p.t_start_s, p.t_end_s);
+    if (!truth.found && !req_.truth_columns.empty()) return false;
+    p.truth.assign(truth.values.begin(), truth.values.begin() + static_cast<std::ptrdiff_t>(req_.truth_columns.size()));
+    if (die_ >= 0 && truth.found) {
+      p.temperature_c = truth.values.back();
+      p.temperature_rate_cps = truth_slope(rec_, die_, p.t_start_s, p.t_end_s);
+      p.temperature_source = TemperatureSource::kDie;
+    } else {
+      p.temperature_c = sensor_temperature_c;
+    }
+    return true;
+  }
+
+  void skip(const Segment& seg, SkipReason reason, const std::string& what_why) {
+    out_.skipped.push_back({seg, reason, "skipped " + what_why});
+    out_.notes.push_back(out_.skipped.back().note);
+  }
+
+  const Recording& rec_;
+  const ProcessingOptions& o_;
+  const Request& req_;
+  Extraction& out_;
+  std::vector<int> columns_;  // truth columns requested, then die_c when present
+  int die_ = -1;
+  std::uint32_t saturation_ = 0;
+};
+
+}  // namespace
+
+const char* skip_reason_name(SkipReason reason) {
+  switch (reason) {
+    case SkipReason::kIncomplete: return "incomplete";
+    case SkipReason::kUnsettled: return "unsettled";
+    case SkipReason::kTooFewSamples: return "too_few_samples";
+    case SkipReason::kFilter: return "filter";
+    case SkipReason::kSaturated: return "saturated";
+    case SkipReason::kNoTruth: break;
+  }
+  return "no_truth";
+}
+
+std::size_t Extraction::count(SkipReason reason) const {
+  return static_cast<std::size_t>(
+      std::count_if(skipped.begin(), skipped.end(), [&](const Skip& s) { return s.reason == reason; }));
+}
+
+std::string describe(const Segment& s) {
+  std::string out = "segment " + std::to_string(s.id) + " (" + s.kind;
+  if (!s.label.empty()) out += " '" + s.label + "'";
+  if (s.orientation >= 0)
+    out += ", orientation " + std::to_string(s.orientation + 1) + "/" + std::to_string(s.orientation_count);
+  return out + ", " + num(s.t_start_s) + "–" + num(s.t_end_s) + " s)";
+}
+
+Extraction extract(const Recording& rec, const ProcessingOptions& options, const Request& request) {
+  Extraction out;
+  out.options = resolve(options, rec);
+  std::string why;
+  if (!out.options.IsValid(&why)) throw std::invalid_argument("processing options: " + why);
+  if (!request.accel && !request.gyro)
+    throw std::invalid_argument("processing: nothing requested (neither accelerometer nor gyroscope)");
+  PointBuilder builder(rec, out.options, request, out);
+  if (rec.truth_column(kDieTemperatureColumn) < 0)
+    out.notes.push_back("no 'die_c' truth column: the temperature of each point is the sensor's own "
+                        "temperature reading");
+  require_increasing_times(rec);
+  for (const Segment& seg : intervals(rec, out.options, out.notes)) builder.add(seg);
+  return out;
+}
+
+}  // namespace stend::processing

@@ -1,0 +1,375 @@
+// The processing stage: options (ranges, YAML keys, the experiment's section as fallback), truth
+// means, the sliding-variance detector, and Recording → static points with its skip rules.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <string>
+
+#include "stend/processing/options.hpp"
+#include "stend/processing/static_detector.hpp"
+#include "stend/processing/static_points.hpp"
+#include "stend/processing/truth.hpp"
+
+using namespace stend;
+using namespace stend::processing;
+
+namespace {
+
+constexpr double kRateHz = 100.0;
+
+// 100 Hz samples over [t0, t1): accelerometer `f` [m/s^2] plus white noise of `sigma`, gyro 0,
+// sensor temperature 30 degC.
+void add_samples(Recording& rec, double t0, double t1, const Eigen::Vector3d& f, double sigma,
+                 std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0.0, sigma);
+  const auto count = static_cast<int>(std::lround((t1 - t0) * kRateHz));
+  for (int i = 0; i < count; ++i) {
+    ImuSample s;
+    s.t_s = t0 + i / kRateHz;
+    s.accel_mps2 = f + Eigen::Vector3d(n(rng), n(rng), n(rng));
+    s.gyro_radps.setZero();
+    s.temperature_c = 30.0;
+    rec.samples.push_back(s);
+  }
+}
+
+// A recording of still poses of 10 s, each a segment of kind orientation, with truth snapshots
+// (f_x_mps2, f_y_mps2, f_z_mps2, die_c) at 10 Hz; die_c ramps 20 → 21 degC over each pose.
+Recording poses(const std::vector<Eigen::Vector3d>& forces, double sigma = 0.01) {
+  Recording rec;
+  rec.header.truth_columns = {"f_x_mps2", "f_y_mps2", "f_z_mps2", "die_c"};
+  std::mt19937_64 rng(4);
+  double t = 0.0;
+  for (std::size_t k = 0; k < forces.size(); ++k, t += 10.0) {
+    add_samples(rec, t, t + 10.0, forces[k], sigma, rng);
+    for (int j = 0; j < 100; ++j) {
+      const double tt = t + 0.1 * j;
+      rec.truth_t.push_back(tt);
+      rec.truth.push_back({forces[k][0], forces[k][1], forces[k][2], 20.0 + 0.1 * (tt - t)});
+    }
+    Segment s;
+    s.id = static_cast<int>(k);
+    s.kind = "orientation";
+    s.orientation = static_cast<int>(k);
+    s.orientation_count = static_cast<int>(forces.size());
+    s.t_start_s = t;
+    s.t_end_s = t + 10.0 - 1.0 / kRateHz;
+    rec.segments.push_back(s);
+  }
+  return rec;
+}
+
+const std::vector<Eigen::Vector3d> kSix = {{0, 0, 9.8}, {0, 0, -9.8}, {9.8, 0, 0},
+                                           {-9.8, 0, 0}, {0, 9.8, 0}, {0, -9.8, 0}};
+
+Request accel_with_force() {
+  Request r;
+  r.gyro = false;
+  r.truth_columns = {"f_x_mps2", "f_y_mps2", "f_z_mps2"};
+  return r;
+}
+
+ProcessingOptions from_yaml(const std::string& text, const std::set<std::string>& keep = {}) {
+  ProcessingOptions o;
+  read_options(yaml::MapReader(YAML::Load(text), "p.yaml", "", "processing", kOptionKeys), o, keep);
+  return o;
+}
+
+std::string yaml_error(const std::string& text) {
+  try {
+    from_yaml(text);
+  } catch (const ExperimentError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Options
+
+TEST(ProcessingOptions, DefaultsAreValidAndRangesNameTheKey) {
+  ProcessingOptions o;
+  EXPECT_TRUE(o.IsValid());
+  EXPECT_EQ(o.intervals, IntervalSource::kAuto);
+  o.extraction.cutoff_hz = -1.0;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("extraction.cutoff_hz"), std::string::npos) << why;
+  o = ProcessingOptions{};
+  o.extraction.filter = Filter::kNone;
+  o.extraction.cutoff_hz = -1.0;  // no filter: the cutoff is not used
+  EXPECT_TRUE(o.IsValid());
+  o.segment_kinds = {"orientaton"};
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("segments"), std::string::npos) << why;
+}
+
+TEST(ProcessingOptions, ReadsTheKeysGivenAndRecordsThem) {
+  const ProcessingOptions o = from_yaml(
+      "intervals: detect\nsegments: [orientation, rate]\n"
+      "extraction: {filter: none, settle_s: 0.5}\ndetector: {window_s: 0.5, max_gyro_dps: 3}\n");
+  EXPECT_EQ(o.intervals, IntervalSource::kDetect);
+  EXPECT_EQ(o.segment_kinds, (std::vector<std::string>{"orientation", "rate"}));
+  EXPECT_EQ(o.extraction.filter, Filter::kNone);
+  EXPECT_EQ(o.extraction.settle_s, 0.5);
+  EXPECT_EQ(o.extraction.cutoff_hz, 1.0);  // default kept
+  EXPECT_EQ(o.detector.window_s, 0.5);
+  EXPECT_NEAR(o.detector.max_gyro_radps, 3.0 * M_PI / 180.0, 1e-15);
+  EXPECT_EQ(o.stated, (std::set<std::string>{"intervals", "segments", "extraction.filter", "extraction.settle_s",
+                                             "detector.window_s", "detector.max_gyro_dps"}));
+  // `keep`: those keys are left alone.
+  const ProcessingOptions k = from_yaml("extraction: {settle_s: 0.5, cutoff_hz: 2}\n", {"extraction.settle_s"});
+  EXPECT_EQ(k.extraction.settle_s, 2.0);
+  EXPECT_EQ(k.extraction.cutoff_hz, 2.0);
+}
+
+TEST(ProcessingOptions, BadKeysAndValuesNameFileLineAndKey) {
+  std::string e = yaml_error("extraction: {cutof_hz: 1}\n");
+  EXPECT_NE(e.find("p.yaml:1:"), std::string::npos) << e;
+  EXPECT_NE(e.find("cutoff_hz"), std::string::npos) << e;  // did you mean
+  e = yaml_error("extraction:\n  filter_order: 30\n");
+  EXPECT_NE(e.find("p.yaml:2:"), std::string::npos) << e;
+  EXPECT_NE(e.find("outside 1..20"), std::string::npos) << e;
+  e = yaml_error("segments: [orientaton]\n");
+  EXPECT_NE(e.find("orientation"), std::string::npos) << e;
+  e = yaml_error("intervals: segment\n");
+  EXPECT_NE(e.find("segments"), std::string::npos) << e;
+  e = yaml_error("detector: {window_s: 0}\n");
+  EXPECT_NE(e.find("window_s"), std::string::npos) << e;
+  EXPECT_NE(e.find("must be > 0"), std::string::npos) << e;
+}
+
+TEST(ProcessingOptions, RoundTripsThroughYaml) {
+  ProcessingOptions o;
+  o.intervals = IntervalSource::kSegments;
+  o.segment_kinds = {"rate"};
+  o.extraction.cutoff_hz = 0.25;
+  o.detector.max_gyro_radps = 0.1;
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  emit_options(out, o);
+  out << YAML::EndMap;
+  const ProcessingOptions r = from_yaml(out.c_str());
+  EXPECT_EQ(r.intervals, o.intervals);
+  EXPECT_EQ(r.segment_kinds, o.segment_kinds);
+  EXPECT_EQ(r.extraction.cutoff_hz, 0.25);
+  EXPECT_NEAR(r.detector.max_gyro_radps, 0.1, 1e-15);
+}
+
+TEST(ProcessingOptions, TheExperimentsSectionFillsWhatTheModelFileDoesNotState) {
+  Recording rec;
+  rec.dir = "runs/r1";
+  rec.experiment_yaml = "name: x\nprocessing:\n  extraction: {settle_s: 3, cutoff_hz: 0.5}\n  segments: [record]\n";
+  ProcessingOptions model;
+  model.extraction.settle_s = 1.0;
+  model.stated.insert("extraction.settle_s");  // the model file said settle_s: 1
+  const ProcessingOptions used = resolve(model, rec);
+  EXPECT_EQ(used.extraction.settle_s, 1.0);   // the model file's
+  EXPECT_EQ(used.extraction.cutoff_hz, 0.5);  // the experiment's
+  EXPECT_EQ(used.segment_kinds, std::vector<std::string>{"record"});
+  EXPECT_EQ(resolve(used, rec).extraction.cutoff_hz, 0.5);  // idempotent
+
+  rec.experiment_yaml = "name: x\nprocessing: {}\n";
+  EXPECT_EQ(resolve(model, rec).extraction.cutoff_hz, 1.0);
+  rec.experiment_yaml = "name: x\nprocessing:\n  extraction: {cutoff: 1}\n";
+  try {
+    resolve(model, rec);
+    FAIL() << "a bad key in the experiment's processing section must be refused";
+  } catch (const ExperimentError& e) {
+    EXPECT_NE(std::string(e.what()).find("runs/r1/experiment.yaml:3:"), std::string::npos) << e.what();
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Truth
+
+TEST(TruthMean, InsideTheWindowElseTheLastSnapshotBefore) {
+  Recording rec;
+  rec.header.truth_columns = {"a", "b"};
+  rec.truth_t = {0.0, 1.0, 2.0, 3.0, 10.0};
+  rec.truth = {{0, 0}, {1, 10}, {2, 20}, {3, 30}, {9, 90}};
+  const int cols[2] = {1, 0};
+  TruthMean m = truth_mean(rec, cols, 0.5, 3.0);
+  ASSERT_TRUE(m.found);
+  EXPECT_EQ(m.rows, 3u);
+  EXPECT_DOUBLE_EQ(m.values[0], 20.0);
+  EXPECT_DOUBLE_EQ(m.values[1], 2.0);
+  m = truth_mean(rec, cols, 4.0, 5.0);  // nothing inside: the state held since t = 3
+  ASSERT_TRUE(m.found);
+  EXPECT_EQ(m.rows, 0u);
+  EXPECT_DOUBLE_EQ(m.values[0], 30.0);
+  EXPECT_FALSE(truth_mean(rec, cols, -2.0, -1.0).found);
+  EXPECT_TRUE(std::isnan(truth_mean(rec, 0, -2.0, -1.0)));
+  EXPECT_TRUE(std::isnan(truth_mean(rec, -1, 0.0, 5.0)));
+  rec.truth[2] = {2};  // a truncated row is ignored
+  EXPECT_DOUBLE_EQ(truth_mean(rec, 1, 0.5, 3.0), 20.0);
+  EXPECT_DOUBLE_EQ(truth_slope(rec, 1, 0.0, 3.0), 10.0);
+  EXPECT_DOUBLE_EQ(truth_slope(rec, 1, 3.0, 4.0), 0.0);  // one snapshot: no slope
+}
+
+// ---------------------------------------------------------------------------------------------
+// Detector
+
+TEST(StaticDetector, FindsStillPosesBetweenMotionAndSplitsAtGaps) {
+  Recording rec;
+  std::mt19937_64 rng(1);
+  double t = 0.0;
+  for (int pose = 0; pose < 5; ++pose) {
+    for (int k = 0; k < 200; ++k, t += 0.01) {  // shaking: 2 s
+      ImuSample s;
+      s.t_s = t;
+      s.accel_mps2 = Eigen::Vector3d(0, 0, 9.8) + Eigen::Vector3d::Constant(2.0 * std::sin(25.0 * t));
+      rec.samples.push_back(s);
+    }
+    add_samples(rec, t, t + 4.0, kSix[static_cast<std::size_t>(pose)], 0.01, rng);
+    t += 4.0;
+  }
+  StaticDetectorOptions o;
+  o.window_s = 0.5;
+  o.min_duration_s = 2.0;
+  const auto ivs = detect_static_intervals(rec, o);
+  ASSERT_EQ(ivs.size(), 5u);
+  EXPECT_NEAR(ivs[0].accel_mean_mps2.z(), 9.8, 0.01);
+  EXPECT_NEAR(ivs[0].t_end_s - ivs[0].t_start_s, 3.7, 0.3);
+  // A gap in the middle of the third pose splits it into two of ≥ 1.5 s.
+  const std::size_t mid = (ivs[2].first + ivs[2].last) / 2;
+  rec.samples[mid].flags |= kGapBefore;
+  o.min_duration_s = 1.0;
+  EXPECT_EQ(detect_static_intervals(rec, o).size(), 6u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Recording → static points
+
+TEST(StaticPoints, MeansTruthAndTemperatureOverTheKeptWindow) {
+  const Recording rec = poses(kSix);
+  const Extraction ex = extract(rec, ProcessingOptions{}, accel_with_force());
+  ASSERT_EQ(ex.points.size(), 6u);
+  EXPECT_TRUE(ex.skipped.empty());
+  const StaticPoint& p = ex.points[2];
+  EXPECT_EQ(p.segment.id, 2);
+  EXPECT_NEAR(p.t_start_s, 22.0, 1e-9);  // settle_s = 2 discarded at each end
+  EXPECT_NEAR(p.t_end_s, 27.99, 0.011);
+  EXPECT_NEAR(static_cast<double>(p.samples_used), 600.0, 1.0);
+  EXPECT_EQ(p.last - p.first + 1, p.samples_used);
+  EXPECT_DOUBLE_EQ(rec.samples[p.first].t_s, p.t_start_s);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(p.accel.mean[a], kSix[2][a], 5 * 0.01 / std::sqrt(600.0) + 1e-3);
+    EXPECT_NEAR(p.accel.sample_std[a], 0.01, 0.002);
+    EXPECT_NEAR(p.accel.std_error[a], p.accel.sample_std[a] / std::sqrt(static_cast<double>(p.samples_used)), 1e-15);
+    EXPECT_TRUE(std::isnan(p.gyro.mean[a]));  // not requested
+    EXPECT_DOUBLE_EQ(p.truth[static_cast<std::size_t>(a)], kSix[2][a]);
+  }
+  EXPECT_EQ(p.temperature_source, TemperatureSource::kDie);
+  EXPECT_NEAR(p.temperature_c, 20.0 + 0.1 * 5.0, 0.01);  // die ramp, mid-window
+  EXPECT_NEAR(p.temperature_rate_cps, 0.1, 1e-9);
+}
+
+TEST(StaticPoints, EveryRuleSkipsWithItsReasonAndANote) {
+  Recording rec = poses(kSix);
+  rec.segments[0].complete = false;
+  rec.segments[1].settled = false;
+  rec.samples[2 * 1000 + 500].flags |= kAccelSaturated;  // inside segment 2's kept window
+  rec.samples[3 * 1000 + 500].flags |= kGyroSaturated;   // gyro not requested: kept
+  rec.samples[3 * 1000 + 600].flags |= kGapBefore;       // noted, kept
+  rec.segments[4].t_end_s = rec.segments[4].t_start_s + 0.05;  // 6 samples
+  Segment early = rec.segments[5];  // before any truth snapshot
+  early.id = 6;
+  early.t_start_s = -20.0;
+  early.t_end_s = -10.0;
+  rec.samples.insert(rec.samples.begin(), rec.samples.begin(), rec.samples.begin() + 1000);
+  for (std::size_t i = 0; i < 1000; ++i) rec.samples[i].t_s = -20.0 + 0.01 * static_cast<double>(i);
+  rec.segments.push_back(early);
+  const Extraction ex = extract(rec, ProcessingOptions{}, accel_with_force());
+  ASSERT_EQ(ex.points.size(), 2u);
+  EXPECT_EQ(ex.points[0].segment.id, 3);
+  EXPECT_EQ(ex.points[0].gaps, 1u);
+  EXPECT_EQ(ex.points[1].segment.id, 5);
+  EXPECT_EQ(ex.count(SkipReason::kIncomplete), 1u);
+  EXPECT_EQ(ex.count(SkipReason::kUnsettled), 1u);
+  EXPECT_EQ(ex.count(SkipReason::kSaturated), 1u);
+  EXPECT_EQ(ex.count(SkipReason::kTooFewSamples), 1u);
+  EXPECT_EQ(ex.count(SkipReason::kNoTruth), 1u);
+  ASSERT_EQ(ex.skipped.size(), 5u);
+  EXPECT_EQ(ex.skipped[2].segment.id, 2);
+  EXPECT_NE(ex.skipped[2].note.find("1 saturated sample(s)"), std::string::npos) << ex.skipped[2].note;
+  EXPECT_EQ(ex.skipped[0].note,
+            "skipped segment 0 (orientation, orientation 1/6, 0–9.99 s): incomplete (the run stopped inside it)");
+  bool gap_noted = false;
+  for (const auto& n : ex.notes) gap_noted = gap_noted || n.find("1 gap(s) in the kept window") != std::string::npos;
+  EXPECT_TRUE(gap_noted);
+  EXPECT_EQ(std::string(skip_reason_name(SkipReason::kNoTruth)), "no_truth");
+}
+
+TEST(StaticPoints, FilterNoneIsThePlainMeanOfTheKeptSamples) {
+  const Recording rec = poses(kSix, 0.5);
+  ProcessingOptions o;
+  o.extraction.filter = Filter::kNone;
+  o.extraction.settle_s = 1.0;
+  const Extraction ex = extract(rec, o, Request{});
+  ASSERT_EQ(ex.points.size(), 6u);
+  const StaticPoint& p = ex.points[1];
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (std::size_t i = p.first; i <= p.last; ++i) sum += rec.samples[i].accel_mps2;
+  EXPECT_LT((p.accel.mean - sum / static_cast<double>(p.samples_used)).norm(), 1e-12);
+  EXPECT_NEAR(static_cast<double>(p.samples_used), 800.0, 1.0);
+  EXPECT_TRUE(p.truth.empty());
+  EXPECT_EQ(p.gyro.mean, Eigen::Vector3d::Zero());
+}
+
+TEST(StaticPoints, DetectsWhenTheRecordingHasNoSegmentsAndTakesTheSensorTemperature) {
+  Recording rec = poses(kSix);
+  rec.segments.clear();
+  rec.header.truth_columns = {"f_x_mps2", "f_y_mps2", "f_z_mps2"};
+  for (auto& row : rec.truth) row.pop_back();
+  // Motion between the poses for the detector.
+  for (auto& s : rec.samples) {
+    const double phase = std::fmod(s.t_s, 10.0);
+    if (phase < 1.0 || phase > 9.0) s.accel_mps2 += Eigen::Vector3d::Constant(3.0 * std::sin(30.0 * s.t_s));
+  }
+  ProcessingOptions o;
+  o.extraction.settle_s = 0.5;
+  const Extraction ex = extract(rec, o, accel_with_force());
+  ASSERT_EQ(ex.points.size(), 6u);
+  EXPECT_EQ(ex.points[0].segment.kind, kDetectedKind);
+  EXPECT_EQ(ex.points[3].segment.label, "static_3");
+  EXPECT_NEAR(ex.points[3].accel.mean.x(), -9.8, 0.01);
+  EXPECT_EQ(ex.points[3].temperature_source, TemperatureSource::kSensor);
+  EXPECT_DOUBLE_EQ(ex.points[3].temperature_c, 30.0);
+  ASSERT_GE(ex.notes.size(), 2u);
+  EXPECT_NE(ex.notes[0].find("no 'die_c' truth column"), std::string::npos);
+  EXPECT_NE(ex.notes[1].find("6 static intervals detected"), std::string::npos) << ex.notes[1];
+  // Segments asked for explicitly: none, said so.
+  o.intervals = IntervalSource::kSegments;
+  const Extraction none = extract(rec, o, accel_with_force());
+  EXPECT_TRUE(none.points.empty());
+  EXPECT_NE(none.notes.back().find("no segment of kind orientation (kinds present: none)"), std::string::npos);
+}
+
+TEST(StaticPoints, RefusesWhatItCannotProcess) {
+  Recording rec = poses(kSix);
+  Request r = accel_with_force();
+  r.truth_columns.push_back("w_x_radps");
+  EXPECT_THROW(extract(rec, ProcessingOptions{}, r), std::invalid_argument);
+  ProcessingOptions bad;
+  bad.extraction.settle_s = -1.0;
+  EXPECT_THROW(extract(rec, bad, accel_with_force()), std::invalid_argument);
+  rec.samples[10].t_s = rec.samples[9].t_s;
+  EXPECT_THROW(extract(rec, ProcessingOptions{}, accel_with_force()), std::runtime_error);
+}
+
+TEST(StaticPoints, TheExperimentsSectionDrivesTheExtraction) {
+  Recording rec = poses(kSix);
+  rec.experiment_yaml = "processing:\n  extraction: {settle_s: 4}\n  segments: [record]\n";
+  Extraction ex = extract(rec, ProcessingOptions{}, accel_with_force());
+  EXPECT_TRUE(ex.points.empty());  // no record segments
+  EXPECT_EQ(ex.options.segment_kinds, std::vector<std::string>{"record"});
+  ProcessingOptions model;
+  model.stated = {"segments"};  // the model file says [orientation]
+  ex = extract(rec, model, accel_with_force());
+  ASSERT_EQ(ex.points.size(), 6u);
+  EXPECT_NEAR(static_cast<double>(ex.points[0].samples_used), 200.0, 1.0);  // settle_s = 4 from the experiment
+}
