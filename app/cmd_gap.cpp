@@ -9,7 +9,8 @@
 #include <sstream>
 
 #include "commands.hpp"
-#include "stend/batch_lsq/model_spec.hpp"
+#include "stend/estimation/model_spec.hpp"
+#include "stend/estimators/builtin.hpp"
 #include "stend/diagnosis/gap.hpp"
 #include "stend/diagnosis/validate.hpp"
 
@@ -37,13 +38,25 @@ diagnosis::FoldBy fold_of(const std::string& s) {
   return diagnosis::FoldBy::kAuto;
 }
 
+// The model file as the linear error model the diagnosis fits and extends, through the estimator
+// registry: the estimator the file is written for must have one.
+estimation::ModelSpec linear_model(const std::string& model_file) {
+  const estimation::Registry registry = estimators::builtin();
+  const estimation::EstimatorEntry& e = registry.for_model(YAML::LoadFile(model_file), model_file);
+  if (!e.linear_model)
+    throw std::runtime_error(model_file + ": a model file for '" + e.name +
+                             "', which fits no linear error model; `stend gap` diagnoses one (a batch_lsq "
+                             "model file: instrument, axes, terms)");
+  return e.linear_model(model_file);
+}
+
 int run_gap(const GapArgs& a) {
   if (a.input.empty() || a.model.empty()) {
     fmt::print(stderr, "stend gap: give RUN_OR_DATASET and --model MODEL.yaml (or `stend gap validate`)\n");
     return 2;
   }
   const stend::Recording rec = open_recording(a.input, a.format);
-  const batch_lsq::ModelSpec spec = batch_lsq::load_model_spec(a.model);
+  const estimation::ModelSpec spec = linear_model(a.model);
   const diagnosis::GapInput in = diagnosis::build_input(rec, spec);
   diagnosis::GapOptions opt;
   opt.fold_by = fold_of(a.fold_by);
@@ -96,7 +109,7 @@ void add_gap_command(CLI::App& app, std::vector<Command>& out) {
                                         "unmodelled effect explains it, how far it shrinks held out");
   sub->add_option("input", args->input, "Run folder, or a dataset file (imucal, MPU-6050 multi-position, .mat, IMU-TK)");
   sub->add_option("--format", args->format, "run | imucal | mpu6050_multipos | mat | imutk (ACC,GYRO) | auto");
-  sub->add_option("-m,--model", args->model, "Model YAML (batch_lsq format: instrument, axes, terms, extraction)");
+  sub->add_option("-m,--model", args->model, "Model YAML of a linear error model (instrument, axes, terms, extraction)");
   sub->add_option("--json", args->json, "Where to write gap.json (default RUN/gap.json, or ./gap.json for a dataset)");
   sub->add_option("--fold-by", args->fold_by, "Held-out groups: auto | orientation | temperature | ramp")
       ->check(CLI::IsMember({"auto", "orientation", "temperature", "ramp"}));

@@ -27,6 +27,7 @@ estimation::EstimatorEntry estimator_entry() {
   e.description = kDescription;
   e.results_file = kResultsFile;
   e.fallback = true;
+  e.linear_model = [](const std::string& file) { return load_model_spec(file); };
   e.create = [] { return PluginPtr<Estimator>(new BatchLsqEstimator(), [](Estimator* p) { delete p; }); };
   return e;
 }

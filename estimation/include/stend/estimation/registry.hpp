@@ -11,6 +11,7 @@
 // mapping), or named with `--estimator NAME`.
 #pragma once
 
+#include <stend/estimation/model_spec.hpp>
 #include <stend/estimation/summary.hpp>
 #include <stend/plugin_host.hpp>
 #include <stend/sdk.hpp>
@@ -39,6 +40,9 @@ struct EstimatorEntry {
   // Reads this estimator's results document back as the typed summary (reports, database,
   // compare). Null: the document has the summary fields (estimation::summary_from_json).
   std::function<FitSummary(const nlohmann::json& doc)> summarize;
+  // For an estimator whose model file is a linear error model (model_spec.hpp): the file read as
+  // that model — what `stend gap` fits, replays and extends. Null: no linear model to diagnose.
+  std::function<ModelSpec(const std::string& model_file)> linear_model;
 };
 
 class Registry {

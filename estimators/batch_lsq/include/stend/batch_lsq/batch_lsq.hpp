@@ -24,13 +24,21 @@
 #include <utility>
 #include <vector>
 
-#include "stend/batch_lsq/model_spec.hpp"
+#include "stend/estimation/model_spec.hpp"
 #include "stend/estimation/linear_lsq.hpp"
 #include "stend/model/terms.hpp"
 #include "stend/processing/static_points.hpp"
 #include "stend/recording.hpp"
 
 namespace stend::batch_lsq {
+
+using estimation::ModelSpec;
+using estimation::Weighting;
+using estimation::axis_name;
+using estimation::instrument_name;
+using estimation::load_model_spec;
+using estimation::parse_model_spec;
+using estimation::weighting_name;
 
 inline constexpr const char* kFitSchema = "stend.fit/1";
 inline constexpr const char* kEstimatorName = "batch_lsq";

@@ -23,7 +23,7 @@
 #include <vector>
 
 #include "stend/batch_lsq/batch_lsq.hpp"
-#include "stend/batch_lsq/model_spec.hpp"
+#include "stend/estimation/model_spec.hpp"
 #include "stend/recording.hpp"
 
 namespace stend::temp_poly {

@@ -1,5 +1,5 @@
-// YAML model specification for batch_lsq. See stend/batch_lsq/model_spec.hpp.
-#include "stend/batch_lsq/model_spec.hpp"
+// YAML model specification of a linear error-model fit. See stend/estimation/model_spec.hpp.
+#include "stend/estimation/model_spec.hpp"
 
 #include <algorithm>
 #include <fstream>
@@ -8,7 +8,7 @@
 #include <stend/yaml_util.hpp>
 #include <yaml-cpp/yaml.h>
 
-namespace stend::batch_lsq {
+namespace stend::estimation {
 
 namespace {
 
@@ -193,4 +193,4 @@ std::string to_yaml(const ModelSpec& spec) {
   return std::string(out.c_str()) + "\n";
 }
 
-}  // namespace stend::batch_lsq
+}  // namespace stend::estimation

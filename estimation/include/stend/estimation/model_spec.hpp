@@ -1,4 +1,5 @@
-// The model specification of a batch least-squares fit, read from YAML:
+// The model file of a linear error-model fit (batch_lsq, temp_poly, the gap diagnosis), read from
+// YAML:
 //
 //   instrument: accelerometer          # or gyroscope
 //   axes: [z]                          # output axes whose equations enter the fit (default x, y, z)
@@ -31,7 +32,7 @@
 #include "stend/model/terms.hpp"
 #include "stend/processing/options.hpp"
 
-namespace stend::batch_lsq {
+namespace stend::estimation {
 
 enum class Weighting {
   kNone,          // unit weights; σ² from the residuals (the paper's batch LSQ)
@@ -58,4 +59,4 @@ const char* instrument_name(model::Instrument inst);  // "accelerometer" | "gyro
 const char* weighting_name(Weighting w);               // "none" | "segment_noise"
 char axis_name(int axis);                              // 'x' 'y' 'z'
 
-}  // namespace stend::batch_lsq
+}  // namespace stend::estimation
