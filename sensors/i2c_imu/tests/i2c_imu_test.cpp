@@ -506,8 +506,7 @@ TEST(I2cImu, ExamplesValidateThroughThePluginSchemas) {
     auto entry = reinterpret_cast<Entry>(dlsym(h, "stend_plugin_entry"));
     ASSERT_NE(entry, nullptr) << so;
     const Params p = params_from_yaml(doc["config"], *entry(), file, "config");
-    const I2cImuConfig c = I2cImuConfig::from(p);
-    EXPECT_GE(c.address, 0x03) << file;
+    EXPECT_GE(p.integer("address"), 0x03) << file;
     // The plugin's own factory validates (no bus access before start()).
     char err[512] = {};
     void* obj = entry()->create(&p, err, sizeof err);
