@@ -108,6 +108,13 @@ TEST(SimImu, RejectsBadConfiguration) {
   stend::Params p;
   p.set("no_such_key", 1.0);
   EXPECT_THROW(SimImu{p}, std::invalid_argument);
+  // Params built in code (not by the host) are held to the schema too: shape and bounds.
+  stend::Params short_bias;
+  short_bias.set("accel_bias_mps2", std::vector<double>{0.1, 0.2});
+  EXPECT_THROW(SimImu{short_bias}, std::invalid_argument);
+  stend::Params wide;
+  wide.set("output_bits", std::int64_t{40});
+  EXPECT_THROW(SimImu{wide}, std::invalid_argument);
   EXPECT_THROW(SimImu{cfg("{accel_cross_axis: [[0.01, 0, 0], [0, 0, 0], [0, 0, 0]]}")}, std::invalid_argument);
   EXPECT_THROW(SimImu{cfg("{output_rate_hz: 100, lowpass_hz: 60}")}, std::invalid_argument);
   // Through the plugin factory: a failure comes back as a message, not an exception.
