@@ -12,27 +12,6 @@ using transport::i2c_hex;
 
 std::string ChipDriver::id_hint(std::uint8_t /*actual*/) const { return ""; }
 
-I2cImuConfig I2cImuConfig::from(const Params& p) {
-  I2cImuConfig c;
-  auto str = [&](const char* k, std::string& v) { if (p.has(k)) v = p.string(k); };
-  auto integer = [&](const char* k, int& v) { if (p.has(k)) v = static_cast<int>(p.integer(k)); };
-  str("bus", c.route.bus);
-  str("device", c.route.device);
-  str("serial", c.route.serial);
-  integer("speed_hz", c.route.speed_hz);
-  integer("baud", c.route.baud);
-  integer("slave_id", c.route.slave_id);
-  integer("timeout_ms", c.route.timeout_ms);
-  integer("address", c.address);
-  integer("accel_range_g", c.accel_range_g);
-  integer("gyro_range_dps", c.gyro_range_dps);
-  if (p.has("output_rate_hz")) c.output_rate_hz = p.number("output_rate_hz");
-  integer("dlpf_hz", c.dlpf_hz);
-  str("mode", c.mode);
-  integer("retries", c.retries);
-  return c;
-}
-
 I2cImuSensor::I2cImuSensor(std::unique_ptr<ChipDriver> chip, I2cImuConfig c) : chip_(std::move(chip)), c_(std::move(c)) {
   const std::string name = chip_->plugin();
   auto require = [&](bool ok, const std::string& what) {

@@ -17,6 +17,8 @@
 
 namespace stend::i2c_imu {
 
+// One I2C sensor's settings. A chip's plugin reads them from its Params through its field table
+// (plugin_common.hpp: chip_table), whose defaults are these with the chip's own.
 struct I2cImuConfig {
   transport::I2cRouteConfig route;  // bus, device, serial, speed_hz, baud, slave_id, timeout_ms
   int address = -1;                 // 7-bit; -1 = the chip's default
@@ -26,9 +28,6 @@ struct I2cImuConfig {
   int dlpf_hz = 0;                  // MPU-6050 only
   std::string mode = "poll";        // "fifo" or "poll" (the plugins default to fifo)
   int retries = 3;                  // I2C-level retries after a NACK, time-out or bus error
-
-  // Reads every key the plugin's schema has (others keep the defaults above).
-  static I2cImuConfig from(const Params& p);
 };
 
 // Counts of one sample as the chip delivers them.

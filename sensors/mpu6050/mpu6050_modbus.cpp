@@ -28,18 +28,28 @@ void require(bool ok, const std::string& what) {
 
 }  // namespace
 
-Mpu6050ModbusConfig Mpu6050ModbusConfig::from(const Params& p) {
-  Mpu6050ModbusConfig c;
-  c.device = p.string("device");
-  c.baud = static_cast<int>(p.integer("baud"));
-  c.slave_id = static_cast<int>(p.integer("slave_id"));
-  c.accel_range_g = static_cast<int>(p.integer("accel_range_g"));
-  c.gyro_range_dps = static_cast<int>(p.integer("gyro_range_dps"));
-  c.dlpf_hz = static_cast<int>(p.integer("dlpf_hz"));
-  c.output_rate_hz = p.number("output_rate_hz");
-  c.timeout_ms = static_cast<int>(p.integer("timeout_ms"));
-  c.retries = static_cast<int>(p.integer("retries"));
-  return c;
+const stend::fields::Table<Mpu6050ModbusConfig>& Mpu6050ModbusConfig::fields() {
+  using F = stend::fields::Field<Mpu6050ModbusConfig>;
+  static const stend::fields::Table<Mpu6050ModbusConfig> table("mpu6050_modbus", {
+      F("device", &Mpu6050ModbusConfig::device, "",
+        "serial port of the USB–RS-485 converter the bench microcontroller hangs on, e.g. /dev/ttyUSB0")
+          .required(),
+      F("baud", &Mpu6050ModbusConfig::baud, "1/s", "line rate, 8N1").range(1200, 4000000),
+      F("slave_id", &Mpu6050ModbusConfig::slave_id, "", "MODBUS address of the bench microcontroller").range(1, 247),
+      F("accel_range_g", &Mpu6050ModbusConfig::accel_range_g, "g", "accelerometer full scale: 2, 4, 8 or 16 (±g)").range(2, 16),
+      F("gyro_range_dps", &Mpu6050ModbusConfig::gyro_range_dps, "deg/s", "gyroscope full scale: 250, 500, 1000 or 2000 (±°/s)")
+          .range(250, 2000),
+      F("dlpf_hz", &Mpu6050ModbusConfig::dlpf_hz, "Hz",
+        "MPU-6050 digital low-pass (CONFIG.DLPF_CFG): 0 = off (260 Hz, 8 kHz gyro rate), 184, 94, 44, 21, 10, 5")
+          .range(0, 260),
+      F("output_rate_hz", &Mpu6050ModbusConfig::output_rate_hz, "Hz",
+        "sample rate; must be 8000/(1+n) with dlpf_hz 0, else 1000/(1+n), n = SMPLRT_DIV 0..255")
+          .range(3.9, 8000),
+      F("timeout_ms", &Mpu6050ModbusConfig::timeout_ms, "ms", "MODBUS response time-out per attempt").range(1, 10000),
+      F("retries", &Mpu6050ModbusConfig::retries, "", "extra attempts after a CRC error or time-out (back-off 5 ms, doubling)")
+          .range(0, 20),
+  });
+  return table;
 }
 
 Mpu6050Modbus::Mpu6050Modbus(const Params& p) : Mpu6050Modbus(Mpu6050ModbusConfig::from(p)) {}

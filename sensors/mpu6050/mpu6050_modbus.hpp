@@ -2,6 +2,7 @@
 // over MODBUS RTU (register map: docs/bench-mcu-modbus.md). See README.md.
 #pragma once
 
+#include <stend/fields.hpp>
 #include <stend/sdk.hpp>
 #include <stend/devices/modbus_rtu.hpp>
 
@@ -25,7 +26,9 @@ struct Mpu6050ModbusConfig {
   int timeout_ms = 100;
   int retries = 3;
 
-  static Mpu6050ModbusConfig from(const Params& p);  // throws std::invalid_argument
+  // Every parameter of the mpu6050_modbus plugin: its schema and the reader of its Params.
+  static const stend::fields::Table<Mpu6050ModbusConfig>& fields();
+  static Mpu6050ModbusConfig from(const Params& p) { return fields().read(p); }  // throws std::invalid_argument
 };
 
 // Link health since start(), for reports and tests.

@@ -1,7 +1,5 @@
 #include <stend/sim/imu.hpp>
 
-#include <stend/sim/param_reader.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -16,26 +14,6 @@ constexpr double kDegToRad = kPi / 180.0;
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument("sim_imu: " + what);
-}
-
-TriadErrors read_triad(ParamReader& r, const std::string& p, const std::string& bias_key, bool gyro) {
-  TriadErrors e;
-  e.bias = r.vec3(bias_key, e.bias);
-  e.scale = r.vec3(p + "_scale", e.scale);
-  e.cross_axis = r.mat3(p + "_cross_axis", e.cross_axis);
-  e.nonlinear_k2 = r.vec3(p + "_nonlinear_k2", e.nonlinear_k2);
-  e.nonlinear_k3 = r.vec3(p + "_nonlinear_k3", e.nonlinear_k3);
-  e.odd_quadratic = r.vec3(p + "_odd_quadratic", e.odd_quadratic);
-  e.bias_tc = r.matrix(p + "_bias_tc", e.bias_tc);
-  e.scale_tc = r.matrix(p + "_scale_tc", e.scale_tc);
-  e.thermal_lag = r.vec3(p + "_thermal_lag", e.thermal_lag);
-  e.time_drift = r.vec3(p + "_time_drift", e.time_drift);
-  if (gyro) e.g_sensitivity = r.mat3(p + "_g_sensitivity", e.g_sensitivity);
-  for (int i = 0; i < 3; ++i)
-    require(e.cross_axis(i, i) == 0.0, p + "_cross_axis must have a zero diagonal (the diagonal is " + p +
-                                           "_scale); row " + std::to_string(i + 1) + " has " +
-                                           std::to_string(e.cross_axis(i, i)));
-  return e;
 }
 
 bool all_zero(const double* p, int n) {
@@ -86,39 +64,115 @@ model::ErrorModel build_model(model::Instrument inst, const TriadErrors& e, doub
   return m;
 }
 
+using F = fields::Field<SimImuConfig>;
+constexpr auto kAccel = &SimImuConfig::accel;
+constexpr auto kGyro = &SimImuConfig::gyro;
+
 }  // namespace
 
-SimImuConfig SimImuConfig::from(const Params& p) {
-  SimImuConfig c;
-  ParamReader r(p, "sim_imu");
-  c.accel = read_triad(r, "accel", "accel_bias_mps2", false);
-  c.gyro = read_triad(r, "gyro", "gyro_bias_radps", true);
-  c.temperature_reference_c = r.number("temperature_reference_c", c.temperature_reference_c);
-  c.accel_noise_density = r.number("accel_noise_density", c.accel_noise_density);
-  c.accel_bias_instability_mps2 = r.number("accel_bias_instability_mps2", c.accel_bias_instability_mps2);
-  c.accel_bias_correlation_s = r.number("accel_bias_correlation_s", c.accel_bias_correlation_s);
-  c.accel_random_walk = r.number("accel_random_walk", c.accel_random_walk);
-  c.gyro_noise_density = r.number("gyro_noise_density", c.gyro_noise_density);
-  c.gyro_bias_instability_radps = r.number("gyro_bias_instability_radps", c.gyro_bias_instability_radps);
-  c.gyro_bias_correlation_s = r.number("gyro_bias_correlation_s", c.gyro_bias_correlation_s);
-  c.gyro_random_walk = r.number("gyro_random_walk", c.gyro_random_walk);
-  c.accel_range_g = r.number("accel_range_g", c.accel_range_g);
-  c.gyro_range_dps = r.number("gyro_range_dps", c.gyro_range_dps);
-  c.accel_lsb_mps2 = r.number("accel_lsb_mps2", c.accel_lsb_mps2);
-  c.gyro_lsb_radps = r.number("gyro_lsb_radps", c.gyro_lsb_radps);
-  c.output_bits = r.integer("output_bits", c.output_bits);
-  c.output_rate_hz = r.number("output_rate_hz", c.output_rate_hz);
-  c.lowpass_hz = r.number("lowpass_hz", c.lowpass_hz);
-  c.temperature_offset_c = r.number("temperature_offset_c", c.temperature_offset_c);
-  c.temperature_counts_per_c = r.number("temperature_counts_per_c", c.temperature_counts_per_c);
-  c.temperature_noise_c = r.number("temperature_noise_c", c.temperature_noise_c);
-  c.seed = r.integer("seed", c.seed);
-  c.vendor = r.string("vendor", c.vendor);
-  c.model = r.string("model", c.model);
-  c.serial = r.string("serial", c.serial);
-  c.who_am_i = r.string("who_am_i", c.who_am_i);
-  r.finish();
-  return c;
+const fields::Table<SimImuConfig>& SimImuConfig::fields() {
+  static const stend::fields::Table<SimImuConfig> table("sim_imu", {
+      // --- deterministic accelerometer errors (the error-model vocabulary, SI) ---
+      F("accel_bias_mps2", kAccel, &TriadErrors::bias, "m/s^2", "bias b_i (term 'bias')").range(-100.0, 100.0),
+      F("accel_scale", kAccel, &TriadErrors::scale, "1", "scale-factor error s_i: y_i = (1 + s_i)·u_i (term 'scale')")
+          .range(-0.5, 0.5),
+      F("accel_cross_axis", kAccel, &TriadErrors::cross_axis, "1",
+        "cross-axis m_ij (row i = output axis, column j = input axis), zero diagonal (term 'cross_axis')")
+          .range(-0.5, 0.5),
+      F("accel_nonlinear_k2", kAccel, &TriadErrors::nonlinear_k2, "1/(m/s^2)", "k2_i·u_i² (term 'nonlinear_k2')")
+          .range(-1.0, 1.0),
+      F("accel_nonlinear_k3", kAccel, &TriadErrors::nonlinear_k3, "1/(m/s^2)^2", "k3_i·u_i³ (term 'nonlinear_k3')")
+          .range(-1.0, 1.0),
+      F("accel_odd_quadratic", kAccel, &TriadErrors::odd_quadratic, "1/(m/s^2)", "q_i·u_i·|u_i| (term 'odd_quadratic')")
+          .range(-1.0, 1.0),
+      F("accel_bias_tc", kAccel, &TriadErrors::bias_tc, "m/s^2/degC^k",
+        "bias temperature coefficients: row = axis, column k = coefficient of (T−T0)^(k+1) (term 'bias_temperature', "
+        "order = columns)"),
+      F("accel_scale_tc", kAccel, &TriadErrors::scale_tc, "1/degC^k",
+        "scale temperature coefficients: row = axis, column k = coefficient of (T−T0)^(k+1)·u_i (term "
+        "'scale_temperature')"),
+      F("accel_thermal_lag", kAccel, &TriadErrors::thermal_lag, "(m/s^2)/(degC/s)",
+        "l_i·dT/dt, T = die temperature (term 'thermal_lag')"),
+      F("accel_time_drift", kAccel, &TriadErrors::time_drift, "m/s^2/s", "r_i·t since start (term 'time_drift')"),
+      // --- deterministic gyroscope errors (rad/s) ---
+      F("gyro_bias_radps", kGyro, &TriadErrors::bias, "rad/s", "bias b_i (term 'bias')").range(-10.0, 10.0),
+      F("gyro_scale", kGyro, &TriadErrors::scale, "1", "scale-factor error s_i (term 'scale')").range(-0.5, 0.5),
+      F("gyro_cross_axis", kGyro, &TriadErrors::cross_axis, "1", "cross-axis m_ij, zero diagonal (term 'cross_axis')")
+          .range(-0.5, 0.5),
+      F("gyro_nonlinear_k2", kGyro, &TriadErrors::nonlinear_k2, "1/(rad/s)", "k2_i·u_i² (term 'nonlinear_k2')")
+          .range(-1.0, 1.0),
+      F("gyro_nonlinear_k3", kGyro, &TriadErrors::nonlinear_k3, "1/(rad/s)^2", "k3_i·u_i³ (term 'nonlinear_k3')")
+          .range(-1.0, 1.0),
+      F("gyro_odd_quadratic", kGyro, &TriadErrors::odd_quadratic, "1/(rad/s)", "q_i·u_i·|u_i| (term 'odd_quadratic')")
+          .range(-1.0, 1.0),
+      F("gyro_bias_tc", kGyro, &TriadErrors::bias_tc, "rad/s/degC^k",
+        "bias temperature coefficients: row = axis, column k = coefficient of (T−T0)^(k+1)"),
+      F("gyro_scale_tc", kGyro, &TriadErrors::scale_tc, "1/degC^k",
+        "scale temperature coefficients: row = axis, column k = coefficient of (T−T0)^(k+1)·u_i"),
+      F("gyro_thermal_lag", kGyro, &TriadErrors::thermal_lag, "(rad/s)/(degC/s)", "l_i·dT/dt (term 'thermal_lag')"),
+      F("gyro_time_drift", kGyro, &TriadErrors::time_drift, "rad/s/s", "r_i·t since start (term 'time_drift')"),
+      F("gyro_g_sensitivity", kGyro, &TriadErrors::g_sensitivity, "(rad/s)/(m/s^2)",
+        "G_ij: gyro axis i responds to specific force f_j (term 'g_sensitivity')")
+          .range(-1.0, 1.0),
+      F("temperature_reference_c", &SimImuConfig::temperature_reference_c, "degC", "T0 of the temperature terms")
+          .range(-100.0, 200.0),
+      // --- noise (stend/model/noise.hpp) ---
+      F("accel_noise_density", &SimImuConfig::accel_noise_density, "m/s^2/sqrt(Hz)",
+        "white noise, one-sided density (datasheet convention; 400 µg/√Hz); σ = density·√(rate/2) before the "
+        "low-pass")
+          .range(0.0, 1.0),
+      F("accel_bias_instability_mps2", &SimImuConfig::accel_bias_instability_mps2, "m/s^2",
+        "bias instability: stationary σ of a first-order Gauss–Markov process (Allan deviation peak ≈ 0.617·σ)")
+          .range(0.0, 10.0),
+      F("accel_bias_correlation_s", &SimImuConfig::accel_bias_correlation_s, "s",
+        "correlation time of the bias instability")
+          .range(1e-3, 1e7),
+      F("accel_random_walk", &SimImuConfig::accel_random_walk, "m/s^2/sqrt(s)",
+        "bias random walk K: Var[b(t) − b(0)] = K²·t (m/s^2.5)")
+          .range(0.0, 1.0),
+      F("gyro_noise_density", &SimImuConfig::gyro_noise_density, "rad/s/sqrt(Hz)",
+        "white noise, one-sided density (0.005 °/s/√Hz)")
+          .range(0.0, 0.1),
+      F("gyro_bias_instability_radps", &SimImuConfig::gyro_bias_instability_radps, "rad/s",
+        "bias instability: stationary σ of a first-order Gauss–Markov process")
+          .range(0.0, 1.0),
+      F("gyro_bias_correlation_s", &SimImuConfig::gyro_bias_correlation_s, "s",
+        "correlation time of the gyro bias instability")
+          .range(1e-3, 1e7),
+      F("gyro_random_walk", &SimImuConfig::gyro_random_walk, "rad/s/sqrt(s)",
+        "gyro bias random walk K: Var[b(t) − b(0)] = K²·t (rad/s^1.5)")
+          .range(0.0, 0.1),
+      // --- output stage ---
+      F("accel_range_g", &SimImuConfig::accel_range_g, "g",
+        "full scale ±range (g = 9.80665 m/s²); beyond it the output saturates and is flagged")
+          .range(1e-3, 1000.0),
+      F("gyro_range_dps", &SimImuConfig::gyro_range_dps, "deg/s", "full scale ±range").range(1e-3, 1e5),
+      F("accel_lsb_mps2", &SimImuConfig::accel_lsb_mps2, "m/s^2",
+        "one count; 0 = full scale / 2^(output_bits−1) (16384 LSB/g at ±2 g)")
+          .range(0.0, 100.0),
+      F("gyro_lsb_radps", &SimImuConfig::gyro_lsb_radps, "rad/s",
+        "one count; 0 = full scale / 2^(output_bits−1) (131.072 LSB/(°/s) at ±250 °/s)")
+          .range(0.0, 10.0),
+      F("output_bits", &SimImuConfig::output_bits, "", "signed output word length").range(2.0, 32.0),
+      F("output_rate_hz", &SimImuConfig::output_rate_hz, "Hz", "output data rate").range(1e-3, 1e6),
+      F("lowpass_hz", &SimImuConfig::lowpass_hz, "Hz",
+        "2nd-order Butterworth low-pass cutoff at the output rate; 0 = off; must be below rate/2")
+          .range(0.0, 5e5),
+      F("temperature_offset_c", &SimImuConfig::temperature_offset_c, "degC",
+        "temperature reading = counts / temperature_counts_per_c + offset")
+          .range(-100.0, 200.0),
+      F("temperature_counts_per_c", &SimImuConfig::temperature_counts_per_c, "1/degC", "temperature sensitivity")
+          .range(1e-6, 1e6),
+      F("temperature_noise_c", &SimImuConfig::temperature_noise_c, "degC", "white noise on the temperature reading")
+          .range(0.0, 10.0),
+      // --- identity and reproducibility ---
+      F("seed", &SimImuConfig::seed, "", "noise seed; 0 = chosen by the host from the experiment seed").at_least(0.0),
+      F("vendor", &SimImuConfig::vendor, "", "reported vendor"),
+      F("model", &SimImuConfig::model, "", "reported model"),
+      F("serial", &SimImuConfig::serial, "", "reported serial number"),
+      F("who_am_i", &SimImuConfig::who_am_i, "", "reported identity register"),
+  });
+  return table;
 }
 
 SimImu::SimImu(const Params& p) : SimImu(SimImuConfig::from(p)) {}
@@ -138,6 +192,11 @@ SimImu::SimImu(const SimImuConfig& c) : c_(c) {
       require(m->size() == 3, "temperature coefficient matrices need 3 rows");
       for (const auto& row : *m) require(row.size() == (*m)[0].size(), "temperature coefficient rows differ in length");
     }
+  for (const auto& [e, name] : {std::pair{&c.accel, "accel"}, std::pair{&c.gyro, "gyro"}})
+    for (int i = 0; i < 3; ++i)
+      require(e->cross_axis(i, i) == 0.0, std::string(name) + "_cross_axis must have a zero diagonal (the diagonal is " +
+                                              name + "_scale); row " + std::to_string(i + 1) + " has " +
+                                              std::to_string(e->cross_axis(i, i)));
 
   dt_ = 1.0 / c.output_rate_hz;
   seed_ = c.seed == 0 ? kFallbackSeed : static_cast<std::uint64_t>(c.seed);

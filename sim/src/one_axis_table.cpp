@@ -1,7 +1,6 @@
 #include <stend/sim/one_axis_table.hpp>
 
 #include <stend/physics/geometry.hpp>
-#include <stend/sim/param_reader.hpp>
 
 #include <cmath>
 #include <stdexcept>
@@ -14,27 +13,45 @@ constexpr double kDeg = physics::kDegToRad;
 constexpr std::uint64_t kFallbackSeed = 0x7AB1EULL;
 }  // namespace
 
-OneAxisTableConfig OneAxisTableConfig::from(const Params& p) {
-  OneAxisTableConfig c;
-  ParamReader r(p, "sim_one_axis_table");
-  c.axis_tilt_deg = r.number("axis_tilt_deg", c.axis_tilt_deg);
-  c.min_deg = r.number("min_deg", c.min_deg);
-  c.max_deg = r.number("max_deg", c.max_deg);
-  c.max_rate_dps = r.number("max_rate_dps", c.max_rate_dps);
-  c.max_accel_dps2 = r.number("max_accel_dps2", c.max_accel_dps2);
-  c.initial_deg = r.number("initial_deg", c.initial_deg);
-  c.lever_arm_m = r.vec3("lever_arm_m", c.lever_arm_m);
-  c.settle_tolerance_deg = r.number("settle_tolerance_deg", c.settle_tolerance_deg);
-  c.settle_rate_tolerance_dps = r.number("settle_rate_tolerance_dps", c.settle_rate_tolerance_dps);
-  c.settle_time_s = r.number("settle_time_s", c.settle_time_s);
-  c.encoder_resolution_deg = r.number("encoder_resolution_deg", c.encoder_resolution_deg);
-  c.encoder_noise_deg = r.number("encoder_noise_deg", c.encoder_noise_deg);
-  c.angle_offset_deg = r.number("angle_offset_deg", c.angle_offset_deg);
-  c.axis_misalignment_x_deg = r.number("axis_misalignment_x_deg", c.axis_misalignment_x_deg);
-  c.axis_misalignment_z_deg = r.number("axis_misalignment_z_deg", c.axis_misalignment_z_deg);
-  c.seed = r.integer("seed", c.seed);
-  r.finish();
-  return c;
+const fields::Table<OneAxisTableConfig>& OneAxisTableConfig::fields() {
+  using F = stend::fields::Field<OneAxisTableConfig>;
+  static const stend::fields::Table<OneAxisTableConfig> table("sim_one_axis_table", {
+      F("axis_tilt_deg", &OneAxisTableConfig::axis_tilt_deg, "deg",
+        "tilt h of the rotation axis, set beforehand (the paper's h): R = Ry(δ)·Rx(h)")
+          .range(-90.0, 90.0),
+      F("min_deg", &OneAxisTableConfig::min_deg, "deg", "lowest position command").range(-3600.0, 3600.0),
+      F("max_deg", &OneAxisTableConfig::max_deg, "deg",
+        "highest position command; a travel of a full turn or more makes the axis continuous in rate mode")
+          .range(-3600.0, 3600.0),
+      F("max_rate_dps", &OneAxisTableConfig::max_rate_dps, "deg/s", "speed limit (rate commands beyond it are refused)")
+          .range(1e-6, 1e5),
+      F("max_accel_dps2", &OneAxisTableConfig::max_accel_dps2, "deg/s^2", "acceleration limit").range(1e-6, 1e6),
+      F("initial_deg", &OneAxisTableConfig::initial_deg, "deg", "angle at power-on").range(-3600.0, 3600.0),
+      F("lever_arm_m", &OneAxisTableConfig::lever_arm_m, "m",
+        "mounting point from the rotation axis, top frame (centripetal and tangential acceleration)")
+          .range(-10.0, 10.0),
+      F("settle_tolerance_deg", &OneAxisTableConfig::settle_tolerance_deg, "deg",
+        "position mode: settled when |measured − commanded| stays within this")
+          .range(1e-9, 10.0),
+      F("settle_rate_tolerance_dps", &OneAxisTableConfig::settle_rate_tolerance_dps, "deg/s",
+        "settled only when the rate is within this of the commanded rate (0 in position mode)")
+          .range(1e-9, 100.0),
+      F("settle_time_s", &OneAxisTableConfig::settle_time_s, "s", "how long the settle condition must hold").range(0.0, 3600.0),
+      F("encoder_resolution_deg", &OneAxisTableConfig::encoder_resolution_deg, "deg", "reading quantum; 0 = none").range(0.0, 1.0),
+      F("encoder_noise_deg", &OneAxisTableConfig::encoder_noise_deg, "deg", "standard deviation of the reading noise")
+          .range(0.0, 1.0),
+      F("angle_offset_deg", &OneAxisTableConfig::angle_offset_deg, "deg",
+        "unmodelled encoder zero error: true angle = encoder angle + offset")
+          .range(-360.0, 360.0),
+      F("axis_misalignment_x_deg", &OneAxisTableConfig::axis_misalignment_x_deg, "deg",
+        "unmodelled tilt of the rotation axis about the tilted frame's x axis")
+          .range(-10.0, 10.0),
+      F("axis_misalignment_z_deg", &OneAxisTableConfig::axis_misalignment_z_deg, "deg",
+        "unmodelled tilt of the rotation axis about the tilted frame's z axis")
+          .range(-10.0, 10.0),
+      F("seed", &OneAxisTableConfig::seed, "", "encoder-noise seed; 0 = chosen by the host").at_least(0.0),
+  });
+  return table;
 }
 
 AxisConfig OneAxisTableConfig::axis() const {

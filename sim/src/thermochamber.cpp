@@ -1,6 +1,5 @@
 #include <stend/sim/thermochamber.hpp>
 
-#include <stend/sim/param_reader.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -22,28 +21,48 @@ std::string fmt(double v) {
 }
 }  // namespace
 
-ThermochamberConfig ThermochamberConfig::from(const Params& p) {
-  ThermochamberConfig c;
-  ParamReader r(p, "sim_thermochamber");
-  c.control_period_s = r.number("control_period_s", c.control_period_s);
-  c.ambient_c = r.number("ambient_c", c.ambient_c);
-  c.initial_c = r.number("initial_c", c.initial_c);
-  c.heat_capacity_j_per_c = r.number("heat_capacity_j_per_c", c.heat_capacity_j_per_c);
-  c.conductance_w_per_c = r.number("conductance_w_per_c", c.conductance_w_per_c);
-  c.internal_load_w = r.number("internal_load_w", c.internal_load_w);
-  c.heater_power_w = r.number("heater_power_w", c.heater_power_w);
-  c.peltier_cooling_w = r.number("peltier_cooling_w", c.peltier_cooling_w);
-  c.die_lag_s = r.number("die_lag_s", c.die_lag_s);
-  c.self_heating_c = r.number("self_heating_c", c.self_heating_c);
-  c.sensor_noise_c = r.number("sensor_noise_c", c.sensor_noise_c);
-  c.min_c = r.number("min_c", c.min_c);
-  c.max_c = r.number("max_c", c.max_c);
-  c.settle_tolerance_c = r.number("settle_tolerance_c", c.settle_tolerance_c);
-  c.settle_time_s = r.number("settle_time_s", c.settle_time_s);
-  c.max_step_s = r.number("max_step_s", c.max_step_s);
-  c.seed = r.integer("seed", c.seed);
-  r.finish();
-  return c;
+const fields::Table<ThermochamberConfig>& ThermochamberConfig::fields() {
+  using F = stend::fields::Field<ThermochamberConfig>;
+  static const stend::fields::Table<ThermochamberConfig> table("sim_thermochamber", {
+      F("control_period_s", &ThermochamberConfig::control_period_s, "s",
+        "controller cycle (≈ one DS18B20 12-bit conversion, 750 ms, plus the loop)")
+          .range(0.01, 60.0),
+      F("ambient_c", &ThermochamberConfig::ambient_c, "degC", "room temperature around the chamber").range(-40.0, 60.0),
+      F("initial_c", &ThermochamberConfig::initial_c, "degC",
+        "air temperature at power-on (the die starts self_heating_c above it); default = the default ambient")
+          .range(-40.0, 100.0),
+      F("heat_capacity_j_per_c", &ThermochamberConfig::heat_capacity_j_per_c, "J/degC",
+        "heat capacity of the air node (air, walls, module)")
+          .range(1e-3, 1e7),
+      F("conductance_w_per_c", &ThermochamberConfig::conductance_w_per_c, "W/degC", "thermal conductance to ambient")
+          .range(1e-6, 1e4),
+      F("internal_load_w", &ThermochamberConfig::internal_load_w, "W",
+        "constant heat released inside (fan, electronics, Peltier hot-side back-leak)")
+          .range(0.0, 1e4),
+      F("heater_power_w", &ThermochamberConfig::heater_power_w, "W",
+        "heater power at PWM 255 (the published loop never exceeds PWM 15 = 255/16)")
+          .range(0.0, 1e5),
+      F("peltier_cooling_w", &ThermochamberConfig::peltier_cooling_w, "W", "net heat the Peltier removes from the air at PWM 255")
+          .range(0.0, 1e5),
+      F("die_lag_s", &ThermochamberConfig::die_lag_s, "s", "first-order time constant of the module/die temperature behind the air")
+          .range(0.0, 1e5),
+      F("self_heating_c", &ThermochamberConfig::self_heating_c, "degC", "die above air at equilibrium").range(-10.0, 50.0),
+      F("sensor_noise_c", &ThermochamberConfig::sensor_noise_c, "degC",
+        "noise of the DS18B20 reading before its 1/16 degC quantization")
+          .range(0.0, 5.0),
+      F("min_c", &ThermochamberConfig::min_c, "degC", "lowest setpoint accepted (further narrowed to what the plant can hold)")
+          .range(-100.0, 200.0),
+      F("max_c", &ThermochamberConfig::max_c, "degC", "highest setpoint accepted (further narrowed to what the plant can hold)")
+          .range(-100.0, 200.0),
+      F("settle_tolerance_c", &ThermochamberConfig::settle_tolerance_c, "degC", "settled when |reading − setpoint| stays within this …")
+          .range(1e-3, 50.0),
+      F("settle_time_s", &ThermochamberConfig::settle_time_s, "s", "… for this long").range(0.0, 1e5),
+      F("max_step_s", &ThermochamberConfig::max_step_s, "s",
+        "largest plant step inside advance() (thermal() interpolates between the exact states)")
+          .range(1e-3, 0.1),
+      F("seed", &ThermochamberConfig::seed, "", "sensor-noise seed; 0 = chosen by the host").at_least(0.0),
+  });
+  return table;
 }
 
 SimThermochamber::SimThermochamber(const Params& p) : SimThermochamber(ThermochamberConfig::from(p)) {}

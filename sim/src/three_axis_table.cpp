@@ -1,7 +1,6 @@
 #include <stend/sim/three_axis_table.hpp>
 
 #include <stend/physics/geometry.hpp>
-#include <stend/sim/param_reader.hpp>
 
 #include <cmath>
 #include <stdexcept>
@@ -15,24 +14,35 @@ constexpr std::uint64_t kFallbackSeed = 0x3A7AB1EULL;
 const char* const kNames[3] = {"azimuth", "tilt", "rotation"};
 }  // namespace
 
-ThreeAxisTableConfig ThreeAxisTableConfig::from(const Params& p) {
-  ThreeAxisTableConfig c;
-  ParamReader r(p, "sim_three_axis_table");
-  c.min_deg = r.vec3("min_deg", c.min_deg);
-  c.max_deg = r.vec3("max_deg", c.max_deg);
-  c.max_rate_dps = r.vec3("max_rate_dps", c.max_rate_dps);
-  c.max_accel_dps2 = r.vec3("max_accel_dps2", c.max_accel_dps2);
-  c.initial_deg = r.vec3("initial_deg", c.initial_deg);
-  c.angle_offset_deg = r.vec3("angle_offset_deg", c.angle_offset_deg);
-  c.lever_arm_m = r.vec3("lever_arm_m", c.lever_arm_m);
-  c.settle_tolerance_deg = r.number("settle_tolerance_deg", c.settle_tolerance_deg);
-  c.settle_rate_tolerance_dps = r.number("settle_rate_tolerance_dps", c.settle_rate_tolerance_dps);
-  c.settle_time_s = r.number("settle_time_s", c.settle_time_s);
-  c.encoder_resolution_deg = r.number("encoder_resolution_deg", c.encoder_resolution_deg);
-  c.encoder_noise_deg = r.number("encoder_noise_deg", c.encoder_noise_deg);
-  c.seed = r.integer("seed", c.seed);
-  r.finish();
-  return c;
+const fields::Table<ThreeAxisTableConfig>& ThreeAxisTableConfig::fields() {
+  using F = stend::fields::Field<ThreeAxisTableConfig>;
+  static const stend::fields::Table<ThreeAxisTableConfig> table("sim_three_axis_table", {
+      F("min_deg", &ThreeAxisTableConfig::min_deg, "deg", "lowest position command per axis [azimuth, tilt, rotation]")
+          .range(-3600.0, 3600.0),
+      F("max_deg", &ThreeAxisTableConfig::max_deg, "deg",
+        "highest position command per axis; a travel of a full turn or more makes that axis continuous in rate mode")
+          .range(-3600.0, 3600.0),
+      F("max_rate_dps", &ThreeAxisTableConfig::max_rate_dps, "deg/s", "speed limit per axis").range(1e-6, 1e5),
+      F("max_accel_dps2", &ThreeAxisTableConfig::max_accel_dps2, "deg/s^2", "acceleration limit per axis").range(1e-6, 1e6),
+      F("initial_deg", &ThreeAxisTableConfig::initial_deg, "deg", "angles at power-on").range(-3600.0, 3600.0),
+      F("angle_offset_deg", &ThreeAxisTableConfig::angle_offset_deg, "deg",
+        "unmodelled encoder zero errors: true angle = encoder angle + offset")
+          .range(-360.0, 360.0),
+      F("lever_arm_m", &ThreeAxisTableConfig::lever_arm_m, "m", "mounting point from the axes' intersection, top frame")
+          .range(-10.0, 10.0),
+      F("settle_tolerance_deg", &ThreeAxisTableConfig::settle_tolerance_deg, "deg",
+        "position mode: settled when |measured − commanded| stays within this on every axis")
+          .range(1e-9, 10.0),
+      F("settle_rate_tolerance_dps", &ThreeAxisTableConfig::settle_rate_tolerance_dps, "deg/s",
+        "settled only when each rate is within this of its commanded rate (0 in position mode)")
+          .range(1e-9, 100.0),
+      F("settle_time_s", &ThreeAxisTableConfig::settle_time_s, "s", "how long the settle condition must hold").range(0.0, 3600.0),
+      F("encoder_resolution_deg", &ThreeAxisTableConfig::encoder_resolution_deg, "deg", "reading quantum; 0 = none").range(0.0, 1.0),
+      F("encoder_noise_deg", &ThreeAxisTableConfig::encoder_noise_deg, "deg", "standard deviation of the reading noise")
+          .range(0.0, 1.0),
+      F("seed", &ThreeAxisTableConfig::seed, "", "encoder-noise seed; 0 = chosen by the host").at_least(0.0),
+  });
+  return table;
 }
 
 SimThreeAxisTable::SimThreeAxisTable(const Params& p) : SimThreeAxisTable(ThreeAxisTableConfig::from(p)) {}

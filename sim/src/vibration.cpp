@@ -1,6 +1,5 @@
 #include <stend/sim/vibration.hpp>
 
-#include <stend/sim/param_reader.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -18,16 +17,24 @@ std::string num(double v) {
 }
 }  // namespace
 
-VibrationConfig VibrationConfig::from(const Params& p) {
-  VibrationConfig c;
-  ParamReader r(p, "sim_vibration");
-  c.direction = r.vec3("direction", c.direction);
-  c.max_amplitude_g = r.number("max_amplitude_g", c.max_amplitude_g);
-  c.min_frequency_hz = r.number("min_frequency_hz", c.min_frequency_hz);
-  c.max_frequency_hz = r.number("max_frequency_hz", c.max_frequency_hz);
-  c.initial_frequency_hz = r.number("initial_frequency_hz", c.initial_frequency_hz);
-  r.finish();
-  return c;
+const fields::Table<VibrationConfig>& VibrationConfig::fields() {
+  using F = stend::fields::Field<VibrationConfig>;
+  static const stend::fields::Table<VibrationConfig> table("sim_vibration", {
+      F("direction", &VibrationConfig::direction, "1",
+        "direction of the vibration in the shaker's top frame (normalized; must not be zero)")
+          .range(-1e6, 1e6),
+      F("max_amplitude_g", &VibrationConfig::max_amplitude_g, "g",
+        "largest peak amplitude accepted (the paper: 0.5 g), g = 9.80665 m/s^2")
+          .range(1e-6, 100.0),
+      F("min_frequency_hz", &VibrationConfig::min_frequency_hz, "Hz", "lowest frequency accepted (the paper: 20 Hz)")
+          .range(1e-3, 1e5),
+      F("max_frequency_hz", &VibrationConfig::max_frequency_hz, "Hz", "highest frequency accepted (the paper: 800 Hz)")
+          .range(1e-3, 1e5),
+      F("initial_frequency_hz", &VibrationConfig::initial_frequency_hz, "Hz",
+        "frequency before the first command (amplitude starts at 0)")
+          .range(1e-3, 1e5),
+  });
+  return table;
 }
 
 SimVibration::SimVibration(const Params& p) : SimVibration(VibrationConfig::from(p)) {}

@@ -250,37 +250,61 @@ template <class T>
 using InterfaceOf = std::conditional_t<
     std::is_base_of_v<Sensor, T>, Sensor,
     std::conditional_t<std::is_base_of_v<Fixture, T>, Fixture, Estimator>>;
+
+// The schema STEND_DEFINE_PLUGIN hands to the host: a hand-written `const stend_param_spec[]`
+// array, or a field table (stend/fields.hpp) — anything with specs() and size().
+template <std::size_t N>
+constexpr const stend_param_spec* schema_data(const stend_param_spec (&specs)[N]) {
+  return specs;
+}
+template <std::size_t N>
+constexpr std::size_t schema_size(const stend_param_spec (&)[N]) {
+  return N;
+}
+template <class Table>
+auto schema_data(const Table& table) -> decltype(table.specs()) {
+  return table.specs();
+}
+template <class Table>
+auto schema_size(const Table& table) -> decltype(table.size()) {
+  return table.size();
+}
+
 }  // namespace detail
 
 }  // namespace stend
 
 // Defines the plugin's entry point. Use once per plugin library:
-//   STEND_DEFINE_PLUGIN(STEND_KIND_SENSOR, "sim_imu", "0.1.0", "Simulated IMU", kParams, MySensor)
-// where MySensor has a constructor MySensor(const stend::Params&) that throws on bad input.
-#define STEND_DEFINE_PLUGIN(KIND, NAME, VERSION, DESCRIPTION, PARAMS, TYPE)                    \
-  extern "C" __attribute__((visibility("default"))) const stend_plugin_info*                  \
-  stend_plugin_entry(void) {                                                                  \
-    static const stend_plugin_info info = {                                                   \
-        STEND_PLUGIN_ABI_VERSION,                                                             \
-        static_cast<uint32_t>(sizeof(stend_plugin_info)),                                     \
-        KIND,                                                                                 \
-        NAME,                                                                                 \
-        VERSION,                                                                              \
-        DESCRIPTION,                                                                          \
-        PARAMS,                                                                               \
-        sizeof(PARAMS) / sizeof(PARAMS[0]),                                                   \
-        [](const void* p, char* err, size_t n) -> void* {                                     \
-          try {                                                                               \
-            using Interface = stend::detail::InterfaceOf<TYPE>;                              \
-            Interface* object = new TYPE(*static_cast<const stend::Params*>(p));              \
-            return static_cast<void*>(object);                           \
-          } catch (const std::exception& e) {                                                 \
-            if (err && n) {                                                                   \
-              std::snprintf(err, n, "%s", e.what());                                          \
-            }                                                                                 \
-            return nullptr;                                                                   \
-          }                                                                                   \
-        },                                                                                    \
-        [](void* o) { delete static_cast<stend::detail::InterfaceOf<TYPE>*>(o); }};                                       \
-    return &info;                                                                             \
+//   STEND_DEFINE_PLUGIN(STEND_KIND_SENSOR, "sim_imu", "0.1.0", "Simulated IMU", SCHEMA, MySensor)
+// where SCHEMA is the plugin's field table (stend/fields.hpp: one declaration per parameter gives
+// the schema and the reader; e.g. `my_fields()`) or a hand-written `const stend_param_spec[]`
+// array, and MySensor has a constructor MySensor(const stend::Params&) that throws on bad input.
+// The schema is read once, on the first call of the entry point, and must live as long as the
+// library (static storage).
+#define STEND_DEFINE_PLUGIN(KIND, NAME, VERSION, DESCRIPTION, SCHEMA, TYPE)                      \
+  extern "C" __attribute__((visibility("default"))) const stend_plugin_info*                    \
+  stend_plugin_entry(void) {                                                                    \
+    static const stend_plugin_info info = {                                                     \
+        STEND_PLUGIN_ABI_VERSION,                                                               \
+        static_cast<uint32_t>(sizeof(stend_plugin_info)),                                       \
+        KIND,                                                                                   \
+        NAME,                                                                                   \
+        VERSION,                                                                                \
+        DESCRIPTION,                                                                            \
+        stend::detail::schema_data(SCHEMA),                                                     \
+        stend::detail::schema_size(SCHEMA),                                                     \
+        [](const void* p, char* err, size_t n) -> void* {                                       \
+          try {                                                                                 \
+            using Interface = stend::detail::InterfaceOf<TYPE>;                                 \
+            Interface* object = new TYPE(*static_cast<const stend::Params*>(p));                \
+            return static_cast<void*>(object);                                                  \
+          } catch (const std::exception& e) {                                                   \
+            if (err && n) {                                                                     \
+              std::snprintf(err, n, "%s", e.what());                                            \
+            }                                                                                   \
+            return nullptr;                                                                     \
+          }                                                                                     \
+        },                                                                                      \
+        [](void* o) { delete static_cast<stend::detail::InterfaceOf<TYPE>*>(o); }};             \
+    return &info;                                                                               \
   }

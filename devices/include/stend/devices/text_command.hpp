@@ -15,9 +15,9 @@
 namespace stend::transport {
 
 struct TextCommandConfig {
-  std::string host;          // TCP: host name or address (empty = serial)
+  std::string host{};        // TCP: host name or address (empty = serial)
   int port = 0;              // TCP port
-  std::string device;        // serial: "/dev/ttyUSB0" (used when host is empty)
+  std::string device{};      // serial: "/dev/ttyUSB0" (used when host is empty)
   int baud = 115200;         // serial: 8N1, no flow control
   std::string terminator = "\n";  // appended to every command; ends every reply ("\r\n" accepted)
   int timeout_ms = 500;      // per reply

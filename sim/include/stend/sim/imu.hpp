@@ -10,6 +10,7 @@
 #include <stend/model/noise.hpp>
 #include <stend/model/output_stage.hpp>
 #include <stend/model/terms.hpp>
+#include <stend/fields.hpp>
 #include <stend/sdk.hpp>
 
 #include <Eigen/Core>
@@ -66,7 +67,9 @@ struct SimImuConfig {
   std::int64_t seed = 0;  // 0 = the host picks (from the experiment seed)
   std::string vendor = "InvenSense", model = "MPU-6050", serial = "", who_am_i = "0x68";
 
-  static SimImuConfig from(const Params& p);  // throws std::invalid_argument
+  // Every parameter of the sim_imu plugin: its schema and the reader of its Params.
+  static const stend::fields::Table<SimImuConfig>& fields();
+  static SimImuConfig from(const Params& p) { return fields().read(p); }  // throws std::invalid_argument
 };
 
 class SimImu final : public Sensor {

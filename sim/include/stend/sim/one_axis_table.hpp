@@ -8,6 +8,7 @@
 // when the axis is misaligned): ω_top = δ̇·n. See README.md.
 #pragma once
 
+#include <stend/fields.hpp>
 #include <stend/sdk.hpp>
 #include <stend/sim/motion_profile.hpp>
 
@@ -34,7 +35,9 @@ struct OneAxisTableConfig {
   double axis_misalignment_z_deg = 0.0;
   std::int64_t seed = 0;
 
-  static OneAxisTableConfig from(const Params& p);
+  // Every parameter of the sim_one_axis_table plugin: its schema and the reader of its Params.
+  static const stend::fields::Table<OneAxisTableConfig>& fields();
+  static OneAxisTableConfig from(const Params& p) { return fields().read(p); }  // throws std::invalid_argument
   // The motion of the one axis "angle" (deg): limits, profile, settling, encoder — as
   // SimOneAxisTable moves it and as emulators/bench_world serves it.
   AxisConfig axis() const;

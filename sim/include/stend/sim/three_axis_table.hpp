@@ -9,6 +9,7 @@
 // Each axis moves under its own trapezoidal profile (stend/sim/motion_profile.hpp). See README.md.
 #pragma once
 
+#include <stend/fields.hpp>
 #include <stend/sdk.hpp>
 #include <stend/sim/motion_profile.hpp>
 
@@ -34,7 +35,9 @@ struct ThreeAxisTableConfig {
   double encoder_noise_deg = 0.0;
   std::int64_t seed = 0;
 
-  static ThreeAxisTableConfig from(const Params& p);
+  // Every parameter of the sim_three_axis_table plugin: its schema and the reader of its Params.
+  static const stend::fields::Table<ThreeAxisTableConfig>& fields();
+  static ThreeAxisTableConfig from(const Params& p) { return fields().read(p); }  // throws std::invalid_argument
 };
 
 class SimThreeAxisTable final : public Fixture {
