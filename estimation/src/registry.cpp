@@ -7,6 +7,11 @@
 
 namespace stend::estimation {
 
+std::vector<fields::Field<EstimatorConfig>> estimator_fields() {
+  return {fields::Field<EstimatorConfig>("results_file", &EstimatorConfig::results_file, "",
+                                         "default name of the results file")};
+}
+
 void Registry::add(EstimatorEntry entry) {
   if (find(entry.name) != nullptr) throw std::logic_error("estimator '" + entry.name + "' registered twice");
   entries_.push_back(std::move(entry));

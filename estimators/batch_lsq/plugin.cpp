@@ -4,16 +4,5 @@
 #include <stend/batch_lsq/estimator.hpp>
 #include <stend/sdk.hpp>
 
-#include <cmath>
-
-namespace {
-
-const stend_param_spec kParams[] = {
-    {"results_file", "string", "", stend::batch_lsq::kResultsFile, NAN, NAN, nullptr,
-     "default name of the results file"},
-};
-
-}  // namespace
-
 STEND_DEFINE_PLUGIN(STEND_KIND_ESTIMATOR, stend::batch_lsq::kEstimatorName, stend::batch_lsq::kEstimatorVersion,
-                    stend::batch_lsq::kDescription, kParams, stend::batch_lsq::BatchLsqEstimator)
+                    stend::batch_lsq::kDescription, stend::batch_lsq::BatchLsqEstimator::fields(), stend::batch_lsq::BatchLsqEstimator)

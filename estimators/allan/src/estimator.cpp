@@ -13,8 +13,12 @@
 
 namespace stend::allan {
 
-AllanEstimator::AllanEstimator(const Params& p) {
-  if (p.has("results_file")) results_file_ = p.string("results_file");
+AllanEstimator::AllanEstimator(const Params& p) : config_(fields().read(p)) {}
+
+const stend::fields::Table<estimation::EstimatorConfig>& AllanEstimator::fields() {
+  static const stend::fields::Table<estimation::EstimatorConfig> table(
+      kEstimatorName, estimation::estimator_fields(), {kResultsFile});
+  return table;
 }
 
 EstimatorResult AllanEstimator::fit(const EstimatorRequest& req) {
@@ -24,7 +28,7 @@ EstimatorResult AllanEstimator::fit(const EstimatorRequest& req) {
   std::ostringstream text, json;
   write_summary_table(text, report);
   write_json(json, report);
-  return {true, {}, json.str(), text.str(), results_file_};
+  return {true, {}, json.str(), text.str(), config_.results_file};
 }
 
 namespace {

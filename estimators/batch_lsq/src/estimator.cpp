@@ -8,8 +8,12 @@
 
 namespace stend::batch_lsq {
 
-BatchLsqEstimator::BatchLsqEstimator(const Params& p) {
-  if (p.has("results_file")) results_file_ = p.string("results_file");
+BatchLsqEstimator::BatchLsqEstimator(const Params& p) : config_(fields().read(p)) {}
+
+const stend::fields::Table<estimation::EstimatorConfig>& BatchLsqEstimator::fields() {
+  static const stend::fields::Table<estimation::EstimatorConfig> table(
+      kEstimatorName, estimation::estimator_fields(), {kResultsFile});
+  return table;
 }
 
 EstimatorResult BatchLsqEstimator::fit(const EstimatorRequest& req) {
@@ -17,7 +21,7 @@ EstimatorResult BatchLsqEstimator::fit(const EstimatorRequest& req) {
   const FitResult r = fit_recording(*req.recording, load_model_spec(req.model_file));
   std::ostringstream text;
   print_table(text, r);
-  return {r.ok, r.message, to_json(r), text.str(), results_file_};
+  return {r.ok, r.message, to_json(r), text.str(), config_.results_file};
 }
 
 estimation::EstimatorEntry estimator_entry() {

@@ -7,14 +7,18 @@
 
 namespace stend::ceres_nonlinear {
 
-CeresNonlinearEstimator::CeresNonlinearEstimator(const Params& p) {
-  if (p.has("results_file")) results_file_ = p.string("results_file");
+CeresNonlinearEstimator::CeresNonlinearEstimator(const Params& p) : config_(fields().read(p)) {}
+
+const stend::fields::Table<estimation::EstimatorConfig>& CeresNonlinearEstimator::fields() {
+  static const stend::fields::Table<estimation::EstimatorConfig> table(
+      kEstimatorName, estimation::estimator_fields(), {kResultsFile});
+  return table;
 }
 
 EstimatorResult CeresNonlinearEstimator::fit(const EstimatorRequest& req) {
   if (req.recording == nullptr) throw std::invalid_argument("ceres_nonlinear: no recording given");
   const ModelFileFit f = fit_model_file(*req.recording, load_model_file(req.model_file));
-  return {f.ok, f.message, f.json, f.text, results_file_};
+  return {f.ok, f.message, f.json, f.text, config_.results_file};
 }
 
 estimation::EstimatorEntry estimator_entry() {

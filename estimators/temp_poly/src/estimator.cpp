@@ -10,8 +10,12 @@
 
 namespace stend::temp_poly {
 
-TempPolyEstimator::TempPolyEstimator(const Params& p) {
-  if (p.has("results_file")) results_file_ = p.string("results_file");
+TempPolyEstimator::TempPolyEstimator(const Params& p) : config_(fields().read(p)) {}
+
+const stend::fields::Table<estimation::EstimatorConfig>& TempPolyEstimator::fields() {
+  static const stend::fields::Table<estimation::EstimatorConfig> table(
+      kEstimatorName, estimation::estimator_fields(), {kResultsFile});
+  return table;
 }
 
 EstimatorResult TempPolyEstimator::fit(const EstimatorRequest& req) {
@@ -19,7 +23,7 @@ EstimatorResult TempPolyEstimator::fit(const EstimatorRequest& req) {
   const TempPolyResult r = fit_temperature_model(*req.recording, load_options(req.model_file));
   std::ostringstream text;
   print_report(text, r);
-  return {r.ok, r.message, to_json(r), text.str(), results_file_};
+  return {r.ok, r.message, to_json(r), text.str(), config_.results_file};
 }
 
 namespace {

@@ -13,6 +13,7 @@
 
 #include <stend/estimation/model_spec.hpp>
 #include <stend/estimation/summary.hpp>
+#include <stend/fields.hpp>
 #include <stend/plugin_host.hpp>
 #include <stend/sdk.hpp>
 
@@ -25,6 +26,12 @@
 #include <vector>
 
 namespace stend::estimation {
+
+// What every estimator plugin is configured with (its field table: estimator_fields()).
+struct EstimatorConfig {
+  std::string results_file;  // default name of the results file in the run folder
+};
+std::vector<fields::Field<EstimatorConfig>> estimator_fields();
 
 struct EstimatorEntry {
   std::string name;          // as in `stend fit --estimator NAME` and the results' "estimator"

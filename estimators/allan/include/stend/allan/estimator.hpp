@@ -14,11 +14,13 @@ inline constexpr const char* kDescription =
 class AllanEstimator final : public Estimator {
  public:
   explicit AllanEstimator(const Params& params = {});
+  // The plugin's configuration: the results file name, defaulting to kResultsFile.
+  static const stend::fields::Table<estimation::EstimatorConfig>& fields();
   // Options from the model file's `allan:` mapping: the summary table and allan.json.
   EstimatorResult fit(const EstimatorRequest& request) override;
 
  private:
-  std::string results_file_ = kResultsFile;
+  estimation::EstimatorConfig config_;
 };
 
 // Registry entry: claims model files with a top-level `allan:` mapping; its summary lists N, K

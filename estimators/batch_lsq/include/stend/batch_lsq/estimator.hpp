@@ -14,11 +14,13 @@ inline constexpr const char* kDescription =
 class BatchLsqEstimator final : public Estimator {
  public:
   explicit BatchLsqEstimator(const Params& params = {});
+  // The plugin's configuration: the results file name, defaulting to kResultsFile.
+  static const stend::fields::Table<estimation::EstimatorConfig>& fields();
   // Fits the model file (load_model_spec) to the recording: the text table and stend.fit/1.
   EstimatorResult fit(const EstimatorRequest& request) override;
 
  private:
-  std::string results_file_ = kResultsFile;
+  estimation::EstimatorConfig config_;
 };
 
 // Registry entry: the fallback for model files no other estimator claims.

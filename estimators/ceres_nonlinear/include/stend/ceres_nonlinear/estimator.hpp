@@ -15,11 +15,13 @@ inline constexpr const char* kDescription =
 class CeresNonlinearEstimator final : public Estimator {
  public:
   explicit CeresNonlinearEstimator(const Params& params = {});
+  // The plugin's configuration: the results file name, defaulting to kResultsFile.
+  static const stend::fields::Table<estimation::EstimatorConfig>& fields();
   // Runs what the model file's `ceres_nonlinear:` mapping asks for (fit_model_file).
   EstimatorResult fit(const EstimatorRequest& request) override;
 
  private:
-  std::string results_file_ = kResultsFile;
+  estimation::EstimatorConfig config_;
 };
 
 // Registry entry: claims model files with a top-level `ceres_nonlinear:` mapping.

@@ -14,11 +14,13 @@ inline constexpr const char* kDescription =
 class TempPolyEstimator final : public Estimator {
  public:
   explicit TempPolyEstimator(const Params& params = {});
+  // The plugin's configuration: the results file name, defaulting to kResultsFile.
+  static const stend::fields::Table<estimation::EstimatorConfig>& fields();
   // Fits the model file (load_options) to the recording: the report and stend.temp_poly/1.
   EstimatorResult fit(const EstimatorRequest& request) override;
 
  private:
-  std::string results_file_ = kResultsFile;
+  estimation::EstimatorConfig config_;
 };
 
 // Registry entry: claims model files with temperature-model options (`selection:`, `max_order:`);
