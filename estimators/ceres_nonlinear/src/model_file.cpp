@@ -1,16 +1,14 @@
 #include <stend/ceres_nonlinear/model_file.hpp>
+#include <stend/physics/units.hpp>
 #include <stend/yaml_util.hpp>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
-#include <numbers>
 
 namespace stend::ceres_nonlinear {
 namespace {
-
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 std::vector<std::string> string_list(const yaml::MapReader& m, const std::string& key,
                                      const std::vector<std::string>& allowed) {
@@ -77,9 +75,9 @@ ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& fi
     a.detector.threshold_multiplier = positive(d, "threshold_multiplier", a.detector.threshold_multiplier, "");
     a.detector.init_duration_s = positive(d, "init_duration_s", a.detector.init_duration_s, "in seconds", true);
     a.detector.trim_s = positive(d, "trim_s", a.detector.trim_s, "in seconds", true);
-    a.detector.max_gyro_radps = positive(d, "max_gyro_dps", 3.0, "in deg/s", true) * kDeg;
+    a.detector.max_gyro_radps = positive(d, "max_gyro_dps", 3.0, "in deg/s", true) * physics::kDegPerSecond;
   } else {
-    a.detector.max_gyro_radps = 3.0 * kDeg;
+    a.detector.max_gyro_radps = 3.0 * physics::kDegPerSecond;
   }
   o.gyro.trim_s = positive(m, "segment_trim_s", o.gyro.trim_s, "in seconds", true);
   if (a.use_segments) a.detector.trim_s = o.gyro.trim_s;
@@ -137,7 +135,7 @@ std::string describe_options(const ModelFileOptions& o) {
                                        a.detector.init_duration_s > 0.0
                                            ? fmt::format("variance of the first {} s", a.detector.init_duration_s)
                                            : std::string("10th percentile of the window variance")),
-                     a.detector.trim_s, a.detector.max_gyro_radps / kDeg);
+                     a.detector.trim_s, a.detector.max_gyro_radps / physics::kDegPerSecond);
   else
     s += fmt::format("  segments trimmed by {} s at each end\n", o.gyro.trim_s);
   s += fmt::format("  gravity: {}\n", a.gravity_mps2 > 0.0 ? fmt::format("{} m/s^2", a.gravity_mps2) : "from the recording");
@@ -168,7 +166,7 @@ std::string options_json(const ModelFileOptions& o) {
         {"threshold_multiplier", a.detector.threshold_multiplier},
         {"init_duration_s", a.detector.init_duration_s},
         {"trim_s", a.detector.trim_s},
-        {"max_gyro_dps", a.detector.max_gyro_radps / kDeg}}},
+        {"max_gyro_dps", a.detector.max_gyro_radps / physics::kDegPerSecond}}},
       {"segment_trim_s", o.gyro.trim_s},
       {"gravity_mps2", a.gravity_mps2},
       {"loss", loss_name(a.loss)},
