@@ -9,6 +9,7 @@
 #include "commands.hpp"
 
 #include "stend/experiment.hpp"
+#include "stend/physics/gravity.hpp"
 #include "stend/plugin_host.hpp"
 
 #include <atomic>
@@ -165,15 +166,15 @@ void add_emulate_command(CLI::App& app, std::vector<Command>& out) {
   };
   auto m = std::make_shared<McuOpts>();
   auto* mcu = sub->add_subcommand("bench-mcu", "Bench microcontroller with an MPU-6050 (docs/bench-mcu-modbus.md), static stimulus");
-  mcu->add_option("--tilt-deg", m->tilt_deg, "the sensor tilted about y by this angle (gravity 9.80665 m/s^2)");
+  mcu->add_option("--tilt-deg", m->tilt_deg, "the sensor tilted about y by this angle (standard gravity)");
   mcu->add_option("--duration-s", m->duration, "stop after this long (0: until Ctrl-C)");
   out.push_back({mcu, [m] {
                    BenchTruth truth;
-                   const double a = m->tilt_deg * 3.14159265358979323846 / 180.0;
-                   truth.specific_force_mps2 = {-9.80665 * std::sin(a), 0.0, 9.80665 * std::cos(a)};
-                   sim::SimImuConfig physics;
-                   physics.seed = 1;
-                   emu::BenchMcuSlave slave(emu::BenchMcuConfig{}, emu::Mpu6050Model(physics, truth));
+                   truth.specific_force_mps2 = physics::gravity_specific_force(
+                       physics::Ry(m->tilt_deg * physics::kDegToRad), physics::kStandardGravity);
+                   sim::SimImuConfig imu;
+                   imu.seed = 1;
+                   emu::BenchMcuSlave slave(emu::BenchMcuConfig{}, emu::Mpu6050Model(imu, truth));
                    std::printf("bench MCU (MODBUS RTU slave 1, MPU-6050): %s\n", slave.device_path().c_str());
                    std::printf("  sensor config: {plugin: mpu6050_modbus, config: {device: %s}}\n", slave.device_path().c_str());
                    serve(m->duration);

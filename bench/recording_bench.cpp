@@ -9,6 +9,7 @@
 // BM_ReadRows: Recording::open of a 1 M-row recording (page cache warm).
 // BM_OneHour: the whole 3.6 M-row, 1 kHz hour written, finished and read back once; reports the
 //   real-time factor of the write side (the bench needs >= 1000x including recording).
+#include <stend/physics/units.hpp>
 #include <stend/recording.hpp>
 
 #include <benchmark/benchmark.h>
@@ -23,6 +24,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// MPU-6050 at ±2 g and ±250 deg/s: 16384 LSB/g, 131 LSB/(deg/s).
+constexpr double kAccelLsb = stend::physics::kStandardGravity / 16384.0;
+constexpr double kGyroLsb = stend::physics::kDegPerSecond / 131.0;
+
 fs::path scratch_dir(const char* name) {
   static int counter = 0;
   return fs::temp_directory_path() / ("stend_recording_bench_" + std::to_string(::getpid()) +
@@ -33,8 +38,8 @@ stend::RecordingHeader header() {
   stend::RecordingHeader h;
   h.experiment_name = "bench";
   h.info.output_rate_hz = 1000.0;
-  h.info.accel_lsb_mps2 = 9.80665 / 16384.0;
-  h.info.gyro_lsb_radps = M_PI / 180.0 / 131.0;
+  h.info.accel_lsb_mps2 = kAccelLsb;
+  h.info.gyro_lsb_radps = kGyroLsb;
   h.clock = "simulated";
   h.truth_columns = {"air_c", "die_c"};
   return h;
@@ -44,7 +49,7 @@ stend::RecordingHeader header() {
 // a small calibration term so the SI text is a full 15-17 digit double, as in real recordings).
 std::vector<stend::ImuSample> one_second(std::uint64_t first_index, std::mt19937_64& rng) {
   std::normal_distribution<double> n(0.0, 20.0);
-  const double lsb_a = 9.80665 / 16384.0, lsb_g = M_PI / 180.0 / 131.0;
+  const double lsb_a = kAccelLsb, lsb_g = kGyroLsb;
   std::vector<stend::ImuSample> v(1000);
   for (std::size_t i = 0; i < v.size(); ++i) {
     auto& s = v[i];

@@ -79,7 +79,7 @@ BenchTruth Bench::at(double t_s) const {
   const Eigen::Matrix3d& M = exp_.R_sensor_from_mount;
   truth.R_sensor_from_local = M * R;
   truth.specific_force_mps2 =
-      truth.R_sensor_from_local * Eigen::Vector3d(0.0, 0.0, exp_.gravity.resolved_mps2) + M * accel;
+      physics::gravity_specific_force(truth.R_sensor_from_local, exp_.gravity.resolved_mps2) + M * accel;
   truth.angular_rate_radps = M * omega + truth.R_sensor_from_local * earth_rate_local_;
   if (chamber_ >= 0) {
     double air = 25.0, die = 25.0;

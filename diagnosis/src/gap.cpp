@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "stend/estimation/linear_lsq.hpp"
+#include "stend/physics/units.hpp"
 #include "magnitude.hpp"
 #include "noise_stage.hpp"
 #include "stats.hpp"
@@ -637,7 +638,7 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
   const bool accel = in.spec.model.instrument == model::Instrument::kAccelerometer;
   rep.unit = accel ? "m/s^2" : "rad/s";
   rep.display_unit = accel ? "mg" : "deg/h";
-  rep.display_per_unit = accel ? 1000.0 / batch_lsq::kStandardGravity : 180.0 / M_PI * 3600.0;
+  rep.display_per_unit = accel ? 1.0 / physics::kMilliG : 1.0 / physics::kDegPerHour;
   rep.magnitude = in.magnitude;
   rep.model_name = in.spec.source.empty() ? "<model>" : in.spec.source;
   rep.source = in.source;

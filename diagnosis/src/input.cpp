@@ -1,6 +1,7 @@
 // stend gap, step 1: from a recording to static segments with their truth stimulus, groups and
 // noise floor. The static points and truth means are the processing stage's (through batch_lsq's
 // extract_points); this file only adds what the diagnoser needs around them.
+#include <ceres/jet.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -10,8 +11,11 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "stend/physics/geometry.hpp"
+#include "stend/physics/gravity.hpp"
+#include "stend/physics/table_chain.hpp"
 #include "stend/diagnosis/gap.hpp"
+#include "stend/model/output_stage.hpp"
+#include "stend/sim/imu.hpp"
 #include "stend/processing/truth.hpp"
 #include "noise_stage.hpp"
 
@@ -36,7 +40,7 @@ int column_ending(const Recording& r, const std::string& suffix) {
 // not say.
 bool add_annotation_truth(Recording& r, std::string& how) {
   static const std::regex kLabel("^([xyz])_([pa])$");
-  const double g = r.header.gravity_mps2 > 0.0 ? r.header.gravity_mps2 : 9.81;
+  const double g = r.header.gravity_or_standard_mps2();
   std::vector<std::pair<double, std::vector<double>>> snaps;
   for (const Segment& s : r.segments) {
     std::smatch m;
@@ -72,39 +76,37 @@ std::string orientation_name(const Eigen::Vector3d& up) {
   return buf;
 }
 
-// Equivalent noise bandwidth of the sim sensor's 2nd-order Butterworth low-pass (π/(2·2·sin(π/4))
-// = 1.1107·fc), capped at Nyquist.
-double sim_twin_std(const YAML::Node& cfg, bool accel, double rate_hz) {
-  const double density =
-      cfg[accel ? "accel_noise_density" : "gyro_noise_density"]
-          ? cfg[accel ? "accel_noise_density" : "gyro_noise_density"].as<double>()
-          : (accel ? 0.00392266 : 8.7266e-5);
-  const double lp = cfg["lowpass_hz"] ? cfg["lowpass_hz"].as<double>() : 0.0;
-  double bw = 0.5 * rate_hz;
-  if (lp > 0.0) bw = std::min(bw, 1.1107 * lp);
-  return density * std::sqrt(bw);
+// White-noise std of a sim_imu sample as its output stage leaves it: the sensor config's noise
+// density, output rate and low-pass, each defaulting to the simulator's own (SimImuConfig).
+double sim_twin_std(const YAML::Node& cfg, bool accel) {
+  const sim::SimImuConfig defaults;
+  auto value = [&](const char* key, double fallback) { return cfg[key] ? cfg[key].as<double>() : fallback; };
+  const double density = accel ? value("accel_noise_density", defaults.accel_noise_density)
+                               : value("gyro_noise_density", defaults.gyro_noise_density);
+  return model::white_noise_output_sigma(density, value("output_rate_hz", defaults.output_rate_hz),
+                                         value("lowpass_hz", defaults.lowpass_hz));
 }
 
 }  // namespace
 
 Eigen::Vector3d table_stimulus(model::Stimulus<double>& st, double az, double h, double dl,
                                const Eigen::Matrix3d& mount, double g) {
-  auto force = [&](double a0, double a1, double a2, double ex, double ey) {
-    const Eigen::Vector3d gb = physics::Rx(ex) * physics::Ry(ey) * Eigen::Vector3d(0, 0, g);
-    return Eigen::Vector3d(mount * physics::Ry(a2) * physics::Rx(a1) * physics::Rz(a0) * gb);
-  };
-  const double e = 1e-6;
-  const double ang[3] = {az, h, dl};
-  for (int k = 0; k < 3; ++k) {
-    double up_a[3] = {ang[0], ang[1], ang[2]}, dn_a[3] = {ang[0], ang[1], ang[2]};
-    up_a[k] += e;
-    dn_a[k] -= e;
-    st.table_df_dangle[static_cast<std::size_t>(k)] =
-        (force(up_a[0], up_a[1], up_a[2], 0, 0) - force(dn_a[0], dn_a[1], dn_a[2], 0, 0)) / (2 * e);
+  // Gravity through the chain on a tilted base at ε = 0, differentiated exactly by the five angles
+  // (az, h, δ, ε_x, ε_y) through Jets.
+  using Jet = ceres::Jet<double, 5>;
+  const physics::Mat3<Jet> R_top_from_local =
+      physics::three_axis_table(Jet(az, 0), Jet(h, 1), Jet(dl, 2)) * physics::tilted_base(Jet(0.0, 3), Jet(0.0, 4));
+  const physics::Vec3<Jet> f = mount.cast<Jet>() * physics::gravity_specific_force(R_top_from_local, Jet(g));
+  Eigen::Vector3d value;
+  Eigen::Matrix<double, 3, 5> df;
+  for (int i = 0; i < 3; ++i) {
+    value[i] = f[i].a;
+    df.row(i) = f[i].v.transpose();
   }
-  st.table_df_dtilt[0] = (force(az, h, dl, e, 0) - force(az, h, dl, -e, 0)) / (2 * e);
-  st.table_df_dtilt[1] = (force(az, h, dl, 0, e) - force(az, h, dl, 0, -e)) / (2 * e);
-  return force(az, h, dl, 0, 0);
+  for (std::size_t k = 0; k < 3; ++k) st.table_df_dangle[k] = df.col(static_cast<Eigen::Index>(k));
+  st.table_df_dtilt[0] = df.col(3);
+  st.table_df_dtilt[1] = df.col(4);
+  return value;
 }
 
 GapInput build_input(const Recording& recording_in, const batch_lsq::ModelSpec& spec) {
@@ -142,8 +144,7 @@ GapInput build_input(const Recording& recording_in, const batch_lsq::ModelSpec& 
       const YAML::Node sensor = root["bench"]["sensor"];
       if (sensor && sensor["plugin"] && sensor["plugin"].as<std::string>() == "sim_imu") {
         const YAML::Node cfg = sensor["config"] ? sensor["config"] : YAML::Node(YAML::NodeType::Map);
-        const double rate = cfg["output_rate_hz"] ? cfg["output_rate_hz"].as<double>() : 1000.0;
-        in.twin_sample_std = Eigen::Vector3d::Constant(sim_twin_std(cfg, accel, rate));
+        in.twin_sample_std = Eigen::Vector3d::Constant(sim_twin_std(cfg, accel));
       }
     } catch (const std::exception&) {
       // no twin noise settings: the recording's median segment std is the reference
@@ -160,7 +161,7 @@ GapInput build_input(const Recording& recording_in, const batch_lsq::ModelSpec& 
   if (rec->header.mounting_R.size() == 9)
     for (int i = 0; i < 9; ++i) mount(i / 3, i % 3) = rec->header.mounting_R[static_cast<std::size_t>(i)];
   bool table_ok = three_axis;
-  const double g = rec->header.gravity_mps2 > 0.0 ? rec->header.gravity_mps2 : 9.80665;
+  const double g = rec->header.gravity_or_standard_mps2();
 
   // Time-ordered walk over the recording's segments for ramp direction and last changes.
   std::vector<const Segment*> segs;

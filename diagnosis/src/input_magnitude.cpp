@@ -10,6 +10,7 @@
 #include "magnitude.hpp"
 #include "stend/estimation/linear_lsq.hpp"
 #include "stend/processing/static_detector.hpp"
+#include "stend/physics/units.hpp"
 
 namespace stend::diagnosis {
 
@@ -85,7 +86,7 @@ batch_lsq::FitResult fit_magnitude_rows(const GapInput& in) {
     return fr;
   }
   fr.residual_rms[0] = std::sqrt(fr.lsq.residuals.squaredNorm() / static_cast<double>(n));
-  fr.residual_rms_display[0] = fr.residual_rms[0] * 1000.0 / batch_lsq::kStandardGravity;
+  fr.residual_rms_display[0] = fr.residual_rms[0] / physics::kMilliG;
   return fr;
 }
 
@@ -132,7 +133,7 @@ GapInput build_magnitude_input(const Recording& rec, const batch_lsq::ModelSpec&
     throw std::runtime_error("'" + rec.dir.string() +
                              "' has no rate truth: a gyroscope gap needs a rate table's truth columns "
                              "(w_x_radps …); sessions with unknown orientations give only |g|");
-  const double g = rec.header.gravity_mps2 > 0.0 ? rec.header.gravity_mps2 : batch_lsq::kStandardGravity;
+  const double g = rec.header.gravity_or_standard_mps2();
   processing::StaticDetectorOptions det;
   // The still interval at the start (an importer's "initialization" segment) sets the threshold.
   for (const auto& s : rec.segments)

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 
 #include "stats.hpp"
@@ -14,7 +15,6 @@ namespace stend::diagnosis::noise_stage {
 namespace {
 
 constexpr int kGroups = 8, kPerGroup = 8, kSub = kGroups * kPerGroup;  // 64 sub-blocks
-constexpr double kPi = 3.14159265358979323846;
 // The kind of coloured noise is read from the slope of the Allan variance above white over the
 // last four octaves of τ (τ_max/16 … τ_max).
 constexpr double kSlopeSpan = 16.5;
@@ -39,7 +39,7 @@ double f_quantile_upper(double q, double d1, double d2) {
 // (a sawtooth with Fourier series Σ (−1)^k (LSB/πk) sin(2πk x/LSB)) damped by the noise's
 // characteristic function at 2π/LSB.
 double dither_bias_bound(double sigma, double lsb) {
-  return lsb / kPi * std::exp(-2.0 * kPi * kPi * sigma * sigma / (lsb * lsb));
+  return lsb / std::numbers::pi * std::exp(-2.0 * std::numbers::pi * std::numbers::pi * sigma * sigma / (lsb * lsb));
 }
 
 // Wilson 95 % interval of a binomial fraction.

@@ -10,10 +10,11 @@
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <numbers>
 #include <ostream>
 #include <set>
 
-#include "stend/physics/geometry.hpp"
+#include "stend/physics/table_chain.hpp"
 #include "segment_mean_noise.hpp"
 #include "stend/model/noise.hpp"
 #include "noise_stage.hpp"
@@ -60,14 +61,12 @@ ValidationDesign many_positions_design(int n) {
   ValidationDesign d;
   d.setpoints_c = {25.0};
   d.positions.clear();
-  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
   for (int k = 0; k < n; ++k) {
     const double z = 1.0 - 2.0 * (k + 0.5) / n, r = std::sqrt(1 - z * z), phi = golden * k;
     const Eigen::Vector3d up(r * std::cos(phi), r * std::sin(phi), z);
-    // f = g·[−sin δ cos h, sin h, cos δ cos h]
-    const double h = std::asin(std::clamp(up[1], -1.0, 1.0)) / physics::kDegToRad;
-    const double dl = std::atan2(-up[0], up[2]) / physics::kDegToRad;
-    d.positions.push_back({h, dl});
+    const auto [h, dl] = physics::paper_table_pointing(up);
+    d.positions.push_back({h * physics::kRadToDeg, dl * physics::kRadToDeg});
   }
   return d;
 }
@@ -494,9 +493,9 @@ void print_validation(std::ostream& os, const ValidationReport& r) {
   auto floor_text = [](const ExperimentValidation& e) {
     char b[128];
     if (e.unit == "rad/s")
-      std::snprintf(b, sizeof b, "%.3g deg/h (%.3g rad/s)", e.floor * 180.0 / M_PI * 3600.0, e.floor);
+      std::snprintf(b, sizeof b, "%.3g deg/h (%.3g rad/s)", e.floor / physics::kDegPerHour, e.floor);
     else
-      std::snprintf(b, sizeof b, "%.3g mg (%.3g m/s^2)", e.floor * 1000 / 9.80665, e.floor);
+      std::snprintf(b, sizeof b, "%.3g mg (%.3g m/s^2)", e.floor / physics::kMilliG, e.floor);
     return std::string(b);
   };
   os << "stend gap validate — segment-level generator; per experiment: the fitted model, the planted effect "

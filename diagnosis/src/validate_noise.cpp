@@ -28,8 +28,7 @@ namespace {
 constexpr double kRate = 100.0;        // Hz
 constexpr double kRecord = 30.0;       // s per position
 constexpr double kLong = 600.0;        // s, the long +z window
-constexpr double kDensity = 0.00392266;  // m/s²/√Hz (sim_imu default)
-constexpr double kG = 9.80665;
+const double kDensity = sim::SimImuConfig{}.accel_noise_density;  // m/s²/√Hz (sim_imu default)
 
 double norm_sf(double z) { return 0.5 * std::erfc(z / std::sqrt(2.0)); }
 
@@ -80,7 +79,7 @@ Recording noise_stage_run(const NoisePlant& plant, std::uint64_t seed, NoiseRunT
   double peak = 0.0;
   for (std::size_t k = 0; k < pos.size(); ++k) {
     model::Stimulus<double> st;
-    st.input = st.specific_force = kG * pos[k].up;
+    st.input = st.specific_force = physics::kStandardGravity * pos[k].up;
     st.gravity_up = pos[k].up;
     st.temperature_c = 25.0;
     mean[k] = m.measure<double>(theta.data(), st);
@@ -88,8 +87,8 @@ Recording noise_stage_run(const NoisePlant& plant, std::uint64_t seed, NoiseRunT
   }
 
   // Output stage.
-  tr.range = std::isfinite(plant.headroom_sigma) ? peak + plant.headroom_sigma * tr.sigma : 2.0 * kG;
-  tr.lsb = plant.lsb_over_sigma > 0 ? plant.lsb_over_sigma * tr.sigma : 2.0 * kG / 32768.0;
+  tr.range = std::isfinite(plant.headroom_sigma) ? peak + plant.headroom_sigma * tr.sigma : 2.0 * physics::kStandardGravity;
+  tr.lsb = plant.lsb_over_sigma > 0 ? plant.lsb_over_sigma * tr.sigma : 2.0 * physics::kStandardGravity / 32768.0;
   const model::Saturation sat(tr.range);
   const int bits = 16;
   const model::Quantizer quant(tr.lsb, bits);
@@ -114,7 +113,7 @@ Recording noise_stage_run(const NoisePlant& plant, std::uint64_t seed, NoiseRunT
   rec.dir = "validation (sample level, noise stage)";
   rec.status = "complete";
   rec.header.experiment_name = "gap validate noise stage";
-  rec.header.gravity_mps2 = kG;
+  rec.header.gravity_mps2 = physics::kStandardGravity;
   rec.header.clock = "simulated";
   rec.header.info.output_rate_hz = kRate;
   rec.header.info.accel_range_mps2 = tr.range;
@@ -137,7 +136,7 @@ Recording noise_stage_run(const NoisePlant& plant, std::uint64_t seed, NoiseRunT
     seg.orientation_count = static_cast<int>(pos.size());
     seg.t_start_s = t;
     const auto n = static_cast<std::int64_t>(std::lround(pos[k].seconds * kRate));
-    const Eigen::Vector3d f = kG * pos[k].up;
+    const Eigen::Vector3d f = physics::kStandardGravity * pos[k].up;
     const std::vector<double> row = {f[0], f[1], f[2], 0.0, 0.0, 0.0, 25.0};
     rec.truth_t.push_back(t + 0.5 * dt);
     rec.truth.push_back(row);

@@ -5,7 +5,7 @@
 #include <cstdio>
 
 #include "stend/diagnosis/validate.hpp"
-#include "stend/physics/geometry.hpp"
+#include "stend/physics/kinematics.hpp"
 #include "segment_mean_noise.hpp"
 #include "stend/model/noise.hpp"
 
@@ -58,9 +58,6 @@ GapInput generate_rate(const RateDesign& d, const batch_lsq::ModelSpec& fit_mode
   const double se = rate_white_floor(d, inst);
   const double bi = d.bias_instability > 0 ? d.bias_instability : 0.3 * se;
   SegmentMeanNoise mean_noise(rng, se, sigma, bi, d.bias_correlation_s);
-  model::ErrorModel lever;
-  lever.instrument = model::Instrument::kAccelerometer;
-  lever.terms = {model::TermSpec{model::TermKind::kLeverArm, 1, 25.0}};
   double t = 0.0;
   int seg_id = 0;
   std::vector<Eigen::Vector3d> mounts = {d.offset_m};
@@ -82,12 +79,12 @@ GapInput generate_rate(const RateDesign& d, const batch_lsq::ModelSpec& fit_mode
       const double mid = t + 0.5 * d.record_s;
       auto& st = p.stimulus;
       // Constant rate about the vertical: ω, gravity and the centripetal term are constant in the
-      // sensor frame, ω̇ = 0. Specific force at the sensor = ω×(ω×r) + g·up.
+      // sensor frame, ω̇ = 0. Specific force at the sensor = the known mount's lever-arm
+      // acceleration + g·up.
       const Eigen::Vector3d w = rate_dps * physics::kDegToRad * up;
       st.angular_rate = w;
       st.angular_accel = Eigen::Vector3d::Zero();
-      // The known mount's centripetal term through the vocabulary's lever_arm regressor (θ = r).
-      const Eigen::Vector3d f = lever.regressor(st) * offset + d.gravity * up;
+      const Eigen::Vector3d f = physics::point_acceleration<double>(w, st.angular_accel, offset) + d.gravity * up;
       st.specific_force = f;
       st.input = gyro ? w : f;
       st.gravity_up = up;

@@ -1,6 +1,7 @@
 #include "bench_world.hpp"
 
-#include <stend/physics/geometry.hpp>
+#include <stend/physics/gravity.hpp>
+#include <stend/physics/table_chain.hpp>
 
 #include <stdexcept>
 
@@ -51,7 +52,7 @@ BenchWorldConfig BenchWorldConfig::from_experiment(const Experiment& e, double c
 }
 
 BenchWorld::BenchWorld(const BenchWorldConfig& c) : c_(c) {
-  Rh_ = physics::Rx(c.table_tilt_deg * physics::kDegToRad);
+  tilt_rad_ = c.table_tilt_deg * physics::kDegToRad;
   earth_local_ = physics::Rz(c.heading_deg * physics::kDegToRad) * physics::earth_rate_local(c.latitude_deg);
   TableTextConfig tc;
   tc.axes = {c.table_axis};
@@ -74,12 +75,13 @@ BenchTruth BenchWorld::truth(double t) {
   const double table_t = table_->emulated_now() -
                          std::chrono::duration<double>(std::chrono::steady_clock::now() - mcu_epoch_).count() + t;
   const sim::AxisState s = table_->state_at(0, table_t);
-  const double d = s.position * physics::kDegToRad;
-  const Eigen::Matrix3d R = c_.R_sensor_from_mount * physics::Ry(d) * Rh_;
+  const physics::TableMotion<double> m =
+      physics::paper_table_motion(tilt_rad_, s.position * physics::kDegToRad, s.velocity * physics::kDegToRad);
+  const Eigen::Matrix3d& M = c_.R_sensor_from_mount;
+  const Eigen::Matrix3d R = M * m.R_top_from_base;
   b.R_sensor_from_local = R;
-  b.specific_force_mps2 = R * Eigen::Vector3d(0.0, 0.0, c_.gravity_mps2);
-  b.angular_rate_radps = c_.R_sensor_from_mount * Eigen::Vector3d(0.0, s.velocity * physics::kDegToRad, 0.0) +
-                         R * earth_local_;
+  b.specific_force_mps2 = physics::gravity_specific_force(R, c_.gravity_mps2);
+  b.angular_rate_radps = M * m.omega_top_radps + R * earth_local_;
   chamber_->with_firmware([&](ChamberFirmware& f) {
     b.air_temperature_c = f.air_c();
     b.die_temperature_c = f.die_c();

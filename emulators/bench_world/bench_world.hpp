@@ -6,11 +6,13 @@
 // sensor in the chamber, as in configs/paper_mpu6050_z.yaml.
 //
 //   R_sensor_from_local = M · Ry(δ(t))·Rx(h),  f = R·(0, 0, g),  ω = M·δ̇·e_y + R·ω_earth
+//   (stend/physics: paper_table_motion, gravity_specific_force)
 //   air / die temperature from the chamber's plant.
 // The table and the sensor run in wall time; the chamber's plant may run faster (chamber_speed).
 #pragma once
 
 #include <stend/experiment.hpp>
+#include <stend/physics/units.hpp>
 #include <stend/sim/motion_profile.hpp>
 
 #include <Eigen/Core>
@@ -31,7 +33,7 @@ struct BenchWorldConfig {
   sim::AxisConfig table_axis;       // the table's rotation axis δ (deg)
   double table_tilt_deg = 0.0;      // h, set beforehand
   ChamberEmuConfig chamber;         // plant and firmware; chamber.speed = its time scale
-  double gravity_mps2 = 9.80665;
+  double gravity_mps2 = physics::kStandardGravity;
   double latitude_deg = 0.0;
   double heading_deg = 0.0;
   Eigen::Matrix3d R_sensor_from_mount = Eigen::Matrix3d::Identity();
@@ -60,7 +62,7 @@ class BenchWorld {
 
  private:
   BenchWorldConfig c_;
-  Eigen::Matrix3d Rh_;
+  double tilt_rad_ = 0.0;  // h
   Eigen::Vector3d earth_local_;
   std::unique_ptr<TableTextServer> table_;
   std::unique_ptr<AtmegaChamberSlave> chamber_;

@@ -1,14 +1,13 @@
 #include "imu_chip_models.hpp"
 
+#include <stend/physics/units.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
 namespace stend::emu {
 namespace {
-
-constexpr double kG = 9.80665;
-constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 class FnTruth final : public TruthSource {
  public:
@@ -158,10 +157,10 @@ sim::SimImuConfig Adxl345Model::output_config(sim::SimImuConfig c) const {
   const int range = regs_[0x31] & 0x03;
   c.accel_range_g = 2.0 * (1 << range);
   if (regs_[0x31] & 0x08) {  // FULL_RES: 3.9 mg/LSB (1/256 g), 10 + range bits
-    c.accel_lsb_mps2 = kG / 256.0;
+    c.accel_lsb_mps2 = physics::kStandardGravity / 256.0;
     c.output_bits = 10 + range;
   } else {  // 10-bit at every range
-    c.accel_lsb_mps2 = 2.0 * c.accel_range_g * kG / 1024.0;
+    c.accel_lsb_mps2 = 2.0 * c.accel_range_g * physics::kStandardGravity / 1024.0;
     c.output_bits = 10;
   }
   c.gyro_lsb_radps = 0.0;
@@ -254,9 +253,9 @@ sim::SimImuConfig Lsm6dsoModel::output_config(sim::SimImuConfig c) const {
   const int xl = (regs_[0x10] >> 2) & 3, g = (regs_[0x11] >> 2) & 3;
   const bool fs125 = (regs_[0x11] & 0x02) != 0;
   c.accel_range_g = kXlFs[xl];
-  c.accel_lsb_mps2 = kXlSens[xl] * 1e-3 * kG;
+  c.accel_lsb_mps2 = kXlSens[xl] * physics::kMilliG;
   c.gyro_range_dps = fs125 ? 125.0 : kGFs[g];
-  c.gyro_lsb_radps = (fs125 ? 4.375 : kGSens[g]) * 1e-3 * kDegToRad;
+  c.gyro_lsb_radps = (fs125 ? 4.375 : kGSens[g]) * 1e-3 * physics::kDegPerSecond;
   c.output_bits = 16;
   const int odr = std::max(std::min(regs_[0x10] >> 4, 10), std::min(regs_[0x11] >> 4, 10));
   c.output_rate_hz = kLsmOdr[odr];

@@ -1,4 +1,5 @@
 #include <stend/io/importers.hpp>
+#include <stend/physics/units.hpp>
 #include <stend/version.hpp>
 
 #include <algorithm>
@@ -36,9 +37,6 @@ ImportError::ImportError(const fs::path& file, std::size_t line, const std::stri
       line_(line) {}
 
 namespace {
-
-constexpr double kStandardGravity = 9.80665;
-constexpr double kDegToRad = std::numbers::pi / 180.0;
 
 // ---------------------------------------------------------------------------------------------
 // Text helpers
@@ -433,8 +431,8 @@ Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) 
   }
 
   Recording rec = new_recording(file, "imucal");
-  const double acc_lsb = kStandardGravity / opt.accel_lsb_per_g;
-  const double gyr_lsb = kDegToRad / opt.gyro_lsb_per_dps;
+  const double acc_lsb = physics::kStandardGravity / opt.accel_lsb_per_g;
+  const double gyr_lsb = physics::kDegPerSecond / opt.gyro_lsb_per_dps;
   std::size_t gaps = 0;
   for (std::size_t i = 0; i < rows.size(); ++i) {
     ImuSample s;
@@ -541,8 +539,8 @@ Recording import_mpu6050_multipos(const fs::path& file, const Mpu6050MultiposOpt
   const std::size_t needed = *std::max_element(col.begin(), col.end()) + 1;
 
   Recording rec = new_recording(file, "mpu6050_multipos");
-  const double acc_lsb = kStandardGravity / opt.accel_lsb_per_g;
-  const double gyr_lsb = kDegToRad / opt.gyro_lsb_per_dps;
+  const double acc_lsb = physics::kStandardGravity / opt.accel_lsb_per_g;
+  const double gyr_lsb = physics::kDegPerSecond / opt.gyro_lsb_per_dps;
   while (r.next(line)) {
     if (is_blank(line)) continue;
     const auto f = split(line, ',');
@@ -587,7 +585,7 @@ Recording import_mpu6050_multipos(const fs::path& file, const Mpu6050MultiposOpt
                             file.string() + " (MPU-6050 multi-position session; header: " + hdr +
                             "; counts converted with " + fmt_g(opt.accel_lsb_per_g) + " LSB/g (+-2 g) and " +
                             fmt_g(opt.gyro_lsb_per_dps) +
-                            " LSB/(deg/s) (+-250 deg/s), 1 g = 9.80665 m/s^2; no orientation "
+                            " LSB/(deg/s) (+-250 deg/s), 1 g = " + fmt_g(physics::kStandardGravity) + " m/s^2; no orientation "
                             "annotations beyond the initial still interval)");
   return rec;
 }

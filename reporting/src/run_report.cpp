@@ -4,6 +4,7 @@
 #include "stend/allan/allan.hpp"
 #include "stend/estimation/summary.hpp"
 #include "stend/model/terms.hpp"
+#include "stend/physics/units.hpp"
 #include "stend/reporting/results.hpp"
 #include "stend/reporting/svg_plot.hpp"
 #include "fitted_model.hpp"
@@ -240,7 +241,7 @@ std::string temp_section(const json& tp) {
                    g(num(tp, "reference_c")), g(vmin), g(vmax));
   const std::string unit = str(tp, "unit");
   const bool accel = unit != "rad/s";
-  const double ds = accel ? 1000.0 / 9.80665 : 180.0 / M_PI * 3600.0;
+  const double ds = accel ? 1.0 / physics::kMilliG : 1.0 / physics::kDegPerHour;
   const std::string dunit = accel ? "mg" : "deg/h";
   for (const auto& ax : tp.value("axes", json::array())) {
     const std::string a = str(ax, "axis");
@@ -484,7 +485,7 @@ std::string gap_section(const json& gp) {
         Series s{fmt::format("axis {}", axis_label(k)), Style::kPoints, {}, {}, {}, {}, svg::palette(static_cast<std::size_t>(k)), false, 0.8};
         for (const auto& sg : segs) {
           s.x.push_back(num(sg, dim));
-          s.y.push_back(at(sg.value("axis_residual_mps2", json::array()), static_cast<std::size_t>(k)) * 1000.0 / 9.80665);
+          s.y.push_back(at(sg.value("axis_residual_mps2", json::array()), static_cast<std::size_t>(k)) / physics::kMilliG);
         }
         p.series.push_back(s);
       }

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "i2c_imu.hpp"
+#include "stend/physics/units.hpp"
 
 namespace stend::i2c_imu {
 namespace {
@@ -17,9 +18,6 @@ namespace {
 using transport::I2cDevice;
 using transport::I2cError;
 using transport::i2c_hex;
-
-constexpr double kG = 9.80665;
-constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 std::int32_t le16(const std::uint8_t* p) { return static_cast<std::int16_t>(p[0] | (p[1] << 8)); }
 std::int32_t be16(const std::uint8_t* p) { return static_cast<std::int16_t>((p[0] << 8) | p[1]); }
@@ -109,8 +107,8 @@ class IdentifiedChip : public ChipDriver {
 SensorInfo full_scale_info(double rate_hz, double accel_range_g, double gyro_range_dps, double temperature_lsb_c) {
   SensorInfo i;
   i.output_rate_hz = rate_hz;
-  i.accel_range_mps2 = accel_range_g * kG;
-  i.gyro_range_radps = gyro_range_dps * kDegToRad;
+  i.accel_range_mps2 = accel_range_g * physics::kStandardGravity;
+  i.gyro_range_radps = gyro_range_dps * physics::kDegPerSecond;
   i.accel_lsb_mps2 = i.accel_range_mps2 / 32768.0;
   i.gyro_lsb_radps = i.gyro_range_radps / 32768.0;
   i.temperature_lsb_c = temperature_lsb_c;
@@ -221,8 +219,8 @@ class Adxl345 final : public IdentifiedChip {
   SensorInfo info() const override {
     SensorInfo i;
     i.output_rate_hz = rate_;
-    i.accel_range_mps2 = 2.0 * (1 << range_) * kG;
-    i.accel_lsb_mps2 = kG / 256.0;  // FULL_RES: 3.9 mg/LSB at every range
+    i.accel_range_mps2 = 2.0 * (1 << range_) * physics::kStandardGravity;
+    i.accel_lsb_mps2 = physics::kStandardGravity / 256.0;  // FULL_RES: 3.9 mg/LSB at every range
     i.has_gyro = false;
     i.has_temperature = false;
     return i;
@@ -295,10 +293,10 @@ class Lsm6dso final : public IdentifiedChip {
     ctrl2_ = static_cast<std::uint8_t>((odr_ << 4) | (w == 0 ? 0x02 : (w - 1) << 2));
     info_ = {};
     info_.output_rate_hz = kOdr[odr_ - 1];
-    info_.accel_range_mps2 = kA[a] * kG;
-    info_.gyro_range_radps = kW[w] * kDegToRad;
-    info_.accel_lsb_mps2 = kXlSens[a] * 1e-3 * kG;
-    info_.gyro_lsb_radps = kGSens[w] * 1e-3 * kDegToRad;
+    info_.accel_range_mps2 = kA[a] * physics::kStandardGravity;
+    info_.gyro_range_radps = kW[w] * physics::kDegPerSecond;
+    info_.accel_lsb_mps2 = kXlSens[a] * physics::kMilliG;
+    info_.gyro_lsb_radps = kGSens[w] * 1e-3 * physics::kDegPerSecond;
     info_.temperature_lsb_c = 1.0 / 256.0;
   }
   SensorInfo info() const override { return info_; }

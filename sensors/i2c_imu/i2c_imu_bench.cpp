@@ -4,6 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include <stend/devices/i2c_hid.hpp>
+#include <stend/physics/units.hpp>
 
 #include <memory>
 #include <string>
@@ -32,7 +33,7 @@ void fifo_drain(benchmark::State& state, const std::string& route) {
   auto now = std::make_shared<double>(0.0);
   bus->set_clock([now] { return *now; });
   BenchTruth truth;
-  truth.specific_force_mps2 = {0.0, 0.0, 9.80665};
+  truth.specific_force_mps2 = {0.0, 0.0, stend::physics::kStandardGravity};
   sim::SimImuConfig physics;
   physics.seed = 1;
   bus->attach(0x68, std::make_shared<emu::Mpu6050I2c>(emu::Mpu6050Model(physics, truth)));

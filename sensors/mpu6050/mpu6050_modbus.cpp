@@ -8,13 +8,12 @@
 #include <stdexcept>
 
 #include <stend/devices/bench_mcu_map.hpp>
+#include <stend/physics/units.hpp>
 
 namespace stend::mpu6050 {
 namespace {
 
 namespace map = stend::bench_mcu;
-constexpr double kG = 9.80665;
-constexpr double kPi = 3.14159265358979323846;
 
 std::string hex2(unsigned v) {
   char b[8];
@@ -94,8 +93,8 @@ SensorIdentity Mpu6050Modbus::identity() const { return {"InvenSense", "MPU-6050
 SensorInfo Mpu6050Modbus::info() const {
   SensorInfo i;
   i.output_rate_hz = 1.0 / period_s_;
-  i.accel_range_mps2 = c_.accel_range_g * kG;
-  i.gyro_range_radps = c_.gyro_range_dps * kPi / 180.0;
+  i.accel_range_mps2 = c_.accel_range_g * physics::kStandardGravity;
+  i.gyro_range_radps = c_.gyro_range_dps * physics::kDegPerSecond;
   i.accel_lsb_mps2 = i.accel_range_mps2 / 32768.0;
   i.gyro_lsb_radps = i.gyro_range_radps / 32768.0;
   i.temperature_lsb_c = 1.0 / 340.0;

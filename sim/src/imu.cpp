@@ -9,9 +9,6 @@ namespace stend::sim {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegToRad = kPi / 180.0;
-
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument("sim_imu: " + what);
 }
@@ -217,8 +214,8 @@ SimImu::SimImu(const SimImuConfig& c) : c_(c) {
 
   const int bits = static_cast<int>(c.output_bits);
   const double half_words = std::ldexp(1.0, bits - 1);
-  const double accel_fs = c.accel_range_g * kStandardGravity;
-  const double gyro_fs = c.gyro_range_dps * kDegToRad;
+  const double accel_fs = c.accel_range_g * physics::kStandardGravity;
+  const double gyro_fs = c.gyro_range_dps * physics::kDegPerSecond;
   accel_sat_ = model::Saturation(accel_fs);
   gyro_sat_ = model::Saturation(gyro_fs);
   accel_q_ = model::Quantizer(c.accel_lsb_mps2 > 0.0 ? c.accel_lsb_mps2 : accel_fs / half_words, bits);

@@ -1,6 +1,7 @@
 #include <stend/sim/one_axis_table.hpp>
 
-#include <stend/physics/geometry.hpp>
+#include <stend/physics/kinematics.hpp>
+#include <stend/physics/rotations.hpp>
 
 #include <cmath>
 #include <stdexcept>
@@ -9,7 +10,7 @@
 namespace stend::sim {
 
 namespace {
-constexpr double kDeg = physics::kDegToRad;
+using physics::kDegToRad;
 constexpr std::uint64_t kFallbackSeed = 0x7AB1EULL;
 }  // namespace
 
@@ -81,11 +82,10 @@ SimOneAxisTable::SimOneAxisTable(const OneAxisTableConfig& c) : c_(c) {
   }
   if (!(std::abs(c.axis_tilt_deg) <= 90.0))
     throw std::invalid_argument("sim_one_axis_table: axis_tilt_deg must be within ±90 deg");
-  Rh_ = physics::Rx(c.axis_tilt_deg * kDeg);
-  ch_ = std::cos(c.axis_tilt_deg * kDeg);
-  sh_ = std::sin(c.axis_tilt_deg * kDeg);
+  chain_ = physics::PaperTable<double>(c.axis_tilt_deg * kDegToRad);
+  Rh_ = physics::Rx(c.axis_tilt_deg * kDegToRad);
   misaligned_ = c.axis_misalignment_x_deg != 0.0 || c.axis_misalignment_z_deg != 0.0;
-  M_ = physics::Rz(c.axis_misalignment_z_deg * kDeg) * physics::Rx(c.axis_misalignment_x_deg * kDeg);
+  M_ = physics::Rz(c.axis_misalignment_z_deg * kDegToRad) * physics::Rx(c.axis_misalignment_x_deg * kDegToRad);
   n_ = M_.transpose() * Eigen::Vector3d::UnitY();
 }
 
@@ -122,18 +122,15 @@ double SimOneAxisTable::commanded(std::size_t axis) const {
 
 Pose SimOneAxisTable::pose(double t_s) const {
   const AxisState s = axis_.at(t_s);
-  const double delta = (s.position + c_.angle_offset_deg) * kDeg;
+  const double delta = (s.position + c_.angle_offset_deg) * kDegToRad;
   Pose p;
-  if (misaligned_) {
+  if (misaligned_)
     p.R_top_from_base = M_.transpose() * physics::Ry(delta) * M_ * Rh_;
-  } else {  // Ry(δ)·Rx(h) written out (the paper's Table 1): this runs at every sensor sample
-    const double c = std::cos(delta), s_ = std::sin(delta);
-    p.R_top_from_base << c, s_ * sh_, -s_ * ch_, 0.0, ch_, sh_, s_, -sh_ * c, c * ch_;
-  }
-  const Eigen::Vector3d w = (s.velocity * kDeg) * n_;
-  const Eigen::Vector3d alpha = (s.acceleration * kDeg) * n_;
+  else  // the paper's chain with cos h, sin h cached: this runs at every sensor sample
+    p.R_top_from_base = chain_.at(delta);
+  const Eigen::Vector3d w = (s.velocity * kDegToRad) * n_;
   p.omega_top_radps = w;
-  p.accel_top_mps2 = w.cross(w.cross(c_.lever_arm_m)) + alpha.cross(c_.lever_arm_m);
+  p.accel_top_mps2 = physics::point_acceleration<double>(w, (s.acceleration * kDegToRad) * n_, c_.lever_arm_m);
   return p;
 }
 

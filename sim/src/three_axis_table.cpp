@@ -1,6 +1,7 @@
 #include <stend/sim/three_axis_table.hpp>
 
-#include <stend/physics/geometry.hpp>
+#include <stend/physics/kinematics.hpp>
+#include <stend/physics/table_chain.hpp>
 
 #include <cmath>
 #include <stdexcept>
@@ -9,7 +10,6 @@
 namespace stend::sim {
 
 namespace {
-constexpr double kDeg = physics::kDegToRad;
 constexpr std::uint64_t kFallbackSeed = 0x3A7AB1EULL;
 const char* const kNames[3] = {"azimuth", "tilt", "rotation"};
 }  // namespace
@@ -107,28 +107,14 @@ bool SimThreeAxisTable::settled() const {
 
 Pose SimThreeAxisTable::pose(double t_s) const {
   const AxisState az = axes_[kAzimuth].at(t_s), h = axes_[kTilt].at(t_s), d = axes_[kRotation].at(t_s);
-  const Eigen::Matrix3d Rd = physics::Ry((d.position + c_.angle_offset_deg[2]) * kDeg);
-  const Eigen::Matrix3d Rh = physics::Rx((h.position + c_.angle_offset_deg[1]) * kDeg);
-  const Eigen::Matrix3d Rdh = Rd * Rh;
+  const Eigen::Vector3d q_deg = Eigen::Vector3d(az.position, h.position, d.position) + c_.angle_offset_deg;
+  const physics::TableMotion<double> m = physics::three_axis_table_motion<double>(
+      q_deg * physics::kDegToRad, Eigen::Vector3d(az.velocity, h.velocity, d.velocity) * physics::kDegToRad,
+      Eigen::Vector3d(az.acceleration, h.acceleration, d.acceleration) * physics::kDegToRad);
   Pose p;
-  p.R_top_from_base = Rdh * physics::Rz((az.position + c_.angle_offset_deg[0]) * kDeg);
-  // ω = A·az' + B·h' + C·δ' with A = Rd·Rh·e_z, B = Rd·e_x, C = e_y (each axis's rate carried
-  // into the top frame by the rotations inside it).
-  const Eigen::Vector3d A = Rdh.col(2), B = Rd.col(0), C = Eigen::Vector3d::UnitY();
-  const double wa = az.velocity * kDeg, wh = h.velocity * kDeg, wd = d.velocity * kDeg;
-  const Eigen::Vector3d w = A * wa + B * wh + C * wd;
-  p.omega_top_radps = w;
-  if (c_.lever_arm_m.squaredNorm() > 0.0) {
-    // ω̇ = A·az'' + Ȧ·az' + B·h'' + Ḃ·h' + C·δ'', with Ṙ = −[ω_rel]×·R for each passive factor:
-    //   Ȧ = −δ'·e_y × A − Rd·(h'·e_x × Rh·e_z),   Ḃ = −δ'·e_y × B.
-    const Eigen::Vector3d wy(0.0, wd, 0.0);
-    const Eigen::Vector3d Adot = -wy.cross(A) - Rd * Eigen::Vector3d(wh, 0.0, 0.0).cross(Rh.col(2));
-    const Eigen::Vector3d Bdot = -wy.cross(B);
-    const Eigen::Vector3d alpha = A * (az.acceleration * kDeg) + Adot * wa + B * (h.acceleration * kDeg) +
-                                  Bdot * wh + C * (d.acceleration * kDeg);
-    const Eigen::Vector3d& r = c_.lever_arm_m;
-    p.accel_top_mps2 = w.cross(w.cross(r)) + alpha.cross(r);
-  }
+  p.R_top_from_base = m.R_top_from_base;
+  p.omega_top_radps = m.omega_top_radps;
+  p.accel_top_mps2 = physics::point_acceleration<double>(m.omega_top_radps, m.alpha_top_radps2, c_.lever_arm_m);
   return p;
 }
 

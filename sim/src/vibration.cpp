@@ -1,15 +1,16 @@
 #include <stend/sim/vibration.hpp>
 
+#include <stend/physics/units.hpp>
 
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
 namespace stend::sim {
 
 namespace {
-constexpr double kTwoPi = 6.283185307179586476925;
 std::string num(double v) {
   char b[32];
   std::snprintf(b, sizeof b, "%g", v);
@@ -70,7 +71,7 @@ std::vector<AxisSpec> SimVibration::axes() const {
 
 double SimVibration::phase(double t_s) const {
   const Segment& s = segment_at(t_s);
-  return s.phase0 + kTwoPi * s.frequency_hz * (t_s - s.t0);
+  return s.phase0 + 2.0 * std::numbers::pi * s.frequency_hz * (t_s - s.t0);
 }
 
 void SimVibration::install(const Segment& s) {
@@ -88,7 +89,7 @@ void SimVibration::command(std::size_t axis, CommandMode mode, double value) {
     throw std::invalid_argument("sim_vibration: " + a.name + " " + num(value) + " " + a.unit + " outside [" +
                                 num(a.min) + ", " + num(a.max) + "] " + a.unit);
   Segment s = cur_;
-  s.phase0 = std::fmod(phase(now_), kTwoPi);
+  s.phase0 = std::fmod(phase(now_), 2.0 * std::numbers::pi);
   s.t0 = now_;
   if (axis == kAmplitude)
     s.amplitude_g = value;
@@ -118,15 +119,15 @@ Pose SimVibration::pose(double t_s) const {
   const Segment& s = segment_at(t_s);
   Pose p;
   if (s.amplitude_g != 0.0) {
-    const double ph = s.phase0 + kTwoPi * s.frequency_hz * (t_s - s.t0);
-    p.accel_top_mps2 = (s.amplitude_g * kG0 * std::sin(ph)) * dir_;
+    const double ph = s.phase0 + 2.0 * std::numbers::pi * s.frequency_hz * (t_s - s.t0);
+    p.accel_top_mps2 = (s.amplitude_g * physics::kStandardGravity * std::sin(ph)) * dir_;
   }
   return p;
 }
 
 void SimVibration::safe_state() noexcept {
   Segment s = cur_;
-  s.phase0 = std::fmod(phase(now_), kTwoPi);
+  s.phase0 = std::fmod(phase(now_), 2.0 * std::numbers::pi);
   s.t0 = now_;
   s.amplitude_g = 0.0;
   install(s);

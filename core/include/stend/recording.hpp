@@ -16,6 +16,7 @@
 // time, whichever comes first), and a reader accepts a truncated last line.
 #pragma once
 
+#include <stend/physics/units.hpp>
 #include <stend/sdk.hpp>
 
 #include <cstdint>
@@ -40,7 +41,7 @@ struct RecordingHeader {
   std::vector<PluginUse> plugins;
   SensorIdentity identity;
   SensorInfo info;
-  double gravity_mps2 = 0.0;
+  double gravity_mps2 = 0.0;  // local gravity of the run; 0 = unknown (an import that does not say)
   double latitude_deg = 0.0;
   double height_m = 0.0;
   std::vector<double> mounting_R;  // 9 values, row-major R_sensor_from_mount
@@ -49,6 +50,11 @@ struct RecordingHeader {
   std::vector<std::string> truth_columns;  // e.g. "table.angle.cmd_deg", "air_c", "f_x_mps2"
   std::string start_time_utc;  // ISO 8601; filled by the writer when empty
   std::string status = "running";
+
+  // The run's local gravity [m/s²], or standard gravity when the recording does not state one.
+  double gravity_or_standard_mps2() const {
+    return gravity_mps2 > 0.0 ? gravity_mps2 : physics::kStandardGravity;
+  }
 };
 
 struct Segment {

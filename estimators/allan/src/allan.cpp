@@ -1,4 +1,5 @@
 #include <stend/allan/allan.hpp>
+#include <stend/physics/units.hpp>
 
 #include <Eigen/Dense>
 #include <fmt/format.h>
@@ -19,7 +20,6 @@ namespace stend::allan {
 namespace {
 
 constexpr int kTerms = 5;  // Q N B K R
-constexpr double kStandardGravity = 9.80665;
 
 // Regressor of the model: σ²(τ) = Σ_j c_j · basis_j(τ), c = (Q², N², B², K², R²).
 std::array<double, kTerms> basis(double tau) {
@@ -731,15 +731,16 @@ void write_summary_table(std::ostream& os, const AllanReport& r) {
     const double n = m.white.identified ? m.white.value : m.white_line.value;
     const double b = m.bias_floor.value;
     if (c.curve.channel.instrument == Instrument::kGyroscope) {
-      const double deg = 180.0 / std::numbers::pi;
+      // ARW: rad/√s → deg/√h is × 180/π × √3600.
       os << fmt::format("{:<4} ARW {} deg/sqrt(h), bias instability {} deg/h{}\n",
-                        c.curve.channel.name, fmt_value(n * deg * 60.0), fmt_value(b * deg * 3600.0),
+                        c.curve.channel.name, fmt_value(n * physics::kRadToDeg * 60.0),
+                        fmt_value(b / physics::kDegPerHour),
                         m.bias_floor.found ? "" : " (upper bound)");
     } else if (c.curve.channel.instrument == Instrument::kAccelerometer) {
       os << fmt::format("{:<4} VRW {} m/s/sqrt(h) = {} ug/sqrt(Hz), bias instability {} ug{}\n",
                         c.curve.channel.name, fmt_value(n * 60.0),
-                        fmt_value(n / kStandardGravity * 1e6),
-                        fmt_value(b / kStandardGravity * 1e6),
+                        fmt_value(n / physics::kMicroG),
+                        fmt_value(b / physics::kMicroG),
                         m.bias_floor.found ? "" : " (upper bound)");
     }
   }

@@ -7,7 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "stend/physics/geometry.hpp"
+#include "stend/physics/units.hpp"
 
 namespace stend::batch_lsq {
 
@@ -131,7 +131,7 @@ FitResult fit_points(const std::vector<StaticPoint>& points, const ModelSpec& sp
   fr.unit = accel ? "m/s^2" : "rad/s";
   fr.display_unit = accel ? "mg" : "deg/h";
   const double display_factor =
-      accel ? 1e3 / kStandardGravity : 180.0 / physics::kPi * 3600.0;
+      accel ? 1.0 / physics::kMilliG : 1.0 / physics::kDegPerHour;
 
   if (spec.axes.empty() || spec.model.terms.empty()) {
     fr.message = "the model specification has no axes or no terms";

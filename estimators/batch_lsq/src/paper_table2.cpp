@@ -8,7 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "stend/physics/geometry.hpp"
+#include "stend/physics/gravity.hpp"
+#include "stend/physics/table_chain.hpp"
 
 #ifndef STEND_BATCH_LSQ_SOURCE_DIR
 #define STEND_BATCH_LSQ_SOURCE_DIR "."
@@ -96,9 +97,8 @@ std::vector<StaticPoint> table2_points(const std::vector<Table2Row>& rows, doubl
     StaticPoint p;
     p.segment_id = static_cast<int>(i);
     p.label = num(rows[i].angle_deg) + " deg";
-    const Eigen::Matrix3d C = physics::paper_table(tilt_h_deg * physics::kDegToRad,
-                                                    rows[i].angle_deg * physics::kDegToRad);
-    const Eigen::Vector3d f = C * Eigen::Vector3d(0.0, 0.0, g_mps2);
+    const Eigen::Vector3d f = physics::gravity_specific_force(
+        physics::paper_table(tilt_h_deg * physics::kDegToRad, rows[i].angle_deg * physics::kDegToRad), g_mps2);
     p.stimulus.input = f;
     p.stimulus.specific_force = f;
     p.stimulus.temperature_c = 25.0;  // one (unstated) temperature; no temperature terms fitted
@@ -120,7 +120,7 @@ Table2Reproduction reproduce_table2(const std::vector<Table2Row>& rows) {
   };
   const std::vector<Setup> setups = {
       {"normal gravity 47.2 N, h = 0", g_local, 0.0},
-      {"standard gravity 9.80665, h = 0", 9.80665, 0.0},
+      {"standard gravity 9.80665, h = 0", physics::kStandardGravity, 0.0},
       {"normal gravity 47.2 N, h = 1 deg (constant tilt)", g_local, 1.0},
   };
   for (const auto& s : setups) {
@@ -132,7 +132,8 @@ Table2Reproduction reproduce_table2(const std::vector<Table2Row>& rows) {
     if (c.fit.ok) {
       const auto& l = c.fit.lsq;
       Eigen::VectorXd a = Eigen::VectorXd::Zero(l.parameter_count);
-      const double gz = s.g * std::cos(s.h * physics::kDegToRad);
+      // g·cos h: the specific force on z at δ = 0.
+      const double gz = physics::gravity_specific_force(physics::paper_table(s.h * physics::kDegToRad, 0.0), s.g).z();
       a[l.index("scale_z")] = gz;
       c.g_one_plus_scale = l.combination(a, gz);
       c.g_one_plus_scale.text = "g*cos(h)*(1 + scale_z)";
@@ -144,14 +145,19 @@ Table2Reproduction reproduce_table2(const std::vector<Table2Row>& rows) {
     out.cases.push_back(c);
   }
 
-  // The paper's parameters on the table: a_z = g cos δ (1+δM) + s·μ33·(−g sin δ) + Δa, with the
-  // sign s of μ33 that fits best (the paper does not fix the sense of δ).
+  // The paper's parameters on the table (h = 0): a_z = f_z (1+δM) + s·μ33·f_x + Δa with f per unit
+  // g = [−sin δ, 0, cos δ], and the sign s of μ33 that fits best (the paper does not fix the sense
+  // of δ). per_g: the part proportional to g.
   const PaperTable2Fit& pp = out.paper;
+  auto per_g = [&](const Table2Row& r, double sign) {
+    const Eigen::Vector3d f =
+        physics::gravity_specific_force(physics::paper_table(0.0, r.angle_deg * physics::kDegToRad), 1.0);
+    return f.z() * (1 + pp.scale) + sign * pp.cross_zx * f.x();
+  };
   auto rms_for = [&](double g, double sign) {
     double ss = 0;
     for (const auto& r : rows) {
-      const double d = r.angle_deg * physics::kDegToRad;
-      const double pred = g * std::cos(d) * (1 + pp.scale) - sign * pp.cross_zx * g * std::sin(d) + pp.bias_mps2;
+      const double pred = g * per_g(r, sign) + pp.bias_mps2;
       ss += (r.a_z_mps2 - pred) * (r.a_z_mps2 - pred);
     }
     return std::sqrt(ss / static_cast<double>(rows.size()));
@@ -159,8 +165,7 @@ Table2Reproduction reproduce_table2(const std::vector<Table2Row>& rows) {
   auto best_g_for = [&](double sign) {
     double num_ = 0, den = 0;
     for (const auto& r : rows) {
-      const double d = r.angle_deg * physics::kDegToRad;
-      const double c = std::cos(d) * (1 + pp.scale) - sign * pp.cross_zx * std::sin(d);
+      const double c = per_g(r, sign);
       num_ += (r.a_z_mps2 - pp.bias_mps2) * c;
       den += c * c;
     }

@@ -95,7 +95,7 @@ Recording synth_recording(const model::ErrorModel& m, const Eigen::VectorXd& the
       ImuSample smp;
       smp.t_s = t;
       for (int a = 0; a < 3; ++a)
-        smp.accel_mps2[a] = y[a] + o.noise * n(rng) + o.vibration * std::sin(2 * physics::kPi * 17.0 * t + a);
+        smp.accel_mps2[a] = y[a] + o.noise * n(rng) + o.vibration * std::sin(2 * std::numbers::pi * 17.0 * t + a);
       smp.temperature_c = o.die_c + 0.1;
       rec.samples.push_back(smp);
     }

@@ -69,7 +69,7 @@ void BM_AccelFit(benchmark::State& state) {
   CalibrationOptions o = accel_options();
   bool ok = true;
   for (auto _ : state) {
-    const CalibrationResult a = calibrate_accelerometer_unknown_orientations(ivs, 9.80665, o);
+    const CalibrationResult a = calibrate_accelerometer_unknown_orientations(ivs, physics::kStandardGravity, o);
     ok = ok && a.ok;
     benchmark::DoNotOptimize(a.theta.data());
   }
@@ -79,7 +79,7 @@ BENCHMARK(BM_AccelFit)->Arg(10)->Arg(20)->Arg(38)->Arg(76)->Arg(150)->Unit(bench
 
 void BM_GyroIntegrationFit(benchmark::State& state) {
   const synthetic::Record r = synthetic::make(positions_spec(static_cast<int>(state.range(0))));
-  const CalibrationResult a = calibrate_accelerometer_unknown_orientations(intervals_of(r), 9.80665, accel_options());
+  const CalibrationResult a = calibrate_accelerometer_unknown_orientations(intervals_of(r), physics::kStandardGravity, accel_options());
   bool ok = a.ok;
   for (auto _ : state) {
     const CalibrationResult g = calibrate_gyro_integration(r.recording, a);

@@ -2,7 +2,6 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
-#include <numbers>
 #include <random>
 
 namespace stend::ceres_nonlinear::synthetic {
@@ -54,7 +53,7 @@ Record make(const Spec& spec) {
     out.statics.emplace_back(first, i - 1);
     if (last) break;
     const std::size_t move = per - n_static;
-    const double T = static_cast<double>(move) * dt, phi = angle(rng) * std::numbers::pi / 180.0;
+    const double T = static_cast<double>(move) * dt, phi = angle(rng) * physics::kDegToRad;
     const Eigen::Vector3d axis = random_unit();
     // The static pose ends at the last static sample; the turn runs over the next `move` samples and
     // ends exactly one sample before the next pose's first sample (φ(T) = φ).

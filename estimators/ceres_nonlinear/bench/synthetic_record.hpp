@@ -9,6 +9,7 @@
 #pragma once
 
 #include <stend/ceres_nonlinear/calibration.hpp>
+#include <stend/physics/units.hpp>
 
 #include <cstdint>
 #include <utility>
@@ -23,7 +24,7 @@ struct Spec {
   double static_fraction = 0.8;
   double accel_noise_mps2 = 0.02;   // per sample
   double gyro_noise_radps = 0.002;  // per sample
-  double gravity_mps2 = 9.80665;
+  double gravity_mps2 = physics::kStandardGravity;
   std::uint64_t seed = 1;
   std::vector<double> accel_theta = {0.12, -0.08, 0.2, 0.015, -0.02, 0.008, 0.0, 0.0, 0.006, 0.0, -0.005, 0.003};
   std::vector<double> gyro_theta = {0.01, -0.015, 0.02, 0.01, -0.008, 0.012, 0.004, -0.003, 0.005, 0.002, -0.004, 0.006};

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
     CalibrationResult r;
     if (kind == "imucal") {
       const Recording rec = io::import_imucal_session(argv[2]);
+      const double g = rec.header.gravity_mps2;  // imucal's expected_g, as the importer states it
       std::vector<StaticInterval> ivs;
       std::vector<Eigen::Vector3d> truth;
       processing::ProcessingOptions segments = default_interval_options();
@@ -30,18 +31,18 @@ int main(int argc, char** argv) {
       for (const auto& iv : static_intervals(rec, segments)) {
         // x_p: x axis up → the accelerometer reads +g on x; x_a: down → −g.
         Eigen::Vector3d f = Eigen::Vector3d::Zero();
-        f[iv.label[0] - 'x'] = (iv.label[2] == 'p' ? 1.0 : -1.0) * 9.81;
+        f[iv.label[0] - 'x'] = (iv.label[2] == 'p' ? 1.0 : -1.0) * g;
         ivs.push_back(iv);
         truth.push_back(f);
       }
       CalibrationOptions o;
-      o.gravity_mps2 = 9.81;           // imucal's expected_g
+      o.gravity_mps2 = g;
       o.orientation_sigma_deg = 1.0;   // hand-placed positions: ~1° tilts
       r = calibrate_accelerometer_known_orientations(ivs, truth, o);
     } else if (kind == "mpu6050") {
       const Recording rec = io::import_mpu6050_multipos(argv[2]);
       CalibrationOptions o;
-      o.gravity_mps2 = 9.81;
+      o.gravity_mps2 = 9.81;  // the g of the session's reference calibration (README, "Figures")
       o.processing.detector.init_duration_s = 30.0;
       r = calibrate_accelerometer_unknown_orientations(rec, o);
     } else {

@@ -1,5 +1,7 @@
 #include <stend/ceres_nonlinear/calibration.hpp>
 #include <stend/estimation/linear_lsq.hpp>
+#include <stend/physics/gravity.hpp>
+#include <stend/physics/table_chain.hpp>
 
 #include <ceres/ceres.h>
 #include <fmt/format.h>
@@ -12,7 +14,6 @@
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <numbers>
 #include <stdexcept>
 
 namespace stend::ceres_nonlinear {
@@ -101,30 +102,18 @@ struct KnownCost {
   }
 };
 
-// Rotations of the table chain, templated for Jets (geometry.hpp's Rx/Ry are double-only; same
-// convention: passive, frame rotated by a about x / y).
+// Specific force of gravity g [m/s²] on the sensor (mounting M = R_sensor_from_mount) for the
+// table's tilt h and rotation δ [deg]: M · paper_table(h, δ) · [0, 0, g] (stend/physics; the
+// azimuth does not move gravity). Templated for Jets.
 template <typename T>
-Eigen::Matrix<T, 3, 3> rot_x(const T& a) {
-  using std::cos;
-  using std::sin;
-  const T c = cos(a), s = sin(a);
-  Eigen::Matrix<T, 3, 3> R;
-  R << T(1), T(0), T(0), T(0), c, s, T(0), -s, c;
-  return R;
-}
-template <typename T>
-Eigen::Matrix<T, 3, 3> rot_y(const T& a) {
-  using std::cos;
-  using std::sin;
-  const T c = cos(a), s = sin(a);
-  Eigen::Matrix<T, 3, 3> R;
-  R << c, T(0), -s, T(0), T(1), T(0), s, T(0), c;
-  return R;
+model::Vec3<T> table_gravity(const Eigen::Matrix3d& M, const T& tilt_deg, const T& rotation_deg, double g) {
+  const physics::Mat3<T> C = physics::paper_table<T>(tilt_deg * physics::kDegToRad, rotation_deg * physics::kDegToRad);
+  return M.cast<T>() * physics::gravity_specific_force<T>(C, T(g));
 }
 
 // Known orientations from the table encoders with angle zero offsets: p = [12 model parameters,
-// offsets in deg for the axes flagged in offset_tilt / offset_rotation (in that order)].
-//   f = M · Ry(δ + dδ) · Rx(h + dh) · [0, 0, g]     (the azimuth does not move gravity)
+// offsets in deg for the axes flagged in offset_tilt / offset_rotation (in that order)]:
+//   f = table_gravity(M, h + dh, δ + dδ, g)
 struct KnownOffsetCost {
   const model::ErrorModel* m;
   Eigen::Vector3d y;
@@ -135,12 +124,10 @@ struct KnownOffsetCost {
   bool operator()(T const* const* p, T* residual) const {
     const T* x = p[0];
     int k = kFull;
-    const T d2r = T(std::numbers::pi / 180.0);
     T h = T(tilt_deg), d = T(rotation_deg);
     if (offset_tilt) h = h + x[k++];
     if (offset_rotation) d = d + x[k++];
-    const Eigen::Matrix<T, 3, 1> up(T(0), T(0), T(g));
-    const model::Vec3<T> f = M.cast<T>() * (rot_y<T>(d * d2r) * (rot_x<T>(h * d2r) * up));
+    const model::Vec3<T> f = table_gravity<T>(M, h, d, g);
     model::Stimulus<T> s;
     s.input = f;
     s.specific_force = f;
@@ -162,10 +149,10 @@ ceres::LossFunction* make_loss(const CalibrationOptions& o) {
 // Nominal size of a parameter for the identifiability scaling: a bias in units of g (accel) or
 // 1 rad/s (gyro), g-sensitivity in 1/g, an angle offset in 1 rad = 57.3 deg, the rest 1.
 double nominal_size(const std::string& name, const CalibrationResult& r) {
-  const double g = r.gravity_mps2 > 0.0 ? r.gravity_mps2 : 9.80665;
+  const double g = r.gravity_mps2 > 0.0 ? r.gravity_mps2 : physics::kStandardGravity;
   if (name.rfind("bias", 0) == 0) return r.model.instrument == model::Instrument::kAccelerometer ? g : 1.0;
   if (name.rfind("gsens", 0) == 0) return 1.0 / g;
-  if (name.rfind("table_offset", 0) == 0) return 180.0 / std::numbers::pi;
+  if (name.rfind("table_offset", 0) == 0) return physics::kRadToDeg;
   return 1.0;
 }
 
@@ -554,16 +541,16 @@ std::string CalibrationResult::report() const {
                      fmt_num(rms_norm_before), fmt_num(rms_norm_after));
     s += fmt::format("residual RMS per axis (x y z), calibrated: {} {} {} m/s^2 = {} {} {} mg; raw: {} {} {} mg\n",
                      fmt_num(rms_axis_after[0]), fmt_num(rms_axis_after[1]), fmt_num(rms_axis_after[2]),
-                     fmt_num(rms_axis_after[0] / 9.80665e-3), fmt_num(rms_axis_after[1] / 9.80665e-3),
-                     fmt_num(rms_axis_after[2] / 9.80665e-3), fmt_num(rms_axis_before[0] / 9.80665e-3),
-                     fmt_num(rms_axis_before[1] / 9.80665e-3), fmt_num(rms_axis_before[2] / 9.80665e-3));
+                     fmt_num(rms_axis_after[0] / physics::kMilliG), fmt_num(rms_axis_after[1] / physics::kMilliG),
+                     fmt_num(rms_axis_after[2] / physics::kMilliG), fmt_num(rms_axis_before[0] / physics::kMilliG),
+                     fmt_num(rms_axis_before[1] / physics::kMilliG), fmt_num(rms_axis_before[2] / physics::kMilliG));
   } else if (method == "integration") {
     s += fmt::format("gravity-direction mismatch after each move (RMS): raw {} rad, calibrated {} rad; per axis "
                      "calibrated {} {} {} rad\n",
                      fmt_num(rms_norm_before), fmt_num(rms_norm_after), fmt_num(rms_axis_after[0]),
                      fmt_num(rms_axis_after[1]), fmt_num(rms_axis_after[2]));
   } else {
-    const double dps = 180.0 / std::numbers::pi;
+    const double dps = 1.0 / physics::kDegPerSecond;
     s += fmt::format("residual RMS per axis (x y z), calibrated: {} {} {} rad/s = {} {} {} deg/s; raw: {} {} {} deg/s\n",
                      fmt_num(rms_axis_after[0]), fmt_num(rms_axis_after[1]), fmt_num(rms_axis_after[2]),
                      fmt_num(rms_axis_after[0] * dps), fmt_num(rms_axis_after[1] * dps),
@@ -613,10 +600,10 @@ std::string CalibrationResult::to_json() const {
   j["rms_axis_before_" + au] = {num(rms_axis_before[0]), num(rms_axis_before[1]), num(rms_axis_before[2])};
   j["rms_axis_after_" + au] = {num(rms_axis_after[0]), num(rms_axis_after[1]), num(rms_axis_after[2])};
   if (!gyro) {
-    j["rms_axis_before_mg"] = {num(rms_axis_before[0] / 9.80665e-3), num(rms_axis_before[1] / 9.80665e-3),
-                               num(rms_axis_before[2] / 9.80665e-3)};
-    j["rms_axis_after_mg"] = {num(rms_axis_after[0] / 9.80665e-3), num(rms_axis_after[1] / 9.80665e-3),
-                              num(rms_axis_after[2] / 9.80665e-3)};
+    j["rms_axis_before_mg"] = {num(rms_axis_before[0] / physics::kMilliG), num(rms_axis_before[1] / physics::kMilliG),
+                               num(rms_axis_before[2] / physics::kMilliG)};
+    j["rms_axis_after_mg"] = {num(rms_axis_after[0] / physics::kMilliG), num(rms_axis_after[1] / physics::kMilliG),
+                              num(rms_axis_after[2] / physics::kMilliG)};
   }
   j["condition_number"] = num(condition_number);
   j["confidence_quantile"] = num(quantile);
@@ -769,7 +756,7 @@ CalibrationResult known_impl(const std::vector<StaticInterval>& intervals, const
       const Eigen::Vector3d e1 = e0.unitOrthogonal(), e2 = e0.cross(e1);
       const double n_sd = std::max(1e-6, intervals[k].accel_std.mean() /
                                              std::sqrt(static_cast<double>(std::max<std::size_t>(1, intervals[k].count))));
-      const double t_sd = std::hypot(n_sd, g * o.orientation_sigma_deg * std::numbers::pi / 180.0);
+      const double t_sd = std::hypot(n_sd, g * o.orientation_sigma_deg * physics::kDegToRad);
       W.row(0) = e0.transpose() / n_sd;
       W.row(1) = e1.transpose() / t_sd;
       W.row(2) = e2.transpose() / t_sd;
@@ -792,8 +779,7 @@ CalibrationResult known_impl(const std::vector<StaticInterval>& intervals, const
   if (n_off > 0 && r.ok) {
     const double dh = off_tilt ? x[kFull] : 0.0, dd = off_rot ? x[static_cast<std::size_t>(kFull + (off_tilt ? 1 : 0))] : 0.0;
     for (std::size_t k = 0; k < truth.size(); ++k)
-      truth[k] = M * (rot_y<double>((angles[k][1] + dd) * std::numbers::pi / 180.0) *
-                      (rot_x<double>((angles[k][0] + dh) * std::numbers::pi / 180.0) * Eigen::Vector3d(0, 0, g)));
+      truth[k] = table_gravity(M, angles[k][0] + dh, angles[k][1] + dd, g);
   }
   for (const auto& iv : intervals) reading.push_back(iv.accel_mean);
   axis_rms_against(r, truth, reading, truth);
@@ -849,8 +835,7 @@ CalibrationResult calibrate_accelerometer_known_orientations(const Recording& re
     Eigen::Vector3d f;
     if (offsets) {
       angles.push_back({a[0], a[1]});
-      f = M * (rot_y<double>(a[1] * std::numbers::pi / 180.0) *
-               (rot_x<double>(a[0] * std::numbers::pi / 180.0) * Eigen::Vector3d(0, 0, o2.gravity_mps2)));
+      f = table_gravity(M, a[0], a[1], o2.gravity_mps2);
     } else {
       f = Eigen::Vector3d(a[0], a[1], a[2]);
     }

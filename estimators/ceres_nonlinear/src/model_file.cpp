@@ -1,16 +1,14 @@
 #include <stend/ceres_nonlinear/model_file.hpp>
+#include <stend/physics/units.hpp>
 #include <stend/yaml_util.hpp>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
-#include <numbers>
 
 namespace stend::ceres_nonlinear {
 namespace {
-
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 std::vector<std::string> string_list(const yaml::MapReader& m, const std::string& key,
                                      const std::vector<std::string>& allowed) {
@@ -65,7 +63,7 @@ ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& fi
                  "use gyroscope: rate_table, or an accelerometer method");
   if (o.accelerometer == "none" && o.gyroscope == "none") m.fail_value("accelerometer", "nothing to fit: both are none");
   auto& a = o.accel;
-  a.processing.detector.max_gyro_radps = 3.0 * kDeg;  // a turn about the vertical is not a pose
+  a.processing.detector.max_gyro_radps = 3.0 * physics::kDegPerSecond;  // a turn about the vertical is not a pose
   processing::read_options(m, a.processing);
   // segment_trim_s: dropped at each end of a segment — the rate table's, and the accelerometer
   // fits' on segments unless the file states their extraction.settle_s.
@@ -136,7 +134,7 @@ std::string describe_options(const ModelFileOptions& o) {
                                        d.init_duration_s > 0.0
                                            ? fmt::format("variance of the first {} s", d.init_duration_s)
                                            : std::string("10th percentile of the window variance")),
-                     d.trim_s, d.max_gyro_radps / kDeg);
+                     d.trim_s, d.max_gyro_radps / physics::kDegPerSecond);
   else
     s += fmt::format("  segments trimmed by {} s at each end\n", a.processing.extraction.settle_s);
   s += fmt::format("  gravity: {}\n", a.gravity_mps2 > 0.0 ? fmt::format("{} m/s^2", a.gravity_mps2) : "from the recording");
@@ -168,7 +166,7 @@ std::string options_json(const ModelFileOptions& o) {
         {"threshold_multiplier", d.threshold_multiplier},
         {"init_duration_s", d.init_duration_s},
         {"trim_s", d.trim_s},
-        {"max_gyro_dps", d.max_gyro_radps / kDeg}}},
+        {"max_gyro_dps", d.max_gyro_radps / physics::kDegPerSecond}}},
       {"segment_trim_s", o.gyro.processing.extraction.settle_s},
       {"gravity_mps2", a.gravity_mps2},
       {"loss", loss_name(a.loss)},

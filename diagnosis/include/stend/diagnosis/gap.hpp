@@ -115,9 +115,10 @@ struct GapInput {
   Eigen::Vector3d allan_slope_se = Eigen::Vector3d::Constant(kNaN);
 };
 
-// The sim three-axis table's chain f = M·Ry(δ)·Rx(h)·Rz(az)·Rx(εx)·Ry(εy)·[0, 0, g] (angles in
-// rad, M = R_sensor_from_mount): returns f and fills the stimulus's table_df_dangle (∂f/∂az,
-// ∂f/∂h, ∂f/∂δ) and table_df_dtilt (∂f/∂εx, ∂f/∂εy) at εx = εy = 0.
+// Gravity through the three-axis table chain on a tilted base (stend/physics), f = M·R_top_from_base
+// (az, h, δ)·tilted_base(εx, εy)·[0, 0, g] (angles in rad, M = R_sensor_from_mount): returns f and
+// fills the stimulus's table_df_dangle (∂f/∂az, ∂f/∂h, ∂f/∂δ) and table_df_dtilt (∂f/∂εx, ∂f/∂εy)
+// at εx = εy = 0.
 Eigen::Vector3d table_stimulus(model::Stimulus<double>& st, double az, double h, double delta,
                                const Eigen::Matrix3d& mount, double g);
 

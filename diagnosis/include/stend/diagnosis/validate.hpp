@@ -32,6 +32,8 @@
 #include <vector>
 
 #include "stend/diagnosis/gap.hpp"
+#include "stend/physics/units.hpp"
+#include "stend/sim/imu.hpp"
 
 namespace stend::diagnosis {
 
@@ -44,10 +46,10 @@ struct ValidationDesign {
   double record_s = 20.0;       // averaging window per position
   double move_s = 10.0;         // between positions
   double rate_hz = 100.0;
-  double noise_density = 0.00392266;    // m/s^2/√Hz (sim_imu default)
+  double noise_density = sim::SimImuConfig{}.accel_noise_density;  // m/s^2/√Hz (sim_imu default)
   double bias_instability = 0.0;        // GM σ [m/s^2]; 0 = 0.3 × the white floor of a mean
   double bias_correlation_s = 600.0;
-  double gravity = 9.80665;
+  double gravity = physics::kStandardGravity;
 };
 
 ValidationDesign default_design();
@@ -86,11 +88,11 @@ struct RateDesign {
   double record_s = 20.0;        // averaging window per segment
   double move_s = 10.0;          // reorientation / spin-up between segments
   double rate_hz = 100.0;
-  double gyro_noise_density = 0.005 * 3.14159265358979323846 / 180.0;  // rad/s/√Hz (sim_imu default)
-  double accel_noise_density = 0.00392266;                               // m/s^2/√Hz (sim_imu default)
+  double gyro_noise_density = sim::SimImuConfig{}.gyro_noise_density;    // rad/s/√Hz (sim_imu default)
+  double accel_noise_density = sim::SimImuConfig{}.accel_noise_density;  // m/s^2/√Hz (sim_imu default)
   double bias_instability = 0.0;  // GM σ [unit]; 0 = 0.3 × the white floor of a mean
   double bias_correlation_s = 600.0;
-  double gravity = 9.80665;
+  double gravity = physics::kStandardGravity;
 };
 RateDesign default_rate_design();
 // default_rate_design() with a second mount (the accelerometer's lever arm / gravity experiment).

@@ -11,6 +11,7 @@
 #include <stend/model/output_stage.hpp>
 #include <stend/model/terms.hpp>
 #include <stend/fields.hpp>
+#include <stend/physics/units.hpp>
 #include <stend/sdk.hpp>
 
 #include <Eigen/Core>
@@ -20,8 +21,6 @@
 #include <vector>
 
 namespace stend::sim {
-
-inline constexpr double kStandardGravity = 9.80665;  // m/s², defines "g" in ranges and densities
 
 // Deterministic error parameters of one triad, SI (accelerometer: m/s²; gyroscope: rad/s).
 struct TriadErrors {
@@ -43,11 +42,11 @@ struct SimImuConfig {
   double temperature_reference_c = 25.0;
 
   // Noise (see stend/model/noise.hpp for the conventions).
-  double accel_noise_density = 400e-6 * kStandardGravity;     // m/s²/√Hz, one-sided
+  double accel_noise_density = 400.0 * physics::kMicroG;      // m/s²/√Hz, one-sided (400 µg/√Hz)
   double accel_bias_instability_mps2 = 5e-4;                  // GM stationary σ
   double accel_bias_correlation_s = 100.0;
   double accel_random_walk = 2e-5;                            // m/s²/√s
-  double gyro_noise_density = 0.005 * 3.14159265358979323846 / 180.0;  // rad/s/√Hz, one-sided
+  double gyro_noise_density = 0.005 * physics::kDegPerSecond;  // rad/s/√Hz, one-sided (0.005 deg/s/√Hz)
   double gyro_bias_instability_radps = 5e-5;
   double gyro_bias_correlation_s = 100.0;
   double gyro_random_walk = 1e-6;                             // rad/s/√s

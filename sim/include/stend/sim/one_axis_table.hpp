@@ -5,10 +5,12 @@
 //   R_top_from_base = A(δ_true) · Rx(h),   A(δ) = Mᵀ·Ry(δ)·M  (= Ry(δ) without misalignment)
 // which is the paper's Table 1 (stend::physics::paper_table(h, δ)). With h = 0 the specific force
 // of gravity on the plate is g·[−sin δ, 0, cos δ]. The plate turns about its own y axis (n = Mᵀ·e_y
-// when the axis is misaligned): ω_top = δ̇·n. See README.md.
+// when the axis is misaligned): ω_top = δ̇·n, and a sensor at lever_arm_m from the axis feels
+// physics::point_acceleration(ω, δ̈·n, lever_arm_m). See README.md.
 #pragma once
 
 #include <stend/fields.hpp>
+#include <stend/physics/table_chain.hpp>
 #include <stend/sdk.hpp>
 #include <stend/sim/motion_profile.hpp>
 
@@ -67,8 +69,8 @@ class SimOneAxisTable final : public Fixture {
 
   OneAxisTableConfig c_;
   SimAxis axis_;
-  Eigen::Matrix3d Rh_ = Eigen::Matrix3d::Identity();  // Rx(h)
-  double ch_ = 1.0, sh_ = 0.0;                         // cos h, sin h
+  physics::PaperTable<double> chain_{0.0};           // Ry(δ)·Rx(h), h fixed
+  Eigen::Matrix3d Rh_ = Eigen::Matrix3d::Identity();  // Rx(h), for the misaligned axis
   Eigen::Matrix3d M_ = Eigen::Matrix3d::Identity();   // axis misalignment
   Eigen::Vector3d n_ = Eigen::Vector3d::UnitY();      // rotation axis in the top frame
   bool misaligned_ = false;

@@ -3,10 +3,10 @@
 //
 //   R_top_from_base = Ry(δ) · Rx(h) · Rz(az)
 //
-// so azimuth 0 is the paper's Table 1 exactly (stend::physics::paper_table(h, δ)). The top's
-// angular velocity is composed through the chain:
-//   ω_top = Ry(δ)·Rx(h)·[0, 0, daz/dt] + Ry(δ)·[dh/dt, 0, 0] + [0, dδ/dt, 0].
-// Each axis moves under its own trapezoidal profile (stend/sim/motion_profile.hpp). See README.md.
+// so azimuth 0 is the paper's Table 1 exactly (stend::physics::paper_table(h, δ)). The chain, the
+// top's angular velocity and acceleration (physics::three_axis_table_motion) and the lever arm
+// (physics::point_acceleration) are stend/physics'. Each axis moves under its own trapezoidal
+// profile (stend/sim/motion_profile.hpp). See README.md.
 #pragma once
 
 #include <stend/fields.hpp>

@@ -9,10 +9,15 @@
 // run causally, as a sensor's own filter runs.
 #pragma once
 
+#include <Eigen/Core>
+#include <Eigen/LU>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
+
+#include "stend/model/noise.hpp"
 
 namespace stend::model {
 
@@ -111,8 +116,7 @@ class Biquad {
     if (!(sample_rate_hz > 0.0 && cutoff_hz > 0.0 && cutoff_hz < 0.5 * sample_rate_hz))
       throw std::invalid_argument("low-pass: cutoff must be in (0, sample rate / 2)");
     if (!(q > 0.0)) throw std::invalid_argument("low-pass: quality factor must be > 0");
-    constexpr double kPi = 3.14159265358979323846;
-    const double k = std::tan(kPi * cutoff_hz / sample_rate_hz);
+    const double k = std::tan(std::numbers::pi * cutoff_hz / sample_rate_hz);
     const double k2 = k * k;
     const double norm = 1.0 / (1.0 + k / q + k2);
     const double b0 = k2 * norm;
@@ -138,12 +142,21 @@ class Biquad {
   double dc_gain() const { return (b0_ + b1_ + b2_) / (1.0 + a1_ + a2_); }
   // |H| at frequency f_hz for sample rate fs_hz.
   double magnitude(double f_hz, double fs_hz) const {
-    constexpr double kPi = 3.14159265358979323846;
-    const double w = 2.0 * kPi * f_hz / fs_hz;
+    const double w = 2.0 * std::numbers::pi * f_hz / fs_hz;
     const double c1 = std::cos(w), s1 = std::sin(w), c2 = std::cos(2 * w), s2 = std::sin(2 * w);
     const double nr = b0_ + b1_ * c1 + b2_ * c2, ni = -(b1_ * s1 + b2_ * s2);
     const double dr = 1.0 + a1_ * c1 + a2_ * c2, di = -(a1_ * s1 + a2_ * s2);
     return std::sqrt((nr * nr + ni * ni) / (dr * dr + di * di));
+  }
+  // Noise gain Σ h[n]² (h the impulse response): the output variance for unit-variance white
+  // input. Exact, from the stationary autocorrelations r0, r1, r2 of y + a1·y₋₁ + a2·y₋₂ =
+  // b0·x + b1·x₋₁ + b2·x₋₂ (E[y y₋k] for k = 0, 1, 2, with E[x₋j y₋k] = h[j−k]).
+  double noise_gain() const {
+    const double h0 = b0_, h1 = b1_ - a1_ * h0, h2 = b2_ - a1_ * h1 - a2_ * h0;
+    Eigen::Matrix3d A;
+    A << 1.0, a1_, a2_, a1_, 1.0 + a2_, 0.0, a2_, a1_, 1.0;
+    const Eigen::Vector3d rhs(b0_ * h0 + b1_ * h1 + b2_ * h2, b1_ * h0 + b2_ * h1, b2_ * h0);
+    return A.partialPivLu().solve(rhs)[0];
   }
   double b0() const { return b0_; }
   double b1() const { return b1_; }
@@ -155,5 +168,16 @@ class Biquad {
   double b0_ = 1.0, b1_ = 0.0, b2_ = 0.0, a1_ = 0.0, a2_ = 0.0;
   double s1_ = 0.0, s2_ = 0.0;
 };
+
+// ---------------------------------------------------------------------------------------------
+// Standard deviation of a sensor's white noise at its output [unit]: one-sided density N
+// [unit/√Hz] sampled at rate_hz, then the output stage's 2nd-order Butterworth low-pass at
+// lowpass_hz (0 = none): σ = σ_white·√(Σh²), σ_white = N·√(rate_hz/2) (WhiteNoise). Throws as
+// Biquad::butterworth_lowpass does unless 0 < lowpass_hz < rate_hz/2.
+inline double white_noise_output_sigma(double density, double rate_hz, double lowpass_hz) {
+  const double sigma = WhiteNoise::sigma_from_density(density, 1.0 / rate_hz);
+  if (!(lowpass_hz > 0.0)) return sigma;
+  return sigma * std::sqrt(Biquad::butterworth_lowpass(lowpass_hz, rate_hz).noise_gain());
+}
 
 }  // namespace stend::model

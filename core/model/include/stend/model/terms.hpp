@@ -23,6 +23,8 @@
 #include <string_view>
 #include <vector>
 
+#include "stend/physics/kinematics.hpp"
+
 namespace stend::model {
 
 template <typename T>
@@ -74,7 +76,7 @@ enum class TermKind {
   kGravityError,      // δg · gravity_up (the local g assumed wrong by δg) [m/s^2], 1 parameter
   kTableAngleOffset,  // Σ_k δ_k · table_df_dangle_k  (zero offsets of the table axes) [rad], 3
   kTableAxisTilt,     // Σ_k ε_k · table_df_dtilt_k   (base tilted about base x, y)    [rad], 2
-  kLeverArm,          // ω×(ω×r) + ω̇×r  (centripetal + tangential at offset r)       [m], 3
+  kLeverArm,          // centripetal + tangential acceleration at offset r (physics::point_acceleration) [m], 3
 };
 
 inline constexpr std::array<TermKind, 11> kAllTermKinds = {
@@ -248,11 +250,8 @@ Vec3<T> contribution(const TermSpec& t, const T* p, const Stimulus<T>& s) {
     case TermKind::kTableAngleOffset:
       return s.table_df_dangle[0] * p[0] + s.table_df_dangle[1] * p[1] + s.table_df_dangle[2] * p[2];
     case TermKind::kTableAxisTilt: return s.table_df_dtilt[0] * p[0] + s.table_df_dtilt[1] * p[1];
-    case TermKind::kLeverArm: {
-      const Vec3<T> r(p[0], p[1], p[2]);
-      const Vec3<T>& w = s.angular_rate;
-      return w.cross(w.cross(r)) + s.angular_accel.cross(r);
-    }
+    case TermKind::kLeverArm:
+      return physics::point_acceleration<T>(s.angular_rate, s.angular_accel, Vec3<T>(p[0], p[1], p[2]));
   }
   return Vec3<T>::Zero();
 }

@@ -43,7 +43,6 @@ using estimation::weighting_name;
 inline constexpr const char* kFitSchema = "stend.fit/1";
 inline constexpr const char* kEstimatorName = "batch_lsq";
 inline constexpr const char* kEstimatorVersion = "0.1.0";
-inline constexpr double kStandardGravity = 9.80665;  // for mg
 
 // One static orientation: what the sensor read (constant part) and what the bench applied — this
 // estimator's view of a processing::StaticPoint.
