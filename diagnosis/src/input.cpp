@@ -109,7 +109,7 @@ Eigen::Vector3d table_stimulus(model::Stimulus<double>& st, double az, double h,
   return value;
 }
 
-GapInput build_input(const Recording& recording_in, const batch_lsq::ModelSpec& spec) {
+GapInput build_input(const Recording& recording_in, const estimation::ModelSpec& spec) {
   GapInput in;
   in.spec = spec;
   in.source = recording_in.dir.string();

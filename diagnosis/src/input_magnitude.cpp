@@ -128,7 +128,7 @@ GapInput magnitude_form(GapInput in, double g) {
   return in;
 }
 
-GapInput build_magnitude_input(const Recording& rec, const batch_lsq::ModelSpec& spec) {
+GapInput build_magnitude_input(const Recording& rec, const estimation::ModelSpec& spec) {
   if (spec.model.instrument != model::Instrument::kAccelerometer)
     throw std::runtime_error("'" + rec.dir.string() +
                              "' has no rate truth: a gyroscope gap needs a rate table's truth columns "

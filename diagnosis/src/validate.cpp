@@ -71,15 +71,15 @@ ValidationDesign many_positions_design(int n) {
   return d;
 }
 
-batch_lsq::ModelSpec validation_model() {
-  batch_lsq::ModelSpec s;
+estimation::ModelSpec validation_model() {
+  estimation::ModelSpec s;
   s.model.instrument = model::Instrument::kAccelerometer;
   s.model.terms = {TermSpec{TermKind::kBias, 1, 25.0}, TermSpec{TermKind::kScale, 1, 25.0}};
   s.source = "bias + scale (validation model)";
   return s;
 }
 
-GapInput generate(const ValidationDesign& d, const batch_lsq::ModelSpec& fit_model, const Planted& truth,
+GapInput generate(const ValidationDesign& d, const estimation::ModelSpec& fit_model, const Planted& truth,
                   std::uint64_t seed) {
   GapInput in;
   in.spec = fit_model;
@@ -164,7 +164,7 @@ namespace {
 struct Experiment {
   std::string name;                    // CandidateValidation::experiment
   std::string tag;                     // short key for the confusion matrix ("" = none)
-  batch_lsq::ModelSpec fit_model;
+  estimation::ModelSpec fit_model;
   std::function<GapInput(const Planted&, std::uint64_t)> make;
   double floor = 0;                    // averaged white floor of a segment mean [unit]
   double bias_sigma = 0.05, scale_sigma = 0.002;  // the true model's own part [unit], [1]
@@ -186,7 +186,7 @@ struct Tally {
 // CandidateValidation rows, the confusion entries and the null / out-of-vocabulary runs.
 void validate_experiment(const Experiment& ex, const ValidateOptions& o, model::Rng& prng, std::uint64_t& seed,
                          ValidationReport& rep, Tally& total) {
-  const batch_lsq::ModelSpec& fit_model = ex.fit_model;
+  const estimation::ModelSpec& fit_model = ex.fit_model;
   const model::Instrument inst = fit_model.model.instrument;
   const double floor = ex.floor;
   ExperimentValidation ev;

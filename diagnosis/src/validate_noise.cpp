@@ -48,7 +48,7 @@ double median(std::vector<double> v) {
 
 Recording noise_stage_run(const NoisePlant& plant, std::uint64_t seed, NoiseRunTruth* truth_out) {
   const double dt = 1.0 / kRate;
-  const batch_lsq::ModelSpec spec = validation_model();
+  const estimation::ModelSpec spec = validation_model();
   const double settle = spec.processing.extraction.settle_s;
   NoiseRunTruth tr;
   tr.sigma = model::WhiteNoise::sigma_from_density(kDensity, dt);
@@ -172,7 +172,7 @@ Recording noise_stage_run(const NoisePlant& plant, std::uint64_t seed, NoiseRunT
 std::vector<NoiseStageValidation> run_noise_validation(const ValidateOptions& o) {
   std::vector<NoiseStageValidation> out;
   if (o.noise_seeds <= 0 && o.noise_null_runs <= 0) return out;
-  const batch_lsq::ModelSpec spec = validation_model();
+  const estimation::ModelSpec spec = validation_model();
   GapOptions gopt = o.gap;
   gopt.check_aliases = false;
   gopt.max_steps = 1;

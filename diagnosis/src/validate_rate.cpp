@@ -27,8 +27,8 @@ RateDesign two_mount_rate_design() {
   return d;
 }
 
-batch_lsq::ModelSpec rate_model(model::Instrument instrument) {
-  batch_lsq::ModelSpec s;
+estimation::ModelSpec rate_model(model::Instrument instrument) {
+  estimation::ModelSpec s;
   s.model.instrument = instrument;
   s.model.terms = {model::TermSpec{model::TermKind::kBias, 1, 25.0}, model::TermSpec{model::TermKind::kScale, 1, 25.0}};
   s.source = instrument == model::Instrument::kGyroscope ? "bias + scale, gyroscope (rate-table validation model)"
@@ -42,7 +42,7 @@ double rate_white_floor(const RateDesign& d, model::Instrument instrument) {
   return sigma / std::sqrt(d.record_s * d.rate_hz);
 }
 
-GapInput generate_rate(const RateDesign& d, const batch_lsq::ModelSpec& fit_model, const Planted& truth,
+GapInput generate_rate(const RateDesign& d, const estimation::ModelSpec& fit_model, const Planted& truth,
                        std::uint64_t seed) {
   const model::Instrument inst = fit_model.model.instrument;
   const bool gyro = inst == model::Instrument::kGyroscope;

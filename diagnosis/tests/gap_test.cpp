@@ -56,7 +56,7 @@ GapInput sim_input(const std::string& experiment, const std::string& model) {
   const RunResult run = run_experiment(exp, host(), opt);
   if (run.status != "complete") throw std::runtime_error(experiment + ": run " + run.status + ": " + run.message);
   return build_input(Recording::open(run.dir),
-                     batch_lsq::load_model_spec(std::string(STEND_SOURCE_DIR) + "/diagnosis/examples/" + model));
+                     estimation::load_model_spec(std::string(STEND_SOURCE_DIR) + "/diagnosis/examples/" + model));
 }
 
 Planted with_term(const model::TermSpec& t, const Eigen::VectorXd& th) {
@@ -211,8 +211,8 @@ TEST(GapRealData, ImucalWithoutCrossAxisNamesCrossAxisFirst) {
   const fs::path csv = fs::path(STEND_SHARED_DATA_DIR) / "imucal" / "annotated_session.csv";
   if (!fs::exists(csv)) GTEST_SKIP() << "../shared/data/imucal is absent (" << csv << "); real-data check skipped";
   const Recording rec = io::import_imucal_session(csv);
-  const batch_lsq::ModelSpec spec =
-      batch_lsq::load_model_spec(std::string(STEND_SOURCE_DIR) + "/diagnosis/examples/imucal_bias_scale.yaml");
+  const estimation::ModelSpec spec =
+      estimation::load_model_spec(std::string(STEND_SOURCE_DIR) + "/diagnosis/examples/imucal_bias_scale.yaml");
   const GapInput in = build_input(rec, spec);
   ASSERT_EQ(in.segments.size(), 6u);
   const GapReport r = diagnose(in);
@@ -267,7 +267,7 @@ TEST(GapRealData, Mpu6050MultiposWithoutScaleNamesScaleInTheMagnitudeForm) {
   const fs::path csv = fs::path(STEND_SHARED_DATA_DIR) / "mpu6050_multipos" / "calibration_session.csv";
   if (!fs::exists(csv)) GTEST_SKIP() << "../shared/data/mpu6050_multipos is absent (" << csv << "); skipped";
   const Recording rec = io::import_mpu6050_multipos(csv);
-  const batch_lsq::ModelSpec spec = batch_lsq::load_model_spec(std::string(STEND_SOURCE_DIR) +
+  const estimation::ModelSpec spec = estimation::load_model_spec(std::string(STEND_SOURCE_DIR) +
                                                                "/diagnosis/examples/mpu6050_multipos_bias.yaml");
   const GapInput in = build_input(rec, spec);
   EXPECT_TRUE(in.magnitude);
@@ -284,7 +284,7 @@ TEST(GapRealData, Mpu6050MultiposWithoutScaleNamesScaleInTheMagnitudeForm) {
   const double reference = 9.80665 / 16384.0 / 5.859241382355084718e-04 - 1.0;  // reference_params_acc.csv
   EXPECT_LT(std::abs(c.size - reference), 0.002) << c.size << " vs " << reference;
   // A gyroscope has no |g| to lean on: refused with the reason.
-  batch_lsq::ModelSpec gyro = spec;
+  estimation::ModelSpec gyro = spec;
   gyro.model.instrument = model::Instrument::kGyroscope;
   try {
     (void)build_input(rec, gyro);

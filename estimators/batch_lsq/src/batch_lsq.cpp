@@ -56,7 +56,7 @@ TruthColumns truth_columns(const Recording& rec, const ModelSpec& spec) {
     for (const auto& c : rec.header.truth_columns) have += (have.empty() ? "" : ", ") + c;
     for (const auto& c : missing) miss += (miss.empty() ? "" : ", ") + c;
     throw std::runtime_error("recording '" + rec.dir.string() + "' lacks the truth column(s) " +
-                             miss + " that a " + instrument_name(spec.model.instrument) +
+                             miss + " that a " + estimation::instrument_name(spec.model.instrument) +
                              " fit needs; truth columns present: " +
                              (have.empty() ? "none" : have));
   }
@@ -156,7 +156,7 @@ FitResult fit_points(const std::vector<StaticPoint>& points, const ModelSpec& sp
   estimation::LsqProblem prob;
   prob.design.resize(k, p);
   prob.observations.resize(k);
-  if (spec.weighting == Weighting::kSegmentNoise) prob.weights.resize(k);
+  if (spec.weighting == estimation::Weighting::kSegmentNoise) prob.weights.resize(k);
   for (const auto& pi : fr.params) {
     prob.names.push_back(pi.name);
     prob.units.push_back(pi.unit);
@@ -168,11 +168,11 @@ FitResult fit_points(const std::vector<StaticPoint>& points, const ModelSpec& sp
     for (int a : spec.axes) {
       for (int j = 0; j < p; ++j) prob.design(row, j) = phi(a, fr.param_index[static_cast<std::size_t>(j)]);
       prob.observations[row] = pt.measured[a] - pt.stimulus.input[a];
-      if (spec.weighting == Weighting::kSegmentNoise) {
+      if (spec.weighting == estimation::Weighting::kSegmentNoise) {
         const double se = pt.measured_std_error[a];
         if (!(se > 0.0) || !std::isfinite(se)) {
           fr.message = "weighting: segment_noise needs a positive standard error for every point; "
-                       "point '" + pt.label + "' axis " + axis_name(a) + " has " + num(se) +
+                       "point '" + pt.label + "' axis " + estimation::axis_name(a) + " has " + num(se) +
                        ". Use weighting: none.";
           return fr;
         }

@@ -18,7 +18,7 @@ const stend::fields::Table<estimation::EstimatorConfig>& BatchLsqEstimator::fiel
 
 EstimatorResult BatchLsqEstimator::fit(const EstimatorRequest& req) {
   if (req.recording == nullptr) throw std::invalid_argument("batch_lsq: no recording given");
-  const FitResult r = fit_recording(*req.recording, load_model_spec(req.model_file));
+  const FitResult r = fit_recording(*req.recording, estimation::load_model_spec(req.model_file));
   std::ostringstream text;
   print_table(text, r);
   return {r.ok, r.message, to_json(r), text.str(), config_.results_file};
@@ -31,7 +31,7 @@ estimation::EstimatorEntry estimator_entry() {
   e.description = kDescription;
   e.results_file = kResultsFile;
   e.fallback = true;
-  e.linear_model = [](const std::string& file) { return load_model_spec(file); };
+  e.linear_model = [](const std::string& file) { return estimation::load_model_spec(file); };
   e.create = [] { return PluginPtr<Estimator>(new BatchLsqEstimator(), [](Estimator* p) { delete p; }); };
   return e;
 }

@@ -51,9 +51,9 @@ nlohmann::ordered_json combination_json(const estimation::Combination& c,
 void print_table(std::ostream& os, const FitResult& fr) {
   const ModelSpec& s = fr.spec;
   const processing::StaticExtractionSettings& ex = s.processing.extraction;
-  os << "batch_lsq " << kEstimatorVersion << " — " << instrument_name(s.model.instrument)
+  os << "batch_lsq " << kEstimatorVersion << " — " << estimation::instrument_name(s.model.instrument)
      << ", axes [";
-  for (std::size_t i = 0; i < s.axes.size(); ++i) os << (i ? ", " : "") << axis_name(s.axes[i]);
+  for (std::size_t i = 0; i < s.axes.size(); ++i) os << (i ? ", " : "") << estimation::axis_name(s.axes[i]);
   os << "], terms:";
   for (const auto& t : s.model.terms) os << " " << term_text(t);
   os << "\n";
@@ -62,15 +62,15 @@ void print_table(std::ostream& os, const FitResult& fr) {
        << "', status " << fr.recording_status << ")\n";
   if (!fr.extracted)
     os << "static extraction: none (the points were given directly); weighting "
-       << weighting_name(s.weighting) << "\n";
+       << estimation::weighting_name(s.weighting) << "\n";
   else if (ex.filter == processing::Filter::kNone)
     os << "static extraction: plain mean (no filter), settle " << num(ex.settle_s)
-       << " s discarded at each end; weighting " << weighting_name(s.weighting) << "\n";
+       << " s discarded at each end; weighting " << estimation::weighting_name(s.weighting) << "\n";
   else
     os << "static extraction: Butterworth order " << ex.filter_order << ", cutoff "
      << num(ex.cutoff_hz) << " Hz, " << (ex.zero_phase ? "zero-phase" : "causal")
      << ", settle " << num(ex.settle_s) << " s discarded at each end; weighting "
-     << weighting_name(s.weighting) << "\n";
+     << estimation::weighting_name(s.weighting) << "\n";
   if (!fr.ok) {
     os << "FIT FAILED: " << fr.message << "\n";
     for (const auto& n : fr.notes) os << "note: " << n << "\n";
@@ -87,7 +87,7 @@ void print_table(std::ostream& os, const FitResult& fr) {
   }
   os << "residual RMS:";
   for (int a : s.axes)
-    os << "  " << axis_name(a) << " " << num(fr.residual_rms[a], 4) << " " << fr.unit << " ("
+    os << "  " << estimation::axis_name(a) << " " << num(fr.residual_rms[a], 4) << " " << fr.unit << " ("
        << num(fr.residual_rms_display[a], 4) << " " << fr.display_unit << ")";
   os << "\nresidual standard deviation (dof-corrected): " << num(std::sqrt(fr.lsq.sigma2), 4)
      << " " << fr.unit << "\n";
@@ -121,8 +121,8 @@ std::string to_json(const FitResult& fr, int indent) {
     terms.push_back(tj);
   }
   json axes = json::array();
-  for (int a : s.axes) axes.push_back(std::string(1, axis_name(a)));
-  j["model"] = {{"instrument", instrument_name(s.model.instrument)},
+  for (int a : s.axes) axes.push_back(std::string(1, estimation::axis_name(a)));
+  j["model"] = {{"instrument", estimation::instrument_name(s.model.instrument)},
                 {"axes", axes},
                 {"terms", terms},
                 {"source", s.source}};
@@ -133,7 +133,7 @@ std::string to_json(const FitResult& fr, int indent) {
                      {"settle_s", ex.settle_s},
                      {"zero_phase", ex.zero_phase},
                      {"segment_kinds", s.processing.segment_kinds}};
-  j["weighting"] = weighting_name(s.weighting);
+  j["weighting"] = estimation::weighting_name(s.weighting);
   j["units"] = {{"residual", fr.unit}, {"residual_display", fr.display_unit}};
   j["notes"] = fr.notes;
   j["excluded_parameters"] = fr.excluded;
@@ -212,13 +212,13 @@ std::string to_json(const FitResult& fr, int indent) {
   j["warnings"] = r.warnings;
   json rms = json::object(), rms_d = json::object();
   for (int a : s.axes) {
-    rms[std::string(1, axis_name(a))] = fr.residual_rms[a];
-    rms_d[std::string(1, axis_name(a))] = fr.residual_rms_display[a];
+    rms[std::string(1, estimation::axis_name(a))] = fr.residual_rms[a];
+    rms_d[std::string(1, estimation::axis_name(a))] = fr.residual_rms_display[a];
   }
   json res = json::array();
   for (const auto& x : fr.residuals)
     res.push_back({{"point", x.point},
-                   {"axis", std::string(1, axis_name(x.axis))},
+                   {"axis", std::string(1, estimation::axis_name(x.axis))},
                    {"observed", x.observed},
                    {"fitted", x.fitted},
                    {"residual", x.residual}});

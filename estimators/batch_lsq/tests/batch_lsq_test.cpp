@@ -32,7 +32,7 @@ extraction: {filter_order: 6, cutoff_hz: 0.5, settle_s: 2.0}
 
 std::string parse_error(const std::string& yaml) {
   try {
-    parse_model_spec(yaml, "spec.yaml");
+    estimation::parse_model_spec(yaml, "spec.yaml");
   } catch (const ExperimentError& e) {
     return e.what();
   }
@@ -128,7 +128,7 @@ Eigen::VectorXd theta_bsc() {
 }  // namespace
 
 TEST(ModelSpec, ParsesTheDocumentedForm) {
-  const ModelSpec s = parse_model_spec(R"(instrument: accelerometer
+  const ModelSpec s = estimation::parse_model_spec(R"(instrument: accelerometer
 axes: [z]
 terms: [bias, scale, {cross_axis: {}}, {bias_temperature: {order: 2, reference_c: 30}}]
 extraction: {filter_order: 6, cutoff_hz: 0.25, settle_s: 4, zero_phase: false}
@@ -147,19 +147,19 @@ confidence: 0.9
   EXPECT_EQ(s.processing.extraction.settle_s, 4.0);
   EXPECT_FALSE(s.processing.extraction.zero_phase);
   EXPECT_EQ(s.processing.segment_kinds, (std::vector<std::string>{"orientation", "record"}));
-  EXPECT_EQ(s.weighting, Weighting::kSegmentNoise);
+  EXPECT_EQ(s.weighting, estimation::Weighting::kSegmentNoise);
   EXPECT_EQ(s.confidence, 0.9);
   // Round trip.
-  const ModelSpec r = parse_model_spec(to_yaml(s), "again.yaml");
+  const ModelSpec r = estimation::parse_model_spec(to_yaml(s), "again.yaml");
   EXPECT_EQ(to_yaml(r), to_yaml(s));
   EXPECT_EQ(r.model.size(), s.model.size());
 }
 
 TEST(ModelSpec, ExampleFileParses) {
-  const ModelSpec s = load_model_spec(fs::path(STEND_SOURCE_DIR) / "estimators/batch_lsq/examples/paper_z_channel.yaml");
+  const ModelSpec s = estimation::load_model_spec(fs::path(STEND_SOURCE_DIR) / "estimators/batch_lsq/examples/paper_z_channel.yaml");
   EXPECT_EQ(s.axes, std::vector<int>{2});
   EXPECT_EQ(s.processing.extraction.filter_order, 6);
-  const ModelSpec t = load_model_spec(fs::path(STEND_SOURCE_DIR) / "estimators/batch_lsq/examples/accelerometer_full.yaml");
+  const ModelSpec t = estimation::load_model_spec(fs::path(STEND_SOURCE_DIR) / "estimators/batch_lsq/examples/accelerometer_full.yaml");
   EXPECT_EQ(t.axes.size(), 3u);
 }
 
@@ -203,12 +203,12 @@ TEST(BatchLsq, TheExperimentsProcessingSectionFillsWhatTheModelDoesNotState) {
   Recording rec = synth_recording(bsc_model(), theta_bsc(), table_forces(9.81), rng);
   rec.experiment_yaml = "name: synthetic\nprocessing:\n  extraction: {settle_s: 3, cutoff_hz: 0.25}\n";
   // kSpec states cutoff_hz 0.5 and settle_s 2: both win.
-  FitResult fr = fit_recording(rec, parse_model_spec(kSpec));
+  FitResult fr = fit_recording(rec, estimation::parse_model_spec(kSpec));
   ASSERT_TRUE(fr.ok) << fr.message;
   EXPECT_EQ(fr.spec.processing.extraction.settle_s, 2.0);
   EXPECT_EQ(fr.spec.processing.extraction.cutoff_hz, 0.5);
   // A spec that states neither: the experiment's settle_s (3 s at each end of a 12 s dwell).
-  fr = fit_recording(rec, parse_model_spec("instrument: accelerometer\nterms: [bias, scale, cross_axis]\n"));
+  fr = fit_recording(rec, estimation::parse_model_spec("instrument: accelerometer\nterms: [bias, scale, cross_axis]\n"));
   ASSERT_TRUE(fr.ok) << fr.message;
   EXPECT_EQ(fr.spec.processing.extraction.settle_s, 3.0);
   EXPECT_EQ(fr.spec.processing.extraction.cutoff_hz, 0.25);
@@ -216,7 +216,7 @@ TEST(BatchLsq, TheExperimentsProcessingSectionFillsWhatTheModelDoesNotState) {
   EXPECT_EQ(nlohmann::json::parse(to_json(fr))["extraction"]["settle_s"], 3.0);
   // A bad key there fails the fit, naming the run's experiment.yaml.
   rec.experiment_yaml = "processing:\n  extraction: {settle: 3}\n";
-  fr = fit_recording(rec, parse_model_spec(kSpec));
+  fr = fit_recording(rec, estimation::parse_model_spec(kSpec));
   EXPECT_FALSE(fr.ok);
   EXPECT_NE(fr.message.find("experiment.yaml:2:"), std::string::npos) << fr.message;
 }
@@ -231,7 +231,7 @@ TEST(BatchLsq, FitsAnInMemoryRecording) {
   bad.id = 999;
   bad.settled = false;
   rec.segments.push_back(bad);
-  const ModelSpec spec = parse_model_spec(kSpec, "spec.yaml");
+  const ModelSpec spec = estimation::parse_model_spec(kSpec, "spec.yaml");
   const FitResult fr = fit_recording(rec, spec);
   ASSERT_TRUE(fr.ok) << fr.message;
   EXPECT_EQ(fr.points.size(), 12u);
@@ -272,7 +272,7 @@ TEST(BatchLsq, RecordingWithoutTruthColumnsFailsLoudly) {
   std::mt19937 rng(1);
   Recording rec = synth_recording(bsc_model(), theta_bsc(), table_forces(9.81), rng);
   rec.header.truth_columns[1] = "force_y";
-  const FitResult fr = fit_recording(rec, parse_model_spec(kSpec));
+  const FitResult fr = fit_recording(rec, estimation::parse_model_spec(kSpec));
   EXPECT_FALSE(fr.ok);
   EXPECT_NE(fr.message.find("f_y_mps2"), std::string::npos) << fr.message;
   EXPECT_NE(fr.message.find("force_y"), std::string::npos) << fr.message;
@@ -298,7 +298,7 @@ TEST(BatchLsq, RotationAboutOneAxisLeavesCrossZyUnidentifiable) {
     p.label = std::to_string(d);
     pts.push_back(p);
   }
-  ModelSpec spec = parse_model_spec("instrument: accelerometer\naxes: [z]\nterms: [bias, scale, cross_axis]\n");
+  ModelSpec spec = estimation::parse_model_spec("instrument: accelerometer\naxes: [z]\nterms: [bias, scale, cross_axis]\n");
   const FitResult fr = fit_points(pts, spec);
   ASSERT_TRUE(fr.ok) << fr.message;
   ASSERT_EQ(fr.params.size(), 4u);  // bias_z scale_z cross_zx cross_zy; x/y-row parameters excluded
@@ -338,7 +338,7 @@ TEST(BatchLsq, BiasAndBiasTemperatureAtOneTemperatureAreAliased) {
   SynthOptions o;
   o.die_c = 40.0;
   const Recording rec = synth_recording(m, th, table_forces(9.81), rng, o);
-  ModelSpec spec = parse_model_spec(
+  ModelSpec spec = estimation::parse_model_spec(
       "instrument: accelerometer\naxes: [z]\nterms: [bias, scale, cross_axis, "
       "{bias_temperature: {order: 1, reference_c: 25}}]\nextraction: {cutoff_hz: 0.5, settle_s: 2}\n");
   const FitResult fr = fit_recording(rec, spec);
@@ -359,9 +359,9 @@ TEST(BatchLsq, BiasAndBiasTemperatureAtOneTemperatureAreAliased) {
 TEST(BatchLsq, SegmentNoiseWeighting) {
   std::mt19937 rng(21);
   const Recording rec = synth_recording(bsc_model(), theta_bsc(), table_forces(9.81), rng);
-  ModelSpec spec = parse_model_spec(kSpec);
+  ModelSpec spec = estimation::parse_model_spec(kSpec);
   const FitResult plain = fit_recording(rec, spec);
-  spec.weighting = Weighting::kSegmentNoise;
+  spec.weighting = estimation::Weighting::kSegmentNoise;
   const FitResult weighted = fit_recording(rec, spec);
   ASSERT_TRUE(plain.ok && weighted.ok) << weighted.message;
   // Equal noise everywhere: the weights are nearly uniform, so the estimates barely move.
@@ -383,7 +383,7 @@ TEST(BatchLsq, RefusesTooFewOrientations) {
   std::mt19937 rng(2);
   const std::vector<Eigen::Vector3d> two = {Eigen::Vector3d(0, 0, 9.81), Eigen::Vector3d(0, 0, -9.81)};
   const Recording rec = synth_recording(bsc_model(), theta_bsc(), two, rng);
-  const FitResult fr = fit_recording(rec, parse_model_spec(kSpec));  // k = 6 < p = 12
+  const FitResult fr = fit_recording(rec, estimation::parse_model_spec(kSpec));  // k = 6 < p = 12
   EXPECT_FALSE(fr.ok);
   EXPECT_NE(fr.message.find("underdetermined"), std::string::npos) << fr.message;
   std::ostringstream os;
@@ -396,7 +396,7 @@ TEST(BatchLsq, RefusesTooFewOrientations) {
 // synthetic recordings with known truth: 90–98% for every parameter.
 TEST(BatchLsq, IntervalCoverageThroughTheProcedure) {
   const model::ErrorModel m = bsc_model();
-  const ModelSpec spec = parse_model_spec(kSpec);
+  const ModelSpec spec = estimation::parse_model_spec(kSpec);
   const auto forces = table_forces(9.80665);
   SynthOptions o;
   o.dwell_s = 8.0;
@@ -439,7 +439,7 @@ TEST(BatchLsq, FitsARecordingReadFromDisk) {
   }
   const Recording rec = Recording::open(dir);
   ASSERT_EQ(rec.samples.size(), mem.samples.size());
-  const ModelSpec spec = parse_model_spec(kSpec);
+  const ModelSpec spec = estimation::parse_model_spec(kSpec);
   const FitResult a = fit_recording(mem, spec);
   const FitResult b = fit_recording(rec, spec);
   ASSERT_TRUE(b.ok) << b.message;

@@ -32,7 +32,7 @@ nlohmann::json num_or_null(double v) { return std::isfinite(v) ? nlohmann::json(
 void print_report(std::ostream& os, const TempPolyResult& r) {
   const TempPolyOptions& o = r.options;
   os << "temp_poly " << kEstimatorVersion << " — bias and scale versus temperature ("
-     << batch_lsq::instrument_name(o.instrument) << ")\n";
+     << estimation::instrument_name(o.instrument) << ")\n";
   if (!r.recording_dir.empty()) os << "recording: " << r.recording_dir << " (" << r.experiment_name << ")\n";
   os << "selection: " << o.selection;
   if (o.selection == "fixed") os << ", order " << o.order;
@@ -52,7 +52,7 @@ void print_report(std::ostream& os, const TempPolyResult& r) {
     os << "  " << fmt("%8.2f", L.temperature_c) << "  [" << fmt("%.2f", L.min_c) << ", " << fmt("%.2f", L.max_c)
        << "]  " << L.points << " (" << L.heating_points << "/" << L.cooling_points << "/" << L.unknown_points << ")\n";
   for (const auto& ax : r.axes) {
-    const char name = batch_lsq::axis_name(ax.axis);
+    const char name = estimation::axis_name(ax.axis);
     os << "\n== axis " << name << " ==\n";
     os << "  order  n    rank  RSS            BIC          CV-MSE        note\n";
     for (const auto& s : ax.scores)
@@ -98,8 +98,8 @@ std::string to_json(const TempPolyResult& r, int indent) {
   j["message"] = r.message;
   j["recording"] = {{"dir", r.recording_dir}, {"experiment", r.experiment_name}};
   json axes_opt = json::array();
-  for (int a : o.axes) axes_opt.push_back(std::string(1, batch_lsq::axis_name(a)));
-  j["options"] = {{"instrument", batch_lsq::instrument_name(o.instrument)},
+  for (int a : o.axes) axes_opt.push_back(std::string(1, estimation::axis_name(a)));
+  j["options"] = {{"instrument", estimation::instrument_name(o.instrument)},
                   {"axes", axes_opt},
                   {"selection", o.selection},
                   {"max_order", o.max_order},
@@ -134,7 +134,7 @@ std::string to_json(const TempPolyResult& r, int indent) {
   json axes = json::array();
   for (const auto& ax : r.axes) {
     json a;
-    a["axis"] = std::string(1, batch_lsq::axis_name(ax.axis));
+    a["axis"] = std::string(1, estimation::axis_name(ax.axis));
     a["ok"] = ax.ok;
     a["message"] = ax.message;
     a["chosen_order"] = ax.chosen_order;

@@ -56,12 +56,12 @@ const char* leg_name(Leg leg) {
 const AxisResult& TempPolyResult::axis(int a) const {
   for (const auto& r : axes)
     if (r.axis == a) return r;
-  throw std::out_of_range(std::string("temp_poly: axis ") + batch_lsq::axis_name(a) +
+  throw std::out_of_range(std::string("temp_poly: axis ") + estimation::axis_name(a) +
                           " was not fitted");
 }
 
-batch_lsq::ModelSpec candidate_spec(const TempPolyOptions& o, int order, int axis) {
-  batch_lsq::ModelSpec spec;
+estimation::ModelSpec candidate_spec(const TempPolyOptions& o, int order, int axis) {
+  estimation::ModelSpec spec;
   spec.model.instrument = o.instrument;
   spec.model.terms.push_back({model::TermKind::kBias, 1, o.reference_c});
   spec.model.terms.push_back({model::TermKind::kScale, 1, o.reference_c});
@@ -74,7 +74,7 @@ batch_lsq::ModelSpec candidate_spec(const TempPolyOptions& o, int order, int axi
   }
   spec.axes = axis >= 0 ? std::vector<int>{axis} : o.axes;
   spec.processing = o.processing;
-  spec.weighting = batch_lsq::Weighting::kNone;
+  spec.weighting = estimation::Weighting::kNone;
   spec.confidence = o.confidence;
   spec.source = "temp_poly";
   return spec;
@@ -234,7 +234,7 @@ TempPolyResult fit_temperature_points(const std::vector<batch_lsq::StaticPoint>&
     ax.axis = a;
     std::vector<batch_lsq::FitResult> fits;
     for (int m = first; m <= top; ++m) {
-      const batch_lsq::ModelSpec spec = candidate_spec(o, m, a);
+      const estimation::ModelSpec spec = candidate_spec(o, m, a);
       fits.push_back(batch_lsq::fit_points(points, spec));
       const batch_lsq::FitResult& f = fits.back();
       OrderScore s;
@@ -295,12 +295,12 @@ TempPolyResult fit_temperature_points(const std::vector<batch_lsq::StaticPoint>&
     }
     if (best < 0) {
       ax.message = std::string("no candidate order could be scored by ") + o.selection + " on axis " +
-                   batch_lsq::axis_name(a) + " (see the order table)";
+                   estimation::axis_name(a) + " (see the order table)";
     } else {
       ax.fit = fits[static_cast<std::size_t>(best)];
       ax.chosen_order = ax.scores[static_cast<std::size_t>(best)].order;
       ax.ok = ax.fit.ok;
-      if (!ax.fit.ok) ax.message = "axis " + std::string(1, batch_lsq::axis_name(a)) + ": " + ax.fit.message;
+      if (!ax.fit.ok) ax.message = "axis " + std::string(1, estimation::axis_name(a)) + ": " + ax.fit.message;
     }
     // Hysteresis between legs, from the chosen fit's residuals.
     if (ax.ok) {

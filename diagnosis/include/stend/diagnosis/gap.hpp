@@ -75,7 +75,7 @@ struct Candidate {
 std::vector<Candidate> default_candidates(const model::ErrorModel& model);
 
 struct GapInput {
-  batch_lsq::ModelSpec spec;
+  estimation::ModelSpec spec;
   std::vector<SegmentData> segments;
   std::string source;       // run folder or dataset file
   std::string truth_source; // "truth columns" | "dataset annotations (…)"
@@ -126,7 +126,7 @@ Eigen::Vector3d table_stimulus(model::Stimulus<double>& st, double az, double h,
 // annotations), stimulus fields for the bench-side candidates (gravity_up; table derivatives for
 // the sim three-axis table's tilt/rotation/azimuth columns; temperature_direction), groups, noise
 // floor. Throws std::runtime_error when no static point can be made (says why).
-GapInput build_input(const Recording& recording, const batch_lsq::ModelSpec& spec);
+GapInput build_input(const Recording& recording, const estimation::ModelSpec& spec);
 
 // Magnitude form of an input whose truth directions are unknown: every segment's truth becomes
 // g·û, û the direction that the model as given (fitted on |f| rows, linearized about û) maps onto
@@ -138,7 +138,7 @@ GapInput magnitude_form(GapInput input, double gravity);
 // sliding-variance detector (the processing stage's, IMU-TK style), extraction on them, the
 // noise floor as build_input, then magnitude_form. Throws std::runtime_error saying why when no
 // usable interval is found or the instrument is a gyroscope (no rate truth to compare with).
-GapInput build_magnitude_input(const Recording& recording, const batch_lsq::ModelSpec& spec);
+GapInput build_magnitude_input(const Recording& recording, const estimation::ModelSpec& spec);
 
 // How the held-out folds are formed.
 enum class FoldBy { kAuto, kOrientation, kTemperature, kRamp };

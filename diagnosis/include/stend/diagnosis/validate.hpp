@@ -58,7 +58,7 @@ ValidationDesign default_design();
 ValidationDesign many_positions_design(int n);
 
 // The model the planted effects are withheld from: bias + scale (accelerometer).
-batch_lsq::ModelSpec validation_model();
+estimation::ModelSpec validation_model();
 
 // Segment-level data for one experiment: `truth` = the true model (terms and θ), noise from seed.
 struct Planted {
@@ -67,7 +67,7 @@ struct Planted {
   // Out-of-vocabulary effect added to the measured means [m/s^2] per (segment, axis); empty none.
   std::vector<Eigen::Vector3d> extra;
 };
-GapInput generate(const ValidationDesign& design, const batch_lsq::ModelSpec& fit_model, const Planted& truth,
+GapInput generate(const ValidationDesign& design, const estimation::ModelSpec& fit_model, const Planted& truth,
                   std::uint64_t seed);
 
 // Rate-table experiment (validate_rate.cpp): the sim three-axis table turns the sensor so that its
@@ -98,11 +98,11 @@ RateDesign default_rate_design();
 // default_rate_design() with a second mount (the accelerometer's lever arm / gravity experiment).
 RateDesign two_mount_rate_design();
 // The fitted model on the rate table: bias + scale of the given instrument.
-batch_lsq::ModelSpec rate_model(model::Instrument instrument);
+estimation::ModelSpec rate_model(model::Instrument instrument);
 // White-noise standard error of one segment mean on the rate table [rad/s | m/s^2].
 double rate_white_floor(const RateDesign& design, model::Instrument instrument);
 // Segment-level data on the rate table; the instrument is fit_model's (truth must match it).
-GapInput generate_rate(const RateDesign& design, const batch_lsq::ModelSpec& fit_model, const Planted& truth,
+GapInput generate_rate(const RateDesign& design, const estimation::ModelSpec& fit_model, const Planted& truth,
                        std::uint64_t seed);
 
 struct ValidateOptions {

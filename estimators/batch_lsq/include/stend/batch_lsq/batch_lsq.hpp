@@ -32,13 +32,7 @@
 
 namespace stend::batch_lsq {
 
-using estimation::ModelSpec;
-using estimation::Weighting;
-using estimation::axis_name;
-using estimation::instrument_name;
-using estimation::load_model_spec;
-using estimation::parse_model_spec;
-using estimation::weighting_name;
+using estimation::ModelSpec;  // the model file (stend/estimation/model_spec.hpp)
 
 inline constexpr const char* kFitSchema = "stend.fit/1";
 inline constexpr const char* kEstimatorName = "batch_lsq";

@@ -116,7 +116,7 @@ struct TempPolyResult {
 
 // The model spec of one candidate: bias, scale (+ cross_axis), bias/scale_temperature of `order`
 // (none when order = 0), fitted axes {axis}.
-batch_lsq::ModelSpec candidate_spec(const TempPolyOptions& options, int order, int axis);
+estimation::ModelSpec candidate_spec(const TempPolyOptions& options, int order, int axis);
 
 // Steps 2–5 on given points (synthetic, or extracted). Never throws for data problems.
 TempPolyResult fit_temperature_points(const std::vector<batch_lsq::StaticPoint>& points,
