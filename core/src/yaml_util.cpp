@@ -29,7 +29,7 @@ constexpr std::array<UnitSuffix, 8> kUnitSuffixes{{
     {"_deg", "angles are in degrees"},
     {"_c", "temperatures are in degrees Celsius"},
     {"_hz", "frequencies are in hertz"},
-    {"_g", "amplitudes are in g (standard gravity, 9.80665 m/s^2)"},
+    {"_g", "amplitudes are in g (standard gravity)"},
     {"_dps", "rates are in degrees per second"},
     {"_m", "heights are in metres"},
     {"_mps2", "accelerations are in m/s^2"},

@@ -141,7 +141,7 @@ const fields::Table<SimImuConfig>& SimImuConfig::fields() {
           .range(0.0, 0.1),
       // --- output stage ---
       F("accel_range_g", &SimImuConfig::accel_range_g, "g",
-        "full scale ±range (g = 9.80665 m/s²); beyond it the output saturates and is flagged")
+        "full scale ±range (g = standard gravity); beyond it the output saturates and is flagged")
           .range(1e-3, 1000.0),
       F("gyro_range_dps", &SimImuConfig::gyro_range_dps, "deg/s", "full scale ±range").range(1e-3, 1e5),
       F("accel_lsb_mps2", &SimImuConfig::accel_lsb_mps2, "m/s^2",

@@ -25,7 +25,7 @@ const fields::Table<VibrationConfig>& VibrationConfig::fields() {
         "direction of the vibration in the shaker's top frame (normalized; must not be zero)")
           .range(-1e6, 1e6),
       F("max_amplitude_g", &VibrationConfig::max_amplitude_g, "g",
-        "largest peak amplitude accepted (the paper: 0.5 g), g = 9.80665 m/s^2")
+        "largest peak amplitude accepted (the paper: 0.5 g), g = standard gravity")
           .range(1e-6, 100.0),
       F("min_frequency_hz", &VibrationConfig::min_frequency_hz, "Hz", "lowest frequency accepted (the paper: 20 Hz)")
           .range(1e-3, 1e5),

@@ -120,7 +120,7 @@ Table2Reproduction reproduce_table2(const std::vector<Table2Row>& rows) {
   };
   const std::vector<Setup> setups = {
       {"normal gravity 47.2 N, h = 0", g_local, 0.0},
-      {"standard gravity 9.80665, h = 0", physics::kStandardGravity, 0.0},
+      {"standard gravity, h = 0", physics::kStandardGravity, 0.0},
       {"normal gravity 47.2 N, h = 1 deg (constant tilt)", g_local, 1.0},
   };
   for (const auto& s : setups) {
@@ -204,7 +204,7 @@ void print_table2_report(std::ostream& os, const Table2Reproduction& r) {
     char line[512];
     os << "=== Side by side (h = 0); the paper reports no uncertainty\n";
     std::snprintf(line, sizeof line, "%-10s %-13s %24s %24s %6s\n", "parameter", "paper",
-                  "g(47.2 N) value +/- se", "g = 9.80665 value +/- se", "unit");
+                  "g(47.2 N) value +/- se", "standard g value +/- se", "unit");
     os << line;
     struct Row {
       const char* name;

@@ -53,7 +53,7 @@ struct Table2Case {
 
 struct Table2Reproduction {
   std::vector<Table2Row> rows;
-  std::vector<Table2Case> cases;  // [0] normal gravity 47.2°N h=0, [1] 9.80665 h=0, [2] h=1°
+  std::vector<Table2Case> cases;  // [0] normal gravity 47.2°N h=0, [1] standard gravity h=0, [2] h=1°
   PaperTable2Fit paper;
   // The paper's parameters (μ33 with the sign that best fits) evaluated on Table 2.
   double paper_rms_normal_g = 0.0;  // RMS residual with g = normal gravity at 47.2°N [m/s²]
