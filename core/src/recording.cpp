@@ -19,6 +19,7 @@
 #include <cstring>
 #include <ctime>
 #include <limits>
+#include <ostream>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string_view>
@@ -1096,6 +1097,22 @@ int Recording::truth_column(const std::string& name) const {
   const auto& c = header.truth_columns;
   const auto it = std::find(c.begin(), c.end(), name);
   return it == c.end() ? -1 : static_cast<int>(it - c.begin());
+}
+
+void Segment::print(std::ostream& os) const {
+  os << fmt::format("#{} {}{} {:.2f}–{:.2f} s", id, kind, label.empty() ? "" : " '" + label + "'", t_start_s, t_end_s);
+  if (!settled) os << " [unsettled]";
+  if (!complete) os << " [incomplete]";
+}
+
+bool Segment::equals(const Segment& o, double tol) const {
+  auto same = [tol](double a, double b) {
+    return (std::isnan(a) && std::isnan(b)) || std::abs(a - b) <= tol * std::max(1.0, std::abs(a));
+  };
+  return id == o.id && step == o.step && kind == o.kind && label == o.label && repeat == o.repeat &&
+         orientation == o.orientation && orientation_count == o.orientation_count && same(t_start_s, o.t_start_s) &&
+         same(t_end_s, o.t_end_s) && settled == o.settled && complete == o.complete && targets == o.targets &&
+         same(setpoint_c, o.setpoint_c) && same(rate, o.rate);
 }
 
 }  // namespace stend

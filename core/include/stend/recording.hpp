@@ -21,6 +21,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <iosfwd>
 #include <memory>
 #include <string>
 #include <vector>
@@ -72,6 +73,11 @@ struct Segment {
   std::string targets;     // "table.angle=10 deg; chamber.temperature=25 degC"
   double setpoint_c = NAN; // chamber setpoint during the segment, NaN when none
   double rate = NAN;       // commanded rate (axis unit/s), NaN when none
+
+  // "#3 orientation 'tilt 10' 12.00–22.00 s [unsettled]": id, kind, label, interval, flags.
+  void print(std::ostream& os) const;
+  // Every field equal; times, setpoint and rate within `tol` (relative above 1; NaN matches NaN).
+  bool equals(const Segment& other, double tol = 1e-9) const;
 };
 
 struct Event {

@@ -4,6 +4,8 @@
 
 #include <ceres/jet.h>
 
+#include <sstream>
+
 #include <random>
 
 #include "stend/model/terms.hpp"
@@ -106,4 +108,19 @@ TEST(Terms, AutodiffJacobianMatchesNumericalDerivative) {
     Eigen::Vector3d num = (m.measure<double>(theta.data(), sp) - m.measure<double>(theta.data(), sm)) / (2 * h);
     for (int r = 0; r < 3; ++r) EXPECT_NEAR(yj[r].v[i], num[r], 1e-7);
   }
+}
+
+TEST(ErrorModel, PrintsItsTermsAndEqualsComparesThem) {
+  ErrorModel a;
+  a.terms = {TermSpec{TermKind::kBias}, TermSpec{TermKind::kBiasTemperature, 2, 25.0}};
+  std::ostringstream os;
+  a.print(os);
+  EXPECT_EQ(os.str(), "accelerometer: bias, bias_temperature(order 2, T0 25 degC)");
+  ErrorModel b = a;
+  EXPECT_TRUE(a.equals(b));
+  b.terms[1].order = 3;
+  EXPECT_FALSE(a.equals(b));
+  b = a;
+  b.instrument = Instrument::kGyroscope;
+  EXPECT_FALSE(a.equals(b));
 }

@@ -18,6 +18,7 @@
 #include <array>
 #include <cmath>
 #include <optional>
+#include <ostream>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -296,6 +297,25 @@ struct ErrorModel {
       p += param_count(t);
     }
     return y;
+  }
+
+  // "accelerometer: bias, scale, bias_temperature(order 2, T0 25 degC)".
+  void print(std::ostream& os) const {
+    os << (instrument == Instrument::kAccelerometer ? "accelerometer" : "gyroscope") << ":";
+    for (std::size_t i = 0; i < terms.size(); ++i) {
+      os << (i ? ", " : " ") << term_name(terms[i].kind);
+      if (terms[i].kind == TermKind::kBiasTemperature || terms[i].kind == TermKind::kScaleTemperature)
+        os << "(order " << terms[i].order << ", T0 " << terms[i].reference_c << " degC)";
+    }
+  }
+  // Same instrument and the same terms in the same order (kind, order, reference temperature).
+  bool equals(const ErrorModel& other) const {
+    if (instrument != other.instrument || terms.size() != other.terms.size()) return false;
+    for (std::size_t i = 0; i < terms.size(); ++i) {
+      const TermSpec &a = terms[i], &b = other.terms[i];
+      if (a.kind != b.kind || a.order != b.order || a.reference_c != b.reference_c) return false;
+    }
+    return true;
   }
 
   // 3 × size() regressor Φ with y − u = Φ·θ. Every term is linear in its own parameters, so the
