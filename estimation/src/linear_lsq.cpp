@@ -27,16 +27,6 @@ constexpr double kNullTolerance = 1e-7;
 // such as g·sin(0) computed through rotations would otherwise be rescaled to unit length).
 constexpr double kZeroColumnTolerance = 1e-12;
 
-// %.<digits>g, or %.<digits>f when fixed.
-std::string num(double v, int digits = 6, bool fixed = false) {
-  if (std::isnan(v)) return "n/a";
-  char buf[64];
-  if (fixed)
-    std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  else
-    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-  return buf;
-}
 
 // Regularised incomplete beta I_x(a, b): continued fraction (modified Lentz).
 double beta_cf(double a, double b, double x) {
@@ -135,7 +125,7 @@ std::string combination_text(const std::vector<std::pair<int, double>>& coeffs,
     } else {
       s += c < 0 ? " - " : " + ";
     }
-    if (std::abs(mag - 1.0) > 1e-12) s += num(mag) + "*";
+    if (std::abs(mag - 1.0) > 1e-12) s += number_text(mag) + "*";
     s += params[static_cast<std::size_t>(idx)].name;
   }
   return s;
@@ -448,7 +438,7 @@ void add_warnings(LsqResult& r, const LsqOptions& opt, const std::vector<std::st
   if (static_cast<double>(k) < opt.observations_per_parameter_warning * static_cast<double>(p))
     r.warnings.push_back("few observations: k = " + std::to_string(k) + " for p = " +
                          std::to_string(p) + " parameters (k < " +
-                         num(opt.observations_per_parameter_warning) +
+                         number_text(opt.observations_per_parameter_warning) +
                          "p); the residual variance and the intervals rest on " +
                          std::to_string(r.dof) + " degrees of freedom (the paper asks for k >> p)");
   if (rank < p)
@@ -461,7 +451,7 @@ void add_warnings(LsqResult& r, const LsqOptions& opt, const std::vector<std::st
     for (Eigen::Index j = 0; j < p; ++j)
       if (std::abs(w[j]) > 0.1 * mx) terms.emplace_back(static_cast<int>(j), w[j] / mx);
     r.warnings.push_back("ill-conditioned design (column-scaled condition number " +
-                         num(r.condition_number_identified, 3) +
+                         number_text(r.condition_number_identified, 3) +
                          "): the weakest direction is " + combination_text(terms, r.parameters) +
                          "; these parameters are strongly correlated and poorly determined");
   }
@@ -523,7 +513,7 @@ Combination LsqResult::combination(const Eigen::VectorXd& c, double offset) cons
   for (Eigen::Index i = 0; i < c.size(); ++i)
     if (c[i] != 0.0) out.coefficients.emplace_back(static_cast<int>(i), c[i]);
   out.text = combination_text(out.coefficients, parameters);
-  if (offset != 0.0) out.text += (offset < 0 ? " - " : " + ") + num(std::abs(offset));
+  if (offset != 0.0) out.text += (offset < 0 ? " - " : " + ") + number_text(std::abs(offset));
   out.value = c.dot(min_norm_solution) + offset;
   out.std_error = std::sqrt(std::max(0.0, c.dot(pinv_covariance * c)));
   out.lower = out.value - quantile * out.std_error;
@@ -578,17 +568,17 @@ LsqResult solve_lsq(const LsqProblem& pr, const LsqOptions& opt) {
 }
 
 std::ostream& operator<<(std::ostream& os, const Combination& c) {
-  return os << c.text << " = " << num(c.value, 7) << " +/- " << num(c.std_error, 3)
-            << " [" << num(c.lower, 7) << ", " << num(c.upper, 7) << "]";
+  return os << c.text << " = " << number_text(c.value, 7) << " +/- " << number_text(c.std_error, 3)
+            << " [" << number_text(c.lower, 7) << ", " << number_text(c.upper, 7) << "]";
 }
 
 std::ostream& operator<<(std::ostream& os, const LsqResult& r) {
   if (!r.ok()) return os << "FIT FAILED: " << r.message << "\n";
   os << "least squares (" << (r.method == LsqMethod::kQr ? "QR" : "SVD") << "): k = "
      << r.observations << ", p = " << r.parameter_count << ", rank = " << r.rank
-     << ", dof = " << r.dof << ", sigma = " << num(std::sqrt(r.sigma2), 4)
-     << ", cond = " << num(r.condition_number, 4)
-     << " (identified subspace " << num(r.condition_number_identified, 4) << ")\n";
+     << ", dof = " << r.dof << ", sigma = " << number_text(std::sqrt(r.sigma2), 4)
+     << ", cond = " << number_text(r.condition_number, 4)
+     << " (identified subspace " << number_text(r.condition_number_identified, 4) << ")\n";
   print_parameter_header(os, r.confidence);
   for (const auto& e : r.parameters) os << e << "\n";
   for (const auto& a : r.aliases) {
