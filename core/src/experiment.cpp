@@ -61,20 +61,37 @@ constexpr std::size_t kMaxSteps = 100000;
 
 const std::vector<std::string> kTopKeys = {"experiment", "bench",      "procedure",
                                            "processing", "estimation", "outputs"};
-const std::vector<std::string> kStepKinds = {"set_temperature", "orientations", "rates",
-                                             "set_vibration",   "record",       "wait",
-                                             "repeat"};
+// Each step kind: its YAML name and the keys its body may hold. `repeat` is a step kind of the
+// file that expands into the others, so it has no Step::Kind.
+struct StepKindSpec {
+  Step::Kind kind;
+  const char* name;
+  std::vector<std::string> keys;
+};
+const std::vector<StepKindSpec> kStepKindSpecs = {
+    {Step::Kind::kSetTemperature, "set_temperature",
+     {"fixture", "setpoint_c", "tolerance_c", "hold_s", "timeout_s", "record", "label"}},
+    {Step::Kind::kOrientations, "orientations",
+     {"fixture", "sweep", "list", "grid", "dwell_s", "record_s", "label"}},
+    {Step::Kind::kRates, "rates", {"fixture", "axis", "rates_dps", "dwell_s", "record_s", "label"}},
+    {Step::Kind::kSetVibration, "set_vibration", {"fixture", "amplitude_g", "frequency_hz", "label"}},
+    {Step::Kind::kRecord, "record", {"duration_s", "label"}},
+    {Step::Kind::kWait, "wait", {"duration_s", "label"}},
+};
 
-const char* kind_name(Step::Kind k) {
-  switch (k) {
-    case Step::Kind::kSetTemperature: return "set_temperature";
-    case Step::Kind::kOrientations: return "orientations";
-    case Step::Kind::kRates: return "rates";
-    case Step::Kind::kRecord: return "record";
-    case Step::Kind::kWait: return "wait";
-    case Step::Kind::kSetVibration: return "set_vibration";
-  }
-  return "?";
+// Every step kind name of the file, `repeat` last.
+std::vector<std::string> step_kind_names() {
+  std::vector<std::string> out;
+  for (const auto& k : kStepKindSpecs) out.push_back(k.name);
+  out.push_back("repeat");
+  return out;
+}
+const std::vector<std::string> kStepKinds = step_kind_names();
+
+const StepKindSpec* find_step_kind(const std::string& name) {
+  for (const auto& k : kStepKindSpecs)
+    if (name == k.name) return &k;
+  return nullptr;
 }
 
 const char* kind_words(stend_plugin_kind k) {
@@ -370,49 +387,9 @@ class Parser {
       const std::string path = "bench.fixtures[" + std::to_string(i) + "]";
       const MapReader f(list[i], file_, path, "a fixture declaration",
                         {"id", "plugin", "on", "config"});
-      f.require("id", "[a-z][a-z0-9_]*, referenced by procedure steps");
       FixtureDecl d;
-      d.id = f.string("id", "");
-      if (!valid_fixture_id(d.id))
-        f.fail_value("id",
-                     "fixture id '" + d.id +
-                         "' must start with a lowercase letter and contain only a-z, 0-9 and '_'",
-                     "e.g. id: table");
-      if (d.id == "base")
-        f.fail_value("id", "'base' is reserved for the bench base; choose another fixture id");
-      for (std::size_t j = 0; j < exp_.fixtures.size(); ++j)
-        if (exp_.fixtures[j].id == d.id)
-          f.fail_value("id",
-                       "duplicate fixture id '" + d.id + "' (first declared at line " +
-                           std::to_string(exp_.fixtures[j].where.line) + ")",
-                       "fixture ids must be unique within the bench");
-      if (f.has("on")) {
-        const std::string on = f.string("on", "");
-        if (on != "base") {
-          const auto earlier = std::find_if(exp_.fixtures.begin(), exp_.fixtures.end(),
-                                            [&](const FixtureDecl& x) { return x.id == on; });
-          if (earlier == exp_.fixtures.end()) {
-            bool later = false;
-            for (std::size_t j = i + 1; j < list.size(); ++j)
-              if (list[j].IsMap() && list[j]["id"].IsScalar() && list[j]["id"].Scalar() == on)
-                later = true;
-            if (later || on == d.id)
-              f.fail_value("on",
-                           on == d.id ? "fixture '" + d.id + "' cannot stand on itself"
-                                      : "fixture '" + d.id + "' stands on '" + on +
-                                            "', which is declared later",
-                           "declare fixtures from the base up: a fixture can only stand on "
-                           "'base' or on a fixture declared before it");
-            std::vector<std::string> ids = fixture_ids_;
-            ids.insert(ids.begin(), "base");
-            f.fail_value("on", "unknown fixture '" + on + "' in 'on'",
-                         yaml::join_sentences(yaml::did_you_mean(on, ids),
-                                              "'on' is 'base' or an earlier fixture: " +
-                                                  yaml::join(ids)));
-          }
-          d.on = on;
-        }
-      }
+      d.id = fixture_id(f);
+      d.on = fixture_support(f, d.id, list, i);
       PluginInstance inst = instance(f, STEND_KIND_FIXTURE);
       d.plugin = std::move(inst.plugin);
       d.params = std::move(inst.params);
@@ -422,29 +399,56 @@ class Parser {
     }
   }
 
+  // A fixture's `id`: well-formed, not "base", not declared before.
+  std::string fixture_id(const MapReader& f) const {
+    f.require("id", "[a-z][a-z0-9_]*, referenced by procedure steps");
+    const std::string id = f.string("id", "");
+    if (!valid_fixture_id(id))
+      f.fail_value("id",
+                   "fixture id '" + id +
+                       "' must start with a lowercase letter and contain only a-z, 0-9 and '_'",
+                   "e.g. id: table");
+    if (id == "base")
+      f.fail_value("id", "'base' is reserved for the bench base; choose another fixture id");
+    for (const auto& earlier : exp_.fixtures)
+      if (earlier.id == id)
+        f.fail_value("id",
+                     "duplicate fixture id '" + id + "' (first declared at line " +
+                         std::to_string(earlier.where.line) + ")",
+                     "fixture ids must be unique within the bench");
+    return id;
+  }
+
+  // What fixture `id` (item i of `list`) stands on: an earlier fixture, or "" for the base.
+  std::string fixture_support(const MapReader& f, const std::string& id, const YAML::Node& list,
+                              std::size_t i) const {
+    if (!f.has("on")) return {};
+    const std::string on = f.string("on", "");
+    if (on == "base") return {};
+    if (std::find(fixture_ids_.begin(), fixture_ids_.end(), on) != fixture_ids_.end()) return on;
+    bool later = false;
+    for (std::size_t j = i + 1; j < list.size(); ++j)
+      if (list[j].IsMap() && list[j]["id"].IsScalar() && list[j]["id"].Scalar() == on) later = true;
+    if (later || on == id)
+      f.fail_value("on",
+                   on == id ? "fixture '" + id + "' cannot stand on itself"
+                            : "fixture '" + id + "' stands on '" + on + "', which is declared later",
+                   "declare fixtures from the base up: a fixture can only stand on 'base' or on a "
+                   "fixture declared before it");
+    std::vector<std::string> ids = fixture_ids_;
+    ids.insert(ids.begin(), "base");
+    f.fail_value("on", "unknown fixture '" + on + "' in 'on'",
+                 yaml::join_sentences(yaml::did_you_mean(on, ids),
+                                      "'on' is 'base' or an earlier fixture: " + yaml::join(ids)));
+  }
+
   void mounting(const MapReader& bench) {
     const MapReader m(bench.get("mounting"), file_, "bench.mounting", "'mounting'",
                       {"on", "rpy_deg", "matrix"}, {}, bench.key_location("mounting"));
     m.at_most_one_of({"rpy_deg", "matrix"},
                      "give the mounting rotation either as rpy_deg: [roll, pitch, yaw] or as a "
                      "3x3 matrix, not both");
-    // "base" when the sensor sits on the bench base (no fixtures, or `on: base`).
-    exp_.mounted_on = fixture_ids_.empty() ? std::string("base") : fixture_ids_.back();
-    if (m.has("on")) {
-      const std::string on = m.string("on", "");
-      if (on == "base") {
-        exp_.mounted_on = "base";
-      } else if (std::find(fixture_ids_.begin(), fixture_ids_.end(), on) == fixture_ids_.end()) {
-        std::vector<std::string> ids = fixture_ids_;
-        ids.insert(ids.begin(), "base");
-        m.fail_value("on", "unknown fixture '" + on + "' in mounting 'on'",
-                     yaml::join_sentences(yaml::did_you_mean(on, ids),
-                                          "The sensor is mounted on 'base' or a declared "
-                                          "fixture: " + yaml::join(ids)));
-      } else {
-        exp_.mounted_on = on;
-      }
-    }
+    exp_.mounted_on = mounted_on(m);
     if (m.has("rpy_deg")) {
       const std::vector<double> rpy = m.numbers("rpy_deg", "in degrees");
       if (rpy.size() != 3)
@@ -453,40 +457,58 @@ class Parser {
                          std::to_string(rpy.size()) + " numbers");
       exp_.R_sensor_from_mount = physics::from_rpy_deg(rpy[0], rpy[1], rpy[2]);
     }
-    if (m.has("matrix")) {
-      const YAML::Node node = m.get("matrix");
-      const std::string path = m.child_path("matrix");
-      const std::string hint = "write matrix: [[1, 0, 0], [0, 1, 0], [0, 0, 1]] (rows)";
-      if (!node.IsSequence() || node.size() != 3)
-        m.fail_value("matrix", "expected a 3x3 rotation matrix (3 rows of 3 numbers), got " +
-                                   (node.IsSequence() ? std::to_string(node.size()) + " rows"
-                                                      : yaml::describe(node)),
-                     hint);
-      Eigen::Matrix3d R;
-      for (std::size_t r = 0; r < 3; ++r) {
-        const std::string rpath = path + "[" + std::to_string(r) + "]";
-        const std::vector<double> row = yaml::as_numbers(node[r], file_, rpath, "");
-        if (row.size() != 3)
-          fail(yaml::location_of(node[r], file_), rpath,
-               "row " + std::to_string(r + 1) + " of the mounting matrix has " +
-                   std::to_string(row.size()) + " numbers, expected 3",
-               hint);
-        for (std::size_t c = 0; c < 3; ++c)
-          R(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = row[c];
-      }
-      const double dev = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-      if (dev > 1e-6)
-        m.fail_value("matrix",
-                     "the mounting matrix is not a rotation: its rows are not orthonormal "
-                     "(largest deviation of R^T R from identity is " + format_number(dev) + ")",
-                     "give a proper rotation (orthonormal to 1e-6, determinant +1), or use "
-                     "rpy_deg: [roll, pitch, yaw]");
-      if (R.determinant() < 0)
-        m.fail_value("matrix",
-                     "the mounting matrix is a reflection (determinant -1), not a rotation",
-                     "sensor frames are right-handed; negate one row, or use rpy_deg");
-      exp_.R_sensor_from_mount = R;
+    if (m.has("matrix")) exp_.R_sensor_from_mount = mounting_matrix(m);
+  }
+
+  // What carries the sensor: `on`, else the last fixture declared, else "base".
+  std::string mounted_on(const MapReader& m) const {
+    if (!m.has("on")) return fixture_ids_.empty() ? std::string("base") : fixture_ids_.back();
+    const std::string on = m.string("on", "");
+    if (on == "base") return on;
+    if (std::find(fixture_ids_.begin(), fixture_ids_.end(), on) == fixture_ids_.end()) {
+      std::vector<std::string> ids = fixture_ids_;
+      ids.insert(ids.begin(), "base");
+      m.fail_value("on", "unknown fixture '" + on + "' in mounting 'on'",
+                   yaml::join_sentences(yaml::did_you_mean(on, ids),
+                                        "The sensor is mounted on 'base' or a declared "
+                                        "fixture: " + yaml::join(ids)));
     }
+    return on;
+  }
+
+  // `matrix`: 3 rows of 3 numbers, a proper rotation (orthonormal to 1e-6, determinant +1).
+  Eigen::Matrix3d mounting_matrix(const MapReader& m) const {
+    const YAML::Node node = m.get("matrix");
+    const std::string path = m.child_path("matrix");
+    const std::string hint = "write matrix: [[1, 0, 0], [0, 1, 0], [0, 0, 1]] (rows)";
+    if (!node.IsSequence() || node.size() != 3)
+      m.fail_value("matrix", "expected a 3x3 rotation matrix (3 rows of 3 numbers), got " +
+                                 (node.IsSequence() ? std::to_string(node.size()) + " rows"
+                                                    : yaml::describe(node)),
+                   hint);
+    Eigen::Matrix3d R;
+    for (std::size_t r = 0; r < 3; ++r) {
+      const std::string rpath = path + "[" + std::to_string(r) + "]";
+      const std::vector<double> row = yaml::as_numbers(node[r], file_, rpath, "");
+      if (row.size() != 3)
+        fail(yaml::location_of(node[r], file_), rpath,
+             "row " + std::to_string(r + 1) + " of the mounting matrix has " +
+                 std::to_string(row.size()) + " numbers, expected 3",
+             hint);
+      for (std::size_t c = 0; c < 3; ++c)
+        R(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = row[c];
+    }
+    const double dev = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+    if (dev > 1e-6)
+      m.fail_value("matrix",
+                   "the mounting matrix is not a rotation: its rows are not orthonormal "
+                   "(largest deviation of R^T R from identity is " + format_number(dev) + ")",
+                   "give a proper rotation (orthonormal to 1e-6, determinant +1), or use "
+                   "rpy_deg: [roll, pitch, yaw]");
+    if (R.determinant() < 0)
+      m.fail_value("matrix", "the mounting matrix is a reflection (determinant -1), not a rotation",
+                   "sensor frames are right-handed; negate one row, or use rpy_deg");
+    return R;
   }
 
   // --- procedure: ----------------------------------------------------------------------------
@@ -512,8 +534,33 @@ class Parser {
     return out;
   }
 
+  // One item of a step list: a one-key mapping naming its kind. A repeat appends its expansion.
   void step(const YAML::Node& item, const std::string& path, bool inside_repeat,
             std::vector<Expanded>& out) {
+    const YAML::Node key = step_kind_key(item, path);
+    const YAML::Node body = item.begin()->second;
+    const std::string kind = key.Scalar();
+    const SourceLocation where = yaml::location_of(key, file_);
+    const std::string spath = path + "." + kind;
+    if (kind == "repeat") {
+      repeat(body, spath, where, out);
+      return;
+    }
+    const StepKindSpec& spec = *find_step_kind(kind);
+    const MapReader m(body, file_, spath, "the " + kind + " step", spec.keys, {"repeat_index"}, where);
+    Step s;
+    s.kind = spec.kind;
+    s.where = where;
+    label_and_repeat_index(m, kind, inside_repeat, s);
+    step_settings(m, s);
+    if (out.size() >= kMaxSteps)
+      fail(where, spath, "the procedure expands into more than " + std::to_string(kMaxSteps) +
+                             " steps");
+    out.push_back({std::move(s), 1});
+  }
+
+  // The key naming a step's kind; fails unless the item is a one-key mapping of a known kind.
+  YAML::Node step_kind_key(const YAML::Node& item, const std::string& path) const {
     const std::string kinds_hint = "Step kinds: " + yaml::join(kStepKinds);
     if (!item.IsDefined() || item.IsNull())
       fail(yaml::location_of(item, file_), path,
@@ -535,108 +582,37 @@ class Parser {
            "indent the step's settings under its kind (deeper than '" + first +
                ":'), or start a new step with '-'");
     }
-    const auto it = item.begin();
-    const YAML::Node key = it->first;
-    const YAML::Node body = it->second;
+    const YAML::Node key = item.begin()->first;
     const std::string kind = key.IsScalar() ? key.Scalar() : std::string{};
-    const SourceLocation where = yaml::location_of(key, file_);
-    if (std::find(kStepKinds.begin(), kStepKinds.end(), kind) == kStepKinds.end()) {
-      fail(where, path, "unknown step kind '" + kind + "'",
+    if (std::find(kStepKinds.begin(), kStepKinds.end(), kind) == kStepKinds.end())
+      fail(yaml::location_of(key, file_), path, "unknown step kind '" + kind + "'",
            yaml::join_sentences(yaml::did_you_mean(kind, kStepKinds), kinds_hint));
-    }
-    const std::string spath = path + "." + kind;
-    if (kind == "repeat") {
-      repeat(body, spath, where, out);
-      return;
-    }
+    return key;
+  }
 
-    Step s;
-    s.where = where;
-    std::vector<std::string> keys;
-    if (kind == "set_temperature") {
-      s.kind = Step::Kind::kSetTemperature;
-      keys = {"fixture", "setpoint_c", "tolerance_c", "hold_s", "timeout_s", "record", "label"};
-    } else if (kind == "orientations") {
-      s.kind = Step::Kind::kOrientations;
-      keys = {"fixture", "sweep", "list", "grid", "dwell_s", "record_s", "label"};
-    } else if (kind == "rates") {
-      s.kind = Step::Kind::kRates;
-      keys = {"fixture", "axis", "rates_dps", "dwell_s", "record_s", "label"};
-    } else if (kind == "set_vibration") {
-      s.kind = Step::Kind::kSetVibration;
-      keys = {"fixture", "amplitude_g", "frequency_hz", "label"};
-    } else if (kind == "record") {
-      s.kind = Step::Kind::kRecord;
-      keys = {"duration_s", "label"};
-    } else {
-      s.kind = Step::Kind::kWait;
-      keys = {"duration_s", "label"};
-    }
-    const MapReader m(body, file_, spath, "the " + kind + " step", keys, {"repeat_index"}, where);
-
+  // `label` (default the kind's name) and `repeat_index` (only outside a repeat, which numbers
+  // its passes itself).
+  static void label_and_repeat_index(const MapReader& m, const std::string& kind, bool inside_repeat,
+                                     Step& s) {
     s.label = m.string("label", kind);
     if (s.label.empty()) m.fail_value("label", "'label' must not be empty");
-    if (m.has("repeat_index")) {
-      if (inside_repeat)
-        m.fail_key("repeat_index",
-                   "'repeat_index' is numbered by the enclosing repeat; remove it here");
-      const std::int64_t r = m.integer("repeat_index", 0);
-      if (r < 0 || r > static_cast<std::int64_t>(kMaxSteps))
-        m.fail_value("repeat_index", "'repeat_index' must be between 0 and " +
-                                         std::to_string(kMaxSteps) + ", got " + std::to_string(r));
-      s.repeat_index = static_cast<int>(r);
-    }
+    if (!m.has("repeat_index")) return;
+    if (inside_repeat)
+      m.fail_key("repeat_index", "'repeat_index' is numbered by the enclosing repeat; remove it here");
+    const std::int64_t r = m.integer("repeat_index", 0);
+    if (r < 0 || r > static_cast<std::int64_t>(kMaxSteps))
+      m.fail_value("repeat_index", "'repeat_index' must be between 0 and " +
+                                       std::to_string(kMaxSteps) + ", got " + std::to_string(r));
+    s.repeat_index = static_cast<int>(r);
+  }
 
+  // The settings of a step of kind s.kind, read from its body.
+  void step_settings(const MapReader& m, Step& s) {
     switch (s.kind) {
-      case Step::Kind::kSetTemperature:
-        s.fixture = step_fixture(m);
-        m.require("setpoint_c", "chamber air temperature to reach, in degrees Celsius");
-        s.setpoint_c = m.number("setpoint_c", 0.0, "in degrees Celsius");
-        if (s.setpoint_c < -273.15)
-          m.fail_value("setpoint_c", "setpoint " + format_number(s.setpoint_c) +
-                                         " degC is below absolute zero");
-        s.tolerance_c = positive(m, "tolerance_c", 0.5, "in degrees Celsius", "degC");
-        s.hold_s = non_negative(m, "hold_s", 60.0);
-        s.timeout_s = positive(m, "timeout_s", 3600.0, "in seconds", "s");
-        s.record_settling = m.boolean("record", true);
-        break;
-      case Step::Kind::kOrientations:
-        s.fixture = step_fixture(m);
-        m.exactly_one_of({"sweep", "list", "grid"});
-        if (m.has("sweep")) sweep(m, s);
-        if (m.has("list")) orientation_list(m, s);
-        if (m.has("grid")) grid(m, s);
-        s.dwell_s = non_negative(m, "dwell_s", 0.0);
-        m.require("record_s", "seconds of data recorded at each orientation");
-        s.record_s = positive(m, "record_s", 0.0, "in seconds", "s");
-        break;
-      case Step::Kind::kRates:
-        s.fixture = step_fixture(m);
-        m.require("axis", "name of the table axis that turns, e.g. angle");
-        s.axis = m.string("axis", "");
-        if (s.axis.empty()) m.fail_value("axis", "'axis' must not be empty");
-        m.require("rates_dps", "list of rates in degrees per second");
-        s.rates = m.numbers("rates_dps", "in degrees per second");
-        if (s.rates.empty())
-          m.fail_value("rates_dps", "'rates_dps' is empty", "give at least one rate, e.g. [-100, 100]");
-        s.dwell_s = non_negative(m, "dwell_s", 0.0);
-        m.require("record_s", "seconds of data recorded at each rate");
-        s.record_s = positive(m, "record_s", 0.0, "in seconds", "s");
-        break;
-      case Step::Kind::kSetVibration:
-        s.fixture = step_fixture(m);
-        m.require("amplitude_g", "vibration amplitude in g; 0 turns vibration off");
-        s.amplitude_g = m.number("amplitude_g", 0.0, "in g");
-        if (s.amplitude_g < 0)
-          m.fail_value("amplitude_g",
-                       "'amplitude_g' must not be negative, got " + format_number(s.amplitude_g) +
-                           " g",
-                       "amplitudes are in g; 0 turns vibration off");
-        if (s.amplitude_g > 0)
-          m.require("frequency_hz", "vibration frequency in hertz");
-        if (m.has("frequency_hz"))
-          s.frequency_hz = positive(m, "frequency_hz", 0.0, "in hertz", "Hz");
-        break;
+      case Step::Kind::kSetTemperature: set_temperature_settings(m, s); break;
+      case Step::Kind::kOrientations: orientations_settings(m, s); break;
+      case Step::Kind::kRates: rates_settings(m, s); break;
+      case Step::Kind::kSetVibration: set_vibration_settings(m, s); break;
       case Step::Kind::kRecord:
         m.require("duration_s", "seconds to record");
         s.record_s = positive(m, "duration_s", 0.0, "in seconds", "s");
@@ -646,10 +622,60 @@ class Parser {
         s.dwell_s = positive(m, "duration_s", 0.0, "in seconds", "s");
         break;
     }
-    if (out.size() >= kMaxSteps)
-      fail(where, spath, "the procedure expands into more than " + std::to_string(kMaxSteps) +
-                             " steps");
-    out.push_back({std::move(s), 1});
+  }
+
+  // set_temperature: chamber setpoint and tolerance [degC], hold and timeout [s].
+  void set_temperature_settings(const MapReader& m, Step& s) {
+    s.fixture = step_fixture(m);
+    m.require("setpoint_c", "chamber air temperature to reach, in degrees Celsius");
+    s.setpoint_c = m.number("setpoint_c", 0.0, "in degrees Celsius");
+    if (s.setpoint_c < -273.15)
+      m.fail_value("setpoint_c", "setpoint " + format_number(s.setpoint_c) +
+                                     " degC is below absolute zero");
+    s.tolerance_c = positive(m, "tolerance_c", 0.5, "in degrees Celsius", "degC");
+    s.hold_s = non_negative(m, "hold_s", 60.0);
+    s.timeout_s = positive(m, "timeout_s", 3600.0, "in seconds", "s");
+    s.record_settling = m.boolean("record", true);
+  }
+
+  // orientations: one of sweep, list or grid [deg], then dwell and record times [s].
+  void orientations_settings(const MapReader& m, Step& s) {
+    s.fixture = step_fixture(m);
+    m.exactly_one_of({"sweep", "list", "grid"});
+    if (m.has("sweep")) sweep(m, s);
+    if (m.has("list")) orientation_list(m, s);
+    if (m.has("grid")) grid(m, s);
+    s.dwell_s = non_negative(m, "dwell_s", 0.0);
+    m.require("record_s", "seconds of data recorded at each orientation");
+    s.record_s = positive(m, "record_s", 0.0, "in seconds", "s");
+  }
+
+  // rates: the turning axis, its rates [deg/s], then dwell and record times [s].
+  void rates_settings(const MapReader& m, Step& s) {
+    s.fixture = step_fixture(m);
+    m.require("axis", "name of the table axis that turns, e.g. angle");
+    s.axis = m.string("axis", "");
+    if (s.axis.empty()) m.fail_value("axis", "'axis' must not be empty");
+    m.require("rates_dps", "list of rates in degrees per second");
+    s.rates = m.numbers("rates_dps", "in degrees per second");
+    if (s.rates.empty())
+      m.fail_value("rates_dps", "'rates_dps' is empty", "give at least one rate, e.g. [-100, 100]");
+    s.dwell_s = non_negative(m, "dwell_s", 0.0);
+    m.require("record_s", "seconds of data recorded at each rate");
+    s.record_s = positive(m, "record_s", 0.0, "in seconds", "s");
+  }
+
+  // set_vibration: amplitude [g] (0 turns vibration off) and frequency [Hz].
+  void set_vibration_settings(const MapReader& m, Step& s) {
+    s.fixture = step_fixture(m);
+    m.require("amplitude_g", "vibration amplitude in g; 0 turns vibration off");
+    s.amplitude_g = m.number("amplitude_g", 0.0, "in g");
+    if (s.amplitude_g < 0)
+      m.fail_value("amplitude_g",
+                   "'amplitude_g' must not be negative, got " + format_number(s.amplitude_g) + " g",
+                   "amplitudes are in g; 0 turns vibration off");
+    if (s.amplitude_g > 0) m.require("frequency_hz", "vibration frequency in hertz");
+    if (m.has("frequency_hz")) s.frequency_hz = positive(m, "frequency_hz", 0.0, "in hertz", "Hz");
   }
 
   void repeat(const YAML::Node& body, const std::string& path, const SourceLocation& where,
@@ -891,7 +917,7 @@ void emit_step(YAML::Emitter& out, const Step& s) {
     out << YAML::Key << "fixture" << YAML::Value;
     yaml::emit_string(out, s.fixture);
   };
-  out << YAML::BeginMap << YAML::Key << kind_name(s.kind) << YAML::Value << YAML::BeginMap;
+  out << YAML::BeginMap << YAML::Key << step_kind_name(s.kind) << YAML::Value << YAML::BeginMap;
   switch (s.kind) {
     case Step::Kind::kSetTemperature:
       fixture();
@@ -949,11 +975,8 @@ void emit_instance(YAML::Emitter& out, const PluginInstance& p, const PluginCata
   yaml::emit_params(out, p.params, cat.find(p.plugin));
 }
 
-std::string emit_resolved(const Experiment& e, const PluginCatalogue& cat) {
-  YAML::Emitter out;
-  out << YAML::Comment("Resolved by Stend: defaults filled in, repeats and sweeps expanded");
-  out << YAML::BeginMap;
-
+// experiment: name, description, seed, clock, plugin paths.
+void emit_experiment_section(YAML::Emitter& out, const Experiment& e) {
   out << YAML::Key << "experiment" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "name" << YAML::Value;
   yaml::emit_string(out, e.name);
@@ -964,21 +987,23 @@ std::string emit_resolved(const Experiment& e, const PluginCatalogue& cat) {
   out << YAML::Key << "plugin_paths" << YAML::Value << YAML::Flow << YAML::BeginSeq;
   for (const auto& p : e.plugin_paths) yaml::emit_string(out, p);
   out << YAML::EndSeq << YAML::EndMap;
+}
 
-  out << YAML::Key << "bench" << YAML::Value << YAML::BeginMap;
+// gravity: as given (value, or latitude and height), and resolved [m/s²].
+void emit_gravity(YAML::Emitter& out, const GravitySpec& g) {
   out << YAML::Key << "gravity" << YAML::Value << YAML::Flow << YAML::BeginMap;
-  if (e.gravity.value_mps2) {
-    out << YAML::Key << "value_mps2" << YAML::Value << format_number(*e.gravity.value_mps2);
+  if (g.value_mps2) {
+    out << YAML::Key << "value_mps2" << YAML::Value << format_number(*g.value_mps2);
   } else {
-    out << YAML::Key << "latitude_deg" << YAML::Value << format_number(e.gravity.latitude_deg);
-    out << YAML::Key << "height_m" << YAML::Value << format_number(e.gravity.height_m);
+    out << YAML::Key << "latitude_deg" << YAML::Value << format_number(g.latitude_deg);
+    out << YAML::Key << "height_m" << YAML::Value << format_number(g.height_m);
   }
-  out << YAML::Key << "resolved_mps2" << YAML::Value << format_number(e.gravity.resolved_mps2);
+  out << YAML::Key << "resolved_mps2" << YAML::Value << format_number(g.resolved_mps2);
   out << YAML::EndMap;
-  out << YAML::Key << "base_heading_deg" << YAML::Value << format_number(e.base_heading_deg);
-  out << YAML::Key << "sensor" << YAML::Value << YAML::BeginMap;
-  emit_instance(out, e.sensor, cat);
-  out << YAML::EndMap;
+}
+
+// fixtures: each with its id, what it stands on and its plugin config.
+void emit_fixtures(YAML::Emitter& out, const Experiment& e, const PluginCatalogue& cat) {
   out << YAML::Key << "fixtures" << YAML::Value;
   if (e.fixtures.empty()) out << YAML::Flow;
   out << YAML::BeginSeq;
@@ -990,6 +1015,10 @@ std::string emit_resolved(const Experiment& e, const PluginCatalogue& cat) {
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;
+}
+
+// mounting: what the sensor is on, and the rotation as a 3x3 matrix (rows).
+void emit_mounting(YAML::Emitter& out, const Experiment& e) {
   out << YAML::Key << "mounting" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "on" << YAML::Value
       << (e.mounted_on.empty() ? std::string("base") : e.mounted_on);
@@ -1000,12 +1029,22 @@ std::string emit_resolved(const Experiment& e, const PluginCatalogue& cat) {
     out << YAML::EndSeq;
   }
   out << YAML::EndSeq << YAML::EndMap;
-  out << YAML::EndMap;  // bench
+}
 
-  out << YAML::Key << "procedure" << YAML::Value << YAML::BeginSeq;
-  for (const auto& s : e.procedure) emit_step(out, s);
-  out << YAML::EndSeq;
+void emit_bench_section(YAML::Emitter& out, const Experiment& e, const PluginCatalogue& cat) {
+  out << YAML::Key << "bench" << YAML::Value << YAML::BeginMap;
+  emit_gravity(out, e.gravity);
+  out << YAML::Key << "base_heading_deg" << YAML::Value << format_number(e.base_heading_deg);
+  out << YAML::Key << "sensor" << YAML::Value << YAML::BeginMap;
+  emit_instance(out, e.sensor, cat);
+  out << YAML::EndMap;
+  emit_fixtures(out, e, cat);
+  emit_mounting(out, e);
+  out << YAML::EndMap;
+}
 
+// processing:, estimation: as given ({} when absent); outputs:.
+void emit_later_sections(YAML::Emitter& out, const Experiment& e) {
   for (const auto& [key, node] : {std::pair<const char*, const YAML::Node*>{"processing", &e.processing},
                                    {"estimation", &e.estimation}}) {
     out << YAML::Key << key << YAML::Value;
@@ -1019,13 +1058,30 @@ std::string emit_resolved(const Experiment& e, const PluginCatalogue& cat) {
   yaml::emit_string(out, e.outputs.directory);
   out << YAML::Key << "report" << YAML::Value << e.outputs.report;
   out << YAML::EndMap;
+}
 
+std::string emit_resolved(const Experiment& e, const PluginCatalogue& cat) {
+  YAML::Emitter out;
+  out << YAML::Comment("Resolved by Stend: defaults filled in, repeats and sweeps expanded");
+  out << YAML::BeginMap;
+  emit_experiment_section(out, e);
+  emit_bench_section(out, e, cat);
+  out << YAML::Key << "procedure" << YAML::Value << YAML::BeginSeq;
+  for (const auto& s : e.procedure) emit_step(out, s);
+  out << YAML::EndSeq;
+  emit_later_sections(out, e);
   out << YAML::EndMap;
   if (!out.good()) throw std::logic_error("experiment: cannot emit resolved YAML: " + out.GetLastError());
   return std::string(out.c_str()) + "\n";
 }
 
 }  // namespace
+
+const char* step_kind_name(Step::Kind kind) {
+  for (const auto& k : kStepKindSpecs)
+    if (k.kind == kind) return k.name;
+  return "?";
+}
 
 Experiment parse_experiment(const std::string& yaml_text, const std::string& file,
                             const PluginCatalogue& catalogue) {
@@ -1067,9 +1123,8 @@ std::string range_text(const AxisSpec& a) {
   return "[" + format_number(a.min) + ", " + format_number(a.max) + "] " + a.unit;
 }
 
-}  // namespace
-
-void validate_against_bench(const Experiment& exp, const std::vector<const Fixture*>& fixtures) {
+// The fixture objects match the declarations one to one, in order.
+void check_fixture_objects(const Experiment& exp, const std::vector<const Fixture*>& fixtures) {
   if (fixtures.size() != exp.fixtures.size())
     throw std::invalid_argument("validate_against_bench: " + std::to_string(fixtures.size()) +
                                 " fixture objects for " + std::to_string(exp.fixtures.size()) +
@@ -1078,131 +1133,170 @@ void validate_against_bench(const Experiment& exp, const std::vector<const Fixtu
     if (!fixtures[i])
       throw std::invalid_argument("validate_against_bench: no object for fixture '" +
                                   exp.fixtures[i].id + "'");
+}
 
+// What the fixtures declare: each one's role and axes, in declaration order.
+struct BenchDeclared {
   std::vector<FixtureRole> roles;
   std::vector<std::vector<AxisSpec>> axes;
-  for (const Fixture* f : fixtures) {
-    roles.push_back(f->role());
-    axes.push_back(f->axes());
+};
+
+// The fixture one procedure step commands, with the lookups its checks need; every failure
+// names the step, the fixture and what it declares.
+class StepFixture {
+ public:
+  StepFixture(const Experiment& exp, const BenchDeclared& bench, const Step& s, std::size_t si)
+      : exp_(exp), bench_(bench), step_(s), path_("procedure[" + std::to_string(si) + "]"),
+        kind_(step_kind_name(s.kind)) {
+    while (fi_ < exp.fixtures.size() && exp.fixtures[fi_].id != s.fixture) ++fi_;
+    if (fi_ == exp.fixtures.size())
+      fail(s.where, path_ + ".fixture", "unknown fixture '" + s.fixture + "'");
+    const FixtureDecl& decl = exp.fixtures[fi_];
+    name_ = "fixture '" + decl.id + "' (plugin " + decl.plugin + ")";
   }
 
+  const std::string& path() const { return path_; }
+  const std::string& name() const { return name_; }
+
+  // Fails unless the fixture has the role the step needs.
+  void need_role(FixtureRole want) const {
+    const FixtureRole role = bench_.roles[fi_];
+    if (role == want) return;
+    std::vector<std::string> fitting;
+    for (std::size_t j = 0; j < bench_.roles.size(); ++j)
+      if (bench_.roles[j] == want) fitting.push_back(exp_.fixtures[j].id);
+    fail(step_.where, path_ + ".fixture",
+         std::string("step '") + kind_ + "' needs a " + role_words(want) + ", but " + name_ +
+             " is a " + role_words(role),
+         fitting.empty() ? std::string("no ") + role_words(want) + " is declared on this bench"
+                         : std::string("declared ") + role_words(want) + "s: " + yaml::join(fitting));
+  }
+
+  // The axis called `name`, which must be in `unit`.
+  const AxisSpec& axis(const std::string& name, const std::string& unit, const SourceLocation& where) const {
+    for (const auto& a : axes()) {
+      if (a.name != name) continue;
+      if (a.unit != unit)
+        fail(where, path_,
+             "axis '" + name + "' of " + name_ + " is in '" + a.unit + "', but step '" + kind_ +
+                 "' gives it in '" + unit + "'",
+             "this step can only command axes in " + unit + "; axes of the fixture: " + axis_list());
+      return a;
+    }
+    std::vector<std::string> names;
+    for (const auto& a : axes()) names.push_back(a.name);
+    fail(where, path_, name_ + " has no axis '" + name + "'",
+         yaml::join_sentences(yaml::did_you_mean(name, names),
+                              "Its axes: " + (axes().empty() ? std::string("none") : axis_list())));
+  }
+
+  // The axis in `unit` (the one called `preferred` when there are several).
+  const AxisSpec& unit_axis(const std::string& preferred, const std::string& unit,
+                            const std::string& what) const {
+    for (const auto& a : axes())
+      if (a.name == preferred && a.unit == unit) return a;
+    for (const auto& a : axes())
+      if (a.unit == unit) return a;
+    fail(step_.where, path_, name_ + " declares no " + what + " axis (unit " + unit + ")",
+         "its axes: " + (axes().empty() ? std::string("none") : axis_list()));
+  }
+
+ private:
+  const std::vector<AxisSpec>& axes() const { return bench_.axes[fi_]; }
+  std::string axis_list() const {
+    std::vector<std::string> out;
+    for (const auto& a : axes()) out.push_back(a.name + " (" + a.unit + ")");
+    return yaml::join(out);
+  }
+
+  const Experiment& exp_;
+  const BenchDeclared& bench_;
+  const Step& step_;
+  std::string path_;
+  const char* kind_;
+  std::size_t fi_ = 0;
+  std::string name_;
+};
+
+// orientations: a table, every target angle [deg] within its axis' limits.
+void check_orientations(const Step& s, const StepFixture& fx) {
+  fx.need_role(FixtureRole::kTable);
+  for (const auto& o : s.orientations) {
+    for (const auto& t : o.targets) {
+      const AxisSpec& a = fx.axis(t.axis, "deg", o.where);
+      if (t.value < a.min || t.value > a.max)
+        fail(o.where, fx.path(),
+             t.axis + "_deg = " + format_number(t.value) + " is beyond the limits of axis '" +
+                 a.name + "' of " + fx.name() + ": " + range_text(a),
+             "keep orientations within the range the fixture declares");
+    }
+  }
+}
+
+// rates: a table axis in rate mode, every |rate| [deg/s] within its maximum.
+void check_rates(const Step& s, const StepFixture& fx) {
+  fx.need_role(FixtureRole::kTable);
+  const AxisSpec& a = fx.axis(s.axis, "deg", s.where);
+  if (!a.supports_rate)
+    fail(s.where, fx.path(), "axis '" + a.name + "' of " + fx.name() + " cannot turn at a commanded rate",
+         "rates need an axis that supports rate mode; use orientations for this axis");
+  for (double r : s.rates)
+    if (std::abs(r) > a.max_rate)
+      fail(s.where, fx.path(),
+           "rate " + format_number(r) + " deg/s exceeds the maximum rate " +
+               format_number(a.max_rate) + " deg/s of axis '" + a.name + "' of " + fx.name(),
+           "keep |rate| <= " + format_number(a.max_rate) + " deg/s");
+}
+
+// set_temperature: a chamber whose temperature axis [degC] holds the setpoint.
+void check_temperature(const Step& s, const StepFixture& fx) {
+  fx.need_role(FixtureRole::kChamber);
+  const AxisSpec& a = fx.unit_axis("temperature", "degC", "temperature");
+  if (s.setpoint_c < a.min || s.setpoint_c > a.max)
+    fail(s.where, fx.path(),
+         "setpoint " + format_number(s.setpoint_c) + " degC is outside the range of " + fx.name() +
+             ": " + range_text(a),
+         "choose a setpoint the chamber can reach");
+}
+
+// set_vibration: a stimulus whose amplitude [g] and (when vibrating) frequency [Hz] axes hold
+// the step's values.
+void check_vibration(const Step& s, const StepFixture& fx) {
+  fx.need_role(FixtureRole::kStimulus);
+  const AxisSpec& amp = fx.unit_axis("amplitude", "g", "amplitude");
+  if (s.amplitude_g < amp.min || s.amplitude_g > amp.max)
+    fail(s.where, fx.path(),
+         "vibration amplitude " + format_number(s.amplitude_g) + " g is outside the range of " +
+             fx.name() + ": " + range_text(amp));
+  if (s.amplitude_g > 0 || s.frequency_hz > 0) {
+    const AxisSpec& fr = fx.unit_axis("frequency", "Hz", "frequency");
+    if (s.frequency_hz < fr.min || s.frequency_hz > fr.max)
+      fail(s.where, fx.path(),
+           "vibration frequency " + format_number(s.frequency_hz) + " Hz is outside the range of " +
+               fx.name() + ": " + range_text(fr));
+  }
+}
+
+}  // namespace
+
+void validate_against_bench(const Experiment& exp, const std::vector<const Fixture*>& fixtures) {
+  check_fixture_objects(exp, fixtures);
+  BenchDeclared bench;
+  for (const Fixture* f : fixtures) {
+    bench.roles.push_back(f->role());
+    bench.axes.push_back(f->axes());
+  }
   for (std::size_t si = 0; si < exp.procedure.size(); ++si) {
     const Step& s = exp.procedure[si];
     if (s.fixture.empty()) continue;
-    const std::string path = "procedure[" + std::to_string(si) + "]";
-    const char* kind = kind_name(s.kind);
-    std::size_t fi = 0;
-    while (fi < exp.fixtures.size() && exp.fixtures[fi].id != s.fixture) ++fi;
-    if (fi == exp.fixtures.size())
-      fail(s.where, path + ".fixture", "unknown fixture '" + s.fixture + "'");
-    const FixtureDecl& decl = exp.fixtures[fi];
-    const std::vector<AxisSpec>& fa = axes[fi];
-    const std::string fname = "fixture '" + decl.id + "' (plugin " + decl.plugin + ")";
-
-    const auto need_role = [&](FixtureRole want) {
-      if (roles[fi] == want) return;
-      std::vector<std::string> fitting;
-      for (std::size_t j = 0; j < roles.size(); ++j)
-        if (roles[j] == want) fitting.push_back(exp.fixtures[j].id);
-      fail(s.where, path + ".fixture",
-           std::string("step '") + kind + "' needs a " + role_words(want) + ", but " + fname +
-               " is a " + role_words(roles[fi]),
-           fitting.empty() ? std::string("no ") + role_words(want) + " is declared on this bench"
-                           : std::string("declared ") + role_words(want) + "s: " + yaml::join(fitting));
-    };
-    const auto axis_names = [&] {
-      std::vector<std::string> names;
-      for (const auto& a : fa) names.push_back(a.name);
-      return names;
-    };
-    const auto axis_list = [&] {
-      std::vector<std::string> out;
-      for (const auto& a : fa) out.push_back(a.name + " (" + a.unit + ")");
-      return yaml::join(out);
-    };
-    const auto find_axis = [&](const std::string& name, const std::string& unit,
-                               const SourceLocation& where) -> const AxisSpec& {
-      for (const auto& a : fa) {
-        if (a.name != name) continue;
-        if (a.unit != unit)
-          fail(where, path,
-               "axis '" + name + "' of " + fname + " is in '" + a.unit + "', but step '" + kind +
-                   "' gives it in '" + unit + "'",
-               "this step can only command axes in " + unit + "; axes of the fixture: " + axis_list());
-        return a;
-      }
-      fail(where, path, fname + " has no axis '" + name + "'",
-           yaml::join_sentences(yaml::did_you_mean(name, axis_names()),
-                                "Its axes: " + (fa.empty() ? std::string("none") : axis_list())));
-    };
-    const auto find_unit_axis = [&](const std::string& preferred, const std::string& unit,
-                                    const std::string& what) -> const AxisSpec& {
-      for (const auto& a : fa)
-        if (a.name == preferred && a.unit == unit) return a;
-      for (const auto& a : fa)
-        if (a.unit == unit) return a;
-      fail(s.where, path, fname + " declares no " + what + " axis (unit " + unit + ")",
-           "its axes: " + (fa.empty() ? std::string("none") : axis_list()));
-    };
-
+    const StepFixture fx(exp, bench, s, si);
     switch (s.kind) {
-      case Step::Kind::kOrientations:
-        need_role(FixtureRole::kTable);
-        for (const auto& o : s.orientations) {
-          for (const auto& t : o.targets) {
-            const AxisSpec& a = find_axis(t.axis, "deg", o.where);
-            if (t.value < a.min || t.value > a.max)
-              fail(o.where, path,
-                   t.axis + "_deg = " + format_number(t.value) + " is beyond the limits of axis '" +
-                       a.name + "' of " + fname + ": " + range_text(a),
-                   "keep orientations within the range the fixture declares");
-          }
-        }
-        break;
-      case Step::Kind::kRates: {
-        need_role(FixtureRole::kTable);
-        const AxisSpec& a = find_axis(s.axis, "deg", s.where);
-        if (!a.supports_rate)
-          fail(s.where, path,
-               "axis '" + a.name + "' of " + fname + " cannot turn at a commanded rate",
-               "rates need an axis that supports rate mode; use orientations for this axis");
-        for (double r : s.rates)
-          if (std::abs(r) > a.max_rate)
-            fail(s.where, path,
-                 "rate " + format_number(r) + " deg/s exceeds the maximum rate " +
-                     format_number(a.max_rate) + " deg/s of axis '" + a.name + "' of " + fname,
-                 "keep |rate| <= " + format_number(a.max_rate) + " deg/s");
-        break;
-      }
-      case Step::Kind::kSetTemperature: {
-        need_role(FixtureRole::kChamber);
-        const AxisSpec& a = find_unit_axis("temperature", "degC", "temperature");
-        if (s.setpoint_c < a.min || s.setpoint_c > a.max)
-          fail(s.where, path,
-               "setpoint " + format_number(s.setpoint_c) + " degC is outside the range of " +
-                   fname + ": " + range_text(a),
-               "choose a setpoint the chamber can reach");
-        break;
-      }
-      case Step::Kind::kSetVibration: {
-        need_role(FixtureRole::kStimulus);
-        const AxisSpec& amp = find_unit_axis("amplitude", "g", "amplitude");
-        if (s.amplitude_g < amp.min || s.amplitude_g > amp.max)
-          fail(s.where, path,
-               "vibration amplitude " + format_number(s.amplitude_g) +
-                   " g is outside the range of " + fname + ": " + range_text(amp));
-        if (s.amplitude_g > 0 || s.frequency_hz > 0) {
-          const AxisSpec& fr = find_unit_axis("frequency", "Hz", "frequency");
-          if (s.frequency_hz < fr.min || s.frequency_hz > fr.max)
-            fail(s.where, path,
-                 "vibration frequency " + format_number(s.frequency_hz) +
-                     " Hz is outside the range of " + fname + ": " + range_text(fr));
-        }
-        break;
-      }
+      case Step::Kind::kOrientations: check_orientations(s, fx); break;
+      case Step::Kind::kRates: check_rates(s, fx); break;
+      case Step::Kind::kSetTemperature: check_temperature(s, fx); break;
+      case Step::Kind::kSetVibration: check_vibration(s, fx); break;
       case Step::Kind::kRecord:
-      case Step::Kind::kWait:
-        break;
+      case Step::Kind::kWait: break;
     }
   }
 }

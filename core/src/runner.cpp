@@ -14,18 +14,6 @@ namespace stend {
 
 namespace {
 
-const char* step_kind_name(Step::Kind k) {
-  switch (k) {
-    case Step::Kind::kSetTemperature: return "set_temperature";
-    case Step::Kind::kOrientations: return "orientations";
-    case Step::Kind::kRates: return "rates";
-    case Step::Kind::kRecord: return "record";
-    case Step::Kind::kWait: return "wait";
-    case Step::Kind::kSetVibration: return "set_vibration";
-  }
-  return "?";
-}
-
 std::string utc_stamp() {
   const std::time_t now = std::time(nullptr);
   std::tm tm{};

@@ -332,6 +332,14 @@ TEST_F(FullExperiment, ProcedureExpanded) {
   EXPECT_EQ(proc[0].repeat_index, 0);
 }
 
+TEST_F(FullExperiment, StepKindNamesAreTheFileKeys) {
+  const auto& proc = exp_->procedure;
+  ASSERT_GE(proc.size(), 7u);
+  const std::vector<std::string> names = {"set_temperature", "orientations", "rates", "set_vibration",
+                                          "record", "set_vibration", "wait"};
+  for (std::size_t i = 0; i < names.size(); ++i) EXPECT_EQ(step_kind_name(proc[i].kind), names[i]) << i;
+}
+
 TEST_F(FullExperiment, PassesStageTwo) {
   TestBench bench(*exp_);
   EXPECT_NO_THROW(validate_against_bench(*exp_, bench.ptrs));

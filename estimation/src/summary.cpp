@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cstdio>
 #include <ostream>
 #include <sstream>
 
@@ -55,6 +56,16 @@ ParameterEstimate parameter_from_json(const json& p) {
 }
 
 }  // namespace
+
+std::string number_text(double v, int digits, bool fixed) {
+  if (std::isnan(v)) return "n/a";
+  char buf[64];
+  if (fixed)
+    std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  else
+    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
+}
 
 const char* to_string(FitStatus s) { return s == FitStatus::kOk ? "ok" : "failed"; }
 

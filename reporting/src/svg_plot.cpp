@@ -135,224 +135,327 @@ std::vector<double> nice_ticks(double lo, double hi, bool log_axis, int target) 
   return t;
 }
 
-std::string Plot::render() const {
-  const double W = width, H = height;
-  // Category labels too long for their slot are drawn slanted; the bottom margin makes room.
-  std::size_t longest_category = 0;
-  for (const auto& c : x_categories) longest_category = std::max(longest_category, c.size());
-  const double slot = x_categories.empty() ? 0.0 : (width - 94.0) / static_cast<double>(std::min<std::size_t>(x_categories.size(), 12));
-  const bool slanted = !x_categories.empty() && 6.0 * static_cast<double>(longest_category) > slot;
-  const double left = 78, right = 16, top = title.empty() ? 14 : 32,
-               bottom = slanted ? 50 + std::min(170.0, 4.0 * static_cast<double>(longest_category)) : 50;
-  // Legend entries decide the right margin: a legend box inside the plot, top right.
-  double xlo = std::numeric_limits<double>::infinity(), xhi = -xlo, ylo = xlo, yhi = -xlo;
-  bool any = false;
-  for (const auto& s : series) {
-    for (std::size_t i = 0; i < s.x.size(); ++i) {
-      if (!usable(s.x[i], x_log)) continue;
-      auto has = [&](const std::vector<double>& v) { return i < v.size() && usable(v[i], y_log); };
-      if (s.style != Style::kBand && i < s.y.size() && usable(s.y[i], y_log)) {
-        extend(s.x[i], x_log, xlo, xhi);
-        extend(s.y[i], y_log, ylo, yhi);
-        any = true;
-      }
-      if (has(s.y_lo)) {
-        extend(s.x[i], x_log, xlo, xhi);
-        extend(s.y_lo[i], y_log, ylo, yhi);
-        any = true;
-      }
-      if (has(s.y_hi)) {
-        extend(s.x[i], x_log, xlo, xhi);
-        extend(s.y_hi[i], y_log, ylo, yhi);
-      }
+namespace {
+
+// --- Steps of Plot::render -------------------------------------------------------------------
+
+// Data ranges of a plot: every drawable point, band edge and reference line, padded (or forced).
+struct Ranges {
+  double xlo = 0.0, xhi = 0.0, ylo = 0.0, yhi = 0.0;
+  bool any = false;  // some point (or a band's lower edge) can be drawn
+};
+
+// Extends the ranges by the drawable points of one series.
+void extend_by_series(const Plot& p, const Series& s, Ranges& r) {
+  for (std::size_t i = 0; i < s.x.size(); ++i) {
+    if (!usable(s.x[i], p.x_log)) continue;
+    auto has = [&](const std::vector<double>& v) { return i < v.size() && usable(v[i], p.y_log); };
+    if (s.style != Style::kBand && i < s.y.size() && usable(s.y[i], p.y_log)) {
+      extend(s.x[i], p.x_log, r.xlo, r.xhi);
+      extend(s.y[i], p.y_log, r.ylo, r.yhi);
+      r.any = true;
+    }
+    if (has(s.y_lo)) {
+      extend(s.x[i], p.x_log, r.xlo, r.xhi);
+      extend(s.y_lo[i], p.y_log, r.ylo, r.yhi);
+      r.any = true;
+    }
+    if (has(s.y_hi)) {
+      extend(s.x[i], p.x_log, r.xlo, r.xhi);
+      extend(s.y_hi[i], p.y_log, r.ylo, r.yhi);
     }
   }
-  for (const auto& l : lines) {
-    if (l.horizontal) extend(l.value, y_log, ylo, yhi);
-    else extend(l.value, x_log, xlo, xhi);
-  }
-  const bool bars = std::any_of(series.begin(), series.end(), [](const Series& s) { return s.style == Style::kBars; });
-  if ((y_include_zero || bars) && !y_log && any) extend(0.0, false, ylo, yhi);
-  if (!x_categories.empty()) {
-    xlo = -0.6;
-    xhi = static_cast<double>(x_categories.size()) - 0.4;
-  } else {
-    finish_range(xlo, xhi, x_log);
-  }
-  finish_range(ylo, yhi, y_log);
-  if (fixed_x) {
-    xlo = x_min;
-    xhi = x_max;
-  }
-  if (fixed_y) {
-    ylo = y_min;
-    yhi = y_max;
-  }
-  Axis ax{xlo, xhi, x_log, left, W - right};
-  Axis ay{ylo, yhi, y_log, H - bottom, top};
+}
 
-  std::string o;
-  o += fmt::format(
+Ranges data_ranges(const Plot& p) {
+  Ranges r;
+  r.xlo = r.ylo = std::numeric_limits<double>::infinity();
+  r.xhi = r.yhi = -r.xlo;
+  for (const auto& s : p.series) extend_by_series(p, s, r);
+  for (const auto& l : p.lines) {
+    if (l.horizontal) extend(l.value, p.y_log, r.ylo, r.yhi);
+    else extend(l.value, p.x_log, r.xlo, r.xhi);
+  }
+  const bool bars = std::any_of(p.series.begin(), p.series.end(), [](const Series& s) { return s.style == Style::kBars; });
+  if ((p.y_include_zero || bars) && !p.y_log && r.any) extend(0.0, false, r.ylo, r.yhi);
+  if (!p.x_categories.empty()) {
+    r.xlo = -0.6;
+    r.xhi = static_cast<double>(p.x_categories.size()) - 0.4;
+  } else {
+    finish_range(r.xlo, r.xhi, p.x_log);
+  }
+  finish_range(r.ylo, r.yhi, p.y_log);
+  if (p.fixed_x) {
+    r.xlo = p.x_min;
+    r.xhi = p.x_max;
+  }
+  if (p.fixed_y) {
+    r.ylo = p.y_min;
+    r.yhi = p.y_max;
+  }
+  return r;
+}
+
+// Where everything goes [px]: the plot box inside the margins, and the axes mapping data onto it.
+struct Frame {
+  bool slanted = false;  // category labels too long for their slot are drawn slanted
+  double px0 = 0.0, px1 = 0.0, py0 = 0.0, py1 = 0.0;  // plot box: left, right, top, bottom
+  Ranges data;
+  Axis ax, ay;
+};
+
+Frame layout(const Plot& p) {
+  Frame f;
+  std::size_t longest_category = 0;
+  for (const auto& c : p.x_categories) longest_category = std::max(longest_category, c.size());
+  const double slot = p.x_categories.empty() ? 0.0 : (p.width - 94.0) / static_cast<double>(std::min<std::size_t>(p.x_categories.size(), 12));
+  f.slanted = !p.x_categories.empty() && 6.0 * static_cast<double>(longest_category) > slot;
+  // The bottom margin makes room for slanted labels.
+  const double left = 78, right = 16, top = p.title.empty() ? 14 : 32,
+               bottom = f.slanted ? 50 + std::min(170.0, 4.0 * static_cast<double>(longest_category)) : 50;
+  const double W = p.width, H = p.height;
+  f.px0 = left;
+  f.px1 = W - right;
+  f.py0 = top;
+  f.py1 = H - bottom;
+  f.data = data_ranges(p);
+  f.ax = Axis{f.data.xlo, f.data.xhi, p.x_log, left, W - right};
+  f.ay = Axis{f.data.ylo, f.data.yhi, p.y_log, H - bottom, top};
+  return f;
+}
+
+// The <svg> element's opening, white background, title and plot box.
+std::string svg_open(const Plot& p, const Frame& f) {
+  std::string o = fmt::format(
       "<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"plot\" width=\"{0}\" height=\"{1}\" viewBox=\"0 0 {0} {1}\" "
       "font-family=\"sans-serif\" font-size=\"11\" role=\"img\" aria-label=\"{2}\">\n",
-      width, height, escape(title));
-  o += fmt::format("<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"#fff\"/>\n", width, height);
-  if (!title.empty())
+      p.width, p.height, escape(p.title));
+  o += fmt::format("<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"#fff\"/>\n", p.width, p.height);
+  if (!p.title.empty())
     o += fmt::format("<text x=\"{}\" y=\"18\" text-anchor=\"middle\" font-size=\"13\" font-weight=\"bold\">{}</text>\n",
-                     num(W / 2), escape(title));
-  const double px0 = left, px1 = W - right, py0 = top, py1 = H - bottom;
-  o += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#333\"/>\n", num(px0),
-                   num(py0), num(px1 - px0), num(py1 - py0));
-  // Grid and ticks.
-  if (!x_categories.empty()) {
-    const std::size_t n = x_categories.size();
-    const std::size_t every = std::max<std::size_t>(1, n / 12 + (n % 12 ? 1 : 0));
-    for (std::size_t i = 0; i < n; i += every) {
-      const double X = ax.map(static_cast<double>(i));
-      o += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{0}\" y2=\"{2}\" stroke=\"#333\"/>", num(X), num(py1),
-                       num(py1 + 4));
-      if (slanted)
-        o += fmt::format("<text x=\"{0}\" y=\"{1}\" text-anchor=\"end\" transform=\"rotate(-40 {0} {1})\">{2}</text>\n",
-                         num(X), num(py1 + 12), escape(x_categories[i]));
-      else
-        o += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n", num(X), num(py1 + 16),
-                         escape(x_categories[i]));
-    }
+                     num(p.width / 2.0), escape(p.title));
+  o += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#333\"/>\n", num(f.px0),
+                   num(f.py0), num(f.px1 - f.px0), num(f.py1 - f.py0));
+  return o;
+}
+
+// Category ticks and labels under the plot box (at most about 12 labelled).
+std::string category_ticks(const Plot& p, const Frame& f) {
+  std::string o;
+  const std::size_t n = p.x_categories.size();
+  const std::size_t every = std::max<std::size_t>(1, n / 12 + (n % 12 ? 1 : 0));
+  for (std::size_t i = 0; i < n; i += every) {
+    const double X = f.ax.map(static_cast<double>(i));
+    o += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{0}\" y2=\"{2}\" stroke=\"#333\"/>", num(X), num(f.py1),
+                     num(f.py1 + 4));
+    if (f.slanted)
+      o += fmt::format("<text x=\"{0}\" y=\"{1}\" text-anchor=\"end\" transform=\"rotate(-40 {0} {1})\">{2}</text>\n",
+                       num(X), num(f.py1 + 12), escape(p.x_categories[i]));
+    else
+      o += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n", num(X), num(f.py1 + 16),
+                       escape(p.x_categories[i]));
+  }
+  return o;
+}
+
+// Grid lines and tick labels of both axes.
+std::string grid_and_ticks(const Plot& p, const Frame& f) {
+  std::string o;
+  if (!p.x_categories.empty()) {
+    o += category_ticks(p, f);
   } else {
-    for (double v : nice_ticks(xlo, xhi, x_log)) {
-      const double X = ax.map(v);
-      o += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{0}\" y2=\"{2}\" stroke=\"#e4e4e4\"/>", num(X), num(py0),
-                       num(py1));
-      o += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n", num(X), num(py1 + 16),
+    for (double v : nice_ticks(f.data.xlo, f.data.xhi, p.x_log)) {
+      const double X = f.ax.map(v);
+      o += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{0}\" y2=\"{2}\" stroke=\"#e4e4e4\"/>", num(X), num(f.py0),
+                       num(f.py1));
+      o += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n", num(X), num(f.py1 + 16),
                        escape(tick_text(v)));
     }
   }
-  for (double v : nice_ticks(ylo, yhi, y_log)) {
-    const double Y = ay.map(v);
-    o += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"#e4e4e4\"/>", num(px0), num(Y),
-                     num(px1));
-    o += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>\n", num(px0 - 5), num(Y + 4),
+  for (double v : nice_ticks(f.data.ylo, f.data.yhi, p.y_log)) {
+    const double Y = f.ay.map(v);
+    o += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"#e4e4e4\"/>", num(f.px0), num(Y),
+                     num(f.px1));
+    o += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>\n", num(f.px0 - 5), num(Y + 4),
                      escape(tick_text(v)));
   }
-  o += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n", num((px0 + px1) / 2), num(H - 12),
-                   escape(x_label));
+  return o;
+}
+
+// Axis labels (x below, y rotated on the left), and "no data" in an empty plot.
+std::string axis_labels(const Plot& p, const Frame& f) {
+  std::string o = fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n",
+                              num((f.px0 + f.px1) / 2), num(p.height - 12.0), escape(p.x_label));
   o += fmt::format("<text x=\"14\" y=\"{0}\" text-anchor=\"middle\" transform=\"rotate(-90 14 {0})\">{1}</text>\n",
-                   num((py0 + py1) / 2), escape(y_label));
-  if (!any) {
+                   num((f.py0 + f.py1) / 2), escape(p.y_label));
+  if (!f.data.any)
     o += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" fill=\"#999\">no data</text>\n",
-                     num((px0 + px1) / 2), num((py0 + py1) / 2));
-  }
+                     num((f.px0 + f.px1) / 2), num((f.py0 + f.py1) / 2));
+  return o;
+}
+
+// A clip path on the plot box and the group drawn through it (closed by the caller).
+std::string clip_open(const Frame& f) {
   // Unique clip id within a document (plots of one report are rendered by one process).
   static std::atomic<unsigned> clip_counter{0};
   const unsigned clip = ++clip_counter;
-  o += fmt::format("<clipPath id=\"clip{0}\"><rect x=\"{1}\" y=\"{2}\" width=\"{3}\" height=\"{4}\"/></clipPath>",
-                   clip, num(px0), num(py0), num(px1 - px0), num(py1 - py0));
+  std::string o = fmt::format("<clipPath id=\"clip{0}\"><rect x=\"{1}\" y=\"{2}\" width=\"{3}\" height=\"{4}\"/></clipPath>",
+                              clip, num(f.px0), num(f.py0), num(f.px1 - f.px0), num(f.py1 - f.py0));
   o += fmt::format("<g clip-path=\"url(#clip{})\">\n", clip);
-  const double ybase = y_log ? ylo : std::clamp(0.0, ylo, yhi);
-  // Bands first, then bars, lines and points.
+  return o;
+}
+
+// A kBand series: the polygon between y_lo and y_hi.
+std::string band(const Plot& p, const Frame& f, const Series& s, const std::string& color) {
+  std::string up, down;
+  for (std::size_t i = 0; i < s.x.size() && i < s.y_lo.size() && i < s.y_hi.size(); ++i) {
+    if (!usable(s.x[i], p.x_log) || !usable(s.y_lo[i], p.y_log) || !usable(s.y_hi[i], p.y_log)) continue;
+    up += fmt::format("{},{} ", num(f.ax.map(s.x[i])), num(f.ay.map(s.y_hi[i])));
+    down = fmt::format("{},{} ", num(f.ax.map(s.x[i])), num(f.ay.map(s.y_lo[i]))) + down;
+  }
+  if (up.empty()) return {};
+  return fmt::format("<polygon points=\"{}{}\" fill=\"{}\" fill-opacity=\"{}\" stroke=\"none\"/>\n", up, down, color,
+                     s.opacity < 1.0 ? s.opacity : 0.25);
+}
+
+// A kBars series: bars from the base (0, or the floor of a log axis) to y.
+std::string bars(const Plot& p, const Frame& f, const Series& s, const std::string& color) {
+  std::string o;
+  const double ybase = p.y_log ? f.data.ylo : std::clamp(0.0, f.data.ylo, f.data.yhi);
+  const double w = std::max(2.0, 0.7 * (f.px1 - f.px0) / std::max<double>(1.0, static_cast<double>(s.x.size()) + 1.0));
+  for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
+    if (!usable(s.x[i], p.x_log) || !usable(s.y[i], p.y_log)) continue;
+    const double X = f.ax.map(s.x[i]), Y = f.ay.map(s.y[i]), Y0 = f.ay.map(ybase);
+    o += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"{}\" fill-opacity=\"{}\"/>\n",
+                     num(X - w / 2), num(std::min(Y, Y0)), num(w), num(std::abs(Y0 - Y)), color, s.opacity);
+  }
+  return o;
+}
+
+// The line of a kLine/kLinePoints series, broken where a point cannot be drawn.
+std::string polyline(const Plot& p, const Frame& f, const Series& s, const std::string& color) {
+  std::string o, pts;
+  const char* dash = s.dashed ? " stroke-dasharray=\"6 4\"" : "";
+  auto flush = [&] {
+    if (!pts.empty())
+      o += fmt::format("<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.6\"{}/>\n", pts, color,
+                       dash);
+    pts.clear();
+  };
+  for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
+    if (!usable(s.x[i], p.x_log) || !usable(s.y[i], p.y_log)) {
+      flush();
+      continue;
+    }
+    pts += fmt::format("{},{} ", num(f.ax.map(s.x[i])), num(f.ay.map(s.y[i])));
+  }
+  flush();
+  return o;
+}
+
+// The markers of a kPoints/kLinePoints series, with error bars where y_lo and y_hi are given.
+std::string markers(const Plot& p, const Frame& f, const Series& s, const std::string& color) {
+  std::string o;
+  for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
+    if (!usable(s.x[i], p.x_log)) continue;
+    const double X = f.ax.map(s.x[i]);
+    if (i < s.y_lo.size() && i < s.y_hi.size() && usable(s.y_lo[i], p.y_log) && usable(s.y_hi[i], p.y_log)) {
+      const double a = f.ay.map(s.y_lo[i]), b = f.ay.map(s.y_hi[i]);
+      o += fmt::format(
+          "<path d=\"M{0},{1}V{2}M{3},{1}H{4}M{3},{2}H{4}\" stroke=\"{5}\" stroke-width=\"1.2\" fill=\"none\"/>",
+          num(X), num(a), num(b), num(X - 3), num(X + 3), color);
+    }
+    if (!usable(s.y[i], p.y_log)) continue;
+    o += fmt::format("<circle cx=\"{}\" cy=\"{}\" r=\"3\" fill=\"{}\" fill-opacity=\"{}\"/>\n", num(X),
+                     num(f.ay.map(s.y[i])), color, s.opacity);
+  }
+  return o;
+}
+
+std::string series_color(const Series& s, std::size_t k) { return s.color.empty() ? palette(k) : s.color; }
+
+// All series in three layers: bands first, then bars, then lines and markers.
+std::string series_layers(const Plot& p, const Frame& f) {
+  std::string o;
   for (int pass = 0; pass < 3; ++pass) {
-    for (std::size_t k = 0; k < series.size(); ++k) {
-      const Series& s = series[k];
-      const std::string c = s.color.empty() ? palette(k) : s.color;
-      const char* dash = s.dashed ? " stroke-dasharray=\"6 4\"" : "";
-      if (pass == 0 && s.style == Style::kBand) {
-        std::string up, down;
-        for (std::size_t i = 0; i < s.x.size() && i < s.y_lo.size() && i < s.y_hi.size(); ++i) {
-          if (!usable(s.x[i], x_log) || !usable(s.y_lo[i], y_log) || !usable(s.y_hi[i], y_log)) continue;
-          up += fmt::format("{},{} ", num(ax.map(s.x[i])), num(ay.map(s.y_hi[i])));
-          down = fmt::format("{},{} ", num(ax.map(s.x[i])), num(ay.map(s.y_lo[i]))) + down;
-        }
-        if (!up.empty())
-          o += fmt::format("<polygon points=\"{}{}\" fill=\"{}\" fill-opacity=\"{}\" stroke=\"none\"/>\n", up, down, c,
-                           s.opacity < 1.0 ? s.opacity : 0.25);
-      }
-      if (pass == 1 && s.style == Style::kBars) {
-        const double w = std::max(2.0, 0.7 * (px1 - px0) / std::max<double>(1.0, static_cast<double>(s.x.size()) + 1.0));
-        for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
-          if (!usable(s.x[i], x_log) || !usable(s.y[i], y_log)) continue;
-          const double X = ax.map(s.x[i]), Y = ay.map(s.y[i]), Y0 = ay.map(ybase);
-          o += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"{}\" fill-opacity=\"{}\"/>\n",
-                           num(X - w / 2), num(std::min(Y, Y0)), num(w), num(std::abs(Y0 - Y)), c, s.opacity);
-        }
-      }
-      if (pass == 2 && (s.style == Style::kLine || s.style == Style::kLinePoints)) {
-        std::string pts;
-        auto flush = [&] {
-          if (!pts.empty())
-            o += fmt::format("<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.6\"{}/>\n", pts, c,
-                             dash);
-          pts.clear();
-        };
-        for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
-          if (!usable(s.x[i], x_log) || !usable(s.y[i], y_log)) {
-            flush();
-            continue;
-          }
-          pts += fmt::format("{},{} ", num(ax.map(s.x[i])), num(ay.map(s.y[i])));
-        }
-        flush();
-      }
-      if (pass == 2 && (s.style == Style::kPoints || s.style == Style::kLinePoints)) {
-        for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
-          if (!usable(s.x[i], x_log)) continue;
-          const double X = ax.map(s.x[i]);
-          if (i < s.y_lo.size() && i < s.y_hi.size() && usable(s.y_lo[i], y_log) && usable(s.y_hi[i], y_log)) {
-            const double a = ay.map(s.y_lo[i]), b = ay.map(s.y_hi[i]);
-            o += fmt::format(
-                "<path d=\"M{0},{1}V{2}M{3},{1}H{4}M{3},{2}H{4}\" stroke=\"{5}\" stroke-width=\"1.2\" fill=\"none\"/>",
-                num(X), num(a), num(b), num(X - 3), num(X + 3), c);
-          }
-          if (!usable(s.y[i], y_log)) continue;
-          o += fmt::format("<circle cx=\"{}\" cy=\"{}\" r=\"3\" fill=\"{}\" fill-opacity=\"{}\"/>\n", num(X),
-                           num(ay.map(s.y[i])), c, s.opacity);
-        }
-      }
+    for (std::size_t k = 0; k < p.series.size(); ++k) {
+      const Series& s = p.series[k];
+      const std::string c = series_color(s, k);
+      const bool line = s.style == Style::kLine || s.style == Style::kLinePoints;
+      const bool points = s.style == Style::kPoints || s.style == Style::kLinePoints;
+      if (pass == 0 && s.style == Style::kBand) o += band(p, f, s, c);
+      if (pass == 1 && s.style == Style::kBars) o += bars(p, f, s, c);
+      if (pass == 2 && line) o += polyline(p, f, s, c);
+      if (pass == 2 && points) o += markers(p, f, s, c);
     }
   }
-  for (const auto& l : lines) {
-    if (!usable(l.value, l.horizontal ? y_log : x_log)) continue;
+  return o;
+}
+
+// Dashed reference lines across the plot box, each with its label.
+std::string reference_lines(const Plot& p, const Frame& f) {
+  std::string o;
+  for (const auto& l : p.lines) {
+    if (!usable(l.value, l.horizontal ? p.y_log : p.x_log)) continue;
     if (l.horizontal) {
-      const double Y = ay.map(l.value);
+      const double Y = f.ay.map(l.value);
       o += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"{3}\" stroke-dasharray=\"3 3\"/>",
-                       num(px0), num(Y), num(px1), l.color);
-      o += fmt::format("<text x=\"{}\" y=\"{}\" fill=\"{}\">{}</text>\n", num(px0 + 4), num(Y - 3), l.color,
+                       num(f.px0), num(Y), num(f.px1), l.color);
+      o += fmt::format("<text x=\"{}\" y=\"{}\" fill=\"{}\">{}</text>\n", num(f.px0 + 4), num(Y - 3), l.color,
                        escape(l.label));
     } else {
-      const double X = ax.map(l.value);
+      const double X = f.ax.map(l.value);
       o += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{0}\" y2=\"{2}\" stroke=\"{3}\" stroke-dasharray=\"3 3\"/>",
-                       num(X), num(py0), num(py1), l.color);
-      o += fmt::format("<text x=\"{}\" y=\"{}\" fill=\"{}\">{}</text>\n", num(X + 3), num(py0 + 12), l.color,
+                       num(X), num(f.py0), num(f.py1), l.color);
+      o += fmt::format("<text x=\"{}\" y=\"{}\" fill=\"{}\">{}</text>\n", num(X + 3), num(f.py0 + 12), l.color,
                        escape(l.label));
     }
   }
-  o += "</g>\n";
-  // Legend.
+  return o;
+}
+
+// The legend of the named series: a box inside the plot, top right, one swatch and name a row.
+std::string legend(const Plot& p, const Frame& f) {
   std::vector<std::size_t> named;
-  for (std::size_t k = 0; k < series.size(); ++k)
-    if (!series[k].name.empty()) named.push_back(k);
-  if (!named.empty()) {
-    std::size_t longest = 0;
-    for (std::size_t k : named) longest = std::max(longest, series[k].name.size());
-    const double lw = 30 + 6.2 * static_cast<double>(longest), lh = 6 + 15.0 * static_cast<double>(named.size());
-    const double lx = px1 - lw - 6, ly = py0 + 6;
-    o += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"#fff\" fill-opacity=\"0.85\" "
-                     "stroke=\"#bbb\"/>\n",
-                     num(lx), num(ly), num(lw), num(lh));
-    for (std::size_t j = 0; j < named.size(); ++j) {
-      const Series& s = series[named[j]];
-      const std::string c = s.color.empty() ? palette(named[j]) : s.color;
-      const double Y = ly + 13 + 15.0 * static_cast<double>(j);
-      if (s.style == Style::kBand || s.style == Style::kBars)
-        o += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"16\" height=\"9\" fill=\"{}\" fill-opacity=\"{}\"/>",
-                         num(lx + 5), num(Y - 8), c, s.style == Style::kBand ? 0.3 : 1.0);
-      else if (s.style == Style::kPoints)
-        o += fmt::format("<circle cx=\"{}\" cy=\"{}\" r=\"3\" fill=\"{}\"/>", num(lx + 13), num(Y - 4), c);
-      else
-        o += fmt::format("<line x1=\"{0}\" y1=\"{2}\" x2=\"{1}\" y2=\"{2}\" stroke=\"{3}\" stroke-width=\"2\"{4}/>",
-                         num(lx + 5), num(lx + 21), num(Y - 4), c, s.dashed ? " stroke-dasharray=\"4 3\"" : "");
-      o += fmt::format("<text x=\"{}\" y=\"{}\">{}</text>\n", num(lx + 26), num(Y), escape(s.name));
-    }
+  for (std::size_t k = 0; k < p.series.size(); ++k)
+    if (!p.series[k].name.empty()) named.push_back(k);
+  if (named.empty()) return {};
+  std::size_t longest = 0;
+  for (std::size_t k : named) longest = std::max(longest, p.series[k].name.size());
+  const double lw = 30 + 6.2 * static_cast<double>(longest), lh = 6 + 15.0 * static_cast<double>(named.size());
+  const double lx = f.px1 - lw - 6, ly = f.py0 + 6;
+  std::string o = fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"#fff\" fill-opacity=\"0.85\" "
+                              "stroke=\"#bbb\"/>\n",
+                              num(lx), num(ly), num(lw), num(lh));
+  for (std::size_t j = 0; j < named.size(); ++j) {
+    const Series& s = p.series[named[j]];
+    const std::string c = series_color(s, named[j]);
+    const double Y = ly + 13 + 15.0 * static_cast<double>(j);
+    if (s.style == Style::kBand || s.style == Style::kBars)
+      o += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"16\" height=\"9\" fill=\"{}\" fill-opacity=\"{}\"/>",
+                       num(lx + 5), num(Y - 8), c, s.style == Style::kBand ? 0.3 : 1.0);
+    else if (s.style == Style::kPoints)
+      o += fmt::format("<circle cx=\"{}\" cy=\"{}\" r=\"3\" fill=\"{}\"/>", num(lx + 13), num(Y - 4), c);
+    else
+      o += fmt::format("<line x1=\"{0}\" y1=\"{2}\" x2=\"{1}\" y2=\"{2}\" stroke=\"{3}\" stroke-width=\"2\"{4}/>",
+                       num(lx + 5), num(lx + 21), num(Y - 4), c, s.dashed ? " stroke-dasharray=\"4 3\"" : "");
+    o += fmt::format("<text x=\"{}\" y=\"{}\">{}</text>\n", num(lx + 26), num(Y), escape(s.name));
   }
+  return o;
+}
+
+}  // namespace
+
+std::string Plot::render() const {
+  const Frame f = layout(*this);
+  std::string o = svg_open(*this, f);
+  o += grid_and_ticks(*this, f);
+  o += axis_labels(*this, f);
+  o += clip_open(f);
+  o += series_layers(*this, f);
+  o += reference_lines(*this, f);
+  o += "</g>\n";
+  o += legend(*this, f);
   o += "</svg>\n";
   return o;
 }

@@ -104,6 +104,9 @@ struct Step {
   double amplitude_g = 0.0, frequency_hz = 0.0;  // direction is the shaker's own config
 };
 
+// The kind's name in the experiment file: "set_temperature", "orientations", "rates", …
+const char* step_kind_name(Step::Kind kind);
+
 struct Outputs {
   std::string directory = "runs";  // run folders are created inside, relative to the CWD
   bool report = true;

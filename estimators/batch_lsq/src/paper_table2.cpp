@@ -18,16 +18,9 @@
 namespace stend::batch_lsq::paper {
 
 namespace {
-// %.<digits>g, or %.<digits>f when fixed.
-std::string num(double v, int digits = 6, bool fixed = false) {
-  if (std::isnan(v)) return "n/a";
-  char buf[64];
-  if (fixed)
-    std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  else
-    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-  return buf;
-}
+
+using estimation::number_text;
+
 std::string trim(const std::string& s) {
   const auto a = s.find_first_not_of(" \t\r");
   if (a == std::string::npos) return "";
@@ -96,7 +89,7 @@ std::vector<StaticPoint> table2_points(const std::vector<Table2Row>& rows, doubl
   for (std::size_t i = 0; i < rows.size(); ++i) {
     StaticPoint p;
     p.segment_id = static_cast<int>(i);
-    p.label = num(rows[i].angle_deg) + " deg";
+    p.label = number_text(rows[i].angle_deg) + " deg";
     const Eigen::Vector3d f = physics::gravity_specific_force(
         physics::paper_table(tilt_h_deg * physics::kDegToRad, rows[i].angle_deg * physics::kDegToRad), g_mps2);
     p.stimulus.input = f;
@@ -189,8 +182,8 @@ void print_table2_report(std::ostream& os, const Table2Reproduction& r) {
      << "model: a_z = f_z + bias_z + scale_z*f_z + cross_zx*f_x + cross_zy*f_y,\n"
      << "       f = g*[-sin(d)cos(h), sin(h), cos(d)cos(h)]  (paper eq. (3)-(6) as specific force)\n\n";
   for (const auto& c : r.cases) {
-    os << "=== " << c.label << ": g = " << num(c.g_mps2, 7, true) << " m/s^2, h = "
-       << num(c.tilt_h_deg) << " deg\n";
+    os << "=== " << c.label << ": g = " << number_text(c.g_mps2, 7, true) << " m/s^2, h = "
+       << number_text(c.tilt_h_deg) << " deg\n";
     print_table(os, c.fit);
     if (c.fit.ok) {
       os << "g-free: " << c.g_one_plus_scale << " m/s^2\n";
@@ -220,21 +213,21 @@ void print_table2_report(std::ostream& os, const Table2Reproduction& r) {
       const auto& pa = a.parameter(row.name);
       const auto& pb = b.parameter(row.name);
       auto cell = [](const estimation::ParameterEstimate& e) {
-        return e.identifiable ? num(e.value, 5, true) + " +/- " + num(e.std_error, 5, true)
+        return e.identifiable ? number_text(e.value, 5, true) + " +/- " + number_text(e.std_error, 5, true)
                               : std::string("NOT IDENTIFIABLE");
       };
       std::snprintf(line, sizeof line, "%-10s %-13s %24s %24s %6s\n", row.name,
-                    (std::string(row.paper_name) + "=" + num(row.paper)).c_str(), cell(pa).c_str(),
+                    (std::string(row.paper_name) + "=" + number_text(row.paper)).c_str(), cell(pa).c_str(),
                     cell(pb).c_str(), row.unit);
       os << line;
     }
-    os << "bias_z/scale_z correlation: " << num(r.bias_scale_correlation, 4, true) << "\n";
-    os << "paper parameters on the table: RMS residual " << num(r.paper_rms_normal_g, 4)
-       << " m/s^2 with g(47.2 N); best g for them " << num(r.paper_best_g, 5, true)
-       << " m/s^2 gives RMS " << num(r.paper_rms_best_g, 4) << " m/s^2 (our fit: "
-       << num(r.cases[0].fit.residual_rms[2], 4) << " m/s^2)\n";
-    os << "g implied by the paper's dM = " << num(r.paper.scale) << " and our g*(1+scale_z): "
-       << num(r.g_implied_by_paper_scale, 5, true) << " m/s^2 (no place on Earth has it)\n";
+    os << "bias_z/scale_z correlation: " << number_text(r.bias_scale_correlation, 4, true) << "\n";
+    os << "paper parameters on the table: RMS residual " << number_text(r.paper_rms_normal_g, 4)
+       << " m/s^2 with g(47.2 N); best g for them " << number_text(r.paper_best_g, 5, true)
+       << " m/s^2 gives RMS " << number_text(r.paper_rms_best_g, 4) << " m/s^2 (our fit: "
+       << number_text(r.cases[0].fit.residual_rms[2], 4) << " m/s^2)\n";
+    os << "g implied by the paper's dM = " << number_text(r.paper.scale) << " and our g*(1+scale_z): "
+       << number_text(r.g_implied_by_paper_scale, 5, true) << " m/s^2 (no place on Earth has it)\n";
   }
   if (!r.cases.empty() && r.cases[0].fit.ok) {
     os << "\nresiduals (g at 47.2 N, h = 0):\n";

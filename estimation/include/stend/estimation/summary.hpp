@@ -46,6 +46,9 @@ std::ostream& operator<<(std::ostream& os, const ParameterEstimate& p);  // = pr
 // The header of print()'s table, for an interval at `confidence`.
 void print_parameter_header(std::ostream& os, double confidence);
 
+// A number in a text report: printf's %.<digits>g, or %.<digits>f when fixed; "n/a" for NaN.
+std::string number_text(double v, int digits = 6, bool fixed = false);
+
 struct FitSummary {
   std::string estimator;  // registry name: "batch_lsq", "temp_poly", "allan", "ceres_nonlinear", …
   std::string version;

@@ -100,6 +100,11 @@ struct TermSpec {
   double reference_c = 25.0; // T0 of the temperature terms [degC]
 };
 
+// The temperature polynomials: the terms whose TermSpec order and reference_c apply.
+inline bool is_temperature_polynomial(TermKind k) {
+  return k == TermKind::kBiasTemperature || k == TermKind::kScaleTemperature;
+}
+
 struct ParamInfo {
   std::string name;  // "bias_x", "cross_xz", "bias_tc1_y" …
   std::string unit;  // "m/s^2", "1", "rad/s/degC" …
