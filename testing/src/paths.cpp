@@ -28,7 +28,7 @@ std::string why_absent(const fs::path& path) {
     why += fs::is_directory(shared_data_dir())
                ? " from the shared data folder"
                : " (there is no shared data folder " + shared_data_dir().string() +
-                     " beside this checkout; set the CMake cache variable STEND_SHARED_DATA_DIR to use one elsewhere)";
+                     "; the CMake cache variable STEND_SHARED_DATA_DIR names where it is)";
   }
   return why;
 }
