@@ -56,16 +56,13 @@ macro(stend_add_plugin_folders)
 endmacro()
 
 # stend_add_gtest(NAME SOURCES ... [LIBRARIES ...]) — one GoogleTest executable registered with
-# ctest. Tests find ../shared/data through STEND_SHARED_DATA_DIR and skip when it is absent.
+# ctest, linked with the shared test support stend_testing (testing/: paths, the skip rule for
+# absent shared data, temporary folders, running the stend program, in-process runs).
 function(stend_add_gtest name)
   cmake_parse_arguments(ARG "" "" "SOURCES;LIBRARIES" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
-  target_link_libraries(${name} PRIVATE stend_core stend_warnings GTest::gtest GTest::gtest_main ${ARG_LIBRARIES})
-  target_compile_definitions(${name} PRIVATE
-    STEND_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
-    STEND_SHARED_DATA_DIR="${PROJECT_SOURCE_DIR}/../shared/data"
-    STEND_BUILD_PLUGIN_DIR="${STEND_BUILD_PLUGIN_DIR}"
-    STEND_BINARY_DIR="${PROJECT_BINARY_DIR}")
+  target_link_libraries(${name} PRIVATE stend_core stend_testing stend_warnings GTest::gtest GTest::gtest_main
+    ${ARG_LIBRARIES})
   gtest_discover_tests(${name} TEST_PREFIX "${name}." DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 600)
 endfunction()
 

@@ -5,14 +5,14 @@
 #include "stend/bench.hpp"
 #include "stend/experiment.hpp"
 #include "stend/plugin_host.hpp"
+#include "stend/testing/sim_bench.hpp"
 
 #include <filesystem>
 
 namespace fs = std::filesystem;
 
 TEST(Configs, EveryShippedExperimentValidates) {
-  stend::PluginHost host;
-  host.scan({{STEND_BUILD_PLUGIN_DIR, "build tree"}});
+  const stend::PluginHost& host = stend::testing::build_tree_plugins();
   int n = 0;
   for (const auto& entry : fs::directory_iterator(fs::path(STEND_SOURCE_DIR) / "configs")) {
     if (entry.path().extension() != ".yaml") continue;

@@ -7,6 +7,9 @@
 #include "stend/plugin_host.hpp"
 #include "stend/recording.hpp"
 #include "stend/runner.hpp"
+#include "stend/testing/files.hpp"
+#include "stend/testing/paths.hpp"
+#include "stend/testing/sim_bench.hpp"
 
 #include <csignal>
 #include <cmath>
@@ -17,28 +20,9 @@
 #include <unistd.h>
 
 namespace fs = std::filesystem;
+using stend::testing::TempDir;
 
 namespace {
-
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    path = fs::temp_directory_path() / ("stend-e2e-" + std::to_string(getpid()) + "-" +
-                                        std::to_string(reinterpret_cast<std::uintptr_t>(this)));
-    fs::create_directories(path);
-  }
-  ~TempDir() { fs::remove_all(path); }
-};
-
-stend::PluginHost& host() {
-  static stend::PluginHost h;
-  static bool scanned = false;
-  if (!scanned) {
-    h.scan({{STEND_BUILD_PLUGIN_DIR, "build tree"}});
-    scanned = true;
-  }
-  return h;
-}
 
 double mean_over(const stend::Recording& rec, double t0, double t1, int axis) {
   double sum = 0.0;
@@ -54,12 +38,9 @@ double mean_over(const stend::Recording& rec, double t0, double t1, int axis) {
 }  // namespace
 
 TEST(PaperExperiment, RunsOnSimulatedBenchAndRecordsTruth) {
-  TempDir tmp;
-  const stend::Experiment exp =
-      stend::load_experiment(std::string(STEND_SOURCE_DIR) + "/configs/paper_mpu6050_z.yaml", host());
-  stend::RunOptions opt;
-  opt.output_dir = tmp.path;
-  const stend::RunResult r = stend::run_experiment(exp, host(), opt);
+  const TempDir tmp("e2e");
+  const stend::RunResult r =
+      stend::testing::run_in_process(stend::testing::source_path("configs/paper_mpu6050_z.yaml"), tmp.path());
   ASSERT_EQ(r.status, "complete") << r.message;
   EXPECT_GT(r.run_time_s / r.wall_time_s, 20.0) << "the simulated clock should run far faster than real time";
 
@@ -102,18 +83,16 @@ TEST(PaperExperiment, RunsOnSimulatedBenchAndRecordsTruth) {
 }
 
 TEST(PaperExperiment, StopRequestKeepsDataAndMarksRunInterrupted) {
-  TempDir tmp;
-  const stend::Experiment exp =
-      stend::load_experiment(std::string(STEND_SOURCE_DIR) + "/configs/paper_mpu6050_z.yaml", host());
+  const TempDir tmp("e2e");
   std::atomic<bool> stop{false};
   stend::RunOptions opt;
-  opt.output_dir = tmp.path;
   opt.stop = &stop;
   opt.progress_period_s = 0.0;
   opt.on_progress = [&](const stend::RunProgress& p) {
     if (p.step_kind == "orientations" && p.item >= 5 && p.phase == "recording") stop = true;
   };
-  const stend::RunResult r = stend::run_experiment(exp, host(), opt);
+  const stend::RunResult r =
+      stend::testing::run_in_process(stend::testing::source_path("configs/paper_mpu6050_z.yaml"), tmp.path(), opt);
   EXPECT_EQ(r.status, "interrupted");
   const stend::Recording rec = stend::Recording::open(r.dir);
   EXPECT_EQ(rec.status, "interrupted");
@@ -127,11 +106,11 @@ TEST(PaperExperiment, StopRequestKeepsDataAndMarksRunInterrupted) {
 }
 
 TEST(PaperExperiment, KilledStendProgramLeavesReadableRecording) {
-  const fs::path stend_bin = fs::path(STEND_BINARY_DIR) / "bin" / "stend";
+  const fs::path stend_bin = stend::testing::stend_program();
   if (!fs::exists(stend_bin)) GTEST_SKIP() << "stend program not built at " << stend_bin;
-  TempDir tmp;
+  const TempDir tmp("e2e");
   // Ten simulated hours at 1 kHz: far longer than the test waits.
-  const fs::path file = tmp.path / "long.yaml";
+  const fs::path file = tmp / "long.yaml";
   std::ofstream(file) << R"(experiment: {name: long_kill}
 bench:
   sensor: {plugin: sim_imu, config: {output_rate_hz: 1000}}
@@ -142,12 +121,12 @@ procedure:
   const pid_t pid = fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
-    const std::string out = (tmp.path / "runs").string();
+    const std::string out = (tmp / "runs").string();
     execl(stend_bin.c_str(), "stend", "run", file.c_str(), "--output", out.c_str(), "--name", "killed", "--quiet",
           static_cast<char*>(nullptr));
     _exit(127);
   }
-  const fs::path imu = tmp.path / "runs" / "killed" / "imu.csv";
+  const fs::path imu = tmp / "runs" / "killed" / "imu.csv";
   for (int i = 0; i < 200 && (!fs::exists(imu) || fs::file_size(imu) < 200000); ++i) usleep(20000);
   usleep(300000);
   kill(pid, SIGKILL);
@@ -155,7 +134,7 @@ procedure:
   waitpid(pid, &status, 0);
   ASSERT_TRUE(WIFSIGNALED(status));
 
-  const stend::Recording rec = stend::Recording::open(tmp.path / "runs" / "killed");
+  const stend::Recording rec = stend::Recording::open(tmp / "runs" / "killed");
   EXPECT_EQ(rec.status, "running");  // the writer never finished: readers call it incomplete
   EXPECT_FALSE(rec.complete());
   ASSERT_GT(rec.samples.size(), 1000u);

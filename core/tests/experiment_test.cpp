@@ -4,12 +4,13 @@
 
 #include <stend/experiment.hpp>
 #include <stend/physics/geometry.hpp>
+#include <stend/testing/files.hpp>
+#include <stend/testing/paths.hpp>
 #include <stend/yaml_util.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <memory>
@@ -145,14 +146,8 @@ struct TestBench {
   }
 };
 
-std::string source_path(const std::string& rel) { return std::string(STEND_SOURCE_DIR) + "/" + rel; }
-
-std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using stend::testing::read_text;
+using stend::testing::source_path;
 
 // A valid experiment with a table, a two-axis table, a chamber and a shaker; `procedure` is
 // appended under "procedure:".
@@ -219,7 +214,7 @@ TEST(YamlUtil, EditDistanceAndSuggestions) {
 class FullExperiment : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    exp_ = new Experiment(load_experiment(source_path("core/tests/data/experiments/full.yaml"), catalogue()));
+    exp_ = new Experiment(load_experiment(source_path("core/tests/data/experiments/full.yaml").string(), catalogue()));
   }
   static void TearDownTestSuite() {
     delete exp_;
@@ -236,7 +231,7 @@ TEST_F(FullExperiment, Header) {
   EXPECT_EQ(e.seed, 42u);
   EXPECT_EQ(e.clock, "simulated");
   ASSERT_EQ(e.plugin_paths.size(), 2u);
-  const fs::path expected = (fs::path(source_path("core/tests/data/experiments")) / "my_plugins").lexically_normal();
+  const fs::path expected = (source_path("core/tests/data/experiments") / "my_plugins").lexically_normal();
   EXPECT_EQ(e.plugin_paths[0], expected.string());
   EXPECT_EQ(e.plugin_paths[1], "/opt/stend/plugins");
   EXPECT_EQ(e.outputs.directory, "my_runs");
@@ -599,7 +594,7 @@ TEST(Experiment, EmptyFile) {
 }
 
 TEST(Experiment, PluginPathsReadAlone) {
-  const std::string path = source_path("core/tests/data/experiments/full.yaml");
+  const std::string path = source_path("core/tests/data/experiments/full.yaml").string();
   const std::vector<std::string> paths = experiment_plugin_paths(path);
   const Experiment e = load_experiment(path, catalogue());
   EXPECT_EQ(paths, e.plugin_paths);
@@ -655,7 +650,7 @@ TEST(Params, PluginWithoutSchemaRejectsAnyKey) {
 
 std::vector<std::string> bad_files() {
   std::vector<std::string> out;
-  const fs::path dir = fs::path(STEND_SOURCE_DIR) / "core/tests/data/bad_experiments";
+  const fs::path dir = source_path("core/tests/data/bad_experiments");
   if (!fs::is_directory(dir)) return out;
   for (const auto& entry : fs::directory_iterator(dir))
     if (entry.path().extension() == ".yaml") out.push_back(entry.path().string());
@@ -669,7 +664,7 @@ class BadExperiment : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(BadExperiment, FailsWhereAndHowItSays) {
   const std::string path = GetParam();
-  std::istringstream text(read_file(path));
+  std::istringstream text(read_text(path));
   std::string first, second;
   std::getline(text, first);
   std::getline(text, second);
@@ -720,7 +715,7 @@ INSTANTIATE_TEST_SUITE_P(Files, BadExperiment, ::testing::ValuesIn(bad_files()),
 
 // Every good example passes both stages and round-trips.
 TEST(GoodExperiments, ParseValidateRoundTrip) {
-  const fs::path dir = fs::path(STEND_SOURCE_DIR) / "core/tests/data/experiments";
+  const fs::path dir = source_path("core/tests/data/experiments");
   int n = 0;
   for (const auto& entry : fs::directory_iterator(dir)) {
     if (entry.path().extension() != ".yaml") continue;

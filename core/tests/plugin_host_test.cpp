@@ -3,6 +3,8 @@
 // researcher follows (install Stend, build sdk/template_sensor against it, load it).
 #include <stend/experiment.hpp>
 #include <stend/plugin_host.hpp>
+#include <stend/testing/files.hpp>
+#include <stend/testing/program.hpp>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -24,6 +26,10 @@ namespace {
 namespace fs = std::filesystem;
 using stend::PluginHost;
 using stend::PluginRecord;
+using stend::testing::read_text;
+using stend::testing::shell_quote;
+using stend::testing::TempDir;
+using stend::testing::write_text;
 
 // Like EXPECT_THAT(text, HasSubstr(part)), without depending on gmock.
 testing::AssertionResult Contains(const char* text_expr, const char* part_expr,
@@ -41,29 +47,6 @@ const std::string kTestPluginDir = kBinaryDir + "/lib/stend/test-plugins";
 std::string test_plugin(const std::string& stem) {
   return kTestPluginDir + "/stend_" + stem + ".so";
 }
-
-// A fresh directory under the system temp dir, removed at the end of the test (unless
-// STEND_KEEP_TEST_DIRS is set, for debugging).
-class TempDir {
- public:
-  explicit TempDir(const std::string& tag) {
-    std::string pattern = (fs::temp_directory_path() / ("stend-" + tag + "-XXXXXX")).string();
-    if (::mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
-    path_ = pattern;
-  }
-  ~TempDir() {
-    if (std::getenv("STEND_KEEP_TEST_DIRS") != nullptr) return;
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const fs::path& path() const { return path_; }
-  std::string str() const { return path_.string(); }
-
- private:
-  fs::path path_;
-};
 
 // Sets (or unsets, with nullopt) an environment variable for one scope.
 class ScopedEnv {
@@ -120,26 +103,6 @@ stend::Params good_params() {
   return p;
 }
 
-std::string read_text(const fs::path& file) {
-  std::ifstream in(file);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// Single-quotes a path for /bin/sh.
-std::string sh_quote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) {
-    if (c == '\'') {
-      out += "'\\''";
-    } else {
-      out += c;
-    }
-  }
-  return out + "'";
-}
-
 bool on_path(const std::string& program) {
   const char* path = std::getenv("PATH");
   if (path == nullptr) return false;
@@ -155,9 +118,9 @@ bool on_path(const std::string& program) {
 
 // Runs a shell command with its output going to `log`; returns true on exit status 0.
 bool run(const std::string& command, const fs::path& log) {
-  const std::string full = "(" + command + ") >" + sh_quote(log.string()) + " 2>&1";
-  const int status = std::system(full.c_str());
-  return status == 0;
+  const stend::testing::ProgramOutput o = stend::testing::run_command(command);
+  write_text(log, o.text);
+  return o.code == 0;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -462,8 +425,8 @@ TEST(PluginHostOutOfTree, TemplateSensorBuildsAgainstInstalledSdkAndWorks) {
   const fs::path log = tmp.path() / "log.txt";
 
   // 1. Install the whole build tree into a private prefix.
-  ASSERT_TRUE(run("cmake --install " + sh_quote(kBinaryDir) + " --prefix " +
-                      sh_quote(prefix.string()),
+  ASSERT_TRUE(run("cmake --install " + shell_quote(kBinaryDir) + " --prefix " +
+                      shell_quote(prefix.string()),
                   log))
       << "cmake --install failed (is the whole project built? `ninja` first):\n"
       << read_text(log);
@@ -479,9 +442,9 @@ TEST(PluginHostOutOfTree, TemplateSensorBuildsAgainstInstalledSdkAndWorks) {
   // 2. Configure and build the template on its own: a fresh CMake project that knows nothing of
   // this build's flags (-Werror, sanitizers), with the environment's compiler flags cleared.
   const std::string clean_env = "env -u CFLAGS -u CXXFLAGS -u CPPFLAGS -u LDFLAGS ";
-  ASSERT_TRUE(run(clean_env + "cmake -S " + sh_quote(kSourceDir + "/sdk/template_sensor") +
-                      " -B " + sh_quote(build.string()) + " -DCMAKE_PREFIX_PATH=" +
-                      sh_quote(prefix.string()) + " -DCMAKE_BUILD_TYPE=Release",
+  ASSERT_TRUE(run(clean_env + "cmake -S " + shell_quote(kSourceDir + "/sdk/template_sensor") +
+                      " -B " + shell_quote(build.string()) + " -DCMAKE_PREFIX_PATH=" +
+                      shell_quote(prefix.string()) + " -DCMAKE_BUILD_TYPE=Release",
                   log))
       << "configuring sdk/template_sensor failed:\n"
       << read_text(log);
@@ -489,7 +452,7 @@ TEST(PluginHostOutOfTree, TemplateSensorBuildsAgainstInstalledSdkAndWorks) {
   EXPECT_CONTAINS(cache, "Stend_DIR:PATH=" + config_dir.string())
       << "found a Stend other than the one just installed";
   EXPECT_EQ(cache.find("-Werror"), std::string::npos) << "parent build flags leaked";
-  ASSERT_TRUE(run(clean_env + "cmake --build " + sh_quote(build.string()), log))
+  ASSERT_TRUE(run(clean_env + "cmake --build " + shell_quote(build.string()), log))
       << "building sdk/template_sensor failed:\n"
       << read_text(log);
   const fs::path plugin = build / "stend_template_sensor.so";
@@ -501,7 +464,7 @@ TEST(PluginHostOutOfTree, TemplateSensorBuildsAgainstInstalledSdkAndWorks) {
   ASSERT_TRUE(cache.find("STEND_PLUGIN_INSTALL_DIR:PATH=" + plugin_dir.string() + "\n") !=
               std::string::npos)
       << "STEND_PLUGIN_DIR of the installed package is not " << plugin_dir;
-  ASSERT_TRUE(run("cmake --install " + sh_quote(build.string()), log)) << read_text(log);
+  ASSERT_TRUE(run("cmake --install " + shell_quote(build.string()), log)) << read_text(log);
   EXPECT_TRUE(fs::exists(plugin_dir / "stend_template_sensor.so"))
       << read_text(log);
 

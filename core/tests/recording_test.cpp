@@ -1,5 +1,6 @@
 // Recording store: round trip, tolerance of interrupted writes, durability under SIGKILL, scale.
 #include <stend/recording.hpp>
+#include <stend/testing/files.hpp>
 
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -13,7 +14,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <limits>
 #include <new>
 #include <nlohmann/json.hpp>
@@ -27,6 +27,9 @@ using stend::Recording;
 using stend::RecordingHeader;
 using stend::RecordingWriter;
 using stend::Segment;
+using stend::testing::read_text;
+using stend::testing::TempDir;
+using stend::testing::write_text;
 
 namespace {
 
@@ -37,18 +40,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 bool same(double a, double b) {
   if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
   return std::memcmp(&a, &b, sizeof a) == 0;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-void spit(const fs::path& p, const std::string& s) {
-  std::ofstream out(p, std::ios::binary | std::ios::trunc);
-  out << s;
 }
 
 double monotonic_s() {
@@ -131,19 +122,8 @@ void expect_same_sample(const ImuSample& a, const ImuSample& b, std::size_t i) {
 
 class RecordingTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    static int counter = 0;
-    root_ = fs::temp_directory_path() /
-            ("stend_recording_test_" + std::to_string(::getpid()) + "_" +
-             std::to_string(counter++));
-    fs::remove_all(root_);
-    fs::create_directories(root_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(root_, ec);
-  }
-  fs::path root_;
+  const TempDir tmp_{"recording"};
+  const fs::path root_ = tmp_.path();
 };
 
 // A small complete recording with awkward values everywhere.
@@ -324,7 +304,7 @@ TEST_F(RecordingTest, FilesAreSelfDescribing) {
   const fs::path dir = root_ / "run";
   const Written w = write_small(dir);
   // run.json is plain JSON with units in the key names and the finish fields.
-  const auto j = nlohmann::json::parse(slurp(dir / "run.json"));
+  const auto j = nlohmann::json::parse(read_text(dir / "run.json"));
   EXPECT_EQ(j.at("format_version"), stend::kRecordingFormatVersion);
   EXPECT_EQ(j.at("status"), "complete");
   EXPECT_EQ(j.at("status_message"), "all steps done");
@@ -334,22 +314,22 @@ TEST_F(RecordingTest, FilesAreSelfDescribing) {
   EXPECT_EQ(j.at("sensor").at("info").at("output_rate_hz"), 1000.0);
   EXPECT_EQ(j.at("seed").get<std::uint64_t>(), 0xFEDCBA9876543210ull);
 
-  const std::string imu = slurp(dir / "imu.csv");
+  const std::string imu = read_text(dir / "imu.csv");
   EXPECT_EQ(imu.substr(0, imu.find('\n')),
             "t_s,ax_counts,ay_counts,az_counts,gx_counts,gy_counts,gz_counts,temp_counts,"
             "ax_mps2,ay_mps2,az_mps2,gx_radps,gy_radps,gz_radps,temp_c,flags");
   // NaN is an empty field; the t_s column keeps µs over days.
   EXPECT_NE(imu.find(",,4294967295\n"), std::string::npos);
   EXPECT_NE(imu.find("\n259200.000001,"), std::string::npos);
-  const std::string truth = slurp(dir / "truth.csv");
+  const std::string truth = read_text(dir / "truth.csv");
   EXPECT_EQ(truth.substr(0, truth.find('\n')),
             "t_s,table.angle.cmd_deg,air_c,f_x_mps2,\"odd, name \"\"x\"\"\"");
-  const std::string seg = slurp(dir / "segments.csv");
+  const std::string seg = read_text(dir / "segments.csv");
   EXPECT_EQ(seg.substr(0, seg.find('\n')),
             "id,step,kind,label,repeat,orientation,orientation_count,t_start_s,t_end_s,settled,"
             "complete,targets,setpoint_c,rate_per_s");
   EXPECT_NE(seg.find("\"soak, 25 \"\"degC\"\"\""), std::string::npos);
-  EXPECT_EQ(slurp(dir / "experiment.yaml"), w.yaml);
+  EXPECT_EQ(read_text(dir / "experiment.yaml"), w.yaml);
 }
 
 TEST_F(RecordingTest, UnfinishedRunStaysRunning) {
@@ -360,7 +340,7 @@ TEST_F(RecordingTest, UnfinishedRunStaysRunning) {
   EXPECT_FALSE(r.complete());
   EXPECT_EQ(r.samples.size(), w.samples.size());  // the destructor flushed
   EXPECT_EQ(r.segments.size(), 2u);
-  const auto j = nlohmann::json::parse(slurp(dir / "run.json"));
+  const auto j = nlohmann::json::parse(read_text(dir / "run.json"));
   EXPECT_FALSE(j.contains("end_time_utc"));
 }
 
@@ -417,7 +397,7 @@ TEST_F(RecordingTest, StartTimeFilledWhenEmpty) {
 TEST_F(RecordingTest, ExistingRunDirectoryIsRefused) {
   const fs::path dir = root_ / "run";
   write_small(dir);
-  const std::string before = slurp(dir / "imu.csv");
+  const std::string before = read_text(dir / "imu.csv");
   try {
     RecordingWriter w(dir, make_header(), "");
     FAIL() << "expected an error";
@@ -425,7 +405,7 @@ TEST_F(RecordingTest, ExistingRunDirectoryIsRefused) {
     EXPECT_NE(std::string(e.what()).find(dir.string()), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("already exists"), std::string::npos) << e.what();
   }
-  EXPECT_EQ(slurp(dir / "imu.csv"), before);  // untouched
+  EXPECT_EQ(read_text(dir / "imu.csv"), before);  // untouched
   EXPECT_EQ(Recording::open(dir).status, "complete");
   // An empty directory counts as existing too.
   fs::create_directories(root_ / "empty");
@@ -460,24 +440,24 @@ TEST_F(RecordingTest, TruncatedLastLineIsTolerated) {
   EXPECT_EQ(r.events[2].message, w.events[2].message);
 
   // Cut inside a quoted multi-line message: still only that record is lost.
-  std::string ev = slurp(dir / "events.csv");
+  std::string ev = read_text(dir / "events.csv");
   const auto cut = ev.find("line two");
   ASSERT_NE(cut, std::string::npos);
-  spit(dir / "events.csv", ev.substr(0, cut + 4));
+  write_text(dir / "events.csv", ev.substr(0, cut + 4));
   const Recording r2 = Recording::open(dir);
   EXPECT_EQ(r2.events.size(), 2u);
   EXPECT_EQ(r2.dropped_partial_lines, 4u);
 
   // A file cut exactly at a line boundary loses nothing and drops nothing.
-  std::string imu = slurp(dir / "imu.csv");
+  std::string imu = read_text(dir / "imu.csv");
   imu.resize(imu.rfind('\n') + 1);
-  spit(dir / "imu.csv", imu);
+  write_text(dir / "imu.csv", imu);
   const Recording r3 = Recording::open(dir);
   EXPECT_EQ(r3.samples.size(), w.samples.size() - 1);
   EXPECT_EQ(r3.dropped_partial_lines, 3u);
 
   // Even the header line may be cut (killed right after creation).
-  spit(dir / "imu.csv", "t_s,ax_co");
+  write_text(dir / "imu.csv", "t_s,ax_co");
   const Recording r4 = Recording::open(dir);
   EXPECT_TRUE(r4.samples.empty());
   EXPECT_EQ(r4.dropped_partial_lines, 4u);
@@ -520,10 +500,10 @@ void expect_open_error(const fs::path& dir, std::initializer_list<std::string> n
 TEST_F(RecordingTest, CorruptionInTheMiddleNamesFileAndLine) {
   const fs::path dir = root_ / "run";
   write_small(dir);
-  const std::string imu = slurp(dir / "imu.csv");
-  const std::string truth = slurp(dir / "truth.csv");
-  const std::string seg = slurp(dir / "segments.csv");
-  const std::string json = slurp(dir / "run.json");
+  const std::string imu = read_text(dir / "imu.csv");
+  const std::string truth = read_text(dir / "truth.csv");
+  const std::string seg = read_text(dir / "segments.csv");
+  const std::string json = read_text(dir / "run.json");
 
   auto line_start = [](const std::string& s, int line) {  // 1-based
     std::size_t p = 0;
@@ -534,7 +514,7 @@ TEST_F(RecordingTest, CorruptionInTheMiddleNamesFileAndLine) {
   // A garbage value on line 100 of imu.csv.
   std::string bad = imu;
   bad[line_start(bad, 100) + 3] = 'x';
-  spit(dir / "imu.csv", bad);
+  write_text(dir / "imu.csv", bad);
   expect_open_error(dir, {"imu.csv:100:"});
 
   // A short row on line 57.
@@ -542,60 +522,60 @@ TEST_F(RecordingTest, CorruptionInTheMiddleNamesFileAndLine) {
   const auto p57 = line_start(bad, 57);
   bad.erase(p57, bad.find('\n', p57) - p57);
   bad.insert(p57, "0.056,1,2");
-  spit(dir / "imu.csv", bad);
+  write_text(dir / "imu.csv", bad);
   expect_open_error(dir, {"imu.csv:57:", "16"});
 
   // A wrong header.
-  spit(dir / "imu.csv", "time,ax\n" + imu.substr(imu.find('\n') + 1));
+  write_text(dir / "imu.csv", "time,ax\n" + imu.substr(imu.find('\n') + 1));
   expect_open_error(dir, {"imu.csv:1:", "header"});
-  spit(dir / "imu.csv", imu);
+  write_text(dir / "imu.csv", imu);
 
   // A count that is not an integer names the column.
   bad = imu;
   const auto p3 = line_start(bad, 3);
   const auto c1 = bad.find(',', p3);
   bad.insert(c1 + 1, "1.5");
-  spit(dir / "imu.csv", bad);
+  write_text(dir / "imu.csv", bad);
   expect_open_error(dir, {"imu.csv:3:", "ax_counts"});
-  spit(dir / "imu.csv", imu);
+  write_text(dir / "imu.csv", imu);
 
   // truth.csv whose header disagrees with run.json.
-  spit(dir / "truth.csv", "t_s,a,b\n" + truth.substr(truth.find('\n') + 1));
+  write_text(dir / "truth.csv", "t_s,a,b\n" + truth.substr(truth.find('\n') + 1));
   expect_open_error(dir, {"truth.csv:1:", "truth_columns"});
   bad = truth;
   bad.insert(line_start(bad, 5), "1,2\n");
-  spit(dir / "truth.csv", bad);
+  write_text(dir / "truth.csv", bad);
   expect_open_error(dir, {"truth.csv:5:"});
-  spit(dir / "truth.csv", truth);
+  write_text(dir / "truth.csv", truth);
 
   // segments.csv: a bad boolean on the second record.
   bad = seg;
   const auto q = bad.find(",0,0,\"table");
   ASSERT_NE(q, std::string::npos);
   bad.replace(q, 5, ",no,0,");
-  spit(dir / "segments.csv", bad);
+  write_text(dir / "segments.csv", bad);
   expect_open_error(dir, {"segments.csv:3:", "settled"});
   // A stray quote in the middle of an unquoted field.
-  spit(dir / "segments.csv", seg.substr(0, line_start(seg, 2)) + "1,2,ab\"c\n" +
+  write_text(dir / "segments.csv", seg.substr(0, line_start(seg, 2)) + "1,2,ab\"c\n" +
                                  seg.substr(line_start(seg, 2)));
   expect_open_error(dir, {"segments.csv:2:"});
-  spit(dir / "segments.csv", seg);
+  write_text(dir / "segments.csv", seg);
 
   // run.json: broken JSON names the line; a newer format is refused with advice.
-  spit(dir / "run.json", json.substr(0, 40) + "\n\n  ]" + json.substr(40));
+  write_text(dir / "run.json", json.substr(0, 40) + "\n\n  ]" + json.substr(40));
   expect_open_error(dir, {"run.json:", "JSON"});
   auto j = nlohmann::json::parse(json);
   j["format_version"] = 99;
-  spit(dir / "run.json", j.dump(2));
+  write_text(dir / "run.json", j.dump(2));
   expect_open_error(dir, {"run.json", "99", "upgrade"});
   j = nlohmann::json::parse(json);
   j["sensor"]["info"]["output_rate_hz"] = "fast";
-  spit(dir / "run.json", j.dump(2));
+  write_text(dir / "run.json", j.dump(2));
   expect_open_error(dir, {"run.json", "sensor.info.output_rate_hz"});
-  spit(dir / "run.json", json);
+  write_text(dir / "run.json", json);
 
   // experiment.yaml that is not YAML names file, line and column.
-  spit(dir / "experiment.yaml", "name: x\nprocedure: [a, b\n");
+  write_text(dir / "experiment.yaml", "name: x\nprocedure: [a, b\n");
   expect_open_error(dir, {"experiment.yaml:"});
 }
 

@@ -1,7 +1,6 @@
 // The gap diagnoser on data whose truth is known: the segment-level generator, the simulated
 // bench end to end (run_experiment with the sim plugins), and the real imucal session.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
@@ -16,6 +15,9 @@
 #include "stend/io/importers.hpp"
 #include "stend/plugin_host.hpp"
 #include "stend/runner.hpp"
+#include "stend/testing/files.hpp"
+#include "stend/testing/paths.hpp"
+#include "stend/testing/sim_bench.hpp"
 
 namespace fs = std::filesystem;
 using namespace stend;
@@ -23,40 +25,14 @@ using namespace stend::diagnosis;
 
 namespace {
 
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    path = fs::temp_directory_path() / ("stend_gap_test_" + std::to_string(::getpid()) + "_" +
-                                        std::to_string(reinterpret_cast<std::uintptr_t>(this)));
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
-
-PluginHost& host() {
-  static PluginHost h;
-  static bool scanned = false;
-  if (!scanned) {
-    h.scan({{STEND_BUILD_PLUGIN_DIR, "build tree"}});
-    scanned = true;
-  }
-  return h;
-}
-
 // Runs an experiment (path relative to the source tree) on the simulated bench with the real
 // runner, reads the run folder back and builds the gap input for a diagnosis/examples model.
 GapInput sim_input(const std::string& experiment, const std::string& model) {
-  TempDir tmp;
-  const Experiment exp = load_experiment(std::string(STEND_SOURCE_DIR) + "/" + experiment, host());
-  RunOptions opt;
-  opt.output_dir = tmp.path;
-  const RunResult run = run_experiment(exp, host(), opt);
+  const stend::testing::TempDir tmp("gap");
+  const RunResult run = stend::testing::run_in_process(stend::testing::source_path(experiment), tmp.path());
   if (run.status != "complete") throw std::runtime_error(experiment + ": run " + run.status + ": " + run.message);
   return build_input(Recording::open(run.dir),
-                     estimation::load_model_spec(std::string(STEND_SOURCE_DIR) + "/diagnosis/examples/" + model));
+                     estimation::load_model_spec(stend::testing::source_path("diagnosis/examples/" + model)));
 }
 
 Planted with_term(const model::TermSpec& t, const Eigen::VectorXd& th) {
@@ -208,11 +184,11 @@ TEST(GapSimBench, SixPositionWithTheRightModelHasNoGapToExplain) {
 
 // Real data: imucal's six-position session fitted without cross-axis terms.
 TEST(GapRealData, ImucalWithoutCrossAxisNamesCrossAxisFirst) {
-  const fs::path csv = fs::path(STEND_SHARED_DATA_DIR) / "imucal" / "annotated_session.csv";
-  if (!fs::exists(csv)) GTEST_SKIP() << "../shared/data/imucal is absent (" << csv << "); real-data check skipped";
+  const fs::path csv = stend::testing::shared_data("imucal/annotated_session.csv");
+  STEND_SKIP_IF_ABSENT(csv) << "; real-data check skipped";
   const Recording rec = io::import_imucal_session(csv);
   const estimation::ModelSpec spec =
-      estimation::load_model_spec(std::string(STEND_SOURCE_DIR) + "/diagnosis/examples/imucal_bias_scale.yaml");
+      estimation::load_model_spec(stend::testing::source_path("diagnosis/examples/imucal_bias_scale.yaml"));
   const GapInput in = build_input(rec, spec);
   ASSERT_EQ(in.segments.size(), 6u);
   const GapReport r = diagnose(in);
@@ -264,11 +240,11 @@ TEST(GapMagnitude, PlantedCrossAxisIsNamedAndOnlyItsSymmetricPartIsSeen) {
 // shrinks, and the recovered scale matches that project's own calibration (z: −2.1 % in its
 // m/s² per count, i.e. the reading is 2.15 % high).
 TEST(GapRealData, Mpu6050MultiposWithoutScaleNamesScaleInTheMagnitudeForm) {
-  const fs::path csv = fs::path(STEND_SHARED_DATA_DIR) / "mpu6050_multipos" / "calibration_session.csv";
-  if (!fs::exists(csv)) GTEST_SKIP() << "../shared/data/mpu6050_multipos is absent (" << csv << "); skipped";
+  const fs::path csv = stend::testing::shared_data("mpu6050_multipos/calibration_session.csv");
+  STEND_SKIP_IF_ABSENT(csv);
   const Recording rec = io::import_mpu6050_multipos(csv);
-  const estimation::ModelSpec spec = estimation::load_model_spec(std::string(STEND_SOURCE_DIR) +
-                                                               "/diagnosis/examples/mpu6050_multipos_bias.yaml");
+  const estimation::ModelSpec spec =
+      estimation::load_model_spec(stend::testing::source_path("diagnosis/examples/mpu6050_multipos_bias.yaml"));
   const GapInput in = build_input(rec, spec);
   EXPECT_TRUE(in.magnitude);
   EXPECT_GE(in.segments.size(), 8u);

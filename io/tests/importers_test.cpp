@@ -1,33 +1,28 @@
 // Importers: the public datasets in ../shared/data (skipped when absent), generic CSV, and the
 // IMU-TK and MATLAB round trips on files this test writes.
 #include <stend/io/importers.hpp>
+#include <stend/testing/files.hpp>
+#include <stend/testing/paths.hpp>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <numbers>
 #include <random>
 #include <string>
-#include <unistd.h>
 
 namespace fs = std::filesystem;
 using namespace stend;
 using namespace stend::io;
+using stend::testing::shared_data;
+using stend::testing::TempDir;
+using stend::testing::write_text;
 
 namespace {
 
 constexpr double kG = 9.80665;
-
-fs::path shared_data() { return fs::path(STEND_SHARED_DATA_DIR); }
-
-#define SKIP_WITHOUT(file)                                                                      \
-  if (!fs::exists(file)) {                                                                      \
-    GTEST_SKIP() << "real-data test skipped: " << (file)                                        \
-                 << " not found (the shared data folder ../shared/data is absent here)";       \
-  }
 
 // Mean |a| over the samples inside [t0, t1].
 double mean_norm(const Recording& r, double t0, double t1) {
@@ -50,30 +45,6 @@ double integral(const Recording& r, int axis, double t0, double t1) {
     if (x.t_s >= t0 && x.t_s <= t1) s += x.gyro_radps[axis] * dt;
   }
   return s;
-}
-
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            ("stend_importers_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  fs::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  fs::path path_;
-};
-
-void write_file(const fs::path& p, const std::string& text) {
-  std::ofstream f(p, std::ios::binary);
-  f << text;
 }
 
 std::string error_of(const std::function<void()>& fn) {
@@ -129,8 +100,8 @@ Recording synthetic(std::size_t n, double rate, bool with_counts) {
 // (c) MPU-6050 multi-position session
 
 TEST(ImportMpu6050, CalibrationSession) {
-  const auto file = shared_data() / "mpu6050_multipos" / "calibration_session.csv";
-  SKIP_WITHOUT(file);
+  const auto file = shared_data("mpu6050_multipos/calibration_session.csv");
+  STEND_SKIP_IF_ABSENT(file);
   const Recording r = import_mpu6050_multipos(file);
   EXPECT_EQ(r.samples.size(), 10245u);  // 10250 lines − the 5-line header (with column names)
   EXPECT_EQ(r.header.info.output_rate_hz, 100.0);
@@ -154,8 +125,8 @@ TEST(ImportMpu6050, CalibrationSession) {
 }
 
 TEST(ImportMpu6050, Static449s) {
-  const auto file = shared_data() / "mpu6050_multipos" / "static_449s.csv";
-  SKIP_WITHOUT(file);
+  const auto file = shared_data("mpu6050_multipos/static_449s.csv");
+  STEND_SKIP_IF_ABSENT(file);
   const Recording r = import_mpu6050_multipos(file);
   EXPECT_EQ(r.samples.size(), 44930u);
   EXPECT_EQ(r.header.info.output_rate_hz, 100.0);
@@ -165,21 +136,21 @@ TEST(ImportMpu6050, Static449s) {
 }
 
 TEST(ImportMpu6050, MalformedInputNamesFileAndLine) {
-  TempDir dir;
+  const TempDir dir("importers");
   const auto bad = dir / "bad.csv";
-  write_file(bad, "Fs,100\nLogging Type,0\nInitialization time,2\nWaiting time,3\nax,ay,az,gx,gy,gz\n"
+  write_text(bad, "Fs,100\nLogging Type,0\nInitialization time,2\nWaiting time,3\nax,ay,az,gx,gy,gz\n"
                   "1,2,3,4,5,6\n1,2,x3,4,5,6\n");
   const std::string e = error_of([&] { import_mpu6050_multipos(bad); });
   EXPECT_NE(e.find("bad.csv:7:"), std::string::npos) << e;
   EXPECT_NE(e.find("'az'"), std::string::npos) << e;
 
-  write_file(bad, "Logging Type,0\nax,ay,az,gx,gy,gz\n1,2,3,4,5,6\n");
+  write_text(bad, "Logging Type,0\nax,ay,az,gx,gy,gz\n1,2,3,4,5,6\n");
   EXPECT_NE(error_of([&] { import_mpu6050_multipos(bad); }).find("Fs"), std::string::npos);
 
-  write_file(bad, "Fs,100\nax,ay,az,gx,gy\n1,2,3,4,5\n");
+  write_text(bad, "Fs,100\nax,ay,az,gx,gy\n1,2,3,4,5\n");
   EXPECT_NE(error_of([&] { import_mpu6050_multipos(bad); }).find("bad.csv:2: no column 'gz'"), std::string::npos);
 
-  write_file(bad, "Fs,100\nax,ay,az,gx,gy,gz\n1,2,3,4,5,6\n1,2,3,4,5\n");
+  write_text(bad, "Fs,100\nax,ay,az,gx,gy,gz\n1,2,3,4,5,6\n1,2,3,4,5\n");
   EXPECT_NE(error_of([&] { import_mpu6050_multipos(bad); }).find("bad.csv:4:"), std::string::npos);
 
   EXPECT_NE(error_of([&] { import_mpu6050_multipos(dir / "missing.csv"); }).find("missing.csv"),
@@ -190,8 +161,8 @@ TEST(ImportMpu6050, MalformedInputNamesFileAndLine) {
 // (b) imucal annotated session
 
 TEST(ImportImucal, AnnotatedSession) {
-  const auto file = shared_data() / "imucal" / "annotated_session.csv";
-  SKIP_WITHOUT(file);
+  const auto file = shared_data("imucal/annotated_session.csv");
+  STEND_SKIP_IF_ABSENT(file);
   const Recording r = import_imucal_session(file);
   EXPECT_EQ(r.samples.size(), 9414u);
   EXPECT_DOUBLE_EQ(r.header.info.output_rate_hz, 204.8);
@@ -239,15 +210,15 @@ TEST(ImportImucal, AnnotatedSession) {
 }
 
 TEST(ImportImucal, MalformedInput) {
-  TempDir dir;
+  const TempDir dir("importers");
   const auto bad = dir / "session.csv";
-  write_file(bad, "part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\nx_p,0,1,2,3,4,5,6\nx_p,1,1,2,3.5,4,5,6\n");
+  write_text(bad, "part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\nx_p,0,1,2,3,4,5,6\nx_p,1,1,2,3.5,4,5,6\n");
   const std::string e = error_of([&] { import_imucal_session(bad); });
   EXPECT_NE(e.find("session.csv:3:"), std::string::npos) << e;
   EXPECT_NE(e.find("not an integer count"), std::string::npos) << e;
-  write_file(bad, "part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y\n");
+  write_text(bad, "part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y\n");
   EXPECT_NE(error_of([&] { import_imucal_session(bad); }).find("no column 'gyr_z'"), std::string::npos);
-  write_file(bad, "part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\nx_p,0,1,2,3,4,5,6\nx_a,0,1,2,3,4,5,6\n");
+  write_text(bad, "part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\nx_p,0,1,2,3,4,5,6\nx_a,0,1,2,3,4,5,6\n");
   EXPECT_NE(error_of([&] { import_imucal_session(bad); }).find("session.csv:3: sample index 0 also appears on line 2"),
             std::string::npos);
 }
@@ -256,8 +227,8 @@ TEST(ImportImucal, MalformedInput) {
 // (a) generic CSV
 
 TEST(ImportCsv, MappingReproducesTheMpu6050Importer) {
-  const auto file = shared_data() / "mpu6050_multipos" / "calibration_session.csv";
-  SKIP_WITHOUT(file);
+  const auto file = shared_data("mpu6050_multipos/calibration_session.csv");
+  STEND_SKIP_IF_ABSENT(file);
   CsvMapping m;
   m.skip_lines = 4;  // Fs, Logging Type, Initialization time, Waiting time
   m.rate_hz = 100.0;
@@ -280,9 +251,9 @@ TEST(ImportCsv, MappingReproducesTheMpu6050Importer) {
 }
 
 TEST(ImportCsv, TimeColumnUnitsDelimiterAndErrors) {
-  TempDir dir;
+  const TempDir dir("importers");
   const auto f = dir / "log.txt";
-  write_file(f,
+  write_text(f,
              "# exported by some logger\n"
              "time_ms; temp; wx; wy; wz; fx; fy; fz\n"
              "1000; 25.5; 0.1; 0.2; 0.3; 0; 0; 1\n"
@@ -313,16 +284,16 @@ TEST(ImportCsv, TimeColumnUnitsDelimiterAndErrors) {
   EXPECT_TRUE(r.header.info.has_temperature);
 
   // Errors name the file and line.
-  write_file(f, "t,ax,ay,az\n0,1,2,3\n0.01,1,2\n");
+  write_text(f, "t,ax,ay,az\n0,1,2,3\n0.01,1,2\n");
   CsvMapping s;
   s.time = "t";
   s.accel = {"ax", "ay", "az"};
   std::string e = error_of([&] { import_csv(f, s); });
   EXPECT_NE(e.find("log.txt:3:"), std::string::npos) << e;
-  write_file(f, "t,ax,ay,az\n0,1,2,3\n0.01,1,2,abc\n");
+  write_text(f, "t,ax,ay,az\n0,1,2,3\n0.01,1,2,abc\n");
   e = error_of([&] { import_csv(f, s); });
   EXPECT_NE(e.find("log.txt:3: column 'az': 'abc' is not a number"), std::string::npos) << e;
-  write_file(f, "t,ax,ay,az\n0,1,2,3\n0,1,2,3\n");
+  write_text(f, "t,ax,ay,az\n0,1,2,3\n0,1,2,3\n");
   EXPECT_NE(error_of([&] { import_csv(f, s); }).find("log.txt:3: time 0 s does not increase"), std::string::npos);
   s.accel = {"ax", "ay", "acc_z"};
   e = error_of([&] { import_csv(f, s); });
@@ -337,7 +308,7 @@ TEST(ImportCsv, TimeColumnUnitsDelimiterAndErrors) {
 // (d) IMU-TK
 
 TEST(ImportImuTk, RoundTripSiAndCounts) {
-  TempDir dir;
+  const TempDir dir("importers");
   const Recording src = synthetic(1000, 100.0, true);
   // Physical units: exact (shortest round-trip text).
   export_imutk(src, dir / "acc.txt", dir / "gyro.txt");
@@ -373,7 +344,7 @@ TEST(ImportImuTk, RoundTripSiAndCounts) {
 }
 
 TEST(ImportImuTk, GyroOnOtherTimestampsIsInterpolated) {
-  TempDir dir;
+  const TempDir dir("importers");
   // Accelerometer at 0, 0.01, …; gyro at 0.005, 0.015, … with a ramp ω = t.
   std::string acc, gyr;
   for (int i = 0; i < 100; ++i) {
@@ -381,8 +352,8 @@ TEST(ImportImuTk, GyroOnOtherTimestampsIsInterpolated) {
     const double t = 0.005 + i * 0.01;
     gyr += std::to_string(t) + "," + std::to_string(t) + "," + std::to_string(2 * t) + ",0\n";
   }
-  write_file(dir / "a.txt", acc);
-  write_file(dir / "g.txt", gyr);
+  write_text(dir / "a.txt", acc);
+  write_text(dir / "g.txt", gyr);
   const Recording r = import_imutk(dir / "a.txt", dir / "g.txt");
   // t = 0 lies before the first gyro sample (dropped); the last accel sample (0.99) is inside.
   ASSERT_EQ(r.samples.size(), 99u);
@@ -395,14 +366,14 @@ TEST(ImportImuTk, GyroOnOtherTimestampsIsInterpolated) {
 }
 
 TEST(ImportImuTk, MalformedLineNamesFileAndLine) {
-  TempDir dir;
-  write_file(dir / "a.txt", "# IMU-TK\n0 1 2 3\n0.01 1 2\n");
+  const TempDir dir("importers");
+  write_text(dir / "a.txt", "# IMU-TK\n0 1 2 3\n0.01 1 2\n");
   std::string e = error_of([&] { import_imutk(dir / "a.txt", {}); });
   EXPECT_NE(e.find("a.txt:3: expected 4 values"), std::string::npos) << e;
-  write_file(dir / "a.txt", "0 1 2 3\n0.01 1 2 3\n0.005 1 2 3\n");
+  write_text(dir / "a.txt", "0 1 2 3\n0.01 1 2 3\n0.005 1 2 3\n");
   e = error_of([&] { import_imutk(dir / "a.txt", {}); });
   EXPECT_NE(e.find("a.txt:3: timestamp"), std::string::npos) << e;
-  write_file(dir / "a.txt", "0 1 2 3\n1e-2 1 2 three\n");
+  write_text(dir / "a.txt", "0 1 2 3\n1e-2 1 2 three\n");
   e = error_of([&] { import_imutk(dir / "a.txt", {}); });
   EXPECT_NE(e.find("a.txt:2: column 'z'"), std::string::npos) << e;
 }
@@ -415,7 +386,7 @@ TEST(ImportMat, RoundTripTopLevelAndStruct) {
     GTEST_SKIP() << "MATLAB support unavailable: stend_core was built without matio "
                     "(io/CMakeLists.txt must link PkgConfig::MATIO and define STEND_HAVE_MATIO)";
   }
-  TempDir dir;
+  const TempDir dir("importers");
   const Recording src = synthetic(500, 200.0, true);
   for (const std::string& st : {std::string(), std::string("imu")}) {
     const auto file = dir / ("r" + st + ".mat");
@@ -449,8 +420,8 @@ TEST(ImportMat, ErrorsNameTheFile) {
   if (!mat_supported()) {
     GTEST_SKIP() << "MATLAB support unavailable: stend_core was built without matio";
   }
-  TempDir dir;
-  write_file(dir / "not.mat", "this is not a MATLAB file\n");
+  const TempDir dir("importers");
+  write_text(dir / "not.mat", "this is not a MATLAB file\n");
   EXPECT_NE(error_of([&] { import_mat(dir / "not.mat"); }).find("not.mat"), std::string::npos);
   Recording empty_gyro = synthetic(10, 100.0, false);
   export_mat(empty_gyro, dir / "ok.mat");

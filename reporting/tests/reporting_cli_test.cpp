@@ -4,6 +4,9 @@
 // its target format's own conventions.
 #include "stend/model/terms.hpp"
 #include "stend/reporting/results.hpp"
+#include "stend/testing/files.hpp"
+#include "stend/testing/paths.hpp"
+#include "stend/testing/program.hpp"
 
 #include <gtest/gtest.h>
 #include <matio.h>
@@ -17,6 +20,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <regex>
 #include <sstream>
 
@@ -25,23 +29,17 @@ using nlohmann::json;
 
 namespace {
 
-const fs::path kStend = fs::path(STEND_BINARY_DIR) / "bin" / "stend";
+using stend::testing::read_text;
+using stend::testing::write_text;
+
+const fs::path kStend = stend::testing::stend_program();
 const fs::path kSrc = STEND_SOURCE_DIR;
 
-std::string read(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-void write(const fs::path& p, const std::string& text) {
-  std::ofstream out(p, std::ios::binary);
-  out << text;
-}
 // Runs a shell command; its stdout+stderr go to `log`. Returns the exit status.
 int sh(const std::string& cmd, const fs::path& log) {
-  const int rc = std::system((cmd + " > '" + log.string() + "' 2>&1").c_str());
-  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+  const stend::testing::ProgramOutput o = stend::testing::run_command(cmd);
+  write_text(log, o.text);
+  return o.code;
 }
 std::size_t count(const std::string& s, const std::string& what) {
   std::size_t n = 0;
@@ -51,7 +49,7 @@ std::size_t count(const std::string& s, const std::string& what) {
 
 // One vendor-study unit with the given planted values (configs/vendor_study/template.yaml).
 std::string unit_yaml(const std::string& serial, int seed) {
-  std::string t = read(kSrc / "configs/vendor_study/template.yaml");
+  std::string t = read_text(kSrc / "configs/vendor_study/template.yaml");
   const std::map<std::string, std::string> v = {
       {"@SEED@", std::to_string(seed)}, {"@VENDOR@", "Acme"}, {"@MODEL@", "AX-100"}, {"@SERIAL@", serial},
       {"@NOISE@", "0.002"}, {"@BX@", "0.04"}, {"@BY@", "-0.02"}, {"@BZ@", "0.06"}, {"@SX@", "0.002"},
@@ -63,10 +61,11 @@ std::string unit_yaml(const std::string& serial, int seed) {
 
 class Cli : public ::testing::Test {
  protected:
+  static inline std::unique_ptr<stend::testing::TempDir> tmp;
   static inline fs::path dir;
   static void SetUpTestSuite() {
-    dir = fs::temp_directory_path() / ("stend_reporting_cli_" + std::to_string(::getpid()));
-    fs::remove_all(dir);
+    tmp = std::make_unique<stend::testing::TempDir>("reporting-cli");
+    dir = tmp->path();
     fs::create_directories(dir / "cfg");
     ::setenv("STEND_RESULTS_DB", (dir / "results.sqlite").c_str(), 1);
     // The paper's run (fit.json), a short temperature sweep unit (temp_poly.json) and a short static
@@ -74,14 +73,14 @@ class Cli : public ::testing::Test {
     sh("cd '" + kSrc.string() + "' && '" + kStend.string() + "' run configs/paper_mpu6050_z.yaml -q -o '" +
            dir.string() + "' --name paper",
        dir / "paper.log");
-    write(dir / "cfg/unit.yaml", unit_yaml("AX-001", 11));
+    write_text(dir / "cfg/unit.yaml", unit_yaml("AX-001", 11));
     fs::copy_file(kSrc / "configs/vendor_study/temp_poly.yaml", dir / "cfg/temp_poly.yaml");
     sh("'" + kStend.string() + "' run '" + (dir / "cfg/unit.yaml").string() + "' -q -o '" + dir.string() +
            "' --name sweep",
        dir / "sweep.log");
-    std::string st = read(kSrc / "configs/long_static.yaml");
+    std::string st = read_text(kSrc / "configs/long_static.yaml");
     st.replace(st.find("duration_s: 7200"), 16, "duration_s: 1200");
-    write(dir / "cfg/static.yaml", st);
+    write_text(dir / "cfg/static.yaml", st);
     sh("'" + kStend.string() + "' run '" + (dir / "cfg/static.yaml").string() + "' -q -o '" + dir.string() +
            "' --name static && '" + kStend.string() + "' fit '" + (dir / "static").string() + "' -m '" +
            (kSrc / "estimators/allan/example/allan.yaml").string() + "' && '" + kStend.string() + "' report '" +
@@ -90,7 +89,7 @@ class Cli : public ::testing::Test {
   }
   static void TearDownTestSuite() {
     ::unsetenv("STEND_RESULTS_DB");
-    if (!::testing::Test::HasFailure()) fs::remove_all(dir);
+    tmp.reset();
   }
 };
 
@@ -103,7 +102,7 @@ std::uint32_t be32(const unsigned char* p) {
   return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | p[3];
 }
 bool read_png(const fs::path& file, Image& img) {
-  const std::string d = read(file);
+  const std::string d = read_text(file);
   const auto* b = reinterpret_cast<const unsigned char*>(d.data());
   if (d.size() < 8 || d.compare(1, 3, "PNG") != 0) return false;
   std::string idat;
@@ -177,9 +176,9 @@ const char* kGapFixture = R"json({"schema":"stend.gap/1","model":"paper_z_channe
 }  // namespace
 
 TEST_F(Cli, RunWritesASelfContainedReportWithPlots) {
-  ASSERT_TRUE(fs::exists(dir / "paper/fit.json")) << read(dir / "paper.log");
-  const std::string html = read(dir / "paper/report.html");  // written by `stend run` itself
-  ASSERT_FALSE(html.empty()) << read(dir / "paper.log");
+  ASSERT_TRUE(fs::exists(dir / "paper/fit.json")) << read_text(dir / "paper.log");
+  const std::string html = read_text(dir / "paper/report.html");  // written by `stend run` itself
+  ASSERT_FALSE(html.empty()) << read_text(dir / "paper.log");
   EXPECT_GE(count(html, "<svg"), 2u);                          // residual + static means (z)
   EXPECT_NE(html.find("residual against orientation"), std::string::npos);
   EXPECT_NE(html.find("static mean − truth, axis z"), std::string::npos);
@@ -199,13 +198,13 @@ TEST_F(Cli, RunWritesASelfContainedReportWithPlots) {
 }
 
 TEST_F(Cli, TemperatureAndAllanPlots) {
-  const std::string sweep = read(dir / "sweep/report.html");
-  ASSERT_FALSE(sweep.empty()) << read(dir / "sweep.log");
+  const std::string sweep = read_text(dir / "sweep/report.html");
+  ASSERT_FALSE(sweep.empty()) << read_text(dir / "sweep.log");
   EXPECT_EQ(count(sweep, "aria-label=\"zero offset against temperature"), 3u);
   EXPECT_EQ(count(sweep, "aria-label=\"scale-factor error against temperature"), 3u);
   EXPECT_NE(sweep.find("<polygon"), std::string::npos);  // interval bands
-  const std::string allan = read(dir / "static/report.html");
-  ASSERT_FALSE(allan.empty()) << read(dir / "static.log");
+  const std::string allan = read_text(dir / "static/report.html");
+  ASSERT_FALSE(allan.empty()) << read_text(dir / "static.log");
   EXPECT_NE(allan.find("accelerometer Allan deviation"), std::string::npos);
   EXPECT_NE(allan.find("gyroscope Allan deviation"), std::string::npos);
   // Log axes: decade ticks.
@@ -222,10 +221,10 @@ TEST_F(Cli, MagnitudeFormGapIsPlottedAsOneRowPerSegment) {
   std::string doc = kGapFixture;
   const std::string schema = "\"schema\":\"stend.gap/1\",";
   doc.replace(doc.find(schema), schema.size(), schema + "\"form\":\"magnitude\",");
-  write(run / "gap.json", doc);
+  write_text(run / "gap.json", doc);
   ASSERT_EQ(sh("'" + kStend.string() + "' report '" + run.string() + "' --no-db", dir / "gapm.log"), 0)
-      << read(dir / "gapm.log");
-  const std::string all = read(run / "report.html");
+      << read_text(dir / "gapm.log");
+  const std::string all = read_text(run / "report.html");
   const auto at = all.find("Sim-to-real gap");
   ASSERT_NE(at, std::string::npos);
   const std::string html = all.substr(at);  // the gap section (the fit's section has axis z plots)
@@ -239,10 +238,10 @@ TEST_F(Cli, GapChartsFromGapJsonAndChromiumRendersThem) {
   const fs::path run = dir / "paper_gap";
   fs::remove_all(run);
   fs::copy(dir / "paper", run);
-  write(run / "gap.json", kGapFixture);
+  write_text(run / "gap.json", kGapFixture);
   ASSERT_EQ(sh("'" + kStend.string() + "' report '" + run.string() + "' --no-db", dir / "gap.log"), 0)
-      << read(dir / "gap.log");
-  const std::string html = read(run / "report.html");
+      << read_text(dir / "gap.log");
+  const std::string html = read_text(run / "report.html");
   EXPECT_NE(html.find("where the gap lies"), std::string::npos);
   EXPECT_NE(html.find("how far the gap shrinks"), std::string::npos);
   EXPECT_NE(html.find("+nonlinear_k2_z"), std::string::npos);
@@ -257,8 +256,8 @@ TEST_F(Cli, GapChartsFromGapJsonAndChromiumRendersThem) {
                     "--enable-logging=stderr --v=0 --window-size=1200,3000 --screenshot='" + png.string() +
                     "' 'file://" + (run / "report.html").string() + "'",
                     log);
-  ASSERT_EQ(rc, 0) << read(log);
-  const std::string out = read(log);
+  ASSERT_EQ(rc, 0) << read_text(log);
+  const std::string out = read_text(log);
   EXPECT_EQ(out.find(":CONSOLE"), std::string::npos) << "console messages while loading the report:\n" << out;
   Image img;
   ASSERT_TRUE(read_png(png, img)) << "cannot decode " << png;
@@ -279,7 +278,7 @@ TEST_F(Cli, CompareRefusesDifferentProcedures) {
                    "' --db '" + (dir / "results.sqlite").string() + "'",
                log),
             2);
-  const std::string out = read(log);
+  const std::string out = read_text(log);
   const auto fp_paper = stend::reporting::load_run_results(dir / "paper").procedure_fingerprint;
   const auto fp_sweep = stend::reporting::load_run_results(dir / "sweep").procedure_fingerprint;
   ASSERT_NE(fp_paper, fp_sweep);
@@ -294,9 +293,9 @@ TEST_F(Cli, KalibrExportParsesAsKalibrYaml) {
                    f.string() + "'",
                dir / "kalibr.log"),
             0)
-      << read(dir / "kalibr.log");
+      << read_text(dir / "kalibr.log");
   const YAML::Node y = YAML::LoadFile(f.string());
-  const json k = json::parse(read(dir / "static/allan.json"))["kalibr"];
+  const json k = json::parse(read_text(dir / "static/allan.json"))["kalibr"];
   for (const char* key : {"accelerometer_noise_density", "accelerometer_random_walk", "gyroscope_noise_density",
                           "gyroscope_random_walk"})
     EXPECT_DOUBLE_EQ(y[key].as<double>(), k[key].get<double>()) << key;
@@ -311,13 +310,13 @@ TEST_F(Cli, MatlabExportReadsBackWithMatio) {
   ASSERT_EQ(sh("'" + kStend.string() + "' export '" + (dir / "sweep").string() + "' --to matlab -o '" + f.string() + "'",
                dir / "mat.log"),
             0)
-      << read(dir / "mat.log");
+      << read_text(dir / "mat.log");
   mat_t* mat = Mat_Open(f.c_str(), MAT_ACC_RDONLY);
   ASSERT_NE(mat, nullptr);
   matvar_t* acc = Mat_VarRead(mat, "accelparams");
   ASSERT_NE(acc, nullptr);
   ASSERT_EQ(acc->class_type, MAT_C_STRUCT);
-  const json tp = json::parse(read(dir / "sweep/temp_poly.json"));
+  const json tp = json::parse(read_text(dir / "sweep/temp_poly.json"));
   auto field = [&](const char* name) {
     matvar_t* v = Mat_VarGetStructFieldByName(acc, name, 0);
     EXPECT_NE(v, nullptr) << name;
@@ -372,7 +371,7 @@ TEST_F(Cli, ImuTkExportCalibratesTheStaticMeans) {
   ASSERT_EQ(sh("'" + kStend.string() + "' export '" + (dir / "paper").string() + "' --to imutk -o '" + prefix.string() + "'",
                dir / "imutk.log"),
             0)
-      << read(dir / "imutk.log");
+      << read_text(dir / "imutk.log");
   // IMU-TK's CalibratedTriad::load reads 9 (misalignment, row-major), 9 (scale) and 3 (bias)
   // numbers with operator>>.
   std::ifstream in(prefix.string() + "_acc.calib");
@@ -385,7 +384,7 @@ TEST_F(Cli, ImuTkExportCalibratesTheStaticMeans) {
   EXPECT_TRUE((K - Eigen::Matrix3d(K.diagonal().asDiagonal())).isZero());
   // Applied to every static mean of the paper run, X' = T·K·(X − B) brings the fitted axis (z) to
   // the bench truth within the fit's residual scatter, where the raw error reached 3 mg.
-  const json fit = json::parse(read(dir / "paper/fit.json"));
+  const json fit = json::parse(read_text(dir / "paper/fit.json"));
   const double sigma = fit["solution"]["sigma"].get<double>();
   double raw_max = 0, cal_max = 0;
   for (const auto& p : fit["points"]) {
@@ -405,7 +404,7 @@ TEST_F(Cli, Px4ExportIsAParamFileWithTheFittedPolynomial) {
                    f.string() + "'",
                dir / "px4.log"),
             0)
-      << read(dir / "px4.log");
+      << read_text(dir / "px4.log");
   // QGroundControl / PX4 parameter file: '#' comments, then tab-separated
   // vehicle-id, component-id, name, value, type (6 = INT32, 9 = REAL32).
   std::map<std::string, std::pair<std::string, int>> params;
@@ -430,7 +429,7 @@ TEST_F(Cli, Px4ExportIsAParamFileWithTheFittedPolynomial) {
   EXPECT_EQ(params.at("TC_A0_TREF").first, "25");
   EXPECT_LT(std::stod(params.at("TC_A0_TMIN").first), 12.0);
   EXPECT_GT(std::stod(params.at("TC_A0_TMAX").first), 38.0);
-  const json tp = json::parse(read(dir / "sweep/temp_poly.json"));
+  const json tp = json::parse(read_text(dir / "sweep/temp_poly.json"));
   const char* ax = "xyz";
   for (int k = 0; k < 3; ++k) {
     double bias = NAN, tc1 = NAN;
@@ -451,8 +450,8 @@ TEST_F(Cli, ResultsJsonExportFollowsItsSchema) {
   ASSERT_EQ(sh("'" + kStend.string() + "' export '" + (dir / "sweep").string() + "' --to json -o '" + f.string() + "'",
                dir / "json.log"),
             0)
-      << read(dir / "json.log");
-  const json j = json::parse(read(f));
+      << read_text(dir / "json.log");
+  const json j = json::parse(read_text(f));
   EXPECT_EQ(j["schema"], "stend.results/1");
   EXPECT_EQ(j["sensor"]["vendor"], "Acme");
   EXPECT_EQ(j["sensor"]["serial"], "AX-001");

@@ -5,6 +5,7 @@
 #include "stend/reporting/results.hpp"
 #include "stend/reporting/results_db.hpp"
 #include "stend/reporting/svg_plot.hpp"
+#include "stend/testing/files.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -15,17 +16,6 @@
 
 namespace rp = stend::reporting;
 namespace fs = std::filesystem;
-
-namespace {
-
-fs::path temp_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("stend_reporting_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-}  // namespace
 
 TEST(Svg, LinearTicksAreNiceAndCoverTheRange) {
   const auto t = rp::svg::nice_ticks(-0.013, 0.047, false);
@@ -145,7 +135,7 @@ rp::RunResults unit(const std::string& vendor, const std::string& serial, const 
 }  // namespace
 
 TEST(ResultsDb, RoundTripReplaceAndNull) {
-  const fs::path d = temp_dir("db");
+  const stend::testing::TempDir d("reporting-db");
   {
     rp::ResultsDb db(d / "r.sqlite");
     db.add(unit("Acme", "1", "ff00", 0.01, 0.001));
@@ -165,7 +155,6 @@ TEST(ResultsDb, RoundTripReplaceAndNull) {
   EXPECT_EQ(all[0].parameters[1].reason, "not excited");
   EXPECT_EQ(db.with_fingerprint("ee11").size(), 1u);
   EXPECT_EQ(db.find_run("Bor-2").serial, "2");
-  fs::remove_all(d);
 }
 
 TEST(Compare, VendorStatisticsAndRefusal) {

@@ -4,17 +4,20 @@
 // their planted values.
 #include "stend/reporting/compare.hpp"
 #include "stend/reporting/results_db.hpp"
+#include "stend/testing/files.hpp"
+#include "stend/testing/paths.hpp"
+#include "stend/testing/program.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <sstream>
 
 namespace fs = std::filesystem;
 namespace rp = stend::reporting;
+namespace st = stend::testing;
 
 namespace {
 
@@ -41,12 +44,14 @@ std::vector<std::map<std::string, std::string>> read_csv(const fs::path& f) {
 }  // namespace
 
 TEST(VendorStudy, VendorsDifferAsPlantedAndIntervalsCoverTheUnits) {
-  const fs::path dir = fs::temp_directory_path() / ("stend_vendor_study_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  const std::string cmd = "STEND='" + (fs::path(STEND_BINARY_DIR) / "bin/stend").string() + "' '" +
-                          (fs::path(STEND_SOURCE_DIR) / "configs/vendor_study/run.sh").string() + "' '" +
-                          dir.string() + "' 5 > '" + (dir.string() + ".log") + "' 2>&1";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << "run.sh failed; see " << dir.string() << ".log";
+  const st::TempDir tmp("vendor-study");
+  const fs::path dir = tmp / "study";
+  const st::ProgramOutput run =
+      st::run_command(st::shell_quote(st::source_path("configs/vendor_study/run.sh").string()) + " " +
+                          st::shell_quote(dir.string()) + " 5",
+                      {{"STEND", st::stend_program().string()}});
+  st::write_text(dir.string() + ".log", run.text);
+  ASSERT_EQ(run.code, 0) << "run.sh failed; see " << dir.string() << ".log";
 
   rp::ResultsDb db(dir / "stend-results.sqlite");
   const auto runs = db.all();
@@ -114,16 +119,10 @@ TEST(VendorStudy, VendorsDifferAsPlantedAndIntervalsCoverTheUnits) {
       }
   }
   // The comparison report shows one plot per parameter.
-  std::ifstream html(dir / "compare.html");
-  std::stringstream s;
-  s << html.rdbuf();
+  const std::string html = st::read_text(dir / "compare.html");
   std::size_t plots = 0;
-  for (auto p = s.str().find("<svg"); p != std::string::npos; p = s.str().find("<svg", p + 1)) ++plots;
+  for (auto p = html.find("<svg"); p != std::string::npos; p = html.find("<svg", p + 1)) ++plots;
   EXPECT_EQ(plots, names.size());
   // Every run also got its own report.
   for (const auto& p : planted) EXPECT_TRUE(fs::exists(dir / "runs" / p.at("run") / "report.html")) << p.at("run");
-  if (!::testing::Test::HasFailure()) {
-    fs::remove_all(dir);
-    fs::remove(dir.string() + ".log");
-  }
 }

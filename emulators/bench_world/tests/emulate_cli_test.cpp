@@ -6,35 +6,16 @@
 #include <stend/devices/modbus_tcp.hpp>
 #include <stend/devices/text_command.hpp>
 
-#include <cstdio>
-#include <regex>
+#include <stend/testing/program.hpp>
+
 #include <string>
 
 namespace {
 
-// Starts `stend emulate ARGS` and returns the first line matching `pattern` (its group 1).
-struct Emulator {
-  FILE* pipe = nullptr;
-  explicit Emulator(const std::string& args) {
-    pipe = popen((std::string(STEND_BINARY_DIR) + "/bin/stend emulate " + args).c_str(), "r");
-  }
-  std::string wait_for(const std::string& pattern) {
-    char line[512];
-    const std::regex re(pattern);
-    while (pipe && std::fgets(line, sizeof line, pipe)) {
-      std::smatch m;
-      const std::string s = line;
-      if (std::regex_search(s, m, re)) return m[1].str();
-    }
-    return "";
-  }
-  ~Emulator() {
-    if (pipe) pclose(pipe);  // the emulator exits after --duration-s
-  }
-};
+using stend::testing::start_stend;
 
 TEST(EmulateCli, WatlowChamberAnswersPvAndSetpointRegistersOnlyOnItsPort) {
-  Emulator e("chamber --protocol watlow_f4 --port 0 --initial-c 23.4 --duration-s 2");
+  auto e = start_stend("emulate chamber --protocol watlow_f4 --port 0 --initial-c 23.4 --duration-s 2");
   const std::string port = e.wait_for("tcp 127\\.0\\.0\\.1:([0-9]+)");
   ASSERT_FALSE(port.empty());
   stend::transport::ModbusTcpConfig c;
@@ -54,7 +35,7 @@ TEST(EmulateCli, WatlowChamberAnswersPvAndSetpointRegistersOnlyOnItsPort) {
 }
 
 TEST(EmulateCli, AtmegaChamberOnAPtyReportsFirmwareAndReading) {
-  Emulator e("chamber --protocol atmega328 --initial-c 30 --duration-s 2");
+  auto e = start_stend("emulate chamber --protocol atmega328 --initial-c 30 --duration-s 2");
   const std::string dev = e.wait_for("(/dev/pts/[0-9]+)");
   ASSERT_FALSE(dev.empty());
   stend::transport::ModbusRtuConfig c;
@@ -68,7 +49,7 @@ TEST(EmulateCli, AtmegaChamberOnAPtyReportsFirmwareAndReading) {
 }
 
 TEST(EmulateCli, TableAnswersTheAcutrolDialect) {
-  Emulator e("table --axes 3 --port 0 --duration-s 2");
+  auto e = start_stend("emulate table --axes 3 --port 0 --duration-s 2");
   const std::string port = e.wait_for("tcp 127\\.0\\.0\\.1:([0-9]+)");
   ASSERT_FALSE(port.empty());
   stend::transport::TextCommandConfig c;

@@ -8,6 +8,9 @@
 #include <stend/plugin_host.hpp>
 #include <stend/recording.hpp>
 #include <stend/runner.hpp>
+#include <stend/testing/files.hpp>
+#include <stend/testing/program.hpp>
+#include <stend/testing/sim_bench.hpp>
 
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
@@ -17,9 +20,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <sstream>
 #include <string>
-#include <unistd.h>
 
 #include "bench_world.hpp"
 
@@ -29,22 +30,7 @@ namespace {
 
 const std::string kSrc = STEND_SOURCE_DIR;
 
-stend::PluginHost& host() {
-  static stend::PluginHost h;
-  static bool scanned = false;
-  if (!scanned) {
-    h.scan({{STEND_BUILD_PLUGIN_DIR, "build tree"}});
-    scanned = true;
-  }
-  return h;
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using stend::testing::read_text;
 
 void replace_all(std::string& s, const std::string& from, const std::string& to) {
   for (std::size_t p = s.find(from); p != std::string::npos; p = s.find(from, p + to.size())) s.replace(p, from.size(), to);
@@ -56,9 +42,9 @@ struct Param {
 };
 
 std::map<std::string, Param> fit(const fs::path& run, const fs::path& json) {
-  const std::string cmd = std::string(STEND_BINARY_DIR) + "/bin/stend fit " + run.string() + " -m " + kSrc +
-                          "/configs/models/paper_z_channel_short.yaml --json " + json.string() + " > /dev/null 2>&1";
-  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const std::string args =
+      "fit " + run.string() + " -m " + kSrc + "/configs/models/paper_z_channel_short.yaml --json " + json.string();
+  EXPECT_EQ(stend::testing::run_stend(args).code, 0) << args;
   std::map<std::string, Param> out;
   std::ifstream f(json);
   if (!f) return out;
@@ -77,36 +63,35 @@ std::map<std::string, Param> fit(const fs::path& run, const fs::path& json) {
 }
 
 TEST(PaperThroughDrivers, FitAgreesWithTheInProcessBenchWithinUncertainty) {
-  const fs::path tmp = fs::temp_directory_path() / ("stend-paper-drivers-" + std::to_string(getpid()));
-  fs::create_directories(tmp);
+  const stend::testing::TempDir tmp("paper-drivers");
+  const stend::PluginHost& host = stend::testing::build_tree_plugins();
   const std::string drivers_file = kSrc + "/configs/paper_mpu6050_z_drivers.yaml";
-  const stend::Experiment twin = stend::load_experiment(kSrc + "/configs/paper_mpu6050_z.yaml", host());
+  const stend::Experiment twin = stend::load_experiment(kSrc + "/configs/paper_mpu6050_z.yaml", host);
 
   // The world, twin of the in-process bench; the chamber's plant runs 50× faster than the wall.
   stend::emu::BenchWorld world(stend::emu::BenchWorldConfig::from_experiment(twin, 50.0));
-  std::string text = slurp(drivers_file);
+  std::string text = read_text(drivers_file);
   replace_all(text, "/dev/ttyUSB0", world.mcu_device());
   replace_all(text, "/dev/ttyUSB1", world.chamber_device());
   replace_all(text, "port: 5025", "port: " + std::to_string(world.table_port()));
-  const stend::Experiment drivers = stend::parse_experiment(text, drivers_file, host());
+  const stend::Experiment drivers = stend::parse_experiment(text, drivers_file, host);
 
   // The same procedure on the in-process simulated bench: the drivers file with the twin's bench.
-  YAML::Node sim = YAML::Load(slurp(drivers_file));
-  sim["bench"] = YAML::Load(slurp(kSrc + "/configs/paper_mpu6050_z.yaml"))["bench"];
+  YAML::Node sim = YAML::Load(read_text(drivers_file));
+  sim["bench"] = YAML::Load(read_text(kSrc + "/configs/paper_mpu6050_z.yaml"))["bench"];
   sim["experiment"]["clock"] = "simulated";
   sim["experiment"]["name"] = "paper_mpu6050_z_inprocess";
   YAML::Emitter em;
   em << sim;
-  const stend::Experiment inproc = stend::parse_experiment(em.c_str(), drivers_file, host());
+  const stend::Experiment inproc = stend::parse_experiment(em.c_str(), drivers_file, host);
 
   stend::RunOptions opt;
-  opt.output_dir = tmp;
   opt.run_name = "drivers";
-  const stend::RunResult rd = stend::run_experiment(drivers, host(), opt);
+  const stend::RunResult rd = stend::testing::run_in_process(drivers, tmp.path(), opt);
   ASSERT_EQ(rd.status, "complete") << rd.message;
   EXPECT_LT(rd.wall_time_s, 60.0);
   opt.run_name = "inprocess";
-  const stend::RunResult rs = stend::run_experiment(inproc, host(), opt);
+  const stend::RunResult rs = stend::testing::run_in_process(inproc, tmp.path(), opt);
   ASSERT_EQ(rs.status, "complete") << rs.message;
   EXPECT_EQ(rd.segments, rs.segments);
 
@@ -129,7 +114,6 @@ TEST(PaperThroughDrivers, FitAgreesWithTheInProcessBenchWithinUncertainty) {
   // At h = 0 neither run can see μ34: both must say so rather than print a number.
   EXPECT_FALSE(fd.at("cross_zy").identifiable);
   EXPECT_FALSE(fsim.at("cross_zy").identifiable);
-  fs::remove_all(tmp);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 // MPU-6050 static record from ../shared/data.
 #include <stend/allan/allan.hpp>
 #include <stend/io/importers.hpp>
+#include <stend/testing/paths.hpp>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -71,8 +72,6 @@ double loglog_slope(const AllanCurve& c, double tau_lo, double tau_hi) {
   }
   return (n * sxy - sx * sy) / (n * sxx - sx * sx);
 }
-
-std::filesystem::path shared_data() { return std::filesystem::path(STEND_SHARED_DATA_DIR); }
 
 }  // namespace
 
@@ -386,11 +385,8 @@ TEST(AllanReport, WarnsAboutGaps) {
 // Real data: MPU-6050, 449 s still, 100 Hz (../shared/data/mpu6050_multipos/static_449s.csv)
 
 TEST(AllanRealData, Mpu6050Static449s) {
-  const auto file = shared_data() / "mpu6050_multipos" / "static_449s.csv";
-  if (!std::filesystem::exists(file)) {
-    GTEST_SKIP() << "real-data test skipped: " << file
-                 << " not found (the shared data folder ../shared/data is absent in this checkout)";
-  }
+  const auto file = stend::testing::shared_data("mpu6050_multipos/static_449s.csv");
+  STEND_SKIP_IF_ABSENT(file);
   const auto rec = stend::io::import_mpu6050_multipos(file);
   const auto report = analyze_recording(rec);
   std::cout << report;

@@ -9,11 +9,11 @@
 #include <random>
 #include <regex>
 #include <sstream>
-#include <unistd.h>
 
 #include "stend/batch_lsq/batch_lsq.hpp"
 #include "stend/experiment.hpp"
 #include "stend/physics/geometry.hpp"
+#include "stend/testing/files.hpp"
 
 using namespace stend;
 using namespace stend::batch_lsq;
@@ -427,9 +427,8 @@ TEST(BatchLsq, IntervalCoverageThroughTheProcedure) {
 TEST(BatchLsq, FitsARecordingReadFromDisk) {
   std::mt19937 rng(77);
   const Recording mem = synth_recording(bsc_model(), theta_bsc(), table_forces(9.81), rng);
-  const fs::path dir = fs::temp_directory_path() /
-                       ("stend_batch_lsq_test_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
+  const stend::testing::TempDir tmp("batch-lsq");
+  const fs::path dir = tmp / "run";
   {
     RecordingWriter w(dir, mem.header, "experiment: synthetic\n");
     w.add_samples(mem.samples.data(), mem.samples.size());
@@ -450,5 +449,4 @@ TEST(BatchLsq, FitsARecordingReadFromDisk) {
   std::ifstream in(dir / "fit.json");
   const auto j = nlohmann::json::parse(in);
   EXPECT_EQ(j["recording"]["status"], "complete");
-  fs::remove_all(dir);
 }

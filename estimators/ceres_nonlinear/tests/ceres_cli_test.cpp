@@ -5,46 +5,30 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <array>
+#include "stend/testing/files.hpp"
+#include "stend/testing/program.hpp"
+
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <string>
-#include <sys/wait.h>
-#include <unistd.h>
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using stend::testing::ProgramOutput;
+using stend::testing::run_stend;
+using stend::testing::TempDir;
 
 namespace {
-
-struct Output {
-  int code = -1;
-  std::string text;
-};
-
-Output stend(const std::string& args, const std::string& env = {}) {
-  const std::string cmd = env + " " + std::string(STEND_BINARY_DIR) + "/bin/stend " + args + " 2>&1";
-  Output out;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return out;
-  std::array<char, 4096> buf{};
-  while (fgets(buf.data(), static_cast<int>(buf.size()), pipe)) out.text += buf.data();
-  const int status = pclose(pipe);
-  out.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return out;
-}
 
 const std::string src = STEND_SOURCE_DIR;
 
 // One simulated run shared by the tests (about 55,000 samples).
 const fs::path& run_dir() {
+  static const TempDir out("ceres-cli");
   static const fs::path dir = [] {
-    const fs::path out = fs::temp_directory_path() / ("stend-ceres-cli-" + std::to_string(getpid()));
-    const Output o = stend("run " + src + "/configs/multi_position_38.yaml --quiet --output " + out.string() + " --name mp38");
+    const ProgramOutput o = run_stend("run " + src + "/configs/multi_position_38.yaml --quiet --output " + out.str() + " --name mp38");
     EXPECT_EQ(o.code, 0) << o.text;
     return out / "mp38";
   }();
@@ -87,7 +71,7 @@ void expect_near_truth(const json& p, double truth) {
 
 TEST(CeresCli, KnownOrientationsRateTableRecoversThePlantedErrors) {
   const fs::path run = run_dir();
-  const Output o = stend("fit " + run.string() + " --model " + src + "/estimators/ceres_nonlinear/examples/known_orientations.yaml");
+  const ProgramOutput o = run_stend("fit " + run.string() + " --model " + src + "/estimators/ceres_nonlinear/examples/known_orientations.yaml");
   EXPECT_EQ(o.code, 0) << o.text;
   for (const char* s : {"options:", "table offsets: tilt", "std error", "95% lower", "identifiable", "mg", "deg/s",
                         "condition number", "ceres_nonlinear: ok"})
@@ -108,7 +92,7 @@ TEST(CeresCli, KnownOrientationsRateTableRecoversThePlantedErrors) {
 TEST(CeresCli, UnknownOrientationsIntegrationCalibratesWithoutTruth) {
   const fs::path run = run_dir();
   const fs::path out = run / "ceres_unknown.json";
-  const Output o = stend("fit " + run.string() + " --model " + src +
+  const ProgramOutput o = run_stend("fit " + run.string() + " --model " + src +
                          "/estimators/ceres_nonlinear/examples/unknown_orientations.yaml --json " + out.string());
   EXPECT_EQ(o.code, 0) << o.text;
   const json j = read_json(out);
@@ -129,22 +113,20 @@ TEST(CeresCli, UnknownOrientationsIntegrationCalibratesWithoutTruth) {
 }
 
 TEST(CeresCli, BadOptionNamesFileLineAndExitsTwo) {
-  const fs::path dir = fs::temp_directory_path() / ("stend-ceres-bad-" + std::to_string(getpid()));
-  fs::create_directories(dir);
+  const TempDir dir("ceres-bad");
   const fs::path model = dir / "bad.yaml";
   std::ofstream(model) << "ceres_nonlinear:\n  accelerometer: unknown_orientations\n  detector: {window_s: 1, trim: 0.5}\n";
-  const Output o = stend("fit " + run_dir().string() + " --model " + model.string());
+  const ProgramOutput o = run_stend("fit " + run_dir().string() + " --model " + model.string());
   EXPECT_EQ(o.code, 2) << o.text;
   EXPECT_NE(o.text.find(model.string() + ":3:"), std::string::npos) << o.text;
   EXPECT_NE(o.text.find("trim_s"), std::string::npos) << o.text;
-  fs::remove_all(dir);
 }
 
 TEST(CeresCli, TooFewPositionsFailsWithExitThreeAndNoNumbers) {
-  const fs::path dir = fs::temp_directory_path() / ("stend-ceres-few-" + std::to_string(getpid()));
-  const Output r = stend("run " + src + "/configs/six_position.yaml --quiet --output " + dir.string() + " --name six");
+  const TempDir dir("ceres-few");
+  const ProgramOutput r = run_stend("run " + src + "/configs/six_position.yaml --quiet --output " + dir.str() + " --name six");
   ASSERT_EQ(r.code, 0) << r.text;
-  const Output o = stend("fit " + (dir / "six").string() + " --model " + src +
+  const ProgramOutput o = run_stend("fit " + (dir / "six").string() + " --model " + src +
                          "/estimators/ceres_nonlinear/examples/unknown_orientations.yaml");
   EXPECT_EQ(o.code, 3) << o.text;
   EXPECT_NE(o.text.find("too few static intervals"), std::string::npos) << o.text;
@@ -154,11 +136,10 @@ TEST(CeresCli, TooFewPositionsFailsWithExitThreeAndNoNumbers) {
     if (!p["fixed"].get<bool>()) {
       EXPECT_TRUE(p["value"].is_null()) << p.dump();
     }
-  fs::remove_all(dir);
 }
 
 TEST(CeresCli, PluginsListTheFourEstimators) {
-  const Output o = stend("plugins");
+  const ProgramOutput o = run_stend("plugins");
   EXPECT_EQ(o.code, 0) << o.text;
   for (const char* name : {"batch_lsq", "temp_poly", "allan", "ceres_nonlinear"})
     EXPECT_NE(o.text.find(name), std::string::npos) << name << "\n" << o.text;
@@ -167,9 +148,9 @@ TEST(CeresCli, PluginsListTheFourEstimators) {
 
 TEST(CeresCli, UnknownEstimatorNameRoutesToAnEstimatorPlugin) {
   const fs::path run = run_dir();
-  const std::string env = "STEND_PLUGIN_PATH=" + std::string(STEND_CERES_TEST_PLUGIN_DIR);
+  const stend::testing::Environment env = {{"STEND_PLUGIN_PATH", STEND_CERES_TEST_PLUGIN_DIR}};
   const fs::path out = run / "mean.json";
-  const Output o = stend("fit " + run.string() + " --model " + src +
+  const ProgramOutput o = run_stend("fit " + run.string() + " --model " + src +
                          "/estimators/ceres_nonlinear/examples/known_orientations.yaml --estimator mean_accel --json " +
                          out.string(), env);
   EXPECT_EQ(o.code, 0) << o.text;
@@ -177,7 +158,7 @@ TEST(CeresCli, UnknownEstimatorNameRoutesToAnEstimatorPlugin) {
   const json j = read_json(out);
   EXPECT_EQ(j["schema"], "test.mean_accel/1");
   EXPECT_GT(j["samples"].get<int>(), 50000);
-  const Output missing = stend("fit " + run.string() + " --model " + src +
+  const ProgramOutput missing = run_stend("fit " + run.string() + " --model " + src +
                                "/estimators/ceres_nonlinear/examples/known_orientations.yaml --estimator no_such_estimator");
   EXPECT_NE(missing.code, 0);
   EXPECT_NE(missing.text.find("no estimator 'no_such_estimator'"), std::string::npos) << missing.text;

@@ -4,17 +4,16 @@
 #include "synthetic_record.hpp"
 
 #include <stend/ceres_nonlinear/model_file.hpp>
+#include <stend/testing/files.hpp>
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
-#include <filesystem>
 #include <fstream>
 #include <numbers>
 #include <random>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 using namespace stend;
@@ -312,8 +311,7 @@ TEST(CeresGyro, KnownOrientationsEstimateTheTiltOffsetAndRefuseTheRotationOffset
 }
 
 TEST(CeresModelFile, BadKeysNameFileLineColumnAndSuggest) {
-  const auto dir = std::filesystem::temp_directory_path() / ("ceres-model-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+  const stend::testing::TempDir dir("ceres-model");
   const auto file = (dir / "m.yaml").string();
   std::ofstream(file) << "ceres_nonlinear:\n  accelerometer: known_orientations\n  gyroscop: rate_table\n";
   try {
@@ -340,7 +338,6 @@ TEST(CeresModelFile, BadKeysNameFileLineColumnAndSuggest) {
   EXPECT_TRUE(o.gyro.estimate_g_sensitivity);
   EXPECT_EQ(o.gyro.loss, Loss::kHuber);
   EXPECT_NE(describe_options(o).find("table offsets: tilt"), std::string::npos);
-  std::filesystem::remove_all(dir);
 }
 
 TEST(CeresModelFile, IntervalKeysAreTheProcessingStagesAndTheExperimentFillsTheRest) {

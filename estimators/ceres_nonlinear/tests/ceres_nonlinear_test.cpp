@@ -3,6 +3,7 @@
 // sessions compared against their projects' own calibrations.
 #include <stend/ceres_nonlinear/calibration.hpp>
 #include <stend/io/importers.hpp>
+#include <stend/testing/paths.hpp>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -68,10 +69,6 @@ std::vector<Eigen::Vector3d> random_dirs(int n, std::mt19937_64& rng) {
   std::vector<Eigen::Vector3d> d;
   for (int i = 0; i < n; ++i) d.push_back(random_unit(rng));
   return d;
-}
-
-bool has_data(const std::string& rel) {
-  return std::filesystem::exists(std::filesystem::path(STEND_SHARED_DATA_DIR) / rel);
 }
 
 // RMS over every sample of the intervals of |a(sample)| − g, and over the interval means.
@@ -293,10 +290,9 @@ TEST(CeresNonlinear, DetectsStaticIntervalsInASimulatedRecording) {
 // Real data.
 
 TEST(CeresNonlinearRealData, ImucalSessionAgainstReferenceCalibration) {
-  if (!has_data("imucal/annotated_session.csv") || !has_data("imucal/example_cal.json"))
-    GTEST_SKIP() << "shared data absent: " << STEND_SHARED_DATA_DIR
-                 << "/imucal (the imucal example session is kept beside the project, not in it)";
-  const auto dir = std::filesystem::path(STEND_SHARED_DATA_DIR) / "imucal";
+  const auto dir = stend::testing::shared_data("imucal");
+  STEND_SKIP_IF_ABSENT(dir / "annotated_session.csv");
+  STEND_SKIP_IF_ABSENT(dir / "example_cal.json");
   const Recording rec = io::import_imucal_session(dir / "annotated_session.csv");
   const double g = 9.81;  // imucal's expected_g
   processing::ProcessingOptions segments = default_interval_options();
@@ -342,11 +338,9 @@ TEST(CeresNonlinearRealData, ImucalSessionAgainstReferenceCalibration) {
 }
 
 TEST(CeresNonlinearRealData, Mpu6050SessionAgainstReferenceCalibration) {
-  if (!has_data("mpu6050_multipos/calibration_session.csv") ||
-      !has_data("mpu6050_multipos/reference_params_acc.csv"))
-    GTEST_SKIP() << "shared data absent: " << STEND_SHARED_DATA_DIR
-                 << "/mpu6050_multipos (kept beside the project, not in it)";
-  const auto dir = std::filesystem::path(STEND_SHARED_DATA_DIR) / "mpu6050_multipos";
+  const auto dir = stend::testing::shared_data("mpu6050_multipos");
+  STEND_SKIP_IF_ABSENT(dir / "calibration_session.csv");
+  STEND_SKIP_IF_ABSENT(dir / "reference_params_acc.csv");
   const Recording rec = io::import_mpu6050_multipos(dir / "calibration_session.csv");
   const double g = 9.81;
   CalibrationOptions o;

@@ -6,27 +6,18 @@
 #include <filesystem>
 #include <fstream>
 #include <cstdlib>
-#include <unistd.h>
 
 #include "stend/experiment.hpp"
 #include "stend/plugin_host.hpp"
 #include "stend/recording.hpp"
 #include "stend/runner.hpp"
 #include "stend/temp_poly/temp_poly.hpp"
+#include "stend/testing/files.hpp"
+#include "stend/testing/sim_bench.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
-
-stend::PluginHost& host() {
-  static stend::PluginHost h;
-  static bool scanned = false;
-  if (!scanned) {
-    h.scan({{STEND_BUILD_PLUGIN_DIR, "build tree"}});
-    scanned = true;
-  }
-  return h;
-}
 
 // Quadratic bias on x and z, linear on y; linear scale; T0 = 25 degC. Bias instability and random
 // walk are switched off so that the only noise is white (the fit's noise model); see README.
@@ -69,15 +60,10 @@ procedure:
 }  // namespace
 
 TEST(TempPolySweep, RecoversPlantedCoefficientsOnSimulatedBench) {
-  const fs::path dir = fs::temp_directory_path() / ("stend-temp-poly-" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const stend::testing::TempDir dir("temp-poly");
   const fs::path file = dir / "sweep.yaml";
   std::ofstream(file) << sweep_yaml();
-  const stend::Experiment exp = stend::load_experiment(file.string(), host());
-  stend::RunOptions ro;
-  ro.output_dir = dir;
-  const stend::RunResult run = stend::run_experiment(exp, host(), ro);
+  const stend::RunResult run = stend::testing::run_in_process(file, dir.path());
   ASSERT_EQ(run.status, "complete") << run.message;
   const stend::Recording rec = stend::Recording::open(run.dir);
 
@@ -143,5 +129,4 @@ TEST(TempPolySweep, RecoversPlantedCoefficientsOnSimulatedBench) {
   EXPECT_GE(inside, 10) << inside << "/" << total << "\n" << f;
   std::ofstream(dir / "report.txt") << r;
   std::ofstream(dir / "result.json") << stend::temp_poly::to_json(r);
-  fs::remove_all(dir);
 }
