@@ -103,10 +103,10 @@ int cmd_run(const std::string& file, const std::string& output, const std::strin
   if (!quiet && tty) fmt::print(stderr, "\n");
 
   fmt::print("run folder: {}\n", r.dir.string());
-  fmt::print("status:     {}{}\n", r.status, r.message.empty() ? "" : " — " + r.message);
+  fmt::print("status:     {}{}\n", stend::to_string(r.status), r.message.empty() ? "" : " — " + r.message);
   fmt::print("recorded:   {} samples, {} segments, {} of run time in {:.2f} s wall ({:.0f}x real time)\n", r.samples,
              r.segments, fmt_duration(r.run_time_s), r.wall_time_s, r.wall_time_s > 0 ? r.run_time_s / r.wall_time_s : 0.0);
-  if (r.status != "complete") return r.status == "interrupted" ? 130 : 1;
+  if (r.status != stend::RunStatus::kComplete) return r.status == stend::RunStatus::kInterrupted ? 130 : 1;
   if (exp.estimation && exp.estimation["model"]) {
     // The experiment names its model: fit it now, relative paths from the experiment's folder.
     std::filesystem::path model = exp.estimation["model"].as<std::string>();
@@ -133,7 +133,7 @@ int cmd_info(const std::string& dir) {
   const stend::Recording rec = stend::Recording::open(dir);
   const auto& h = rec.header;
   fmt::print("recording:  {}\nexperiment: {} (stend {})\nstatus:     {}{}\n", rec.dir.string(), h.experiment_name,
-             h.stend_version, rec.status, rec.complete() ? "" : " (incomplete)");
+             h.stend_version, stend::to_string(h.status), rec.complete() ? "" : " (incomplete)");
   fmt::print("sensor:     {} {} serial '{}' WHO_AM_I {} at {} Hz\n", h.identity.vendor, h.identity.model,
              h.identity.serial, h.identity.who_am_i, h.info.output_rate_hz);
   fmt::print("gravity:    {:.6f} m/s^2; clock {}; seed {}\n", h.gravity_mps2, h.clock, h.seed);

@@ -138,7 +138,7 @@ void BM_Finish(benchmark::State& state) {
       stend::RecordingWriter w(dir, header(), "name: bench\n");
       write_rows(w, sec, 1'000'000, scratch);
       state.ResumeTiming();
-      w.finish("complete");
+      w.finish(stend::RunStatus::kComplete);
       state.PauseTiming();
     }
     fs::remove_all(dir);
@@ -155,7 +155,7 @@ void BM_ReadRows(benchmark::State& state) {
     std::vector<stend::ImuSample> scratch;
     stend::RecordingWriter w(dir, header(), "name: bench\n");
     write_rows(w, sec, rows, scratch);
-    w.finish("complete");
+    w.finish(stend::RunStatus::kComplete);
   }
   for (auto _ : state) {
     auto r = stend::Recording::open(dir);
@@ -183,7 +183,7 @@ void BM_OneHour(benchmark::State& state) {
       stend::RecordingWriter w(dir, header(), "name: hour\n");
       write_rows(w, sec, kRows, scratch);
       const auto t1 = clock::now();
-      w.finish("complete");
+      w.finish(stend::RunStatus::kComplete);
       write_s = std::chrono::duration<double>(t1 - t0).count();
       finish_s = std::chrono::duration<double>(clock::now() - t1).count();
     }

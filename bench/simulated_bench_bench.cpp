@@ -36,7 +36,7 @@ void BM_SimulatedBenchOneHour1kHz(benchmark::State& state) {
     stend::RunOptions opt;
     opt.output_dir = out;
     const stend::RunResult r = stend::run_experiment(exp, host, opt);
-    if (r.status != "complete") state.SkipWithError(r.message.c_str());
+    if (r.status != stend::RunStatus::kComplete) state.SkipWithError(r.message.c_str());
     run_s += r.run_time_s;
     wall_s += r.wall_time_s;
     samples += r.samples;

@@ -41,7 +41,7 @@ TEST(PaperExperiment, RunsOnSimulatedBenchAndRecordsTruth) {
   const TempDir tmp("e2e");
   const stend::RunResult r =
       stend::testing::run_in_process(stend::testing::source_path("configs/paper_mpu6050_z.yaml"), tmp.path());
-  ASSERT_EQ(r.status, "complete") << r.message;
+  ASSERT_EQ(r.status, stend::RunStatus::kComplete) << r.message;
   EXPECT_GT(r.run_time_s / r.wall_time_s, 20.0) << "the simulated clock should run far faster than real time";
 
   const stend::Recording rec = stend::Recording::open(r.dir);
@@ -93,9 +93,9 @@ TEST(PaperExperiment, StopRequestKeepsDataAndMarksRunInterrupted) {
   };
   const stend::RunResult r =
       stend::testing::run_in_process(stend::testing::source_path("configs/paper_mpu6050_z.yaml"), tmp.path(), opt);
-  EXPECT_EQ(r.status, "interrupted");
+  EXPECT_EQ(r.status, stend::RunStatus::kInterrupted);
   const stend::Recording rec = stend::Recording::open(r.dir);
-  EXPECT_EQ(rec.status, "interrupted");
+  EXPECT_EQ(rec.header.status, stend::RunStatus::kInterrupted);
   EXPECT_FALSE(rec.complete());
   EXPECT_EQ(rec.samples.size(), r.samples);
   ASSERT_FALSE(rec.segments.empty());
@@ -135,7 +135,7 @@ procedure:
   ASSERT_TRUE(WIFSIGNALED(status));
 
   const stend::Recording rec = stend::Recording::open(tmp / "runs" / "killed");
-  EXPECT_EQ(rec.status, "running");  // the writer never finished: readers call it incomplete
+  EXPECT_EQ(rec.header.status, stend::RunStatus::kRunning);  // the writer never finished: readers call it incomplete
   EXPECT_FALSE(rec.complete());
   ASSERT_GT(rec.samples.size(), 1000u);
   for (std::size_t i = 1; i < rec.samples.size(); ++i) ASSERT_GT(rec.samples[i].t_s, rec.samples[i - 1].t_s);

@@ -246,7 +246,7 @@ void write_file(const fs::path& file, const std::string& content) {
 ojson header_json(const RecordingHeader& h) {
   ojson j;
   j["format_version"] = kRecordingFormatVersion;
-  j["status"] = h.status;
+  j["status"] = to_string(h.status);
   j["experiment_name"] = h.experiment_name;
   j["experiment_file"] = h.experiment_file;
   j["stend_version"] = h.stend_version;
@@ -379,7 +379,7 @@ RecordingWriter::RecordingWriter(const fs::path& run_dir, RecordingHeader header
         e.mark.line + 1, e.mark.column + 1, e.msg));
   }
   if (header.start_time_utc.empty()) header.start_time_utc = utc_now_iso();
-  header.status = "running";
+  header.status = RunStatus::kRunning;
 
   // "runs/x/" names the folder "runs/x".
   const fs::path target = run_dir.has_filename() ? run_dir : run_dir.parent_path();
@@ -563,11 +563,9 @@ void RecordingWriter::tick(double run_time_s) {
 
 void RecordingWriter::flush() { impl_->flush_all(); }
 
-void RecordingWriter::finish(const std::string& status, const std::string& message) {
-  if (status != "complete" && status != "interrupted" && status != "failed") {
-    throw std::invalid_argument(fmt::format(
-        "RecordingWriter::finish: status '{}' is not one of complete, interrupted, failed", status));
-  }
+void RecordingWriter::finish(RunStatus status, const std::string& message) {
+  if (status == RunStatus::kRunning)
+    throw std::invalid_argument("RecordingWriter::finish: the final status cannot be 'running'");
   Impl& I = *impl_;
   I.flush_all();
   // Data reaches the disk before run.json claims a final status.
@@ -692,8 +690,9 @@ void read_run_json(const fs::path& file, RecordingHeader& h) {
         version > kRecordingFormatVersion ? "upgrade Stend" : "the file is damaged"));
   }
   const auto* st = f.find(j, "status");
-  if (!st || !st->is_string()) f.bad("status", "a string (required)");
-  h.status = st->get<std::string>();
+  const auto status = st && st->is_string() ? run_status_from_string(st->get<std::string>()) : std::nullopt;
+  if (!status) f.bad("status", "one of running, complete, interrupted, failed (required)");
+  h.status = *status;
 
   f.str(j, "experiment_name", "experiment_name", h.experiment_name);
   f.str(j, "experiment_file", "experiment_file", h.experiment_file);
@@ -1069,7 +1068,6 @@ Recording Recording::open(const fs::path& run_dir) {
         run_json.string(), run_dir.string()));
   }
   read_run_json(run_json, r.header);
-  r.status = r.header.status;
 
   const fs::path yaml = run_dir / "experiment.yaml";
   if (fs::exists(yaml, ec)) {
@@ -1098,6 +1096,24 @@ int Recording::truth_column(const std::string& name) const {
   const auto it = std::find(c.begin(), c.end(), name);
   return it == c.end() ? -1 : static_cast<int>(it - c.begin());
 }
+
+const char* to_string(RunStatus s) {
+  switch (s) {
+    case RunStatus::kRunning: return "running";
+    case RunStatus::kComplete: return "complete";
+    case RunStatus::kInterrupted: return "interrupted";
+    case RunStatus::kFailed: return "failed";
+  }
+  return "?";
+}
+
+std::optional<RunStatus> run_status_from_string(std::string_view name) {
+  for (RunStatus s : {RunStatus::kRunning, RunStatus::kComplete, RunStatus::kInterrupted, RunStatus::kFailed})
+    if (name == to_string(s)) return s;
+  return std::nullopt;
+}
+
+std::ostream& operator<<(std::ostream& os, RunStatus s) { return os << to_string(s); }
 
 void Segment::print(std::ostream& os) const {
   os << fmt::format("#{} {}{} {:.2f}–{:.2f} s", id, kind, label.empty() ? "" : " '" + label + "'", t_start_s, t_end_s);

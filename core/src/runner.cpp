@@ -403,19 +403,19 @@ RunResult run_experiment(const Experiment& exp, const PluginHost& host, const Ru
   Run run(exp, bench, *clock, writer, options);
   try {
     run.execute();
-    result.status = "complete";
+    result.status = RunStatus::kComplete;
   } catch (const Stopped&) {
-    result.status = "interrupted";
+    result.status = RunStatus::kInterrupted;
     result.message = "stopped by request; everything recorded so far is kept";
   } catch (const std::exception& e) {
-    result.status = "failed";
+    result.status = RunStatus::kFailed;
     result.message = e.what();
     writer.add_event({clock->now_s(), "error", "runner", e.what()});
   }
-  if (result.status != "complete") run.abandon();
+  if (result.status != RunStatus::kComplete) run.abandon();
   bench.safe_state();
-  if (result.status != "complete")
-    writer.add_event({clock->now_s(), "warning", "runner", "run " + result.status + "; fixtures put in their safe state"});
+  if (result.status != RunStatus::kComplete)
+    writer.add_event({clock->now_s(), "warning", "runner", std::string("run ") + to_string(result.status) + "; fixtures put in their safe state"});
   try {
     bench.sensor().stop();
   } catch (const std::exception& e) {

@@ -199,7 +199,7 @@ Written write_small(const fs::path& dir, bool finish = true) {
   for (const auto& ev : w.events) writer.add_event(ev);
   EXPECT_EQ(writer.sample_count(), w.samples.size());
   EXPECT_EQ(writer.dir(), dir);
-  if (finish) writer.finish("complete", "all steps done");
+  if (finish) writer.finish(stend::RunStatus::kComplete, "all steps done");
   return w;
 }
 
@@ -216,7 +216,7 @@ TEST_F(RecordingTest, RoundTripIsExact) {
 
   const Recording r = Recording::open(dir);
   EXPECT_EQ(r.dir, dir);
-  EXPECT_EQ(r.status, "complete");
+  EXPECT_EQ(r.header.status, stend::RunStatus::kComplete);
   EXPECT_TRUE(r.complete());
   EXPECT_EQ(r.dropped_partial_lines, 0u);
   EXPECT_EQ(r.experiment_yaml, w.yaml);
@@ -252,7 +252,7 @@ TEST_F(RecordingTest, RoundTripIsExact) {
   EXPECT_EQ(h.clock, "simulated");
   EXPECT_EQ(h.truth_columns, w.header.truth_columns);
   EXPECT_EQ(h.start_time_utc, w.header.start_time_utc);
-  EXPECT_EQ(h.status, "complete");
+  EXPECT_EQ(h.status, stend::RunStatus::kComplete);
 
   ASSERT_EQ(r.samples.size(), w.samples.size());
   for (std::size_t i = 0; i < w.samples.size(); ++i) {
@@ -336,7 +336,7 @@ TEST_F(RecordingTest, UnfinishedRunStaysRunning) {
   const fs::path dir = root_ / "run";
   const Written w = write_small(dir, /*finish=*/false);  // writer destroyed without finish()
   const Recording r = Recording::open(dir);
-  EXPECT_EQ(r.status, "running");
+  EXPECT_EQ(r.header.status, stend::RunStatus::kRunning);
   EXPECT_FALSE(r.complete());
   EXPECT_EQ(r.samples.size(), w.samples.size());  // the destructor flushed
   EXPECT_EQ(r.segments.size(), 2u);
@@ -347,23 +347,23 @@ TEST_F(RecordingTest, UnfinishedRunStaysRunning) {
 TEST_F(RecordingTest, FinishStatusesAndMisuse) {
   {
     RecordingWriter w(root_ / "a", make_header(), "");
-    EXPECT_THROW(w.finish("done"), std::invalid_argument);
+    EXPECT_THROW(w.finish(stend::RunStatus::kRunning), std::invalid_argument);
     EXPECT_THROW(w.add_truth(0.0, {1.0}), std::invalid_argument);  // 4 columns expected
-    w.finish("interrupted", "operator pressed Ctrl-C");
+    w.finish(stend::RunStatus::kInterrupted, "operator pressed Ctrl-C");
     ImuSample s;
     EXPECT_THROW(w.add_samples(&s, 1), std::logic_error);
     EXPECT_THROW(w.add_event({0.0, "info", "runner", "late"}), std::logic_error);
   }
   const Recording a = Recording::open(root_ / "a");
-  EXPECT_EQ(a.status, "interrupted");
+  EXPECT_EQ(a.header.status, stend::RunStatus::kInterrupted);
   EXPECT_FALSE(a.complete());
   EXPECT_TRUE(a.samples.empty());
   EXPECT_EQ(a.experiment_yaml, "");
   {
     RecordingWriter w(root_ / "b", make_header(), "x: 1\n");
-    w.finish("failed", "sensor stopped answering");
+    w.finish(stend::RunStatus::kFailed, "sensor stopped answering");
   }
-  EXPECT_EQ(Recording::open(root_ / "b").status, "failed");
+  EXPECT_EQ(Recording::open(root_ / "b").header.status, stend::RunStatus::kFailed);
 
   RecordingHeader bad = make_header();
   bad.mounting_R = {1, 0, 0};
@@ -406,7 +406,7 @@ TEST_F(RecordingTest, ExistingRunDirectoryIsRefused) {
     EXPECT_NE(std::string(e.what()).find("already exists"), std::string::npos) << e.what();
   }
   EXPECT_EQ(read_text(dir / "imu.csv"), before);  // untouched
-  EXPECT_EQ(Recording::open(dir).status, "complete");
+  EXPECT_EQ(Recording::open(dir).header.status, stend::RunStatus::kComplete);
   // An empty directory counts as existing too.
   fs::create_directories(root_ / "empty");
   EXPECT_THROW(RecordingWriter(root_ / "empty", make_header(), ""), std::runtime_error);
@@ -710,7 +710,7 @@ TEST_F(RecordingTest, SigkillLosesAtMostOneSecondOfRunTime) {
   const fs::path dir = root_ / "killed";
   const Killed k = run_and_kill(dir, 10, 500, 0.8);
   const Recording& r = k.rec;
-  EXPECT_EQ(r.status, "running");
+  EXPECT_EQ(r.header.status, stend::RunStatus::kRunning);
   EXPECT_FALSE(r.complete());
   EXPECT_EQ(r.experiment_yaml, "name: killed\n");
   EXPECT_LE(r.dropped_partial_lines, 2u);
@@ -731,7 +731,7 @@ TEST_F(RecordingTest, SigkillLosesAtMostOneSecondOfWallTime) {
   const fs::path dir = root_ / "killed";
   const Killed k = run_and_kill(dir, 5, 20000, 2.3);
   const Recording& r = k.rec;
-  EXPECT_EQ(r.status, "running");
+  EXPECT_EQ(r.header.status, stend::RunStatus::kRunning);
   ASSERT_FALSE(r.samples.empty());
   expect_clean_samples(r);
   // Whatever had been ticked more than ~1 s of wall time before the kill is on disk.
@@ -769,7 +769,7 @@ TEST_F(RecordingTest, OneHourAtOneKilohertzWritesAndReadsBack) {
       write_time += clock::now() - t0;
     }
     const auto t0 = clock::now();
-    w.finish("complete");
+    w.finish(stend::RunStatus::kComplete);
     write_time += clock::now() - t0;
     EXPECT_EQ(w.sample_count(), kRows);
   }

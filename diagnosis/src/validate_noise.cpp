@@ -111,7 +111,7 @@ Recording noise_stage_run(const NoisePlant& plant, std::uint64_t seed, NoiseRunT
 
   Recording rec;
   rec.dir = "validation (sample level, noise stage)";
-  rec.status = "complete";
+  rec.header.status = RunStatus::kComplete;
   rec.header.experiment_name = "gap validate noise stage";
   rec.header.gravity_mps2 = physics::kStandardGravity;
   rec.header.clock = "simulated";

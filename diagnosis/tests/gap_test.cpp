@@ -30,7 +30,7 @@ namespace {
 GapInput sim_input(const std::string& experiment, const std::string& model) {
   const stend::testing::TempDir tmp("gap");
   const RunResult run = stend::testing::run_in_process(stend::testing::source_path(experiment), tmp.path());
-  if (run.status != "complete") throw std::runtime_error(experiment + ": run " + run.status + ": " + run.message);
+  if (run.status != stend::RunStatus::kComplete) throw std::runtime_error(experiment + ": run " + std::string(stend::to_string(run.status)) + ": " + run.message);
   return build_input(Recording::open(run.dir),
                      estimation::load_model_spec(stend::testing::source_path("diagnosis/examples/" + model)));
 }

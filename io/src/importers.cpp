@@ -179,8 +179,7 @@ std::string fmt_g(double v) {
 Recording new_recording(const fs::path& file, const std::string& format) {
   Recording rec;
   rec.dir = file;
-  rec.status = "complete";
-  rec.header.status = "complete";
+  rec.header.status = RunStatus::kComplete;
   rec.header.experiment_name = "import:" + format;
   rec.header.experiment_file = file.string();
   rec.header.stend_version = stend::version();

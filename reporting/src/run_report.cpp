@@ -6,6 +6,7 @@
 #include "stend/model/terms.hpp"
 #include "stend/physics/units.hpp"
 #include "stend/reporting/results.hpp"
+#include "stend/recording.hpp"
 #include "stend/reporting/svg_plot.hpp"
 #include "fitted_model.hpp"
 
@@ -580,7 +581,7 @@ std::string run_report_html(const fs::path& run_dir) {
   row("estimators", ests.empty() ? "none: no results file in this folder (run `stend fit RUN -m MODEL`)" : ests);
   row("stend", rr.stend_version);
   body += "</table>\n";
-  if (rr.run_status != "complete")
+  if (rr.run_status != to_string(RunStatus::kComplete))
     body += "<p class=\"bad\">This recording is not complete (status " + escape(rr.run_status) +
             "): results describe the data present only.</p>\n";
   for (const auto& n : rr.notes) body += "<p class=\"warn\">" + escape(n) + "</p>\n";

@@ -94,7 +94,7 @@ procedure:
   - record: {duration_s: 2}
 )");
   const stend::RunResult r = st::run_in_process(file, tmp / "runs");
-  ASSERT_EQ(r.status, "complete") << r.message;
+  ASSERT_EQ(r.status, stend::RunStatus::kComplete) << r.message;
   EXPECT_EQ(r.dir.parent_path(), tmp / "runs");
   EXPECT_NEAR(static_cast<double>(stend::Recording::open(r.dir).samples.size()), 200.0, 2.0);
   EXPECT_NE(st::build_tree_plugins().record_of("sim_imu"), nullptr);

@@ -23,12 +23,24 @@
 #include <filesystem>
 #include <iosfwd>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace stend {
 
 inline constexpr int kRecordingFormatVersion = 1;
+
+// A run's state, run.json's "status": kRunning from the start until finish(), and forever when
+// the writer never finished (a killed run); then kComplete, kInterrupted (stopped by the operator)
+// or kFailed (a fault).
+enum class RunStatus { kRunning, kComplete, kInterrupted, kFailed };
+// "running" | "complete" | "interrupted" | "failed".
+const char* to_string(RunStatus s);
+// The status of that name, or nullopt.
+std::optional<RunStatus> run_status_from_string(std::string_view name);
+std::ostream& operator<<(std::ostream& os, RunStatus s);
 
 struct PluginUse {
   std::string role;  // "sensor" or the fixture id
@@ -50,7 +62,7 @@ struct RecordingHeader {
   std::string clock;  // "simulated" | "wall"
   std::vector<std::string> truth_columns;  // e.g. "table.angle.cmd_deg", "air_c", "f_x_mps2"
   std::string start_time_utc;  // ISO 8601; filled by the writer when empty
-  std::string status = "running";
+  RunStatus status = RunStatus::kRunning;
 
   // The run's local gravity [m/s²], or standard gravity when the recording does not state one.
   double gravity_or_standard_mps2() const {
@@ -105,7 +117,7 @@ class RecordingWriter {
   void tick(double run_time_s);
   void flush();
   // Final status and counts into run.json.
-  void finish(const std::string& status, const std::string& message = {});
+  void finish(RunStatus status, const std::string& message = {});  // not kRunning
   const std::filesystem::path& dir() const { return dir_; }
   std::uint64_t sample_count() const;
 
@@ -119,8 +131,7 @@ class RecordingWriter {
 struct Recording {
   std::filesystem::path dir;
   RecordingHeader header;
-  std::string status;        // from run.json; "running" means the writer never finished
-  bool complete() const { return status == "complete"; }
+  bool complete() const { return header.status == RunStatus::kComplete; }
   std::string experiment_yaml;
   std::vector<ImuSample> samples;
   std::vector<double> truth_t;

@@ -5,6 +5,7 @@
 #include <stend/clock.hpp>
 #include <stend/experiment.hpp>
 #include <stend/plugin_host.hpp>
+#include <stend/recording.hpp>
 
 #include <atomic>
 #include <cstdint>
@@ -45,7 +46,7 @@ struct RunOptions {
 
 struct RunResult {
   std::filesystem::path dir;
-  std::string status;   // "complete" | "interrupted" | "failed"
+  RunStatus status = RunStatus::kFailed;  // kComplete, kInterrupted or kFailed
   std::string message;  // why, when not complete
   std::uint64_t samples = 0;
   int segments = 0;

@@ -88,11 +88,11 @@ TEST(PaperThroughDrivers, FitAgreesWithTheInProcessBenchWithinUncertainty) {
   stend::RunOptions opt;
   opt.run_name = "drivers";
   const stend::RunResult rd = stend::testing::run_in_process(drivers, tmp.path(), opt);
-  ASSERT_EQ(rd.status, "complete") << rd.message;
+  ASSERT_EQ(rd.status, stend::RunStatus::kComplete) << rd.message;
   EXPECT_LT(rd.wall_time_s, 60.0);
   opt.run_name = "inprocess";
   const stend::RunResult rs = stend::testing::run_in_process(inproc, tmp.path(), opt);
-  ASSERT_EQ(rs.status, "complete") << rs.message;
+  ASSERT_EQ(rs.status, stend::RunStatus::kComplete) << rs.message;
   EXPECT_EQ(rd.segments, rs.segments);
 
   const auto fd = fit(rd.dir, tmp / "drivers.json");

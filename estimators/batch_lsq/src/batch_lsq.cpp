@@ -228,9 +228,9 @@ FitResult fit_recording(const Recording& rec, const ModelSpec& spec) {
   fr.extracted = true;
   fr.recording_dir = rec.dir.string();
   fr.experiment_name = rec.header.experiment_name;
-  fr.recording_status = rec.status;
+  fr.recording_status = to_string(rec.header.status);
   if (!rec.complete())
-    fr.notes.push_back("the recording's status is '" + rec.status +
+    fr.notes.push_back("the recording's status is '" + fr.recording_status +
                        "', not 'complete': it may be truncated");
   const processing::StaticExtractionSettings& x = fr.spec.processing.extraction;
   if (x.filter == processing::Filter::kButterworth && x.settle_s < 1.0 / x.cutoff_hz)

@@ -65,7 +65,7 @@ Recording synth_recording(const model::ErrorModel& m, const Eigen::VectorXd& the
   std::normal_distribution<double> n(0.0, 1.0);
   Recording rec;
   rec.dir = "memory://synthetic";
-  rec.status = "complete";
+  rec.header.status = stend::RunStatus::kComplete;
   rec.header.experiment_name = "synthetic";
   rec.header.gravity_mps2 = 9.80665;
   rec.header.truth_columns = {"f_x_mps2", "f_y_mps2", "f_z_mps2", "w_x_radps", "w_y_radps",
@@ -434,7 +434,7 @@ TEST(BatchLsq, FitsARecordingReadFromDisk) {
     w.add_samples(mem.samples.data(), mem.samples.size());
     for (std::size_t r = 0; r < mem.truth.size(); ++r) w.add_truth(mem.truth_t[r], mem.truth[r]);
     for (const auto& s : mem.segments) w.add_segment(s);
-    w.finish("complete");
+    w.finish(stend::RunStatus::kComplete);
   }
   const Recording rec = Recording::open(dir);
   ASSERT_EQ(rec.samples.size(), mem.samples.size());

@@ -11,7 +11,7 @@ Record make(const Spec& spec) {
   Recording& rec = out.recording;
   rec.header.gravity_mps2 = spec.gravity_mps2;
   rec.header.info.output_rate_hz = spec.rate_hz;
-  rec.status = "complete";
+  rec.header.status = RunStatus::kComplete;
   rec.samples.resize(spec.samples);
   std::mt19937_64 rng(spec.seed);
   std::normal_distribution<double> n01(0.0, 1.0);

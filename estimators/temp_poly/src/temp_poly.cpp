@@ -399,7 +399,7 @@ TempPolyResult fit_temperature_model(const Recording& rec, const TempPolyOptions
   if (!r.ok && points.empty()) r.message = "no usable static segment in the recording; " + r.message;
   r.notes.insert(r.notes.begin(), ex.notes.begin(), ex.notes.end());
   if (!rec.complete())
-    r.notes.push_back("the recording's status is '" + rec.status + "', not 'complete'");
+    r.notes.push_back("the recording's status is '" + std::string(to_string(rec.header.status)) + "', not 'complete'");
   r.recording_dir = rec.dir.string();
   r.experiment_name = rec.header.experiment_name;
   return r;

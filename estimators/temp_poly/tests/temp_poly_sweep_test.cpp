@@ -64,7 +64,7 @@ TEST(TempPolySweep, RecoversPlantedCoefficientsOnSimulatedBench) {
   const fs::path file = dir / "sweep.yaml";
   std::ofstream(file) << sweep_yaml();
   const stend::RunResult run = stend::testing::run_in_process(file, dir.path());
-  ASSERT_EQ(run.status, "complete") << run.message;
+  ASSERT_EQ(run.status, stend::RunStatus::kComplete) << run.message;
   const stend::Recording rec = stend::Recording::open(run.dir);
 
   stend::temp_poly::TempPolyOptions o;
