@@ -181,198 +181,260 @@ struct Tally {
   double closed_sum = 0;
 };
 
-// Declares aliases and identifiability from a probe of the design (rank only), plants each candidate at
-// each size in the experiment, fits the model without it and diagnoses blind; appends the
-// CandidateValidation rows, the confusion entries and the null / out-of-vocabulary runs.
-void validate_experiment(const Experiment& ex, const ValidateOptions& o, model::Rng& prng, std::uint64_t& seed,
-                         ValidationReport& rep, Tally& total) {
-  const estimation::ModelSpec& fit_model = ex.fit_model;
-  const model::Instrument inst = fit_model.model.instrument;
-  const double floor = ex.floor;
-  ExperimentValidation ev;
-  ev.experiment = ex.name;
-  ev.unit = inst == model::Instrument::kGyroscope ? "rad/s" : "m/s^2";
-  ev.floor = floor;
-  Tally tally;
+// The true model's own part (the fitted model's terms) at plausible MEMS values: normal with
+// bias_sigma [unit] for bias terms, scale_sigma [1] for the others.
+Planted base_truth(const Experiment& ex, model::Rng& r) {
+  Planted p;
+  p.model = ex.fit_model.model;
+  p.theta = VectorXd::Zero(p.model.size());
+  for (std::size_t k = 0; k < p.model.terms.size(); ++k) {
+    const int off = p.model.offset(k), n = model::param_count(p.model.terms[k]);
+    const double s = p.model.terms[k].kind == TermKind::kBias ? ex.bias_sigma : ex.scale_sigma;
+    for (int i = 0; i < n; ++i) p.theta[off + i] = s * r.normal();
+  }
+  return p;
+}
 
-  // The true model's own part (the fitted model's terms) at plausible MEMS values.
-  auto base_truth = [&](model::Rng& r) {
-    Planted p;
-    p.model = fit_model.model;
-    p.theta = VectorXd::Zero(p.model.size());
-    for (std::size_t k = 0; k < p.model.terms.size(); ++k) {
-      const int off = p.model.offset(k), n = model::param_count(p.model.terms[k]);
-      const double s = p.model.terms[k].kind == TermKind::kBias ? ex.bias_sigma : ex.scale_sigma;
-      for (int i = 0; i < n; ++i) p.theta[off + i] = s * r.normal();
-    }
-    return p;
-  };
+// The design of a term list on the rows of `in` (3 per segment).
+MatrixXd rows_design(const GapInput& in, const std::vector<TermSpec>& terms) {
+  MatrixXd A(3 * static_cast<Eigen::Index>(in.segments.size()), 0);
+  for (const auto& t : terms) {
+    const MatrixXd B = rows_block(in, t);
+    MatrixXd C(A.rows(), A.cols() + B.cols());
+    C << A, B;
+    A = C;
+  }
+  return A;
+}
 
-  // Alias pairs and identifiability, declared beforehand from the design (no noise involved).
-  GapOptions gopt = o.gap;
-  std::vector<Candidate> cands = default_candidates(fit_model.model);
-  const GapInput probe = ex.make(base_truth(prng), seed++);
-  GapOptions aopt = gopt;
+// What the runs of one experiment share.
+struct Context {
+  const Experiment& ex;
+  const ValidateOptions& o;
+  GapOptions gopt;                                  // blind runs: no alias analysis
+  GapInput probe;                                   // one run of the design (ranks, regressors)
+  std::map<std::string, CandidateResult> declared;  // the probe's candidates, by name
+  MatrixXd A0;                                      // the fitted model's design on the probe
+  Eigen::ColPivHouseholderQR<MatrixXd> qr0;         // of A0
+};
+
+// The random state and the figures every run adds to.
+struct Sinks {
+  model::Rng& prng;
+  std::uint64_t& seed;
+  ValidationReport& rep;
+  Tally& tally;
+};
+
+// Alias pairs and identifiability, declared beforehand from one run of the design (rank only, no
+// noise involved), and the baseline design for sizing a planted effect's unabsorbable part.
+Context probe_design(const Experiment& ex, const ValidateOptions& o, model::Rng& prng, std::uint64_t& seed) {
+  Context cx{ex, o, o.gap, ex.make(base_truth(ex, prng), seed++), {}, {}, {}};
+  GapOptions aopt = o.gap;
   aopt.check_aliases = true;
   aopt.max_steps = 0;
-  const GapReport arep = diagnose(probe, aopt);
-  std::map<std::string, CandidateResult> declared;
-  for (const auto& c : arep.candidates) declared[c.term] = c;
-  gopt.check_aliases = false;
+  for (const auto& c : diagnose(cx.probe, aopt).candidates) cx.declared[c.term] = c;
+  cx.gopt.check_aliases = false;
+  cx.A0 = rows_design(cx.probe, ex.fit_model.model.terms);
+  cx.qr0.compute(cx.A0);
+  return cx;
+}
 
-  // Baseline design (rows: 3 per segment) for sizing the planted effect's unabsorbable part.
-  const MatrixXd A0 = [&] {
-    MatrixXd A(3 * static_cast<Eigen::Index>(probe.segments.size()), 0);
-    for (const auto& t : fit_model.model.terms) {
-      const MatrixXd B = rows_block(probe, t);
-      MatrixXd C(A.rows(), A.cols() + B.cols());
-      C << A, B;
-      A = C;
-    }
-    return A;
-  }();
-  const Eigen::ColPivHouseholderQR<MatrixXd> qr0(A0);
-
-  // One planted candidate per kind (temperature polynomials at order 2).
+// One planted candidate per kind (temperature polynomials at order 2), restricted to --only and to
+// the experiment's plant list; those the design cannot excite are listed in ev.not_excited.
+std::vector<Candidate> planted_candidates(const Context& cx, ExperimentValidation& ev) {
+  const auto& only = cx.o.only;
+  const auto& kinds_to_plant = cx.ex.plant;
   std::vector<Candidate> plant;
   std::set<int> kinds;
-  for (const auto& c : cands) {
+  for (const auto& c : default_candidates(cx.ex.fit_model.model)) {
     const std::string kname = model::term_name(c.term.kind);
-    if (!o.only.empty() && std::find(o.only.begin(), o.only.end(), c.name) == o.only.end() &&
-        std::find(o.only.begin(), o.only.end(), kname) == o.only.end())
+    if (!only.empty() && std::find(only.begin(), only.end(), c.name) == only.end() &&
+        std::find(only.begin(), only.end(), kname) == only.end())
       continue;
-    if (!ex.plant.empty() && std::find(ex.plant.begin(), ex.plant.end(), kname) == ex.plant.end()) continue;
+    if (!kinds_to_plant.empty() && std::find(kinds_to_plant.begin(), kinds_to_plant.end(), kname) == kinds_to_plant.end())
+      continue;
     const bool temp = c.term.kind == TermKind::kBiasTemperature || c.term.kind == TermKind::kScaleTemperature;
     if (temp && c.term.order != 2) continue;
     if (kinds.count(static_cast<int>(c.term.kind))) continue;
     kinds.insert(static_cast<int>(c.term.kind));
-    if (rows_block(probe, c.term).norm() == 0.0) {
+    if (rows_block(cx.probe, c.term).norm() == 0.0) {
       ev.not_excited.push_back(c.name);
-      if (!ex.list_not_excited) continue;
+      if (!cx.ex.list_not_excited) continue;
     }
     plant.push_back(c);
   }
+  return plant;
+}
 
-  for (const auto& c : plant) {
-    CandidateValidation cv;
-    cv.term = c.name;
-    cv.experiment = ex.name;
-    const auto dit = declared.find(c.name);
-    cv.identifiable = dit != declared.end() && dit->second.evaluated;
-    if (dit != declared.end()) cv.aliases = dit->second.aliases;
-    const MatrixXd C = rows_block(probe, c.term);
-    const auto info = model::param_info(c.term, inst);
-    const std::string key = ex.tag.empty() ? c.name : c.name + " [" + ex.tag + "]";
-    for (double m : o.sizes) {
-      CandidateValidation::BySize bs;
-      bs.size = m;
-      double rank_sum = 0, closed = 0, ratio_sum = 0;
-      int ratio_n = 0;
-      for (int sd = 0; sd < o.seeds; ++sd) {
-        Planted truth = base_truth(prng);
-        VectorXd th(C.cols());
-        for (Eigen::Index i = 0; i < th.size(); ++i) th[i] = prng.normal();
-        const VectorXd eff = C * th;
-        const VectorXd orth = eff - A0 * qr0.solve(eff);
-        const double rms_o = std::sqrt(orth.squaredNorm() / static_cast<double>(orth.size()));
-        const double rms_e = std::sqrt(eff.squaredNorm() / static_cast<double>(eff.size()));
-        const double base = cv.identifiable && rms_o > 1e-9 * rms_e ? rms_o : rms_e;
-        if (!(base > 0)) break;
-        th *= m * floor / base;
-        truth.model.terms.push_back(c.term);
-        VectorXd full(truth.theta.size() + th.size());
-        full << truth.theta, th;
-        truth.theta = full;
-        const GapInput in = ex.make(truth, seed++);
-        const GapReport r = diagnose(in, gopt);
-        if (!r.ok) continue;
-        ++bs.runs;
-        const std::string named = r.selected.empty() ? "(none)" : r.selected.front();
-        bool alias_ok = false;
-        for (const auto& a : cv.aliases) alias_ok = alias_ok || same_effect(named, a);
-        const bool strict = same_effect(named, c.name);
-        bs.top1_strict += strict ? 1 : 0;
-        bs.top1 += (strict || alias_ok) ? 1 : 0;
-        int rank = 0, pos = 0;
-        for (const auto& cr : r.candidates) {
-          if (cr.noise_stage || !cr.evaluated) continue;
-          ++pos;
-          if (same_effect(cr.term, c.name) && rank == 0) rank = pos;
-        }
-        rank_sum += rank > 0 ? rank : pos + 1;
-        if (!r.steps.empty()) {
-          const double h0 = r.steps.front().heldout_rms, f0 = r.steps.front().floor_rms;
-          const double exq = h0 * h0 - f0 * f0;
-          const double cl = h0 * h0 - r.unexplained_heldout_rms * r.unexplained_heldout_rms;
-          const double frac = exq > 0 ? std::clamp(cl / exq, 0.0, 1.0) : 1.0;
-          closed += frac;
-          if (cv.identifiable && m >= 5) {
-            tally.closed_sum += frac;
-            ++tally.closed_n;
-          }
-        }
-        for (const auto& cr : r.candidates)
-          if (cr.term == c.name && std::isfinite(cr.size)) {
-            for (std::size_t k = 0; k < info.size(); ++k)
-              if (info[k].name == cr.size_param) {
-                const double planted = th[static_cast<Eigen::Index>(k)];
-                ++bs.coverage_n;
-                const bool in_ci = cr.ci_lo <= planted && planted <= cr.ci_hi;
-                bs.covered += in_ci ? 1 : 0;
-                if (planted != 0) {
-                  ratio_sum += cr.size / planted;
-                  ++ratio_n;
-                }
-                if (cv.identifiable && m >= 5) {
-                  ++tally.cov_n;
-                  tally.cov_ok += in_ci ? 1 : 0;
-                }
-              }
-          }
-        if (m >= 5) {
-          rep.confusion[key][named] += 1;
-          if (cv.identifiable) {
-            ++tally.top1_n;
-            tally.top1_ok += (strict || alias_ok) ? 1 : 0;
-          }
-        }
-      }
-      if (bs.runs > 0) {
-        bs.mean_rank = rank_sum / bs.runs;
-        bs.closed = closed / bs.runs;
-        bs.recovered_ratio = ratio_n ? ratio_sum / ratio_n : kNaN;
-      }
-      cv.by_size.push_back(bs);
-    }
-    rep.candidates.push_back(cv);
+// Planted parameters of candidate columns C: standard normal, scaled so the part of C·θ the model
+// cannot absorb (all of it when not identifiable) has an RMS of size × floor [unit]; empty when
+// the effect is zero.
+VectorXd planted_parameters(const Context& cx, const MatrixXd& C, bool identifiable, double size, model::Rng& prng) {
+  VectorXd th(C.cols());
+  for (Eigen::Index i = 0; i < th.size(); ++i) th[i] = prng.normal();
+  const VectorXd eff = C * th;
+  const VectorXd orth = eff - cx.A0 * cx.qr0.solve(eff);
+  const double rms_o = std::sqrt(orth.squaredNorm() / static_cast<double>(orth.size()));
+  const double rms_e = std::sqrt(eff.squaredNorm() / static_cast<double>(eff.size()));
+  const double base = identifiable && rms_o > 1e-9 * rms_e ? rms_o : rms_e;
+  if (!(base > 0)) return {};
+  return th * (size * cx.ex.floor / base);
+}
+
+// 1-based rank of the planted term among the evaluated static candidates (one past the last when
+// absent).
+int planted_rank(const GapReport& r, const std::string& planted) {
+  int rank = 0, pos = 0;
+  for (const auto& cr : r.candidates) {
+    if (cr.noise_stage || !cr.evaluated) continue;
+    ++pos;
+    if (same_effect(cr.term, planted) && rank == 0) rank = pos;
   }
+  return rank > 0 ? rank : pos + 1;
+}
 
-  // Null runs.
-  for (int i = 0; i < ex.null_runs; ++i) {
-    const GapReport r = diagnose(ex.make(base_truth(prng), seed++), gopt);
+// Fraction of the excess squared held-out gap above the floor that the selection closed, in [0, 1].
+double closed_fraction(const GapReport& r) {
+  const double h0 = r.steps.front().heldout_rms, f0 = r.steps.front().floor_rms;
+  const double exq = h0 * h0 - f0 * f0;
+  const double cl = h0 * h0 - r.unexplained_heldout_rms * r.unexplained_heldout_rms;
+  return exq > 0 ? std::clamp(cl / exq, 0.0, 1.0) : 1.0;
+}
+
+// Running sums of one (candidate, size) cell.
+struct SizeSums {
+  CandidateValidation::BySize bs;
+  double rank_sum = 0, closed = 0, ratio_sum = 0;
+  int ratio_n = 0;
+};
+
+// Interval coverage and recovered/planted ratio of the candidate's reported size parameter.
+void score_size(const GapReport& r, const Candidate& c, const VectorXd& th, bool counted, SizeSums& ss, Tally& tally,
+                model::Instrument inst) {
+  const auto info = model::param_info(c.term, inst);
+  for (const auto& cr : r.candidates)
+    if (cr.term == c.name && std::isfinite(cr.size)) {
+      for (std::size_t k = 0; k < info.size(); ++k)
+        if (info[k].name == cr.size_param) {
+          const double planted = th[static_cast<Eigen::Index>(k)];
+          ++ss.bs.coverage_n;
+          const bool in_ci = cr.ci_lo <= planted && planted <= cr.ci_hi;
+          ss.bs.covered += in_ci ? 1 : 0;
+          if (planted != 0) {
+            ss.ratio_sum += cr.size / planted;
+            ++ss.ratio_n;
+          }
+          if (counted) {
+            ++tally.cov_n;
+            tally.cov_ok += in_ci ? 1 : 0;
+          }
+        }
+    }
+}
+
+// Scores one blind diagnosis of a planted run: top-1 (strict, or an alias declared beforehand),
+// rank, gap closed, coverage; runs at ≥ 5× the floor go into the confusion matrix and, when the
+// candidate is identifiable, into the tally.
+void score_run(const GapReport& r, const Context& cx, const Candidate& c, const CandidateValidation& cv,
+               const VectorXd& th, double size, SizeSums& ss, Sinks& out) {
+  const bool counted = cv.identifiable && size >= 5;
+  ++ss.bs.runs;
+  const std::string named = r.selected.empty() ? "(none)" : r.selected.front();
+  bool alias_ok = false;
+  for (const auto& a : cv.aliases) alias_ok = alias_ok || same_effect(named, a);
+  const bool strict = same_effect(named, c.name);
+  ss.bs.top1_strict += strict ? 1 : 0;
+  ss.bs.top1 += (strict || alias_ok) ? 1 : 0;
+  ss.rank_sum += planted_rank(r, c.name);
+  if (!r.steps.empty()) {
+    const double frac = closed_fraction(r);
+    ss.closed += frac;
+    if (counted) {
+      out.tally.closed_sum += frac;
+      ++out.tally.closed_n;
+    }
+  }
+  score_size(r, c, th, counted, ss, out.tally, cx.ex.fit_model.model.instrument);
+  if (size >= 5) {
+    const std::string key = cx.ex.tag.empty() ? c.name : c.name + " [" + cx.ex.tag + "]";
+    out.rep.confusion[key][named] += 1;
+    if (cv.identifiable) {
+      ++out.tally.top1_n;
+      out.tally.top1_ok += (strict || alias_ok) ? 1 : 0;
+    }
+  }
+}
+
+// Seeds runs of the candidate planted at `size` × the floor, each diagnosed blind.
+CandidateValidation::BySize validate_size(const Context& cx, const Candidate& c, const CandidateValidation& cv,
+                                          const MatrixXd& C, double size, Sinks& out) {
+  SizeSums ss;
+  ss.bs.size = size;
+  for (int sd = 0; sd < cx.o.seeds; ++sd) {
+    Planted truth = base_truth(cx.ex, out.prng);
+    const VectorXd th = planted_parameters(cx, C, cv.identifiable, size, out.prng);
+    if (th.size() == 0) break;
+    truth.model.terms.push_back(c.term);
+    VectorXd full(truth.theta.size() + th.size());
+    full << truth.theta, th;
+    truth.theta = full;
+    const GapReport r = diagnose(cx.ex.make(truth, out.seed++), cx.gopt);
+    if (r.ok) score_run(r, cx, c, cv, th, size, ss, out);
+  }
+  if (ss.bs.runs > 0) {
+    ss.bs.mean_rank = ss.rank_sum / ss.bs.runs;
+    ss.bs.closed = ss.closed / ss.bs.runs;
+    ss.bs.recovered_ratio = ss.ratio_n ? ss.ratio_sum / ss.ratio_n : kNaN;
+  }
+  return ss.bs;
+}
+
+// One planted candidate at every size: identifiability and aliases as declared by the probe.
+CandidateValidation validate_candidate(const Context& cx, const Candidate& c, Sinks& out) {
+  CandidateValidation cv;
+  cv.term = c.name;
+  cv.experiment = cx.ex.name;
+  const auto dit = cx.declared.find(c.name);
+  cv.identifiable = dit != cx.declared.end() && dit->second.evaluated;
+  if (dit != cx.declared.end()) cv.aliases = dit->second.aliases;
+  const MatrixXd C = rows_block(cx.probe, c.term);
+  for (double m : cx.o.sizes) cv.by_size.push_back(validate_size(cx, c, cv, C, m, out));
+  return cv;
+}
+
+// Null runs: the true model is the fitted one; any term named is a false positive.
+void null_runs(const Context& cx, ExperimentValidation& ev, Sinks& out) {
+  for (int i = 0; i < cx.ex.null_runs; ++i) {
+    const GapReport r = diagnose(cx.ex.make(base_truth(cx.ex, out.prng), out.seed++), cx.gopt);
     if (!r.ok) continue;
     ++ev.null_runs;
     ev.null_false_positives += r.selected.empty() ? 0 : 1;
-    if (!r.selected.empty()) ++rep.null_named[r.selected.front() + (ex.tag.empty() ? "" : " [" + ex.tag + "]")];
+    if (!r.selected.empty()) ++out.rep.null_named[r.selected.front() + (cx.ex.tag.empty() ? "" : " [" + cx.ex.tag + "]")];
   }
+}
 
-  // Out of vocabulary: the z reading jumps by 8× the floor in one segment of every repeat of the
-  // pattern (a part that shifts at that table position), something no term of the vocabulary
-  // describes. The first 6 segments of a repeat are left clean.
-  for (int i = 0; i < ex.oov_runs; ++i) {
-    Planted p = base_truth(prng);
-    const std::size_t per = ex.oov_period;
-    p.extra.assign(ex.oov_segments, Eigen::Vector3d::Zero());
+// Out of vocabulary: the z reading jumps by 8× the floor in one segment of every repeat of the
+// pattern (a part that shifts at that table position), something no term of the vocabulary
+// describes. The first 6 segments of a repeat are left clean.
+void oov_runs(const Context& cx, ExperimentValidation& ev, Sinks& out) {
+  const std::size_t per = cx.ex.oov_period;
+  for (int i = 0; i < cx.ex.oov_runs; ++i) {
+    Planted p = base_truth(cx.ex, out.prng);
+    p.extra.assign(cx.ex.oov_segments, Eigen::Vector3d::Zero());
     const std::size_t where = 6 + static_cast<std::size_t>(i) % (per > 6 ? per - 6 : 1);
     for (std::size_t s = 0; s < p.extra.size(); ++s)
-      if (s % per == where % per) p.extra[s][2] = 8.0 * floor * (i % 2 ? 1.0 : -1.0);
-    const GapReport r = diagnose(ex.make(p, seed++), gopt);
+      if (s % per == where % per) p.extra[s][2] = 8.0 * cx.ex.floor * (i % 2 ? 1.0 : -1.0);
+    const GapReport r = diagnose(cx.ex.make(p, out.seed++), cx.gopt);
     if (!r.ok) continue;
     ++ev.oov_runs;
     if (r.explanation.empty() && !r.at_floor) ++ev.oov_unexplained;
     if (!r.explanation.empty()) ++ev.oov_wrong_name;
   }
+}
 
+// The experiment's summary figures from its tally, added to the totals and the report.
+void summarize(ExperimentValidation& ev, const Tally& tally, Tally& total, ValidationReport& rep) {
   ev.planted_at5 = tally.top1_n;
   ev.top1_ok_at5 = tally.top1_ok;
   ev.top1_at5 = tally.top1_n ? static_cast<double>(tally.top1_ok) / tally.top1_n : kNaN;
@@ -390,6 +452,24 @@ void validate_experiment(const Experiment& ex, const ValidateOptions& o, model::
   rep.oov_unexplained += ev.oov_unexplained;
   rep.oov_wrong_name += ev.oov_wrong_name;
   rep.experiments.push_back(ev);
+}
+
+// Declares aliases and identifiability from a probe of the design (rank only), plants each candidate at
+// each size in the experiment, fits the model without it and diagnoses blind; appends the
+// CandidateValidation rows, the confusion entries and the null / out-of-vocabulary runs.
+void validate_experiment(const Experiment& ex, const ValidateOptions& o, model::Rng& prng, std::uint64_t& seed,
+                         ValidationReport& rep, Tally& total) {
+  ExperimentValidation ev;
+  ev.experiment = ex.name;
+  ev.unit = ex.fit_model.model.instrument == model::Instrument::kGyroscope ? "rad/s" : "m/s^2";
+  ev.floor = ex.floor;
+  Tally tally;
+  Sinks out{prng, seed, rep, tally};
+  const Context cx = probe_design(ex, o, prng, seed);
+  for (const auto& c : planted_candidates(cx, ev)) rep.candidates.push_back(validate_candidate(cx, c, out));
+  null_runs(cx, ev, out);
+  oov_runs(cx, ev, out);
+  summarize(ev, tally, total, rep);
 }
 
 }  // namespace
