@@ -6,6 +6,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "samples.hpp"
 #include "stats.hpp"
 #include "text.hpp"
 #include "stend/allan/allan.hpp"
@@ -18,11 +19,6 @@ constexpr int kGroups = 8, kPerGroup = 8, kSub = kGroups * kPerGroup;  // 64 sub
 // The kind of coloured noise is read from the slope of the Allan variance above white over the
 // last four octaves of τ (τ_max/16 … τ_max).
 constexpr double kSlopeSpan = 16.5;
-
-using SampleIt = std::vector<ImuSample>::const_iterator;
-
-double axis_value(const ImuSample& s, bool accel, int a) { return accel ? s.accel_mps2[a] : s.gyro_radps[a]; }
-
 
 // x with P(F_{d1,d2} > x) = q, by bisection on log x.
 double f_quantile_upper(double q, double d1, double d2) {
@@ -51,15 +47,6 @@ std::pair<double, double> wilson(double k, double n) {
   const double c = (p + z2 / (2 * n)) / (1 + z2 / n);
   const double h = z * std::sqrt(p * (1 - p) / n + z2 / (4 * n * n)) / (1 + z2 / n);
   return {std::max(0.0, c - h), std::min(1.0, c + h)};
-}
-
-// The samples with t_start_s ≤ t_s ≤ t_end_s [s] (samples sorted by time).
-std::pair<SampleIt, SampleIt> sample_window(const std::vector<ImuSample>& S, double t_start_s, double t_end_s) {
-  const auto lo = std::lower_bound(S.begin(), S.end(), t_start_s,
-                                   [](const ImuSample& s, double t) { return s.t_s < t; });
-  const auto hi = std::upper_bound(S.begin(), S.end(), t_end_s,
-                                   [](double t, const ImuSample& s) { return t < s.t_s; });
-  return {lo, hi};
 }
 
 // Whether a sample counts as clipped on axis a: by the instrument's saturation flag, charged to

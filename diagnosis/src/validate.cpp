@@ -15,6 +15,7 @@
 #include <set>
 
 #include "stend/physics/table_chain.hpp"
+#include "groups.hpp"
 #include "segment_mean_noise.hpp"
 #include "stend/model/noise.hpp"
 #include "noise_stage.hpp"
@@ -103,13 +104,7 @@ GapInput generate(const ValidationDesign& d, const estimation::ModelSpec& fit_mo
     const int dir = std::isfinite(prev_sp) ? (sp > prev_sp ? 1 : -1) : 0;
     prev_sp = sp;
     t += d.hold_s;
-    int level = -1;
-    for (std::size_t i = 0; i < levels.size(); ++i)
-      if (std::abs(levels[i] - sp) <= 2.0) level = static_cast<int>(i);
-    if (level < 0) {
-      levels.push_back(sp);
-      level = static_cast<int>(levels.size()) - 1;
-    }
+    const int level = temperature_group(levels, sp);
     double t_last_orient = t_change;
     for (const auto& [h, dl] : d.positions) {
       t += d.move_s;
@@ -139,9 +134,7 @@ GapInput generate(const ValidationDesign& d, const estimation::ModelSpec& fit_mo
                 std::to_string(static_cast<int>(dl));
       char name[64];
       std::snprintf(name, sizeof name, "h=%g d=%g", h, dl);
-      auto it = og.find(name);
-      if (it == og.end()) it = og.emplace(name, static_cast<int>(og.size())).first;
-      s.orientation = it->second;
+      s.orientation = orientation_group(og, name);
       s.orientation_name = name;
       s.setpoint_c = sp;
       s.temperature_group = level;
