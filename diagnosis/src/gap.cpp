@@ -10,6 +10,7 @@
 #include <limits>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -271,12 +272,11 @@ MatrixXd gls_whiten(const Gls& g, const GlsPoint& pt, const Rows& rows, const Ma
   return out;
 }
 
-Gls estimate_gls(const GapInput& in, const Rows& rows, const MatrixXd& Xfull) {
-  Gls g;
-  const Eigen::Index K = rows.y.size();
+// Rows per axis into g.idx, and their segment mid-times [s] per axis.
+std::vector<std::vector<double>> axis_times(const GapInput& in, const Rows& rows, Gls& g) {
   std::vector<std::vector<double>> t;
   std::map<int, std::size_t> axis_slot;
-  for (Eigen::Index r = 0; r < K; ++r) {
+  for (Eigen::Index r = 0; r < rows.y.size(); ++r) {
     const int a = rows.axis[static_cast<std::size_t>(r)];
     if (!axis_slot.count(a)) {
       axis_slot[a] = g.idx.size();
@@ -287,6 +287,49 @@ Gls estimate_gls(const GapInput& in, const Rows& rows, const MatrixXd& Xfull) {
     g.idx[axis_slot[a]].push_back(r);
     t[axis_slot[a]].push_back(0.5 * (p.t_start_s + p.t_end_s));
   }
+  return t;
+}
+
+// Restricted log-likelihood of the rows under covariance floor²·(δ_ij + λ·exp(−|t_i − t_j|/τ))
+// per axis (τ [s]), fixed effects spanned by the orthonormal Q; nullopt when a factor fails.
+std::optional<double> reml_loglik(const Gls& g, const std::vector<std::vector<double>>& t, const Rows& rows,
+                                  const MatrixXd& Q, double lam, double tau) {
+  const Eigen::Index p = Q.cols();
+  const VectorXd sw = rows.w.cwiseSqrt();
+  MatrixXd M = MatrixXd::Zero(p, p);
+  VectorXd b = VectorXd::Zero(p);
+  double yy = 0, logdet = 0;
+  for (std::size_t a = 0; a < g.idx.size(); ++a) {
+    const auto& id = g.idx[a];
+    Eigen::LLT<MatrixXd> llt(gls_corr(t[a], lam, tau));
+    if (llt.info() != Eigen::Success) return std::nullopt;
+    MatrixXd Qa(static_cast<Eigen::Index>(id.size()), p);
+    VectorXd ya(static_cast<Eigen::Index>(id.size()));
+    for (std::size_t i = 0; i < id.size(); ++i) {
+      Qa.row(static_cast<Eigen::Index>(i)) = Q.row(id[i]);
+      ya[static_cast<Eigen::Index>(i)] = rows.y[id[i]] * sw[id[i]];
+    }
+    // Q spans the unweighted columns; rows are scaled by sqrt(w) like y (w is constant per axis).
+    Qa *= sw[id[0]];
+    Qa = llt.matrixL().solve(Qa);
+    ya = llt.matrixL().solve(ya);
+    M += Qa.transpose() * Qa;
+    b += Qa.transpose() * ya;
+    yy += ya.squaredNorm();
+    logdet += 2.0 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
+  }
+  Eigen::LLT<MatrixXd> lm(M);
+  if (lm.info() != Eigen::Success) return std::nullopt;
+  const double q = yy - b.dot(lm.solve(b));
+  if (!(q > 0)) return std::nullopt;
+  return -0.5 * (static_cast<double>(rows.y.size() - p) * std::log(q) + logdet +
+                 2.0 * lm.matrixL().toDenseMatrix().diagonal().array().log().sum());
+}
+
+Gls estimate_gls(const GapInput& in, const Rows& rows, const MatrixXd& Xfull) {
+  Gls g;
+  const Eigen::Index K = rows.y.size();
+  const std::vector<std::vector<double>> t = axis_times(in, rows, g);
   double span = 0;
   for (const auto& ta : t)
     if (!ta.empty()) span = std::max(span, *std::max_element(ta.begin(), ta.end()) - *std::min_element(ta.begin(), ta.end()));
@@ -296,56 +339,24 @@ Gls estimate_gls(const GapInput& in, const Rows& rows, const MatrixXd& Xfull) {
   for (const auto& ta : t) nmax = std::max(nmax, ta.size());
   if (!(span > 0) || Xfull.cols() == 0 || nmax > 600) return g;
   // Orthonormal basis of the weighted fixed-effect column space (REML is basis invariant).
-  const VectorXd sw = rows.w.cwiseSqrt();
   Eigen::ColPivHouseholderQR<MatrixXd> qr(unit_columns(Xfull));
   qr.setThreshold(1e-9);
   const Eigen::Index p = qr.rank();
   if (p >= K - 5) return g;
   const MatrixXd Q = MatrixXd(qr.householderQ()).leftCols(p);
   double best = -std::numeric_limits<double>::infinity();
-  std::vector<std::array<double, 3>> tried;  // λ, τ, log-likelihood
+  std::vector<std::array<double, 3>> tried;  // λ, τ [s], log-likelihood
   const double lambdas[] = {0.0, 0.05, 0.15, 0.4, 1.0};
   const double taus[] = {0.03, 0.1, 0.3};  // × span
   for (double lam : lambdas)
     for (double tf : taus) {
       if (lam == 0.0 && tf != taus[0]) continue;
       const double tau = tf * span;
-      MatrixXd M = MatrixXd::Zero(p, p);
-      VectorXd b = VectorXd::Zero(p);
-      double yy = 0, logdet = 0;
-      bool fine = true;
-      for (std::size_t a = 0; a < g.idx.size() && fine; ++a) {
-        const auto& id = g.idx[a];
-        Eigen::LLT<MatrixXd> llt(gls_corr(t[a], lam, tau));
-        if (llt.info() != Eigen::Success) {
-          fine = false;
-          break;
-        }
-        MatrixXd Qa(static_cast<Eigen::Index>(id.size()), p);
-        VectorXd ya(static_cast<Eigen::Index>(id.size()));
-        for (std::size_t i = 0; i < id.size(); ++i) {
-          Qa.row(static_cast<Eigen::Index>(i)) = Q.row(id[i]);
-          ya[static_cast<Eigen::Index>(i)] = rows.y[id[i]] * sw[id[i]];
-        }
-        // Q spans the unweighted columns; rows are scaled by sqrt(w) like y (w is constant per axis).
-        Qa *= sw[id[0]];
-        Qa = llt.matrixL().solve(Qa);
-        ya = llt.matrixL().solve(ya);
-        M += Qa.transpose() * Qa;
-        b += Qa.transpose() * ya;
-        yy += ya.squaredNorm();
-        logdet += 2.0 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
-      }
-      if (!fine) continue;
-      Eigen::LLT<MatrixXd> lm(M);
-      if (lm.info() != Eigen::Success) continue;
-      const double q = yy - b.dot(lm.solve(b));
-      if (!(q > 0)) continue;
-      const double ll = -0.5 * (static_cast<double>(K - p) * std::log(q) + logdet +
-                                2.0 * lm.matrixL().toDenseMatrix().diagonal().array().log().sum());
-      tried.push_back({lam, tau, ll});
-      if (ll > best) {
-        best = ll;
+      const std::optional<double> ll = reml_loglik(g, t, rows, Q, lam, tau);
+      if (!ll) continue;
+      tried.push_back({lam, tau, *ll});
+      if (*ll > best) {
+        best = *ll;
         g.lambda = lam;
         g.tau_s = tau;
       }

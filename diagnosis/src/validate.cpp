@@ -49,6 +49,23 @@ bool same_effect(const std::string& named, const std::string& planted) {
   return kind(named) == kind(planted);
 }
 
+// Stimulus of a generated segment: gravity through the table at h, δ [deg] (identity mount), die
+// temperature [degC] approaching the setpoint sp [degC] with the die lag, mid-time [s], ramp direction.
+model::Stimulus<double> generated_stimulus(const ValidationDesign& d, double h, double dl, double die, double sp,
+                                           double mid, int dir) {
+  model::Stimulus<double> st;
+  const Eigen::Vector3d f = table_stimulus(st, 0.0, h * physics::kDegToRad, dl * physics::kDegToRad,
+                                           Eigen::Matrix3d::Identity(), d.gravity);
+  st.input = f;
+  st.specific_force = f;
+  st.gravity_up = f / f.norm();
+  st.temperature_c = die;
+  st.temperature_rate_cps = -(die - sp) / d.die_lag_s;
+  st.time_s = mid;
+  st.temperature_direction = dir;
+  return st;
+}
+
 }  // namespace
 
 ValidationDesign default_design() {
@@ -95,7 +112,6 @@ GapInput generate(const ValidationDesign& d, const estimation::ModelSpec& fit_mo
   SegmentMeanNoise mean_noise(rng, se, sigma, bi, d.bias_correlation_s);
   double t = 0.0;
   double die = 22.0, prev_sp = kNaN;
-  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   int seg_id = 0;
   std::map<std::string, int> og;
   std::vector<double> levels;
@@ -117,16 +133,8 @@ GapInput generate(const ValidationDesign& d, const estimation::ModelSpec& fit_mo
       const double mid = t + 0.5 * d.record_s;
       const double decay = std::exp(-(mid - t_change) / d.die_lag_s);
       die = sp + (die_start - sp) * decay;
-      auto& st = p.stimulus;
-      const Eigen::Vector3d f = table_stimulus(st, 0.0, h * physics::kDegToRad, dl * physics::kDegToRad, I, d.gravity);
-      st.input = f;
-      st.specific_force = f;
-      st.gravity_up = f / f.norm();
-      st.temperature_c = die;
-      st.temperature_rate_cps = -(die - sp) / d.die_lag_s;
-      st.time_s = mid;
-      st.temperature_direction = dir;
-      Eigen::Vector3d y = truth.model.measure<double>(truth.theta.data(), st);
+      p.stimulus = generated_stimulus(d, h, dl, die, sp, mid, dir);
+      Eigen::Vector3d y = truth.model.measure<double>(truth.theta.data(), p.stimulus);
       if (!truth.extra.empty()) y += truth.extra[static_cast<std::size_t>(p.segment_id) % truth.extra.size()];
       mean_noise.apply(rng, mid, y, s);
       p.measured = y;
@@ -465,73 +473,90 @@ void validate_experiment(const Experiment& ex, const ValidateOptions& o, model::
   summarize(ev, tally, total, rep);
 }
 
+// The static tumble × temperature design with the accelerometer bias + scale model.
+Experiment static_experiment(const ValidateOptions& o) {
+  const ValidationDesign& d = o.design;
+  Experiment e;
+  e.name = "static tumble x temperature, accel bias+scale";
+  e.fit_model = validation_model();
+  e.make = [&d = o.design, fm = e.fit_model](const Planted& p, std::uint64_t s) { return generate(d, fm, p, s); };
+  e.floor = white_floor(d);
+  e.null_runs = o.null_runs;
+  e.oov_runs = o.oov_runs;
+  e.oov_period = d.positions.size();
+  e.oov_segments = d.positions.size() * d.setpoints_c.size();
+  return e;
+}
+
+// The same static design with a bias-only model: scale itself, and a wrong local g (a common scale
+// on a static design: declared alias).
+Experiment static_bias_only_experiment(const ValidateOptions& o) {
+  Experiment e;
+  e.name = "static tumble x temperature, accel bias only";
+  e.tag = "static, bias only";
+  e.fit_model = validation_model();
+  e.fit_model.model.terms = {TermSpec{TermKind::kBias, 1, 25.0}};
+  e.fit_model.source = "bias (validation model)";
+  e.make = [&d = o.design, fm = e.fit_model](const Planted& p, std::uint64_t s) { return generate(d, fm, p, s); };
+  e.floor = white_floor(o.design);
+  e.plant = {"scale", "gravity_error"};
+  return e;
+}
+
+// The rate table with the gyroscope bias + scale model.
+Experiment rate_gyro_experiment(const ValidateOptions& o) {
+  const RateDesign& rd = o.rate_design;
+  Experiment g;
+  g.name = "rate table, gyro bias+scale";
+  g.tag = "rate, gyro";
+  g.fit_model = rate_model(model::Instrument::kGyroscope);
+  g.make = [&rd = o.rate_design, fm = g.fit_model](const Planted& p, std::uint64_t s) {
+    return generate_rate(rd, fm, p, s);
+  };
+  g.floor = rate_white_floor(rd, model::Instrument::kGyroscope);
+  g.bias_sigma = 0.01;  // rad/s (≈ 0.6 deg/s)
+  g.list_not_excited = false;
+  g.null_runs = o.rate_null_runs >= 0 ? o.rate_null_runs : (o.null_runs + 1) / 2;
+  g.oov_runs = o.rate_oov_runs >= 0 ? o.rate_oov_runs : (o.oov_runs + 1) / 2;
+  g.oov_period = rd.axes.size() * rd.rates_dps.size();
+  g.oov_segments = g.oov_period;
+  return g;
+}
+
+// The accelerometer off the axis: the centripetal ω×(ω×r) at a known r is an input of known
+// size apart from gravity, so a wrong local g no longer hides in the scale; with one mount it
+// still hides in scale + a radius error (g and r off by the same fraction), a second mount at
+// another known offset separates that too.
+Experiment rate_accel_experiment(const ValidateOptions& o) {
+  const RateDesign& ra = o.rate_accel_design;
+  Experiment a;
+  a.name = ra.remount_offsets_m.empty() ? "rate table, accel bias+scale (off axis)"
+                                        : "rate table, accel bias+scale (off axis, two mounts)";
+  a.tag = "rate, accel";
+  a.fit_model = rate_model(model::Instrument::kAccelerometer);
+  a.make = [&ra = o.rate_accel_design, fm = a.fit_model](const Planted& p, std::uint64_t s) {
+    return generate_rate(ra, fm, p, s);
+  };
+  a.floor = rate_white_floor(ra, model::Instrument::kAccelerometer);
+  a.plant = {"lever_arm", "gravity_error"};
+  a.list_not_excited = false;
+  return a;
+}
+
 }  // namespace
 
 ValidationReport run_validation(const ValidateOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   ValidationReport rep;
-  const ValidationDesign& d = o.design;
-  rep.floor_mps2 = white_floor(d);
+  rep.floor_mps2 = white_floor(o.design);
   model::Rng prng(o.seed * 7919 + 17);
   std::uint64_t seed = o.seed * 1000003;
   Tally total;
-
-  std::vector<Experiment> exps;
-  {
-    Experiment e;
-    e.name = "static tumble x temperature, accel bias+scale";
-    e.fit_model = validation_model();
-    e.make = [&d, fm = e.fit_model](const Planted& p, std::uint64_t s) { return generate(d, fm, p, s); };
-    e.floor = white_floor(d);
-    e.null_runs = o.null_runs;
-    e.oov_runs = o.oov_runs;
-    e.oov_period = d.positions.size();
-    e.oov_segments = d.positions.size() * d.setpoints_c.size();
-    exps.push_back(e);
-  }
-  const RateDesign& rd = o.rate_design;
+  std::vector<Experiment> exps = {static_experiment(o)};
   if (o.more_designs) {
-    // Scale itself, and a wrong local g (a common scale on a static design: declared alias).
-    Experiment e;
-    e.name = "static tumble x temperature, accel bias only";
-    e.tag = "static, bias only";
-    e.fit_model = validation_model();
-    e.fit_model.model.terms = {TermSpec{TermKind::kBias, 1, 25.0}};
-    e.fit_model.source = "bias (validation model)";
-    e.make = [&d, fm = e.fit_model](const Planted& p, std::uint64_t s) { return generate(d, fm, p, s); };
-    e.floor = white_floor(d);
-    e.plant = {"scale", "gravity_error"};
-    exps.push_back(e);
-
-    Experiment g;
-    g.name = "rate table, gyro bias+scale";
-    g.tag = "rate, gyro";
-    g.fit_model = rate_model(model::Instrument::kGyroscope);
-    g.make = [&rd, fm = g.fit_model](const Planted& p, std::uint64_t s) { return generate_rate(rd, fm, p, s); };
-    g.floor = rate_white_floor(rd, model::Instrument::kGyroscope);
-    g.bias_sigma = 0.01;  // rad/s (≈ 0.6 deg/s)
-    g.list_not_excited = false;
-    g.null_runs = o.rate_null_runs >= 0 ? o.rate_null_runs : (o.null_runs + 1) / 2;
-    g.oov_runs = o.rate_oov_runs >= 0 ? o.rate_oov_runs : (o.oov_runs + 1) / 2;
-    g.oov_period = rd.axes.size() * rd.rates_dps.size();
-    g.oov_segments = g.oov_period;
-    exps.push_back(g);
-
-    // The accelerometer off the axis: the centripetal ω×(ω×r) at a known r is an input of known
-    // size apart from gravity, so a wrong local g no longer hides in the scale; with one mount it
-    // still hides in scale + a radius error (g and r off by the same fraction), a second mount at
-    // another known offset separates that too.
-    Experiment a;
-    const RateDesign& ra = o.rate_accel_design;
-    a.name = ra.remount_offsets_m.empty() ? "rate table, accel bias+scale (off axis)"
-                                          : "rate table, accel bias+scale (off axis, two mounts)";
-    a.tag = "rate, accel";
-    a.fit_model = rate_model(model::Instrument::kAccelerometer);
-    a.make = [&ra, fm = a.fit_model](const Planted& p, std::uint64_t s) { return generate_rate(ra, fm, p, s); };
-    a.floor = rate_white_floor(ra, model::Instrument::kAccelerometer);
-    a.plant = {"lever_arm", "gravity_error"};
-    a.list_not_excited = false;
-    exps.push_back(a);
+    exps.push_back(static_bias_only_experiment(o));
+    exps.push_back(rate_gyro_experiment(o));
+    exps.push_back(rate_accel_experiment(o));
   }
   for (const auto& e : exps) validate_experiment(e, o, prng, seed, rep, total);
   rep.top1_at5 = total.top1_n ? static_cast<double>(total.top1_ok) / total.top1_n : kNaN;
