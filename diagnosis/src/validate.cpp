@@ -99,11 +99,7 @@ estimation::ModelSpec validation_model() {
 
 GapInput generate(const ValidationDesign& d, const estimation::ModelSpec& fit_model, const Planted& truth,
                   std::uint64_t seed) {
-  GapInput in;
-  in.spec = fit_model;
-  in.source = "validation generator (segment level)";
-  in.truth_source = "generator truth";
-  in.floor_source = "batch means of 8 blocks (generator: white floor × sqrt(chi2_7/7))";
+  GapInput in = generated_input(fit_model, "validation generator (segment level)");
   model::Rng rng(seed);
   const double dt = 1.0 / d.rate_hz;
   const double sigma = model::WhiteNoise::sigma_from_density(d.noise_density, dt);
@@ -126,18 +122,11 @@ GapInput generate(const ValidationDesign& d, const estimation::ModelSpec& fit_mo
       t += d.move_s;
       SegmentData s;
       auto& p = s.point;
-      p.segment_id = seg_id++;
-      p.t_start_s = t;
-      p.t_end_s = t + d.record_s;
-      p.samples_used = static_cast<std::size_t>(d.record_s * d.rate_hz);
-      const double mid = t + 0.5 * d.record_s;
+      const double mid = time_segment(s, seg_id++, t, d.record_s, d.rate_hz);
       const double decay = std::exp(-(mid - t_change) / d.die_lag_s);
       die = sp + (die_start - sp) * decay;
       p.stimulus = generated_stimulus(d, h, dl, die, sp, mid, dir);
-      Eigen::Vector3d y = truth.model.measure<double>(truth.theta.data(), p.stimulus);
-      if (!truth.extra.empty()) y += truth.extra[static_cast<std::size_t>(p.segment_id) % truth.extra.size()];
-      mean_noise.apply(rng, mid, y, s);
-      p.measured = y;
+      measure_segment(truth, mean_noise, rng, mid, s);
       p.label = "T" + std::to_string(static_cast<int>(sp)) + " h" + std::to_string(static_cast<int>(h)) + " d" +
                 std::to_string(static_cast<int>(dl));
       char name[64];
@@ -585,19 +574,21 @@ bool targets_met(const ValidationReport& r) {
          noise_ok;
 }
 
-void print_validation(std::ostream& os, const ValidationReport& r) {
+namespace {
+
+// The floor of a segment mean in the experiment's display unit (mg or deg/h) and its own unit.
+std::string floor_text(const ExperimentValidation& e) {
+  char b[128];
+  if (e.unit == "rad/s")
+    std::snprintf(b, sizeof b, "%.3g deg/h (%.3g rad/s)", e.floor / physics::kDegPerHour, e.floor);
+  else
+    std::snprintf(b, sizeof b, "%.3g mg (%.3g m/s^2)", e.floor / physics::kMilliG, e.floor);
+  return std::string(b);
+}
+
+// One table per experiment: every planted candidate at every size.
+void print_planted(std::ostream& os, const ValidationReport& r) {
   char line[512];
-  // The floor of a segment mean in the experiment's display unit (mg or deg/h).
-  auto floor_text = [](const ExperimentValidation& e) {
-    char b[128];
-    if (e.unit == "rad/s")
-      std::snprintf(b, sizeof b, "%.3g deg/h (%.3g rad/s)", e.floor / physics::kDegPerHour, e.floor);
-    else
-      std::snprintf(b, sizeof b, "%.3g mg (%.3g m/s^2)", e.floor / physics::kMilliG, e.floor);
-    return std::string(b);
-  };
-  os << "stend gap validate — segment-level generator; per experiment: the fitted model, the planted effect "
-        "withheld from it, sizes in multiples of the averaged noise floor of a segment mean\n";
   const std::string header =
       "planted effect                 ident  size  runs  top-1  strict  mean rank  closed  recovered/planted  CI cover\n";
   std::string current = "\x01";
@@ -617,6 +608,11 @@ void print_validation(std::ostream& os, const ValidationReport& r) {
       os << line;
     }
   }
+}
+
+// Alias pairs declared beforehand, the per-experiment figures and the confusion matrix.
+void print_per_experiment(std::ostream& os, const ValidationReport& r) {
+  char line[512];
   os << "\nalias pairs declared beforehand (joint-design rank, per experiment):\n";
   for (const auto& c : r.candidates)
     if (!c.aliases.empty()) {
@@ -644,6 +640,11 @@ void print_validation(std::ostream& os, const ValidationReport& r) {
     for (const auto& [n, k] : m) os << " " << n << ":" << k;
     os << "\n";
   }
+}
+
+// The totals against their targets, the run time [s] and the terms null runs named.
+void print_totals(std::ostream& os, const ValidationReport& r) {
+  char line[512];
   std::snprintf(line, sizeof line,
                 "\ntop-1 (identifiable, >= 5x floor): %.3f   [target >= 0.9]\n"
                 "explainable held-out gap closed (>= 5x): %.3f   [target >= 0.8]\n"
@@ -659,6 +660,16 @@ void print_validation(std::ostream& os, const ValidationReport& r) {
     for (const auto& [n, k] : r.null_named) os << " " << n << ":" << k;
     os << "\n";
   }
+}
+
+}  // namespace
+
+void print_validation(std::ostream& os, const ValidationReport& r) {
+  os << "stend gap validate — segment-level generator; per experiment: the fitted model, the planted effect "
+        "withheld from it, sizes in multiples of the averaged noise floor of a segment mean\n";
+  print_planted(os, r);
+  print_per_experiment(os, r);
+  print_totals(os, r);
   noise_stage::print_validation(os, r.noise_stage, r.noise_seconds);
 }
 
