@@ -1039,7 +1039,7 @@ int best_candidate(const std::vector<Eval>& ev, const std::vector<bool>& used, d
 // Forward selection on the held-out gap: add the best significant candidate, refit, until the
 // held-out errors reach the noise floor, none is significant or max_steps are taken. Step 1
 // reuses the first pass. Fills rep.steps / rep.selected / rep.at_floor; returns the final model.
-Current forward_select(const Search& sr, Current cur, std::vector<Eval> first, const GapOptions& opt,
+Current forward_select(const Search& sr, Current cur, const std::vector<Eval>& first, const GapOptions& opt,
                        GapReport& rep) {
   std::vector<bool> used(sr.cands.size(), false);
   bool floor_now = at_noise_floor(cur.cv);
@@ -1106,7 +1106,7 @@ std::string statement(const GapReport& rep, bool floor0) {
 
 // Steps 4–5: every candidate against the model as given, their aliases, the noise-stage
 // candidates, then forward selection and the verdict.
-void explain_gap(const GapInput& in, Rows& rows, const GapOptions& opt, GapReport& rep) {
+void explain_gap(const GapInput& in, const Rows& rows, const GapOptions& opt, GapReport& rep) {
   const std::vector<Candidate> cands = opt.candidates.empty() ? default_candidates(in.spec.model) : opt.candidates;
   Current cur;
   cur.terms = in.spec.model.terms;
