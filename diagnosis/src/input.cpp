@@ -17,7 +17,9 @@
 #include "stend/model/output_stage.hpp"
 #include "stend/sim/imu.hpp"
 #include "stend/processing/truth.hpp"
+#include "groups.hpp"
 #include "noise_stage.hpp"
+#include "samples.hpp"
 
 namespace stend::diagnosis {
 
@@ -87,6 +89,198 @@ double sim_twin_std(const YAML::Node& cfg, bool accel) {
                                          value("lowpass_hz", defaults.lowpass_hz));
 }
 
+// The recording with truth columns: the recording itself, or a copy with truth from its dataset
+// annotations (stored in `augmented`, `how` says so); nullptr when neither exists.
+const Recording* recording_with_truth(const Recording& rec, bool accel, Recording& augmented, std::string& how) {
+  if (column(rec, accel ? "f_x_mps2" : "w_x_radps") >= 0) return &rec;
+  augmented = rec;
+  if (!add_annotation_truth(augmented, how)) return nullptr;
+  return &augmented;
+}
+
+// Static points of the processing stage; records its options, skips and notes in `in`.
+std::vector<batch_lsq::StaticPoint> static_points(const Recording& rec, const estimation::ModelSpec& spec,
+                                                  GapInput& in) {
+  processing::Extraction extraction;
+  std::vector<batch_lsq::StaticPoint> points = batch_lsq::extract_points(rec, spec, &extraction);
+  in.spec.processing = extraction.options;
+  in.saturated_segments = extraction.count(processing::SkipReason::kSaturated);
+  in.notes = extraction.notes;
+  if (points.size() < 2)
+    throw std::runtime_error("'" + in.source + "': only " + std::to_string(points.size()) +
+                             " static segment(s) could be extracted; the gap needs several");
+  return points;
+}
+
+// Twin noise of a simulated run: the white-noise std of one sample from the sim sensor's own
+// noise settings [unit]; NaN when the run's sensor is not sim_imu (the recording's median segment
+// std is the reference then).
+Eigen::Vector3d twin_sample_std(const Recording& rec, bool accel) {
+  if (rec.experiment_yaml.empty()) return Eigen::Vector3d::Constant(kNaN);
+  try {
+    const YAML::Node root = YAML::Load(rec.experiment_yaml);
+    const YAML::Node sensor = root["bench"]["sensor"];
+    if (sensor && sensor["plugin"] && sensor["plugin"].as<std::string>() == "sim_imu") {
+      const YAML::Node cfg = sensor["config"] ? sensor["config"] : YAML::Node(YAML::NodeType::Map);
+      return Eigen::Vector3d::Constant(sim_twin_std(cfg, accel));
+    }
+  } catch (const std::exception&) {
+    // no twin noise settings
+  }
+  return Eigen::Vector3d::Constant(kNaN);
+}
+
+// Truth columns for the bench-side stimulus fields: specific force, rate, the sim three-axis
+// table's measured angles, the sensor mounting and local gravity.
+struct TruthColumns {
+  int f[3], w[3], table[3];  // f_*_mps2, w_*_radps, azimuth / tilt / rotation [deg]; −1 absent
+  bool three_axis = false;
+  Eigen::Matrix3d mount = Eigen::Matrix3d::Identity();
+  double g = 0.0;  // [m/s²]
+};
+TruthColumns truth_columns(const Recording& rec) {
+  TruthColumns c{{column(rec, "f_x_mps2"), column(rec, "f_y_mps2"), column(rec, "f_z_mps2")},
+                 {column(rec, "w_x_radps"), column(rec, "w_y_radps"), column(rec, "w_z_radps")},
+                 {column_ending(rec, ".azimuth.meas_deg"), column_ending(rec, ".tilt.meas_deg"),
+                  column_ending(rec, ".rotation.meas_deg")}};
+  c.three_axis = c.table[0] >= 0 && c.table[1] >= 0 && c.table[2] >= 0;
+  if (rec.header.mounting_R.size() == 9)
+    for (int i = 0; i < 9; ++i) c.mount(i / 3, i % 3) = rec.header.mounting_R[static_cast<std::size_t>(i)];
+  c.g = rec.header.gravity_or_standard_mps2();
+  return c;
+}
+
+// Truth specific force [m/s²] and rate [rad/s] over the point's window into its stimulus; returns
+// the specific force (NaN where the column is absent).
+Eigen::Vector3d truth_stimulus(const Recording& rec, const TruthColumns& c, const batch_lsq::StaticPoint& p,
+                               bool accel, model::Stimulus<double>& st) {
+  Eigen::Vector3d f, w;
+  for (int a = 0; a < 3; ++a) {
+    f[a] = processing::truth_mean(rec, c.f[a], p.t_start_s, p.t_end_s);
+    w[a] = processing::truth_mean(rec, c.w[a], p.t_start_s, p.t_end_s);
+  }
+  if (f.allFinite() && f.norm() > 0.5) {
+    st.specific_force = f;
+    if (accel) st.gravity_up = f / f.norm();  // static: specific force is "up"
+  }
+  // Rates below 1e-3 rad/s (the Earth's 7e-5 rad/s on a static table) cannot show a lever arm
+  // (ω²·1 m < 1e-6 m/s²): left at zero so the lever_arm candidate reads "not excited".
+  if (w.allFinite() && w.norm() > 1e-3) st.angular_rate = w;
+  if (!accel && w.allFinite()) st.input = w;
+  return f;
+}
+
+// Table geometry (sim three-axis table: R = Ry(δ)·Rx(h)·Rz(az)) from the measured angles [deg],
+// checked against the truth specific force f (within 2 % of g): its angle and tilt derivatives
+// into the stimulus; returns false when the chain does not reproduce f.
+bool table_derivatives(const Recording& rec, const TruthColumns& c, const batch_lsq::StaticPoint& p,
+                       const Eigen::Vector3d& f, model::Stimulus<double>& st) {
+  const double deg = physics::kDegToRad;
+  const double az = processing::truth_mean(rec, c.table[0], p.t_start_s, p.t_end_s) * deg;
+  const double h = processing::truth_mean(rec, c.table[1], p.t_start_s, p.t_end_s) * deg;
+  const double dl = processing::truth_mean(rec, c.table[2], p.t_start_s, p.t_end_s) * deg;
+  model::Stimulus<double> probe = st;
+  const Eigen::Vector3d f0 = table_stimulus(probe, az, h, dl, c.mount, c.g);
+  if (!f.allFinite() || (f0 - f).norm() > 0.02 * c.g) return false;
+  st.table_df_dangle = probe.table_df_dangle;
+  st.table_df_dtilt = probe.table_df_dtilt;
+  return true;
+}
+
+// Ramp direction, setpoint [degC] and time since the last orientation or temperature change [s]
+// of the segment starting at p, from the time-ordered segments up to its start.
+void segment_history(const std::vector<const Segment*>& segs, const batch_lsq::StaticPoint& p, SegmentData& d) {
+  const Segment* seg = nullptr;
+  for (const auto* s : segs)
+    if (s->id == p.segment_id) seg = s;
+  double cur_sp = kNaN, prev_sp = kNaN, t_temp_change = kNaN, t_orient_change = kNaN;
+  int dir = 0;
+  const Segment* prev_orient = nullptr;
+  for (const auto* s : segs) {
+    if (s->t_start_s > p.t_start_s) break;
+    if (s->kind == "set_temperature" && std::isfinite(s->setpoint_c)) {
+      if (!std::isfinite(cur_sp) || std::abs(s->setpoint_c - cur_sp) > 0.1) {
+        prev_sp = cur_sp;
+        cur_sp = s->setpoint_c;
+        t_temp_change = s->t_start_s;
+        dir = std::isfinite(prev_sp) ? (cur_sp > prev_sp ? 1 : -1) : 0;
+      }
+    }
+    if (s != seg && seg && s->kind == seg->kind) prev_orient = s;
+  }
+  if (prev_orient) t_orient_change = prev_orient->t_end_s;
+  if (seg) t_orient_change = std::isfinite(t_orient_change) ? t_orient_change : seg->t_start_s;
+  d.setpoint_c = seg && std::isfinite(seg->setpoint_c) ? seg->setpoint_c : cur_sp;
+  d.ramp_direction = dir;
+  d.point.stimulus.temperature_direction = dir;
+  double last = std::isfinite(t_orient_change) ? t_orient_change : 0.0;
+  if (std::isfinite(t_temp_change)) last = std::max(last, t_temp_change);
+  d.time_since_change_s = p.t_start_s - last;
+}
+
+// Noise floor of the mean of the window [lo, hi) on axis a: sample std and the larger of the
+// batch-means (8 blocks) and white standard errors [unit]; needs ≥ 16 samples.
+void mean_noise(SampleIt lo, SampleIt hi, bool accel, int a, SegmentData& d) {
+  const auto n = static_cast<std::size_t>(hi - lo);
+  double sum = 0, sum2 = 0;
+  for (auto it = lo; it != hi; ++it) {
+    const double v = axis_value(*it, accel, a);
+    sum += v;
+    sum2 += v * v;
+  }
+  const double mean = sum / static_cast<double>(n);
+  const double var = std::max(0.0, sum2 / static_cast<double>(n) - mean * mean);
+  d.raw_std[a] = std::sqrt(var * static_cast<double>(n) / static_cast<double>(n - 1));
+  constexpr int kB = 8;
+  double bsum2 = 0.0;
+  for (int b = 0; b < kB; ++b) {
+    const auto b0 = lo + static_cast<std::ptrdiff_t>(n * static_cast<std::size_t>(b) / kB);
+    const auto b1 = lo + static_cast<std::ptrdiff_t>(n * static_cast<std::size_t>(b + 1) / kB);
+    double bs = 0.0;
+    for (auto it = b0; it != b1; ++it) bs += axis_value(*it, accel, a);
+    const double bm = bs / static_cast<double>(b1 - b0) - mean;
+    bsum2 += bm * bm;
+  }
+  const double se_bm = std::sqrt(bsum2 / (kB - 1) / kB);
+  const double se_white = d.raw_std[a] / std::sqrt(static_cast<double>(n));
+  d.mean_std_error[a] = std::max(se_bm, se_white);
+}
+
+// The raw-sample evidence of a point's kept window: noise floor of the mean per axis (the
+// processing stage's standard error when the window is short) and the noise-stage evidence.
+void window_evidence(const Recording& rec, const batch_lsq::StaticPoint& p, bool accel, SegmentData& d) {
+  const auto& S = rec.samples;
+  const auto [lo, hi] = sample_window(S, p.t_start_s, p.t_end_s);
+  if (hi - lo >= 16)
+    for (int a = 0; a < 3; ++a) mean_noise(lo, hi, accel, a, d);
+  if (!d.mean_std_error.allFinite()) d.mean_std_error = p.measured_std_error;
+  noise_stage::segment_evidence(d, S.data() + (lo - S.begin()), S.data() + (hi - S.begin()), accel);
+}
+
+// Notes on the table candidates, and their stimulus derivatives cleared when the chain is unusable.
+void settle_table(GapInput& in, bool three_axis, bool table_ok) {
+  if (three_axis && !table_ok)
+    in.notes.push_back("table angle columns found but the sim three-axis table chain does not reproduce the "
+                       "truth specific force: table offset/tilt candidates not excited");
+  if (!three_axis)
+    in.notes.push_back("no three-axis table angle columns: the table offset/tilt candidates are not excited");
+  if (!table_ok)
+    for (auto& d : in.segments) {
+      for (auto& v : d.point.stimulus.table_df_dangle) v.setZero();
+      for (auto& v : d.point.stimulus.table_df_dtilt) v.setZero();
+    }
+}
+
+// Orientation groups by gravity direction; temperature groups by setpoint (else die, 2 °C).
+void assign_groups(std::vector<SegmentData>& segments) {
+  std::map<std::string, int> og;
+  for (auto& d : segments) d.orientation = orientation_group(og, d.orientation_name);
+  std::vector<double> levels;
+  for (auto& d : segments)
+    d.temperature_group =
+        temperature_group(levels, std::isfinite(d.setpoint_c) ? d.setpoint_c : d.point.stimulus.temperature_c);
+}
+
 }  // namespace
 
 Eigen::Vector3d table_stimulus(model::Stimulus<double>& st, double az, double h, double dl,
@@ -114,186 +308,37 @@ GapInput build_input(const Recording& recording_in, const estimation::ModelSpec&
   in.spec = spec;
   in.source = recording_in.dir.string();
   const bool accel = spec.model.instrument == model::Instrument::kAccelerometer;
-  const Recording* rec = &recording_in;
   Recording augmented;
-  in.truth_source = "truth columns";
-  if (column(recording_in, accel ? "f_x_mps2" : "w_x_radps") < 0) {
-    augmented = recording_in;
-    std::string how;
-    // No truth and no annotations: orientations unknown, only |g| — the magnitude form.
-    if (!add_annotation_truth(augmented, how)) return build_magnitude_input(recording_in, spec);
-    rec = &augmented;
-    in.truth_source = how;
-  }
-  processing::Extraction extraction;
-  std::vector<batch_lsq::StaticPoint> points = batch_lsq::extract_points(*rec, spec, &extraction);
-  in.spec.processing = extraction.options;
-  in.saturated_segments = extraction.count(processing::SkipReason::kSaturated);
-  in.notes = extraction.notes;
-  if (points.size() < 2)
-    throw std::runtime_error("'" + in.source + "': only " + std::to_string(points.size()) +
-                             " static segment(s) could be extracted; the gap needs several");
-
+  std::string how = "truth columns";
+  const Recording* rec = recording_with_truth(recording_in, accel, augmented, how);
+  // No truth and no annotations: orientations unknown, only |g| — the magnitude form.
+  if (!rec) return build_magnitude_input(recording_in, spec);
+  in.truth_source = how;
+  const std::vector<batch_lsq::StaticPoint> points = static_points(*rec, spec, in);
   in.lsb = accel ? rec->header.info.accel_lsb_mps2 : rec->header.info.gyro_lsb_radps;
   in.range = accel ? rec->header.info.accel_range_mps2 : rec->header.info.gyro_range_radps;
+  in.twin_sample_std = twin_sample_std(*rec, accel);
 
-  // Twin noise of a simulated run: the sim sensor's own noise settings.
-  if (!rec->experiment_yaml.empty()) {
-    try {
-      const YAML::Node root = YAML::Load(rec->experiment_yaml);
-      const YAML::Node sensor = root["bench"]["sensor"];
-      if (sensor && sensor["plugin"] && sensor["plugin"].as<std::string>() == "sim_imu") {
-        const YAML::Node cfg = sensor["config"] ? sensor["config"] : YAML::Node(YAML::NodeType::Map);
-        in.twin_sample_std = Eigen::Vector3d::Constant(sim_twin_std(cfg, accel));
-      }
-    } catch (const std::exception&) {
-      // no twin noise settings: the recording's median segment std is the reference
-    }
-  }
-
-  // Truth columns for the bench-side stimulus fields.
-  const int fcol[3] = {column(*rec, "f_x_mps2"), column(*rec, "f_y_mps2"), column(*rec, "f_z_mps2")};
-  const int wcol[3] = {column(*rec, "w_x_radps"), column(*rec, "w_y_radps"), column(*rec, "w_z_radps")};
-  const int tab[3] = {column_ending(*rec, ".azimuth.meas_deg"), column_ending(*rec, ".tilt.meas_deg"),
-                      column_ending(*rec, ".rotation.meas_deg")};
-  const bool three_axis = tab[0] >= 0 && tab[1] >= 0 && tab[2] >= 0;
-  Eigen::Matrix3d mount = Eigen::Matrix3d::Identity();
-  if (rec->header.mounting_R.size() == 9)
-    for (int i = 0; i < 9; ++i) mount(i / 3, i % 3) = rec->header.mounting_R[static_cast<std::size_t>(i)];
-  bool table_ok = three_axis;
-  const double g = rec->header.gravity_or_standard_mps2();
-
+  const TruthColumns cols = truth_columns(*rec);
+  bool table_ok = cols.three_axis;
   // Time-ordered walk over the recording's segments for ramp direction and last changes.
   std::vector<const Segment*> segs;
   for (const auto& s : rec->segments) segs.push_back(&s);
   std::sort(segs.begin(), segs.end(), [](const Segment* a, const Segment* b) { return a->t_start_s < b->t_start_s; });
-
-  const double deg = physics::kDegToRad;
   for (const auto& p : points) {
     SegmentData d;
     d.point = p;
-    const Segment* seg = nullptr;
-    for (const auto* s : segs)
-      if (s->id == p.segment_id) seg = s;
-    auto& st = d.point.stimulus;
-    Eigen::Vector3d f, w;
-    for (int a = 0; a < 3; ++a) {
-      f[a] = processing::truth_mean(*rec, fcol[a], p.t_start_s, p.t_end_s);
-      w[a] = processing::truth_mean(*rec, wcol[a], p.t_start_s, p.t_end_s);
-    }
-    if (f.allFinite() && f.norm() > 0.5) {
-      st.specific_force = f;
-      if (accel) st.gravity_up = f / f.norm();  // static: specific force is "up"
-    }
-    // Rates below 1e-3 rad/s (the Earth's 7e-5 rad/s on a static table) cannot show a lever arm
-    // (ω²·1 m < 1e-6 m/s²): left at zero so the lever_arm candidate reads "not excited".
-    if (w.allFinite() && w.norm() > 1e-3) st.angular_rate = w;
-    if (!accel && w.allFinite()) st.input = w;
-    const Eigen::Vector3d up = f.allFinite() && f.norm() > 0 ? Eigen::Vector3d(f / f.norm()) : Eigen::Vector3d::Zero();
-    d.orientation_name = orientation_name(up);
-    // Table geometry (sim three-axis table: R = Ry(δ)·Rx(h)·Rz(az)), checked against the truth.
-    if (table_ok) {
-      const double az = processing::truth_mean(*rec, tab[0], p.t_start_s, p.t_end_s) * deg;
-      const double h = processing::truth_mean(*rec, tab[1], p.t_start_s, p.t_end_s) * deg;
-      const double dl = processing::truth_mean(*rec, tab[2], p.t_start_s, p.t_end_s) * deg;
-      model::Stimulus<double> probe = st;
-      const Eigen::Vector3d f0 = table_stimulus(probe, az, h, dl, mount, g);
-      if (!f.allFinite() || (f0 - f).norm() > 0.02 * g) {
-        table_ok = false;
-      } else {
-        st.table_df_dangle = probe.table_df_dangle;
-        st.table_df_dtilt = probe.table_df_dtilt;
-      }
-    }
-    // Ramp direction, setpoint and last changes.
-    double cur_sp = kNaN, prev_sp = kNaN, t_temp_change = kNaN, t_orient_change = kNaN;
-    int dir = 0;
-    const Segment* prev_orient = nullptr;
-    for (const auto* s : segs) {
-      if (s->t_start_s > p.t_start_s) break;
-      if (s->kind == "set_temperature" && std::isfinite(s->setpoint_c)) {
-        if (!std::isfinite(cur_sp) || std::abs(s->setpoint_c - cur_sp) > 0.1) {
-          prev_sp = cur_sp;
-          cur_sp = s->setpoint_c;
-          t_temp_change = s->t_start_s;
-          dir = std::isfinite(prev_sp) ? (cur_sp > prev_sp ? 1 : -1) : 0;
-        }
-      }
-      if (s != seg && seg && s->kind == seg->kind) prev_orient = s;
-    }
-    if (prev_orient) t_orient_change = prev_orient->t_end_s;
-    if (seg) t_orient_change = std::isfinite(t_orient_change) ? t_orient_change : seg->t_start_s;
-    d.setpoint_c = seg && std::isfinite(seg->setpoint_c) ? seg->setpoint_c : cur_sp;
-    d.ramp_direction = dir;
-    st.temperature_direction = dir;
-    double last = std::isfinite(t_orient_change) ? t_orient_change : 0.0;
-    if (std::isfinite(t_temp_change)) last = std::max(last, t_temp_change);
-    d.time_since_change_s = p.t_start_s - last;
+    const Eigen::Vector3d f = truth_stimulus(*rec, cols, p, accel, d.point.stimulus);
+    d.orientation_name = orientation_name(f.allFinite() && f.norm() > 0 ? Eigen::Vector3d(f / f.norm())
+                                                                        : Eigen::Vector3d::Zero());
+    if (table_ok) table_ok = table_derivatives(*rec, cols, p, f, d.point.stimulus);
+    segment_history(segs, p, d);
     d.averaging_s = p.t_end_s - p.t_start_s;
-    // Noise floor of the mean: batch means (8 blocks) over the raw samples in the kept window.
-    const auto& S = rec->samples;
-    auto lo = std::lower_bound(S.begin(), S.end(), p.t_start_s, [](const ImuSample& s, double t) { return s.t_s < t; });
-    auto hi = std::upper_bound(S.begin(), S.end(), p.t_end_s, [](double t, const ImuSample& s) { return t < s.t_s; });
-    const auto n = static_cast<std::size_t>(hi - lo);
-    for (int a = 0; a < 3; ++a) {
-      if (n < 16) break;
-      double sum = 0, sum2 = 0;
-      for (auto it = lo; it != hi; ++it) {
-        const double v = accel ? it->accel_mps2[a] : it->gyro_radps[a];
-        sum += v;
-        sum2 += v * v;
-      }
-      const double mean = sum / static_cast<double>(n);
-      const double var = std::max(0.0, sum2 / static_cast<double>(n) - mean * mean);
-      d.raw_std[a] = std::sqrt(var * static_cast<double>(n) / static_cast<double>(n - 1));
-      constexpr int kB = 8;
-      double bsum2 = 0.0;
-      for (int b = 0; b < kB; ++b) {
-        const auto b0 = lo + static_cast<std::ptrdiff_t>(n * static_cast<std::size_t>(b) / kB);
-        const auto b1 = lo + static_cast<std::ptrdiff_t>(n * static_cast<std::size_t>(b + 1) / kB);
-        double bs = 0.0;
-        for (auto it = b0; it != b1; ++it) bs += accel ? it->accel_mps2[a] : it->gyro_radps[a];
-        const double bm = bs / static_cast<double>(b1 - b0) - mean;
-        bsum2 += bm * bm;
-      }
-      const double se_bm = std::sqrt(bsum2 / (kB - 1) / kB);
-      const double se_white = d.raw_std[a] / std::sqrt(static_cast<double>(n));
-      d.mean_std_error[a] = std::max(se_bm, se_white);
-    }
-    if (!d.mean_std_error.allFinite()) d.mean_std_error = p.measured_std_error;
-    noise_stage::segment_evidence(d, S.data() + (lo - S.begin()), S.data() + (hi - S.begin()), accel);
+    window_evidence(*rec, p, accel, d);
     in.segments.push_back(d);
   }
-  if (three_axis && !table_ok)
-    in.notes.push_back("table angle columns found but the sim three-axis table chain does not reproduce the "
-                       "truth specific force: table offset/tilt candidates not excited");
-  if (!three_axis)
-    in.notes.push_back("no three-axis table angle columns: the table offset/tilt candidates are not excited");
-  if (!table_ok)
-    for (auto& d : in.segments) {
-      for (auto& v : d.point.stimulus.table_df_dangle) v.setZero();
-      for (auto& v : d.point.stimulus.table_df_dtilt) v.setZero();
-    }
-
-  // Orientation groups by gravity direction; temperature groups by setpoint (else die, 2 °C).
-  std::map<std::string, int> og;
-  for (auto& d : in.segments) {
-    auto it = og.find(d.orientation_name);
-    if (it == og.end()) it = og.emplace(d.orientation_name, static_cast<int>(og.size())).first;
-    d.orientation = it->second;
-  }
-  std::vector<double> levels;
-  for (auto& d : in.segments) {
-    const double t = std::isfinite(d.setpoint_c) ? d.setpoint_c : d.point.stimulus.temperature_c;
-    int k = -1;
-    for (std::size_t i = 0; i < levels.size(); ++i)
-      if (std::abs(levels[i] - t) <= 2.0) k = static_cast<int>(i);
-    if (k < 0) {
-      levels.push_back(t);
-      k = static_cast<int>(levels.size()) - 1;
-    }
-    d.temperature_group = k;
-  }
+  settle_table(in, cols.three_axis, table_ok);
+  assign_groups(in.segments);
   noise_stage::recording_evidence(in, *rec);  // clipped samples, Allan of a long window
   in.floor_source = "batch means of 8 blocks inside each segment's kept window (Allan-type, robust to "
                     "short-term correlation; never below the white-noise standard error)";

@@ -6,8 +6,10 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <string>
 
 #include "stend/diagnosis/gap.hpp"
+#include "stend/diagnosis/validate.hpp"
 #include "stend/model/noise.hpp"
 
 namespace stend::diagnosis {
@@ -44,5 +46,37 @@ class SegmentMeanNoise {
   Eigen::Vector3d gm_ = Eigen::Vector3d::Zero();
   double t_prev_s_ = 0.0;
 };
+
+// A generator's input before any segment: the fitted model, the source, truth and floor notes.
+inline GapInput generated_input(const estimation::ModelSpec& fit_model, const std::string& source) {
+  GapInput in;
+  in.spec = fit_model;
+  in.source = source;
+  in.truth_source = "generator truth";
+  in.floor_source = "batch means of 8 blocks (generator: white floor × sqrt(chi2_7/7))";
+  return in;
+}
+
+// A generated segment's id and window [t_start_s, t_start_s + record_s] [s] with its samples at
+// rate_hz [Hz]; returns the mid-time [s].
+inline double time_segment(SegmentData& s, int id, double t_start_s, double record_s, double rate_hz) {
+  auto& p = s.point;
+  p.segment_id = id;
+  p.t_start_s = t_start_s;
+  p.t_end_s = t_start_s + record_s;
+  p.samples_used = static_cast<std::size_t>(record_s * rate_hz);
+  return t_start_s + 0.5 * record_s;
+}
+
+// The measured mean of a generated segment: the true model at its stimulus, plus the
+// out-of-vocabulary effect of its id (when planted), plus the noise of the mean at mid_s [s].
+inline void measure_segment(const Planted& truth, SegmentMeanNoise& noise, model::Rng& rng, double mid_s,
+                            SegmentData& s) {
+  auto& p = s.point;
+  Eigen::Vector3d y = truth.model.measure<double>(truth.theta.data(), p.stimulus);
+  if (!truth.extra.empty()) y += truth.extra[static_cast<std::size_t>(p.segment_id) % truth.extra.size()];
+  noise.apply(rng, mid_s, y, s);
+  p.measured = y;
+}
 
 }  // namespace stend::diagnosis

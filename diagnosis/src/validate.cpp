@@ -15,6 +15,7 @@
 #include <set>
 
 #include "stend/physics/table_chain.hpp"
+#include "groups.hpp"
 #include "segment_mean_noise.hpp"
 #include "stend/model/noise.hpp"
 #include "noise_stage.hpp"
@@ -46,6 +47,23 @@ double white_floor(const ValidationDesign& d) {
 bool same_effect(const std::string& named, const std::string& planted) {
   auto kind = [](const std::string& s) { return s.substr(0, s.find('(')); };
   return kind(named) == kind(planted);
+}
+
+// Stimulus of a generated segment: gravity through the table at h, δ [deg] (identity mount), die
+// temperature [degC] approaching the setpoint sp [degC] with the die lag, mid-time [s], ramp direction.
+model::Stimulus<double> generated_stimulus(const ValidationDesign& d, double h, double dl, double die, double sp,
+                                           double mid, int dir) {
+  model::Stimulus<double> st;
+  const Eigen::Vector3d f = table_stimulus(st, 0.0, h * physics::kDegToRad, dl * physics::kDegToRad,
+                                           Eigen::Matrix3d::Identity(), d.gravity);
+  st.input = f;
+  st.specific_force = f;
+  st.gravity_up = f / f.norm();
+  st.temperature_c = die;
+  st.temperature_rate_cps = -(die - sp) / d.die_lag_s;
+  st.time_s = mid;
+  st.temperature_direction = dir;
+  return st;
 }
 
 }  // namespace
@@ -81,11 +99,7 @@ estimation::ModelSpec validation_model() {
 
 GapInput generate(const ValidationDesign& d, const estimation::ModelSpec& fit_model, const Planted& truth,
                   std::uint64_t seed) {
-  GapInput in;
-  in.spec = fit_model;
-  in.source = "validation generator (segment level)";
-  in.truth_source = "generator truth";
-  in.floor_source = "batch means of 8 blocks (generator: white floor × sqrt(chi2_7/7))";
+  GapInput in = generated_input(fit_model, "validation generator (segment level)");
   model::Rng rng(seed);
   const double dt = 1.0 / d.rate_hz;
   const double sigma = model::WhiteNoise::sigma_from_density(d.noise_density, dt);
@@ -94,7 +108,6 @@ GapInput generate(const ValidationDesign& d, const estimation::ModelSpec& fit_mo
   SegmentMeanNoise mean_noise(rng, se, sigma, bi, d.bias_correlation_s);
   double t = 0.0;
   double die = 22.0, prev_sp = kNaN;
-  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   int seg_id = 0;
   std::map<std::string, int> og;
   std::vector<double> levels;
@@ -103,45 +116,22 @@ GapInput generate(const ValidationDesign& d, const estimation::ModelSpec& fit_mo
     const int dir = std::isfinite(prev_sp) ? (sp > prev_sp ? 1 : -1) : 0;
     prev_sp = sp;
     t += d.hold_s;
-    int level = -1;
-    for (std::size_t i = 0; i < levels.size(); ++i)
-      if (std::abs(levels[i] - sp) <= 2.0) level = static_cast<int>(i);
-    if (level < 0) {
-      levels.push_back(sp);
-      level = static_cast<int>(levels.size()) - 1;
-    }
+    const int level = temperature_group(levels, sp);
     double t_last_orient = t_change;
     for (const auto& [h, dl] : d.positions) {
       t += d.move_s;
       SegmentData s;
       auto& p = s.point;
-      p.segment_id = seg_id++;
-      p.t_start_s = t;
-      p.t_end_s = t + d.record_s;
-      p.samples_used = static_cast<std::size_t>(d.record_s * d.rate_hz);
-      const double mid = t + 0.5 * d.record_s;
+      const double mid = time_segment(s, seg_id++, t, d.record_s, d.rate_hz);
       const double decay = std::exp(-(mid - t_change) / d.die_lag_s);
       die = sp + (die_start - sp) * decay;
-      auto& st = p.stimulus;
-      const Eigen::Vector3d f = table_stimulus(st, 0.0, h * physics::kDegToRad, dl * physics::kDegToRad, I, d.gravity);
-      st.input = f;
-      st.specific_force = f;
-      st.gravity_up = f / f.norm();
-      st.temperature_c = die;
-      st.temperature_rate_cps = -(die - sp) / d.die_lag_s;
-      st.time_s = mid;
-      st.temperature_direction = dir;
-      Eigen::Vector3d y = truth.model.measure<double>(truth.theta.data(), st);
-      if (!truth.extra.empty()) y += truth.extra[static_cast<std::size_t>(p.segment_id) % truth.extra.size()];
-      mean_noise.apply(rng, mid, y, s);
-      p.measured = y;
+      p.stimulus = generated_stimulus(d, h, dl, die, sp, mid, dir);
+      measure_segment(truth, mean_noise, rng, mid, s);
       p.label = "T" + std::to_string(static_cast<int>(sp)) + " h" + std::to_string(static_cast<int>(h)) + " d" +
                 std::to_string(static_cast<int>(dl));
       char name[64];
       std::snprintf(name, sizeof name, "h=%g d=%g", h, dl);
-      auto it = og.find(name);
-      if (it == og.end()) it = og.emplace(name, static_cast<int>(og.size())).first;
-      s.orientation = it->second;
+      s.orientation = orientation_group(og, name);
       s.orientation_name = name;
       s.setpoint_c = sp;
       s.temperature_group = level;
@@ -181,198 +171,260 @@ struct Tally {
   double closed_sum = 0;
 };
 
-// Declares aliases and identifiability from a probe of the design (rank only), plants each candidate at
-// each size in the experiment, fits the model without it and diagnoses blind; appends the
-// CandidateValidation rows, the confusion entries and the null / out-of-vocabulary runs.
-void validate_experiment(const Experiment& ex, const ValidateOptions& o, model::Rng& prng, std::uint64_t& seed,
-                         ValidationReport& rep, Tally& total) {
-  const estimation::ModelSpec& fit_model = ex.fit_model;
-  const model::Instrument inst = fit_model.model.instrument;
-  const double floor = ex.floor;
-  ExperimentValidation ev;
-  ev.experiment = ex.name;
-  ev.unit = inst == model::Instrument::kGyroscope ? "rad/s" : "m/s^2";
-  ev.floor = floor;
-  Tally tally;
+// The true model's own part (the fitted model's terms) at plausible MEMS values: normal with
+// bias_sigma [unit] for bias terms, scale_sigma [1] for the others.
+Planted base_truth(const Experiment& ex, model::Rng& r) {
+  Planted p;
+  p.model = ex.fit_model.model;
+  p.theta = VectorXd::Zero(p.model.size());
+  for (std::size_t k = 0; k < p.model.terms.size(); ++k) {
+    const int off = p.model.offset(k), n = model::param_count(p.model.terms[k]);
+    const double s = p.model.terms[k].kind == TermKind::kBias ? ex.bias_sigma : ex.scale_sigma;
+    for (int i = 0; i < n; ++i) p.theta[off + i] = s * r.normal();
+  }
+  return p;
+}
 
-  // The true model's own part (the fitted model's terms) at plausible MEMS values.
-  auto base_truth = [&](model::Rng& r) {
-    Planted p;
-    p.model = fit_model.model;
-    p.theta = VectorXd::Zero(p.model.size());
-    for (std::size_t k = 0; k < p.model.terms.size(); ++k) {
-      const int off = p.model.offset(k), n = model::param_count(p.model.terms[k]);
-      const double s = p.model.terms[k].kind == TermKind::kBias ? ex.bias_sigma : ex.scale_sigma;
-      for (int i = 0; i < n; ++i) p.theta[off + i] = s * r.normal();
-    }
-    return p;
-  };
+// The design of a term list on the rows of `in` (3 per segment).
+MatrixXd rows_design(const GapInput& in, const std::vector<TermSpec>& terms) {
+  MatrixXd A(3 * static_cast<Eigen::Index>(in.segments.size()), 0);
+  for (const auto& t : terms) {
+    const MatrixXd B = rows_block(in, t);
+    MatrixXd C(A.rows(), A.cols() + B.cols());
+    C << A, B;
+    A = C;
+  }
+  return A;
+}
 
-  // Alias pairs and identifiability, declared beforehand from the design (no noise involved).
-  GapOptions gopt = o.gap;
-  std::vector<Candidate> cands = default_candidates(fit_model.model);
-  const GapInput probe = ex.make(base_truth(prng), seed++);
-  GapOptions aopt = gopt;
+// What the runs of one experiment share.
+struct Context {
+  const Experiment& ex;
+  const ValidateOptions& o;
+  GapOptions gopt;                                  // blind runs: no alias analysis
+  GapInput probe;                                   // one run of the design (ranks, regressors)
+  std::map<std::string, CandidateResult> declared;  // the probe's candidates, by name
+  MatrixXd A0;                                      // the fitted model's design on the probe
+  Eigen::ColPivHouseholderQR<MatrixXd> qr0;         // of A0
+};
+
+// The random state and the figures every run adds to.
+struct Sinks {
+  model::Rng& prng;
+  std::uint64_t& seed;
+  ValidationReport& rep;
+  Tally& tally;
+};
+
+// Alias pairs and identifiability, declared beforehand from one run of the design (rank only, no
+// noise involved), and the baseline design for sizing a planted effect's unabsorbable part.
+Context probe_design(const Experiment& ex, const ValidateOptions& o, model::Rng& prng, std::uint64_t& seed) {
+  Context cx{ex, o, o.gap, ex.make(base_truth(ex, prng), seed++), {}, {}, {}};
+  GapOptions aopt = o.gap;
   aopt.check_aliases = true;
   aopt.max_steps = 0;
-  const GapReport arep = diagnose(probe, aopt);
-  std::map<std::string, CandidateResult> declared;
-  for (const auto& c : arep.candidates) declared[c.term] = c;
-  gopt.check_aliases = false;
+  for (const auto& c : diagnose(cx.probe, aopt).candidates) cx.declared[c.term] = c;
+  cx.gopt.check_aliases = false;
+  cx.A0 = rows_design(cx.probe, ex.fit_model.model.terms);
+  cx.qr0.compute(cx.A0);
+  return cx;
+}
 
-  // Baseline design (rows: 3 per segment) for sizing the planted effect's unabsorbable part.
-  const MatrixXd A0 = [&] {
-    MatrixXd A(3 * static_cast<Eigen::Index>(probe.segments.size()), 0);
-    for (const auto& t : fit_model.model.terms) {
-      const MatrixXd B = rows_block(probe, t);
-      MatrixXd C(A.rows(), A.cols() + B.cols());
-      C << A, B;
-      A = C;
-    }
-    return A;
-  }();
-  const Eigen::ColPivHouseholderQR<MatrixXd> qr0(A0);
-
-  // One planted candidate per kind (temperature polynomials at order 2).
+// One planted candidate per kind (temperature polynomials at order 2), restricted to --only and to
+// the experiment's plant list; those the design cannot excite are listed in ev.not_excited.
+std::vector<Candidate> planted_candidates(const Context& cx, ExperimentValidation& ev) {
+  const auto& only = cx.o.only;
+  const auto& kinds_to_plant = cx.ex.plant;
   std::vector<Candidate> plant;
   std::set<int> kinds;
-  for (const auto& c : cands) {
+  for (const auto& c : default_candidates(cx.ex.fit_model.model)) {
     const std::string kname = model::term_name(c.term.kind);
-    if (!o.only.empty() && std::find(o.only.begin(), o.only.end(), c.name) == o.only.end() &&
-        std::find(o.only.begin(), o.only.end(), kname) == o.only.end())
+    if (!only.empty() && std::find(only.begin(), only.end(), c.name) == only.end() &&
+        std::find(only.begin(), only.end(), kname) == only.end())
       continue;
-    if (!ex.plant.empty() && std::find(ex.plant.begin(), ex.plant.end(), kname) == ex.plant.end()) continue;
+    if (!kinds_to_plant.empty() && std::find(kinds_to_plant.begin(), kinds_to_plant.end(), kname) == kinds_to_plant.end())
+      continue;
     const bool temp = c.term.kind == TermKind::kBiasTemperature || c.term.kind == TermKind::kScaleTemperature;
     if (temp && c.term.order != 2) continue;
     if (kinds.count(static_cast<int>(c.term.kind))) continue;
     kinds.insert(static_cast<int>(c.term.kind));
-    if (rows_block(probe, c.term).norm() == 0.0) {
+    if (rows_block(cx.probe, c.term).norm() == 0.0) {
       ev.not_excited.push_back(c.name);
-      if (!ex.list_not_excited) continue;
+      if (!cx.ex.list_not_excited) continue;
     }
     plant.push_back(c);
   }
+  return plant;
+}
 
-  for (const auto& c : plant) {
-    CandidateValidation cv;
-    cv.term = c.name;
-    cv.experiment = ex.name;
-    const auto dit = declared.find(c.name);
-    cv.identifiable = dit != declared.end() && dit->second.evaluated;
-    if (dit != declared.end()) cv.aliases = dit->second.aliases;
-    const MatrixXd C = rows_block(probe, c.term);
-    const auto info = model::param_info(c.term, inst);
-    const std::string key = ex.tag.empty() ? c.name : c.name + " [" + ex.tag + "]";
-    for (double m : o.sizes) {
-      CandidateValidation::BySize bs;
-      bs.size = m;
-      double rank_sum = 0, closed = 0, ratio_sum = 0;
-      int ratio_n = 0;
-      for (int sd = 0; sd < o.seeds; ++sd) {
-        Planted truth = base_truth(prng);
-        VectorXd th(C.cols());
-        for (Eigen::Index i = 0; i < th.size(); ++i) th[i] = prng.normal();
-        const VectorXd eff = C * th;
-        const VectorXd orth = eff - A0 * qr0.solve(eff);
-        const double rms_o = std::sqrt(orth.squaredNorm() / static_cast<double>(orth.size()));
-        const double rms_e = std::sqrt(eff.squaredNorm() / static_cast<double>(eff.size()));
-        const double base = cv.identifiable && rms_o > 1e-9 * rms_e ? rms_o : rms_e;
-        if (!(base > 0)) break;
-        th *= m * floor / base;
-        truth.model.terms.push_back(c.term);
-        VectorXd full(truth.theta.size() + th.size());
-        full << truth.theta, th;
-        truth.theta = full;
-        const GapInput in = ex.make(truth, seed++);
-        const GapReport r = diagnose(in, gopt);
-        if (!r.ok) continue;
-        ++bs.runs;
-        const std::string named = r.selected.empty() ? "(none)" : r.selected.front();
-        bool alias_ok = false;
-        for (const auto& a : cv.aliases) alias_ok = alias_ok || same_effect(named, a);
-        const bool strict = same_effect(named, c.name);
-        bs.top1_strict += strict ? 1 : 0;
-        bs.top1 += (strict || alias_ok) ? 1 : 0;
-        int rank = 0, pos = 0;
-        for (const auto& cr : r.candidates) {
-          if (cr.noise_stage || !cr.evaluated) continue;
-          ++pos;
-          if (same_effect(cr.term, c.name) && rank == 0) rank = pos;
-        }
-        rank_sum += rank > 0 ? rank : pos + 1;
-        if (!r.steps.empty()) {
-          const double h0 = r.steps.front().heldout_rms, f0 = r.steps.front().floor_rms;
-          const double exq = h0 * h0 - f0 * f0;
-          const double cl = h0 * h0 - r.unexplained_heldout_rms * r.unexplained_heldout_rms;
-          const double frac = exq > 0 ? std::clamp(cl / exq, 0.0, 1.0) : 1.0;
-          closed += frac;
-          if (cv.identifiable && m >= 5) {
-            tally.closed_sum += frac;
-            ++tally.closed_n;
-          }
-        }
-        for (const auto& cr : r.candidates)
-          if (cr.term == c.name && std::isfinite(cr.size)) {
-            for (std::size_t k = 0; k < info.size(); ++k)
-              if (info[k].name == cr.size_param) {
-                const double planted = th[static_cast<Eigen::Index>(k)];
-                ++bs.coverage_n;
-                const bool in_ci = cr.ci_lo <= planted && planted <= cr.ci_hi;
-                bs.covered += in_ci ? 1 : 0;
-                if (planted != 0) {
-                  ratio_sum += cr.size / planted;
-                  ++ratio_n;
-                }
-                if (cv.identifiable && m >= 5) {
-                  ++tally.cov_n;
-                  tally.cov_ok += in_ci ? 1 : 0;
-                }
-              }
-          }
-        if (m >= 5) {
-          rep.confusion[key][named] += 1;
-          if (cv.identifiable) {
-            ++tally.top1_n;
-            tally.top1_ok += (strict || alias_ok) ? 1 : 0;
-          }
-        }
-      }
-      if (bs.runs > 0) {
-        bs.mean_rank = rank_sum / bs.runs;
-        bs.closed = closed / bs.runs;
-        bs.recovered_ratio = ratio_n ? ratio_sum / ratio_n : kNaN;
-      }
-      cv.by_size.push_back(bs);
-    }
-    rep.candidates.push_back(cv);
+// Planted parameters of candidate columns C: standard normal, scaled so the part of C·θ the model
+// cannot absorb (all of it when not identifiable) has an RMS of size × floor [unit]; empty when
+// the effect is zero.
+VectorXd planted_parameters(const Context& cx, const MatrixXd& C, bool identifiable, double size, model::Rng& prng) {
+  VectorXd th(C.cols());
+  for (Eigen::Index i = 0; i < th.size(); ++i) th[i] = prng.normal();
+  const VectorXd eff = C * th;
+  const VectorXd orth = eff - cx.A0 * cx.qr0.solve(eff);
+  const double rms_o = std::sqrt(orth.squaredNorm() / static_cast<double>(orth.size()));
+  const double rms_e = std::sqrt(eff.squaredNorm() / static_cast<double>(eff.size()));
+  const double base = identifiable && rms_o > 1e-9 * rms_e ? rms_o : rms_e;
+  if (!(base > 0)) return {};
+  return th * (size * cx.ex.floor / base);
+}
+
+// 1-based rank of the planted term among the evaluated static candidates (one past the last when
+// absent).
+int planted_rank(const GapReport& r, const std::string& planted) {
+  int rank = 0, pos = 0;
+  for (const auto& cr : r.candidates) {
+    if (cr.noise_stage || !cr.evaluated) continue;
+    ++pos;
+    if (same_effect(cr.term, planted) && rank == 0) rank = pos;
   }
+  return rank > 0 ? rank : pos + 1;
+}
 
-  // Null runs.
-  for (int i = 0; i < ex.null_runs; ++i) {
-    const GapReport r = diagnose(ex.make(base_truth(prng), seed++), gopt);
+// Fraction of the excess squared held-out gap above the floor that the selection closed, in [0, 1].
+double closed_fraction(const GapReport& r) {
+  const double h0 = r.steps.front().heldout_rms, f0 = r.steps.front().floor_rms;
+  const double exq = h0 * h0 - f0 * f0;
+  const double cl = h0 * h0 - r.unexplained_heldout_rms * r.unexplained_heldout_rms;
+  return exq > 0 ? std::clamp(cl / exq, 0.0, 1.0) : 1.0;
+}
+
+// Running sums of one (candidate, size) cell.
+struct SizeSums {
+  CandidateValidation::BySize bs;
+  double rank_sum = 0, closed = 0, ratio_sum = 0;
+  int ratio_n = 0;
+};
+
+// Interval coverage and recovered/planted ratio of the candidate's reported size parameter.
+void score_size(const GapReport& r, const Candidate& c, const VectorXd& th, bool counted, SizeSums& ss, Tally& tally,
+                model::Instrument inst) {
+  const auto info = model::param_info(c.term, inst);
+  for (const auto& cr : r.candidates)
+    if (cr.term == c.name && std::isfinite(cr.size)) {
+      for (std::size_t k = 0; k < info.size(); ++k)
+        if (info[k].name == cr.size_param) {
+          const double planted = th[static_cast<Eigen::Index>(k)];
+          ++ss.bs.coverage_n;
+          const bool in_ci = cr.ci_lo <= planted && planted <= cr.ci_hi;
+          ss.bs.covered += in_ci ? 1 : 0;
+          if (planted != 0) {
+            ss.ratio_sum += cr.size / planted;
+            ++ss.ratio_n;
+          }
+          if (counted) {
+            ++tally.cov_n;
+            tally.cov_ok += in_ci ? 1 : 0;
+          }
+        }
+    }
+}
+
+// Scores one blind diagnosis of a planted run: top-1 (strict, or an alias declared beforehand),
+// rank, gap closed, coverage; runs at ≥ 5× the floor go into the confusion matrix and, when the
+// candidate is identifiable, into the tally.
+void score_run(const GapReport& r, const Context& cx, const Candidate& c, const CandidateValidation& cv,
+               const VectorXd& th, double size, SizeSums& ss, Sinks& out) {
+  const bool counted = cv.identifiable && size >= 5;
+  ++ss.bs.runs;
+  const std::string named = r.selected.empty() ? "(none)" : r.selected.front();
+  bool alias_ok = false;
+  for (const auto& a : cv.aliases) alias_ok = alias_ok || same_effect(named, a);
+  const bool strict = same_effect(named, c.name);
+  ss.bs.top1_strict += strict ? 1 : 0;
+  ss.bs.top1 += (strict || alias_ok) ? 1 : 0;
+  ss.rank_sum += planted_rank(r, c.name);
+  if (!r.steps.empty()) {
+    const double frac = closed_fraction(r);
+    ss.closed += frac;
+    if (counted) {
+      out.tally.closed_sum += frac;
+      ++out.tally.closed_n;
+    }
+  }
+  score_size(r, c, th, counted, ss, out.tally, cx.ex.fit_model.model.instrument);
+  if (size >= 5) {
+    const std::string key = cx.ex.tag.empty() ? c.name : c.name + " [" + cx.ex.tag + "]";
+    out.rep.confusion[key][named] += 1;
+    if (cv.identifiable) {
+      ++out.tally.top1_n;
+      out.tally.top1_ok += (strict || alias_ok) ? 1 : 0;
+    }
+  }
+}
+
+// Seeds runs of the candidate planted at `size` × the floor, each diagnosed blind.
+CandidateValidation::BySize validate_size(const Context& cx, const Candidate& c, const CandidateValidation& cv,
+                                          const MatrixXd& C, double size, Sinks& out) {
+  SizeSums ss;
+  ss.bs.size = size;
+  for (int sd = 0; sd < cx.o.seeds; ++sd) {
+    Planted truth = base_truth(cx.ex, out.prng);
+    const VectorXd th = planted_parameters(cx, C, cv.identifiable, size, out.prng);
+    if (th.size() == 0) break;
+    truth.model.terms.push_back(c.term);
+    VectorXd full(truth.theta.size() + th.size());
+    full << truth.theta, th;
+    truth.theta = full;
+    const GapReport r = diagnose(cx.ex.make(truth, out.seed++), cx.gopt);
+    if (r.ok) score_run(r, cx, c, cv, th, size, ss, out);
+  }
+  if (ss.bs.runs > 0) {
+    ss.bs.mean_rank = ss.rank_sum / ss.bs.runs;
+    ss.bs.closed = ss.closed / ss.bs.runs;
+    ss.bs.recovered_ratio = ss.ratio_n ? ss.ratio_sum / ss.ratio_n : kNaN;
+  }
+  return ss.bs;
+}
+
+// One planted candidate at every size: identifiability and aliases as declared by the probe.
+CandidateValidation validate_candidate(const Context& cx, const Candidate& c, Sinks& out) {
+  CandidateValidation cv;
+  cv.term = c.name;
+  cv.experiment = cx.ex.name;
+  const auto dit = cx.declared.find(c.name);
+  cv.identifiable = dit != cx.declared.end() && dit->second.evaluated;
+  if (dit != cx.declared.end()) cv.aliases = dit->second.aliases;
+  const MatrixXd C = rows_block(cx.probe, c.term);
+  for (double m : cx.o.sizes) cv.by_size.push_back(validate_size(cx, c, cv, C, m, out));
+  return cv;
+}
+
+// Null runs: the true model is the fitted one; any term named is a false positive.
+void null_runs(const Context& cx, ExperimentValidation& ev, Sinks& out) {
+  for (int i = 0; i < cx.ex.null_runs; ++i) {
+    const GapReport r = diagnose(cx.ex.make(base_truth(cx.ex, out.prng), out.seed++), cx.gopt);
     if (!r.ok) continue;
     ++ev.null_runs;
     ev.null_false_positives += r.selected.empty() ? 0 : 1;
-    if (!r.selected.empty()) ++rep.null_named[r.selected.front() + (ex.tag.empty() ? "" : " [" + ex.tag + "]")];
+    if (!r.selected.empty()) ++out.rep.null_named[r.selected.front() + (cx.ex.tag.empty() ? "" : " [" + cx.ex.tag + "]")];
   }
+}
 
-  // Out of vocabulary: the z reading jumps by 8× the floor in one segment of every repeat of the
-  // pattern (a part that shifts at that table position), something no term of the vocabulary
-  // describes. The first 6 segments of a repeat are left clean.
-  for (int i = 0; i < ex.oov_runs; ++i) {
-    Planted p = base_truth(prng);
-    const std::size_t per = ex.oov_period;
-    p.extra.assign(ex.oov_segments, Eigen::Vector3d::Zero());
+// Out of vocabulary: the z reading jumps by 8× the floor in one segment of every repeat of the
+// pattern (a part that shifts at that table position), something no term of the vocabulary
+// describes. The first 6 segments of a repeat are left clean.
+void oov_runs(const Context& cx, ExperimentValidation& ev, Sinks& out) {
+  const std::size_t per = cx.ex.oov_period;
+  for (int i = 0; i < cx.ex.oov_runs; ++i) {
+    Planted p = base_truth(cx.ex, out.prng);
+    p.extra.assign(cx.ex.oov_segments, Eigen::Vector3d::Zero());
     const std::size_t where = 6 + static_cast<std::size_t>(i) % (per > 6 ? per - 6 : 1);
     for (std::size_t s = 0; s < p.extra.size(); ++s)
-      if (s % per == where % per) p.extra[s][2] = 8.0 * floor * (i % 2 ? 1.0 : -1.0);
-    const GapReport r = diagnose(ex.make(p, seed++), gopt);
+      if (s % per == where % per) p.extra[s][2] = 8.0 * cx.ex.floor * (i % 2 ? 1.0 : -1.0);
+    const GapReport r = diagnose(cx.ex.make(p, out.seed++), cx.gopt);
     if (!r.ok) continue;
     ++ev.oov_runs;
     if (r.explanation.empty() && !r.at_floor) ++ev.oov_unexplained;
     if (!r.explanation.empty()) ++ev.oov_wrong_name;
   }
+}
 
+// The experiment's summary figures from its tally, added to the totals and the report.
+void summarize(ExperimentValidation& ev, const Tally& tally, Tally& total, ValidationReport& rep) {
   ev.planted_at5 = tally.top1_n;
   ev.top1_ok_at5 = tally.top1_ok;
   ev.top1_at5 = tally.top1_n ? static_cast<double>(tally.top1_ok) / tally.top1_n : kNaN;
@@ -392,73 +444,108 @@ void validate_experiment(const Experiment& ex, const ValidateOptions& o, model::
   rep.experiments.push_back(ev);
 }
 
+// Declares aliases and identifiability from a probe of the design (rank only), plants each candidate at
+// each size in the experiment, fits the model without it and diagnoses blind; appends the
+// CandidateValidation rows, the confusion entries and the null / out-of-vocabulary runs.
+void validate_experiment(const Experiment& ex, const ValidateOptions& o, model::Rng& prng, std::uint64_t& seed,
+                         ValidationReport& rep, Tally& total) {
+  ExperimentValidation ev;
+  ev.experiment = ex.name;
+  ev.unit = ex.fit_model.model.instrument == model::Instrument::kGyroscope ? "rad/s" : "m/s^2";
+  ev.floor = ex.floor;
+  Tally tally;
+  Sinks out{prng, seed, rep, tally};
+  const Context cx = probe_design(ex, o, prng, seed);
+  for (const auto& c : planted_candidates(cx, ev)) rep.candidates.push_back(validate_candidate(cx, c, out));
+  null_runs(cx, ev, out);
+  oov_runs(cx, ev, out);
+  summarize(ev, tally, total, rep);
+}
+
+// The static tumble × temperature design with the accelerometer bias + scale model.
+Experiment static_experiment(const ValidateOptions& o) {
+  const ValidationDesign& d = o.design;
+  Experiment e;
+  e.name = "static tumble x temperature, accel bias+scale";
+  e.fit_model = validation_model();
+  e.make = [&d = o.design, fm = e.fit_model](const Planted& p, std::uint64_t s) { return generate(d, fm, p, s); };
+  e.floor = white_floor(d);
+  e.null_runs = o.null_runs;
+  e.oov_runs = o.oov_runs;
+  e.oov_period = d.positions.size();
+  e.oov_segments = d.positions.size() * d.setpoints_c.size();
+  return e;
+}
+
+// The same static design with a bias-only model: scale itself, and a wrong local g (a common scale
+// on a static design: declared alias).
+Experiment static_bias_only_experiment(const ValidateOptions& o) {
+  Experiment e;
+  e.name = "static tumble x temperature, accel bias only";
+  e.tag = "static, bias only";
+  e.fit_model = validation_model();
+  e.fit_model.model.terms = {TermSpec{TermKind::kBias, 1, 25.0}};
+  e.fit_model.source = "bias (validation model)";
+  e.make = [&d = o.design, fm = e.fit_model](const Planted& p, std::uint64_t s) { return generate(d, fm, p, s); };
+  e.floor = white_floor(o.design);
+  e.plant = {"scale", "gravity_error"};
+  return e;
+}
+
+// The rate table with the gyroscope bias + scale model.
+Experiment rate_gyro_experiment(const ValidateOptions& o) {
+  const RateDesign& rd = o.rate_design;
+  Experiment g;
+  g.name = "rate table, gyro bias+scale";
+  g.tag = "rate, gyro";
+  g.fit_model = rate_model(model::Instrument::kGyroscope);
+  g.make = [&rd = o.rate_design, fm = g.fit_model](const Planted& p, std::uint64_t s) {
+    return generate_rate(rd, fm, p, s);
+  };
+  g.floor = rate_white_floor(rd, model::Instrument::kGyroscope);
+  g.bias_sigma = 0.01;  // rad/s (≈ 0.6 deg/s)
+  g.list_not_excited = false;
+  g.null_runs = o.rate_null_runs >= 0 ? o.rate_null_runs : (o.null_runs + 1) / 2;
+  g.oov_runs = o.rate_oov_runs >= 0 ? o.rate_oov_runs : (o.oov_runs + 1) / 2;
+  g.oov_period = rd.axes.size() * rd.rates_dps.size();
+  g.oov_segments = g.oov_period;
+  return g;
+}
+
+// The accelerometer off the axis: the centripetal ω×(ω×r) at a known r is an input of known
+// size apart from gravity, so a wrong local g no longer hides in the scale; with one mount it
+// still hides in scale + a radius error (g and r off by the same fraction), a second mount at
+// another known offset separates that too.
+Experiment rate_accel_experiment(const ValidateOptions& o) {
+  const RateDesign& ra = o.rate_accel_design;
+  Experiment a;
+  a.name = ra.remount_offsets_m.empty() ? "rate table, accel bias+scale (off axis)"
+                                        : "rate table, accel bias+scale (off axis, two mounts)";
+  a.tag = "rate, accel";
+  a.fit_model = rate_model(model::Instrument::kAccelerometer);
+  a.make = [&ra = o.rate_accel_design, fm = a.fit_model](const Planted& p, std::uint64_t s) {
+    return generate_rate(ra, fm, p, s);
+  };
+  a.floor = rate_white_floor(ra, model::Instrument::kAccelerometer);
+  a.plant = {"lever_arm", "gravity_error"};
+  a.list_not_excited = false;
+  return a;
+}
+
 }  // namespace
 
 ValidationReport run_validation(const ValidateOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   ValidationReport rep;
-  const ValidationDesign& d = o.design;
-  rep.floor_mps2 = white_floor(d);
+  rep.floor_mps2 = white_floor(o.design);
   model::Rng prng(o.seed * 7919 + 17);
   std::uint64_t seed = o.seed * 1000003;
   Tally total;
-
-  std::vector<Experiment> exps;
-  {
-    Experiment e;
-    e.name = "static tumble x temperature, accel bias+scale";
-    e.fit_model = validation_model();
-    e.make = [&d, fm = e.fit_model](const Planted& p, std::uint64_t s) { return generate(d, fm, p, s); };
-    e.floor = white_floor(d);
-    e.null_runs = o.null_runs;
-    e.oov_runs = o.oov_runs;
-    e.oov_period = d.positions.size();
-    e.oov_segments = d.positions.size() * d.setpoints_c.size();
-    exps.push_back(e);
-  }
-  const RateDesign& rd = o.rate_design;
+  std::vector<Experiment> exps = {static_experiment(o)};
   if (o.more_designs) {
-    // Scale itself, and a wrong local g (a common scale on a static design: declared alias).
-    Experiment e;
-    e.name = "static tumble x temperature, accel bias only";
-    e.tag = "static, bias only";
-    e.fit_model = validation_model();
-    e.fit_model.model.terms = {TermSpec{TermKind::kBias, 1, 25.0}};
-    e.fit_model.source = "bias (validation model)";
-    e.make = [&d, fm = e.fit_model](const Planted& p, std::uint64_t s) { return generate(d, fm, p, s); };
-    e.floor = white_floor(d);
-    e.plant = {"scale", "gravity_error"};
-    exps.push_back(e);
-
-    Experiment g;
-    g.name = "rate table, gyro bias+scale";
-    g.tag = "rate, gyro";
-    g.fit_model = rate_model(model::Instrument::kGyroscope);
-    g.make = [&rd, fm = g.fit_model](const Planted& p, std::uint64_t s) { return generate_rate(rd, fm, p, s); };
-    g.floor = rate_white_floor(rd, model::Instrument::kGyroscope);
-    g.bias_sigma = 0.01;  // rad/s (≈ 0.6 deg/s)
-    g.list_not_excited = false;
-    g.null_runs = o.rate_null_runs >= 0 ? o.rate_null_runs : (o.null_runs + 1) / 2;
-    g.oov_runs = o.rate_oov_runs >= 0 ? o.rate_oov_runs : (o.oov_runs + 1) / 2;
-    g.oov_period = rd.axes.size() * rd.rates_dps.size();
-    g.oov_segments = g.oov_period;
-    exps.push_back(g);
-
-    // The accelerometer off the axis: the centripetal ω×(ω×r) at a known r is an input of known
-    // size apart from gravity, so a wrong local g no longer hides in the scale; with one mount it
-    // still hides in scale + a radius error (g and r off by the same fraction), a second mount at
-    // another known offset separates that too.
-    Experiment a;
-    const RateDesign& ra = o.rate_accel_design;
-    a.name = ra.remount_offsets_m.empty() ? "rate table, accel bias+scale (off axis)"
-                                          : "rate table, accel bias+scale (off axis, two mounts)";
-    a.tag = "rate, accel";
-    a.fit_model = rate_model(model::Instrument::kAccelerometer);
-    a.make = [&ra, fm = a.fit_model](const Planted& p, std::uint64_t s) { return generate_rate(ra, fm, p, s); };
-    a.floor = rate_white_floor(ra, model::Instrument::kAccelerometer);
-    a.plant = {"lever_arm", "gravity_error"};
-    a.list_not_excited = false;
-    exps.push_back(a);
+    exps.push_back(static_bias_only_experiment(o));
+    exps.push_back(rate_gyro_experiment(o));
+    exps.push_back(rate_accel_experiment(o));
   }
   for (const auto& e : exps) validate_experiment(e, o, prng, seed, rep, total);
   rep.top1_at5 = total.top1_n ? static_cast<double>(total.top1_ok) / total.top1_n : kNaN;
@@ -487,19 +574,21 @@ bool targets_met(const ValidationReport& r) {
          noise_ok;
 }
 
-void print_validation(std::ostream& os, const ValidationReport& r) {
+namespace {
+
+// The floor of a segment mean in the experiment's display unit (mg or deg/h) and its own unit.
+std::string floor_text(const ExperimentValidation& e) {
+  char b[128];
+  if (e.unit == "rad/s")
+    std::snprintf(b, sizeof b, "%.3g deg/h (%.3g rad/s)", e.floor / physics::kDegPerHour, e.floor);
+  else
+    std::snprintf(b, sizeof b, "%.3g mg (%.3g m/s^2)", e.floor / physics::kMilliG, e.floor);
+  return std::string(b);
+}
+
+// One table per experiment: every planted candidate at every size.
+void print_planted(std::ostream& os, const ValidationReport& r) {
   char line[512];
-  // The floor of a segment mean in the experiment's display unit (mg or deg/h).
-  auto floor_text = [](const ExperimentValidation& e) {
-    char b[128];
-    if (e.unit == "rad/s")
-      std::snprintf(b, sizeof b, "%.3g deg/h (%.3g rad/s)", e.floor / physics::kDegPerHour, e.floor);
-    else
-      std::snprintf(b, sizeof b, "%.3g mg (%.3g m/s^2)", e.floor / physics::kMilliG, e.floor);
-    return std::string(b);
-  };
-  os << "stend gap validate — segment-level generator; per experiment: the fitted model, the planted effect "
-        "withheld from it, sizes in multiples of the averaged noise floor of a segment mean\n";
   const std::string header =
       "planted effect                 ident  size  runs  top-1  strict  mean rank  closed  recovered/planted  CI cover\n";
   std::string current = "\x01";
@@ -519,6 +608,11 @@ void print_validation(std::ostream& os, const ValidationReport& r) {
       os << line;
     }
   }
+}
+
+// Alias pairs declared beforehand, the per-experiment figures and the confusion matrix.
+void print_per_experiment(std::ostream& os, const ValidationReport& r) {
+  char line[512];
   os << "\nalias pairs declared beforehand (joint-design rank, per experiment):\n";
   for (const auto& c : r.candidates)
     if (!c.aliases.empty()) {
@@ -546,6 +640,11 @@ void print_validation(std::ostream& os, const ValidationReport& r) {
     for (const auto& [n, k] : m) os << " " << n << ":" << k;
     os << "\n";
   }
+}
+
+// The totals against their targets, the run time [s] and the terms null runs named.
+void print_totals(std::ostream& os, const ValidationReport& r) {
+  char line[512];
   std::snprintf(line, sizeof line,
                 "\ntop-1 (identifiable, >= 5x floor): %.3f   [target >= 0.9]\n"
                 "explainable held-out gap closed (>= 5x): %.3f   [target >= 0.8]\n"
@@ -561,6 +660,16 @@ void print_validation(std::ostream& os, const ValidationReport& r) {
     for (const auto& [n, k] : r.null_named) os << " " << n << ":" << k;
     os << "\n";
   }
+}
+
+}  // namespace
+
+void print_validation(std::ostream& os, const ValidationReport& r) {
+  os << "stend gap validate — segment-level generator; per experiment: the fitted model, the planted effect "
+        "withheld from it, sizes in multiples of the averaged noise floor of a segment mean\n";
+  print_planted(os, r);
+  print_per_experiment(os, r);
+  print_totals(os, r);
   noise_stage::print_validation(os, r.noise_stage, r.noise_seconds);
 }
 

@@ -42,15 +42,35 @@ double rate_white_floor(const RateDesign& d, model::Instrument instrument) {
   return sigma / std::sqrt(d.record_s * d.rate_hz);
 }
 
+namespace {
+
+// Constant rate [deg/s] about the vertical `up` (sensor frame): ω, gravity and the centripetal
+// term are constant in the sensor frame, ω̇ = 0. Specific force at the sensor = the known mount's
+// lever-arm acceleration (offset [m]) + g·up; the input is ω for a gyroscope, f otherwise.
+model::Stimulus<double> rate_stimulus(const RateDesign& d, const Eigen::Vector3d& up, const Eigen::Vector3d& offset,
+                                      double rate_dps, bool gyro, double mid_s) {
+  model::Stimulus<double> st;
+  const Eigen::Vector3d w = rate_dps * physics::kDegToRad * up;
+  st.angular_rate = w;
+  st.angular_accel = Eigen::Vector3d::Zero();
+  const Eigen::Vector3d f = physics::point_acceleration<double>(w, st.angular_accel, offset) + d.gravity * up;
+  st.specific_force = f;
+  st.input = gyro ? w : f;
+  st.gravity_up = up;
+  st.temperature_c = d.temperature_c;
+  st.temperature_rate_cps = 0.0;
+  st.temperature_direction = 0.0;
+  st.time_s = mid_s;
+  return st;
+}
+
+}  // namespace
+
 GapInput generate_rate(const RateDesign& d, const estimation::ModelSpec& fit_model, const Planted& truth,
                        std::uint64_t seed) {
   const model::Instrument inst = fit_model.model.instrument;
   const bool gyro = inst == model::Instrument::kGyroscope;
-  GapInput in;
-  in.spec = fit_model;
-  in.source = "validation generator (rate table, segment level)";
-  in.truth_source = "generator truth";
-  in.floor_source = "batch means of 8 blocks (generator: white floor × sqrt(chi2_7/7))";
+  GapInput in = generated_input(fit_model, "validation generator (rate table, segment level)");
   model::Rng rng(seed);
   const double dt = 1.0 / d.rate_hz;
   const double sigma =
@@ -72,30 +92,9 @@ GapInput generate_rate(const RateDesign& d, const estimation::ModelSpec& fit_mod
       t += d.move_s;
       SegmentData s;
       auto& p = s.point;
-      p.segment_id = seg_id++;
-      p.t_start_s = t;
-      p.t_end_s = t + d.record_s;
-      p.samples_used = static_cast<std::size_t>(d.record_s * d.rate_hz);
-      const double mid = t + 0.5 * d.record_s;
-      auto& st = p.stimulus;
-      // Constant rate about the vertical: ω, gravity and the centripetal term are constant in the
-      // sensor frame, ω̇ = 0. Specific force at the sensor = the known mount's lever-arm
-      // acceleration + g·up.
-      const Eigen::Vector3d w = rate_dps * physics::kDegToRad * up;
-      st.angular_rate = w;
-      st.angular_accel = Eigen::Vector3d::Zero();
-      const Eigen::Vector3d f = physics::point_acceleration<double>(w, st.angular_accel, offset) + d.gravity * up;
-      st.specific_force = f;
-      st.input = gyro ? w : f;
-      st.gravity_up = up;
-      st.temperature_c = d.temperature_c;
-      st.temperature_rate_cps = 0.0;
-      st.temperature_direction = 0.0;
-      st.time_s = mid;
-      Eigen::Vector3d y = truth.model.measure<double>(truth.theta.data(), st);
-      if (!truth.extra.empty()) y += truth.extra[static_cast<std::size_t>(p.segment_id) % truth.extra.size()];
-      mean_noise.apply(rng, mid, y, s);
-      p.measured = y;
+      const double mid = time_segment(s, seg_id++, t, d.record_s, d.rate_hz);
+      p.stimulus = rate_stimulus(d, up, offset, rate_dps, gyro, mid);
+      measure_segment(truth, mean_noise, rng, mid, s);
       char label[160];
       std::snprintf(label, sizeof label, "mount %zu, %s %g deg/s", mount + 1, oname, rate_dps);
       p.label = label;
