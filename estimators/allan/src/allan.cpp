@@ -316,11 +316,8 @@ Readoff slope_readoff(const char* name, const std::string& unit, const std::vect
   return r;
 }
 
-}  // namespace
-
-NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
-  NoiseModel model;
-  const Units& u = curve.units;
+// The unit of every coefficient and read-off, from the curve's units.
+void set_units(NoiseModel& model, const Units& u) {
   model.quantization.unit = u.quantization;
   model.white.unit = u.white;
   model.bias_instability.unit = u.bias;
@@ -329,24 +326,28 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
   model.white_line.unit = u.white;
   model.random_walk_line.unit = u.random_walk;
   model.bias_floor.unit = u.bias;
+}
 
+// Points with a positive, finite Allan variance from at least one term, with the basis at τ.
+std::vector<FitPoint> usable_points(const AllanCurve& curve) {
   std::vector<FitPoint> pts;
   for (const auto& p : curve.points) {
     if (!(p.avar > 0.0) || !std::isfinite(p.avar) || p.terms < 1) continue;
     pts.push_back({p.tau_s, p.avar, p.adev, kNaN, kNaN, kNaN, basis(p.tau_s)});
   }
-  if (pts.size() < 2) {
-    model.message = fmt::format("fit failed: {} usable Allan point(s), need at least 2",
-                                pts.size());
-    return model;
-  }
-  model.tau_min_s = pts.front().tau;
-  model.tau_max_s = pts.back().tau;
-  const double n_phase = static_cast<double>(curve.samples) + 1.0;
-  auto m_of = [&](const FitPoint& p) { return std::round(p.tau * curve.rate_hz); };
-  for (auto& p : pts) p.edf = stats::edf_overlapping_adev(NoiseType::kWhite, n_phase, m_of(p));
+  return pts;
+}
 
-  // Iteratively reweighted: Var(σ̂²) ≈ 2σ⁴/EDF with σ² from the current model.
+// Averaging factor m = τ·rate of a point (samples per cluster).
+double averaging_factor(const FitPoint& p, const AllanCurve& curve) { return std::round(p.tau * curve.rate_hz); }
+
+// Iteratively reweighted non-negative fit of the term coefficients to the Allan variances:
+// Var(σ̂²) ≈ 2σ⁴/EDF with σ² from the current model (8 passes); fills the fitted coefficients and,
+// with opt.edf_from_model, the points' EDF from the dominant term.
+NnlsResult reweighted_fit(std::vector<FitPoint>& pts, const AllanCurve& curve, const AllanOptions& opt,
+                          NoiseModel& model) {
+  const double n_phase = static_cast<double>(curve.samples) + 1.0;
+  for (auto& p : pts) p.edf = stats::edf_overlapping_adev(NoiseType::kWhite, n_phase, averaging_factor(p, curve));
   NnlsResult fit;
   std::vector<double> w(pts.size());
   for (int iter = 0; iter < 8; ++iter) {
@@ -364,36 +365,41 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
     for (int j = 0; j < kTerms; ++j) coefficient(model, j)->fitted = std::sqrt(fit.c[j]);
     if (opt.edf_from_model && iter >= 2) {
       model.ok = true;  // dominant() needs it
-      for (auto& p : pts) p.edf = stats::edf_overlapping_adev(model.dominant(p.tau), n_phase, m_of(p));
+      for (auto& p : pts) p.edf = stats::edf_overlapping_adev(model.dominant(p.tau), n_phase, averaging_factor(p, curve));
     }
   }
-  model.ok = true;
+  return fit;
+}
+
+// Degrees of freedom, reduced χ², and each active coefficient's σ: σ(c) from the covariance
+// (inflated by χ²_red when above 1), σ(√c) = σ(c) / (2√c).
+void fit_uncertainties(const NnlsResult& fit, std::size_t points, NoiseModel& model) {
   int active = 0;
   for (int j = 0; j < kTerms; ++j) active += fit.active[j] ? 1 : 0;
-  model.dof = static_cast<int>(pts.size()) - active;
+  model.dof = static_cast<int>(points) - active;
   model.chi2_reduced = model.dof > 0 ? fit.chi2 / model.dof : kNaN;
   const double inflate = std::isfinite(model.chi2_reduced) ? std::max(1.0, model.chi2_reduced) : 1.0;
-
-  // Uncertainties: σ(c) from the covariance, σ(√c) = σ(c) / (2√c).
-  {
-    int q = 0;
-    for (int j = 0; j < kTerms; ++j) {
-      if (!fit.active[j]) continue;
-      const double var_c = fit.cov(q, q) * inflate;
-      ++q;
-      Coefficient* c = coefficient(model, j);
-      c->fitted_sigma = c->fitted > 0 ? std::sqrt(std::max(0.0, var_c)) / (2.0 * c->fitted) : kNaN;
-    }
+  int q = 0;
+  for (int j = 0; j < kTerms; ++j) {
+    if (!fit.active[j]) continue;
+    const double var_c = fit.cov(q, q) * inflate;
+    ++q;
+    Coefficient* c = coefficient(model, j);
+    c->fitted_sigma = c->fitted > 0 ? std::sqrt(std::max(0.0, var_c)) / (2.0 * c->fitted) : kNaN;
   }
+}
 
-  // Intervals of the points with the final EDF (for upper bounds and read-offs).
+// Confidence interval of each point's ADEV with its final EDF (for upper bounds and read-offs).
+void point_intervals(std::vector<FitPoint>& pts, double confidence) {
   for (auto& p : pts) {
-    const auto ci = stats::deviation_interval(p.adev, p.edf, curve.confidence);
+    const auto ci = stats::deviation_interval(p.adev, p.edf, confidence);
     p.lo = ci.lo;
     p.hi = ci.hi;
   }
+}
 
-  // Identification: where does each term dominate inside [τ_min, τ_max]?
+// Where each term dominates the fitted variance inside [τ_min, τ_max] (400 log-spaced τ) [s].
+void mark_dominance(const NnlsResult& fit, NoiseModel& model) {
   const int grid = 400;
   const double l0 = std::log(model.tau_min_s), l1 = std::log(model.tau_max_s);
   for (int g = 0; g <= grid; ++g) {
@@ -414,6 +420,11 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
     if (!std::isfinite(c->tau_lo_s)) c->tau_lo_s = tau;
     c->tau_hi_s = tau;
   }
+}
+
+// A coefficient is identified where it dominates and is ≥ 2σ; each gets the largest value
+// compatible with every measured upper limit (term alone).
+void identify_and_bound(const std::vector<FitPoint>& pts, NoiseModel& model) {
   for (int j = 0; j < kTerms; ++j) {
     Coefficient* c = coefficient(model, j);
     c->identified = c->dominates && std::isfinite(c->fitted_sigma) && c->fitted >= 2.0 * c->fitted_sigma;
@@ -421,7 +432,6 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
       c->value = c->fitted;
       c->sigma = c->fitted_sigma;
     }
-    // Largest coefficient compatible with every measured upper limit (term alone).
     double bound = std::numeric_limits<double>::infinity();
     for (const auto& p : pts) {
       const double hi = std::isfinite(p.hi) ? p.hi : p.adev;
@@ -429,33 +439,56 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
     }
     c->upper_bound = std::sqrt(bound);
   }
+}
 
-  // Slope-line read-offs.
+// Bias-instability read-off at the ADEV minimum (ADEV / 0.664); found only for a flat minimum
+// inside the measured τ range.
+void read_bias_floor(const std::vector<FitPoint>& pts, const Units& u, Readoff& r) {
+  r.unit = u.bias;
+  std::size_t imin = 0;
+  for (std::size_t i = 1; i < pts.size(); ++i) {
+    if (pts[i].adev < pts[imin].adev) imin = i;
+  }
+  r.tau_lo_s = r.tau_hi_s = pts[imin].tau;
+  r.value = pts[imin].adev / kFlickerFloor;
+  r.lo = pts[imin].lo / kFlickerFloor;
+  r.hi = pts[imin].hi / kFlickerFloor;
+  if (imin + 1 == pts.size()) {
+    r.note = fmt::format("ADEV still falling at tau_max = {:.4g} s: no flat minimum; B <= {:.4g} {}",
+                         pts[imin].tau, r.value, u.bias);
+  } else if (imin == 0) {
+    r.note = "ADEV rises from the smallest tau: no flat minimum";
+  } else {
+    r.found = true;
+  }
+}
+
+}  // namespace
+
+NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
+  NoiseModel model;
+  const Units& u = curve.units;
+  set_units(model, u);
+  std::vector<FitPoint> pts = usable_points(curve);
+  if (pts.size() < 2) {
+    model.message = fmt::format("fit failed: {} usable Allan point(s), need at least 2",
+                                pts.size());
+    return model;
+  }
+  model.tau_min_s = pts.front().tau;
+  model.tau_max_s = pts.back().tau;
+  const NnlsResult fit = reweighted_fit(pts, curve, opt, model);
+  model.ok = true;
+  fit_uncertainties(fit, pts.size(), model);
+  point_intervals(pts, curve.confidence);
+  mark_dominance(fit, model);
+  identify_and_bound(pts, model);
   std::vector<double> slope;
   local_slopes(pts, slope);
   model.white_line = slope_readoff(model.white_line.name, u.white, pts, slope, -0.5, 1.0, opt);
   model.random_walk_line =
       slope_readoff(model.random_walk_line.name, u.random_walk, pts, slope, 0.5, 3.0, opt);
-  {
-    Readoff& r = model.bias_floor;
-    r.unit = u.bias;
-    std::size_t imin = 0;
-    for (std::size_t i = 1; i < pts.size(); ++i) {
-      if (pts[i].adev < pts[imin].adev) imin = i;
-    }
-    r.tau_lo_s = r.tau_hi_s = pts[imin].tau;
-    r.value = pts[imin].adev / kFlickerFloor;
-    r.lo = pts[imin].lo / kFlickerFloor;
-    r.hi = pts[imin].hi / kFlickerFloor;
-    if (imin + 1 == pts.size()) {
-      r.note = fmt::format("ADEV still falling at tau_max = {:.4g} s: no flat minimum; B <= {:.4g} {}",
-                           pts[imin].tau, r.value, u.bias);
-    } else if (imin == 0) {
-      r.note = "ADEV rises from the smallest tau: no flat minimum";
-    } else {
-      r.found = true;
-    }
-  }
+  read_bias_floor(pts, u, model.bias_floor);
   if (model.dof <= 0) model.message = "as many active terms as points: no residual check";
   return model;
 }
