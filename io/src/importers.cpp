@@ -256,8 +256,26 @@ void write_number(std::string& out, double v) {
 // =============================================================================================
 // (a) generic CSV
 
-Recording import_csv(const fs::path& file, const CsvMapping& map) {
-  LineReader r(file);
+namespace {
+
+// Column indices (0-based, −1 = absent) that a CSV mapping resolves to.
+struct CsvColumns {
+  std::vector<std::string> names;  // from the column-name line (empty without one)
+  std::array<int, 3> acc{}, gyr{};
+  bool has_gyro = false;
+  int time = -1, temperature = -1;
+
+  // Name of column idx for messages: its header name, else "#idx".
+  std::string name(int idx) const {
+    return idx >= 0 && static_cast<std::size_t>(idx) < names.size() ? names[static_cast<std::size_t>(idx)]
+                                                                    : "#" + std::to_string(idx);
+  }
+  // Fields a data line must have.
+  int needed() const { return std::max({time, temperature, acc[0], acc[1], acc[2], gyr[0], gyr[1], gyr[2]}) + 1; }
+};
+
+// Skips the mapping's header lines and reads the column-name line (when the mapping has one).
+std::vector<std::string> read_csv_header(LineReader& r, const CsvMapping& map) {
   std::string line;
   for (std::size_t i = 0; i < map.skip_lines; ++i) {
     if (!r.next(line)) r.fail("file ends inside the " + std::to_string(map.skip_lines) + " header line(s) to skip");
@@ -269,48 +287,84 @@ Recording import_csv(const fs::path& file, const CsvMapping& map) {
     if (!got) r.fail("no column-name line");
     for (auto f : split(line, map.delimiter)) names.push_back(unquote(f));
   }
+  return names;
+}
+
+// Index of column c: given directly, or found by name among the header names (on line
+// names_line); −1 when the mapping leaves c empty.
+int resolve_column(const LineReader& r, const CsvMapping& map, const std::vector<std::string>& names,
+                   std::size_t names_line, const CsvColumn& c, const std::string& role) {
+  if (c.empty()) return -1;
+  if (c.index >= 0) return c.index;
+  if (!map.column_names) {
+    throw ImportError(r.file(), 0, "column '" + c.name + "' (" + role +
+                                       ") is given by name but the mapping has column_names = false");
+  }
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == c.name) return static_cast<int>(i);
+  }
+  std::string have;
+  for (const auto& n : names) have += (have.empty() ? "" : ", ") + n;
+  throw ImportError(r.file(), names_line, "no column named '" + c.name + "' (" + role +
+                                              "); the columns are: " + have);
+}
+
+// The mapping's columns resolved against the header: all three accelerometer axes, all three
+// gyroscope axes or none, and a time column or a fixed rate.
+CsvColumns resolve_csv_columns(const LineReader& r, const CsvMapping& map, std::vector<std::string> names) {
+  CsvColumns c;
+  c.names = std::move(names);
   const std::size_t names_line = r.line();
-  auto resolve = [&](const CsvColumn& c, const std::string& role) -> int {
-    if (c.empty()) return -1;
-    if (c.index >= 0) return c.index;
-    if (!map.column_names) {
-      throw ImportError(file, 0, "column '" + c.name + "' (" + role +
-                                     ") is given by name but the mapping has column_names = false");
-    }
-    for (std::size_t i = 0; i < names.size(); ++i) {
-      if (names[i] == c.name) return static_cast<int>(i);
-    }
-    std::string have;
-    for (const auto& n : names) have += (have.empty() ? "" : ", ") + n;
-    throw ImportError(file, names_line, "no column named '" + c.name + "' (" + role +
-                                            "); the columns are: " + have);
-  };
   const char* axes[3] = {"x", "y", "z"};
-  std::array<int, 3> acc{}, gyr{};
-  bool has_gyro = false;
   for (int k = 0; k < 3; ++k) {
     if (map.accel[k].empty()) {
-      throw ImportError(file, 0, std::string("the mapping has no accelerometer ") + axes[k] + " column");
+      throw ImportError(r.file(), 0, std::string("the mapping has no accelerometer ") + axes[k] + " column");
     }
-    acc[k] = resolve(map.accel[k], std::string("accel ") + axes[k]);
-    gyr[k] = resolve(map.gyro[k], std::string("gyro ") + axes[k]);
-    has_gyro = has_gyro || gyr[k] >= 0;
+    c.acc[k] = resolve_column(r, map, c.names, names_line, map.accel[k], std::string("accel ") + axes[k]);
+    c.gyr[k] = resolve_column(r, map, c.names, names_line, map.gyro[k], std::string("gyro ") + axes[k]);
+    c.has_gyro = c.has_gyro || c.gyr[k] >= 0;
   }
-  if (has_gyro && (gyr[0] < 0 || gyr[1] < 0 || gyr[2] < 0)) {
-    throw ImportError(file, 0, "the mapping names only some gyroscope columns (give x, y and z or none)");
+  if (c.has_gyro && (c.gyr[0] < 0 || c.gyr[1] < 0 || c.gyr[2] < 0)) {
+    throw ImportError(r.file(), 0, "the mapping names only some gyroscope columns (give x, y and z or none)");
   }
-  const int tcol = resolve(map.time, "time");
-  const int tempcol = resolve(map.temperature, "temperature");
-  if (tcol < 0 && !(map.rate_hz > 0.0)) {
-    throw ImportError(file, 0, "the mapping has neither a time column nor a rate_hz > 0");
+  c.time = resolve_column(r, map, c.names, names_line, map.time, "time");
+  c.temperature = resolve_column(r, map, c.names, names_line, map.temperature, "temperature");
+  if (c.time < 0 && !(map.rate_hz > 0.0)) {
+    throw ImportError(r.file(), 0, "the mapping has neither a time column nor a rate_hz > 0");
   }
-  int needed = std::max({tcol, tempcol, acc[0], acc[1], acc[2], gyr[0], gyr[1], gyr[2]}) + 1;
-  auto column_name = [&](int idx) {
-    return idx >= 0 && static_cast<std::size_t>(idx) < names.size() ? names[static_cast<std::size_t>(idx)]
-                                                                    : "#" + std::to_string(idx);
-  };
+  return c;
+}
 
-  Recording rec = new_recording(file, "csv");
+// Data line `index` as a sample: time [s] (column × time_scale_s, or index / rate_hz), specific
+// force [m/s²], rate [rad/s] and temperature [°C] scaled from the fields, plus the raw counts when
+// the mapping reads counts.
+ImuSample csv_sample(const LineReader& r, const std::vector<std::string_view>& f, const CsvMapping& map,
+                     const CsvColumns& c, std::size_t index) {
+  auto field = [&](int idx) { return number(r, f[static_cast<std::size_t>(idx)], c.name(idx)); };
+  ImuSample s;
+  s.t_s = c.time >= 0 ? field(c.time) * map.time_scale_s : static_cast<double>(index) / map.rate_hz;
+  for (int k = 0; k < 3; ++k) {
+    const double a = field(c.acc[k]);
+    if (map.counts) s.accel_counts[k] = to_counts(r, a, c.name(c.acc[k]));
+    s.accel_mps2[k] = a * map.accel_scale;
+    if (c.has_gyro) {
+      const double g = field(c.gyr[k]);
+      if (map.counts) s.gyro_counts[k] = to_counts(r, g, c.name(c.gyr[k]));
+      s.gyro_radps[k] = g * map.gyro_scale;
+    }
+  }
+  if (c.temperature >= 0) {
+    const double v = field(c.temperature);
+    if (map.counts) s.temperature_counts = to_counts(r, v, c.name(c.temperature));
+    s.temperature_c = v * map.temperature_scale + map.temperature_offset_c;
+  }
+  return s;
+}
+
+// Every data line as a sample (blank and comment lines skipped); a time column must increase.
+void read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColumns& c, Recording& rec) {
+  const int needed = c.needed();
+  std::string line;
   while (r.next(line)) {
     if (is_blank(line)) continue;
     if (!map.comment_prefix.empty() && trim(line).substr(0, map.comment_prefix.size()) == map.comment_prefix) {
@@ -320,55 +374,48 @@ Recording import_csv(const fs::path& file, const CsvMapping& map) {
     if (static_cast<int>(f.size()) < needed) {
       r.fail("expected at least " + std::to_string(needed) + " fields, found " + std::to_string(f.size()));
     }
-    ImuSample s;
-    const std::size_t i = rec.samples.size();
-    s.t_s = tcol >= 0 ? number(r, f[static_cast<std::size_t>(tcol)], column_name(tcol)) * map.time_scale_s
-                      : static_cast<double>(i) / map.rate_hz;
-    for (int k = 0; k < 3; ++k) {
-      const std::string an = column_name(acc[k]);
-      const double a = number(r, f[static_cast<std::size_t>(acc[k])], an);
-      if (map.counts) s.accel_counts[k] = to_counts(r, a, an);
-      s.accel_mps2[k] = a * map.accel_scale;
-      if (has_gyro) {
-        const std::string gn = column_name(gyr[k]);
-        const double g = number(r, f[static_cast<std::size_t>(gyr[k])], gn);
-        if (map.counts) s.gyro_counts[k] = to_counts(r, g, gn);
-        s.gyro_radps[k] = g * map.gyro_scale;
-      }
-    }
-    if (tempcol >= 0) {
-      const std::string tn = column_name(tempcol);
-      const double v = number(r, f[static_cast<std::size_t>(tempcol)], tn);
-      if (map.counts) s.temperature_counts = to_counts(r, v, tn);
-      s.temperature_c = v * map.temperature_scale + map.temperature_offset_c;
-    }
-    if (tcol >= 0 && !rec.samples.empty() && !(s.t_s > rec.samples.back().t_s)) {
+    const ImuSample s = csv_sample(r, f, map, c, rec.samples.size());
+    if (c.time >= 0 && !rec.samples.empty() && !(s.t_s > rec.samples.back().t_s)) {
       r.fail("time " + fmt_g(s.t_s) + " s does not increase (previous " +
              fmt_g(rec.samples.back().t_s) + " s)");
     }
     rec.samples.push_back(s);
   }
-  if (rec.samples.empty()) throw ImportError(file, 0, "no data lines");
+}
 
+// Sensor description from the mapping: rate [Hz] (given, or from the median sample step),
+// ranges, and the LSB sizes when the file holds counts.
+void set_csv_sensor_info(const CsvMapping& map, const CsvColumns& c, Recording& rec) {
   SensorInfo& info = rec.header.info;
   info.output_rate_hz = map.rate_hz > 0.0 ? map.rate_hz : 1.0 / median_interval(rec.samples);
-  info.has_gyro = has_gyro;
-  info.has_temperature = tempcol >= 0;
+  info.has_gyro = c.has_gyro;
+  info.has_temperature = c.temperature >= 0;
   info.accel_range_mps2 = map.accel_range_mps2;
   info.gyro_range_radps = map.gyro_range_radps;
   if (map.counts) {
     info.accel_lsb_mps2 = map.accel_scale;
-    info.gyro_lsb_radps = has_gyro ? map.gyro_scale : 0.0;
-    info.temperature_lsb_c = tempcol >= 0 ? map.temperature_scale : 0.0;
+    info.gyro_lsb_radps = c.has_gyro ? map.gyro_scale : 0.0;
+    info.temperature_lsb_c = c.temperature >= 0 ? map.temperature_scale : 0.0;
   }
   rec.header.identity = map.identity;
   rec.header.gravity_mps2 = map.gravity_mps2;
-  const std::size_t gaps = tcol >= 0 ? flag_time_gaps(rec.samples, info.output_rate_hz) : 0;
+}
+
+}  // namespace
+
+Recording import_csv(const fs::path& file, const CsvMapping& map) {
+  LineReader r(file);
+  const CsvColumns c = resolve_csv_columns(r, map, read_csv_header(r, map));
+  Recording rec = new_recording(file, "csv");
+  read_csv_samples(r, map, c, rec);
+  if (rec.samples.empty()) throw ImportError(file, 0, "no data lines");
+  set_csv_sensor_info(map, c, rec);
+  const std::size_t gaps = c.time >= 0 ? flag_time_gaps(rec.samples, rec.header.info.output_rate_hz) : 0;
   add_import_event(rec, "imported " + std::to_string(rec.samples.size()) + " samples from " +
                             file.string() + " (generic CSV; " +
                             (map.counts ? "counts" : "physical units") + ", accel scale " +
                             fmt_g(map.accel_scale) + ", gyro scale " + fmt_g(map.gyro_scale) +
-                            (tcol >= 0 ? ", time column" : ", fixed rate " + fmt_g(map.rate_hz) + " Hz") +
+                            (c.time >= 0 ? ", time column" : ", fixed rate " + fmt_g(map.rate_hz) + " Hz") +
                             (gaps ? ", " + std::to_string(gaps) + " gap(s) flagged" : "") + ")");
   return rec;
 }
@@ -376,67 +423,92 @@ Recording import_csv(const fs::path& file, const CsvMapping& map) {
 // =============================================================================================
 // (b) imucal annotated session
 
-Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) {
-  LineReader r(file);
+namespace {
+
+// The columns an imucal session must have, in the order of ImucalColumns::index.
+constexpr const char* kImucalColumns[8] = {"part", "samples", "acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"};
+
+// Positions of the required columns in the column-name line.
+struct ImucalColumns {
+  std::array<std::size_t, 8> index{};
+  std::size_t count = 0;  // columns in the header
+  std::size_t needed() const { return *std::max_element(index.begin(), index.end()) + 1; }
+};
+
+// One data line: sample index, part label, the six raw counts (acc xyz, gyr xyz), source line.
+struct ImucalRow {
+  std::int64_t index;
+  std::string part;
+  std::array<std::int32_t, 6> counts;
+  std::size_t line;
+};
+
+// Reads the column-name line and finds the required columns in it.
+ImucalColumns read_imucal_header(LineReader& r) {
   std::string line;
-  if (!r.next(line)) throw ImportError(file, 0, "empty file (expected the column-name line)");
+  if (!r.next(line)) throw ImportError(r.file(), 0, "empty file (expected the column-name line)");
   std::vector<std::string> names;
   for (auto f : split(line, ',')) names.push_back(unquote(f));
-  const char* required[8] = {"part", "samples", "acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"};
-  std::array<std::size_t, 8> col{};
+  ImucalColumns c;
+  c.count = names.size();
   for (int k = 0; k < 8; ++k) {
-    const auto it = std::find(names.begin(), names.end(), required[k]);
+    const auto it = std::find(names.begin(), names.end(), kImucalColumns[k]);
     if (it == names.end()) {
-      r.fail(std::string("no column '") + required[k] +
+      r.fail(std::string("no column '") + kImucalColumns[k] +
              "' (expected part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z)");
     }
-    col[static_cast<std::size_t>(k)] = static_cast<std::size_t>(it - names.begin());
+    c.index[static_cast<std::size_t>(k)] = static_cast<std::size_t>(it - names.begin());
   }
-  const std::size_t needed = *std::max_element(col.begin(), col.end()) + 1;
+  return c;
+}
 
-  struct Row {
-    std::int64_t index;
-    std::string part;
-    std::array<std::int32_t, 6> counts;
-    std::size_t line;
-  };
-  std::vector<Row> rows;
+// One data line's fields as a row: a non-empty part, a non-negative integer index, six counts.
+ImucalRow imucal_row(const LineReader& r, const std::vector<std::string_view>& f, const ImucalColumns& c) {
+  ImucalRow row;
+  row.part = unquote(f[c.index[0]]);
+  if (row.part.empty()) r.fail("empty 'part'");
+  const double idx = number(r, f[c.index[1]], "samples");
+  if (idx < 0 || idx != std::floor(idx)) r.fail("'samples' must be a non-negative integer index");
+  row.index = static_cast<std::int64_t>(idx);
+  for (std::size_t k = 0; k < 6; ++k) {
+    row.counts[k] = to_counts(r, number(r, f[c.index[k + 2]], kImucalColumns[k + 2]), kImucalColumns[k + 2]);
+  }
+  row.line = r.line();
+  return row;
+}
+
+// Every data line as a row, in time order (the file is grouped by part; time order is the sample
+// index); a repeated sample index is an error.
+std::vector<ImucalRow> read_imucal_rows(LineReader& r, const ImucalColumns& c) {
+  std::vector<ImucalRow> rows;
+  std::string line;
   while (r.next(line)) {
     if (is_blank(line)) continue;
     const auto f = split(line, ',');
-    if (f.size() < needed) {
-      r.fail("expected " + std::to_string(names.size()) + " fields, found " + std::to_string(f.size()));
+    if (f.size() < c.needed()) {
+      r.fail("expected " + std::to_string(c.count) + " fields, found " + std::to_string(f.size()));
     }
-    Row row;
-    row.part = unquote(f[col[0]]);
-    if (row.part.empty()) r.fail("empty 'part'");
-    const double idx = number(r, f[col[1]], "samples");
-    if (idx < 0 || idx != std::floor(idx)) r.fail("'samples' must be a non-negative integer index");
-    row.index = static_cast<std::int64_t>(idx);
-    for (int k = 0; k < 6; ++k) {
-      row.counts[static_cast<std::size_t>(k)] =
-          to_counts(r, number(r, f[col[static_cast<std::size_t>(k + 2)]], required[k + 2]), required[k + 2]);
-    }
-    row.line = r.line();
-    rows.push_back(std::move(row));
+    rows.push_back(imucal_row(r, f, c));
   }
-  if (rows.empty()) throw ImportError(file, 0, "no data lines");
-  // The file is grouped by part; time order is the sample index.
-  std::stable_sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) { return a.index < b.index; });
+  if (rows.empty()) throw ImportError(r.file(), 0, "no data lines");
+  std::stable_sort(rows.begin(), rows.end(), [](const ImucalRow& a, const ImucalRow& b) { return a.index < b.index; });
   for (std::size_t i = 1; i < rows.size(); ++i) {
     if (rows[i].index == rows[i - 1].index) {
-      throw ImportError(file, rows[i].line, "sample index " + std::to_string(rows[i].index) +
-                                                " also appears on line " + std::to_string(rows[i - 1].line));
+      throw ImportError(r.file(), rows[i].line, "sample index " + std::to_string(rows[i].index) +
+                                                    " also appears on line " + std::to_string(rows[i - 1].line));
     }
   }
+  return rows;
+}
 
-  Recording rec = new_recording(file, "imucal");
-  const double acc_lsb = physics::kStandardGravity / opt.accel_lsb_per_g;
-  const double gyr_lsb = physics::kDegPerSecond / opt.gyro_lsb_per_dps;
+// Rows as samples: t = index / rate [s], counts × LSB [m/s², rad/s]; a jump in the index flags a
+// gap. Returns the number of gaps.
+std::size_t add_imucal_samples(const std::vector<ImucalRow>& rows, double rate_hz, double acc_lsb, double gyr_lsb,
+                               Recording& rec) {
   std::size_t gaps = 0;
   for (std::size_t i = 0; i < rows.size(); ++i) {
     ImuSample s;
-    s.t_s = static_cast<double>(rows[i].index) / opt.rate_hz;
+    s.t_s = static_cast<double>(rows[i].index) / rate_hz;
     for (int k = 0; k < 3; ++k) {
       s.accel_counts[k] = rows[i].counts[static_cast<std::size_t>(k)];
       s.gyro_counts[k] = rows[i].counts[static_cast<std::size_t>(k + 3)];
@@ -449,8 +521,12 @@ Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) 
     }
     rec.samples.push_back(s);
   }
+  return gaps;
+}
 
-  // One segment per contiguous run of a part.
+// One segment per contiguous run of a part: "<axis>_rot" is a 360° rotation about the axis,
+// any other part an orientation ("<axis>_p" = +axis up, "<axis>_a" = +axis down).
+void add_imucal_segments(const std::vector<ImucalRow>& rows, Recording& rec) {
   int id = 0, orientation = 0;
   std::vector<std::size_t> orientation_segments;
   for (std::size_t i = 0; i < rows.size();) {
@@ -473,7 +549,10 @@ Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) 
     i = j + 1;
   }
   for (std::size_t k : orientation_segments) rec.segments[k].orientation_count = orientation;
+}
 
+// Sensor description of the session: rate [Hz], LSB sizes and ±32768-count ranges [m/s², rad/s].
+void set_imucal_sensor_info(const ImucalOptions& opt, double acc_lsb, double gyr_lsb, Recording& rec) {
   SensorInfo& info = rec.header.info;
   info.output_rate_hz = opt.rate_hz;
   info.accel_lsb_mps2 = acc_lsb;
@@ -484,6 +563,20 @@ Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) 
   info.has_temperature = false;
   rec.header.identity.model = "imucal example session";
   rec.header.gravity_mps2 = opt.gravity_mps2;
+}
+
+}  // namespace
+
+Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) {
+  LineReader r(file);
+  const ImucalColumns columns = read_imucal_header(r);
+  const std::vector<ImucalRow> rows = read_imucal_rows(r, columns);
+  Recording rec = new_recording(file, "imucal");
+  const double acc_lsb = physics::kStandardGravity / opt.accel_lsb_per_g;
+  const double gyr_lsb = physics::kDegPerSecond / opt.gyro_lsb_per_dps;
+  const std::size_t gaps = add_imucal_samples(rows, opt.rate_hz, acc_lsb, gyr_lsb, rec);
+  add_imucal_segments(rows, rec);
+  set_imucal_sensor_info(opt, acc_lsb, gyr_lsb, rec);
   add_import_event(
       rec, "imported " + std::to_string(rec.samples.size()) + " samples from " + file.string() +
                " (imucal annotated session; rate " + fmt_g(opt.rate_hz) +
