@@ -434,107 +434,131 @@ std::string allan_section(const json& al) {
 
 // ---- gap -------------------------------------------------------------------------------------------
 
-std::string gap_section(const json& gp) {
+// Residual layout of a gap result: per axis (x y z), or the magnitude form (orientations unknown)
+// with one |f| row per segment in slot 0 of every vector.
+struct GapAxes {
+  bool magnitude = false;
+  int count = 3;
+  std::string label(int k) const { return magnitude ? std::string("|f|") : std::string(1, kAxes[k]); }
+};
+
+// Heading, the magnitude-form note, and the static residual RMS [m/s²] per axis and over the noise floor.
+std::string gap_summary(const json& gp, const GapAxes& axes) {
   std::string o = fmt::format("<h2>Sim-to-real gap — {} <span class=\"file\">(gap.json)</span></h2>\n",
                               escape(str(gp, "model")));
   const json gap = gp.value("gap", json::object());
   const json floor = gp.value("noise_floor", json::object());
-  // Magnitude form (orientations unknown): one |f| row per segment, in slot 0 of every vector.
-  const bool magnitude = str(gp, "form") == "magnitude";
-  const int n_axes = magnitude ? 1 : 3;
-  auto axis_label = [&](int k) { return magnitude ? std::string("|f|") : std::string(1, kAxes[k]); };
-  if (magnitude)
+  if (axes.magnitude)
     o += "<p>Magnitude form: the orientations were not recorded, only |g| is known; each segment is its mean "
          "along the estimated gravity direction, and rotations of the sensor frame cannot be seen.</p>\n";
   std::string rms, ratio;
-  for (int k = 0; k < n_axes; ++k) {
-    rms += fmt::format("{}{} {}", k ? ", " : "", axis_label(k), g3(at(gap.value("static_rms_mps2", json::array()), static_cast<std::size_t>(k))));
-    ratio += fmt::format("{}{} {}", k ? ", " : "", axis_label(k),
+  for (int k = 0; k < axes.count; ++k) {
+    rms += fmt::format("{}{} {}", k ? ", " : "", axes.label(k), g3(at(gap.value("static_rms_mps2", json::array()), static_cast<std::size_t>(k))));
+    ratio += fmt::format("{}{} {}", k ? ", " : "", axes.label(k),
                          g3(at(gap.value("static_rms_over_floor", json::array()), static_cast<std::size_t>(k))));
   }
   o += fmt::format("<p>Static residual RMS [m/s²]: {}; over the noise floor: {} (floor source: {}).</p>\n", rms, ratio,
                    escape(str(floor, "source")));
-  // Where: share of the gap by dimension and place.
-  const json where = gp.value("where", json::array());
-  if (!where.empty()) {
-    Plot p;
-    p.title = "where the gap lies";
-    p.y_label = "share of the residual energy";
-    p.x_label = "dimension : place";
-    p.width = 760;
-    p.height = 520;  // room for the slanted (dimension : place) labels
-    Series bars{"share", Style::kBars, {}, {}, {}, {}, svg::palette(3), false, 0.85};
-    for (std::size_t i = 0; i < where.size(); ++i) {
-      p.x_categories.push_back(str(where[i], "dimension") + ":" + str(where[i], "place"));
-      bars.x.push_back(static_cast<double>(i));
-      bars.y.push_back(num(where[i], "share"));
-    }
-    bars.name.clear();
-    p.series = {bars};
-    o += figure(p, "Localization: the share of the residual each (dimension, place) holds.");
+  return o;
+}
+
+// Where: bar chart of the share of the residual energy each (dimension, place) holds.
+std::string gap_where_figure(const json& where) {
+  Plot p;
+  p.title = "where the gap lies";
+  p.y_label = "share of the residual energy";
+  p.x_label = "dimension : place";
+  p.width = 760;
+  p.height = 520;  // room for the slanted (dimension : place) labels
+  Series bars{"share", Style::kBars, {}, {}, {}, {}, svg::palette(3), false, 0.85};
+  for (std::size_t i = 0; i < where.size(); ++i) {
+    p.x_categories.push_back(str(where[i], "dimension") + ":" + str(where[i], "place"));
+    bars.x.push_back(static_cast<double>(i));
+    bars.y.push_back(num(where[i], "share"));
   }
-  // Segments: residual per axis against temperature and time since the last change.
-  const json segs = gp.value("segments", json::array());
-  if (!segs.empty()) {
-    for (const char* dim : {"temperature_c", "time_since_change_s"}) {
-      Plot p;
-      p.title = std::string("segment residual against ") + (dim[0] == 't' && dim[1] == 'e' ? "temperature" : "time since change");
-      p.x_label = dim[1] == 'e' ? "temperature [°C]" : "time since the last change [s]";
-      p.y_label = "residual [mg]";
-      for (int k = 0; k < n_axes; ++k) {
-        Series s{fmt::format("axis {}", axis_label(k)), Style::kPoints, {}, {}, {}, {}, svg::palette(static_cast<std::size_t>(k)), false, 0.8};
-        for (const auto& sg : segs) {
-          s.x.push_back(num(sg, dim));
-          s.y.push_back(at(sg.value("axis_residual_mps2", json::array()), static_cast<std::size_t>(k)) / physics::kMilliG);
-        }
-        p.series.push_back(s);
+  bars.name.clear();
+  p.series = {bars};
+  return figure(p, "Localization: the share of the residual each (dimension, place) holds.");
+}
+
+// Segment residual per axis [mg] against temperature [°C] and against time since the last change [s].
+std::string gap_segment_figures(const json& segs, const GapAxes& axes) {
+  std::string o;
+  for (const char* dim : {"temperature_c", "time_since_change_s"}) {
+    Plot p;
+    p.title = std::string("segment residual against ") + (dim[0] == 't' && dim[1] == 'e' ? "temperature" : "time since change");
+    p.x_label = dim[1] == 'e' ? "temperature [°C]" : "time since the last change [s]";
+    p.y_label = "residual [mg]";
+    for (int k = 0; k < axes.count; ++k) {
+      Series s{fmt::format("axis {}", axes.label(k)), Style::kPoints, {}, {}, {}, {}, svg::palette(static_cast<std::size_t>(k)), false, 0.8};
+      for (const auto& sg : segs) {
+        s.x.push_back(num(sg, dim));
+        s.y.push_back(at(sg.value("axis_residual_mps2", json::array()), static_cast<std::size_t>(k)) / physics::kMilliG);
       }
-      p.lines.push_back({true, 0.0, "", "#555"});
-      o += figure(p, "Twin-minus-recording residual of each static segment, per axis.");
+      p.series.push_back(s);
     }
+    p.lines.push_back({true, 0.0, "", "#555"});
+    o += figure(p, "Twin-minus-recording residual of each static segment, per axis.");
   }
-  // Shrink: held-out RMS as candidate terms are added.
-  const json steps = gp.value("steps", json::array());
-  if (!steps.empty()) {
-    Plot p;
-    p.title = "how far the gap shrinks";
-    p.y_label = "RMS [m/s²]";
-    p.x_label = "model after step";
-    p.width = 760;
-    Series held{"held-out RMS", Style::kLinePoints, {}, {}, {}, {}, svg::palette(0), false, 1.0};
-    Series ins{"in-sample RMS", Style::kLinePoints, {}, {}, {}, {}, svg::palette(1), true, 1.0};
-    Series fl{"noise floor", Style::kLine, {}, {}, {}, {}, "#777", true, 1.0};
-    for (std::size_t i = 0; i < steps.size(); ++i) {
-      const std::string added = str(steps[i], "added");
-      p.x_categories.push_back(added.empty() ? fmt::format("step {}", i) : "+" + added);
-      held.x.push_back(static_cast<double>(i));
-      held.y.push_back(num(steps[i], "heldout_rms_mps2"));
-      ins.x.push_back(static_cast<double>(i));
-      ins.y.push_back(num(steps[i], "in_sample_rms_mps2"));
-      fl.x.push_back(static_cast<double>(i));
-      fl.y.push_back(num(steps[i], "noise_floor_mps2"));
-    }
-    p.series = {held, ins, fl};
-    p.y_include_zero = true;
-    o += figure(p, "Residual RMS on data not used to fit (held-out) as each candidate term is added, against the "
+  return o;
+}
+
+// Shrink: held-out and in-sample RMS [m/s²] after each forward-selection step, against the noise floor.
+std::string gap_shrink_figure(const json& steps) {
+  Plot p;
+  p.title = "how far the gap shrinks";
+  p.y_label = "RMS [m/s²]";
+  p.x_label = "model after step";
+  p.width = 760;
+  Series held{"held-out RMS", Style::kLinePoints, {}, {}, {}, {}, svg::palette(0), false, 1.0};
+  Series ins{"in-sample RMS", Style::kLinePoints, {}, {}, {}, {}, svg::palette(1), true, 1.0};
+  Series fl{"noise floor", Style::kLine, {}, {}, {}, {}, "#777", true, 1.0};
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const std::string added = str(steps[i], "added");
+    p.x_categories.push_back(added.empty() ? fmt::format("step {}", i) : "+" + added);
+    held.x.push_back(static_cast<double>(i));
+    held.y.push_back(num(steps[i], "heldout_rms_mps2"));
+    ins.x.push_back(static_cast<double>(i));
+    ins.y.push_back(num(steps[i], "in_sample_rms_mps2"));
+    fl.x.push_back(static_cast<double>(i));
+    fl.y.push_back(num(steps[i], "noise_floor_mps2"));
+  }
+  p.series = {held, ins, fl};
+  p.y_include_zero = true;
+  return figure(p, "Residual RMS on data not used to fit (held-out) as each candidate term is added, against the "
                    "noise floor.");
+}
+
+// Table of the candidate terms: held-out improvement, ΔBIC, p, size with its 95 % interval, aliases.
+std::string gap_candidates_table(const json& cands) {
+  std::string o = "<table><tr><th>term</th><th>axis</th><th>held-out improvement</th><th>ΔBIC</th><th>p</th><th>size</th>"
+                  "<th>95 % interval</th><th>aliases</th><th>significant</th></tr>\n";
+  for (const auto& c : cands) {
+    std::string al;
+    for (const auto& a : c.value("aliases", json::array())) al += (al.empty() ? "" : ", ") + (a.is_string() ? a.get<std::string>() : a.dump());
+    o += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} {}</td><td>[{}, {}]</td>"
+                     "<td>{}</td><td>{}</td></tr>\n",
+                     escape(str(c, "term")), escape(str(c, "axis")), g3(num(c, "heldout_improvement")),
+                     g3(num(c, "delta_bic")), g3(num(c, "p_value")), g3(num(c, "size")), escape(str(c, "size_unit")),
+                     g3(at(c.value("ci95", json::array()), 0)), g3(at(c.value("ci95", json::array()), 1)), escape(al),
+                     c.value("significant", false) ? "YES" : "no");
   }
+  return o + "</table>\n";
+}
+
+std::string gap_section(const json& gp) {
+  GapAxes axes;
+  axes.magnitude = str(gp, "form") == "magnitude";
+  axes.count = axes.magnitude ? 1 : 3;
+  std::string o = gap_summary(gp, axes);
+  const json where = gp.value("where", json::array());
+  if (!where.empty()) o += gap_where_figure(where);
+  const json segs = gp.value("segments", json::array());
+  if (!segs.empty()) o += gap_segment_figures(segs, axes);
+  const json steps = gp.value("steps", json::array());
+  if (!steps.empty()) o += gap_shrink_figure(steps);
   const json cands = gp.value("candidates", json::array());
-  if (!cands.empty()) {
-    o += "<table><tr><th>term</th><th>axis</th><th>held-out improvement</th><th>ΔBIC</th><th>p</th><th>size</th>"
-         "<th>95 % interval</th><th>aliases</th><th>significant</th></tr>\n";
-    for (const auto& c : cands) {
-      std::string al;
-      for (const auto& a : c.value("aliases", json::array())) al += (al.empty() ? "" : ", ") + (a.is_string() ? a.get<std::string>() : a.dump());
-      o += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} {}</td><td>[{}, {}]</td>"
-                       "<td>{}</td><td>{}</td></tr>\n",
-                       escape(str(c, "term")), escape(str(c, "axis")), g3(num(c, "heldout_improvement")),
-                       g3(num(c, "delta_bic")), g3(num(c, "p_value")), g3(num(c, "size")), escape(str(c, "size_unit")),
-                       g3(at(c.value("ci95", json::array()), 0)), g3(at(c.value("ci95", json::array()), 1)), escape(al),
-                       c.value("significant", false) ? "YES" : "no");
-    }
-    o += "</table>\n";
-  }
+  if (!cands.empty()) o += gap_candidates_table(cands);
   const json un = gp.value("unexplained", json::object());
   if (!un.empty())
     o += fmt::format("<p><b>Unexplained:</b> held-out RMS {} m/s² = {} × floor. {}</p>\n", g3(num(un, "heldout_rms_mps2")),
