@@ -80,61 +80,43 @@ estimation::ModelSpec candidate_spec(const TempPolyOptions& o, int order, int ax
   return spec;
 }
 
-TempPolyResult fit_temperature_points(const std::vector<batch_lsq::StaticPoint>& points,
-                                      const TempPolyOptions& o) {
-  TempPolyResult r;
-  r.options = o;
-  r.points = points;
-  r.reference_c = o.reference_c;
-  r.unit = o.instrument == model::Instrument::kAccelerometer ? "m/s^2" : "rad/s";
+namespace {
 
-  // Options.
-  if (o.selection != "bic" && o.selection != "cv" && o.selection != "fixed") {
-    r.message = "unknown selection '" + o.selection + "': use bic, cv or fixed";
-    return r;
-  }
-  if (o.selection == "fixed" ? (o.order < 0 || o.order > 6) : (o.max_order < 1 || o.max_order > 6)) {
-    r.message = o.selection == "fixed"
-                    ? "order " + std::to_string(o.order) + " is outside 0..6"
-                    : "max_order " + std::to_string(o.max_order) + " is outside 1..6";
-    return r;
-  }
-  if (o.axes.empty()) {
-    r.message = "no axes to fit";
-    return r;
-  }
+// Why the options or the points cannot be fitted, or "" when they can.
+std::string input_problem(const std::vector<batch_lsq::StaticPoint>& points, const TempPolyOptions& o) {
+  if (o.selection != "bic" && o.selection != "cv" && o.selection != "fixed")
+    return "unknown selection '" + o.selection + "': use bic, cv or fixed";
+  if (o.selection == "fixed" ? (o.order < 0 || o.order > 6) : (o.max_order < 1 || o.max_order > 6))
+    return o.selection == "fixed" ? "order " + std::to_string(o.order) + " is outside 0..6"
+                                  : "max_order " + std::to_string(o.max_order) + " is outside 1..6";
+  if (o.axes.empty()) return "no axes to fit";
   for (int a : o.axes)
-    if (a < 0 || a > 2) {
-      r.message = "axis index " + std::to_string(a) + " is not 0 (x), 1 (y) or 2 (z)";
-      return r;
-    }
-  if (!o.bias_temperature && !o.scale_temperature) {
-    r.message = "neither bias_temperature nor scale_temperature is enabled: nothing depends on "
-                "temperature";
-    return r;
-  }
-  if (!(o.level_tolerance_c > 0.0) || !(o.min_span_c >= 0.0) || !std::isfinite(o.reference_c)) {
-    r.message = "level_tolerance_c must be > 0, min_span_c ≥ 0 and reference_c finite";
-    return r;
-  }
-  if (points.empty()) {
-    r.message = "no static points: nothing to fit";
-    return r;
-  }
+    if (a < 0 || a > 2) return "axis index " + std::to_string(a) + " is not 0 (x), 1 (y) or 2 (z)";
+  if (!o.bias_temperature && !o.scale_temperature)
+    return "neither bias_temperature nor scale_temperature is enabled: nothing depends on "
+           "temperature";
+  if (!(o.level_tolerance_c > 0.0) || !(o.min_span_c >= 0.0) || !std::isfinite(o.reference_c))
+    return "level_tolerance_c must be > 0, min_span_c ≥ 0 and reference_c finite";
+  if (points.empty()) return "no static points: nothing to fit";
   for (const auto& p : points)
-    if (!std::isfinite(p.stimulus.temperature_c)) {
-      r.message = "point '" + p.label + "' has no finite temperature";
-      return r;
-    }
+    if (!std::isfinite(p.stimulus.temperature_c)) return "point '" + p.label + "' has no finite temperature";
+  return "";
+}
 
-  // Temperature levels: clusters of the sorted temperatures.
-  const std::size_t n = points.size();
-  std::vector<std::size_t> by_t(n);
-  std::iota(by_t.begin(), by_t.end(), std::size_t{0});
-  std::stable_sort(by_t.begin(), by_t.end(), [&](std::size_t i, std::size_t j) {
-    return points[i].stimulus.temperature_c < points[j].stimulus.temperature_c;
-  });
-  r.level_of.assign(n, -1);
+// Point indices in the (stable) order of key(point).
+template <typename Key>
+std::vector<std::size_t> sorted_by(const std::vector<batch_lsq::StaticPoint>& points, Key key) {
+  std::vector<std::size_t> idx(points.size());
+  std::iota(idx.begin(), idx.end(), std::size_t{0});
+  std::stable_sort(idx.begin(), idx.end(), [&](std::size_t i, std::size_t j) { return key(points[i]) < key(points[j]); });
+  return idx;
+}
+
+// Temperature levels: clusters of the sorted temperatures, a new level where the step to the next
+// temperature exceeds level_tolerance_c [°C]; also the measured range [°C].
+void cluster_levels(const std::vector<batch_lsq::StaticPoint>& points, const TempPolyOptions& o, TempPolyResult& r) {
+  const auto by_t = sorted_by(points, [](const batch_lsq::StaticPoint& p) { return p.stimulus.temperature_c; });
+  r.level_of.assign(points.size(), -1);
   double prev = kNaN;
   for (std::size_t i : by_t) {
     const double t = points[i].stimulus.temperature_c;
@@ -150,14 +132,15 @@ TempPolyResult fit_temperature_points(const std::vector<batch_lsq::StaticPoint>&
     prev = t;
   }
   for (auto& L : r.levels) L.temperature_c /= L.points;
+  r.valid_min_c = points[by_t.front()].stimulus.temperature_c;
+  r.valid_max_c = points[by_t.back()].stimulus.temperature_c;
+}
 
-  // Legs: visits in time order; a visit approached from a colder level is heating.
-  std::vector<std::size_t> by_time(n);
-  std::iota(by_time.begin(), by_time.end(), std::size_t{0});
-  std::stable_sort(by_time.begin(), by_time.end(), [&](std::size_t i, std::size_t j) {
-    return points[i].t_start_s < points[j].t_start_s;
-  });
-  r.legs.assign(n, Leg::kUnknown);
+// Legs: level visits in time order; a visit approached from a colder level is heating, from a
+// warmer one cooling, the first visit unknown. Counts each level's points per leg.
+void assign_legs(const std::vector<batch_lsq::StaticPoint>& points, TempPolyResult& r) {
+  const auto by_time = sorted_by(points, [](const batch_lsq::StaticPoint& p) { return p.t_start_s; });
+  r.legs.assign(points.size(), Leg::kUnknown);
   int prev_level = -1, cur_level = -1;
   Leg cur_leg = Leg::kUnknown;
   for (std::size_t i : by_time) {
@@ -172,47 +155,51 @@ TempPolyResult fit_temperature_points(const std::vector<batch_lsq::StaticPoint>&
     (cur_leg == Leg::kHeating ? L.heating_points
                               : cur_leg == Leg::kCooling ? L.cooling_points : L.unknown_points)++;
   }
+}
 
-  r.valid_min_c = points[by_t.front()].stimulus.temperature_c;
-  r.valid_max_c = points[by_t.back()].stimulus.temperature_c;
-  const double span = r.valid_max_c - r.valid_min_c;
-  const int nlevels = static_cast<int>(r.levels.size());
+// "N distinct temperature level(s) (list degC, …)" for messages.
+std::string levels_description(const TempPolyResult& r, const TempPolyOptions& o) {
   std::string level_list;
   for (const auto& L : r.levels) level_list += (level_list.empty() ? "" : ", ") + num(L.temperature_c, "%.1f");
-  const std::string have = std::to_string(nlevels) + " distinct temperature level(s) (" +
-                           level_list + " degC, levels closer than level_tolerance_c = " +
-                           num(o.level_tolerance_c) + " degC merged)";
+  return std::to_string(r.levels.size()) + " distinct temperature level(s) (" + level_list +
+         " degC, levels closer than level_tolerance_c = " + num(o.level_tolerance_c) + " degC merged)";
+}
 
-  // Refusals: span and number of levels against the requested order.
+// Highest order to try, refused (message set, −1 returned) when the span or the number of levels
+// cannot support the requested order; notes the orders left untried.
+int highest_order(const TempPolyOptions& o, TempPolyResult& r) {
+  const double span = r.valid_max_c - r.valid_min_c;
+  const int nlevels = static_cast<int>(r.levels.size());
+  const std::string have = levels_description(r, o);
   const int requested = o.selection == "fixed" ? o.order : o.max_order;
   if (requested >= 1 && span < o.min_span_c) {
     r.message = "temperature span " + num(span, "%.3g") + " degC (" + num(r.valid_min_c, "%.2f") +
                 " to " + num(r.valid_max_c, "%.2f") + " degC) is below min_span_c = " +
                 num(o.min_span_c) + " degC: temperature coefficients would be extrapolation-grade. "
                 "Extend the sweep or lower min_span_c.";
-    return r;
+    return -1;
   }
-  int top = requested;
   if (o.selection == "fixed") {
-    if (nlevels < o.order + 1) {
-      r.message = "order " + std::to_string(o.order) + " needs at least " +
-                  std::to_string(o.order + 1) + " distinct temperature levels; the data have " + have +
-                  ". Add temperature steps or lower the order.";
-      return r;
-    }
-  } else {
-    const int need_extra = o.selection == "cv" ? 2 : 1;  // cv: every fold keeps order+1 levels
-    top = std::min(o.max_order, nlevels - need_extra);
-    if (top < 1) {
-      r.message = std::string("selection '") + o.selection + "' needs at least " +
-                  std::to_string(1 + need_extra) + " distinct temperature levels for order 1; the " +
-                  "data have " + have + ". Add temperature steps.";
-      return r;
-    }
-    if (top < o.max_order)
-      r.notes.push_back("orders " + std::to_string(top + 1) + ".." + std::to_string(o.max_order) +
-                        " not tried: the data have " + have);
+    if (nlevels >= o.order + 1) return requested;
+    r.message = "order " + std::to_string(o.order) + " needs at least " + std::to_string(o.order + 1) +
+                " distinct temperature levels; the data have " + have + ". Add temperature steps or lower the order.";
+    return -1;
   }
+  const int need_extra = o.selection == "cv" ? 2 : 1;  // cv: every fold keeps order+1 levels
+  const int top = std::min(o.max_order, nlevels - need_extra);
+  if (top < 1) {
+    r.message = std::string("selection '") + o.selection + "' needs at least " + std::to_string(1 + need_extra) +
+                " distinct temperature levels for order 1; the " + "data have " + have + ". Add temperature steps.";
+    return -1;
+  }
+  if (top < o.max_order)
+    r.notes.push_back("orders " + std::to_string(top + 1) + ".." + std::to_string(o.max_order) +
+                      " not tried: the data have " + have);
+  return top;
+}
+
+// Notes on a reference temperature outside the measured range and on the legs used.
+void add_range_notes(const TempPolyOptions& o, TempPolyResult& r) {
   if (o.reference_c < r.valid_min_c || o.reference_c > r.valid_max_c)
     r.notes.push_back("reference_c = " + num(o.reference_c) + " degC lies outside the measured range " +
                       num(r.valid_min_c, "%.2f") + "…" + num(r.valid_max_c, "%.2f") +
@@ -223,118 +210,165 @@ TempPolyResult fit_temperature_points(const std::vector<batch_lsq::StaticPoint>&
     cooling += l == Leg::kCooling;
   }
   r.notes.push_back("legs used: " + std::to_string(heating) + " heating, " + std::to_string(cooling) +
-                    " cooling, " + std::to_string(static_cast<int>(n) - heating - cooling) +
+                    " cooling, " + std::to_string(static_cast<int>(r.legs.size()) - heating - cooling) +
                     " unknown-direction point(s) (first visit)");
+}
 
-  // Per axis: candidate orders, scores, choice, hysteresis.
+// Score of one candidate order from its fit: RSS, BIC = n·ln(RSS/n) + rank·ln(n), identifiability.
+OrderScore score_fit(const batch_lsq::FitResult& f, int order) {
+  OrderScore s;
+  s.order = order;
+  s.observations = f.lsq.observations;
+  if (!f.ok) {
+    s.note = "fit failed: " + f.message;
+    return s;
+  }
+  s.parameters = f.lsq.rank;
+  s.rss = f.lsq.rss;
+  const double nn = f.lsq.observations;
+  s.bic = nn * std::log(std::max(f.lsq.rss, 1e-300) / nn) + f.lsq.rank * std::log(nn);
+  s.ok = all_identifiable(f);
+  if (!s.ok) s.note = "not every parameter is identifiable at this order";
+  return s;
+}
+
+// Leave-one-temperature-out cross-validation of spec on axis a: mean squared prediction error of
+// each level's points [unit²] from a fit without that level.
+void cross_validate(const std::vector<batch_lsq::StaticPoint>& points, const estimation::ModelSpec& spec, int a,
+                    const TempPolyResult& r, OrderScore& s) {
+  double sse = 0.0;
+  int count = 0;
+  std::string why;
+  for (int lv = 0; lv < static_cast<int>(r.levels.size()) && why.empty(); ++lv) {
+    std::vector<batch_lsq::StaticPoint> train;
+    std::vector<std::size_t> test;
+    for (std::size_t i = 0; i < points.size(); ++i)
+      (r.level_of[i] == lv ? (void)test.push_back(i) : train.push_back(points[i]));
+    const batch_lsq::FitResult tf = batch_lsq::fit_points(train, spec);
+    if (!all_identifiable(tf)) {
+      why = "without level " + num(r.levels[static_cast<std::size_t>(lv)].temperature_c, "%.1f") +
+            " degC the fit is " + (tf.ok ? "not identifiable" : "refused: " + tf.message);
+      break;
+    }
+    for (std::size_t i : test) {
+      const double e = points[i].measured[a] - points[i].stimulus.input[a] - predict(tf, points[i], a);
+      sse += e * e;
+      ++count;
+    }
+  }
+  if (why.empty() && count > 0) {
+    s.cv_ok = true;
+    s.cv_mse = sse / count;
+  } else {
+    s.note += (s.note.empty() ? "" : "; ") + std::string("cv: ") + why;
+  }
+}
+
+// Index of the chosen score: the only one (fixed), the lowest BIC, or the lowest CV error; −1 if none.
+int choose_order(const std::vector<OrderScore>& scores, const std::string& selection) {
+  int best = -1;
+  for (std::size_t k = 0; k < scores.size(); ++k) {
+    const OrderScore& s = scores[k];
+    if (selection == "fixed") {
+      best = static_cast<int>(k);
+    } else if (selection == "bic") {
+      if (s.ok && (best < 0 || s.bic < scores[static_cast<std::size_t>(best)].bic)) best = static_cast<int>(k);
+    } else if (s.cv_ok && (best < 0 || s.cv_mse < scores[static_cast<std::size_t>(best)].cv_mse)) {
+      best = static_cast<int>(k);
+    }
+  }
+  return best;
+}
+
+// Hysteresis at level lv on the chosen fit: mean cooling-leg minus mean heating-leg residual [unit]
+// with its standard error and confidence interval.
+Hysteresis level_hysteresis(const TempPolyResult& r, const AxisResult& ax, int lv) {
+  const TemperatureLevel& L = r.levels[static_cast<std::size_t>(lv)];
+  Hysteresis h;
+  h.level = lv;
+  h.temperature_c = L.temperature_c;
+  double sh = 0.0, sc = 0.0;
+  for (const auto& res : ax.fit.residuals) {
+    const auto i = static_cast<std::size_t>(res.point);
+    if (res.axis != ax.axis || r.level_of[i] != lv) continue;
+    if (r.legs[i] == Leg::kHeating) {
+      sh += res.residual;
+      ++h.heating_points;
+    } else if (r.legs[i] == Leg::kCooling) {
+      sc += res.residual;
+      ++h.cooling_points;
+    }
+  }
+  if (h.heating_points > 0 && h.cooling_points > 0) {
+    const double sigma = std::sqrt(ax.fit.lsq.sigma2);
+    h.value = sc / h.cooling_points - sh / h.heating_points;
+    h.std_error = sigma * std::sqrt(1.0 / h.cooling_points + 1.0 / h.heating_points);
+    h.lower = h.value - ax.fit.lsq.quantile * h.std_error;
+    h.upper = h.value + ax.fit.lsq.quantile * h.std_error;
+    h.significant = h.lower > 0.0 || h.upper < 0.0;
+  }
+  return h;
+}
+
+// Hysteresis between legs at every level visited both heating and cooling, and the largest |value|.
+void add_hysteresis(const TempPolyResult& r, AxisResult& ax) {
+  for (int lv = 0; lv < static_cast<int>(r.levels.size()); ++lv) {
+    const TemperatureLevel& L = r.levels[static_cast<std::size_t>(lv)];
+    if (L.heating_points == 0 || L.cooling_points == 0) continue;
+    const Hysteresis h = level_hysteresis(r, ax, lv);
+    if (h.heating_points > 0 && h.cooling_points > 0 && !(std::abs(h.value) <= std::abs(ax.max_abs_hysteresis)))
+      ax.max_abs_hysteresis = std::abs(h.value);
+    ax.hysteresis.push_back(h);
+  }
+}
+
+// One axis: fit and score every candidate order first..top, choose one, and measure hysteresis on it.
+AxisResult fit_axis(const std::vector<batch_lsq::StaticPoint>& points, const TempPolyOptions& o,
+                    const TempPolyResult& r, int a, int first, int top) {
+  AxisResult ax;
+  ax.axis = a;
+  std::vector<batch_lsq::FitResult> fits;
+  for (int m = first; m <= top; ++m) {
+    const estimation::ModelSpec spec = candidate_spec(o, m, a);
+    fits.push_back(batch_lsq::fit_points(points, spec));
+    OrderScore s = score_fit(fits.back(), m);
+    if (s.ok && o.selection != "fixed") cross_validate(points, spec, a, r, s);
+    ax.scores.push_back(s);
+  }
+  const int best = choose_order(ax.scores, o.selection);
+  if (best < 0) {
+    ax.message = std::string("no candidate order could be scored by ") + o.selection + " on axis " +
+                 estimation::axis_name(a) + " (see the order table)";
+  } else {
+    ax.fit = fits[static_cast<std::size_t>(best)];
+    ax.chosen_order = ax.scores[static_cast<std::size_t>(best)].order;
+    ax.ok = ax.fit.ok;
+    if (!ax.fit.ok) ax.message = "axis " + std::string(1, estimation::axis_name(a)) + ": " + ax.fit.message;
+  }
+  if (ax.ok) add_hysteresis(r, ax);
+  return ax;
+}
+
+}  // namespace
+
+TempPolyResult fit_temperature_points(const std::vector<batch_lsq::StaticPoint>& points,
+                                      const TempPolyOptions& o) {
+  TempPolyResult r;
+  r.options = o;
+  r.points = points;
+  r.reference_c = o.reference_c;
+  r.unit = o.instrument == model::Instrument::kAccelerometer ? "m/s^2" : "rad/s";
+  r.message = input_problem(points, o);
+  if (!r.message.empty()) return r;
+  cluster_levels(points, o, r);
+  assign_legs(points, r);
+  const int top = highest_order(o, r);
+  if (top < 0) return r;
+  add_range_notes(o, r);
   const int first = o.selection == "fixed" ? o.order : 0;
   bool all_ok = true;
   for (int a : o.axes) {
-    AxisResult ax;
-    ax.axis = a;
-    std::vector<batch_lsq::FitResult> fits;
-    for (int m = first; m <= top; ++m) {
-      const estimation::ModelSpec spec = candidate_spec(o, m, a);
-      fits.push_back(batch_lsq::fit_points(points, spec));
-      const batch_lsq::FitResult& f = fits.back();
-      OrderScore s;
-      s.order = m;
-      s.observations = f.lsq.observations;
-      if (!f.ok) {
-        s.note = "fit failed: " + f.message;
-      } else {
-        s.parameters = f.lsq.rank;
-        s.rss = f.lsq.rss;
-        const double nn = f.lsq.observations;
-        s.bic = nn * std::log(std::max(f.lsq.rss, 1e-300) / nn) + f.lsq.rank * std::log(nn);
-        s.ok = all_identifiable(f);
-        if (!s.ok) s.note = "not every parameter is identifiable at this order";
-      }
-      // Leave-one-temperature-out cross-validation.
-      if (s.ok && o.selection != "fixed") {
-        double sse = 0.0;
-        int count = 0;
-        std::string why;
-        for (int lv = 0; lv < nlevels && why.empty(); ++lv) {
-          std::vector<batch_lsq::StaticPoint> train;
-          std::vector<std::size_t> test;
-          for (std::size_t i = 0; i < n; ++i)
-            (r.level_of[i] == lv ? (void)test.push_back(i) : train.push_back(points[i]));
-          const batch_lsq::FitResult tf = batch_lsq::fit_points(train, spec);
-          if (!all_identifiable(tf)) {
-            why = "without level " + num(r.levels[static_cast<std::size_t>(lv)].temperature_c, "%.1f") +
-                  " degC the fit is " + (tf.ok ? "not identifiable" : "refused: " + tf.message);
-            break;
-          }
-          for (std::size_t i : test) {
-            const double e = points[i].measured[a] - points[i].stimulus.input[a] - predict(tf, points[i], a);
-            sse += e * e;
-            ++count;
-          }
-        }
-        if (why.empty() && count > 0) {
-          s.cv_ok = true;
-          s.cv_mse = sse / count;
-        } else {
-          s.note += (s.note.empty() ? "" : "; ") + std::string("cv: ") + why;
-        }
-      }
-      ax.scores.push_back(s);
-    }
-    // Choice.
-    int best = -1;
-    for (std::size_t k = 0; k < ax.scores.size(); ++k) {
-      const OrderScore& s = ax.scores[k];
-      if (o.selection == "fixed") {
-        best = static_cast<int>(k);
-      } else if (o.selection == "bic") {
-        if (s.ok && (best < 0 || s.bic < ax.scores[static_cast<std::size_t>(best)].bic)) best = static_cast<int>(k);
-      } else if (s.cv_ok && (best < 0 || s.cv_mse < ax.scores[static_cast<std::size_t>(best)].cv_mse)) {
-        best = static_cast<int>(k);
-      }
-    }
-    if (best < 0) {
-      ax.message = std::string("no candidate order could be scored by ") + o.selection + " on axis " +
-                   estimation::axis_name(a) + " (see the order table)";
-    } else {
-      ax.fit = fits[static_cast<std::size_t>(best)];
-      ax.chosen_order = ax.scores[static_cast<std::size_t>(best)].order;
-      ax.ok = ax.fit.ok;
-      if (!ax.fit.ok) ax.message = "axis " + std::string(1, estimation::axis_name(a)) + ": " + ax.fit.message;
-    }
-    // Hysteresis between legs, from the chosen fit's residuals.
-    if (ax.ok) {
-      const double sigma = std::sqrt(ax.fit.lsq.sigma2);
-      for (int lv = 0; lv < nlevels; ++lv) {
-        const TemperatureLevel& L = r.levels[static_cast<std::size_t>(lv)];
-        if (L.heating_points == 0 || L.cooling_points == 0) continue;
-        Hysteresis h;
-        h.level = lv;
-        h.temperature_c = L.temperature_c;
-        double sh = 0.0, sc = 0.0;
-        for (const auto& res : ax.fit.residuals) {
-          const auto i = static_cast<std::size_t>(res.point);
-          if (res.axis != a || r.level_of[i] != lv) continue;
-          if (r.legs[i] == Leg::kHeating) {
-            sh += res.residual;
-            ++h.heating_points;
-          } else if (r.legs[i] == Leg::kCooling) {
-            sc += res.residual;
-            ++h.cooling_points;
-          }
-        }
-        if (h.heating_points > 0 && h.cooling_points > 0) {
-          h.value = sc / h.cooling_points - sh / h.heating_points;
-          h.std_error = sigma * std::sqrt(1.0 / h.cooling_points + 1.0 / h.heating_points);
-          h.lower = h.value - ax.fit.lsq.quantile * h.std_error;
-          h.upper = h.value + ax.fit.lsq.quantile * h.std_error;
-          h.significant = h.lower > 0.0 || h.upper < 0.0;
-          if (!(std::abs(h.value) <= std::abs(ax.max_abs_hysteresis)))
-            ax.max_abs_hysteresis = std::abs(h.value);
-        }
-        ax.hysteresis.push_back(h);
-      }
-    }
+    AxisResult ax = fit_axis(points, o, r, a, first, top);
     all_ok = all_ok && ax.ok;
     if (!ax.ok && r.message.empty()) r.message = ax.message;
     r.axes.push_back(std::move(ax));
