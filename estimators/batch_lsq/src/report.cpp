@@ -99,47 +99,47 @@ std::ostream& operator<<(std::ostream& os, const FitResult& fit) {
   return os;
 }
 
-std::string to_json(const FitResult& fr, int indent) {
-  using json = nlohmann::ordered_json;
-  const ModelSpec& s = fr.spec;
-  const processing::StaticExtractionSettings& ex = s.processing.extraction;
-  json j;
-  j["schema"] = kFitSchema;
-  j["estimator"] = {{"name", kEstimatorName}, {"version", kEstimatorVersion}};
-  j["status"] = fr.ok ? "ok" : "failed";
-  j["message"] = fr.message;
-  j["recording"] = {{"dir", fr.recording_dir},
-                    {"experiment", fr.experiment_name},
-                    {"status", fr.recording_status}};
-  json terms = json::array();
+namespace {
+
+using ojson = nlohmann::ordered_json;
+
+// "model": instrument, fitted axes, terms (temperature terms with order and T0 [°C]), source.
+ojson model_json(const ModelSpec& s) {
+  ojson terms = ojson::array();
   for (const auto& t : s.model.terms) {
-    json tj = {{"kind", model::term_name(t.kind)}};
+    ojson tj = {{"kind", model::term_name(t.kind)}};
     if (t.kind == model::TermKind::kBiasTemperature || t.kind == model::TermKind::kScaleTemperature) {
       tj["order"] = t.order;
       tj["reference_c"] = t.reference_c;
     }
     terms.push_back(tj);
   }
-  json axes = json::array();
+  ojson axes = ojson::array();
   for (int a : s.axes) axes.push_back(std::string(1, estimation::axis_name(a)));
-  j["model"] = {{"instrument", estimation::instrument_name(s.model.instrument)},
-                {"axes", axes},
-                {"terms", terms},
-                {"source", s.source}};
-  j["extraction"] = {{"applied", fr.extracted},
-                     {"filter", processing::filter_name(ex.filter)},
-                     {"order", ex.filter_order},
-                     {"cutoff_hz", ex.cutoff_hz},
-                     {"settle_s", ex.settle_s},
-                     {"zero_phase", ex.zero_phase},
-                     {"segment_kinds", s.processing.segment_kinds}};
-  j["weighting"] = estimation::weighting_name(s.weighting);
-  j["units"] = {{"residual", fr.unit}, {"residual_display", fr.display_unit}};
-  j["notes"] = fr.notes;
-  j["excluded_parameters"] = fr.excluded;
-  json pts = json::array();
-  for (const auto& p : fr.points) {
-    json m = json::array(), se = json::array(), in = json::array();
+  return {{"instrument", estimation::instrument_name(s.model.instrument)},
+          {"axes", axes},
+          {"terms", terms},
+          {"source", s.source}};
+}
+
+// "extraction": whether it ran and its settings (filter, order, cutoff [Hz], settle [s], phase, kinds).
+ojson extraction_json(const FitResult& fr) {
+  const processing::StaticExtractionSettings& ex = fr.spec.processing.extraction;
+  return {{"applied", fr.extracted},
+          {"filter", processing::filter_name(ex.filter)},
+          {"order", ex.filter_order},
+          {"cutoff_hz", ex.cutoff_hz},
+          {"settle_s", ex.settle_s},
+          {"zero_phase", ex.zero_phase},
+          {"segment_kinds", fr.spec.processing.segment_kinds}};
+}
+
+// "points": each static point's span [s], samples, measured mean and its standard error, true
+// input and temperature [°C].
+ojson points_json(const std::vector<StaticPoint>& points) {
+  ojson pts = ojson::array();
+  for (const auto& p : points) {
+    ojson m = ojson::array(), se = ojson::array(), in = ojson::array();
     for (int a = 0; a < 3; ++a) {
       m.push_back(number_or_null(p.measured[a]));
       se.push_back(number_or_null(p.measured_std_error[a]));
@@ -155,28 +155,31 @@ std::string to_json(const FitResult& fr, int indent) {
                    {"true_input", in},
                    {"temperature_c", number_or_null(p.stimulus.temperature_c)}});
   }
-  j["points"] = pts;
-  if (!fr.ok) return j.dump(indent);
+  return pts;
+}
 
-  const auto& r = fr.lsq;
-  j["solution"] = {{"method", r.method == estimation::LsqMethod::kQr ? "qr" : "svd"},
-                   {"observations", r.observations},
-                   {"parameters", r.parameter_count},
-                   {"rank", r.rank},
-                   {"dof", r.dof},
-                   {"rss", r.rss},
-                   {"sigma", std::sqrt(r.sigma2)},
-                   {"confidence", r.confidence},
-                   {"quantile", r.quantile},
-                   {"condition_number", number_or_null(r.condition_number)},
-                   {"condition_number_identified", number_or_null(r.condition_number_identified)}};
-  json params = json::array();
-  for (std::size_t i = 0; i < r.parameters.size(); ++i) {
-    const auto& e = r.parameters[i];
-    json pj = {{"name", e.name},
-               {"unit", e.unit},
-               {"index", fr.param_index[i]},
-               {"identifiable", e.identifiable}};
+// "solution": method, counts, RSS, σ, confidence and quantile, condition numbers.
+ojson solution_json(const estimation::LsqResult& r) {
+  return {{"method", r.method == estimation::LsqMethod::kQr ? "qr" : "svd"},
+          {"observations", r.observations},
+          {"parameters", r.parameter_count},
+          {"rank", r.rank},
+          {"dof", r.dof},
+          {"rss", r.rss},
+          {"sigma", std::sqrt(r.sigma2)},
+          {"confidence", r.confidence},
+          {"quantile", r.quantile},
+          {"condition_number", number_or_null(r.condition_number)},
+          {"condition_number_identified", number_or_null(r.condition_number_identified)}};
+}
+
+// "parameters": value, standard error and interval of each identifiable parameter; null and the
+// reason for the others.
+ojson parameters_json(const FitResult& fr) {
+  ojson params = ojson::array();
+  for (std::size_t i = 0; i < fr.lsq.parameters.size(); ++i) {
+    const auto& e = fr.lsq.parameters[i];
+    ojson pj = {{"name", e.name}, {"unit", e.unit}, {"index", fr.param_index[i]}, {"identifiable", e.identifiable}};
     if (e.identifiable) {
       pj["value"] = e.value;
       pj["std_error"] = e.std_error;
@@ -189,40 +192,74 @@ std::string to_json(const FitResult& fr, int indent) {
     }
     params.push_back(pj);
   }
-  j["parameters"] = params;
-  json corr = json::array();
+  return params;
+}
+
+// "correlation": the parameters' correlation matrix, row by row (null where undefined).
+ojson correlation_json(const estimation::LsqResult& r) {
+  ojson corr = ojson::array();
   const Eigen::MatrixXd c = r.correlation();
   for (Eigen::Index a = 0; a < c.rows(); ++a) {
-    json row = json::array();
+    ojson row = ojson::array();
     for (Eigen::Index b = 0; b < c.cols(); ++b) row.push_back(number_or_null(c(a, b)));
     corr.push_back(row);
   }
-  j["correlation"] = corr;
-  json aliases = json::array();
+  return corr;
+}
+
+// "aliases": groups of parameters that only combinations of are identified.
+ojson aliases_json(const estimation::LsqResult& r) {
+  ojson aliases = ojson::array();
   for (const auto& g : r.aliases) {
-    json names = json::array();
+    ojson names = ojson::array();
     for (int idx : g.parameters) names.push_back(r.parameters[static_cast<std::size_t>(idx)].name);
-    json comb = json::array();
+    ojson comb = ojson::array();
     for (const auto& cb : g.identified) comb.push_back(combination_json(cb, r.parameters));
-    aliases.push_back({{"parameters", names},
-                       {"null_dimension", g.null_dimension},
-                       {"identified_combinations", comb}});
+    aliases.push_back({{"parameters", names}, {"null_dimension", g.null_dimension}, {"identified_combinations", comb}});
   }
-  j["aliases"] = aliases;
-  j["warnings"] = r.warnings;
-  json rms = json::object(), rms_d = json::object();
-  for (int a : s.axes) {
+  return aliases;
+}
+
+// "residuals": RMS per axis (residual unit and display unit) and every row.
+ojson residuals_json(const FitResult& fr) {
+  ojson rms = ojson::object(), rms_d = ojson::object();
+  for (int a : fr.spec.axes) {
     rms[std::string(1, estimation::axis_name(a))] = fr.residual_rms[a];
     rms_d[std::string(1, estimation::axis_name(a))] = fr.residual_rms_display[a];
   }
-  json res = json::array();
+  ojson res = ojson::array();
   for (const auto& x : fr.residuals)
     res.push_back({{"point", x.point},
                    {"axis", std::string(1, estimation::axis_name(x.axis))},
                    {"observed", x.observed},
                    {"fitted", x.fitted},
                    {"residual", x.residual}});
-  j["residuals"] = {{"rms", rms}, {"rms_display", rms_d}, {"rows", res}};
+  return {{"rms", rms}, {"rms_display", rms_d}, {"rows", res}};
+}
+
+}  // namespace
+
+std::string to_json(const FitResult& fr, int indent) {
+  ojson j;
+  j["schema"] = kFitSchema;
+  j["estimator"] = {{"name", kEstimatorName}, {"version", kEstimatorVersion}};
+  j["status"] = fr.ok ? "ok" : "failed";
+  j["message"] = fr.message;
+  j["recording"] = {{"dir", fr.recording_dir}, {"experiment", fr.experiment_name}, {"status", fr.recording_status}};
+  j["model"] = model_json(fr.spec);
+  j["extraction"] = extraction_json(fr);
+  j["weighting"] = estimation::weighting_name(fr.spec.weighting);
+  j["units"] = {{"residual", fr.unit}, {"residual_display", fr.display_unit}};
+  j["notes"] = fr.notes;
+  j["excluded_parameters"] = fr.excluded;
+  j["points"] = points_json(fr.points);
+  if (!fr.ok) return j.dump(indent);
+  j["solution"] = solution_json(fr.lsq);
+  j["parameters"] = parameters_json(fr);
+  j["correlation"] = correlation_json(fr.lsq);
+  j["aliases"] = aliases_json(fr.lsq);
+  j["warnings"] = fr.lsq.warnings;
+  j["residuals"] = residuals_json(fr);
   return j.dump(indent);
 }
 
