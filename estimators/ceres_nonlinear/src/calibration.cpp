@@ -730,6 +730,88 @@ CalibrationResult calibrate_accelerometer_unknown_orientations(const Recording& 
 
 namespace {
 
+// Which table angle zero offsets are estimated (tilt, rotation); the azimuth cannot be (gravity
+// does not depend on it) and other names are refused.
+struct TableOffsets {
+  bool tilt = false, rotation = false;
+  int count() const { return (tilt ? 1 : 0) + (rotation ? 1 : 0); }
+};
+
+TableOffsets table_offsets(const std::vector<std::string>& names) {
+  TableOffsets t;
+  for (const auto& a : names) {
+    if (a == "tilt") t.tilt = true;
+    else if (a == "rotation") t.rotation = true;
+    else if (a == "azimuth")
+      throw std::invalid_argument("table offset 'azimuth' cannot be estimated: gravity does not depend on the "
+                                  "azimuth angle (only tilt and rotation)");
+    else
+      throw std::invalid_argument("unknown table offset axis '" + a + "' (expected tilt or rotation)");
+  }
+  return t;
+}
+
+// Gravity [m/s²]: the option when given, else the mean magnitude of the truth vectors.
+double known_gravity(const std::vector<Eigen::Vector3d>& truth_f, const CalibrationOptions& o) {
+  if (o.gravity_mps2 > 0.0) return o.gravity_mps2;
+  double g = 0.0;
+  for (const auto& f : truth_f) g += f.norm();
+  return g / static_cast<double>(std::max<std::size_t>(1, truth_f.size()));
+}
+
+// Residual weighting of interval k: identity, or with orientation_sigma_deg > 0 the tilt of the
+// true orientation ~ N(0, σ_tilt²): the residual across gravity gets the extra variance
+// (g·σ_tilt)² [m/s²]², the one along gravity only the noise of the mean.
+Eigen::Matrix3d residual_weight(const StaticInterval& iv, const Eigen::Vector3d& truth_f, double g,
+                                const CalibrationOptions& o) {
+  Eigen::Matrix3d W = Eigen::Matrix3d::Identity();
+  if (!(o.orientation_sigma_deg > 0.0 && truth_f.norm() > 0.0)) return W;
+  const Eigen::Vector3d e0 = truth_f.normalized();
+  const Eigen::Vector3d e1 = e0.unitOrthogonal(), e2 = e0.cross(e1);
+  const double n_sd = std::max(1e-6, iv.accel_std.mean() / std::sqrt(static_cast<double>(std::max<std::size_t>(1, iv.count))));
+  const double t_sd = std::hypot(n_sd, g * o.orientation_sigma_deg * physics::kDegToRad);
+  W.row(0) = e0.transpose() / n_sd;
+  W.row(1) = e1.transpose() / t_sd;
+  W.row(2) = e2.transpose() / t_sd;
+  return W;
+}
+
+// The known-orientation residual blocks: truth vectors, or encoder angles with offsets [deg].
+void add_known_residuals(const std::vector<StaticInterval>& intervals, const std::vector<Eigen::Vector3d>& truth_f,
+                         const std::vector<std::array<double, 2>>& angles, const Eigen::Matrix3d& M,
+                         const TableOffsets& off, const std::vector<int>& free_index, const CalibrationOptions& o,
+                         const CalibrationResult& r, ceres::Problem& problem, std::vector<double>& x) {
+  const int p = static_cast<int>(free_index.size());
+  for (std::size_t k = 0; k < intervals.size(); ++k) {
+    const Eigen::Matrix3d W = residual_weight(intervals[k], truth_f[k], r.gravity_mps2, o);
+    if (off.count() == 0) {
+      auto* f = new KnownCost{&r.model, free_index, intervals[k].accel_mean, truth_f[k], W};
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<KnownCost, 3, kFull>(f), make_loss(o), x.data());
+    } else {
+      auto* c = new ceres::DynamicAutoDiffCostFunction<KnownOffsetCost, 4>(new KnownOffsetCost{
+          &r.model, intervals[k].accel_mean, angles[k][0], angles[k][1], r.gravity_mps2, M, W, off.tilt, off.rotation});
+      c->AddParameterBlock(p);
+      c->SetNumResiduals(3);
+      problem.AddResidualBlock(c, make_loss(o), x.data());
+    }
+  }
+}
+
+// Per-axis residual RMS against the truth, offset-corrected when offsets were estimated
+// (x = the solution: 12 model parameters, then the offsets [deg]).
+void known_axis_rms(const std::vector<StaticInterval>& intervals, const std::vector<Eigen::Vector3d>& truth_f,
+                    const std::vector<std::array<double, 2>>& angles, const Eigen::Matrix3d& M,
+                    const TableOffsets& off, const std::vector<double>& x, CalibrationResult& r) {
+  std::vector<Eigen::Vector3d> truth = truth_f, reading;
+  if (off.count() > 0 && r.ok) {
+    const double dh = off.tilt ? x[kFull] : 0.0, dd = off.rotation ? x[static_cast<std::size_t>(kFull + (off.tilt ? 1 : 0))] : 0.0;
+    for (std::size_t k = 0; k < truth.size(); ++k)
+      truth[k] = table_gravity(M, angles[k][0] + dh, angles[k][1] + dd, r.gravity_mps2);
+  }
+  for (const auto& iv : intervals) reading.push_back(iv.accel_mean);
+  axis_rms_against(r, truth, reading, truth);
+}
+
 // Known orientations, shared by the truth-vector and the encoder-angle (offset) variants.
 // `angles` (tilt, rotation deg per interval) and M are used only when offsets are estimated.
 CalibrationResult known_impl(const std::vector<StaticInterval>& intervals, const std::vector<Eigen::Vector3d>& truth_f,
@@ -739,31 +821,15 @@ CalibrationResult known_impl(const std::vector<StaticInterval>& intervals, const
   r.method = "known_orientations";
   r.model = accelerometer_model();
   r.intervals = intervals;
-  double g = o.gravity_mps2;
-  if (!(g > 0.0)) {
-    g = 0.0;
-    for (const auto& f : truth_f) g += f.norm();
-    g /= static_cast<double>(std::max<std::size_t>(1, truth_f.size()));
-  }
-  r.gravity_mps2 = g;
+  r.gravity_mps2 = known_gravity(truth_f, o);
   r.whitened = o.orientation_sigma_deg > 0.0;
-  bool off_tilt = false, off_rot = false;
-  for (const auto& a : o.table_offsets) {
-    if (a == "tilt") off_tilt = true;
-    else if (a == "rotation") off_rot = true;
-    else if (a == "azimuth")
-      throw std::invalid_argument("table offset 'azimuth' cannot be estimated: gravity does not depend on the "
-                                  "azimuth angle (only tilt and rotation)");
-    else
-      throw std::invalid_argument("unknown table offset axis '" + a + "' (expected tilt or rotation)");
-  }
-  const int n_off = (off_tilt ? 1 : 0) + (off_rot ? 1 : 0);
-  const int p = kFull + n_off;
+  const TableOffsets off = table_offsets(o.table_offsets);
+  const int p = kFull + off.count();
   std::vector<int> free_index(static_cast<std::size_t>(p));
   for (int i = 0; i < p; ++i) free_index[static_cast<std::size_t>(i)] = i;
   init_parameters(r, std::vector<int>(free_index.begin(), free_index.begin() + kFull));
   for (const char* ax : {"tilt", "rotation"}) {
-    if ((std::string(ax) == "tilt" && !off_tilt) || (std::string(ax) == "rotation" && !off_rot)) continue;
+    if ((std::string(ax) == "tilt" && !off.tilt) || (std::string(ax) == "rotation" && !off.rotation)) continue;
     Parameter prm;
     prm.name = std::string("table_offset_") + ax;
     prm.unit = "deg";
@@ -779,7 +845,7 @@ CalibrationResult known_impl(const std::vector<StaticInterval>& intervals, const
     norm_rms(r);
     return r;
   };
-  if (truth_f.size() != intervals.size() || (n_off > 0 && angles.size() != intervals.size()))
+  if (truth_f.size() != intervals.size() || (off.count() > 0 && angles.size() != intervals.size()))
     return done("known orientations: one truth vector (or encoder angle pair) per static interval is needed");
   if (!finite_intervals(intervals)) return done("non-finite (NaN) readings in a static interval");
   if (3 * n < p + 1)
@@ -788,42 +854,10 @@ CalibrationResult known_impl(const std::vector<StaticInterval>& intervals, const
                             n, (p + 1 + 2) / 3, p));
   std::vector<double> x(static_cast<std::size_t>(p), 0.0);
   ceres::Problem problem;
-  for (std::size_t k = 0; k < intervals.size(); ++k) {
-    Eigen::Matrix3d W = Eigen::Matrix3d::Identity();
-    if (o.orientation_sigma_deg > 0.0 && truth_f[k].norm() > 0.0) {
-      // Tilt of the true orientation ~ N(0, σ_tilt²): the residual across gravity gets the extra
-      // variance (g·σ_tilt)², the one along gravity only the noise of the mean.
-      const Eigen::Vector3d e0 = truth_f[k].normalized();
-      const Eigen::Vector3d e1 = e0.unitOrthogonal(), e2 = e0.cross(e1);
-      const double n_sd = std::max(1e-6, intervals[k].accel_std.mean() /
-                                             std::sqrt(static_cast<double>(std::max<std::size_t>(1, intervals[k].count))));
-      const double t_sd = std::hypot(n_sd, g * o.orientation_sigma_deg * physics::kDegToRad);
-      W.row(0) = e0.transpose() / n_sd;
-      W.row(1) = e1.transpose() / t_sd;
-      W.row(2) = e2.transpose() / t_sd;
-    }
-    if (n_off == 0) {
-      auto* f = new KnownCost{&r.model, free_index, intervals[k].accel_mean, truth_f[k], W};
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<KnownCost, 3, kFull>(f), make_loss(o), x.data());
-    } else {
-      auto* c = new ceres::DynamicAutoDiffCostFunction<KnownOffsetCost, 4>(new KnownOffsetCost{
-          &r.model, intervals[k].accel_mean, angles[k][0], angles[k][1], g, M, W, off_tilt, off_rot});
-      c->AddParameterBlock(p);
-      c->SetNumResiduals(3);
-      problem.AddResidualBlock(c, make_loss(o), x.data());
-    }
-  }
+  add_known_residuals(intervals, truth_f, angles, M, off, free_index, o, r, problem, x);
   solve(problem, x, free_index, 3 * n, o, r);
   norm_rms(r);
-  // Per axis against the (offset-corrected) truth.
-  std::vector<Eigen::Vector3d> truth = truth_f, reading;
-  if (n_off > 0 && r.ok) {
-    const double dh = off_tilt ? x[kFull] : 0.0, dd = off_rot ? x[static_cast<std::size_t>(kFull + (off_tilt ? 1 : 0))] : 0.0;
-    for (std::size_t k = 0; k < truth.size(); ++k)
-      truth[k] = table_gravity(M, angles[k][0] + dh, angles[k][1] + dd, g);
-  }
-  for (const auto& iv : intervals) reading.push_back(iv.accel_mean);
-  axis_rms_against(r, truth, reading, truth);
+  known_axis_rms(intervals, truth_f, angles, M, off, x, r);
   return r;
 }
 
