@@ -251,6 +251,19 @@ void write_number(std::string& out, double v) {
   out.append(buf, ec == std::errc() ? p : buf);
 }
 
+// Sensor description of a 16-bit accelerometer + gyroscope without temperature: rate [Hz], LSB
+// sizes [m/s², rad/s per count] and the ±32768-count ranges.
+void set_int16_sensor_info(double rate_hz, double acc_lsb, double gyr_lsb, Recording& rec) {
+  SensorInfo& info = rec.header.info;
+  info.output_rate_hz = rate_hz;
+  info.accel_lsb_mps2 = acc_lsb;
+  info.gyro_lsb_radps = gyr_lsb;
+  info.accel_range_mps2 = 32768.0 * acc_lsb;
+  info.gyro_range_radps = 32768.0 * gyr_lsb;
+  info.has_gyro = true;
+  info.has_temperature = false;
+}
+
 }  // namespace
 
 // =============================================================================================
@@ -551,20 +564,6 @@ void add_imucal_segments(const std::vector<ImucalRow>& rows, Recording& rec) {
   for (std::size_t k : orientation_segments) rec.segments[k].orientation_count = orientation;
 }
 
-// Sensor description of the session: rate [Hz], LSB sizes and ±32768-count ranges [m/s², rad/s].
-void set_imucal_sensor_info(const ImucalOptions& opt, double acc_lsb, double gyr_lsb, Recording& rec) {
-  SensorInfo& info = rec.header.info;
-  info.output_rate_hz = opt.rate_hz;
-  info.accel_lsb_mps2 = acc_lsb;
-  info.gyro_lsb_radps = gyr_lsb;
-  info.accel_range_mps2 = 32768.0 * acc_lsb;
-  info.gyro_range_radps = 32768.0 * gyr_lsb;
-  info.has_gyro = true;
-  info.has_temperature = false;
-  rec.header.identity.model = "imucal example session";
-  rec.header.gravity_mps2 = opt.gravity_mps2;
-}
-
 }  // namespace
 
 Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) {
@@ -576,7 +575,9 @@ Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) 
   const double gyr_lsb = physics::kDegPerSecond / opt.gyro_lsb_per_dps;
   const std::size_t gaps = add_imucal_samples(rows, opt.rate_hz, acc_lsb, gyr_lsb, rec);
   add_imucal_segments(rows, rec);
-  set_imucal_sensor_info(opt, acc_lsb, gyr_lsb, rec);
+  set_int16_sensor_info(opt.rate_hz, acc_lsb, gyr_lsb, rec);
+  rec.header.identity.model = "imucal example session";
+  rec.header.gravity_mps2 = opt.gravity_mps2;
   add_import_event(
       rec, "imported " + std::to_string(rec.samples.size()) + " samples from " + file.string() +
                " (imucal annotated session; rate " + fmt_g(opt.rate_hz) +
@@ -592,88 +593,117 @@ Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) 
 // =============================================================================================
 // (c) MPU-6050 multi-position session
 
-Recording import_mpu6050_multipos(const fs::path& file, const Mpu6050MultiposOptions& opt) {
-  LineReader r(file);
-  std::string line;
-  std::map<std::string, double> header;
-  std::map<std::string, std::size_t> header_line;
+namespace {
+
+// The "key,value" header lines before the column names (values and their line numbers), and the
+// column names with their line.
+struct MpuHeader {
+  std::map<std::string, double> values;
+  std::map<std::string, std::size_t> lines;
   std::vector<std::string> names;
+  std::size_t names_line = 0;
+};
+
+MpuHeader read_mpu_header(LineReader& r) {
+  MpuHeader h;
+  std::string line;
   while (r.next(line)) {
     if (is_blank(line)) continue;
     const auto f = split(line, ',');
     double v = 0.0;
     if (f.size() == 2 && !parse_double(f[0], v)) {
       if (!parse_double(f[1], v)) r.fail("header value '" + std::string(f[1]) + "' is not a number");
-      header[unquote(f[0])] = v;
-      header_line[unquote(f[0])] = r.line();
+      h.values[unquote(f[0])] = v;
+      h.lines[unquote(f[0])] = r.line();
       continue;
     }
-    for (auto n : f) names.push_back(unquote(n));
+    for (auto n : f) h.names.push_back(unquote(n));
     break;
   }
-  if (names.empty()) throw ImportError(file, r.line(), "no column-name line (expected ax,ay,az,gx,gy,gz)");
-  const std::size_t names_line = r.line();
-  const char* required[6] = {"ax", "ay", "az", "gx", "gy", "gz"};
+  if (h.names.empty()) throw ImportError(r.file(), r.line(), "no column-name line (expected ax,ay,az,gx,gy,gz)");
+  h.names_line = r.line();
+  return h;
+}
+
+constexpr const char* kMpuColumns[6] = {"ax", "ay", "az", "gx", "gy", "gz"};
+
+// Positions of ax..gz among the column names.
+std::array<std::size_t, 6> mpu_columns(const fs::path& file, const MpuHeader& h) {
   std::array<std::size_t, 6> col{};
-  for (int k = 0; k < 6; ++k) {
-    const auto it = std::find(names.begin(), names.end(), required[k]);
-    if (it == names.end()) {
-      throw ImportError(file, names_line, std::string("no column '") + required[k] +
-                                              "' (expected ax,ay,az,gx,gy,gz after the header)");
+  for (std::size_t k = 0; k < 6; ++k) {
+    const auto it = std::find(h.names.begin(), h.names.end(), kMpuColumns[k]);
+    if (it == h.names.end()) {
+      throw ImportError(file, h.names_line, std::string("no column '") + kMpuColumns[k] +
+                                                "' (expected ax,ay,az,gx,gy,gz after the header)");
     }
-    col[static_cast<std::size_t>(k)] = static_cast<std::size_t>(it - names.begin());
+    col[k] = static_cast<std::size_t>(it - h.names.begin());
   }
-  const auto fs_it = header.find("Fs");
-  if (fs_it == header.end() || !(fs_it->second > 0.0)) {
-    throw ImportError(file, fs_it == header.end() ? 1 : header_line["Fs"],
+  return col;
+}
+
+// Sample rate [Hz] from the header line "Fs,<Hz>".
+double mpu_rate(const fs::path& file, const MpuHeader& h) {
+  const auto fs_it = h.values.find("Fs");
+  if (fs_it == h.values.end() || !(fs_it->second > 0.0)) {
+    throw ImportError(file, fs_it == h.values.end() ? 1 : h.lines.at("Fs"),
                       "no sample rate: expected a header line 'Fs,<Hz>' with a positive rate");
   }
-  const double rate = fs_it->second;
-  const std::size_t needed = *std::max_element(col.begin(), col.end()) + 1;
+  return fs_it->second;
+}
 
-  Recording rec = new_recording(file, "mpu6050_multipos");
-  const double acc_lsb = physics::kStandardGravity / opt.accel_lsb_per_g;
-  const double gyr_lsb = physics::kDegPerSecond / opt.gyro_lsb_per_dps;
+// Every data line as a sample at t = index / rate [s]; counts × LSB [m/s², rad/s].
+void read_mpu_samples(LineReader& r, const std::array<std::size_t, 6>& col, std::size_t fields, double rate,
+                      double acc_lsb, double gyr_lsb, Recording& rec) {
+  const std::size_t needed = *std::max_element(col.begin(), col.end()) + 1;
+  std::string line;
   while (r.next(line)) {
     if (is_blank(line)) continue;
     const auto f = split(line, ',');
     if (f.size() < needed) {
-      r.fail("expected " + std::to_string(names.size()) + " fields, found " + std::to_string(f.size()));
+      r.fail("expected " + std::to_string(fields) + " fields, found " + std::to_string(f.size()));
     }
     ImuSample s;
     s.t_s = static_cast<double>(rec.samples.size()) / rate;
     for (int k = 0; k < 3; ++k) {
-      s.accel_counts[k] = to_counts(r, number(r, f[col[static_cast<std::size_t>(k)]], required[k]), required[k]);
-      s.gyro_counts[k] =
-          to_counts(r, number(r, f[col[static_cast<std::size_t>(k + 3)]], required[k + 3]), required[k + 3]);
+      const auto ka = static_cast<std::size_t>(k), kg = static_cast<std::size_t>(k + 3);
+      s.accel_counts[k] = to_counts(r, number(r, f[col[ka]], kMpuColumns[ka]), kMpuColumns[ka]);
+      s.gyro_counts[k] = to_counts(r, number(r, f[col[kg]], kMpuColumns[kg]), kMpuColumns[kg]);
       s.accel_mps2[k] = s.accel_counts[k] * acc_lsb;
       s.gyro_radps[k] = s.gyro_counts[k] * gyr_lsb;
     }
     rec.samples.push_back(s);
   }
-  if (rec.samples.empty()) throw ImportError(file, 0, "no data lines after the column names");
+}
 
-  SensorInfo& info = rec.header.info;
-  info.output_rate_hz = rate;
-  info.accel_lsb_mps2 = acc_lsb;
-  info.gyro_lsb_radps = gyr_lsb;
-  info.accel_range_mps2 = 32768.0 * acc_lsb;
-  info.gyro_range_radps = 32768.0 * gyr_lsb;
-  info.has_gyro = true;
-  info.has_temperature = false;
+// The still interval at the start ("Initialization time" [s] in the header) as an orientation segment.
+void add_initialization_segment(const MpuHeader& h, Recording& rec) {
+  const auto init = h.values.find("Initialization time");
+  if (init == h.values.end() || !(init->second > 0.0)) return;
+  const double t_end = std::min(init->second, rec.samples.back().t_s);
+  Segment seg = make_segment(0, "orientation", "initialization", 0.0, t_end);
+  seg.orientation = 0;
+  seg.targets = "held still (Initialization time " + fmt_g(init->second) + " s)";
+  rec.segments.push_back(seg);
+}
+
+}  // namespace
+
+Recording import_mpu6050_multipos(const fs::path& file, const Mpu6050MultiposOptions& opt) {
+  LineReader r(file);
+  const MpuHeader header = read_mpu_header(r);
+  const std::array<std::size_t, 6> col = mpu_columns(file, header);
+  const double rate = mpu_rate(file, header);
+  Recording rec = new_recording(file, "mpu6050_multipos");
+  const double acc_lsb = physics::kStandardGravity / opt.accel_lsb_per_g;
+  const double gyr_lsb = physics::kDegPerSecond / opt.gyro_lsb_per_dps;
+  read_mpu_samples(r, col, header.names.size(), rate, acc_lsb, gyr_lsb, rec);
+  if (rec.samples.empty()) throw ImportError(file, 0, "no data lines after the column names");
+  set_int16_sensor_info(rate, acc_lsb, gyr_lsb, rec);
   rec.header.identity.vendor = "InvenSense";
   rec.header.identity.model = "MPU-6050";
-
   std::string hdr;
-  for (const auto& [k, v] : header) hdr += (hdr.empty() ? "" : ", ") + k + " = " + fmt_g(v);
-  const auto init = header.find("Initialization time");
-  if (init != header.end() && init->second > 0.0) {
-    const double t_end = std::min(init->second, rec.samples.back().t_s);
-    Segment seg = make_segment(0, "orientation", "initialization", 0.0, t_end);
-    seg.orientation = 0;
-    seg.targets = "held still (Initialization time " + fmt_g(init->second) + " s)";
-    rec.segments.push_back(seg);
-  }
+  for (const auto& [k, v] : header.values) hdr += (hdr.empty() ? "" : ", ") + k + " = " + fmt_g(v);
+  add_initialization_segment(header, rec);
   add_import_event(rec, "imported " + std::to_string(rec.samples.size()) + " samples from " +
                             file.string() + " (MPU-6050 multi-position session; header: " + hdr +
                             "; counts converted with " + fmt_g(opt.accel_lsb_per_g) + " LSB/g (+-2 g) and " +
@@ -686,81 +716,86 @@ Recording import_mpu6050_multipos(const fs::path& file, const Mpu6050MultiposOpt
 // =============================================================================================
 // (d) IMU-TK
 
-Recording import_imutk(const fs::path& acc_file, const fs::path& gyro_file, const ImuTkOptions& opt) {
-  const Triad acc = read_triad_file(acc_file, opt.time_scale_s);
-  const bool has_gyro = !gyro_file.empty();
-  Triad gyr;
-  if (has_gyro) gyr = read_triad_file(gyro_file, opt.time_scale_s);
+namespace {
 
-  Recording rec = new_recording(acc_file, "imutk");
-  auto counts_of = [&](const Triad& tr, std::size_t i, double v, const fs::path& f) -> std::int32_t {
-    if (!std::isfinite(v) || std::abs(v - std::round(v)) > 1e-6 || std::abs(v) > 2147483647.0) {
-      throw ImportError(f, tr.line[i], fmt_g(v) + " is not an integer count (counts = true)");
-    }
-    return static_cast<std::int32_t>(std::lround(v));
-  };
+// Value v of line i of a triad file as an integer count (counts = true).
+std::int32_t triad_count(const Triad& tr, std::size_t i, double v, const fs::path& file) {
+  if (!std::isfinite(v) || std::abs(v - std::round(v)) > 1e-6 || std::abs(v) > 2147483647.0) {
+    throw ImportError(file, tr.line[i], fmt_g(v) + " is not an integer count (counts = true)");
+  }
+  return static_cast<std::int32_t>(std::lround(v));
+}
+
+// One sample per accelerometer line: time [s] and value × accel_scale [m/s²] (with the counts).
+void add_accel_samples(const Triad& acc, const fs::path& acc_file, const ImuTkOptions& opt, Recording& rec) {
   for (std::size_t i = 0; i < acc.t.size(); ++i) {
     ImuSample s;
     s.t_s = acc.t[i];
     const double a[3] = {acc.x[i], acc.y[i], acc.z[i]};
     for (int k = 0; k < 3; ++k) {
-      if (opt.counts) s.accel_counts[k] = counts_of(acc, i, a[k], acc_file);
+      if (opt.counts) s.accel_counts[k] = triad_count(acc, i, a[k], acc_file);
       s.accel_mps2[k] = a[k] * opt.accel_scale;
     }
     rec.samples.push_back(s);
   }
-  const double median_dt = median_interval(rec.samples);
-  const double tol = opt.time_tolerance_s >= 0.0 ? opt.time_tolerance_s : 0.01 * median_dt;
-  std::string merge_note;
-  if (has_gyro) {
-    bool same_times = gyr.t.size() == acc.t.size();
-    for (std::size_t i = 0; same_times && i < acc.t.size(); ++i) {
-      same_times = std::abs(gyr.t[i] - acc.t[i]) <= tol;
-    }
-    if (same_times) {
-      for (std::size_t i = 0; i < acc.t.size(); ++i) {
-        const double g[3] = {gyr.x[i], gyr.y[i], gyr.z[i]};
-        for (int k = 0; k < 3; ++k) {
-          if (opt.counts) rec.samples[i].gyro_counts[k] = counts_of(gyr, i, g[k], gyro_file);
-          rec.samples[i].gyro_radps[k] = g[k] * opt.gyro_scale;
-        }
-      }
-      merge_note = "gyro samples matched by timestamp";
-    } else {
-      // Linear interpolation of the gyro at the accelerometer times; counts are the rounded
-      // interpolated values.
-      std::vector<ImuSample> kept;
-      std::size_t j = 0, dropped = 0;
-      for (auto& s : rec.samples) {
-        if (s.t_s < gyr.t.front() - tol || s.t_s > gyr.t.back() + tol) {
-          ++dropped;
-          continue;
-        }
-        while (j + 1 < gyr.t.size() && gyr.t[j + 1] < s.t_s) ++j;
-        const std::size_t j1 = std::min(j + 1, gyr.t.size() - 1);
-        const double span = gyr.t[j1] - gyr.t[j];
-        const double u = span > 0.0 ? std::clamp((s.t_s - gyr.t[j]) / span, 0.0, 1.0) : 0.0;
-        const double g[3] = {gyr.x[j] + u * (gyr.x[j1] - gyr.x[j]), gyr.y[j] + u * (gyr.y[j1] - gyr.y[j]),
-                             gyr.z[j] + u * (gyr.z[j1] - gyr.z[j])};
-        for (int k = 0; k < 3; ++k) {
-          if (opt.counts) s.gyro_counts[k] = static_cast<std::int32_t>(std::lround(g[k]));
-          s.gyro_radps[k] = g[k] * opt.gyro_scale;
-        }
-        kept.push_back(s);
-      }
-      if (kept.empty()) {
-        throw ImportError(gyro_file, 0, "the gyro timestamps (" + fmt_g(gyr.t.front()) + " … " +
-                                            fmt_g(gyr.t.back()) + " s) do not overlap the accelerometer's (" +
-                                            fmt_g(acc.t.front()) + " … " + fmt_g(acc.t.back()) +
-                                            " s); check time_scale_s");
-      }
-      rec.samples = std::move(kept);
-      merge_note = "gyro linearly interpolated at the accelerometer times (the files' timestamps differ)" +
-                   (dropped ? "; " + std::to_string(dropped) + " accelerometer sample(s) outside the gyro's time span dropped"
-                            : std::string());
+}
+
+// Whether the gyro lines have the accelerometer's timestamps (within tol [s]).
+bool same_times(const Triad& acc, const Triad& gyr, double tol) {
+  bool same = gyr.t.size() == acc.t.size();
+  for (std::size_t i = 0; same && i < acc.t.size(); ++i) same = std::abs(gyr.t[i] - acc.t[i]) <= tol;
+  return same;
+}
+
+// Gyro line i into sample i: value × gyro_scale [rad/s] (with the counts).
+void add_matched_gyro(const Triad& gyr, const fs::path& gyro_file, const ImuTkOptions& opt, Recording& rec) {
+  for (std::size_t i = 0; i < rec.samples.size(); ++i) {
+    const double g[3] = {gyr.x[i], gyr.y[i], gyr.z[i]};
+    for (int k = 0; k < 3; ++k) {
+      if (opt.counts) rec.samples[i].gyro_counts[k] = triad_count(gyr, i, g[k], gyro_file);
+      rec.samples[i].gyro_radps[k] = g[k] * opt.gyro_scale;
     }
   }
+}
 
+// Gyro linearly interpolated at the accelerometer times (counts are the rounded interpolated
+// values); samples outside the gyro's time span (± tol [s]) are dropped. Returns the merge note.
+std::string add_interpolated_gyro(const Triad& acc, const Triad& gyr, const fs::path& gyro_file, double tol,
+                                  const ImuTkOptions& opt, Recording& rec) {
+  std::vector<ImuSample> kept;
+  std::size_t j = 0, dropped = 0;
+  for (auto& s : rec.samples) {
+    if (s.t_s < gyr.t.front() - tol || s.t_s > gyr.t.back() + tol) {
+      ++dropped;
+      continue;
+    }
+    while (j + 1 < gyr.t.size() && gyr.t[j + 1] < s.t_s) ++j;
+    const std::size_t j1 = std::min(j + 1, gyr.t.size() - 1);
+    const double span = gyr.t[j1] - gyr.t[j];
+    const double u = span > 0.0 ? std::clamp((s.t_s - gyr.t[j]) / span, 0.0, 1.0) : 0.0;
+    const double g[3] = {gyr.x[j] + u * (gyr.x[j1] - gyr.x[j]), gyr.y[j] + u * (gyr.y[j1] - gyr.y[j]),
+                         gyr.z[j] + u * (gyr.z[j1] - gyr.z[j])};
+    for (int k = 0; k < 3; ++k) {
+      if (opt.counts) s.gyro_counts[k] = static_cast<std::int32_t>(std::lround(g[k]));
+      s.gyro_radps[k] = g[k] * opt.gyro_scale;
+    }
+    kept.push_back(s);
+  }
+  if (kept.empty()) {
+    throw ImportError(gyro_file, 0, "the gyro timestamps (" + fmt_g(gyr.t.front()) + " … " +
+                                        fmt_g(gyr.t.back()) + " s) do not overlap the accelerometer's (" +
+                                        fmt_g(acc.t.front()) + " … " + fmt_g(acc.t.back()) +
+                                        " s); check time_scale_s");
+  }
+  rec.samples = std::move(kept);
+  return "gyro linearly interpolated at the accelerometer times (the files' timestamps differ)" +
+         (dropped ? "; " + std::to_string(dropped) + " accelerometer sample(s) outside the gyro's time span dropped"
+                  : std::string());
+}
+
+// Sensor description: rate [Hz] (given, or from the median sample step median_dt [s]) and the
+// LSB sizes when the files hold counts.
+void set_imutk_sensor_info(const ImuTkOptions& opt, bool has_gyro, double median_dt, Recording& rec) {
   SensorInfo& info = rec.header.info;
   info.output_rate_hz = opt.rate_hz > 0.0 ? opt.rate_hz : (median_dt > 0.0 ? 1.0 / median_dt : 0.0);
   info.has_gyro = has_gyro;
@@ -771,7 +806,28 @@ Recording import_imutk(const fs::path& acc_file, const fs::path& gyro_file, cons
   }
   rec.header.identity = opt.identity;
   rec.header.gravity_mps2 = opt.gravity_mps2;
-  const std::size_t gaps = flag_time_gaps(rec.samples, info.output_rate_hz);
+}
+
+}  // namespace
+
+Recording import_imutk(const fs::path& acc_file, const fs::path& gyro_file, const ImuTkOptions& opt) {
+  const Triad acc = read_triad_file(acc_file, opt.time_scale_s);
+  const bool has_gyro = !gyro_file.empty();
+  Triad gyr;
+  if (has_gyro) gyr = read_triad_file(gyro_file, opt.time_scale_s);
+  Recording rec = new_recording(acc_file, "imutk");
+  add_accel_samples(acc, acc_file, opt, rec);
+  const double median_dt = median_interval(rec.samples);
+  const double tol = opt.time_tolerance_s >= 0.0 ? opt.time_tolerance_s : 0.01 * median_dt;
+  std::string merge_note;
+  if (has_gyro && same_times(acc, gyr, tol)) {
+    add_matched_gyro(gyr, gyro_file, opt, rec);
+    merge_note = "gyro samples matched by timestamp";
+  } else if (has_gyro) {
+    merge_note = add_interpolated_gyro(acc, gyr, gyro_file, tol, opt, rec);
+  }
+  set_imutk_sensor_info(opt, has_gyro, median_dt, rec);
+  const std::size_t gaps = flag_time_gaps(rec.samples, rec.header.info.output_rate_hz);
   add_import_event(rec, "imported " + std::to_string(rec.samples.size()) + " samples from " +
                             acc_file.string() + (has_gyro ? " and " + gyro_file.string() : std::string()) +
                             " (IMU-TK text; time scale " + fmt_g(opt.time_scale_s) + " s/unit, " +
