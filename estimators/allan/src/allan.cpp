@@ -565,10 +565,10 @@ KalibrParameters kalibr_parameters(const std::vector<ChannelResult>& channels, d
   return k;
 }
 
-AllanReport analyze_recording(const Recording& rec, const AllanOptions& options) {
-  AllanReport report;
-  report.source = rec.dir.string();
-  if (!rec.header.experiment_name.empty()) report.source += " (" + rec.header.experiment_name + ")";
+namespace {
+
+// Sample index range [i0, i1) inside the options' time window [t_begin_s, t_end_s] [s].
+std::pair<std::size_t, std::size_t> selected_range(const Recording& rec, const AllanOptions& options) {
   std::size_t i0 = 0, i1 = rec.samples.size();
   if (std::isfinite(options.t_begin_s)) {
     while (i0 < i1 && rec.samples[i0].t_s < options.t_begin_s) ++i0;
@@ -576,33 +576,26 @@ AllanReport analyze_recording(const Recording& rec, const AllanOptions& options)
   if (std::isfinite(options.t_end_s)) {
     while (i1 > i0 && rec.samples[i1 - 1].t_s > options.t_end_s) --i1;
   }
-  const std::size_t n = i1 - i0;
-  if (n < 2) {
-    throw std::runtime_error(fmt::format("Allan: {} has {} sample(s) in the selected time range",
-                                         report.source, n));
-  }
-  report.samples = n;
-  report.t_begin_s = rec.samples[i0].t_s;
-  report.t_end_s = rec.samples[i1 - 1].t_s;
+  return {i0, i1};
+}
 
-  // Rate: the header's, or the median interval.
-  std::vector<double> dt;
-  dt.reserve(n - 1);
-  for (std::size_t i = i0 + 1; i < i1; ++i) dt.push_back(rec.samples[i].t_s - rec.samples[i - 1].t_s);
+// Sample rate [Hz]: the header's, or 1 / the median sample interval dt [s].
+double sample_rate(const Recording& rec, const std::vector<double>& dt, const std::string& source) {
   std::vector<double> sorted = dt;
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2),
-                   sorted.end());
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
   const double median_dt = sorted[sorted.size() / 2];
-  double rate = rec.header.info.output_rate_hz;
-  if (!(rate > 0.0)) {
-    if (!(median_dt > 0.0)) {
-      throw std::runtime_error(fmt::format(
-          "Allan: {}: no output rate in the header and the timestamps do not increase",
-          report.source));
-    }
-    rate = 1.0 / median_dt;
+  const double rate = rec.header.info.output_rate_hz;
+  if (rate > 0.0) return rate;
+  if (!(median_dt > 0.0)) {
+    throw std::runtime_error(fmt::format(
+        "Allan: {}: no output rate in the header and the timestamps do not increase", source));
   }
-  report.rate_hz = rate;
+  return 1.0 / median_dt;
+}
+
+// Warnings on lost samples and on intervals dt [s] off 1/rate by more than 50 %.
+void add_sampling_warnings(const Recording& rec, std::size_t i0, std::size_t i1, const std::vector<double>& dt,
+                           double rate, AllanReport& report) {
   std::size_t gaps = 0, irregular = 0;
   for (std::size_t i = i0 + 1; i < i1; ++i) {
     if (rec.samples[i].flags & kGapBefore) ++gaps;
@@ -620,26 +613,53 @@ AllanReport analyze_recording(const Recording& rec, const AllanOptions& options)
         "{} sample interval(s) deviate by more than 50 % from 1/rate = {:.6g} s", irregular,
         1.0 / rate));
   }
+}
 
-  const bool gyro = rec.header.info.has_gyro;
-  const char* names[6] = {"ax", "ay", "az", "gx", "gy", "gz"};
+// Allan curve and noise model of channel ch (0..2 accelerometer [m/s²], 3..5 gyroscope [rad/s])
+// over samples [i0, i1), streamed in blocks.
+ChannelResult analyze_channel(const Recording& rec, std::size_t i0, std::size_t i1, int ch, double rate,
+                              const AllanOptions& options) {
+  static const char* names[6] = {"ax", "ay", "az", "gx", "gy", "gz"};
   std::vector<double> buf(OverlappingAllanStream::kBlock);
-  for (int ch = 0; ch < (gyro ? 6 : 3); ++ch) {
-    OverlappingAllanStream s(options.max_m, n);
-    for (std::size_t i = i0; i < i1;) {
-      const std::size_t take = std::min(buf.size(), i1 - i);
-      for (std::size_t t = 0; t < take; ++t) {
-        const ImuSample& smp = rec.samples[i + t];
-        buf[t] = ch < 3 ? smp.accel_mps2[ch] : smp.gyro_radps[ch - 3];
-      }
-      s.add(buf.data(), take);
-      i += take;
+  OverlappingAllanStream s(options.max_m, i1 - i0);
+  for (std::size_t i = i0; i < i1;) {
+    const std::size_t take = std::min(buf.size(), i1 - i);
+    for (std::size_t t = 0; t < take; ++t) {
+      const ImuSample& smp = rec.samples[i + t];
+      buf[t] = ch < 3 ? smp.accel_mps2[ch] : smp.gyro_radps[ch - 3];
     }
-    ChannelInfo info;
-    info.name = names[ch];
-    info.instrument = ch < 3 ? Instrument::kAccelerometer : Instrument::kGyroscope;
-    report.channels.push_back(analyze(s, rate, info, options));
+    s.add(buf.data(), take);
+    i += take;
   }
+  ChannelInfo info;
+  info.name = names[ch];
+  info.instrument = ch < 3 ? Instrument::kAccelerometer : Instrument::kGyroscope;
+  return analyze(s, rate, info, options);
+}
+
+}  // namespace
+
+AllanReport analyze_recording(const Recording& rec, const AllanOptions& options) {
+  AllanReport report;
+  report.source = rec.dir.string();
+  if (!rec.header.experiment_name.empty()) report.source += " (" + rec.header.experiment_name + ")";
+  const auto [i0, i1] = selected_range(rec, options);
+  const std::size_t n = i1 - i0;
+  if (n < 2) {
+    throw std::runtime_error(fmt::format("Allan: {} has {} sample(s) in the selected time range",
+                                         report.source, n));
+  }
+  report.samples = n;
+  report.t_begin_s = rec.samples[i0].t_s;
+  report.t_end_s = rec.samples[i1 - 1].t_s;
+  std::vector<double> dt;
+  dt.reserve(n - 1);
+  for (std::size_t i = i0 + 1; i < i1; ++i) dt.push_back(rec.samples[i].t_s - rec.samples[i - 1].t_s);
+  const double rate = sample_rate(rec, dt, report.source);
+  report.rate_hz = rate;
+  add_sampling_warnings(rec, i0, i1, dt, rate, report);
+  const int channels = rec.header.info.has_gyro ? 6 : 3;
+  for (int ch = 0; ch < channels; ++ch) report.channels.push_back(analyze_channel(rec, i0, i1, ch, rate, options));
   report.kalibr = kalibr_parameters(report.channels, rate);
   return report;
 }
