@@ -1028,174 +1028,249 @@ MatVar make_text(const char* name, const std::string& s) {
   return MatVar(Mat_VarCreate(name, MAT_C_CHAR, MAT_T_UINT8, 2, dims, const_cast<char*>(s.data()), 0));
 }
 
-}  // namespace
-
-Recording import_mat(const fs::path& file, const MatOptions& opt) {
-  MatSource src(file, opt.struct_name);
+// The variables an import looks for, as found (names as in the file, empty when absent).
+struct MatData {
   std::vector<std::array<double, 3>> acc, gyr, acc_counts, gyr_counts;
   std::string acc_name, gyr_name, acc_counts_name, gyr_counts_name, t_name, fs_name, temp_name, lsb_name;
-  const bool have_acc = triad(src, {"acc", "accel", "accelerometer"}, acc, acc_name);
-  const bool have_acc_counts = triad(src, {"acc_counts"}, acc_counts, acc_counts_name);
-  const bool have_gyr = triad(src, {"gyro", "gyr", "gyroscope"}, gyr, gyr_name);
-  const bool have_gyr_counts = triad(src, {"gyro_counts", "gyr_counts"}, gyr_counts, gyr_counts_name);
+  bool have_acc = false, have_acc_counts = false, have_gyr = false, have_gyr_counts = false;
   std::vector<double> t, rate_v, temp, acc_lsb_v, gyr_lsb_v;
-  const bool have_t = vector_of(src, {"t", "time", "timestamp"}, t, t_name);
-  const bool have_fs = vector_of(src, {"fs", "rate_hz", "rate"}, rate_v, fs_name);
-  const bool have_temp = vector_of(src, {"temp", "temperature"}, temp, temp_name);
-  const bool have_acc_lsb = vector_of(src, {"acc_lsb"}, acc_lsb_v, lsb_name);
-  const bool have_gyr_lsb = vector_of(src, {"gyro_lsb", "gyr_lsb"}, gyr_lsb_v, lsb_name);
-  if (!have_acc && !(have_acc_counts && have_acc_lsb)) {
+  bool have_t = false, have_fs = false, have_temp = false, have_acc_lsb = false, have_gyr_lsb = false;
+
+  std::size_t rows() const { return have_acc ? acc.size() : acc_counts.size(); }
+  bool fixed_rate() const { return have_fs && rate_v.size() == 1 && rate_v[0] > 0.0; }
+  double acc_lsb() const { return have_acc_lsb && !acc_lsb_v.empty() ? acc_lsb_v[0] : 0.0; }
+  double gyr_lsb() const { return have_gyr_lsb && !gyr_lsb_v.empty() ? gyr_lsb_v[0] : 0.0; }
+  bool has_gyro() const { return have_gyr || (have_gyr_counts && gyr_lsb() > 0.0); }
+};
+
+// Finds the variables (or struct fields) under their accepted names.
+MatData read_mat_data(const MatSource& src) {
+  MatData m;
+  m.have_acc = triad(src, {"acc", "accel", "accelerometer"}, m.acc, m.acc_name);
+  m.have_acc_counts = triad(src, {"acc_counts"}, m.acc_counts, m.acc_counts_name);
+  m.have_gyr = triad(src, {"gyro", "gyr", "gyroscope"}, m.gyr, m.gyr_name);
+  m.have_gyr_counts = triad(src, {"gyro_counts", "gyr_counts"}, m.gyr_counts, m.gyr_counts_name);
+  m.have_t = vector_of(src, {"t", "time", "timestamp"}, m.t, m.t_name);
+  m.have_fs = vector_of(src, {"fs", "rate_hz", "rate"}, m.rate_v, m.fs_name);
+  m.have_temp = vector_of(src, {"temp", "temperature"}, m.temp, m.temp_name);
+  m.have_acc_lsb = vector_of(src, {"acc_lsb"}, m.acc_lsb_v, m.lsb_name);
+  m.have_gyr_lsb = vector_of(src, {"gyro_lsb", "gyr_lsb"}, m.gyr_lsb_v, m.lsb_name);
+  return m;
+}
+
+// An accelerometer (SI or counts with LSB), every series as long as it, and a time or a rate.
+void check_mat_data(const fs::path& file, const MatData& m) {
+  if (!m.have_acc && !(m.have_acc_counts && m.have_acc_lsb)) {
     throw ImportError(file, 0, "no accelerometer: expected a variable/field 'acc' (N x 3, m/s^2), or "
                                "'acc_counts' with 'acc_lsb'");
   }
-  const std::size_t n = have_acc ? acc.size() : acc_counts.size();
+  const std::size_t n = m.rows();
   auto check_len = [&](std::size_t len, const std::string& name) {
     if (len != n) {
       throw ImportError(file, 0, "'" + name + "' has " + std::to_string(len) + " rows, the accelerometer " +
                                      std::to_string(n));
     }
   };
-  if (have_acc_counts) check_len(acc_counts.size(), acc_counts_name);
-  if (have_gyr) check_len(gyr.size(), gyr_name);
-  if (have_gyr_counts) check_len(gyr_counts.size(), gyr_counts_name);
-  if (have_temp) check_len(temp.size(), temp_name);
-  if (have_t) check_len(t.size(), t_name);
-  if (!have_t && !(have_fs && rate_v.size() == 1 && rate_v[0] > 0.0)) {
+  if (m.have_acc_counts) check_len(m.acc_counts.size(), m.acc_counts_name);
+  if (m.have_gyr) check_len(m.gyr.size(), m.gyr_name);
+  if (m.have_gyr_counts) check_len(m.gyr_counts.size(), m.gyr_counts_name);
+  if (m.have_temp) check_len(m.temp.size(), m.temp_name);
+  if (m.have_t) check_len(m.t.size(), m.t_name);
+  if (!m.have_t && !m.fixed_rate()) {
     throw ImportError(file, 0, "no time: expected 't' (N-vector, s) or a positive scalar 'fs' (Hz)");
   }
-  const double acc_lsb = have_acc_lsb && !acc_lsb_v.empty() ? acc_lsb_v[0] : 0.0;
-  const double gyr_lsb = have_gyr_lsb && !gyr_lsb_v.empty() ? gyr_lsb_v[0] : 0.0;
-  const bool has_gyro = have_gyr || (have_gyr_counts && gyr_lsb > 0.0);
+}
 
+// Row i as a sample: time [s] (t × time_scale_s, or i / fs), acceleration [m/s²] and rate [rad/s]
+// (SI × scale, or counts × LSB), counts, temperature [°C].
+ImuSample mat_sample(const MatData& m, std::size_t i, const MatOptions& opt) {
+  ImuSample s;
+  s.t_s = m.have_t ? m.t[i] * opt.time_scale_s : static_cast<double>(i) / m.rate_v[0];
+  const bool has_gyro = m.has_gyro();
+  for (int k = 0; k < 3; ++k) {
+    const auto uk = static_cast<std::size_t>(k);
+    if (m.have_acc_counts) s.accel_counts[k] = static_cast<std::int32_t>(std::lround(m.acc_counts[i][uk]));
+    s.accel_mps2[k] = m.have_acc ? m.acc[i][uk] * opt.accel_scale : m.acc_counts[i][uk] * m.acc_lsb();
+    if (m.have_gyr_counts) s.gyro_counts[k] = static_cast<std::int32_t>(std::lround(m.gyr_counts[i][uk]));
+    if (m.have_gyr) {
+      s.gyro_radps[k] = m.gyr[i][uk] * opt.gyro_scale;
+    } else if (has_gyro) {
+      s.gyro_radps[k] = m.gyr_counts[i][uk] * m.gyr_lsb();
+    }
+  }
+  if (m.have_temp) s.temperature_c = m.temp[i];
+  return s;
+}
+
+// Segments from a struct array 'segments' with fields kind, label, t_start_s, t_end_s [s].
+void add_mat_segments(const MatSource& src, const fs::path& file, Recording& rec) {
+  const matvar_t* segs = src.get({"segments"});
+  if (!segs || segs->class_type != MAT_C_STRUCT) return;
+  std::size_t count = 1;
+  for (int d = 0; d < segs->rank; ++d) count *= segs->dims[d];
+  auto* sv = const_cast<matvar_t*>(segs);
+  for (std::size_t i = 0; i < count; ++i) {
+    std::vector<double> a, b;
+    std::size_t r = 0, c = 0;
+    matvar_t* t0 = Mat_VarGetStructFieldByName(sv, "t_start_s", i);
+    matvar_t* t1 = Mat_VarGetStructFieldByName(sv, "t_end_s", i);
+    if (!numeric(t0, a, r, c) || a.size() != 1 || !numeric(t1, b, r, c) || b.size() != 1) {
+      throw ImportError(file, 0, "segments(" + std::to_string(i + 1) +
+                                     ") needs scalar fields t_start_s and t_end_s");
+    }
+    Segment seg = make_segment(static_cast<int>(i), text(Mat_VarGetStructFieldByName(sv, "kind", i)),
+                               text(Mat_VarGetStructFieldByName(sv, "label", i)), a[0], b[0]);
+    rec.segments.push_back(seg);
+  }
+}
+
+// Sensor description: rate [Hz] (fs, or from the median sample step), gyro, temperature, LSB sizes.
+void set_mat_sensor_info(const MatData& m, const MatOptions& opt, Recording& rec) {
+  SensorInfo& info = rec.header.info;
+  const double median_dt = median_interval(rec.samples);
+  info.output_rate_hz = m.fixed_rate() ? m.rate_v[0] : (median_dt > 0.0 ? 1.0 / median_dt : 0.0);
+  info.has_gyro = m.has_gyro();
+  info.has_temperature = m.have_temp;
+  info.accel_lsb_mps2 = m.acc_lsb();
+  info.gyro_lsb_radps = m.gyr_lsb();
+  rec.header.identity = opt.identity;
+  rec.header.gravity_mps2 = opt.gravity_mps2;
+}
+
+}  // namespace
+
+Recording import_mat(const fs::path& file, const MatOptions& opt) {
+  MatSource src(file, opt.struct_name);
+  const MatData m = read_mat_data(src);
+  check_mat_data(file, m);
+  const std::size_t n = m.rows();
   Recording rec = new_recording(file, "mat");
   rec.samples.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    ImuSample& s = rec.samples[i];
-    s.t_s = have_t ? t[i] * opt.time_scale_s : static_cast<double>(i) / rate_v[0];
-    if (have_t && i > 0 && !(s.t_s > rec.samples[i - 1].t_s)) {
-      throw ImportError(file, 0, "'" + t_name + "' does not increase at element " + std::to_string(i + 1));
-    }
-    for (int k = 0; k < 3; ++k) {
-      const auto uk = static_cast<std::size_t>(k);
-      if (have_acc_counts) s.accel_counts[k] = static_cast<std::int32_t>(std::lround(acc_counts[i][uk]));
-      s.accel_mps2[k] = have_acc ? acc[i][uk] * opt.accel_scale : acc_counts[i][uk] * acc_lsb;
-      if (have_gyr_counts) s.gyro_counts[k] = static_cast<std::int32_t>(std::lround(gyr_counts[i][uk]));
-      if (have_gyr) {
-        s.gyro_radps[k] = gyr[i][uk] * opt.gyro_scale;
-      } else if (has_gyro) {
-        s.gyro_radps[k] = gyr_counts[i][uk] * gyr_lsb;
-      }
-    }
-    if (have_temp) s.temperature_c = temp[i];
-  }
-  // Segments (struct array with kind, label, t_start_s, t_end_s).
-  if (const matvar_t* segs = src.get({"segments"}); segs && segs->class_type == MAT_C_STRUCT) {
-    std::size_t count = 1;
-    for (int d = 0; d < segs->rank; ++d) count *= segs->dims[d];
-    auto* sv = const_cast<matvar_t*>(segs);
-    for (std::size_t i = 0; i < count; ++i) {
-      std::vector<double> a, b;
-      std::size_t r = 0, c = 0;
-      matvar_t* t0 = Mat_VarGetStructFieldByName(sv, "t_start_s", i);
-      matvar_t* t1 = Mat_VarGetStructFieldByName(sv, "t_end_s", i);
-      if (!numeric(t0, a, r, c) || a.size() != 1 || !numeric(t1, b, r, c) || b.size() != 1) {
-        throw ImportError(file, 0, "segments(" + std::to_string(i + 1) +
-                                       ") needs scalar fields t_start_s and t_end_s");
-      }
-      Segment seg = make_segment(static_cast<int>(i), text(Mat_VarGetStructFieldByName(sv, "kind", i)),
-                                 text(Mat_VarGetStructFieldByName(sv, "label", i)), a[0], b[0]);
-      rec.segments.push_back(seg);
+    rec.samples[i] = mat_sample(m, i, opt);
+    if (m.have_t && i > 0 && !(rec.samples[i].t_s > rec.samples[i - 1].t_s)) {
+      throw ImportError(file, 0, "'" + m.t_name + "' does not increase at element " + std::to_string(i + 1));
     }
   }
-  SensorInfo& info = rec.header.info;
-  const double median_dt = median_interval(rec.samples);
-  info.output_rate_hz = have_fs && rate_v.size() == 1 && rate_v[0] > 0.0 ? rate_v[0]
-                        : (median_dt > 0.0 ? 1.0 / median_dt : 0.0);
-  info.has_gyro = has_gyro;
-  info.has_temperature = have_temp;
-  info.accel_lsb_mps2 = acc_lsb;
-  info.gyro_lsb_radps = gyr_lsb;
-  rec.header.identity = opt.identity;
-  rec.header.gravity_mps2 = opt.gravity_mps2;
-  const std::size_t gaps = have_t ? flag_time_gaps(rec.samples, info.output_rate_hz) : 0;
+  add_mat_segments(src, file, rec);
+  set_mat_sensor_info(m, opt, rec);
+  const bool has_gyro = m.has_gyro();
+  const std::size_t gaps = m.have_t ? flag_time_gaps(rec.samples, rec.header.info.output_rate_hz) : 0;
   add_import_event(rec, "imported " + std::to_string(n) + " samples from " + file.string() +
                             " (MATLAB file" + (opt.struct_name.empty() ? "" : ", struct " + opt.struct_name) +
-                            "; accel from '" + (have_acc ? acc_name : acc_counts_name) + "'" +
-                            (has_gyro ? ", gyro from '" + (have_gyr ? gyr_name : gyr_counts_name) + "'" : ", no gyro") +
-                            (have_t ? ", time '" + t_name + "'" : ", rate '" + fs_name + "'") +
+                            "; accel from '" + (m.have_acc ? m.acc_name : m.acc_counts_name) + "'" +
+                            (has_gyro ? ", gyro from '" + (m.have_gyr ? m.gyr_name : m.gyr_counts_name) + "'" : ", no gyro") +
+                            (m.have_t ? ", time '" + m.t_name + "'" : ", rate '" + m.fs_name + "'") +
                             (gaps ? "; " + std::to_string(gaps) + " gap(s) flagged" : "") + ")");
   return rec;
 }
+
+namespace {
+
+// The samples as column-major N x 1 / N x 3 arrays: time [s], acceleration [m/s²], rate [rad/s],
+// their counts, temperature [°C].
+struct MatColumns {
+  std::vector<double> t, acc, gyr, temp;
+  std::vector<std::int32_t> acc_c, gyr_c;
+};
+
+MatColumns mat_columns(const Recording& rec) {
+  const std::size_t n = rec.samples.size();
+  MatColumns m{std::vector<double>(n), std::vector<double>(3 * n), std::vector<double>(3 * n), std::vector<double>(n),
+               std::vector<std::int32_t>(3 * n), std::vector<std::int32_t>(3 * n)};
+  for (std::size_t i = 0; i < n; ++i) {
+    const ImuSample& s = rec.samples[i];
+    m.t[i] = s.t_s;
+    m.temp[i] = s.temperature_c;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const int ik = static_cast<int>(k);
+      m.acc[i + k * n] = s.accel_mps2[ik];
+      m.gyr[i + k * n] = s.gyro_radps[ik];
+      m.acc_c[i + k * n] = s.accel_counts[k];
+      m.gyr_c[i + k * n] = s.gyro_counts[k];
+    }
+  }
+  return m;
+}
+
+// The segments as a struct array with fields kind, label, t_start_s, t_end_s [s].
+MatVar segments_struct(const Recording& rec, const fs::path& file) {
+  const char* segment_fields[] = {"kind", "label", "t_start_s", "t_end_s", nullptr};
+  std::size_t dims[2] = {rec.segments.size(), 1};
+  MatVar s(Mat_VarCreateStruct2("segments", 2, dims, segment_fields));
+  if (!s) throw ImportError(file, 0, "matio failed to create 'segments'");
+  for (std::size_t i = 0; i < rec.segments.size(); ++i) {
+    const Segment& seg = rec.segments[i];
+    Mat_VarSetStructFieldByName(s.get(), "kind", i, make_text("kind", seg.kind).release());
+    Mat_VarSetStructFieldByName(s.get(), "label", i, make_text("label", seg.label).release());
+    Mat_VarSetStructFieldByName(s.get(), "t_start_s", i, make_double("t_start_s", 1, 1, &seg.t_start_s).release());
+    Mat_VarSetStructFieldByName(s.get(), "t_end_s", i, make_double("t_end_s", 1, 1, &seg.t_end_s).release());
+  }
+  return s;
+}
+
+// Writes variables to a MAT file: at the top level each at once, or (struct_name given)
+// collected and written as the fields of one struct by finish().
+class MatWriter {
+ public:
+  MatWriter(mat_t* mat, const fs::path& file, const std::string& struct_name)
+      : mat_(mat), file_(file), struct_name_(struct_name) {}
+
+  void write(MatVar v, const char* what) {
+    if (!v) throw ImportError(file_, 0, std::string("matio failed to create '") + what + "'");
+    if (!struct_name_.empty()) {
+      fields_.emplace_back(what, std::move(v));
+      return;
+    }
+    if (Mat_VarWrite(mat_, v.get(), MAT_COMPRESSION_NONE) != 0) {
+      throw ImportError(file_, 0, std::string("matio failed to write '") + what + "'");
+    }
+  }
+
+  void finish() {
+    if (struct_name_.empty()) return;
+    std::vector<const char*> names;
+    for (const auto& f : fields_) names.push_back(f.first.c_str());
+    names.push_back(nullptr);
+    std::size_t dims[2] = {1, 1};
+    MatVar root(Mat_VarCreateStruct2(struct_name_.c_str(), 2, dims, names.data()));
+    if (!root) throw ImportError(file_, 0, "matio failed to create struct '" + struct_name_ + "'");
+    for (auto& f : fields_) Mat_VarSetStructFieldByName(root.get(), f.first.c_str(), 0, f.second.release());
+    if (Mat_VarWrite(mat_, root.get(), MAT_COMPRESSION_NONE) != 0) {
+      throw ImportError(file_, 0, "matio failed to write struct '" + struct_name_ + "'");
+    }
+  }
+
+ private:
+  mat_t* mat_;
+  fs::path file_;
+  std::string struct_name_;
+  std::vector<std::pair<std::string, MatVar>> fields_;
+};
+
+}  // namespace
 
 void export_mat(const Recording& rec, const fs::path& file, const std::string& struct_name) {
   MatFile mat(Mat_CreateVer(file.c_str(), nullptr, MAT_FT_MAT5));
   if (!mat) throw ImportError(file, 0, "matio cannot create it");
   const std::size_t n = rec.samples.size();
-  std::vector<double> t(n), acc(3 * n), gyr(3 * n), temp(n);
-  std::vector<std::int32_t> acc_c(3 * n), gyr_c(3 * n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const ImuSample& s = rec.samples[i];
-    t[i] = s.t_s;
-    temp[i] = s.temperature_c;
-    for (std::size_t k = 0; k < 3; ++k) {
-      const int ik = static_cast<int>(k);
-      acc[i + k * n] = s.accel_mps2[ik];
-      gyr[i + k * n] = s.gyro_radps[ik];
-      acc_c[i + k * n] = s.accel_counts[k];
-      gyr_c[i + k * n] = s.gyro_counts[k];
-    }
-  }
+  const MatColumns c = mat_columns(rec);
   const double fs_hz = rec.header.info.output_rate_hz;
   const double acc_lsb = rec.header.info.accel_lsb_mps2, gyr_lsb = rec.header.info.gyro_lsb_radps;
-  // Top level: each variable is written at once. In a struct: collected, then one struct.
-  std::vector<std::pair<std::string, MatVar>> fields;
-  auto write = [&](MatVar v, const char* what) {
-    if (!v) throw ImportError(file, 0, std::string("matio failed to create '") + what + "'");
-    if (!struct_name.empty()) {
-      fields.emplace_back(what, std::move(v));
-      return;
-    }
-    if (Mat_VarWrite(mat.get(), v.get(), MAT_COMPRESSION_NONE) != 0) {
-      throw ImportError(file, 0, std::string("matio failed to write '") + what + "'");
-    }
-  };
-  write(make_double("t", n, 1, t.data()), "t");
-  write(make_double("fs", 1, 1, &fs_hz), "fs");
-  write(make_double("acc", n, 3, acc.data()), "acc");
-  write(make_int32("acc_counts", n, 3, acc_c.data()), "acc_counts");
-  write(make_double("acc_lsb", 1, 1, &acc_lsb), "acc_lsb");
+  MatWriter w(mat.get(), file, struct_name);
+  w.write(make_double("t", n, 1, c.t.data()), "t");
+  w.write(make_double("fs", 1, 1, &fs_hz), "fs");
+  w.write(make_double("acc", n, 3, c.acc.data()), "acc");
+  w.write(make_int32("acc_counts", n, 3, c.acc_c.data()), "acc_counts");
+  w.write(make_double("acc_lsb", 1, 1, &acc_lsb), "acc_lsb");
   if (rec.header.info.has_gyro) {
-    write(make_double("gyro", n, 3, gyr.data()), "gyro");
-    write(make_int32("gyro_counts", n, 3, gyr_c.data()), "gyro_counts");
-    write(make_double("gyro_lsb", 1, 1, &gyr_lsb), "gyro_lsb");
+    w.write(make_double("gyro", n, 3, c.gyr.data()), "gyro");
+    w.write(make_int32("gyro_counts", n, 3, c.gyr_c.data()), "gyro_counts");
+    w.write(make_double("gyro_lsb", 1, 1, &gyr_lsb), "gyro_lsb");
   }
-  if (rec.header.info.has_temperature) write(make_double("temp", n, 1, temp.data()), "temp");
-  if (!rec.segments.empty()) {
-    const char* segment_fields[] = {"kind", "label", "t_start_s", "t_end_s", nullptr};
-    std::size_t dims[2] = {rec.segments.size(), 1};
-    MatVar s(Mat_VarCreateStruct2("segments", 2, dims, segment_fields));
-    if (!s) throw ImportError(file, 0, "matio failed to create 'segments'");
-    for (std::size_t i = 0; i < rec.segments.size(); ++i) {
-      const Segment& seg = rec.segments[i];
-      Mat_VarSetStructFieldByName(s.get(), "kind", i, make_text("kind", seg.kind).release());
-      Mat_VarSetStructFieldByName(s.get(), "label", i, make_text("label", seg.label).release());
-      Mat_VarSetStructFieldByName(s.get(), "t_start_s", i, make_double("t_start_s", 1, 1, &seg.t_start_s).release());
-      Mat_VarSetStructFieldByName(s.get(), "t_end_s", i, make_double("t_end_s", 1, 1, &seg.t_end_s).release());
-    }
-    write(std::move(s), "segments");
-  }
-  if (!struct_name.empty()) {
-    std::vector<const char*> names;
-    for (const auto& f : fields) names.push_back(f.first.c_str());
-    names.push_back(nullptr);
-    std::size_t dims[2] = {1, 1};
-    MatVar root(Mat_VarCreateStruct2(struct_name.c_str(), 2, dims, names.data()));
-    if (!root) throw ImportError(file, 0, "matio failed to create struct '" + struct_name + "'");
-    for (auto& f : fields) Mat_VarSetStructFieldByName(root.get(), f.first.c_str(), 0, f.second.release());
-    if (Mat_VarWrite(mat.get(), root.get(), MAT_COMPRESSION_NONE) != 0) {
-      throw ImportError(file, 0, "matio failed to write struct '" + struct_name + "'");
-    }
-  }
+  if (rec.header.info.has_temperature) w.write(make_double("temp", n, 1, c.temp.data()), "temp");
+  if (!rec.segments.empty()) w.write(segments_struct(rec, file), "segments");
+  w.finish();
 }
 
 #else  // built without matio
