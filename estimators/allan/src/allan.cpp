@@ -74,69 +74,93 @@ Units units_for(Instrument instrument, const std::string& signal_unit) {
 // ---------------------------------------------------------------------------------------------
 // Options
 
+namespace {
+
+// "file:line:column" of a YAML node for messages ("<yaml>" without a file name).
+std::string yaml_location(const std::string& file, const YAML::Node& n) {
+  const YAML::Mark m = n.Mark();
+  std::string loc = file.empty() ? std::string("<yaml>") : file;
+  if (m.line >= 0) loc += fmt::format(":{}:{}", m.line + 1, m.column + 1);
+  return loc;
+}
+
+// The value of one Allan option, read as a number or a boolean; a bad value throws with its location.
+struct OptionValue {
+  const std::string& file;
+  const std::string& key;
+  const YAML::Node& v;
+
+  [[noreturn]] void fail(const std::string& what) const {
+    throw std::runtime_error(fmt::format("{}: allan option '{}': {}", yaml_location(file, v), key, what));
+  }
+  double number() const {
+    try {
+      return v.as<double>();
+    } catch (const YAML::Exception&) {
+      fail("expected a number, got '" + (v.IsScalar() ? v.Scalar() : std::string("a non-scalar")) + "'");
+    }
+  }
+  bool boolean() const {
+    try {
+      return v.as<bool>();
+    } catch (const YAML::Exception&) {
+      fail("expected true or false");
+    }
+  }
+};
+
+// Sets the option named value.key with its range check; false for an unknown name.
+bool set_allan_option(AllanOptions& o, const OptionValue& value) {
+  const std::string& key = value.key;
+  if (key == "max_m") {
+    const double m = value.number();
+    if (!(m >= 1.0) || m > 9.2e18 || m != std::floor(m)) value.fail("must be an integer >= 1 (samples)");
+    o.max_m = static_cast<std::uint64_t>(m);
+  } else if (key == "confidence") {
+    o.confidence = value.number();
+    if (!(o.confidence > 0.0 && o.confidence < 1.0)) value.fail("must be in (0, 1), e.g. 0.683 or 0.95");
+  } else if (key == "edf_from_model") {
+    o.edf_from_model = value.boolean();
+  } else if (key == "slope_tolerance") {
+    o.slope_tolerance = value.number();
+    if (!(o.slope_tolerance > 0.0 && o.slope_tolerance < 0.5)) value.fail("must be in (0, 0.5)");
+  } else if (key == "min_readoff_edf") {
+    o.min_readoff_edf = value.number();
+    if (!(o.min_readoff_edf >= 0.0)) value.fail("must be >= 0");
+  } else if (key == "min_readoff_points") {
+    const double n = value.number();
+    if (!(n >= 1.0 && n <= 64.0) || n != std::floor(n)) value.fail("must be an integer in 1 … 64");
+    o.min_readoff_points = static_cast<int>(n);
+  } else if (key == "t_begin_s") {
+    o.t_begin_s = value.number();
+  } else if (key == "t_end_s") {
+    o.t_end_s = value.number();
+  } else {
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 AllanOptions options_from_yaml(const YAML::Node& node, const std::string& file) {
-  auto where = [&](const YAML::Node& n) {
-    const YAML::Mark m = n.Mark();
-    std::string loc = file.empty() ? std::string("<yaml>") : file;
-    if (m.line >= 0) loc += fmt::format(":{}:{}", m.line + 1, m.column + 1);
-    return loc;
-  };
   AllanOptions o;
   if (!node || node.IsNull()) return o;
-  if (!node.IsMap()) throw std::runtime_error(where(node) + ": Allan options must be a mapping");
+  if (!node.IsMap()) throw std::runtime_error(yaml_location(file, node) + ": Allan options must be a mapping");
   static const std::vector<std::string> keys = {"max_m", "confidence", "edf_from_model",
                                                 "slope_tolerance", "min_readoff_edf",
                                                 "min_readoff_points", "t_begin_s", "t_end_s"};
   for (const auto& kv : node) {
     const std::string key = kv.first.as<std::string>();
     const YAML::Node& v = kv.second;
-    auto fail = [&](const std::string& what) {
-      throw std::runtime_error(fmt::format("{}: allan option '{}': {}", where(v), key, what));
-    };
-    auto number = [&]() {
-      try {
-        return v.as<double>();
-      } catch (const YAML::Exception&) {
-        fail("expected a number, got '" + (v.IsScalar() ? v.Scalar() : std::string("a non-scalar")) + "'");
-      }
-      return 0.0;
-    };
-    if (key == "max_m") {
-      const double m = number();
-      if (!(m >= 1.0) || m > 9.2e18 || m != std::floor(m)) fail("must be an integer >= 1 (samples)");
-      o.max_m = static_cast<std::uint64_t>(m);
-    } else if (key == "confidence") {
-      o.confidence = number();
-      if (!(o.confidence > 0.0 && o.confidence < 1.0)) fail("must be in (0, 1), e.g. 0.683 or 0.95");
-    } else if (key == "edf_from_model") {
-      try {
-        o.edf_from_model = v.as<bool>();
-      } catch (const YAML::Exception&) {
-        fail("expected true or false");
-      }
-    } else if (key == "slope_tolerance") {
-      o.slope_tolerance = number();
-      if (!(o.slope_tolerance > 0.0 && o.slope_tolerance < 0.5)) fail("must be in (0, 0.5)");
-    } else if (key == "min_readoff_edf") {
-      o.min_readoff_edf = number();
-      if (!(o.min_readoff_edf >= 0.0)) fail("must be >= 0");
-    } else if (key == "min_readoff_points") {
-      const double n = number();
-      if (!(n >= 1.0 && n <= 64.0) || n != std::floor(n)) fail("must be an integer in 1 … 64");
-      o.min_readoff_points = static_cast<int>(n);
-    } else if (key == "t_begin_s") {
-      o.t_begin_s = number();
-    } else if (key == "t_end_s") {
-      o.t_end_s = number();
-    } else {
-      std::string all;
-      for (const auto& k : keys) all += (all.empty() ? "" : ", ") + k;
-      throw std::runtime_error(fmt::format("{}: unknown allan option '{}' (known: {})",
-                                           where(kv.first), key, all));
-    }
+    if (set_allan_option(o, OptionValue{file, key, v})) continue;
+    std::string all;
+    for (const auto& k : keys) all += (all.empty() ? "" : ", ") + k;
+    throw std::runtime_error(fmt::format("{}: unknown allan option '{}' (known: {})",
+                                         yaml_location(file, kv.first), key, all));
   }
   if (std::isfinite(o.t_begin_s) && std::isfinite(o.t_end_s) && !(o.t_end_s > o.t_begin_s)) {
-    throw std::runtime_error(where(node) + ": allan options: t_end_s must be after t_begin_s");
+    throw std::runtime_error(yaml_location(file, node) + ": allan options: t_end_s must be after t_begin_s");
   }
   return o;
 }
