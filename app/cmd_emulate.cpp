@@ -73,17 +73,30 @@ void replace_all(std::string& s, const std::string& from, const std::string& to)
   for (std::size_t p = s.find(from); p != std::string::npos; p = s.find(from, p + to.size())) s.replace(p, from.size(), to);
 }
 
-}  // namespace
+// ---- table ----
 
-void add_emulate_command(CLI::App& app, std::vector<Command>& out) {
-  auto* sub = app.add_subcommand("emulate", "Serve emulated devices (table, chamber, bench MCU, a whole bench) for the real drivers");
-  sub->require_subcommand(1);
+struct TableOpts {
+  int axes = 1, port = 5025;
+  double speed = 1.0, rate = 100.0, accel = 200.0, duration = 0.0;
+};
 
-  // ---- table ----
-  struct TableOpts {
-    int axes = 1, port = 5025;
-    double speed = 1.0, rate = 100.0, accel = 200.0, duration = 0.0;
-  };
+// Serves a 1-axis (angle) or 3-axis (azimuth, tilt, rotation) text-command table.
+int run_table(const TableOpts& t) {
+  emu::TableTextConfig c;
+  c.port = t.port;
+  c.speed = t.speed;
+  if (t.axes == 1) c.axes = {table_axis("angle", t.rate, t.accel)};
+  else
+    for (const char* n : {"azimuth", "tilt", "rotation"}) c.axes.push_back(table_axis(n, t.rate, t.accel));
+  emu::TableTextServer server(c);
+  std::printf("table (%d axis%s, ACUTROL-style text): tcp 127.0.0.1:%d\n", t.axes, t.axes == 1 ? "" : "es",
+              server.port());
+  std::printf("  driver config: {preset: acutrol, host: 127.0.0.1, port: %d}\n", server.port());
+  serve(t.duration);
+  return 0;
+}
+
+void add_table_command(CLI::App* sub, std::vector<Command>& out) {
   auto t = std::make_shared<TableOpts>();
   auto* table = sub->add_subcommand("table", "Rate table speaking the ACUTROL-style text dialect (docs/text-command-tables.md)");
   table->add_option("--axes", t->axes, "1 (angle) or 3 (azimuth, tilt, rotation)")->check(CLI::IsMember({1, 3}));
@@ -92,28 +105,62 @@ void add_emulate_command(CLI::App& app, std::vector<Command>& out) {
   table->add_option("--max-rate-dps", t->rate, "axis speed limit, deg/s");
   table->add_option("--max-accel-dps2", t->accel, "axis acceleration limit, deg/s^2");
   table->add_option("--duration-s", t->duration, "stop after this long (0: until Ctrl-C)");
-  out.push_back({table, [t] {
-                   emu::TableTextConfig c;
-                   c.port = t->port;
-                   c.speed = t->speed;
-                   if (t->axes == 1) c.axes = {table_axis("angle", t->rate, t->accel)};
-                   else
-                     for (const char* n : {"azimuth", "tilt", "rotation"}) c.axes.push_back(table_axis(n, t->rate, t->accel));
-                   emu::TableTextServer server(c);
-                   std::printf("table (%d axis%s, ACUTROL-style text): tcp 127.0.0.1:%d\n", t->axes, t->axes == 1 ? "" : "es",
-                               server.port());
-                   std::printf("  driver config: {preset: acutrol, host: 127.0.0.1, port: %d}\n", server.port());
-                   serve(t->duration);
-                   return 0;
-                 }});
+  out.push_back({table, [t] { return run_table(*t); }});
+}
 
-  // ---- chamber ----
-  struct ChamberOpts {
-    std::string protocol = "atmega328", fault = "none";
-    int port = 0;
-    double speed = 1.0, initial = 22.0, fault_after = 0.0, duration = 0.0;
-    bool published = false;
-  };
+// ---- chamber ----
+
+struct ChamberOpts {
+  std::string protocol = "atmega328", fault = "none";
+  int port = 0;
+  double speed = 1.0, initial = 22.0, fault_after = 0.0, duration = 0.0;
+  bool published = false;
+};
+
+// The chamber server for the protocol (ATmega328 on a pty, or Watlow F4 on TCP), printing where to connect.
+std::unique_ptr<emu::ChamberServerBase> start_chamber(const ChamberOpts& c, const emu::ChamberEmuConfig& ec) {
+  if (c.protocol == "atmega328") {
+    auto s = std::make_unique<emu::AtmegaChamberSlave>(ec);
+    std::printf("chamber (ATmega328, MODBUS RTU slave 1): %s\n", s->device_path().c_str());
+    std::printf("  driver config: {protocol: atmega328, transport: rtu, device: %s}\n", s->device_path().c_str());
+    return s;
+  }
+  auto s = std::make_unique<emu::WatlowChamberServer>(ec, c.port);
+  std::printf("chamber (Watlow F4, MODBUS TCP unit 1): tcp 127.0.0.1:%d\n", s->port());
+  std::printf("  driver config: {protocol: watlow_f4, transport: tcp, port: %d}\n", s->port());
+  return s;
+}
+
+// Injects the named fault into the chamber firmware.
+void inject_fault(emu::ChamberServerBase& server, const std::string& fault) {
+  server.with_firmware([&](emu::ChamberFirmware& f) {
+    if (fault == "sensor_open") f.inject_sensor_fault(emu::SensorFault::kDisconnected);
+    if (fault == "sensor_stuck") f.inject_sensor_fault(emu::SensorFault::kStuck);
+    if (fault == "sensor_85") f.inject_sensor_fault(emu::SensorFault::kPowerOn);
+    if (fault == "runaway") f.inject_heater_stuck_on(true);
+    return 0;
+  });
+  std::printf("fault injected: %s\n", fault.c_str());
+  std::fflush(stdout);
+}
+
+// Serves the chamber, injecting the fault (if any) after fault_after wall seconds.
+int run_chamber(const ChamberOpts& c) {
+  emu::ChamberEmuConfig ec;
+  ec.plant.initial_c = c.initial;
+  ec.speed = c.speed;
+  ec.firmware_guards = !c.published;
+  const std::unique_ptr<emu::ChamberServerBase> server = start_chamber(c, ec);
+  bool injected = c.fault == "none";
+  serve(c.duration, [&](double now) {
+    if (injected || now < c.fault_after) return;
+    injected = true;
+    inject_fault(*server, c.fault);
+  });
+  return 0;
+}
+
+void add_chamber_command(CLI::App* sub, std::vector<Command>& out) {
   auto c = std::make_shared<ChamberOpts>();
   auto* chamber = sub->add_subcommand("chamber", "Thermochamber controller (docs/thermochamber-modbus.md) on the sim plant and the paper's PID");
   chamber->add_option("--protocol", c->protocol, "atmega328 (MODBUS RTU on a pty) | watlow_f4 (MODBUS TCP)")
@@ -126,68 +173,80 @@ void add_emulate_command(CLI::App& app, std::vector<Command>& out) {
       ->check(CLI::IsMember({"none", "sensor_open", "sensor_stuck", "sensor_85", "runaway"}));
   chamber->add_option("--fault-after-s", c->fault_after, "wall seconds before the fault");
   chamber->add_option("--duration-s", c->duration, "stop after this long (0: until Ctrl-C)");
-  out.push_back({chamber, [c] {
-                   emu::ChamberEmuConfig ec;
-                   ec.plant.initial_c = c->initial;
-                   ec.speed = c->speed;
-                   ec.firmware_guards = !c->published;
-                   std::unique_ptr<emu::ChamberServerBase> server;
-                   if (c->protocol == "atmega328") {
-                     auto s = std::make_unique<emu::AtmegaChamberSlave>(ec);
-                     std::printf("chamber (ATmega328, MODBUS RTU slave 1): %s\n", s->device_path().c_str());
-                     std::printf("  driver config: {protocol: atmega328, transport: rtu, device: %s}\n", s->device_path().c_str());
-                     server = std::move(s);
-                   } else {
-                     auto s = std::make_unique<emu::WatlowChamberServer>(ec, c->port);
-                     std::printf("chamber (Watlow F4, MODBUS TCP unit 1): tcp 127.0.0.1:%d\n", s->port());
-                     std::printf("  driver config: {protocol: watlow_f4, transport: tcp, port: %d}\n", s->port());
-                     server = std::move(s);
-                   }
-                   bool injected = c->fault == "none";
-                   serve(c->duration, [&](double now) {
-                     if (injected || now < c->fault_after) return;
-                     injected = true;
-                     server->with_firmware([&](emu::ChamberFirmware& f) {
-                       if (c->fault == "sensor_open") f.inject_sensor_fault(emu::SensorFault::kDisconnected);
-                       if (c->fault == "sensor_stuck") f.inject_sensor_fault(emu::SensorFault::kStuck);
-                       if (c->fault == "sensor_85") f.inject_sensor_fault(emu::SensorFault::kPowerOn);
-                       if (c->fault == "runaway") f.inject_heater_stuck_on(true);
-                       return 0;
-                     });
-                     std::printf("fault injected: %s\n", c->fault.c_str());
-                     std::fflush(stdout);
-                   });
-                   return 0;
-                 }});
+  out.push_back({chamber, [c] { return run_chamber(*c); }});
+}
 
-  // ---- bench-mcu ----
-  struct McuOpts {
-    double tilt_deg = 0.0, duration = 0.0;
-  };
+// ---- bench-mcu ----
+
+struct McuOpts {
+  double tilt_deg = 0.0, duration = 0.0;
+};
+
+// Serves the bench MCU with a static MPU-6050 tilted about y by tilt_deg [deg] under standard gravity.
+int run_bench_mcu(const McuOpts& m) {
+  BenchTruth truth;
+  truth.specific_force_mps2 = physics::gravity_specific_force(
+      physics::Ry(m.tilt_deg * physics::kDegToRad), physics::kStandardGravity);
+  sim::SimImuConfig imu;
+  imu.seed = 1;
+  emu::BenchMcuSlave slave(emu::BenchMcuConfig{}, emu::Mpu6050Model(imu, truth));
+  std::printf("bench MCU (MODBUS RTU slave 1, MPU-6050): %s\n", slave.device_path().c_str());
+  std::printf("  sensor config: {plugin: mpu6050_modbus, config: {device: %s}}\n", slave.device_path().c_str());
+  serve(m.duration);
+  return 0;
+}
+
+void add_bench_mcu_command(CLI::App* sub, std::vector<Command>& out) {
   auto m = std::make_shared<McuOpts>();
   auto* mcu = sub->add_subcommand("bench-mcu", "Bench microcontroller with an MPU-6050 (docs/bench-mcu-modbus.md), static stimulus");
   mcu->add_option("--tilt-deg", m->tilt_deg, "the sensor tilted about y by this angle (standard gravity)");
   mcu->add_option("--duration-s", m->duration, "stop after this long (0: until Ctrl-C)");
-  out.push_back({mcu, [m] {
-                   BenchTruth truth;
-                   truth.specific_force_mps2 = physics::gravity_specific_force(
-                       physics::Ry(m->tilt_deg * physics::kDegToRad), physics::kStandardGravity);
-                   sim::SimImuConfig imu;
-                   imu.seed = 1;
-                   emu::BenchMcuSlave slave(emu::BenchMcuConfig{}, emu::Mpu6050Model(imu, truth));
-                   std::printf("bench MCU (MODBUS RTU slave 1, MPU-6050): %s\n", slave.device_path().c_str());
-                   std::printf("  sensor config: {plugin: mpu6050_modbus, config: {device: %s}}\n", slave.device_path().c_str());
-                   serve(m->duration);
-                   return 0;
-                 }});
+  out.push_back({mcu, [m] { return run_bench_mcu(*m); }});
+}
 
-  // ---- world ----
-  struct WorldOpts {
-    std::string twin;
-    std::vector<std::string> write_config;
-    double chamber_speed = 50.0, duration = 0.0;
-    int table_port = 5025;
-  };
+// ---- world ----
+
+struct WorldOpts {
+  std::string twin;
+  std::vector<std::string> write_config;
+  double chamber_speed = 50.0, duration = 0.0;
+  int table_port = 5025;
+};
+
+// Copies the drivers experiment `in` to `out` with the emulators' devices and table port in place
+// of /dev/ttyUSB0 (bench MCU), /dev/ttyUSB1 (chamber) and port 5025.
+void write_world_config(const emu::BenchWorld& bw, const std::string& in, const std::string& out) {
+  std::string text = slurp(in);
+  replace_all(text, "/dev/ttyUSB0", bw.mcu_device());
+  replace_all(text, "/dev/ttyUSB1", bw.chamber_device());
+  replace_all(text, "port: 5025", "port: " + std::to_string(bw.table_port()));
+  // Relative paths in the copy (estimation model) are resolved from its new folder.
+  const auto from = std::filesystem::absolute(in).parent_path();
+  replace_all(text, "model: models/", "model: " + (from / "models").string() + "/");
+  std::ofstream o(out);
+  o << text;
+  if (!o) throw std::runtime_error("cannot write " + out);
+  std::printf("  wrote %s: run it with `stend run %s`\n", out.c_str(), out.c_str());
+}
+
+// Serves table, chamber and bench MCU in one world copied from the twin experiment's bench.
+int run_world(const WorldOpts& w) {
+  PluginHost host;
+  host.scan(PluginHost::default_search_path({}));
+  const Experiment twin = load_experiment(w.twin, host);
+  auto cfg = emu::BenchWorldConfig::from_experiment(twin, w.chamber_speed);
+  cfg.table_port = w.table_port;
+  emu::BenchWorld bw(cfg);
+  std::printf("bench world, twin of %s:\n", w.twin.c_str());
+  std::printf("  bench MCU (MPU-6050, MODBUS RTU): %s\n", bw.mcu_device().c_str());
+  std::printf("  chamber (ATmega328, MODBUS RTU):  %s  (plant at %gx)\n", bw.chamber_device().c_str(), w.chamber_speed);
+  std::printf("  table (ACUTROL-style text):       tcp 127.0.0.1:%d\n", bw.table_port());
+  if (w.write_config.size() == 2) write_world_config(bw, w.write_config[0], w.write_config[1]);
+  serve(w.duration);
+  return 0;
+}
+
+void add_world_command(CLI::App* sub, std::vector<Command>& out) {
   auto w = std::make_shared<WorldOpts>();
   auto* world = sub->add_subcommand("world", "Table + chamber + bench MCU in one simulated world, the twin of an in-process bench");
   world->add_option("--twin", w->twin, "in-process experiment whose bench (sim_imu, sim_one_axis_table, sim_thermochamber) the world copies")
@@ -199,33 +258,18 @@ void add_emulate_command(CLI::App& app, std::vector<Command>& out) {
                     "and port 5025 (table) replaced by the emulators'")
       ->expected(2);
   world->add_option("--duration-s", w->duration, "stop after this long (0: until Ctrl-C)");
-  out.push_back({world, [w] {
-                   PluginHost host;
-                   host.scan(PluginHost::default_search_path({}));
-                   const Experiment twin = load_experiment(w->twin, host);
-                   auto cfg = emu::BenchWorldConfig::from_experiment(twin, w->chamber_speed);
-                   cfg.table_port = w->table_port;
-                   emu::BenchWorld bw(cfg);
-                   std::printf("bench world, twin of %s:\n", w->twin.c_str());
-                   std::printf("  bench MCU (MPU-6050, MODBUS RTU): %s\n", bw.mcu_device().c_str());
-                   std::printf("  chamber (ATmega328, MODBUS RTU):  %s  (plant at %gx)\n", bw.chamber_device().c_str(), w->chamber_speed);
-                   std::printf("  table (ACUTROL-style text):       tcp 127.0.0.1:%d\n", bw.table_port());
-                   if (w->write_config.size() == 2) {
-                     std::string text = slurp(w->write_config[0]);
-                     replace_all(text, "/dev/ttyUSB0", bw.mcu_device());
-                     replace_all(text, "/dev/ttyUSB1", bw.chamber_device());
-                     replace_all(text, "port: 5025", "port: " + std::to_string(bw.table_port()));
-                     // Relative paths in the copy (estimation model) are resolved from its new folder.
-                     const auto from = std::filesystem::absolute(w->write_config[0]).parent_path();
-                     replace_all(text, "model: models/", "model: " + (from / "models").string() + "/");
-                     std::ofstream o(w->write_config[1]);
-                     o << text;
-                     if (!o) throw std::runtime_error("cannot write " + w->write_config[1]);
-                     std::printf("  wrote %s: run it with `stend run %s`\n", w->write_config[1].c_str(), w->write_config[1].c_str());
-                   }
-                   serve(w->duration);
-                   return 0;
-                 }});
+  out.push_back({world, [w] { return run_world(*w); }});
+}
+
+}  // namespace
+
+void add_emulate_command(CLI::App& app, std::vector<Command>& out) {
+  auto* sub = app.add_subcommand("emulate", "Serve emulated devices (table, chamber, bench MCU, a whole bench) for the real drivers");
+  sub->require_subcommand(1);
+  add_table_command(sub, out);
+  add_chamber_command(sub, out);
+  add_bench_mcu_command(sub, out);
+  add_world_command(sub, out);
 }
 
 }  // namespace stend::cli

@@ -250,13 +250,44 @@ void write_number(std::string& out, double v) {
   out.append(buf, ec == std::errc() ? p : buf);
 }
 
+// Sensor description of a 16-bit accelerometer + gyroscope without temperature: rate [Hz], LSB
+// sizes [m/s², rad/s per count] and the ±32768-count ranges.
+void set_int16_sensor_info(double rate_hz, double acc_lsb, double gyr_lsb, Recording& rec) {
+  SensorInfo& info = rec.header.info;
+  info.output_rate_hz = rate_hz;
+  info.accel_lsb_mps2 = acc_lsb;
+  info.gyro_lsb_radps = gyr_lsb;
+  info.accel_range_mps2 = 32768.0 * acc_lsb;
+  info.gyro_range_radps = 32768.0 * gyr_lsb;
+  info.has_gyro = true;
+  info.has_temperature = false;
+}
+
 }  // namespace
 
 // =============================================================================================
 // (a) generic CSV
 
-Recording import_csv(const fs::path& file, const CsvMapping& map) {
-  LineReader r(file);
+namespace {
+
+// Column indices (0-based, −1 = absent) that a CSV mapping resolves to.
+struct CsvColumns {
+  std::vector<std::string> names;  // from the column-name line (empty without one)
+  std::array<int, 3> acc{}, gyr{};
+  bool has_gyro = false;
+  int time = -1, temperature = -1;
+
+  // Name of column idx for messages: its header name, else "#idx".
+  std::string name(int idx) const {
+    return idx >= 0 && static_cast<std::size_t>(idx) < names.size() ? names[static_cast<std::size_t>(idx)]
+                                                                    : "#" + std::to_string(idx);
+  }
+  // Fields a data line must have.
+  int needed() const { return std::max({time, temperature, acc[0], acc[1], acc[2], gyr[0], gyr[1], gyr[2]}) + 1; }
+};
+
+// Skips the mapping's header lines and reads the column-name line (when the mapping has one).
+std::vector<std::string> read_csv_header(LineReader& r, const CsvMapping& map) {
   std::string line;
   for (std::size_t i = 0; i < map.skip_lines; ++i) {
     if (!r.next(line)) r.fail("file ends inside the " + std::to_string(map.skip_lines) + " header line(s) to skip");
@@ -268,48 +299,84 @@ Recording import_csv(const fs::path& file, const CsvMapping& map) {
     if (!got) r.fail("no column-name line");
     for (auto f : split(line, map.delimiter)) names.push_back(unquote(f));
   }
+  return names;
+}
+
+// Index of column c: given directly, or found by name among the header names (on line
+// names_line); −1 when the mapping leaves c empty.
+int resolve_column(const LineReader& r, const CsvMapping& map, const std::vector<std::string>& names,
+                   std::size_t names_line, const CsvColumn& c, const std::string& role) {
+  if (c.empty()) return -1;
+  if (c.index >= 0) return c.index;
+  if (!map.column_names) {
+    throw ImportError(r.file(), 0, "column '" + c.name + "' (" + role +
+                                       ") is given by name but the mapping has column_names = false");
+  }
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == c.name) return static_cast<int>(i);
+  }
+  std::string have;
+  for (const auto& n : names) have += (have.empty() ? "" : ", ") + n;
+  throw ImportError(r.file(), names_line, "no column named '" + c.name + "' (" + role +
+                                              "); the columns are: " + have);
+}
+
+// The mapping's columns resolved against the header: all three accelerometer axes, all three
+// gyroscope axes or none, and a time column or a fixed rate.
+CsvColumns resolve_csv_columns(const LineReader& r, const CsvMapping& map, std::vector<std::string> names) {
+  CsvColumns c;
+  c.names = std::move(names);
   const std::size_t names_line = r.line();
-  auto resolve = [&](const CsvColumn& c, const std::string& role) -> int {
-    if (c.empty()) return -1;
-    if (c.index >= 0) return c.index;
-    if (!map.column_names) {
-      throw ImportError(file, 0, "column '" + c.name + "' (" + role +
-                                     ") is given by name but the mapping has column_names = false");
-    }
-    for (std::size_t i = 0; i < names.size(); ++i) {
-      if (names[i] == c.name) return static_cast<int>(i);
-    }
-    std::string have;
-    for (const auto& n : names) have += (have.empty() ? "" : ", ") + n;
-    throw ImportError(file, names_line, "no column named '" + c.name + "' (" + role +
-                                            "); the columns are: " + have);
-  };
   const char* axes[3] = {"x", "y", "z"};
-  std::array<int, 3> acc{}, gyr{};
-  bool has_gyro = false;
   for (int k = 0; k < 3; ++k) {
     if (map.accel[k].empty()) {
-      throw ImportError(file, 0, std::string("the mapping has no accelerometer ") + axes[k] + " column");
+      throw ImportError(r.file(), 0, std::string("the mapping has no accelerometer ") + axes[k] + " column");
     }
-    acc[k] = resolve(map.accel[k], std::string("accel ") + axes[k]);
-    gyr[k] = resolve(map.gyro[k], std::string("gyro ") + axes[k]);
-    has_gyro = has_gyro || gyr[k] >= 0;
+    c.acc[k] = resolve_column(r, map, c.names, names_line, map.accel[k], std::string("accel ") + axes[k]);
+    c.gyr[k] = resolve_column(r, map, c.names, names_line, map.gyro[k], std::string("gyro ") + axes[k]);
+    c.has_gyro = c.has_gyro || c.gyr[k] >= 0;
   }
-  if (has_gyro && (gyr[0] < 0 || gyr[1] < 0 || gyr[2] < 0)) {
-    throw ImportError(file, 0, "the mapping names only some gyroscope columns (give x, y and z or none)");
+  if (c.has_gyro && (c.gyr[0] < 0 || c.gyr[1] < 0 || c.gyr[2] < 0)) {
+    throw ImportError(r.file(), 0, "the mapping names only some gyroscope columns (give x, y and z or none)");
   }
-  const int tcol = resolve(map.time, "time");
-  const int tempcol = resolve(map.temperature, "temperature");
-  if (tcol < 0 && !(map.rate_hz > 0.0)) {
-    throw ImportError(file, 0, "the mapping has neither a time column nor a rate_hz > 0");
+  c.time = resolve_column(r, map, c.names, names_line, map.time, "time");
+  c.temperature = resolve_column(r, map, c.names, names_line, map.temperature, "temperature");
+  if (c.time < 0 && !(map.rate_hz > 0.0)) {
+    throw ImportError(r.file(), 0, "the mapping has neither a time column nor a rate_hz > 0");
   }
-  int needed = std::max({tcol, tempcol, acc[0], acc[1], acc[2], gyr[0], gyr[1], gyr[2]}) + 1;
-  auto column_name = [&](int idx) {
-    return idx >= 0 && static_cast<std::size_t>(idx) < names.size() ? names[static_cast<std::size_t>(idx)]
-                                                                    : "#" + std::to_string(idx);
-  };
+  return c;
+}
 
-  Recording rec = new_recording(file, "csv");
+// Data line `index` as a sample: time [s] (column × time_scale_s, or index / rate_hz), specific
+// force [m/s²], rate [rad/s] and temperature [°C] scaled from the fields, plus the raw counts when
+// the mapping reads counts.
+ImuSample csv_sample(const LineReader& r, const std::vector<std::string_view>& f, const CsvMapping& map,
+                     const CsvColumns& c, std::size_t index) {
+  auto field = [&](int idx) { return number(r, f[static_cast<std::size_t>(idx)], c.name(idx)); };
+  ImuSample s;
+  s.t_s = c.time >= 0 ? field(c.time) * map.time_scale_s : static_cast<double>(index) / map.rate_hz;
+  for (int k = 0; k < 3; ++k) {
+    const double a = field(c.acc[k]);
+    if (map.counts) s.accel_counts[k] = to_counts(r, a, c.name(c.acc[k]));
+    s.accel_mps2[k] = a * map.accel_scale;
+    if (c.has_gyro) {
+      const double g = field(c.gyr[k]);
+      if (map.counts) s.gyro_counts[k] = to_counts(r, g, c.name(c.gyr[k]));
+      s.gyro_radps[k] = g * map.gyro_scale;
+    }
+  }
+  if (c.temperature >= 0) {
+    const double v = field(c.temperature);
+    if (map.counts) s.temperature_counts = to_counts(r, v, c.name(c.temperature));
+    s.temperature_c = v * map.temperature_scale + map.temperature_offset_c;
+  }
+  return s;
+}
+
+// Every data line as a sample (blank and comment lines skipped); a time column must increase.
+void read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColumns& c, Recording& rec) {
+  const int needed = c.needed();
+  std::string line;
   while (r.next(line)) {
     if (is_blank(line)) continue;
     if (!map.comment_prefix.empty() && trim(line).substr(0, map.comment_prefix.size()) == map.comment_prefix) {
@@ -319,55 +386,48 @@ Recording import_csv(const fs::path& file, const CsvMapping& map) {
     if (static_cast<int>(f.size()) < needed) {
       r.fail("expected at least " + std::to_string(needed) + " fields, found " + std::to_string(f.size()));
     }
-    ImuSample s;
-    const std::size_t i = rec.samples.size();
-    s.t_s = tcol >= 0 ? number(r, f[static_cast<std::size_t>(tcol)], column_name(tcol)) * map.time_scale_s
-                      : static_cast<double>(i) / map.rate_hz;
-    for (int k = 0; k < 3; ++k) {
-      const std::string an = column_name(acc[k]);
-      const double a = number(r, f[static_cast<std::size_t>(acc[k])], an);
-      if (map.counts) s.accel_counts[k] = to_counts(r, a, an);
-      s.accel_mps2[k] = a * map.accel_scale;
-      if (has_gyro) {
-        const std::string gn = column_name(gyr[k]);
-        const double g = number(r, f[static_cast<std::size_t>(gyr[k])], gn);
-        if (map.counts) s.gyro_counts[k] = to_counts(r, g, gn);
-        s.gyro_radps[k] = g * map.gyro_scale;
-      }
-    }
-    if (tempcol >= 0) {
-      const std::string tn = column_name(tempcol);
-      const double v = number(r, f[static_cast<std::size_t>(tempcol)], tn);
-      if (map.counts) s.temperature_counts = to_counts(r, v, tn);
-      s.temperature_c = v * map.temperature_scale + map.temperature_offset_c;
-    }
-    if (tcol >= 0 && !rec.samples.empty() && !(s.t_s > rec.samples.back().t_s)) {
+    const ImuSample s = csv_sample(r, f, map, c, rec.samples.size());
+    if (c.time >= 0 && !rec.samples.empty() && !(s.t_s > rec.samples.back().t_s)) {
       r.fail("time " + fmt_g(s.t_s) + " s does not increase (previous " +
              fmt_g(rec.samples.back().t_s) + " s)");
     }
     rec.samples.push_back(s);
   }
-  if (rec.samples.empty()) throw ImportError(file, 0, "no data lines");
+}
 
+// Sensor description from the mapping: rate [Hz] (given, or from the median sample step),
+// ranges, and the LSB sizes when the file holds counts.
+void set_csv_sensor_info(const CsvMapping& map, const CsvColumns& c, Recording& rec) {
   SensorInfo& info = rec.header.info;
   info.output_rate_hz = map.rate_hz > 0.0 ? map.rate_hz : 1.0 / median_interval(rec.samples);
-  info.has_gyro = has_gyro;
-  info.has_temperature = tempcol >= 0;
+  info.has_gyro = c.has_gyro;
+  info.has_temperature = c.temperature >= 0;
   info.accel_range_mps2 = map.accel_range_mps2;
   info.gyro_range_radps = map.gyro_range_radps;
   if (map.counts) {
     info.accel_lsb_mps2 = map.accel_scale;
-    info.gyro_lsb_radps = has_gyro ? map.gyro_scale : 0.0;
-    info.temperature_lsb_c = tempcol >= 0 ? map.temperature_scale : 0.0;
+    info.gyro_lsb_radps = c.has_gyro ? map.gyro_scale : 0.0;
+    info.temperature_lsb_c = c.temperature >= 0 ? map.temperature_scale : 0.0;
   }
   rec.header.identity = map.identity;
   rec.header.gravity_mps2 = map.gravity_mps2;
-  const std::size_t gaps = tcol >= 0 ? flag_time_gaps(rec.samples, info.output_rate_hz) : 0;
+}
+
+}  // namespace
+
+Recording import_csv(const fs::path& file, const CsvMapping& map) {
+  LineReader r(file);
+  const CsvColumns c = resolve_csv_columns(r, map, read_csv_header(r, map));
+  Recording rec = new_recording(file, "csv");
+  read_csv_samples(r, map, c, rec);
+  if (rec.samples.empty()) throw ImportError(file, 0, "no data lines");
+  set_csv_sensor_info(map, c, rec);
+  const std::size_t gaps = c.time >= 0 ? flag_time_gaps(rec.samples, rec.header.info.output_rate_hz) : 0;
   add_import_event(rec, "imported " + std::to_string(rec.samples.size()) + " samples from " +
                             file.string() + " (generic CSV; " +
                             (map.counts ? "counts" : "physical units") + ", accel scale " +
                             fmt_g(map.accel_scale) + ", gyro scale " + fmt_g(map.gyro_scale) +
-                            (tcol >= 0 ? ", time column" : ", fixed rate " + fmt_g(map.rate_hz) + " Hz") +
+                            (c.time >= 0 ? ", time column" : ", fixed rate " + fmt_g(map.rate_hz) + " Hz") +
                             (gaps ? ", " + std::to_string(gaps) + " gap(s) flagged" : "") + ")");
   return rec;
 }
@@ -375,67 +435,92 @@ Recording import_csv(const fs::path& file, const CsvMapping& map) {
 // =============================================================================================
 // (b) imucal annotated session
 
-Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) {
-  LineReader r(file);
+namespace {
+
+// The columns an imucal session must have, in the order of ImucalColumns::index.
+constexpr const char* kImucalColumns[8] = {"part", "samples", "acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"};
+
+// Positions of the required columns in the column-name line.
+struct ImucalColumns {
+  std::array<std::size_t, 8> index{};
+  std::size_t count = 0;  // columns in the header
+  std::size_t needed() const { return *std::max_element(index.begin(), index.end()) + 1; }
+};
+
+// One data line: sample index, part label, the six raw counts (acc xyz, gyr xyz), source line.
+struct ImucalRow {
+  std::int64_t index;
+  std::string part;
+  std::array<std::int32_t, 6> counts;
+  std::size_t line;
+};
+
+// Reads the column-name line and finds the required columns in it.
+ImucalColumns read_imucal_header(LineReader& r) {
   std::string line;
-  if (!r.next(line)) throw ImportError(file, 0, "empty file (expected the column-name line)");
+  if (!r.next(line)) throw ImportError(r.file(), 0, "empty file (expected the column-name line)");
   std::vector<std::string> names;
   for (auto f : split(line, ',')) names.push_back(unquote(f));
-  const char* required[8] = {"part", "samples", "acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"};
-  std::array<std::size_t, 8> col{};
+  ImucalColumns c;
+  c.count = names.size();
   for (int k = 0; k < 8; ++k) {
-    const auto it = std::find(names.begin(), names.end(), required[k]);
+    const auto it = std::find(names.begin(), names.end(), kImucalColumns[k]);
     if (it == names.end()) {
-      r.fail(std::string("no column '") + required[k] +
+      r.fail(std::string("no column '") + kImucalColumns[k] +
              "' (expected part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z)");
     }
-    col[static_cast<std::size_t>(k)] = static_cast<std::size_t>(it - names.begin());
+    c.index[static_cast<std::size_t>(k)] = static_cast<std::size_t>(it - names.begin());
   }
-  const std::size_t needed = *std::max_element(col.begin(), col.end()) + 1;
+  return c;
+}
 
-  struct Row {
-    std::int64_t index;
-    std::string part;
-    std::array<std::int32_t, 6> counts;
-    std::size_t line;
-  };
-  std::vector<Row> rows;
+// One data line's fields as a row: a non-empty part, a non-negative integer index, six counts.
+ImucalRow imucal_row(const LineReader& r, const std::vector<std::string_view>& f, const ImucalColumns& c) {
+  ImucalRow row;
+  row.part = unquote(f[c.index[0]]);
+  if (row.part.empty()) r.fail("empty 'part'");
+  const double idx = number(r, f[c.index[1]], "samples");
+  if (idx < 0 || idx != std::floor(idx)) r.fail("'samples' must be a non-negative integer index");
+  row.index = static_cast<std::int64_t>(idx);
+  for (std::size_t k = 0; k < 6; ++k) {
+    row.counts[k] = to_counts(r, number(r, f[c.index[k + 2]], kImucalColumns[k + 2]), kImucalColumns[k + 2]);
+  }
+  row.line = r.line();
+  return row;
+}
+
+// Every data line as a row, in time order (the file is grouped by part; time order is the sample
+// index); a repeated sample index is an error.
+std::vector<ImucalRow> read_imucal_rows(LineReader& r, const ImucalColumns& c) {
+  std::vector<ImucalRow> rows;
+  std::string line;
   while (r.next(line)) {
     if (is_blank(line)) continue;
     const auto f = split(line, ',');
-    if (f.size() < needed) {
-      r.fail("expected " + std::to_string(names.size()) + " fields, found " + std::to_string(f.size()));
+    if (f.size() < c.needed()) {
+      r.fail("expected " + std::to_string(c.count) + " fields, found " + std::to_string(f.size()));
     }
-    Row row;
-    row.part = unquote(f[col[0]]);
-    if (row.part.empty()) r.fail("empty 'part'");
-    const double idx = number(r, f[col[1]], "samples");
-    if (idx < 0 || idx != std::floor(idx)) r.fail("'samples' must be a non-negative integer index");
-    row.index = static_cast<std::int64_t>(idx);
-    for (int k = 0; k < 6; ++k) {
-      row.counts[static_cast<std::size_t>(k)] =
-          to_counts(r, number(r, f[col[static_cast<std::size_t>(k + 2)]], required[k + 2]), required[k + 2]);
-    }
-    row.line = r.line();
-    rows.push_back(std::move(row));
+    rows.push_back(imucal_row(r, f, c));
   }
-  if (rows.empty()) throw ImportError(file, 0, "no data lines");
-  // The file is grouped by part; time order is the sample index.
-  std::stable_sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) { return a.index < b.index; });
+  if (rows.empty()) throw ImportError(r.file(), 0, "no data lines");
+  std::stable_sort(rows.begin(), rows.end(), [](const ImucalRow& a, const ImucalRow& b) { return a.index < b.index; });
   for (std::size_t i = 1; i < rows.size(); ++i) {
     if (rows[i].index == rows[i - 1].index) {
-      throw ImportError(file, rows[i].line, "sample index " + std::to_string(rows[i].index) +
-                                                " also appears on line " + std::to_string(rows[i - 1].line));
+      throw ImportError(r.file(), rows[i].line, "sample index " + std::to_string(rows[i].index) +
+                                                    " also appears on line " + std::to_string(rows[i - 1].line));
     }
   }
+  return rows;
+}
 
-  Recording rec = new_recording(file, "imucal");
-  const double acc_lsb = physics::kStandardGravity / opt.accel_lsb_per_g;
-  const double gyr_lsb = physics::kDegPerSecond / opt.gyro_lsb_per_dps;
+// Rows as samples: t = index / rate [s], counts × LSB [m/s², rad/s]; a jump in the index flags a
+// gap. Returns the number of gaps.
+std::size_t add_imucal_samples(const std::vector<ImucalRow>& rows, double rate_hz, double acc_lsb, double gyr_lsb,
+                               Recording& rec) {
   std::size_t gaps = 0;
   for (std::size_t i = 0; i < rows.size(); ++i) {
     ImuSample s;
-    s.t_s = static_cast<double>(rows[i].index) / opt.rate_hz;
+    s.t_s = static_cast<double>(rows[i].index) / rate_hz;
     for (int k = 0; k < 3; ++k) {
       s.accel_counts[k] = rows[i].counts[static_cast<std::size_t>(k)];
       s.gyro_counts[k] = rows[i].counts[static_cast<std::size_t>(k + 3)];
@@ -448,8 +533,12 @@ Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) 
     }
     rec.samples.push_back(s);
   }
+  return gaps;
+}
 
-  // One segment per contiguous run of a part.
+// One segment per contiguous run of a part: "<axis>_rot" is a 360° rotation about the axis,
+// any other part an orientation ("<axis>_p" = +axis up, "<axis>_a" = +axis down).
+void add_imucal_segments(const std::vector<ImucalRow>& rows, Recording& rec) {
   int id = 0, orientation = 0;
   std::vector<std::size_t> orientation_segments;
   for (std::size_t i = 0; i < rows.size();) {
@@ -472,15 +561,20 @@ Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) 
     i = j + 1;
   }
   for (std::size_t k : orientation_segments) rec.segments[k].orientation_count = orientation;
+}
 
-  SensorInfo& info = rec.header.info;
-  info.output_rate_hz = opt.rate_hz;
-  info.accel_lsb_mps2 = acc_lsb;
-  info.gyro_lsb_radps = gyr_lsb;
-  info.accel_range_mps2 = 32768.0 * acc_lsb;
-  info.gyro_range_radps = 32768.0 * gyr_lsb;
-  info.has_gyro = true;
-  info.has_temperature = false;
+}  // namespace
+
+Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) {
+  LineReader r(file);
+  const ImucalColumns columns = read_imucal_header(r);
+  const std::vector<ImucalRow> rows = read_imucal_rows(r, columns);
+  Recording rec = new_recording(file, "imucal");
+  const double acc_lsb = physics::kStandardGravity / opt.accel_lsb_per_g;
+  const double gyr_lsb = physics::kDegPerSecond / opt.gyro_lsb_per_dps;
+  const std::size_t gaps = add_imucal_samples(rows, opt.rate_hz, acc_lsb, gyr_lsb, rec);
+  add_imucal_segments(rows, rec);
+  set_int16_sensor_info(opt.rate_hz, acc_lsb, gyr_lsb, rec);
   rec.header.identity.model = "imucal example session";
   rec.header.gravity_mps2 = opt.gravity_mps2;
   add_import_event(
@@ -498,88 +592,117 @@ Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) 
 // =============================================================================================
 // (c) MPU-6050 multi-position session
 
-Recording import_mpu6050_multipos(const fs::path& file, const Mpu6050MultiposOptions& opt) {
-  LineReader r(file);
-  std::string line;
-  std::map<std::string, double> header;
-  std::map<std::string, std::size_t> header_line;
+namespace {
+
+// The "key,value" header lines before the column names (values and their line numbers), and the
+// column names with their line.
+struct MpuHeader {
+  std::map<std::string, double> values;
+  std::map<std::string, std::size_t> lines;
   std::vector<std::string> names;
+  std::size_t names_line = 0;
+};
+
+MpuHeader read_mpu_header(LineReader& r) {
+  MpuHeader h;
+  std::string line;
   while (r.next(line)) {
     if (is_blank(line)) continue;
     const auto f = split(line, ',');
     double v = 0.0;
     if (f.size() == 2 && !parse_double(f[0], v)) {
       if (!parse_double(f[1], v)) r.fail("header value '" + std::string(f[1]) + "' is not a number");
-      header[unquote(f[0])] = v;
-      header_line[unquote(f[0])] = r.line();
+      h.values[unquote(f[0])] = v;
+      h.lines[unquote(f[0])] = r.line();
       continue;
     }
-    for (auto n : f) names.push_back(unquote(n));
+    for (auto n : f) h.names.push_back(unquote(n));
     break;
   }
-  if (names.empty()) throw ImportError(file, r.line(), "no column-name line (expected ax,ay,az,gx,gy,gz)");
-  const std::size_t names_line = r.line();
-  const char* required[6] = {"ax", "ay", "az", "gx", "gy", "gz"};
+  if (h.names.empty()) throw ImportError(r.file(), r.line(), "no column-name line (expected ax,ay,az,gx,gy,gz)");
+  h.names_line = r.line();
+  return h;
+}
+
+constexpr const char* kMpuColumns[6] = {"ax", "ay", "az", "gx", "gy", "gz"};
+
+// Positions of ax..gz among the column names.
+std::array<std::size_t, 6> mpu_columns(const fs::path& file, const MpuHeader& h) {
   std::array<std::size_t, 6> col{};
-  for (int k = 0; k < 6; ++k) {
-    const auto it = std::find(names.begin(), names.end(), required[k]);
-    if (it == names.end()) {
-      throw ImportError(file, names_line, std::string("no column '") + required[k] +
-                                              "' (expected ax,ay,az,gx,gy,gz after the header)");
+  for (std::size_t k = 0; k < 6; ++k) {
+    const auto it = std::find(h.names.begin(), h.names.end(), kMpuColumns[k]);
+    if (it == h.names.end()) {
+      throw ImportError(file, h.names_line, std::string("no column '") + kMpuColumns[k] +
+                                                "' (expected ax,ay,az,gx,gy,gz after the header)");
     }
-    col[static_cast<std::size_t>(k)] = static_cast<std::size_t>(it - names.begin());
+    col[k] = static_cast<std::size_t>(it - h.names.begin());
   }
-  const auto fs_it = header.find("Fs");
-  if (fs_it == header.end() || !(fs_it->second > 0.0)) {
-    throw ImportError(file, fs_it == header.end() ? 1 : header_line["Fs"],
+  return col;
+}
+
+// Sample rate [Hz] from the header line "Fs,<Hz>".
+double mpu_rate(const fs::path& file, const MpuHeader& h) {
+  const auto fs_it = h.values.find("Fs");
+  if (fs_it == h.values.end() || !(fs_it->second > 0.0)) {
+    throw ImportError(file, fs_it == h.values.end() ? 1 : h.lines.at("Fs"),
                       "no sample rate: expected a header line 'Fs,<Hz>' with a positive rate");
   }
-  const double rate = fs_it->second;
-  const std::size_t needed = *std::max_element(col.begin(), col.end()) + 1;
+  return fs_it->second;
+}
 
-  Recording rec = new_recording(file, "mpu6050_multipos");
-  const double acc_lsb = physics::kStandardGravity / opt.accel_lsb_per_g;
-  const double gyr_lsb = physics::kDegPerSecond / opt.gyro_lsb_per_dps;
+// Every data line as a sample at t = index / rate [s]; counts × LSB [m/s², rad/s].
+void read_mpu_samples(LineReader& r, const std::array<std::size_t, 6>& col, std::size_t fields, double rate,
+                      double acc_lsb, double gyr_lsb, Recording& rec) {
+  const std::size_t needed = *std::max_element(col.begin(), col.end()) + 1;
+  std::string line;
   while (r.next(line)) {
     if (is_blank(line)) continue;
     const auto f = split(line, ',');
     if (f.size() < needed) {
-      r.fail("expected " + std::to_string(names.size()) + " fields, found " + std::to_string(f.size()));
+      r.fail("expected " + std::to_string(fields) + " fields, found " + std::to_string(f.size()));
     }
     ImuSample s;
     s.t_s = static_cast<double>(rec.samples.size()) / rate;
     for (int k = 0; k < 3; ++k) {
-      s.accel_counts[k] = to_counts(r, number(r, f[col[static_cast<std::size_t>(k)]], required[k]), required[k]);
-      s.gyro_counts[k] =
-          to_counts(r, number(r, f[col[static_cast<std::size_t>(k + 3)]], required[k + 3]), required[k + 3]);
+      const auto ka = static_cast<std::size_t>(k), kg = static_cast<std::size_t>(k + 3);
+      s.accel_counts[k] = to_counts(r, number(r, f[col[ka]], kMpuColumns[ka]), kMpuColumns[ka]);
+      s.gyro_counts[k] = to_counts(r, number(r, f[col[kg]], kMpuColumns[kg]), kMpuColumns[kg]);
       s.accel_mps2[k] = s.accel_counts[k] * acc_lsb;
       s.gyro_radps[k] = s.gyro_counts[k] * gyr_lsb;
     }
     rec.samples.push_back(s);
   }
-  if (rec.samples.empty()) throw ImportError(file, 0, "no data lines after the column names");
+}
 
-  SensorInfo& info = rec.header.info;
-  info.output_rate_hz = rate;
-  info.accel_lsb_mps2 = acc_lsb;
-  info.gyro_lsb_radps = gyr_lsb;
-  info.accel_range_mps2 = 32768.0 * acc_lsb;
-  info.gyro_range_radps = 32768.0 * gyr_lsb;
-  info.has_gyro = true;
-  info.has_temperature = false;
+// The still interval at the start ("Initialization time" [s] in the header) as an orientation segment.
+void add_initialization_segment(const MpuHeader& h, Recording& rec) {
+  const auto init = h.values.find("Initialization time");
+  if (init == h.values.end() || !(init->second > 0.0)) return;
+  const double t_end = std::min(init->second, rec.samples.back().t_s);
+  Segment seg = make_segment(0, "orientation", "initialization", 0.0, t_end);
+  seg.orientation = 0;
+  seg.targets = "held still (Initialization time " + fmt_g(init->second) + " s)";
+  rec.segments.push_back(seg);
+}
+
+}  // namespace
+
+Recording import_mpu6050_multipos(const fs::path& file, const Mpu6050MultiposOptions& opt) {
+  LineReader r(file);
+  const MpuHeader header = read_mpu_header(r);
+  const std::array<std::size_t, 6> col = mpu_columns(file, header);
+  const double rate = mpu_rate(file, header);
+  Recording rec = new_recording(file, "mpu6050_multipos");
+  const double acc_lsb = physics::kStandardGravity / opt.accel_lsb_per_g;
+  const double gyr_lsb = physics::kDegPerSecond / opt.gyro_lsb_per_dps;
+  read_mpu_samples(r, col, header.names.size(), rate, acc_lsb, gyr_lsb, rec);
+  if (rec.samples.empty()) throw ImportError(file, 0, "no data lines after the column names");
+  set_int16_sensor_info(rate, acc_lsb, gyr_lsb, rec);
   rec.header.identity.vendor = "InvenSense";
   rec.header.identity.model = "MPU-6050";
-
   std::string hdr;
-  for (const auto& [k, v] : header) hdr += (hdr.empty() ? "" : ", ") + k + " = " + fmt_g(v);
-  const auto init = header.find("Initialization time");
-  if (init != header.end() && init->second > 0.0) {
-    const double t_end = std::min(init->second, rec.samples.back().t_s);
-    Segment seg = make_segment(0, "orientation", "initialization", 0.0, t_end);
-    seg.orientation = 0;
-    seg.targets = "held still (Initialization time " + fmt_g(init->second) + " s)";
-    rec.segments.push_back(seg);
-  }
+  for (const auto& [k, v] : header.values) hdr += (hdr.empty() ? "" : ", ") + k + " = " + fmt_g(v);
+  add_initialization_segment(header, rec);
   add_import_event(rec, "imported " + std::to_string(rec.samples.size()) + " samples from " +
                             file.string() + " (MPU-6050 multi-position session; header: " + hdr +
                             "; counts converted with " + fmt_g(opt.accel_lsb_per_g) + " LSB/g (+-2 g) and " +
@@ -592,81 +715,86 @@ Recording import_mpu6050_multipos(const fs::path& file, const Mpu6050MultiposOpt
 // =============================================================================================
 // (d) IMU-TK
 
-Recording import_imutk(const fs::path& acc_file, const fs::path& gyro_file, const ImuTkOptions& opt) {
-  const Triad acc = read_triad_file(acc_file, opt.time_scale_s);
-  const bool has_gyro = !gyro_file.empty();
-  Triad gyr;
-  if (has_gyro) gyr = read_triad_file(gyro_file, opt.time_scale_s);
+namespace {
 
-  Recording rec = new_recording(acc_file, "imutk");
-  auto counts_of = [&](const Triad& tr, std::size_t i, double v, const fs::path& f) -> std::int32_t {
-    if (!std::isfinite(v) || std::abs(v - std::round(v)) > 1e-6 || std::abs(v) > 2147483647.0) {
-      throw ImportError(f, tr.line[i], fmt_g(v) + " is not an integer count (counts = true)");
-    }
-    return static_cast<std::int32_t>(std::lround(v));
-  };
+// Value v of line i of a triad file as an integer count (counts = true).
+std::int32_t triad_count(const Triad& tr, std::size_t i, double v, const fs::path& file) {
+  if (!std::isfinite(v) || std::abs(v - std::round(v)) > 1e-6 || std::abs(v) > 2147483647.0) {
+    throw ImportError(file, tr.line[i], fmt_g(v) + " is not an integer count (counts = true)");
+  }
+  return static_cast<std::int32_t>(std::lround(v));
+}
+
+// One sample per accelerometer line: time [s] and value × accel_scale [m/s²] (with the counts).
+void add_accel_samples(const Triad& acc, const fs::path& acc_file, const ImuTkOptions& opt, Recording& rec) {
   for (std::size_t i = 0; i < acc.t.size(); ++i) {
     ImuSample s;
     s.t_s = acc.t[i];
     const double a[3] = {acc.x[i], acc.y[i], acc.z[i]};
     for (int k = 0; k < 3; ++k) {
-      if (opt.counts) s.accel_counts[k] = counts_of(acc, i, a[k], acc_file);
+      if (opt.counts) s.accel_counts[k] = triad_count(acc, i, a[k], acc_file);
       s.accel_mps2[k] = a[k] * opt.accel_scale;
     }
     rec.samples.push_back(s);
   }
-  const double median_dt = median_interval(rec.samples);
-  const double tol = opt.time_tolerance_s >= 0.0 ? opt.time_tolerance_s : 0.01 * median_dt;
-  std::string merge_note;
-  if (has_gyro) {
-    bool same_times = gyr.t.size() == acc.t.size();
-    for (std::size_t i = 0; same_times && i < acc.t.size(); ++i) {
-      same_times = std::abs(gyr.t[i] - acc.t[i]) <= tol;
-    }
-    if (same_times) {
-      for (std::size_t i = 0; i < acc.t.size(); ++i) {
-        const double g[3] = {gyr.x[i], gyr.y[i], gyr.z[i]};
-        for (int k = 0; k < 3; ++k) {
-          if (opt.counts) rec.samples[i].gyro_counts[k] = counts_of(gyr, i, g[k], gyro_file);
-          rec.samples[i].gyro_radps[k] = g[k] * opt.gyro_scale;
-        }
-      }
-      merge_note = "gyro samples matched by timestamp";
-    } else {
-      // Linear interpolation of the gyro at the accelerometer times; counts are the rounded
-      // interpolated values.
-      std::vector<ImuSample> kept;
-      std::size_t j = 0, dropped = 0;
-      for (auto& s : rec.samples) {
-        if (s.t_s < gyr.t.front() - tol || s.t_s > gyr.t.back() + tol) {
-          ++dropped;
-          continue;
-        }
-        while (j + 1 < gyr.t.size() && gyr.t[j + 1] < s.t_s) ++j;
-        const std::size_t j1 = std::min(j + 1, gyr.t.size() - 1);
-        const double span = gyr.t[j1] - gyr.t[j];
-        const double u = span > 0.0 ? std::clamp((s.t_s - gyr.t[j]) / span, 0.0, 1.0) : 0.0;
-        const double g[3] = {gyr.x[j] + u * (gyr.x[j1] - gyr.x[j]), gyr.y[j] + u * (gyr.y[j1] - gyr.y[j]),
-                             gyr.z[j] + u * (gyr.z[j1] - gyr.z[j])};
-        for (int k = 0; k < 3; ++k) {
-          if (opt.counts) s.gyro_counts[k] = static_cast<std::int32_t>(std::lround(g[k]));
-          s.gyro_radps[k] = g[k] * opt.gyro_scale;
-        }
-        kept.push_back(s);
-      }
-      if (kept.empty()) {
-        throw ImportError(gyro_file, 0, "the gyro timestamps (" + fmt_g(gyr.t.front()) + " … " +
-                                            fmt_g(gyr.t.back()) + " s) do not overlap the accelerometer's (" +
-                                            fmt_g(acc.t.front()) + " … " + fmt_g(acc.t.back()) +
-                                            " s); check time_scale_s");
-      }
-      rec.samples = std::move(kept);
-      merge_note = "gyro linearly interpolated at the accelerometer times (the files' timestamps differ)" +
-                   (dropped ? "; " + std::to_string(dropped) + " accelerometer sample(s) outside the gyro's time span dropped"
-                            : std::string());
+}
+
+// Whether the gyro lines have the accelerometer's timestamps (within tol [s]).
+bool same_times(const Triad& acc, const Triad& gyr, double tol) {
+  bool same = gyr.t.size() == acc.t.size();
+  for (std::size_t i = 0; same && i < acc.t.size(); ++i) same = std::abs(gyr.t[i] - acc.t[i]) <= tol;
+  return same;
+}
+
+// Gyro line i into sample i: value × gyro_scale [rad/s] (with the counts).
+void add_matched_gyro(const Triad& gyr, const fs::path& gyro_file, const ImuTkOptions& opt, Recording& rec) {
+  for (std::size_t i = 0; i < rec.samples.size(); ++i) {
+    const double g[3] = {gyr.x[i], gyr.y[i], gyr.z[i]};
+    for (int k = 0; k < 3; ++k) {
+      if (opt.counts) rec.samples[i].gyro_counts[k] = triad_count(gyr, i, g[k], gyro_file);
+      rec.samples[i].gyro_radps[k] = g[k] * opt.gyro_scale;
     }
   }
+}
 
+// Gyro linearly interpolated at the accelerometer times (counts are the rounded interpolated
+// values); samples outside the gyro's time span (± tol [s]) are dropped. Returns the merge note.
+std::string add_interpolated_gyro(const Triad& acc, const Triad& gyr, const fs::path& gyro_file, double tol,
+                                  const ImuTkOptions& opt, Recording& rec) {
+  std::vector<ImuSample> kept;
+  std::size_t j = 0, dropped = 0;
+  for (auto& s : rec.samples) {
+    if (s.t_s < gyr.t.front() - tol || s.t_s > gyr.t.back() + tol) {
+      ++dropped;
+      continue;
+    }
+    while (j + 1 < gyr.t.size() && gyr.t[j + 1] < s.t_s) ++j;
+    const std::size_t j1 = std::min(j + 1, gyr.t.size() - 1);
+    const double span = gyr.t[j1] - gyr.t[j];
+    const double u = span > 0.0 ? std::clamp((s.t_s - gyr.t[j]) / span, 0.0, 1.0) : 0.0;
+    const double g[3] = {gyr.x[j] + u * (gyr.x[j1] - gyr.x[j]), gyr.y[j] + u * (gyr.y[j1] - gyr.y[j]),
+                         gyr.z[j] + u * (gyr.z[j1] - gyr.z[j])};
+    for (int k = 0; k < 3; ++k) {
+      if (opt.counts) s.gyro_counts[k] = static_cast<std::int32_t>(std::lround(g[k]));
+      s.gyro_radps[k] = g[k] * opt.gyro_scale;
+    }
+    kept.push_back(s);
+  }
+  if (kept.empty()) {
+    throw ImportError(gyro_file, 0, "the gyro timestamps (" + fmt_g(gyr.t.front()) + " … " +
+                                        fmt_g(gyr.t.back()) + " s) do not overlap the accelerometer's (" +
+                                        fmt_g(acc.t.front()) + " … " + fmt_g(acc.t.back()) +
+                                        " s); check time_scale_s");
+  }
+  rec.samples = std::move(kept);
+  return "gyro linearly interpolated at the accelerometer times (the files' timestamps differ)" +
+         (dropped ? "; " + std::to_string(dropped) + " accelerometer sample(s) outside the gyro's time span dropped"
+                  : std::string());
+}
+
+// Sensor description: rate [Hz] (given, or from the median sample step median_dt [s]) and the
+// LSB sizes when the files hold counts.
+void set_imutk_sensor_info(const ImuTkOptions& opt, bool has_gyro, double median_dt, Recording& rec) {
   SensorInfo& info = rec.header.info;
   info.output_rate_hz = opt.rate_hz > 0.0 ? opt.rate_hz : (median_dt > 0.0 ? 1.0 / median_dt : 0.0);
   info.has_gyro = has_gyro;
@@ -677,7 +805,28 @@ Recording import_imutk(const fs::path& acc_file, const fs::path& gyro_file, cons
   }
   rec.header.identity = opt.identity;
   rec.header.gravity_mps2 = opt.gravity_mps2;
-  const std::size_t gaps = flag_time_gaps(rec.samples, info.output_rate_hz);
+}
+
+}  // namespace
+
+Recording import_imutk(const fs::path& acc_file, const fs::path& gyro_file, const ImuTkOptions& opt) {
+  const Triad acc = read_triad_file(acc_file, opt.time_scale_s);
+  const bool has_gyro = !gyro_file.empty();
+  Triad gyr;
+  if (has_gyro) gyr = read_triad_file(gyro_file, opt.time_scale_s);
+  Recording rec = new_recording(acc_file, "imutk");
+  add_accel_samples(acc, acc_file, opt, rec);
+  const double median_dt = median_interval(rec.samples);
+  const double tol = opt.time_tolerance_s >= 0.0 ? opt.time_tolerance_s : 0.01 * median_dt;
+  std::string merge_note;
+  if (has_gyro && same_times(acc, gyr, tol)) {
+    add_matched_gyro(gyr, gyro_file, opt, rec);
+    merge_note = "gyro samples matched by timestamp";
+  } else if (has_gyro) {
+    merge_note = add_interpolated_gyro(acc, gyr, gyro_file, tol, opt, rec);
+  }
+  set_imutk_sensor_info(opt, has_gyro, median_dt, rec);
+  const std::size_t gaps = flag_time_gaps(rec.samples, rec.header.info.output_rate_hz);
   add_import_event(rec, "imported " + std::to_string(rec.samples.size()) + " samples from " +
                             acc_file.string() + (has_gyro ? " and " + gyro_file.string() : std::string()) +
                             " (IMU-TK text; time scale " + fmt_g(opt.time_scale_s) + " s/unit, " +
@@ -878,174 +1027,249 @@ MatVar make_text(const char* name, const std::string& s) {
   return MatVar(Mat_VarCreate(name, MAT_C_CHAR, MAT_T_UINT8, 2, dims, const_cast<char*>(s.data()), 0));
 }
 
-}  // namespace
-
-Recording import_mat(const fs::path& file, const MatOptions& opt) {
-  MatSource src(file, opt.struct_name);
+// The variables an import looks for, as found (names as in the file, empty when absent).
+struct MatData {
   std::vector<std::array<double, 3>> acc, gyr, acc_counts, gyr_counts;
   std::string acc_name, gyr_name, acc_counts_name, gyr_counts_name, t_name, fs_name, temp_name, lsb_name;
-  const bool have_acc = triad(src, {"acc", "accel", "accelerometer"}, acc, acc_name);
-  const bool have_acc_counts = triad(src, {"acc_counts"}, acc_counts, acc_counts_name);
-  const bool have_gyr = triad(src, {"gyro", "gyr", "gyroscope"}, gyr, gyr_name);
-  const bool have_gyr_counts = triad(src, {"gyro_counts", "gyr_counts"}, gyr_counts, gyr_counts_name);
+  bool have_acc = false, have_acc_counts = false, have_gyr = false, have_gyr_counts = false;
   std::vector<double> t, rate_v, temp, acc_lsb_v, gyr_lsb_v;
-  const bool have_t = vector_of(src, {"t", "time", "timestamp"}, t, t_name);
-  const bool have_fs = vector_of(src, {"fs", "rate_hz", "rate"}, rate_v, fs_name);
-  const bool have_temp = vector_of(src, {"temp", "temperature"}, temp, temp_name);
-  const bool have_acc_lsb = vector_of(src, {"acc_lsb"}, acc_lsb_v, lsb_name);
-  const bool have_gyr_lsb = vector_of(src, {"gyro_lsb", "gyr_lsb"}, gyr_lsb_v, lsb_name);
-  if (!have_acc && !(have_acc_counts && have_acc_lsb)) {
+  bool have_t = false, have_fs = false, have_temp = false, have_acc_lsb = false, have_gyr_lsb = false;
+
+  std::size_t rows() const { return have_acc ? acc.size() : acc_counts.size(); }
+  bool fixed_rate() const { return have_fs && rate_v.size() == 1 && rate_v[0] > 0.0; }
+  double acc_lsb() const { return have_acc_lsb && !acc_lsb_v.empty() ? acc_lsb_v[0] : 0.0; }
+  double gyr_lsb() const { return have_gyr_lsb && !gyr_lsb_v.empty() ? gyr_lsb_v[0] : 0.0; }
+  bool has_gyro() const { return have_gyr || (have_gyr_counts && gyr_lsb() > 0.0); }
+};
+
+// Finds the variables (or struct fields) under their accepted names.
+MatData read_mat_data(const MatSource& src) {
+  MatData m;
+  m.have_acc = triad(src, {"acc", "accel", "accelerometer"}, m.acc, m.acc_name);
+  m.have_acc_counts = triad(src, {"acc_counts"}, m.acc_counts, m.acc_counts_name);
+  m.have_gyr = triad(src, {"gyro", "gyr", "gyroscope"}, m.gyr, m.gyr_name);
+  m.have_gyr_counts = triad(src, {"gyro_counts", "gyr_counts"}, m.gyr_counts, m.gyr_counts_name);
+  m.have_t = vector_of(src, {"t", "time", "timestamp"}, m.t, m.t_name);
+  m.have_fs = vector_of(src, {"fs", "rate_hz", "rate"}, m.rate_v, m.fs_name);
+  m.have_temp = vector_of(src, {"temp", "temperature"}, m.temp, m.temp_name);
+  m.have_acc_lsb = vector_of(src, {"acc_lsb"}, m.acc_lsb_v, m.lsb_name);
+  m.have_gyr_lsb = vector_of(src, {"gyro_lsb", "gyr_lsb"}, m.gyr_lsb_v, m.lsb_name);
+  return m;
+}
+
+// An accelerometer (SI or counts with LSB), every series as long as it, and a time or a rate.
+void check_mat_data(const fs::path& file, const MatData& m) {
+  if (!m.have_acc && !(m.have_acc_counts && m.have_acc_lsb)) {
     throw ImportError(file, 0, "no accelerometer: expected a variable/field 'acc' (N x 3, m/s^2), or "
                                "'acc_counts' with 'acc_lsb'");
   }
-  const std::size_t n = have_acc ? acc.size() : acc_counts.size();
+  const std::size_t n = m.rows();
   auto check_len = [&](std::size_t len, const std::string& name) {
     if (len != n) {
       throw ImportError(file, 0, "'" + name + "' has " + std::to_string(len) + " rows, the accelerometer " +
                                      std::to_string(n));
     }
   };
-  if (have_acc_counts) check_len(acc_counts.size(), acc_counts_name);
-  if (have_gyr) check_len(gyr.size(), gyr_name);
-  if (have_gyr_counts) check_len(gyr_counts.size(), gyr_counts_name);
-  if (have_temp) check_len(temp.size(), temp_name);
-  if (have_t) check_len(t.size(), t_name);
-  if (!have_t && !(have_fs && rate_v.size() == 1 && rate_v[0] > 0.0)) {
+  if (m.have_acc_counts) check_len(m.acc_counts.size(), m.acc_counts_name);
+  if (m.have_gyr) check_len(m.gyr.size(), m.gyr_name);
+  if (m.have_gyr_counts) check_len(m.gyr_counts.size(), m.gyr_counts_name);
+  if (m.have_temp) check_len(m.temp.size(), m.temp_name);
+  if (m.have_t) check_len(m.t.size(), m.t_name);
+  if (!m.have_t && !m.fixed_rate()) {
     throw ImportError(file, 0, "no time: expected 't' (N-vector, s) or a positive scalar 'fs' (Hz)");
   }
-  const double acc_lsb = have_acc_lsb && !acc_lsb_v.empty() ? acc_lsb_v[0] : 0.0;
-  const double gyr_lsb = have_gyr_lsb && !gyr_lsb_v.empty() ? gyr_lsb_v[0] : 0.0;
-  const bool has_gyro = have_gyr || (have_gyr_counts && gyr_lsb > 0.0);
+}
 
+// Row i as a sample: time [s] (t × time_scale_s, or i / fs), acceleration [m/s²] and rate [rad/s]
+// (SI × scale, or counts × LSB), counts, temperature [°C].
+ImuSample mat_sample(const MatData& m, std::size_t i, const MatOptions& opt) {
+  ImuSample s;
+  s.t_s = m.have_t ? m.t[i] * opt.time_scale_s : static_cast<double>(i) / m.rate_v[0];
+  const bool has_gyro = m.has_gyro();
+  for (int k = 0; k < 3; ++k) {
+    const auto uk = static_cast<std::size_t>(k);
+    if (m.have_acc_counts) s.accel_counts[k] = static_cast<std::int32_t>(std::lround(m.acc_counts[i][uk]));
+    s.accel_mps2[k] = m.have_acc ? m.acc[i][uk] * opt.accel_scale : m.acc_counts[i][uk] * m.acc_lsb();
+    if (m.have_gyr_counts) s.gyro_counts[k] = static_cast<std::int32_t>(std::lround(m.gyr_counts[i][uk]));
+    if (m.have_gyr) {
+      s.gyro_radps[k] = m.gyr[i][uk] * opt.gyro_scale;
+    } else if (has_gyro) {
+      s.gyro_radps[k] = m.gyr_counts[i][uk] * m.gyr_lsb();
+    }
+  }
+  if (m.have_temp) s.temperature_c = m.temp[i];
+  return s;
+}
+
+// Segments from a struct array 'segments' with fields kind, label, t_start_s, t_end_s [s].
+void add_mat_segments(const MatSource& src, const fs::path& file, Recording& rec) {
+  const matvar_t* segs = src.get({"segments"});
+  if (!segs || segs->class_type != MAT_C_STRUCT) return;
+  std::size_t count = 1;
+  for (int d = 0; d < segs->rank; ++d) count *= segs->dims[d];
+  auto* sv = const_cast<matvar_t*>(segs);
+  for (std::size_t i = 0; i < count; ++i) {
+    std::vector<double> a, b;
+    std::size_t r = 0, c = 0;
+    matvar_t* t0 = Mat_VarGetStructFieldByName(sv, "t_start_s", i);
+    matvar_t* t1 = Mat_VarGetStructFieldByName(sv, "t_end_s", i);
+    if (!numeric(t0, a, r, c) || a.size() != 1 || !numeric(t1, b, r, c) || b.size() != 1) {
+      throw ImportError(file, 0, "segments(" + std::to_string(i + 1) +
+                                     ") needs scalar fields t_start_s and t_end_s");
+    }
+    Segment seg = make_segment(static_cast<int>(i), text(Mat_VarGetStructFieldByName(sv, "kind", i)),
+                               text(Mat_VarGetStructFieldByName(sv, "label", i)), a[0], b[0]);
+    rec.segments.push_back(seg);
+  }
+}
+
+// Sensor description: rate [Hz] (fs, or from the median sample step), gyro, temperature, LSB sizes.
+void set_mat_sensor_info(const MatData& m, const MatOptions& opt, Recording& rec) {
+  SensorInfo& info = rec.header.info;
+  const double median_dt = median_interval(rec.samples);
+  info.output_rate_hz = m.fixed_rate() ? m.rate_v[0] : (median_dt > 0.0 ? 1.0 / median_dt : 0.0);
+  info.has_gyro = m.has_gyro();
+  info.has_temperature = m.have_temp;
+  info.accel_lsb_mps2 = m.acc_lsb();
+  info.gyro_lsb_radps = m.gyr_lsb();
+  rec.header.identity = opt.identity;
+  rec.header.gravity_mps2 = opt.gravity_mps2;
+}
+
+}  // namespace
+
+Recording import_mat(const fs::path& file, const MatOptions& opt) {
+  MatSource src(file, opt.struct_name);
+  const MatData m = read_mat_data(src);
+  check_mat_data(file, m);
+  const std::size_t n = m.rows();
   Recording rec = new_recording(file, "mat");
   rec.samples.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    ImuSample& s = rec.samples[i];
-    s.t_s = have_t ? t[i] * opt.time_scale_s : static_cast<double>(i) / rate_v[0];
-    if (have_t && i > 0 && !(s.t_s > rec.samples[i - 1].t_s)) {
-      throw ImportError(file, 0, "'" + t_name + "' does not increase at element " + std::to_string(i + 1));
-    }
-    for (int k = 0; k < 3; ++k) {
-      const auto uk = static_cast<std::size_t>(k);
-      if (have_acc_counts) s.accel_counts[k] = static_cast<std::int32_t>(std::lround(acc_counts[i][uk]));
-      s.accel_mps2[k] = have_acc ? acc[i][uk] * opt.accel_scale : acc_counts[i][uk] * acc_lsb;
-      if (have_gyr_counts) s.gyro_counts[k] = static_cast<std::int32_t>(std::lround(gyr_counts[i][uk]));
-      if (have_gyr) {
-        s.gyro_radps[k] = gyr[i][uk] * opt.gyro_scale;
-      } else if (has_gyro) {
-        s.gyro_radps[k] = gyr_counts[i][uk] * gyr_lsb;
-      }
-    }
-    if (have_temp) s.temperature_c = temp[i];
-  }
-  // Segments (struct array with kind, label, t_start_s, t_end_s).
-  if (const matvar_t* segs = src.get({"segments"}); segs && segs->class_type == MAT_C_STRUCT) {
-    std::size_t count = 1;
-    for (int d = 0; d < segs->rank; ++d) count *= segs->dims[d];
-    auto* sv = const_cast<matvar_t*>(segs);
-    for (std::size_t i = 0; i < count; ++i) {
-      std::vector<double> a, b;
-      std::size_t r = 0, c = 0;
-      matvar_t* t0 = Mat_VarGetStructFieldByName(sv, "t_start_s", i);
-      matvar_t* t1 = Mat_VarGetStructFieldByName(sv, "t_end_s", i);
-      if (!numeric(t0, a, r, c) || a.size() != 1 || !numeric(t1, b, r, c) || b.size() != 1) {
-        throw ImportError(file, 0, "segments(" + std::to_string(i + 1) +
-                                       ") needs scalar fields t_start_s and t_end_s");
-      }
-      Segment seg = make_segment(static_cast<int>(i), text(Mat_VarGetStructFieldByName(sv, "kind", i)),
-                                 text(Mat_VarGetStructFieldByName(sv, "label", i)), a[0], b[0]);
-      rec.segments.push_back(seg);
+    rec.samples[i] = mat_sample(m, i, opt);
+    if (m.have_t && i > 0 && !(rec.samples[i].t_s > rec.samples[i - 1].t_s)) {
+      throw ImportError(file, 0, "'" + m.t_name + "' does not increase at element " + std::to_string(i + 1));
     }
   }
-  SensorInfo& info = rec.header.info;
-  const double median_dt = median_interval(rec.samples);
-  info.output_rate_hz = have_fs && rate_v.size() == 1 && rate_v[0] > 0.0 ? rate_v[0]
-                        : (median_dt > 0.0 ? 1.0 / median_dt : 0.0);
-  info.has_gyro = has_gyro;
-  info.has_temperature = have_temp;
-  info.accel_lsb_mps2 = acc_lsb;
-  info.gyro_lsb_radps = gyr_lsb;
-  rec.header.identity = opt.identity;
-  rec.header.gravity_mps2 = opt.gravity_mps2;
-  const std::size_t gaps = have_t ? flag_time_gaps(rec.samples, info.output_rate_hz) : 0;
+  add_mat_segments(src, file, rec);
+  set_mat_sensor_info(m, opt, rec);
+  const bool has_gyro = m.has_gyro();
+  const std::size_t gaps = m.have_t ? flag_time_gaps(rec.samples, rec.header.info.output_rate_hz) : 0;
   add_import_event(rec, "imported " + std::to_string(n) + " samples from " + file.string() +
                             " (MATLAB file" + (opt.struct_name.empty() ? "" : ", struct " + opt.struct_name) +
-                            "; accel from '" + (have_acc ? acc_name : acc_counts_name) + "'" +
-                            (has_gyro ? ", gyro from '" + (have_gyr ? gyr_name : gyr_counts_name) + "'" : ", no gyro") +
-                            (have_t ? ", time '" + t_name + "'" : ", rate '" + fs_name + "'") +
+                            "; accel from '" + (m.have_acc ? m.acc_name : m.acc_counts_name) + "'" +
+                            (has_gyro ? ", gyro from '" + (m.have_gyr ? m.gyr_name : m.gyr_counts_name) + "'" : ", no gyro") +
+                            (m.have_t ? ", time '" + m.t_name + "'" : ", rate '" + m.fs_name + "'") +
                             (gaps ? "; " + std::to_string(gaps) + " gap(s) flagged" : "") + ")");
   return rec;
 }
+
+namespace {
+
+// The samples as column-major N x 1 / N x 3 arrays: time [s], acceleration [m/s²], rate [rad/s],
+// their counts, temperature [°C].
+struct MatColumns {
+  std::vector<double> t, acc, gyr, temp;
+  std::vector<std::int32_t> acc_c, gyr_c;
+};
+
+MatColumns mat_columns(const Recording& rec) {
+  const std::size_t n = rec.samples.size();
+  MatColumns m{std::vector<double>(n), std::vector<double>(3 * n), std::vector<double>(3 * n), std::vector<double>(n),
+               std::vector<std::int32_t>(3 * n), std::vector<std::int32_t>(3 * n)};
+  for (std::size_t i = 0; i < n; ++i) {
+    const ImuSample& s = rec.samples[i];
+    m.t[i] = s.t_s;
+    m.temp[i] = s.temperature_c;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const int ik = static_cast<int>(k);
+      m.acc[i + k * n] = s.accel_mps2[ik];
+      m.gyr[i + k * n] = s.gyro_radps[ik];
+      m.acc_c[i + k * n] = s.accel_counts[k];
+      m.gyr_c[i + k * n] = s.gyro_counts[k];
+    }
+  }
+  return m;
+}
+
+// The segments as a struct array with fields kind, label, t_start_s, t_end_s [s].
+MatVar segments_struct(const Recording& rec, const fs::path& file) {
+  const char* segment_fields[] = {"kind", "label", "t_start_s", "t_end_s", nullptr};
+  std::size_t dims[2] = {rec.segments.size(), 1};
+  MatVar s(Mat_VarCreateStruct2("segments", 2, dims, segment_fields));
+  if (!s) throw ImportError(file, 0, "matio failed to create 'segments'");
+  for (std::size_t i = 0; i < rec.segments.size(); ++i) {
+    const Segment& seg = rec.segments[i];
+    Mat_VarSetStructFieldByName(s.get(), "kind", i, make_text("kind", seg.kind).release());
+    Mat_VarSetStructFieldByName(s.get(), "label", i, make_text("label", seg.label).release());
+    Mat_VarSetStructFieldByName(s.get(), "t_start_s", i, make_double("t_start_s", 1, 1, &seg.t_start_s).release());
+    Mat_VarSetStructFieldByName(s.get(), "t_end_s", i, make_double("t_end_s", 1, 1, &seg.t_end_s).release());
+  }
+  return s;
+}
+
+// Writes variables to a MAT file: at the top level each at once, or (struct_name given)
+// collected and written as the fields of one struct by finish().
+class MatWriter {
+ public:
+  MatWriter(mat_t* mat, const fs::path& file, const std::string& struct_name)
+      : mat_(mat), file_(file), struct_name_(struct_name) {}
+
+  void write(MatVar v, const char* what) {
+    if (!v) throw ImportError(file_, 0, std::string("matio failed to create '") + what + "'");
+    if (!struct_name_.empty()) {
+      fields_.emplace_back(what, std::move(v));
+      return;
+    }
+    if (Mat_VarWrite(mat_, v.get(), MAT_COMPRESSION_NONE) != 0) {
+      throw ImportError(file_, 0, std::string("matio failed to write '") + what + "'");
+    }
+  }
+
+  void finish() {
+    if (struct_name_.empty()) return;
+    std::vector<const char*> names;
+    for (const auto& f : fields_) names.push_back(f.first.c_str());
+    names.push_back(nullptr);
+    std::size_t dims[2] = {1, 1};
+    MatVar root(Mat_VarCreateStruct2(struct_name_.c_str(), 2, dims, names.data()));
+    if (!root) throw ImportError(file_, 0, "matio failed to create struct '" + struct_name_ + "'");
+    for (auto& f : fields_) Mat_VarSetStructFieldByName(root.get(), f.first.c_str(), 0, f.second.release());
+    if (Mat_VarWrite(mat_, root.get(), MAT_COMPRESSION_NONE) != 0) {
+      throw ImportError(file_, 0, "matio failed to write struct '" + struct_name_ + "'");
+    }
+  }
+
+ private:
+  mat_t* mat_;
+  fs::path file_;
+  std::string struct_name_;
+  std::vector<std::pair<std::string, MatVar>> fields_;
+};
+
+}  // namespace
 
 void export_mat(const Recording& rec, const fs::path& file, const std::string& struct_name) {
   MatFile mat(Mat_CreateVer(file.c_str(), nullptr, MAT_FT_MAT5));
   if (!mat) throw ImportError(file, 0, "matio cannot create it");
   const std::size_t n = rec.samples.size();
-  std::vector<double> t(n), acc(3 * n), gyr(3 * n), temp(n);
-  std::vector<std::int32_t> acc_c(3 * n), gyr_c(3 * n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const ImuSample& s = rec.samples[i];
-    t[i] = s.t_s;
-    temp[i] = s.temperature_c;
-    for (std::size_t k = 0; k < 3; ++k) {
-      const int ik = static_cast<int>(k);
-      acc[i + k * n] = s.accel_mps2[ik];
-      gyr[i + k * n] = s.gyro_radps[ik];
-      acc_c[i + k * n] = s.accel_counts[k];
-      gyr_c[i + k * n] = s.gyro_counts[k];
-    }
-  }
+  const MatColumns c = mat_columns(rec);
   const double fs_hz = rec.header.info.output_rate_hz;
   const double acc_lsb = rec.header.info.accel_lsb_mps2, gyr_lsb = rec.header.info.gyro_lsb_radps;
-  // Top level: each variable is written at once. In a struct: collected, then one struct.
-  std::vector<std::pair<std::string, MatVar>> fields;
-  auto write = [&](MatVar v, const char* what) {
-    if (!v) throw ImportError(file, 0, std::string("matio failed to create '") + what + "'");
-    if (!struct_name.empty()) {
-      fields.emplace_back(what, std::move(v));
-      return;
-    }
-    if (Mat_VarWrite(mat.get(), v.get(), MAT_COMPRESSION_NONE) != 0) {
-      throw ImportError(file, 0, std::string("matio failed to write '") + what + "'");
-    }
-  };
-  write(make_double("t", n, 1, t.data()), "t");
-  write(make_double("fs", 1, 1, &fs_hz), "fs");
-  write(make_double("acc", n, 3, acc.data()), "acc");
-  write(make_int32("acc_counts", n, 3, acc_c.data()), "acc_counts");
-  write(make_double("acc_lsb", 1, 1, &acc_lsb), "acc_lsb");
+  MatWriter w(mat.get(), file, struct_name);
+  w.write(make_double("t", n, 1, c.t.data()), "t");
+  w.write(make_double("fs", 1, 1, &fs_hz), "fs");
+  w.write(make_double("acc", n, 3, c.acc.data()), "acc");
+  w.write(make_int32("acc_counts", n, 3, c.acc_c.data()), "acc_counts");
+  w.write(make_double("acc_lsb", 1, 1, &acc_lsb), "acc_lsb");
   if (rec.header.info.has_gyro) {
-    write(make_double("gyro", n, 3, gyr.data()), "gyro");
-    write(make_int32("gyro_counts", n, 3, gyr_c.data()), "gyro_counts");
-    write(make_double("gyro_lsb", 1, 1, &gyr_lsb), "gyro_lsb");
+    w.write(make_double("gyro", n, 3, c.gyr.data()), "gyro");
+    w.write(make_int32("gyro_counts", n, 3, c.gyr_c.data()), "gyro_counts");
+    w.write(make_double("gyro_lsb", 1, 1, &gyr_lsb), "gyro_lsb");
   }
-  if (rec.header.info.has_temperature) write(make_double("temp", n, 1, temp.data()), "temp");
-  if (!rec.segments.empty()) {
-    const char* segment_fields[] = {"kind", "label", "t_start_s", "t_end_s", nullptr};
-    std::size_t dims[2] = {rec.segments.size(), 1};
-    MatVar s(Mat_VarCreateStruct2("segments", 2, dims, segment_fields));
-    if (!s) throw ImportError(file, 0, "matio failed to create 'segments'");
-    for (std::size_t i = 0; i < rec.segments.size(); ++i) {
-      const Segment& seg = rec.segments[i];
-      Mat_VarSetStructFieldByName(s.get(), "kind", i, make_text("kind", seg.kind).release());
-      Mat_VarSetStructFieldByName(s.get(), "label", i, make_text("label", seg.label).release());
-      Mat_VarSetStructFieldByName(s.get(), "t_start_s", i, make_double("t_start_s", 1, 1, &seg.t_start_s).release());
-      Mat_VarSetStructFieldByName(s.get(), "t_end_s", i, make_double("t_end_s", 1, 1, &seg.t_end_s).release());
-    }
-    write(std::move(s), "segments");
-  }
-  if (!struct_name.empty()) {
-    std::vector<const char*> names;
-    for (const auto& f : fields) names.push_back(f.first.c_str());
-    names.push_back(nullptr);
-    std::size_t dims[2] = {1, 1};
-    MatVar root(Mat_VarCreateStruct2(struct_name.c_str(), 2, dims, names.data()));
-    if (!root) throw ImportError(file, 0, "matio failed to create struct '" + struct_name + "'");
-    for (auto& f : fields) Mat_VarSetStructFieldByName(root.get(), f.first.c_str(), 0, f.second.release());
-    if (Mat_VarWrite(mat.get(), root.get(), MAT_COMPRESSION_NONE) != 0) {
-      throw ImportError(file, 0, "matio failed to write struct '" + struct_name + "'");
-    }
-  }
+  if (rec.header.info.has_temperature) w.write(make_double("temp", n, 1, c.temp.data()), "temp");
+  if (!rec.segments.empty()) w.write(segments_struct(rec, file), "segments");
+  w.finish();
 }
 
 #else  // built without matio

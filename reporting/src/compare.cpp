@@ -26,83 +26,103 @@ const ParameterComparison* Comparison::find(const std::string& estimator, const 
   return nullptr;
 }
 
-Comparison compare_runs(const std::vector<RunResults>& runs) {
-  if (runs.empty()) throw ComparisonRefused("nothing to compare: no runs were selected");
+namespace {
+
+// The runs' common procedure fingerprint; refuses runs measured with different (or no) procedures.
+std::string common_fingerprint(const std::vector<RunResults>& runs) {
   std::map<std::string, std::vector<std::string>> by_fp;
   for (const auto& r : runs) by_fp[r.procedure_fingerprint].push_back(r.run_name);
-  if (by_fp.size() > 1 || by_fp.begin()->first.empty()) {
-    std::string msg =
-        "refusing to compare: the runs were not measured with the same procedure, so their parameters are not "
-        "comparable (a different procedure excites, heats and averages the unit differently). Procedure "
-        "fingerprints:";
-    for (const auto& [fp, names] : by_fp) {
-      msg += "\n  " + (fp.empty() ? std::string("(none: no experiment.yaml)") : fp.substr(0, 16)) + ": ";
-      for (std::size_t i = 0; i < names.size(); ++i) msg += (i ? ", " : "") + names[i];
-    }
-    msg += "\nCompare one group at a time (stend compare --procedure FINGERPRINT).";
-    throw ComparisonRefused(msg);
+  if (by_fp.size() == 1 && !by_fp.begin()->first.empty()) return by_fp.begin()->first;
+  std::string msg =
+      "refusing to compare: the runs were not measured with the same procedure, so their parameters are not "
+      "comparable (a different procedure excites, heats and averages the unit differently). Procedure "
+      "fingerprints:";
+  for (const auto& [fp, names] : by_fp) {
+    msg += "\n  " + (fp.empty() ? std::string("(none: no experiment.yaml)") : fp.substr(0, 16)) + ": ";
+    for (std::size_t i = 0; i < names.size(); ++i) msg += (i ? ", " : "") + names[i];
   }
+  msg += "\nCompare one group at a time (stend compare --procedure FINGERPRINT).";
+  throw ComparisonRefused(msg);
+}
+
+// (estimator, parameter) pairs in order of first appearance.
+std::vector<std::pair<std::string, std::string>> parameter_keys(const std::vector<RunResults>& runs) {
+  std::vector<std::pair<std::string, std::string>> keys;
+  for (const auto& r : runs)
+    for (const auto& p : r.parameters)
+      if (std::find(keys.begin(), keys.end(), std::make_pair(p.estimator, p.name)) == keys.end())
+        keys.emplace_back(p.estimator, p.name);
+  return keys;
+}
+
+// One vendor's units: mean of the identified values, unit-to-unit SD with the 95 % t interval of
+// the mean (two or more values), and the median standard error.
+VendorStats vendor_stats(const std::string& vendor, const std::vector<const UnitValue*>& units) {
+  VendorStats s;
+  s.vendor = vendor;
+  std::vector<double> vals, ses;
+  for (const UnitValue* u : units) {
+    ++s.units;
+    if (!u->p.identifiable || !std::isfinite(u->p.value)) continue;
+    ++s.identified;
+    vals.push_back(u->p.value);
+    if (std::isfinite(u->p.std_error)) ses.push_back(u->p.std_error);
+  }
+  if (!vals.empty()) {
+    double sum = 0.0;
+    for (double x : vals) sum += x;
+    s.mean = sum / static_cast<double>(vals.size());
+  }
+  if (vals.size() >= 2) {
+    double ss = 0.0;
+    for (double x : vals) ss += (x - s.mean) * (x - s.mean);
+    s.spread_sd = std::sqrt(ss / static_cast<double>(vals.size() - 1));
+    const double n = static_cast<double>(vals.size());
+    const double t = estimation::student_t_quantile(0.975, n - 1.0);
+    s.mean_lo = s.mean - t * s.spread_sd / std::sqrt(n);
+    s.mean_hi = s.mean + t * s.spread_sd / std::sqrt(n);
+  }
+  if (!ses.empty()) {
+    std::sort(ses.begin(), ses.end());
+    const std::size_t m = ses.size() / 2;
+    s.median_std_error = ses.size() % 2 ? ses[m] : 0.5 * (ses[m - 1] + ses[m]);
+  }
+  return s;
+}
+
+// One parameter across the runs: every unit's value, and the statistics per vendor (in order of
+// first appearance).
+ParameterComparison compare_parameter(const std::vector<RunResults>& runs, const std::string& est,
+                                      const std::string& name) {
+  ParameterComparison pc;
+  pc.estimator = est;
+  pc.name = name;
+  for (const auto& r : runs)
+    if (const ParameterResult* p = r.find(est, name)) {
+      pc.unit = p->unit;
+      pc.units.push_back({r.run_name, vendor_key(r), r.model, r.serial, *p});
+    }
+  std::map<std::string, std::vector<const UnitValue*>> groups;
+  std::vector<std::string> order;
+  for (const auto& u : pc.units) {
+    if (!groups.count(u.vendor)) order.push_back(u.vendor);
+    groups[u.vendor].push_back(&u);
+  }
+  for (const auto& v : order) pc.vendors.push_back(vendor_stats(v, groups[v]));
+  return pc;
+}
+
+}  // namespace
+
+Comparison compare_runs(const std::vector<RunResults>& runs) {
+  if (runs.empty()) throw ComparisonRefused("nothing to compare: no runs were selected");
   Comparison c;
-  c.fingerprint = by_fp.begin()->first;
+  c.fingerprint = common_fingerprint(runs);
   c.runs = runs;
   std::stable_sort(c.runs.begin(), c.runs.end(), [](const RunResults& a, const RunResults& b) {
     return std::tie(a.vendor, a.model, a.serial, a.run_name) < std::tie(b.vendor, b.model, b.serial, b.run_name);
   });
-  // Parameters in order of first appearance.
-  std::vector<std::pair<std::string, std::string>> keys;
-  for (const auto& r : c.runs)
-    for (const auto& p : r.parameters)
-      if (std::find(keys.begin(), keys.end(), std::make_pair(p.estimator, p.name)) == keys.end())
-        keys.emplace_back(p.estimator, p.name);
-  for (const auto& [est, name] : keys) {
-    ParameterComparison pc;
-    pc.estimator = est;
-    pc.name = name;
-    std::map<std::string, std::vector<const UnitValue*>> groups;
-    for (const auto& r : c.runs)
-      if (const ParameterResult* p = r.find(est, name)) {
-        pc.unit = p->unit;
-        pc.units.push_back({r.run_name, vendor_key(r), r.model, r.serial, *p});
-      }
-    std::vector<std::string> order;
-    for (const auto& u : pc.units) {
-      if (!groups.count(u.vendor)) order.push_back(u.vendor);
-      groups[u.vendor].push_back(&u);
-    }
-    for (const auto& v : order) {
-      VendorStats s;
-      s.vendor = v;
-      std::vector<double> vals, ses;
-      for (const UnitValue* u : groups[v]) {
-        ++s.units;
-        if (!u->p.identifiable || !std::isfinite(u->p.value)) continue;
-        ++s.identified;
-        vals.push_back(u->p.value);
-        if (std::isfinite(u->p.std_error)) ses.push_back(u->p.std_error);
-      }
-      if (!vals.empty()) {
-        double sum = 0.0;
-        for (double x : vals) sum += x;
-        s.mean = sum / static_cast<double>(vals.size());
-      }
-      if (vals.size() >= 2) {
-        double ss = 0.0;
-        for (double x : vals) ss += (x - s.mean) * (x - s.mean);
-        s.spread_sd = std::sqrt(ss / static_cast<double>(vals.size() - 1));
-        const double n = static_cast<double>(vals.size());
-        const double t = estimation::student_t_quantile(0.975, n - 1.0);
-        s.mean_lo = s.mean - t * s.spread_sd / std::sqrt(n);
-        s.mean_hi = s.mean + t * s.spread_sd / std::sqrt(n);
-      }
-      if (!ses.empty()) {
-        std::sort(ses.begin(), ses.end());
-        const std::size_t m = ses.size() / 2;
-        s.median_std_error = ses.size() % 2 ? ses[m] : 0.5 * (ses[m - 1] + ses[m]);
-      }
-      pc.vendors.push_back(s);
-    }
-    c.parameters.push_back(std::move(pc));
-  }
+  for (const auto& [est, name] : parameter_keys(c.runs)) c.parameters.push_back(compare_parameter(c.runs, est, name));
   return c;
 }
 

@@ -311,6 +311,95 @@ struct MatStruct {
   }
 };
 
+// MATLAB imuSensor calibration arrays of one instrument at T0 [°C]: ConstantBias (1×3),
+// AxesMisalignment (3×3, column-major, percent), TemperatureBias (per °C) and
+// TemperatureScaleFactor (percent per °C); what is missing is noted in not_estimated.
+struct MatlabCalibration {
+  std::vector<double> bias = std::vector<double>(3), mis = std::vector<double>(9), tb = std::vector<double>(3),
+                      tsf = std::vector<double>(3);
+};
+
+MatlabCalibration matlab_calibration(const InstrumentModels& im, const char* inst, double T0, std::string& not_estimated) {
+  MatlabCalibration c;
+  for (int k = 0; k < 3; ++k) {
+    const auto uk = static_cast<std::size_t>(k);
+    const auto& m = im.calib[uk];
+    c.bias[uk] = offset_at(m, k, T0);
+    const Eigen::RowVector3d row = input_row(m, k, T0);
+    // MATLAB's 3×3 AxesMisalignment in percent: diagonal 100·(1 + scale error), off-diagonal
+    // 100·cross-axis sensitivity; column-major storage for MAT files.
+    for (int j = 0; j < 3; ++j) c.mis[static_cast<std::size_t>(j * 3 + k)] = 100.0 * row[j];
+    // Linear temperature coefficients at T0: central differences of the model over ±1 °C.
+    const auto& t = im.temp[uk];
+    c.tb[uk] = t ? 0.5 * (offset_at(t, k, T0 + 1) - offset_at(t, k, T0 - 1)) : 0.0;
+    c.tsf[uk] = t ? 100.0 * 0.5 * (input_row(t, k, T0 + 1)[k] - input_row(t, k, T0 - 1)[k]) : 0.0;
+    if (!m) not_estimated += fmt::format("{} axis {}: ConstantBias, AxesMisalignment; ", inst, kAxisNames[k]);
+    if (!t) not_estimated += fmt::format("{} axis {}: TemperatureBias, TemperatureScaleFactor; ", inst, kAxisNames[k]);
+  }
+  return c;
+}
+
+// NoiseDensity, BiasInstability and RandomWalk from allan.json: the mean over the instrument's
+// axes of N, B and K where identified, else 0 (noted in not_estimated).
+void add_matlab_noise(MatStruct& s, const std::optional<json>& al, const char* inst, std::string& not_estimated) {
+  double N = 0, B = 0, K = 0;
+  int nN = 0, nB = 0, nK = 0;
+  if (al)
+    for (const auto& ch : al->value("channels", json::array())) {
+      if (jstr(ch, "instrument") != inst) continue;
+      const json m = ch.value("model", json::object());
+      auto take = [&](const char* sym, double& acc, int& n) {
+        const json c = m.value(sym, json::object());
+        if (c.value("identified", false)) {
+          acc += jnum(c, "value");
+          ++n;
+        }
+      };
+      take("N", N, nN);
+      take("B", B, nB);
+      take("K", K, nK);
+    }
+  auto mean_or_zero = [&](double acc, int n, const char* field) {
+    if (n == 0) not_estimated += fmt::format("{}: {}; ", inst, field);
+    return n ? acc / n : 0.0;
+  };
+  s.add("NoiseDensity", std::vector<double>(3, mean_or_zero(N, nN, "NoiseDensity")), 1, 3);
+  s.add("BiasInstability", std::vector<double>(3, mean_or_zero(B, nB, "BiasInstability")), 1, 3);
+  s.add("RandomWalk", std::vector<double>(3, mean_or_zero(K, nK, "RandomWalk")), 1, 3);
+}
+
+// The accelparams / gyroparams struct of one instrument (sensor description from run.json `info`).
+void write_matlab_params(mat_t* mat, const fs::path& run, const json& info, const std::optional<json>& al,
+                         const char* inst, ExportResult& res, std::string& not_estimated) {
+  const bool accel = inst[0] == 'a';
+  const InstrumentModels im = models_for(run, inst, res.warnings);
+  const double T0 = std::isfinite(im.reference_c) ? im.reference_c : 25.0;
+  MatStruct s;
+  s.add("MeasurementRange", {jnum(info, accel ? "accel_range_mps2" : "gyro_range_radps")}, 1, 1);
+  s.add("Resolution", {jnum(info, accel ? "accel_lsb_mps2" : "gyro_lsb_radps")}, 1, 1);
+  const MatlabCalibration c = matlab_calibration(im, inst, T0, not_estimated);
+  s.add("ConstantBias", c.bias, 1, 3);
+  s.add("AxesMisalignment", c.mis, 3, 3);
+  add_matlab_noise(s, al, inst, not_estimated);
+  s.add("TemperatureBias", c.tb, 1, 3);
+  s.add("TemperatureScaleFactor", c.tsf, 1, 3);
+  if (!accel) s.add("AccelerationBias", {0.0, 0.0, 0.0}, 1, 3);
+  s.write(mat, accel ? "accelparams" : "gyroparams");
+}
+
+// The stend_info struct: run identity, procedure, what was exported as 0, units.
+void write_matlab_info(mat_t* mat, const RunResults& rr, const std::string& not_estimated) {
+  MatStruct meta;
+  meta.add_text("run", rr.run_name);
+  meta.add_text("vendor", rr.vendor);
+  meta.add_text("model", rr.model);
+  meta.add_text("serial", rr.serial);
+  meta.add_text("procedure_fingerprint", rr.procedure_fingerprint);
+  meta.add_text("not_estimated", not_estimated);
+  meta.add_text("units", "SI: m/s^2, rad/s, degC; AxesMisalignment and TemperatureScaleFactor in percent");
+  meta.write(mat, "stend_info");
+}
+
 ExportResult export_matlab(const fs::path& run, const RunResults& rr, const fs::path& out) {
   ExportResult res;
   json runj;
@@ -323,70 +412,8 @@ ExportResult export_matlab(const fs::path& run, const RunResults& rr, const fs::
   mat_t* mat = Mat_CreateVer(out.c_str(), nullptr, MAT_FT_MAT5);
   if (!mat) throw std::runtime_error(out.string() + ": cannot create the .mat file");
   std::string not_estimated;
-  for (const char* inst : {"accelerometer", "gyroscope"}) {
-    const bool accel = inst[0] == 'a';
-    const InstrumentModels im = models_for(run, inst, res.warnings);
-    const double T0 = std::isfinite(im.reference_c) ? im.reference_c : 25.0;
-    MatStruct s;
-    s.add("MeasurementRange", {jnum(info, accel ? "accel_range_mps2" : "gyro_range_radps")}, 1, 1);
-    s.add("Resolution", {jnum(info, accel ? "accel_lsb_mps2" : "gyro_lsb_radps")}, 1, 1);
-    std::vector<double> bias(3), mis(9), tb(3), tsf(3);
-    for (int k = 0; k < 3; ++k) {
-      const auto uk = static_cast<std::size_t>(k);
-      const auto& m = im.calib[uk];
-      bias[uk] = offset_at(m, k, T0);
-      const Eigen::RowVector3d row = input_row(m, k, T0);
-      // MATLAB's 3×3 AxesMisalignment in percent: diagonal 100·(1 + scale error), off-diagonal
-      // 100·cross-axis sensitivity; column-major storage for MAT files.
-      for (int j = 0; j < 3; ++j) mis[static_cast<std::size_t>(j * 3 + k)] = 100.0 * row[j];
-      // Linear temperature coefficients at T0: central differences of the model over ±1 °C.
-      const auto& t = im.temp[uk];
-      tb[uk] = t ? 0.5 * (offset_at(t, k, T0 + 1) - offset_at(t, k, T0 - 1)) : 0.0;
-      tsf[uk] = t ? 100.0 * 0.5 * (input_row(t, k, T0 + 1)[k] - input_row(t, k, T0 - 1)[k]) : 0.0;
-      if (!m) not_estimated += fmt::format("{} axis {}: ConstantBias, AxesMisalignment; ", inst, kAxisNames[k]);
-      if (!t) not_estimated += fmt::format("{} axis {}: TemperatureBias, TemperatureScaleFactor; ", inst, kAxisNames[k]);
-    }
-    s.add("ConstantBias", bias, 1, 3);
-    s.add("AxesMisalignment", mis, 3, 3);
-    // Noise from allan.json: mean over the axes of N, B and K where identified.
-    double N = 0, B = 0, K = 0;
-    int nN = 0, nB = 0, nK = 0;
-    if (al)
-      for (const auto& ch : al->value("channels", json::array())) {
-        if (jstr(ch, "instrument") != inst) continue;
-        const json m = ch.value("model", json::object());
-        auto take = [&](const char* sym, double& acc, int& n) {
-          const json c = m.value(sym, json::object());
-          if (c.value("identified", false)) {
-            acc += jnum(c, "value");
-            ++n;
-          }
-        };
-        take("N", N, nN);
-        take("B", B, nB);
-        take("K", K, nK);
-      }
-    auto mean_or_zero = [&](double acc, int n, const char* field) {
-      if (n == 0) not_estimated += fmt::format("{}: {}; ", inst, field);
-      return n ? acc / n : 0.0;
-    };
-    s.add("NoiseDensity", std::vector<double>(3, mean_or_zero(N, nN, "NoiseDensity")), 1, 3);
-    s.add("BiasInstability", std::vector<double>(3, mean_or_zero(B, nB, "BiasInstability")), 1, 3);
-    s.add("RandomWalk", std::vector<double>(3, mean_or_zero(K, nK, "RandomWalk")), 1, 3);
-    s.add("TemperatureBias", tb, 1, 3);
-    s.add("TemperatureScaleFactor", tsf, 1, 3);
-    if (!accel) s.add("AccelerationBias", {0.0, 0.0, 0.0}, 1, 3);
-    s.write(mat, accel ? "accelparams" : "gyroparams");
-  }
-  MatStruct meta;
-  meta.add_text("run", rr.run_name);
-  meta.add_text("vendor", rr.vendor);
-  meta.add_text("model", rr.model);
-  meta.add_text("serial", rr.serial);
-  meta.add_text("procedure_fingerprint", rr.procedure_fingerprint);
-  meta.add_text("not_estimated", not_estimated);
-  meta.add_text("units", "SI: m/s^2, rad/s, degC; AxesMisalignment and TemperatureScaleFactor in percent");
-  meta.write(mat, "stend_info");
+  for (const char* inst : {"accelerometer", "gyroscope"}) write_matlab_params(mat, run, info, al, inst, res, not_estimated);
+  write_matlab_info(mat, rr, not_estimated);
   Mat_Close(mat);
   if (!not_estimated.empty()) res.warnings.push_back("exported as 0 (not estimated): " + not_estimated);
   res.files.push_back(out);

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -129,16 +130,10 @@ double display_scale(const json& fit) {
   return 1.0;
 }
 
-// Residual against orientation and static means against truth for a fit document.
-std::string fit_plots(const json& fit, const std::string& what) {
-  if (!fit.contains("points") || !fit.contains("residuals")) return {};
-  const json& points = fit["points"];
-  const json rows = fit["residuals"].value("rows", json::array());
-  const std::string unit = fit.value("units", json::object()).value("residual", "m/s^2");
-  const std::string dunit = fit.value("units", json::object()).value("residual_display", unit);
-  const double ds = display_scale(fit);
-  std::string o;
-  // Residual against orientation: one series per fitted axis, x = orientation (point) number.
+// Residual against orientation: one series per fitted axis, x = orientation (point) number, with
+// ±σ lines (residuals scaled to the display unit by ds).
+std::string residual_plot(const json& fit, const json& points, const json& rows, const std::string& what,
+                          const std::string& dunit, double ds) {
   Plot r;
   r.title = what + ": residual against orientation";
   r.x_label = "orientation (segment id)";
@@ -166,39 +161,55 @@ std::string fit_plots(const json& fit, const std::string& what) {
     r.lines.push_back({true, sigma * ds, "+σ", "#999"});
     r.lines.push_back({true, -sigma * ds, "−σ", "#999"});
   }
-  o += figure(r, "Residual Δ − fitted of each static orientation (σ: residual standard deviation of the fit).");
-  // Static means against truth: per fitted axis, (measured − true) against the true input.
+  return figure(r, "Residual Δ − fitted of each static orientation (σ: residual standard deviation of the fit).");
+}
+
+// Static means against truth on axis ax (index k): (measured − true) ± 2 SE against the true
+// input, and the fitted model at the same stimulus (display unit via ds).
+std::string static_mean_plot(const json& points, const json& rows, const std::string& what, const std::string& ax,
+                             std::size_t k, const std::string& unit, const std::string& dunit, double ds) {
+  Plot p;
+  p.title = what + ": static mean − truth, axis " + ax;
+  p.x_label = "true input, axis " + ax + " [" + unit + "]";
+  p.y_label = "measured − true [" + dunit + "]";
+  Series meas{"measured mean ± 2 SE", Style::kPoints, {}, {}, {}, {}, svg::palette(k), false, 1.0};
+  Series fitted{"fitted model", Style::kPoints, {}, {}, {}, {}, "#000", false, 0.55};
+  for (const auto& pt : points) {
+    const double u = at(pt.value("true_input", json::array()), k);
+    const double m = at(pt.value("measured", json::array()), k);
+    const double se = at(pt.value("measured_std_error", json::array()), k);
+    meas.x.push_back(u);
+    meas.y.push_back((m - u) * ds);
+    meas.y_lo.push_back((m - u - 2 * se) * ds);
+    meas.y_hi.push_back((m - u + 2 * se) * ds);
+  }
+  for (const auto& row : rows) {
+    if (str(row, "axis") != ax) continue;
+    const auto pi = static_cast<std::size_t>(std::max(0.0, num(row, "point")));
+    if (pi >= points.size()) continue;
+    fitted.x.push_back(at(points[pi].value("true_input", json::array()), k));
+    fitted.y.push_back(num(row, "fitted") * ds);
+  }
+  p.series = {meas, fitted};
+  return figure(p, "Each static orientation's low-passed mean minus the bench truth, against the truth; black: the "
+                   "fitted error model at the same stimulus.");
+}
+
+// Residual against orientation and static means against truth for a fit document.
+std::string fit_plots(const json& fit, const std::string& what) {
+  if (!fit.contains("points") || !fit.contains("residuals")) return {};
+  const json& points = fit["points"];
+  const json rows = fit["residuals"].value("rows", json::array());
+  const std::string unit = fit.value("units", json::object()).value("residual", "m/s^2");
+  const std::string dunit = fit.value("units", json::object()).value("residual_display", unit);
+  const double ds = display_scale(fit);
+  std::string o = residual_plot(fit, points, rows, what, dunit, ds);
   std::set<std::string> axes;
   for (const auto& row : rows) axes.insert(str(row, "axis"));
   for (const std::string& ax : axes) {
     const int k = axis_index(ax);
     if (k < 0) continue;
-    const auto uk = static_cast<std::size_t>(k);
-    Plot p;
-    p.title = what + ": static mean − truth, axis " + ax;
-    p.x_label = "true input, axis " + ax + " [" + unit + "]";
-    p.y_label = "measured − true [" + dunit + "]";
-    Series meas{"measured mean ± 2 SE", Style::kPoints, {}, {}, {}, {}, svg::palette(uk), false, 1.0};
-    Series fitted{"fitted model", Style::kPoints, {}, {}, {}, {}, "#000", false, 0.55};
-    for (const auto& pt : points) {
-      const double u = at(pt.value("true_input", json::array()), uk);
-      const double m = at(pt.value("measured", json::array()), uk);
-      const double se = at(pt.value("measured_std_error", json::array()), uk);
-      meas.x.push_back(u);
-      meas.y.push_back((m - u) * ds);
-      meas.y_lo.push_back((m - u - 2 * se) * ds);
-      meas.y_hi.push_back((m - u + 2 * se) * ds);
-    }
-    for (const auto& row : rows) {
-      if (str(row, "axis") != ax) continue;
-      const auto pi = static_cast<std::size_t>(std::max(0.0, num(row, "point")));
-      if (pi >= points.size()) continue;
-      fitted.x.push_back(at(points[pi].value("true_input", json::array()), uk));
-      fitted.y.push_back(num(row, "fitted") * ds);
-    }
-    p.series = {meas, fitted};
-    o += figure(p, "Each static orientation's low-passed mean minus the bench truth, against the truth; black: the "
-                   "fitted error model at the same stimulus.");
+    o += static_mean_plot(points, rows, what, ax, static_cast<std::size_t>(k), unit, dunit, ds);
   }
   return o;
 }
@@ -232,6 +243,125 @@ std::string fit_section(const json& fit, const std::string& file) {
 
 // ---- temperature -------------------------------------------------------------------------------
 
+// Display scale and unit of a temp_poly result: mg for an accelerometer, deg/h for a gyroscope.
+struct TempDisplay {
+  double scale;
+  std::string unit;
+};
+
+// The candidate orders with their BIC, CV error and rank, and the chosen one.
+std::string order_table(const json& ax) {
+  std::string o = fmt::format("<p>chosen polynomial order: <b>{}</b></p><table><tr><th>order</th><th>BIC</th><th>CV MSE</th>"
+                              "<th>rank</th><th>note</th></tr>\n",
+                              ax.value("chosen_order", -1));
+  for (const auto& s : ax.value("scores", json::array()))
+    o += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n", s.value("order", -1),
+                     g(num(s, "bic")), g(num(s, "cv_mse")), g(num(s, "rank")), escape(str(s, "note")));
+  return o + "</table>\n";
+}
+
+// Zero offset [display unit] and scale-factor error [ppm] of axis k against temperature tlo..thi
+// [°C] (81 steps), each as a curve with its interval band: {band, curve, scale band, scale curve}.
+std::array<Series, 4> temperature_curves(const FittedModel& fm, int k, double tlo, double thi, double ds) {
+  const auto uk = static_cast<std::size_t>(k);
+  Series band{"interval", Style::kBand, {}, {}, {}, {}, svg::palette(uk), false, 0.25};
+  Series curve{"fitted zero offset", Style::kLine, {}, {}, {}, {}, svg::palette(uk), false, 1.0};
+  Series sband{"interval", Style::kBand, {}, {}, {}, {}, svg::palette(uk), false, 0.25};
+  Series scurve{"fitted scale error", Style::kLine, {}, {}, {}, {}, svg::palette(uk), false, 1.0};
+  const model::Vec3<double> zero = model::Vec3<double>::Zero();
+  model::Vec3<double> unit_in = zero;
+  unit_in[k] = 1.0;
+  for (int i = 0; i <= 80; ++i) {
+    const double T = tlo + (thi - tlo) * i / 80.0;
+    const auto [b, bse] = contribution(fm, k, zero, T);
+    curve.x.push_back(T);
+    curve.y.push_back(b * ds);
+    band.x.push_back(T);
+    band.y_lo.push_back((b - fm.quantile * bse) * ds);
+    band.y_hi.push_back((b + fm.quantile * bse) * ds);
+    const auto [sc, sse] = contribution(fm, k, unit_in, T, &zero);
+    scurve.x.push_back(T);
+    scurve.y.push_back(sc * 1e6);
+    sband.x.push_back(T);
+    sband.y_lo.push_back((sc - fm.quantile * sse) * 1e6);
+    sband.y_hi.push_back((sc + fm.quantile * sse) * 1e6);
+  }
+  return {band, curve, sband, scurve};
+}
+
+// Partial residuals of axis a (index k): each static orientation's residual added to the fitted
+// offset at its temperature [display unit], against temperature [°C].
+Series partial_residuals(const FittedModel& fm, const json& fit, const std::string& a, int k, double ds) {
+  const json points = fit.value("points", json::array());
+  const model::Vec3<double> zero = model::Vec3<double>::Zero();
+  Series pts{"observations (partial residuals)", Style::kPoints, {}, {}, {}, {}, "#222", false, 0.7};
+  for (const auto& row : fit.value("residuals", json::object()).value("rows", json::array())) {
+    if (str(row, "axis") != a) continue;
+    const auto pi = static_cast<std::size_t>(std::max(0.0, num(row, "point")));
+    if (pi >= points.size()) continue;
+    const double T = num(points[pi], "temperature_c");
+    pts.x.push_back(T);
+    pts.y.push_back((contribution(fm, k, zero, T).first + num(row, "residual")) * ds);
+  }
+  return pts;
+}
+
+// Zero-offset and scale-factor plots of axis a (index k) over the valid range and the points'
+// temperatures [°C]; nothing when that range is empty.
+std::string temperature_plots(const json& ax, const json& fit, const FittedModel& fm, const std::string& a, int k,
+                              double vmin, double vmax, const TempDisplay& d) {
+  double tlo = vmin, thi = vmax;
+  for (const auto& p : fit.value("points", json::array())) {
+    tlo = std::min(tlo, num(p, "temperature_c"));
+    thi = std::max(thi, num(p, "temperature_c"));
+  }
+  if (!std::isfinite(tlo) || !std::isfinite(thi) || !(thi > tlo)) return "";
+  const auto [band, curve, sband, scurve] = temperature_curves(fm, k, tlo, thi, d.scale);
+  Plot p;
+  p.title = "zero offset against temperature, axis " + a;
+  p.x_label = "die temperature [°C]";
+  p.y_label = "zero offset [" + d.unit + "]";
+  p.series = {band, curve, partial_residuals(fm, fit, a, k, d.scale)};
+  std::string o = figure(p, fmt::format("Fitted bias polynomial (order {}) with its {:.0f} % interval band; points: each static "
+                                        "orientation's residual added to the fitted offset at its temperature.",
+                                        ax.value("chosen_order", -1), 100 * num(fit.value("solution", json::object()), "confidence")));
+  Plot s;
+  s.title = "scale-factor error against temperature, axis " + a;
+  s.x_label = "die temperature [°C]";
+  s.y_label = "scale-factor error [ppm]";
+  s.series = {sband, scurve};
+  return o + figure(s, "Fitted scale-factor error (scale + scale_temperature terms) with its interval band.");
+}
+
+// Cooling-minus-heating hysteresis per level with its standard error and interval.
+std::string hysteresis_table(const json& hy) {
+  std::string o = "<table><tr><th>level [°C]</th><th>cooling − heating</th><th>std error</th><th>interval</th><th>significant</th></tr>\n";
+  for (const auto& h : hy)
+    o += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>[{}, {}]</td><td>{}</td></tr>\n",
+                     g(num(h, "temperature_c")), g(num(h, "value")), g(num(h, "std_error")), g(num(h, "lower")),
+                     g(num(h, "upper")), h.value("significant", false) ? "YES" : "no");
+  return o + "</table>\n";
+}
+
+// One axis of a temp_poly result: order table, parameters, plots and hysteresis.
+std::string temp_axis(const json& ax, double vmin, double vmax, const TempDisplay& d) {
+  const std::string a = str(ax, "axis");
+  const int k = axis_index(a);
+  std::string o = fmt::format("<h3>axis {}</h3>\n", escape(a));
+  if (!ax.value("ok", false) || !ax.contains("fit") || ax["fit"].is_null())
+    return o + "<p class=\"bad\">axis failed: " + escape(str(ax, "message")) + "</p>\n";
+  const json& fit = ax["fit"];
+  o += order_table(ax) + parameter_table(fit);
+  const FittedModel fm = fitted_model(fit);
+  if (!fm.ok || k < 0) return o;
+  const std::string plots = temperature_plots(ax, fit, fm, a, k, vmin, vmax, d);
+  if (plots.empty()) return o;
+  o += plots;
+  const json hy = ax.value("hysteresis", json::array());
+  if (!hy.empty()) o += hysteresis_table(hy);
+  return o;
+}
+
 std::string temp_section(const json& tp) {
   std::string o = "<h2>Temperature model — temp_poly <span class=\"file\">(temp_poly.json)</span></h2>\n";
   if (estimation::status_of(tp) != estimation::FitStatus::kOk)
@@ -240,99 +370,127 @@ std::string temp_section(const json& tp) {
   const double vmin = at(tp.value("valid_range_c", json::array()), 0), vmax = at(tp.value("valid_range_c", json::array()), 1);
   o += fmt::format("<p>Reference temperature T0 = {} °C; coefficients valid over {} … {} °C (die temperature).</p>\n",
                    g(num(tp, "reference_c")), g(vmin), g(vmax));
-  const std::string unit = str(tp, "unit");
-  const bool accel = unit != "rad/s";
-  const double ds = accel ? 1.0 / physics::kMilliG : 1.0 / physics::kDegPerHour;
-  const std::string dunit = accel ? "mg" : "deg/h";
-  for (const auto& ax : tp.value("axes", json::array())) {
-    const std::string a = str(ax, "axis");
-    const int k = axis_index(a);
-    o += fmt::format("<h3>axis {}</h3>\n", escape(a));
-    if (!ax.value("ok", false) || !ax.contains("fit") || ax["fit"].is_null()) {
-      o += "<p class=\"bad\">axis failed: " + escape(str(ax, "message")) + "</p>\n";
-      continue;
-    }
-    const json& fit = ax["fit"];
-    // Order selection table.
-    o += fmt::format("<p>chosen polynomial order: <b>{}</b></p><table><tr><th>order</th><th>BIC</th><th>CV MSE</th>"
-                     "<th>rank</th><th>note</th></tr>\n",
-                     ax.value("chosen_order", -1));
-    for (const auto& s : ax.value("scores", json::array()))
-      o += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n", s.value("order", -1),
-                       g(num(s, "bic")), g(num(s, "cv_mse")), g(num(s, "rank")), escape(str(s, "note")));
-    o += "</table>\n" + parameter_table(fit);
-    const FittedModel fm = fitted_model(fit);
-    if (!fm.ok || k < 0) continue;
-    const auto uk = static_cast<std::size_t>(k);
-    double tlo = vmin, thi = vmax;
-    const json points = fit.value("points", json::array());
-    for (const auto& p : points) {
-      tlo = std::min(tlo, num(p, "temperature_c"));
-      thi = std::max(thi, num(p, "temperature_c"));
-    }
-    if (!std::isfinite(tlo) || !std::isfinite(thi) || !(thi > tlo)) continue;
-    // Zero offset against temperature: curve with its interval band, and partial residuals
-    // (residual + fitted offset at the point's temperature) for every static orientation.
-    Series band{"interval", Style::kBand, {}, {}, {}, {}, svg::palette(uk), false, 0.25};
-    Series curve{"fitted zero offset", Style::kLine, {}, {}, {}, {}, svg::palette(uk), false, 1.0};
-    Series sband{"interval", Style::kBand, {}, {}, {}, {}, svg::palette(uk), false, 0.25};
-    Series scurve{"fitted scale error", Style::kLine, {}, {}, {}, {}, svg::palette(uk), false, 1.0};
-    const model::Vec3<double> zero = model::Vec3<double>::Zero();
-    model::Vec3<double> unit_in = zero;
-    unit_in[k] = 1.0;
-    for (int i = 0; i <= 80; ++i) {
-      const double T = tlo + (thi - tlo) * i / 80.0;
-      const auto [b, bse] = contribution(fm, k, zero, T);
-      curve.x.push_back(T);
-      curve.y.push_back(b * ds);
-      band.x.push_back(T);
-      band.y_lo.push_back((b - fm.quantile * bse) * ds);
-      band.y_hi.push_back((b + fm.quantile * bse) * ds);
-      const auto [sc, sse] = contribution(fm, k, unit_in, T, &zero);
-      scurve.x.push_back(T);
-      scurve.y.push_back(sc * 1e6);
-      sband.x.push_back(T);
-      sband.y_lo.push_back((sc - fm.quantile * sse) * 1e6);
-      sband.y_hi.push_back((sc + fm.quantile * sse) * 1e6);
-    }
-    Series pts{"observations (partial residuals)", Style::kPoints, {}, {}, {}, {}, "#222", false, 0.7};
-    for (const auto& row : fit.value("residuals", json::object()).value("rows", json::array())) {
-      if (str(row, "axis") != a) continue;
-      const auto pi = static_cast<std::size_t>(std::max(0.0, num(row, "point")));
-      if (pi >= points.size()) continue;
-      const double T = num(points[pi], "temperature_c");
-      pts.x.push_back(T);
-      pts.y.push_back((contribution(fm, k, zero, T).first + num(row, "residual")) * ds);
-    }
-    Plot p;
-    p.title = "zero offset against temperature, axis " + a;
-    p.x_label = "die temperature [°C]";
-    p.y_label = "zero offset [" + dunit + "]";
-    p.series = {band, curve, pts};
-    o += figure(p, fmt::format("Fitted bias polynomial (order {}) with its {:.0f} % interval band; points: each static "
-                               "orientation's residual added to the fitted offset at its temperature.",
-                               ax.value("chosen_order", -1), 100 * num(fit.value("solution", json::object()), "confidence")));
-    Plot s;
-    s.title = "scale-factor error against temperature, axis " + a;
-    s.x_label = "die temperature [°C]";
-    s.y_label = "scale-factor error [ppm]";
-    s.series = {sband, scurve};
-    o += figure(s, "Fitted scale-factor error (scale + scale_temperature terms) with its interval band.");
-    // Hysteresis.
-    const json hy = ax.value("hysteresis", json::array());
-    if (!hy.empty()) {
-      o += "<table><tr><th>level [°C]</th><th>cooling − heating</th><th>std error</th><th>interval</th><th>significant</th></tr>\n";
-      for (const auto& h : hy)
-        o += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>[{}, {}]</td><td>{}</td></tr>\n",
-                         g(num(h, "temperature_c")), g(num(h, "value")), g(num(h, "std_error")), g(num(h, "lower")),
-                         g(num(h, "upper")), h.value("significant", false) ? "YES" : "no");
-      o += "</table>\n";
-    }
-  }
+  const bool accel = str(tp, "unit") != "rad/s";
+  const TempDisplay d{accel ? 1.0 / physics::kMilliG : 1.0 / physics::kDegPerHour, accel ? "mg" : "deg/h"};
+  for (const auto& ax : tp.value("axes", json::array())) o += temp_axis(ax, vmin, vmax, d);
   return o;
 }
 
 // ---- Allan ---------------------------------------------------------------------------------------
+
+// The fitted noise model of a channel's "model" document (missing coefficients as 0), for the
+// Allan library's own formula.
+allan::NoiseModel noise_model_from_json(const json& m) {
+  allan::NoiseModel nm;
+  nm.quantization.fitted = num(m.value("Q", json::object()), "fitted");
+  nm.white.fitted = num(m.value("N", json::object()), "fitted");
+  nm.bias_instability.fitted = num(m.value("B", json::object()), "fitted");
+  nm.random_walk.fitted = num(m.value("K", json::object()), "fitted");
+  nm.rate_ramp.fitted = num(m.value("R", json::object()), "fitted");
+  for (auto* coef : {&nm.quantization, &nm.white, &nm.bias_instability, &nm.random_walk, &nm.rate_ramp})
+    if (!std::isfinite(coef->fitted)) coef->fitted = 0.0;
+  return nm;
+}
+
+// The fitted model's ADEV over its τ range [s] (61 log-spaced τ, dashed in color c), and the slope
+// lines of the identified coefficients: −½ (N/√τ), +½ (K·√(τ/3)); empty lines are left out.
+std::vector<Series> model_series(const json& m, const std::string& c) {
+  const allan::NoiseModel nm = noise_model_from_json(m);
+  const json tr = m.value("tau_range_s", json::array());
+  const double t0 = at(tr, 0), t1 = at(tr, 1);
+  Series model{"", Style::kLine, {}, {}, {}, {}, c, true, 1.0};
+  Series nline{"", Style::kLine, {}, {}, {}, {}, "#555", true, 0.6};
+  Series kline{"", Style::kLine, {}, {}, {}, {}, "#999", true, 0.6};
+  const json N = m.value("N", json::object()), K = m.value("K", json::object());
+  if (std::isfinite(t0) && std::isfinite(t1) && t1 > t0) {
+    for (int i = 0; i <= 60; ++i) {
+      const double tau = t0 * std::pow(t1 / t0, i / 60.0);
+      model.x.push_back(tau);
+      model.y.push_back(std::sqrt(nm.avar(tau)));
+      if (N.value("identified", false)) {
+        nline.x.push_back(tau);
+        nline.y.push_back(num(N, "value") / std::sqrt(tau));
+      }
+      if (K.value("identified", false)) {
+        kline.x.push_back(tau);
+        kline.y.push_back(num(K, "value") * std::sqrt(tau / 3.0));
+      }
+    }
+  }
+  std::vector<Series> out = {model};
+  if (!nline.x.empty()) out.push_back(nline);
+  if (!kline.x.empty()) out.push_back(kline);
+  return out;
+}
+
+// Table row of a channel's N, K and B: value ± σ when identified, else the upper bound.
+std::string coefficient_row(const json& ch, const json& m) {
+  auto cell = [](const json& coef) {
+    if (coef.value("identified", false))
+      return fmt::format("{} ± {}", g3(num(coef, "value")), g3(num(coef, "sigma")));
+    return fmt::format("≤ {} (not identified)", g3(num(coef, "upper_bound")));
+  };
+  const json N = m.value("N", json::object()), K = m.value("K", json::object()), B = m.value("B", json::object());
+  return fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n", escape(str(ch, "channel")),
+                     cell(N), cell(K), cell(B), escape(str(N, "unit") + ", " + str(K, "unit") + ", " + str(B, "unit")));
+}
+
+// One channel into the instrument's plot (confidence band, points, model curves in color c) and
+// its table row (or the model's failure).
+void add_allan_channel(const json& ch, const std::string& c, Plot& p, std::string& table) {
+  p.y_label = "Allan deviation [" + str(ch, "unit") + "]";
+  Series band{"", Style::kBand, {}, {}, {}, {}, c, false, 0.2};
+  Series pts{str(ch, "channel"), Style::kPoints, {}, {}, {}, {}, c, false, 1.0};
+  for (const auto& pt : ch.value("points", json::array())) {
+    band.x.push_back(num(pt, "tau_s"));
+    band.y_lo.push_back(num(pt, "adev_lo"));
+    band.y_hi.push_back(num(pt, "adev_hi"));
+    pts.x.push_back(num(pt, "tau_s"));
+    pts.y.push_back(num(pt, "adev"));
+  }
+  p.series.push_back(band);
+  p.series.push_back(pts);
+  const json m = ch.value("model", json::object());
+  if (!m.value("ok", false)) {
+    table += fmt::format("<tr><td>{}</td><td colspan=\"5\" class=\"bad\">model fit failed: {}</td></tr>\n",
+                         escape(str(ch, "channel")), escape(str(m, "message")));
+    return;
+  }
+  for (auto& s : model_series(m, c)) p.series.push_back(std::move(s));
+  table += coefficient_row(ch, m);
+}
+
+// The Allan plot and coefficient table of one instrument; nothing when it has no channel.
+std::string allan_instrument(const json& al, const std::string& inst) {
+  Plot p;
+  p.x_log = p.y_log = true;
+  p.width = 760;
+  p.height = 440;
+  p.title = inst + " Allan deviation";
+  p.x_label = "averaging time τ [s]";
+  std::string table;
+  std::size_t color = 0;
+  for (const auto& ch : al.value("channels", json::array()))
+    if (str(ch, "instrument") == inst) add_allan_channel(ch, svg::palette(color++), p, table);
+  if (color == 0) return "";
+  return figure(p, "Overlapping Allan deviation with its confidence band (shaded), the fitted noise model (dashed, "
+                   "same color) and the slope lines of identified coefficients (grey dashed: −½ white noise N/√τ, "
+                   "light grey: +½ random walk K·√(τ/3)).") +
+         "<table><tr><th>channel</th><th>N (white)</th><th>K (random walk)</th><th>B (bias instability)</th>"
+         "<th>units N, K, B</th></tr>\n" + table + "</table>\n";
+}
+
+// The Kalibr noise parameters (with identification and upper-bound flags).
+std::string kalibr_paragraph(const json& kb) {
+  return fmt::format(
+      "<p>Kalibr: accelerometer_noise_density {}{}, accelerometer_random_walk {}{}, gyroscope_noise_density {}{}, "
+      "gyroscope_random_walk {}{}, update_rate {} Hz (<code>stend export RUN --to kalibr</code>).</p>\n",
+      g3(num(kb, "accelerometer_noise_density")), kb.value("accelerometer_noise_identified", false) ? "" : " (not identified)",
+      g3(num(kb, "accelerometer_random_walk")), kb.value("accelerometer_random_walk_is_upper_bound", false) ? " (UPPER BOUND)" : "",
+      g3(num(kb, "gyroscope_noise_density")), kb.value("gyroscope_noise_identified", false) ? "" : " (not identified)",
+      g3(num(kb, "gyroscope_random_walk")), kb.value("gyroscope_random_walk_is_upper_bound", false) ? " (UPPER BOUND)" : "",
+      g(num(kb, "update_rate")));
+}
 
 std::string allan_section(const json& al) {
   std::string o = "<h2>Noise — Allan deviation <span class=\"file\">(allan.json)</span></h2>\n";
@@ -340,202 +498,138 @@ std::string allan_section(const json& al) {
                    escape(str(al, "source")));
   for (const auto& w : al.value("warnings", json::array()))
     if (w.is_string()) o += "<p class=\"warn\">warning: " + escape(w.get<std::string>()) + "</p>\n";
-  for (const char* inst : {"accelerometer", "gyroscope"}) {
-    Plot p;
-    p.x_log = p.y_log = true;
-    p.width = 760;
-    p.height = 440;
-    p.title = std::string(inst) + " Allan deviation";
-    p.x_label = "averaging time τ [s]";
-    std::string table;
-    std::size_t color = 0;
-    for (const auto& ch : al.value("channels", json::array())) {
-      if (str(ch, "instrument") != inst) continue;
-      p.y_label = "Allan deviation [" + str(ch, "unit") + "]";
-      const std::string c = svg::palette(color++);
-      Series band{"", Style::kBand, {}, {}, {}, {}, c, false, 0.2};
-      Series pts{str(ch, "channel"), Style::kPoints, {}, {}, {}, {}, c, false, 1.0};
-      for (const auto& pt : ch.value("points", json::array())) {
-        band.x.push_back(num(pt, "tau_s"));
-        band.y_lo.push_back(num(pt, "adev_lo"));
-        band.y_hi.push_back(num(pt, "adev_hi"));
-        pts.x.push_back(num(pt, "tau_s"));
-        pts.y.push_back(num(pt, "adev"));
-      }
-      p.series.push_back(band);
-      p.series.push_back(pts);
-      const json m = ch.value("model", json::object());
-      if (!m.value("ok", false)) {
-        table += fmt::format("<tr><td>{}</td><td colspan=\"5\" class=\"bad\">model fit failed: {}</td></tr>\n",
-                             escape(str(ch, "channel")), escape(str(m, "message")));
-        continue;
-      }
-      // The fitted model through the Allan library's own formula.
-      allan::NoiseModel nm;
-      nm.quantization.fitted = num(m.value("Q", json::object()), "fitted");
-      nm.white.fitted = num(m.value("N", json::object()), "fitted");
-      nm.bias_instability.fitted = num(m.value("B", json::object()), "fitted");
-      nm.random_walk.fitted = num(m.value("K", json::object()), "fitted");
-      nm.rate_ramp.fitted = num(m.value("R", json::object()), "fitted");
-      for (auto* coef : {&nm.quantization, &nm.white, &nm.bias_instability, &nm.random_walk, &nm.rate_ramp})
-        if (!std::isfinite(coef->fitted)) coef->fitted = 0.0;
-      const json tr = m.value("tau_range_s", json::array());
-      const double t0 = at(tr, 0), t1 = at(tr, 1);
-      Series model{"", Style::kLine, {}, {}, {}, {}, c, true, 1.0};
-      Series nline{"", Style::kLine, {}, {}, {}, {}, "#555", true, 0.6};
-      Series kline{"", Style::kLine, {}, {}, {}, {}, "#999", true, 0.6};
-      const json N = m.value("N", json::object()), K = m.value("K", json::object()), B = m.value("B", json::object());
-      if (std::isfinite(t0) && std::isfinite(t1) && t1 > t0) {
-        for (int i = 0; i <= 60; ++i) {
-          const double tau = t0 * std::pow(t1 / t0, i / 60.0);
-          model.x.push_back(tau);
-          model.y.push_back(std::sqrt(nm.avar(tau)));
-          // Slope lines of the identified coefficients: −½ (N/√τ), +½ (K·√(τ/3)).
-          if (N.value("identified", false)) {
-            nline.x.push_back(tau);
-            nline.y.push_back(num(N, "value") / std::sqrt(tau));
-          }
-          if (K.value("identified", false)) {
-            kline.x.push_back(tau);
-            kline.y.push_back(num(K, "value") * std::sqrt(tau / 3.0));
-          }
-        }
-      }
-      p.series.push_back(model);
-      if (!nline.x.empty()) p.series.push_back(nline);
-      if (!kline.x.empty()) p.series.push_back(kline);
-      auto cell = [](const json& coef) {
-        if (coef.value("identified", false))
-          return fmt::format("{} ± {}", g3(num(coef, "value")), g3(num(coef, "sigma")));
-        return fmt::format("≤ {} (not identified)", g3(num(coef, "upper_bound")));
-      };
-      table += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n", escape(str(ch, "channel")),
-                           cell(N), cell(K), cell(B), escape(str(N, "unit") + ", " + str(K, "unit") + ", " + str(B, "unit")));
-    }
-    if (color == 0) continue;
-    o += figure(p, "Overlapping Allan deviation with its confidence band (shaded), the fitted noise model (dashed, "
-                   "same color) and the slope lines of identified coefficients (grey dashed: −½ white noise N/√τ, "
-                   "light grey: +½ random walk K·√(τ/3)).");
-    o += "<table><tr><th>channel</th><th>N (white)</th><th>K (random walk)</th><th>B (bias instability)</th>"
-         "<th>units N, K, B</th></tr>\n" + table + "</table>\n";
-  }
-  if (al.contains("kalibr")) {
-    const json& kb = al["kalibr"];
-    o += fmt::format(
-        "<p>Kalibr: accelerometer_noise_density {}{}, accelerometer_random_walk {}{}, gyroscope_noise_density {}{}, "
-        "gyroscope_random_walk {}{}, update_rate {} Hz (<code>stend export RUN --to kalibr</code>).</p>\n",
-        g3(num(kb, "accelerometer_noise_density")), kb.value("accelerometer_noise_identified", false) ? "" : " (not identified)",
-        g3(num(kb, "accelerometer_random_walk")), kb.value("accelerometer_random_walk_is_upper_bound", false) ? " (UPPER BOUND)" : "",
-        g3(num(kb, "gyroscope_noise_density")), kb.value("gyroscope_noise_identified", false) ? "" : " (not identified)",
-        g3(num(kb, "gyroscope_random_walk")), kb.value("gyroscope_random_walk_is_upper_bound", false) ? " (UPPER BOUND)" : "",
-        g(num(kb, "update_rate")));
-  }
+  for (const char* inst : {"accelerometer", "gyroscope"}) o += allan_instrument(al, inst);
+  if (al.contains("kalibr")) o += kalibr_paragraph(al["kalibr"]);
   return o;
 }
 
 // ---- gap -------------------------------------------------------------------------------------------
 
-std::string gap_section(const json& gp) {
+// Residual layout of a gap result: per axis (x y z), or the magnitude form (orientations unknown)
+// with one |f| row per segment in slot 0 of every vector.
+struct GapAxes {
+  bool magnitude = false;
+  int count = 3;
+  std::string label(int k) const { return magnitude ? std::string("|f|") : std::string(1, kAxes[k]); }
+};
+
+// Heading, the magnitude-form note, and the static residual RMS [m/s²] per axis and over the noise floor.
+std::string gap_summary(const json& gp, const GapAxes& axes) {
   std::string o = fmt::format("<h2>Sim-to-real gap — {} <span class=\"file\">(gap.json)</span></h2>\n",
                               escape(str(gp, "model")));
   const json gap = gp.value("gap", json::object());
   const json floor = gp.value("noise_floor", json::object());
-  // Magnitude form (orientations unknown): one |f| row per segment, in slot 0 of every vector.
-  const bool magnitude = str(gp, "form") == "magnitude";
-  const int n_axes = magnitude ? 1 : 3;
-  auto axis_label = [&](int k) { return magnitude ? std::string("|f|") : std::string(1, kAxes[k]); };
-  if (magnitude)
+  if (axes.magnitude)
     o += "<p>Magnitude form: the orientations were not recorded, only |g| is known; each segment is its mean "
          "along the estimated gravity direction, and rotations of the sensor frame cannot be seen.</p>\n";
   std::string rms, ratio;
-  for (int k = 0; k < n_axes; ++k) {
-    rms += fmt::format("{}{} {}", k ? ", " : "", axis_label(k), g3(at(gap.value("static_rms_mps2", json::array()), static_cast<std::size_t>(k))));
-    ratio += fmt::format("{}{} {}", k ? ", " : "", axis_label(k),
+  for (int k = 0; k < axes.count; ++k) {
+    rms += fmt::format("{}{} {}", k ? ", " : "", axes.label(k), g3(at(gap.value("static_rms_mps2", json::array()), static_cast<std::size_t>(k))));
+    ratio += fmt::format("{}{} {}", k ? ", " : "", axes.label(k),
                          g3(at(gap.value("static_rms_over_floor", json::array()), static_cast<std::size_t>(k))));
   }
   o += fmt::format("<p>Static residual RMS [m/s²]: {}; over the noise floor: {} (floor source: {}).</p>\n", rms, ratio,
                    escape(str(floor, "source")));
-  // Where: share of the gap by dimension and place.
-  const json where = gp.value("where", json::array());
-  if (!where.empty()) {
-    Plot p;
-    p.title = "where the gap lies";
-    p.y_label = "share of the residual energy";
-    p.x_label = "dimension : place";
-    p.width = 760;
-    p.height = 520;  // room for the slanted (dimension : place) labels
-    Series bars{"share", Style::kBars, {}, {}, {}, {}, svg::palette(3), false, 0.85};
-    for (std::size_t i = 0; i < where.size(); ++i) {
-      p.x_categories.push_back(str(where[i], "dimension") + ":" + str(where[i], "place"));
-      bars.x.push_back(static_cast<double>(i));
-      bars.y.push_back(num(where[i], "share"));
-    }
-    bars.name.clear();
-    p.series = {bars};
-    o += figure(p, "Localization: the share of the residual each (dimension, place) holds.");
+  return o;
+}
+
+// Where: bar chart of the share of the residual energy each (dimension, place) holds.
+std::string gap_where_figure(const json& where) {
+  Plot p;
+  p.title = "where the gap lies";
+  p.y_label = "share of the residual energy";
+  p.x_label = "dimension : place";
+  p.width = 760;
+  p.height = 520;  // room for the slanted (dimension : place) labels
+  Series bars{"share", Style::kBars, {}, {}, {}, {}, svg::palette(3), false, 0.85};
+  for (std::size_t i = 0; i < where.size(); ++i) {
+    p.x_categories.push_back(str(where[i], "dimension") + ":" + str(where[i], "place"));
+    bars.x.push_back(static_cast<double>(i));
+    bars.y.push_back(num(where[i], "share"));
   }
-  // Segments: residual per axis against temperature and time since the last change.
-  const json segs = gp.value("segments", json::array());
-  if (!segs.empty()) {
-    for (const char* dim : {"temperature_c", "time_since_change_s"}) {
-      Plot p;
-      p.title = std::string("segment residual against ") + (dim[0] == 't' && dim[1] == 'e' ? "temperature" : "time since change");
-      p.x_label = dim[1] == 'e' ? "temperature [°C]" : "time since the last change [s]";
-      p.y_label = "residual [mg]";
-      for (int k = 0; k < n_axes; ++k) {
-        Series s{fmt::format("axis {}", axis_label(k)), Style::kPoints, {}, {}, {}, {}, svg::palette(static_cast<std::size_t>(k)), false, 0.8};
-        for (const auto& sg : segs) {
-          s.x.push_back(num(sg, dim));
-          s.y.push_back(at(sg.value("axis_residual_mps2", json::array()), static_cast<std::size_t>(k)) / physics::kMilliG);
-        }
-        p.series.push_back(s);
+  bars.name.clear();
+  p.series = {bars};
+  return figure(p, "Localization: the share of the residual each (dimension, place) holds.");
+}
+
+// Segment residual per axis [mg] against temperature [°C] and against time since the last change [s].
+std::string gap_segment_figures(const json& segs, const GapAxes& axes) {
+  std::string o;
+  for (const char* dim : {"temperature_c", "time_since_change_s"}) {
+    Plot p;
+    p.title = std::string("segment residual against ") + (dim[0] == 't' && dim[1] == 'e' ? "temperature" : "time since change");
+    p.x_label = dim[1] == 'e' ? "temperature [°C]" : "time since the last change [s]";
+    p.y_label = "residual [mg]";
+    for (int k = 0; k < axes.count; ++k) {
+      Series s{fmt::format("axis {}", axes.label(k)), Style::kPoints, {}, {}, {}, {}, svg::palette(static_cast<std::size_t>(k)), false, 0.8};
+      for (const auto& sg : segs) {
+        s.x.push_back(num(sg, dim));
+        s.y.push_back(at(sg.value("axis_residual_mps2", json::array()), static_cast<std::size_t>(k)) / physics::kMilliG);
       }
-      p.lines.push_back({true, 0.0, "", "#555"});
-      o += figure(p, "Twin-minus-recording residual of each static segment, per axis.");
+      p.series.push_back(s);
     }
+    p.lines.push_back({true, 0.0, "", "#555"});
+    o += figure(p, "Twin-minus-recording residual of each static segment, per axis.");
   }
-  // Shrink: held-out RMS as candidate terms are added.
-  const json steps = gp.value("steps", json::array());
-  if (!steps.empty()) {
-    Plot p;
-    p.title = "how far the gap shrinks";
-    p.y_label = "RMS [m/s²]";
-    p.x_label = "model after step";
-    p.width = 760;
-    Series held{"held-out RMS", Style::kLinePoints, {}, {}, {}, {}, svg::palette(0), false, 1.0};
-    Series ins{"in-sample RMS", Style::kLinePoints, {}, {}, {}, {}, svg::palette(1), true, 1.0};
-    Series fl{"noise floor", Style::kLine, {}, {}, {}, {}, "#777", true, 1.0};
-    for (std::size_t i = 0; i < steps.size(); ++i) {
-      const std::string added = str(steps[i], "added");
-      p.x_categories.push_back(added.empty() ? fmt::format("step {}", i) : "+" + added);
-      held.x.push_back(static_cast<double>(i));
-      held.y.push_back(num(steps[i], "heldout_rms_mps2"));
-      ins.x.push_back(static_cast<double>(i));
-      ins.y.push_back(num(steps[i], "in_sample_rms_mps2"));
-      fl.x.push_back(static_cast<double>(i));
-      fl.y.push_back(num(steps[i], "noise_floor_mps2"));
-    }
-    p.series = {held, ins, fl};
-    p.y_include_zero = true;
-    o += figure(p, "Residual RMS on data not used to fit (held-out) as each candidate term is added, against the "
+  return o;
+}
+
+// Shrink: held-out and in-sample RMS [m/s²] after each forward-selection step, against the noise floor.
+std::string gap_shrink_figure(const json& steps) {
+  Plot p;
+  p.title = "how far the gap shrinks";
+  p.y_label = "RMS [m/s²]";
+  p.x_label = "model after step";
+  p.width = 760;
+  Series held{"held-out RMS", Style::kLinePoints, {}, {}, {}, {}, svg::palette(0), false, 1.0};
+  Series ins{"in-sample RMS", Style::kLinePoints, {}, {}, {}, {}, svg::palette(1), true, 1.0};
+  Series fl{"noise floor", Style::kLine, {}, {}, {}, {}, "#777", true, 1.0};
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const std::string added = str(steps[i], "added");
+    p.x_categories.push_back(added.empty() ? fmt::format("step {}", i) : "+" + added);
+    held.x.push_back(static_cast<double>(i));
+    held.y.push_back(num(steps[i], "heldout_rms_mps2"));
+    ins.x.push_back(static_cast<double>(i));
+    ins.y.push_back(num(steps[i], "in_sample_rms_mps2"));
+    fl.x.push_back(static_cast<double>(i));
+    fl.y.push_back(num(steps[i], "noise_floor_mps2"));
+  }
+  p.series = {held, ins, fl};
+  p.y_include_zero = true;
+  return figure(p, "Residual RMS on data not used to fit (held-out) as each candidate term is added, against the "
                    "noise floor.");
+}
+
+// Table of the candidate terms: held-out improvement, ΔBIC, p, size with its 95 % interval, aliases.
+std::string gap_candidates_table(const json& cands) {
+  std::string o = "<table><tr><th>term</th><th>axis</th><th>held-out improvement</th><th>ΔBIC</th><th>p</th><th>size</th>"
+                  "<th>95 % interval</th><th>aliases</th><th>significant</th></tr>\n";
+  for (const auto& c : cands) {
+    std::string al;
+    for (const auto& a : c.value("aliases", json::array())) al += (al.empty() ? "" : ", ") + (a.is_string() ? a.get<std::string>() : a.dump());
+    o += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} {}</td><td>[{}, {}]</td>"
+                     "<td>{}</td><td>{}</td></tr>\n",
+                     escape(str(c, "term")), escape(str(c, "axis")), g3(num(c, "heldout_improvement")),
+                     g3(num(c, "delta_bic")), g3(num(c, "p_value")), g3(num(c, "size")), escape(str(c, "size_unit")),
+                     g3(at(c.value("ci95", json::array()), 0)), g3(at(c.value("ci95", json::array()), 1)), escape(al),
+                     c.value("significant", false) ? "YES" : "no");
   }
+  return o + "</table>\n";
+}
+
+std::string gap_section(const json& gp) {
+  GapAxes axes;
+  axes.magnitude = str(gp, "form") == "magnitude";
+  axes.count = axes.magnitude ? 1 : 3;
+  std::string o = gap_summary(gp, axes);
+  const json where = gp.value("where", json::array());
+  if (!where.empty()) o += gap_where_figure(where);
+  const json segs = gp.value("segments", json::array());
+  if (!segs.empty()) o += gap_segment_figures(segs, axes);
+  const json steps = gp.value("steps", json::array());
+  if (!steps.empty()) o += gap_shrink_figure(steps);
   const json cands = gp.value("candidates", json::array());
-  if (!cands.empty()) {
-    o += "<table><tr><th>term</th><th>axis</th><th>held-out improvement</th><th>ΔBIC</th><th>p</th><th>size</th>"
-         "<th>95 % interval</th><th>aliases</th><th>significant</th></tr>\n";
-    for (const auto& c : cands) {
-      std::string al;
-      for (const auto& a : c.value("aliases", json::array())) al += (al.empty() ? "" : ", ") + (a.is_string() ? a.get<std::string>() : a.dump());
-      o += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} {}</td><td>[{}, {}]</td>"
-                       "<td>{}</td><td>{}</td></tr>\n",
-                       escape(str(c, "term")), escape(str(c, "axis")), g3(num(c, "heldout_improvement")),
-                       g3(num(c, "delta_bic")), g3(num(c, "p_value")), g3(num(c, "size")), escape(str(c, "size_unit")),
-                       g3(at(c.value("ci95", json::array()), 0)), g3(at(c.value("ci95", json::array()), 1)), escape(al),
-                       c.value("significant", false) ? "YES" : "no");
-    }
-    o += "</table>\n";
-  }
+  if (!cands.empty()) o += gap_candidates_table(cands);
   const json un = gp.value("unexplained", json::object());
   if (!un.empty())
     o += fmt::format("<p><b>Unexplained:</b> held-out RMS {} m/s² = {} × floor. {}</p>\n", g3(num(un, "heldout_rms_mps2")),

@@ -74,69 +74,93 @@ Units units_for(Instrument instrument, const std::string& signal_unit) {
 // ---------------------------------------------------------------------------------------------
 // Options
 
+namespace {
+
+// "file:line:column" of a YAML node for messages ("<yaml>" without a file name).
+std::string yaml_location(const std::string& file, const YAML::Node& n) {
+  const YAML::Mark m = n.Mark();
+  std::string loc = file.empty() ? std::string("<yaml>") : file;
+  if (m.line >= 0) loc += fmt::format(":{}:{}", m.line + 1, m.column + 1);
+  return loc;
+}
+
+// The value of one Allan option, read as a number or a boolean; a bad value throws with its location.
+struct OptionValue {
+  const std::string& file;
+  const std::string& key;
+  const YAML::Node& v;
+
+  [[noreturn]] void fail(const std::string& what) const {
+    throw std::runtime_error(fmt::format("{}: allan option '{}': {}", yaml_location(file, v), key, what));
+  }
+  double number() const {
+    try {
+      return v.as<double>();
+    } catch (const YAML::Exception&) {
+      fail("expected a number, got '" + (v.IsScalar() ? v.Scalar() : std::string("a non-scalar")) + "'");
+    }
+  }
+  bool boolean() const {
+    try {
+      return v.as<bool>();
+    } catch (const YAML::Exception&) {
+      fail("expected true or false");
+    }
+  }
+};
+
+// Sets the option named value.key with its range check; false for an unknown name.
+bool set_allan_option(AllanOptions& o, const OptionValue& value) {
+  const std::string& key = value.key;
+  if (key == "max_m") {
+    const double m = value.number();
+    if (!(m >= 1.0) || m > 9.2e18 || m != std::floor(m)) value.fail("must be an integer >= 1 (samples)");
+    o.max_m = static_cast<std::uint64_t>(m);
+  } else if (key == "confidence") {
+    o.confidence = value.number();
+    if (!(o.confidence > 0.0 && o.confidence < 1.0)) value.fail("must be in (0, 1), e.g. 0.683 or 0.95");
+  } else if (key == "edf_from_model") {
+    o.edf_from_model = value.boolean();
+  } else if (key == "slope_tolerance") {
+    o.slope_tolerance = value.number();
+    if (!(o.slope_tolerance > 0.0 && o.slope_tolerance < 0.5)) value.fail("must be in (0, 0.5)");
+  } else if (key == "min_readoff_edf") {
+    o.min_readoff_edf = value.number();
+    if (!(o.min_readoff_edf >= 0.0)) value.fail("must be >= 0");
+  } else if (key == "min_readoff_points") {
+    const double n = value.number();
+    if (!(n >= 1.0 && n <= 64.0) || n != std::floor(n)) value.fail("must be an integer in 1 … 64");
+    o.min_readoff_points = static_cast<int>(n);
+  } else if (key == "t_begin_s") {
+    o.t_begin_s = value.number();
+  } else if (key == "t_end_s") {
+    o.t_end_s = value.number();
+  } else {
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 AllanOptions options_from_yaml(const YAML::Node& node, const std::string& file) {
-  auto where = [&](const YAML::Node& n) {
-    const YAML::Mark m = n.Mark();
-    std::string loc = file.empty() ? std::string("<yaml>") : file;
-    if (m.line >= 0) loc += fmt::format(":{}:{}", m.line + 1, m.column + 1);
-    return loc;
-  };
   AllanOptions o;
   if (!node || node.IsNull()) return o;
-  if (!node.IsMap()) throw std::runtime_error(where(node) + ": Allan options must be a mapping");
+  if (!node.IsMap()) throw std::runtime_error(yaml_location(file, node) + ": Allan options must be a mapping");
   static const std::vector<std::string> keys = {"max_m", "confidence", "edf_from_model",
                                                 "slope_tolerance", "min_readoff_edf",
                                                 "min_readoff_points", "t_begin_s", "t_end_s"};
   for (const auto& kv : node) {
     const std::string key = kv.first.as<std::string>();
     const YAML::Node& v = kv.second;
-    auto fail = [&](const std::string& what) {
-      throw std::runtime_error(fmt::format("{}: allan option '{}': {}", where(v), key, what));
-    };
-    auto number = [&]() {
-      try {
-        return v.as<double>();
-      } catch (const YAML::Exception&) {
-        fail("expected a number, got '" + (v.IsScalar() ? v.Scalar() : std::string("a non-scalar")) + "'");
-      }
-      return 0.0;
-    };
-    if (key == "max_m") {
-      const double m = number();
-      if (!(m >= 1.0) || m > 9.2e18 || m != std::floor(m)) fail("must be an integer >= 1 (samples)");
-      o.max_m = static_cast<std::uint64_t>(m);
-    } else if (key == "confidence") {
-      o.confidence = number();
-      if (!(o.confidence > 0.0 && o.confidence < 1.0)) fail("must be in (0, 1), e.g. 0.683 or 0.95");
-    } else if (key == "edf_from_model") {
-      try {
-        o.edf_from_model = v.as<bool>();
-      } catch (const YAML::Exception&) {
-        fail("expected true or false");
-      }
-    } else if (key == "slope_tolerance") {
-      o.slope_tolerance = number();
-      if (!(o.slope_tolerance > 0.0 && o.slope_tolerance < 0.5)) fail("must be in (0, 0.5)");
-    } else if (key == "min_readoff_edf") {
-      o.min_readoff_edf = number();
-      if (!(o.min_readoff_edf >= 0.0)) fail("must be >= 0");
-    } else if (key == "min_readoff_points") {
-      const double n = number();
-      if (!(n >= 1.0 && n <= 64.0) || n != std::floor(n)) fail("must be an integer in 1 … 64");
-      o.min_readoff_points = static_cast<int>(n);
-    } else if (key == "t_begin_s") {
-      o.t_begin_s = number();
-    } else if (key == "t_end_s") {
-      o.t_end_s = number();
-    } else {
-      std::string all;
-      for (const auto& k : keys) all += (all.empty() ? "" : ", ") + k;
-      throw std::runtime_error(fmt::format("{}: unknown allan option '{}' (known: {})",
-                                           where(kv.first), key, all));
-    }
+    if (set_allan_option(o, OptionValue{file, key, v})) continue;
+    std::string all;
+    for (const auto& k : keys) all += (all.empty() ? "" : ", ") + k;
+    throw std::runtime_error(fmt::format("{}: unknown allan option '{}' (known: {})",
+                                         yaml_location(file, kv.first), key, all));
   }
   if (std::isfinite(o.t_begin_s) && std::isfinite(o.t_end_s) && !(o.t_end_s > o.t_begin_s)) {
-    throw std::runtime_error(where(node) + ": allan options: t_end_s must be after t_begin_s");
+    throw std::runtime_error(yaml_location(file, node) + ": allan options: t_end_s must be after t_begin_s");
   }
   return o;
 }
@@ -316,11 +340,8 @@ Readoff slope_readoff(const char* name, const std::string& unit, const std::vect
   return r;
 }
 
-}  // namespace
-
-NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
-  NoiseModel model;
-  const Units& u = curve.units;
+// The unit of every coefficient and read-off, from the curve's units.
+void set_units(NoiseModel& model, const Units& u) {
   model.quantization.unit = u.quantization;
   model.white.unit = u.white;
   model.bias_instability.unit = u.bias;
@@ -329,24 +350,28 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
   model.white_line.unit = u.white;
   model.random_walk_line.unit = u.random_walk;
   model.bias_floor.unit = u.bias;
+}
 
+// Points with a positive, finite Allan variance from at least one term, with the basis at τ.
+std::vector<FitPoint> usable_points(const AllanCurve& curve) {
   std::vector<FitPoint> pts;
   for (const auto& p : curve.points) {
     if (!(p.avar > 0.0) || !std::isfinite(p.avar) || p.terms < 1) continue;
     pts.push_back({p.tau_s, p.avar, p.adev, kNaN, kNaN, kNaN, basis(p.tau_s)});
   }
-  if (pts.size() < 2) {
-    model.message = fmt::format("fit failed: {} usable Allan point(s), need at least 2",
-                                pts.size());
-    return model;
-  }
-  model.tau_min_s = pts.front().tau;
-  model.tau_max_s = pts.back().tau;
-  const double n_phase = static_cast<double>(curve.samples) + 1.0;
-  auto m_of = [&](const FitPoint& p) { return std::round(p.tau * curve.rate_hz); };
-  for (auto& p : pts) p.edf = stats::edf_overlapping_adev(NoiseType::kWhite, n_phase, m_of(p));
+  return pts;
+}
 
-  // Iteratively reweighted: Var(σ̂²) ≈ 2σ⁴/EDF with σ² from the current model.
+// Averaging factor m = τ·rate of a point (samples per cluster).
+double averaging_factor(const FitPoint& p, const AllanCurve& curve) { return std::round(p.tau * curve.rate_hz); }
+
+// Iteratively reweighted non-negative fit of the term coefficients to the Allan variances:
+// Var(σ̂²) ≈ 2σ⁴/EDF with σ² from the current model (8 passes); fills the fitted coefficients and,
+// with opt.edf_from_model, the points' EDF from the dominant term.
+NnlsResult reweighted_fit(std::vector<FitPoint>& pts, const AllanCurve& curve, const AllanOptions& opt,
+                          NoiseModel& model) {
+  const double n_phase = static_cast<double>(curve.samples) + 1.0;
+  for (auto& p : pts) p.edf = stats::edf_overlapping_adev(NoiseType::kWhite, n_phase, averaging_factor(p, curve));
   NnlsResult fit;
   std::vector<double> w(pts.size());
   for (int iter = 0; iter < 8; ++iter) {
@@ -364,36 +389,41 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
     for (int j = 0; j < kTerms; ++j) coefficient(model, j)->fitted = std::sqrt(fit.c[j]);
     if (opt.edf_from_model && iter >= 2) {
       model.ok = true;  // dominant() needs it
-      for (auto& p : pts) p.edf = stats::edf_overlapping_adev(model.dominant(p.tau), n_phase, m_of(p));
+      for (auto& p : pts) p.edf = stats::edf_overlapping_adev(model.dominant(p.tau), n_phase, averaging_factor(p, curve));
     }
   }
-  model.ok = true;
+  return fit;
+}
+
+// Degrees of freedom, reduced χ², and each active coefficient's σ: σ(c) from the covariance
+// (inflated by χ²_red when above 1), σ(√c) = σ(c) / (2√c).
+void fit_uncertainties(const NnlsResult& fit, std::size_t points, NoiseModel& model) {
   int active = 0;
   for (int j = 0; j < kTerms; ++j) active += fit.active[j] ? 1 : 0;
-  model.dof = static_cast<int>(pts.size()) - active;
+  model.dof = static_cast<int>(points) - active;
   model.chi2_reduced = model.dof > 0 ? fit.chi2 / model.dof : kNaN;
   const double inflate = std::isfinite(model.chi2_reduced) ? std::max(1.0, model.chi2_reduced) : 1.0;
-
-  // Uncertainties: σ(c) from the covariance, σ(√c) = σ(c) / (2√c).
-  {
-    int q = 0;
-    for (int j = 0; j < kTerms; ++j) {
-      if (!fit.active[j]) continue;
-      const double var_c = fit.cov(q, q) * inflate;
-      ++q;
-      Coefficient* c = coefficient(model, j);
-      c->fitted_sigma = c->fitted > 0 ? std::sqrt(std::max(0.0, var_c)) / (2.0 * c->fitted) : kNaN;
-    }
+  int q = 0;
+  for (int j = 0; j < kTerms; ++j) {
+    if (!fit.active[j]) continue;
+    const double var_c = fit.cov(q, q) * inflate;
+    ++q;
+    Coefficient* c = coefficient(model, j);
+    c->fitted_sigma = c->fitted > 0 ? std::sqrt(std::max(0.0, var_c)) / (2.0 * c->fitted) : kNaN;
   }
+}
 
-  // Intervals of the points with the final EDF (for upper bounds and read-offs).
+// Confidence interval of each point's ADEV with its final EDF (for upper bounds and read-offs).
+void point_intervals(std::vector<FitPoint>& pts, double confidence) {
   for (auto& p : pts) {
-    const auto ci = stats::deviation_interval(p.adev, p.edf, curve.confidence);
+    const auto ci = stats::deviation_interval(p.adev, p.edf, confidence);
     p.lo = ci.lo;
     p.hi = ci.hi;
   }
+}
 
-  // Identification: where does each term dominate inside [τ_min, τ_max]?
+// Where each term dominates the fitted variance inside [τ_min, τ_max] (400 log-spaced τ) [s].
+void mark_dominance(const NnlsResult& fit, NoiseModel& model) {
   const int grid = 400;
   const double l0 = std::log(model.tau_min_s), l1 = std::log(model.tau_max_s);
   for (int g = 0; g <= grid; ++g) {
@@ -414,6 +444,11 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
     if (!std::isfinite(c->tau_lo_s)) c->tau_lo_s = tau;
     c->tau_hi_s = tau;
   }
+}
+
+// A coefficient is identified where it dominates and is ≥ 2σ; each gets the largest value
+// compatible with every measured upper limit (term alone).
+void identify_and_bound(const std::vector<FitPoint>& pts, NoiseModel& model) {
   for (int j = 0; j < kTerms; ++j) {
     Coefficient* c = coefficient(model, j);
     c->identified = c->dominates && std::isfinite(c->fitted_sigma) && c->fitted >= 2.0 * c->fitted_sigma;
@@ -421,7 +456,6 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
       c->value = c->fitted;
       c->sigma = c->fitted_sigma;
     }
-    // Largest coefficient compatible with every measured upper limit (term alone).
     double bound = std::numeric_limits<double>::infinity();
     for (const auto& p : pts) {
       const double hi = std::isfinite(p.hi) ? p.hi : p.adev;
@@ -429,33 +463,56 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
     }
     c->upper_bound = std::sqrt(bound);
   }
+}
 
-  // Slope-line read-offs.
+// Bias-instability read-off at the ADEV minimum (ADEV / 0.664); found only for a flat minimum
+// inside the measured τ range.
+void read_bias_floor(const std::vector<FitPoint>& pts, const Units& u, Readoff& r) {
+  r.unit = u.bias;
+  std::size_t imin = 0;
+  for (std::size_t i = 1; i < pts.size(); ++i) {
+    if (pts[i].adev < pts[imin].adev) imin = i;
+  }
+  r.tau_lo_s = r.tau_hi_s = pts[imin].tau;
+  r.value = pts[imin].adev / kFlickerFloor;
+  r.lo = pts[imin].lo / kFlickerFloor;
+  r.hi = pts[imin].hi / kFlickerFloor;
+  if (imin + 1 == pts.size()) {
+    r.note = fmt::format("ADEV still falling at tau_max = {:.4g} s: no flat minimum; B <= {:.4g} {}",
+                         pts[imin].tau, r.value, u.bias);
+  } else if (imin == 0) {
+    r.note = "ADEV rises from the smallest tau: no flat minimum";
+  } else {
+    r.found = true;
+  }
+}
+
+}  // namespace
+
+NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
+  NoiseModel model;
+  const Units& u = curve.units;
+  set_units(model, u);
+  std::vector<FitPoint> pts = usable_points(curve);
+  if (pts.size() < 2) {
+    model.message = fmt::format("fit failed: {} usable Allan point(s), need at least 2",
+                                pts.size());
+    return model;
+  }
+  model.tau_min_s = pts.front().tau;
+  model.tau_max_s = pts.back().tau;
+  const NnlsResult fit = reweighted_fit(pts, curve, opt, model);
+  model.ok = true;
+  fit_uncertainties(fit, pts.size(), model);
+  point_intervals(pts, curve.confidence);
+  mark_dominance(fit, model);
+  identify_and_bound(pts, model);
   std::vector<double> slope;
   local_slopes(pts, slope);
   model.white_line = slope_readoff(model.white_line.name, u.white, pts, slope, -0.5, 1.0, opt);
   model.random_walk_line =
       slope_readoff(model.random_walk_line.name, u.random_walk, pts, slope, 0.5, 3.0, opt);
-  {
-    Readoff& r = model.bias_floor;
-    r.unit = u.bias;
-    std::size_t imin = 0;
-    for (std::size_t i = 1; i < pts.size(); ++i) {
-      if (pts[i].adev < pts[imin].adev) imin = i;
-    }
-    r.tau_lo_s = r.tau_hi_s = pts[imin].tau;
-    r.value = pts[imin].adev / kFlickerFloor;
-    r.lo = pts[imin].lo / kFlickerFloor;
-    r.hi = pts[imin].hi / kFlickerFloor;
-    if (imin + 1 == pts.size()) {
-      r.note = fmt::format("ADEV still falling at tau_max = {:.4g} s: no flat minimum; B <= {:.4g} {}",
-                           pts[imin].tau, r.value, u.bias);
-    } else if (imin == 0) {
-      r.note = "ADEV rises from the smallest tau: no flat minimum";
-    } else {
-      r.found = true;
-    }
-  }
+  read_bias_floor(pts, u, model.bias_floor);
   if (model.dof <= 0) model.message = "as many active terms as points: no residual check";
   return model;
 }
@@ -532,10 +589,10 @@ KalibrParameters kalibr_parameters(const std::vector<ChannelResult>& channels, d
   return k;
 }
 
-AllanReport analyze_recording(const Recording& rec, const AllanOptions& options) {
-  AllanReport report;
-  report.source = rec.dir.string();
-  if (!rec.header.experiment_name.empty()) report.source += " (" + rec.header.experiment_name + ")";
+namespace {
+
+// Sample index range [i0, i1) inside the options' time window [t_begin_s, t_end_s] [s].
+std::pair<std::size_t, std::size_t> selected_range(const Recording& rec, const AllanOptions& options) {
   std::size_t i0 = 0, i1 = rec.samples.size();
   if (std::isfinite(options.t_begin_s)) {
     while (i0 < i1 && rec.samples[i0].t_s < options.t_begin_s) ++i0;
@@ -543,33 +600,26 @@ AllanReport analyze_recording(const Recording& rec, const AllanOptions& options)
   if (std::isfinite(options.t_end_s)) {
     while (i1 > i0 && rec.samples[i1 - 1].t_s > options.t_end_s) --i1;
   }
-  const std::size_t n = i1 - i0;
-  if (n < 2) {
-    throw std::runtime_error(fmt::format("Allan: {} has {} sample(s) in the selected time range",
-                                         report.source, n));
-  }
-  report.samples = n;
-  report.t_begin_s = rec.samples[i0].t_s;
-  report.t_end_s = rec.samples[i1 - 1].t_s;
+  return {i0, i1};
+}
 
-  // Rate: the header's, or the median interval.
-  std::vector<double> dt;
-  dt.reserve(n - 1);
-  for (std::size_t i = i0 + 1; i < i1; ++i) dt.push_back(rec.samples[i].t_s - rec.samples[i - 1].t_s);
+// Sample rate [Hz]: the header's, or 1 / the median sample interval dt [s].
+double sample_rate(const Recording& rec, const std::vector<double>& dt, const std::string& source) {
   std::vector<double> sorted = dt;
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2),
-                   sorted.end());
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
   const double median_dt = sorted[sorted.size() / 2];
-  double rate = rec.header.info.output_rate_hz;
-  if (!(rate > 0.0)) {
-    if (!(median_dt > 0.0)) {
-      throw std::runtime_error(fmt::format(
-          "Allan: {}: no output rate in the header and the timestamps do not increase",
-          report.source));
-    }
-    rate = 1.0 / median_dt;
+  const double rate = rec.header.info.output_rate_hz;
+  if (rate > 0.0) return rate;
+  if (!(median_dt > 0.0)) {
+    throw std::runtime_error(fmt::format(
+        "Allan: {}: no output rate in the header and the timestamps do not increase", source));
   }
-  report.rate_hz = rate;
+  return 1.0 / median_dt;
+}
+
+// Warnings on lost samples and on intervals dt [s] off 1/rate by more than 50 %.
+void add_sampling_warnings(const Recording& rec, std::size_t i0, std::size_t i1, const std::vector<double>& dt,
+                           double rate, AllanReport& report) {
   std::size_t gaps = 0, irregular = 0;
   for (std::size_t i = i0 + 1; i < i1; ++i) {
     if (rec.samples[i].flags & kGapBefore) ++gaps;
@@ -587,26 +637,53 @@ AllanReport analyze_recording(const Recording& rec, const AllanOptions& options)
         "{} sample interval(s) deviate by more than 50 % from 1/rate = {:.6g} s", irregular,
         1.0 / rate));
   }
+}
 
-  const bool gyro = rec.header.info.has_gyro;
-  const char* names[6] = {"ax", "ay", "az", "gx", "gy", "gz"};
+// Allan curve and noise model of channel ch (0..2 accelerometer [m/s²], 3..5 gyroscope [rad/s])
+// over samples [i0, i1), streamed in blocks.
+ChannelResult analyze_channel(const Recording& rec, std::size_t i0, std::size_t i1, int ch, double rate,
+                              const AllanOptions& options) {
+  static const char* names[6] = {"ax", "ay", "az", "gx", "gy", "gz"};
   std::vector<double> buf(OverlappingAllanStream::kBlock);
-  for (int ch = 0; ch < (gyro ? 6 : 3); ++ch) {
-    OverlappingAllanStream s(options.max_m, n);
-    for (std::size_t i = i0; i < i1;) {
-      const std::size_t take = std::min(buf.size(), i1 - i);
-      for (std::size_t t = 0; t < take; ++t) {
-        const ImuSample& smp = rec.samples[i + t];
-        buf[t] = ch < 3 ? smp.accel_mps2[ch] : smp.gyro_radps[ch - 3];
-      }
-      s.add(buf.data(), take);
-      i += take;
+  OverlappingAllanStream s(options.max_m, i1 - i0);
+  for (std::size_t i = i0; i < i1;) {
+    const std::size_t take = std::min(buf.size(), i1 - i);
+    for (std::size_t t = 0; t < take; ++t) {
+      const ImuSample& smp = rec.samples[i + t];
+      buf[t] = ch < 3 ? smp.accel_mps2[ch] : smp.gyro_radps[ch - 3];
     }
-    ChannelInfo info;
-    info.name = names[ch];
-    info.instrument = ch < 3 ? Instrument::kAccelerometer : Instrument::kGyroscope;
-    report.channels.push_back(analyze(s, rate, info, options));
+    s.add(buf.data(), take);
+    i += take;
   }
+  ChannelInfo info;
+  info.name = names[ch];
+  info.instrument = ch < 3 ? Instrument::kAccelerometer : Instrument::kGyroscope;
+  return analyze(s, rate, info, options);
+}
+
+}  // namespace
+
+AllanReport analyze_recording(const Recording& rec, const AllanOptions& options) {
+  AllanReport report;
+  report.source = rec.dir.string();
+  if (!rec.header.experiment_name.empty()) report.source += " (" + rec.header.experiment_name + ")";
+  const auto [i0, i1] = selected_range(rec, options);
+  const std::size_t n = i1 - i0;
+  if (n < 2) {
+    throw std::runtime_error(fmt::format("Allan: {} has {} sample(s) in the selected time range",
+                                         report.source, n));
+  }
+  report.samples = n;
+  report.t_begin_s = rec.samples[i0].t_s;
+  report.t_end_s = rec.samples[i1 - 1].t_s;
+  std::vector<double> dt;
+  dt.reserve(n - 1);
+  for (std::size_t i = i0 + 1; i < i1; ++i) dt.push_back(rec.samples[i].t_s - rec.samples[i - 1].t_s);
+  const double rate = sample_rate(rec, dt, report.source);
+  report.rate_hz = rate;
+  add_sampling_warnings(rec, i0, i1, dt, rate, report);
+  const int channels = rec.header.info.has_gyro ? 6 : 3;
+  for (int ch = 0; ch < channels; ++ch) report.channels.push_back(analyze_channel(rec, i0, i1, ch, rate, options));
   report.kalibr = kalibr_parameters(report.channels, rate);
   return report;
 }

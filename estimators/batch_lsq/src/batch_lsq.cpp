@@ -123,6 +123,83 @@ std::vector<StaticPoint> extract_points(const Recording& rec, const ModelSpec& s
   return points;
 }
 
+namespace {
+
+// The parameters that can affect the fitted axes (the others are listed as excluded).
+void select_parameters(const ModelSpec& spec, FitResult& fr) {
+  const std::vector<model::ParamInfo> all = spec.model.params();
+  const Eigen::MatrixXd generic = spec.model.regressor(generic_stimulus());
+  for (int j = 0; j < spec.model.size(); ++j) {
+    bool affects = false;
+    for (int a : spec.axes) affects = affects || generic(a, j) != 0.0;
+    if (affects) {
+      fr.params.push_back(all[static_cast<std::size_t>(j)]);
+      fr.param_index.push_back(j);
+    } else {
+      fr.excluded.push_back(all[static_cast<std::size_t>(j)].name);
+    }
+  }
+}
+
+// The linear problem: one row per point and fitted axis, observation = measured − true input,
+// weight 1/SE² with segment-noise weighting. Fills the residual rows' observed values; returns
+// false (message set) when a weight cannot be formed.
+bool build_problem(const std::vector<StaticPoint>& points, const ModelSpec& spec, FitResult& fr,
+                   estimation::LsqProblem& prob) {
+  const int p = static_cast<int>(fr.params.size());
+  const int k = static_cast<int>(points.size() * spec.axes.size());
+  const bool weighted = spec.weighting == estimation::Weighting::kSegmentNoise;
+  prob.design.resize(k, p);
+  prob.observations.resize(k);
+  if (weighted) prob.weights.resize(k);
+  for (const auto& pi : fr.params) {
+    prob.names.push_back(pi.name);
+    prob.units.push_back(pi.unit);
+  }
+  int row = 0;
+  for (std::size_t n = 0; n < points.size(); ++n) {
+    const StaticPoint& pt = points[n];
+    const Eigen::MatrixXd phi = spec.model.regressor(pt.stimulus);
+    for (int a : spec.axes) {
+      for (int j = 0; j < p; ++j) prob.design(row, j) = phi(a, fr.param_index[static_cast<std::size_t>(j)]);
+      prob.observations[row] = pt.measured[a] - pt.stimulus.input[a];
+      if (weighted) {
+        const double se = pt.measured_std_error[a];
+        if (!(se > 0.0) || !std::isfinite(se)) {
+          fr.message = "weighting: segment_noise needs a positive standard error for every point; "
+                       "point '" + pt.label + "' axis " + estimation::axis_name(a) + " has " + num(se) +
+                       ". Use weighting: none.";
+          return false;
+        }
+        prob.weights[row] = 1.0 / (se * se);
+      }
+      fr.residuals.push_back({static_cast<int>(n), a, prob.observations[row], 0.0, 0.0});
+      ++row;
+    }
+  }
+  return true;
+}
+
+// Residual and fitted value of every row, and the residual RMS per fitted axis (in the residual
+// unit and × display_factor in the display unit).
+void fill_residuals(const ModelSpec& spec, double display_factor, FitResult& fr) {
+  Eigen::Vector3d ss = Eigen::Vector3d::Zero();
+  Eigen::Vector3i cnt = Eigen::Vector3i::Zero();
+  for (std::size_t r = 0; r < fr.residuals.size(); ++r) {
+    Residual& res = fr.residuals[r];
+    res.residual = fr.lsq.residuals[static_cast<Eigen::Index>(r)];
+    res.fitted = res.observed - res.residual;
+    ss[res.axis] += res.residual * res.residual;
+    ++cnt[res.axis];
+  }
+  for (int a : spec.axes) {
+    fr.residual_rms[a] = std::sqrt(ss[a] / cnt[a]);
+    fr.residual_rms_display[a] = fr.residual_rms[a] * display_factor;
+  }
+}
+
+}  // namespace
+
 FitResult fit_points(const std::vector<StaticPoint>& points, const ModelSpec& spec) {
   FitResult fr;
   fr.spec = spec;
@@ -137,51 +214,9 @@ FitResult fit_points(const std::vector<StaticPoint>& points, const ModelSpec& sp
     fr.message = "the model specification has no axes or no terms";
     return fr;
   }
-  // Parameters that can affect the fitted axes.
-  const std::vector<model::ParamInfo> all = spec.model.params();
-  const Eigen::MatrixXd generic = spec.model.regressor(generic_stimulus());
-  for (int j = 0; j < spec.model.size(); ++j) {
-    bool affects = false;
-    for (int a : spec.axes) affects = affects || generic(a, j) != 0.0;
-    if (affects) {
-      fr.params.push_back(all[static_cast<std::size_t>(j)]);
-      fr.param_index.push_back(j);
-    } else {
-      fr.excluded.push_back(all[static_cast<std::size_t>(j)].name);
-    }
-  }
-  const int p = static_cast<int>(fr.params.size());
-  const int k = static_cast<int>(points.size() * spec.axes.size());
-
+  select_parameters(spec, fr);
   estimation::LsqProblem prob;
-  prob.design.resize(k, p);
-  prob.observations.resize(k);
-  if (spec.weighting == estimation::Weighting::kSegmentNoise) prob.weights.resize(k);
-  for (const auto& pi : fr.params) {
-    prob.names.push_back(pi.name);
-    prob.units.push_back(pi.unit);
-  }
-  int row = 0;
-  for (std::size_t n = 0; n < points.size(); ++n) {
-    const StaticPoint& pt = points[n];
-    const Eigen::MatrixXd phi = spec.model.regressor(pt.stimulus);
-    for (int a : spec.axes) {
-      for (int j = 0; j < p; ++j) prob.design(row, j) = phi(a, fr.param_index[static_cast<std::size_t>(j)]);
-      prob.observations[row] = pt.measured[a] - pt.stimulus.input[a];
-      if (spec.weighting == estimation::Weighting::kSegmentNoise) {
-        const double se = pt.measured_std_error[a];
-        if (!(se > 0.0) || !std::isfinite(se)) {
-          fr.message = "weighting: segment_noise needs a positive standard error for every point; "
-                       "point '" + pt.label + "' axis " + estimation::axis_name(a) + " has " + num(se) +
-                       ". Use weighting: none.";
-          return fr;
-        }
-        prob.weights[row] = 1.0 / (se * se);
-      }
-      fr.residuals.push_back({static_cast<int>(n), a, prob.observations[row], 0.0, 0.0});
-      ++row;
-    }
-  }
+  if (!build_problem(points, spec, fr, prob)) return fr;
   estimation::LsqOptions opt;
   opt.confidence = spec.confidence;
   fr.lsq = estimation::solve_lsq(prob, opt);
@@ -191,19 +226,7 @@ FitResult fit_points(const std::vector<StaticPoint>& points, const ModelSpec& sp
     return fr;
   }
   fr.ok = true;
-  Eigen::Vector3d ss = Eigen::Vector3d::Zero();
-  Eigen::Vector3i cnt = Eigen::Vector3i::Zero();
-  for (int r = 0; r < k; ++r) {
-    Residual& res = fr.residuals[static_cast<std::size_t>(r)];
-    res.residual = fr.lsq.residuals[r];
-    res.fitted = res.observed - res.residual;
-    ss[res.axis] += res.residual * res.residual;
-    ++cnt[res.axis];
-  }
-  for (int a : spec.axes) {
-    fr.residual_rms[a] = std::sqrt(ss[a] / cnt[a]);
-    fr.residual_rms_display[a] = fr.residual_rms[a] * display_factor;
-  }
+  fill_residuals(spec, display_factor, fr);
   return fr;
 }
 

@@ -15,6 +15,7 @@
 #include <limits>
 #include <memory>
 #include <stdexcept>
+#include <tuple>
 
 namespace stend::ceres_nonlinear {
 namespace {
@@ -220,10 +221,9 @@ void gyro_bias(CalibrationResult& r, const CalibrationOptions& o) {
   }
 }
 
-// Solve, check identifiability, fill the covariance. `free_index` lists the estimated parameters.
-void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<int>& free_index,
-           int residual_count, const CalibrationOptions& o, CalibrationResult& r) {
-  const int p = static_cast<int>(free_index.size());
+// Runs Ceres (dense QR, tight tolerances) on the problem and records the counts in r.
+ceres::Solver::Summary run_solver(ceres::Problem& problem, int residual_count, int p, const CalibrationOptions& o,
+                                  CalibrationResult& r) {
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_QR;
   so.max_num_iterations = o.max_iterations;
@@ -238,35 +238,40 @@ void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<in
   r.observations = residual_count;
   r.estimated = p;
   r.dof = residual_count - p;
+  return summary;
+}
 
-  // Identifiability from the Jacobian at the solution (before judging convergence: a flat
-  // direction is the more useful explanation of a failure).
+// Dense Jacobian of the residuals at the current parameter values; `cost` = ½·Σ residual².
+Eigen::MatrixXd jacobian_at_solution(ceres::Problem& problem, double& cost) {
   ceres::CRSMatrix crs;
-  double cost = 0.0;
   std::vector<double> residuals;
   problem.Evaluate(ceres::Problem::EvaluateOptions(), &cost, &residuals, nullptr, &crs);
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
   for (int row = 0; row < crs.num_rows; ++row)
     for (int k = crs.rows[static_cast<std::size_t>(row)]; k < crs.rows[static_cast<std::size_t>(row) + 1]; ++k)
       J(row, crs.cols[static_cast<std::size_t>(k)]) = crs.values[static_cast<std::size_t>(k)];
-  Eigen::VectorXd scale(p);
-  for (int k = 0; k < p; ++k)
-    scale[k] = nominal_size(r.parameters[static_cast<std::size_t>(free_index[static_cast<std::size_t>(k)])].name, r);
-  const Eigen::MatrixXd Js = J * scale.asDiagonal();
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(Js, Eigen::ComputeFullV);
-  const Eigen::VectorXd sv = svd.singularValues();
-  r.condition_number = sv.size() > 0 && sv[sv.size() - 1] > 0.0 ? sv[0] / sv[sv.size() - 1]
-                                                                 : std::numeric_limits<double>::infinity();
-  if (!std::isfinite(cost) || !J.allFinite()) {
-    fail_all(r, "non-finite residuals or Jacobian at the solution (NaN or Inf in the data or the "
-                "fit diverged); check the recording for invalid samples");
-    return;
-  }
-  const double rss = 2.0 * cost;
-  r.sigma = r.dof > 0 ? std::sqrt(rss / r.dof) : kNaN;
-  std::vector<std::string> weak;
+  return J;
+}
+
+// Name of free parameter k.
+const std::string& free_name(const CalibrationResult& r, const std::vector<int>& free_index, int k) {
+  return r.parameters[static_cast<std::size_t>(free_index[static_cast<std::size_t>(k)])].name;
+}
+
+// Parameters that the weak directions of the scaled Jacobian move, and why the directions are weak.
+struct WeakParameters {
+  std::vector<std::string> names;
   std::string why;
-  // Weak directions: rank-deficient, or determined worse than max_std_error (relative).
+};
+
+// Weak directions: rank-deficient (singular value below rank_tolerance of the largest), or
+// determined worse than max_std_error (relative). A parameter whose unit vector has a share ≥ 0.5
+// inside the weak subspace is not identifiable (if none reaches it, the most affected ones).
+WeakParameters weak_parameters(const Eigen::JacobiSVD<Eigen::MatrixXd>& svd, const std::vector<int>& free_index,
+                               const CalibrationOptions& o, const CalibrationResult& r) {
+  const Eigen::VectorXd sv = svd.singularValues();
+  const int p = static_cast<int>(free_index.size());
+  WeakParameters weak;
   std::vector<int> weak_dirs;
   for (int k = 0; k < sv.size(); ++k) {
     const bool rank = !(sv[k] > o.rank_tolerance * sv[0]);
@@ -274,47 +279,41 @@ void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<in
     const bool poor = !rank && std::isfinite(se_dir) && se_dir > o.max_std_error;
     if (!rank && !poor) continue;
     weak_dirs.push_back(k);
-    if (why.empty() || rank)
-      why = rank ? fmt::format("rank-deficient Jacobian (singular value ratio {:.2e})", sv[k] / sv[0])
-                 : fmt::format("the weakest direction is determined only to {:.3g} (relative; limit {:.3g})",
-                               se_dir, o.max_std_error);
+    if (weak.why.empty() || rank)
+      weak.why = rank ? fmt::format("rank-deficient Jacobian (singular value ratio {:.2e})", sv[k] / sv[0])
+                      : fmt::format("the weakest direction is determined only to {:.3g} (relative; limit {:.3g})",
+                                    se_dir, o.max_std_error);
   }
-  if (!weak_dirs.empty()) {
-    // Share of each parameter's unit vector inside the weak subspace: ≥ 0.5 → not identifiable
-    // (if none reaches it, the most affected ones).
-    std::vector<double> share(static_cast<std::size_t>(p), 0.0);
-    for (int j = 0; j < p; ++j)
-      for (int k : weak_dirs) share[static_cast<std::size_t>(j)] += std::pow(svd.matrixV()(j, k), 2);
-    const double top = *std::max_element(share.begin(), share.end());
-    const double cut = std::min(0.5, 0.5 * top);
-    for (int j = 0; j < p; ++j)
-      if (share[static_cast<std::size_t>(j)] >= cut)
-        weak.push_back(r.parameters[static_cast<std::size_t>(free_index[static_cast<std::size_t>(j)])].name);
-    why = fmt::format("{} unobservable or poorly observed direction(s); {}", weak_dirs.size(), why);
-  }
-  if (!weak.empty()) {
-    r.not_identifiable = weak;
-    std::string names;
-    for (const auto& w : weak) names += (names.empty() ? "" : ", ") + w;
-    fail_all(r, "not identifiable from this experiment: " + names + " — " + why +
-                    ". The other parameters are coupled to them, so no numbers are reported; add "
-                    "orientations that excite these parameters.");
-    for (auto& prm : r.parameters)
-      if (std::find(weak.begin(), weak.end(), prm.name) != weak.end())
-        prm.reason = "not identifiable: " + why;
-    return;
-  }
-  if (summary.termination_type != ceres::CONVERGENCE) {
-    fail_all(r, "the solver did not converge: " + summary.BriefReport() +
-                    " (raise max_iterations, check the static intervals and gravity)");
-    return;
-  }
-  if (r.dof <= 0) {
-    fail_all(r, fmt::format("no degree of freedom left for the noise ({} residuals, {} parameters): "
-                            "add static intervals", residual_count, p));
-    return;
-  }
+  if (weak_dirs.empty()) return weak;
+  std::vector<double> share(static_cast<std::size_t>(p), 0.0);
+  for (int j = 0; j < p; ++j)
+    for (int k : weak_dirs) share[static_cast<std::size_t>(j)] += std::pow(svd.matrixV()(j, k), 2);
+  const double top = *std::max_element(share.begin(), share.end());
+  const double cut = std::min(0.5, 0.5 * top);
+  for (int j = 0; j < p; ++j)
+    if (share[static_cast<std::size_t>(j)] >= cut) weak.names.push_back(free_name(r, free_index, j));
+  weak.why = fmt::format("{} unobservable or poorly observed direction(s); {}", weak_dirs.size(), weak.why);
+  return weak;
+}
 
+// Fails the fit naming the parameters that the experiment cannot determine.
+void fail_not_identifiable(CalibrationResult& r, const WeakParameters& weak) {
+  r.not_identifiable = weak.names;
+  std::string names;
+  for (const auto& w : weak.names) names += (names.empty() ? "" : ", ") + w;
+  fail_all(r, "not identifiable from this experiment: " + names + " — " + weak.why +
+                  ". The other parameters are coupled to them, so no numbers are reported; add "
+                  "orientations that excite these parameters.");
+  for (auto& prm : r.parameters)
+    if (std::find(weak.names.begin(), weak.names.end(), prm.name) != weak.names.end())
+      prm.reason = "not identifiable: " + weak.why;
+}
+
+// Covariance σ²·(JᵀJ)⁻¹ of the free parameters, their values, standard errors and confidence
+// bounds; fails the fit when Ceres cannot invert JᵀJ.
+void fill_parameters(ceres::Problem& problem, std::vector<double>& x, const std::vector<int>& free_index,
+                     const CalibrationOptions& o, CalibrationResult& r) {
+  const int p = static_cast<int>(free_index.size());
   ceres::Covariance::Options co;
   co.algorithm_type = ceres::DENSE_SVD;
   co.null_space_rank = 0;
@@ -343,6 +342,48 @@ void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<in
     prm.identifiable = true;
   }
   r.ok = true;
+}
+
+// Solve, check identifiability, fill the covariance. `free_index` lists the estimated parameters.
+void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<int>& free_index,
+           int residual_count, const CalibrationOptions& o, CalibrationResult& r) {
+  const int p = static_cast<int>(free_index.size());
+  const ceres::Solver::Summary summary = run_solver(problem, residual_count, p, o, r);
+
+  // Identifiability from the Jacobian at the solution (before judging convergence: a flat
+  // direction is the more useful explanation of a failure), scaled by the parameters' nominal sizes.
+  double cost = 0.0;
+  const Eigen::MatrixXd J = jacobian_at_solution(problem, cost);
+  Eigen::VectorXd scale(p);
+  for (int k = 0; k < p; ++k) scale[k] = nominal_size(free_name(r, free_index, k), r);
+  const Eigen::MatrixXd Js = J * scale.asDiagonal();
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(Js, Eigen::ComputeFullV);
+  const Eigen::VectorXd sv = svd.singularValues();
+  r.condition_number = sv.size() > 0 && sv[sv.size() - 1] > 0.0 ? sv[0] / sv[sv.size() - 1]
+                                                                 : std::numeric_limits<double>::infinity();
+  if (!std::isfinite(cost) || !J.allFinite()) {
+    fail_all(r, "non-finite residuals or Jacobian at the solution (NaN or Inf in the data or the "
+                "fit diverged); check the recording for invalid samples");
+    return;
+  }
+  const double rss = 2.0 * cost;
+  r.sigma = r.dof > 0 ? std::sqrt(rss / r.dof) : kNaN;
+  const WeakParameters weak = weak_parameters(svd, free_index, o, r);
+  if (!weak.names.empty()) {
+    fail_not_identifiable(r, weak);
+    return;
+  }
+  if (summary.termination_type != ceres::CONVERGENCE) {
+    fail_all(r, "the solver did not converge: " + summary.BriefReport() +
+                    " (raise max_iterations, check the static intervals and gravity)");
+    return;
+  }
+  if (r.dof <= 0) {
+    fail_all(r, fmt::format("no degree of freedom left for the noise ({} residuals, {} parameters): "
+                            "add static intervals", residual_count, p));
+    return;
+  }
+  fill_parameters(problem, x, free_index, o, r);
 }
 
 void norm_rms(CalibrationResult& r) {
@@ -689,6 +730,88 @@ CalibrationResult calibrate_accelerometer_unknown_orientations(const Recording& 
 
 namespace {
 
+// Which table angle zero offsets are estimated (tilt, rotation); the azimuth cannot be (gravity
+// does not depend on it) and other names are refused.
+struct TableOffsets {
+  bool tilt = false, rotation = false;
+  int count() const { return (tilt ? 1 : 0) + (rotation ? 1 : 0); }
+};
+
+TableOffsets table_offsets(const std::vector<std::string>& names) {
+  TableOffsets t;
+  for (const auto& a : names) {
+    if (a == "tilt") t.tilt = true;
+    else if (a == "rotation") t.rotation = true;
+    else if (a == "azimuth")
+      throw std::invalid_argument("table offset 'azimuth' cannot be estimated: gravity does not depend on the "
+                                  "azimuth angle (only tilt and rotation)");
+    else
+      throw std::invalid_argument("unknown table offset axis '" + a + "' (expected tilt or rotation)");
+  }
+  return t;
+}
+
+// Gravity [m/s²]: the option when given, else the mean magnitude of the truth vectors.
+double known_gravity(const std::vector<Eigen::Vector3d>& truth_f, const CalibrationOptions& o) {
+  if (o.gravity_mps2 > 0.0) return o.gravity_mps2;
+  double g = 0.0;
+  for (const auto& f : truth_f) g += f.norm();
+  return g / static_cast<double>(std::max<std::size_t>(1, truth_f.size()));
+}
+
+// Residual weighting of interval k: identity, or with orientation_sigma_deg > 0 the tilt of the
+// true orientation ~ N(0, σ_tilt²): the residual across gravity gets the extra variance
+// (g·σ_tilt)² [m/s²]², the one along gravity only the noise of the mean.
+Eigen::Matrix3d residual_weight(const StaticInterval& iv, const Eigen::Vector3d& truth_f, double g,
+                                const CalibrationOptions& o) {
+  Eigen::Matrix3d W = Eigen::Matrix3d::Identity();
+  if (!(o.orientation_sigma_deg > 0.0 && truth_f.norm() > 0.0)) return W;
+  const Eigen::Vector3d e0 = truth_f.normalized();
+  const Eigen::Vector3d e1 = e0.unitOrthogonal(), e2 = e0.cross(e1);
+  const double n_sd = std::max(1e-6, iv.accel_std.mean() / std::sqrt(static_cast<double>(std::max<std::size_t>(1, iv.count))));
+  const double t_sd = std::hypot(n_sd, g * o.orientation_sigma_deg * physics::kDegToRad);
+  W.row(0) = e0.transpose() / n_sd;
+  W.row(1) = e1.transpose() / t_sd;
+  W.row(2) = e2.transpose() / t_sd;
+  return W;
+}
+
+// The known-orientation residual blocks: truth vectors, or encoder angles with offsets [deg].
+void add_known_residuals(const std::vector<StaticInterval>& intervals, const std::vector<Eigen::Vector3d>& truth_f,
+                         const std::vector<std::array<double, 2>>& angles, const Eigen::Matrix3d& M,
+                         const TableOffsets& off, const std::vector<int>& free_index, const CalibrationOptions& o,
+                         const CalibrationResult& r, ceres::Problem& problem, std::vector<double>& x) {
+  const int p = static_cast<int>(free_index.size());
+  for (std::size_t k = 0; k < intervals.size(); ++k) {
+    const Eigen::Matrix3d W = residual_weight(intervals[k], truth_f[k], r.gravity_mps2, o);
+    if (off.count() == 0) {
+      auto* f = new KnownCost{&r.model, free_index, intervals[k].accel_mean, truth_f[k], W};
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<KnownCost, 3, kFull>(f), make_loss(o), x.data());
+    } else {
+      auto* c = new ceres::DynamicAutoDiffCostFunction<KnownOffsetCost, 4>(new KnownOffsetCost{
+          &r.model, intervals[k].accel_mean, angles[k][0], angles[k][1], r.gravity_mps2, M, W, off.tilt, off.rotation});
+      c->AddParameterBlock(p);
+      c->SetNumResiduals(3);
+      problem.AddResidualBlock(c, make_loss(o), x.data());
+    }
+  }
+}
+
+// Per-axis residual RMS against the truth, offset-corrected when offsets were estimated
+// (x = the solution: 12 model parameters, then the offsets [deg]).
+void known_axis_rms(const std::vector<StaticInterval>& intervals, const std::vector<Eigen::Vector3d>& truth_f,
+                    const std::vector<std::array<double, 2>>& angles, const Eigen::Matrix3d& M,
+                    const TableOffsets& off, const std::vector<double>& x, CalibrationResult& r) {
+  std::vector<Eigen::Vector3d> truth = truth_f, reading;
+  if (off.count() > 0 && r.ok) {
+    const double dh = off.tilt ? x[kFull] : 0.0, dd = off.rotation ? x[static_cast<std::size_t>(kFull + (off.tilt ? 1 : 0))] : 0.0;
+    for (std::size_t k = 0; k < truth.size(); ++k)
+      truth[k] = table_gravity(M, angles[k][0] + dh, angles[k][1] + dd, r.gravity_mps2);
+  }
+  for (const auto& iv : intervals) reading.push_back(iv.accel_mean);
+  axis_rms_against(r, truth, reading, truth);
+}
+
 // Known orientations, shared by the truth-vector and the encoder-angle (offset) variants.
 // `angles` (tilt, rotation deg per interval) and M are used only when offsets are estimated.
 CalibrationResult known_impl(const std::vector<StaticInterval>& intervals, const std::vector<Eigen::Vector3d>& truth_f,
@@ -698,31 +821,15 @@ CalibrationResult known_impl(const std::vector<StaticInterval>& intervals, const
   r.method = "known_orientations";
   r.model = accelerometer_model();
   r.intervals = intervals;
-  double g = o.gravity_mps2;
-  if (!(g > 0.0)) {
-    g = 0.0;
-    for (const auto& f : truth_f) g += f.norm();
-    g /= static_cast<double>(std::max<std::size_t>(1, truth_f.size()));
-  }
-  r.gravity_mps2 = g;
+  r.gravity_mps2 = known_gravity(truth_f, o);
   r.whitened = o.orientation_sigma_deg > 0.0;
-  bool off_tilt = false, off_rot = false;
-  for (const auto& a : o.table_offsets) {
-    if (a == "tilt") off_tilt = true;
-    else if (a == "rotation") off_rot = true;
-    else if (a == "azimuth")
-      throw std::invalid_argument("table offset 'azimuth' cannot be estimated: gravity does not depend on the "
-                                  "azimuth angle (only tilt and rotation)");
-    else
-      throw std::invalid_argument("unknown table offset axis '" + a + "' (expected tilt or rotation)");
-  }
-  const int n_off = (off_tilt ? 1 : 0) + (off_rot ? 1 : 0);
-  const int p = kFull + n_off;
+  const TableOffsets off = table_offsets(o.table_offsets);
+  const int p = kFull + off.count();
   std::vector<int> free_index(static_cast<std::size_t>(p));
   for (int i = 0; i < p; ++i) free_index[static_cast<std::size_t>(i)] = i;
   init_parameters(r, std::vector<int>(free_index.begin(), free_index.begin() + kFull));
   for (const char* ax : {"tilt", "rotation"}) {
-    if ((std::string(ax) == "tilt" && !off_tilt) || (std::string(ax) == "rotation" && !off_rot)) continue;
+    if ((std::string(ax) == "tilt" && !off.tilt) || (std::string(ax) == "rotation" && !off.rotation)) continue;
     Parameter prm;
     prm.name = std::string("table_offset_") + ax;
     prm.unit = "deg";
@@ -738,7 +845,7 @@ CalibrationResult known_impl(const std::vector<StaticInterval>& intervals, const
     norm_rms(r);
     return r;
   };
-  if (truth_f.size() != intervals.size() || (n_off > 0 && angles.size() != intervals.size()))
+  if (truth_f.size() != intervals.size() || (off.count() > 0 && angles.size() != intervals.size()))
     return done("known orientations: one truth vector (or encoder angle pair) per static interval is needed");
   if (!finite_intervals(intervals)) return done("non-finite (NaN) readings in a static interval");
   if (3 * n < p + 1)
@@ -747,42 +854,10 @@ CalibrationResult known_impl(const std::vector<StaticInterval>& intervals, const
                             n, (p + 1 + 2) / 3, p));
   std::vector<double> x(static_cast<std::size_t>(p), 0.0);
   ceres::Problem problem;
-  for (std::size_t k = 0; k < intervals.size(); ++k) {
-    Eigen::Matrix3d W = Eigen::Matrix3d::Identity();
-    if (o.orientation_sigma_deg > 0.0 && truth_f[k].norm() > 0.0) {
-      // Tilt of the true orientation ~ N(0, σ_tilt²): the residual across gravity gets the extra
-      // variance (g·σ_tilt)², the one along gravity only the noise of the mean.
-      const Eigen::Vector3d e0 = truth_f[k].normalized();
-      const Eigen::Vector3d e1 = e0.unitOrthogonal(), e2 = e0.cross(e1);
-      const double n_sd = std::max(1e-6, intervals[k].accel_std.mean() /
-                                             std::sqrt(static_cast<double>(std::max<std::size_t>(1, intervals[k].count))));
-      const double t_sd = std::hypot(n_sd, g * o.orientation_sigma_deg * physics::kDegToRad);
-      W.row(0) = e0.transpose() / n_sd;
-      W.row(1) = e1.transpose() / t_sd;
-      W.row(2) = e2.transpose() / t_sd;
-    }
-    if (n_off == 0) {
-      auto* f = new KnownCost{&r.model, free_index, intervals[k].accel_mean, truth_f[k], W};
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<KnownCost, 3, kFull>(f), make_loss(o), x.data());
-    } else {
-      auto* c = new ceres::DynamicAutoDiffCostFunction<KnownOffsetCost, 4>(new KnownOffsetCost{
-          &r.model, intervals[k].accel_mean, angles[k][0], angles[k][1], g, M, W, off_tilt, off_rot});
-      c->AddParameterBlock(p);
-      c->SetNumResiduals(3);
-      problem.AddResidualBlock(c, make_loss(o), x.data());
-    }
-  }
+  add_known_residuals(intervals, truth_f, angles, M, off, free_index, o, r, problem, x);
   solve(problem, x, free_index, 3 * n, o, r);
   norm_rms(r);
-  // Per axis against the (offset-corrected) truth.
-  std::vector<Eigen::Vector3d> truth = truth_f, reading;
-  if (n_off > 0 && r.ok) {
-    const double dh = off_tilt ? x[kFull] : 0.0, dd = off_rot ? x[static_cast<std::size_t>(kFull + (off_tilt ? 1 : 0))] : 0.0;
-    for (std::size_t k = 0; k < truth.size(); ++k)
-      truth[k] = table_gravity(M, angles[k][0] + dh, angles[k][1] + dd, g);
-  }
-  for (const auto& iv : intervals) reading.push_back(iv.accel_mean);
-  axis_rms_against(r, truth, reading, truth);
+  known_axis_rms(intervals, truth_f, angles, M, off, x, r);
   return r;
 }
 
@@ -1057,105 +1132,138 @@ CalibrationResult calibrate_gyro_rate_table(const Recording& rec, const GyroOpti
   return r;
 }
 
-CalibrationResult calibrate_gyro_integration(const Recording& rec, const CalibrationResult& accel, const GyroOptions& go) {
-  CalibrationResult r;
-  r.method = "integration";
-  r.model = gyroscope_model(go.estimate_g_sensitivity);
-  r.gravity_mps2 = accel.gravity_mps2;
-  gyro_parameters_init(r);
-  std::vector<StaticInterval> ivs = accel.intervals;
-  std::sort(ivs.begin(), ivs.end(), [](const StaticInterval& a, const StaticInterval& b) { return a.first < b.first; });
-  r.intervals = ivs;
-  const int full = r.model.size();
-  auto done = [&](const std::string& why) {
-    fail_all(r, why);
-    return r;
-  };
-  if (!accel.ok) return done("the gyro integration needs the accelerometer calibration first, which failed: " + accel.message);
-  if (!finite_intervals(ivs)) return done("non-finite (NaN) readings in a static interval");
-  const int n = static_cast<int>(ivs.size());
-  if (n < 7)
-    return done(fmt::format("too few static intervals: {} found, need at least 7 (6 moves, 2 residuals each) for "
-                            "9 gyro scale and cross-axis parameters plus noise",
-                            n));
-  for (const auto& iv : ivs)
-    if (iv.last >= rec.samples.size()) return done("the accelerometer calibration's intervals do not index this recording");
-  const CalibrationOptions o1 = as_calibration_options(go, go.loss_scale_radps);
-  const CalibrationOptions o2 = as_calibration_options(go, go.loss_scale_rad);
+namespace {
 
-  // Stage 1: bias (+ G) from the static intervals, f = calibrated specific force.
-  std::vector<Eigen::Vector3d> fk;
-  for (const auto& iv : ivs) fk.push_back(accel.correct(iv.accel_mean));
-  std::vector<int> s1_index = {0, 1, 2};
-  if (go.estimate_g_sensitivity)
-    for (int i = 12; i < 21; ++i) s1_index.push_back(i);
-  const int p1 = static_cast<int>(s1_index.size());
-  std::vector<double> x1(static_cast<std::size_t>(p1), 0.0);
-  ceres::Problem prob1;
-  for (std::size_t k = 0; k < ivs.size(); ++k) {
-    auto* c = new ceres::DynamicAutoDiffCostFunction<StaticGyroCost, 4>(
-        new StaticGyroCost{&r.model, s1_index, full, ivs[k].gyro_mean, fk[k]});
-    c->AddParameterBlock(p1);
-    c->SetNumResiduals(3);
-    prob1.AddResidualBlock(c, make_loss(o1), x1.data());
-  }
-  CalibrationResult r1 = r;
-  if (3 * n < p1 + 1) return done("too few static intervals for the gyro bias and g-sensitivity");
-  solve(prob1, x1, s1_index, 3 * n, o1, r1);
-  if (!r1.ok) {
-    r.not_identifiable = r1.not_identifiable;
-    return done("stage 1 (bias" + std::string(go.estimate_g_sensitivity ? " and g-sensitivity" : "") +
-                " from the static intervals): " + r1.message);
-  }
+// Stage-2 parameters of the gyro model: scale (3) and cross-axis (6).
+const std::vector<int> kScaleCrossIndex = {3, 4, 5, 6, 7, 8, 9, 10, 11};
 
-  // Stage 2: scale and cross-axis from the rotations between consecutive intervals.
-  std::vector<double> base = r1.theta;
-  std::vector<Eigen::Vector3d> d(rec.samples.size());
-  std::vector<double> dt(rec.samples.size(), 0.0);
-  // Calibrated specific force of every sample, for G·f during the turns.
-  std::vector<Eigen::Vector3d> f_cal;
-  if (go.estimate_g_sensitivity) {
-    f_cal.resize(rec.samples.size());
-    for (std::size_t i = 0; i < rec.samples.size(); ++i) f_cal[i] = accel.correct(rec.samples[i].accel_mps2);
-  }
-  {
-    std::vector<double> zero(base.size(), 0.0);
-    for (int i : s1_index) zero[static_cast<std::size_t>(i)] = base[static_cast<std::size_t>(i)];
-    for (std::size_t i = 0; i < rec.samples.size(); ++i) {
-      model::Stimulus<double> st;
-      // G·f during the motion: the calibrated accelerometer reading (gravity plus motion).
-      if (go.estimate_g_sensitivity) st.specific_force = f_cal[i];
-      d[i] = rec.samples[i].gyro_radps - r.model.measure<double>(zero.data(), st);
-      if (i + 1 < rec.samples.size()) dt[i] = rec.samples[i + 1].t_s - rec.samples[i].t_s;
-    }
-  }
-  std::vector<double> x2(9, 0.0);
-  ceres::Problem prob2;
-  int pairs = 0;
-  std::vector<Eigen::Vector3d> gdir;
-  for (const auto& f : fk) gdir.push_back(f.normalized());
+// A move between consecutive static intervals k and k + 1: samples a (last of k) .. b (first of k + 1).
+struct Move {
+  std::size_t k, a, b;
+};
+
+// Inputs shared by the steps of the integration method; intervals sorted by time.
+struct IntegrationData {
+  const Recording& rec;
+  const CalibrationResult& accel;
+  const GyroOptions& go;
+  std::vector<StaticInterval> ivs;
+  std::vector<Eigen::Vector3d> fk;     // calibrated specific force of each interval [m/s²]
+  std::vector<Eigen::Vector3d> gdir;   // its direction (unit, sensor frame)
+  std::vector<Eigen::Vector3d> f_cal;  // calibrated specific force of each sample [m/s²] (with G only)
+  std::vector<int> s1_index;           // stage-1 parameters: bias (+ G)
+  std::vector<Move> moves;             // the moves that can be integrated
+};
+
+// Moves with at least one sample and no lost samples inside (a rotation cannot be integrated
+// across a gap).
+std::vector<Move> integrable_moves(const Recording& rec, const std::vector<StaticInterval>& ivs) {
+  std::vector<Move> moves;
   for (std::size_t k = 0; k + 1 < ivs.size(); ++k) {
     const std::size_t a = ivs[k].last, b = ivs[k + 1].first;
     if (b <= a) continue;
     bool gap = false;
     for (std::size_t i = a + 1; i <= b; ++i) gap = gap || (rec.samples[i].flags & kGapBefore);
-    if (gap) continue;  // lost samples: the rotation cannot be integrated across them
-    const Eigen::Vector3d e1 = gdir[k + 1].unitOrthogonal(), e2 = gdir[k + 1].cross(e1);
-    auto* c = new ceres::AutoDiffCostFunction<PairCost, 2, 9>(
-        new PairCost{&r.model, base, &d[a], &dt[a], b - a + 1, gdir[k], e1, e2});
-    prob2.AddResidualBlock(c, make_loss(o2), x2.data());
-    ++pairs;
+    if (!gap) moves.push_back({k, a, b});
   }
-  if (2 * pairs < 10)
-    return done(fmt::format("too few moves between static intervals: {} usable, need at least 5 (2 residuals each) "
-                            "for 9 gyro scale and cross-axis parameters plus noise",
-                            pairs));
-  std::vector<int> s2_index = {3, 4, 5, 6, 7, 8, 9, 10, 11};
+  return moves;
+}
+
+// Sorted intervals, their calibrated specific force and direction, the stage-1 parameter list and
+// the per-sample calibrated specific force (G·f during the turns); the moves come later, once the
+// intervals are known to index the recording.
+IntegrationData integration_data(const Recording& rec, const CalibrationResult& accel, const GyroOptions& go) {
+  IntegrationData d{rec, accel, go, accel.intervals, {}, {}, {}, {0, 1, 2}, {}};
+  std::sort(d.ivs.begin(), d.ivs.end(), [](const StaticInterval& a, const StaticInterval& b) { return a.first < b.first; });
+  if (!accel.ok) return d;
+  for (const auto& iv : d.ivs) d.fk.push_back(accel.correct(iv.accel_mean));
+  for (const auto& f : d.fk) d.gdir.push_back(f.normalized());
+  if (go.estimate_g_sensitivity) {
+    for (int i = 12; i < 21; ++i) d.s1_index.push_back(i);
+    d.f_cal.resize(rec.samples.size());
+    for (std::size_t i = 0; i < rec.samples.size(); ++i) d.f_cal[i] = accel.correct(rec.samples[i].accel_mps2);
+  }
+  return d;
+}
+
+// Why the recording cannot be used for the integration method, or "" when it can.
+std::string integration_precondition(const IntegrationData& d) {
+  if (!d.accel.ok) return "the gyro integration needs the accelerometer calibration first, which failed: " + d.accel.message;
+  if (!finite_intervals(d.ivs)) return "non-finite (NaN) readings in a static interval";
+  if (d.ivs.size() < 7)
+    return fmt::format("too few static intervals: {} found, need at least 7 (6 moves, 2 residuals each) for "
+                       "9 gyro scale and cross-axis parameters plus noise",
+                       d.ivs.size());
+  for (const auto& iv : d.ivs)
+    if (iv.last >= d.rec.samples.size()) return "the accelerometer calibration's intervals do not index this recording";
+  return "";
+}
+
+// Stage 1: gyro bias [rad/s] (+ G [rad/s/(m/s²)]) from the static-interval means, with f the
+// calibrated specific force; x1 holds the stage-1 parameters on return.
+CalibrationResult solve_static_stage(const IntegrationData& d, const CalibrationResult& r, const CalibrationOptions& o1,
+                                     std::vector<double>& x1) {
+  const int p1 = static_cast<int>(d.s1_index.size());
+  x1.assign(static_cast<std::size_t>(p1), 0.0);
+  ceres::Problem prob1;
+  for (std::size_t k = 0; k < d.ivs.size(); ++k) {
+    auto* c = new ceres::DynamicAutoDiffCostFunction<StaticGyroCost, 4>(
+        new StaticGyroCost{&r.model, d.s1_index, r.model.size(), d.ivs[k].gyro_mean, d.fk[k]});
+    c->AddParameterBlock(p1);
+    c->SetNumResiduals(3);
+    prob1.AddResidualBlock(c, make_loss(o1), x1.data());
+  }
+  CalibrationResult r1 = r;
+  solve(prob1, x1, d.s1_index, 3 * static_cast<int>(d.ivs.size()), o1, r1);
+  return r1;
+}
+
+// Gyro reading of sample i minus the bias (+ G·f, f the calibrated specific force) of θ [rad/s].
+Eigen::Vector3d bias_corrected_rate(const IntegrationData& d, const model::ErrorModel& m, const double* theta,
+                                    std::size_t i) {
+  model::Stimulus<double> st;
+  if (d.go.estimate_g_sensitivity) st.specific_force = d.f_cal[i];
+  return d.rec.samples[i].gyro_radps - m.measure<double>(theta, st);
+}
+
+// Bias-corrected rate of every sample [rad/s] and the step to the next sample dt [s] (0 for the last).
+void bias_corrected_rates(const IntegrationData& d, const model::ErrorModel& m, const std::vector<double>& base,
+                          std::vector<Eigen::Vector3d>& w, std::vector<double>& dt) {
+  const auto& samples = d.rec.samples;
+  w.resize(samples.size());
+  dt.assign(samples.size(), 0.0);
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    w[i] = bias_corrected_rate(d, m, base.data(), i);
+    if (i + 1 < samples.size()) dt[i] = samples[i + 1].t_s - samples[i].t_s;
+  }
+}
+
+// Stage 2: scale and cross-axis (9 parameters) from the gravity direction carried through each
+// move by the bias-corrected rates w [rad/s]; x2 holds them on return.
+CalibrationResult solve_move_stage(const IntegrationData& d, const CalibrationResult& r, const std::vector<double>& base,
+                                   const std::vector<Eigen::Vector3d>& w, const std::vector<double>& dt,
+                                   const CalibrationOptions& o2, std::vector<double>& x2) {
+  x2.assign(9, 0.0);
+  ceres::Problem prob2;
+  for (const Move& mv : d.moves) {
+    const Eigen::Vector3d& g1 = d.gdir[mv.k + 1];
+    const Eigen::Vector3d e1 = g1.unitOrthogonal(), e2 = g1.cross(e1);
+    auto* c = new ceres::AutoDiffCostFunction<PairCost, 2, 9>(
+        new PairCost{&r.model, base, &w[mv.a], &dt[mv.a], mv.b - mv.a + 1, d.gdir[mv.k], e1, e2});
+    prob2.AddResidualBlock(c, make_loss(o2), x2.data());
+  }
   CalibrationResult r2 = r;
-  solve(prob2, x2, s2_index, 2 * pairs, o2, r2);
-  // Merge: bias (+ G) from stage 1, scale and cross-axis from stage 2.
+  solve(prob2, x2, kScaleCrossIndex, 2 * static_cast<int>(d.moves.size()), o2, r2);
+  return r2;
+}
+
+// Counts, noise and solver reports of the two stages merged into r: bias (+ G) from stage 1,
+// scale and cross-axis from stage 2.
+void merge_stages(const IntegrationData& d, const CalibrationResult& r1, const CalibrationResult& r2,
+                  CalibrationResult& r) {
+  const int pairs = static_cast<int>(d.moves.size());
   r.parameters = r2.parameters;
-  for (int i : s1_index) r.parameters[static_cast<std::size_t>(i)] = r1.parameters[static_cast<std::size_t>(i)];
+  for (int i : d.s1_index) r.parameters[static_cast<std::size_t>(i)] = r1.parameters[static_cast<std::size_t>(i)];
   r.observations = 2 * pairs;
   r.estimated = 9;
   r.dof = 2 * pairs - 9;
@@ -1164,135 +1272,188 @@ CalibrationResult calibrate_gyro_integration(const Recording& rec, const Calibra
   r.iterations = r1.iterations + r2.iterations;
   r.condition_number = r2.condition_number;
   r.not_identifiable = r2.not_identifiable;
-  r.solver_report = "stage 1 (bias" + std::string(go.estimate_g_sensitivity ? ", g-sensitivity" : "") +
-                    fmt::format(", {} static intervals, sigma {:.3g} rad/s): ", n, r1.sigma) + r1.solver_report +
-                    fmt::format("; stage 2 (scale, cross-axis, {} moves): ", pairs) + r2.solver_report;
+  r.solver_report = "stage 1 (bias" + std::string(d.go.estimate_g_sensitivity ? ", g-sensitivity" : "") +
+                    fmt::format(", {} static intervals, sigma {:.3g} rad/s): ", d.ivs.size(), r1.sigma) +
+                    r1.solver_report + fmt::format("; stage 2 (scale, cross-axis, {} moves): ", pairs) +
+                    r2.solver_report;
+}
+
+// Move residuals [rad] as a function of the upstream parameters z = [accelerometer free
+// parameters, stage-1 parameters] and the stage-2 parameters x. The bias-corrected rates are
+// recomputed only when a stage-1 parameter (or, with G, anything upstream) moved; otherwise the
+// ones of the first evaluation are reused.
+class MoveResiduals {
+ public:
+  MoveResiduals(const IntegrationData& d, const model::ErrorModel& gyro, const std::vector<double>& dt)
+      : d_(d), gyro_(gyro), dt_(dt), rate_cache_(d.moves.size()) {}
+
+  Eigen::VectorXd operator()(const Eigen::VectorXd& z, const std::vector<double>& x, bool rates_moved) {
+    const std::size_t na = d_.accel.free_index.size();
+    std::vector<double> ta = d_.accel.theta, tb(static_cast<std::size_t>(gyro_.size()), 0.0);
+    for (std::size_t j = 0; j < na; ++j) ta[static_cast<std::size_t>(d_.accel.free_index[j])] = z[static_cast<Eigen::Index>(j)];
+    for (std::size_t j = 0; j < d_.s1_index.size(); ++j)
+      tb[static_cast<std::size_t>(d_.s1_index[j])] = z[static_cast<Eigen::Index>(na + j)];
+    auto cal = [&](const Eigen::Vector3d& y) { return d_.accel.model.correct(ta.data(), y, model::Stimulus<double>{}); };
+    Eigen::VectorXd out(static_cast<Eigen::Index>(2 * d_.moves.size()));
+    std::vector<Eigen::Vector3d> fresh;
+    for (std::size_t q = 0; q < d_.moves.size(); ++q) {
+      const Move& mv = d_.moves[q];
+      const bool use_cache = !rates_moved && !rate_cache_[q].empty();
+      std::vector<Eigen::Vector3d>& dw = use_cache ? rate_cache_[q] : fresh;
+      // G·f during the turns with the baseline calibrated f (the accelerometer's uncertainty
+      // reaches the rates through G·δf only at second order).
+      if (!use_cache) {
+        dw.assign(mv.b - mv.a + 1, Eigen::Vector3d::Zero());
+        for (std::size_t i = mv.a; i <= mv.b; ++i) dw[i - mv.a] = bias_corrected_rate(d_, gyro_, tb.data(), i);
+      }
+      const Eigen::Vector3d g0 = cal(d_.ivs[mv.k].accel_mean).normalized(), g1 = cal(d_.ivs[mv.k + 1].accel_mean).normalized();
+      const Eigen::Vector3d e1 = g1.unitOrthogonal(), e2 = g1.cross(e1);
+      const PairCost c{&gyro_, tb, dw.data(), &dt_[mv.a], mv.b - mv.a + 1, g0, e1, e2};
+      double res[2];
+      c(x.data(), res);
+      out[static_cast<Eigen::Index>(2 * q)] = res[0];
+      out[static_cast<Eigen::Index>(2 * q + 1)] = res[1];
+      if (rate_cache_[q].empty()) rate_cache_[q] = dw;
+    }
+    return out;
+  }
+
+ private:
+  const IntegrationData& d_;
+  const model::ErrorModel& gyro_;
+  const std::vector<double>& dt_;
+  std::vector<std::vector<Eigen::Vector3d>> rate_cache_;
+};
+
+// Covariance Cz of the upstream parameters z: the accelerometer's and stage 1's, uncorrelated.
+// Returns false when either calibration has no covariance of the expected size.
+bool upstream_covariance(const IntegrationData& d, const CalibrationResult& r1, Eigen::MatrixXd& Cz) {
+  const auto na = static_cast<Eigen::Index>(d.accel.free_index.size());
+  const auto n1 = static_cast<Eigen::Index>(d.s1_index.size());
+  Cz = Eigen::MatrixXd::Zero(na + n1, na + n1);
+  if (d.accel.covariance.rows() != na || r1.covariance.rows() != n1) return false;
+  Cz.topLeftCorner(na, na) = d.accel.covariance;
+  Cz.bottomRightCorner(r1.covariance.rows(), r1.covariance.cols()) = r1.covariance;
+  return true;
+}
+
+// Stage-2 covariance with the uncertainty the accelerometer calibration and stage 1 pass on
+// (delta method, forward differences of the move residuals): C = C2 + S·Cz·Sᵀ with
+// S = −(J2ᵀJ2)⁻¹·J2ᵀ·Rz; fills the stage-2 standard errors and bounds in r.
+void add_upstream_uncertainty(const IntegrationData& d, const CalibrationResult& r1, const CalibrationResult& r2,
+                              const std::vector<double>& x1, const std::vector<double>& x2,
+                              const std::vector<double>& dt, CalibrationResult& r) {
+  Eigen::MatrixXd Cz;
+  if (!upstream_covariance(d, r1, Cz)) return;
+  const std::size_t na = d.accel.free_index.size();
+  const auto nz = static_cast<Eigen::Index>(na + d.s1_index.size());
+  Eigen::VectorXd z0(nz);
+  for (std::size_t j = 0; j < na; ++j) z0[static_cast<Eigen::Index>(j)] = d.accel.theta[static_cast<std::size_t>(d.accel.free_index[j])];
+  for (std::size_t j = 0; j < d.s1_index.size(); ++j) z0[static_cast<Eigen::Index>(na + j)] = x1[j];
+  MoveResiduals residuals(d, r.model, dt);
+  const Eigen::VectorXd r0 = residuals(z0, x2, true);
+  Eigen::MatrixXd Rz(r0.size(), nz), J2(r0.size(), 9);
+  for (Eigen::Index j = 0; j < nz; ++j) {
+    const double h = 1e-6 * std::max(1.0, std::abs(z0[j]));
+    Eigen::VectorXd z = z0;
+    z[j] += h;
+    Rz.col(j) = (residuals(z, x2, j >= static_cast<Eigen::Index>(na)) - r0) / h;
+  }
+  for (int j = 0; j < 9; ++j) {
+    std::vector<double> x = x2;
+    x[static_cast<std::size_t>(j)] += 1e-7;
+    J2.col(j) = (residuals(z0, x, false) - r0) / 1e-7;
+  }
+  const Eigen::MatrixXd S = -(J2.transpose() * J2).ldlt().solve(J2.transpose() * Rz);
+  const Eigen::MatrixXd C = r2.covariance + S * Cz * S.transpose();
+  r.covariance = C;
+  r.free_index = kScaleCrossIndex;
+  for (int k = 0; k < 9; ++k) {
+    auto& prm = r.parameters[static_cast<std::size_t>(kScaleCrossIndex[static_cast<std::size_t>(k)])];
+    prm.std_error = std::sqrt(std::max(0.0, C(k, k)));
+    prm.lower = prm.value - r.quantile * prm.std_error;
+    prm.upper = prm.value + r.quantile * prm.std_error;
+  }
+}
+
+// Gravity-direction mismatch after each move (RMS over the moves of |v − ĝ_end|, and per axis),
+// raw (θ unused, readings as they are, directions of the raw means) or calibrated with θ.
+std::pair<double, Eigen::Vector3d> gravity_mismatch(const IntegrationData& d, const model::ErrorModel& m,
+                                                    const std::vector<double>& th, bool raw) {
+  const auto& ivs = d.ivs;
+  const auto& samples = d.rec.samples;
+  auto rate = [&](std::size_t i) {
+    model::Stimulus<double> st;
+    if (d.go.estimate_g_sensitivity && !raw) st.specific_force = d.f_cal[i];
+    return raw ? Eigen::Vector3d(samples[i].gyro_radps) : m.correct(th.data(), samples[i].gyro_radps, st);
+  };
+  Eigen::Vector3d acc = Eigen::Vector3d::Zero();
+  double sum = 0.0;
+  int count = 0;
+  for (std::size_t k = 0; k + 1 < ivs.size(); ++k) {
+    const std::size_t a = ivs[k].last, b = ivs[k + 1].first;
+    if (b <= a) continue;
+    Eigen::Vector3d v = raw ? ivs[k].accel_mean.normalized() : d.gdir[k];
+    Eigen::Vector3d wp = rate(a);
+    for (std::size_t i = a; i < b; ++i) {
+      const Eigen::Vector3d wn = rate(i + 1);
+      const Eigen::Vector3d t = (wp + wn) * 0.5 * (samples[i + 1].t_s - samples[i].t_s);
+      const double ang = t.norm();
+      if (ang > 0.0) v = Eigen::AngleAxisd(-ang, t / ang).toRotationMatrix() * v;
+      wp = wn;
+    }
+    const Eigen::Vector3d target = raw ? ivs[k + 1].accel_mean.normalized() : d.gdir[k + 1];
+    acc += (v - target).cwiseAbs2();
+    sum += (v - target).squaredNorm();
+    ++count;
+  }
+  const double dm = std::max(1, count);
+  return std::make_pair(std::sqrt(sum / dm), Eigen::Vector3d((acc / dm).cwiseSqrt()));
+}
+
+}  // namespace
+
+CalibrationResult calibrate_gyro_integration(const Recording& rec, const CalibrationResult& accel, const GyroOptions& go) {
+  CalibrationResult r;
+  r.method = "integration";
+  r.model = gyroscope_model(go.estimate_g_sensitivity);
+  r.gravity_mps2 = accel.gravity_mps2;
+  gyro_parameters_init(r);
+  IntegrationData d = integration_data(rec, accel, go);
+  r.intervals = d.ivs;
+  auto done = [&](const std::string& why) {
+    fail_all(r, why);
+    return r;
+  };
+  if (const std::string why = integration_precondition(d); !why.empty()) return done(why);
+  d.moves = integrable_moves(rec, d.ivs);
+  const int n = static_cast<int>(d.ivs.size());
+  if (3 * n < static_cast<int>(d.s1_index.size()) + 1) return done("too few static intervals for the gyro bias and g-sensitivity");
+  std::vector<double> x1;
+  const CalibrationResult r1 = solve_static_stage(d, r, as_calibration_options(go, go.loss_scale_radps), x1);
+  if (!r1.ok) {
+    r.not_identifiable = r1.not_identifiable;
+    return done("stage 1 (bias" + std::string(go.estimate_g_sensitivity ? " and g-sensitivity" : "") +
+                " from the static intervals): " + r1.message);
+  }
+  const int pairs = static_cast<int>(d.moves.size());
+  if (2 * pairs < 10)
+    return done(fmt::format("too few moves between static intervals: {} usable, need at least 5 (2 residuals each) "
+                            "for 9 gyro scale and cross-axis parameters plus noise",
+                            pairs));
+  std::vector<Eigen::Vector3d> w;
+  std::vector<double> dt, x2;
+  bias_corrected_rates(d, r.model, r1.theta, w, dt);
+  const CalibrationResult r2 = solve_move_stage(d, r, r1.theta, w, dt, as_calibration_options(go, go.loss_scale_rad), x2);
+  merge_stages(d, r1, r2, r);
   if (!r2.ok) return done("stage 2 (scale and cross-axis from the integrated rotations): " + r2.message);
   r.ok = true;
   r.theta = r1.theta;
-  for (int i : s2_index) r.theta[static_cast<std::size_t>(i)] = r2.theta[static_cast<std::size_t>(i)];
-
-  // Uncertainty passed on by the accelerometer calibration and stage 1 (delta method, forward
-  // differences of the pair residuals): z = [accelerometer free parameters, stage-1 parameters].
-  {
-    const std::size_t na = accel.free_index.size(), nz = na + s1_index.size();
-    struct Pair {
-      std::size_t k, a, b;
-    };
-    std::vector<Pair> pl;
-    for (std::size_t k = 0; k + 1 < ivs.size(); ++k) {
-      const std::size_t a = ivs[k].last, b = ivs[k + 1].first;
-      if (b <= a) continue;
-      bool gap = false;
-      for (std::size_t i = a + 1; i <= b; ++i) gap = gap || (rec.samples[i].flags & kGapBefore);
-      if (!gap) pl.push_back({k, a, b});
-    }
-    // Residuals for upstream z and stage-2 x. The bias-corrected rates are recomputed only when a
-    // stage-1 parameter (or, with G, anything upstream) moved; otherwise the cached ones are used.
-    std::vector<std::vector<Eigen::Vector3d>> rate_cache(pl.size());
-
-    auto residuals = [&](const Eigen::VectorXd& z, const std::vector<double>& x, bool rates_moved) {
-      std::vector<double> ta = accel.theta, tb(static_cast<std::size_t>(full), 0.0);
-      for (std::size_t j = 0; j < na; ++j) ta[static_cast<std::size_t>(accel.free_index[j])] = z[static_cast<Eigen::Index>(j)];
-      for (std::size_t j = 0; j < s1_index.size(); ++j)
-        tb[static_cast<std::size_t>(s1_index[j])] = z[static_cast<Eigen::Index>(na + j)];
-      auto cal = [&](const Eigen::Vector3d& y) { return accel.model.correct(ta.data(), y, model::Stimulus<double>{}); };
-      std::vector<double> base2 = tb;
-      Eigen::VectorXd out(static_cast<Eigen::Index>(2 * pl.size()));
-      std::vector<Eigen::Vector3d> fresh;
-      for (std::size_t q = 0; q < pl.size(); ++q) {
-        const auto& P = pl[q];
-        const bool use_cache = !rates_moved && !rate_cache[q].empty();
-        std::vector<Eigen::Vector3d>& dw = use_cache ? rate_cache[q] : fresh;
-        if (!use_cache) dw.assign(P.b - P.a + 1, Eigen::Vector3d::Zero());
-        for (std::size_t i = P.a; !use_cache && i <= P.b; ++i) {
-          model::Stimulus<double> st;
-          // G·f during the turns with the baseline calibrated f (the accelerometer's uncertainty
-          // reaches the rates through G·δf only at second order).
-          if (go.estimate_g_sensitivity) st.specific_force = f_cal[i];
-          dw[i - P.a] = rec.samples[i].gyro_radps - r.model.measure<double>(tb.data(), st);
-        }
-        const Eigen::Vector3d g0 = cal(ivs[P.k].accel_mean).normalized(), g1 = cal(ivs[P.k + 1].accel_mean).normalized();
-        const Eigen::Vector3d e1 = g1.unitOrthogonal(), e2 = g1.cross(e1);
-        const PairCost c{&r.model, base2, dw.data(), &dt[P.a], P.b - P.a + 1, g0, e1, e2};
-        double res[2];
-        c(x.data(), res);
-        out[static_cast<Eigen::Index>(2 * q)] = res[0];
-        out[static_cast<Eigen::Index>(2 * q + 1)] = res[1];
-        if (rate_cache[q].empty()) rate_cache[q] = dw;
-      }
-      return out;
-    };
-    Eigen::VectorXd z0(static_cast<Eigen::Index>(nz));
-    for (std::size_t j = 0; j < na; ++j) z0[static_cast<Eigen::Index>(j)] = accel.theta[static_cast<std::size_t>(accel.free_index[j])];
-    for (std::size_t j = 0; j < s1_index.size(); ++j) z0[static_cast<Eigen::Index>(na + j)] = x1[j];
-    Eigen::MatrixXd Cz = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(nz), static_cast<Eigen::Index>(nz));
-    const bool have_cov = accel.covariance.rows() == static_cast<Eigen::Index>(na) &&
-                          r1.covariance.rows() == static_cast<Eigen::Index>(s1_index.size());
-    if (have_cov) {
-      Cz.topLeftCorner(static_cast<Eigen::Index>(na), static_cast<Eigen::Index>(na)) = accel.covariance;
-      Cz.bottomRightCorner(r1.covariance.rows(), r1.covariance.cols()) = r1.covariance;
-      const Eigen::VectorXd r0 = residuals(z0, x2, true);
-      Eigen::MatrixXd Rz(r0.size(), static_cast<Eigen::Index>(nz)), J2(r0.size(), 9);
-      for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(nz); ++j) {
-        const double h = 1e-6 * std::max(1.0, std::abs(z0[j]));
-        Eigen::VectorXd z = z0;
-        z[j] += h;
-        Rz.col(j) = (residuals(z, x2, j >= static_cast<Eigen::Index>(na)) - r0) / h;
-      }
-      for (int j = 0; j < 9; ++j) {
-        std::vector<double> x = x2;
-        x[static_cast<std::size_t>(j)] += 1e-7;
-        J2.col(j) = (residuals(z0, x, false) - r0) / 1e-7;
-      }
-      const Eigen::MatrixXd S = -(J2.transpose() * J2).ldlt().solve(J2.transpose() * Rz);
-      const Eigen::MatrixXd C = r2.covariance + S * Cz * S.transpose();
-      r.covariance = C;
-      r.free_index = s2_index;
-      for (int k = 0; k < 9; ++k) {
-        auto& prm = r.parameters[static_cast<std::size_t>(s2_index[static_cast<std::size_t>(k)])];
-        prm.std_error = std::sqrt(std::max(0.0, C(k, k)));
-        prm.lower = prm.value - r.quantile * prm.std_error;
-        prm.upper = prm.value + r.quantile * prm.std_error;
-      }
-    }
-  }
-  // Gravity-direction mismatch after each move, raw (θ = 0, readings as they are) and calibrated.
-  auto mismatch = [&](const std::vector<double>& th, bool raw) {
-    Eigen::Vector3d acc = Eigen::Vector3d::Zero();
-    double sum = 0.0;
-    int m = 0;
-    for (std::size_t k = 0; k + 1 < ivs.size(); ++k) {
-      const std::size_t a = ivs[k].last, b = ivs[k + 1].first;
-      if (b <= a) continue;
-      Eigen::Vector3d v = raw ? ivs[k].accel_mean.normalized() : gdir[k];
-      auto rate = [&](std::size_t i) {
-        model::Stimulus<double> st;
-        if (go.estimate_g_sensitivity && !raw) st.specific_force = f_cal[i];
-        return raw ? Eigen::Vector3d(rec.samples[i].gyro_radps) : r.model.correct(th.data(), rec.samples[i].gyro_radps, st);
-      };
-      Eigen::Vector3d wp = rate(a);
-      for (std::size_t i = a; i < b; ++i) {
-        const Eigen::Vector3d wn = rate(i + 1);
-        const Eigen::Vector3d t = (wp + wn) * 0.5 * (rec.samples[i + 1].t_s - rec.samples[i].t_s);
-        const double ang = t.norm();
-        if (ang > 0.0) v = Eigen::AngleAxisd(-ang, t / ang).toRotationMatrix() * v;
-        wp = wn;
-      }
-      const Eigen::Vector3d target = raw ? ivs[k + 1].accel_mean.normalized() : gdir[k + 1];
-      acc += (v - target).cwiseAbs2();
-      sum += (v - target).squaredNorm();
-      ++m;
-    }
-    const double dm = std::max(1, m);
-    return std::make_pair(std::sqrt(sum / dm), Eigen::Vector3d((acc / dm).cwiseSqrt()));
-  };
-  const auto bef = mismatch(std::vector<double>(static_cast<std::size_t>(full), 0.0), true);
-  const auto aft = mismatch(r.theta, false);
-  r.rms_norm_before = bef.first;
-  r.rms_norm_after = aft.first;
-  r.rms_axis_before = bef.second;
-  r.rms_axis_after = aft.second;
+  for (int i : kScaleCrossIndex) r.theta[static_cast<std::size_t>(i)] = r2.theta[static_cast<std::size_t>(i)];
+  add_upstream_uncertainty(d, r1, r2, x1, x2, dt, r);
+  std::tie(r.rms_norm_before, r.rms_axis_before) =
+      gravity_mismatch(d, r.model, std::vector<double>(static_cast<std::size_t>(r.model.size()), 0.0), true);
+  std::tie(r.rms_norm_after, r.rms_axis_after) = gravity_mismatch(d, r.model, r.theta, false);
   return r;
 }
 

@@ -88,83 +88,115 @@ std::ostream& operator<<(std::ostream& os, const TempPolyResult& r) {
   return os;
 }
 
-std::string to_json(const TempPolyResult& r, int indent) {
-  using nlohmann::json;
-  const TempPolyOptions& o = r.options;
-  json j;
-  j["schema"] = kSchema;
-  j["estimator"] = {{"name", kEstimatorName}, {"version", kEstimatorVersion}};
-  j["status"] = r.ok ? "ok" : "failed";
-  j["message"] = r.message;
-  j["recording"] = {{"dir", r.recording_dir}, {"experiment", r.experiment_name}};
-  json axes_opt = json::array();
-  for (int a : o.axes) axes_opt.push_back(std::string(1, estimation::axis_name(a)));
-  j["options"] = {{"instrument", estimation::instrument_name(o.instrument)},
-                  {"axes", axes_opt},
-                  {"selection", o.selection},
-                  {"max_order", o.max_order},
-                  {"order", o.order},
-                  {"reference_c", o.reference_c},
-                  {"min_span_c", o.min_span_c},
-                  {"level_tolerance_c", o.level_tolerance_c},
-                  {"bias_temperature", o.bias_temperature},
-                  {"scale_temperature", o.scale_temperature},
-                  {"cross_axis", o.cross_axis},
-                  {"confidence", o.confidence}};
-  j["unit"] = r.unit;
-  j["reference_c"] = r.reference_c;
-  j["valid_range_c"] = {num_or_null(r.valid_min_c), num_or_null(r.valid_max_c)};
-  json levels = json::array();
-  for (const auto& L : r.levels)
-    levels.push_back({{"temperature_c", L.temperature_c},
-                      {"min_c", L.min_c},
-                      {"max_c", L.max_c},
-                      {"points", L.points},
-                      {"heating_points", L.heating_points},
-                      {"cooling_points", L.cooling_points},
-                      {"unknown_points", L.unknown_points}});
-  j["levels"] = levels;
+namespace {
+
+using nlohmann::json;
+
+// "options": the settings the fit ran with.
+json options_json(const TempPolyOptions& o) {
+  json axes = json::array();
+  for (int a : o.axes) axes.push_back(std::string(1, estimation::axis_name(a)));
+  return {{"instrument", estimation::instrument_name(o.instrument)},
+          {"axes", axes},
+          {"selection", o.selection},
+          {"max_order", o.max_order},
+          {"order", o.order},
+          {"reference_c", o.reference_c},
+          {"min_span_c", o.min_span_c},
+          {"level_tolerance_c", o.level_tolerance_c},
+          {"bias_temperature", o.bias_temperature},
+          {"scale_temperature", o.scale_temperature},
+          {"cross_axis", o.cross_axis},
+          {"confidence", o.confidence}};
+}
+
+// "levels": each temperature level [°C] with its point counts per leg.
+json levels_json(const std::vector<TemperatureLevel>& levels) {
+  json out = json::array();
+  for (const auto& L : levels)
+    out.push_back({{"temperature_c", L.temperature_c},
+                   {"min_c", L.min_c},
+                   {"max_c", L.max_c},
+                   {"points", L.points},
+                   {"heating_points", L.heating_points},
+                   {"cooling_points", L.cooling_points},
+                   {"unknown_points", L.unknown_points}});
+  return out;
+}
+
+// "points": each static point's label, temperature [°C], level and leg.
+json points_json(const TempPolyResult& r) {
   json pts = json::array();
   for (std::size_t i = 0; i < r.points.size(); ++i)
     pts.push_back({{"label", r.points[i].label},
                    {"temperature_c", r.points[i].stimulus.temperature_c},
                    {"level", i < r.level_of.size() ? r.level_of[i] : -1},
                    {"leg", i < r.legs.size() ? leg_name(r.legs[i]) : "unknown"}});
-  j["points"] = pts;
+  return pts;
+}
+
+// The candidate orders' scores (RSS, BIC, CV error) of an axis.
+json scores_json(const std::vector<OrderScore>& scores) {
+  json out = json::array();
+  for (const auto& s : scores)
+    out.push_back({{"order", s.order},
+                   {"ok", s.ok},
+                   {"observations", s.observations},
+                   {"rank", s.parameters},
+                   {"rss", num_or_null(s.rss)},
+                   {"bic", num_or_null(s.bic)},
+                   {"cv_ok", s.cv_ok},
+                   {"cv_mse", num_or_null(s.cv_mse)},
+                   {"note", s.note}});
+  return out;
+}
+
+// The cooling-minus-heating hysteresis per level of an axis.
+json hysteresis_json(const std::vector<Hysteresis>& hysteresis) {
+  json out = json::array();
+  for (const auto& h : hysteresis)
+    out.push_back({{"temperature_c", h.temperature_c},
+                   {"heating_points", h.heating_points},
+                   {"cooling_points", h.cooling_points},
+                   {"value", num_or_null(h.value)},
+                   {"std_error", num_or_null(h.std_error)},
+                   {"lower", num_or_null(h.lower)},
+                   {"upper", num_or_null(h.upper)},
+                   {"significant", h.significant}});
+  return out;
+}
+
+// One axis: status, chosen order, scores, hysteresis and the chosen fit's own document.
+json axis_json(const AxisResult& ax) {
+  json a;
+  a["axis"] = std::string(1, estimation::axis_name(ax.axis));
+  a["ok"] = ax.ok;
+  a["message"] = ax.message;
+  a["chosen_order"] = ax.chosen_order;
+  a["scores"] = scores_json(ax.scores);
+  a["hysteresis"] = hysteresis_json(ax.hysteresis);
+  a["max_abs_hysteresis"] = num_or_null(ax.max_abs_hysteresis);
+  a["fit"] = ax.ok ? json::parse(batch_lsq::to_json(ax.fit, -1)) : json();
+  return a;
+}
+
+}  // namespace
+
+std::string to_json(const TempPolyResult& r, int indent) {
+  json j;
+  j["schema"] = kSchema;
+  j["estimator"] = {{"name", kEstimatorName}, {"version", kEstimatorVersion}};
+  j["status"] = r.ok ? "ok" : "failed";
+  j["message"] = r.message;
+  j["recording"] = {{"dir", r.recording_dir}, {"experiment", r.experiment_name}};
+  j["options"] = options_json(r.options);
+  j["unit"] = r.unit;
+  j["reference_c"] = r.reference_c;
+  j["valid_range_c"] = {num_or_null(r.valid_min_c), num_or_null(r.valid_max_c)};
+  j["levels"] = levels_json(r.levels);
+  j["points"] = points_json(r);
   json axes = json::array();
-  for (const auto& ax : r.axes) {
-    json a;
-    a["axis"] = std::string(1, estimation::axis_name(ax.axis));
-    a["ok"] = ax.ok;
-    a["message"] = ax.message;
-    a["chosen_order"] = ax.chosen_order;
-    json scores = json::array();
-    for (const auto& s : ax.scores)
-      scores.push_back({{"order", s.order},
-                        {"ok", s.ok},
-                        {"observations", s.observations},
-                        {"rank", s.parameters},
-                        {"rss", num_or_null(s.rss)},
-                        {"bic", num_or_null(s.bic)},
-                        {"cv_ok", s.cv_ok},
-                        {"cv_mse", num_or_null(s.cv_mse)},
-                        {"note", s.note}});
-    a["scores"] = scores;
-    json hys = json::array();
-    for (const auto& h : ax.hysteresis)
-      hys.push_back({{"temperature_c", h.temperature_c},
-                     {"heating_points", h.heating_points},
-                     {"cooling_points", h.cooling_points},
-                     {"value", num_or_null(h.value)},
-                     {"std_error", num_or_null(h.std_error)},
-                     {"lower", num_or_null(h.lower)},
-                     {"upper", num_or_null(h.upper)},
-                     {"significant", h.significant}});
-    a["hysteresis"] = hys;
-    a["max_abs_hysteresis"] = num_or_null(ax.max_abs_hysteresis);
-    a["fit"] = ax.ok ? json::parse(batch_lsq::to_json(ax.fit, -1)) : json();
-    axes.push_back(a);
-  }
+  for (const auto& ax : r.axes) axes.push_back(axis_json(ax));
   j["axes"] = axes;
   j["notes"] = r.notes;
   return j.dump(indent);
