@@ -664,11 +664,11 @@ class JsonFields {
   fs::path file_;
 };
 
-void read_run_json(const fs::path& file, RecordingHeader& h) {
+// run.json's text as JSON; a syntax error names the file and line.
+nlohmann::json parse_run_json(const fs::path& file) {
   const std::string text = read_whole_file(file);
-  nlohmann::json j;
   try {
-    j = nlohmann::json::parse(text);
+    return nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
     const std::size_t upto = std::min<std::size_t>(e.byte == 0 ? 0 : e.byte - 1, text.size());
     const auto line =
@@ -677,9 +677,11 @@ void read_run_json(const fs::path& file, RecordingHeader& h) {
   } catch (const nlohmann::json::exception& e) {  // e.g. a number out of range
     throw std::runtime_error(fmt::format("{}: invalid JSON ({})", file.string(), e.what()));
   }
-  if (!j.is_object()) fail_at(file, 1, "expected a JSON object");
-  JsonFields f(j, file);
+}
 
+// format_version (refused outside 1..kRecordingFormatVersion) and status.
+void read_version_and_status(const nlohmann::json& j, const JsonFields& f, const fs::path& file,
+                             RecordingHeader& h) {
   const auto* ver = f.find(j, "format_version");
   if (!ver || !ver->is_number_integer()) f.bad("format_version", "an integer (required)");
   const auto version = ver->get<std::int64_t>();
@@ -693,7 +695,10 @@ void read_run_json(const fs::path& file, RecordingHeader& h) {
   const auto status = st && st->is_string() ? run_status_from_string(st->get<std::string>()) : std::nullopt;
   if (!status) f.bad("status", "one of running, complete, interrupted, failed (required)");
   h.status = *status;
+}
 
+// Names, clock, seed, site (gravity [m/s²], latitude [deg], height [m]) and mounting.
+void read_run_fields(const nlohmann::json& j, const JsonFields& f, RecordingHeader& h) {
   f.str(j, "experiment_name", "experiment_name", h.experiment_name);
   f.str(j, "experiment_file", "experiment_file", h.experiment_file);
   f.str(j, "stend_version", "stend_version", h.stend_version);
@@ -723,29 +728,35 @@ void read_run_json(const fs::path& file, RecordingHeader& h) {
       }
     }
   }
-  if (const auto* sensor = f.find(j, "sensor")) {
-    if (!sensor->is_object()) f.bad("sensor", "an object");
-    if (const auto* id = f.find(*sensor, "identity")) {
-      if (!id->is_object()) f.bad("sensor.identity", "an object");
-      f.str(*id, "vendor", "sensor.identity.vendor", h.identity.vendor);
-      f.str(*id, "model", "sensor.identity.model", h.identity.model);
-      f.str(*id, "serial", "sensor.identity.serial", h.identity.serial);
-      f.str(*id, "who_am_i", "sensor.identity.who_am_i", h.identity.who_am_i);
-    }
-    if (const auto* info = f.find(*sensor, "info")) {
-      if (!info->is_object()) f.bad("sensor.info", "an object");
-      f.num(*info, "output_rate_hz", "sensor.info.output_rate_hz", h.info.output_rate_hz);
-      f.num(*info, "accel_range_mps2", "sensor.info.accel_range_mps2", h.info.accel_range_mps2);
-      f.num(*info, "gyro_range_radps", "sensor.info.gyro_range_radps", h.info.gyro_range_radps);
-      f.num(*info, "accel_lsb_mps2", "sensor.info.accel_lsb_mps2", h.info.accel_lsb_mps2);
-      f.num(*info, "gyro_lsb_radps", "sensor.info.gyro_lsb_radps", h.info.gyro_lsb_radps);
-      f.num(*info, "temperature_lsb_c", "sensor.info.temperature_lsb_c",
-            h.info.temperature_lsb_c);
-      f.boolean(*info, "has_gyro", "sensor.info.has_gyro", h.info.has_gyro);
-      f.boolean(*info, "has_temperature", "sensor.info.has_temperature",
-                h.info.has_temperature);
-    }
+}
+
+// "sensor": identity and info (rate [Hz], ranges and LSB sizes in SI, what it measures).
+void read_sensor(const nlohmann::json& j, const JsonFields& f, RecordingHeader& h) {
+  const auto* sensor = f.find(j, "sensor");
+  if (!sensor) return;
+  if (!sensor->is_object()) f.bad("sensor", "an object");
+  if (const auto* id = f.find(*sensor, "identity")) {
+    if (!id->is_object()) f.bad("sensor.identity", "an object");
+    f.str(*id, "vendor", "sensor.identity.vendor", h.identity.vendor);
+    f.str(*id, "model", "sensor.identity.model", h.identity.model);
+    f.str(*id, "serial", "sensor.identity.serial", h.identity.serial);
+    f.str(*id, "who_am_i", "sensor.identity.who_am_i", h.identity.who_am_i);
   }
+  if (const auto* info = f.find(*sensor, "info")) {
+    if (!info->is_object()) f.bad("sensor.info", "an object");
+    f.num(*info, "output_rate_hz", "sensor.info.output_rate_hz", h.info.output_rate_hz);
+    f.num(*info, "accel_range_mps2", "sensor.info.accel_range_mps2", h.info.accel_range_mps2);
+    f.num(*info, "gyro_range_radps", "sensor.info.gyro_range_radps", h.info.gyro_range_radps);
+    f.num(*info, "accel_lsb_mps2", "sensor.info.accel_lsb_mps2", h.info.accel_lsb_mps2);
+    f.num(*info, "gyro_lsb_radps", "sensor.info.gyro_lsb_radps", h.info.gyro_lsb_radps);
+    f.num(*info, "temperature_lsb_c", "sensor.info.temperature_lsb_c", h.info.temperature_lsb_c);
+    f.boolean(*info, "has_gyro", "sensor.info.has_gyro", h.info.has_gyro);
+    f.boolean(*info, "has_temperature", "sensor.info.has_temperature", h.info.has_temperature);
+  }
+}
+
+// "plugins" (role, name, version, file of each) and "truth_columns".
+void read_plugins_and_truth_columns(const nlohmann::json& j, const JsonFields& f, RecordingHeader& h) {
   if (const auto* plugins = f.find(j, "plugins")) {
     if (!plugins->is_array()) f.bad("plugins", "an array");
     h.plugins.clear();
@@ -769,6 +780,16 @@ void read_run_json(const fs::path& file, RecordingHeader& h) {
       h.truth_columns.push_back(c.get<std::string>());
     }
   }
+}
+
+void read_run_json(const fs::path& file, RecordingHeader& h) {
+  const nlohmann::json j = parse_run_json(file);
+  if (!j.is_object()) fail_at(file, 1, "expected a JSON object");
+  const JsonFields f(j, file);
+  read_version_and_status(j, f, file, h);
+  read_run_fields(j, f, h);
+  read_sensor(j, f, h);
+  read_plugins_and_truth_columns(j, f, h);
 }
 
 // --- imu.csv ---------------------------------------------------------------------------------
