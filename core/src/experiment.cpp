@@ -270,7 +270,7 @@ class Parser {
                       {"gravity", "base_heading_deg", "sensor", "fixtures", "mounting"}, {},
                       top.key_location("bench"));
     gravity(m);
-    exp_.base_heading_deg = m.number("base_heading_deg", 0.0, "in degrees");
+    exp_.base_heading_deg = m.number("base_heading_deg", exp_.base_heading_deg, "in degrees");
     m.require("sensor", "the sensor under test: plugin and config");
     {
       const MapReader s(m.get("sensor"), file_, "bench.sensor", "the sensor", {"plugin", "config"},
@@ -301,12 +301,12 @@ class Parser {
       g.value_mps2 = v;
       g.resolved_mps2 = v;
     } else {
-      g.latitude_deg = m.number("latitude_deg", 0.0, "in degrees");
+      g.latitude_deg = m.number("latitude_deg", g.latitude_deg, "in degrees");
       if (g.latitude_deg < -90.0 || g.latitude_deg > 90.0)
         m.fail_value("latitude_deg",
                      "latitude " + format_number(g.latitude_deg) + " deg is outside [-90, 90]",
                      "latitude_deg is the geodetic latitude in degrees, north positive");
-      g.height_m = m.number("height_m", 0.0, "in metres");
+      g.height_m = m.number("height_m", g.height_m, "in metres");
       if (g.height_m < -500.0 || g.height_m > 10000.0)
         m.fail_value("height_m",
                      "height " + format_number(g.height_m) + " m is outside [-500, 10000]",
@@ -615,11 +615,11 @@ class Parser {
       case Step::Kind::kSetVibration: set_vibration_settings(m, s); break;
       case Step::Kind::kRecord:
         m.require("duration_s", "seconds to record");
-        s.record_s = positive(m, "duration_s", 0.0, "in seconds", "s");
+        s.record_s = positive(m, "duration_s", s.record_s, "in seconds", "s");
         break;
       case Step::Kind::kWait:
         m.require("duration_s", "seconds to wait without recording");
-        s.dwell_s = positive(m, "duration_s", 0.0, "in seconds", "s");
+        s.dwell_s = positive(m, "duration_s", s.dwell_s, "in seconds", "s");
         break;
     }
   }
@@ -628,14 +628,14 @@ class Parser {
   void set_temperature_settings(const MapReader& m, Step& s) {
     s.fixture = step_fixture(m);
     m.require("setpoint_c", "chamber air temperature to reach, in degrees Celsius");
-    s.setpoint_c = m.number("setpoint_c", 0.0, "in degrees Celsius");
+    s.setpoint_c = m.number("setpoint_c", s.setpoint_c, "in degrees Celsius");
     if (s.setpoint_c < -273.15)
       m.fail_value("setpoint_c", "setpoint " + format_number(s.setpoint_c) +
                                      " degC is below absolute zero");
-    s.tolerance_c = positive(m, "tolerance_c", 0.5, "in degrees Celsius", "degC");
-    s.hold_s = non_negative(m, "hold_s", 60.0);
-    s.timeout_s = positive(m, "timeout_s", 3600.0, "in seconds", "s");
-    s.record_settling = m.boolean("record", true);
+    s.tolerance_c = positive(m, "tolerance_c", s.tolerance_c, "in degrees Celsius", "degC");
+    s.hold_s = non_negative(m, "hold_s", s.hold_s);
+    s.timeout_s = positive(m, "timeout_s", s.timeout_s, "in seconds", "s");
+    s.record_settling = m.boolean("record", s.record_settling);
   }
 
   // orientations: one of sweep, list or grid [deg], then dwell and record times [s].
@@ -645,9 +645,9 @@ class Parser {
     if (m.has("sweep")) sweep(m, s);
     if (m.has("list")) orientation_list(m, s);
     if (m.has("grid")) grid(m, s);
-    s.dwell_s = non_negative(m, "dwell_s", 0.0);
+    s.dwell_s = non_negative(m, "dwell_s", s.dwell_s);
     m.require("record_s", "seconds of data recorded at each orientation");
-    s.record_s = positive(m, "record_s", 0.0, "in seconds", "s");
+    s.record_s = positive(m, "record_s", s.record_s, "in seconds", "s");
   }
 
   // rates: the turning axis, its rates [deg/s], then dwell and record times [s].
@@ -660,22 +660,22 @@ class Parser {
     s.rates = m.numbers("rates_dps", "in degrees per second");
     if (s.rates.empty())
       m.fail_value("rates_dps", "'rates_dps' is empty", "give at least one rate, e.g. [-100, 100]");
-    s.dwell_s = non_negative(m, "dwell_s", 0.0);
+    s.dwell_s = non_negative(m, "dwell_s", s.dwell_s);
     m.require("record_s", "seconds of data recorded at each rate");
-    s.record_s = positive(m, "record_s", 0.0, "in seconds", "s");
+    s.record_s = positive(m, "record_s", s.record_s, "in seconds", "s");
   }
 
   // set_vibration: amplitude [g] (0 turns vibration off) and frequency [Hz].
   void set_vibration_settings(const MapReader& m, Step& s) {
     s.fixture = step_fixture(m);
     m.require("amplitude_g", "vibration amplitude in g; 0 turns vibration off");
-    s.amplitude_g = m.number("amplitude_g", 0.0, "in g");
+    s.amplitude_g = m.number("amplitude_g", s.amplitude_g, "in g");
     if (s.amplitude_g < 0)
       m.fail_value("amplitude_g",
                    "'amplitude_g' must not be negative, got " + format_number(s.amplitude_g) + " g",
                    "amplitudes are in g; 0 turns vibration off");
     if (s.amplitude_g > 0) m.require("frequency_hz", "vibration frequency in hertz");
-    if (m.has("frequency_hz")) s.frequency_hz = positive(m, "frequency_hz", 0.0, "in hertz", "Hz");
+    if (m.has("frequency_hz")) s.frequency_hz = positive(m, "frequency_hz", s.frequency_hz, "in hertz", "Hz");
   }
 
   void repeat(const YAML::Node& body, const std::string& path, const SourceLocation& where,
@@ -899,7 +899,7 @@ class Parser {
     exp_.outputs.directory = m.string("directory", "runs");
     if (exp_.outputs.directory.empty())
       m.fail_value("directory", "'directory' must not be empty", "e.g. directory: runs");
-    exp_.outputs.report = m.boolean("report", true);
+    exp_.outputs.report = m.boolean("report", exp_.outputs.report);
   }
 
   std::string file_;
