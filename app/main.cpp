@@ -141,7 +141,7 @@ int cmd_info(const std::string& dir) {
   if (!rec.samples.empty()) fmt::print(" from {:.3f} s to {:.3f} s", rec.samples.front().t_s, rec.samples.back().t_s);
   fmt::print(", {} truth rows, {} segments, {} events\n", rec.truth_t.size(), rec.segments.size(), rec.events.size());
   for (const auto& s : rec.segments)
-    fmt::print("  #{:<3} {:<15} {:>7.2f}–{:<8.2f} s {}{}{}  {}\n", s.id, s.kind, s.t_start_s, s.t_end_s,
+    fmt::print("  #{:<3} {:<15} {:>7.2f}–{:<8.2f} s {}{}{}  {}\n", s.id, stend::to_string(s.kind), s.t_start_s, s.t_end_s,
                s.settled ? "" : "[unsettled] ", s.complete ? "" : "[incomplete] ", s.label, s.targets);
   for (const auto& e : rec.events) fmt::print("  event {:.3f} s {} {}: {}\n", e.t_s, e.level, e.source, e.message);
   return 0;

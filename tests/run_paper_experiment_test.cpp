@@ -51,7 +51,7 @@ TEST(PaperExperiment, RunsOnSimulatedBenchAndRecordsTruth) {
 
   std::vector<stend::Segment> orient;
   for (const auto& s : rec.segments)
-    if (s.kind == "orientation") orient.push_back(s);
+    if (s.kind == stend::SegmentKind::kOrientation) orient.push_back(s);
   ASSERT_EQ(orient.size(), 23u);
 
   const int fx = rec.truth_column("f_x_mps2"), fy = rec.truth_column("f_y_mps2"), fz = rec.truth_column("f_z_mps2");
@@ -101,7 +101,7 @@ TEST(PaperExperiment, StopRequestKeepsDataAndMarksRunInterrupted) {
   ASSERT_FALSE(rec.segments.empty());
   EXPECT_FALSE(rec.segments.back().complete);
   int orientations = 0;
-  for (const auto& s : rec.segments) orientations += s.kind == "orientation" && s.complete;
+  for (const auto& s : rec.segments) orientations += s.kind == stend::SegmentKind::kOrientation && s.complete;
   EXPECT_EQ(orientations, 4);
 }
 

@@ -514,7 +514,7 @@ void RecordingWriter::add_segment(const Segment& s) {
   std::string& line = I.scratch;
   line.clear();
   fmt::format_to(std::back_inserter(line), "{},{},", s.id, s.step);
-  csv::append_field(line, s.kind);
+  csv::append_field(line, to_string(s.kind));
   line.push_back(',');
   csv::append_field(line, s.label);
   fmt::format_to(std::back_inserter(line), ",{},{},{},", s.repeat, s.orientation,
@@ -1028,7 +1028,9 @@ void read_segments(const fs::path& file, Recording& r) {
     Segment s;
     integer(0, s.id);
     integer(1, s.step);
-    s.kind = std::move(f[2]);
+    const auto kind = segment_kind_from_string(f[2]);
+    if (!kind) bad(2, "a segment kind (orientation, rate, rotation, set_temperature, record, wait, detected)");
+    s.kind = *kind;
     s.label = std::move(f[3]);
     integer(4, s.repeat);
     integer(5, s.orientation);
@@ -1136,8 +1138,40 @@ std::optional<RunStatus> run_status_from_string(std::string_view name) {
 
 std::ostream& operator<<(std::ostream& os, RunStatus s) { return os << to_string(s); }
 
+namespace {
+constexpr std::pair<SegmentKind, const char*> kSegmentKindNames[] = {
+    {SegmentKind::kOrientation, "orientation"}, {SegmentKind::kRate, "rate"},
+    {SegmentKind::kRotation, "rotation"},       {SegmentKind::kSetTemperature, "set_temperature"},
+    {SegmentKind::kRecord, "record"},           {SegmentKind::kWait, "wait"},
+    {SegmentKind::kDetected, "detected"},
+};
+}  // namespace
+
+const char* to_string(SegmentKind k) {
+  for (const auto& [kind, name] : kSegmentKindNames)
+    if (kind == k) return name;
+  return "?";
+}
+
+std::optional<SegmentKind> segment_kind_from_string(std::string_view name) {
+  for (const auto& [kind, text] : kSegmentKindNames)
+    if (name == text) return kind;
+  return std::nullopt;
+}
+
+const std::vector<std::string>& segment_kind_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> out;
+    for (const auto& [kind, name] : kSegmentKindNames) out.emplace_back(name);
+    return out;
+  }();
+  return names;
+}
+
+std::ostream& operator<<(std::ostream& os, SegmentKind k) { return os << to_string(k); }
+
 void Segment::print(std::ostream& os) const {
-  os << fmt::format("#{} {}{} {:.2f}–{:.2f} s", id, kind, label.empty() ? "" : " '" + label + "'", t_start_s, t_end_s);
+  os << fmt::format("#{} {}{} {:.2f}–{:.2f} s", id, to_string(kind), label.empty() ? "" : " '" + label + "'", t_start_s, t_end_s);
   if (!settled) os << " [unsettled]";
   if (!complete) os << " [incomplete]";
 }

@@ -101,7 +101,7 @@ class Run {
       case Step::Kind::kOrientations: orientations(index, s); break;
       case Step::Kind::kRates: rates(index, s); break;
       case Step::Kind::kRecord:
-        begin_segment(index, s, "record", -1, 0, "");
+        begin_segment(index, s, SegmentKind::kRecord, -1, 0, "");
         progress_.phase = "recording";
         advance_for(s.record_s);
         end_segment();
@@ -127,7 +127,7 @@ class Run {
     setpoint_c_ = s.setpoint_c;
     tolerance_c_ = s.tolerance_c;
     progress_.phase = "settling";
-    if (s.record_settling) begin_segment(index, s, "set_temperature", -1, 0, fmt::format("{}.temperature={} degC", s.fixture, s.setpoint_c));
+    if (s.record_settling) begin_segment(index, s, SegmentKind::kSetTemperature, -1, 0, fmt::format("{}.temperature={} degC", s.fixture, s.setpoint_c));
     const double t0 = clock_.now_s();
     double in_band_since = -1.0;  // run time the measurement entered the band, −1 when outside
     while (true) {
@@ -159,7 +159,7 @@ class Run {
         table.command(static_cast<std::size_t>(axis_index(table, a.axis)), CommandMode::kPosition, a.value);
         targets += fmt::format("{}{}.{}={} deg", targets.empty() ? "" : "; ", s.fixture, a.axis, a.value);
       }
-      move_and_record(index, s, table, "orientation", static_cast<int>(k), targets, NAN);
+      move_and_record(index, s, table, SegmentKind::kOrientation, static_cast<int>(k), targets, NAN);
     }
   }
 
@@ -170,7 +170,7 @@ class Run {
     for (std::size_t k = 0; k < s.rates.size(); ++k) {
       progress_.item = static_cast<int>(k) + 1;
       table.command(axis, CommandMode::kRate, s.rates[k]);
-      move_and_record(index, s, table, "rate", static_cast<int>(k),
+      move_and_record(index, s, table, SegmentKind::kRate, static_cast<int>(k),
                       fmt::format("{}.{} rate={} deg/s", s.fixture, s.axis, s.rates[k]), s.rates[k]);
     }
     table.command(axis, CommandMode::kRate, 0.0);
@@ -178,7 +178,7 @@ class Run {
     wait_settled(table, s.fixture);
   }
 
-  void move_and_record(int index, const Step& s, Fixture& table, const char* kind, int k,
+  void move_and_record(int index, const Step& s, Fixture& table, SegmentKind kind, int k,
                        const std::string& targets, double rate) {
     progress_.phase = "moving";
     wait_settled(table, s.fixture);
@@ -205,7 +205,7 @@ class Run {
     }
   }
 
-  void begin_segment(int index, const Step& s, const char* kind, int k, int count, const std::string& targets) {
+  void begin_segment(int index, const Step& s, SegmentKind kind, int k, int count, const std::string& targets) {
     segment_ = Segment{};
     segment_.id = segments_;
     segment_.step = index;
@@ -244,7 +244,7 @@ class Run {
       snapshot(t);
       next_truth_ = t + opt_.truth_period_s;
     }
-    if (open_ && bench_.chamber_index() >= 0 && std::isfinite(setpoint_c_) && segment_.kind != "set_temperature") {
+    if (open_ && bench_.chamber_index() >= 0 && std::isfinite(setpoint_c_) && segment_.kind != SegmentKind::kSetTemperature) {
       const double m = bench_.fixture(static_cast<std::size_t>(bench_.chamber_index())).measured(0);
       if (std::abs(m - setpoint_c_) > tolerance_c_) segment_.settled = false;
     }

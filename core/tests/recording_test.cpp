@@ -163,7 +163,7 @@ Written write_small(const fs::path& dir, bool finish = true) {
   Segment s1;
   s1.id = 0;
   s1.step = 0;
-  s1.kind = "set_temperature";
+  s1.kind = stend::SegmentKind::kSetTemperature;
   s1.label = "soak, 25 \"degC\"";
   s1.t_start_s = 0.0;
   s1.t_end_s = 600.25;
@@ -172,7 +172,7 @@ Written write_small(const fs::path& dir, bool finish = true) {
   Segment s2;
   s2.id = 1;
   s2.step = 2;
-  s2.kind = "orientation";
+  s2.kind = stend::SegmentKind::kOrientation;
   s2.label = "";
   s2.repeat = 3;
   s2.orientation = 4;

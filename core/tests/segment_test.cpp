@@ -13,7 +13,7 @@ namespace {
 Segment tilt() {
   Segment s;
   s.id = 3;
-  s.kind = "orientation";
+  s.kind = stend::SegmentKind::kOrientation;
   s.label = "tilt 10";
   s.t_start_s = 12.0;
   s.t_end_s = 22.0;

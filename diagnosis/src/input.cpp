@@ -46,7 +46,7 @@ bool add_annotation_truth(Recording& r, std::string& how) {
   std::vector<std::pair<double, std::vector<double>>> snaps;
   for (const Segment& s : r.segments) {
     std::smatch m;
-    if (s.kind != "orientation" || !std::regex_match(s.label, m, kLabel)) continue;
+    if (s.kind != SegmentKind::kOrientation || !std::regex_match(s.label, m, kLabel)) continue;
     std::vector<double> row(6, 0.0);
     row[static_cast<std::size_t>(m[1].str()[0] - 'x')] = (m[2].str() == "p" ? 1.0 : -1.0) * g;
     snaps.push_back({s.t_start_s, row});

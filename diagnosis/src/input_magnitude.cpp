@@ -154,7 +154,7 @@ GapInput build_magnitude_input(const Recording& rec, const estimation::ModelSpec
   for (const auto& iv : ivs) {
     Segment s;
     s.id = id;
-    s.kind = "orientation";
+    s.kind = SegmentKind::kOrientation;
     s.orientation = id;
     s.orientation_count = static_cast<int>(ivs.size());
     s.t_start_s = iv.t_start_s;

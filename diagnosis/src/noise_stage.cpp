@@ -102,9 +102,8 @@ void count_clipped(GapInput& in, const Recording& rec, bool accel) {
   in.clipped_samples.setZero();
   in.static_samples.setZero();
   const bool flags_used = std::any_of(S.begin(), S.end(), [&](const ImuSample& x) { return (x.flags & flag) != 0; });
-  const auto& kinds = in.spec.processing.segment_kinds;
   for (const auto& seg : rec.segments) {
-    if (std::find(kinds.begin(), kinds.end(), seg.kind) == kinds.end()) continue;
+    if (!in.spec.processing.selects(seg.kind)) continue;
     const auto [lo, hi] = sample_window(S, seg.t_start_s, seg.t_end_s);
     const auto n = hi - lo;
     if (n < 16) continue;

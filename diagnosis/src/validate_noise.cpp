@@ -137,7 +137,7 @@ std::int64_t record_position(const Position& p, const Eigen::Vector3d& mean, int
   Segment seg;
   seg.id = id;
   seg.step = 0;
-  seg.kind = "orientation";
+  seg.kind = SegmentKind::kOrientation;
   seg.label = p.label;
   seg.orientation = id;
   seg.orientation_count = count;

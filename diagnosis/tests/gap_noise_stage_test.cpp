@@ -182,7 +182,7 @@ Recording sim_run(const sim::SimImuConfig& c) {
   for (const auto& [te, f] : truth.until) {
     Segment s;
     s.id = id++;
-    s.kind = "orientation";
+    s.kind = stend::SegmentKind::kOrientation;
     s.label = "p" + std::to_string(s.id);
     s.t_start_s = t0;
     s.t_end_s = te;

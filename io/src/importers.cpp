@@ -1,6 +1,7 @@
 #include <stend/io/importers.hpp>
 #include <stend/physics/units.hpp>
 #include <stend/version.hpp>
+#include <stend/yaml_util.hpp>
 
 #include <algorithm>
 #include <charconv>
@@ -196,7 +197,7 @@ void add_import_event(Recording& rec, const std::string& message) {
   rec.events.push_back(std::move(e));
 }
 
-Segment make_segment(int id, const std::string& kind, const std::string& label, double t0,
+Segment make_segment(int id, SegmentKind kind, const std::string& label, double t0,
                      double t1) {
   Segment s;
   s.id = id;
@@ -546,7 +547,7 @@ void add_imucal_segments(const std::vector<ImucalRow>& rows, Recording& rec) {
     while (j + 1 < rows.size() && rows[j + 1].part == rows[i].part) ++j;
     const std::string& part = rows[i].part;
     const bool rotation = part.size() > 4 && part.compare(part.size() - 4, 4, "_rot") == 0;
-    Segment seg = make_segment(id++, rotation ? "rotation" : "orientation", part,
+    Segment seg = make_segment(id++, rotation ? SegmentKind::kRotation : SegmentKind::kOrientation, part,
                                rec.samples[i].t_s, rec.samples[j].t_s);
     const std::string axis = part.substr(0, 1);
     if (rotation) {
@@ -679,7 +680,7 @@ void add_initialization_segment(const MpuHeader& h, Recording& rec) {
   const auto init = h.values.find("Initialization time");
   if (init == h.values.end() || !(init->second > 0.0)) return;
   const double t_end = std::min(init->second, rec.samples.back().t_s);
-  Segment seg = make_segment(0, "orientation", "initialization", 0.0, t_end);
+  Segment seg = make_segment(0, SegmentKind::kOrientation, "initialization", 0.0, t_end);
   seg.orientation = 0;
   seg.targets = "held still (Initialization time " + fmt_g(init->second) + " s)";
   rec.segments.push_back(seg);
@@ -1117,8 +1118,14 @@ void add_mat_segments(const MatSource& src, const fs::path& file, Recording& rec
       throw ImportError(file, 0, "segments(" + std::to_string(i + 1) +
                                      ") needs scalar fields t_start_s and t_end_s");
     }
-    Segment seg = make_segment(static_cast<int>(i), text(Mat_VarGetStructFieldByName(sv, "kind", i)),
-                               text(Mat_VarGetStructFieldByName(sv, "label", i)), a[0], b[0]);
+    // kind: a segment kind's name; absent or empty means a static position ("orientation").
+    const std::string kind_text = text(Mat_VarGetStructFieldByName(sv, "kind", i));
+    const auto kind = kind_text.empty() ? SegmentKind::kOrientation : segment_kind_from_string(kind_text);
+    if (!kind) {
+      throw ImportError(file, 0, "segments(" + std::to_string(i + 1) + ").kind '" + kind_text +
+                                     "' is not a segment kind (" + yaml::join(segment_kind_names()) + ")");
+    }
+    Segment seg = make_segment(static_cast<int>(i), *kind, text(Mat_VarGetStructFieldByName(sv, "label", i)), a[0], b[0]);
     rec.segments.push_back(seg);
   }
 }
@@ -1200,7 +1207,7 @@ MatVar segments_struct(const Recording& rec, const fs::path& file) {
   if (!s) throw ImportError(file, 0, "matio failed to create 'segments'");
   for (std::size_t i = 0; i < rec.segments.size(); ++i) {
     const Segment& seg = rec.segments[i];
-    Mat_VarSetStructFieldByName(s.get(), "kind", i, make_text("kind", seg.kind).release());
+    Mat_VarSetStructFieldByName(s.get(), "kind", i, make_text("kind", to_string(seg.kind)).release());
     Mat_VarSetStructFieldByName(s.get(), "label", i, make_text("label", seg.label).release());
     Mat_VarSetStructFieldByName(s.get(), "t_start_s", i, make_double("t_start_s", 1, 1, &seg.t_start_s).release());
     Mat_VarSetStructFieldByName(s.get(), "t_end_s", i, make_double("t_end_s", 1, 1, &seg.t_end_s).release());

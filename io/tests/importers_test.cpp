@@ -81,12 +81,12 @@ Recording synthetic(std::size_t n, double rate, bool with_counts) {
     r.samples.push_back(s);
   }
   Segment a;
-  a.kind = "orientation";
+  a.kind = stend::SegmentKind::kOrientation;
   a.label = "z up";
   a.t_start_s = 0.5;
   a.t_end_s = 1.5;
   Segment b = a;
-  b.kind = "rotation";
+  b.kind = stend::SegmentKind::kRotation;
   b.label = "x_rot";
   b.t_start_s = 2.0;
   b.t_end_s = 3.25;
@@ -114,7 +114,7 @@ TEST(ImportMpu6050, CalibrationSession) {
   EXPECT_EQ(r.samples[0].gyro_counts[0], -447);
   // The only annotation: the initial still interval from the header (36.5 s).
   ASSERT_EQ(r.segments.size(), 1u);
-  EXPECT_EQ(r.segments[0].kind, "orientation");
+  EXPECT_EQ(r.segments[0].kind, stend::SegmentKind::kOrientation);
   EXPECT_EQ(r.segments[0].label, "initialization");
   EXPECT_DOUBLE_EQ(r.segments[0].t_end_s, 36.5);
   // Still: |a| ≈ g. This unit is uncalibrated (its reference calibration has a z offset of
@@ -179,7 +179,7 @@ TEST(ImportImucal, AnnotatedSession) {
     const Segment& s = r.segments[i];
     EXPECT_EQ(s.label, expected[i]);
     const bool rot = i >= 6;
-    EXPECT_EQ(s.kind, rot ? "rotation" : "orientation");
+    EXPECT_EQ(s.kind, rot ? stend::SegmentKind::kRotation : stend::SegmentKind::kOrientation);
     if (!rot) {
       EXPECT_EQ(s.orientation, orientations++);
       EXPECT_EQ(s.orientation_count, 6);
@@ -407,7 +407,7 @@ TEST(ImportMat, RoundTripTopLevelAndStruct) {
     EXPECT_EQ(r.header.info.output_rate_hz, 200.0);
     EXPECT_EQ(r.header.info.accel_lsb_mps2, src.header.info.accel_lsb_mps2);
     ASSERT_EQ(r.segments.size(), 2u);
-    EXPECT_EQ(r.segments[1].kind, "rotation");
+    EXPECT_EQ(r.segments[1].kind, stend::SegmentKind::kRotation);
     EXPECT_EQ(r.segments[1].label, "x_rot");
     EXPECT_EQ(r.segments[1].t_end_s, 3.25);
   }

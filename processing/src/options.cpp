@@ -49,11 +49,11 @@ std::vector<std::string> segment_kinds(const yaml::MapReader& m) {
   for (std::size_t i = 0; i < seg.size(); ++i) {
     const std::string path = m.child_path("segments") + "[" + std::to_string(i) + "]";
     const std::string k = yaml::as_string(seg[i], m.file(), path);
-    if (std::find(kSegmentKinds.begin(), kSegmentKinds.end(), k) == kSegmentKinds.end())
+    if (!segment_kind_from_string(k))
       throw ExperimentError(yaml::location_of(seg[i], m.file()), path,
                             "unknown segment kind '" + k + "'",
-                            yaml::did_you_mean(k, kSegmentKinds) +
-                                "segment kinds: " + yaml::join(kSegmentKinds));
+                            yaml::did_you_mean(k, segment_kind_names()) +
+                                "segment kinds: " + yaml::join(segment_kind_names()));
     kinds.push_back(k);
   }
   return kinds;
@@ -117,12 +117,16 @@ const char* interval_source_name(IntervalSource source) {
   return "auto";
 }
 
+bool ProcessingOptions::selects(SegmentKind k) const {
+  return std::find(segment_kinds.begin(), segment_kinds.end(), to_string(k)) != segment_kinds.end();
+}
+
 std::optional<ProcessingOptions::Problem> ProcessingOptions::problem() const {
   auto at_least = [](double v, double lo, bool open) { return std::isfinite(v) && (open ? v > lo : v >= lo); };
   if (segment_kinds.empty()) return Problem{"segments", "expected a non-empty list of segment kinds such as [orientation]"};
   for (const auto& k : segment_kinds)
-    if (std::find(kSegmentKinds.begin(), kSegmentKinds.end(), k) == kSegmentKinds.end())
-      return Problem{"segments", "unknown segment kind '" + k + "' (segment kinds: " + yaml::join(kSegmentKinds) + ")"};
+    if (!segment_kind_from_string(k))
+      return Problem{"segments", "unknown segment kind '" + k + "' (segment kinds: " + yaml::join(segment_kind_names()) + ")"};
   const StaticExtractionSettings& e = extraction;
   if (e.filter == Filter::kButterworth && (e.filter_order < 1 || e.filter_order > 20))
     return Problem{"extraction.filter_order",

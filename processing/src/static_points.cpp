@@ -33,16 +33,16 @@ void require_increasing_times(const Recording& rec) {
                                num(rec.samples[i].t_s) + " s)");
 }
 
-std::vector<Segment> segments_of_kinds(const Recording& rec, const std::vector<std::string>& kinds,
+std::vector<Segment> segments_of_kinds(const Recording& rec, const ProcessingOptions& o,
                                        std::vector<std::string>& notes) {
   std::vector<Segment> out;
   for (const Segment& s : rec.segments)
-    if (std::find(kinds.begin(), kinds.end(), s.kind) != kinds.end()) out.push_back(s);
+    if (o.selects(s.kind)) out.push_back(s);
   if (out.empty()) {
     std::vector<std::string> present;
     for (const auto& s : rec.segments)
-      if (std::find(present.begin(), present.end(), s.kind) == present.end()) present.push_back(s.kind);
-    notes.push_back("the recording has no segment of kind " + join(kinds) + " (kinds present: " +
+      if (std::find(present.begin(), present.end(), to_string(s.kind)) == present.end()) present.emplace_back(to_string(s.kind));
+    notes.push_back("the recording has no segment of kind " + join(o.segment_kinds) + " (kinds present: " +
                     (present.empty() ? "none" : join(present)) + ")");
   }
   return out;
@@ -53,7 +53,7 @@ std::vector<Segment> detected_segments(const Recording& rec, const StaticDetecto
   for (const DetectedInterval& iv : detect_static_intervals(rec, o)) {
     Segment s;
     s.id = static_cast<int>(out.size());
-    s.kind = kDetectedKind;
+    s.kind = SegmentKind::kDetected;
     s.label = "static_" + std::to_string(s.id);
     s.t_start_s = iv.t_start_s;
     s.t_end_s = iv.t_end_s;
@@ -67,7 +67,7 @@ std::vector<Segment> intervals(const Recording& rec, const ProcessingOptions& o,
   IntervalSource source = o.intervals;
   if (source == IntervalSource::kAuto)
     source = rec.segments.empty() ? IntervalSource::kDetect : IntervalSource::kSegments;
-  if (source == IntervalSource::kSegments) return segments_of_kinds(rec, o.segment_kinds, notes);
+  if (source == IntervalSource::kSegments) return segments_of_kinds(rec, o, notes);
   std::vector<Segment> found = detected_segments(rec, o.detector);
   if (o.intervals == IntervalSource::kAuto)
     notes.push_back("the recording has no segments: " + std::to_string(found.size()) +
@@ -217,7 +217,7 @@ std::size_t Extraction::count(SkipReason reason) const {
 }
 
 std::string describe(const Segment& s) {
-  std::string out = "segment " + std::to_string(s.id) + " (" + s.kind;
+  std::string out = "segment " + std::to_string(s.id) + " (" + to_string(s.kind);
   if (!s.label.empty()) out += " '" + s.label + "'";
   if (s.orientation >= 0)
     out += ", orientation " + std::to_string(s.orientation + 1) + "/" + std::to_string(s.orientation_count);

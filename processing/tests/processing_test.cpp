@@ -50,7 +50,7 @@ Recording poses(const std::vector<Eigen::Vector3d>& forces, double sigma = 0.01)
     }
     Segment s;
     s.id = static_cast<int>(k);
-    s.kind = "orientation";
+    s.kind = stend::SegmentKind::kOrientation;
     s.orientation = static_cast<int>(k);
     s.orientation_count = static_cast<int>(forces.size());
     s.t_start_s = t;
@@ -334,7 +334,7 @@ TEST(StaticPoints, DetectsWhenTheRecordingHasNoSegmentsAndTakesTheSensorTemperat
   o.extraction.settle_s = 0.5;
   const Extraction ex = extract(rec, o, accel_with_force());
   ASSERT_EQ(ex.points.size(), 6u);
-  EXPECT_EQ(ex.points[0].segment.kind, kDetectedKind);
+  EXPECT_EQ(ex.points[0].segment.kind, stend::SegmentKind::kDetected);
   EXPECT_EQ(ex.points[3].segment.label, "static_3");
   EXPECT_NEAR(ex.points[3].accel.mean.x(), -9.8, 0.01);
   EXPECT_EQ(ex.points[3].temperature_source, TemperatureSource::kSensor);

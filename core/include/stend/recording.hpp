@@ -70,10 +70,22 @@ struct RecordingHeader {
   }
 };
 
+// What a segment of the recording is. The runner writes one per pose (kOrientation) or rate
+// (kRate) of a table step, and one per set_temperature (settling), record and wait step; importers
+// add kRotation (a turn between poses); the static detector marks its intervals kDetected.
+enum class SegmentKind { kOrientation, kRate, kRotation, kSetTemperature, kRecord, kWait, kDetected };
+// "orientation" | "rate" | "rotation" | "set_temperature" | "record" | "wait" | "detected".
+const char* to_string(SegmentKind k);
+// The kind of that name, or nullopt.
+std::optional<SegmentKind> segment_kind_from_string(std::string_view name);
+// Every kind's name, in the enum's order (for messages and option checks).
+const std::vector<std::string>& segment_kind_names();
+std::ostream& operator<<(std::ostream& os, SegmentKind k);
+
 struct Segment {
   int id = 0;
   int step = 0;            // index into the procedure
-  std::string kind;        // "set_temperature", "orientation", "rate", "record", "wait", …
+  SegmentKind kind = SegmentKind::kRecord;
   std::string label;
   int repeat = 0;
   int orientation = -1;    // index within the step (orientation k), −1 when not applicable

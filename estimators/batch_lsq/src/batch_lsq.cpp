@@ -69,7 +69,7 @@ StaticPoint point_of(const processing::StaticPoint& q, bool accel, const TruthCo
   StaticPoint p;
   p.segment_id = seg.id;
   p.label = seg.label.empty() ? processing::describe(seg) : seg.label;
-  if (seg.orientation >= 0 && seg.label.empty()) p.label = seg.kind + " " + std::to_string(seg.orientation + 1);
+  if (seg.orientation >= 0 && seg.label.empty()) p.label = std::string(to_string(seg.kind)) + " " + std::to_string(seg.orientation + 1);
   p.t_start_s = q.t_start_s;
   p.t_end_s = q.t_end_s;
   p.samples_used = q.samples_used;

@@ -75,14 +75,14 @@ Recording synth_recording(const model::ErrorModel& m, const Eigen::VectorXd& the
   for (std::size_t k = 0; k < forces.size(); ++k) {
     Segment wait;
     wait.id = id++;
-    wait.kind = "wait";
+    wait.kind = stend::SegmentKind::kWait;
     wait.t_start_s = t;
     t += 3.0;
     wait.t_end_s = t;
     rec.segments.push_back(wait);
     Segment s;
     s.id = id++;
-    s.kind = "orientation";
+    s.kind = stend::SegmentKind::kOrientation;
     s.orientation = static_cast<int>(k);
     s.orientation_count = static_cast<int>(forces.size());
     s.t_start_s = t;

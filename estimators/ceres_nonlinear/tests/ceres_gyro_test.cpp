@@ -258,7 +258,7 @@ TEST(CeresGyro, KnownOrientationsEstimateTheTiltOffsetAndRefuseTheRotationOffset
     for (double d = 0.0; d < 360.0; d += 30.0) {
       Segment seg;
       seg.id = id++;
-      seg.kind = "orientation";
+      seg.kind = stend::SegmentKind::kOrientation;
       seg.t_start_s = t;
       const Eigen::Vector3d f = Eigen::AngleAxisd(-(d)*kDeg, Eigen::Vector3d::UnitY()).toRotationMatrix() *
                                 Eigen::AngleAxisd(-(h + dh) * kDeg, Eigen::Vector3d::UnitX()).toRotationMatrix() *

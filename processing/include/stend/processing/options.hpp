@@ -40,13 +40,10 @@ enum class IntervalSource {
 };
 const char* interval_source_name(IntervalSource source);  // "segments" | "detect" | "auto"
 
-// Segment kinds the runner writes (docs/recording-format.md).
-inline const std::vector<std::string> kSegmentKinds = {"orientation", "rate", "record",
-                                                       "set_temperature", "wait"};
 
 struct ProcessingOptions {
   IntervalSource intervals = IntervalSource::kAuto;
-  std::vector<std::string> segment_kinds = {"orientation"};
+  std::vector<std::string> segment_kinds = {"orientation"};  // names of SegmentKind (core/recording.hpp)
   StaticExtractionSettings extraction;
   StaticDetectorOptions detector;
   // Keys ("intervals", "segments", "extraction.cutoff_hz", "detector.window_s", …) that a model
@@ -60,6 +57,8 @@ struct ProcessingOptions {
   std::optional<Problem> problem() const;
   // Ceres style: false, with "KEY: what is wrong" in *message, when a value is out of range.
   bool IsValid(std::string* message = nullptr) const;
+  // Whether segments of kind k are static points under segment_kinds.
+  bool selects(SegmentKind k) const;
 };
 
 // The processing keys of a mapping (an experiment's `processing:` section); model files accept

@@ -27,7 +27,6 @@
 namespace stend::processing {
 
 inline constexpr const char* kDieTemperatureColumn = "die_c";  // truth column, degC
-inline constexpr const char* kDetectedKind = "detected";       // Segment::kind of a detected interval
 
 // What the caller needs from each interval.
 struct Request {
@@ -51,7 +50,7 @@ struct AxesValue {
 enum class TemperatureSource { kDie, kSensor };
 
 struct StaticPoint {
-  // The interval: a segment of the recording, or a detected interval (kind kDetectedKind, id =
+  // The interval: a segment of the recording, or a detected interval (kind SegmentKind::kDetected, id =
   // its index among the detected ones, label "static_<id>").
   Segment segment;
   std::size_t first = 0, last = 0;        // the kept window: sample indices, inclusive
