@@ -71,8 +71,9 @@ struct RecordingHeader {
 };
 
 // What a segment of the recording is. The runner writes one per pose (kOrientation) or rate
-// (kRate) of a table step, and one per set_temperature (settling), record and wait step; importers
-// add kRotation (a turn between poses); the static detector marks its intervals kDetected.
+// (kRate) of a table step, one per record step and one per recorded set_temperature settling;
+// importers add kRotation (a turn between poses); the static detector marks its intervals
+// kDetected; kWait is accepted as a kind that processing options may name.
 enum class SegmentKind { kOrientation, kRate, kRotation, kSetTemperature, kRecord, kWait, kDetected };
 // "orientation" | "rate" | "rotation" | "set_temperature" | "record" | "wait" | "detected".
 const char* to_string(SegmentKind k);
