@@ -555,6 +555,13 @@ TEST_F(RecordingTest, CorruptionInTheMiddleNamesFileAndLine) {
   bad.replace(q, 5, ",no,0,");
   write_text(dir / "segments.csv", bad);
   expect_open_error(dir, {"segments.csv:3:", "settled"});
+  // segments.csv: a kind that is not a segment kind on the second record.
+  bad = seg;
+  const auto k = bad.find(",orientation,", line_start(bad, 3));
+  ASSERT_NE(k, std::string::npos);
+  bad.replace(k, 13, ",orientaton,");
+  write_text(dir / "segments.csv", bad);
+  expect_open_error(dir, {"segments.csv:3:", "kind", "orientaton"});
   // A stray quote in the middle of an unquoted field.
   write_text(dir / "segments.csv", seg.substr(0, line_start(seg, 2)) + "1,2,ab\"c\n" +
                                  seg.substr(line_start(seg, 2)));

@@ -44,3 +44,14 @@ TEST(Segment, EqualsComparesEveryFieldAndNanMatchesNan) {
   b.complete = false;
   EXPECT_FALSE(a.equals(b));
 }
+
+TEST(SegmentKind, EveryKindsNameReadsBackAndOtherNamesAreRefused) {
+  ASSERT_EQ(stend::segment_kind_names().size(), 7u);
+  for (const std::string& name : stend::segment_kind_names()) {
+    const auto k = stend::segment_kind_from_string(name);
+    ASSERT_TRUE(k) << name;
+    EXPECT_EQ(stend::to_string(*k), name);
+  }
+  EXPECT_FALSE(stend::segment_kind_from_string("orientations"));
+  EXPECT_FALSE(stend::segment_kind_from_string(""));
+}

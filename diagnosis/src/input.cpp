@@ -198,7 +198,7 @@ void segment_history(const std::vector<const Segment*>& segs, const batch_lsq::S
   const Segment* prev_orient = nullptr;
   for (const auto* s : segs) {
     if (s->t_start_s > p.t_start_s) break;
-    if (s->kind == "set_temperature" && std::isfinite(s->setpoint_c)) {
+    if (s->kind == SegmentKind::kSetTemperature && std::isfinite(s->setpoint_c)) {
       if (!std::isfinite(cur_sp) || std::abs(s->setpoint_c - cur_sp) > 0.1) {
         prev_sp = cur_sp;
         cur_sp = s->setpoint_c;

@@ -1117,7 +1117,7 @@ CalibrationResult calibrate_gyro_rate_table(const Recording& rec, const GyroOpti
     });
     for (const auto& p : points) {
       kept.push_back(to_interval(p));
-      kept.back().label = p.segment.kind + ": " + p.segment.label;
+      kept.back().label = std::string(to_string(p.segment.kind)) + ": " + p.segment.label;
       w.emplace_back(p.truth[0], p.truth[1], p.truth[2]);
       f.emplace_back(p.truth[3], p.truth[4], p.truth[5]);
     }
