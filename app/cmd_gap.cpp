@@ -68,13 +68,8 @@ int run_gap(const GapArgs& a) {
   diagnosis::print_report(text, rep);
   std::cout << text.str();
   std::filesystem::path json = a.json;
-  if (json.empty())
-    json = std::filesystem::is_directory(a.input) ? std::filesystem::path(a.input) / "gap.json"
-                                                  : std::filesystem::path("gap.json");
-  std::ofstream(json) << diagnosis::to_json(rep) << "\n";
-  std::filesystem::path txt = json;
-  std::ofstream(txt.replace_extension(".txt")) << text.str();
-  fmt::print("results:    {}\n", json.string());
+  if (json.empty() && std::filesystem::is_directory(a.input)) json = std::filesystem::path(a.input) / "gap.json";
+  write_results(json, diagnosis::to_json(rep), text.str());
   return rep.ok ? 0 : 3;
 }
 

@@ -31,6 +31,10 @@ stend::Recording open_recording(const std::string& input, std::string format);
 // is written for, through the estimator registry), prints the report to stdout and writes the
 // results JSON (+ a .txt copy) to `json_out`, or to out_dir/<the estimator's results file> when
 // empty. Returns false when the fit failed (it says why, with no numbers).
+// Writes the results document to `json` and the printed text beside it (.txt); with no path (the
+// input is a dataset file, not a run folder, and no --json was given) writes nothing and says so.
+void write_results(std::filesystem::path json, const std::string& document, const std::string& text);
+
 bool fit_recording(const stend::Recording& rec, const std::string& model_file, const std::filesystem::path& out_dir,
                    const std::string& json_out, const std::string& estimator = "auto");
 

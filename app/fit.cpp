@@ -61,6 +61,17 @@ const estimation::EstimatorEntry& resolve_estimator(const estimation::Registry& 
 
 }  // namespace
 
+void write_results(std::filesystem::path json, const std::string& document, const std::string& text) {
+  if (json.empty()) {
+    fmt::print("results:    not written (the input is not a run folder; --json FILE writes them)\n");
+    return;
+  }
+  std::ofstream(json) << document << "\n";
+  std::filesystem::path txt = json;
+  std::ofstream(txt.replace_extension(".txt")) << text;
+  fmt::print("results:    {}\n", json.string());
+}
+
 bool fit_recording(const stend::Recording& rec, const std::string& model_file, const std::filesystem::path& out_dir,
                    const std::string& json_out, const std::string& estimator) {
   const estimation::Registry registry = estimators::builtin();
@@ -77,12 +88,9 @@ bool fit_recording(const stend::Recording& rec, const std::string& model_file, c
   if (!r.ok && !r.message.empty() && text.find(r.message) == std::string::npos)
     text += entry.name + ": FAILED — " + r.message + "\n";
   std::filesystem::path json = json_out;
-  if (json.empty()) json = out_dir / (r.json_name.empty() ? entry.results_file : r.json_name);
+  if (json.empty() && !out_dir.empty()) json = out_dir / (r.json_name.empty() ? entry.results_file : r.json_name);
   std::cout << text;
-  std::ofstream(json) << r.json << "\n";
-  std::filesystem::path txt = json;
-  std::ofstream(txt.replace_extension(".txt")) << text;
-  fmt::print("results:    {}\n", json.string());
+  write_results(json, r.json, text);
   return r.ok;
 }
 

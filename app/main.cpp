@@ -123,7 +123,7 @@ int cmd_fit(const std::string& input, const std::string& format, const std::stri
             const std::string& estimator) {
   const stend::Recording rec = open_recording(input, format);
   const bool is_run = std::filesystem::is_directory(input);
-  return fit_recording(rec, model, is_run ? std::filesystem::path(input) : std::filesystem::current_path(), json,
+  return fit_recording(rec, model, is_run ? std::filesystem::path(input) : std::filesystem::path(), json,
                        estimator)
              ? 0
              : 3;
