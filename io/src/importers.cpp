@@ -1,4 +1,7 @@
 #include <stend/io/importers.hpp>
+#include <stend/io/timestamps.hpp>
+#include <stend/physics/gravity.hpp>
+#include <stend/physics/table_chain.hpp>
 #include <stend/physics/units.hpp>
 #include <stend/version.hpp>
 #include <stend/yaml_util.hpp>
@@ -8,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -158,19 +162,6 @@ double median_interval(const std::vector<ImuSample>& s) {
   return dt[dt.size() / 2];
 }
 
-// Flags samples that follow an interval longer than 1.5 periods; returns how many.
-std::size_t flag_time_gaps(std::vector<ImuSample>& s, double rate_hz) {
-  if (!(rate_hz > 0.0)) return 0;
-  std::size_t gaps = 0;
-  for (std::size_t i = 1; i < s.size(); ++i) {
-    if (s[i].t_s - s[i - 1].t_s > 1.5 / rate_hz) {
-      s[i].flags |= kGapBefore;
-      ++gaps;
-    }
-  }
-  return gaps;
-}
-
 std::string fmt_g(double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.6g", v);
@@ -211,6 +202,17 @@ Segment make_segment(int id, SegmentKind kind, const std::string& label, double 
   return s;
 }
 
+// Truth snapshots (kTruthColumns) holding specific force f [m/s²] and zero rate over t0 … t1 [s]:
+// at its start, middle and end (snapshots in time order; a time already passed is not repeated).
+void add_held_truth(Recording& rec, double t0, double t1, const std::array<double, 3>& f) {
+  rec.header.truth_columns = kTruthColumns;
+  for (const double t : {t0, 0.5 * (t0 + t1), t1}) {
+    if (!rec.truth_t.empty() && !(t > rec.truth_t.back())) continue;
+    rec.truth_t.push_back(t);
+    rec.truth.push_back({f[0], f[1], f[2], 0.0, 0.0, 0.0});
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // IMU-TK helpers
 
@@ -231,9 +233,8 @@ Triad read_triad_file(const fs::path& file, double time_scale) {
       r.fail("expected 4 values 't x y z', found " + std::to_string(f.size()));
     }
     const double t = number(r, f[0], "t") * time_scale;
-    if (!out.t.empty() && !(t > out.t.back())) {
-      r.fail("timestamp " + fmt_g(t) + " s does not increase (previous " + fmt_g(out.t.back()) +
-             " s)");
+    if (!out.t.empty() && t < out.t.back()) {  // repeats are repaired from the rate afterwards
+      r.fail("timestamp " + fmt_g(t) + " s goes back (previous " + fmt_g(out.t.back()) + " s)");
     }
     out.t.push_back(t);
     out.x.push_back(number(r, f[1], "x"));
@@ -359,11 +360,11 @@ ImuSample csv_sample(const LineReader& r, const std::vector<std::string_view>& f
   for (int k = 0; k < 3; ++k) {
     const double a = field(c.acc[k]);
     if (map.counts) s.accel_counts[k] = to_counts(r, a, c.name(c.acc[k]));
-    s.accel_mps2[k] = a * map.accel_scale;
+    s.accel_mps2[k] = (a - map.accel_offset_counts) * map.accel_scale;
     if (c.has_gyro) {
       const double g = field(c.gyr[k]);
       if (map.counts) s.gyro_counts[k] = to_counts(r, g, c.name(c.gyr[k]));
-      s.gyro_radps[k] = g * map.gyro_scale;
+      s.gyro_radps[k] = (g - map.gyro_offset_counts) * map.gyro_scale;
     }
   }
   if (c.temperature >= 0) {
@@ -374,7 +375,8 @@ ImuSample csv_sample(const LineReader& r, const std::vector<std::string_view>& f
   return s;
 }
 
-// Every data line as a sample (blank and comment lines skipped); a time column must increase.
+// Every data line as a sample (blank and comment lines skipped); a time column must not go back
+// (repeats are repaired afterwards).
 void read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColumns& c, Recording& rec) {
   const int needed = c.needed();
   std::string line;
@@ -388,8 +390,8 @@ void read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColumns& c,
       r.fail("expected at least " + std::to_string(needed) + " fields, found " + std::to_string(f.size()));
     }
     const ImuSample s = csv_sample(r, f, map, c, rec.samples.size());
-    if (c.time >= 0 && !rec.samples.empty() && !(s.t_s > rec.samples.back().t_s)) {
-      r.fail("time " + fmt_g(s.t_s) + " s does not increase (previous " +
+    if (c.time >= 0 && !rec.samples.empty() && s.t_s < rec.samples.back().t_s) {
+      r.fail("time " + fmt_g(s.t_s) + " s goes back (previous " +
              fmt_g(rec.samples.back().t_s) + " s)");
     }
     rec.samples.push_back(s);
@@ -400,7 +402,7 @@ void read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColumns& c,
 // ranges, and the LSB sizes when the file holds counts.
 void set_csv_sensor_info(const CsvMapping& map, const CsvColumns& c, Recording& rec) {
   SensorInfo& info = rec.header.info;
-  info.output_rate_hz = map.rate_hz > 0.0 ? map.rate_hz : 1.0 / median_interval(rec.samples);
+  info.output_rate_hz = map.rate_hz;  // 0: set by the timestamp repair
   info.has_gyro = c.has_gyro;
   info.has_temperature = c.temperature >= 0;
   info.accel_range_mps2 = map.accel_range_mps2;
@@ -423,11 +425,12 @@ Recording import_csv(const fs::path& file, const CsvMapping& map) {
   read_csv_samples(r, map, c, rec);
   if (rec.samples.empty()) throw ImportError(file, 0, "no data lines");
   set_csv_sensor_info(map, c, rec);
-  const std::size_t gaps = c.time >= 0 ? flag_time_gaps(rec.samples, rec.header.info.output_rate_hz) : 0;
+  const std::size_t gaps = c.time >= 0 ? repair_timestamps(rec, map.rate_hz).gaps : 0;
   add_import_event(rec, "imported " + std::to_string(rec.samples.size()) + " samples from " +
                             file.string() + " (generic CSV; " +
                             (map.counts ? "counts" : "physical units") + ", accel scale " +
-                            fmt_g(map.accel_scale) + ", gyro scale " + fmt_g(map.gyro_scale) +
+                            fmt_g(map.accel_scale) + " offset " + fmt_g(map.accel_offset_counts) + ", gyro scale " +
+                            fmt_g(map.gyro_scale) + " offset " + fmt_g(map.gyro_offset_counts) +
                             (c.time >= 0 ? ", time column" : ", fixed rate " + fmt_g(map.rate_hz) + " Hz") +
                             (gaps ? ", " + std::to_string(gaps) + " gap(s) flagged" : "") + ")");
   return rec;
@@ -516,17 +519,17 @@ std::vector<ImucalRow> read_imucal_rows(LineReader& r, const ImucalColumns& c) {
 
 // Rows as samples: t = index / rate [s], counts × LSB [m/s², rad/s]; a jump in the index flags a
 // gap. Returns the number of gaps.
-std::size_t add_imucal_samples(const std::vector<ImucalRow>& rows, double rate_hz, double acc_lsb, double gyr_lsb,
-                               Recording& rec) {
+std::size_t add_imucal_samples(const std::vector<ImucalRow>& rows, const ImucalOptions& opt, double acc_lsb,
+                               double gyr_lsb, Recording& rec) {
   std::size_t gaps = 0;
   for (std::size_t i = 0; i < rows.size(); ++i) {
     ImuSample s;
-    s.t_s = static_cast<double>(rows[i].index) / rate_hz;
+    s.t_s = static_cast<double>(rows[i].index) / opt.rate_hz;
     for (int k = 0; k < 3; ++k) {
       s.accel_counts[k] = rows[i].counts[static_cast<std::size_t>(k)];
       s.gyro_counts[k] = rows[i].counts[static_cast<std::size_t>(k + 3)];
-      s.accel_mps2[k] = s.accel_counts[k] * acc_lsb;
-      s.gyro_radps[k] = s.gyro_counts[k] * gyr_lsb;
+      s.accel_mps2[k] = (s.accel_counts[k] - opt.accel_offset_counts) * acc_lsb;
+      s.gyro_radps[k] = (s.gyro_counts[k] - opt.gyro_offset_counts) * gyr_lsb;
     }
     if (i > 0 && rows[i].index != rows[i - 1].index + 1) {
       s.flags |= kGapBefore;
@@ -538,8 +541,9 @@ std::size_t add_imucal_samples(const std::vector<ImucalRow>& rows, double rate_h
 }
 
 // One segment per contiguous run of a part: "<axis>_rot" is a 360° rotation about the axis,
-// any other part an orientation ("<axis>_p" = +axis up, "<axis>_a" = +axis down).
-void add_imucal_segments(const std::vector<ImucalRow>& rows, Recording& rec) {
+// any other part an orientation ("<axis>_p" = +axis up: f = +g along it, "<axis>_a" = +axis
+// down: f = −g, both held as truth).
+void add_imucal_segments(const std::vector<ImucalRow>& rows, double g_mps2, Recording& rec) {
   int id = 0, orientation = 0;
   std::vector<std::size_t> orientation_segments;
   for (std::size_t i = 0; i < rows.size();) {
@@ -554,8 +558,14 @@ void add_imucal_segments(const std::vector<ImucalRow>& rows, Recording& rec) {
       seg.targets = "360 deg turn about " + axis;
     } else {
       seg.orientation = orientation++;
-      if (part.size() == 3 && part[1] == '_' && part[2] == 'p') seg.targets = "+" + axis + " up";
-      if (part.size() == 3 && part[1] == '_' && part[2] == 'a') seg.targets = "+" + axis + " down";
+      const bool up = part.size() == 3 && part[1] == '_' && part[2] == 'p';
+      const bool down = part.size() == 3 && part[1] == '_' && part[2] == 'a';
+      if (up || down) seg.targets = "+" + axis + (up ? " up" : " down");
+      if ((up || down) && part[0] >= 'x' && part[0] <= 'z') {
+        std::array<double, 3> f{};
+        f[static_cast<std::size_t>(part[0] - 'x')] = up ? g_mps2 : -g_mps2;
+        add_held_truth(rec, seg.t_start_s, seg.t_end_s, f);
+      }
       orientation_segments.push_back(rec.segments.size());
     }
     rec.segments.push_back(seg);
@@ -573,8 +583,8 @@ Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) 
   Recording rec = new_recording(file, "imucal");
   const double acc_lsb = physics::kStandardGravity / opt.accel_lsb_per_g;
   const double gyr_lsb = physics::kDegPerSecond / opt.gyro_lsb_per_dps;
-  const std::size_t gaps = add_imucal_samples(rows, opt.rate_hz, acc_lsb, gyr_lsb, rec);
-  add_imucal_segments(rows, rec);
+  const std::size_t gaps = add_imucal_samples(rows, opt, acc_lsb, gyr_lsb, rec);
+  add_imucal_segments(rows, opt.gravity_mps2, rec);
   set_int16_sensor_info(opt.rate_hz, acc_lsb, gyr_lsb, rec);
   rec.header.identity.model = "imucal example session";
   rec.header.gravity_mps2 = opt.gravity_mps2;
@@ -585,7 +595,8 @@ Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) 
                " LSB/g and " + fmt_g(opt.gyro_lsb_per_dps) +
                " LSB/(deg/s), which imucal's own calibration of this session (example_cal.json) "
                "matches within 3 % — SI values are uncalibrated approximations; gravity " +
-               fmt_g(opt.gravity_mps2) + " m/s^2 is imucal's expected_g" +
+               fmt_g(opt.gravity_mps2) + " m/s^2 is imucal's expected_g; truth from the annotations: "
+               "<axis>_p = axis up (f = +g along it), <axis>_a = axis down (-g), rate 0" +
                (gaps ? "; " + std::to_string(gaps) + " gap(s) in the sample index" : "") + ")");
   return rec;
 }
@@ -653,7 +664,7 @@ double mpu_rate(const fs::path& file, const MpuHeader& h) {
 
 // Every data line as a sample at t = index / rate [s]; counts × LSB [m/s², rad/s].
 void read_mpu_samples(LineReader& r, const std::array<std::size_t, 6>& col, std::size_t fields, double rate,
-                      double acc_lsb, double gyr_lsb, Recording& rec) {
+                      const Mpu6050MultiposOptions& opt, double acc_lsb, double gyr_lsb, Recording& rec) {
   const std::size_t needed = *std::max_element(col.begin(), col.end()) + 1;
   std::string line;
   while (r.next(line)) {
@@ -668,8 +679,8 @@ void read_mpu_samples(LineReader& r, const std::array<std::size_t, 6>& col, std:
       const auto ka = static_cast<std::size_t>(k), kg = static_cast<std::size_t>(k + 3);
       s.accel_counts[k] = to_counts(r, number(r, f[col[ka]], kMpuColumns[ka]), kMpuColumns[ka]);
       s.gyro_counts[k] = to_counts(r, number(r, f[col[kg]], kMpuColumns[kg]), kMpuColumns[kg]);
-      s.accel_mps2[k] = s.accel_counts[k] * acc_lsb;
-      s.gyro_radps[k] = s.gyro_counts[k] * gyr_lsb;
+      s.accel_mps2[k] = (s.accel_counts[k] - opt.accel_offset_counts) * acc_lsb;
+      s.gyro_radps[k] = (s.gyro_counts[k] - opt.gyro_offset_counts) * gyr_lsb;
     }
     rec.samples.push_back(s);
   }
@@ -696,7 +707,7 @@ Recording import_mpu6050_multipos(const fs::path& file, const Mpu6050MultiposOpt
   Recording rec = new_recording(file, "mpu6050_multipos");
   const double acc_lsb = physics::kStandardGravity / opt.accel_lsb_per_g;
   const double gyr_lsb = physics::kDegPerSecond / opt.gyro_lsb_per_dps;
-  read_mpu_samples(r, col, header.names.size(), rate, acc_lsb, gyr_lsb, rec);
+  read_mpu_samples(r, col, header.names.size(), rate, opt, acc_lsb, gyr_lsb, rec);
   if (rec.samples.empty()) throw ImportError(file, 0, "no data lines after the column names");
   set_int16_sensor_info(rate, acc_lsb, gyr_lsb, rec);
   rec.header.identity.vendor = "InvenSense";
@@ -734,7 +745,7 @@ void add_accel_samples(const Triad& acc, const fs::path& acc_file, const ImuTkOp
     const double a[3] = {acc.x[i], acc.y[i], acc.z[i]};
     for (int k = 0; k < 3; ++k) {
       if (opt.counts) s.accel_counts[k] = triad_count(acc, i, a[k], acc_file);
-      s.accel_mps2[k] = a[k] * opt.accel_scale;
+      s.accel_mps2[k] = (a[k] - opt.accel_offset_counts) * opt.accel_scale;
     }
     rec.samples.push_back(s);
   }
@@ -753,7 +764,7 @@ void add_matched_gyro(const Triad& gyr, const fs::path& gyro_file, const ImuTkOp
     const double g[3] = {gyr.x[i], gyr.y[i], gyr.z[i]};
     for (int k = 0; k < 3; ++k) {
       if (opt.counts) rec.samples[i].gyro_counts[k] = triad_count(gyr, i, g[k], gyro_file);
-      rec.samples[i].gyro_radps[k] = g[k] * opt.gyro_scale;
+      rec.samples[i].gyro_radps[k] = (g[k] - opt.gyro_offset_counts) * opt.gyro_scale;
     }
   }
 }
@@ -777,7 +788,7 @@ std::string add_interpolated_gyro(const Triad& acc, const Triad& gyr, const fs::
                          gyr.z[j] + u * (gyr.z[j1] - gyr.z[j])};
     for (int k = 0; k < 3; ++k) {
       if (opt.counts) s.gyro_counts[k] = static_cast<std::int32_t>(std::lround(g[k]));
-      s.gyro_radps[k] = g[k] * opt.gyro_scale;
+      s.gyro_radps[k] = (g[k] - opt.gyro_offset_counts) * opt.gyro_scale;
     }
     kept.push_back(s);
   }
@@ -793,11 +804,11 @@ std::string add_interpolated_gyro(const Triad& acc, const Triad& gyr, const fs::
                   : std::string());
 }
 
-// Sensor description: rate [Hz] (given, or from the median sample step median_dt [s]) and the
+// Sensor description: rate [Hz] (given, else left to the timestamp repair) and the
 // LSB sizes when the files hold counts.
-void set_imutk_sensor_info(const ImuTkOptions& opt, bool has_gyro, double median_dt, Recording& rec) {
+void set_imutk_sensor_info(const ImuTkOptions& opt, bool has_gyro, Recording& rec) {
   SensorInfo& info = rec.header.info;
-  info.output_rate_hz = opt.rate_hz > 0.0 ? opt.rate_hz : (median_dt > 0.0 ? 1.0 / median_dt : 0.0);
+  info.output_rate_hz = opt.rate_hz;  // 0: set by the timestamp repair
   info.has_gyro = has_gyro;
   info.has_temperature = false;
   if (opt.counts) {
@@ -826,8 +837,8 @@ Recording import_imutk(const fs::path& acc_file, const fs::path& gyro_file, cons
   } else if (has_gyro) {
     merge_note = add_interpolated_gyro(acc, gyr, gyro_file, tol, opt, rec);
   }
-  set_imutk_sensor_info(opt, has_gyro, median_dt, rec);
-  const std::size_t gaps = flag_time_gaps(rec.samples, rec.header.info.output_rate_hz);
+  set_imutk_sensor_info(opt, has_gyro, rec);
+  const std::size_t gaps = repair_timestamps(rec, opt.rate_hz).gaps;
   add_import_event(rec, "imported " + std::to_string(rec.samples.size()) + " samples from " +
                             acc_file.string() + (has_gyro ? " and " + gyro_file.string() : std::string()) +
                             " (IMU-TK text; time scale " + fmt_g(opt.time_scale_s) + " s/unit, " +
@@ -862,6 +873,102 @@ void export_imutk(const Recording& rec, const fs::path& acc_file, const fs::path
   };
   write(acc_file, false);
   if (!gyro_file.empty()) write(gyro_file, true);
+}
+
+// =============================================================================================
+// (f) table of static means
+
+namespace {
+
+// Which columns of a static table hold the known input and the measured means (−1 = absent).
+struct TableColumns {
+  int angle = -1;
+  std::array<int, 3> force{-1, -1, -1}, measured{-1, -1, -1};
+};
+
+TableColumns table_columns(const LineReader& r, const std::vector<std::string>& names) {
+  TableColumns c;
+  auto find = [&](const std::string& n) {
+    const auto it = std::find(names.begin(), names.end(), n);
+    return it == names.end() ? -1 : static_cast<int>(it - names.begin());
+  };
+  c.angle = find("angle_deg");
+  bool any = false;
+  for (std::size_t k = 0; k < 3; ++k) {
+    const std::string axis(1, static_cast<char>('x' + k));
+    c.force[k] = find("f_" + axis + "_mps2");
+    c.measured[k] = find("a_" + axis + "_mps2");
+    any = any || c.measured[k] >= 0;
+  }
+  const bool force = c.force[0] >= 0 && c.force[1] >= 0 && c.force[2] >= 0;
+  if (!any) r.fail("no measured column: expected a_x_mps2, a_y_mps2 and/or a_z_mps2");
+  if ((c.angle >= 0) == force)
+    r.fail("expected the known input as either angle_deg or f_x_mps2,f_y_mps2,f_z_mps2 (exactly one of them)");
+  return c;
+}
+
+}  // namespace
+
+Recording import_static_table(const fs::path& file, double gravity_mps2) {
+  LineReader r(file);
+  std::string line;
+  std::vector<std::string> names;
+  while (names.empty() && r.next(line)) {
+    if (is_blank(line) || trim(line).front() == '#') continue;
+    for (auto f : split(line, ',')) names.push_back(unquote(f));
+  }
+  if (names.empty()) throw ImportError(file, 0, "no column-name line");
+  const TableColumns c = table_columns(r, names);
+  Recording rec = new_recording(file, "static_table");
+  rec.header.gravity_mps2 = gravity_mps2;
+  const double g = rec.header.gravity_or_standard_mps2();
+  const auto per_row = static_cast<std::size_t>(kStaticTableHold_s * kStaticTableRate_hz);
+  while (r.next(line)) {
+    if (is_blank(line) || trim(line).front() == '#') continue;
+    const auto f = split(line, ',');
+    if (f.size() != names.size()) {
+      r.fail("expected " + std::to_string(names.size()) + " fields, found " + std::to_string(f.size()));
+    }
+    std::array<double, 3> force{};
+    std::string label;
+    if (c.angle >= 0) {
+      const double delta = number(r, f[static_cast<std::size_t>(c.angle)], "angle_deg");
+      const Eigen::Vector3d fv = physics::gravity_specific_force(physics::paper_table(0.0, delta * physics::kDegToRad), g);
+      force = {fv.x(), fv.y(), fv.z()};
+      label = fmt_g(delta) + " deg";
+    } else {
+      for (std::size_t k = 0; k < 3; ++k) force[k] = number(r, f[static_cast<std::size_t>(c.force[k])], names[static_cast<std::size_t>(c.force[k])]);
+      label = "row " + std::to_string(rec.segments.size() + 1);
+    }
+    ImuSample s;
+    for (std::size_t k = 0; k < 3; ++k) {
+      s.accel_mps2[static_cast<int>(k)] = c.measured[k] >= 0 ? number(r, f[static_cast<std::size_t>(c.measured[k])], names[static_cast<std::size_t>(c.measured[k])])
+                                                            : std::numeric_limits<double>::quiet_NaN();
+    }
+    const double t0 = static_cast<double>(rec.samples.size()) / kStaticTableRate_hz;
+    for (std::size_t i = 0; i < per_row; ++i) {
+      s.t_s = static_cast<double>(rec.samples.size()) / kStaticTableRate_hz;
+      rec.samples.push_back(s);
+    }
+    const int id = static_cast<int>(rec.segments.size());
+    Segment seg = make_segment(id, SegmentKind::kOrientation, label, t0, rec.samples.back().t_s);
+    seg.orientation = id;
+    rec.segments.push_back(seg);
+    add_held_truth(rec, seg.t_start_s, seg.t_end_s, force);
+  }
+  if (rec.segments.empty()) throw ImportError(file, 0, "no data rows after the column names");
+  for (auto& seg : rec.segments) seg.orientation_count = static_cast<int>(rec.segments.size());
+  rec.header.info.output_rate_hz = kStaticTableRate_hz;
+  rec.header.info.has_gyro = false;
+  add_import_event(rec, "imported " + std::to_string(rec.segments.size()) + " static means from " + file.string() +
+                            " (table of static means; each row held as an orientation segment of " +
+                            fmt_g(kStaticTableHold_s) + " s at " + fmt_g(kStaticTableRate_hz) +
+                            " Hz repeating the mean, so sample statistics carry no noise information; " +
+                            (c.angle >= 0 ? "known input from angle_deg: f = g*[-sin d, 0, cos d], the paper's table with tilt h = 0, g = " +
+                                                fmt_g(g) + " m/s^2" + (gravity_mps2 > 0.0 ? "" : " (standard gravity: the table does not state g)")
+                                          : std::string("known input from f_x_mps2, f_y_mps2, f_z_mps2")) +
+                            "; axes without a measured column read NaN)");
+  return rec;
 }
 
 // =============================================================================================
@@ -1133,8 +1240,7 @@ void add_mat_segments(const MatSource& src, const fs::path& file, Recording& rec
 // Sensor description: rate [Hz] (fs, or from the median sample step), gyro, temperature, LSB sizes.
 void set_mat_sensor_info(const MatData& m, const MatOptions& opt, Recording& rec) {
   SensorInfo& info = rec.header.info;
-  const double median_dt = median_interval(rec.samples);
-  info.output_rate_hz = m.fixed_rate() ? m.rate_v[0] : (median_dt > 0.0 ? 1.0 / median_dt : 0.0);
+  info.output_rate_hz = m.fixed_rate() ? m.rate_v[0] : 0.0;  // 0: set by the timestamp repair
   info.has_gyro = m.has_gyro();
   info.has_temperature = m.have_temp;
   info.accel_lsb_mps2 = m.acc_lsb();
@@ -1154,14 +1260,14 @@ Recording import_mat(const fs::path& file, const MatOptions& opt) {
   rec.samples.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     rec.samples[i] = mat_sample(m, i, opt);
-    if (m.have_t && i > 0 && !(rec.samples[i].t_s > rec.samples[i - 1].t_s)) {
-      throw ImportError(file, 0, "'" + m.t_name + "' does not increase at element " + std::to_string(i + 1));
+    if (m.have_t && i > 0 && rec.samples[i].t_s < rec.samples[i - 1].t_s) {  // repeats are repaired below
+      throw ImportError(file, 0, "'" + m.t_name + "' goes back at element " + std::to_string(i + 1));
     }
   }
   add_mat_segments(src, file, rec);
   set_mat_sensor_info(m, opt, rec);
   const bool has_gyro = m.has_gyro();
-  const std::size_t gaps = m.have_t ? flag_time_gaps(rec.samples, rec.header.info.output_rate_hz) : 0;
+  const std::size_t gaps = m.have_t ? repair_timestamps(rec, m.fixed_rate() ? m.rate_v[0] : 0.0).gaps : 0;
   add_import_event(rec, "imported " + std::to_string(n) + " samples from " + file.string() +
                             " (MATLAB file" + (opt.struct_name.empty() ? "" : ", struct " + opt.struct_name) +
                             "; accel from '" + (m.have_acc ? m.acc_name : m.acc_counts_name) + "'" +

@@ -25,6 +25,7 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace stend::io {
 
@@ -39,6 +40,11 @@ class ImportError : public std::runtime_error {
   std::filesystem::path file_;
   std::size_t line_;
 };
+
+// The truth columns importers write where the dataset knows its stimulus: specific force [m/s²]
+// and rate [rad/s] in the sensor frame.
+inline const std::vector<std::string> kTruthColumns = {"f_x_mps2", "f_y_mps2", "f_z_mps2",
+                                                       "w_x_radps", "w_y_radps", "w_z_radps"};
 
 // ---------------------------------------------------------------------------------------------
 // (a) Generic delimited text with a column mapping.
@@ -63,14 +69,18 @@ struct CsvMapping {
   CsvColumn time;               // empty: fixed rate, t = i / rate_hz
   double time_scale_s = 1.0;    // seconds per time unit (1e-3 for ms, 1e-9 for ns)
   double rate_hz = 0.0;         // required without a time column; else 0 = from the timestamps
+                                // (repaired from this rate when they repeat or jitter)
 
   std::array<CsvColumn, 3> accel;   // x y z (required)
   std::array<CsvColumn, 3> gyro;    // x y z (all empty = no gyroscope)
   CsvColumn temperature;            // optional
 
-  // File value → SI: value · scale (m/s² resp. rad/s per file unit; °C = value·scale + offset).
+  // File value → SI: (value − offset) · scale (m/s² resp. rad/s per file unit or count; the
+  // offsets are in file units, e.g. 32768 counts for unsigned 16-bit; °C = value·scale + offset).
   double accel_scale = 1.0;
+  double accel_offset_counts = 0.0;
   double gyro_scale = 1.0;
+  double gyro_offset_counts = 0.0;
   double temperature_scale = 1.0;
   double temperature_offset_c = 0.0;
   // The file holds raw integer counts: they are stored as counts too, and the scales are the
@@ -90,6 +100,8 @@ Recording import_csv(const std::filesystem::path& file, const CsvMapping& mappin
 // columns part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z in raw counts; `samples` is the sample
 // index (t = samples / rate). Parts x_p x_a y_p y_a z_p z_a (axis pointing up / down) become
 // "orientation" segments, x_rot y_rot z_rot (360° turns about the axis) "rotation" segments.
+// Truth (kTruthColumns) from the annotations: an orientation <axis>_p / <axis>_a holds
+// f = ±gravity_mps2 along the axis and zero rate (snapshots at its start, middle and end).
 //
 // Scale: the file has counts only. The defaults are the nominal ±16 g (2048 LSB/g) and
 // ±2000 °/s (16.4 LSB/(°/s)) settings that imucal's own calibration of this session
@@ -99,6 +111,8 @@ struct ImucalOptions {
   double rate_hz = 204.8;
   double accel_lsb_per_g = 2048.0;
   double gyro_lsb_per_dps = 16.4;
+  double accel_offset_counts = 0.0;  // SI = (count − offset) · LSB
+  double gyro_offset_counts = 0.0;
   double gravity_mps2 = 9.81;  // the value imucal's Ferraris calibration assumes (expected_g)
 };
 Recording import_imucal_session(const std::filesystem::path& csv, const ImucalOptions& options = {});
@@ -112,6 +126,8 @@ Recording import_imucal_session(const std::filesystem::path& csv, const ImucalOp
 struct Mpu6050MultiposOptions {
   double accel_lsb_per_g = 16384.0;
   double gyro_lsb_per_dps = 131.0;
+  double accel_offset_counts = 0.0;  // SI = (count − offset) · LSB
+  double gyro_offset_counts = 0.0;
 };
 Recording import_mpu6050_multipos(const std::filesystem::path& csv,
                                   const Mpu6050MultiposOptions& options = {});
@@ -124,8 +140,10 @@ Recording import_mpu6050_multipos(const std::filesystem::path& csv,
 // (accelerometer samples outside the gyro's time span are dropped, and an event says so).
 struct ImuTkOptions {
   double time_scale_s = 1.0;  // seconds per timestamp unit (IMU-TK: sec, ms, µs or ns)
-  double accel_scale = 1.0;   // m/s² per file unit
+  double accel_scale = 1.0;   // m/s² per file unit (SI = (value − offset) · scale)
+  double accel_offset_counts = 0.0;
   double gyro_scale = 1.0;    // rad/s per file unit
+  double gyro_offset_counts = 0.0;
   bool counts = false;        // values are raw counts (stored as counts; scales = LSBs)
   double rate_hz = 0.0;       // 0 = from the median accelerometer interval
   double time_tolerance_s = -1.0;  // < 0: 1 % of the median interval
@@ -169,6 +187,19 @@ Recording import_mat(const std::filesystem::path& file, const MatOptions& option
 // `struct_name` when it is not empty.
 void export_mat(const Recording& recording, const std::filesystem::path& file,
                 const std::string& struct_name = {});
+// ---------------------------------------------------------------------------------------------
+// (f) A table of static means against known inputs (the paper's Table 2 form): delimited text
+// with a column-name line and '#' comments. Per row the known input: `angle_deg` (a turn δ of the
+// paper's table about y: f = g·[−sin δ, 0, cos δ], stend::physics::paper_table with h = 0) or
+// f_x_mps2, f_y_mps2, f_z_mps2; and the measured means a_x_mps2, a_y_mps2, a_z_mps2 (any subset;
+// an axis the table lacks reads NaN). Each row becomes an "orientation" segment in which its mean
+// is held for kStaticTableHold_s at kStaticTableRate_hz (the samples repeat the mean: their std is
+// 0 and says nothing about noise), with truth snapshots (kTruthColumns, zero rate) and an event
+// saying so. gravity_mps2 = 0: standard gravity, stated as an assumption.
+inline constexpr double kStaticTableRate_hz = 10.0;
+inline constexpr double kStaticTableHold_s = 20.0;
+Recording import_static_table(const std::filesystem::path& file, double gravity_mps2 = 0.0);
+
 // False when stend_core was built without matio (import_mat / export_mat then throw).
 bool mat_supported();
 

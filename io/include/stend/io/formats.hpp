@@ -1,0 +1,63 @@
+// The format registry: every file kind `stend fit|gap|import` reads, in one table. A format is
+//   name         what --format takes
+//   description  one line for the help and for "cannot tell the format" errors
+//   detect       whether the first input is of this kind, by its content (never by its name);
+//                nullptr: only chosen by --format (or, for csv, by mapped columns)
+//   open         inputs → Recording, with the import options (LSB, offsets, columns, rate, g)
+//   max_inputs   how many files one dataset may take (IMU-TK: the accelerometer and gyro files)
+// Adding a format is one line in formats() (src/formats.cpp), e.g.
+//   {"ulog", "PX4 ULog: sensor_accel / sensor_gyro with temperature", looks_like_ulog,
+//    [](const Inputs& in, const ImportOptions& o) { return import_ulog(in[0]); }},
+#pragma once
+
+#include <stend/io/import_options.hpp>
+#include <stend/recording.hpp>
+
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace stend::io {
+
+using Inputs = std::vector<std::filesystem::path>;
+
+struct Format {
+  std::string name;
+  std::string description;
+  bool (*detect)(const std::filesystem::path& file) = nullptr;
+  Recording (*open)(const Inputs& inputs, const ImportOptions& options) = nullptr;
+  std::size_t max_inputs = 1;
+};
+
+// Every format, in detection order (the first whose detect() accepts the input wins).
+const std::vector<Format>& formats();
+
+// "run | mat | imucal | …" for help texts.
+std::string format_names();
+
+// The format named `name`; throws std::invalid_argument listing the formats when unknown.
+const Format& find_format(const std::string& name);
+
+// The format of `inputs` by content: the first format that detects inputs[0] (and, for two
+// inputs, inputs[1] as well); the generic csv format when `options` map columns. Throws
+// std::runtime_error listing every format with its description when nothing matches.
+const Format& detect_format(const Inputs& inputs, const ImportOptions& options = {});
+
+// The dataset: `format` ("auto" or empty: detect_format) opened with `options`. Checks the input
+// count and the options (IsValid). The recording's events state the format and every stated key.
+Recording open_dataset(const Inputs& inputs, const std::string& format, const ImportOptions& options = {});
+
+// Provenance of the inputs as events (source "import"): path, size, SHA-256, format, Stend
+// version. For `stend import`, which makes a run folder of the recording.
+void add_provenance(Recording& rec, const Inputs& inputs, const std::string& format);
+
+// Content checks the formats use, exposed for tests.
+bool looks_like_run(const std::filesystem::path& p);
+bool looks_like_mat(const std::filesystem::path& p);  // MAT v5 header or HDF5 (v7.3) signature
+bool looks_like_imucal(const std::filesystem::path& p);
+bool looks_like_mpu6050_multipos(const std::filesystem::path& p);
+bool looks_like_imutk(const std::filesystem::path& p);  // text: each data line 't x y z'
+bool looks_like_static_table(const std::filesystem::path& p);
+
+}  // namespace stend::io

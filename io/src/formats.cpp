@@ -1,0 +1,255 @@
+// The format registry. See stend/io/formats.hpp.
+#include <stend/io/formats.hpp>
+
+#include <stend/io/importers.hpp>
+#include <stend/physics/units.hpp>
+#include <stend/version.hpp>
+
+#include <openssl/evp.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <memory>
+#include <stdexcept>
+
+namespace stend::io {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// The first `n` bytes of a file (fewer when it is shorter; none when it cannot be read).
+std::string head(const fs::path& p, std::size_t n) {
+  std::ifstream in(p, std::ios::binary);
+  std::string out(n, '\0');
+  in.read(out.data(), static_cast<std::streamsize>(n));
+  out.resize(static_cast<std::size_t>(std::max<std::streamsize>(0, in.gcount())));
+  return out;
+}
+
+// The first lines of a text file that are neither blank nor comments ('#', '%').
+std::vector<std::string> data_lines(const fs::path& p, std::size_t n) {
+  std::vector<std::string> out;
+  if (!fs::is_regular_file(p)) return out;
+  std::ifstream in(p, std::ios::binary);
+  std::string line;
+  while (out.size() < n && std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const auto a = line.find_first_not_of(" \t");
+    if (a == std::string::npos || line[a] == '#' || line[a] == '%') continue;
+    if (line.find('\0') != std::string::npos) return {};  // binary
+    out.push_back(line);
+  }
+  return out;
+}
+
+bool starts_with(const std::string& s, const std::string& prefix) { return s.rfind(prefix, 0) == 0; }
+
+// Counts from the options as the nominal-LSB importers take them: LSB per g resp. per deg/s.
+double per_g(const ValueScale& v, double fallback) { return v.counts() ? physics::kStandardGravity / v.lsb : fallback; }
+double per_dps(const ValueScale& v, double fallback) { return v.counts() ? physics::kDegPerSecond / v.lsb : fallback; }
+
+Recording open_run(const Inputs& in, const ImportOptions&) { return Recording::open(in[0]); }
+
+Recording open_mat(const Inputs& in, const ImportOptions& o) {
+  MatOptions m;
+  m.time_scale_s = o.time_scale_s;
+  m.accel_scale = o.accel_value.unit;
+  m.gyro_scale = o.gyro_value.unit;
+  m.gravity_mps2 = o.gravity_mps2;
+  return import_mat(in[0], m);
+}
+
+Recording open_imucal(const Inputs& in, const ImportOptions& o) {
+  ImucalOptions m;
+  if (o.rate_hz > 0.0) m.rate_hz = o.rate_hz;
+  m.accel_lsb_per_g = per_g(o.accel_value, m.accel_lsb_per_g);
+  m.gyro_lsb_per_dps = per_dps(o.gyro_value, m.gyro_lsb_per_dps);
+  m.accel_offset_counts = o.accel_value.offset;
+  m.gyro_offset_counts = o.gyro_value.offset;
+  if (o.gravity_mps2 > 0.0) m.gravity_mps2 = o.gravity_mps2;
+  return import_imucal_session(in[0], m);
+}
+
+Recording open_mpu6050(const Inputs& in, const ImportOptions& o) {
+  Mpu6050MultiposOptions m;
+  m.accel_lsb_per_g = per_g(o.accel_value, m.accel_lsb_per_g);
+  m.gyro_lsb_per_dps = per_dps(o.gyro_value, m.gyro_lsb_per_dps);
+  m.accel_offset_counts = o.accel_value.offset;
+  m.gyro_offset_counts = o.gyro_value.offset;
+  Recording rec = import_mpu6050_multipos(in[0], m);
+  rec.header.gravity_mps2 = o.gravity_mps2;
+  return rec;
+}
+
+Recording open_imutk(const Inputs& in, const ImportOptions& o) {
+  ImuTkOptions m;
+  m.time_scale_s = o.time_scale_s;
+  m.counts = o.accel_value.counts();
+  m.accel_scale = m.counts ? o.accel_value.lsb : o.accel_value.unit;
+  m.accel_offset_counts = o.accel_value.offset;
+  m.gyro_scale = o.gyro_value.counts() ? o.gyro_value.lsb : o.gyro_value.unit;
+  m.gyro_offset_counts = o.gyro_value.offset;
+  m.rate_hz = o.rate_hz;
+  m.gravity_mps2 = o.gravity_mps2;
+  return import_imutk(in[0], in.size() > 1 ? in[1] : fs::path(), m);
+}
+
+Recording open_table(const Inputs& in, const ImportOptions& o) { return import_static_table(in[0], o.gravity_mps2); }
+
+Recording open_csv(const Inputs& in, const ImportOptions& o) { return import_csv(in[0], o.csv_mapping()); }
+
+std::string sha256_hex(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  if (!in) throw std::runtime_error(p.string() + ": cannot read it to fingerprint it");
+  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx(EVP_MD_CTX_new(), EVP_MD_CTX_free);
+  EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr);
+  std::array<char, 1 << 16> buf{};
+  while (in.read(buf.data(), buf.size()) || in.gcount() > 0)
+    EVP_DigestUpdate(ctx.get(), buf.data(), static_cast<std::size_t>(in.gcount()));
+  std::array<unsigned char, EVP_MAX_MD_SIZE> md{};
+  unsigned int len = 0;
+  EVP_DigestFinal_ex(ctx.get(), md.data(), &len);
+  std::string hex;
+  char two[3];
+  for (unsigned int i = 0; i < len; ++i) {
+    std::snprintf(two, sizeof two, "%02x", md[i]);
+    hex += two;
+  }
+  return hex;
+}
+
+void add_import_event(Recording& rec, const std::string& message) {
+  Event e;
+  e.t_s = rec.samples.empty() ? 0.0 : rec.samples.front().t_s;
+  e.level = "info";
+  e.source = "import";
+  e.message = message;
+  rec.events.push_back(e);
+}
+
+}  // namespace
+
+bool looks_like_run(const fs::path& p) { return fs::is_directory(p) && fs::exists(p / "run.json"); }
+
+bool looks_like_mat(const fs::path& p) {
+  // MAT v5 (and v7): a 128-byte text header starting "MATLAB 5.0 MAT-file"; v7.3 is HDF5 with its
+  // signature at offset 512 (after the same kind of text header).
+  static const std::string kHdf5("\x89HDF\r\n\x1a\n", 8);
+  const std::string h = head(p, 520);
+  return starts_with(h, "MATLAB 5.0 MAT-file") || (h.size() >= 520 && h.compare(512, 8, kHdf5) == 0);
+}
+
+bool looks_like_imucal(const fs::path& p) {
+  const auto lines = data_lines(p, 1);
+  return !lines.empty() && starts_with(lines[0], "part,samples");
+}
+
+bool looks_like_mpu6050_multipos(const fs::path& p) {
+  const auto lines = data_lines(p, 1);
+  return !lines.empty() && starts_with(lines[0], "Fs,");
+}
+
+bool looks_like_imutk(const fs::path& p) {
+  const auto lines = data_lines(p, 5);
+  if (lines.empty()) return false;
+  for (const std::string& l : lines) {
+    std::size_t fields = 0;
+    std::size_t i = 0;
+    auto sep = [](char c) { return c == ' ' || c == '\t' || c == ',' || c == ';'; };
+    while (i < l.size()) {
+      while (i < l.size() && sep(l[i])) ++i;
+      if (i >= l.size()) break;
+      std::size_t j = i;
+      while (j < l.size() && !sep(l[j])) ++j;
+      char* end = nullptr;
+      const std::string field = l.substr(i, j - i);
+      std::strtod(field.c_str(), &end);
+      if (end != field.c_str() + field.size()) return false;
+      ++fields;
+      i = j;
+    }
+    if (fields != 4) return false;
+  }
+  return true;
+}
+
+bool looks_like_static_table(const fs::path& p) {
+  const auto lines = data_lines(p, 1);
+  if (lines.empty()) return false;
+  const std::string& h = lines[0];
+  const bool input = h.find("angle_deg") != std::string::npos || h.find("f_x_mps2") != std::string::npos;
+  return input && (h.find("a_x_mps2") != std::string::npos || h.find("a_y_mps2") != std::string::npos ||
+                   h.find("a_z_mps2") != std::string::npos);
+}
+
+const std::vector<Format>& formats() {
+  static const std::vector<Format> table = {
+      {"run", "a Stend run folder (run.json, imu.csv, ...)", looks_like_run, open_run},
+      {"mat", "MATLAB .mat (v5; v7.3 through HDF5): t|fs, acc, gyro, temp, counts, segments", looks_like_mat, open_mat},
+      {"imucal", "imucal annotated session (part,samples,acc_*,gyr_* counts)", looks_like_imucal, open_imucal},
+      {"mpu6050_multipos", "MPU-6050 multi-position session (Fs,… header, ax..gz counts)", looks_like_mpu6050_multipos,
+       open_mpu6050},
+      {"static_table", "table of static means against known inputs (angle_deg or f_*_mps2, a_*_mps2)",
+       looks_like_static_table, open_table},
+      {"imutk", "IMU-TK text 't x y z' (ACC [GYRO]; any extension, .mat included)", looks_like_imutk, open_imutk, 2},
+      {"csv", "generic delimited text with mapped columns (--accel/--mapping ...)", nullptr, open_csv},
+  };
+  return table;
+}
+
+std::string format_names() {
+  std::string out;
+  for (const auto& f : formats()) out += (out.empty() ? "" : " | ") + f.name;
+  return out;
+}
+
+const Format& find_format(const std::string& name) {
+  for (const auto& f : formats())
+    if (f.name == name) return f;
+  throw std::invalid_argument("unknown format '" + name + "' (formats: " + format_names() + ")");
+}
+
+const Format& detect_format(const Inputs& inputs, const ImportOptions& options) {
+  if (inputs.empty()) throw std::invalid_argument("no input file");
+  if (options.maps_columns()) return find_format("csv");
+  for (const auto& f : formats()) {
+    if (!f.detect || inputs.size() > f.max_inputs) continue;
+    if (std::all_of(inputs.begin(), inputs.end(), [&](const fs::path& p) { return f.detect(p); })) return f;
+  }
+  if (!fs::exists(inputs[0])) throw std::runtime_error(inputs[0].string() + ": no such file or folder");
+  std::string list;
+  for (const auto& f : formats()) list += "\n  " + f.name + ": " + f.description;
+  throw std::runtime_error((inputs.size() > 1 ? "these " + std::to_string(inputs.size()) + " inputs" : inputs[0].string()) +
+                           ": cannot tell the format from the content; give --format, one of:" + list);
+}
+
+Recording open_dataset(const Inputs& inputs, const std::string& format, const ImportOptions& options) {
+  std::string problem;
+  if (!options.IsValid(&problem)) throw std::invalid_argument("import options: " + problem);
+  const Format& f = format.empty() || format == "auto" ? detect_format(inputs, options) : find_format(format);
+  if (inputs.empty() || inputs.size() > f.max_inputs)
+    throw std::invalid_argument("format " + f.name + " takes " +
+                                (f.max_inputs == 1 ? std::string("one input") : "1 to " + std::to_string(f.max_inputs) + " inputs") +
+                                ", got " + std::to_string(inputs.size()));
+  Recording rec = f.open(inputs, options);
+  if (f.name == "run") return rec;
+  std::string stated;
+  for (const auto& s : options.stated) stated += (stated.empty() ? "" : "; ") + s;
+  add_import_event(rec, "format " + f.name + (format.empty() || format == "auto" ? " (detected from the content)" : " (given)") +
+                            "; import options: " + (stated.empty() ? "none (the format's defaults)" : stated));
+  return rec;
+}
+
+void add_provenance(Recording& rec, const Inputs& inputs, const std::string& format) {
+  for (const auto& p : inputs) {
+    add_import_event(rec, "source " + fs::absolute(p).lexically_normal().string() + ": " +
+                              std::to_string(fs::file_size(p)) + " bytes, sha256 " + sha256_hex(p) + ", format " +
+                              format + ", imported by stend " + stend::version());
+  }
+}
+
+}  // namespace stend::io

@@ -1,0 +1,263 @@
+// Import options: the keys, their parsing, the YAML mapping file. See stend/io/import_options.hpp.
+#include <stend/io/import_options.hpp>
+
+#include <stend/physics/units.hpp>
+#include <stend/yaml_util.hpp>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+namespace stend::io {
+
+namespace {
+
+std::string trimmed(std::string s) {
+  const auto a = s.find_first_not_of(" \t");
+  if (a == std::string::npos) return {};
+  return s.substr(a, s.find_last_not_of(" \t") - a + 1);
+}
+
+[[noreturn]] void bad(const std::string& key, const std::string& value, const std::string& expected) {
+  throw std::invalid_argument(key + ": '" + value + "' is not " + expected);
+}
+
+double number(const std::string& key, const std::string& text) {
+  const std::string s = trimmed(text);
+  double v = 0.0;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (s.empty() || ec != std::errc() || p != s.data() + s.size() || !std::isfinite(v)) bad(key, text, "a number");
+  return v;
+}
+
+bool boolean(const std::string& key, const std::string& text) {
+  const std::string s = trimmed(text);
+  if (s == "true" || s == "yes" || s == "1") return true;
+  if (s == "false" || s == "no" || s == "0") return false;
+  bad(key, text, "true or false");
+}
+
+// A column by 0-based index (all digits) or by name.
+CsvColumn column(const std::string& text) {
+  const std::string s = trimmed(text);
+  if (!s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; }))
+    return CsvColumn(std::stoi(s));
+  return CsvColumn(s);
+}
+
+std::array<CsvColumn, 3> three_columns(const std::string& key, const std::string& text) {
+  std::vector<std::string> parts;
+  std::size_t start = 0;
+  for (std::size_t i = 0; i <= text.size(); ++i)
+    if (i == text.size() || text[i] == ',') {
+      parts.push_back(trimmed(text.substr(start, i - start)));
+      start = i + 1;
+    }
+  if (parts.size() != 3 || std::any_of(parts.begin(), parts.end(), [](const std::string& p) { return p.empty(); }))
+    bad(key, text, "three columns x,y,z (names or 0-based indices)");
+  return {column(parts[0]), column(parts[1]), column(parts[2])};
+}
+
+// SI per unit: g and m/s^2 for the accelerometer, deg/s and rad/s for the gyroscope.
+double unit_si(const std::string& key, const std::string& unit, bool accel) {
+  const std::string u = trimmed(unit);
+  if (accel && u == "g") return physics::kStandardGravity;
+  if (accel && (u == "m/s^2" || u == "m/s2" || u == "mps2")) return 1.0;
+  if (!accel && (u == "deg/s" || u == "dps")) return physics::kDegPerSecond;
+  if (!accel && (u == "rad/s" || u == "radps")) return 1.0;
+  bad(key, unit, accel ? "a unit g | m/s^2" : "a unit deg/s | rad/s");
+}
+
+// "1/16384 g", "1/16384g", "0.000598 m/s^2" → SI per count.
+double lsb_si(const std::string& key, const std::string& text, bool accel) {
+  const std::string s = trimmed(text);
+  const auto unit_at = s.find_first_not_of("0123456789.eE+-/ ");
+  if (unit_at == std::string::npos) bad(key, text, "NUMBER[/NUMBER] UNIT (e.g. 1/16384 g, 1/131 deg/s)");
+  const std::string value = trimmed(s.substr(0, unit_at));
+  const auto slash = value.find('/');
+  const double v = slash == std::string::npos ? number(key, value)
+                                              : number(key, value.substr(0, slash)) / number(key, value.substr(slash + 1));
+  if (!(v > 0.0)) bad(key, text, "a positive count size");
+  return v * unit_si(key, s.substr(unit_at), accel);
+}
+
+double time_unit(const std::string& key, const std::string& text) {
+  const std::string u = trimmed(text);
+  if (u == "s") return 1.0;
+  if (u == "ms") return 1e-3;
+  if (u == "us") return 1e-6;
+  if (u == "ns") return 1e-9;
+  bad(key, text, "a time unit s | ms | us | ns");
+}
+
+char delimiter(const std::string& key, const std::string& text) {
+  if (text == "space" || text == " ") return ' ';
+  if (text == "tab" || text == "\t") return '\t';
+  if (text.size() == 1) return text[0];
+  bad(key, text, "one character, space or tab");
+}
+
+using Setter = void (*)(ImportOptions&, const std::string& key, const std::string& value);
+
+struct KeyDef {
+  ImportKey info;
+  Setter set;
+};
+
+// Every key: its help and how its text sets the options. The one table flags and files share.
+const std::vector<KeyDef>& key_table() {
+  static const std::vector<KeyDef> table = {
+      {{"delimiter", "column delimiter: one character, space (runs of blanks) or tab [,]"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.delimiter = delimiter(k, v); }},
+      {{"skip_lines", "lines before the column-name line or the data [0]"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) {
+         const double n = number(k, v);
+         if (n < 0 || n != std::floor(n)) bad(k, v, "a count of lines");
+         o.skip_lines = static_cast<std::size_t>(n);
+       }},
+      {{"column_names", "the first line names the columns: true | false [true]"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.column_names = boolean(k, v); }},
+      {{"comment", "data lines starting with this are ignored [#]"},
+       [](ImportOptions& o, const std::string&, const std::string& v) { o.comment = v; }},
+      {{"time", "time column: name or 0-based index (absent: t = i / rate_hz)"},
+       [](ImportOptions& o, const std::string&, const std::string& v) { o.time = column(v); }},
+      {{"time_unit", "unit of the time column: s | ms | us | ns [s]"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.time_scale_s = time_unit(k, v); }},
+      {{"rate_hz", "sample rate [Hz]: required without a time column; with one, the rate bad timestamps are rebuilt from"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) {
+         o.rate_hz = number(k, v);
+         if (!(o.rate_hz > 0.0)) bad(k, v, "a positive rate");
+       }},
+      {{"accel", "accelerometer columns x,y,z (names or 0-based indices)"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.accel = three_columns(k, v); }},
+      {{"gyro", "gyroscope columns x,y,z (absent: no gyroscope)"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.gyro = three_columns(k, v); }},
+      {{"temperature", "temperature column: name or 0-based index"},
+       [](ImportOptions& o, const std::string&, const std::string& v) { o.temperature = column(v); }},
+      {{"accel_unit", "accelerometer values in physical units: m/s^2 | g [m/s^2]"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.accel_value.unit = unit_si(k, v, true); }},
+      {{"gyro_unit", "gyroscope values in physical units: rad/s | deg/s [rad/s]"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.gyro_value.unit = unit_si(k, v, false); }},
+      {{"accel_lsb", "accelerometer values are counts of this size: NUMBER[/NUMBER] g|m/s^2 (e.g. 1/16384g)"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.accel_value.lsb = lsb_si(k, v, true); }},
+      {{"accel_offset", "accelerometer count offset: SI = (count - offset) * lsb (e.g. 32768) [0]"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.accel_value.offset = number(k, v); }},
+      {{"gyro_lsb", "gyroscope values are counts of this size: NUMBER[/NUMBER] deg/s|rad/s (e.g. 1/131deg/s)"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.gyro_value.lsb = lsb_si(k, v, false); }},
+      {{"gyro_offset", "gyroscope count offset [0]"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.gyro_value.offset = number(k, v); }},
+      {{"temperature_scale", "degC per temperature unit [1]"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.temperature_scale = number(k, v); }},
+      {{"temperature_offset_c", "degC added after scaling [0]"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.temperature_offset_c = number(k, v); }},
+      {{"gravity_mps2", "local gravity [m/s^2] (0: unknown, standard gravity where one is needed)"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) {
+         o.gravity_mps2 = number(k, v);
+         if (o.gravity_mps2 != 0.0 && (o.gravity_mps2 < 9.7 || o.gravity_mps2 > 9.9)) bad(k, v, "a gravity in 9.7 … 9.9 m/s^2 (or 0)");
+       }},
+  };
+  return table;
+}
+
+}  // namespace
+
+const std::vector<ImportKey>& import_keys() {
+  static const std::vector<ImportKey> keys = [] {
+    std::vector<ImportKey> out;
+    for (const auto& d : key_table()) out.push_back(d.info);
+    return out;
+  }();
+  return keys;
+}
+
+std::string import_flag(const std::string& key) {
+  std::string f = "--" + key;
+  std::replace(f.begin(), f.end(), '_', '-');
+  return f;
+}
+
+void ImportOptions::set(const std::string& key, const std::string& value) {
+  const auto& table = key_table();
+  const auto it = std::find_if(table.begin(), table.end(), [&](const KeyDef& d) { return d.info.key == key; });
+  if (it == table.end()) throw std::invalid_argument("unknown import key '" + key + "'");
+  it->set(*this, key, value);
+  stated.push_back(key + ": " + value);
+}
+
+bool ImportOptions::was_stated(const std::string& key) const {
+  return std::any_of(stated.begin(), stated.end(), [&](const std::string& s) { return s.rfind(key + ": ", 0) == 0; });
+}
+
+bool ImportOptions::IsValid(std::string* message) const {
+  auto fail = [&](const std::string& m) {
+    if (message) *message = m;
+    return false;
+  };
+  const bool some_gyro = !gyro[0].empty() || !gyro[1].empty() || !gyro[2].empty();
+  if (some_gyro && (gyro[0].empty() || gyro[1].empty() || gyro[2].empty()))
+    return fail("gyro: give x, y and z columns, or none");
+  if (!maps_columns() && (some_gyro || !time.empty() || !temperature.empty()))
+    return fail("accel: columns are mapped (time, gyro or temperature given) but not the accelerometer's");
+  if (maps_columns() && time.empty() && !(rate_hz > 0.0))
+    return fail("rate_hz: without a time column the rate is required");
+  if (!(time_scale_s > 0.0)) return fail("time_unit: must be positive");
+  if (accel_value.offset != 0.0 && !accel_value.counts()) return fail("accel_offset: needs accel_lsb (the values are counts)");
+  if (gyro_value.offset != 0.0 && !gyro_value.counts()) return fail("gyro_offset: needs gyro_lsb (the values are counts)");
+  return true;
+}
+
+CsvMapping ImportOptions::csv_mapping() const {
+  CsvMapping m;
+  m.delimiter = delimiter;
+  m.skip_lines = skip_lines;
+  m.column_names = column_names;
+  m.comment_prefix = comment;
+  m.time = time;
+  m.time_scale_s = time_scale_s;
+  m.rate_hz = rate_hz;
+  m.accel = accel;
+  m.gyro = gyro;
+  m.temperature = temperature;
+  m.counts = accel_value.counts();
+  m.accel_scale = m.counts ? accel_value.lsb : accel_value.unit;
+  m.accel_offset_counts = accel_value.offset;
+  m.gyro_scale = gyro_value.counts() ? gyro_value.lsb : gyro_value.unit;
+  m.gyro_offset_counts = gyro_value.offset;
+  m.temperature_scale = temperature_scale;
+  m.temperature_offset_c = temperature_offset_c;
+  m.gravity_mps2 = gravity_mps2;
+  return m;
+}
+
+void read_import_mapping(const std::filesystem::path& file, ImportOptions& options) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(file.string());
+  } catch (const YAML::BadFile&) {
+    throw ExperimentError({file.string(), 0, 0}, "", "cannot open the mapping file (check the path)");
+  } catch (const YAML::ParserException& e) {
+    throw ExperimentError({file.string(), e.mark.line + 1, e.mark.column + 1}, "", e.msg);
+  }
+  std::vector<std::string> keys;
+  for (const auto& k : import_keys()) keys.push_back(k.key);
+  const yaml::MapReader m(root, file.string(), "", "import mapping", keys);
+  for (const std::string& key : m.keys()) {
+    const YAML::Node v = m.get(key);
+    std::string text;
+    if (v.IsSequence()) {
+      for (std::size_t i = 0; i < v.size(); ++i)
+        text += (i ? "," : "") + yaml::as_string(v[i], file.string(), key + "[" + std::to_string(i) + "]");
+    } else {
+      text = yaml::as_string(v, file.string(), key);
+    }
+    try {
+      options.set(key, text);
+    } catch (const std::invalid_argument& e) {
+      m.fail_value(key, e.what());
+    }
+  }
+}
+
+}  // namespace stend::io
