@@ -19,7 +19,8 @@ namespace stend::cli {
 namespace {
 
 struct GapArgs {
-  std::string input, format = "auto", model, json, fold_by = "auto";
+  DatasetArgs data;
+  std::string model, json, fold_by = "auto";
   int max_steps = 4, max_folds = 12;
   double alpha = 0.05;
   // validate
@@ -51,11 +52,11 @@ estimation::ModelSpec linear_model(const std::string& model_file) {
 }
 
 int run_gap(const GapArgs& a) {
-  if (a.input.empty() || a.model.empty()) {
+  if (a.data.inputs.empty() || a.model.empty()) {
     fmt::print(stderr, "stend gap: give RUN_OR_DATASET and --model MODEL.yaml (or `stend gap validate`)\n");
     return 2;
   }
-  const stend::Recording rec = open_recording(a.input, a.format);
+  const stend::Recording rec = a.data.open();
   const estimation::ModelSpec spec = linear_model(a.model);
   const diagnosis::GapInput in = diagnosis::build_input(rec, spec);
   diagnosis::GapOptions opt;
@@ -68,7 +69,7 @@ int run_gap(const GapArgs& a) {
   diagnosis::print_report(text, rep);
   std::cout << text.str();
   std::filesystem::path json = a.json;
-  if (json.empty() && std::filesystem::is_directory(a.input)) json = std::filesystem::path(a.input) / "gap.json";
+  if (json.empty() && a.data.is_run()) json = std::filesystem::path(a.data.inputs[0]) / "gap.json";
   write_results(json, diagnosis::to_json(rep), text.str());
   return rep.ok ? 0 : 3;
 }
@@ -102,8 +103,7 @@ void add_gap_command(CLI::App& app, std::vector<Command>& out) {
   auto args = std::make_shared<GapArgs>();
   auto* sub = app.add_subcommand("gap", "Sim-to-real gap: where the twin disagrees with a recording, which "
                                         "unmodelled effect explains it, how far it shrinks held out");
-  sub->add_option("input", args->input, "Run folder, or a dataset file (imucal, MPU-6050 multi-position, .mat, IMU-TK)");
-  sub->add_option("--format", args->format, "run | imucal | mpu6050_multipos | mat | imutk (ACC,GYRO) | auto");
+  args->data.add_to(sub, false);
   sub->add_option("-m,--model", args->model, "Model YAML of a linear error model (instrument, axes, terms, extraction)");
   sub->add_option("--json", args->json, "Where to write gap.json (default RUN/gap.json, or ./gap.json for a dataset)");
   sub->add_option("--fold-by", args->fold_by, "Held-out groups: auto | orientation | temperature | ramp")

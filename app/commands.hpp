@@ -2,6 +2,7 @@
 // subcommand lives in its own cmd_<name>.cpp and registers itself through add_<name>_command.
 #pragma once
 
+#include "stend/io/formats.hpp"
 #include "stend/recording.hpp"
 
 #include <CLI/CLI.hpp>
@@ -9,6 +10,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -23,9 +25,25 @@ struct Command {
 
 // ---- shared analysis helpers (app/fit.cpp) -----------------------------------------------------
 
-// A recording from a run folder, or a dataset file through its importer:
-//   format = run | imucal | mpu6050_multipos | mat | imutk ("ACC_FILE,GYRO_FILE") | auto.
-stend::Recording open_recording(const std::string& input, std::string format);
+// What a command reads: a run folder, or dataset files through the io/ format registry, with
+// --format (default: detected from the content), --mapping FILE and one flag per import key
+// (io::import_keys(): --accel, --accel-lsb, --time-unit, ...). Flags override the mapping file.
+struct DatasetArgs {
+  std::vector<std::string> inputs;
+  std::string format = "auto";
+  std::string mapping;
+  std::map<std::string, std::string> flags;  // import key → value as given
+
+  // Adds the INPUT positional (one file or folder; two for IMU-TK's accelerometer and gyro files),
+  // --format, --mapping and the import flags to `sub`; the input is required unless `required`
+  // is false (a command with subcommands of its own).
+  void add_to(CLI::App* sub, bool required = true);
+  io::ImportOptions options() const;
+  io::Inputs paths() const;
+  stend::Recording open() const;
+  // The single input is a run folder (results may be written into it).
+  bool is_run() const;
+};
 
 // Fits `model_file` to `rec` with the estimator named `estimator` ("auto": the one the model file
 // is written for, through the estimator registry), prints the report to stdout and writes the
@@ -44,6 +62,7 @@ void add_report_command(CLI::App& app, std::vector<Command>& out);   // cmd_repo
 void add_compare_command(CLI::App& app, std::vector<Command>& out);  // cmd_compare.cpp
 void add_export_command(CLI::App& app, std::vector<Command>& out);   // cmd_export.cpp
 void add_emulate_command(CLI::App& app, std::vector<Command>& out);  // cmd_emulate.cpp
+void add_import_command(CLI::App& app, std::vector<Command>& out);   // cmd_import.cpp
 
 // Builds RUN/report.html from what the run folder holds (called at the end of `stend run`).
 // Returns the report path, or an empty path when no report could be written (says why on stderr).

@@ -12,34 +12,36 @@
 
 namespace stend::cli {
 
-// A recording from a run folder, or a dataset file through its importer:
-//   --format run|imucal|mpu6050_multipos|mat|imutk (imutk: "ACC_FILE,GYRO_FILE"), or auto.
-stend::Recording open_recording(const std::string& input, std::string format) {
-  namespace fs = std::filesystem;
-  if (format.empty() || format == "auto") {
-    if (fs::is_directory(input)) format = "run";
-    else if (fs::path(input).extension() == ".mat") format = "mat";
-    else {
-      std::ifstream in(input);
-      std::string first;
-      std::getline(in, first);
-      if (first.rfind("part,samples", 0) == 0) format = "imucal";
-      else if (first.rfind("Fs,", 0) == 0) format = "mpu6050_multipos";
-      else
-        throw std::runtime_error(input + ": cannot tell the format; give --format run|imucal|mpu6050_multipos|mat|imutk");
+void DatasetArgs::add_to(CLI::App* sub, bool required) {
+  sub->add_option("input", inputs,
+                  "Run folder, or dataset file(s): " + io::format_names() + " (IMU-TK: ACC [GYRO])")
+      ->required(required)
+      ->expected(1, 2);
+  sub->add_option("--format", format, "auto (by content) | " + io::format_names());
+  sub->add_option("--mapping", mapping, "YAML file of import keys (the flags below, '_' for '-')");
+  for (const auto& k : io::import_keys()) sub->add_option(io::import_flag(k.key), flags[k.key], k.help);
+}
+
+io::ImportOptions DatasetArgs::options() const {
+  io::ImportOptions o;
+  if (!mapping.empty()) io::read_import_mapping(mapping, o);
+  for (const auto& k : io::import_keys()) {
+    const auto it = flags.find(k.key);
+    if (it == flags.end() || it->second.empty()) continue;
+    try {
+      o.set(k.key, it->second);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(io::import_flag(k.key) + ": " + e.what());
     }
   }
-  if (format == "run") return stend::Recording::open(input);
-  if (format == "imucal") return stend::io::import_imucal_session(input);
-  if (format == "mpu6050_multipos") return stend::io::import_mpu6050_multipos(input);
-  if (format == "mat") return stend::io::import_mat(input);
-  if (format == "imutk") {
-    const auto comma = input.find(',');
-    if (comma == std::string::npos) throw std::runtime_error("--format imutk takes ACC_FILE,GYRO_FILE");
-    return stend::io::import_imutk(input.substr(0, comma), input.substr(comma + 1));
-  }
-  throw std::runtime_error("unknown format '" + format + "'");
+  return o;
 }
+
+io::Inputs DatasetArgs::paths() const { return io::Inputs(inputs.begin(), inputs.end()); }
+
+stend::Recording DatasetArgs::open() const { return io::open_dataset(paths(), format, options()); }
+
+bool DatasetArgs::is_run() const { return inputs.size() == 1 && io::looks_like_run(inputs[0]); }
 
 namespace {
 

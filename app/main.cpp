@@ -24,7 +24,6 @@ namespace {
 std::atomic<bool> g_stop{false};
 
 using stend::cli::fit_recording;
-using stend::cli::open_recording;
 
 extern "C" void on_sigint(int) {
   if (g_stop.load()) {  // second Ctrl-C: stop now
@@ -119,12 +118,11 @@ int cmd_run(const std::string& file, const std::string& output, const std::strin
   return 0;
 }
 
-int cmd_fit(const std::string& input, const std::string& format, const std::string& model, const std::string& json,
+int cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, const std::string& json,
             const std::string& estimator) {
-  const stend::Recording rec = open_recording(input, format);
-  const bool is_run = std::filesystem::is_directory(input);
-  return fit_recording(rec, model, is_run ? std::filesystem::path(input) : std::filesystem::path(), json,
-                       estimator)
+  const stend::Recording rec = data.open();
+  return fit_recording(rec, model, data.is_run() ? std::filesystem::path(data.inputs[0]) : std::filesystem::path(),
+                       json, estimator)
              ? 0
              : 3;
 }
@@ -176,10 +174,9 @@ int main(int argc, char** argv) {
   info->add_option("run", dir, "Run folder")->required();
 
   std::string model, json;
-  std::string format = "auto";
+  stend::cli::DatasetArgs fit_data;
   auto* fit = app.add_subcommand("fit", "Fit an error model (or the Allan noise model) to a recording or dataset");
-  fit->add_option("input", dir, "Run folder, or a dataset file (imucal, MPU-6050 multi-position, .mat, IMU-TK)")->required();
-  fit->add_option("--format", format, "run | imucal | mpu6050_multipos | mat | imutk (ACC,GYRO) | auto");
+  fit_data.add_to(fit);
   fit->add_option("-m,--model", model, "Model YAML (instrument, axes, terms, extraction)")->required();
   std::string estimator = "auto";
   fit->add_option("--estimator", estimator,
@@ -193,6 +190,7 @@ int main(int argc, char** argv) {
   stend::cli::add_compare_command(app, commands);
   stend::cli::add_export_command(app, commands);
   stend::cli::add_emulate_command(app, commands);
+  stend::cli::add_import_command(app, commands);
 
   CLI11_PARSE(app, argc, argv);
   try {
@@ -202,7 +200,7 @@ int main(int argc, char** argv) {
     if (*validate) return cmd_validate(file);
     if (*run) return cmd_run(file, output, name, clock, quiet);
     if (*info) return cmd_info(dir);
-    if (*fit) return cmd_fit(dir, format, model, json, estimator);
+    if (*fit) return cmd_fit(fit_data, model, json, estimator);
   } catch (const stend::ExperimentError& e) {
     fmt::print(stderr, "{}\n", e.what());
     return 2;

@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <regex>
 #include <sstream>
 #include <stdexcept>
 
@@ -37,39 +36,6 @@ int column_ending(const Recording& r, const std::string& suffix) {
   return -1;
 }
 
-// Truth from a dataset's annotations: segments labelled <axis>_p / <axis>_a (imucal: that axis
-// pointing up / down) hold f = ±g along the axis, zero rate. Returns false when the labels do
-// not say.
-bool add_annotation_truth(Recording& r, std::string& how) {
-  static const std::regex kLabel("^([xyz])_([pa])$");
-  const double g = r.header.gravity_or_standard_mps2();
-  std::vector<std::pair<double, std::vector<double>>> snaps;
-  for (const Segment& s : r.segments) {
-    std::smatch m;
-    if (s.kind != SegmentKind::kOrientation || !std::regex_match(s.label, m, kLabel)) continue;
-    std::vector<double> row(6, 0.0);
-    row[static_cast<std::size_t>(m[1].str()[0] - 'x')] = (m[2].str() == "p" ? 1.0 : -1.0) * g;
-    snaps.push_back({s.t_start_s, row});
-    snaps.push_back({0.5 * (s.t_start_s + s.t_end_s), row});
-    snaps.push_back({s.t_end_s, row});
-  }
-  if (snaps.empty()) return false;
-  std::sort(snaps.begin(), snaps.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  r.header.truth_columns = {"f_x_mps2", "f_y_mps2", "f_z_mps2", "w_x_radps", "w_y_radps", "w_z_radps"};
-  r.truth_t.clear();
-  r.truth.clear();
-  for (auto& [t, row] : snaps) {
-    if (!r.truth_t.empty() && !(t > r.truth_t.back())) continue;
-    r.truth_t.push_back(t);
-    r.truth.push_back(row);
-  }
-  std::ostringstream os;
-  os << "dataset annotations (<axis>_p = axis up: +g, <axis>_a = axis down: -g, g = " << g
-     << " m/s^2, rate 0)";
-  how = os.str();
-  return true;
-}
-
 std::string orientation_name(const Eigen::Vector3d& up) {
   for (int a = 0; a < 3; ++a)
     if (std::abs(up[a]) > 0.995) return std::string(up[a] > 0 ? "+" : "-") + "xyz"[a] + " up";
@@ -87,15 +53,6 @@ double sim_twin_std(const YAML::Node& cfg, bool accel) {
                                : value("gyro_noise_density", defaults.gyro_noise_density);
   return model::white_noise_output_sigma(density, value("output_rate_hz", defaults.output_rate_hz),
                                          value("lowpass_hz", defaults.lowpass_hz));
-}
-
-// The recording with truth columns: the recording itself, or a copy with truth from its dataset
-// annotations (stored in `augmented`, `how` says so); nullptr when neither exists.
-const Recording* recording_with_truth(const Recording& rec, bool accel, Recording& augmented, std::string& how) {
-  if (column(rec, accel ? "f_x_mps2" : "w_x_radps") >= 0) return &rec;
-  augmented = rec;
-  if (!add_annotation_truth(augmented, how)) return nullptr;
-  return &augmented;
 }
 
 // Static points of the processing stage; records its options, skips and notes in `in`.
@@ -308,12 +265,11 @@ GapInput build_input(const Recording& recording_in, const estimation::ModelSpec&
   in.spec = spec;
   in.source = recording_in.dir.string();
   const bool accel = spec.model.instrument == model::Instrument::kAccelerometer;
-  Recording augmented;
-  std::string how = "truth columns";
-  const Recording* rec = recording_with_truth(recording_in, accel, augmented, how);
-  // No truth and no annotations: orientations unknown, only |g| — the magnitude form.
-  if (!rec) return build_magnitude_input(recording_in, spec);
-  in.truth_source = how;
+  // Truth columns: the bench's, or those an importer built from the dataset's annotations.
+  // Without them the orientations are unknown, only |g|: the magnitude form.
+  if (column(recording_in, accel ? "f_x_mps2" : "w_x_radps") < 0) return build_magnitude_input(recording_in, spec);
+  const Recording* rec = &recording_in;
+  in.truth_source = "truth columns";
   const std::vector<batch_lsq::StaticPoint> points = static_points(*rec, spec, in);
   in.lsb = accel ? rec->header.info.accel_lsb_mps2 : rec->header.info.gyro_lsb_radps;
   in.range = accel ? rec->header.info.accel_range_mps2 : rec->header.info.gyro_range_radps;

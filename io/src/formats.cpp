@@ -227,7 +227,8 @@ const Format& detect_format(const Inputs& inputs, const ImportOptions& options) 
                            ": cannot tell the format from the content; give --format, one of:" + list);
 }
 
-Recording open_dataset(const Inputs& inputs, const std::string& format, const ImportOptions& options) {
+Recording open_dataset(const Inputs& inputs, const std::string& format, const ImportOptions& options,
+                       std::string* used) {
   std::string problem;
   if (!options.IsValid(&problem)) throw std::invalid_argument("import options: " + problem);
   const Format& f = format.empty() || format == "auto" ? detect_format(inputs, options) : find_format(format);
@@ -236,6 +237,7 @@ Recording open_dataset(const Inputs& inputs, const std::string& format, const Im
                                 (f.max_inputs == 1 ? std::string("one input") : "1 to " + std::to_string(f.max_inputs) + " inputs") +
                                 ", got " + std::to_string(inputs.size()));
   Recording rec = f.open(inputs, options);
+  if (used) *used = f.name;
   if (f.name == "run") return rec;
   std::string stated;
   for (const auto& s : options.stated) stated += (stated.empty() ? "" : "; ") + s;

@@ -4,8 +4,8 @@
 //
 // Procedure (diagnosis/README.md, docs/gap-diagnosis.md):
 //   1. static points per segment by batch_lsq's extraction (Butterworth, settle, average); truth
-//      from the recording's truth columns, or from the dataset's annotations for imported data
-//      (imucal x_p … z_a);
+//      from the recording's truth columns (for imported data the importer builds them from the
+//      dataset's annotations, e.g. imucal x_p … z_a);
 //   2. fit the model (batch_lsq::fit_points, the shared SVD solver), replay every segment through
 //      the twin: ErrorModel::measure(θ̂, recorded truth stimulus) — the simulator's code path;
 //   3. gap = measured − twin per segment and axis [m/s² | rad/s], against the noise floor of a
@@ -78,7 +78,7 @@ struct GapInput {
   estimation::ModelSpec spec;
   std::vector<SegmentData> segments;
   std::string source;       // run folder or dataset file
-  std::string truth_source; // "truth columns" | "dataset annotations (…)"
+  std::string truth_source; // "truth columns" | the magnitude form's statement
   std::string floor_source; // how the noise floor was obtained
   double lsb = 0.0;         // one count of the instrument [unit], 0 unknown
   double range = 0.0;       // full scale [unit], 0 unknown
@@ -122,8 +122,8 @@ struct GapInput {
 Eigen::Vector3d table_stimulus(model::Stimulus<double>& st, double az, double h, double delta,
                                const Eigen::Matrix3d& mount, double g);
 
-// Builds the input from a recording: extraction, truth (truth columns or imucal-style
-// annotations), stimulus fields for the bench-side candidates (gravity_up; table derivatives for
+// Builds the input from a recording: extraction, truth (truth columns; without them the
+// magnitude form), stimulus fields for the bench-side candidates (gravity_up; table derivatives for
 // the sim three-axis table's tilt/rotation/azimuth columns; temperature_direction), groups, noise
 // floor. Throws std::runtime_error when no static point can be made (says why).
 GapInput build_input(const Recording& recording, const estimation::ModelSpec& spec);

@@ -45,8 +45,10 @@ const Format& find_format(const std::string& name);
 const Format& detect_format(const Inputs& inputs, const ImportOptions& options = {});
 
 // The dataset: `format` ("auto" or empty: detect_format) opened with `options`. Checks the input
-// count and the options (IsValid). The recording's events state the format and every stated key.
-Recording open_dataset(const Inputs& inputs, const std::string& format, const ImportOptions& options = {});
+// count and the options (IsValid). The recording's events state the format and every stated key;
+// *used (when given) receives the format's name.
+Recording open_dataset(const Inputs& inputs, const std::string& format, const ImportOptions& options = {},
+                       std::string* used = nullptr);
 
 // Provenance of the inputs as events (source "import"): path, size, SHA-256, format, Stend
 // version. For `stend import`, which makes a run folder of the recording.

@@ -1,0 +1,90 @@
+// stend import FILE… -o RUN: another tool's log → a run folder, so that every analysis command
+// (info, fit, gap, report, export, compare) works on it. The dataset is read whole through the io/
+// format registry first; the folder is created only then, and removed again if writing fails.
+#include "commands.hpp"
+
+#include "stend/io/formats.hpp"
+#include "stend/yaml_util.hpp"
+
+#include <fmt/format.h>
+
+#include <memory>
+
+namespace stend::cli {
+
+namespace {
+
+struct ImportArgs {
+  DatasetArgs data;
+  std::string output, name;
+};
+
+// experiment.yaml of an imported run: there was no experiment; it records what was imported and how.
+std::string import_yaml(const ImportArgs& a, const std::string& format, const io::ImportOptions& options) {
+  YAML::Emitter out;
+  out << YAML::Comment("made by `stend import` from another tool's log: there was no experiment");
+  out << YAML::BeginMap << YAML::Key << "name" << YAML::Value;
+  yaml::emit_string(out, a.name.empty() ? "import:" + format : a.name);
+  out << YAML::Key << "import" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "format" << YAML::Value << format;
+  out << YAML::Key << "sources" << YAML::Value << YAML::BeginSeq;
+  for (const auto& p : a.data.paths()) yaml::emit_string(out, std::filesystem::absolute(p).lexically_normal().string());
+  out << YAML::EndSeq << YAML::Key << "options" << YAML::Value << YAML::BeginSeq;
+  for (const auto& s : options.stated) yaml::emit_string(out, s);
+  out << YAML::EndSeq << YAML::EndMap << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+// Writes `rec` as the run folder `dir` through the recording store.
+void write_run(const Recording& rec, const std::filesystem::path& dir, const std::string& yaml) {
+  RecordingWriter w(dir, rec.header, yaml);
+  w.add_samples(rec.samples.data(), rec.samples.size());
+  for (std::size_t i = 0; i < rec.truth_t.size(); ++i) w.add_truth(rec.truth_t[i], rec.truth[i]);
+  for (const auto& s : rec.segments) w.add_segment(s);
+  for (const auto& e : rec.events) w.add_event(e);
+  w.finish(RunStatus::kComplete);
+}
+
+int run_import(const ImportArgs& a) {
+  const std::filesystem::path dir = a.output;
+  if (std::filesystem::exists(dir)) {
+    fmt::print(stderr, "stend import: '{}' exists; give a new folder with -o (nothing was written)\n", dir.string());
+    return 2;
+  }
+  const io::ImportOptions options = a.data.options();
+  const io::Inputs inputs = a.data.paths();
+  if (a.data.is_run()) {
+    fmt::print(stderr, "stend import: '{}' is a run folder already\n", inputs[0].string());
+    return 2;
+  }
+  std::string format;
+  Recording rec = io::open_dataset(inputs, a.data.format, options, &format);
+  io::add_provenance(rec, inputs, format);
+  if (!a.name.empty()) rec.header.experiment_name = a.name;
+  try {
+    write_run(rec, dir, import_yaml(a, format, options));
+  } catch (...) {
+    std::error_code ec;
+    std::filesystem::remove_all(dir, ec);  // the folder did not exist before: nothing else is lost
+    throw;
+  }
+  fmt::print("run folder: {}\nformat:     {}\nrecorded:   {} samples, {} segments, {} truth rows, {} events\n",
+             dir.string(), format, rec.samples.size(), rec.segments.size(), rec.truth_t.size(), rec.events.size());
+  for (const auto& e : rec.events)
+    if (e.level == "warning") fmt::print("warning:    {}\n", e.message);
+  return 0;
+}
+
+}  // namespace
+
+void add_import_command(CLI::App& app, std::vector<Command>& out) {
+  auto args = std::make_shared<ImportArgs>();
+  auto* sub = app.add_subcommand("import", "Turn another tool's log into a run folder (then info, fit, gap, "
+                                           "report, export and compare work on it)");
+  args->data.add_to(sub);
+  sub->add_option("-o,--output", args->output, "The run folder to create (must not exist)")->required();
+  sub->add_option("--name", args->name, "The recording's name (default import:<format>)");
+  out.push_back({sub, [args] { return run_import(*args); }});
+}
+
+}  // namespace stend::cli
