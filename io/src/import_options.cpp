@@ -225,6 +225,7 @@ CsvMapping ImportOptions::csv_mapping() const {
   m.accel_offset_counts = accel_value.offset;
   m.gyro_scale = gyro_value.counts() ? gyro_value.lsb : gyro_value.unit;
   m.gyro_offset_counts = gyro_value.offset;
+  m.temperature_counts = false;  // temperature_scale/offset_c convert whatever the column holds
   m.temperature_scale = temperature_scale;
   m.temperature_offset_c = temperature_offset_c;
   m.gravity_mps2 = gravity_mps2;

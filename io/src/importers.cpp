@@ -369,7 +369,7 @@ ImuSample csv_sample(const LineReader& r, const std::vector<std::string_view>& f
   }
   if (c.temperature >= 0) {
     const double v = field(c.temperature);
-    if (map.counts) s.temperature_counts = to_counts(r, v, c.name(c.temperature));
+    if (map.counts && map.temperature_counts) s.temperature_counts = to_counts(r, v, c.name(c.temperature));
     s.temperature_c = v * map.temperature_scale + map.temperature_offset_c;
   }
   return s;
@@ -410,7 +410,7 @@ void set_csv_sensor_info(const CsvMapping& map, const CsvColumns& c, Recording& 
   if (map.counts) {
     info.accel_lsb_mps2 = map.accel_scale;
     info.gyro_lsb_radps = c.has_gyro ? map.gyro_scale : 0.0;
-    info.temperature_lsb_c = c.temperature >= 0 ? map.temperature_scale : 0.0;
+    info.temperature_lsb_c = c.temperature >= 0 && map.temperature_counts ? map.temperature_scale : 0.0;
   }
   rec.header.identity = map.identity;
   rec.header.gravity_mps2 = map.gravity_mps2;

@@ -27,13 +27,13 @@ namespace {
 // times.
 std::vector<double> write_log(const fs::path& file, int decimals, long gap_at = -1, std::size_t n = 4000) {
   std::vector<double> truth;
-  std::string text = "t,ax,ay,az\n";
+  std::string text = "t,ax,ay,az,temp\n";
   const double t0 = 12.3456;
   for (std::size_t i = 0; i < n; ++i) {
     const double t = t0 + static_cast<double>(i) / 200.0 + (gap_at >= 0 && static_cast<long>(i) >= gap_at ? 0.5 : 0.0);
     truth.push_back(t);
     char line[128];
-    std::snprintf(line, sizeof line, "%.*f,%d,%d,%d\n", decimals, t, 32768 + 5, 32768 - 3, 32768 + 16384);
+    std::snprintf(line, sizeof line, "%.*f,%d,%d,%d,25.37\n", decimals, t, 32768 + 5, 32768 - 3, 32768 + 16384);
     text += line;
   }
   write_text(file, text);
@@ -46,6 +46,7 @@ ImportOptions log_options() {
   o.set("accel", "ax,ay,az");
   o.set("accel_lsb", "1/16384g");
   o.set("accel_offset", "32768");
+  o.set("temperature", "temp");  // in degC beside the counts
   return o;
 }
 
@@ -66,6 +67,7 @@ TEST(TimestampRepair, RoundedTimesAt200HzAreRebuiltWithinHalfASample) {
   EXPECT_EQ(rec.samples[0].accel_counts[2], 32768 + 16384);
   EXPECT_NEAR(rec.samples[0].accel_mps2[2], physics::kStandardGravity, 1e-12);
   EXPECT_NEAR(rec.samples[0].accel_mps2[1], -3 * physics::kStandardGravity / 16384, 1e-12);
+  EXPECT_DOUBLE_EQ(rec.samples[0].temperature_c, 25.37);
   bool warned = false;
   for (const auto& e : rec.events) warned = warned || (e.level == "warning" && e.message.find("rebuilt") != std::string::npos);
   EXPECT_TRUE(warned);

@@ -86,6 +86,7 @@ struct CsvMapping {
   // The file holds raw integer counts: they are stored as counts too, and the scales are the
   // LSBs (header.info.accel_lsb_mps2 / gyro_lsb_radps / temperature_lsb_c).
   bool counts = false;
+  bool temperature_counts = true;  // with counts: the temperature column holds integer counts too
 
   SensorIdentity identity;
   double accel_range_mps2 = 0.0;  // header.info, 0 = unknown
