@@ -2,7 +2,6 @@
 #include "commands.hpp"
 
 #include "stend/estimators/builtin.hpp"
-#include "stend/io/importers.hpp"
 #include "stend/plugin_host.hpp"
 
 #include <fmt/format.h>
