@@ -7,6 +7,8 @@
 
 #include <openssl/evp.h>
 
+#include "import_event.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cstdio>
@@ -120,15 +122,6 @@ std::string sha256_hex(const fs::path& p) {
     hex += two;
   }
   return hex;
-}
-
-void add_import_event(Recording& rec, const std::string& message) {
-  Event e;
-  e.t_s = rec.samples.empty() ? 0.0 : rec.samples.front().t_s;
-  e.level = "info";
-  e.source = "import";
-  e.message = message;
-  rec.events.push_back(e);
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include <stend/io/importers.hpp>
 #include <stend/io/timestamps.hpp>
+
+#include "import_event.hpp"
 #include <stend/physics/gravity.hpp>
 #include <stend/physics/table_chain.hpp>
 #include <stend/physics/units.hpp>
@@ -177,15 +179,6 @@ Recording new_recording(const fs::path& file, const std::string& format) {
   rec.header.stend_version = stend::version();
   rec.header.clock = "wall";
   return rec;
-}
-
-void add_import_event(Recording& rec, const std::string& message) {
-  Event e;
-  e.t_s = rec.samples.empty() ? 0.0 : rec.samples.front().t_s;
-  e.level = "info";
-  e.source = "import";
-  e.message = message;
-  rec.events.push_back(std::move(e));
 }
 
 Segment make_segment(int id, SegmentKind kind, const std::string& label, double t0,

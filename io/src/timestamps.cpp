@@ -1,6 +1,8 @@
 // Timestamp repair. See stend/io/timestamps.hpp.
 #include <stend/io/timestamps.hpp>
 
+#include "import_event.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -86,15 +88,6 @@ std::string num(double v) {
   return buf;
 }
 
-void add_event(Recording& rec, const std::string& level, const std::string& message) {
-  Event e;
-  e.t_s = rec.samples.front().t_s;
-  e.level = level;
-  e.source = "import";
-  e.message = message;
-  rec.events.push_back(e);
-}
-
 }  // namespace
 
 TimestampRepair repair_timestamps(Recording& rec, double rate_hz) {
@@ -113,16 +106,18 @@ TimestampRepair repair_timestamps(Recording& rec, double rate_hz) {
   out.rate_hz = 1.0 / T_used;
   if (needs_repair) {
     rebuild(s, starts, T_used, out);
-    add_event(rec, "warning",
+    add_import_event(rec,
               "timestamps repeat or jitter (logged intervals stray by " + num(J * 1e3) + " ms median from " +
                   num(T * 1e3) + " ms): " + std::to_string(out.repaired) + " of " + std::to_string(s.size()) +
                   " sample times rebuilt from the rate " + num(out.rate_hz) + " Hz (" +
                   (given ? "given" : "fitted to the logged times") + "), largest correction " +
-                  num(out.max_correction_s * 1e3) + " ms");
+                  num(out.max_correction_s * 1e3) + " ms",
+              "warning");
   }
   if (out.gaps > 0)
-    add_event(rec, "warning", std::to_string(out.gaps) + " gap(s) in the logged times (intervals longer than " +
-                                  num((1.5 * T + 2.0 * J) * 1e3) + " ms) flagged, not filled");
+    add_import_event(rec, std::to_string(out.gaps) + " gap(s) in the logged times (intervals longer than " +
+                              num((1.5 * T + 2.0 * J) * 1e3) + " ms) flagged, not filled",
+                     "warning");
   if (rec.header.info.output_rate_hz <= 0.0) rec.header.info.output_rate_hz = out.rate_hz;
   return out;
 }

@@ -1,13 +1,13 @@
 // The format registry: every file kind `stend fit|gap|import` reads, in one table. A format is
 //   name         what --format takes
 //   description  one line for the help and for "cannot tell the format" errors
-//   detect       whether the first input is of this kind, by its content (never by its name);
+//   detect       whether an input is of this kind, by its content (never by its name);
 //                nullptr: only chosen by --format (or, for csv, by mapped columns)
 //   open         inputs → Recording, with the import options (LSB, offsets, columns, rate, g)
 //   max_inputs   how many files one dataset may take (IMU-TK: the accelerometer and gyro files)
 // Adding a format is one line in formats() (src/formats.cpp), e.g.
 //   {"ulog", "PX4 ULog: sensor_accel / sensor_gyro with temperature", looks_like_ulog,
-//    [](const Inputs& in, const ImportOptions& o) { return import_ulog(in[0]); }},
+//    [](const Inputs& in, const ImportOptions&) { return import_ulog(in[0]); }},
 #pragma once
 
 #include <stend/io/import_options.hpp>

@@ -1,0 +1,20 @@
+// The one way io/ notes something about an import in the recording: an event of source "import"
+// at the first sample's time.
+#pragma once
+
+#include <stend/recording.hpp>
+
+#include <string>
+
+namespace stend::io {
+
+inline void add_import_event(Recording& rec, const std::string& message, const std::string& level = "info") {
+  Event e;
+  e.t_s = rec.samples.empty() ? 0.0 : rec.samples.front().t_s;
+  e.level = level;
+  e.source = "import";
+  e.message = message;
+  rec.events.push_back(std::move(e));
+}
+
+}  // namespace stend::io
