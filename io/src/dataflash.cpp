@@ -387,7 +387,7 @@ Recording import_dataflash(const fs::path& file, const DataflashOptions& opt) {
     const auto t_us = static_cast<std::uint64_t>(value(f, *r.fmt, r.rec.offset, c.time));
     if (rec.samples.empty()) t0_us = t_us;
     ImuSample s;
-    s.t_s = (static_cast<double>(t_us) - static_cast<double>(t0_us)) * 1e-6;
+    s.t_s = seconds_since_us(t0_us, t_us);
     for (int k = 0; k < 3; ++k) {
       s.gyro_radps[k] = value(f, *r.fmt, r.rec.offset, c.gyr[k]) * c.gyr_factor;
       s.accel_mps2[k] = value(f, *r.fmt, r.rec.offset, c.acc[k]) * c.acc_factor;

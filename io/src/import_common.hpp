@@ -89,6 +89,11 @@ Recording new_recording(const std::filesystem::path& file, const std::string& fo
 // The one "info" event (source "import") stating the file and the assumptions.
 void add_import_event(Recording& rec, const std::string& message);
 
+// Seconds from t0_us to t_us (timestamps in µs), exact to the microsecond.
+inline double seconds_since_us(std::uint64_t t0_us, std::uint64_t t_us) {
+  return static_cast<double>(static_cast<std::int64_t>(t_us - t0_us)) * 1e-6;
+}
+
 double median_interval(const std::vector<ImuSample>& s);
 // Flags samples that follow an interval longer than 1.5 periods; returns how many.
 std::size_t flag_time_gaps(std::vector<ImuSample>& s, double rate_hz);

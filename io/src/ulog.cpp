@@ -134,7 +134,7 @@ const Field* find_field(const Format& fmt, const std::string& name) {
 // The log: formats, subscriptions with the data of the topics an import reads, info messages
 
 // The topics an IMU import reads; data of others is skipped.
-const std::set<std::string> kImuTopics = {"sensor_accel", "sensor_gyro", "sensor_combined"};
+const std::set<std::string> kImuTopics = {"sensor_accel", "sensor_gyro", "sensor_combined", "sensor_selection"};
 
 struct DataRecord {
   std::size_t offset;      // of the message data (after msg_id)
@@ -465,8 +465,35 @@ int choose_instance(const std::map<int, std::size_t>& counts, int wanted) {
 // What an import reads: the accelerometer and gyro series and why they were chosen.
 struct UlogChoice {
   Series acc, gyr;
+  Series temperature;  // when acc has none: a sensor_accel of the same device (time-ordered)
   std::string why;
+  std::string temperature_note;
 };
+
+// sensor_combined: the devices sensor_selection names (its first message) as the accel's and
+// gyro's device ids, and the temperature of the sensor_accel instance with that device id.
+void add_selected_devices(const BinaryFile& f, const UlogLog& log, UlogChoice& c) {
+  const auto sel = std::find_if(log.subscriptions.begin(), log.subscriptions.end(), [](const auto& s) {
+    return s.second.topic == "sensor_selection" && !s.second.records.empty();
+  });
+  if (sel == log.subscriptions.end()) {
+    c.temperature_note = "no temperature (sensor_combined has none and there is no sensor_selection)";
+    return;
+  }
+  const Format& fmt = log.formats.at("sensor_selection");
+  const RecordView v(f, fmt, sel->second.records.front());
+  c.acc.device_id = static_cast<std::uint32_t>(v.number("accel_device_id"));
+  c.gyr.device_id = static_cast<std::uint32_t>(v.number("gyro_device_id"));
+  for (const auto& [inst, n] : instance_counts(log, "sensor_accel")) {
+    Series t = sensor_series(f, log, "sensor_accel", inst);
+    if (t.device_id == c.acc.device_id && !t.temperature_c.empty()) {
+      c.temperature_note = "temperature interpolated from " + t.what + " (the device sensor_selection names)";
+      c.temperature = std::move(t);
+      return;
+    }
+  }
+  c.temperature_note = "no temperature (no sensor_accel of the selected device " + fmt_hex(*c.acc.device_id, 8) + ")";
+}
 
 UlogChoice choose_series(const BinaryFile& f, const UlogLog& log, const UlogOptions& opt) {
   const auto accel = instance_counts(log, "sensor_accel");
@@ -481,8 +508,8 @@ UlogChoice choose_series(const BinaryFile& f, const UlogLog& log, const UlogOpti
   bool use_ag = false;
   std::string why;
   switch (opt.source) {
-    case UlogSource::kSensorAccelGyro: use_ag = true; why = "as asked"; break;
-    case UlogSource::kSensorCombined: use_ag = false; why = "as asked"; break;
+    case UlogSource::kSensorAccelGyro: use_ag = true; why = "topics as asked"; break;
+    case UlogSource::kSensorCombined: use_ag = false; why = "topic as asked"; break;
     case UlogSource::kAuto:
       use_ag = ag_n > 0 && 2 * ag_n >= cb_n;
       why = use_ag ? "it holds at least half as many samples as sensor_combined"
@@ -504,41 +531,71 @@ UlogChoice choose_series(const BinaryFile& f, const UlogLog& log, const UlogOpti
     c.gyr = sensor_series(f, log, "sensor_gyro", ag);
   } else {
     std::tie(c.acc, c.gyr) = combined_series(f, log, cb);
+    add_selected_devices(f, log, c);
   }
   c.why = "IMU from " + std::string(use_ag ? "sensor_accel + sensor_gyro" : "sensor_combined") + " instance " +
           std::to_string(use_ag ? ag : cb) + " (" + which + "; " + why + "); available: " + available;
   return c;
 }
 
+// A series' times [s, relative to t0_us] and values in time order, for interpolation.
+template <class V>
+struct Ordered {
+  std::vector<double> t;
+  std::vector<V> v;
+};
+template <class V>
+Ordered<V> in_time_order(const std::vector<std::uint64_t>& t_us, const std::vector<V>& v, std::uint64_t t0_us) {
+  std::vector<std::size_t> order(t_us.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return t_us[a] < t_us[b]; });
+  Ordered<V> out;
+  for (std::size_t i : order) {
+    out.t.push_back(seconds_since_us(t0_us, t_us[i]));
+    out.v.push_back(v[i]);
+  }
+  return out;
+}
+
+constexpr double kTimestampUnitS = 1e-6;     // interpolation tolerance at the ends: one timestamp unit
+constexpr double kTemperatureHoldS = 2.0;    // a sparse temperature is held this long past its ends
+
+// Temperature [°C] at the samples from another topic's sparse series, linearly interpolated; none
+// at all (has_temperature false) unless it covers every sample. Returns the note.
+std::string add_interpolated_temperature(const UlogChoice& c, Recording& rec) {
+  const Ordered<double> temp = in_time_order(c.temperature.t_us, c.temperature.temperature_c, c.acc.t_us.front());
+  for (auto& s : rec.samples) {
+    if (!interpolate_at(temp.t, temp.v, s.t_s, kTemperatureHoldS, s.temperature_c)) {
+      for (auto& x : rec.samples) x.temperature_c = 0.0;
+      return "no temperature (" + c.temperature.what + " does not cover the samples within " +
+             fmt_g(kTemperatureHoldS) + " s)";
+    }
+  }
+  rec.header.info.has_temperature = true;
+  return c.temperature_note + ", held at its end values up to " + fmt_g(kTemperatureHoldS) + " s beyond";
+}
+
 // Samples at the accelerometer times [s from the first sample]: accel [m/s²], temperature [°C],
 // gyro [rad/s] as logged at the same time or linearly interpolated; a dropout or resync before a
-// sample flags a gap. Accelerometer samples outside the gyro's time span are dropped. Returns the
-// merge note.
+// sample flags a gap. Accelerometer samples outside the gyro's time span are dropped. Sets
+// has_temperature; returns the merge note.
 std::string merge_series(const BinaryFile& f, const UlogChoice& c, Recording& rec) {
   if (c.acc.t_us.empty() || c.gyr.t_us.empty()) {
     f.fail(f.size(), "no IMU data: " + c.acc.what + " has " + std::to_string(c.acc.t_us.size()) + " samples, " +
                          c.gyr.what + " " + std::to_string(c.gyr.t_us.size()));
   }
   const bool same_times = c.acc.t_us == c.gyr.t_us;
-  // The gyro in time order for interpolation [s, relative to the first accelerometer sample].
   const std::uint64_t t0 = c.acc.t_us.front();
-  auto rel_s = [t0](std::uint64_t t) { return (static_cast<double>(t) - static_cast<double>(t0)) * 1e-6; };
-  std::vector<std::size_t> order(c.gyr.t_us.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return c.gyr.t_us[a] < c.gyr.t_us[b]; });
-  std::vector<double> gt;
-  std::vector<Eigen::Vector3d> gv;
-  for (std::size_t i : order) gt.push_back(rel_s(c.gyr.t_us[i])), gv.push_back(c.gyr.v[i]);
-  const double tol = 1e-6;  // one timestamp unit
+  const Ordered<Eigen::Vector3d> gyro = in_time_order(c.gyr.t_us, c.gyr.v, t0);
   std::size_t dropped = 0;
   for (std::size_t i = 0; i < c.acc.t_us.size(); ++i) {
     ImuSample s;
-    s.t_s = rel_s(c.acc.t_us[i]);
+    s.t_s = seconds_since_us(t0, c.acc.t_us[i]);
     s.accel_mps2 = c.acc.v[i];
     if (!c.acc.temperature_c.empty()) s.temperature_c = c.acc.temperature_c[i];
     if (same_times) {
       s.gyro_radps = c.gyr.v[i];
-    } else if (!interpolate_at(gt, gv, s.t_s, tol, s.gyro_radps)) {
+    } else if (!interpolate_at(gyro.t, gyro.v, s.t_s, kTimestampUnitS, s.gyro_radps)) {
       ++dropped;
       continue;
     }
@@ -548,10 +605,15 @@ std::string merge_series(const BinaryFile& f, const UlogChoice& c, Recording& re
   if (rec.samples.empty()) {
     f.fail(f.size(), "the gyro's timestamps do not overlap the accelerometer's (" + c.acc.what + ", " + c.gyr.what + ")");
   }
-  return same_times ? "gyro logged at the accelerometer times"
-                    : "gyro linearly interpolated at the accelerometer times" +
-                          (dropped ? " (" + std::to_string(dropped) + " accelerometer sample(s) outside the gyro's time span dropped)"
-                                   : std::string());
+  std::string note = same_times ? "gyro logged at the accelerometer times"
+                                : "gyro linearly interpolated at the accelerometer times" +
+                                      (dropped ? " (" + std::to_string(dropped) +
+                                                     " accelerometer sample(s) outside the gyro's time span dropped)"
+                                               : std::string());
+  rec.header.info.has_temperature = !c.acc.temperature_c.empty();
+  if (rec.header.info.has_temperature) return note + "; temperature from " + c.acc.what;
+  if (c.temperature.t_us.empty()) return note + "; " + c.temperature_note;
+  return note + "; " + add_interpolated_temperature(c, rec);
 }
 
 std::string info_or(const UlogLog& log, const std::string& key, const std::string& fallback = {}) {
@@ -585,13 +647,12 @@ Recording import_ulog(const fs::path& file, const UlogOptions& opt) {
   SensorInfo& info = rec.header.info;
   info.output_rate_hz = ts.rate_hz;
   info.has_gyro = true;
-  info.has_temperature = !choice.acc.temperature_c.empty();
   rec.header.identity = ulog_identity(log, choice);
   add_import_event(
       rec, "imported " + std::to_string(rec.samples.size()) + " samples from " + file.string() + " (PX4 ULog; " +
                "sys_name '" + info_or(log, "sys_name", "?") + "', ver_hw '" + info_or(log, "ver_hw", "?") +
                "', ver_sw '" + info_or(log, "ver_sw", "?") + "'; " + choice.why + "; " + merge +
-               "; values as logged: m/s^2, rad/s" + (info.has_temperature ? ", degC" : ", no temperature") +
+               "; values as logged: m/s^2, rad/s, degC" +
                "; t = " + (choice.acc.what.rfind("sensor_combined", 0) == 0 ? "timestamp + accelerometer_timestamp_relative"
                                                                             : "timestamp_sample") +
                " [us] relative to the first sample; " + ts.describe() + "; " + std::to_string(log.dropouts) +

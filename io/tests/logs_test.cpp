@@ -117,7 +117,13 @@ TEST(ImportUlog, RealLogTakesSensorCombinedWhenSensorAccelIsSparse) {
   EXPECT_EQ(r.header.clock, "wall");
   EXPECT_EQ(r.header.identity.vendor, "PX4");
   EXPECT_EQ(r.header.identity.model, "CUBEPILOT_CUBEORANGE");
-  EXPECT_FALSE(r.header.info.has_temperature);  // sensor_combined has none
+  // sensor_combined has no temperature: sensor_selection names accel device 0x0025000A, the
+  // device of sensor_accel instance 0 (first temperature 40.0254 °C at 21.31 s, held before it).
+  EXPECT_TRUE(r.header.info.has_temperature);
+  EXPECT_FLOAT_EQ(static_cast<float>(r.samples[0].temperature_c), 40.02537155151367f);
+  EXPECT_NE(r.header.identity.who_am_i.find("accel device_id 0x0025000A"), std::string::npos)
+      << r.header.identity.who_am_i;
+  EXPECT_NE(r.events[0].message.find("temperature interpolated from sensor_accel instance 0"), std::string::npos);
   ASSERT_EQ(r.events.size(), 1u);
   EXPECT_NE(r.events[0].message.find("sensor_combined instance 0"), std::string::npos) << r.events[0].message;
   EXPECT_NE(r.events[0].message.find("sensor_accel instance 0: 6"), std::string::npos) << r.events[0].message;
