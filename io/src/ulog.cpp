@@ -267,7 +267,7 @@ UlogLog read_ulog(const BinaryFile& f) {
       pos = static_cast<std::size_t>(*cut);
       continue;
     }
-    f.need(pos + kMessageHeader, size, std::string("a '") + type + "' message");
+    f.need(pos, kMessageHeader + size, std::string("a '") + type + "' message (3-byte header + " + std::to_string(size) + " bytes)");
     const std::size_t body = pos + kMessageHeader;
     switch (type) {
       case 'F': {

@@ -235,6 +235,38 @@ TEST(ImportUlog, WrittenLogNestedPaddingDropoutInterpolation) {
   EXPECT_NE(r.events[0].message.find("interpolated"), std::string::npos) << r.events[0].message;
 }
 
+// Appended data (a D message cut where the appended section starts) and corrupt bytes skipped up
+// to the next sync marker, as pyulog reads them.
+TEST(ImportUlog, WrittenLogAppendedDataAndResync) {
+  UlogWriter w;
+  const std::size_t flags_at = w.message('B', std::string(8, '\0') + std::string(1, '\x01') + std::string(7, '\0') +
+                                                  le<std::uint64_t>(0) + le<std::uint64_t>(0) + le<std::uint64_t>(0));
+  w.format("sensor_combined:uint64_t timestamp;float[3] gyro_rad;uint32_t gyro_integral_dt;"
+           "int32_t accelerometer_timestamp_relative;float[3] accelerometer_m_s2;");
+  w.subscribe(0, 1, "sensor_combined");
+  auto sample = [&](std::uint64_t t, float ax) {
+    w.data(1, le(t) + vec3(0.f, 0.f, 0.1f) + le<std::uint32_t>(0) + le<std::int32_t>(0) + vec3(ax, 0.f, -9.8f));
+  };
+  for (int i = 0; i < 4; ++i) sample(1000u * static_cast<unsigned>(i + 1), static_cast<float>(i));
+  w.bytes += std::string("\x05\x00zjunk!", 8) + std::string("\x2F\x73\x13\x20\x25\x0C\xBB\x12", 8);  // corrupt, then sync
+  sample(5000, 4.f);
+  sample(6000, 5.f);
+  w.bytes.resize(w.bytes.size() - 5);  // the last message cut: the appended data starts here
+  const std::uint64_t appended = w.bytes.size();
+  std::memcpy(w.bytes.data() + flags_at + 3 + 16, &appended, sizeof appended);
+  sample(7000, 6.f);
+  TempDir dir("ulog-appended");
+  write_text(dir / "appended.ulg", w.bytes);
+  const Recording r = import_ulog(dir / "appended.ulg");
+  ASSERT_EQ(r.samples.size(), 6u);  // 4, then 1 after the resync, the cut one lost, 1 appended
+  EXPECT_EQ(r.samples[4].accel_mps2.x(), 4.0);
+  EXPECT_TRUE(r.samples[4].flags & kGapBefore);  // bytes were skipped before it
+  EXPECT_EQ(r.samples[5].accel_mps2.x(), 6.0);
+  EXPECT_TRUE(r.samples[5].flags & kGapBefore);  // 2 ms after the previous one at 1 kHz
+  EXPECT_EQ(r.samples[5].gyro_radps.z(), static_cast<double>(0.1f));
+  EXPECT_NE(r.events[0].message.find("1 resync(s) (16 bytes skipped)"), std::string::npos) << r.events[0].message;
+}
+
 TEST(ImportUlog, BadFilesNameTheOffsetAndWhatWasExpected) {
   TempDir dir("ulog-bad");
   {  // wrong magic
