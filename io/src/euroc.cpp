@@ -47,9 +47,11 @@ bool parse_ns(std::string_view s, std::int64_t& out) {
 
 bool looks_like_euroc(const fs::path& path) {
   try {
-    LineReader r(euroc_csv(path));
-    std::string line;
-    return r.next(line) && euroc_header(line);
+    // The column-name line is about 150 bytes; a binary file is not read through.
+    std::string head = file_prefix(euroc_csv(path), 1024);
+    head = head.substr(0, head.find('\n'));
+    if (!head.empty() && head.back() == '\r') head.pop_back();
+    return euroc_header(head);
   } catch (const ImportError&) {
     return false;
   }

@@ -42,6 +42,13 @@ constexpr BasicType kBasicTypes[] = {
     {"double", Basic::kDouble, 8}, {"bool", Basic::kBool, 1},       {"char", Basic::kChar, 1},
 };
 
+// The basic type named `name`, or nullptr (a nested format or unknown).
+const BasicType* basic_type(const std::string& name) {
+  const auto* it = std::find_if(std::begin(kBasicTypes), std::end(kBasicTypes),
+                                [&](const BasicType& b) { return name == b.name; });
+  return it == std::end(kBasicTypes) ? nullptr : it;
+}
+
 struct Field {
   std::string type;   // element type name as written ("float", "vehicle_attitude_s"...)
   std::string name;
@@ -103,9 +110,7 @@ void resolve_format(const BinaryFile& f, std::map<std::string, Format>& formats,
   if (depth > 16) f.fail(fmt.defined_at, "format '" + name + "' nests formats more than 16 deep (a cycle?)");
   std::size_t offset = 0;
   for (Field& fld : fmt.fields) {
-    const auto* basic = std::find_if(std::begin(kBasicTypes), std::end(kBasicTypes),
-                                     [&](const BasicType& b) { return fld.type == b.name; });
-    if (basic != std::end(kBasicTypes)) {
+    if (const BasicType* basic = basic_type(fld.type)) {
       fld.basic = basic->basic;
       fld.element_size = basic->size;
     } else if (formats.count(fld.type)) {
@@ -184,9 +189,8 @@ void read_info(const BinaryFile& f, std::size_t at, std::size_t body, std::size_
   const std::size_t key_len = *f.at(body);
   if (1 + key_len > size) f.fail(at, "info message key (" + std::to_string(key_len) + " bytes) runs past the message");
   const Field key = parse_field(f, at, "info", fixed_string(f.at(body + 1), key_len));
-  const auto* basic = std::find_if(std::begin(kBasicTypes), std::end(kBasicTypes),
-                                   [&](const BasicType& b) { return key.type == b.name; });
-  if (basic == std::end(kBasicTypes)) return;  // nested-type info: not needed
+  const BasicType* basic = basic_type(key.type);
+  if (!basic) return;  // nested-type info: not needed
   Field typed = key;
   typed.basic = basic->basic;
   typed.element_size = basic->size;
@@ -245,10 +249,11 @@ std::optional<std::size_t> next_sync(const BinaryFile& f, std::size_t from) {
 }
 
 void check_header(const BinaryFile& f) {
-  f.need(0, kHeaderBytes, "the ULog header");
-  if (!std::equal(std::begin(kUlogMagic), std::end(kUlogMagic), f.at(0))) {
+  const std::size_t compared = std::min(f.size(), sizeof kUlogMagic);
+  if (!std::equal(kUlogMagic, kUlogMagic + compared, f.at(0))) {
     f.fail(0, "not a ULog file (expected the magic bytes 55 4c 6f 67 01 12 35, \"ULog\"...)");
   }
+  f.need(0, kHeaderBytes, "the ULog header");
 }
 
 // Reads every message after the header.
@@ -264,7 +269,21 @@ UlogLog read_ulog(const BinaryFile& f) {
     const auto cut = std::find_if(log.appended_offsets.begin(), log.appended_offsets.end(),
                                   [&](std::uint64_t off) { return pos < off && end > off; });
     if (cut != log.appended_offsets.end()) {
+      ++log.lost;
       pos = static_cast<std::size_t>(*cut);
+      continue;
+    }
+    if (std::string_view("FIMPQBARDLCSO").find(type) == std::string_view::npos) {
+      // Corrupt data: continue after the next sync marker, as pyulog does.
+      const auto sync = next_sync(f, pos + 1);
+      if (!sync) {
+        f.fail(pos, "unknown message type " + fmt_hex(static_cast<std::uint8_t>(type), 2) +
+                        " (expected one of F I M P Q B A R D L C S O) and no sync marker follows");
+      }
+      log.skipped_bytes += *sync - pos;
+      ++log.resyncs;
+      ++log.lost;
+      pos = *sync;
       continue;
     }
     f.need(pos, kMessageHeader + size, std::string("a '") + type + "' message (3-byte header + " + std::to_string(size) + " bytes)");
@@ -285,20 +304,7 @@ UlogLog read_ulog(const BinaryFile& f) {
         ++log.lost;
         if (size >= 2) log.dropout_ms += f.get<std::uint16_t>(body, "a dropout duration");
         break;
-      case 'M': case 'Q': case 'R': case 'L': case 'C': case 'S': break;
-      default: {
-        // Corrupt data: continue after the next sync marker, as pyulog does.
-        const auto sync = next_sync(f, pos + 1);
-        if (!sync) {
-          f.fail(pos, std::string("unknown message type ") + fmt_hex(static_cast<std::uint8_t>(type), 2) +
-                          " (expected one of F I M P Q B A R D L C S O) and no sync marker follows");
-        }
-        log.skipped_bytes += *sync - pos;
-        ++log.resyncs;
-        ++log.lost;
-        pos = *sync;
-        continue;
-      }
+      default: break;  // M Q R L C S: not needed
     }
     pos = end;
   }
