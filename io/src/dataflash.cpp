@@ -166,23 +166,19 @@ const DfFormat& format_named(const DfLog& log, const std::string& name) {
   throw std::logic_error("format_named: no " + name);  // only called for names with records
 }
 
-// Column index by name; fails naming the format's columns when absent.
 std::optional<std::size_t> column(const DfFormat& fmt, const std::string& name) {
   const auto it = std::find(fmt.columns.begin(), fmt.columns.end(), name);
   if (it == fmt.columns.end()) return std::nullopt;
   return static_cast<std::size_t>(it - fmt.columns.begin());
 }
 
+// Column index by name; fails naming the format's columns when absent.
 std::size_t required_column(const BinaryFile& f, const DfFormat& fmt, const std::string& name) {
   const auto c = column(fmt, name);
   if (!c) {
-    f.fail(fmt.defined_at, "FMT for '" + fmt.name + "' has no column '" + name + "' (columns: " +
-                               [&] {
-                                 std::string s;
-                                 for (const auto& n : fmt.columns) s += (s.empty() ? "" : ",") + n;
-                                 return s;
-                               }() +
-                               ")");
+    std::string columns;
+    for (const auto& n : fmt.columns) columns += (columns.empty() ? "" : ",") + n;
+    f.fail(fmt.defined_at, "FMT for '" + fmt.name + "' has no column '" + name + "' (columns: " + columns + ")");
   }
   return *c;
 }
@@ -300,7 +296,7 @@ std::map<int, std::vector<ImuRecordRef>> imu_records_by_instance(const BinaryFil
   return out;
 }
 
-// The SI factors of an IMU format's columns: gyro, accel, temperature (0 = no T column).
+// An IMU format's columns (T may be absent) and their SI factors, with the unit note.
 struct ImuColumns {
   std::size_t time, gyr[3], acc[3];
   std::optional<std::size_t> temp;
@@ -380,12 +376,14 @@ Recording import_dataflash(const fs::path& file, const DataflashOptions& opt) {
   std::uint64_t t0_us = 0;
   bool has_temperature = true;
   std::size_t lost_gaps = 0;
-  for (const ImuRecordRef& r : by_instance.at(instance)) {
+  const std::vector<ImuRecordRef>& records = by_instance.at(instance);
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const ImuRecordRef& r = records[i];
     auto it = columns.find(r.fmt);
     if (it == columns.end()) it = columns.emplace(r.fmt, imu_columns(f, units, *r.fmt)).first;
     const ImuColumns& c = it->second;
     const auto t_us = static_cast<std::uint64_t>(value(f, *r.fmt, r.rec.offset, c.time));
-    if (rec.samples.empty()) t0_us = t_us;
+    if (i == 0) t0_us = t_us;
     ImuSample s;
     s.t_s = seconds_since_us(t0_us, t_us);
     for (int k = 0; k < 3; ++k) {
@@ -394,7 +392,7 @@ Recording import_dataflash(const fs::path& file, const DataflashOptions& opt) {
     }
     has_temperature = has_temperature && c.temp.has_value();
     if (c.temp) s.temperature_c = value(f, *r.fmt, r.rec.offset, *c.temp) * c.temp_factor;
-    if (!rec.samples.empty() && r.rec.lost_before != by_instance.at(instance)[rec.samples.size() - 1].rec.lost_before) {
+    if (i > 0 && r.rec.lost_before != records[i - 1].rec.lost_before) {
       s.flags |= kGapBefore;
       ++lost_gaps;
     }

@@ -18,6 +18,7 @@
 #include <cstring>
 #include <filesystem>
 #include <functional>
+#include <numbers>
 #include <random>
 #include <string>
 #include <vector>
@@ -388,6 +389,49 @@ std::string df_fmt(std::uint8_t type, std::uint8_t length, const std::string& na
 std::string df_fmt_of_fmt() { return df_fmt(0x80, 89, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns"); }
 
 }  // namespace
+
+// A written log: two IMU instances, the gyro in deg/s by FMTU/UNIT/MULT, corrupt bytes skipped.
+TEST(ImportDataflash, WrittenLogUnitsInstancesResync) {
+  auto fixed = [](const std::string& t, std::size_t n) { return (t + std::string(n, '\0')).substr(0, n); };
+  auto head = [](std::uint8_t type) { return std::string("\xA3\x95", 2) + static_cast<char>(type); };
+  std::string b = df_fmt_of_fmt() + df_fmt(178, 76, "UNIT", "QbZ", "TimeUS,Id,Label") +
+                  df_fmt(179, 20, "MULT", "Qbd", "TimeUS,Id,Mult") +
+                  df_fmt(177, 44, "FMTU", "QBNN", "TimeUS,FmtType,UnitIds,MultIds") +
+                  df_fmt(162, 40, "IMU", "QBfffffff", "TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ,T");
+  for (const auto& [id, label] : std::vector<std::pair<char, std::string>>{
+           {'k', "deg/s"}, {'o', "m/s/s"}, {'O', "degC"}, {'s', "s"}, {'#', "instance"}}) {
+    b += head(178) + le<std::uint64_t>(1) + id + fixed(label, 64);
+  }
+  for (const auto& [id, mult] : std::vector<std::pair<char, double>>{{'-', 0.0}, {'0', 1.0}, {'F', 1e-6}}) {
+    b += head(179) + le<std::uint64_t>(1) + id + le(mult);
+  }
+  b += head(177) + le<std::uint64_t>(1) + static_cast<char>(162) + fixed("s#kkkoooO", 16) + fixed("F-0000000", 16);
+  auto imu = [&](std::uint64_t t_us, std::uint8_t instance, float gz_dps, float temp) {
+    b += head(162) + le(t_us) + static_cast<char>(instance) + vec3(0.f, 0.f, gz_dps) + vec3(0.f, 0.f, -9.8f) + le(temp);
+  };
+  for (int i = 0; i < 6; ++i) {
+    imu(100000u + 10000u * static_cast<unsigned>(i), 0, 90.f, 30.f + static_cast<float>(i));
+    if (i % 2 == 0) imu(100000u + 10000u * static_cast<unsigned>(i), 1, 0.f, 20.f);
+    if (i == 3) b += "corrupt";
+  }
+  TempDir dir("df-written");
+  write_text(dir / "written.BIN", b);
+  const Recording r = import_dataflash(dir / "written.BIN");
+  ASSERT_EQ(r.samples.size(), 6u);  // instance 0 has the most
+  EXPECT_NEAR(r.samples[0].gyro_radps.z(), std::numbers::pi / 2.0, 1e-6);  // 90 deg/s
+  EXPECT_EQ(r.samples[5].temperature_c, 35.0);
+  EXPECT_NEAR(r.samples[5].t_s, 0.05, 1e-12);
+  EXPECT_TRUE(r.samples[4].flags & kGapBefore);  // after the corrupt bytes
+  EXPECT_EQ(gaps(r), 1u);
+  EXPECT_NE(r.events[0].message.find("1 resync(s) (7 bytes skipped)"), std::string::npos) << r.events[0].message;
+  EXPECT_NE(r.events[0].message.find("GyrX deg/s x 0.0174533"), std::string::npos) << r.events[0].message;
+  DataflashOptions opt;
+  opt.instance = 1;
+  const Recording r1 = import_dataflash(dir / "written.BIN", opt);
+  ASSERT_EQ(r1.samples.size(), 3u);
+  EXPECT_EQ(r1.samples[2].temperature_c, 20.0);
+  EXPECT_NEAR(r1.samples[2].t_s, 0.04, 1e-12);
+}
 
 TEST(ImportDataflash, BadFilesNameTheOffsetAndWhatWasExpected) {
   TempDir dir("df-bad");
