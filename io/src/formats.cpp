@@ -1,5 +1,6 @@
 // The format registry. See stend/io/formats.hpp.
 #include <stend/io/formats.hpp>
+#include <stend/io/logs.hpp>
 
 #include <stend/io/importers.hpp>
 #include <stend/physics/units.hpp>
@@ -189,6 +190,12 @@ const std::vector<Format>& formats() {
       {"static_table", "table of static means against known inputs (angle_deg or f_*_mps2, a_*_mps2)",
        looks_like_static_table, open_table},
       {"imutk", "IMU-TK text 't x y z' (ACC [GYRO]; any extension, .mat included)", looks_like_imutk, open_imutk, 2},
+      {"ulog", "PX4 ULog: sensor_accel + sensor_gyro (with temperature), else sensor_combined", looks_like_ulog,
+       [](const Inputs& in, const ImportOptions&) { return import_ulog(in[0]); }},
+      {"dataflash", "ArduPilot DataFlash .BIN: IMU records (with temperature)", looks_like_dataflash,
+       [](const Inputs& in, const ImportOptions&) { return import_dataflash(in[0]); }},
+      {"euroc", "EuRoC / ASL: mav0/imu0/data.csv (or the folder holding mav0/)", looks_like_euroc,
+       [](const Inputs& in, const ImportOptions&) { return import_euroc(in[0]); }},
       {"csv", "generic delimited text with mapped columns (--accel/--mapping ...)", nullptr, open_csv},
   };
   return table;

@@ -1,7 +1,7 @@
 #include <stend/io/importers.hpp>
 #include <stend/io/timestamps.hpp>
 
-#include "import_event.hpp"
+#include "import_common.hpp"
 #include <stend/physics/gravity.hpp>
 #include <stend/physics/table_chain.hpp>
 #include <stend/physics/units.hpp>
@@ -43,44 +43,17 @@ ImportError::ImportError(const fs::path& file, std::size_t line, const std::stri
       file_(file),
       line_(line) {}
 
+ImportError::ImportError(const fs::path& file, ByteOffset offset, const std::string& message)
+    : std::runtime_error(file.string() + ": byte " + std::to_string(offset.bytes) + ": " + message),
+      file_(file),
+      offset_(offset.bytes) {}
+
 namespace {
+
+using namespace detail;
 
 // ---------------------------------------------------------------------------------------------
 // Text helpers
-
-class LineReader {
- public:
-  explicit LineReader(const fs::path& file) : file_(file), in_(file, std::ios::binary) {
-    if (!in_) {
-      throw ImportError(file, 0, std::string("cannot open: ") + std::strerror(errno) +
-                                     " (check the path)");
-    }
-  }
-  bool next(std::string& line) {
-    if (!std::getline(in_, line)) return false;
-    ++line_;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line_ == 1 && line.size() >= 3 && static_cast<unsigned char>(line[0]) == 0xEF &&
-        static_cast<unsigned char>(line[1]) == 0xBB && static_cast<unsigned char>(line[2]) == 0xBF) {
-      line.erase(0, 3);  // UTF-8 byte-order mark
-    }
-    return true;
-  }
-  std::size_t line() const { return line_; }
-  const fs::path& file() const { return file_; }
-  [[noreturn]] void fail(const std::string& message) const { throw ImportError(file_, line_, message); }
-
- private:
-  fs::path file_;
-  std::ifstream in_;
-  std::size_t line_ = 0;
-};
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
-  return s;
-}
 
 std::string unquote(std::string_view s) {
   s = trim(s);
@@ -89,31 +62,6 @@ std::string unquote(std::string_view s) {
 }
 
 bool is_blank(std::string_view s) { return trim(s).empty(); }
-
-// Splits on `delim`; ' ' splits on runs of spaces and tabs.
-std::vector<std::string_view> split(std::string_view line, char delim) {
-  std::vector<std::string_view> out;
-  if (delim == ' ') {
-    std::size_t i = 0;
-    while (i < line.size()) {
-      while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
-      if (i >= line.size()) break;
-      std::size_t j = i;
-      while (j < line.size() && line[j] != ' ' && line[j] != '\t') ++j;
-      out.push_back(line.substr(i, j - i));
-      i = j;
-    }
-    return out;
-  }
-  std::size_t start = 0;
-  for (std::size_t i = 0; i <= line.size(); ++i) {
-    if (i == line.size() || line[i] == delim) {
-      out.push_back(trim(line.substr(start, i - start)));
-      start = i + 1;
-    }
-  }
-  return out;
-}
 
 // Whitespace, comma or semicolon separated (IMU-TK files come in all three).
 std::vector<std::string_view> split_any(std::string_view line) {
@@ -131,14 +79,6 @@ std::vector<std::string_view> split_any(std::string_view line) {
   return out;
 }
 
-bool parse_double(std::string_view s, double& out) {
-  s = trim(s);
-  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
-  if (s.empty()) return false;
-  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
-  return ec == std::errc() && p == s.data() + s.size();
-}
-
 double number(const LineReader& r, std::string_view field, const std::string& what) {
   double v = 0.0;
   if (!parse_double(field, v)) {
@@ -153,32 +93,6 @@ std::int32_t to_counts(const LineReader& r, double v, const std::string& what) {
            " is not an integer count (set counts = false for values in physical units)");
   }
   return static_cast<std::int32_t>(std::lround(v));
-}
-
-double median_interval(const std::vector<ImuSample>& s) {
-  if (s.size() < 2) return 0.0;
-  std::vector<double> dt;
-  dt.reserve(s.size() - 1);
-  for (std::size_t i = 1; i < s.size(); ++i) dt.push_back(s[i].t_s - s[i - 1].t_s);
-  std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
-  return dt[dt.size() / 2];
-}
-
-std::string fmt_g(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
-Recording new_recording(const fs::path& file, const std::string& format) {
-  Recording rec;
-  rec.dir = file;
-  rec.header.status = RunStatus::kComplete;
-  rec.header.experiment_name = "import:" + format;
-  rec.header.experiment_file = file.string();
-  rec.header.stend_version = stend::version();
-  rec.header.clock = "wall";
-  return rec;
 }
 
 Segment make_segment(int id, SegmentKind kind, const std::string& label, double t0,

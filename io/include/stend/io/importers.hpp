@@ -13,7 +13,8 @@
 //             sample time of the annotated part
 //   events    one "info" event (source "import") stating the file and every assumption made
 //   dir       the source file
-// and throws ImportError, whose message names the file and the 1-based line, for malformed input.
+// and throws ImportError, whose message names the file and the 1-based line (text files) or the
+// byte offset (binary files), for malformed input.
 #pragma once
 
 #include <stend/recording.hpp>
@@ -21,7 +22,9 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -29,16 +32,25 @@
 
 namespace stend::io {
 
+// A position in a binary file: bytes from its start.
+struct ByteOffset {
+  std::uint64_t bytes = 0;
+};
+
 class ImportError : public std::runtime_error {
  public:
   // line = 0 when the problem is not tied to a line.
   ImportError(const std::filesystem::path& file, std::size_t line, const std::string& message);
+  // A binary file: the message reads "<file>: byte <offset>: <message>".
+  ImportError(const std::filesystem::path& file, ByteOffset offset, const std::string& message);
   const std::filesystem::path& file() const { return file_; }
   std::size_t line() const { return line_; }
+  std::optional<std::uint64_t> offset() const { return offset_; }
 
  private:
   std::filesystem::path file_;
-  std::size_t line_;
+  std::size_t line_ = 0;
+  std::optional<std::uint64_t> offset_;
 };
 
 // The truth columns importers write where the dataset knows its stimulus: specific force [m/s²]

@@ -1,0 +1,161 @@
+#include "import_common.hpp"
+
+#include <stend/version.hpp>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cstdio>
+#include <iterator>
+#include <system_error>
+#include <utility>
+
+namespace stend::io::detail {
+
+namespace fs = std::filesystem;
+
+LineReader::LineReader(const fs::path& file) : file_(file), in_(file, std::ios::binary) {
+  if (!in_) {
+    throw ImportError(file, 0, std::string("cannot open: ") + std::strerror(errno) + " (check the path)");
+  }
+}
+
+bool LineReader::next(std::string& line) {
+  if (!std::getline(in_, line)) return false;
+  ++line_;
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  if (line_ == 1 && line.size() >= 3 && static_cast<unsigned char>(line[0]) == 0xEF &&
+      static_cast<unsigned char>(line[1]) == 0xBB && static_cast<unsigned char>(line[2]) == 0xBF) {
+    line.erase(0, 3);  // UTF-8 byte-order mark
+  }
+  return true;
+}
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
+  return s;
+}
+
+std::vector<std::string_view> split(std::string_view line, char delim) {
+  std::vector<std::string_view> out;
+  if (delim == ' ') {
+    std::size_t i = 0;
+    while (i < line.size()) {
+      while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+      if (i >= line.size()) break;
+      std::size_t j = i;
+      while (j < line.size() && line[j] != ' ' && line[j] != '\t') ++j;
+      out.push_back(line.substr(i, j - i));
+      i = j;
+    }
+    return out;
+  }
+  std::size_t start = 0;
+  for (std::size_t i = 0; i <= line.size(); ++i) {
+    if (i == line.size() || line[i] == delim) {
+      out.push_back(trim(line.substr(start, i - start)));
+      start = i + 1;
+    }
+  }
+  return out;
+}
+
+bool parse_double(std::string_view s, double& out) {
+  s = trim(s);
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  if (s.empty()) return false;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+  return ec == std::errc() && p == s.data() + s.size();
+}
+
+std::string fmt_g(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+std::string fmt_hex(std::uint64_t v, int digits) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "0x%0*llX", digits, static_cast<unsigned long long>(v));
+  return buf;
+}
+
+BinaryFile::BinaryFile(const fs::path& file) : file_(file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw ImportError(file, 0, std::string("cannot open: ") + std::strerror(errno) + " (check the path)");
+  data_.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+void BinaryFile::need(std::size_t offset, std::size_t count, const std::string& what) const {
+  if (offset > data_.size() || count > data_.size() - offset) {
+    fail(offset, "the file ends inside " + what + " (expected " + std::to_string(count) + " bytes, " +
+                     std::to_string(offset > data_.size() ? 0 : data_.size() - offset) + " remain; truncated?)");
+  }
+}
+
+std::string file_prefix(const fs::path& file, std::size_t count) {
+  std::ifstream in(file, std::ios::binary);
+  std::string out(count, '\0');
+  if (!in) return {};
+  in.read(out.data(), static_cast<std::streamsize>(count));
+  out.resize(static_cast<std::size_t>(in.gcount()));
+  return out;
+}
+
+std::string fixed_string(const std::uint8_t* p, std::size_t size) {
+  const auto* c = reinterpret_cast<const char*>(p);
+  return std::string(c, static_cast<std::size_t>(std::find(c, c + size, '\0') - c));
+}
+
+Recording new_recording(const fs::path& file, const std::string& format) {
+  Recording rec;
+  rec.dir = file;
+  rec.header.status = RunStatus::kComplete;
+  rec.header.experiment_name = "import:" + format;
+  rec.header.experiment_file = file.string();
+  rec.header.stend_version = stend::version();
+  rec.header.clock = "wall";
+  return rec;
+}
+
+double median_interval(const std::vector<ImuSample>& s) {
+  if (s.size() < 2) return 0.0;
+  std::vector<double> dt;
+  dt.reserve(s.size() - 1);
+  for (std::size_t i = 1; i < s.size(); ++i) dt.push_back(s[i].t_s - s[i - 1].t_s);
+  std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
+  return dt[dt.size() / 2];
+}
+
+std::size_t flag_time_gaps(std::vector<ImuSample>& s, double rate_hz) {
+  if (!(rate_hz > 0.0)) return 0;
+  std::size_t gaps = 0;
+  for (std::size_t i = 1; i < s.size(); ++i) {
+    if (s[i].t_s - s[i - 1].t_s > 1.5 / rate_hz) {
+      s[i].flags |= kGapBefore;
+      ++gaps;
+    }
+  }
+  return gaps;
+}
+
+TimestampSummary check_log_timestamps(std::vector<ImuSample>& s) {
+  TimestampSummary sum;
+  const double dt = median_interval(s);
+  sum.rate_hz = dt > 0.0 ? 1.0 / dt : 0.0;
+  sum.gaps = flag_time_gaps(s, sum.rate_hz);
+  for (std::size_t i = 1; i < s.size(); ++i) {
+    if (s[i].t_s == s[i - 1].t_s) ++sum.repeated;
+    if (s[i].t_s < s[i - 1].t_s) ++sum.decreasing;
+  }
+  return sum;
+}
+
+std::string TimestampSummary::describe() const {
+  return "rate " + fmt_g(rate_hz) + " Hz from the median interval; " + std::to_string(gaps) +
+         " gap(s) flagged where the time jumps by more than 1.5 median intervals; " + std::to_string(repeated) +
+         " repeated and " + std::to_string(decreasing) + " decreasing timestamp(s), kept in file order";
+}
+
+}  // namespace stend::io::detail

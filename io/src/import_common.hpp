@@ -1,0 +1,133 @@
+// Pieces every importer in io/ shares: reading text lines and binary files with positions for
+// error messages, the recording every import starts from, its "info" event, and the timestamp
+// checks (median interval, gaps, repeats).
+#pragma once
+
+#include <stend/io/importers.hpp>
+
+#include "import_event.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace stend::io::detail {
+
+// ---------------------------------------------------------------------------------------------
+// Text
+
+// Lines of a text file with their 1-based numbers (CR and a UTF-8 byte-order mark removed).
+class LineReader {
+ public:
+  explicit LineReader(const std::filesystem::path& file);
+  bool next(std::string& line);
+  std::size_t line() const { return line_; }
+  const std::filesystem::path& file() const { return file_; }
+  [[noreturn]] void fail(const std::string& message) const { throw ImportError(file_, line_, message); }
+
+ private:
+  std::filesystem::path file_;
+  std::ifstream in_;
+  std::size_t line_ = 0;
+};
+
+std::string_view trim(std::string_view s);
+// Splits on `delim`; ' ' splits on runs of spaces and tabs.
+std::vector<std::string_view> split(std::string_view line, char delim);
+bool parse_double(std::string_view s, double& out);
+// "%.6g"
+std::string fmt_g(double v);
+// "0x" and `digits` upper-case hex digits: fmt_hex(0xA3, 2) = "0xA3".
+std::string fmt_hex(std::uint64_t v, int digits);
+
+// ---------------------------------------------------------------------------------------------
+// Binary
+
+static_assert(std::endian::native == std::endian::little, "the binary log readers assume a little-endian host");
+
+// A whole binary file in memory, read with bounds checks: every read past the end throws an
+// ImportError naming the offset and what was being read.
+class BinaryFile {
+ public:
+  explicit BinaryFile(const std::filesystem::path& file);
+  const std::filesystem::path& file() const { return file_; }
+  std::size_t size() const { return data_.size(); }
+  const std::uint8_t* at(std::size_t offset) const { return data_.data() + offset; }
+  // Throws unless bytes [offset, offset + count) are in the file.
+  void need(std::size_t offset, std::size_t count, const std::string& what) const;
+  template <class T>
+  T get(std::size_t offset, const std::string& what) const {
+    need(offset, sizeof(T), what);
+    T v;
+    std::memcpy(&v, data_.data() + offset, sizeof(T));
+    return v;
+  }
+  [[noreturn]] void fail(std::size_t offset, const std::string& message) const {
+    throw ImportError(file_, ByteOffset{offset}, message);
+  }
+
+ private:
+  std::filesystem::path file_;
+  std::vector<std::uint8_t> data_;
+};
+
+// The first `count` bytes of a file (fewer when it is shorter; none when it cannot be read).
+std::string file_prefix(const std::filesystem::path& file, std::size_t count);
+
+// Text of a fixed-size char field, up to the first NUL.
+std::string fixed_string(const std::uint8_t* p, std::size_t size);
+
+// ---------------------------------------------------------------------------------------------
+// Recordings and timestamps
+
+// Status complete, experiment "import:<format>", clock "wall", experiment_file and dir = file.
+Recording new_recording(const std::filesystem::path& file, const std::string& format);
+// Events of source "import" (import_event.hpp).
+using stend::io::add_import_event;
+
+// Seconds from t0_us to t_us (timestamps in µs), exact to the microsecond.
+inline double seconds_since_us(std::uint64_t t0_us, std::uint64_t t_us) {
+  return static_cast<double>(static_cast<std::int64_t>(t_us - t0_us)) * 1e-6;
+}
+
+double median_interval(const std::vector<ImuSample>& s);
+// Flags samples that follow an interval longer than 1.5 periods; returns how many.
+std::size_t flag_time_gaps(std::vector<ImuSample>& s, double rate_hz);
+
+// The timestamps of a log taken as they come (in file order): output rate from the median
+// interval, gaps flagged where the time jumps by more than 1.5 median intervals, repeated and
+// decreasing timestamps counted (they do not stop an import).
+struct TimestampSummary {
+  double rate_hz = 0.0;
+  std::size_t gaps = 0;        // samples flagged kGapBefore by the timestamps
+  std::size_t repeated = 0;    // t equal to the previous sample's
+  std::size_t decreasing = 0;  // t before the previous sample's
+  std::string describe() const;  // for the info event
+};
+TimestampSummary check_log_timestamps(std::vector<ImuSample>& s);
+
+// Linear interpolation of y(t) at `at`; t ascending. False outside [t.front() − tol, t.back() + tol]
+// (the value is then left alone); inside, clamped to the end values.
+template <class V>
+bool interpolate_at(const std::vector<double>& t, const std::vector<V>& y, double at, double tol, V& out) {
+  if (t.empty() || at < t.front() - tol || at > t.back() + tol) return false;
+  std::size_t j = static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), at) - t.begin());
+  if (j == 0) {
+    out = y.front();
+  } else if (j == t.size()) {
+    out = y.back();
+  } else {
+    const double span = t[j] - t[j - 1];
+    const double u = span > 0.0 ? (at - t[j - 1]) / span : 0.0;
+    out = y[j - 1] + (y[j] - y[j - 1]) * u;
+  }
+  return true;
+}
+
+}  // namespace stend::io::detail
