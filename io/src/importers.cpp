@@ -1,4 +1,6 @@
 #include <stend/io/importers.hpp>
+
+#include "importer_support.hpp"
 #include <stend/physics/units.hpp>
 #include <stend/version.hpp>
 #include <stend/yaml_util.hpp>
@@ -36,6 +38,9 @@ ImportError::ImportError(const fs::path& file, std::size_t line, const std::stri
                          ": " + message),
       file_(file),
       line_(line) {}
+
+ImportError::ImportError(const fs::path& file, const std::string& where, const std::string& message)
+    : std::runtime_error(file.string() + ": " + where + ": " + message), file_(file), where_(where) {}
 
 namespace {
 
@@ -149,6 +154,11 @@ std::int32_t to_counts(const LineReader& r, double v, const std::string& what) {
   return static_cast<std::int32_t>(std::lround(v));
 }
 
+}  // namespace
+
+// Shared with the other importers' files (importer_support.hpp).
+namespace detail {
+
 double median_interval(const std::vector<ImuSample>& s) {
   if (s.size() < 2) return 0.0;
   std::vector<double> dt;
@@ -158,7 +168,6 @@ double median_interval(const std::vector<ImuSample>& s) {
   return dt[dt.size() / 2];
 }
 
-// Flags samples that follow an interval longer than 1.5 periods; returns how many.
 std::size_t flag_time_gaps(std::vector<ImuSample>& s, double rate_hz) {
   if (!(rate_hz > 0.0)) return 0;
   std::size_t gaps = 0;
@@ -196,6 +205,12 @@ void add_import_event(Recording& rec, const std::string& message) {
   e.message = message;
   rec.events.push_back(std::move(e));
 }
+
+}  // namespace detail
+
+using namespace detail;
+
+namespace {
 
 Segment make_segment(int id, SegmentKind kind, const std::string& label, double t0,
                      double t1) {

@@ -13,7 +13,8 @@
 //             sample time of the annotated part
 //   events    one "info" event (source "import") stating the file and every assumption made
 //   dir       the source file
-// and throws ImportError, whose message names the file and the 1-based line, for malformed input.
+// and throws ImportError, whose message names the file and the 1-based line (text) or the place
+// (binary: byte offset, record), for malformed input.
 #pragma once
 
 #include <stend/recording.hpp>
@@ -32,12 +33,16 @@ class ImportError : public std::runtime_error {
  public:
   // line = 0 when the problem is not tied to a line.
   ImportError(const std::filesystem::path& file, std::size_t line, const std::string& message);
+  // A binary file: `where` names the place ("byte 1234", "record 17 (message)").
+  ImportError(const std::filesystem::path& file, const std::string& where, const std::string& message);
   const std::filesystem::path& file() const { return file_; }
   std::size_t line() const { return line_; }
+  const std::string& where() const { return where_; }  // "" for the line form
 
  private:
   std::filesystem::path file_;
-  std::size_t line_;
+  std::size_t line_ = 0;
+  std::string where_;
 };
 
 // ---------------------------------------------------------------------------------------------
