@@ -11,10 +11,12 @@
 #include <rosbag/view.h>
 #include <ros/serialization.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace stend::io {
@@ -139,6 +141,52 @@ BagContent read_messages(const fs::path& file, const rosbag::Bag& bag, const Ros
   return c;
 }
 
+// The bag header record's index_pos (where librosbag reads the connection and chunk index
+// from), or 0 when the header cannot be read. Record: uint32 header length, fields
+// (uint32 length, "name=value"), uint32 data length, data.
+std::uint64_t index_position(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  in.seekg(sizeof kMagic - 1);
+  auto u32 = [&in] {
+    std::uint8_t b[4] = {};
+    in.read(reinterpret_cast<char*>(b), 4);
+    return static_cast<std::uint32_t>(b[0] | b[1] << 8 | b[2] << 16 | static_cast<std::uint32_t>(b[3]) << 24);
+  };
+  const std::uint32_t header_len = u32();
+  if (!in || header_len > 4096) return 0;
+  std::string header(header_len, '\0');
+  in.read(header.data(), header_len);
+  if (!in) return 0;
+  constexpr std::string_view kField = "index_pos=";
+  for (std::size_t pos = 0; pos + 4 <= header.size();) {
+    std::uint32_t n = 0;
+    std::memcpy(&n, header.data() + pos, 4);  // little endian, as the host
+    const std::string_view field(header.data() + pos + 4, std::min<std::size_t>(n, header.size() - pos - 4));
+    if (field.substr(0, kField.size()) == kField && field.size() == kField.size() + 8) {
+      std::uint64_t v = 0;
+      std::memcpy(&v, field.data() + kField.size(), 8);
+      return v;
+    }
+    pos += 4 + n;
+  }
+  return 0;
+}
+
+// Why librosbag could not open the bag, with the offsets that explain it.
+[[noreturn]] void open_failed(const fs::path& path, const std::exception& e) {
+  std::error_code ec;
+  const auto size = fs::file_size(path, ec);
+  const std::uint64_t index = index_position(path);
+  if (index >= size) {
+    throw ImportError(path, "byte " + std::to_string(index),
+                      "the bag header puts the index there, but the file ends at byte " + std::to_string(size) +
+                          " (truncated, or unindexed: `rosbag reindex` restores an unindexed bag; librosbag: " +
+                          e.what() + ")");
+  }
+  throw ImportError(path, "index at byte " + std::to_string(index) + " (file size " + std::to_string(size) + ")",
+                    std::string("librosbag cannot read the bag header or index: ") + e.what());
+}
+
 }  // namespace
 
 bool looks_like_rosbag1(const fs::path& path) {
@@ -153,15 +201,11 @@ Recording import_rosbag1(const fs::path& path, const RosbagOptions& options) {
   if (!looks_like_rosbag1(path)) {
     throw ImportError(path, "byte 0", "not a ROS 1 bag: expected the magic line '#ROSBAG V2.0'");
   }
-  std::error_code ec;
-  const auto size = fs::file_size(path, ec);
   rosbag::Bag bag;
   try {
     bag.open(path.string(), rosbag::bagmode::Read);
   } catch (const std::exception& e) {
-    throw ImportError(path, "bag header and index (file size " + std::to_string(size) + " bytes)",
-                      std::string("librosbag cannot open it: ") + e.what() +
-                          " (a truncated or unindexed bag; `rosbag reindex` restores an unindexed one)");
+    open_failed(path, e);
   }
   try {
     const std::vector<TopicInfo> topics = bag_topics(bag);
@@ -171,8 +215,7 @@ Recording import_rosbag1(const fs::path& path, const RosbagOptions& options) {
   } catch (const ImportError&) {
     throw;
   } catch (const std::exception& e) {
-    throw ImportError(path, "chunks (file size " + std::to_string(size) + " bytes)",
-                      std::string("librosbag cannot read a message: ") + e.what());
+    throw ImportError(path, "chunks", std::string("librosbag cannot read a message: ") + e.what());
   }
 }
 

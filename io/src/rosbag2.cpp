@@ -19,6 +19,8 @@
 #include <zstd.h>
 
 #include <algorithm>
+#include <cstdio>
+#include <iterator>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
@@ -40,6 +42,17 @@ constexpr std::uint8_t kMcapMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n
 constexpr char kSqliteMagic[16] = "SQLite format 3";  // with its terminating NUL: 16 bytes
 
 std::string byte_at(std::uint64_t offset) { return "byte " + std::to_string(offset); }
+
+// "Message record (opcode 0x05)".
+std::string mcap_record_name(std::uint8_t op) {
+  static const char* const names[] = {"?",           "Header",          "Footer",     "Schema",        "Channel",
+                                      "Message",     "Chunk",           "MessageIndex", "ChunkIndex",  "Attachment",
+                                      "AttachmentIndex", "Statistics",  "Metadata",   "MetadataIndex", "SummaryOffset",
+                                      "DataEnd"};
+  char code[8];
+  std::snprintf(code, sizeof code, "0x%02x", op);
+  return std::string(op < std::size(names) ? names[op] : "unknown") + " record (opcode " + code + ")";
+}
 
 Bytes read_prefix(const fs::path& file, std::size_t n) {
   std::ifstream in(file, std::ios::binary);
@@ -221,7 +234,7 @@ class McapParser {
       const std::uint64_t len = le(data, pos + 1, 8);
       if (len > end - pos - 9) {
         throw ImportError(file_, where,
-                          "record opcode " + std::to_string(op) + " declares " + std::to_string(len) +
+                          mcap_record_name(op) + " declares " + std::to_string(len) +
                               " bytes, only " + std::to_string(end - pos - 9) + " follow (truncated file?)");
       }
       const std::uint64_t body = pos + 9;
@@ -395,7 +408,8 @@ struct Stmt {
 
 void prepare(const fs::path& file, Db& db, Stmt& st, const char* sql) {
   if (sqlite3_prepare_v2(db.db, sql, -1, &st.s, nullptr) != SQLITE_OK) {
-    throw ImportError(file, "SQLite", std::string("not a rosbag2 database (") + sqlite3_errmsg(db.db) + "): expected tables topics and messages");
+    throw ImportError(file, "SQLite", std::string("cannot read the rosbag2 tables topics and messages: ") +
+                                          sqlite3_errmsg(db.db) + " (truncated or not a rosbag2 database?)");
   }
 }
 
@@ -440,9 +454,13 @@ void read_db3(const fs::path& file, RawBag& bag) {
   bag.notes.push_back("SQLite3 storage " + file.filename().string());
 }
 
-bool is_rosbag2_db3(const fs::path& file) {
+bool is_sqlite(const fs::path& file) {
   const Bytes head = read_prefix(file, sizeof kSqliteMagic);
-  if (head.size() != sizeof kSqliteMagic || std::memcmp(head.data(), kSqliteMagic, sizeof kSqliteMagic) != 0) return false;
+  return head.size() == sizeof kSqliteMagic && std::memcmp(head.data(), kSqliteMagic, sizeof kSqliteMagic) == 0;
+}
+
+bool is_rosbag2_db3(const fs::path& file) {
+  if (!is_sqlite(file)) return false;
   Db db;
   if (sqlite3_open_v2(file.c_str(), &db.db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) return false;
   Stmt st;
@@ -496,8 +514,8 @@ RawBag read_storage(const fs::path& path) {
   for (const fs::path& f : files) {
     if (is_mcap(f)) {
       read_mcap(f, bag);
-    } else if (is_rosbag2_db3(f)) {
-      read_db3(f, bag);
+    } else if (is_sqlite(f)) {
+      read_db3(f, bag);  // says why when it is not a readable rosbag2 database
     } else {
       throw ImportError(f, "byte 0", "neither MCAP (magic \\x89MCAP0\\r\\n) nor a rosbag2 SQLite3 database");
     }

@@ -211,6 +211,13 @@ TEST(Rosbag1, TopicChoiceZeroStampsAndBadFiles) {
   const fs::path whole = dir / "whole.bag";
   write_ros1_bag(whole, {"/imu"}, 300, false, rosbag::compression::BZ2);
   expect_truncations_refused(whole, dir.path(), 40, [](const fs::path& f) { stend::io::import_rosbag1(f); });
+  const fs::path cut = dir / "cut.bag";
+  truncate_copy(whole, cut, fs::file_size(whole) / 2);
+  msg = import_error([&] { stend::io::import_rosbag1(cut); });
+  EXPECT_NE(msg.find("the bag header puts the index there, but the file ends at byte " +
+                     std::to_string(fs::file_size(whole) / 2)),
+            std::string::npos)
+      << msg;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -334,8 +341,18 @@ TEST_F(Rosbag2, SqliteBagFolderAndFile) {
   EXPECT_FALSE(stend::io::looks_like_rosbag2(other));
   RosbagOptions odom;
   odom.topic = "/odom";
-  const std::string msg = import_error([&] { stend::io::import_rosbag2(folder, odom); });
+  std::string msg = import_error([&] { stend::io::import_rosbag2(folder, odom); });
   EXPECT_NE(msg.find("type nav_msgs/msg/Odometry, expected sensor_msgs/msg/Imu"), std::string::npos) << msg;
+  // A message cut short inside its CDR payload: the row and the bytes missing.
+  const fs::path short_db = bag("short.db3");
+  fs::copy_file(db, short_db, fs::copy_options::overwrite_existing);
+  ASSERT_EQ(stend::testing::run_command("python3 -c \"import sqlite3; c = sqlite3.connect('" + short_db.string() +
+                                        "'); c.execute('UPDATE messages SET data = substr(data, 1, 40) WHERE id = 5'); "
+                                        "c.commit()\"").code, 0);
+  msg = import_error([&] { stend::io::import_rosbag2(short_db); });
+  EXPECT_NE(msg.find(short_db.string() + ": messages row id 5: topic /imu/data: ends at byte 40 of the payload"),
+            std::string::npos)
+      << msg;
 }
 
 TEST_F(Rosbag2, TopicChoiceAndZeroStamps) {
