@@ -6,6 +6,8 @@ packages=(
   libeigen3-dev libceres-dev libyaml-cpp-dev nlohmann-json3-dev libfmt-dev libspdlog-dev
   libcli11-dev libmodbus-dev libhidapi-dev libmatio-dev libhdf5-dev libsqlite3-dev libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  librosbag-storage-dev libzstd-dev liblz4-dev  # io: ROS 1 bags; MCAP chunk compression
+  librosbag-dev lz4  # io tests: ROS 1 bags written with rosbag::Bag; lz4 MCAP chunks (npm packages: install-node-test-deps.sh)
   zlib1g-dev chromium  # reporting: PNG check of report screenshots; headless-browser test of the reports
 )
 missing=()
@@ -14,6 +16,7 @@ for p in "${packages[@]}"; do
 done
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#packages[@]} packages present"
+  "$(dirname "$0")/install-node-test-deps.sh"
   exit 0
 fi
 echo "install-deps: installing ${missing[*]}"
@@ -22,3 +25,4 @@ SUDO=""
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+"$(dirname "$0")/install-node-test-deps.sh"

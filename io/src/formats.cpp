@@ -1,6 +1,7 @@
 // The format registry. See stend/io/formats.hpp.
 #include <stend/io/formats.hpp>
 #include <stend/io/logs.hpp>
+#include <stend/io/rosbag.hpp>
 
 #include <stend/io/importers.hpp>
 #include <stend/physics/units.hpp>
@@ -180,6 +181,14 @@ bool looks_like_static_table(const fs::path& p) {
                    h.find("a_z_mps2") != std::string::npos);
 }
 
+RosbagOptions rosbag_options(const ImportOptions& o) {
+  RosbagOptions r;
+  r.topic = o.topic;
+  r.temperature_topic = o.temperature_topic;
+  r.gravity_mps2 = o.gravity_mps2;
+  return r;
+}
+
 const std::vector<Format>& formats() {
   static const std::vector<Format> table = {
       {"run", "a Stend run folder (run.json, imu.csv, ...)", looks_like_run, open_run},
@@ -191,11 +200,15 @@ const std::vector<Format>& formats() {
        looks_like_static_table, open_table},
       {"imutk", "IMU-TK text 't x y z' (ACC [GYRO]; any extension, .mat included)", looks_like_imutk, open_imutk, 2},
       {"ulog", "PX4 ULog: sensor_accel + sensor_gyro (with temperature), else sensor_combined", looks_like_ulog,
-       [](const Inputs& in, const ImportOptions&) { return import_ulog(in[0]); }},
+       [](const Inputs& in, const ImportOptions& o) { return import_ulog(in[0], {.instance = o.instance}); }},
       {"dataflash", "ArduPilot DataFlash .BIN: IMU records (with temperature)", looks_like_dataflash,
-       [](const Inputs& in, const ImportOptions&) { return import_dataflash(in[0]); }},
+       [](const Inputs& in, const ImportOptions& o) { return import_dataflash(in[0], {.instance = o.instance}); }},
       {"euroc", "EuRoC / ASL: mav0/imu0/data.csv (or the folder holding mav0/)", looks_like_euroc,
        [](const Inputs& in, const ImportOptions&) { return import_euroc(in[0]); }},
+      {"rosbag1", "ROS 1 bag v2.0: sensor_msgs/Imu (--topic)", looks_like_rosbag1,
+       [](const Inputs& in, const ImportOptions& o) { return import_rosbag1(in[0], rosbag_options(o)); }},
+      {"rosbag2", "ROS 2 bag (SQLite3 .db3 or MCAP, file or folder): sensor_msgs/msg/Imu (--topic)", looks_like_rosbag2,
+       [](const Inputs& in, const ImportOptions& o) { return import_rosbag2(in[0], rosbag_options(o)); }},
       {"csv", "generic delimited text with mapped columns (--accel/--mapping ...)", nullptr, open_csv},
   };
   return table;

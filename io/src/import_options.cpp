@@ -157,6 +157,16 @@ const std::vector<KeyDef>& key_table() {
          o.gravity_mps2 = number(k, v);
          if (o.gravity_mps2 != 0.0 && (o.gravity_mps2 < 9.7 || o.gravity_mps2 > 9.9)) bad(k, v, "a gravity in 9.7 … 9.9 m/s^2 (or 0)");
        }},
+      {{"topic", "ROS bags: the sensor_msgs Imu topic (absent: the bag's only Imu topic)"},
+       [](ImportOptions& o, const std::string&, const std::string& v) { o.topic = v; }},
+      {{"temperature_topic", "ROS bags: a sensor_msgs Temperature topic to take the temperature from"},
+       [](ImportOptions& o, const std::string&, const std::string& v) { o.temperature_topic = v; }},
+      {{"instance", "ULog / DataFlash: the IMU instance (absent: the instance with the most samples)"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) {
+         const double n = number(k, v);
+         if (n < 0 || n != std::floor(n) || n > 255) bad(k, v, "an instance number 0 … 255");
+         o.instance = static_cast<int>(n);
+       }},
   };
   return table;
 }

@@ -46,7 +46,11 @@ ImportError::ImportError(const fs::path& file, std::size_t line, const std::stri
 ImportError::ImportError(const fs::path& file, ByteOffset offset, const std::string& message)
     : std::runtime_error(file.string() + ": byte " + std::to_string(offset.bytes) + ": " + message),
       file_(file),
-      offset_(offset.bytes) {}
+      offset_(offset.bytes),
+      where_("byte " + std::to_string(offset.bytes)) {}
+
+ImportError::ImportError(const fs::path& file, const std::string& where, const std::string& message)
+    : std::runtime_error(file.string() + ": " + where + ": " + message), file_(file), where_(where) {}
 
 namespace {
 

@@ -22,6 +22,9 @@
 //   temperature_scale: 1
 //   temperature_offset_c: 0
 //   gravity_mps2: 0         local gravity, 0 = unknown (standard gravity where one is needed)
+//   topic: /imu/data        ROS bags: the Imu topic (absent: the bag's only one)
+//   temperature_topic: ""   ROS bags: a Temperature topic
+//   instance: 0             ULog / DataFlash: the IMU instance (absent: the one with most samples)
 //
 // The LSB and offset keys apply to every format that holds counts (csv, imutk, imucal,
 // mpu6050_multipos): they replace the format's nominal LSB.
@@ -59,6 +62,9 @@ struct ImportOptions {
   double temperature_scale = 1.0;
   double temperature_offset_c = 0.0;
   double gravity_mps2 = 0.0;
+  std::string topic;              // ROS bags
+  std::string temperature_topic;  // ROS bags
+  int instance = -1;              // ULog / DataFlash; −1 = the instance with the most samples
   // Every key set, as "key: value" in the order given (the import's provenance states them).
   std::vector<std::string> stated;
 

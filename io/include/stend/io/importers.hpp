@@ -14,7 +14,7 @@
 //   events    one "info" event (source "import") stating the file and every assumption made
 //   dir       the source file
 // and throws ImportError, whose message names the file and the 1-based line (text files) or the
-// byte offset (binary files), for malformed input.
+// place (binary files: the byte offset, or a record), for malformed input.
 #pragma once
 
 #include <stend/recording.hpp>
@@ -43,14 +43,18 @@ class ImportError : public std::runtime_error {
   ImportError(const std::filesystem::path& file, std::size_t line, const std::string& message);
   // A binary file: the message reads "<file>: byte <offset>: <message>".
   ImportError(const std::filesystem::path& file, ByteOffset offset, const std::string& message);
+  // A binary file: `where` names the place ("record 17 (message)", "byte 1234 (chunk)").
+  ImportError(const std::filesystem::path& file, const std::string& where, const std::string& message);
   const std::filesystem::path& file() const { return file_; }
   std::size_t line() const { return line_; }
-  std::optional<std::uint64_t> offset() const { return offset_; }
+  std::optional<std::uint64_t> offset() const { return offset_; }  // the ByteOffset form
+  const std::string& where() const { return where_; }               // the binary forms
 
  private:
   std::filesystem::path file_;
   std::size_t line_ = 0;
   std::optional<std::uint64_t> offset_;
+  std::string where_;
 };
 
 // The truth columns importers write where the dataset knows its stimulus: specific force [m/s²]

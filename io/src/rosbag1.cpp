@@ -1,0 +1,222 @@
+// ROS 1 bags (format v2.0) through Debian's librosbag storage library (rosbag::Bag, rosbag::View):
+// it reads the records, connections, chunks (bz2 / lz4) and the index; this file turns the raw
+// sensor_msgs/Imu and sensor_msgs/Temperature messages into a Recording. The messages are
+// decoded from their ROS 1 serialization with ros::serialization::IStream (the generated
+// sensor_msgs C++ headers do not compile as C++20: their allocator rebind was removed).
+#include <stend/io/rosbag.hpp>
+
+#include "rosbag_common.hpp"
+
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <ros/serialization.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace stend::io {
+
+namespace fs = std::filesystem;
+using namespace rosbag_detail;
+
+namespace {
+
+constexpr char kMagic[] = "#ROSBAG V2.0\n";
+// The message definitions' MD5 sums (sensor_msgs 1.13): a connection of that type name with
+// another sum carries another layout.
+constexpr char kImuMd5[] = "6a62c6daae103f4ff57a132d6f95cec2";
+constexpr char kTemperatureMd5[] = "ff71b307acdbe7c871a5a6d7ed359100";
+
+using Bytes = std::vector<std::uint8_t>;
+
+Bytes serialized(const rosbag::MessageInstance& m) {
+  Bytes buf(m.size());
+  ros::serialization::OStream out(buf.data(), static_cast<std::uint32_t>(buf.size()));
+  m.write(out);
+  return buf;
+}
+
+std::int64_t stamp_ns(std::uint32_t sec, std::uint32_t nsec) {
+  return static_cast<std::int64_t>(sec) * 1000000000 + static_cast<std::int64_t>(nsec);
+}
+
+// std_msgs/Header: seq, stamp (sec, nsec), frame_id.
+void read_header(ros::serialization::IStream& in, std::int64_t& stamp, std::string& frame_id) {
+  std::uint32_t seq = 0, sec = 0, nsec = 0;
+  in.next(seq);
+  in.next(sec);
+  in.next(nsec);
+  in.next(frame_id);
+  stamp = stamp_ns(sec, nsec);
+}
+
+Eigen::Vector3d read_vector3(ros::serialization::IStream& in) {
+  Eigen::Vector3d v;
+  in.next(v.x());
+  in.next(v.y());
+  in.next(v.z());
+  return v;
+}
+
+void skip_doubles(ros::serialization::IStream& in, int n) {
+  double ignored = 0.0;
+  for (int i = 0; i < n; ++i) in.next(ignored);
+}
+
+// sensor_msgs/Imu: header, orientation (4), its covariance (9), angular_velocity (3), covariance
+// (9), linear_acceleration (3), covariance (9).
+ImuMessage decode_imu(Bytes buf, std::int64_t record_ns) {
+  ros::serialization::IStream in(buf.data(), static_cast<std::uint32_t>(buf.size()));
+  ImuMessage m;
+  m.record_ns = record_ns;
+  read_header(in, m.stamp_ns, m.frame_id);
+  skip_doubles(in, 4 + 9);
+  m.gyro_radps = read_vector3(in);
+  skip_doubles(in, 9);
+  m.accel_mps2 = read_vector3(in);
+  skip_doubles(in, 9);
+  return m;
+}
+
+// sensor_msgs/Temperature: header, temperature [°C], variance.
+TemperatureMessage decode_temperature(Bytes buf, std::int64_t record_ns) {
+  ros::serialization::IStream in(buf.data(), static_cast<std::uint32_t>(buf.size()));
+  TemperatureMessage m;
+  m.record_ns = record_ns;
+  std::string frame_id;
+  read_header(in, m.stamp_ns, frame_id);
+  in.next(m.celsius);
+  return m;
+}
+
+std::vector<TopicInfo> bag_topics(const rosbag::Bag& bag) {
+  std::vector<TopicInfo> topics;
+  rosbag::View all(bag);
+  for (const rosbag::ConnectionInfo* c : all.getConnections()) {
+    bool seen = false;
+    for (const TopicInfo& t : topics) seen = seen || t.name == c->topic;
+    if (!seen) topics.push_back({c->topic, c->datatype});
+  }
+  return topics;
+}
+
+void check_md5(const fs::path& file, const rosbag::MessageInstance& m, const char* md5) {
+  if (m.getMD5Sum() != md5) {
+    throw ImportError(file, "topic " + m.getTopic(),
+                      m.getDataType() + " with definition MD5 " + m.getMD5Sum() + ", expected " + md5 +
+                          " (sensor_msgs as released with ROS 1)");
+  }
+}
+
+BagContent read_messages(const fs::path& file, const rosbag::Bag& bag, const RosbagOptions& options,
+                         const std::string& imu_topic) {
+  BagContent c;
+  c.format = "ROS 1 bag v2.0";
+  c.imu_topic = imu_topic;
+  std::vector<std::string> wanted{imu_topic};
+  if (!options.temperature_topic.empty()) wanted.push_back(options.temperature_topic);
+  rosbag::View view(bag, rosbag::TopicQuery(wanted));
+  std::size_t index = 0;
+  for (const rosbag::MessageInstance& m : view) {
+    const std::string where = "message " + std::to_string(index + 1) + " of the view (topic " + m.getTopic() + ")";
+    try {
+      const std::int64_t record_ns = static_cast<std::int64_t>(m.getTime().toNSec());
+      if (m.getTopic() == imu_topic) {
+        check_md5(file, m, kImuMd5);
+        c.imu.push_back(decode_imu(serialized(m), record_ns));
+      } else {
+        check_md5(file, m, kTemperatureMd5);
+        c.temperature.push_back(decode_temperature(serialized(m), record_ns));
+      }
+    } catch (const ros::serialization::StreamOverrunException& e) {
+      throw ImportError(file, where, std::string("message shorter than its type: ") + e.what());
+    }
+    ++index;
+  }
+  return c;
+}
+
+// The bag header record's index_pos (where librosbag reads the connection and chunk index
+// from), or 0 when the header cannot be read. Record: uint32 header length, fields
+// (uint32 length, "name=value"), uint32 data length, data.
+std::uint64_t index_position(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  in.seekg(sizeof kMagic - 1);
+  auto u32 = [&in] {
+    std::uint8_t b[4] = {};
+    in.read(reinterpret_cast<char*>(b), 4);
+    return static_cast<std::uint32_t>(b[0] | b[1] << 8 | b[2] << 16 | static_cast<std::uint32_t>(b[3]) << 24);
+  };
+  const std::uint32_t header_len = u32();
+  if (!in || header_len > 4096) return 0;
+  std::string header(header_len, '\0');
+  in.read(header.data(), header_len);
+  if (!in) return 0;
+  constexpr std::string_view kField = "index_pos=";
+  for (std::size_t pos = 0; pos + 4 <= header.size();) {
+    std::uint32_t n = 0;
+    std::memcpy(&n, header.data() + pos, 4);  // little endian, as the host
+    const std::string_view field(header.data() + pos + 4, std::min<std::size_t>(n, header.size() - pos - 4));
+    if (field.substr(0, kField.size()) == kField && field.size() == kField.size() + 8) {
+      std::uint64_t v = 0;
+      std::memcpy(&v, field.data() + kField.size(), 8);
+      return v;
+    }
+    pos += 4 + n;
+  }
+  return 0;
+}
+
+// Why librosbag could not open the bag, with the offsets that explain it.
+[[noreturn]] void open_failed(const fs::path& path, const std::exception& e) {
+  std::error_code ec;
+  const auto size = fs::file_size(path, ec);
+  const std::uint64_t index = index_position(path);
+  if (index >= size) {
+    throw ImportError(path, "byte " + std::to_string(index),
+                      "the bag header puts the index there, but the file ends at byte " + std::to_string(size) +
+                          " (truncated, or unindexed: `rosbag reindex` restores an unindexed bag; librosbag: " +
+                          e.what() + ")");
+  }
+  throw ImportError(path, "index at byte " + std::to_string(index) + " (file size " + std::to_string(size) + ")",
+                    std::string("librosbag cannot read the bag header or index: ") + e.what());
+}
+
+}  // namespace
+
+bool looks_like_rosbag1(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return false;
+  std::ifstream in(path, std::ios::binary);
+  char head[sizeof kMagic - 1] = {};
+  return in.read(head, sizeof head) && std::memcmp(head, kMagic, sizeof head) == 0;
+}
+
+Recording import_rosbag1(const fs::path& path, const RosbagOptions& options) {
+  if (!looks_like_rosbag1(path)) {
+    throw ImportError(path, "byte 0", "not a ROS 1 bag: expected the magic line '#ROSBAG V2.0'");
+  }
+  rosbag::Bag bag;
+  try {
+    bag.open(path.string(), rosbag::bagmode::Read);
+  } catch (const std::exception& e) {
+    open_failed(path, e);
+  }
+  try {
+    const std::vector<TopicInfo> topics = bag_topics(bag);
+    const std::string topic = choose_imu_topic(path, topics, options, kRos1Types);
+    check_temperature_topic(path, topics, options, kRos1Types);
+    return make_recording(path, read_messages(path, bag, options, topic), options);
+  } catch (const ImportError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw ImportError(path, "chunks", std::string("librosbag cannot read a message: ") + e.what());
+  }
+}
+
+}  // namespace stend::io

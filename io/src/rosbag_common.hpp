@@ -1,0 +1,65 @@
+// What the ROS 1 and rosbag2 readers share: the decoded messages they hand over, the topic
+// choice, and the one step that turns the messages into a Recording.
+#pragma once
+
+#include <stend/io/rosbag.hpp>
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace stend::io::rosbag_detail {
+
+struct ImuMessage {
+  std::int64_t stamp_ns = 0;   // header.stamp
+  std::int64_t record_ns = 0;  // when the recorder received it (bag time)
+  std::string frame_id;
+  Eigen::Vector3d accel_mps2 = Eigen::Vector3d::Zero();  // linear_acceleration
+  Eigen::Vector3d gyro_radps = Eigen::Vector3d::Zero();  // angular_velocity
+};
+
+struct TemperatureMessage {
+  std::int64_t stamp_ns = 0;
+  std::int64_t record_ns = 0;
+  double celsius = 0.0;
+};
+
+struct TopicInfo {
+  std::string name;
+  std::string type;  // "sensor_msgs/Imu" (ROS 1), "sensor_msgs/msg/Imu" (ROS 2)
+};
+
+// The type names of one ROS generation.
+struct MessageTypes {
+  std::string_view imu;
+  std::string_view temperature;
+};
+inline constexpr MessageTypes kRos1Types{"sensor_msgs/Imu", "sensor_msgs/Temperature"};
+inline constexpr MessageTypes kRos2Types{"sensor_msgs/msg/Imu", "sensor_msgs/msg/Temperature"};
+
+// What a reader hands over, in the bag's order.
+struct BagContent {
+  std::string format;  // "ROS 1 bag v2.0", "rosbag2 (sqlite3)", "rosbag2 (mcap)"
+  std::string imu_topic;
+  std::vector<ImuMessage> imu;
+  std::vector<TemperatureMessage> temperature;
+  std::vector<std::string> notes;  // what the reader read (files, compression), for the info event
+};
+
+// The Imu topic the options name, or the bag's only Imu topic. Throws ImportError naming the
+// bag's topics when the named topic is absent or not Imu, or when there are none or several.
+std::string choose_imu_topic(const std::filesystem::path& file, const std::vector<TopicInfo>& topics,
+                             const RosbagOptions& options, const MessageTypes& types);
+// Throws ImportError when options.temperature_topic is set but absent or not Temperature.
+void check_temperature_topic(const std::filesystem::path& file, const std::vector<TopicInfo>& topics,
+                             const RosbagOptions& options, const MessageTypes& types);
+
+// The recording of rosbag.hpp's header comment. Throws ImportError when there is no message.
+Recording make_recording(const std::filesystem::path& file, const BagContent& content,
+                         const RosbagOptions& options);
+
+}  // namespace stend::io::rosbag_detail
