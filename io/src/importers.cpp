@@ -1,9 +1,9 @@
 #include <stend/io/importers.hpp>
-
-#include "importer_support.hpp"
 #include <stend/physics/units.hpp>
 #include <stend/version.hpp>
 #include <stend/yaml_util.hpp>
+
+#include "importer_support.hpp"
 
 #include <algorithm>
 #include <charconv>
