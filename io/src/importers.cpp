@@ -1,7 +1,5 @@
 #include <stend/io/importers.hpp>
 #include <stend/io/timestamps.hpp>
-
-#include "import_common.hpp"
 #include <stend/physics/gravity.hpp>
 #include <stend/physics/table_chain.hpp>
 #include <stend/physics/units.hpp>
@@ -23,6 +21,8 @@
 #include <system_error>
 #include <utility>
 #include <vector>
+
+#include "import_common.hpp"
 
 // MATLAB files go through matio, when stend_core is built with it: core/CMakeLists.txt links
 // PkgConfig::MATIO and defines STEND_HAVE_MATIO. Without it the .mat functions say so.

@@ -186,3 +186,27 @@ TEST(Formats, StaticTableHoldsEachMeanWithItsTruth) {
   EXPECT_NEAR(rec.truth.back()[static_cast<std::size_t>(fx)], -9.8, 1e-12);  // f = g·[−sin δ, 0, cos δ]
   EXPECT_NEAR(rec.truth.back()[static_cast<std::size_t>(fz)], 0.0, 1e-12);
 }
+
+// The LSB and offset keys replace a counts format's nominal LSB (here imucal's 2048 LSB/g); the
+// counts are kept as logged, and the truth built from the annotations is unchanged.
+TEST(Formats, LsbAndOffsetOverrideACountsFormat) {
+  TempDir dir("imucal");
+  std::string text = "part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n";
+  for (int i = 0; i < 20; ++i) text += "x_p," + std::to_string(i) + ",4196,100,100,100,100,100\n";
+  write_text(dir / "s.csv", text);
+  const Recording nominal = open_dataset({dir / "s.csv"}, "auto");
+  EXPECT_NEAR(nominal.samples[0].accel_mps2[0], 4196 * physics::kStandardGravity / 2048, 1e-12);
+  ImportOptions o;
+  o.set("accel_lsb", "1/4096 g");
+  o.set("accel_offset", "100");
+  o.set("gyro_lsb", "1/32.8 deg/s");
+  o.set("gyro_offset", "100");
+  const Recording r = open_dataset({dir / "s.csv"}, "imucal", o);
+  EXPECT_EQ(r.samples[0].accel_counts[0], 4196);
+  EXPECT_NEAR(r.samples[0].accel_mps2[0], physics::kStandardGravity, 1e-12);
+  EXPECT_NEAR(r.samples[0].accel_mps2[1], 0.0, 1e-15);
+  EXPECT_NEAR(r.samples[0].gyro_radps[2], 0.0, 1e-15);
+  const int fx = r.truth_column("f_x_mps2");
+  ASSERT_GE(fx, 0);
+  EXPECT_DOUBLE_EQ(r.truth[0][static_cast<std::size_t>(fx)], 9.81);  // imucal's expected_g
+}
