@@ -7,6 +7,7 @@ packages=(
   libcli11-dev libmodbus-dev libhidapi-dev libmatio-dev libhdf5-dev libsqlite3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   zlib1g-dev chromium  # reporting: PNG check of report screenshots; headless-browser test of the reports
+  octave  # reporting: octave-cli loads the MATLAB export in a test (~1 min to install, no recommends)
 )
 missing=()
 for p in "${packages[@]}"; do
