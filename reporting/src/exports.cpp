@@ -112,13 +112,13 @@ std::optional<FittedModel> ceres_model(const RunResults& rr, const std::string& 
   return f;
 }
 
-// "no ceres.json in RUN" or "ceres.json: the fit failed: why" ("" when it is there and ok).
-std::string absent_or_failed(const RunResults& rr, const std::string& file) {
+// The estimator that wrote `file` into the run, nullptr when the run has no such file.
+const EstimatorUse* use_of(const RunResults& rr, const std::string& file) {
   for (const auto& e : rr.estimators)
-    if (e.file == file)
-      return e.status == "ok" ? "" : fmt::format("{}: the fit failed: {}", file, e.message);
-  return fmt::format("no {} in {}", file, rr.dir.string());
+    if (e.file == file) return &e;
+  return nullptr;
 }
+std::string failure_of(const EstimatorUse& e) { return fmt::format("{}: the fit failed: {}", e.file, e.message); }
 
 // The calibration of one instrument by the rule of ExportOptions::from:
 //   ceres      ceres.json (one model for the three axes)
@@ -160,7 +160,7 @@ InstrumentModels models_for(const fs::path& run, const RunResults& rr, const std
   if (ceres && (o.from == "ceres" || full || !im.has_calib())) {
     for (int k = 0; k < 3; ++k) take(*ceres, k, kCeresFile);
     if (!held.empty())
-      res.notes.push_back(fmt::format("{}: held at 0 by the Ceres fit's frame convention (the x axis defines the frame): {}",
+      res.notes.push_back(fmt::format("{}: held at 0 by the Ceres fit's frame convention (its fixed_cross_axis): {}",
                                       instrument, fmt::join(held, ", ")));
   }
   if (im.has_calib()) {
@@ -194,13 +194,16 @@ std::array<InstrumentModels, 2> calibrations(const fs::path& run, const RunResul
   if (ims[0].has_calib() || ims[1].has_calib()) return ims;
   const std::map<std::string, std::string> file = {{"ceres", kCeresFile}, {"batch_lsq", "fit.json"}, {"temp_poly", "temp_poly.json"}};
   if (o.from != "auto") {
-    const std::string why = absent_or_failed(rr, file.at(o.from));
+    const std::string& f = file.at(o.from);
+    const EstimatorUse* e = use_of(rr, f);
     throw std::runtime_error(fmt::format("--from {}: no accelerometer or gyroscope calibration: {}", o.from,
-                                         why.empty() ? file.at(o.from) + " holds none" : why));
+                                         !e                  ? fmt::format("no {} in {}", f, run.string())
+                                         : e->status != "ok" ? failure_of(*e)
+                                                             : f + " holds none"));
   }
-  for (const auto& [name, f] : file)
-    if (const std::string why = absent_or_failed(rr, f); why.find("failed") != std::string::npos)
-      throw std::runtime_error(why + "; no other accelerometer or gyroscope calibration in " + run.string());
+  for (const auto& source : file)
+    if (const EstimatorUse* e = use_of(rr, source.second); e && e->status != "ok")
+      throw std::runtime_error(failure_of(*e) + "; no other accelerometer or gyroscope calibration in " + run.string());
   return ims;
 }
 
@@ -518,9 +521,12 @@ ExportResult export_px4(const fs::path& run, const RunResults& rr, const fs::pat
     const InstrumentModels& im = ims[static_cast<std::size_t>(i)];
     if (im.has_temp()) {
       px4_thermal(body, im, inst, o, res);
-      if (im.has_calib() && im.calib_source[0] != "temp_poly.json")
-        res.notes.push_back(fmt::format("{}: thermal parameters (TC_*) written; the static calibration from {} is not "
-                                        "(PX4 would add its offsets to the thermal ones)", inst, im.calib_source[0]));
+      for (const auto& source : im.calib_source)
+        if (!source.empty() && source != "temp_poly.json") {
+          res.notes.push_back(fmt::format("{}: thermal parameters (TC_*) written; the static calibration from {} is not "
+                                          "(PX4 would add its offsets to the thermal ones)", inst, source));
+          break;
+        }
     } else if (im.has_calib()) {
       px4_static(body, im, inst, o, res);
     } else {
