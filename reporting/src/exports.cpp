@@ -120,13 +120,29 @@ const EstimatorUse* use_of(const RunResults& rr, const std::string& file) {
 }
 std::string failure_of(const EstimatorUse& e) { return fmt::format("{}: the fit failed: {}", e.file, e.message); }
 
+// The instrument's temperature model and its file: temp_poly.json, or another temp_poly*.json in
+// the run folder (a run holds one per instrument, e.g. `stend fit RUN -m GYRO_MODEL --json
+// RUN/temp_poly_gyro.json`); the first in name order whose fit is ok and is of this instrument.
+std::optional<std::pair<json, std::string>> temp_poly_of(const fs::path& run, const std::string& instrument) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(run)) {
+    const std::string n = e.path().filename().string();
+    if (n.rfind("temp_poly", 0) == 0 && e.path().extension() == ".json") names.push_back(n);
+  }
+  std::sort(names.begin(), names.end());
+  for (const auto& n : names)
+    if (auto d = load_json(run / n); d && doc_ok(*d) && jstr(d->value("options", json::object()), "instrument") == instrument)
+      return std::make_pair(std::move(*d), n);
+  return std::nullopt;
+}
+
 // The calibration of one instrument by the rule of ExportOptions::from:
 //   ceres      ceres.json (one model for the three axes)
 //   batch_lsq  fit.json, axis by axis
-//   temp_poly  temp_poly.json at its reference temperature, axis by axis
+//   temp_poly  temp_poly*.json at its reference temperature, axis by axis
 //   auto       Ceres when it estimated this instrument's scale factors (a full 3-axis calibration),
 //              else fit.json then temp_poly.json axis by axis, else a Ceres bias-only result.
-// The temperature models always come from temp_poly.json. What was used goes to res.notes.
+// The temperature models always come from temp_poly*.json. What was used goes to res.notes.
 InstrumentModels models_for(const fs::path& run, const RunResults& rr, const std::string& instrument,
                             const ExportOptions& o, ExportResult& res) {
   InstrumentModels im;
@@ -138,20 +154,20 @@ InstrumentModels models_for(const fs::path& run, const RunResults& rr, const std
     if (auto d = load_json(run / "fit.json"); d && doc_ok(*d) && instrument_of(*d) == instrument && d->contains("parameters"))
       for (int k = 0; k < 3; ++k)
         if (fits_axis(*d, k)) take(detail::fitted_model(*d), k, "fit.json");
-  if (auto tp = load_json(run / "temp_poly.json"); tp && doc_ok(*tp) &&
-                                                  jstr(tp->value("options", json::object()), "instrument") == instrument) {
-    im.reference_c = jnum(*tp, "reference_c");
-    const json vr = tp->value("valid_range_c", json::array());
+  if (const auto tp = temp_poly_of(run, instrument)) {
+    const json& d = tp->first;
+    im.reference_c = jnum(d, "reference_c");
+    const json vr = d.value("valid_range_c", json::array());
     im.tmin = detail::jat(vr, 0);
     im.tmax = detail::jat(vr, 1);
-    for (const auto& ax : tp->value("axes", json::array())) {
+    for (const auto& ax : d.value("axes", json::array())) {
       const std::string a = jstr(ax, "axis");
       const auto pos = std::string(kAxisNames).find(a);
       if (a.size() != 1 || pos == std::string::npos || !ax.value("ok", false) || !ax.contains("fit") || ax["fit"].is_null())
         continue;
       im.temp[pos] = detail::fitted_model(ax["fit"]);
-      im.temp_source[pos] = "temp_poly.json";
-      if (!im.calib[pos] && (o.from == "auto" || o.from == "temp_poly")) take(*im.temp[pos], static_cast<int>(pos), "temp_poly.json");
+      im.temp_source[pos] = tp->second;
+      if (!im.calib[pos] && (o.from == "auto" || o.from == "temp_poly")) take(*im.temp[pos], static_cast<int>(pos), tp->second);
     }
   }
   std::vector<std::string> held;
@@ -522,7 +538,7 @@ ExportResult export_px4(const fs::path& run, const RunResults& rr, const fs::pat
     if (im.has_temp()) {
       px4_thermal(body, im, inst, o, res);
       for (const auto& source : im.calib_source)
-        if (!source.empty() && source != "temp_poly.json") {
+        if (!source.empty() && source.rfind("temp_poly", 0) != 0) {
           res.notes.push_back(fmt::format("{}: thermal parameters (TC_*) written; the static calibration from {} is not "
                                           "(PX4 would add its offsets to the thermal ones)", inst, source));
           break;

@@ -10,7 +10,7 @@
 //           where the run has a temperature model, else the static CAL_ACC0_* / CAL_GYRO0_*
 //   json    the results JSON, schema stend.results/1 (docs/reports.md)
 // The calibration (bias, scale, cross-axis, g-sensitivity) comes from ceres.json, fit.json
-// (batch_lsq) or temp_poly.json by the rule of ExportOptions::from; which was used is in
+// (batch_lsq) or temp_poly*.json by the rule of ExportOptions::from; which was used is in
 // ExportResult::notes. A source that is absent or failed is refused (std::runtime_error naming it).
 // Values the fit could not identify, and what the target format cannot hold, are listed in
 // ExportResult::warnings — never silently.
@@ -28,7 +28,8 @@ struct ExportOptions {
   int px4_device_id = 0;           // TC_A0_ID / CAL_ACC0_ID: the sensor's PX4 device id (0: fill in on the vehicle)
   // Calibration source: "auto" (Ceres when it estimated the instrument's scale factors, else
   // fit.json then temp_poly.json axis by axis, else a Ceres bias-only result) | "ceres" |
-  // "batch_lsq" | "temp_poly". Temperature models always come from temp_poly.json, noise from allan.json.
+  // "batch_lsq" | "temp_poly". Temperature models always come from temp_poly*.json (one per
+  // instrument), noise from allan.json.
   std::string from = "auto";
 };
 
