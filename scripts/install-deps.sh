@@ -9,6 +9,7 @@ packages=(
   librosbag-storage-dev libzstd-dev liblz4-dev  # io: ROS 1 bags; MCAP chunk compression
   librosbag-dev lz4  # io tests: ROS 1 bags written with rosbag::Bag; lz4 MCAP chunks (npm packages: install-node-test-deps.sh)
   zlib1g-dev chromium  # reporting: PNG check of report screenshots; headless-browser test of the reports
+  octave  # reporting: octave-cli loads the MATLAB export in a test (~1 min to install, no recommends)
 )
 missing=()
 for p in "${packages[@]}"; do

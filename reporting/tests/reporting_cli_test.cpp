@@ -295,10 +295,19 @@ TEST_F(Cli, KalibrExportParsesAsKalibrYaml) {
             0)
       << read_text(dir / "kalibr.log");
   const YAML::Node y = YAML::LoadFile(f.string());
+  // Kalibr takes one number per sensor: the worst identified axis of the Allan fit, else (no axis
+  // identified) allan.json's Kalibr block (slope read-off or upper bound).
   const json k = json::parse(read_text(dir / "static/allan.json"))["kalibr"];
-  for (const char* key : {"accelerometer_noise_density", "accelerometer_random_walk", "gyroscope_noise_density",
-                          "gyroscope_random_walk"})
-    EXPECT_DOUBLE_EQ(y[key].as<double>(), k[key].get<double>()) << key;
+  const auto rr = stend::reporting::load_run_results(dir / "static");
+  for (const auto& [key, sym] : std::map<std::string, std::string>{{"accelerometer_noise_density", "N_a"},
+                                                                    {"accelerometer_random_walk", "K_a"},
+                                                                    {"gyroscope_noise_density", "N_g"},
+                                                                    {"gyroscope_random_walk", "K_g"}}) {
+    double worst = -1;
+    for (const char* c : {"x", "y", "z"})
+      if (const auto* p = rr.find("allan", sym + c); p && p->identifiable) worst = std::max(worst, p->value);
+    EXPECT_DOUBLE_EQ(y[key].as<double>(), worst >= 0 ? worst : k[key].get<double>()) << key;
+  }
   EXPECT_EQ(y["rostopic"].as<std::string>(), "/imu/data");
   EXPECT_DOUBLE_EQ(y["update_rate"].as<double>(), 100.0);
   // The simulated white noise: 400 µg/√Hz one-sided = 0.00392 m/s²/√Hz → Kalibr's N = density/√2.
@@ -442,6 +451,47 @@ TEST_F(Cli, Px4ExportIsAParamFileWithTheFittedPolynomial) {
     EXPECT_NEAR(std::stod(params.at("TC_A0_X1_" + std::to_string(k)).first), tc1, 1e-6 * std::abs(tc1) + 1e-12);
     EXPECT_EQ(std::stod(params.at("TC_A0_X2_" + std::to_string(k)).first), 0.0);  // order 1 model
     EXPECT_EQ(std::stod(params.at("TC_A0_X3_" + std::to_string(k)).first), 0.0);
+  }
+}
+
+TEST_F(Cli, Px4ExportHasTcAAndTcGFromOneRun) {
+  // A copy of the sweep with the gyroscope's temperature model beside the accelerometer's (a run
+  // holds one temp_poly*.json per instrument).
+  const fs::path run = dir / "sweep_ag";
+  fs::copy(dir / "sweep", run, fs::copy_options::recursive);
+  std::string model = read_text(kSrc / "configs/vendor_study/temp_poly.yaml");
+  model.replace(model.find("instrument: accelerometer"), 25, "instrument: gyroscope");
+  write_text(dir / "cfg/temp_poly_gyro.yaml", model);
+  const fs::path f = dir / "px4_ag.params";
+  ASSERT_EQ(sh("'" + kStend.string() + "' fit '" + run.string() + "' -m '" + (dir / "cfg/temp_poly_gyro.yaml").string() +
+                   "' --json '" + (run / "temp_poly_gyro.json").string() + "' && '" + kStend.string() + "' export '" +
+                   run.string() + "' --to px4 -o '" + f.string() + "'",
+               dir / "px4_ag.log"),
+            0)
+      << read_text(dir / "px4_ag.log");
+  std::map<std::string, double> params;
+  std::ifstream in(f);
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::vector<std::string> cols;
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, '\t');) cols.push_back(c);
+    ASSERT_EQ(cols.size(), 5u) << line;
+    params[cols[2]] = std::stod(cols[3]);
+  }
+  EXPECT_EQ(params.at("TC_A_ENABLE"), 1);
+  EXPECT_EQ(params.at("TC_G_ENABLE"), 1);
+  for (const auto& [file, prefix] : {std::pair{"temp_poly.json", "TC_A0_"}, {"temp_poly_gyro.json", "TC_G0_"}}) {
+    const json tp = json::parse(read_text(run / file));
+    int checked = 0;
+    for (int k = 0; k < 3; ++k)
+      for (const auto& p : tp["axes"][static_cast<std::size_t>(k)]["fit"]["parameters"])
+        if (p["name"] == std::string("bias_tc1_") + "xyz"[k]) {
+          const double tc1 = p["value"].get<double>();
+          EXPECT_NEAR(params.at(prefix + std::string("X1_") + std::to_string(k)), tc1, 1e-6 * std::abs(tc1) + 1e-15) << file;
+          ++checked;
+        }
+    EXPECT_EQ(checked, 3) << file;
   }
 }
 
