@@ -482,12 +482,12 @@ void add_selected_devices(const BinaryFile& f, const UlogLog& log, UlogChoice& c
   const auto sel = std::find_if(log.subscriptions.begin(), log.subscriptions.end(), [](const auto& s) {
     return s.second.topic == "sensor_selection" && !s.second.records.empty();
   });
-  if (sel == log.subscriptions.end()) {
-    c.temperature_note = "no temperature (sensor_combined has none and there is no sensor_selection)";
+  const Format* fmt = sel == log.subscriptions.end() ? nullptr : &log.formats.at("sensor_selection");
+  if (!fmt || !find_field(*fmt, "accel_device_id") || !find_field(*fmt, "gyro_device_id")) {
+    c.temperature_note = "no temperature (sensor_combined has none, and no sensor_selection names its devices)";
     return;
   }
-  const Format& fmt = log.formats.at("sensor_selection");
-  const RecordView v(f, fmt, sel->second.records.front());
+  const RecordView v(f, *fmt, sel->second.records.front());
   c.acc.device_id = static_cast<std::uint32_t>(v.number("accel_device_id"));
   c.gyr.device_id = static_cast<std::uint32_t>(v.number("gyro_device_id"));
   for (const auto& [inst, n] : instance_counts(log, "sensor_accel")) {
