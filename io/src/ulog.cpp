@@ -226,7 +226,6 @@ void read_subscription(const BinaryFile& f, std::size_t at, std::size_t body, st
   if (!log.formats.count(sub.topic)) {
     f.fail(at, "subscription to '" + sub.topic + "', which no format message defines");
   }
-  if (kImuTopics.count(sub.topic)) resolve_format(f, log.formats, sub.topic, 0);
   log.subscriptions[id] = std::move(sub);
 }
 
@@ -307,6 +306,10 @@ UlogLog read_ulog(const BinaryFile& f) {
       default: break;  // M Q R L C S: not needed
     }
     pos = end;
+  }
+  // Offsets of the formats the import decodes (their last definition, as pyulog keeps it).
+  for (const auto& [id, sub] : log.subscriptions) {
+    if (kImuTopics.count(sub.topic)) resolve_format(f, log.formats, sub.topic, 0);
   }
   return log;
 }
