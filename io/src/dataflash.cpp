@@ -179,24 +179,30 @@ std::size_t required_column(const BinaryFile& f, const DfFormat& fmt, const std:
   return *c;
 }
 
-// Numeric value of column c of the message at `msg`, with the type's own scale (c, e, L...).
+// Numeric value of column c of the message at `msg`, with the type's own scale (c, e, L...). The
+// message is in the file (read_dataflash checked its length) and its FMT adds up to that length.
 double value(const BinaryFile& f, const DfFormat& fmt, std::size_t msg, std::size_t c) {
   const TypeChar& t = *type_char(fmt.format[c]);
-  const std::size_t at = msg + fmt.offsets[c];
-  const std::string what = "column '" + fmt.columns[c] + "' of a '" + fmt.name + "' message";
+  const std::uint8_t* p = f.at(msg + fmt.offsets[c]);
   double v = 0.0;
   switch (t.storage) {
     case Storage::kInt:
-      v = t.size == 1 ? f.get<std::int8_t>(at, what) : t.size == 2 ? f.get<std::int16_t>(at, what)
-          : t.size == 4 ? f.get<std::int32_t>(at, what) : static_cast<double>(f.get<std::int64_t>(at, what));
+      v = t.size == 1   ? load_le<std::int8_t>(p)
+          : t.size == 2 ? load_le<std::int16_t>(p)
+          : t.size == 4 ? load_le<std::int32_t>(p)
+                        : static_cast<double>(load_le<std::int64_t>(p));
       break;
     case Storage::kUInt:
-      v = t.size == 1 ? f.get<std::uint8_t>(at, what) : t.size == 2 ? f.get<std::uint16_t>(at, what)
-          : t.size == 4 ? f.get<std::uint32_t>(at, what) : static_cast<double>(f.get<std::uint64_t>(at, what));
+      v = t.size == 1   ? load_le<std::uint8_t>(p)
+          : t.size == 2 ? load_le<std::uint16_t>(p)
+          : t.size == 4 ? load_le<std::uint32_t>(p)
+                        : static_cast<double>(load_le<std::uint64_t>(p));
       break;
-    case Storage::kFloat: v = t.size == 4 ? static_cast<double>(f.get<float>(at, what)) : f.get<double>(at, what); break;
+    case Storage::kFloat: v = t.size == 4 ? static_cast<double>(load_le<float>(p)) : load_le<double>(p); break;
     case Storage::kText:
-    case Storage::kArray: f.fail(at, what + " is not a number (format char '" + std::string(1, t.c) + "')");
+    case Storage::kArray:
+      f.fail(msg, "column '" + fmt.columns[c] + "' of a '" + fmt.name + "' message is not a number (format char '" +
+                      std::string(1, t.c) + "')");
   }
   return v * t.scale;
 }

@@ -344,18 +344,18 @@ class RecordView {
 
   double number(const std::string& name, std::size_t index = 0) const {
     const Field& fld = field(name, index);
-    const std::size_t at = r_.offset + fld.offset + index * fld.element_size;
+    const std::uint8_t* p = f_.at(r_.offset + fld.offset + index * fld.element_size);  // checked by field()
     switch (fld.basic) {
-      case Basic::kInt8: return f_.get<std::int8_t>(at, what(name));
-      case Basic::kUInt8: case Basic::kBool: case Basic::kChar: return f_.get<std::uint8_t>(at, what(name));
-      case Basic::kInt16: return f_.get<std::int16_t>(at, what(name));
-      case Basic::kUInt16: return f_.get<std::uint16_t>(at, what(name));
-      case Basic::kInt32: return f_.get<std::int32_t>(at, what(name));
-      case Basic::kUInt32: return f_.get<std::uint32_t>(at, what(name));
-      case Basic::kInt64: return static_cast<double>(f_.get<std::int64_t>(at, what(name)));
-      case Basic::kUInt64: return static_cast<double>(f_.get<std::uint64_t>(at, what(name)));
-      case Basic::kFloat: return f_.get<float>(at, what(name));
-      case Basic::kDouble: return f_.get<double>(at, what(name));
+      case Basic::kInt8: return load_le<std::int8_t>(p);
+      case Basic::kUInt8: case Basic::kBool: case Basic::kChar: return load_le<std::uint8_t>(p);
+      case Basic::kInt16: return load_le<std::int16_t>(p);
+      case Basic::kUInt16: return load_le<std::uint16_t>(p);
+      case Basic::kInt32: return load_le<std::int32_t>(p);
+      case Basic::kUInt32: return load_le<std::uint32_t>(p);
+      case Basic::kInt64: return static_cast<double>(load_le<std::int64_t>(p));
+      case Basic::kUInt64: return static_cast<double>(load_le<std::uint64_t>(p));
+      case Basic::kFloat: return static_cast<double>(load_le<float>(p));
+      case Basic::kDouble: return load_le<double>(p);
       case Basic::kNested: break;
     }
     f_.fail(r_.offset, "field '" + name + "' of '" + fmt_.name + "' is a nested type, expected a number");
@@ -366,7 +366,7 @@ class RecordView {
     if (fld.basic != Basic::kUInt64) {
       f_.fail(fmt_.defined_at, "field '" + name + "' of '" + fmt_.name + "' is " + fld.type + ", expected uint64_t [us]");
     }
-    return f_.get<std::uint64_t>(r_.offset + fld.offset, what(name));
+    return load_le<std::uint64_t>(f_.at(r_.offset + fld.offset));  // checked by field()
   }
 
  private:
@@ -383,7 +383,6 @@ class RecordView {
     }
     return *fld;
   }
-  std::string what(const std::string& name) const { return "field '" + name + "' of a '" + fmt_.name + "' message"; }
 
   const BinaryFile& f_;
   const Format& fmt_;
