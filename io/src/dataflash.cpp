@@ -6,6 +6,7 @@
 #include "import_common.hpp"
 
 #include <algorithm>
+#include <deque>
 #include <map>
 #include <optional>
 #include <utility>
@@ -95,12 +96,14 @@ bool wanted(const std::string& name) {
 }
 
 struct DfRecord {
+  const DfFormat* fmt;
   std::size_t offset;       // of the message header
   std::size_t lost_before;  // resyncs before it
 };
 
 struct DfLog {
-  std::map<std::uint8_t, DfFormat> formats;         // by type
+  std::deque<DfFormat> formats;                     // every FMT in file order (stable addresses)
+  std::map<std::uint8_t, const DfFormat*> by_type;  // the latest FMT of each type
   std::map<std::string, std::vector<DfRecord>> records;  // of the wanted messages, by name
   std::map<std::string, std::size_t> counts;        // every message, by name
   std::size_t resyncs = 0, skipped_bytes = 0;
@@ -128,14 +131,14 @@ DfLog read_dataflash(const BinaryFile& f) {
     const std::uint8_t type = *f.at(pos + 2);
     const bool header_ok = *f.at(pos) == kHead1 && *f.at(pos + 1) == kHead2;
     if (header_ok && type == kFmtType) {
-      DfFormat fmt = read_fmt(f, pos);
+      log.formats.push_back(read_fmt(f, pos));
       ++log.counts["FMT"];
-      log.formats[fmt.type] = std::move(fmt);
+      log.by_type[log.formats.back().type] = &log.formats.back();
       pos += kFmtLength;
       continue;
     }
-    const auto it = header_ok ? log.formats.find(type) : log.formats.end();
-    if (it == log.formats.end()) {
+    const auto it = header_ok ? log.by_type.find(type) : log.by_type.end();
+    if (it == log.by_type.end()) {
       const std::size_t next = next_header(f, pos + 1);
       if (next == f.size()) {
         f.fail(pos, header_ok ? "message type " + std::to_string(type) + " has no FMT, and no message header follows"
@@ -146,24 +149,17 @@ DfLog read_dataflash(const BinaryFile& f) {
       pos = next;
       continue;
     }
-    const DfFormat& fmt = it->second;
+    const DfFormat& fmt = *it->second;
     if (fmt.length < kHeaderBytes) f.fail(fmt.defined_at, "FMT for '" + fmt.name + "' gives a length below 3");
     f.need(pos, fmt.length, "a '" + fmt.name + "' message");
     ++log.counts[fmt.name];
     if (wanted(fmt.name)) {
       if (!fmt.problem.empty()) f.fail(fmt.defined_at, "FMT for '" + fmt.name + "': " + fmt.problem);
-      log.records[fmt.name].push_back({pos, log.resyncs});
+      log.records[fmt.name].push_back({&fmt, pos, log.resyncs});
     }
     pos += fmt.length;
   }
   return log;
-}
-
-const DfFormat& format_named(const DfLog& log, const std::string& name) {
-  for (const auto& [type, fmt] : log.formats) {
-    if (fmt.name == name) return fmt;
-  }
-  throw std::logic_error("format_named: no " + name);  // only called for names with records
 }
 
 std::optional<std::size_t> column(const DfFormat& fmt, const std::string& name) {
@@ -183,24 +179,30 @@ std::size_t required_column(const BinaryFile& f, const DfFormat& fmt, const std:
   return *c;
 }
 
-// Numeric value of column c of the message at `msg`, with the type's own scale (c, e, L...).
+// Numeric value of column c of the message at `msg`, with the type's own scale (c, e, L...). The
+// message is in the file (read_dataflash checked its length) and its FMT adds up to that length.
 double value(const BinaryFile& f, const DfFormat& fmt, std::size_t msg, std::size_t c) {
   const TypeChar& t = *type_char(fmt.format[c]);
-  const std::size_t at = msg + fmt.offsets[c];
-  const std::string what = "column '" + fmt.columns[c] + "' of a '" + fmt.name + "' message";
+  const std::uint8_t* p = f.at(msg + fmt.offsets[c]);
   double v = 0.0;
   switch (t.storage) {
     case Storage::kInt:
-      v = t.size == 1 ? f.get<std::int8_t>(at, what) : t.size == 2 ? f.get<std::int16_t>(at, what)
-          : t.size == 4 ? f.get<std::int32_t>(at, what) : static_cast<double>(f.get<std::int64_t>(at, what));
+      v = t.size == 1   ? load_le<std::int8_t>(p)
+          : t.size == 2 ? load_le<std::int16_t>(p)
+          : t.size == 4 ? load_le<std::int32_t>(p)
+                        : static_cast<double>(load_le<std::int64_t>(p));
       break;
     case Storage::kUInt:
-      v = t.size == 1 ? f.get<std::uint8_t>(at, what) : t.size == 2 ? f.get<std::uint16_t>(at, what)
-          : t.size == 4 ? f.get<std::uint32_t>(at, what) : static_cast<double>(f.get<std::uint64_t>(at, what));
+      v = t.size == 1   ? load_le<std::uint8_t>(p)
+          : t.size == 2 ? load_le<std::uint16_t>(p)
+          : t.size == 4 ? load_le<std::uint32_t>(p)
+                        : static_cast<double>(load_le<std::uint64_t>(p));
       break;
-    case Storage::kFloat: v = t.size == 4 ? static_cast<double>(f.get<float>(at, what)) : f.get<double>(at, what); break;
+    case Storage::kFloat: v = t.size == 4 ? static_cast<double>(load_le<float>(p)) : load_le<double>(p); break;
     case Storage::kText:
-    case Storage::kArray: f.fail(at, what + " is not a number (format char '" + std::string(1, t.c) + "')");
+    case Storage::kArray:
+      f.fail(msg, "column '" + fmt.columns[c] + "' of a '" + fmt.name + "' message is not a number (format char '" +
+                      std::string(1, t.c) + "')");
   }
   return v * t.scale;
 }
@@ -223,8 +225,7 @@ DfUnits read_units(const BinaryFile& f, const DfLog& log) {
   auto each = [&](const std::string& name, auto fn) {
     const auto it = log.records.find(name);
     if (it == log.records.end()) return;
-    const DfFormat& fmt = format_named(log, name);
-    for (const DfRecord& r : it->second) fn(fmt, r.offset);
+    for (const DfRecord& r : it->second) fn(*r.fmt, r.offset);
   };
   each("UNIT", [&](const DfFormat& fmt, std::size_t m) {
     u.labels[static_cast<char>(value(f, fmt, m, required_column(f, fmt, "Id")))] = text(f, fmt, m, required_column(f, fmt, "Label"));
@@ -277,21 +278,15 @@ int instance_of(const BinaryFile& f, const DfFormat& fmt, std::size_t msg) {
   return fmt.name == "IMU" ? 0 : fmt.name[3] - '1';
 }
 
-struct ImuRecordRef {
-  const DfFormat* fmt;
-  DfRecord rec;
-};
-
-std::map<int, std::vector<ImuRecordRef>> imu_records_by_instance(const BinaryFile& f, const DfLog& log) {
-  std::map<int, std::vector<ImuRecordRef>> out;
+std::map<int, std::vector<DfRecord>> imu_records_by_instance(const BinaryFile& f, const DfLog& log) {
+  std::map<int, std::vector<DfRecord>> out;
   for (const char* name : {"IMU", "IMU2", "IMU3"}) {
     const auto it = log.records.find(name);
     if (it == log.records.end()) continue;
-    const DfFormat& fmt = format_named(log, name);
-    for (const DfRecord& r : it->second) out[instance_of(f, fmt, r.offset)].push_back({&fmt, r});
+    for (const DfRecord& r : it->second) out[instance_of(f, *r.fmt, r.offset)].push_back(r);
   }
   for (auto& [inst, v] : out) {
-    std::stable_sort(v.begin(), v.end(), [](const ImuRecordRef& a, const ImuRecordRef& b) { return a.rec.offset < b.rec.offset; });
+    std::stable_sort(v.begin(), v.end(), [](const DfRecord& a, const DfRecord& b) { return a.offset < b.offset; });
   }
   return out;
 }
@@ -323,23 +318,22 @@ ImuColumns imu_columns(const BinaryFile& f, const DfUnits& u, const DfFormat& fm
 std::string firmware(const BinaryFile& f, const DfLog& log) {
   const auto it = log.records.find("MSG");
   if (it == log.records.end()) return {};
-  const DfFormat& fmt = format_named(log, "MSG");
-  const auto c = column(fmt, "Message");
-  if (!c) return {};
   for (const DfRecord& r : it->second) {
-    const std::string m = text(f, fmt, r.offset, *c);
+    const auto c = column(*r.fmt, "Message");
+    if (!c) continue;
+    const std::string m = text(f, *r.fmt, r.offset, *c);
     if (m.rfind("Ardu", 0) == 0) return m;
   }
   return {};
 }
 
-std::string describe_instances(const std::map<int, std::vector<ImuRecordRef>>& by_instance) {
+std::string describe_instances(const std::map<int, std::vector<DfRecord>>& by_instance) {
   std::string s;
   for (const auto& [inst, v] : by_instance) s += (s.empty() ? "" : ", ") + std::to_string(inst) + ": " + std::to_string(v.size());
   return s;
 }
 
-int choose_instance(const BinaryFile& f, const std::map<int, std::vector<ImuRecordRef>>& by_instance, int wanted_instance) {
+int choose_instance(const BinaryFile& f, const std::map<int, std::vector<DfRecord>>& by_instance, int wanted_instance) {
   if (by_instance.empty()) {
     f.fail(f.size(), "no IMU data: expected IMU (or IMU2/IMU3) messages defined by an FMT; the log has none");
   }
@@ -376,23 +370,23 @@ Recording import_dataflash(const fs::path& file, const DataflashOptions& opt) {
   std::uint64_t t0_us = 0;
   bool has_temperature = true;
   std::size_t lost_gaps = 0;
-  const std::vector<ImuRecordRef>& records = by_instance.at(instance);
+  const std::vector<DfRecord>& records = by_instance.at(instance);
   for (std::size_t i = 0; i < records.size(); ++i) {
-    const ImuRecordRef& r = records[i];
+    const DfRecord& r = records[i];
     auto it = columns.find(r.fmt);
     if (it == columns.end()) it = columns.emplace(r.fmt, imu_columns(f, units, *r.fmt)).first;
     const ImuColumns& c = it->second;
-    const auto t_us = static_cast<std::uint64_t>(value(f, *r.fmt, r.rec.offset, c.time));
+    const auto t_us = static_cast<std::uint64_t>(value(f, *r.fmt, r.offset, c.time));
     if (i == 0) t0_us = t_us;
     ImuSample s;
     s.t_s = seconds_since_us(t0_us, t_us);
     for (int k = 0; k < 3; ++k) {
-      s.gyro_radps[k] = value(f, *r.fmt, r.rec.offset, c.gyr[k]) * c.gyr_factor;
-      s.accel_mps2[k] = value(f, *r.fmt, r.rec.offset, c.acc[k]) * c.acc_factor;
+      s.gyro_radps[k] = value(f, *r.fmt, r.offset, c.gyr[k]) * c.gyr_factor;
+      s.accel_mps2[k] = value(f, *r.fmt, r.offset, c.acc[k]) * c.acc_factor;
     }
     has_temperature = has_temperature && c.temp.has_value();
-    if (c.temp) s.temperature_c = value(f, *r.fmt, r.rec.offset, *c.temp) * c.temp_factor;
-    if (i > 0 && r.rec.lost_before != records[i - 1].rec.lost_before) {
+    if (c.temp) s.temperature_c = value(f, *r.fmt, r.offset, *c.temp) * c.temp_factor;
+    if (i > 0 && r.lost_before != records[i - 1].lost_before) {
       s.flags |= kGapBefore;
       ++lost_gaps;
     }

@@ -51,6 +51,14 @@ std::string fmt_hex(std::uint64_t v, int digits);
 
 static_assert(std::endian::native == std::endian::little, "the binary log readers assume a little-endian host");
 
+// A little-endian value at p (no bounds check: the caller checked the bytes are in the file).
+template <class T>
+T load_le(const std::uint8_t* p) {
+  T v;
+  std::memcpy(&v, p, sizeof(T));
+  return v;
+}
+
 // A whole binary file in memory, read with bounds checks: every read past the end throws an
 // ImportError naming the offset and what was being read.
 class BinaryFile {
@@ -64,9 +72,7 @@ class BinaryFile {
   template <class T>
   T get(std::size_t offset, const std::string& what) const {
     need(offset, sizeof(T), what);
-    T v;
-    std::memcpy(&v, data_.data() + offset, sizeof(T));
-    return v;
+    return load_le<T>(data_.data() + offset);
   }
   [[noreturn]] void fail(std::size_t offset, const std::string& message) const {
     throw ImportError(file_, ByteOffset{offset}, message);

@@ -226,7 +226,6 @@ void read_subscription(const BinaryFile& f, std::size_t at, std::size_t body, st
   if (!log.formats.count(sub.topic)) {
     f.fail(at, "subscription to '" + sub.topic + "', which no format message defines");
   }
-  if (kImuTopics.count(sub.topic)) resolve_format(f, log.formats, sub.topic, 0);
   log.subscriptions[id] = std::move(sub);
 }
 
@@ -308,6 +307,10 @@ UlogLog read_ulog(const BinaryFile& f) {
     }
     pos = end;
   }
+  // Offsets of the formats the import decodes (their last definition, as pyulog keeps it).
+  for (const auto& [id, sub] : log.subscriptions) {
+    if (kImuTopics.count(sub.topic)) resolve_format(f, log.formats, sub.topic, 0);
+  }
   return log;
 }
 
@@ -341,18 +344,18 @@ class RecordView {
 
   double number(const std::string& name, std::size_t index = 0) const {
     const Field& fld = field(name, index);
-    const std::size_t at = r_.offset + fld.offset + index * fld.element_size;
+    const std::uint8_t* p = f_.at(r_.offset + fld.offset + index * fld.element_size);  // checked by field()
     switch (fld.basic) {
-      case Basic::kInt8: return f_.get<std::int8_t>(at, what(name));
-      case Basic::kUInt8: case Basic::kBool: case Basic::kChar: return f_.get<std::uint8_t>(at, what(name));
-      case Basic::kInt16: return f_.get<std::int16_t>(at, what(name));
-      case Basic::kUInt16: return f_.get<std::uint16_t>(at, what(name));
-      case Basic::kInt32: return f_.get<std::int32_t>(at, what(name));
-      case Basic::kUInt32: return f_.get<std::uint32_t>(at, what(name));
-      case Basic::kInt64: return static_cast<double>(f_.get<std::int64_t>(at, what(name)));
-      case Basic::kUInt64: return static_cast<double>(f_.get<std::uint64_t>(at, what(name)));
-      case Basic::kFloat: return f_.get<float>(at, what(name));
-      case Basic::kDouble: return f_.get<double>(at, what(name));
+      case Basic::kInt8: return load_le<std::int8_t>(p);
+      case Basic::kUInt8: case Basic::kBool: case Basic::kChar: return load_le<std::uint8_t>(p);
+      case Basic::kInt16: return load_le<std::int16_t>(p);
+      case Basic::kUInt16: return load_le<std::uint16_t>(p);
+      case Basic::kInt32: return load_le<std::int32_t>(p);
+      case Basic::kUInt32: return load_le<std::uint32_t>(p);
+      case Basic::kInt64: return static_cast<double>(load_le<std::int64_t>(p));
+      case Basic::kUInt64: return static_cast<double>(load_le<std::uint64_t>(p));
+      case Basic::kFloat: return static_cast<double>(load_le<float>(p));
+      case Basic::kDouble: return load_le<double>(p);
       case Basic::kNested: break;
     }
     f_.fail(r_.offset, "field '" + name + "' of '" + fmt_.name + "' is a nested type, expected a number");
@@ -363,7 +366,7 @@ class RecordView {
     if (fld.basic != Basic::kUInt64) {
       f_.fail(fmt_.defined_at, "field '" + name + "' of '" + fmt_.name + "' is " + fld.type + ", expected uint64_t [us]");
     }
-    return f_.get<std::uint64_t>(r_.offset + fld.offset, what(name));
+    return load_le<std::uint64_t>(f_.at(r_.offset + fld.offset));  // checked by field()
   }
 
  private:
@@ -380,7 +383,6 @@ class RecordView {
     }
     return *fld;
   }
-  std::string what(const std::string& name) const { return "field '" + name + "' of a '" + fmt_.name + "' message"; }
 
   const BinaryFile& f_;
   const Format& fmt_;
@@ -482,12 +484,12 @@ void add_selected_devices(const BinaryFile& f, const UlogLog& log, UlogChoice& c
   const auto sel = std::find_if(log.subscriptions.begin(), log.subscriptions.end(), [](const auto& s) {
     return s.second.topic == "sensor_selection" && !s.second.records.empty();
   });
-  if (sel == log.subscriptions.end()) {
-    c.temperature_note = "no temperature (sensor_combined has none and there is no sensor_selection)";
+  const Format* fmt = sel == log.subscriptions.end() ? nullptr : &log.formats.at("sensor_selection");
+  if (!fmt || !find_field(*fmt, "accel_device_id") || !find_field(*fmt, "gyro_device_id")) {
+    c.temperature_note = "no temperature (sensor_combined has none, and no sensor_selection names its devices)";
     return;
   }
-  const Format& fmt = log.formats.at("sensor_selection");
-  const RecordView v(f, fmt, sel->second.records.front());
+  const RecordView v(f, *fmt, sel->second.records.front());
   c.acc.device_id = static_cast<std::uint32_t>(v.number("accel_device_id"));
   c.gyr.device_id = static_cast<std::uint32_t>(v.number("gyro_device_id"));
   for (const auto& [inst, n] : instance_counts(log, "sensor_accel")) {

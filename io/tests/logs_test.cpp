@@ -332,9 +332,35 @@ void check_truncations(const fs::path& file, const std::function<Recording(const
   }
 }
 
+// Random bytes overwritten: a recording or an ImportError with an offset, never another exception.
+void check_corruptions(const fs::path& file, const std::function<Recording(const fs::path&)>& import) {
+  const std::string bytes = read_text(file);
+  TempDir dir("corrupted");
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<std::size_t> any(0, bytes.size() - 1);
+  std::uniform_int_distribution<int> byte(0, 255);
+  for (int trial = 0; trial < 30; ++trial) {
+    std::string b = bytes;
+    for (int k = 0; k < 8; ++k) b[any(rng)] = static_cast<char>(byte(rng));
+    const fs::path bad = dir / ("corrupt_" + std::to_string(trial));
+    write_text(bad, b);
+    try {
+      import(bad);
+    } catch (const ImportError& e) {
+      EXPECT_TRUE(e.offset().has_value()) << e.what();
+    }
+    fs::remove(bad);
+  }
+}
+
 TEST(ImportUlog, TruncatedAtManyOffsets) {
   STEND_SKIP_IF_ABSENT(kUlog);
   check_truncations(kUlog, [](const fs::path& f) { return import_ulog(f); }, 1298);
+}
+
+TEST(ImportUlog, CorruptedBytes) {
+  STEND_SKIP_IF_ABSENT(kUlog);
+  check_corruptions(kUlog, [](const fs::path& f) { return import_ulog(f); });
 }
 
 // =============================================================================================
@@ -464,6 +490,11 @@ TEST(ImportDataflash, BadFilesNameTheOffsetAndWhatWasExpected) {
 TEST(ImportDataflash, TruncatedAtManyOffsets) {
   STEND_SKIP_IF_ABSENT(kDataflash);
   check_truncations(kDataflash, [](const fs::path& f) { return import_dataflash(f); }, 594);
+}
+
+TEST(ImportDataflash, CorruptedBytes) {
+  STEND_SKIP_IF_ABSENT(kDataflash);
+  check_corruptions(kDataflash, [](const fs::path& f) { return import_dataflash(f); });
 }
 
 // =============================================================================================
