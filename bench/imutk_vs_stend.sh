@@ -42,8 +42,12 @@ gravity=$(sed -n 's/.*"gravity_mps2": *\([0-9.eE+-]*\).*/\1/p' "$run/run.json" |
 
 imutk=""
 if [ -x "$imutk_src/build.sh" ]; then
-  "$imutk_src/build.sh" "$tmp/imutk" >/dev/null
-  imutk=$tmp/imutk/imutk_calib
+  if "$imutk_src/build.sh" "$tmp/imutk" >"$tmp/imutk_build.log" 2>&1; then
+    imutk=$tmp/imutk/imutk_calib
+  else
+    tail -5 "$tmp/imutk_build.log"
+    echo "IMU-TK did not build (it needs libceres-dev, libgoogle-glog-dev, libgflags-dev, libboost-dev): timing Stend alone"
+  fi
 else
   echo "IMU-TK not found at $imutk_src (../shared/peers/imu_tk): timing Stend alone"
 fi
