@@ -80,6 +80,35 @@ TEST(Terms, CorrectInvertsMeasure) {
   }
 }
 
+// The affine form of every input-affine term (temperature, G, drift... included) at a stimulus
+// inverts measure() exactly and agrees with correct(); a model with u² has none.
+TEST(Terms, AffineFormInvertsMeasure) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0.0, 1e-3);
+  for (Instrument inst : {Instrument::kAccelerometer, Instrument::kGyroscope}) {
+    ErrorModel full = full_model(inst), m;
+    m.instrument = inst;
+    for (const auto& t : full.terms)
+      if (input_affine(t.kind)) m.terms.push_back(t);
+    ASSERT_TRUE(m.input_affine());
+    Eigen::VectorXd theta(m.size());
+    for (int i = 0; i < theta.size(); ++i) theta[i] = n(rng);
+    for (int trial = 0; trial < 20; ++trial) {
+      Stimulus<double> s = random_stimulus(rng);
+      if (inst == Instrument::kAccelerometer) s.specific_force = s.input;
+      const Eigen::Vector3d y = m.measure<double>(theta.data(), s);
+      const AffineForm<double> f = m.affine<double>(theta.data(), s);
+      EXPECT_LT((f.correct(y) - s.input).norm(), 1e-12 * (1 + s.input.norm()));
+      EXPECT_LT((f.correct(y) - m.correct(theta.data(), y, s)).norm(), 1e-9);
+      EXPECT_LT((f.a * f.a_inv - Eigen::Matrix3d::Identity()).norm(), 1e-12);
+    }
+  }
+  const ErrorModel nonlinear = full_model(Instrument::kAccelerometer);
+  EXPECT_FALSE(nonlinear.input_affine());
+  const std::vector<double> zero(static_cast<std::size_t>(nonlinear.size()), 0.0);
+  EXPECT_THROW(nonlinear.affine<double>(zero.data()), std::logic_error);
+}
+
 TEST(Terms, AutodiffJacobianMatchesNumericalDerivative) {
   using Jet = ceres::Jet<double, 3>;
   std::mt19937 rng(11);

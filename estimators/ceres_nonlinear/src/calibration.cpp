@@ -33,28 +33,11 @@ void expand(const T* free_params, const std::vector<int>& free_index, T* full) {
     full[free_index[k]] = free_params[k];
 }
 
-// The input u that the (affine) model maps to y: b = measure(θ, 0), A e_j = measure(θ, e_j) − b,
-// u = A⁻¹ (y − b). Only measure<T> is used, so the terms are not re-derived here.
+// The input u that the (affine) accelerometer model maps to y (the model's affine form, built
+// from measure<T> only, so the terms are not re-derived here).
 template <typename T>
 model::Vec3<T> invert_affine(const model::ErrorModel& m, const T* theta, const Eigen::Vector3d& y) {
-  model::Stimulus<T> s;
-  const model::Vec3<T> b = m.measure<T>(theta, s);
-  Eigen::Matrix<T, 3, 3> A;
-  for (int j = 0; j < 3; ++j) {
-    s.input = model::Vec3<T>::Zero();
-    s.input[j] = T(1);
-    s.specific_force = s.input;
-    A.col(j) = m.measure<T>(theta, s) - b;
-  }
-  const model::Vec3<T> r = y.cast<T>() - b;
-  // Cramer's rule (works for ceres::Jet).
-  const model::Vec3<T> c0 = A.col(0), c1 = A.col(1), c2 = A.col(2);
-  const T det = c0.dot(c1.cross(c2));
-  model::Vec3<T> u;
-  u[0] = r.dot(c1.cross(c2)) / det;
-  u[1] = c0.dot(r.cross(c2)) / det;
-  u[2] = c0.dot(c1.cross(r)) / det;
-  return u;
+  return m.affine<T>(theta).correct(y.cast<T>());
 }
 
 struct NormCost {
@@ -980,56 +963,95 @@ struct StaticGyroCost {
   }
 };
 
-// Stage 2 of the integration method: p = scale(3) + cross(6). `d` are the readings with the
-// stage-1 bias and G·f removed (rad/s), `dt` the sample steps. The corrected rate is A⁻¹·d with
-// A e_j = measure(θ, e_j) − measure(θ, 0) (affine terms; only measure<T> is used). The gravity
-// direction g0 (sensor frame at the start) is carried through v̇ = −ω × v (passive) with a
-// third-order rotation step on the trapezoidal rate; residual = [e1·v, e2·v], e1 e2 ⊥ ĝ_end.
-struct PairCost {
-  const model::ErrorModel* m;
-  std::vector<double> base;  // full θ with bias and G from stage 1
-  const Eigen::Vector3d* d;  // samples first..last
-  const double* dt;          // dt[i] = t[i+1] − t[i]
-  std::size_t count;
-  Eigen::Vector3d g0, e1, e2;
-  template <typename T>
-  bool operator()(const T* const p, T* residual) const {
-    std::vector<T> theta(base.size());
-    for (std::size_t i = 0; i < base.size(); ++i) theta[i] = T(base[i]);
-    for (int k = 0; k < 9; ++k) theta[static_cast<std::size_t>(3 + k)] = p[k];
-    model::Stimulus<T> s;
-    const model::Vec3<T> b = m->measure<T>(theta.data(), s);
-    Eigen::Matrix<T, 3, 3> A;
-    for (int j = 0; j < 3; ++j) {
-      s.input = model::Vec3<T>::Zero();
-      s.input[j] = T(1);
-      A.col(j) = m->measure<T>(theta.data(), s) - b;
-    }
-    // 3×3 inverse by cofactors (Jets).
-    const model::Vec3<T> c0 = A.col(0), c1 = A.col(1), c2 = A.col(2);
-    const T det = c0.dot(c1.cross(c2));
-    Eigen::Matrix<T, 3, 3> Ai;
-    Ai.row(0) = c1.cross(c2).transpose() / det;
-    Ai.row(1) = c2.cross(c0).transpose() / det;
-    Ai.row(2) = c0.cross(c1).transpose() / det;
-    model::Vec3<T> v = g0.cast<T>();
-    model::Vec3<T> w_prev = Ai * d[0].cast<T>();
-    for (std::size_t i = 0; i + 1 < count; ++i) {
-      const model::Vec3<T> w_next = Ai * d[i + 1].cast<T>();
-      const model::Vec3<T> th = (w_prev + w_next) * T(0.5 * dt[i]);
-      const model::Vec3<T> a1 = th.cross(v);
-      const model::Vec3<T> a2 = th.cross(a1);
-      const model::Vec3<T> a3 = th.cross(a2);
-      const model::Vec3<T> a4 = th.cross(a3);
-      const model::Vec3<T> a5 = th.cross(a4);
-      // exp(−[θ]×)·v to fifth order (error θ⁶/720: < 1e-10 rad per step at 0.05 rad).
-      v = v - a1 + a2 * T(0.5) - a3 * T(1.0 / 6.0) + a4 * T(1.0 / 24.0) - a5 * T(1.0 / 120.0);
-      w_prev = w_next;
-    }
-    residual[0] = v.dot(e1.cast<T>());
-    residual[1] = v.dot(e2.cast<T>());
+// One step of the gravity direction v carried through a rotation vector θ [rad] of the sensor
+// frame (passive, v̇ = −ω × v): exp(−[θ]×)·v = v − c1·(θ × v) + c2·θ × (θ × v) with c1, c2 the
+// series of sin|θ|/|θ| and (1 − cos|θ|)/|θ|² to fifth order in θ (error θ⁶/720: < 1e-10 rad per
+// step at 0.05 rad). With the derivatives the move's Jacobian needs.
+struct RotationStep {
+  Eigen::Vector3d th;
+  double c1, c2, dc1, dc2;  // c(x), dc/dx at x = |θ|²
+  explicit RotationStep(const Eigen::Vector3d& theta) : th(theta) {
+    const double x = th.squaredNorm();
+    c1 = 1.0 - x / 6.0 + x * x / 120.0;
+    c2 = 0.5 - x / 24.0;
+    dc1 = -1.0 / 6.0 + x / 60.0;
+    dc2 = -1.0 / 24.0;
+  }
+  // R·v, R = I − c1·[θ]× + c2·[θ]×².
+  Eigen::Vector3d apply(const Eigen::Vector3d& v) const {
+    const Eigen::Vector3d a1 = th.cross(v);
+    return v - c1 * a1 + c2 * th.cross(a1);
+  }
+  // Rᵀ·l (carries ∂r/∂v back one step).
+  Eigen::Vector3d apply_transpose(const Eigen::Vector3d& l) const {
+    const Eigen::Vector3d a1 = th.cross(l);
+    return l + c1 * a1 + c2 * th.cross(a1);
+  }
+  // (∂(R·v)/∂θ)ᵀ·l.
+  Eigen::Vector3d gradient(const Eigen::Vector3d& v, const Eigen::Vector3d& l) const {
+    const Eigen::Vector3d a1 = th.cross(v), a2 = th.cross(a1);
+    return -c1 * v.cross(l) + th * (2.0 * dc2 * a2.dot(l) - 2.0 * dc1 * a1.dot(l)) +
+           c2 * (a1.cross(l) - v.cross(th.cross(l)));
+  }
+};
+
+// Stage 2 of the integration method: p = scale(3) + cross(6), the rest of the gyro model's θ
+// (`base`: bias and G from stage 1) held. `inc` are the move's rate increments
+// Δ_i = ½(w_i + w_{i+1})·(t_{i+1} − t_i) of the bias-corrected readings w [rad]; the corrected rate
+// is A⁻¹·w (the model's affine form, from measure() only), so step i turns by θ_i = A⁻¹·Δ_i. The
+// gravity direction g0 (sensor frame at the start) is carried through the steps (RotationStep);
+// residual = [e1·v, e2·v], e1 e2 ⊥ ĝ_end. The Jacobian is the exact derivative of that recursion,
+// from one backward (adjoint) pass: λ ← Rᵢᵀ·λ, ∂r/∂A⁻¹ = Σ_i (∂(Rᵢv_i)/∂θ_i)ᵀλ·Δ_iᵀ, and
+// ∂A⁻¹/∂p_k = −A⁻¹·(∂A/∂p_k)·A⁻¹ (every term is linear in its parameters: ∂A/∂p_k = A(e_k) − A(0)).
+class MoveCost final : public ceres::SizedCostFunction<2, 9> {
+ public:
+  MoveCost(const model::ErrorModel& m, std::vector<double> base, std::vector<Eigen::Vector3d> inc,
+           const Eigen::Vector3d& g0, const Eigen::Vector3d& e1, const Eigen::Vector3d& e2)
+      : m_(m), base_(std::move(base)), inc_(std::move(inc)), g0_(g0), e1_(e1), e2_(e2) {}
+
+  bool Evaluate(double const* const* p, double* residual, double** jacobian) const override {
+    std::vector<double> theta = base_;
+    for (std::size_t k = 0; k < 9; ++k) theta[3 + k] = p[0][k];
+    const Eigen::Matrix3d ai = m_.affine<double>(theta.data()).a_inv;
+    const std::size_t n = inc_.size();
+    std::vector<Eigen::Vector3d> v(n + 1);  // v[i]: the direction before step i
+    v[0] = g0_;
+    for (std::size_t i = 0; i < n; ++i) v[i + 1] = RotationStep(ai * inc_[i]).apply(v[i]);
+    residual[0] = e1_.dot(v[n]);
+    residual[1] = e2_.dot(v[n]);
+    if (jacobian && jacobian[0]) jacobian_by_adjoint(theta, ai, v, jacobian[0]);
     return true;
   }
+
+ private:
+  void jacobian_by_adjoint(std::vector<double>& theta, const Eigen::Matrix3d& ai, const std::vector<Eigen::Vector3d>& v,
+                           double* jac) const {
+    Eigen::Vector3d l1 = e1_, l2 = e2_;
+    Eigen::Matrix3d d1 = Eigen::Matrix3d::Zero(), d2 = Eigen::Matrix3d::Zero();  // ∂r_m/∂A⁻¹
+    for (std::size_t i = inc_.size(); i-- > 0;) {
+      const RotationStep step(ai * inc_[i]);
+      d1 += step.gradient(v[i], l1) * inc_[i].transpose();
+      d2 += step.gradient(v[i], l2) * inc_[i].transpose();
+      l1 = step.apply_transpose(l1);
+      l2 = step.apply_transpose(l2);
+    }
+    for (std::size_t k = 0; k < 9; ++k) {
+      const double keep = theta[3 + k];
+      theta[3 + k] = 1.0;
+      Eigen::Matrix3d da = m_.affine<double>(theta.data()).a;
+      theta[3 + k] = 0.0;
+      da -= m_.affine<double>(theta.data()).a;
+      theta[3 + k] = keep;
+      const Eigen::Matrix3d dai = -ai * da * ai;
+      jac[k] = d1.cwiseProduct(dai).sum();
+      jac[9 + k] = d2.cwiseProduct(dai).sum();
+    }
+  }
+
+  const model::ErrorModel& m_;
+  std::vector<double> base_;  // full θ with bias and G from stage 1
+  std::vector<Eigen::Vector3d> inc_;
+  Eigen::Vector3d g0_, e1_, e2_;
 };
 
 void gyro_parameters_init(CalibrationResult& r) {
@@ -1150,7 +1172,8 @@ struct IntegrationData {
   std::vector<StaticInterval> ivs;
   std::vector<Eigen::Vector3d> fk;     // calibrated specific force of each interval [m/s²]
   std::vector<Eigen::Vector3d> gdir;   // its direction (unit, sensor frame)
-  std::vector<Eigen::Vector3d> f_cal;  // calibrated specific force of each sample [m/s²] (with G only)
+  std::vector<Eigen::Vector3d> f_cal;  // calibrated specific force [m/s²] of the samples between
+                                       // consecutive intervals (with G only; elsewhere unset)
   std::vector<int> s1_index;           // stage-1 parameters: bias (+ G)
   std::vector<Move> moves;             // the moves that can be integrated
 };
@@ -1170,8 +1193,9 @@ std::vector<Move> integrable_moves(const Recording& rec, const std::vector<Stati
 }
 
 // Sorted intervals, their calibrated specific force and direction, the stage-1 parameter list and
-// the per-sample calibrated specific force (G·f during the turns); the moves come later, once the
-// intervals are known to index the recording.
+// the calibrated specific force of the samples between consecutive intervals (G·f during the
+// turns; the accelerometer model is affine, so its inverse is applied as A⁻¹·(y − b)); the moves
+// come later, once the intervals are known to index the recording.
 IntegrationData integration_data(const Recording& rec, const CalibrationResult& accel, const GyroOptions& go) {
   IntegrationData d{rec, accel, go, accel.intervals, {}, {}, {}, {0, 1, 2}, {}};
   std::sort(d.ivs.begin(), d.ivs.end(), [](const StaticInterval& a, const StaticInterval& b) { return a.first < b.first; });
@@ -1180,8 +1204,11 @@ IntegrationData integration_data(const Recording& rec, const CalibrationResult& 
   for (const auto& f : d.fk) d.gdir.push_back(f.normalized());
   if (go.estimate_g_sensitivity) {
     for (int i = 12; i < 21; ++i) d.s1_index.push_back(i);
+    const model::AffineForm<double> cal = accel.model.affine<double>(accel.theta.data());
     d.f_cal.resize(rec.samples.size());
-    for (std::size_t i = 0; i < rec.samples.size(); ++i) d.f_cal[i] = accel.correct(rec.samples[i].accel_mps2);
+    for (std::size_t k = 0; k + 1 < d.ivs.size(); ++k)
+      for (std::size_t i = d.ivs[k].last; i <= d.ivs[k + 1].first && i < rec.samples.size(); ++i)
+        d.f_cal[i] = cal.correct(rec.samples[i].accel_mps2);
   }
   return d;
 }
@@ -1226,30 +1253,31 @@ Eigen::Vector3d bias_corrected_rate(const IntegrationData& d, const model::Error
   return d.rec.samples[i].gyro_radps - m.measure<double>(theta, st);
 }
 
-// Bias-corrected rate of every sample [rad/s] and the step to the next sample dt [s] (0 for the last).
-void bias_corrected_rates(const IntegrationData& d, const model::ErrorModel& m, const std::vector<double>& base,
-                          std::vector<Eigen::Vector3d>& w, std::vector<double>& dt) {
+// Rate increments of a move's bias-corrected readings w (θ's bias and G removed), trapezoidal:
+// Δ_i = ½(w_i + w_{i+1})·(t_{i+1} − t_i) [rad], i = a .. b − 1.
+std::vector<Eigen::Vector3d> move_increments(const IntegrationData& d, const model::ErrorModel& m, const double* theta,
+                                             const Move& mv) {
   const auto& samples = d.rec.samples;
-  w.resize(samples.size());
-  dt.assign(samples.size(), 0.0);
-  for (std::size_t i = 0; i < samples.size(); ++i) {
-    w[i] = bias_corrected_rate(d, m, base.data(), i);
-    if (i + 1 < samples.size()) dt[i] = samples[i + 1].t_s - samples[i].t_s;
+  std::vector<Eigen::Vector3d> inc(mv.b - mv.a);
+  Eigen::Vector3d w_prev = bias_corrected_rate(d, m, theta, mv.a);
+  for (std::size_t i = mv.a; i < mv.b; ++i) {
+    const Eigen::Vector3d w_next = bias_corrected_rate(d, m, theta, i + 1);
+    inc[i - mv.a] = (w_prev + w_next) * (0.5 * (samples[i + 1].t_s - samples[i].t_s));
+    w_prev = w_next;
   }
+  return inc;
 }
 
 // Stage 2: scale and cross-axis (9 parameters) from the gravity direction carried through each
-// move by the bias-corrected rates w [rad/s]; x2 holds them on return.
+// move by the bias-corrected rates of `base` (stage 1); x2 holds them on return.
 CalibrationResult solve_move_stage(const IntegrationData& d, const CalibrationResult& r, const std::vector<double>& base,
-                                   const std::vector<Eigen::Vector3d>& w, const std::vector<double>& dt,
                                    const CalibrationOptions& o2, std::vector<double>& x2) {
   x2.assign(9, 0.0);
   ceres::Problem prob2;
   for (const Move& mv : d.moves) {
     const Eigen::Vector3d& g1 = d.gdir[mv.k + 1];
     const Eigen::Vector3d e1 = g1.unitOrthogonal(), e2 = g1.cross(e1);
-    auto* c = new ceres::AutoDiffCostFunction<PairCost, 2, 9>(
-        new PairCost{&r.model, base, &w[mv.a], &dt[mv.a], mv.b - mv.a + 1, d.gdir[mv.k], e1, e2});
+    auto* c = new MoveCost(r.model, base, move_increments(d, r.model, base.data(), mv), d.gdir[mv.k], e1, e2);
     prob2.AddResidualBlock(c, make_loss(o2), x2.data());
   }
   CalibrationResult r2 = r;
@@ -1284,8 +1312,8 @@ void merge_stages(const IntegrationData& d, const CalibrationResult& r1, const C
 // ones of the first evaluation are reused.
 class MoveResiduals {
  public:
-  MoveResiduals(const IntegrationData& d, const model::ErrorModel& gyro, const std::vector<double>& dt)
-      : d_(d), gyro_(gyro), dt_(dt), rate_cache_(d.moves.size()) {}
+  MoveResiduals(const IntegrationData& d, const model::ErrorModel& gyro)
+      : d_(d), gyro_(gyro), increment_cache_(d.moves.size()) {}
 
   Eigen::VectorXd operator()(const Eigen::VectorXd& z, const std::vector<double>& x, bool rates_moved) {
     const std::size_t na = d_.accel.free_index.size();
@@ -1295,25 +1323,21 @@ class MoveResiduals {
       tb[static_cast<std::size_t>(d_.s1_index[j])] = z[static_cast<Eigen::Index>(na + j)];
     auto cal = [&](const Eigen::Vector3d& y) { return d_.accel.model.correct(ta.data(), y, model::Stimulus<double>{}); };
     Eigen::VectorXd out(static_cast<Eigen::Index>(2 * d_.moves.size()));
-    std::vector<Eigen::Vector3d> fresh;
     for (std::size_t q = 0; q < d_.moves.size(); ++q) {
       const Move& mv = d_.moves[q];
-      const bool use_cache = !rates_moved && !rate_cache_[q].empty();
-      std::vector<Eigen::Vector3d>& dw = use_cache ? rate_cache_[q] : fresh;
       // G·f during the turns with the baseline calibrated f (the accelerometer's uncertainty
       // reaches the rates through G·δf only at second order).
-      if (!use_cache) {
-        dw.assign(mv.b - mv.a + 1, Eigen::Vector3d::Zero());
-        for (std::size_t i = mv.a; i <= mv.b; ++i) dw[i - mv.a] = bias_corrected_rate(d_, gyro_, tb.data(), i);
-      }
+      const bool use_cache = !rates_moved && !increment_cache_[q].empty();
+      std::vector<Eigen::Vector3d> inc = use_cache ? increment_cache_[q] : move_increments(d_, gyro_, tb.data(), mv);
+      if (increment_cache_[q].empty()) increment_cache_[q] = inc;
       const Eigen::Vector3d g0 = cal(d_.ivs[mv.k].accel_mean).normalized(), g1 = cal(d_.ivs[mv.k + 1].accel_mean).normalized();
       const Eigen::Vector3d e1 = g1.unitOrthogonal(), e2 = g1.cross(e1);
-      const PairCost c{&gyro_, tb, dw.data(), &dt_[mv.a], mv.b - mv.a + 1, g0, e1, e2};
+      const MoveCost c(gyro_, tb, std::move(inc), g0, e1, e2);
+      const double* p[] = {x.data()};
       double res[2];
-      c(x.data(), res);
+      c.Evaluate(p, res, nullptr);
       out[static_cast<Eigen::Index>(2 * q)] = res[0];
       out[static_cast<Eigen::Index>(2 * q + 1)] = res[1];
-      if (rate_cache_[q].empty()) rate_cache_[q] = dw;
     }
     return out;
   }
@@ -1321,8 +1345,7 @@ class MoveResiduals {
  private:
   const IntegrationData& d_;
   const model::ErrorModel& gyro_;
-  const std::vector<double>& dt_;
-  std::vector<std::vector<Eigen::Vector3d>> rate_cache_;
+  std::vector<std::vector<Eigen::Vector3d>> increment_cache_;
 };
 
 // Covariance Cz of the upstream parameters z: the accelerometer's and stage 1's, uncorrelated.
@@ -1341,8 +1364,7 @@ bool upstream_covariance(const IntegrationData& d, const CalibrationResult& r1, 
 // (delta method, forward differences of the move residuals): C = C2 + S·Cz·Sᵀ with
 // S = −(J2ᵀJ2)⁻¹·J2ᵀ·Rz; fills the stage-2 standard errors and bounds in r.
 void add_upstream_uncertainty(const IntegrationData& d, const CalibrationResult& r1, const CalibrationResult& r2,
-                              const std::vector<double>& x1, const std::vector<double>& x2,
-                              const std::vector<double>& dt, CalibrationResult& r) {
+                              const std::vector<double>& x1, const std::vector<double>& x2, CalibrationResult& r) {
   Eigen::MatrixXd Cz;
   if (!upstream_covariance(d, r1, Cz)) return;
   const std::size_t na = d.accel.free_index.size();
@@ -1350,7 +1372,7 @@ void add_upstream_uncertainty(const IntegrationData& d, const CalibrationResult&
   Eigen::VectorXd z0(nz);
   for (std::size_t j = 0; j < na; ++j) z0[static_cast<Eigen::Index>(j)] = d.accel.theta[static_cast<std::size_t>(d.accel.free_index[j])];
   for (std::size_t j = 0; j < d.s1_index.size(); ++j) z0[static_cast<Eigen::Index>(na + j)] = x1[j];
-  MoveResiduals residuals(d, r.model, dt);
+  MoveResiduals residuals(d, r.model);
   const Eigen::VectorXd r0 = residuals(z0, x2, true);
   Eigen::MatrixXd Rz(r0.size(), nz), J2(r0.size(), 9);
   for (Eigen::Index j = 0; j < nz; ++j) {
@@ -1382,10 +1404,10 @@ std::pair<double, Eigen::Vector3d> gravity_mismatch(const IntegrationData& d, co
                                                     const std::vector<double>& th, bool raw) {
   const auto& ivs = d.ivs;
   const auto& samples = d.rec.samples;
+  // Calibrated: A⁻¹·(y − b − G·f) (the gyro model is affine in the rate; G·f only moves its offset).
+  const Eigen::Matrix3d ai = raw ? Eigen::Matrix3d::Identity() : m.affine<double>(th.data()).a_inv;
   auto rate = [&](std::size_t i) {
-    model::Stimulus<double> st;
-    if (d.go.estimate_g_sensitivity && !raw) st.specific_force = d.f_cal[i];
-    return raw ? Eigen::Vector3d(samples[i].gyro_radps) : m.correct(th.data(), samples[i].gyro_radps, st);
+    return raw ? Eigen::Vector3d(samples[i].gyro_radps) : Eigen::Vector3d(ai * bias_corrected_rate(d, m, th.data(), i));
   };
   Eigen::Vector3d acc = Eigen::Vector3d::Zero();
   double sum = 0.0;
@@ -1441,16 +1463,14 @@ CalibrationResult calibrate_gyro_integration(const Recording& rec, const Calibra
     return done(fmt::format("too few moves between static intervals: {} usable, need at least 5 (2 residuals each) "
                             "for 9 gyro scale and cross-axis parameters plus noise",
                             pairs));
-  std::vector<Eigen::Vector3d> w;
-  std::vector<double> dt, x2;
-  bias_corrected_rates(d, r.model, r1.theta, w, dt);
-  const CalibrationResult r2 = solve_move_stage(d, r, r1.theta, w, dt, as_calibration_options(go, go.loss_scale_rad), x2);
+  std::vector<double> x2;
+  const CalibrationResult r2 = solve_move_stage(d, r, r1.theta, as_calibration_options(go, go.loss_scale_rad), x2);
   merge_stages(d, r1, r2, r);
   if (!r2.ok) return done("stage 2 (scale and cross-axis from the integrated rotations): " + r2.message);
   r.ok = true;
   r.theta = r1.theta;
   for (int i : kScaleCrossIndex) r.theta[static_cast<std::size_t>(i)] = r2.theta[static_cast<std::size_t>(i)];
-  add_upstream_uncertainty(d, r1, r2, x1, x2, dt, r);
+  add_upstream_uncertainty(d, r1, r2, x1, x2, r);
   std::tie(r.rms_norm_before, r.rms_axis_before) =
       gravity_mismatch(d, r.model, std::vector<double>(static_cast<std::size_t>(r.model.size()), 0.0), true);
   std::tie(r.rms_norm_after, r.rms_axis_after) = gravity_mismatch(d, r.model, r.theta, false);

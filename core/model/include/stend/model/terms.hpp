@@ -262,6 +262,21 @@ Vec3<T> contribution(const TermSpec& t, const T* p, const Stimulus<T>& s) {
   return Vec3<T>::Zero();
 }
 
+// Whether a term's contribution is affine in the input u (the rest of the stimulus held): all but
+// the input's square, cube and |u|·u.
+inline bool input_affine(TermKind k) {
+  return k != TermKind::kNonlinearK2 && k != TermKind::kNonlinearK3 && k != TermKind::kOddQuadratic;
+}
+
+// An input-affine model at one stimulus: y = offset + A·u, and its inverse (the calibration)
+// u = A⁻¹·(y − offset). A⁻¹ by cofactors, so it works for ceres::Jet.
+template <typename T>
+struct AffineForm {
+  Eigen::Matrix<T, 3, 3> a, a_inv;
+  Vec3<T> offset;
+  Vec3<T> correct(const Vec3<T>& y) const { return a_inv * (y - offset); }
+};
+
 // A model: an ordered set of terms over one flat parameter vector (Basalt style).
 struct ErrorModel {
   Instrument instrument = Instrument::kAccelerometer;
@@ -339,6 +354,36 @@ struct ErrorModel {
       }
     }
     return phi;
+  }
+
+  bool input_affine() const {
+    for (const auto& t : terms)
+      if (!model::input_affine(t.kind)) return false;
+    return true;
+  }
+
+  // The affine form of an input_affine() model at the stimulus s (its input ignored; for an
+  // accelerometer the specific force follows the input, as in correct()): offset = measure(θ, 0),
+  // A·e_j = measure(θ, e_j) − offset. Its correct() is the exact inverse of measure(); a model
+  // with the input's square or cube has no such form (std::logic_error).
+  template <typename T>
+  AffineForm<T> affine(const T* theta, Stimulus<T> s = {}) const {
+    if (!input_affine()) throw std::logic_error("ErrorModel::affine: the model is not affine in its input");
+    const bool accel = instrument == Instrument::kAccelerometer;
+    auto at = [&](const Vec3<T>& u) {
+      s.input = u;
+      if (accel) s.specific_force = u;
+      return measure<T>(theta, s);
+    };
+    AffineForm<T> f;
+    f.offset = at(Vec3<T>::Zero());
+    for (int j = 0; j < 3; ++j) f.a.col(j) = at(Vec3<T>::Unit(j)) - f.offset;
+    const Vec3<T> c0 = f.a.col(0), c1 = f.a.col(1), c2 = f.a.col(2);
+    const T det = c0.dot(c1.cross(c2));
+    f.a_inv.row(0) = c1.cross(c2).transpose() / det;
+    f.a_inv.row(1) = c2.cross(c0).transpose() / det;
+    f.a_inv.row(2) = c0.cross(c1).transpose() / det;
+    return f;
   }
 
   // Inverse (calibration): the input u that makes measure(θ, u) = y, with the rest of the
