@@ -229,17 +229,28 @@ double quadric_rms(const std::vector<DetectedInterval>& ivs) {
   return std::sqrt(rss / static_cast<double>(n - kQuadricUnknowns));
 }
 
+// Distinct poses among the intervals: consecutive intervals whose mean directions differ by less
+// than kSamePoseDeg are one pose split by noise.
+std::size_t poses(const std::vector<DetectedInterval>& ivs) {
+  std::size_t n = ivs.empty() ? 0 : 1;
+  for (std::size_t k = 1; k < ivs.size(); ++k) {
+    const Eigen::Vector3d a = ivs[k - 1].accel_mean_mps2.normalized(), b = ivs[k].accel_mean_mps2.normalized();
+    if (std::atan2(a.cross(b).norm(), a.dot(b)) > kSamePoseDeg * physics::kDegToRad) ++n;
+  }
+  return n;
+}
+
 // Scans kScanMultipliers; sets s.multiplier, s.multiplier_choice and s.scan.
 void scan_multipliers(const Recording& rec, const Prepared& p, DetectionSummary& s) {
   std::size_t most = 0;
   for (double k : kScanMultipliers) {
     const Pass pass = detect_at(rec, p, k * s.noise_variance, s);
-    s.scan.push_back({k, pass.intervals.size(), quadric_rms(pass.intervals)});
-    if (std::isfinite(s.scan.back().quadric_rms_mps2)) most = std::max(most, pass.intervals.size());
+    s.scan.push_back({k, pass.intervals.size(), poses(pass.intervals), quadric_rms(pass.intervals)});
+    if (std::isfinite(s.scan.back().quadric_rms_mps2)) most = std::max(most, s.scan.back().poses);
   }
   double least = kNaN;
   for (const auto& step : s.scan)
-    if (step.intervals == most && !(step.quadric_rms_mps2 >= least)) {
+    if (step.poses == most && !(step.quadric_rms_mps2 >= least)) {
       least = step.quadric_rms_mps2;
       s.multiplier = step.multiplier;
     }
@@ -250,7 +261,7 @@ void scan_multipliers(const Recording& rec, const Prepared& p, DetectionSummary&
     return;
   }
   s.multiplier_choice = "scanned " + num(kScanMultipliers.front()) + ".." + num(kScanMultipliers.back()) +
-                        ": of those keeping the most intervals (" + std::to_string(most) +
+                        ": of those keeping the most distinct poses (" + std::to_string(most) +
                         "), the least quadric (ellipsoid) residual of the interval means, " + num(least) + " m/s^2";
 }
 
@@ -273,8 +284,10 @@ std::string DetectionSummary::print() const {
   out += "  threshold " + num(threshold) + " (m/s^2)^2" +
          (multiplier > 0.0 ? " = " + num(multiplier) + " x noise (" + multiplier_choice + ")" : " (given)") + "\n";
   if (!scan.empty()) {
-    out += "  scan (multiplier: intervals, quadric RMS m/s^2):";
-    for (const auto& st : scan) out += " " + num(st.multiplier) + ": " + std::to_string(st.intervals) + ", " + num(st.quadric_rms_mps2) + ";";
+    out += "  scan (multiplier: intervals, poses, quadric RMS m/s^2):";
+    for (const auto& st : scan)
+      out += " " + num(st.multiplier) + ": " + std::to_string(st.intervals) + ", " + std::to_string(st.poses) + ", " +
+             num(st.quadric_rms_mps2) + ";";
     out += "\n";
   }
   const double dps = 1.0 / physics::kDegPerSecond;

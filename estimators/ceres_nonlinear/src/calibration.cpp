@@ -622,7 +622,8 @@ nlohmann::json detection_json(const processing::DetectionSummary& d) {
   auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
   json scan = json::array();
   for (const auto& st : d.scan)
-    scan.push_back({{"multiplier", st.multiplier}, {"intervals", st.intervals}, {"quadric_rms_mps2", num(st.quadric_rms_mps2)}});
+    scan.push_back({{"multiplier", st.multiplier}, {"intervals", st.intervals}, {"poses", st.poses},
+                    {"quadric_rms_mps2", num(st.quadric_rms_mps2)}});
   json rejected = json::object();
   for (processing::Rejection r : processing::kAllRejections) rejected[processing::rejection_name(r)] = d.count(r);
   return {{"found", d.found},

@@ -14,9 +14,9 @@
 //                   candidate set is judged by its count and by the RMS residual [m/s²] of a
 //                   quadric (ellipsoid) fitted to the interval means — the surface a perfect
 //                   calibration maps onto |a| = g, so motion inside an interval shows as residual.
-//                   Of the multipliers keeping the most intervals (a loose threshold merges a pose
-//                   with the move next to it, which the gyro gate then cuts away), the least
-//                   residual wins. When no multiplier gives ≥ 10 intervals determining the quadric
+//                   Of the multipliers keeping the most distinct poses (a loose threshold merges a
+//                   pose with the move next to it, which the gyro gate then cuts away; a tight one
+//                   splits a pose by noise, which counts once), the least residual wins. When no multiplier gives ≥ 10 intervals determining the quadric
 //                   (e.g. six axis-aligned poses): kFallbackMultiplier.
 //   gyro bias       the mean gyro reading over the init interval, else the per-axis median over
 //                   the stillest samples (window variance ≤ the lowest scanned threshold)
@@ -41,6 +41,7 @@ inline constexpr int kMinWindowSamples = 11;       // IMU-TK's least window
 inline constexpr double kAutoMinDurationS = 0.5;   // [s]
 inline constexpr std::array<double, 9> kScanMultipliers = {2, 3, 4, 5, 6, 7, 8, 9, 10};
 inline constexpr double kFallbackMultiplier = 4.0;
+inline constexpr double kSamePoseDeg = 2.0;        // consecutive intervals closer than this: one pose
 inline constexpr double kDefaultMaxGyroRadps = 3.0 * physics::kDegPerSecond;  // 3 deg/s
 
 struct StaticDetectorOptions {
@@ -88,6 +89,7 @@ struct DetectionSummary {
   struct ScanStep {
     double multiplier = 0.0;
     std::size_t intervals = 0;
+    std::size_t poses = 0;          // distinct: consecutive intervals within kSamePoseDeg are one
     double quadric_rms_mps2 = 0.0;  // NaN when the intervals do not determine a quadric
   };
   std::vector<ScanStep> scan;       // empty unless scanned
