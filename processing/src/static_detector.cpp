@@ -250,7 +250,7 @@ void scan_multipliers(const Recording& rec, const Prepared& p, DetectionSummary&
   }
   double least = kNaN;
   for (const auto& step : s.scan)
-    if (step.poses == most && !(step.quadric_rms_mps2 >= least)) {
+    if (step.poses == most && std::isfinite(step.quadric_rms_mps2) && !(step.quadric_rms_mps2 >= least)) {
       least = step.quadric_rms_mps2;
       s.multiplier = step.multiplier;
     }
