@@ -245,7 +245,8 @@ void scan_multipliers(const Recording& rec, const Prepared& p, DetectionSummary&
   std::size_t most = 0;
   for (double k : kScanMultipliers) {
     const Pass pass = detect_at(rec, p, k * s.noise_variance, s);
-    s.scan.push_back({k, pass.intervals.size(), poses(pass.intervals), quadric_rms(pass.intervals)});
+    const std::size_t distinct = poses(pass.intervals);  // noise splits do not determine a quadric
+    s.scan.push_back({k, pass.intervals.size(), distinct, distinct > kQuadricUnknowns ? quadric_rms(pass.intervals) : kNaN});
     if (std::isfinite(s.scan.back().quadric_rms_mps2)) most = std::max(most, s.scan.back().poses);
   }
   double least = kNaN;
@@ -257,7 +258,7 @@ void scan_multipliers(const Recording& rec, const Prepared& p, DetectionSummary&
   if (!std::isfinite(least)) {
     s.multiplier = kFallbackMultiplier;
     s.multiplier_choice = "fallback: no multiplier in " + num(kScanMultipliers.front()) + ".." +
-                          num(kScanMultipliers.back()) + " gave >= 10 intervals determining a quadric";
+                          num(kScanMultipliers.back()) + " gave >= 10 distinct poses determining a quadric";
     return;
   }
   s.multiplier_choice = "scanned " + num(kScanMultipliers.front()) + ".." + num(kScanMultipliers.back()) +

@@ -17,7 +17,7 @@
 //                   Of the multipliers keeping the most distinct poses (a loose threshold merges a
 //                   pose with the move next to it, which the gyro gate then cuts away; a tight one
 //                   splits a pose by noise, which counts once), the least residual wins. When no
-//                   multiplier gives ≥ 10 intervals determining the quadric (e.g. six
+//                   multiplier gives ≥ 10 distinct poses determining the quadric (e.g. six
 //                   axis-aligned poses): kFallbackMultiplier.
 //   gyro bias       the mean gyro reading over the init interval, else the per-axis median over
 //                   the stillest samples (window variance ≤ the lowest scanned threshold)
