@@ -134,10 +134,7 @@ GapInput build_magnitude_input(const Recording& rec, const estimation::ModelSpec
                              "' has no rate truth: a gyroscope gap needs a rate table's truth columns "
                              "(w_x_radps …); sessions with unknown orientations give only |g|");
   const double g = rec.header.gravity_or_standard_mps2();
-  processing::StaticDetectorOptions det;
-  // The still interval at the start (an importer's "initialization" segment) sets the threshold.
-  for (const auto& s : rec.segments)
-    if (s.label == "initialization" && s.t_end_s > s.t_start_s) det.init_duration_s = s.t_end_s - s.t_start_s;
+  processing::StaticDetectorOptions det;  // the still start (an "initialization" segment) sets the threshold
   // Long enough for the extraction to keep something after settle_s at both ends.
   det.min_duration_s = 2.0 * spec.processing.extraction.settle_s + 1.0;
   const auto ivs = processing::detect_static_intervals(rec, det);

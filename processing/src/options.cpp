@@ -136,17 +136,18 @@ std::optional<ProcessingOptions::Problem> ProcessingOptions::problem() const {
   if (!at_least(e.settle_s, 0.0, false))
     return Problem{"extraction.settle_s", "the settling time must not be negative, got " + num(e.settle_s) + " s"};
   const StaticDetectorOptions& d = detector;
-  if (!at_least(d.window_s, 0.0, true))
-    return Problem{"detector.window_s", "must be > 0 (in seconds), got " + num(d.window_s)};
+  if (!at_least(d.window_s, 0.0, false))
+    return Problem{"detector.window_s", "must be >= 0 (in seconds; 0: from the sample rate), got " + num(d.window_s)};
   if (!at_least(d.min_duration_s, 0.0, false))
-    return Problem{"detector.min_duration_s", "must be >= 0 (in seconds), got " + num(d.min_duration_s)};
+    return Problem{"detector.min_duration_s",
+                   "must be >= 0 (in seconds; 0: from the window), got " + num(d.min_duration_s)};
   if (!at_least(d.variance_threshold, 0.0, false))
     return Problem{"detector.variance_threshold_m2ps4",
                    "must be >= 0 (in (m/s^2)^2; 0: automatic), got " + num(d.variance_threshold)};
-  if (!at_least(d.threshold_multiplier, 0.0, true))
-    return Problem{"detector.threshold_multiplier", "must be > 0, got " + num(d.threshold_multiplier)};
+  if (!at_least(d.threshold_multiplier, 0.0, false))
+    return Problem{"detector.threshold_multiplier", "must be >= 0 (0: scanned), got " + num(d.threshold_multiplier)};
   if (!at_least(d.init_duration_s, 0.0, false))
-    return Problem{"detector.init_duration_s", "must be >= 0 (in seconds), got " + num(d.init_duration_s)};
+    return Problem{"detector.init_duration_s", "must be >= 0 (in seconds; 0: the recording's initialization segment), got " + num(d.init_duration_s)};
   if (!at_least(d.trim_s, 0.0, false))
     return Problem{"detector.trim_s", "must be >= 0 (in seconds), got " + num(d.trim_s)};
   if (!at_least(d.max_gyro_radps, 0.0, false))

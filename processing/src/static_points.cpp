@@ -48,9 +48,12 @@ std::vector<Segment> segments_of_kinds(const Recording& rec, const ProcessingOpt
   return out;
 }
 
-std::vector<Segment> detected_segments(const Recording& rec, const StaticDetectorOptions& o) {
+std::vector<Segment> detected_segments(const Recording& rec, const StaticDetectorOptions& o,
+                                       std::optional<DetectionSummary>& summary) {
+  const Detection found = detect_static(rec, o);
+  summary = found.summary;
   std::vector<Segment> out;
-  for (const DetectedInterval& iv : detect_static_intervals(rec, o)) {
+  for (const DetectedInterval& iv : found.intervals) {
     Segment s;
     s.id = static_cast<int>(out.size());
     s.kind = SegmentKind::kDetected;
@@ -63,16 +66,16 @@ std::vector<Segment> detected_segments(const Recording& rec, const StaticDetecto
 }
 
 // Step 1: the intervals, as segments.
-std::vector<Segment> intervals(const Recording& rec, const ProcessingOptions& o, std::vector<std::string>& notes) {
+std::vector<Segment> intervals(const Recording& rec, const ProcessingOptions& o, Extraction& out) {
   IntervalSource source = o.intervals;
   if (source == IntervalSource::kAuto)
     source = rec.segments.empty() ? IntervalSource::kDetect : IntervalSource::kSegments;
-  if (source == IntervalSource::kSegments) return segments_of_kinds(rec, o, notes);
-  std::vector<Segment> found = detected_segments(rec, o.detector);
+  if (source == IntervalSource::kSegments) return segments_of_kinds(rec, o, out.notes);
+  std::vector<Segment> found = detected_segments(rec, o.detector, out.detection);
   if (o.intervals == IntervalSource::kAuto)
-    notes.push_back("the recording has no segments: " + std::to_string(found.size()) +
-                    " static intervals detected in the samples (sliding variance, window " +
-                    num(o.detector.window_s) + " s, at least " + num(o.detector.min_duration_s) + " s)");
+    out.notes.push_back("the recording has no segments: " + std::to_string(found.size()) +
+                        " static intervals detected in the samples");
+  out.notes.push_back(out.detection->print());
   return found;
 }
 
@@ -236,7 +239,7 @@ Extraction extract(const Recording& rec, const ProcessingOptions& options, const
     out.notes.push_back("no 'die_c' truth column: the temperature of each point is the sensor's own "
                         "temperature reading");
   require_increasing_times(rec);
-  for (const Segment& seg : intervals(rec, out.options, out.notes)) builder.add(seg);
+  for (const Segment& seg : intervals(rec, out.options, out)) builder.add(seg);
   return out;
 }
 

@@ -2,7 +2,9 @@
 // means, the sliding-variance detector, and Recording → static points with its skip rules.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <random>
 #include <string>
 
@@ -137,9 +139,9 @@ TEST(ProcessingOptions, BadKeysAndValuesNameFileLineAndKey) {
   EXPECT_NE(e.find("orientation"), std::string::npos) << e;
   e = yaml_error("intervals: segment\n");
   EXPECT_NE(e.find("segments"), std::string::npos) << e;
-  e = yaml_error("detector: {window_s: 0}\n");
+  e = yaml_error("detector: {window_s: -1}\n");  // 0 is allowed: chosen from the sample rate
   EXPECT_NE(e.find("window_s"), std::string::npos) << e;
-  EXPECT_NE(e.find("must be > 0"), std::string::npos) << e;
+  EXPECT_NE(e.find("must be >= 0"), std::string::npos) << e;
 }
 
 TEST(ProcessingOptions, RoundTripsThroughYaml) {
@@ -239,6 +241,89 @@ TEST(StaticDetector, FindsStillPosesBetweenMotionAndSplitsAtGaps) {
   rec.samples[mid].flags |= kGapBefore;
   o.min_duration_s = 1.0;
   EXPECT_EQ(detect_static_intervals(rec, o).size(), 6u);
+}
+
+// A hand-held session at 100 Hz: a 10 s still start, then short poses in random directions
+// joined by shaking; the gyro reads a zero-rate offset of several deg/s throughout. Pose 3 is a
+// constant 10 deg/s turn about the vertical, pose 6 holds a saturated sample, pose 9 a gap.
+struct HandSession {
+  Recording rec;
+  std::vector<std::pair<double, double>> poses;  // [t_start, t_end) of each pose
+};
+
+HandSession hand_session(std::uint64_t seed) {
+  HandSession h;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::uniform_real_distribution<double> hold(1.0, 1.5);
+  const Eigen::Vector3d offset = Eigen::Vector3d(4.0, -3.0, 2.5) * M_PI / 180.0;
+  auto gyro = [&](const Eigen::Vector3d& w) { return Eigen::Vector3d(offset + w + 0.002 * Eigen::Vector3d(n(rng), n(rng), n(rng))); };
+  double t = 0.0;
+  auto still = [&](double duration, const Eigen::Vector3d& f, const Eigen::Vector3d& w) {
+    const std::size_t first = h.rec.samples.size();
+    add_samples(h.rec, t, t + duration, f, 0.02, rng);
+    for (std::size_t i = first; i < h.rec.samples.size(); ++i) h.rec.samples[i].gyro_radps = gyro(w);
+    t += duration;
+  };
+  still(10.0, Eigen::Vector3d(0.3, 0.2, 9.8), Eigen::Vector3d::Zero());
+  for (int pose = 0; pose < 14; ++pose) {
+    for (int k = 0; k < 80; ++k, t += 0.01) {  // shaking 0.8 s
+      ImuSample s;
+      s.t_s = t;
+      s.accel_mps2 = Eigen::Vector3d(0, 0, 9.8) + Eigen::Vector3d(2.0 * std::sin(25.0 * t), std::cos(19.0 * t), 0.5);
+      s.gyro_radps = gyro(Eigen::Vector3d(0.5, -0.3, 0.2));
+      h.rec.samples.push_back(s);
+    }
+    const Eigen::Vector3d f = 9.8 * Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+    const double d = pose == 9 ? 3.0 : hold(rng);
+    h.poses.emplace_back(t, t + d);
+    const std::size_t first = h.rec.samples.size();
+    still(d, f, pose == 3 ? Eigen::Vector3d(0.0, 0.0, 10.0 * M_PI / 180.0) : Eigen::Vector3d::Zero());
+    const std::size_t mid = (first + h.rec.samples.size()) / 2;
+    if (pose == 6) h.rec.samples[mid].flags |= kAccelSaturated;
+    if (pose == 9) h.rec.samples[mid].flags |= kGapBefore;
+  }
+  return h;
+}
+
+TEST(StaticDetector, ChoosesFromTheDataAndCountsEveryRejection) {
+  const HandSession h = hand_session(3);
+  const Detection d = detect_static(h.rec);
+  const DetectionSummary& s = d.summary;
+  std::cout << s.print() << "\n";
+  EXPECT_NEAR(s.rate_hz, 100.0, 0.1);
+  EXPECT_NEAR(s.window_s, 0.2, 1e-12);  // kAutoWindowS at 100 Hz
+  EXPECT_NEAR(s.min_duration_s, 0.5, 1e-12);
+  EXPECT_EQ(s.multiplier_choice.rfind("scanned", 0), 0u) << s.multiplier_choice;
+  EXPECT_EQ(s.scan.size(), kScanMultipliers.size());
+  // The zero-rate offset (4, −3, 2.5) deg/s, from the stillest samples, and removed before the gate.
+  EXPECT_NEAR(s.gyro_bias_radps.x() * 180.0 / M_PI, 4.0, 0.05);
+  EXPECT_NEAR(s.gyro_bias_radps.y() * 180.0 / M_PI, -3.0, 0.05);
+  EXPECT_EQ(s.count(Rejection::kSaturated), 1u);
+  EXPECT_EQ(s.count(Rejection::kGap), 1u);
+  EXPECT_GE(s.count(Rejection::kGyroRate), 1u);
+  // Every pose of 1–1.5 s is found except the turning and the saturated ones; the gap splits one in two.
+  EXPECT_EQ(d.intervals.size(), 1u + 14u - 2u + 1u);
+  for (std::size_t k = 0; k < h.poses.size(); ++k) {
+    const auto [t0, t1] = h.poses[k];
+    const auto inside = std::count_if(d.intervals.begin(), d.intervals.end(),
+                                      [&](const DetectedInterval& iv) { return iv.t_start_s >= t0 && iv.t_end_s < t1; });
+    EXPECT_EQ(inside, k == 3 || k == 6 ? 0 : k == 9 ? 2 : 1) << "pose " << k;
+  }
+  // The importer's still start sets the noise and the gyro bias.
+  Recording with_init = h.rec;
+  Segment init;
+  init.label = "initialization";
+  init.t_start_s = 0.0;
+  init.t_end_s = 10.0;
+  with_init.segments.push_back(init);
+  const DetectionSummary si = detect_static(with_init).summary;
+  EXPECT_NEAR(si.init_duration_s, 10.0, 1e-12);
+  EXPECT_NE(si.noise_source.find("first 10 s"), std::string::npos) << si.noise_source;
+  EXPECT_NE(si.gyro_bias_source.find("first 10 s"), std::string::npos) << si.gyro_bias_source;
+  EXPECT_NEAR(si.gyro_bias_radps.z() * 180.0 / M_PI, 2.5, 0.01);
+  EXPECT_TRUE(si.equals(si));
+  EXPECT_FALSE(si.equals(s));
 }
 
 // ---------------------------------------------------------------------------------------------

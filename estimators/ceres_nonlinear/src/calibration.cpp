@@ -513,6 +513,7 @@ namespace {
 struct Extracted {
   std::vector<StaticInterval> intervals;
   std::vector<std::vector<double>> truth;  // per interval, the means of the requested columns
+  std::optional<processing::DetectionSummary> detection;
 };
 
 Extracted extract_intervals(const Recording& rec, const processing::ProcessingOptions& o,
@@ -520,10 +521,12 @@ Extracted extract_intervals(const Recording& rec, const processing::ProcessingOp
   processing::Request request;
   request.truth_columns = std::move(truth_columns);
   Extracted out;
-  for (const auto& p : processing::extract(rec, o, request).points) {
+  const processing::Extraction ex = processing::extract(rec, o, request);
+  for (const auto& p : ex.points) {
     out.intervals.push_back(to_interval(p));
     out.truth.push_back(p.truth);
   }
+  out.detection = ex.detection;
   return out;
 }
 
@@ -560,6 +563,7 @@ std::string CalibrationResult::report() const {
                            : method == "integration" ? "rad (gravity direction)"
                            : gyro ? "rad/s" : "m/s^2";
   s += fmt::format("residual sigma: {} {}, solver: {}\n", fmt_num(sigma), sigma_unit, solver_report);
+  if (detection) s += detection->print() + "\n";
   if (!gyro) {
     s += fmt::format("RMS of |a| - g over the intervals: raw {} m/s^2, calibrated {} m/s^2\n",
                      fmt_num(rms_norm_before), fmt_num(rms_norm_after));
@@ -593,6 +597,37 @@ std::string CalibrationResult::report() const {
   for (const auto& p : gyro_parameters) row(p);
   return s;
 }
+
+namespace {
+
+nlohmann::json detection_json(const processing::DetectionSummary& d) {
+  using nlohmann::json;
+  auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  json scan = json::array();
+  for (const auto& st : d.scan)
+    scan.push_back({{"multiplier", st.multiplier}, {"intervals", st.intervals}, {"poses", st.poses},
+                    {"quadric_rms_mps2", num(st.quadric_rms_mps2)}});
+  json rejected = json::object();
+  for (processing::Rejection r : processing::kAllRejections) rejected[processing::rejection_name(r)] = d.count(r);
+  return {{"found", d.found},
+          {"rate_hz", d.rate_hz},
+          {"window_s", d.window_s},
+          {"min_duration_s", d.min_duration_s},
+          {"init_duration_s", d.init_duration_s},
+          {"noise_variance_m2ps4", d.noise_variance},
+          {"noise_source", d.noise_source},
+          {"threshold_m2ps4", d.threshold},
+          {"multiplier", d.multiplier},
+          {"multiplier_choice", d.multiplier_choice},
+          {"scan", scan},
+          {"gyro_bias_dps", {d.gyro_bias_radps.x() / physics::kDegPerSecond, d.gyro_bias_radps.y() / physics::kDegPerSecond,
+                             d.gyro_bias_radps.z() / physics::kDegPerSecond}},
+          {"gyro_bias_source", d.gyro_bias_source},
+          {"max_gyro_dps", d.max_gyro_radps / physics::kDegPerSecond},
+          {"rejected", rejected}};
+}
+
+}  // namespace
 
 std::string CalibrationResult::to_json() const {
   using nlohmann::json;
@@ -637,6 +672,7 @@ std::string CalibrationResult::to_json() const {
   for (const auto& p : parameters) j["parameters"].push_back(prm(p));
   j["gyro_parameters"] = json::array();
   for (const auto& p : gyro_parameters) j["gyro_parameters"].push_back(prm(p));
+  if (detection) j["detection"] = detection_json(*detection);
   j["intervals"] = json::array();
   for (const auto& iv : intervals)
     j["intervals"].push_back({{"label", iv.label}, {"t_start_s", iv.t_start_s}, {"t_end_s", iv.t_end_s},
@@ -707,8 +743,13 @@ CalibrationResult calibrate_accelerometer_unknown_orientations(const std::vector
 
 CalibrationResult calibrate_accelerometer_unknown_orientations(const Recording& rec,
                                                                const CalibrationOptions& o) {
-  const double g = o.gravity_mps2 > 0.0 ? o.gravity_mps2 : rec.header.gravity_mps2;
-  return calibrate_accelerometer_unknown_orientations(static_intervals(rec, o.processing), g, o);
+  const double g = o.gravity_mps2 > 0.0          ? o.gravity_mps2
+                   : o.standard_gravity_fallback ? rec.header.gravity_or_standard_mps2()
+                                                 : rec.header.gravity_mps2;
+  const Extracted ex = extract_intervals(rec, o.processing);
+  CalibrationResult r = calibrate_accelerometer_unknown_orientations(ex.intervals, g, o);
+  r.detection = ex.detection;
+  return r;
 }
 
 namespace {

@@ -63,7 +63,6 @@ ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& fi
                  "use gyroscope: rate_table, or an accelerometer method");
   if (o.accelerometer == "none" && o.gyroscope == "none") m.fail_value("accelerometer", "nothing to fit: both are none");
   auto& a = o.accel;
-  a.processing.detector.max_gyro_radps = 3.0 * physics::kDegPerSecond;  // a turn about the vertical is not a pose
   processing::read_options(m, a.processing);
   // segment_trim_s: dropped at each end of a segment — the rate table's, and the accelerometer
   // fits' on segments unless the file states their extraction.settle_s.
@@ -77,7 +76,11 @@ ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& fi
     a.processing.extraction.settle_s = rate_table.extraction.settle_s;
     if (rate_table.stated.count(settle) > 0) a.processing.stated.insert(settle);
   }
-  a.gravity_mps2 = positive(m, "gravity_mps2", 0.0, "in m/s^2", true);
+  if (m.has("gravity_mps2") && m.get("gravity_mps2").IsScalar() &&
+      m.get("gravity_mps2").Scalar() == kRecordingOrStandardGravity)
+    a.standard_gravity_fallback = true;
+  else
+    a.gravity_mps2 = positive(m, "gravity_mps2", 0.0, std::string("in m/s^2, or ") + kRecordingOrStandardGravity, true);
   a.loss = loss_from_name(choice(m, "loss", "none", {"none", "huber", "cauchy"}));
   o.gyro.loss = a.loss;
   a.loss_scale_mps2 = positive(m, "loss_scale_mps2", a.loss_scale_mps2, "in m/s^2");
@@ -125,19 +128,18 @@ std::string describe_options(const ModelFileOptions& o) {
   const processing::IntervalSource source = a.processing.intervals;
   s += fmt::format("  accelerometer: {}, gyroscope: {}, intervals: {}\n", o.accelerometer, o.gyroscope,
                    processing::interval_source_name(source));
+  auto or_auto = [](double v, const char* unit) { return v > 0.0 ? fmt::format("{} {}", v, unit) : std::string("auto"); };
   if (source != processing::IntervalSource::kSegments)
-    s += fmt::format("  detector: window {} s, min duration {} s, threshold {}, trim {} s, max gyro {:.3g} deg/s\n",
-                     d.window_s, d.min_duration_s,
-                     d.variance_threshold > 0.0
-                         ? fmt::format("{} (m/s^2)^2", d.variance_threshold)
-                         : fmt::format("auto ({} x {})", d.threshold_multiplier,
-                                       d.init_duration_s > 0.0
-                                           ? fmt::format("variance of the first {} s", d.init_duration_s)
-                                           : std::string("10th percentile of the window variance")),
-                     d.trim_s, d.max_gyro_radps / physics::kDegPerSecond);
+    s += fmt::format("  detector (auto: from the data, see the detection below): window {}, min duration {}, "
+                     "threshold {}, multiplier {}, still start {}, trim {} s, max gyro {:.3g} deg/s after its bias\n",
+                     or_auto(d.window_s, "s"), or_auto(d.min_duration_s, "s"),
+                     or_auto(d.variance_threshold, "(m/s^2)^2"), or_auto(d.threshold_multiplier, ""),
+                     or_auto(d.init_duration_s, "s"), d.trim_s, d.max_gyro_radps / physics::kDegPerSecond);
   else
     s += fmt::format("  segments trimmed by {} s at each end\n", a.processing.extraction.settle_s);
-  s += fmt::format("  gravity: {}\n", a.gravity_mps2 > 0.0 ? fmt::format("{} m/s^2", a.gravity_mps2) : "from the recording");
+  s += fmt::format("  gravity: {}\n", a.gravity_mps2 > 0.0            ? fmt::format("{} m/s^2", a.gravity_mps2)
+                                      : a.standard_gravity_fallback ? "the recording's, else standard (9.80665 m/s^2)"
+                                                                    : "from the recording");
   s += fmt::format("  loss: {} (scale {} m/s^2, gyro {} rad/s, integration {} rad)\n", loss_name(a.loss),
                    a.loss_scale_mps2, o.gyro.loss_scale_radps, o.gyro.loss_scale_rad);
   s += fmt::format("  confidence {}, max iterations {}, rank tolerance {:g}, max relative std error {}\n", a.confidence,
@@ -168,7 +170,8 @@ std::string options_json(const ModelFileOptions& o) {
         {"trim_s", d.trim_s},
         {"max_gyro_dps", d.max_gyro_radps / physics::kDegPerSecond}}},
       {"segment_trim_s", o.gyro.processing.extraction.settle_s},
-      {"gravity_mps2", a.gravity_mps2},
+      {"gravity_mps2", a.standard_gravity_fallback && !(a.gravity_mps2 > 0.0) ? nlohmann::json(kRecordingOrStandardGravity)
+                                                                               : nlohmann::json(a.gravity_mps2)},
       {"loss", loss_name(a.loss)},
       {"loss_scale_mps2", a.loss_scale_mps2},
       {"gyro_loss_scale_radps", o.gyro.loss_scale_radps},

@@ -11,14 +11,14 @@
 //     cutoff_hz: 1.0
 //     settle_s: 2.0                # discarded at each end of every interval
 //     zero_phase: true
-//   detector:                      # stend/processing/static_detector.hpp
-//     window_s: 1.0
-//     min_duration_s: 1.0
-//     variance_threshold_m2ps4: 0  # 0: automatic
-//     threshold_multiplier: 6
-//     init_duration_s: 0
+//   detector:                      # stend/processing/static_detector.hpp (0: chosen from the data)
+//     window_s: 0                  # 0: from the sample rate
+//     min_duration_s: 0            # 0: from the window
+//     variance_threshold_m2ps4: 0  # 0: threshold_multiplier × the still noise variance
+//     threshold_multiplier: 0      # 0: scanned 2..10 (IMU-TK), the most consistent set wins
+//     init_duration_s: 0           # 0: the recording's initialization segment, if any
 //     trim_s: 0
-//     max_gyro_dps: 0              # 0: no limit
+//     max_gyro_dps: 3              # after removing the gyro bias; 0: no limit
 #pragma once
 
 #include <optional>

@@ -17,11 +17,13 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "stend/processing/options.hpp"
 #include "stend/processing/skip.hpp"
+#include "stend/processing/static_detector.hpp"
 #include "stend/recording.hpp"
 
 namespace stend::processing {
@@ -78,6 +80,8 @@ struct Extraction {
   // Every remark in order: data-source remarks, each skip's note, gaps in kept windows, no
   // segment of the requested kinds.
   std::vector<std::string> notes;
+  // How the intervals were detected and what the detector rejected (when they were detected).
+  std::optional<DetectionSummary> detection;
   std::size_t count(SkipReason reason) const;  // skips with that reason
 };
 

@@ -29,6 +29,7 @@
 #include <Eigen/Dense>
 #include <cstddef>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -74,7 +75,8 @@ enum class Loss { kNone, kHuber, kCauchy };
 
 struct CalibrationOptions {
   processing::ProcessingOptions processing = default_interval_options();  // the static intervals
-  double gravity_mps2 = 0.0;       // 0: the recording header's; both 0 → error
+  double gravity_mps2 = 0.0;       // 0: the recording header's; both 0 → error, unless:
+  bool standard_gravity_fallback = false;  // the recording states no g: standard gravity 9.80665 m/s^2
   Loss loss = Loss::kNone;
   double loss_scale_mps2 = 0.05;   // Huber / Cauchy scale
   double confidence = 0.95;
@@ -120,6 +122,8 @@ struct CalibrationResult {
   std::vector<Parameter> gyro_parameters;  // gyro_bias_x/y/z when estimated
   std::vector<std::string> not_identifiable;  // parameter names
   std::vector<StaticInterval> intervals;
+  // How the intervals were detected, with the rejected candidates by reason (when detected).
+  std::optional<processing::DetectionSummary> detection;
   double gravity_mps2 = 0.0;
   int observations = 0, estimated = 0, dof = 0, iterations = 0;
   double sigma = 0.0;              // residual standard deviation [m/s^2] (whitened: 1 = as expected)

@@ -23,6 +23,9 @@ namespace stend::ceres_nonlinear {
 inline constexpr const char* kResultsSchema = "stend.ceres_nonlinear.results/1";
 inline constexpr const char* kEstimatorName = "ceres_nonlinear";
 inline constexpr const char* kEstimatorVersion = "0.2.0";
+// gravity_mps2: recording_or_standard — the recording's g where it states one (a stend run: from
+// the experiment's site), else standard gravity (an imported log states none).
+inline constexpr const char* kRecordingOrStandardGravity = "recording_or_standard";
 
 struct ModelFileOptions {
   std::string accelerometer = "unknown_orientations";
