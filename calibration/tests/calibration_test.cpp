@@ -233,9 +233,13 @@ TEST(Calibration, TemperatureModelFromATempPolyDocumentInvertsTheForwardModel) {
   EXPECT_EQ(cal.valid_max_c, 70.0);
   // bias_tc2_x and bias_tc2_z are not in the document (those axes chose order 1): 0, as fitted.
   const auto info = m.params();
-  for (std::size_t i = 0; i < info.size(); ++i)
-    if (info[i].name == "bias_tc2_x") EXPECT_EQ(cal.accel.theta[i], 0.0);
-    else if (info[i].name == "bias_tc2_y") EXPECT_EQ(cal.accel.theta[i], 3e-5);
+  auto theta_of = [&](const std::string& name) {
+    for (std::size_t i = 0; i < info.size(); ++i)
+      if (info[i].name == name) return cal.accel.theta[i];
+    return std::nan("");
+  };
+  EXPECT_EQ(theta_of("bias_tc2_x"), 0.0);
+  EXPECT_EQ(theta_of("bias_tc2_y"), 3e-5);
   EXPECT_TRUE(cal.notes.empty());
 
   Recording raw;
