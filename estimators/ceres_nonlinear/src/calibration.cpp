@@ -266,13 +266,13 @@ struct WeakParameters {
   std::string why;
 };
 
-// Singular directions of the scaled Jacobian (singular value below rank_tolerance of the
-// largest), each named as a combination of parameters in their own units; a parameter whose unit
+// Singular directions of the scaled Jacobian (singular value below `tolerance` × the largest;
+// `what` says what that means in the message), each named as a combination of parameters in their own units; a parameter whose unit
 // vector has a share ≥ 0.5 inside the singular subspace is not identifiable (if none reaches it,
 // the most affected ones). A large standard error alone never makes a direction weak: the
 // parameters' verdicts judge precision.
 WeakParameters weak_parameters(const Eigen::JacobiSVD<Eigen::MatrixXd>& svd, const Eigen::VectorXd& scale,
-                               const std::vector<int>& free_index, const CalibrationOptions& o,
+                               const std::vector<int>& free_index, double tolerance, const char* what,
                                const CalibrationResult& r) {
   const Eigen::VectorXd sv = svd.singularValues();
   const int p = static_cast<int>(free_index.size());
@@ -281,7 +281,7 @@ WeakParameters weak_parameters(const Eigen::JacobiSVD<Eigen::MatrixXd>& svd, con
   WeakParameters weak;
   std::vector<int> weak_dirs;
   for (int k = 0; k < sv.size(); ++k)
-    if (!(sv[k] > o.rank_tolerance * sv[0])) weak_dirs.push_back(k);
+    if (!(sv[k] > tolerance * sv[0])) weak_dirs.push_back(k);
   if (weak_dirs.empty()) return weak;
   // θ = diag(scale)·θ_s, so a direction in the parameters' own units is scale ⊙ v.
   Eigen::MatrixXd basis(p, static_cast<Eigen::Index>(weak_dirs.size()));
@@ -296,7 +296,7 @@ WeakParameters weak_parameters(const Eigen::JacobiSVD<Eigen::MatrixXd>& svd, con
     if (share[static_cast<std::size_t>(j)] >= cut) weak.names.push_back(names[static_cast<std::size_t>(j)]);
   std::string list;
   for (const auto& c : estimation::null_space_text(basis, names)) list += (list.empty() ? "" : "; ") + c;
-  weak.why = fmt::format("rank-deficient design (smallest singular value ratio {:.2e}): the data do not see {}",
+  weak.why = fmt::format("{} (smallest singular value ratio {:.2e}): the data do not see {}", what,
                          sv[sv.size() - 1] / sv[0], list);
   return weak;
 }
@@ -374,12 +374,20 @@ void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<in
   }
   const double rss = 2.0 * cost;
   r.sigma = r.dof > 0 ? std::sqrt(rss / r.dof) : kNaN;
-  const WeakParameters weak = weak_parameters(svd, scale, free_index, o, r);
+  const WeakParameters weak = weak_parameters(svd, scale, free_index, o.rank_tolerance, "rank-deficient design", r);
   if (!weak.names.empty()) {
     fail_not_identifiable(r, weak);
     return;
   }
   if (summary.termination_type != ceres::CONVERGENCE) {
+    // A nonlinear fit whose design is singular to first order (e.g. gravity never along one axis)
+    // wanders along the direction the data hardly see: name it as the reason.
+    const WeakParameters near = weak_parameters(svd, scale, free_index, std::sqrt(o.rank_tolerance),
+                                                "the solver did not converge on a nearly singular design", r);
+    if (!near.names.empty()) {
+      fail_not_identifiable(r, near);
+      return;
+    }
     fail_all(r, "the solver did not converge: " + summary.BriefReport() +
                     " (raise max_iterations, check the static intervals and gravity)");
     return;
