@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <numbers>
+#include <iostream>
 #include <random>
 
 namespace {
@@ -123,6 +124,7 @@ TEST_F(HeldOut, StaticNormAfterApplyingIsWithinTheNoiseFloor) {
   std::ostringstream text;
   r.print(text);
   ASSERT_TRUE(r.ok) << text.str();
+  std::cout << text.str();
   EXPECT_EQ(r.statics.intervals, 6) << text.str();  // the still start and five poses
   // Calibrated: within the noise of the interval means (the fit's own uncertainty is smaller).
   EXPECT_LT(r.statics.rms_after, 3.0 * r.statics.noise_floor) << text.str();
@@ -141,6 +143,7 @@ TEST_F(HeldOut, PlantedTurnsIntegrateToTheirAngleWithinTheStatedUncertainty) {
   std::ostringstream text;
   r.print(text);
   ASSERT_TRUE(r.ok) << text.str();
+  std::cout << text.str();
   ASSERT_EQ(r.turns.size(), 3u) << text.str();  // the three turns about x, not those about y and z
   for (const auto& t : r.turns) {
     EXPECT_TRUE(t.holds) << text.str();
