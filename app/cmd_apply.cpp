@@ -24,7 +24,8 @@ namespace fs = std::filesystem;
 fs::path results_file(const fs::path& cal) {
   if (!fs::is_directory(cal)) return cal;
   std::vector<fs::path> found;
-  for (const auto& e : estimators::builtin().entries())
+  const estimation::Registry registry = estimators::builtin();
+  for (const auto& e : registry.entries())
     if (!e.results_file.empty() && fs::is_regular_file(cal / e.results_file)) found.push_back(cal / e.results_file);
   if (found.size() == 1) return found.front();
   std::string names;
