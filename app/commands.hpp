@@ -63,6 +63,7 @@ void add_compare_command(CLI::App& app, std::vector<Command>& out);  // cmd_comp
 void add_export_command(CLI::App& app, std::vector<Command>& out);   // cmd_export.cpp
 void add_emulate_command(CLI::App& app, std::vector<Command>& out);  // cmd_emulate.cpp
 void add_import_command(CLI::App& app, std::vector<Command>& out);   // cmd_import.cpp
+void add_apply_command(CLI::App& app, std::vector<Command>& out);    // cmd_apply.cpp
 
 // Builds RUN/report.html from what the run folder holds (called at the end of `stend run`).
 // Returns the report path, or an empty path when no report could be written (says why on stderr).

@@ -191,6 +191,7 @@ int main(int argc, char** argv) {
   stend::cli::add_export_command(app, commands);
   stend::cli::add_emulate_command(app, commands);
   stend::cli::add_import_command(app, commands);
+  stend::cli::add_apply_command(app, commands);
 
   CLI11_PARSE(app, argc, argv);
   try {

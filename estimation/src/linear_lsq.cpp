@@ -92,29 +92,6 @@ bool close(double a, double b, double rel, double abs_tol) {
   return std::abs(a - b) <= abs_tol + rel * std::max(std::abs(a), std::abs(b));
 }
 
-// Reduced row echelon form (rows = combinations), leading coefficient 1, dust set to zero.
-Eigen::MatrixXd rref(Eigen::MatrixXd M) {
-  const Eigen::Index rows = M.rows(), cols = M.cols();
-  Eigen::Index r = 0;
-  for (Eigen::Index c = 0; c < cols && r < rows; ++c) {
-    Eigen::Index piv;
-    const double best = M.col(c).tail(rows - r).cwiseAbs().maxCoeff(&piv);
-    if (best < 1e-12) continue;
-    piv += r;
-    M.row(r).swap(M.row(piv));
-    M.row(r) /= M(r, c);
-    for (Eigen::Index i = 0; i < rows; ++i)
-      if (i != r) M.row(i) -= M(i, c) * M.row(r);
-    ++r;
-  }
-  for (Eigen::Index i = 0; i < rows; ++i) {
-    const double mx = M.row(i).cwiseAbs().maxCoeff();
-    for (Eigen::Index j = 0; j < cols; ++j)
-      if (std::abs(M(i, j)) < 1e-10 * mx) M(i, j) = 0.0;
-  }
-  return M;
-}
-
 std::string combination_text(const std::vector<std::pair<int, double>>& coeffs,
                              const std::vector<ParameterEstimate>& params) {
   std::string s;
@@ -324,7 +301,8 @@ std::vector<bool> identifiable_parameters(const Eigen::MatrixXd& P) {
 
 // Estimates, covariance, standard errors and intervals of the identifiable parameters (NaN for
 // the others); the fit is ok from here on.
-void fill_identified(LsqResult& r, const Eigen::VectorXd& x, const std::vector<bool>& ident) {
+void fill_identified(LsqResult& r, const Eigen::VectorXd& x, const std::vector<bool>& ident,
+                     const PrecisionTolerances& tolerances) {
   const Eigen::Index p = x.size();
   r.estimate = Eigen::VectorXd::Constant(p, kNaN);
   r.covariance = Eigen::MatrixXd::Constant(p, p, kNaN);
@@ -344,6 +322,7 @@ void fill_identified(LsqResult& r, const Eigen::VectorXd& x, const std::vector<b
     e.lower = e.value - r.quantile * e.std_error;
     e.upper = e.value + r.quantile * e.std_error;
   }
+  for (auto& e : r.parameters) judge(e, tolerances);
 }
 
 // Groups of non-identifiable parameters connected through the null space (projector entries
@@ -388,7 +367,7 @@ AliasGroup alias_group(const LsqResult& r, const std::vector<int>& g, const Eige
   for (int a = 0; a < ag.null_dimension; ++a) Nt.row(a) = ag.null_directions[static_cast<std::size_t>(a)].transpose();
   Eigen::JacobiSVD<Eigen::MatrixXd> nsvd(Nt, Eigen::ComputeFullV);
   const Eigen::MatrixXd comp = nsvd.matrixV().rightCols(m - ag.null_dimension);
-  const Eigen::MatrixXd combos = rref(comp.transpose());
+  const Eigen::MatrixXd combos = reduced_row_echelon(comp.transpose());
   for (Eigen::Index c = 0; c < combos.rows(); ++c) {
     Eigen::VectorXd full = Eigen::VectorXd::Zero(p);
     for (int b = 0; b < m; ++b) full[g[static_cast<std::size_t>(b)]] = combos(c, b);
@@ -415,14 +394,19 @@ std::vector<std::string> explain_unidentified(LsqResult& r, const Eigen::MatrixX
       continue;
     }
     AliasGroup ag = alias_group(r, g, P, dinv);
-    std::vector<std::string> identified;
+    std::vector<std::string> identified, unseen, group_names;
     for (const auto& c : ag.identified) identified.push_back(c.text);
+    for (int j : g) group_names.push_back(r.parameters[static_cast<std::size_t>(j)].name);
+    Eigen::MatrixXd basis(static_cast<Eigen::Index>(g.size()), ag.null_dimension);
+    for (int a = 0; a < ag.null_dimension; ++a) basis.col(a) = ag.null_directions[static_cast<std::size_t>(a)];
+    unseen = null_space_text(basis, group_names);
     for (int j : g) {
       std::vector<std::string> others;
       for (int o : g)
         if (o != j) others.push_back(r.parameters[static_cast<std::size_t>(o)].name);
       auto& e = r.parameters[static_cast<std::size_t>(j)];
-      e.reason = "aliased with " + join(others, ", ") + ": the data identify only " + join(identified, "; ");
+      e.reason = "aliased with " + join(others, ", ") + ": the data do not see " + join(unseen, "; ") +
+                 (identified.empty() ? std::string() : " and identify only " + join(identified, "; "));
       not_identified.push_back(e.name);
     }
     r.aliases.push_back(std::move(ag));
@@ -444,6 +428,14 @@ void add_warnings(LsqResult& r, const LsqOptions& opt, const std::vector<std::st
   if (rank < p)
     r.warnings.push_back("rank-deficient design: rank " + std::to_string(rank) + " < p = " +
                          std::to_string(p) + "; not identifiable: " + join(not_identified, ", "));
+  if (rank < p) {
+    std::vector<std::string> names;
+    for (const auto& e : r.parameters) names.push_back(e.name);
+    for (const auto& c : null_space_text(r.null_space, names))
+      r.warnings.push_back("unidentified combination: " + c +
+                           " (a singular direction of the design; add orientations or inputs that separate these "
+                           "parameters)");
+  }
   if (r.condition_number_identified > opt.condition_warning) {
     const Eigen::VectorXd w = dinv.cwiseProduct(V.col(rank - 1));
     const double mx = w.cwiseAbs().maxCoeff();
@@ -561,7 +553,7 @@ LsqResult solve_lsq(const LsqProblem& pr, const LsqOptions& opt) {
   r.null_space = unscaled_null_basis(Ns, dinv);
   const Eigen::MatrixXd P = Ns * Ns.transpose();
   const std::vector<bool> ident = identifiable_parameters(P);
-  fill_identified(r, x, ident);
+  fill_identified(r, x, ident, opt.tolerances);
   const std::vector<std::string> not_identified = explain_unidentified(r, P, ident, d.zero_col, dinv);
   add_warnings(r, opt, not_identified, svd.matrixV(), dinv);
   return r;

@@ -88,7 +88,7 @@ ModelSpec parse_model_spec(const std::string& yaml_text, const std::string& sour
   ModelSpec spec;
   spec.source = source_name;
   const std::string& f = source_name;
-  std::vector<std::string> keys = {"instrument", "axes", "terms", "weighting", "confidence"};
+  std::vector<std::string> keys = {"instrument", "axes", "terms", "weighting", "confidence", kTolerancesKey};
   keys.insert(keys.end(), processing::kOptionKeys.begin(), processing::kOptionKeys.end());
   yaml::MapReader top(root, f, "", "model specification", keys);
   top.require("instrument", "accelerometer or gyroscope");
@@ -155,6 +155,7 @@ ModelSpec parse_model_spec(const std::string& yaml_text, const std::string& sour
   if (!(spec.confidence > 0.0 && spec.confidence < 1.0))
     top.fail_value("confidence", "the interval level must lie strictly between 0 and 1",
                    "e.g. 0.95");
+  read_tolerances(top, spec.tolerances);
   return spec;
 }
 
@@ -189,6 +190,16 @@ std::string to_yaml(const ModelSpec& spec) {
   processing::emit_options(out, spec.processing);
   out << YAML::Key << "weighting" << YAML::Value << weighting_name(spec.weighting);
   out << YAML::Key << "confidence" << YAML::Value << YAML::Precision(17) << spec.confidence;
+  if (!spec.tolerances.equals(PrecisionTolerances{})) {
+    const PrecisionTolerances& t = spec.tolerances;
+    out << YAML::Key << kTolerancesKey << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Precision(17);
+    out << YAML::Key << "accel_bias_mg" << YAML::Value << t.accel_bias_mg;
+    out << YAML::Key << "gyro_bias_dps" << YAML::Value << t.gyro_bias_dps;
+    out << YAML::Key << "scale_cross_ppm" << YAML::Value << t.scale_cross_ppm;
+    out << YAML::Key << "g_sensitivity_dps_per_g" << YAML::Value << t.g_sensitivity_dps_per_g;
+    out << YAML::Key << "temperature_span_c" << YAML::Value << t.temperature_span_c;
+    out << YAML::EndMap;
+  }
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }

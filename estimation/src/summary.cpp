@@ -41,12 +41,16 @@ ParameterEstimate parameter_from_json(const json& p) {
   e.unit = string_or_empty(p, "unit");
   e.identifiable = p.value("identifiable", false);
   e.reason = string_or_empty(p, "reason");
+  e.tolerance = number_or_nan(p, "tolerance");
   if (!e.identifiable) {
     if (e.reason.empty()) e.reason = "not identifiable";
     return e;  // never a default as a result
   }
   e.value = number_or_nan(p, "value");
   e.std_error = number_or_nan(p, "std_error");
+  // Documents written before verdicts: identified is determined.
+  e.verdict = string_or_empty(p, "verdict") == to_string(Verdict::kImprecise) ? Verdict::kImprecise
+                                                                              : Verdict::kDetermined;
   const json iv = p.value("interval", json::array());
   if (iv.is_array() && iv.size() == 2 && iv[0].is_number() && iv[1].is_number()) {
     e.lower = iv[0].get<double>();
@@ -73,8 +77,8 @@ FitStatus fit_status_from_string(const std::string& s) { return s == "ok" ? FitS
 
 void ParameterEstimate::print(std::ostream& os) const {
   if (identifiable)
-    os << fmt::format("{:<18} {:>14.7g} {:<14} {:>11.3g}  [{:.7g}, {:.7g}]  yes", name, value, unit, std_error, lower,
-                      upper);
+    os << fmt::format("{:<18} {:>14.7g} {:<14} {:>11.3g}  [{:.7g}, {:.7g}]  {}{}", name, value, unit, std_error, lower,
+                      upper, to_string(judged()), judged() == Verdict::kImprecise ? ": " + reason : "");
   else
     os << fmt::format("{:<18} {:>14} {:<14} {:>11}  {:<26}  NO: {}", name, "not estimated", unit, "-", "-", reason);
 }
@@ -86,11 +90,11 @@ std::ostream& operator<<(std::ostream& os, const ParameterEstimate& p) {
 
 void print_parameter_header(std::ostream& os, double confidence) {
   os << fmt::format("{:<18} {:>14} {:<14} {:>11}  {:<26}  {}\n", "parameter", "value", "unit", "std error",
-                    fmt::format("{:.6g}% interval", 100 * confidence), "identifiable");
+                    fmt::format("{:.6g}% interval", 100 * confidence), "verdict");
 }
 
 bool ParameterEstimate::equals(const ParameterEstimate& o, double rel_tol, double abs_tol) const {
-  return name == o.name && unit == o.unit && identifiable == o.identifiable &&
+  return name == o.name && unit == o.unit && identifiable == o.identifiable && judged() == o.judged() &&
          close(value, o.value, rel_tol, abs_tol) && close(std_error, o.std_error, rel_tol, abs_tol) &&
          close(lower, o.lower, rel_tol, abs_tol) && close(upper, o.upper, rel_tol, abs_tol);
 }
@@ -106,7 +110,10 @@ std::string FitSummary::BriefReport() const {
   if (!ok()) return fmt::format("{}: FAILED — {}", who, message.empty() ? "no reason given" : message);
   const auto identified = std::count_if(parameters.begin(), parameters.end(),
                                         [](const ParameterEstimate& p) { return p.identifiable; });
-  return fmt::format("{}: ok — {} parameters, {} identified", who, parameters.size(), identified);
+  const auto imprecise = std::count_if(parameters.begin(), parameters.end(),
+                                       [](const ParameterEstimate& p) { return p.judged() == Verdict::kImprecise; });
+  return fmt::format("{}: ok — {} parameters, {} identified{}", who, parameters.size(), identified,
+                     imprecise > 0 ? fmt::format(" ({} imprecise)", imprecise) : "");
 }
 
 std::string FitSummary::FullReport() const {
@@ -149,6 +156,8 @@ json to_json(const FitSummary& s) {
     j["parameters"].push_back({{"name", p.name},
                                {"unit", p.unit},
                                {"identifiable", p.identifiable},
+                               {"verdict", to_string(p.judged())},
+                               {"tolerance", finite_or_null(p.tolerance)},
                                {"value", finite_or_null(p.value)},
                                {"std_error", finite_or_null(p.std_error)},
                                {"interval", {finite_or_null(p.lower), finite_or_null(p.upper)}},

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <algorithm>
+#include <numbers>
 #include <random>
 #include <regex>
 #include <sstream>
@@ -323,12 +325,55 @@ TEST(LinearLsq, CollinearTermsReportedAsAliasedPairWithIdentifiedCombination) {
       EXPECT_TRUE(std::isnan(e.value));
       EXPECT_NE(e.reason.find("aliased with"), std::string::npos);
       EXPECT_NE(e.reason.find("bias_" + ax + " + 10*bias_tc1_" + ax), std::string::npos);
+      // The direction the design cannot see, named: δbias = −10·δbias_tc1.
+      EXPECT_NE(e.reason.find("do not see bias_" + ax + " - 0.1*bias_tc1_" + ax), std::string::npos) << e.reason;
+      EXPECT_EQ(e.judged(), Verdict::kNotIdentifiable);
     }
+    EXPECT_NE(std::find(r.warnings.begin(), r.warnings.end(),
+                        "unidentified combination: bias_" + ax + " - 0.1*bias_tc1_" + ax +
+                            " (a singular direction of the design; add orientations or inputs that separate these "
+                            "parameters)"),
+              r.warnings.end());
     EXPECT_TRUE(r.parameter("scale_" + ax).identifiable);
   }
   std::ostringstream os;
   os << r;
   EXPECT_NE(os.str().find("identified: bias_x + 10*bias_tc1_x = "), std::string::npos) << os.str();
+}
+
+TEST(LinearLsq, VerdictsJudgeTheStandardErrorAgainstAUnitAwareTolerance) {
+  std::mt19937 rng(12);
+  const ErrorModel m = accel_model({{TermKind::kBias}, {TermKind::kScale}});
+  const Eigen::VectorXd theta = random_theta(m, rng);
+  const LsqProblem pr = synthetic(m, theta, cube_stimuli(9.81), 0.003, rng);
+  const LsqResult r = solve_lsq(pr);
+  ASSERT_TRUE(r.ok()) << r.message;
+  for (const auto& e : r.parameters) {
+    EXPECT_EQ(e.judged(), Verdict::kDetermined) << e.name;
+    // bias: 1 mg in m/s^2; scale: 1000 ppm.
+    EXPECT_DOUBLE_EQ(e.tolerance, e.unit == "m/s^2" ? 1e-3 * 9.80665 : 1e-3) << e.name;
+  }
+  // Tolerances tighter than the standard errors: every parameter is still reported, with its value,
+  // and flagged imprecise.
+  LsqOptions tight;
+  tight.tolerances.accel_bias_mg = 1e-6;
+  tight.tolerances.scale_cross_ppm = 1e-3;
+  const LsqResult t = solve_lsq(pr, tight);
+  ASSERT_TRUE(t.ok());
+  for (const auto& e : t.parameters) {
+    EXPECT_TRUE(e.identifiable);
+    EXPECT_TRUE(std::isfinite(e.value));
+    EXPECT_EQ(e.judged(), Verdict::kImprecise) << e.name;
+    EXPECT_NE(e.reason.find("exceeds the tolerance"), std::string::npos) << e.reason;
+  }
+  std::ostringstream os;
+  os << t;
+  EXPECT_NE(os.str().find("imprecise: standard error"), std::string::npos) << os.str();
+  // Units the tolerances do not cover are judged by identifiability alone.
+  EXPECT_TRUE(std::isnan(tolerance_for("m", PrecisionTolerances{})));
+  EXPECT_DOUBLE_EQ(tolerance_for("m/s^2/degC^2", PrecisionTolerances{}), 1e-3 * 9.80665 / 100.0);
+  EXPECT_DOUBLE_EQ(tolerance_for("rad/s", PrecisionTolerances{}), 0.05 * std::numbers::pi / 180.0);
+  EXPECT_EQ(tolerance_text("1/degC", PrecisionTolerances{}), "1000 ppm over 10 degC");
 }
 
 TEST(LinearLsq, RefusesWhenUnderdetermined) {

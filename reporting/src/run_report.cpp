@@ -84,6 +84,15 @@ std::string figure(const Plot& p, const std::string& caption) {
   return "<figure>" + p.render() + "<figcaption>" + escape(caption) + "</figcaption></figure>\n";
 }
 
+// A parameter's verdict (stend/estimation/identifiability.hpp): "determined", "imprecise: why" or
+// "NO: why" (documents written before verdicts: an identified parameter is determined).
+std::string verdict_text(const json& p) {
+  if (!p.value("identifiable", false)) return "NO: " + escape(str(p, "reason"));
+  const std::string v = str(p, "verdict");
+  if (v == "imprecise") return "imprecise: " + escape(str(p, "reason"));
+  return "determined";
+}
+
 // Parameter table of a "stend.fit/1"-shaped document.
 std::string parameter_table(const json& fit) {
   if (!fit.contains("parameters") || !fit["parameters"].is_array()) return {};
@@ -91,7 +100,7 @@ std::string parameter_table(const json& fit) {
   if (!std::isfinite(conf)) conf = num(fit, "confidence");
   std::string o = fmt::format(
       "<table class=\"params\"><tr><th>parameter</th><th>value</th><th>unit</th><th>std error</th><th>{} "
-      "interval</th><th>identifiable</th></tr>\n",
+      "interval</th><th>verdict</th></tr>\n",
       std::isfinite(conf) ? fmt::format("{:.0f} %", 100 * conf) : "");
   for (const auto& p : fit["parameters"]) {
     const bool id = p.value("identifiable", false);
@@ -101,7 +110,7 @@ std::string parameter_table(const json& fit) {
     o += fmt::format("<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
                      id ? "" : " class=\"nid\"", escape(str(p, "name")), id ? g(num(p, "value")) : "not estimated",
                      escape(str(p, "unit")), g(num(p, "std_error")), interval,
-                     id ? "yes" : "NO: " + escape(str(p, "reason")));
+                     verdict_text(p));
   }
   o += "</table>\n";
   if (fit.contains("aliases") && fit["aliases"].is_array())

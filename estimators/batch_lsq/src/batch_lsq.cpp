@@ -219,6 +219,7 @@ FitResult fit_points(const std::vector<StaticPoint>& points, const ModelSpec& sp
   if (!build_problem(points, spec, fr, prob)) return fr;
   estimation::LsqOptions opt;
   opt.confidence = spec.confidence;
+  opt.tolerances = spec.tolerances;
   fr.lsq = estimation::solve_lsq(prob, opt);
   if (!fr.lsq.ok()) {
     fr.message = fr.lsq.message;

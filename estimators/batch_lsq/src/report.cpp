@@ -122,10 +122,13 @@ json parameters_json(const FitResult& fr) {
   for (std::size_t i = 0; i < fr.lsq.parameters.size(); ++i) {
     const auto& e = fr.lsq.parameters[i];
     json pj = {{"name", e.name}, {"unit", e.unit}, {"index", fr.param_index[i]}, {"identifiable", e.identifiable}};
+    pj["verdict"] = estimation::to_string(e.judged());
+    pj["tolerance"] = number_or_null(e.tolerance);
     if (e.identifiable) {
       pj["value"] = e.value;
       pj["std_error"] = e.std_error;
       pj["interval"] = {e.lower, e.upper};
+      if (e.judged() == estimation::Verdict::kImprecise) pj["reason"] = e.reason;
     } else {
       pj["value"] = nullptr;
       pj["std_error"] = nullptr;

@@ -199,7 +199,9 @@ void gyro_bias(CalibrationResult& r, const CalibrationOptions& o) {
     p.lower = mean - q * se;
     p.upper = mean + q * se;
     p.identifiable = true;
-    p.reason = "mean over static intervals (includes Earth rotation projected on the axis)";
+    estimation::judge(p, o.tolerances);
+    if (p.verdict == estimation::Verdict::kDetermined)
+      p.reason = "mean over static intervals (includes Earth rotation projected on the axis)";
     r.gyro_parameters.push_back(p);
   }
 }
@@ -247,35 +249,38 @@ struct WeakParameters {
   std::string why;
 };
 
-// Weak directions: rank-deficient (singular value below rank_tolerance of the largest), or
-// determined worse than max_std_error (relative). A parameter whose unit vector has a share ≥ 0.5
-// inside the weak subspace is not identifiable (if none reaches it, the most affected ones).
-WeakParameters weak_parameters(const Eigen::JacobiSVD<Eigen::MatrixXd>& svd, const std::vector<int>& free_index,
-                               const CalibrationOptions& o, const CalibrationResult& r) {
+// Singular directions of the scaled Jacobian (singular value below `tolerance` × the largest;
+// `what` says what that means in the message), each named as a combination of parameters in their own units; a parameter whose unit
+// vector has a share ≥ 0.5 inside the singular subspace is not identifiable (if none reaches it,
+// the most affected ones). A large standard error alone never makes a direction weak: the
+// parameters' verdicts judge precision.
+WeakParameters weak_parameters(const Eigen::JacobiSVD<Eigen::MatrixXd>& svd, const Eigen::VectorXd& scale,
+                               const std::vector<int>& free_index, double tolerance, const char* what,
+                               const CalibrationResult& r) {
   const Eigen::VectorXd sv = svd.singularValues();
   const int p = static_cast<int>(free_index.size());
+  std::vector<std::string> names;
+  for (int j = 0; j < p; ++j) names.push_back(free_name(r, free_index, j));
   WeakParameters weak;
   std::vector<int> weak_dirs;
-  for (int k = 0; k < sv.size(); ++k) {
-    const bool rank = !(sv[k] > o.rank_tolerance * sv[0]);
-    const double se_dir = r.sigma / sv[k];
-    const bool poor = !rank && std::isfinite(se_dir) && se_dir > o.max_std_error;
-    if (!rank && !poor) continue;
-    weak_dirs.push_back(k);
-    if (weak.why.empty() || rank)
-      weak.why = rank ? fmt::format("rank-deficient Jacobian (singular value ratio {:.2e})", sv[k] / sv[0])
-                      : fmt::format("the weakest direction is determined only to {:.3g} (relative; limit {:.3g})",
-                                    se_dir, o.max_std_error);
-  }
+  for (int k = 0; k < sv.size(); ++k)
+    if (!(sv[k] > tolerance * sv[0])) weak_dirs.push_back(k);
   if (weak_dirs.empty()) return weak;
+  // θ = diag(scale)·θ_s, so a direction in the parameters' own units is scale ⊙ v.
+  Eigen::MatrixXd basis(p, static_cast<Eigen::Index>(weak_dirs.size()));
+  for (std::size_t c = 0; c < weak_dirs.size(); ++c)
+    basis.col(static_cast<Eigen::Index>(c)) = scale.cwiseProduct(svd.matrixV().col(weak_dirs[c]));
   std::vector<double> share(static_cast<std::size_t>(p), 0.0);
   for (int j = 0; j < p; ++j)
     for (int k : weak_dirs) share[static_cast<std::size_t>(j)] += std::pow(svd.matrixV()(j, k), 2);
   const double top = *std::max_element(share.begin(), share.end());
   const double cut = std::min(0.5, 0.5 * top);
   for (int j = 0; j < p; ++j)
-    if (share[static_cast<std::size_t>(j)] >= cut) weak.names.push_back(free_name(r, free_index, j));
-  weak.why = fmt::format("{} unobservable or poorly observed direction(s); {}", weak_dirs.size(), weak.why);
+    if (share[static_cast<std::size_t>(j)] >= cut) weak.names.push_back(names[static_cast<std::size_t>(j)]);
+  std::string list;
+  for (const auto& c : estimation::null_space_text(basis, names)) list += (list.empty() ? "" : "; ") + c;
+  weak.why = fmt::format("{} (smallest singular value ratio {:.2e}): the data do not see {}", what,
+                         sv[sv.size() - 1] / sv[0], list);
   return weak;
 }
 
@@ -323,6 +328,7 @@ void fill_parameters(ceres::Problem& problem, std::vector<double>& x, const std:
     prm.lower = prm.value - r.quantile * prm.std_error;
     prm.upper = prm.value + r.quantile * prm.std_error;
     prm.identifiable = true;
+    estimation::judge(prm, o.tolerances);
   }
   r.ok = true;
 }
@@ -351,12 +357,20 @@ void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<in
   }
   const double rss = 2.0 * cost;
   r.sigma = r.dof > 0 ? std::sqrt(rss / r.dof) : kNaN;
-  const WeakParameters weak = weak_parameters(svd, free_index, o, r);
+  const WeakParameters weak = weak_parameters(svd, scale, free_index, o.rank_tolerance, "rank-deficient design", r);
   if (!weak.names.empty()) {
     fail_not_identifiable(r, weak);
     return;
   }
   if (summary.termination_type != ceres::CONVERGENCE) {
+    // A nonlinear fit whose design is singular to first order (e.g. gravity never along one axis)
+    // wanders along the direction the data hardly see: name it as the reason.
+    const WeakParameters near = weak_parameters(svd, scale, free_index, std::sqrt(o.rank_tolerance),
+                                                "the solver did not converge on a nearly singular design", r);
+    if (!near.names.empty()) {
+      fail_not_identifiable(r, near);
+      return;
+    }
     fail_all(r, "the solver did not converge: " + summary.BriefReport() +
                     " (raise max_iterations, check the static intervals and gravity)");
     return;
@@ -586,12 +600,11 @@ std::string CalibrationResult::report() const {
                      fmt_num(rms_axis_before[1] * dps), fmt_num(rms_axis_before[2] * dps));
   }
   s += fmt::format("{:<22} {:>14} {:<14} {:>12} {:>14} {:>14}  {:<12} {}\n", "parameter", "value", "unit",
-                   "std error", "95% lower", "95% upper", "identifiable", "note");
+                   "std error", "95% lower", "95% upper", "verdict", "note");
   auto row = [&](const Parameter& p) {
     s += fmt::format("{:<22} {:>14} {:<14} {:>12} {:>14} {:>14}  {:<12} {}\n", p.name, fmt_num(p.value), p.unit,
                      fmt_num(p.std_error), fmt_num(p.lower), fmt_num(p.upper),
-                     p.fixed ? "fixed" : (p.identifiable ? "yes" : "no"),
-                     p.fixed ? p.reason : (p.identifiable ? "" : p.reason));
+                     p.fixed ? "fixed" : estimation::to_string(p.judged()), p.reason);
   };
   for (const auto& p : parameters) row(p);
   for (const auto& p : gyro_parameters) row(p);
@@ -635,7 +648,8 @@ std::string CalibrationResult::to_json() const {
   auto prm = [&](const Parameter& p) {
     return json{{"name", p.name}, {"unit", p.unit}, {"value", num(p.value)},
                 {"std_error", num(p.std_error)}, {"ci95", {num(p.lower), num(p.upper)}},
-                {"identifiable", p.identifiable}, {"fixed", p.fixed}, {"reason", p.reason}};
+                {"identifiable", p.identifiable}, {"verdict", estimation::to_string(p.judged())},
+                {"tolerance", num(p.tolerance)}, {"fixed", p.fixed}, {"reason", p.reason}};
   };
   json j;
   j["ok"] = ok;
@@ -964,7 +978,7 @@ CalibrationOptions as_calibration_options(const GyroOptions& g, double loss_scal
   o.confidence = g.confidence;
   o.max_iterations = g.max_iterations;
   o.rank_tolerance = g.rank_tolerance;
-  o.max_std_error = g.max_std_error;
+  o.tolerances = g.tolerances;
   o.estimate_gyro_bias = false;
   return o;
 }
@@ -1405,7 +1419,8 @@ bool upstream_covariance(const IntegrationData& d, const CalibrationResult& r1, 
 // (delta method, forward differences of the move residuals): C = C2 + S·Cz·Sᵀ with
 // S = −(J2ᵀJ2)⁻¹·J2ᵀ·Rz; fills the stage-2 standard errors and bounds in r.
 void add_upstream_uncertainty(const IntegrationData& d, const CalibrationResult& r1, const CalibrationResult& r2,
-                              const std::vector<double>& x1, const std::vector<double>& x2, CalibrationResult& r) {
+                              const std::vector<double>& x1, const std::vector<double>& x2,
+                              const estimation::PrecisionTolerances& tolerances, CalibrationResult& r) {
   Eigen::MatrixXd Cz;
   if (!upstream_covariance(d, r1, Cz)) return;
   const std::size_t na = d.accel.free_index.size();
@@ -1436,6 +1451,7 @@ void add_upstream_uncertainty(const IntegrationData& d, const CalibrationResult&
     prm.std_error = std::sqrt(std::max(0.0, C(k, k)));
     prm.lower = prm.value - r.quantile * prm.std_error;
     prm.upper = prm.value + r.quantile * prm.std_error;
+    estimation::judge(prm, tolerances);
   }
 }
 
@@ -1511,7 +1527,7 @@ CalibrationResult calibrate_gyro_integration(const Recording& rec, const Calibra
   r.ok = true;
   r.theta = r1.theta;
   for (int i : kScaleCrossIndex) r.theta[static_cast<std::size_t>(i)] = r2.theta[static_cast<std::size_t>(i)];
-  add_upstream_uncertainty(d, r1, r2, x1, x2, r);
+  add_upstream_uncertainty(d, r1, r2, x1, x2, go.tolerances, r);
   std::tie(r.rms_norm_before, r.rms_axis_before) =
       gravity_mismatch(d, r.model, std::vector<double>(static_cast<std::size_t>(r.model.size()), 0.0), true);
   std::tie(r.rms_norm_after, r.rms_axis_after) = gravity_mismatch(d, r.model, r.theta, false);

@@ -51,7 +51,7 @@ ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& fi
   top.require("ceres_nonlinear", "the ceres_nonlinear estimator's options");
   std::vector<std::string> keys = {"accelerometer", "gyroscope", "segment_trim_s", "gravity_mps2", "loss",
                                    "loss_scale_mps2", "gyro_loss_scale_radps", "gyro_loss_scale_rad", "confidence",
-                                   "max_iterations", "rank_tolerance", "max_std_error", "fixed_cross_axis",
+                                   "max_iterations", "rank_tolerance", "max_std_error", estimation::kTolerancesKey, "fixed_cross_axis",
                                    "orientation_sigma_deg", "table_offsets", "table_fixture", "gyro_g_sensitivity"};
   keys.insert(keys.end(), processing::kOptionKeys.begin(), processing::kOptionKeys.end());
   const yaml::MapReader m(top.get("ceres_nonlinear"), file, "ceres_nonlinear", "ceres_nonlinear options", keys, {},
@@ -93,7 +93,16 @@ ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& fi
   if (it < 1 || it > 100000) m.fail_value("max_iterations", "must be an integer in 1..100000");
   a.max_iterations = o.gyro.max_iterations = static_cast<int>(it);
   a.rank_tolerance = o.gyro.rank_tolerance = positive(m, "rank_tolerance", a.rank_tolerance, "(ratio of singular values)");
-  a.max_std_error = o.gyro.max_std_error = positive(m, "max_std_error", a.max_std_error, "(relative)");
+  if (m.has("max_std_error")) {
+    positive(m, "max_std_error", 0.05, "(relative)");  // still checked, so a typo is still caught
+    o.warnings.push_back(fmt::format(
+        "{}: `max_std_error` is superseded and ignored: a converged fit on a non-singular design is always "
+        "reported, each parameter with its standard error and a verdict against `tolerances:` "
+        "(accel_bias_mg, gyro_bias_dps, scale_cross_ppm, g_sensitivity_dps_per_g, temperature_span_c)",
+        m.key_location("max_std_error").str()));
+  }
+  estimation::read_tolerances(m, a.tolerances);
+  o.gyro.tolerances = a.tolerances;
   if (m.has("fixed_cross_axis"))
     a.fixed_cross_axis = string_list(m, "fixed_cross_axis",
                                      {"cross_xy", "cross_xz", "cross_yx", "cross_yz", "cross_zx", "cross_zy"});
@@ -142,8 +151,13 @@ std::string describe_options(const ModelFileOptions& o) {
                                                                     : "from the recording");
   s += fmt::format("  loss: {} (scale {} m/s^2, gyro {} rad/s, integration {} rad)\n", loss_name(a.loss),
                    a.loss_scale_mps2, o.gyro.loss_scale_radps, o.gyro.loss_scale_rad);
-  s += fmt::format("  confidence {}, max iterations {}, rank tolerance {:g}, max relative std error {}\n", a.confidence,
-                   a.max_iterations, a.rank_tolerance, a.max_std_error);
+  const estimation::PrecisionTolerances& t = a.tolerances;
+  s += fmt::format("  confidence {}, max iterations {}, rank tolerance {:g}\n", a.confidence, a.max_iterations,
+                   a.rank_tolerance);
+  s += fmt::format("  precision tolerances (1 sigma): bias {:g} mg, {:g} deg/s; scale, cross-axis {:g} ppm; "
+                   "g-sensitivity {:g} (deg/s)/g\n",
+                   t.accel_bias_mg, t.gyro_bias_dps, t.scale_cross_ppm, t.g_sensitivity_dps_per_g);
+  for (const auto& w : o.warnings) s += "  warning: " + w + "\n";
   if (o.accelerometer == "unknown_orientations")
     s += fmt::format("  fixed cross-axis terms: {}\n", yaml::join(a.fixed_cross_axis));
   if (o.accelerometer == "known_orientations")
@@ -179,7 +193,13 @@ std::string options_json(const ModelFileOptions& o) {
       {"confidence", a.confidence},
       {"max_iterations", a.max_iterations},
       {"rank_tolerance", a.rank_tolerance},
-      {"max_std_error", a.max_std_error},
+      {"tolerances",
+       {{"accel_bias_mg", a.tolerances.accel_bias_mg},
+        {"gyro_bias_dps", a.tolerances.gyro_bias_dps},
+        {"scale_cross_ppm", a.tolerances.scale_cross_ppm},
+        {"g_sensitivity_dps_per_g", a.tolerances.g_sensitivity_dps_per_g},
+        {"temperature_span_c", a.tolerances.temperature_span_c}}},
+      {"warnings", o.warnings},
       {"fixed_cross_axis", a.fixed_cross_axis},
       {"orientation_sigma_deg", a.orientation_sigma_deg},
       {"table_offsets", a.table_offsets},
@@ -224,6 +244,7 @@ ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& option
     const std::string name = p.name.rfind("table_offset", 0) == 0 || p.name.rfind("gyro_", 0) == 0 ? p.name : prefix + p.name;
     j["parameters"].push_back({{"name", name}, {"unit", p.unit}, {"value", num(p.value)}, {"std_error", num(p.std_error)},
                                {"interval", {num(p.lower), num(p.upper)}}, {"identifiable", p.identifiable},
+                               {"verdict", estimation::to_string(p.judged())}, {"tolerance", num(p.tolerance)},
                                {"fixed", p.fixed}, {"reason", p.reason}});
   };
   if (f.has_accel) {

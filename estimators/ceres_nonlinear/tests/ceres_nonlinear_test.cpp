@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -199,7 +200,12 @@ TEST(CeresNonlinear, DegenerateDesignNamesNonIdentifiableParameters) {
   const auto r = calibrate_accelerometer_unknown_orientations(ivs, kG);
   ASSERT_FALSE(r.ok) << r.report();
   EXPECT_NE(r.message.find("not identifiable"), std::string::npos) << r.message;
-  EXPECT_EQ(r.not_identifiable.size(), 4u) << r.message;
+  // The z row is unobservable to first order (|u| depends on u_z ≈ 0 only quadratically): the
+  // solver wanders along one nearly singular direction, and the message names it as a combination
+  // of all four z-row parameters; not_identifiable lists those that dominate it.
+  EXPECT_NE(r.message.find("nearly singular"), std::string::npos) << r.message;
+  EXPECT_NE(std::find(r.not_identifiable.begin(), r.not_identifiable.end(), "scale_z"), r.not_identifiable.end())
+      << r.message;
   for (const char* name : {"bias_z", "scale_z", "cross_zx", "cross_zy"}) {
     EXPECT_NE(r.message.find(name), std::string::npos) << r.message;
     EXPECT_FALSE(r.parameter(name).identifiable);
@@ -219,6 +225,59 @@ TEST(CeresNonlinear, DegenerateDesignNamesNonIdentifiableParameters) {
   EXPECT_NE(k.message.find("scale_z"), std::string::npos) << k.message;
   EXPECT_NE(k.message.find("rank-deficient"), std::string::npos) << k.message;
   std::cout << "[degenerate, known orientations] " << k.message << "\n";
+}
+
+TEST(CeresNonlinear, SingularDesignIsWithheldNamingTheUnseenCombination) {
+  // Every pose tilted 30° from z-up (a cone of azimuths): the z axis never sees another input
+  // than g·cos 30°, so its bias and scale cannot be told apart, nor the x and y biases from the
+  // cross-axis terms on z. Known orientations: the fit is linear, the singular directions exact.
+  std::mt19937_64 rng(8);
+  std::vector<Eigen::Vector3d> dirs, f;
+  const double tilt = 30.0 * std::numbers::pi / 180.0;
+  for (int k = 0; k < 16; ++k) {
+    const double a = 2.0 * std::numbers::pi * k / 16.0;
+    dirs.emplace_back(std::sin(tilt) * std::cos(a), std::sin(tilt) * std::sin(a), std::cos(tilt));
+    f.push_back(dirs.back() * kG);
+  }
+  const auto ivs = simulate(dirs, truth_theta(true), 200, 0.02, rng);
+  const auto r = calibrate_accelerometer_known_orientations(ivs, f);
+  ASSERT_FALSE(r.ok) << r.report();
+  // b_z + s_z·g·cos 30° is all the data see: the unseen direction is bias_z − scale_z/(g·cos 30°).
+  EXPECT_NE(r.message.find("the data do not see"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("bias_z - 0.12*scale_z"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("bias_x - 0.12*cross_xz"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("bias_y - 0.12*cross_yz"), std::string::npos) << r.message;
+  for (const auto& p : r.parameters) EXPECT_TRUE(std::isnan(p.value)) << p.name << " printed a number for a failed fit";
+}
+
+TEST(CeresNonlinear, ConvergedFitWithANearZeroCrossTermIsReportedWithItsVerdict) {
+  // A well-spread design with noisy interval means: the cross-axis terms (truth 0) are known only
+  // to several percent. The old rule (a standard error above 0.05, relative) withheld the whole
+  // fit; the design is not singular, so every parameter is reported with its standard error and
+  // those above their tolerance are flagged imprecise.
+  std::mt19937_64 rng(9);
+  std::vector<double> theta = truth_theta(false);
+  const auto dirs = random_dirs(14, rng);
+  const auto ivs = simulate(dirs, theta, 4, 2.0, rng);
+  std::vector<Eigen::Vector3d> f;
+  for (const auto& d : dirs) f.push_back(d * kG);
+  const auto r = calibrate_accelerometer_known_orientations(ivs, f);
+  ASSERT_TRUE(r.ok) << r.report();
+  const auto& c = r.parameter("cross_xy");
+  EXPECT_TRUE(c.identifiable);
+  EXPECT_TRUE(std::isfinite(c.value));
+  EXPECT_GT(c.std_error, 0.05) << "the old relative rule would have withheld this fit";
+  EXPECT_LT(std::abs(c.value), 4.0 * c.std_error);
+  EXPECT_EQ(c.verdict, estimation::Verdict::kImprecise);
+  EXPECT_NE(c.reason.find("exceeds the tolerance 1000 ppm"), std::string::npos) << c.reason;
+  EXPECT_NE(r.report().find("imprecise"), std::string::npos);
+  // The same design with little noise: every parameter determined within its tolerance.
+  const auto quiet = calibrate_accelerometer_known_orientations(simulate(dirs, theta, 2000, 0.002, rng), f);
+  ASSERT_TRUE(quiet.ok) << quiet.report();
+  for (const auto& p : quiet.parameters) EXPECT_EQ(p.verdict, estimation::Verdict::kDetermined) << p.name << " " << p.reason;
+  const auto doc = nlohmann::json::parse(quiet.to_json());
+  EXPECT_EQ(doc["parameters"][0]["verdict"], "determined");
+  EXPECT_NEAR(doc["parameters"][0]["tolerance"].get<double>(), 1e-3 * kG, 1e-12);  // 1 mg
 }
 
 TEST(CeresNonlinear, RobustLossResistsAnOutlierInterval) {

@@ -212,7 +212,7 @@ TempPolyOptions parse_options(const std::string& yaml_text, const std::string& f
   TempPolyOptions o;
   std::vector<std::string> keys = {"instrument", "axes", "selection", "max_order", "order", "reference_c",
                                    "min_span_c", "level_tolerance_c", "bias_temperature", "scale_temperature",
-                                   "cross_axis", "confidence"};
+                                   "cross_axis", "confidence", estimation::kTolerancesKey};
   keys.insert(keys.end(), processing::kOptionKeys.begin(), processing::kOptionKeys.end());
   yaml::MapReader top(root, f, "", "temp_poly options", keys);
   const std::string inst = top.string("instrument", "accelerometer");
@@ -251,6 +251,7 @@ TempPolyOptions parse_options(const std::string& yaml_text, const std::string& f
   o.confidence = top.number("confidence", o.confidence, "");
   if (!(o.confidence > 0 && o.confidence < 1)) top.fail_value("confidence", "confidence must be in (0, 1)");
   processing::read_options(top, o.processing);
+  estimation::read_tolerances(top, o.tolerances);
   return o;
 }
 

@@ -349,6 +349,7 @@ estimation::ModelSpec candidate_spec(const TempPolyOptions& o, int order, int ax
   spec.processing = o.processing;
   spec.weighting = estimation::Weighting::kNone;
   spec.confidence = o.confidence;
+  spec.tolerances = o.tolerances;
   spec.source = "temp_poly";
   return spec;
 }

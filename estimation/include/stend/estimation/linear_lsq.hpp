@@ -19,6 +19,8 @@
 //   - "aliased": it shares a null-space direction with other parameters; the group's identified
 //     linear combinations (the row-space part, e.g. bias_z + 10·bias_tc1_z) are reported with
 //     value, standard error and interval instead.
+// Every identified parameter carries a precision verdict against LsqOptions::tolerances
+// (stend/estimation/identifiability.hpp); a large standard error never withholds it.
 // Fits are refused (status kFailed, a message, no numbers) when k < p, when no degree of freedom is
 // left for the noise (k = rank without known variance), or on non-finite input.
 #pragma once
@@ -46,6 +48,8 @@ struct LsqOptions {
   bool known_variance = false;
   // Warn when the column-scaled condition number (identified subspace) exceeds this.
   double condition_warning = 1e6;
+  // Precision tolerances of the parameters' verdicts (by unit).
+  PrecisionTolerances tolerances;
   // Warn when the number of observations k is below this multiple of the parameter count p.
   double observations_per_parameter_warning = 3.0;
 };

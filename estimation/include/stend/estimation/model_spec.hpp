@@ -16,6 +16,7 @@
 //   segments: [orientation]            # which segment kinds are static points
 //   weighting: none                    # or segment_noise (1/σ² of each segment's mean)
 //   confidence: 0.95                   # interval level
+//   tolerances: {accel_bias_mg: 1}     # precision tolerances of the verdicts (identifiability.hpp)
 //
 // extraction, segments (and intervals, detector) are the processing stage's keys
 // (stend/processing/options.hpp); those the file does not state come from the recording's
@@ -29,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "stend/estimation/identifiability.hpp"
 #include "stend/model/terms.hpp"
 #include "stend/processing/options.hpp"
 
@@ -46,6 +48,7 @@ struct ModelSpec {
   processing::ProcessingOptions processing;  // static intervals and extraction (paper steps 1–3)
   Weighting weighting = Weighting::kNone;
   double confidence = 0.95;
+  PrecisionTolerances tolerances;  // of each parameter's verdict
   std::string source;  // file the spec came from ("" when built in code)
 };
 

@@ -6,9 +6,13 @@
 // JSON (the fields every results document carries, read back by summary_from_json):
 //   "status": "ok" | "failed", "message": "…",
 //   "parameters": [{"name", "unit", "value", "std_error", "interval": [lo, hi],
-//                   "identifiable", "reason"}, …],   non-finite numbers are null
+//                   "identifiable", "verdict", "tolerance", "reason"}, …],   non-finite numbers are null
+//   ("verdict": "determined" | "imprecise" | "not identifiable", stend/estimation/identifiability.hpp;
+//    "tolerance": the precision tolerance in the parameter's unit, null when none applies)
 //   "confidence": 0.95   (or "solution": {"confidence": …})
 #pragma once
+
+#include <stend/estimation/identifiability.hpp>
 
 #include <nlohmann/json_fwd.hpp>
 
@@ -31,12 +35,19 @@ struct ParameterEstimate {
   std::string name;  // the vocabulary's name ("bias_z", "bias_tc1_x") or Allan "N_ax", "K_gz"
   std::string unit;
   bool identifiable = false;
-  std::string reason;  // why not identifiable (or an upper bound); "" when identified
+  std::string reason;  // why not identifiable or imprecise (or an upper bound); "" when determined
   // NaN when not identifiable: never a default presented as a result.
   double value = NAN, std_error = NAN;  // std_error: 1 σ
   double lower = NAN, upper = NAN;      // interval at the fit's confidence
+  // How precisely the data determine an identified parameter (identifiability.hpp): kDetermined,
+  // or kImprecise when std_error exceeds `tolerance` (set by estimation::judge).
+  Verdict verdict = Verdict::kDetermined;
+  double tolerance = NAN;  // precision tolerance (1 σ) in `unit`; NaN when none applies
+  // The verdict as reported: kNotIdentifiable when not identifiable, else `verdict`.
+  Verdict judged() const { return identifiable ? verdict : Verdict::kNotIdentifiable; }
 
-  // One table row: name, value, unit, std error, [lower, upper], "yes" or "NO: reason".
+  // One table row: name, value, unit, std error, [lower, upper], the verdict ("determined",
+  // "imprecise: reason") or "NO: reason".
   void print(std::ostream& os) const;
   // Same name, unit and identifiability; numbers equal within |a − b| ≤ abs_tol +
   // rel_tol·max(|a|, |b|) (NaN matches NaN).

@@ -13,14 +13,17 @@
 //     vectors): residual ȳ_k − measure(θ, f_k), all 12 parameters.
 //
 // Uncertainty: ceres::Covariance (dense SVD) scaled by σ² = RSS / (n − p); intervals θ̂ ± t·se
-// (Student t, n − p degrees of freedom). Identifiability: SVD of the Jacobian at the solution
-// (columns scaled by a nominal size: g for a bias, 1 for a dimensionless term); a direction whose
-// singular value is below rank_tolerance·σ_max, or whose standard error exceeds max_std_error
-// (relative), makes the fit fail with the parameters that span it named. A failed fit (too few
-// intervals, no convergence, not identifiable, ceres::Covariance failure) has ok = false, a
-// message, and NaN values: never an identity calibration.
+// (Student t, n − p degrees of freedom). Identifiability (stend/estimation/identifiability.hpp):
+// SVD of the Jacobian at the solution (columns scaled by a nominal size: g for a bias, 1 for a
+// dimensionless term); a direction whose singular value is below rank_tolerance·σ_max makes the
+// fit fail naming the unidentified combination ("bias_z + 0.98*scale_z"). A converged fit on a
+// non-singular Jacobian is always reported; each parameter carries its standard error and a
+// verdict against its precision tolerance (`tolerances`). A failed fit (too few intervals, no
+// convergence, singular, ceres::Covariance failure) has ok = false, a message, and NaN values:
+// never an identity calibration.
 #pragma once
 
+#include <stend/estimation/summary.hpp>
 #include <stend/model/terms.hpp>
 #include <stend/processing/static_points.hpp>
 #include <stend/recording.hpp>
@@ -82,7 +85,7 @@ struct CalibrationOptions {
   double confidence = 0.95;
   int max_iterations = 200;
   double rank_tolerance = 1e-8;    // σ_k / σ_max of the scaled Jacobian
-  double max_std_error = 0.05;     // relative (a bias in units of g, scale/cross in 1)
+  estimation::PrecisionTolerances tolerances;  // of each parameter's verdict
   // Unknown orientations: cross-axis terms held at zero (names from the vocabulary).
   std::vector<std::string> fixed_cross_axis = {"cross_xy", "cross_xz", "cross_yz"};
   bool estimate_gyro_bias = true;
@@ -103,12 +106,10 @@ struct CalibrationOptions {
   std::string table_fixture = "table";
 };
 
-struct Parameter {
-  std::string name, unit;
-  double value = 0.0, std_error = 0.0, lower = 0.0, upper = 0.0;  // NaN when not identifiable
-  bool identifiable = false;
+// A fitted parameter (name, unit, value, standard error, interval, verdict; NaN when not
+// identifiable), or one held at zero by construction.
+struct Parameter : estimation::ParameterEstimate {
   bool fixed = false;              // held at zero by construction (not estimated)
-  std::string reason;
 };
 
 struct CalibrationResult {
@@ -202,7 +203,7 @@ struct GyroOptions {
   double confidence = 0.95;
   int max_iterations = 200;
   double rank_tolerance = 1e-8;
-  double max_std_error = 0.05;     // relative (bias in rad/s, G in 1/g, scale/cross in 1)
+  estimation::PrecisionTolerances tolerances;  // of each parameter's verdict
   bool estimate_g_sensitivity = false;
   processing::ProcessingOptions processing = rate_table_interval_options();  // rate table intervals
 };

@@ -16,6 +16,7 @@
 #include <stend/recording.hpp>
 
 #include <string>
+#include <vector>
 #include <yaml-cpp/yaml.h>
 
 namespace stend::ceres_nonlinear {
@@ -32,6 +33,9 @@ struct ModelFileOptions {
   std::string gyroscope = "integration";
   CalibrationOptions accel;
   GyroOptions gyro;
+  // What the file asks for that no longer acts, said in the report (e.g. `max_std_error`,
+  // superseded by the per-parameter verdicts and `tolerances`).
+  std::vector<std::string> warnings;
 };
 
 // Reads the `ceres_nonlinear:` mapping of `root` (loaded from `file`).

@@ -45,6 +45,7 @@ struct TempPolyOptions {
   bool scale_temperature = true;  // fit scale_temperature (the paper's k_t, k_tt on A_i)
   bool cross_axis = false;        // add the temperature-independent cross_axis term
   double confidence = 0.95;
+  estimation::PrecisionTolerances tolerances;  // of each parameter's verdict (model file `tolerances:`)
   // Static intervals and extraction (the processing stage's keys and defaults).
   processing::ProcessingOptions processing;
 };

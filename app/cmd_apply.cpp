@@ -1,0 +1,109 @@
+// `stend apply CAL INPUT [-o CALIBRATED] [--validate] [--expect-rotation x:90] [--rebias-from-start S]`
+// — a fitted calibration applied to a recording (run folder or dataset file), written as a new run
+// folder of calibrated samples, and validated on it when asked (stend/calibration/*.hpp).
+#include "commands.hpp"
+
+#include "stend/calibration/calibration.hpp"
+#include "stend/calibration/validation.hpp"
+#include "stend/estimators/builtin.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <sstream>
+
+namespace stend::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// The results file CAL names: the file itself, or the one estimator results file in a run folder.
+fs::path results_file(const fs::path& cal) {
+  if (!fs::is_directory(cal)) return cal;
+  std::vector<fs::path> found;
+  const estimation::Registry registry = estimators::builtin();
+  for (const auto& e : registry.entries())
+    if (!e.results_file.empty() && fs::is_regular_file(cal / e.results_file)) found.push_back(cal / e.results_file);
+  if (found.size() == 1) return found.front();
+  std::string names;
+  for (const auto& f : found) names += (names.empty() ? "" : ", ") + f.string();
+  throw std::invalid_argument(cal.string() + (found.empty() ? ": no estimator results in this run folder (run `stend fit` first)"
+                                                            : ": several results in this run folder (" + names +
+                                                                  "); name the one to apply"));
+}
+
+struct ApplyArgs {
+  std::string cal, input, format = "auto", output, json;
+  bool validate = false;
+  std::vector<std::string> rotations;
+  calibration::ValidationOptions options;
+};
+
+int run_apply(const ApplyArgs& a) {
+  const calibration::Calibration cal = calibration::load_calibration(results_file(a.cal));
+  const bool validating = a.validate || !a.rotations.empty() || a.options.rebias_from_start_s > 0.0;
+  if (a.output.empty() && !validating)
+    throw std::invalid_argument("nothing to do: give -o CALIBRATED to write the calibrated recording, and/or --validate");
+  calibration::ValidationOptions options = a.options;
+  for (const auto& r : a.rotations) options.rotations.push_back(calibration::parse_expected_rotation(r));
+  calibration::check_applicable(cal, options);  // before reading the recording or writing anything
+  cal.print(std::cout);
+  const Recording raw = open_recording(a.input, a.format);
+  if (cal.needs_temperature() && std::isfinite(cal.valid_min_c) && !raw.samples.empty()) {
+    auto [lo, hi] = std::minmax_element(raw.samples.begin(), raw.samples.end(), [](const ImuSample& x, const ImuSample& y) {
+      return x.temperature_c < y.temperature_c;
+    });
+    if (lo->temperature_c < cal.valid_min_c || hi->temperature_c > cal.valid_max_c)
+      fmt::print(stderr, "warning: the recording spans {:.1f}..{:.1f} degC, outside the fit's {:.1f}..{:.1f} degC\n",
+                 lo->temperature_c, hi->temperature_c, cal.valid_min_c, cal.valid_max_c);
+  }
+  const Recording calibrated = calibration::apply_calibration(raw, cal);
+  if (!a.output.empty()) {
+    calibration::write_calibrated(calibrated, cal, a.output);
+    fmt::print("calibrated: {} ({} samples)\n", a.output, calibrated.samples.size());
+  }
+  if (!validating) return 0;
+  const calibration::ValidationReport report = calibration::validate(raw, calibrated, cal, options);
+  std::ostringstream text;
+  report.print(text);
+  std::cout << "\n" << text.str();
+  fs::path json = a.json;
+  if (json.empty() && !a.output.empty()) json = fs::path(a.output) / "validation.json";
+  write_results(json, report.to_json(), text.str());
+  return report.ok ? 0 : 3;
+}
+
+}  // namespace
+
+void add_apply_command(CLI::App& app, std::vector<Command>& out) {
+  auto* sub = app.add_subcommand("apply", "Apply a fitted calibration to a recording (run folder or dataset file) and "
+                                          "validate it there: static |a| - g, integrated turns");
+  static ApplyArgs a;
+  sub->add_option("calibration", a.cal,
+                  "Results of a fit: ceres.json, fit.json, temp_poly.json, or the run folder that holds one")
+      ->required();
+  sub->add_option("input", a.input, "Recording to calibrate: run folder or dataset file")->required();
+  sub->add_option("--format", a.format, "Input format, as for `stend fit` (default auto)");
+  sub->add_option("-o,--output", a.output, "New run folder for the calibrated recording");
+  sub->add_flag("--validate", a.validate, "Validate on the input (a recording the calibration was not fitted to)");
+  sub->add_option("--expect-rotation", a.rotations,
+                  "AXIS:DEGREES, e.g. x:90: turns between still intervals to integrate and compare (repeatable)");
+  sub->add_option("--rebias-from-start", a.options.rebias_from_start_s,
+                  "Re-estimate the gyro bias from the first S seconds (they must be still)");
+  sub->add_option("--gravity", a.options.gravity_mps2, "Local gravity [m/s^2] (default: the recording's)");
+  sub->add_option("--confidence", a.options.confidence, "Level of the turns' intervals (default 0.95)");
+  sub->add_option("--json", a.json, "Where to write the validation JSON (default CALIBRATED/validation.json)");
+  out.push_back({sub, [] {
+                   try {
+                     return run_apply(a);
+                   } catch (const std::invalid_argument& e) {
+                     fmt::print(stderr, "error: {}\n", e.what());
+                     return 2;
+                   }
+                 }});
+}
+
+}  // namespace stend::cli

@@ -1,0 +1,322 @@
+// How well a calibration holds on a held-out recording. See stend/calibration/validation.hpp.
+#include "stend/calibration/validation.hpp"
+
+#include <stend/estimation/linear_lsq.hpp>
+#include <stend/physics/units.hpp>
+#include <stend/processing/static_points.hpp>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <ostream>
+#include <stdexcept>
+
+namespace stend::calibration {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// A still interval must not turn faster than this (calibrated, so the gyro bias is gone): a
+// constant-rate turn about the vertical leaves the accelerometer still.
+constexpr double kStillMaxRateDps = 3.0;
+
+// Mean of a sample field over [first, last].
+template <class Get>
+Eigen::Vector3d mean_of(const Recording& rec, std::size_t first, std::size_t last, Get get) {
+  Eigen::Vector3d m = Eigen::Vector3d::Zero();
+  for (std::size_t i = first; i <= last; ++i) m += get(rec.samples[i]);
+  return m / static_cast<double>(last - first + 1);
+}
+Eigen::Vector3d accel_mean(const Recording& rec, std::size_t first, std::size_t last) {
+  return mean_of(rec, first, last, [](const ImuSample& s) { return s.accel_mps2; });
+}
+
+// The local gravity the check uses: the options', the recording's, the calibration's, standard.
+double gravity_for(const Recording& rec, const Calibration& cal, const ValidationOptions& o) {
+  if (o.gravity_mps2 > 0.0) return o.gravity_mps2;
+  if (rec.header.gravity_mps2 > 0.0) return rec.header.gravity_mps2;
+  if (cal.gravity_mps2 > 0.0) return cal.gravity_mps2;
+  return physics::kStandardGravity;
+}
+
+struct Summary3 {
+  double mean = kNaN, rms = kNaN, max = kNaN;
+};
+Summary3 summarize(const std::vector<double>& v) {
+  Summary3 s;
+  if (v.empty()) return s;
+  double sum = 0.0, sq = 0.0, mx = 0.0;
+  for (double x : v) {
+    sum += x;
+    sq += x * x;
+    mx = std::max(mx, std::abs(x));
+  }
+  const double n = static_cast<double>(v.size());
+  return {sum / n, std::sqrt(sq / n), mx};
+}
+
+double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b)) * physics::kRadToDeg;
+}
+
+// |a| − g before and after over the static points, the noise floor, the gravity direction's
+// stability inside each.
+StaticCheck static_check(const Recording& raw, const Recording& cal, const std::vector<processing::StaticPoint>& pts,
+                         double g) {
+  StaticCheck c;
+  c.intervals = static_cast<int>(pts.size());
+  c.gravity_mps2 = g;
+  std::vector<double> before, after, floor2, dir;
+  for (const auto& p : pts) {
+    const Eigen::Vector3d a = accel_mean(cal, p.first, p.last);
+    before.push_back(accel_mean(raw, p.first, p.last).norm() - g);
+    after.push_back(a.norm() - g);
+    // Standard error of |mean a|: the per-axis standard errors projected on the mean's direction.
+    floor2.push_back(p.accel.std_error.cwiseAbs2().dot(a.normalized().cwiseAbs2()));
+    const std::size_t mid = p.first + (p.last - p.first) / 2;
+    if (mid > p.first && mid + 1 <= p.last)
+      dir.push_back(angle_deg(accel_mean(cal, p.first, mid), accel_mean(cal, mid + 1, p.last)));
+  }
+  const Summary3 b = summarize(before), a = summarize(after), d = summarize(dir);
+  std::tie(c.mean_before, c.rms_before, c.max_before) = std::tie(b.mean, b.rms, b.max);
+  std::tie(c.mean_after, c.rms_after, c.max_after) = std::tie(a.mean, a.rms, a.max);
+  double f = 0.0;
+  for (double x : floor2) f += x;
+  c.noise_floor = floor2.empty() ? kNaN : std::sqrt(f / static_cast<double>(floor2.size()));
+  c.direction_rms_deg = d.rms;
+  c.direction_max_deg = d.max;
+  return c;
+}
+
+// The gyro's white noise per sample on each axis [rad/s]: the pooled sample spread of the static points.
+Eigen::Vector3d gyro_noise(const std::vector<processing::StaticPoint>& pts) {
+  Eigen::Vector3d s2 = Eigen::Vector3d::Zero();
+  for (const auto& p : pts) s2 += p.gyro.sample_std.cwiseAbs2();
+  return (s2 / static_cast<double>(std::max<std::size_t>(1, pts.size()))).cwiseSqrt();
+}
+
+// Mean calibrated rate over the first `seconds` and its standard error; throws when that span is
+// not still (no static point covers it).
+void rebias(const Recording& cal, const std::vector<processing::StaticPoint>& pts, double seconds, ValidationReport& r) {
+  if (cal.samples.empty()) throw std::invalid_argument("--rebias-from-start: the recording has no samples");
+  const double t0 = cal.samples.front().t_s;
+  std::size_t last = 0;
+  while (last + 1 < cal.samples.size() && cal.samples[last + 1].t_s - t0 <= seconds) ++last;
+  const bool still = std::any_of(pts.begin(), pts.end(), [&](const processing::StaticPoint& p) {
+    return cal.samples[p.first].t_s - t0 <= 0.5 * seconds && p.last >= last;
+  });
+  if (!still || last < 8)
+    throw std::invalid_argument(fmt::format(
+        "--rebias-from-start {} s: the recording's first {} s are not one still interval (the static detector finds "
+        "none covering them); give a shorter span or leave the calibration's bias",
+        seconds, seconds));
+  const Eigen::Vector3d m = mean_of(cal, 0, last, [](const ImuSample& s) { return s.gyro_radps; });
+  Eigen::Vector3d s2 = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i <= last; ++i) s2 += (cal.samples[i].gyro_radps - m).cwiseAbs2();
+  const double n = static_cast<double>(last + 1);
+  r.rebiased = true;
+  r.rebias_radps = m;
+  r.rebias_se_radps = (s2 / (n - 1.0) / n).cwiseSqrt();
+}
+
+// The rotation carried by the rates over samples [a, b] (trapezoid rates, rotation vectors
+// composed), as a rotation vector [rad] in the frame at sample a.
+Eigen::Vector3d integrated_rotation(const Recording& cal, std::size_t a, std::size_t b, const Eigen::Vector3d& bias) {
+  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+  for (std::size_t i = a; i < b; ++i) {
+    const Eigen::Vector3d w = 0.5 * (cal.samples[i].gyro_radps + cal.samples[i + 1].gyro_radps) - bias;
+    const Eigen::Vector3d d = w * (cal.samples[i + 1].t_s - cal.samples[i].t_s);
+    const double ang = d.norm();
+    if (ang > 0.0) q = q * Eigen::Quaterniond(Eigen::AngleAxisd(ang, d / ang));
+  }
+  const Eigen::AngleAxisd aa(q.normalized());
+  return aa.axis() * aa.angle();
+}
+
+// Every motion between consecutive static points that turns by more than half the stated angle,
+// checked against it.
+std::vector<TurnCheck> turn_checks(const Recording& cal, const Calibration& c,
+                                   const std::vector<processing::StaticPoint>& pts, const ExpectedRotation& e,
+                                   const ValidationReport& r, double z) {
+  const char* ax = "xyz";
+  const Eigen::Vector3d bias = r.rebiased ? r.rebias_radps : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d noise = gyro_noise(pts);
+  const double bias_se = r.rebiased ? r.rebias_se_radps[e.axis] : c.gyro.std_error(std::string("bias_") + ax[e.axis]);
+  const double scale_se = c.gyro.std_error(std::string("scale_") + ax[e.axis]);
+  std::vector<TurnCheck> out;
+  for (std::size_t k = 0; k + 1 < pts.size(); ++k) {
+    const std::size_t a = pts[k].last, b = pts[k + 1].first;
+    if (b <= a) continue;
+    const Eigen::Vector3d rv = integrated_rotation(cal, a, b, bias);
+    if (std::abs(rv[e.axis]) * physics::kRadToDeg < 0.5 * std::abs(e.angle_deg)) continue;
+    TurnCheck t;
+    t.expected = e;
+    t.t_start_s = cal.samples[a].t_s;
+    t.t_end_s = cal.samples[b].t_s;
+    t.measured_deg = rv[e.axis] * physics::kRadToDeg;
+    t.error_deg = std::abs(t.measured_deg) - std::abs(e.angle_deg);
+    const double T = t.t_end_s - t.t_start_s, n = static_cast<double>(b - a);
+    t.sigma_noise_deg = noise[e.axis] * std::sqrt(n) * (T / n) * physics::kRadToDeg;
+    t.sigma_bias_deg = bias_se * T * physics::kRadToDeg;
+    t.sigma_scale_deg = scale_se * std::abs(e.angle_deg);
+    t.sigma_deg = std::sqrt(t.sigma_noise_deg * t.sigma_noise_deg + t.sigma_bias_deg * t.sigma_bias_deg +
+                            t.sigma_scale_deg * t.sigma_scale_deg);
+    t.bound_deg = z * t.sigma_deg;
+    t.holds = std::abs(t.error_deg) <= t.bound_deg;
+    out.push_back(t);
+  }
+  return out;
+}
+
+std::string num(double v, int digits = 4) { return estimation::number_text(v, digits); }
+
+}  // namespace
+
+ExpectedRotation parse_expected_rotation(const std::string& text) {
+  const auto colon = text.find(':');
+  const std::string axis = text.substr(0, colon);
+  ExpectedRotation e;
+  e.axis = axis == "x" ? 0 : axis == "y" ? 1 : axis == "z" ? 2 : -1;
+  bool ok = colon != std::string::npos && e.axis >= 0;
+  if (ok) {
+    try {
+      std::size_t used = 0;
+      e.angle_deg = std::stod(text.substr(colon + 1), &used);
+      ok = used == text.size() - colon - 1 && std::isfinite(e.angle_deg) && e.angle_deg != 0.0;
+    } catch (const std::exception&) {
+      ok = false;
+    }
+  }
+  if (!ok)
+    throw std::invalid_argument("expected rotation '" + text +
+                                "': expected AXIS:DEGREES with AXIS x, y or z (sensor frame) and a nonzero angle, "
+                                "e.g. x:90");
+  return e;
+}
+
+processing::ProcessingOptions validation_interval_options() {
+  processing::ProcessingOptions o;
+  o.intervals = processing::IntervalSource::kDetect;
+  o.extraction.filter = processing::Filter::kNone;
+  o.extraction.settle_s = 0.0;
+  o.detector.max_gyro_radps = kStillMaxRateDps * physics::kDegPerSecond;
+  o.stated = {"intervals", "extraction.filter", "extraction.settle_s", "detector.max_gyro_dps"};
+  return o;
+}
+
+bool ValidationOptions::IsValid(std::string* error) const {
+  auto fail = [&](const std::string& why) {
+    if (error) *error = why;
+    return false;
+  };
+  if (!(confidence > 0.0 && confidence < 1.0)) return fail("confidence must lie in (0, 1)");
+  if (!(gravity_mps2 >= 0.0)) return fail("gravity must be >= 0 m/s^2 (0: the recording's)");
+  if (!(rebias_from_start_s >= 0.0)) return fail("--rebias-from-start must be >= 0 s");
+  return intervals.IsValid(error);
+}
+
+void check_applicable(const Calibration& cal, const ValidationOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw std::invalid_argument(why);
+  if ((!o.rotations.empty() || o.rebias_from_start_s > 0.0) && !cal.gyro.present())
+    throw std::invalid_argument(cal.source + " holds no gyroscope calibration (" +
+                                (cal.accel.present() ? "accelerometer only" : "nothing") +
+                                "): a rotation check or a gyro re-bias needs one; give the results of a gyroscope fit");
+}
+
+ValidationReport validate(const Recording& raw, const Recording& calibrated, const Calibration& cal,
+                          const ValidationOptions& o) {
+  check_applicable(cal, o);
+  ValidationReport r;
+  r.calibration = cal.source;
+  r.confidence = o.confidence;
+  processing::Request request;
+  const processing::Extraction ex = processing::extract(calibrated, o.intervals, request);
+  const auto& pts = ex.points;
+  r.notes.insert(r.notes.end(), ex.notes.begin(), ex.notes.end());
+  if (cal.accel.present()) r.statics = static_check(raw, calibrated, pts, gravity_for(raw, cal, o));
+  else r.notes.push_back("no accelerometer calibration: the static |a| - g check is not made");
+  if (o.rebias_from_start_s > 0.0) rebias(calibrated, pts, o.rebias_from_start_s, r);
+  const double z = estimation::normal_quantile(0.5 * (1.0 + o.confidence));
+  for (const auto& e : o.rotations) {
+    auto turns = turn_checks(calibrated, cal, pts, e, r, z);
+    if (turns.empty())
+      r.notes.push_back(fmt::format("no motion between static intervals turns by more than half of {}:{} deg",
+                                    "xyz"[e.axis], e.angle_deg));
+    r.turns.insert(r.turns.end(), turns.begin(), turns.end());
+  }
+  if (pts.empty()) r.message = "no static interval detected: nothing to validate against";
+  else if (!o.rotations.empty() && r.turns.empty()) r.message = "no turn of the stated size found";
+  else if (std::any_of(r.turns.begin(), r.turns.end(), [](const TurnCheck& t) { return !t.holds; }))
+    r.message = "an integrated turn lies outside its stated uncertainty";
+  r.ok = r.message.empty();
+  return r;
+}
+
+void ValidationReport::print(std::ostream& os) const {
+  os << "validation of " << calibration << ": " << (ok ? "ok" : "FAILED — " + message) << "\n";
+  const auto& s = statics;
+  if (s.intervals > 0 && std::isfinite(s.rms_after)) {
+    const double mg = physics::kMilliG;
+    os << fmt::format("static |a| - g over {} detected still intervals (g = {} m/s^2), mg:\n", s.intervals,
+                      num(s.gravity_mps2, 8));
+    os << fmt::format("  raw         mean {:>9}  RMS {:>9}  max {:>9}\n", num(s.mean_before / mg),
+                      num(s.rms_before / mg), num(s.max_before / mg));
+    os << fmt::format("  calibrated  mean {:>9}  RMS {:>9}  max {:>9}   (noise floor {} mg)\n", num(s.mean_after / mg),
+                      num(s.rms_after / mg), num(s.max_after / mg), num(s.noise_floor / mg));
+    os << fmt::format("gravity direction stability inside the intervals (half to half): RMS {} deg, max {} deg\n",
+                      num(s.direction_rms_deg), num(s.direction_max_deg));
+  }
+  if (rebiased)
+    os << fmt::format("gyro bias re-estimated from the still start: {} {} {} deg/s (std error {} {} {})\n",
+                      num(rebias_radps[0] / physics::kDegPerSecond), num(rebias_radps[1] / physics::kDegPerSecond),
+                      num(rebias_radps[2] / physics::kDegPerSecond), num(rebias_se_radps[0] / physics::kDegPerSecond),
+                      num(rebias_se_radps[1] / physics::kDegPerSecond), num(rebias_se_radps[2] / physics::kDegPerSecond));
+  for (const auto& t : turns)
+    os << fmt::format("turn {}:{} deg at {}-{} s: integrated {} deg, error {} deg, {:.3g}% bound +/-{} deg "
+                      "(1 sigma {}: noise {}, bias {}, scale {}) {}\n",
+                      "xyz"[t.expected.axis], t.expected.angle_deg, num(t.t_start_s, 6), num(t.t_end_s, 6),
+                      num(t.measured_deg, 7), num(t.error_deg), 100 * confidence, num(t.bound_deg), num(t.sigma_deg),
+                      num(t.sigma_noise_deg), num(t.sigma_bias_deg), num(t.sigma_scale_deg),
+                      t.holds ? "holds" : "DOES NOT HOLD");
+  for (const auto& n : notes) os << "note: " << n << "\n";
+}
+
+std::string ValidationReport::to_json() const {
+  using nlohmann::json;
+  auto n = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  const auto& s = statics;
+  json j = {{"status", ok ? "ok" : "failed"},
+            {"message", message},
+            {"calibration", calibration},
+            {"confidence", confidence},
+            {"static",
+             {{"intervals", s.intervals},
+              {"gravity_mps2", n(s.gravity_mps2)},
+              {"norm_minus_g_before_mps2", {{"mean", n(s.mean_before)}, {"rms", n(s.rms_before)}, {"max", n(s.max_before)}}},
+              {"norm_minus_g_after_mps2", {{"mean", n(s.mean_after)}, {"rms", n(s.rms_after)}, {"max", n(s.max_after)}}},
+              {"noise_floor_mps2", n(s.noise_floor)},
+              {"direction_change_deg", {{"rms", n(s.direction_rms_deg)}, {"max", n(s.direction_max_deg)}}}}},
+            {"notes", notes}};
+  if (rebiased)
+    j["rebias_radps"] = {{"value", {n(rebias_radps[0]), n(rebias_radps[1]), n(rebias_radps[2])}},
+                         {"std_error", {n(rebias_se_radps[0]), n(rebias_se_radps[1]), n(rebias_se_radps[2])}}};
+  j["turns"] = json::array();
+  for (const auto& t : turns)
+    j["turns"].push_back({{"axis", std::string(1, "xyz"[t.expected.axis])},
+                          {"stated_deg", t.expected.angle_deg},
+                          {"t_start_s", t.t_start_s},
+                          {"t_end_s", t.t_end_s},
+                          {"measured_deg", n(t.measured_deg)},
+                          {"error_deg", n(t.error_deg)},
+                          {"sigma_deg", {{"total", n(t.sigma_deg)}, {"noise", n(t.sigma_noise_deg)},
+                                         {"bias", n(t.sigma_bias_deg)}, {"scale", n(t.sigma_scale_deg)}}},
+                          {"bound_deg", n(t.bound_deg)},
+                          {"holds", t.holds}});
+  return j.dump(2);
+}
+
+}  // namespace stend::calibration
