@@ -36,7 +36,8 @@ fs::path results_file(const fs::path& cal) {
 }
 
 struct ApplyArgs {
-  std::string cal, input, format = "auto", output, json;
+  std::string cal, output, json;
+  DatasetArgs data;  // the recording to calibrate
   bool validate = false;
   std::vector<std::string> rotations;
   calibration::ValidationOptions options;
@@ -51,7 +52,7 @@ int run_apply(const ApplyArgs& a) {
   for (const auto& r : a.rotations) options.rotations.push_back(calibration::parse_expected_rotation(r));
   calibration::check_applicable(cal, options);  // before reading the recording or writing anything
   cal.print(std::cout);
-  const Recording raw = open_recording(a.input, a.format);
+  const Recording raw = a.data.open();
   if (cal.needs_temperature() && std::isfinite(cal.valid_min_c) && !raw.samples.empty()) {
     auto [lo, hi] = std::minmax_element(raw.samples.begin(), raw.samples.end(), [](const ImuSample& x, const ImuSample& y) {
       return x.temperature_c < y.temperature_c;
@@ -85,8 +86,7 @@ void add_apply_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_option("calibration", a.cal,
                   "Results of a fit: ceres.json, fit.json, temp_poly.json, or the run folder that holds one")
       ->required();
-  sub->add_option("input", a.input, "Recording to calibrate: run folder or dataset file")->required();
-  sub->add_option("--format", a.format, "Input format, as for `stend fit` (default auto)");
+  a.data.add_to(sub);  // the recording to calibrate: run folder or dataset file, as for `stend fit`
   sub->add_option("-o,--output", a.output, "New run folder for the calibrated recording");
   sub->add_flag("--validate", a.validate, "Validate on the input (a recording the calibration was not fitted to)");
   sub->add_option("--expect-rotation", a.rotations,
