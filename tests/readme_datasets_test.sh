@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# Runs the README's commands on the real recordings (the block between <!-- datasets:begin --> and
+# <!-- datasets:end -->) exactly as written, as a new user would from the repository root: every
+# command must succeed. They run in a scratch copy of the root (links to the sources and the build)
+# with ../shared beside it, so nothing is written into the work tree.
+# Usage: readme_datasets_test.sh SOURCE_DIR BUILD_DIR SHARED_DATA_DIR. Exit 77 (skipped) without the data.
+set -uo pipefail
+src=$1 build=$2 data=$3
+if [ ! -d "$data" ]; then
+  echo "SKIP: $data is absent (the real recordings live in ../shared/data beside the repository)"
+  exit 77
+fi
+scratch=$(mktemp -d)
+trap 'rm -rf "$scratch"' EXIT
+mkdir -p "$scratch/repo" "$scratch/shared"
+ln -s "$(cd "$data" && pwd)" "$scratch/shared/data"
+for entry in "$src"/*; do
+  name=$(basename "$entry")
+  [ "$name" = build ] || ln -s "$entry" "$scratch/repo/$name"
+done
+ln -s "$build" "$scratch/repo/build"
+commands=$(sed -n '/<!-- datasets:begin -->/,/<!-- datasets:end -->/p' "$src/README.md" |
+           sed -n 's/^    \(build\/bin\/stend .*\)$/\1/p')
+count=$(printf '%s\n' "$commands" | grep -c .)
+if [ "$count" -lt 10 ]; then
+  echo "FAIL: found only $count commands between the README's datasets markers"
+  exit 1
+fi
+failed=0
+cd "$scratch/repo"
+while IFS= read -r cmd; do
+  if out=$(bash -c "$cmd" 2>&1); then
+    echo "ok    $cmd"
+  else
+    rc=$?
+    echo "FAIL  $cmd (exit $rc)"
+    printf '%s\n' "$out" | tail -15 | sed 's/^/      /'
+    failed=$((failed + 1))
+  fi
+done <<< "$commands"
+# Only the run folders the commands name may appear: nothing else in the scratch root.
+extra=$(find "$scratch/repo" -mindepth 1 -maxdepth 1 ! -type l ! -name runs)
+if [ -n "$extra" ]; then
+  echo "FAIL: the commands wrote outside runs/: $extra"
+  failed=$((failed + 1))
+fi
+echo "$((count - failed)) of $count README commands on ../shared/data succeeded"
+[ "$failed" -eq 0 ]
