@@ -137,7 +137,9 @@ Eigen::Vector3d integrated_rotation(const Recording& cal, std::size_t a, std::si
 }
 
 // Every motion between consecutive static points that turns by more than half the stated angle,
-// checked against it.
+// checked against it. The rates are integrated from the middle of one static point to the middle
+// of the next: a slow start or end of the turn that the detector counts as still is inside that
+// span, and the still parts add only noise and bias, which the bound carries.
 std::vector<TurnCheck> turn_checks(const Recording& cal, const Calibration& c,
                                    const std::vector<processing::StaticPoint>& pts, const ExpectedRotation& e,
                                    const ValidationReport& r, double z) {
@@ -148,7 +150,7 @@ std::vector<TurnCheck> turn_checks(const Recording& cal, const Calibration& c,
   const double scale_se = c.gyro.std_error(std::string("scale_") + ax[e.axis]);
   std::vector<TurnCheck> out;
   for (std::size_t k = 0; k + 1 < pts.size(); ++k) {
-    const std::size_t a = pts[k].last, b = pts[k + 1].first;
+    const std::size_t a = (pts[k].first + pts[k].last) / 2, b = (pts[k + 1].first + pts[k + 1].last) / 2;
     if (b <= a) continue;
     const Eigen::Vector3d rv = integrated_rotation(cal, a, b, bias);
     if (std::abs(rv[e.axis]) * physics::kRadToDeg < 0.5 * std::abs(e.angle_deg)) continue;
