@@ -24,6 +24,7 @@
 #include <stdexcept>
 #include <string_view>
 #include <system_error>
+#include <utility>
 
 namespace stend {
 namespace {
@@ -1075,7 +1076,7 @@ void read_events(const fs::path& file, Recording& r) {
 
 }  // namespace
 
-Recording Recording::open(const fs::path& run_dir) {
+Recording Recording::open(const fs::path& run_dir, SampleLoading loading) {
   std::error_code ec;
   if (!fs::is_directory(run_dir, ec)) {
     throw std::runtime_error(
@@ -1111,7 +1112,16 @@ Recording Recording::open(const fs::path& run_dir) {
   if (fs::exists(run_dir / "truth.csv", ec)) read_truth(run_dir / "truth.csv", r);
   if (fs::exists(run_dir / "segments.csv", ec)) read_segments(run_dir / "segments.csv", r);
   if (fs::exists(run_dir / "events.csv", ec)) read_events(run_dir / "events.csv", r);
+  if (loading == SampleLoading::kStream)
+    r.source = std::make_shared<MemorySamples>(std::exchange(r.samples, {}));
   return r;
+}
+
+const SampleSource& Recording::sample_source() const {
+  if (source) return *source;
+  if (!memory_view_ || &memory_view_->samples() != &samples)
+    memory_view_ = std::make_shared<MemorySamples>(samples);
+  return *memory_view_;
 }
 
 int Recording::truth_column(const std::string& name) const {

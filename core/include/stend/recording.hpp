@@ -17,6 +17,7 @@
 #pragma once
 
 #include <stend/physics/units.hpp>
+#include <stend/samples.hpp>
 #include <stend/sdk.hpp>
 
 #include <cstdint>
@@ -140,13 +141,20 @@ class RecordingWriter {
   std::filesystem::path dir_;
 };
 
-// Column-wise in-memory view of a recording, for analysis.
+// How Recording::open treats the samples: read them all into `samples` (kInMemory), or leave
+// them in the store and read them through `source` a chunk at a time (kStream; a CSV run folder,
+// having no index, is still read whole, into the source).
+enum class SampleLoading { kInMemory, kStream };
+
+// A recording for analysis: header, truth, segments and events in memory; the samples either in
+// memory (`samples`) or in the store (`source`). Analyses iterate sample_source().
 struct Recording {
   std::filesystem::path dir;
   RecordingHeader header;
   bool complete() const { return header.status == RunStatus::kComplete; }
   std::string experiment_yaml;
-  std::vector<ImuSample> samples;
+  std::vector<ImuSample> samples;                // in memory; empty when `source` is set
+  std::shared_ptr<const SampleSource> source;    // the store's samples (SampleLoading::kStream)
   std::vector<double> truth_t;
   std::vector<std::vector<double>> truth;  // rows, each truth_columns.size()
   std::vector<Segment> segments;
@@ -154,9 +162,17 @@ struct Recording {
   std::size_t dropped_partial_lines = 0;  // truncated trailing lines ignored by the reader
 
   // Throws std::runtime_error naming the file and line when something is unreadable.
-  static Recording open(const std::filesystem::path& run_dir);
+  static Recording open(const std::filesystem::path& run_dir,
+                        SampleLoading loading = SampleLoading::kInMemory);
+  // The samples to iterate: `source` when set, else a view of `samples`.
+  const SampleSource& sample_source() const;
+  // Number of samples, wherever they are.
+  std::uint64_t sample_count() const { return source ? source->size() : samples.size(); }
   // Column index of a truth column, −1 when absent.
   int truth_column(const std::string& name) const;
+
+ private:
+  mutable std::shared_ptr<const MemorySamples> memory_view_;  // sample_source() over `samples`
 };
 
 }  // namespace stend

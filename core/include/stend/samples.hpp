@@ -1,0 +1,85 @@
+// A recording's samples, read a chunk at a time: what every analysis iterates, so that its memory
+// does not grow with the length of the record.
+//
+// A SampleSource is random-access by sample index and ordered by time. The run store's reader
+// (HDF5) implements it on the file; MemorySamples wraps samples already in memory (importers,
+// tests, CSV run folders). Analyses take `const SampleSource&` and use for_each_chunk /
+// read_interval / read_column; state that grows with positions or segments is fine, state that
+// grows with samples is not.
+#pragma once
+
+#include <stend/sdk.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+namespace stend {
+
+// One scalar column of the samples (SI: s, m/s², rad/s, °C).
+enum class Channel { kTime, kAx, kAy, kAz, kGx, kGy, kGz, kTemperature };
+// "t_s" | "ax" | "ay" | "az" | "gx" | "gy" | "gz" | "temp_c".
+const char* to_string(Channel c);
+// The channel's SI value in a sample.
+double value_of(const ImuSample& s, Channel c);
+
+// Samples per chunk when a caller does not choose: 64 Ki samples (≈ 7 MiB of ImuSample).
+inline constexpr std::size_t kDefaultChunkSamples = std::size_t{1} << 16;
+
+class SampleSource {
+ public:
+  virtual ~SampleSource() = default;
+  // Readable samples (a damaged tail is not counted).
+  virtual std::uint64_t size() const = 0;
+  // Samples [first, first + count) into out[0 .. count). Requires first + count ≤ size().
+  // Throws std::runtime_error naming the file and what is damaged when the data cannot be read.
+  virtual void read(std::uint64_t first, std::size_t count, ImuSample* out) const = 0;
+  // One channel of samples [first, first + count) into out[0 .. count). The default reads whole
+  // samples; a columnar store overrides it to read only that column.
+  virtual void read_column(Channel c, std::uint64_t first, std::size_t count, double* out) const;
+};
+
+// Samples held in memory: a view of a vector owned elsewhere (valid while the vector lives and is
+// not resized), or owning one.
+class MemorySamples final : public SampleSource {
+ public:
+  explicit MemorySamples(const std::vector<ImuSample>& view) : data_(&view) {}
+  explicit MemorySamples(std::vector<ImuSample>&& owned)
+      : owned_(std::make_shared<std::vector<ImuSample>>(std::move(owned))), data_(owned_.get()) {}
+  std::uint64_t size() const override { return data_->size(); }
+  void read(std::uint64_t first, std::size_t count, ImuSample* out) const override;
+  void read_column(Channel c, std::uint64_t first, std::size_t count, double* out) const override;
+  // The samples themselves (no copy).
+  const std::vector<ImuSample>& samples() const { return *data_; }
+
+ private:
+  std::shared_ptr<std::vector<ImuSample>> owned_;
+  const std::vector<ImuSample>* data_;
+};
+
+// Calls fn(chunk, n, first_index) for consecutive chunks covering samples [first, last) in order;
+// one buffer of `chunk_samples` is reused. last is clamped to size().
+using ChunkFn = std::function<void(const ImuSample* chunk, std::size_t n, std::uint64_t first)>;
+void for_each_chunk(const SampleSource& src, std::uint64_t first, std::uint64_t last,
+                    const ChunkFn& fn, std::size_t chunk_samples = kDefaultChunkSamples);
+// All samples.
+void for_each_chunk(const SampleSource& src, const ChunkFn& fn,
+                    std::size_t chunk_samples = kDefaultChunkSamples);
+
+// Index of the first sample with t_s ≥ t (size() when none): binary search by single reads.
+std::uint64_t lower_bound_time(const SampleSource& src, double t_s);
+// Index range [first, last) of the samples with t_s in [t0_s, t1_s).
+struct IndexRange {
+  std::uint64_t first = 0, last = 0;
+  std::uint64_t size() const { return last > first ? last - first : 0; }
+};
+IndexRange index_range(const SampleSource& src, double t0_s, double t1_s);
+// The samples with t_s in [t0_s, t1_s), in memory (for one segment or pose).
+std::vector<ImuSample> read_interval(const SampleSource& src, double t0_s, double t1_s);
+// One channel of samples [first, last) in memory.
+std::vector<double> read_column(const SampleSource& src, Channel c, std::uint64_t first,
+                                std::uint64_t last);
+
+}  // namespace stend
