@@ -1,5 +1,7 @@
 // Speed of the simulated bench: a one-hour static experiment at 1 kHz (sensor in a chamber held
-// at 25 °C on a one-axis table), recorded to a run folder, in multiples of real time.
+// at 25 °C on a one-axis table), in multiples of real time — recorded to a run folder
+// (BM_SimulatedBenchOneHour1kHz), and with every record dropped (…NoWriter: the simulator and the
+// runner alone).
 //   build/bin/simulated_bench_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
@@ -7,7 +9,10 @@
 #include "stend/plugin_host.hpp"
 #include "stend/runner.hpp"
 
+#include <cstdint>
 #include <filesystem>
+#include <string>
+#include <vector>
 #include <unistd.h>
 
 namespace {
@@ -25,7 +30,25 @@ procedure:
   - record: {duration_s: 3600}
 )";
 
-void BM_SimulatedBenchOneHour1kHz(benchmark::State& state) {
+// Drops every record (counts the samples so that nothing is optimized away).
+class NullSink final : public stend::RunSink {
+ public:
+  void add_samples(const stend::ImuSample* samples, std::size_t count) override {
+    if (count > 0) last_t_s_ = samples[count - 1].t_s;
+    samples_ += count;
+  }
+  void add_truth(double, const std::vector<double>&) override {}
+  void add_segment(const stend::Segment&) override {}
+  void add_event(const stend::Event&) override {}
+  void tick(double) override {}
+  void finish(stend::RunStatus, const std::string&) override {}
+
+ private:
+  std::uint64_t samples_ = 0;
+  double last_t_s_ = 0.0;
+};
+
+void run_bench(benchmark::State& state, bool write) {
   stend::PluginHost host;
   host.scan({{STEND_BUILD_PLUGIN_DIR, "build tree"}});
   const stend::Experiment exp = stend::parse_experiment(kExperiment, "bench.yaml", host);
@@ -35,19 +58,24 @@ void BM_SimulatedBenchOneHour1kHz(benchmark::State& state) {
   for (auto _ : state) {
     stend::RunOptions opt;
     opt.output_dir = out;
-    const stend::RunResult r = stend::run_experiment(exp, host, opt);
+    NullSink sink;
+    const stend::RunResult r = write ? stend::run_experiment(exp, host, opt) : stend::run_experiment_to(exp, host, opt, sink);
     if (r.status != stend::RunStatus::kComplete) state.SkipWithError(r.message.c_str());
     run_s += r.run_time_s;
     wall_s += r.wall_time_s;
     samples += r.samples;
-    std::filesystem::remove_all(r.dir);
+    if (write) std::filesystem::remove_all(r.dir);
   }
   std::filesystem::remove_all(out);
   state.counters["x_real_time"] = run_s / wall_s;
   state.counters["ns_per_sample"] = 1e9 * wall_s / static_cast<double>(samples);
   state.counters["samples"] = static_cast<double>(samples) / static_cast<double>(state.iterations());
 }
+
+void BM_SimulatedBenchOneHour1kHz(benchmark::State& state) { run_bench(state, true); }
+void BM_SimulatedBenchOneHour1kHzNoWriter(benchmark::State& state) { run_bench(state, false); }
 BENCHMARK(BM_SimulatedBenchOneHour1kHz)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
+BENCHMARK(BM_SimulatedBenchOneHour1kHzNoWriter)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
 
 }  // namespace
 

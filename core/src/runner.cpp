@@ -8,7 +8,9 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <memory>
 #include <stdexcept>
+#include <utility>
 
 namespace stend {
 
@@ -57,7 +59,7 @@ class Stopped : public std::exception {
 // One run: owns the loop state so the procedure reads as a list of steps.
 class Run {
  public:
-  Run(const Experiment& exp, Bench& bench, Clock& clock, RecordingWriter& writer, const RunOptions& opt)
+  Run(const Experiment& exp, Bench& bench, Clock& clock, RunSink& writer, const RunOptions& opt)
       : exp_(exp), bench_(bench), clock_(clock), writer_(writer), opt_(opt) {
     progress_.step_count = static_cast<int>(exp.procedure.size());
     progress_.planned_total_s = planned_duration(exp);
@@ -339,7 +341,7 @@ class Run {
   const Experiment& exp_;
   Bench& bench_;
   Clock& clock_;
-  RecordingWriter& writer_;
+  RunSink& writer_;
   const RunOptions& opt_;
   RunProgress progress_;
   std::chrono::steady_clock::time_point wall_start_, last_progress_;
@@ -358,17 +360,33 @@ class Run {
   double tolerance_c_ = INFINITY;
 };
 
-}  // namespace
+// The run folder as a RunSink.
+class RecordingSink final : public RunSink {
+ public:
+  explicit RecordingSink(RecordingWriter& w) : w_(w) {}
+  void add_samples(const ImuSample* samples, std::size_t count) override { w_.add_samples(samples, count); }
+  void add_truth(double t_s, const std::vector<double>& values) override { w_.add_truth(t_s, values); }
+  void add_segment(const Segment& s) override { w_.add_segment(s); }
+  void add_event(const Event& e) override { w_.add_event(e); }
+  void tick(double run_time_s) override { w_.tick(run_time_s); }
+  void finish(RunStatus status, const std::string& message) override { w_.finish(status, message); }
 
-RunResult run_experiment(const Experiment& exp, const PluginHost& host, const RunOptions& options) {
-  Bench bench(exp, host);  // throws ExperimentError on stage-2 problems: nothing written yet
+ private:
+  RecordingWriter& w_;
+};
 
-  std::string clock_kind = options.clock.empty() ? exp.clock : options.clock;
-  if (clock_kind == "auto") clock_kind = bench.simulated() ? "simulated" : "wall";
-  std::unique_ptr<Clock> clock;
-  if (clock_kind == "simulated") clock = std::make_unique<SimulatedClock>();
-  else clock = std::make_unique<WallClock>();
+std::string clock_kind(const Experiment& exp, const Bench& bench, const RunOptions& options) {
+  const std::string kind = options.clock.empty() ? exp.clock : options.clock;
+  if (kind == "auto") return bench.simulated() ? "simulated" : "wall";
+  return kind;
+}
 
+std::unique_ptr<Clock> make_clock(const std::string& kind) {
+  if (kind == "simulated") return std::make_unique<SimulatedClock>();
+  return std::make_unique<WallClock>();
+}
+
+RecordingHeader run_header(const Experiment& exp, const PluginHost& host, Bench& bench, const std::string& clock) {
   RecordingHeader header;
   header.experiment_name = exp.name;
   header.experiment_file = exp.file;
@@ -387,20 +405,16 @@ RunResult run_experiment(const Experiment& exp, const PluginHost& host, const Ru
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) header.mounting_R.push_back(exp.R_sensor_from_mount(r, c));
   header.seed = exp.seed;
-  header.clock = clock_kind;
+  header.clock = clock;
   header.truth_columns = bench.truth_columns();
+  return header;
+}
 
-  const std::filesystem::path out = options.output_dir.empty() ? std::filesystem::path(exp.outputs.directory) : options.output_dir;
-  std::filesystem::create_directories(out);
-  std::string name = options.run_name.empty() ? exp.name + "-" + utc_stamp() : options.run_name;
-  std::filesystem::path dir = out / name;
-  for (int n = 2; std::filesystem::exists(dir); ++n) dir = out / (name + "-" + std::to_string(n));
-
-  RecordingWriter writer(dir, header, exp.resolved_yaml);
+// Runs the procedure on an assembled bench into `sink`; faults end in the result's status.
+RunResult execute(const Experiment& exp, Bench& bench, Clock& clock, RunSink& sink, const RunOptions& options) {
   RunResult result;
-  result.dir = dir;
   const auto wall0 = std::chrono::steady_clock::now();
-  Run run(exp, bench, *clock, writer, options);
+  Run run(exp, bench, clock, sink, options);
   try {
     run.execute();
     result.status = RunStatus::kComplete;
@@ -410,23 +424,48 @@ RunResult run_experiment(const Experiment& exp, const PluginHost& host, const Ru
   } catch (const std::exception& e) {
     result.status = RunStatus::kFailed;
     result.message = e.what();
-    writer.add_event({clock->now_s(), "error", "runner", e.what()});
+    sink.add_event({clock.now_s(), "error", "runner", e.what()});
   }
   if (result.status != RunStatus::kComplete) run.abandon();
   bench.safe_state();
   if (result.status != RunStatus::kComplete)
-    writer.add_event({clock->now_s(), "warning", "runner", std::string("run ") + to_string(result.status) + "; fixtures put in their safe state"});
+    sink.add_event({clock.now_s(), "warning", "runner", std::string("run ") + to_string(result.status) + "; fixtures put in their safe state"});
   try {
     bench.sensor().stop();
   } catch (const std::exception& e) {
-    writer.add_event({clock->now_s(), "warning", "sensor", std::string("stop failed: ") + e.what()});
+    sink.add_event({clock.now_s(), "warning", "sensor", std::string("stop failed: ") + e.what()});
   }
-  writer.finish(result.status, result.message);
+  sink.finish(result.status, result.message);
   result.samples = run.samples();
   result.segments = run.segments();
-  result.run_time_s = clock->now_s();
+  result.run_time_s = clock.now_s();
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return result;
+}
+
+}  // namespace
+
+RunResult run_experiment(const Experiment& exp, const PluginHost& host, const RunOptions& options) {
+  Bench bench(exp, host);  // throws ExperimentError on stage-2 problems: nothing written yet
+  const std::string clock = clock_kind(exp, bench, options);
+  RecordingHeader header = run_header(exp, host, bench, clock);
+
+  const std::filesystem::path out = options.output_dir.empty() ? std::filesystem::path(exp.outputs.directory) : options.output_dir;
+  std::filesystem::create_directories(out);
+  std::string name = options.run_name.empty() ? exp.name + "-" + utc_stamp() : options.run_name;
+  std::filesystem::path dir = out / name;
+  for (int n = 2; std::filesystem::exists(dir); ++n) dir = out / (name + "-" + std::to_string(n));
+
+  RecordingWriter writer(dir, std::move(header), exp.resolved_yaml);
+  RecordingSink sink(writer);
+  RunResult result = execute(exp, bench, *make_clock(clock), sink, options);
+  result.dir = dir;
+  return result;
+}
+
+RunResult run_experiment_to(const Experiment& exp, const PluginHost& host, const RunOptions& options, RunSink& sink) {
+  Bench bench(exp, host);
+  return execute(exp, bench, *make_clock(clock_kind(exp, bench, options)), sink, options);
 }
 
 }  // namespace stend

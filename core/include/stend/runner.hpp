@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace stend {
 
@@ -54,9 +55,27 @@ struct RunResult {
   double wall_time_s = 0.0;
 };
 
+// Where a run's records go, in the order they happen (the same calls as RecordingWriter's).
+// run_experiment writes them to a run folder; a benchmark of the bench alone passes a sink that
+// drops them (run_experiment_to).
+class RunSink {
+ public:
+  virtual ~RunSink() = default;
+  virtual void add_samples(const ImuSample* samples, std::size_t count) = 0;
+  virtual void add_truth(double t_s, const std::vector<double>& values) = 0;  // size = truth_columns
+  virtual void add_segment(const Segment& s) = 0;
+  virtual void add_event(const Event& e) = 0;
+  virtual void tick(double run_time_s) = 0;  // called every control period
+  virtual void finish(RunStatus status, const std::string& message) = 0;
+};
+
 // Runs the experiment. Throws ExperimentError for problems found before anything runs (stage-2
 // validation); once the run folder exists, faults end in a RunResult with status "failed" and
 // everything recorded so far kept.
 RunResult run_experiment(const Experiment& exp, const PluginHost& host, const RunOptions& options);
+
+// The same run with its records sent to `sink` instead of a run folder (RunResult::dir empty;
+// RunOptions::output_dir and run_name unused).
+RunResult run_experiment_to(const Experiment& exp, const PluginHost& host, const RunOptions& options, RunSink& sink);
 
 }  // namespace stend
