@@ -2,6 +2,7 @@
 
 #include "stend/physics/geometry.hpp"
 
+#include <cstring>
 #include <stdexcept>
 
 namespace stend {
@@ -64,23 +65,40 @@ void Bench::safe_state() noexcept {
   for (auto& f : fixtures_) f->safe_state();
 }
 
-BenchTruth Bench::at(double t_s) const {
-  BenchTruth truth;
-  truth.t_s = t_s;
+// The composition of the chain's poses k.poses (see at()) into k's kinematic fields.
+void Bench::compose(Kinematics& k) const {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();  // top-of-chain from local
   Eigen::Vector3d omega = Eigen::Vector3d::Zero();  // relative to base, in top-of-chain frame
   Eigen::Vector3d accel = Eigen::Vector3d::Zero();  // of the mounting point, top-of-chain frame
-  for (int i : chain_) {
-    const Pose p = fixtures_[static_cast<std::size_t>(i)]->pose(t_s);
+  for (const Pose& p : k.poses) {
     R = p.R_top_from_base * R;
     omega = p.R_top_from_base * omega + p.omega_top_radps;
     accel = p.R_top_from_base * accel + p.accel_top_mps2;
   }
   const Eigen::Matrix3d& M = exp_.R_sensor_from_mount;
-  truth.R_sensor_from_local = M * R;
-  truth.specific_force_mps2 =
-      physics::gravity_specific_force(truth.R_sensor_from_local, exp_.gravity.resolved_mps2) + M * accel;
-  truth.angular_rate_radps = M * omega + truth.R_sensor_from_local * earth_rate_local_;
+  k.R_sensor_from_local = M * R;
+  k.specific_force_mps2 =
+      physics::gravity_specific_force(k.R_sensor_from_local, exp_.gravity.resolved_mps2) + M * accel;
+  k.angular_rate_radps = M * omega + k.R_sensor_from_local * earth_rate_local_;
+  k.valid = true;
+}
+
+BenchTruth Bench::at(double t_s) const {
+  last_.poses.resize(chain_.size());
+  bool same = last_.valid;
+  for (std::size_t j = 0; j < chain_.size(); ++j) {
+    const Pose p = fixtures_[static_cast<std::size_t>(chain_[j])]->pose(t_s);
+    static_assert(sizeof(Pose) == 15 * sizeof(double), "Pose is compared byte for byte");
+    if (same && std::memcmp(&p, &last_.poses[j], sizeof(Pose)) == 0) continue;
+    same = false;
+    last_.poses[j] = p;
+  }
+  if (!same) compose(last_);
+  BenchTruth truth;
+  truth.t_s = t_s;
+  truth.R_sensor_from_local = last_.R_sensor_from_local;
+  truth.specific_force_mps2 = last_.specific_force_mps2;
+  truth.angular_rate_radps = last_.angular_rate_radps;
   if (chamber_ >= 0) {
     double air = 25.0, die = 25.0;
     if (fixtures_[static_cast<std::size_t>(chamber_)]->thermal(t_s, air, die)) {

@@ -54,6 +54,18 @@ class Bench final : public TruthSource {
   Eigen::Vector3d earth_rate_local_ = Eigen::Vector3d::Zero();
   bool simulated_ = true;
   mutable std::vector<std::pair<std::string, double>> telemetry_;
+
+  // The kinematic part of at() for the chain's last poses. A chain that holds still gives the
+  // same poses sample after sample; their composition is then reused (bit for bit the same).
+  struct Kinematics {
+    std::vector<Pose> poses;  // one per chain_ entry
+    Eigen::Matrix3d R_sensor_from_local = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d specific_force_mps2 = Eigen::Vector3d::Zero();
+    Eigen::Vector3d angular_rate_radps = Eigen::Vector3d::Zero();
+    bool valid = false;
+  };
+  void compose(Kinematics& k) const;
+  mutable Kinematics last_;
 };
 
 }  // namespace stend
