@@ -4,6 +4,7 @@
 #include <stend/physics/rotations.hpp>
 
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -122,6 +123,8 @@ double SimOneAxisTable::commanded(std::size_t axis) const {
 
 Pose SimOneAxisTable::pose(double t_s) const {
   const AxisState s = axis_.at(t_s);
+  if (std::memcmp(&s, &last_state_, sizeof s) == 0) return last_pose_;  // bit for bit: −0 ≠ +0
+  last_state_ = s;
   const double delta = (s.position + c_.angle_offset_deg) * kDegToRad;
   Pose p;
   if (misaligned_)
@@ -131,6 +134,7 @@ Pose SimOneAxisTable::pose(double t_s) const {
   const Eigen::Vector3d w = (s.velocity * kDegToRad) * n_;
   p.omega_top_radps = w;
   p.accel_top_mps2 = physics::point_acceleration<double>(w, (s.acceleration * kDegToRad) * n_, c_.lever_arm_m);
+  last_pose_ = p;
   return p;
 }
 
