@@ -51,8 +51,8 @@ class Quantizer {
       if (clamped) *clamped = true;
       return static_cast<std::int32_t>(max_);
     }
-    auto t = static_cast<std::int64_t>(v);  // truncation; inline floor below
-    if (static_cast<double>(t) > v) --t;
+    auto t = static_cast<std::int64_t>(v);  // truncation, then floor without a branch (the sign of
+    t -= static_cast<std::int64_t>(static_cast<double>(t) > v);  // v is random for a zero input)
     return static_cast<std::int32_t>(t);
   }
   double value(std::int64_t counts) const { return static_cast<double>(counts) * lsb_; }
