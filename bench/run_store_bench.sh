@@ -9,8 +9,8 @@
 #
 # 1. writes bench/run_store_1khz.yaml (configs/long_static.yaml at 1 kHz) shortened to SAMPLES
 #    samples: `stend run CONFIG -o WORK --name run -q`, timed once (wall, CPU, peak RSS), in
-#    multiples of real time (recorded run time / wall time), and the run folder's size in bytes
-#    and bytes per sample;
+#    multiples of real time (recorded run time / wall time), and the run's size on disk in bytes
+#    and bytes per sample (samples as `stend info` counts them);
 # 2. times `stend info RUN` and `stend fit RUN --model estimators/allan/example/allan.yaml
 #    --json WORK/fit.json` three times each with /usr/bin/time (medians of wall, CPU, peak RSS);
 # 3. runs bench/allantools_vs_stend.sh on the same run when that script exists
@@ -31,7 +31,7 @@ repeats=3
 if [ -n "${3:-}" ]; then
   work=$3
   mkdir -p "$work"
-  [ ! -e "$work/run" ] || { echo "$work/run exists: choose an empty WORK folder" >&2; exit 1; }
+  [ -z "$(find "$work" -maxdepth 1 -name 'run*')" ] || { echo "$work has a run already: choose an empty WORK folder" >&2; exit 1; }
 else
   work=$(mktemp -d)
   trap 'rm -rf "$work"' EXIT
@@ -57,21 +57,23 @@ column_median() { awk -v c="$2" '{ print $c }' "$1" | median; }
 mib() { awk '{ printf "%.1f", $1 / 1024 }'; }
 
 echo "recording $samples samples ($duration_s s at $rate_hz Hz) into $work/run …"
-timed "$work/run.times" "$stend" run "$work/experiment.yaml" -o "$work" --name run -q
-run=$work/run
+timed "$work/write.times" "$stend" run "$work/experiment.yaml" -o "$work" --name run -q
+# The run as the store names it: a folder "run" (or a file "run.<ext>").
+run=$(find "$work" -maxdepth 1 -name 'run*' | head -1)
+[ -n "$run" ] || { echo "stend run wrote no run into $work" >&2; exit 1; }
 bytes=$(du -sb "$run" | cut -f1)
-recorded=$(grep -o '"samples": *[0-9]*' "$run/run.json" | head -1 | grep -o '[0-9]*$' || true)
-[ -n "$recorded" ] || recorded=$samples
 
 for _ in $(seq "$repeats"); do
   timed "$work/info.times" "$stend" info "$run"
   timed "$work/fit.times" "$stend" fit "$run" --model "$model" --json "$work/fit.json"
 done
+recorded=$(sed -n 's/^data: *\([0-9]*\) samples.*/\1/p' "$work/info.times.out")
+[ -n "$recorded" ] || { echo "stend info printed no sample count:" >&2; cat "$work/info.times.out" >&2; exit 1; }
 
 echo
 echo "record: bench/run_store_1khz.yaml, $recorded samples x 6 channels at $rate_hz Hz ($(awk -v d="$duration_s" 'BEGIN { printf "%.2f", d / 3600 }') h)"
 echo "load average: $(cut -d' ' -f1-3 /proc/loadavg), $(nproc) cores; medians of $repeats for info and fit"
-read -r run_wall run_cpu run_rss <"$work/run.times"
+read -r run_wall run_cpu run_rss <"$work/write.times"
 printf '%-34s %10s %10s %12s  %s\n' "command" "wall [s]" "CPU [s]" "peak RSS" "figure"
 printf '%-34s %10s %10s %12s  %s\n' "stend run (write)" "$run_wall" "$run_cpu" "$(echo "$run_rss" | mib) MiB" \
   "$(awk -v d="$duration_s" -v w="$run_wall" -v c="$run_cpu" -v n="$recorded" \

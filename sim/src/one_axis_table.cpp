@@ -4,7 +4,8 @@
 #include <stend/physics/rotations.hpp>
 
 #include <cmath>
-#include <cstring>
+#include <bit>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 
@@ -123,7 +124,11 @@ double SimOneAxisTable::commanded(std::size_t axis) const {
 
 Pose SimOneAxisTable::pose(double t_s) const {
   const AxisState s = axis_.at(t_s);
-  if (std::memcmp(&s, &last_state_, sizeof s) == 0) return last_pose_;  // bit for bit: −0 ≠ +0
+  using Bits = std::uint64_t;  // compared bit for bit: −0 ≠ +0
+  if (std::bit_cast<Bits>(s.position) == std::bit_cast<Bits>(last_state_.position) &&
+      std::bit_cast<Bits>(s.velocity) == std::bit_cast<Bits>(last_state_.velocity) &&
+      std::bit_cast<Bits>(s.acceleration) == std::bit_cast<Bits>(last_state_.acceleration))
+    return last_pose_;
   last_state_ = s;
   const double delta = (s.position + c_.angle_offset_deg) * kDegToRad;
   Pose p;
