@@ -35,7 +35,8 @@ class Bench final : public TruthSource {
   //   R_sensor_from_local = R_mount · R_n ⋯ R_1
   //   ω = R_mount·(ω_n + R_n·(ω_{n−1} + …)) + R_sensor_from_local·ω_earth
   //   f = R_sensor_from_local·(0,0,g) + R_mount·(a_n + R_n·(a_{n−1} + …))
-  // Temperatures come from the chamber (25 °C air and die when the bench has none).
+  // Temperatures come from the chamber (25 °C air and die when the bench has none). Keeps the
+  // last composition for the next call: one thread at a time.
   BenchTruth at(double t_s) const override;
 
   // Names of the truth snapshot columns (see recording.hpp) and one row of values at t_s.

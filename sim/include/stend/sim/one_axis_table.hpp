@@ -75,8 +75,8 @@ class SimOneAxisTable final : public Fixture {
   Eigen::Matrix3d M_ = Eigen::Matrix3d::Identity();   // axis misalignment
   Eigen::Vector3d n_ = Eigen::Vector3d::UnitY();      // rotation axis in the top frame
   bool misaligned_ = false;
-  // pose() for the last axis state asked: the sensor asks at every sample, and a table holding a
-  // position (or turning at a constant rate) repeats the state's angle terms.
+  // pose() for the last axis state asked (one thread at a time): the sensor asks at every sample,
+  // and a table holding a position repeats the same state.
   mutable AxisState last_state_{std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0};
   mutable Pose last_pose_;
   double now_ = 0.0;
