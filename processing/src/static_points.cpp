@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 #include "stend/processing/static_detector.hpp"
@@ -12,6 +13,8 @@
 namespace stend::processing {
 
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 std::string num(double v) {
   char buf[64];
@@ -26,11 +29,16 @@ std::string join(const std::vector<std::string>& items) {
 }
 
 void require_increasing_times(const Recording& rec) {
-  for (std::size_t i = 1; i < rec.samples.size(); ++i)
-    if (!(rec.samples[i].t_s > rec.samples[i - 1].t_s))
-      throw std::runtime_error("recording '" + rec.dir.string() + "': sample times are not " +
-                               "strictly increasing at sample " + std::to_string(i) + " (t = " +
-                               num(rec.samples[i].t_s) + " s)");
+  double prev = 0.0;
+  for_each_chunk(rec.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t first) {
+    for (std::size_t k = 0; k < n; ++k) {
+      if (first + k > 0 && !(c[k].t_s > prev))
+        throw std::runtime_error("recording '" + rec.dir.string() + "': sample times are not " +
+                                 "strictly increasing at sample " + std::to_string(first + k) + " (t = " +
+                                 num(c[k].t_s) + " s)");
+      prev = c[k].t_s;
+    }
+  });
 }
 
 std::vector<Segment> segments_of_kinds(const Recording& rec, const ProcessingOptions& o,
@@ -118,28 +126,27 @@ class PointBuilder {
   }
 
  private:
-  // Step 3: the requested instruments' axes over the segment's samples; sets the kept window.
-  void extract_axes(StaticPoint& p) const {
-    const auto& S = rec_.samples;
-    const auto lo = std::lower_bound(S.begin(), S.end(), p.segment.t_start_s,
-                                     [](const ImuSample& s, double t) { return s.t_s < t; });
-    const auto hi = std::upper_bound(S.begin(), S.end(), p.segment.t_end_s,
-                                     [](double t, const ImuSample& s) { return t < s.t_s; });
-    const auto first = static_cast<std::size_t>(lo - S.begin());
+  // Step 3: the requested instruments' axes over the segment's samples (read into seg_, the
+  // first at index first_); sets the kept window.
+  void extract_axes(StaticPoint& p) {
+    const SampleSource& src = rec_.sample_source();
+    first_ = lower_bound_time(src, p.segment.t_start_s);
+    const std::uint64_t end = lower_bound_time(src, std::nextafter(p.segment.t_end_s, kInf));
+    seg_.resize(static_cast<std::size_t>(end > first_ ? end - first_ : 0));
+    if (!seg_.empty()) src.read(first_, seg_.size(), seg_.data());
     std::vector<double> t;
-    for (auto it = lo; it < hi; ++it) t.push_back(it->t_s);
-    if (req_.accel) p.accel = axes(first, t, [](const ImuSample& s, int a) { return s.accel_mps2[a]; }, p);
-    if (req_.gyro) p.gyro = axes(first, t, [](const ImuSample& s, int a) { return s.gyro_radps[a]; }, p);
+    for (const ImuSample& s : seg_) t.push_back(s.t_s);
+    if (req_.accel) p.accel = axes(t, [](const ImuSample& s, int a) { return s.accel_mps2[a]; }, p);
+    if (req_.gyro) p.gyro = axes(t, [](const ImuSample& s, int a) { return s.gyro_radps[a]; }, p);
   }
 
-  // One instrument's three axes over the segment's samples (times `t`, the first at index
-  // `first`).
+  // One instrument's three axes over the segment's samples (times `t`).
   template <typename Axis>
-  AxesValue axes(std::size_t first, const std::vector<double>& t, Axis axis, StaticPoint& p) const {
+  AxesValue axes(const std::vector<double>& t, Axis axis, StaticPoint& p) const {
     std::vector<double> x(t.size());
     AxesValue v;
     for (int a = 0; a < 3; ++a) {
-      for (std::size_t i = 0; i < x.size(); ++i) x[i] = axis(rec_.samples[first + i], a);
+      for (std::size_t i = 0; i < x.size(); ++i) x[i] = axis(seg_[i], a);
       const StaticValue s = extract_static(t, x, p.segment.t_start_s, p.segment.t_end_s, o_.extraction);
       v.mean[a] = s.mean;
       v.sample_std[a] = s.raw_std;
@@ -148,7 +155,7 @@ class PointBuilder {
       p.t_end_s = s.t_last_s;
       p.samples_used = s.n_used;
     }
-    p.first = first + static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), p.t_start_s) - t.begin());
+    p.first = first_ + static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), p.t_start_s) - t.begin());
     p.last = p.first + p.samples_used - 1;
     return v;
   }
@@ -161,7 +168,7 @@ class PointBuilder {
   Window scan_window(StaticPoint& p) const {
     Window w;
     for (std::size_t i = p.first; i <= p.last; ++i) {
-      const ImuSample& s = rec_.samples[i];
+      const ImuSample& s = seg_[i - first_];
       if (s.flags & saturation_) ++w.saturated;
       if (i > p.first && (s.flags & kGapBefore)) ++p.gaps;
       w.sensor_temperature_c += s.temperature_c;
@@ -198,6 +205,8 @@ class PointBuilder {
   std::vector<int> columns_;  // truth columns requested, then die_c when present
   int die_ = -1;
   std::uint32_t saturation_ = 0;
+  std::vector<ImuSample> seg_;  // the current segment's samples
+  std::size_t first_ = 0;       // index of seg_[0] in the recording
 };
 
 }  // namespace
