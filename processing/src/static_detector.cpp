@@ -32,12 +32,6 @@ double quantile(std::vector<double> v, double q) {
   return v[static_cast<std::size_t>(k)];
 }
 
-ImuSample sample_at(const SampleSource& src, std::uint64_t i) {
-  ImuSample s;
-  src.read(i, 1, &s);
-  return s;
-}
-
 // The samples, read a chunk at a time, and their count.
 struct Stream {
   const SampleSource& src;
