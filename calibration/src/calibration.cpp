@@ -306,7 +306,7 @@ void write_calibrated(const Recording& calibrated, const Calibration& cal, const
   RecordingWriter w(out_dir, h, calibrated.experiment_yaml);
   Event e;
   const SampleSource& samples = calibrated.sample_source();
-  e.t_s = samples.size() == 0 ? 0.0 : sample_at(samples, 0).t_s;
+  e.t_s = samples.size() == 0 ? 0.0 : read_column(samples, Channel::kTime, 0, 1).front();
   e.level = "info";
   e.source = "calibration";
   std::string parts;

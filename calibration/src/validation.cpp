@@ -23,6 +23,13 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // constant-rate turn about the vertical leaves the accelerometer still.
 constexpr double kStillMaxRateDps = 3.0;
 
+// Sample i (one read; for the ends of an interval, not for loops).
+ImuSample sample_at(const SampleSource& src, std::uint64_t i) {
+  ImuSample s;
+  src.read(i, 1, &s);
+  return s;
+}
+
 // Mean of a sample field over [first, last], read a chunk at a time.
 template <class Get>
 Eigen::Vector3d mean_of(const Recording& rec, std::size_t first, std::size_t last, Get get) {
