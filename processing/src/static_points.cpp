@@ -126,28 +126,24 @@ class PointBuilder {
   }
 
  private:
-  // Step 3: the requested instruments' axes over the segment's samples (read into seg_, the
-  // first at index first_); sets the kept window.
-  void extract_axes(StaticPoint& p) {
+  // Step 3: the requested instruments' axes over the segment's samples (read a column at a time);
+  // sets the kept window.
+  void extract_axes(StaticPoint& p) const {
     const SampleSource& src = rec_.sample_source();
-    first_ = lower_bound_time(src, p.segment.t_start_s);
-    const std::uint64_t end = lower_bound_time(src, std::nextafter(p.segment.t_end_s, kInf));
-    seg_.resize(static_cast<std::size_t>(end > first_ ? end - first_ : 0));
-    if (!seg_.empty()) src.read(first_, seg_.size(), seg_.data());
-    std::vector<double> t;
-    for (const ImuSample& s : seg_) t.push_back(s.t_s);
-    if (req_.accel) p.accel = axes(t, [](const ImuSample& s, int a) { return s.accel_mps2[a]; }, p);
-    if (req_.gyro) p.gyro = axes(t, [](const ImuSample& s, int a) { return s.gyro_radps[a]; }, p);
+    const std::uint64_t first = lower_bound_time(src, p.segment.t_start_s);
+    const std::uint64_t end = std::max(first, lower_bound_time(src, std::nextafter(p.segment.t_end_s, kInf)));
+    const std::vector<double> t = read_column(src, Channel::kTime, first, end);
+    if (req_.accel) p.accel = axes(first, end, t, Channel::kAx, p);
+    if (req_.gyro) p.gyro = axes(first, end, t, Channel::kGx, p);
   }
 
-  // One instrument's three axes over the segment's samples (times `t`).
-  template <typename Axis>
-  AxesValue axes(const std::vector<double>& t, Axis axis, StaticPoint& p) const {
-    std::vector<double> x(t.size());
+  // One instrument's three axes (channels x, x + 1, x + 2) over samples [first, end) at times t.
+  AxesValue axes(std::uint64_t first, std::uint64_t end, const std::vector<double>& t, Channel x, StaticPoint& p) const {
     AxesValue v;
     for (int a = 0; a < 3; ++a) {
-      for (std::size_t i = 0; i < x.size(); ++i) x[i] = axis(seg_[i], a);
-      const StaticValue s = extract_static(t, x, p.segment.t_start_s, p.segment.t_end_s, o_.extraction);
+      const auto c = static_cast<Channel>(static_cast<int>(x) + a);
+      const StaticValue s = extract_static(t, read_column(rec_.sample_source(), c, first, end), p.segment.t_start_s,
+                                           p.segment.t_end_s, o_.extraction);
       v.mean[a] = s.mean;
       v.sample_std[a] = s.raw_std;
       v.std_error[a] = s.white_std_error;
@@ -155,7 +151,7 @@ class PointBuilder {
       p.t_end_s = s.t_last_s;
       p.samples_used = s.n_used;
     }
-    p.first = first_ + static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), p.t_start_s) - t.begin());
+    p.first = first + static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), p.t_start_s) - t.begin());
     p.last = p.first + p.samples_used - 1;
     return v;
   }
@@ -167,12 +163,14 @@ class PointBuilder {
   };
   Window scan_window(StaticPoint& p) const {
     Window w;
-    for (std::size_t i = p.first; i <= p.last; ++i) {
-      const ImuSample& s = seg_[i - first_];
-      if (s.flags & saturation_) ++w.saturated;
-      if (i > p.first && (s.flags & kGapBefore)) ++p.gaps;
-      w.sensor_temperature_c += s.temperature_c;
-    }
+    for_each_chunk(rec_.sample_source(), p.first, p.last + 1, [&](const ImuSample* c, std::size_t n, std::uint64_t at) {
+      for (std::size_t k = 0; k < n; ++k) {
+        const ImuSample& s = c[k];
+        if (s.flags & saturation_) ++w.saturated;
+        if (at + k > p.first && (s.flags & kGapBefore)) ++p.gaps;
+        w.sensor_temperature_c += s.temperature_c;
+      }
+    });
     w.sensor_temperature_c /= static_cast<double>(p.samples_used);
     return w;
   }
@@ -205,8 +203,6 @@ class PointBuilder {
   std::vector<int> columns_;  // truth columns requested, then die_c when present
   int die_ = -1;
   std::uint32_t saturation_ = 0;
-  std::vector<ImuSample> seg_;  // the current segment's samples
-  std::size_t first_ = 0;       // index of seg_[0] in the recording
 };
 
 }  // namespace
