@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <iostream>
 #include <sstream>
 
@@ -53,18 +54,22 @@ int run_apply(const ApplyArgs& a) {
   calibration::check_applicable(cal, options);  // before reading the recording or writing anything
   cal.print(std::cout);
   const Recording raw = a.data.open();
-  if (cal.needs_temperature() && std::isfinite(cal.valid_min_c) && !raw.samples.empty()) {
-    auto [lo, hi] = std::minmax_element(raw.samples.begin(), raw.samples.end(), [](const ImuSample& x, const ImuSample& y) {
-      return x.temperature_c < y.temperature_c;
+  if (cal.needs_temperature() && std::isfinite(cal.valid_min_c) && raw.sample_count() > 0) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;  // [degC]
+    for_each_chunk(raw.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t) {
+      for (std::size_t k = 0; k < n; ++k) {
+        lo = std::min(lo, c[k].temperature_c);
+        hi = std::max(hi, c[k].temperature_c);
+      }
     });
-    if (lo->temperature_c < cal.valid_min_c || hi->temperature_c > cal.valid_max_c)
+    if (lo < cal.valid_min_c || hi > cal.valid_max_c)
       fmt::print(stderr, "warning: the recording spans {:.1f}..{:.1f} degC, outside the fit's {:.1f}..{:.1f} degC\n",
-                 lo->temperature_c, hi->temperature_c, cal.valid_min_c, cal.valid_max_c);
+                 lo, hi, cal.valid_min_c, cal.valid_max_c);
   }
   const Recording calibrated = calibration::apply_calibration(raw, cal);
   if (!a.output.empty()) {
     calibration::write_calibrated(calibrated, cal, a.output);
-    fmt::print("calibrated: {} ({} samples)\n", a.output, calibrated.samples.size());
+    fmt::print("calibrated: {} ({} samples)\n", a.output, calibrated.sample_count());
   }
   if (!validating) return 0;
   const calibration::ValidationReport report = calibration::validate(raw, calibrated, cal, options);

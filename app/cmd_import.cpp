@@ -35,10 +35,10 @@ std::string import_yaml(const ImportArgs& a, const std::string& format, const io
   return std::string(out.c_str()) + "\n";
 }
 
-// Writes `rec` as the run folder `dir` through the recording store.
+// Writes `rec` as the run folder `dir` through the recording store, the samples a chunk at a time.
 void write_run(const Recording& rec, const std::filesystem::path& dir, const std::string& yaml) {
   RecordingWriter w(dir, rec.header, yaml);
-  w.add_samples(rec.samples.data(), rec.samples.size());
+  for_each_chunk(rec.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t) { w.add_samples(c, n); });
   for (std::size_t i = 0; i < rec.truth_t.size(); ++i) w.add_truth(rec.truth_t[i], rec.truth[i]);
   for (const auto& s : rec.segments) w.add_segment(s);
   for (const auto& e : rec.events) w.add_event(e);
@@ -69,7 +69,7 @@ int run_import(const ImportArgs& a) {
     throw;
   }
   fmt::print("run folder: {}\nformat:     {}\nrecorded:   {} samples, {} segments, {} truth rows, {} events\n",
-             dir.string(), format, rec.samples.size(), rec.segments.size(), rec.truth_t.size(), rec.events.size());
+             dir.string(), format, rec.sample_count(), rec.segments.size(), rec.truth_t.size(), rec.events.size());
   for (const auto& e : rec.events)
     if (e.level == "warning") fmt::print("warning:    {}\n", e.message);
   return 0;

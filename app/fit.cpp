@@ -6,8 +6,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <fstream>
 #include <iostream>
+#include <optional>
 
 namespace stend::cli {
 
@@ -73,14 +75,38 @@ void write_results(std::filesystem::path json, const std::string& document, cons
   fmt::print("results:    {}\n", json.string());
 }
 
+namespace {
+
+// Whether the estimator reads the samples through Recording::sample_source(): the built-in ones
+// but allan, whose core reads `samples`. The others (allan, plugins written against `samples`) get
+// the samples in memory.
+bool reads_sample_source(const estimation::Registry& builtin, const estimation::EstimatorEntry& e) {
+  const auto& all = builtin.entries();
+  return e.name != "allan" &&
+         std::any_of(all.begin(), all.end(), [&](const estimation::EstimatorEntry& b) { return b.name == e.name; });
+}
+
+// The recording with its samples in memory (a copy when they are in the store).
+stend::Recording with_samples_in_memory(const stend::Recording& rec) {
+  stend::Recording out = rec;
+  out.source.reset();
+  out.samples.resize(static_cast<std::size_t>(rec.sample_count()));
+  if (!out.samples.empty()) rec.sample_source().read(0, out.samples.size(), out.samples.data());
+  return out;
+}
+
+}  // namespace
+
 bool fit_recording(const stend::Recording& rec, const std::string& model_file, const std::filesystem::path& out_dir,
                    const std::string& json_out, const std::string& estimator) {
   const estimation::Registry registry = estimators::builtin();
   PluginHost host;
   estimation::Registry with_plugins;
   const estimation::EstimatorEntry& entry = resolve_estimator(registry, host, with_plugins, estimator, model_file);
+  std::optional<stend::Recording> in_memory;
+  if (rec.source && !reads_sample_source(registry, entry)) in_memory = with_samples_in_memory(rec);
   EstimatorRequest request;
-  request.recording = &rec;
+  request.recording = in_memory ? &*in_memory : &rec;
   request.input = rec.dir.string();
   request.model_file = model_file;
   request.output_dir = out_dir.string();

@@ -111,7 +111,7 @@ int cmd_run(const std::string& file, const std::string& output, const std::strin
     std::filesystem::path model = exp.estimation["model"].as<std::string>();
     if (model.is_relative()) model = std::filesystem::path(file).parent_path() / model;
     fmt::print("\n");
-    if (!fit_recording(stend::Recording::open(r.dir), model.string(), r.dir, "")) return 3;
+    if (!fit_recording(stend::Recording::open(r.dir, stend::SampleLoading::kStream), model.string(), r.dir, "")) return 3;
   }
   const auto report = stend::cli::write_run_report(r.dir);
   if (!report.empty()) fmt::print("report:     {}\n", report.string());

@@ -247,23 +247,54 @@ Calibration load_calibration(const std::filesystem::path& file) {
   return calibration_from_json(doc, file.string());
 }
 
-Recording apply_calibration(const Recording& raw, const Calibration& cal) {
-  const bool temperature = cal.needs_temperature();
-  Recording out = raw;
-  for (std::size_t i = 0; i < out.samples.size(); ++i) {
-    ImuSample& s = out.samples[i];
-    if (temperature && !std::isfinite(s.temperature_c))
-      throw std::runtime_error(fmt::format("{}: sample {} (t = {} s) has no temperature, which the calibration's "
-                                           "temperature terms need",
-                                           raw.dir.string(), i, s.t_s));
+namespace {
+
+// Throws when sample i of recording `name` has no temperature (which temperature terms need).
+void require_temperature(const std::string& name, std::uint64_t i, const ImuSample& s) {
+  if (!std::isfinite(s.temperature_c))
+    throw std::runtime_error(fmt::format("{}: sample {} (t = {} s) has no temperature, which the calibration's "
+                                         "temperature terms need",
+                                         name, i, s.t_s));
+}
+
+}  // namespace
+
+CalibratedSamples::CalibratedSamples(std::shared_ptr<const SampleSource> raw, const Calibration& cal, std::string name)
+    : raw_(std::move(raw)), cal_(cal), name_(std::move(name)) {}
+
+void CalibratedSamples::read(std::uint64_t first, std::size_t count, ImuSample* out) const {
+  raw_->read(first, count, out);
+  const bool temperature = cal_.needs_temperature();
+  for (std::size_t k = 0; k < count; ++k) {
+    ImuSample& s = out[k];
+    if (temperature) require_temperature(name_, first + k, s);
     model::Stimulus<double> st;
     st.temperature_c = s.temperature_c;
-    if (cal.accel.present()) s.accel_mps2 = cal.accel.model.correct(cal.accel.theta.data(), s.accel_mps2, st);
-    if (cal.gyro.present()) {
+    if (cal_.accel.present()) s.accel_mps2 = cal_.accel.model.correct(cal_.accel.theta.data(), s.accel_mps2, st);
+    if (cal_.gyro.present()) {
       st.specific_force = s.accel_mps2;
-      s.gyro_radps = cal.gyro.model.correct(cal.gyro.theta.data(), s.gyro_radps, st);
+      s.gyro_radps = cal_.gyro.model.correct(cal_.gyro.theta.data(), s.gyro_radps, st);
     }
   }
+}
+
+Recording apply_calibration(const Recording& raw, const Calibration& cal) {
+  Recording out;
+  out.dir = raw.dir;
+  out.header = raw.header;
+  out.experiment_yaml = raw.experiment_yaml;
+  out.truth_t = raw.truth_t;
+  out.truth = raw.truth;
+  out.segments = raw.segments;
+  out.events = raw.events;
+  out.dropped_partial_lines = raw.dropped_partial_lines;
+  std::shared_ptr<const SampleSource> samples = raw.source;
+  if (!samples) samples = std::make_shared<MemorySamples>(raw.samples);  // a view of raw's
+  if (cal.needs_temperature())  // before anything is written
+    for_each_chunk(*samples, [&](const ImuSample* c, std::size_t n, std::uint64_t first) {
+      for (std::size_t k = 0; k < n; ++k) require_temperature(raw.dir.string(), first + k, c[k]);
+    });
+  out.source = std::make_shared<CalibratedSamples>(std::move(samples), cal, raw.dir.string());
   return out;
 }
 
@@ -274,7 +305,8 @@ void write_calibrated(const Recording& calibrated, const Calibration& cal, const
   h.status = RunStatus::kRunning;
   RecordingWriter w(out_dir, h, calibrated.experiment_yaml);
   Event e;
-  e.t_s = calibrated.samples.empty() ? 0.0 : calibrated.samples.front().t_s;
+  const SampleSource& samples = calibrated.sample_source();
+  e.t_s = samples.size() == 0 ? 0.0 : read_column(samples, Channel::kTime, 0, 1).front();
   e.level = "info";
   e.source = "calibration";
   std::string parts;
@@ -286,7 +318,7 @@ void write_calibrated(const Recording& calibrated, const Calibration& cal, const
                           cal.source, cal.estimator, parts, calibrated.dir.string());
   w.add_event(e);
   for (const auto& ev : calibrated.events) w.add_event(ev);
-  w.add_samples(calibrated.samples.data(), calibrated.samples.size());
+  for_each_chunk(samples, [&](const ImuSample* c, std::size_t n, std::uint64_t) { w.add_samples(c, n); });
   for (std::size_t i = 0; i < calibrated.truth_t.size(); ++i) w.add_truth(calibrated.truth_t[i], calibrated.truth[i]);
   for (const auto& s : calibrated.segments) w.add_segment(s);
   w.finish(calibrated.header.status == RunStatus::kRunning ? RunStatus::kInterrupted : calibrated.header.status);

@@ -23,11 +23,20 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // constant-rate turn about the vertical leaves the accelerometer still.
 constexpr double kStillMaxRateDps = 3.0;
 
-// Mean of a sample field over [first, last].
+// Sample i (one read; for the ends of an interval, not for loops).
+ImuSample sample_at(const SampleSource& src, std::uint64_t i) {
+  ImuSample s;
+  src.read(i, 1, &s);
+  return s;
+}
+
+// Mean of a sample field over [first, last], read a chunk at a time.
 template <class Get>
 Eigen::Vector3d mean_of(const Recording& rec, std::size_t first, std::size_t last, Get get) {
   Eigen::Vector3d m = Eigen::Vector3d::Zero();
-  for (std::size_t i = first; i <= last; ++i) m += get(rec.samples[i]);
+  for_each_chunk(rec.sample_source(), first, last + 1, [&](const ImuSample* c, std::size_t n, std::uint64_t) {
+    for (std::size_t k = 0; k < n; ++k) m += get(c[k]);
+  });
   return m / static_cast<double>(last - first + 1);
 }
 Eigen::Vector3d accel_mean(const Recording& rec, std::size_t first, std::size_t last) {
@@ -101,12 +110,13 @@ Eigen::Vector3d gyro_noise(const std::vector<processing::StaticPoint>& pts) {
 // Mean calibrated rate over the first `seconds` and its standard error; throws when that span is
 // not still (no static point covers it).
 void rebias(const Recording& cal, const std::vector<processing::StaticPoint>& pts, double seconds, ValidationReport& r) {
-  if (cal.samples.empty()) throw std::invalid_argument("--rebias-from-start: the recording has no samples");
-  const double t0 = cal.samples.front().t_s;
+  const SampleSource& src = cal.sample_source();
+  if (src.size() == 0) throw std::invalid_argument("--rebias-from-start: the recording has no samples");
+  const double t0 = sample_at(src, 0).t_s;
   std::size_t last = 0;
-  while (last + 1 < cal.samples.size() && cal.samples[last + 1].t_s - t0 <= seconds) ++last;
+  while (last + 1 < src.size() && sample_at(src, last + 1).t_s - t0 <= seconds) ++last;
   const bool still = std::any_of(pts.begin(), pts.end(), [&](const processing::StaticPoint& p) {
-    return cal.samples[p.first].t_s - t0 <= 0.5 * seconds && p.last >= last;
+    return sample_at(src, p.first).t_s - t0 <= 0.5 * seconds && p.last >= last;
   });
   if (!still || last < 8)
     throw std::invalid_argument(fmt::format(
@@ -115,7 +125,9 @@ void rebias(const Recording& cal, const std::vector<processing::StaticPoint>& pt
         seconds, seconds));
   const Eigen::Vector3d m = mean_of(cal, 0, last, [](const ImuSample& s) { return s.gyro_radps; });
   Eigen::Vector3d s2 = Eigen::Vector3d::Zero();
-  for (std::size_t i = 0; i <= last; ++i) s2 += (cal.samples[i].gyro_radps - m).cwiseAbs2();
+  for_each_chunk(src, 0, last + 1, [&](const ImuSample* c, std::size_t n, std::uint64_t) {
+    for (std::size_t k = 0; k < n; ++k) s2 += (c[k].gyro_radps - m).cwiseAbs2();
+  });
   const double n = static_cast<double>(last + 1);
   r.rebiased = true;
   r.rebias_radps = m;
@@ -126,9 +138,11 @@ void rebias(const Recording& cal, const std::vector<processing::StaticPoint>& pt
 // composed), as a rotation vector [rad] in the frame at sample a.
 Eigen::Vector3d integrated_rotation(const Recording& cal, std::size_t a, std::size_t b, const Eigen::Vector3d& bias) {
   Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
-  for (std::size_t i = a; i < b; ++i) {
-    const Eigen::Vector3d w = 0.5 * (cal.samples[i].gyro_radps + cal.samples[i + 1].gyro_radps) - bias;
-    const Eigen::Vector3d d = w * (cal.samples[i + 1].t_s - cal.samples[i].t_s);
+  std::vector<ImuSample> S(b - a + 1);  // one turn
+  cal.sample_source().read(a, S.size(), S.data());
+  for (std::size_t i = 0; i + 1 < S.size(); ++i) {
+    const Eigen::Vector3d w = 0.5 * (S[i].gyro_radps + S[i + 1].gyro_radps) - bias;
+    const Eigen::Vector3d d = w * (S[i + 1].t_s - S[i].t_s);
     const double ang = d.norm();
     if (ang > 0.0) q = q * Eigen::Quaterniond(Eigen::AngleAxisd(ang, d / ang));
   }
@@ -156,8 +170,8 @@ std::vector<TurnCheck> turn_checks(const Recording& cal, const Calibration& c,
     if (std::abs(rv[e.axis]) * physics::kRadToDeg < 0.5 * std::abs(e.angle_deg)) continue;
     TurnCheck t;
     t.expected = e;
-    t.t_start_s = cal.samples[a].t_s;
-    t.t_end_s = cal.samples[b].t_s;
+    t.t_start_s = sample_at(cal.sample_source(), a).t_s;
+    t.t_end_s = sample_at(cal.sample_source(), b).t_s;
     t.measured_deg = rv[e.axis] * physics::kRadToDeg;
     t.error_deg = std::abs(t.measured_deg) - std::abs(e.angle_deg);
     const double T = t.t_end_s - t.t_start_s, n = static_cast<double>(b - a);

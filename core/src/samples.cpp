@@ -69,6 +69,12 @@ void for_each_chunk(const SampleSource& src, std::uint64_t first, std::uint64_t 
   last = std::min(last, src.size());
   if (first >= last) return;
   chunk_samples = std::max<std::size_t>(chunk_samples, 1);
+  if (const auto* memory = dynamic_cast<const MemorySamples*>(&src)) {  // the same chunks, not copied
+    const ImuSample* data = memory->samples().data();
+    for (std::uint64_t i = first; i < last; i += chunk_samples)
+      fn(data + i, static_cast<std::size_t>(std::min<std::uint64_t>(chunk_samples, last - i)), i);
+    return;
+  }
   std::vector<ImuSample> buf(static_cast<std::size_t>(std::min<std::uint64_t>(chunk_samples, last - first)));
   for (std::uint64_t i = first; i < last;) {
     const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(buf.size(), last - i));

@@ -206,12 +206,12 @@ void mean_noise(SampleIt lo, SampleIt hi, bool accel, int a, SegmentData& d) {
 // The raw-sample evidence of a point's kept window: noise floor of the mean per axis (the
 // processing stage's standard error when the window is short) and the noise-stage evidence.
 void window_evidence(const Recording& rec, const batch_lsq::StaticPoint& p, bool accel, SegmentData& d) {
-  const auto& S = rec.samples;
-  const auto [lo, hi] = sample_window(S, p.t_start_s, p.t_end_s);
+  const std::vector<ImuSample> S = read_window(rec, p.t_start_s, p.t_end_s);
+  const auto lo = S.begin(), hi = S.end();
   if (hi - lo >= 16)
     for (int a = 0; a < 3; ++a) mean_noise(lo, hi, accel, a, d);
   if (!d.mean_std_error.allFinite()) d.mean_std_error = p.measured_std_error;
-  noise_stage::segment_evidence(d, S.data() + (lo - S.begin()), S.data() + (hi - S.begin()), accel);
+  noise_stage::segment_evidence(d, S.data(), S.data() + S.size(), accel);
 }
 
 // Notes on the table candidates, and their stimulus derivatives cleared when the chain is unusable.

@@ -98,13 +98,16 @@ std::size_t piled_at_extremes(SampleIt lo, SampleIt hi, bool accel, int a) {
 // near the range may be an unclipped sample rounded up); otherwise by the value.
 void count_clipped(GapInput& in, const Recording& rec, bool accel) {
   const std::uint32_t flag = accel ? kAccelSaturated : kGyroSaturated;
-  const auto& S = rec.samples;
   in.clipped_samples.setZero();
   in.static_samples.setZero();
-  const bool flags_used = std::any_of(S.begin(), S.end(), [&](const ImuSample& x) { return (x.flags & flag) != 0; });
+  bool flags_used = false;
+  for_each_chunk(rec.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t) {
+    flags_used = flags_used || std::any_of(c, c + n, [&](const ImuSample& x) { return (x.flags & flag) != 0; });
+  });
   for (const auto& seg : rec.segments) {
     if (!in.spec.processing.selects(seg.kind)) continue;
-    const auto [lo, hi] = sample_window(S, seg.t_start_s, seg.t_end_s);
+    const std::vector<ImuSample> S = read_window(rec, seg.t_start_s, seg.t_end_s);
+    const auto lo = S.begin(), hi = S.end();
     const auto n = hi - lo;
     if (n < 16) continue;
     for (int a = 0; a < 3; ++a) {
@@ -154,21 +157,25 @@ void allan_excess(GapInput& in, const allan::ChannelResult& r, int a) {
 
 // Allan deviation of the longest kept window, when ≥ 100 s and ≥ 1000 samples long enough to see
 // slopes beyond white: white N, random walk K and the excess over white per axis.
-void allan_evidence(GapInput& in, const std::vector<ImuSample>& S, bool accel) {
+void allan_evidence(GapInput& in, const Recording& rec, bool accel) {
   const SegmentData* longest = nullptr;
   for (const auto& d : in.segments)
     if (!longest || d.averaging_s > longest->averaging_s) longest = &d;
   if (!longest || longest->averaging_s < 100.0) return;
-  const auto [lo, hi] = sample_window(S, longest->point.t_start_s, longest->point.t_end_s);
-  const auto n = static_cast<std::size_t>(hi - lo);
+  const SampleSource& src = rec.sample_source();
+  const IndexRange w = index_range(src, longest->point.t_start_s,
+                                   std::nextafter(longest->point.t_end_s, std::numeric_limits<double>::infinity()));
+  const auto n = static_cast<std::size_t>(w.size());
   if (n < 1000) return;
-  const double rate = static_cast<double>(n - 1) / ((hi - 1)->t_s - lo->t_s);  // [Hz]
+  const std::vector<double> t = read_column(src, Channel::kTime, w.first, w.first + 1),
+                            t_last = read_column(src, Channel::kTime, w.last - 1, w.last);
+  const double rate = static_cast<double>(n - 1) / (t_last[0] - t[0]);  // [Hz]
   in.allan_window_s = longest->averaging_s;
-  std::vector<double> y(n);
   allan::AllanOptions ao;
   ao.confidence = 0.95;
   for (int a = 0; a < 3; ++a) {
-    for (std::size_t i = 0; i < n; ++i) y[i] = axis_value(lo[static_cast<std::ptrdiff_t>(i)], accel, a);
+    const auto c = static_cast<Channel>(static_cast<int>(accel ? Channel::kAx : Channel::kGx) + a);
+    const std::vector<double> y = read_column(src, c, w.first, w.last);  // one axis of one window
     allan::ChannelInfo ch;
     ch.name = std::string(accel ? "a" : "g") + "xyz"[a];
     ch.instrument = accel ? allan::Instrument::kAccelerometer : allan::Instrument::kGyroscope;
@@ -486,7 +493,7 @@ void segment_evidence(SegmentData& d, const ImuSample* first, const ImuSample* l
 void recording_evidence(GapInput& in, const Recording& rec) {
   const bool accel = in.spec.model.instrument == model::Instrument::kAccelerometer;
   count_clipped(in, rec, accel);
-  allan_evidence(in, rec.samples, accel);
+  allan_evidence(in, rec, accel);
 }
 
 std::vector<CandidateResult> candidates(const GapInput& in, const std::vector<int>& axes, const std::string& unit,

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -12,14 +14,10 @@ namespace stend::diagnosis {
 
 using SampleIt = std::vector<ImuSample>::const_iterator;
 
-// The samples with t_start_s ≤ t_s ≤ t_end_s [s] (samples sorted by time).
-inline std::pair<SampleIt, SampleIt> sample_window(const std::vector<ImuSample>& S, double t_start_s,
-                                                   double t_end_s) {
-  const auto lo = std::lower_bound(S.begin(), S.end(), t_start_s,
-                                   [](const ImuSample& s, double t) { return s.t_s < t; });
-  const auto hi = std::upper_bound(S.begin(), S.end(), t_end_s,
-                                   [](double t, const ImuSample& s) { return t < s.t_s; });
-  return {lo, hi};
+// The samples with t_start_s ≤ t_s ≤ t_end_s [s], read from the recording's store (one segment).
+inline std::vector<ImuSample> read_window(const Recording& rec, double t_start_s, double t_end_s) {
+  return read_interval(rec.sample_source(), t_start_s,
+                       std::nextafter(t_end_s, std::numeric_limits<double>::infinity()));
 }
 
 // Axis a of the instrument's reading: specific force [m/s²] or angular rate [rad/s].

@@ -176,6 +176,22 @@ TEST(GapSimBench, PlantedCrossAxisInTheSimulatorIsNamedFirst) {
   for (int a = 0; a < 3; ++a) EXPECT_NEAR(r.noise_ratio[a], 1.0, 0.2);
 }
 
+// The run folder read whole or streamed from its store: the same report to the last digit (the
+// static points, the batch fit, the noise evidence and the Allan window of the longest segment).
+TEST(GapSimBench, SameReportFromARunInMemoryOrStreamed) {
+  const stend::testing::TempDir tmp("gap-stream");
+  const RunResult run = stend::testing::run_in_process(stend::testing::source_path("configs/temperature_sweep.yaml"), tmp.path());
+  ASSERT_EQ(run.status, stend::RunStatus::kComplete) << run.message;
+  const auto spec = estimation::load_model_spec(stend::testing::source_path("diagnosis/examples/bias_scale.yaml"));
+  const Recording streamed = Recording::open(run.dir, SampleLoading::kStream);
+  ASSERT_TRUE(streamed.samples.empty());
+  ASSERT_GT(streamed.sample_count(), 0u);
+  const GapReport a = diagnose(build_input(Recording::open(run.dir), spec));
+  const GapReport b = diagnose(build_input(streamed, spec));
+  ASSERT_TRUE(a.ok) << a.message;
+  EXPECT_EQ(to_json(a), to_json(b));
+}
+
 TEST(GapSimBench, SixPositionWithTheRightModelHasNoGapToExplain) {
   const GapReport r = diagnose(sim_input("configs/six_position.yaml", "bias_scale.yaml"));
   ASSERT_TRUE(r.ok) << r.message;

@@ -56,7 +56,8 @@ bool starts_with(const std::string& s, const std::string& prefix) { return s.rfi
 double per_g(const ValueScale& v, double fallback) { return v.counts() ? physics::kStandardGravity / v.lsb : fallback; }
 double per_dps(const ValueScale& v, double fallback) { return v.counts() ? physics::kDegPerSecond / v.lsb : fallback; }
 
-Recording open_run(const Inputs& in, const ImportOptions&) { return Recording::open(in[0]); }
+// A run folder's samples stay in its store; analyses read them a chunk at a time.
+Recording open_run(const Inputs& in, const ImportOptions&) { return Recording::open(in[0], SampleLoading::kStream); }
 
 Recording open_mat(const Inputs& in, const ImportOptions& o) {
   MatOptions m;

@@ -3,9 +3,12 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
+#include <map>
 #include <stdexcept>
 
 namespace stend::processing {
@@ -23,104 +26,229 @@ std::string num(double v) {
   return buf;
 }
 
-DetectedInterval interval_of(const Recording& rec, std::size_t first, std::size_t last) {
-  DetectedInterval iv;
-  iv.first = first;
-  iv.last = last;
-  iv.t_start_s = rec.samples[first].t_s;
-  iv.t_end_s = rec.samples[last].t_s;
-  for (std::size_t i = first; i <= last; ++i) {
-    iv.accel_mean_mps2 += rec.samples[i].accel_mps2;
-    iv.gyro_mean_radps += rec.samples[i].gyro_radps;
-  }
-  const double n = static_cast<double>(last - first + 1);
-  iv.accel_mean_mps2 /= n;
-  iv.gyro_mean_radps /= n;
-  return iv;
-}
-
-// Sum of the three accelerometer variances over the centred window of every sample (the window is
-// cut at the ends of the recording), from prefix sums of the centred values.
-std::vector<double> window_variance(const Recording& rec, std::size_t half) {
-  const std::size_t n = rec.samples.size();
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (const auto& s : rec.samples) mean += s.accel_mps2;
-  mean /= static_cast<double>(n);
-  std::vector<Eigen::Vector3d> s1(n + 1, Eigen::Vector3d::Zero()), s2(n + 1, Eigen::Vector3d::Zero());
-  for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d d = rec.samples[i].accel_mps2 - mean;
-    s1[i + 1] = s1[i] + d;
-    s2[i + 1] = s2[i] + d.cwiseAbs2();
-  }
-  std::vector<double> var(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t a = i >= half ? i - half : 0, b = std::min(n, i + half + 1);
-    const double m = static_cast<double>(b - a);
-    const Eigen::Vector3d mu = (s1[b] - s1[a]) / m;
-    var[i] = ((s2[b] - s2[a]) / m - mu.cwiseAbs2()).sum() * m / std::max(1.0, m - 1.0);
-  }
-  return var;
-}
-
 double quantile(std::vector<double> v, double q) {
   const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(v.size() - 1));
   std::nth_element(v.begin(), v.begin() + k, v.end());
   return v[static_cast<std::size_t>(k)];
 }
 
+// Sample i (one read; for the ends of an interval, not for loops).
+ImuSample sample_at(const SampleSource& src, std::uint64_t i) {
+  ImuSample s;
+  src.read(i, 1, &s);
+  return s;
+}
+
+// The samples, read a chunk at a time, and their count.
+struct Stream {
+  const SampleSource& src;
+  std::size_t chunk;
+  std::uint64_t size() const { return src.size(); }
+};
+
+// Plain means of samples first..last (inclusive); `saturated` tells whether any is flagged
+// saturated.
+struct Means {
+  DetectedInterval iv;
+  bool saturated = false;
+};
+Means interval_means(const Stream& in, std::size_t first, std::size_t last) {
+  Means m;
+  DetectedInterval& iv = m.iv;
+  iv.first = first;
+  iv.last = last;
+  for_each_chunk(in.src, first, last + 1, [&](const ImuSample* c, std::size_t n, std::uint64_t at) {
+    if (at == first) iv.t_start_s = c[0].t_s;
+    if (at + n == last + 1) iv.t_end_s = c[n - 1].t_s;
+    for (std::size_t i = 0; i < n; ++i) {
+      iv.accel_mean_mps2 += c[i].accel_mps2;
+      iv.gyro_mean_radps += c[i].gyro_radps;
+      m.saturated = m.saturated || (c[i].flags & (kAccelSaturated | kGyroSaturated));
+    }
+  }, in.chunk);
+  const double n = static_cast<double>(last - first + 1);
+  iv.accel_mean_mps2 /= n;
+  iv.gyro_mean_radps /= n;
+  return m;
+}
+
+// Calls fn(i, sample_i, var_i, rate_i) for the samples i < end in order: var_i is the sum of the
+// three accelerometer variances over the centred window of 2·half + 1 samples (cut at the ends of
+// the recording), from prefix sums of the values centred on `mean`; rate_i [rad/s] is the norm of
+// the window-mean gyro reading less `*bias` (0 when bias is null). The prefix sums of the last
+// 2·half + 2 indices and the last half + 1 samples are kept, so memory is the window's.
+using WindowFn = std::function<void(std::uint64_t i, const ImuSample& s, double var, double rate)>;
+void for_each_window(const Stream& in, std::size_t half, const Eigen::Vector3d& mean, const Eigen::Vector3d* bias,
+                     std::uint64_t end, const WindowFn& fn) {
+  const std::uint64_t n = in.size();
+  end = std::min(end, n);
+  const std::size_t R = 2 * half + 2, H = half + 1;
+  std::vector<Eigen::Vector3d> s1(R, Eigen::Vector3d::Zero()), s2(R, Eigen::Vector3d::Zero()), g1(R, Eigen::Vector3d::Zero());
+  std::vector<ImuSample> recent(H);
+  auto emit = [&](std::uint64_t i) {
+    const std::uint64_t a = i >= half ? i - half : 0, b = std::min(n, i + half + 1);
+    const double m = static_cast<double>(b - a);
+    const Eigen::Vector3d mu = (s1[b % R] - s1[a % R]) / m;
+    const double var = ((s2[b % R] - s2[a % R]) / m - mu.cwiseAbs2()).sum() * m / std::max(1.0, m - 1.0);
+    const double rate = bias ? ((g1[b % R] - g1[a % R]) / m).norm() : 0.0;
+    fn(i, recent[i % H], var, rate);
+  };
+  std::uint64_t next = 0;  // next sample to emit
+  const std::uint64_t read_end = std::min(n, end + half);
+  for_each_chunk(in.src, 0, read_end, [&](const ImuSample* c, std::size_t count, std::uint64_t at) {
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::uint64_t j = at + k;
+      const Eigen::Vector3d d = c[k].accel_mps2 - mean;
+      s1[(j + 1) % R] = s1[j % R] + d;
+      s2[(j + 1) % R] = s2[j % R] + d.cwiseAbs2();
+      if (bias) g1[(j + 1) % R] = g1[j % R] + (c[k].gyro_radps - *bias);
+      recent[j % H] = c[k];
+      if (j >= half && next < end) emit(next++);
+    }
+  }, in.chunk);
+  if (read_end == n)
+    while (next < end) emit(next++);
+}
+
+// The exact q-quantile of values fed in repeated identical passes: the element of rank
+// ⌊q·(count − 1)⌋, as nth_element picks it. One pass when at most kHeld values; past that, each
+// pass narrows the candidates by 16 bits of the values' order-preserving bit patterns until they
+// fit in memory.
+class StreamSelect {
+ public:
+  explicit StreamSelect(double q) : q_(q) {}
+  void add(double v) {
+    const std::uint64_t key = key_of(v);
+    if (level_ > 0 && (key >> (64 - level_)) != prefix_) return;
+    ++seen_;
+    if (!overflow_) {
+      held_.push_back(v);
+      if (held_.size() <= kHeld) return;
+      overflow_ = true;
+      hist_.assign(kBins, 0);
+      for (double h : held_) ++hist_[bin_of(key_of(h))];
+      held_.clear();
+      held_.shrink_to_fit();
+      return;
+    }
+    ++hist_[bin_of(key)];
+  }
+  // Ends a pass; true when the value is known (then value() and count() hold).
+  bool end_pass() {
+    if (level_ == 0) {
+      count_ = seen_;
+      if (count_ == 0) return done_ = true;
+      rank_ = static_cast<std::uint64_t>(q_ * static_cast<double>(count_ - 1));
+    }
+    if (!overflow_) {
+      const auto k = static_cast<std::ptrdiff_t>(rank_);
+      std::nth_element(held_.begin(), held_.begin() + k, held_.end());
+      value_ = held_[static_cast<std::size_t>(k)];
+      return done_ = true;
+    }
+    std::uint64_t below = 0, b = 0;
+    while (below + hist_[b] <= rank_) below += hist_[b++];
+    rank_ -= below;
+    prefix_ = (prefix_ << kBits) | b;
+    level_ += kBits;
+    if (level_ == 64) {
+      value_ = value_of_key(prefix_);
+      return done_ = true;
+    }
+    seen_ = 0;
+    overflow_ = false;
+    hist_.clear();
+    return false;
+  }
+  bool done() const { return done_; }
+  double value() const { return value_; }
+  std::uint64_t count() const { return count_; }
+
+ private:
+  static constexpr std::size_t kHeld = std::size_t{1} << 20;
+  static constexpr int kBits = 16;
+  static constexpr std::size_t kBins = std::size_t{1} << kBits;
+  static std::uint64_t key_of(double v) {
+    const auto bits = std::bit_cast<std::uint64_t>(v);
+    return (bits >> 63) ? ~bits : bits | (std::uint64_t{1} << 63);
+  }
+  static double value_of_key(std::uint64_t key) {
+    return std::bit_cast<double>((key >> 63) ? key & ~(std::uint64_t{1} << 63) : ~key);
+  }
+  std::size_t bin_of(std::uint64_t key) const {
+    return static_cast<std::size_t>((key >> (64 - level_ - kBits)) & (kBins - 1));
+  }
+  double q_;
+  int level_ = 0;            // leading key bits fixed so far
+  std::uint64_t prefix_ = 0;  // their value
+  std::uint64_t rank_ = 0;    // rank sought among the values with that prefix
+  std::uint64_t seen_ = 0, count_ = 0;
+  bool overflow_ = false, done_ = false;
+  std::vector<double> held_;
+  std::vector<std::uint64_t> hist_;
+  double value_ = kNaN;
+};
+
+// Runs `pass(selectors)` until every selector knows its value.
+void select_all(std::vector<StreamSelect>& sel, const std::function<void()>& pass) {
+  for (bool done = false; !done;) {
+    pass();
+    done = true;
+    for (auto& s : sel)
+      if (!s.done()) done = s.end_pass() && done;
+  }
+}
+
 // The still start: init_duration_s, else the recording's initialization segment starting at its
 // first sample; 0 when neither.
-double init_duration(const Recording& rec, const StaticDetectorOptions& o) {
+double init_duration(const Recording& rec, double t0_s, const StaticDetectorOptions& o) {
   if (o.init_duration_s > 0.0) return o.init_duration_s;
   for (const Segment& s : rec.segments)
-    if (s.label == kInitSegmentLabel && s.t_start_s <= rec.samples.front().t_s && s.t_end_s > s.t_start_s)
-      return s.t_end_s - rec.samples.front().t_s;
+    if (s.label == kInitSegmentLabel && s.t_start_s <= t0_s && s.t_end_s > s.t_start_s) return s.t_end_s - t0_s;
   return 0.0;
 }
 
-// Samples within `duration` of the first.
-std::size_t samples_within(const Recording& rec, double duration) {
-  std::size_t b = 0;
-  while (b < rec.samples.size() && rec.samples[b].t_s - rec.samples[0].t_s <= duration) ++b;
-  return b;
-}
-
-// Norm of the centred window mean of the gyro reading less `bias` [rad/s], per sample.
-std::vector<double> window_rate(const Recording& rec, std::size_t half, const Eigen::Vector3d& bias) {
-  const std::size_t n = rec.samples.size();
-  std::vector<Eigen::Vector3d> s1(n + 1, Eigen::Vector3d::Zero());
-  for (std::size_t i = 0; i < n; ++i) s1[i + 1] = s1[i] + (rec.samples[i].gyro_radps - bias);
-  std::vector<double> rate(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t a = i >= half ? i - half : 0, b = std::min(n, i + half + 1);
-    rate[i] = ((s1[b] - s1[a]) / static_cast<double>(b - a)).norm();
+// Samples within `duration` of the first (read from the start until one is later).
+std::size_t samples_within(const Stream& in, double duration) {
+  const std::uint64_t n = in.size();
+  std::vector<ImuSample> buf(std::min<std::uint64_t>(in.chunk, n));
+  const double t0 = sample_at(in.src, 0).t_s;
+  for (std::uint64_t at = 0; at < n; at += buf.size()) {
+    const auto count = static_cast<std::size_t>(std::min<std::uint64_t>(buf.size(), n - at));
+    in.src.read(at, count, buf.data());
+    for (std::size_t k = 0; k < count; ++k)
+      if (!(buf[k].t_s - t0 <= duration)) return at + k;
   }
-  return rate;
+  return n;
 }
 
-// The settings and the per-sample window variance (and gyro rate) every threshold works on.
+// The settings every threshold works on.
 struct Prepared {
-  std::vector<double> var;
-  std::vector<double> rate;  // window_rate with the chosen bias; empty: no gyro gate
+  std::size_t half = 0;    // window = 2·half + 1 samples
   std::size_t window = 0;  // samples
   std::size_t init = 0;    // samples of the still start (0: none usable)
   double trim_s = 0.0;
+  Eigen::Vector3d accel_mean = Eigen::Vector3d::Zero();  // over the recording [m/s²]
 };
 
-Prepared prepare(const Recording& rec, const StaticDetectorOptions& o, DetectionSummary& s) {
-  const std::size_t n = rec.samples.size();
-  const double dt = (rec.samples.back().t_s - rec.samples.front().t_s) / static_cast<double>(n - 1);
+Prepared prepare(const Recording& rec, const Stream& in, const StaticDetectorOptions& o, DetectionSummary& s) {
+  const std::uint64_t n = in.size();
+  const double t0 = sample_at(in.src, 0).t_s;
+  const double dt = (sample_at(in.src, n - 1).t_s - t0) / static_cast<double>(n - 1);
   if (!(dt > 0.0)) throw std::invalid_argument("detect_static_intervals: sample times do not increase");
   s.rate_hz = 1.0 / dt;
   s.window_s = o.window_s > 0.0 ? o.window_s : std::max(kAutoWindowS, kMinWindowSamples * dt);
-  const auto half = static_cast<std::size_t>(std::max(1.0, std::round(0.5 * s.window_s / dt)));
-  s.min_duration_s = o.min_duration_s > 0.0 ? o.min_duration_s : std::max(kAutoMinDurationS, 2.0 * s.window_s);
   Prepared p;
-  p.window = 2 * half + 1;
-  p.var = window_variance(rec, half);
+  p.half = static_cast<std::size_t>(std::max(1.0, std::round(0.5 * s.window_s / dt)));
+  s.min_duration_s = o.min_duration_s > 0.0 ? o.min_duration_s : std::max(kAutoMinDurationS, 2.0 * s.window_s);
+  p.window = 2 * p.half + 1;
+  for_each_chunk(in.src, [&](const ImuSample* c, std::size_t count, std::uint64_t) {
+    for (std::size_t k = 0; k < count; ++k) p.accel_mean += c[k].accel_mps2;
+  }, in.chunk);
+  p.accel_mean /= static_cast<double>(n);
   p.trim_s = o.trim_s;
-  const double init_s = init_duration(rec, o);
-  const std::size_t init_n = init_s > 0.0 ? samples_within(rec, init_s) : 0;
+  const double init_s = init_duration(rec, t0, o);
+  const std::size_t init_n = init_s > 0.0 ? samples_within(in, init_s) : 0;
   if (init_n >= 2 * p.window) {
     p.init = init_n;
     s.init_duration_s = init_s;
@@ -129,36 +257,41 @@ Prepared prepare(const Recording& rec, const StaticDetectorOptions& o, Detection
 }
 
 // The base variance the multiplier scales.
-void choose_noise(const Prepared& p, DetectionSummary& s) {
-  if (p.init > 0) {
-    const std::size_t h = p.window / 2;
-    s.noise_variance = quantile({p.var.begin() + static_cast<std::ptrdiff_t>(h),
-                                 p.var.begin() + static_cast<std::ptrdiff_t>(p.init - h)}, 0.5);
-    s.noise_source = "median window variance over the first " + num(s.init_duration_s) + " s";
-  } else {
-    s.noise_variance = quantile(p.var, kNoisePercentile);
-    s.noise_source = "10th percentile of the window variance over the recording";
-  }
+void choose_noise(const Stream& in, const Prepared& p, DetectionSummary& s) {
+  const bool init = p.init > 0;
+  std::vector<StreamSelect> sel{StreamSelect(init ? 0.5 : kNoisePercentile)};
+  const std::uint64_t from = init ? p.half : 0, to = init ? p.init - p.half : in.size();
+  select_all(sel, [&] {
+    for_each_window(in, p.half, p.accel_mean, nullptr, to, [&](std::uint64_t i, const ImuSample&, double var, double) {
+      if (i >= from) sel[0].add(var);
+    });
+  });
+  s.noise_variance = sel[0].value();
+  s.noise_source = init ? "median window variance over the first " + num(s.init_duration_s) + " s"
+                        : "10th percentile of the window variance over the recording";
 }
 
 // The gyro's zero-rate offset from still data: the mean over the still start, else the per-axis
 // median over the samples whose window variance is at most `still_threshold`.
-void choose_gyro_bias(const Recording& rec, const Prepared& p, double still_threshold, DetectionSummary& s) {
+void choose_gyro_bias(const Stream& in, const Prepared& p, double still_threshold, DetectionSummary& s) {
   if (p.init > 0) {
-    s.gyro_bias_radps = interval_of(rec, 0, p.init - 1).gyro_mean_radps;
+    s.gyro_bias_radps = interval_means(in, 0, p.init - 1).iv.gyro_mean_radps;
     s.gyro_bias_source = "mean over the first " + num(s.init_duration_s) + " s";
     return;
   }
-  std::array<std::vector<double>, 3> still;
-  for (std::size_t i = 0; i < rec.samples.size(); ++i)
-    if (p.var[i] <= still_threshold)
-      for (int a = 0; a < 3; ++a) still[static_cast<std::size_t>(a)].push_back(rec.samples[i].gyro_radps[a]);
-  if (still[0].empty()) {
+  std::vector<StreamSelect> axis(3, StreamSelect(0.5));
+  select_all(axis, [&] {
+    for_each_window(in, p.half, p.accel_mean, nullptr, in.size(), [&](std::uint64_t, const ImuSample& x, double var, double) {
+      if (var <= still_threshold)
+        for (int a = 0; a < 3; ++a) axis[static_cast<std::size_t>(a)].add(x.gyro_radps[a]);
+    });
+  });
+  if (axis[0].count() == 0) {
     s.gyro_bias_source = "none (no still sample)";
     return;
   }
-  for (int a = 0; a < 3; ++a) s.gyro_bias_radps[a] = quantile(still[static_cast<std::size_t>(a)], 0.5);
-  s.gyro_bias_source = "per-axis median over the " + std::to_string(still[0].size()) + " stillest samples";
+  for (int a = 0; a < 3; ++a) s.gyro_bias_radps[a] = axis[static_cast<std::size_t>(a)].value();
+  s.gyro_bias_source = "per-axis median over the " + std::to_string(axis[0].count()) + " stillest samples";
 }
 
 struct Pass {
@@ -167,39 +300,79 @@ struct Pass {
   void reject(Rejection r) { ++rejected[static_cast<std::size_t>(r)]; }
 };
 
-// Samples i..j (still by both gates): accepted, or rejected as too short or saturated.
-void take_run(const Recording& rec, std::size_t i, std::size_t j, std::size_t trim, double min_duration_s, Pass& out) {
-  const std::size_t a = i + trim, b = j >= trim ? j - trim : 0;
-  if (b < a || rec.samples[b].t_s - rec.samples[a].t_s < min_duration_s) return out.reject(Rejection::kTooShort);
-  for (std::size_t k = a; k <= b; ++k)
-    if (rec.samples[k].flags & (kAccelSaturated | kGyroSaturated)) return out.reject(Rejection::kSaturated);
-  out.intervals.push_back(interval_of(rec, a, b));
-}
+// One threshold's runs, found sample by sample: the runs whose window variance is at most the
+// threshold (split at gaps: counted as kGap), each cut where the window-mean gyro rate less its
+// bias exceeds the gate (counted once per run as kGyroRate); the pieces kept as index ranges to be
+// judged when the pass is over.
+struct Runs {
+  double threshold = 0.0;
+  std::vector<std::pair<std::size_t, std::size_t>> pieces;  // first, last (inclusive)
+  Pass pass;
+  bool in_run = false, in_piece = false, cut = false;
+  std::size_t piece_first = 0;
 
-// The runs whose window variance is at most `threshold` (split at gaps), each cut where the
-// window-mean gyro rate less its bias exceeds the gate (counted once per run as kGyroRate), the
-// pieces accepted or rejected with their reason.
-Pass detect_at(const Recording& rec, const Prepared& p, double threshold, const DetectionSummary& s) {
-  const std::size_t n = rec.samples.size();
-  const auto trim = static_cast<std::size_t>(std::round(p.trim_s * s.rate_hz));
-  auto turning = [&](std::size_t k) { return !p.rate.empty() && p.rate[k] > s.max_gyro_radps; };
-  Pass out;
-  std::size_t i = 0;
-  while (i < n) {
-    if (!(p.var[i] <= threshold)) { ++i; continue; }
-    std::size_t j = i;
-    while (j + 1 < n && p.var[j + 1] <= threshold && !(rec.samples[j + 1].flags & kGapBefore)) ++j;
-    if (j + 1 < n && p.var[j + 1] <= threshold) out.reject(Rejection::kGap);
-    bool cut = false;
-    for (std::size_t k = i; k <= j;) {
-      if (turning(k)) { cut = true; ++k; continue; }
-      std::size_t e = k;
-      while (e + 1 <= j && !turning(e + 1)) ++e;
-      take_run(rec, k, e, trim, s.min_duration_s, out);
-      k = e + 1;
+  void feed(std::size_t k, double var, bool gap, bool turning) {
+    const bool still = var <= threshold;
+    if (in_run && (!still || gap)) {
+      close(k - 1);
+      if (still) pass.reject(Rejection::kGap);
     }
-    if (cut) out.reject(Rejection::kGyroRate);
-    i = j + 1;
+    if (!still) return;
+    in_run = true;
+    if (turning) {
+      if (in_piece) pieces.emplace_back(piece_first, k - 1);
+      in_piece = false;
+      cut = true;
+    } else if (!in_piece) {
+      in_piece = true;
+      piece_first = k;
+    }
+  }
+  void close(std::size_t last) {
+    if (in_piece) pieces.emplace_back(piece_first, last);
+    if (cut) pass.reject(Rejection::kGyroRate);
+    in_run = in_piece = cut = false;
+  }
+};
+
+// Pieces i..j (still by both gates), trimmed: accepted, or rejected as too short or saturated.
+// Means are read once per distinct trimmed range (thresholds share most of them).
+class PieceJudge {
+ public:
+  PieceJudge(const Stream& in, std::size_t trim, double min_duration_s) : in_(in), trim_(trim), min_s_(min_duration_s) {}
+  void take(std::size_t i, std::size_t j, Pass& out) {
+    const std::size_t a = i + trim_, b = j >= trim_ ? j - trim_ : 0;
+    if (b < a || sample_at(in_.src, b).t_s - sample_at(in_.src, a).t_s < min_s_) return out.reject(Rejection::kTooShort);
+    auto it = seen_.find({a, b});
+    if (it == seen_.end()) it = seen_.emplace(std::make_pair(a, b), interval_means(in_, a, b)).first;
+    if (it->second.saturated) return out.reject(Rejection::kSaturated);
+    out.intervals.push_back(it->second.iv);
+  }
+
+ private:
+  const Stream& in_;
+  std::size_t trim_;
+  double min_s_;
+  std::map<std::pair<std::size_t, std::size_t>, Means> seen_;
+};
+
+// detect at each threshold, in one pass over the samples.
+std::vector<Pass> detect_at(const Stream& in, const Prepared& p, const std::vector<double>& thresholds,
+                            const DetectionSummary& s) {
+  std::vector<Runs> runs(thresholds.size());
+  for (std::size_t t = 0; t < thresholds.size(); ++t) runs[t].threshold = thresholds[t];
+  const bool gate = s.max_gyro_radps > 0.0;
+  for_each_window(in, p.half, p.accel_mean, gate ? &s.gyro_bias_radps : nullptr, in.size(),
+                  [&](std::uint64_t i, const ImuSample& x, double var, double rate) {
+                    const bool turning = gate && rate > s.max_gyro_radps;
+                    for (Runs& r : runs) r.feed(i, var, x.flags & kGapBefore, turning);
+                  });
+  PieceJudge judge(in, static_cast<std::size_t>(std::round(p.trim_s * s.rate_hz)), s.min_duration_s);
+  std::vector<Pass> out;
+  for (Runs& r : runs) {
+    if (r.in_run) r.close(in.size() - 1);
+    for (const auto& [i, j] : r.pieces) judge.take(i, j, r.pass);
+    out.push_back(std::move(r.pass));
   }
   return out;
 }
@@ -240,13 +413,18 @@ std::size_t poses(const std::vector<DetectedInterval>& ivs) {
   return n;
 }
 
-// Scans kScanMultipliers; sets s.multiplier, s.multiplier_choice and s.scan.
-void scan_multipliers(const Recording& rec, const Prepared& p, DetectionSummary& s) {
+// Detects at every multiplier of kScanMultipliers; sets s.multiplier, s.multiplier_choice and
+// s.scan; returns the passes, one per multiplier.
+std::vector<Pass> scan_multipliers(const Stream& in, const Prepared& p, DetectionSummary& s) {
+  std::vector<double> thresholds;
+  for (double k : kScanMultipliers) thresholds.push_back(k * s.noise_variance);
+  std::vector<Pass> passes = detect_at(in, p, thresholds, s);
   std::size_t most = 0;
-  for (double k : kScanMultipliers) {
-    const Pass pass = detect_at(rec, p, k * s.noise_variance, s);
+  for (std::size_t m = 0; m < passes.size(); ++m) {
+    const Pass& pass = passes[m];
     const std::size_t distinct = poses(pass.intervals);  // noise splits do not determine a quadric
-    s.scan.push_back({k, pass.intervals.size(), distinct, distinct > kQuadricUnknowns ? quadric_rms(pass.intervals) : kNaN});
+    s.scan.push_back({kScanMultipliers[m], pass.intervals.size(), distinct,
+                      distinct > kQuadricUnknowns ? quadric_rms(pass.intervals) : kNaN});
     if (std::isfinite(s.scan.back().quadric_rms_mps2)) most = std::max(most, s.scan.back().poses);
   }
   double least = kNaN;
@@ -259,11 +437,12 @@ void scan_multipliers(const Recording& rec, const Prepared& p, DetectionSummary&
     s.multiplier = kFallbackMultiplier;
     s.multiplier_choice = "fallback: no multiplier in " + num(kScanMultipliers.front()) + ".." +
                           num(kScanMultipliers.back()) + " gave >= 10 distinct poses determining a quadric";
-    return;
+    return passes;
   }
   s.multiplier_choice = "scanned " + num(kScanMultipliers.front()) + ".." + num(kScanMultipliers.back()) +
                         ": of those keeping the most distinct poses (" + std::to_string(most) +
                         "), the least quadric (ellipsoid) residual of the interval means, " + num(least) + " m/s^2";
+  return passes;
 }
 
 }  // namespace
@@ -311,29 +490,33 @@ bool DetectionSummary::equals(const DetectionSummary& o, double tol) const {
          gyro_bias_source == o.gyro_bias_source;
 }
 
-Detection detect_static(const Recording& rec, const StaticDetectorOptions& o) {
+Detection detect_static(const Recording& rec, const StaticDetectorOptions& o, std::size_t chunk_samples) {
   Detection out;
   DetectionSummary& s = out.summary;
-  if (rec.samples.size() < 3) return out;
-  Prepared p = prepare(rec, o, s);
+  const Stream in{rec.sample_source(), chunk_samples};
+  if (in.size() < 3) return out;
+  const Prepared p = prepare(rec, in, o, s);
   s.max_gyro_radps = o.max_gyro_radps;
   const bool given = o.variance_threshold > 0.0;
   if (given) {
     s.threshold = o.variance_threshold;
     s.noise_source = "given";
   } else {
-    choose_noise(p, s);
+    choose_noise(in, p, s);
   }
-  choose_gyro_bias(rec, p, given ? s.threshold : kScanMultipliers.front() * s.noise_variance, s);
-  if (s.max_gyro_radps > 0.0) p.rate = window_rate(rec, p.window / 2, s.gyro_bias_radps);
+  choose_gyro_bias(in, p, given ? s.threshold : kScanMultipliers.front() * s.noise_variance, s);
+  std::vector<Pass> scanned;
   if (!given && o.threshold_multiplier > 0.0) {
     s.multiplier = o.threshold_multiplier;
     s.multiplier_choice = "given";
   } else if (!given) {
-    scan_multipliers(rec, p, s);
+    scanned = scan_multipliers(in, p, s);
   }
   if (!given) s.threshold = s.multiplier * s.noise_variance;
-  Pass pass = detect_at(rec, p, s.threshold, s);
+  const auto at = std::find(kScanMultipliers.begin(), kScanMultipliers.end(), s.multiplier);
+  Pass pass = !scanned.empty() && at != kScanMultipliers.end()
+                  ? std::move(scanned[static_cast<std::size_t>(at - kScanMultipliers.begin())])
+                  : std::move(detect_at(in, p, {s.threshold}, s).front());
   out.intervals = std::move(pass.intervals);
   s.rejected = pass.rejected;
   s.found = out.intervals.size();

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 #include "stend/processing/static_detector.hpp"
@@ -12,6 +13,8 @@
 namespace stend::processing {
 
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 std::string num(double v) {
   char buf[64];
@@ -26,11 +29,16 @@ std::string join(const std::vector<std::string>& items) {
 }
 
 void require_increasing_times(const Recording& rec) {
-  for (std::size_t i = 1; i < rec.samples.size(); ++i)
-    if (!(rec.samples[i].t_s > rec.samples[i - 1].t_s))
-      throw std::runtime_error("recording '" + rec.dir.string() + "': sample times are not " +
-                               "strictly increasing at sample " + std::to_string(i) + " (t = " +
-                               num(rec.samples[i].t_s) + " s)");
+  double prev = 0.0;
+  for_each_chunk(rec.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t first) {
+    for (std::size_t k = 0; k < n; ++k) {
+      if (first + k > 0 && !(c[k].t_s > prev))
+        throw std::runtime_error("recording '" + rec.dir.string() + "': sample times are not " +
+                                 "strictly increasing at sample " + std::to_string(first + k) + " (t = " +
+                                 num(c[k].t_s) + " s)");
+      prev = c[k].t_s;
+    }
+  });
 }
 
 std::vector<Segment> segments_of_kinds(const Recording& rec, const ProcessingOptions& o,
@@ -118,29 +126,24 @@ class PointBuilder {
   }
 
  private:
-  // Step 3: the requested instruments' axes over the segment's samples; sets the kept window.
+  // Step 3: the requested instruments' axes over the segment's samples (read a column at a time);
+  // sets the kept window.
   void extract_axes(StaticPoint& p) const {
-    const auto& S = rec_.samples;
-    const auto lo = std::lower_bound(S.begin(), S.end(), p.segment.t_start_s,
-                                     [](const ImuSample& s, double t) { return s.t_s < t; });
-    const auto hi = std::upper_bound(S.begin(), S.end(), p.segment.t_end_s,
-                                     [](double t, const ImuSample& s) { return t < s.t_s; });
-    const auto first = static_cast<std::size_t>(lo - S.begin());
-    std::vector<double> t;
-    for (auto it = lo; it < hi; ++it) t.push_back(it->t_s);
-    if (req_.accel) p.accel = axes(first, t, [](const ImuSample& s, int a) { return s.accel_mps2[a]; }, p);
-    if (req_.gyro) p.gyro = axes(first, t, [](const ImuSample& s, int a) { return s.gyro_radps[a]; }, p);
+    const SampleSource& src = rec_.sample_source();
+    const std::uint64_t first = lower_bound_time(src, p.segment.t_start_s);
+    const std::uint64_t end = std::max(first, lower_bound_time(src, std::nextafter(p.segment.t_end_s, kInf)));
+    const std::vector<double> t = read_column(src, Channel::kTime, first, end);
+    if (req_.accel) p.accel = axes(first, end, t, Channel::kAx, p);
+    if (req_.gyro) p.gyro = axes(first, end, t, Channel::kGx, p);
   }
 
-  // One instrument's three axes over the segment's samples (times `t`, the first at index
-  // `first`).
-  template <typename Axis>
-  AxesValue axes(std::size_t first, const std::vector<double>& t, Axis axis, StaticPoint& p) const {
-    std::vector<double> x(t.size());
+  // One instrument's three axes (channels x, x + 1, x + 2) over samples [first, end) at times t.
+  AxesValue axes(std::uint64_t first, std::uint64_t end, const std::vector<double>& t, Channel x, StaticPoint& p) const {
     AxesValue v;
     for (int a = 0; a < 3; ++a) {
-      for (std::size_t i = 0; i < x.size(); ++i) x[i] = axis(rec_.samples[first + i], a);
-      const StaticValue s = extract_static(t, x, p.segment.t_start_s, p.segment.t_end_s, o_.extraction);
+      const auto c = static_cast<Channel>(static_cast<int>(x) + a);
+      const StaticValue s = extract_static(t, read_column(rec_.sample_source(), c, first, end), p.segment.t_start_s,
+                                           p.segment.t_end_s, o_.extraction);
       v.mean[a] = s.mean;
       v.sample_std[a] = s.raw_std;
       v.std_error[a] = s.white_std_error;
@@ -160,12 +163,14 @@ class PointBuilder {
   };
   Window scan_window(StaticPoint& p) const {
     Window w;
-    for (std::size_t i = p.first; i <= p.last; ++i) {
-      const ImuSample& s = rec_.samples[i];
-      if (s.flags & saturation_) ++w.saturated;
-      if (i > p.first && (s.flags & kGapBefore)) ++p.gaps;
-      w.sensor_temperature_c += s.temperature_c;
-    }
+    for_each_chunk(rec_.sample_source(), p.first, p.last + 1, [&](const ImuSample* c, std::size_t n, std::uint64_t at) {
+      for (std::size_t k = 0; k < n; ++k) {
+        const ImuSample& s = c[k];
+        if (s.flags & saturation_) ++w.saturated;
+        if (at + k > p.first && (s.flags & kGapBefore)) ++p.gaps;
+        w.sensor_temperature_c += s.temperature_c;
+      }
+    });
     w.sensor_temperature_c /= static_cast<double>(p.samples_used);
     return w;
   }

@@ -326,6 +326,85 @@ TEST(StaticDetector, ChoosesFromTheDataAndCountsEveryRejection) {
   EXPECT_FALSE(si.equals(s));
 }
 
+// The recording with its samples behind a SampleSource instead of in `samples`.
+Recording streamed(const Recording& rec) {
+  Recording out = rec;
+  out.source = std::make_shared<MemorySamples>(std::vector<ImuSample>(rec.samples));
+  out.samples.clear();
+  return out;
+}
+
+void expect_same(const Detection& a, const Detection& b) {
+  EXPECT_TRUE(a.summary.equals(b.summary, 0.0)) << a.summary.print() << "\n" << b.summary.print();
+  ASSERT_EQ(a.intervals.size(), b.intervals.size());
+  for (std::size_t k = 0; k < a.intervals.size(); ++k) {
+    EXPECT_EQ(a.intervals[k].first, b.intervals[k].first);
+    EXPECT_EQ(a.intervals[k].last, b.intervals[k].last);
+    EXPECT_EQ(a.intervals[k].accel_mean_mps2, b.intervals[k].accel_mean_mps2);
+    EXPECT_EQ(a.intervals[k].gyro_mean_radps, b.intervals[k].gyro_mean_radps);
+  }
+}
+
+// The detector reads its samples a chunk at a time carrying the window across chunks: the same
+// numbers from samples in memory, behind a source, and in chunks smaller than the window.
+TEST(StaticDetector, SameResultWhateverTheChunking) {
+  HandSession h = hand_session(5);
+  Segment init;
+  init.label = "initialization";
+  init.t_end_s = 10.0;
+  for (bool with_init : {false, true}) {
+    Recording rec = h.rec;
+    if (with_init) rec.segments.push_back(init);
+    const Detection ref = detect_static(rec);
+    EXPECT_GT(ref.intervals.size(), 10u);
+    expect_same(ref, detect_static(streamed(rec)));
+    for (std::size_t chunk : {1u, 7u, 1000u}) expect_same(ref, detect_static(streamed(rec), {}, chunk));
+  }
+}
+
+// Past a million samples the noise percentile and the gyro medians are selected over several
+// passes instead of in memory; they are still the exact order statistics.
+TEST(StaticDetector, ExactQuantilesOnALongRecord) {
+  Recording rec;
+  std::mt19937_64 rng(8);
+  add_samples(rec, 0.0, 15000.0, Eigen::Vector3d(0, 0, 9.8), 0.01, rng);  // 1.5 M samples
+  std::normal_distribution<double> n(0.0, 1e-3);
+  for (auto& s : rec.samples) s.gyro_radps = Eigen::Vector3d(0.01 + n(rng), n(rng), n(rng));
+  StaticDetectorOptions o;
+  o.threshold_multiplier = 4.0;
+  const Detection d = detect_static(rec, o);
+  // The same statistics in memory: window variance of 2·half + 1 = 21 samples at 100 Hz, 0.2 s.
+  const std::size_t N = rec.samples.size(), half = 10;
+  std::vector<double> var(N);
+  std::vector<Eigen::Vector3d> s1(N + 1, Eigen::Vector3d::Zero()), s2(N + 1, Eigen::Vector3d::Zero());
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& s : rec.samples) mean += s.accel_mps2;
+  mean /= static_cast<double>(N);
+  for (std::size_t i = 0; i < N; ++i) {
+    const Eigen::Vector3d x = rec.samples[i].accel_mps2 - mean;
+    s1[i + 1] = s1[i] + x;
+    s2[i + 1] = s2[i] + x.cwiseAbs2();
+  }
+  for (std::size_t i = 0; i < N; ++i) {
+    const std::size_t a = i >= half ? i - half : 0, b = std::min(N, i + half + 1);
+    const double m = static_cast<double>(b - a);
+    const Eigen::Vector3d mu = (s1[b] - s1[a]) / m;
+    var[i] = ((s2[b] - s2[a]) / m - mu.cwiseAbs2()).sum() * m / std::max(1.0, m - 1.0);
+  }
+  auto kth = [](std::vector<double> v, double q) {
+    const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(v.size() - 1));
+    std::nth_element(v.begin(), v.begin() + k, v.end());
+    return v[static_cast<std::size_t>(k)];
+  };
+  const double noise = kth(var, 0.10);
+  EXPECT_EQ(d.summary.noise_variance, noise);
+  std::vector<double> gx;
+  for (std::size_t i = 0; i < N; ++i)
+    if (var[i] <= 2.0 * noise) gx.push_back(rec.samples[i].gyro_radps.x());
+  EXPECT_GT(gx.size(), std::size_t{1} << 20);
+  EXPECT_EQ(d.summary.gyro_bias_radps.x(), kth(gx, 0.5));
+}
+
 // ---------------------------------------------------------------------------------------------
 // Recording → static points
 

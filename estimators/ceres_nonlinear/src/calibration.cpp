@@ -460,27 +460,29 @@ Loss loss_from_name(const std::string& name) {
 }
 
 StaticInterval make_interval(const Recording& rec, std::size_t first, std::size_t last, std::string label) {
-  if (last < first || last >= rec.samples.size())
+  if (last < first || last >= rec.sample_count())
     throw std::out_of_range("make_interval: bad sample range");
+  std::vector<ImuSample> S(last - first + 1);  // one static interval
+  rec.sample_source().read(first, S.size(), S.data());
   StaticInterval iv;
   iv.first = first;
   iv.last = last;
-  iv.t_start_s = rec.samples[first].t_s;
-  iv.t_end_s = rec.samples[last].t_s;
+  iv.t_start_s = S.front().t_s;
+  iv.t_end_s = S.back().t_s;
   iv.count = last - first + 1;
   iv.label = std::move(label);
   Eigen::Vector3d s2 = Eigen::Vector3d::Zero();
-  for (std::size_t i = first; i <= last; ++i) {
-    iv.accel_mean += rec.samples[i].accel_mps2;
-    iv.gyro_mean += rec.samples[i].gyro_radps;
+  for (const ImuSample& x : S) {
+    iv.accel_mean += x.accel_mps2;
+    iv.gyro_mean += x.gyro_radps;
   }
   const double n = static_cast<double>(iv.count);
   iv.accel_mean /= n;
   iv.gyro_mean /= n;
   Eigen::Vector3d g2 = Eigen::Vector3d::Zero();
-  for (std::size_t i = first; i <= last; ++i) {
-    s2 += (rec.samples[i].accel_mps2 - iv.accel_mean).cwiseAbs2();
-    g2 += (rec.samples[i].gyro_radps - iv.gyro_mean).cwiseAbs2();
+  for (const ImuSample& x : S) {
+    s2 += (x.accel_mps2 - iv.accel_mean).cwiseAbs2();
+    g2 += (x.gyro_radps - iv.gyro_mean).cwiseAbs2();
   }
   if (iv.count > 1) {
     iv.accel_std = (s2 / (n - 1.0)).cwiseSqrt();
@@ -1219,6 +1221,15 @@ struct Move {
   std::size_t k, a, b;
 };
 
+// The samples a .. b between consecutive static intervals (the last of one, the first of the
+// next), read from the recording, and their calibrated specific force [m/s²] (with G only).
+struct Turn {
+  std::size_t a = 0;
+  std::vector<ImuSample> samples;
+  std::vector<Eigen::Vector3d> f_cal;
+  const ImuSample& at(std::size_t i) const { return samples[i - a]; }
+};
+
 // Inputs shared by the steps of the integration method; intervals sorted by time.
 struct IntegrationData {
   const Recording& rec;
@@ -1227,21 +1238,20 @@ struct IntegrationData {
   std::vector<StaticInterval> ivs;
   std::vector<Eigen::Vector3d> fk;     // calibrated specific force of each interval [m/s²]
   std::vector<Eigen::Vector3d> gdir;   // its direction (unit, sensor frame)
-  std::vector<Eigen::Vector3d> f_cal;  // calibrated specific force [m/s²] of the samples between
-                                       // consecutive intervals (with G only; elsewhere unset)
+  std::vector<Turn> turns;             // after interval k (empty when the next starts no later)
   std::vector<int> s1_index;           // stage-1 parameters: bias (+ G)
   std::vector<Move> moves;             // the moves that can be integrated
 };
 
 // Moves with at least one sample and no lost samples inside (a rotation cannot be integrated
 // across a gap).
-std::vector<Move> integrable_moves(const Recording& rec, const std::vector<StaticInterval>& ivs) {
+std::vector<Move> integrable_moves(const IntegrationData& d) {
   std::vector<Move> moves;
-  for (std::size_t k = 0; k + 1 < ivs.size(); ++k) {
-    const std::size_t a = ivs[k].last, b = ivs[k + 1].first;
+  for (std::size_t k = 0; k + 1 < d.ivs.size(); ++k) {
+    const std::size_t a = d.ivs[k].last, b = d.ivs[k + 1].first;
     if (b <= a) continue;
     bool gap = false;
-    for (std::size_t i = a + 1; i <= b; ++i) gap = gap || (rec.samples[i].flags & kGapBefore);
+    for (std::size_t i = a + 1; i <= b; ++i) gap = gap || (d.turns[k].at(i).flags & kGapBefore);
     if (!gap) moves.push_back({k, a, b});
   }
   return moves;
@@ -1257,13 +1267,19 @@ IntegrationData integration_data(const Recording& rec, const CalibrationResult& 
   if (!accel.ok) return d;
   for (const auto& iv : d.ivs) d.fk.push_back(accel.correct(iv.accel_mean));
   for (const auto& f : d.fk) d.gdir.push_back(f.normalized());
-  if (go.estimate_g_sensitivity) {
+  if (go.estimate_g_sensitivity)
     for (int i = 12; i < 21; ++i) d.s1_index.push_back(i);
-    const model::AffineForm<double> cal = accel.model.affine<double>(accel.theta.data());
-    d.f_cal.resize(rec.samples.size());
-    for (std::size_t k = 0; k + 1 < d.ivs.size(); ++k)
-      for (std::size_t i = d.ivs[k].last; i <= d.ivs[k + 1].first && i < rec.samples.size(); ++i)
-        d.f_cal[i] = cal.correct(rec.samples[i].accel_mps2);
+  const model::AffineForm<double> cal = accel.model.affine<double>(accel.theta.data());
+  d.turns.resize(d.ivs.size());
+  for (std::size_t k = 0; k + 1 < d.ivs.size(); ++k) {
+    Turn& t = d.turns[k];
+    t.a = d.ivs[k].last;
+    const std::size_t b = d.ivs[k + 1].first;
+    if (b <= t.a || b >= rec.sample_count()) continue;  // nothing between, or not this recording's
+    t.samples.resize(b - t.a + 1);
+    rec.sample_source().read(t.a, t.samples.size(), t.samples.data());
+    if (go.estimate_g_sensitivity)
+      for (const ImuSample& x : t.samples) t.f_cal.push_back(cal.correct(x.accel_mps2));
   }
   return d;
 }
@@ -1277,7 +1293,7 @@ std::string integration_precondition(const IntegrationData& d) {
                        "9 gyro scale and cross-axis parameters plus noise",
                        d.ivs.size());
   for (const auto& iv : d.ivs)
-    if (iv.last >= d.rec.samples.size()) return "the accelerometer calibration's intervals do not index this recording";
+    if (iv.last >= d.rec.sample_count()) return "the accelerometer calibration's intervals do not index this recording";
   return "";
 }
 
@@ -1300,24 +1316,26 @@ CalibrationResult solve_static_stage(const IntegrationData& d, const Calibration
   return r1;
 }
 
-// Gyro reading of sample i minus the bias (+ G·f, f the calibrated specific force) of θ [rad/s].
+// Gyro reading of sample i of turn k minus the bias (+ G·f, f the calibrated specific force) of θ
+// [rad/s].
 Eigen::Vector3d bias_corrected_rate(const IntegrationData& d, const model::ErrorModel& m, const double* theta,
-                                    std::size_t i) {
+                                    std::size_t k, std::size_t i) {
+  const Turn& t = d.turns[k];
   model::Stimulus<double> st;
-  if (d.go.estimate_g_sensitivity) st.specific_force = d.f_cal[i];
-  return d.rec.samples[i].gyro_radps - m.measure<double>(theta, st);
+  if (d.go.estimate_g_sensitivity) st.specific_force = t.f_cal[i - t.a];
+  return t.at(i).gyro_radps - m.measure<double>(theta, st);
 }
 
 // Rate increments of a move's bias-corrected readings w (θ's bias and G removed), trapezoidal:
 // Δ_i = ½(w_i + w_{i+1})·(t_{i+1} − t_i) [rad], i = a .. b − 1.
 std::vector<Eigen::Vector3d> move_increments(const IntegrationData& d, const model::ErrorModel& m, const double* theta,
                                              const Move& mv) {
-  const auto& samples = d.rec.samples;
+  const Turn& turn = d.turns[mv.k];
   std::vector<Eigen::Vector3d> inc(mv.b - mv.a);
-  Eigen::Vector3d w_prev = bias_corrected_rate(d, m, theta, mv.a);
+  Eigen::Vector3d w_prev = bias_corrected_rate(d, m, theta, mv.k, mv.a);
   for (std::size_t i = mv.a; i < mv.b; ++i) {
-    const Eigen::Vector3d w_next = bias_corrected_rate(d, m, theta, i + 1);
-    inc[i - mv.a] = (w_prev + w_next) * (0.5 * (samples[i + 1].t_s - samples[i].t_s));
+    const Eigen::Vector3d w_next = bias_corrected_rate(d, m, theta, mv.k, i + 1);
+    inc[i - mv.a] = (w_prev + w_next) * (0.5 * (turn.at(i + 1).t_s - turn.at(i).t_s));
     w_prev = w_next;
   }
   return inc;
@@ -1460,23 +1478,25 @@ void add_upstream_uncertainty(const IntegrationData& d, const CalibrationResult&
 std::pair<double, Eigen::Vector3d> gravity_mismatch(const IntegrationData& d, const model::ErrorModel& m,
                                                     const std::vector<double>& th, bool raw) {
   const auto& ivs = d.ivs;
-  const auto& samples = d.rec.samples;
   // Calibrated: A⁻¹·(y − b − G·f) (the gyro model is affine in the rate; G·f only moves its offset).
   const Eigen::Matrix3d ai = raw ? Eigen::Matrix3d::Identity() : m.affine<double>(th.data()).a_inv;
+  std::size_t k = 0;  // the turn being integrated
   auto rate = [&](std::size_t i) {
-    return raw ? Eigen::Vector3d(samples[i].gyro_radps) : Eigen::Vector3d(ai * bias_corrected_rate(d, m, th.data(), i));
+    return raw ? Eigen::Vector3d(d.turns[k].at(i).gyro_radps)
+               : Eigen::Vector3d(ai * bias_corrected_rate(d, m, th.data(), k, i));
   };
   Eigen::Vector3d acc = Eigen::Vector3d::Zero();
   double sum = 0.0;
   int count = 0;
-  for (std::size_t k = 0; k + 1 < ivs.size(); ++k) {
+  for (; k + 1 < ivs.size(); ++k) {
     const std::size_t a = ivs[k].last, b = ivs[k + 1].first;
     if (b <= a) continue;
+    const Turn& turn = d.turns[k];
     Eigen::Vector3d v = raw ? ivs[k].accel_mean.normalized() : d.gdir[k];
     Eigen::Vector3d wp = rate(a);
     for (std::size_t i = a; i < b; ++i) {
       const Eigen::Vector3d wn = rate(i + 1);
-      const Eigen::Vector3d t = (wp + wn) * 0.5 * (samples[i + 1].t_s - samples[i].t_s);
+      const Eigen::Vector3d t = (wp + wn) * 0.5 * (turn.at(i + 1).t_s - turn.at(i).t_s);
       const double ang = t.norm();
       if (ang > 0.0) v = Eigen::AngleAxisd(-ang, t / ang).toRotationMatrix() * v;
       wp = wn;
@@ -1505,7 +1525,7 @@ CalibrationResult calibrate_gyro_integration(const Recording& rec, const Calibra
     return r;
   };
   if (const std::string why = integration_precondition(d); !why.empty()) return done(why);
-  d.moves = integrable_moves(rec, d.ivs);
+  d.moves = integrable_moves(d);
   const int n = static_cast<int>(d.ivs.size());
   if (3 * n < static_cast<int>(d.s1_index.size()) + 1) return done("too few static intervals for the gyro bias and g-sensitivity");
   std::vector<double> x1;

@@ -164,6 +164,32 @@ TEST(CeresGyro, IntegrationRecoversTruthOnA38PositionRecord) {
   EXPECT_NE(g.report().find("integration"), std::string::npos);
 }
 
+// The samples behind a SampleSource (as a run store gives them): detection, interval statistics and
+// the integration over the turns give the same numbers as from samples in memory.
+TEST(CeresGyro, SameResultFromSamplesInMemoryOrStreamed) {
+  synthetic::Spec spec;
+  spec.seed = 12;
+  const synthetic::Record rec = synthetic::make(spec);
+  Recording streamed = rec.recording;
+  streamed.source = std::make_shared<MemorySamples>(std::vector<ImuSample>(rec.recording.samples));
+  streamed.samples.clear();
+  CalibrationOptions ao;
+  ao.processing.detector.trim_s = 0.5;
+  ao.processing.detector.max_gyro_radps = 0.05;
+  GyroOptions go;
+  go.estimate_g_sensitivity = true;
+  const CalibrationResult a = calibrate_accelerometer_unknown_orientations(rec.recording, ao);
+  const CalibrationResult b = calibrate_accelerometer_unknown_orientations(streamed, ao);
+  ASSERT_TRUE(a.ok) << a.message;
+  EXPECT_EQ(a.theta, b.theta);
+  const CalibrationResult ga = calibrate_gyro_integration(rec.recording, a, go);
+  const CalibrationResult gb = calibrate_gyro_integration(streamed, b, go);
+  ASSERT_TRUE(ga.ok) << ga.message;
+  EXPECT_EQ(ga.theta, gb.theta);
+  EXPECT_EQ(ga.covariance, gb.covariance);
+  EXPECT_EQ(ga.rms_norm_after, gb.rms_norm_after);
+}
+
 // Sample-level simulation (synthetic records, 20 positions, exact static intervals), 200 seeds,
 // without and with g-sensitivity (12 and 21 parameters).
 void integration_coverage(bool gsens) {

@@ -68,8 +68,24 @@ Calibration load_calibration(const std::filesystem::path& results_file);
 model::ErrorModel model_from_names(model::Instrument instrument, const std::vector<std::string>& names,
                                    double reference_c);
 
-// The recording with every sample corrected (the instruments `cal` holds; the other one as
-// recorded). Throws std::runtime_error when the model needs the temperature and a sample has none.
+// Samples with a calibration applied as they are read (the instruments `cal` holds; the other one
+// as recorded), a chunk at a time. A read throws std::runtime_error when the model needs the
+// temperature and a sample has none.
+class CalibratedSamples final : public SampleSource {
+ public:
+  CalibratedSamples(std::shared_ptr<const SampleSource> raw, const Calibration& cal, std::string name);
+  std::uint64_t size() const override { return raw_->size(); }
+  void read(std::uint64_t first, std::size_t count, ImuSample* out) const override;
+
+ private:
+  std::shared_ptr<const SampleSource> raw_;
+  const Calibration& cal_;
+  std::string name_;  // the raw recording, for errors
+};
+
+// The recording with every sample corrected as it is read (CalibratedSamples over raw's samples:
+// valid while `raw` and `cal` live). Throws std::runtime_error when the model needs the
+// temperature and a sample has none.
 Recording apply_calibration(const Recording& raw, const Calibration& cal);
 
 // Writes `calibrated` as a new run folder `out_dir` (which must not exist): samples, truth,

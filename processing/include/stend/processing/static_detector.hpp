@@ -110,10 +110,12 @@ struct Detection {
   DetectionSummary summary;
 };
 
-// Sliding-window variance detector over rec.samples (in time order). A sample flagged
+// Sliding-window variance detector over rec.sample_source() (in time order), read in chunks of
+// `chunk_samples`: memory is the window's plus the runs found, not the record's. A sample flagged
 // kGapBefore starts a new run. Throws std::invalid_argument when the sample times do not
 // increase over the recording.
-Detection detect_static(const Recording& rec, const StaticDetectorOptions& options = {});
+Detection detect_static(const Recording& rec, const StaticDetectorOptions& options = {},
+                        std::size_t chunk_samples = kDefaultChunkSamples);
 // detect_static(rec, options).intervals
 std::vector<DetectedInterval> detect_static_intervals(const Recording& rec,
                                                       const StaticDetectorOptions& options = {});
