@@ -23,13 +23,6 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // constant-rate turn about the vertical leaves the accelerometer still.
 constexpr double kStillMaxRateDps = 3.0;
 
-// Sample i (one read; for the ends of an interval, not for loops).
-ImuSample sample_at(const SampleSource& src, std::uint64_t i) {
-  ImuSample s;
-  src.read(i, 1, &s);
-  return s;
-}
-
 // Mean of a sample field over [first, last], read a chunk at a time.
 template <class Get>
 Eigen::Vector3d mean_of(const Recording& rec, std::size_t first, std::size_t last, Get get) {
@@ -113,8 +106,9 @@ void rebias(const Recording& cal, const std::vector<processing::StaticPoint>& pt
   const SampleSource& src = cal.sample_source();
   if (src.size() == 0) throw std::invalid_argument("--rebias-from-start: the recording has no samples");
   const double t0 = sample_at(src, 0).t_s;
-  std::size_t last = 0;
-  while (last + 1 < src.size() && sample_at(src, last + 1).t_s - t0 <= seconds) ++last;
+  // The last sample within `seconds` of the first (a binary search, not a scan).
+  const std::uint64_t past = lower_bound_time(src, std::nextafter(t0 + seconds, INFINITY));
+  const std::size_t last = past > 0 ? static_cast<std::size_t>(past - 1) : 0;
   const bool still = std::any_of(pts.begin(), pts.end(), [&](const processing::StaticPoint& p) {
     return sample_at(src, p.first).t_s - t0 <= 0.5 * seconds && p.last >= last;
   });

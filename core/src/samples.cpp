@@ -88,6 +88,12 @@ void for_each_chunk(const SampleSource& src, const ChunkFn& fn, std::size_t chun
   for_each_chunk(src, 0, src.size(), fn, chunk_samples);
 }
 
+ImuSample sample_at(const SampleSource& src, std::uint64_t i) {
+  ImuSample s;
+  src.read(i, 1, &s);
+  return s;
+}
+
 std::uint64_t lower_bound_time(const SampleSource& src, double t_s) {
   std::uint64_t lo = 0, hi = src.size();
   ImuSample s;

@@ -32,13 +32,6 @@ double quantile(std::vector<double> v, double q) {
   return v[static_cast<std::size_t>(k)];
 }
 
-// Sample i (one read; for the ends of an interval, not for loops).
-ImuSample sample_at(const SampleSource& src, std::uint64_t i) {
-  ImuSample s;
-  src.read(i, 1, &s);
-  return s;
-}
-
 // The samples, read a chunk at a time, and their count.
 struct Stream {
   const SampleSource& src;

@@ -68,6 +68,9 @@ void for_each_chunk(const SampleSource& src, std::uint64_t first, std::uint64_t 
 void for_each_chunk(const SampleSource& src, const ChunkFn& fn,
                     std::size_t chunk_samples = kDefaultChunkSamples);
 
+// Sample i (one read: for the ends of an interval, not for loops).
+ImuSample sample_at(const SampleSource& src, std::uint64_t i);
+
 // Index of the first sample with t_s ≥ t (size() when none): binary search by single reads.
 std::uint64_t lower_bound_time(const SampleSource& src, double t_s);
 // Index range [first, last) of the samples with t_s in [t0_s, t1_s).
