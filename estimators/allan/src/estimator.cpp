@@ -25,6 +25,13 @@ EstimatorResult AllanEstimator::fit(const EstimatorRequest& req) {
   if (req.recording == nullptr) throw std::invalid_argument("allan: no recording given");
   const YAML::Node root = YAML::LoadFile(req.model_file);
   const AllanReport report = analyze_recording(*req.recording, options_from_yaml(root["allan"], req.model_file));
+  std::string failures;
+  bool any_ok = false;
+  for (const auto& ch : report.channels) {
+    any_ok = any_ok || ch.model.ok;
+    if (!ch.model.ok) failures += fmt::format("{}{}: {}", failures.empty() ? "" : "; ", ch.curve.channel.name, ch.model.message);
+  }
+  if (!any_ok) return {false, "allan: no channel could be fitted: " + failures, {}, {}, config_.results_file};
   std::ostringstream text, json;
   write_summary_table(text, report);
   write_json(json, report);
