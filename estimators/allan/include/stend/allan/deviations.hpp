@@ -28,7 +28,8 @@
 // ρ = r1/(1 + r1) < 0.25 (W. J. Riley, C. A. Greenhall, "Power law noise identification using
 // the lag 1 autocorrelation", 2004), α = 2 − 2(ρ + d) rounded, when at least 30 decimated points
 // exist; otherwise Barnes' B1 ratio (standard over Allan variance of the m-averages) against its
-// theoretical value, with R(n) = MVAR/AVAR separating white from flicker PM. The autocorrelation
+// theoretical value, with R(n) = MVAR/AVAR separating white from flicker PM, while at least
+// b1_min_averages averages exist; beyond that the type of the next shorter factor is kept. The autocorrelation
 // of the d-th difference is taken about its mean (differencing removes the trends that
 // Riley's recipe removes by a polynomial fit), from running sums: bounded memory.
 #pragma once
@@ -178,6 +179,9 @@ struct DeviationOptions {
   double confidence = stats::kOneSigma;
   // Noise identification: lag-1 autocorrelation from this many decimated points on, B1 below.
   std::uint64_t acf_min_points = 30;
+  // Fewer m-averages than this: the noise type of the next shorter factor is kept (with 7
+  // averages B1 cannot tell white FM from PM noise; Stable32 keeps white FM on PHASE.DAT there).
+  std::uint64_t b1_min_averages = 10;
 
   bool IsValid(std::string* why = nullptr) const {
     auto fail = [&](const char* w) {
@@ -429,7 +433,9 @@ class DeviationStream {
     // over their non-overlapped Allan variance; R(n) from MVAR/AVAR of the same record.
     const double n = static_cast<double>(s.acf[1].n);
     const double m = static_cast<double>(opt_.factors[i]);
-    if (n < 2 || s.adev_terms == 0) return 0;
+    if (s.acf[1].n < opt_.b1_min_averages || s.adev_terms == 0) {
+      return i > 0 ? alpha(i - 1, kind) : 0;  // too few averages: the type found at the shorter τ
+    }
     const double avar = static_cast<double>(s.adev / (2.0L * s.adev_terms));
     const double b1 = s.acf[1].variance() / avar;
     const std::uint64_t N = count_;
