@@ -44,7 +44,8 @@
 #include <string>
 #include <vector>
 
-#include "stend/allan/stats.hpp"
+#include "stats.hpp"
+#include "stream.hpp"
 
 namespace stend::allan {
 
@@ -94,6 +95,70 @@ inline double deviation_edf(DeviationKind kind, int alpha, double m, double n_ph
   return std::numeric_limits<double>::quiet_NaN();
 }
 
+// Largest factor reported: N phase points / this (Stable32's stop ratios, W. J. Riley,
+// "Evolution of frequency stability analysis software", Table III).
+inline std::uint64_t stop_ratio(DeviationKind kind) {
+  switch (kind) {
+    case DeviationKind::kAdev:
+    case DeviationKind::kHdev: return 5;
+    case DeviationKind::kTotdev: return 2;
+    default: return 4;
+  }
+}
+
+namespace detail {
+
+// Over i < n with d2_i = c_i − 2a_i + b_i, d3_i = d2_i − (a_i − 2b_i + e_i) (c, a, b, e the
+// phase at k, k−m, k−2m, k−3m): sums[0] += Σ d2², sums[1] += Σ d3², w_i = w0 + Σ_{t≤i} d3_t,
+// sums[2] += Σ w². d3 and w are n-element scratch arrays.
+STEND_ALLAN_KERNEL
+inline void steady_sums(const double* c, const double* a, const double* b, const double* e,
+                        std::size_t n, double* d3, double* w, double w0, double* sums) {
+  v8d s2{}, s3{};
+  std::size_t i = 0;
+  for (; i + 8 <= n; i += 8) {
+    v8d vc, va, vb, ve;
+    load8(vc, c + i);
+    load8(va, a + i);
+    load8(vb, b + i);
+    load8(ve, e + i);
+    const v8d d2 = vc - 2.0 * va + vb;
+    const v8d d3v = d2 - (va - 2.0 * vb + ve);
+    s2 += d2 * d2;
+    s3 += d3v * d3v;
+    store8(d3 + i, d3v);
+  }
+  auto hsum = [](const v8d& v) {
+    return ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
+  };
+  double t2 = hsum(s2), t3 = hsum(s3);
+  for (std::size_t t = i; t < n; ++t) {
+    const double d2 = c[t] - 2.0 * a[t] + b[t];
+    d3[t] = d2 - (a[t] - 2.0 * b[t] + e[t]);
+    t2 += d2 * d2;
+    t3 += d3[t] * d3[t];
+  }
+  const double total = prefix_scan8(d3, w, i, w0, 0.0);
+  double run = w0 + total;
+  for (std::size_t t = i; t < n; ++t) {
+    run += d3[t];
+    w[t] = run;
+  }
+  v8d sw{};
+  for (std::size_t t = 0; t < i; t += 8) {  // i is a multiple of 8
+    v8d vw;
+    load8(vw, w + t);
+    sw += vw * vw;
+  }
+  double tw = hsum(sw);
+  for (std::size_t t = i; t < n; ++t) tw += w[t] * w[t];
+  sums[0] += t2;
+  sums[1] += t3;
+  sums[2] += tw;
+}
+
+}  // namespace detail
+
 namespace noise_id {
 
 // Expected B1 ratio for n averages and bias exponent μ (Barnes 1974; Howe et al. 1981).
@@ -142,17 +207,17 @@ inline int from_acf(const std::array<double, 4>& r1, int dmax) {
 }
 
 // Running sums for the lag-1 autocorrelation (about the mean) of one series, values shifted
-// by the first one for precision.
+// by the first one for precision (double sums: only the rounded noise type depends on them).
 struct Lag1 {
   std::uint64_t n = 0;
   double shift = 0.0, first = 0.0, last = 0.0;
-  long double s = 0, s2 = 0, s11 = 0;
+  double s = 0, s2 = 0, s11 = 0;
   void add(double v) {
     if (n == 0) shift = v;
     v -= shift;
-    if (n == 0) first = v; else s11 += static_cast<long double>(last) * v;
+    if (n == 0) first = v; else s11 += last * v;
     s += v;
-    s2 += static_cast<long double>(v) * v;
+    s2 += v * v;
     last = v;
     ++n;
   }
@@ -273,8 +338,8 @@ class DeviationStream {
   }
   const DeviationOptions& options() const { return opt_; }
 
-  // The deviations of `kind` at every factor where the record allows it (OADEV, MDEV, …: at
-  // least one term; TOTDEV: m ≤ (N − 1)/2), with noise type, EDF and interval.
+  // The deviations of `kind` at every factor up to N / stop_ratio(kind) (Stable32's limits),
+  // with noise type, EDF and interval.
   std::vector<DeviationPoint> result(DeviationKind kind) {
     process();
     std::vector<DeviationPoint> out;
@@ -316,7 +381,7 @@ class DeviationStream {
           if (p.terms) var = (s.oadev + total_ends(m)) / (2 * tau * tau * p.terms);
           break;
       }
-      if (p.terms == 0) continue;
+      if (p.terms == 0 || m * stop_ratio(kind) > N) continue;
       p.dev = static_cast<double>(std::sqrt(var));
       p.alpha = alpha(i, kind);
       p.edf = deviation_edf(kind, p.alpha, static_cast<double>(m), static_cast<double>(N));
@@ -347,8 +412,12 @@ class DeviationStream {
   void process() {
     const std::uint64_t base = count_ - done_;  // global index of hist_[0]
     const double* h = hist_.data();
-    for (std::size_t i = 0; i < opt_.factors.size(); ++i) {
-      accumulate(opt_.factors[i], per_m_[i], h, base, done_, fill_);
+    // Sub-blocks of kSubBlock points, every factor on each, so the newest points stay in cache.
+    for (std::size_t from = done_; from < fill_; from += kSubBlock) {
+      const std::size_t to = std::min(fill_, from + kSubBlock);
+      for (std::size_t i = 0; i < opt_.factors.size(); ++i) {
+        accumulate(opt_.factors[i], per_m_[i], h, base, from, to);
+      }
     }
     count_ += fill_ - done_;
     done_ = fill_;
@@ -376,35 +445,47 @@ class DeviationStream {
       s.window += d2;
       if (k == 3 * m - 1) s.mdev += static_cast<long double>(s.window) * s.window;
     }
-    // Steady state: vectorisable sums over the block.
-    double oa = 0, oh = 0, md = 0, w = s.window;
-    for (std::size_t t = j; t < to; ++t) {
-      const double d2 = h[t] - 2 * h[t - M] + h[t - 2 * M];
-      const double d3 = d2 - (h[t - M] - 2 * h[t - 2 * M] + h[t - 3 * M]);
-      oa += d2 * d2;
-      oh += d3 * d3;
-      w += d3;  // window of the last m d2: adds d2_k, drops d2_{k−m}
-      md += w * w;
+    // Steady state (k ≥ 3m), in vector kernels: Σ d2², Σ d3², and the MDEV window as a running
+    // sum of d3 (adding d3_k = d2_k − d2_{k−m} slides the window of the last m d2 by one).
+    if (j < to) {
+      const std::size_t n = to - j;
+      double sums[3] = {0, 0, 0};
+      detail::steady_sums(h + j, h + j - M, h + j - 2 * M, h + j - 3 * M, n, scratch_d3(),
+                          scratch_w(), s.window, sums);
+      s.oadev += sums[0];
+      s.ohdev += sums[1];
+      s.mdev += sums[2];
+      s.window = scratch_w()[n - 1];
     }
-    s.oadev += oa;
-    s.ohdev += oh;
-    s.mdev += md;
-    s.window = w;
     // Non-overlapped terms and the decimated phase for noise identification.
-    std::uint64_t k0 = base + from;
-    std::uint64_t first = (k0 + m - 1) / m * m;
+    const std::uint64_t k0 = base + from;
+    const std::uint64_t first = (k0 + m - 1) / m * m;
+    double a2 = 0, h2 = 0;
     for (std::uint64_t k = first; k < base + to; k += m) {
       const std::size_t t = static_cast<std::size_t>(k - base);
       if (k >= 3 * m) {
         const double d2 = h[t] - 2 * h[t - M] + h[t - 2 * M];
         const double d3 = d2 - (h[t - M] - 2 * h[t - 2 * M] + h[t - 3 * M]);
-        s.adev += static_cast<long double>(d2) * d2;
+        a2 += d2 * d2;
         ++s.adev_terms;
-        s.hdev += static_cast<long double>(d3) * d3;
+        h2 += d3 * d3;
         ++s.hdev_terms;
       }
       add_decimated(s, h[t]);
     }
+    s.adev += a2;
+    s.hdev += h2;
+  }
+
+  static constexpr std::size_t kSubBlock = 4096;
+  // Per-thread scratch for the steady-state kernel (d3 and the MDEV window of one sub-block).
+  static double* scratch_d3() {
+    thread_local std::array<double, kSubBlock> buf;
+    return buf.data();
+  }
+  static double* scratch_w() {
+    thread_local std::array<double, kSubBlock> buf;
+    return buf.data();
   }
 
   static void add_decimated(PerM& s, double z) {
