@@ -109,12 +109,15 @@ inline std::uint64_t stop_ratio(DeviationKind kind) {
 namespace detail {
 
 // Over i < n with d2_i = c_i − 2a_i + b_i, d3_i = d2_i − (a_i − 2b_i + e_i) (c, a, b, e the
-// phase at k, k−m, k−2m, k−3m): sums[0] += Σ d2², sums[1] += Σ d3², w_i = w0 + Σ_{t≤i} d3_t,
-// sums[2] += Σ w². d3 and w are n-element scratch arrays.
+// phase at k, k−m, k−2m, k−3m): sums[0] += Σ d2², sums[1] += Σ d3², and with the running sum
+// w_i = w + Σ_{t≤i} d3_t, sums[2] += Σ w². Returns the last w. One pass: the running sum is an
+// in-register prefix scan of each 8 lanes plus the carried value.
 STEND_ALLAN_KERNEL
-inline void steady_sums(const double* c, const double* a, const double* b, const double* e,
-                        std::size_t n, double* d3, double* w, double w0, double* sums) {
-  v8d s2{}, s3{};
+inline double steady_sums(const double* c, const double* a, const double* b, const double* e,
+                          std::size_t n, double w, double* sums) {
+  const v8d zero = {};
+  v8d s2{}, s3{}, sw{};
+  v8d carry = zero + w;
   std::size_t i = 0;
   for (; i + 8 <= n; i += 8) {
     v8d vc, va, vb, ve;
@@ -123,38 +126,33 @@ inline void steady_sums(const double* c, const double* a, const double* b, const
     load8(vb, b + i);
     load8(ve, e + i);
     const v8d d2 = vc - 2.0 * va + vb;
-    const v8d d3v = d2 - (va - 2.0 * vb + ve);
+    v8d v = d2 - (va - 2.0 * vb + ve);
     s2 += d2 * d2;
-    s3 += d3v * d3v;
-    store8(d3 + i, d3v);
+    s3 += v * v;
+    v += __builtin_shufflevector(zero, v, 0, 8, 9, 10, 11, 12, 13, 14);
+    v += __builtin_shufflevector(zero, v, 0, 1, 8, 9, 10, 11, 12, 13);
+    v += __builtin_shufflevector(zero, v, 0, 1, 2, 3, 8, 9, 10, 11);
+    v += carry;
+    sw += v * v;
+    carry = __builtin_shufflevector(v, v, 7, 7, 7, 7, 7, 7, 7, 7);
   }
   auto hsum = [](const v8d& v) {
     return ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
   };
-  double t2 = hsum(s2), t3 = hsum(s3);
+  double t2 = hsum(s2), t3 = hsum(s3), tw = hsum(sw);
+  w = carry[0];
   for (std::size_t t = i; t < n; ++t) {
     const double d2 = c[t] - 2.0 * a[t] + b[t];
-    d3[t] = d2 - (a[t] - 2.0 * b[t] + e[t]);
+    const double d3 = d2 - (a[t] - 2.0 * b[t] + e[t]);
     t2 += d2 * d2;
-    t3 += d3[t] * d3[t];
+    t3 += d3 * d3;
+    w += d3;
+    tw += w * w;
   }
-  const double total = prefix_scan8(d3, w, i, w0, 0.0);
-  double run = w0 + total;
-  for (std::size_t t = i; t < n; ++t) {
-    run += d3[t];
-    w[t] = run;
-  }
-  v8d sw{};
-  for (std::size_t t = 0; t < i; t += 8) {  // i is a multiple of 8
-    v8d vw;
-    load8(vw, w + t);
-    sw += vw * vw;
-  }
-  double tw = hsum(sw);
-  for (std::size_t t = i; t < n; ++t) tw += w[t] * w[t];
   sums[0] += t2;
   sums[1] += t3;
   sums[2] += tw;
+  return w;
 }
 
 }  // namespace detail
@@ -318,16 +316,10 @@ class DeviationStream {
         rate_started_ = true;
         x[j++] = 0.0;  // x_0
       }
-      for (std::size_t t = 0; t < take; ++t) {
-        phase_ += static_cast<long double>(y[i + t] - rate_offset_) * opt_.tau0_s;
-        x[j++] = static_cast<double>(phase_);
-        if (j == x.size()) {
-          add_phase(x.data(), j);
-          j = 0;
-        }
-      }
-      if (j) add_phase(x.data(), j);
-      i += take;
+      const std::size_t now = std::min(take, x.size() - j);  // room after x_0
+      integrate(y + i, now, x.data() + j);
+      add_phase(x.data(), j + now);
+      i += now;
     }
   }
 
@@ -394,6 +386,21 @@ class DeviationStream {
   }
 
  private:
+  // x[t] = τ0 · (Σ (y − y_0) so far, through y[t]); the sum carried in long double.
+  void integrate(const double* y, std::size_t n, double* x) {
+    const std::size_t n8 = n / 8 * 8;
+    const double total = detail::prefix_scan8(y, x, n8, static_cast<double>(phase_), rate_offset_);
+    long double run = phase_ + static_cast<long double>(total);
+    for (std::size_t t = n8; t < n; ++t) {
+      run += static_cast<long double>(y[t] - rate_offset_);
+      x[t] = static_cast<double>(run);
+    }
+    phase_ = run;
+    if (opt_.tau0_s != 1.0) {
+      for (std::size_t t = 0; t < n; ++t) x[t] *= opt_.tau0_s;
+    }
+  }
+
   struct PerM {
     long double oadev = 0, adev = 0, mdev = 0, ohdev = 0, hdev = 0;
     std::uint64_t adev_terms = 0, hdev_terms = 0;
@@ -450,12 +457,11 @@ class DeviationStream {
     if (j < to) {
       const std::size_t n = to - j;
       double sums[3] = {0, 0, 0};
-      detail::steady_sums(h + j, h + j - M, h + j - 2 * M, h + j - 3 * M, n, scratch_d3(),
-                          scratch_w(), s.window, sums);
+      s.window = detail::steady_sums(h + j, h + j - M, h + j - 2 * M, h + j - 3 * M, n,
+                                     s.window, sums);
       s.oadev += sums[0];
       s.ohdev += sums[1];
       s.mdev += sums[2];
-      s.window = scratch_w()[n - 1];
     }
     // Non-overlapped terms and the decimated phase for noise identification.
     const std::uint64_t k0 = base + from;
@@ -478,15 +484,6 @@ class DeviationStream {
   }
 
   static constexpr std::size_t kSubBlock = 4096;
-  // Per-thread scratch for the steady-state kernel (d3 and the MDEV window of one sub-block).
-  static double* scratch_d3() {
-    thread_local std::array<double, kSubBlock> buf;
-    return buf.data();
-  }
-  static double* scratch_w() {
-    thread_local std::array<double, kSubBlock> buf;
-    return buf.data();
-  }
 
   static void add_decimated(PerM& s, double z) {
     double v = z;
