@@ -210,6 +210,7 @@ inline int from_b1(double b1, double rn, double n, double m) {
 inline int from_acf(const std::array<double, 4>& r1, int dmax) {
   for (int d = 0;; ++d) {
     const double rho = r1[static_cast<std::size_t>(d)] / (1.0 + r1[static_cast<std::size_t>(d)]);
+    if (!std::isfinite(rho)) return 0;  // a constant series: no type to tell, white FM
     if (rho < 0.25 || d >= dmax) {
       return std::clamp(static_cast<int>(-std::round(2.0 * rho)) - 2 * d + 2, -2, 2);
     }
@@ -273,7 +274,8 @@ struct DeviationOptions {
   }
 };
 
-// Every factor 1 … max_m (all τ), or about `per_decade` log-spaced factors per decade.
+// Every factor 1 … max_m (all τ), or about `per_decade` log-spaced factors per decade. The cost
+// is O(N · factors): all τ suits short records, log-spaced ones long records.
 inline std::vector<std::uint64_t> all_factors(std::uint64_t max_m) {
   std::vector<std::uint64_t> out(max_m);
   for (std::uint64_t m = 1; m <= max_m; ++m) out[m - 1] = m;
