@@ -1,4 +1,5 @@
 #include <stend/allan/allan.hpp>
+#include <stend/allan/deviation_report.hpp>
 #include <stend/physics/units.hpp>
 
 #include <Eigen/Dense>
@@ -78,15 +79,14 @@ Units units_for(Instrument instrument, const std::string& signal_unit) {
 // ---------------------------------------------------------------------------------------------
 // Options
 
-namespace {
-
-// "file:line:column" of a YAML node for messages ("<yaml>" without a file name).
 std::string yaml_location(const std::string& file, const YAML::Node& n) {
   const YAML::Mark m = n.Mark();
   std::string loc = file.empty() ? std::string("<yaml>") : file;
   if (m.line >= 0) loc += fmt::format(":{}:{}", m.line + 1, m.column + 1);
   return loc;
 }
+
+namespace {
 
 // The value of one Allan option, read as a number or a boolean; a bad value throws with its location.
 struct OptionValue {
@@ -153,11 +153,12 @@ AllanOptions options_from_yaml(const YAML::Node& node, const std::string& file) 
   if (!node.IsMap()) throw std::runtime_error(yaml_location(file, node) + ": Allan options must be a mapping");
   static const std::vector<std::string> keys = {"max_m", "confidence", "edf_from_model",
                                                 "slope_tolerance", "min_readoff_edf",
-                                                "min_readoff_points", "t_begin_s", "t_end_s"};
+                                                "min_readoff_points", "t_begin_s", "t_end_s",
+                                                "deviations", "tau"};
   for (const auto& kv : node) {
     const std::string key = kv.first.as<std::string>();
     const YAML::Node& v = kv.second;
-    if (set_allan_option(o, OptionValue{file, key, v})) continue;
+    if (set_allan_option(o, OptionValue{file, key, v}) || is_deviation_key(key)) continue;
     std::string all;
     for (const auto& k : keys) all += (all.empty() ? "" : ", ") + k;
     throw std::runtime_error(fmt::format("{}: unknown allan option '{}' (known: {})",
