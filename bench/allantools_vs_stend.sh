@@ -6,8 +6,9 @@
 #                                               `stend run configs/long_static.yaml`; RUNS: 3)
 #   BUILD=build dir, ALLANTOOLS=allantools source dir (default ../shared/peers/allantools)
 #
-# 1. Stend: `stend fit RUN --model estimators/allan/example/allan.yaml --json F` (read the run,
-#    octave OADEV of all six channels, EDF and intervals, noise model, write the results);
+# 1. Stend: `stend fit RUN --model estimators/allan/example/allan.yaml --json F` without the
+#    example's further deviations (read the run, octave OADEV of all six channels, EDF and
+#    intervals, noise model, write the results: what allantools computes);
 # 2. allantools: bench/allantools_octave.py RUN/imu.csv (pandas reads the six SI columns,
 #    allantools.oadev at the same octave τ, Greenhall EDF and chi-squared intervals), run with
 #    Debian's python3 (numpy, pandas, scipy: scripts/install-deps.sh);
@@ -21,12 +22,13 @@ run=${1:-}
 runs=${2:-3}
 peer_src=${ALLANTOOLS:-$root/../shared/peers/allantools}
 stend=$build/bin/stend
-model=$root/estimators/allan/example/allan.yaml
 python=/usr/bin/python3
 [ -x "$stend" ] || { echo "missing $stend: build first (scripts/build.sh)" >&2; exit 1; }
 
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+model=$tmp/allan.yaml
+grep -vE '^ *(deviations|tau):' "$root/estimators/allan/example/allan.yaml" >"$model"
 if [ -z "$run" ]; then
   "$stend" run "$root/configs/long_static.yaml" -o "$tmp" --name static -q >/dev/null
   run=$tmp/static
