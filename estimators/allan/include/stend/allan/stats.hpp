@@ -218,73 +218,6 @@ inline A01 table3(int d) {  // α = 1, unmodified: (b0, b1)
 
 }  // namespace greenhall
 
-// EDF of the fully overlapping Allan variance at averaging factor m from N *phase* points
-// (N rate samples give N + 1 phase points), for noise type `type`. Greenhall's algorithm
-// (d = 2, unmodified, S = m overlapping; F = ∞ for α ≤ 0, see below). NaN when no difference
-// exists.
-inline double edf_overlapping_adev(NoiseType type, double n_phase, double m) {
-  const int alpha = alpha_of(type);
-  constexpr int d = 2;
-  const long double N = n_phase, mm = m;
-  const long double L = 1 + mm * d;  // m/F + m·d with F = m
-  if (!(N >= L)) return std::numeric_limits<double>::quiet_NaN();
-  const long double S = mm;
-  const long double M = 1 + std::floor(S * (N - L) / mm);
-  const long double J = std::min(M, (d + 1) * S);
-  constexpr long double J_max = 100;
-  const long double r = M / S;
-  long double inv = 0;
-  using greenhall::basic_sum;
-  using greenhall::sz;
-  if (alpha <= 0) {
-    if (J <= J_max) {
-      // F = ∞ (phase point samples). Our phase is x_k = Σ y_i of rate samples that are
-      // averages over τ0, i.e. exact samples of the integrated signal; with F = ∞ the result
-      // equals the exact EDF of discrete white noise (Greenhall's table uses F = m for m ≤ 33,
-      // which models phase averaged over τ0 and overstates the EDF at m = 1 by ~17 %).
-      const long double s0 = sz(0, 0, alpha);
-      inv = basic_sum(J, M, S, 0, alpha) / (s0 * s0 * M);
-    } else if (r > d + 1) {
-      long double a0 = 0, a1 = 0;  // Greenhall–Riley Table 2, d = 2
-      switch (alpha) {
-        case 0: a0 = 2.0L / 3.0L; a1 = 1.0L / 3.0L; break;
-        case -1: a0 = 0.852L; a1 = 0.375L; break;
-        default: a0 = 1.079L; a1 = 0.368L; break;  // −2
-      }
-      inv = (a0 - a1 / r) / r;
-    } else {
-      const long double mp = J_max / r;
-      const long double s0 = sz(0, 0, alpha);
-      inv = basic_sum(J_max, J_max, mp, 0, alpha) / (s0 * s0 * J_max);
-    }
-  } else if (alpha == 1) {
-    constexpr long double b0 = 15.23L, b1 = 12.0L;  // Table 3, d = 2
-    if (J <= J_max) {
-      const long double s0 = sz(0, mm, 1);
-      inv = basic_sum(J, M, S, mm, 1) / (s0 * s0 * M);
-    } else if (r > d + 1) {
-      constexpr long double a0 = 790.0L, a1 = 410.0L;
-      const long double b = b0 + b1 * std::log(mm);
-      inv = (a0 - a1 / r) / (b * b * r);
-    } else {
-      const long double mp = J_max / r;
-      const long double b = b0 + b1 * std::log(mm);
-      inv = basic_sum(J_max, J_max, mp, mp, 1) / (b * b * J_max);
-    }
-  } else {  // alpha == 2
-    const long double K = std::ceil(r);
-    if (K <= d) {
-      // Few differences (M ≤ 2m): fall back to the NIST SP 1065 closed form.
-      const double e = static_cast<double>((N + 1) * (N - 2 * mm) / (2 * (N - mm)));
-      return e > 0 ? e : std::numeric_limits<double>::quiet_NaN();
-    }
-    const long double a0 = 70.0L / 36.0L;  // C(4d, 2d) / C(2d, d)²
-    const long double a1 = d / 2.0L;
-    inv = (a0 - a1 / r) / M;
-  }
-  return inv > 0 ? static_cast<double>(1 / inv) : std::numeric_limits<double>::quiet_NaN();
-}
-
 // EDF of a d-th difference variance (d = 1 first difference, 2 Allan, 3 Hadamard) at
 // averaging factor m from N phase points, by Greenhall's algorithm exactly as in C. A. Greenhall,
 // W. J. Riley, "Uncertainty of stability variances based on finite differences" (PTTI 2003),
@@ -349,6 +282,14 @@ inline double edf_greenhall(int alpha, int d, double m, double n_phase, bool ove
     inv = (a.a0 - a.a1 / r) / M;
   }
   return inv > 0 ? static_cast<double>(1 / inv) : kNaN;
+}
+
+// EDF of the fully overlapping Allan variance at averaging factor m from N *phase* points
+// (N rate samples give N + 1 phase points), for noise type `type`: Greenhall's algorithm as
+// Stable32 uses it (edf_greenhall with d = 2, overlapping, unmodified). NaN when no difference
+// exists.
+inline double edf_overlapping_adev(NoiseType type, double n_phase, double m) {
+  return edf_greenhall(alpha_of(type), 2, m, n_phase, true, false);
 }
 
 // EDF of the total variance (NIST SP 1065 Table 7: b·N/m − c) for white, flicker and
