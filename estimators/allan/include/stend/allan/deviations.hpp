@@ -486,23 +486,27 @@ class DeviationStream {
     // Non-overlapped terms and the decimated phase for noise identification.
     const std::uint64_t k0 = base + from;
     const std::uint64_t first = (k0 + m - 1) / m * m;
-    double a2 = 0, h2 = 0;
     const bool want_id = s.acf[0].n < kNoiseIdPoints;
     if (m == 1 && !want_id) return;
-    for (std::uint64_t k = first; k < base + to; k += m) {
+    if (want_id) {
+      for (std::uint64_t k = first; k < base + to; k += m) add_decimated(s, h[k - base]);
+    }
+    if (m == 1) return;
+    // Local sums and count (members would be stored back on every step: s may alias h).
+    double a2 = 0, h2 = 0;
+    std::uint64_t terms = 0;
+    for (std::uint64_t k = std::max(first, 3 * m); k < base + to; k += m) {
       const std::size_t t = static_cast<std::size_t>(k - base);
-      if (k >= 3 * m && m > 1) {
-        const double d2 = h[t] - 2 * h[t - M] + h[t - 2 * M];
-        const double d3 = d2 - (h[t - M] - 2 * h[t - 2 * M] + h[t - 3 * M]);
-        a2 += d2 * d2;
-        ++s.adev_terms;
-        h2 += d3 * d3;
-        ++s.hdev_terms;
-      }
-      if (want_id) add_decimated(s, h[t]);
+      const double d2 = h[t] - 2 * h[t - M] + h[t - 2 * M];
+      const double d3 = d2 - (h[t - M] - 2 * h[t - 2 * M] + h[t - 3 * M]);
+      a2 += d2 * d2;
+      h2 += d3 * d3;
+      ++terms;
     }
     s.adev += a2;
     s.hdev += h2;
+    s.adev_terms += terms;
+    s.hdev_terms += terms;
   }
 
   static constexpr std::size_t kSubBlock = 4096;
