@@ -51,7 +51,10 @@ struct DatasetArgs {
 // empty. Returns false when the fit failed (it says why, with no numbers).
 // Writes the results document to `json` and the printed text beside it (.txt); with no path (the
 // input is a dataset file, not a run folder, and no --json was given) writes nothing and says so.
-void write_results(std::filesystem::path json, const std::string& document, const std::string& text);
+// `failed`: the document states a failed fit; it is written (so that no earlier results stand for
+// this fit) and said to hold no results.
+void write_results(std::filesystem::path json, const std::string& document, const std::string& text,
+                   bool failed = false);
 
 bool fit_recording(const stend::Recording& rec, const std::string& model_file, const std::filesystem::path& out_dir,
                    const std::string& json_out, const std::string& estimator = "auto");

@@ -1,10 +1,12 @@
 // Shared analysis helpers of the `stend` program: open a recording or dataset, fit a model file.
 #include "commands.hpp"
 
+#include "stend/estimation/summary.hpp"
 #include "stend/estimators/builtin.hpp"
 #include "stend/plugin_host.hpp"
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <fstream>
@@ -62,9 +64,20 @@ const estimation::EstimatorEntry& resolve_estimator(const estimation::Registry& 
                            "(`stend plugins` lists what is found; STEND_PLUGIN_PATH adds a folder)");
 }
 
+// The results document of a failed fit whose estimator gave none: its status and why, no numbers.
+std::string failure_document(const estimation::EstimatorEntry& entry, const std::string& message) {
+  estimation::FitSummary s;
+  s.estimator = entry.name;
+  s.version = entry.version;
+  s.status = estimation::FitStatus::kFailed;
+  s.message = message;
+  return estimation::to_json(s).dump(2);
+}
+
 }  // namespace
 
-void write_results(std::filesystem::path json, const std::string& document, const std::string& text) {
+void write_results(std::filesystem::path json, const std::string& document, const std::string& text,
+                   bool failed) {
   if (json.empty()) {
     fmt::print("results:    not written (the input is not a run folder; --json FILE writes them)\n");
     return;
@@ -72,7 +85,11 @@ void write_results(std::filesystem::path json, const std::string& document, cons
   std::ofstream(json) << document << "\n";
   std::filesystem::path txt = json;
   std::ofstream(txt.replace_extension(".txt")) << text;
-  fmt::print("results:    {}\n", json.string());
+  if (failed) {
+    fmt::print("results:    none — the fit failed ({} says why)\n", json.string());
+  } else {
+    fmt::print("results:    {}\n", json.string());
+  }
 }
 
 namespace {
@@ -117,7 +134,7 @@ bool fit_recording(const stend::Recording& rec, const std::string& model_file, c
   std::filesystem::path json = json_out;
   if (json.empty() && !out_dir.empty()) json = out_dir / (r.json_name.empty() ? entry.results_file : r.json_name);
   std::cout << text;
-  write_results(json, r.json, text);
+  write_results(json, r.ok || !r.json.empty() ? r.json : failure_document(entry, r.message), text, !r.ok);
   return r.ok;
 }
 

@@ -1,5 +1,7 @@
 // Overlapping Allan deviation at octave τ over 10^8 samples, streaming, with confidence
-// intervals (Greenhall EDF + chi-squared quantiles) for every octave.
+// intervals (Greenhall EDF + chi-squared quantiles) for every octave; and every deviation kind
+// together (ADEV, OADEV, MDEV, TDEV, HDEV, OHDEV, TOTDEV with noise identification and
+// intervals, stend/allan/deviations.hpp) over the same input.
 //
 //   ninja -C build allan_bench && build/bin/allan_bench
 //
@@ -9,6 +11,7 @@
 // longer than the estimator; the table keeps the process small so that peak RSS measures the
 // estimator's state). Counters: peak_rss_MiB (getrusage, whole process), state_MiB (the
 // estimator's own allocation), octaves, and Msamples/s.
+#include "../estimators/allan/include/stend/allan/deviations.hpp"
 #include "../estimators/allan/include/stend/allan/stats.hpp"
 #include "../estimators/allan/include/stend/allan/stream.hpp"
 
@@ -74,8 +77,48 @@ void BM_AllanOctaveOverlappingWithIntervals(benchmark::State& state) {
                                                     benchmark::Counter::kIsIterationInvariantRate);
 }
 
+void BM_AllDeviationsOctave(benchmark::State& state) {
+  const auto n = static_cast<std::uint64_t>(state.range(0));
+  const auto& table = noise_table();
+  constexpr std::size_t kChunk = 4096;
+  std::size_t points = 0, state_bytes = 0;
+  for (auto _ : state) {
+    // Octave factors up to 2^20 (τ ≤ 17 min at 1 kHz): history and head of 64 MiB.
+    stend::allan::DeviationStream devs(stend::allan::DeviationOptions{.factors = {}, .max_m = 1u << 20});
+    std::uint64_t lcg = 12345;
+    for (std::uint64_t done = 0; done < n; done += kChunk) {
+      lcg = lcg * 6364136223846793005ull + 1442695040888963407ull;
+      const std::size_t offset = static_cast<std::size_t>((lcg >> 33) % (table.size() - kChunk));
+      devs.add_rate(table.data() + offset, static_cast<std::size_t>(std::min<std::uint64_t>(kChunk, n - done)));
+    }
+    double sink = 0.0;
+    points = 0;
+    for (auto kind : stend::allan::kAllDeviationKinds) {
+      for (const auto& p : devs.result(kind)) {
+        sink += p.lo + p.hi;
+        ++points;
+      }
+    }
+    benchmark::DoNotOptimize(sink);
+    state_bytes = devs.state_bytes();
+  }
+  state.counters["points"] = static_cast<double>(points);
+  state.counters["state_MiB"] = static_cast<double>(state_bytes) / (1024.0 * 1024.0);
+  state.counters["peak_rss_MiB"] = peak_rss_mib();
+  state.counters["Msamples/s"] = benchmark::Counter(static_cast<double>(n) * 1e-6,
+                                                    benchmark::Counter::kIsIterationInvariantRate);
+}
+
 }  // namespace
 
+BENCHMARK(BM_AllDeviationsOctave)->Arg(10000000)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_AllDeviationsOctave)
+    ->Arg(100000000)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1)
+    ->Repetitions(3)
+    ->ReportAggregatesOnly(true);
 BENCHMARK(BM_AllanOctaveOverlappingWithIntervals)
     ->Arg(1000000)
     ->Arg(10000000)

@@ -10,6 +10,7 @@ packages=(
   librosbag-dev lz4  # io tests: ROS 1 bags written with rosbag::Bag; lz4 MCAP chunks (npm packages: install-node-test-deps.sh)
   zlib1g-dev chromium  # reporting: PNG check of report screenshots; headless-browser test of the reports
   octave  # reporting: octave-cli loads the MATLAB export in a test (~1 min to install, no recommends)
+  python3-numpy python3-pandas python3-scipy  # bench: allantools (the Allan peer, ../shared/peers) on Debian's numpy, pandas, scipy
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -74,3 +74,24 @@ TEST(Cli, FitImportsTheMpu6050StaticDataset) {
   EXPECT_EQ(o.code, 0) << o.text;
   EXPECT_TRUE(fs::exists(json));
 }
+
+// A fit that fails (a constant signal: nothing to fit) exits non-zero, says so, and its results
+// file states the failure with no numbers — replacing, not keeping, an earlier file's results.
+TEST(Cli, FailedFitWritesAFailureDocumentAndClaimsNoResults) {
+  const TempDir dir("cli-failed-fit");
+  std::string csv = "Fs,100\nLogging Type,1\nInitialization time,-1\nWaiting time,-1\nax,ay,az,gx,gy,gz\n";
+  for (int i = 0; i < 5000; ++i) csv += "2508,-604,14684,-429,140,-53\n";
+  stend::testing::write_text(dir / "constant.csv", csv);
+  const fs::path json = dir / "allan.json";
+  stend::testing::write_text(json, "{\"status\": \"ok\", \"stale\": 1}\n");
+  const ProgramOutput o = run_stend("fit " + (dir / "constant.csv").string() + " --format mpu6050_multipos --model " + src +
+                                    "/estimators/allan/example/allan.yaml --json " + json.string());
+  EXPECT_NE(o.code, 0) << o.text;
+  EXPECT_NE(o.text.find("FAILED"), std::string::npos) << o.text;
+  EXPECT_NE(o.text.find("results:    none"), std::string::npos) << o.text;
+  const std::string doc = stend::testing::read_text(json);
+  EXPECT_NE(doc.find("\"status\": \"failed\""), std::string::npos) << doc;
+  EXPECT_NE(doc.find("constant"), std::string::npos) << doc;
+  EXPECT_EQ(doc.find("stale"), std::string::npos) << doc;
+  EXPECT_EQ(doc.find("\"channels\""), std::string::npos) << doc;
+}

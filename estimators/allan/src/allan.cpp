@@ -1,4 +1,5 @@
 #include <stend/allan/allan.hpp>
+#include <stend/allan/deviation_report.hpp>
 #include <stend/physics/units.hpp>
 
 #include <Eigen/Dense>
@@ -12,8 +13,12 @@
 #include <cmath>
 #include <numbers>
 #include <ostream>
+#include <exception>
+#include <limits>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 namespace stend::allan {
 
@@ -74,15 +79,14 @@ Units units_for(Instrument instrument, const std::string& signal_unit) {
 // ---------------------------------------------------------------------------------------------
 // Options
 
-namespace {
-
-// "file:line:column" of a YAML node for messages ("<yaml>" without a file name).
 std::string yaml_location(const std::string& file, const YAML::Node& n) {
   const YAML::Mark m = n.Mark();
   std::string loc = file.empty() ? std::string("<yaml>") : file;
   if (m.line >= 0) loc += fmt::format(":{}:{}", m.line + 1, m.column + 1);
   return loc;
 }
+
+namespace {
 
 // The value of one Allan option, read as a number or a boolean; a bad value throws with its location.
 struct OptionValue {
@@ -149,11 +153,12 @@ AllanOptions options_from_yaml(const YAML::Node& node, const std::string& file) 
   if (!node.IsMap()) throw std::runtime_error(yaml_location(file, node) + ": Allan options must be a mapping");
   static const std::vector<std::string> keys = {"max_m", "confidence", "edf_from_model",
                                                 "slope_tolerance", "min_readoff_edf",
-                                                "min_readoff_points", "t_begin_s", "t_end_s"};
+                                                "min_readoff_points", "t_begin_s", "t_end_s",
+                                                "deviations", "tau"};
   for (const auto& kv : node) {
     const std::string key = kv.first.as<std::string>();
     const YAML::Node& v = kv.second;
-    if (set_allan_option(o, OptionValue{file, key, v})) continue;
+    if (set_allan_option(o, OptionValue{file, key, v}) || is_deviation_key(key)) continue;
     std::string all;
     for (const auto& k : keys) all += (all.empty() ? "" : ", ") + k;
     throw std::runtime_error(fmt::format("{}: unknown allan option '{}' (known: {})",
@@ -521,6 +526,15 @@ ChannelResult analyze(const OverlappingAllanStream& stream, double rate_hz,
                       const ChannelInfo& channel, const AllanOptions& options) {
   ChannelResult r;
   r.curve = make_curve(stream.octaves(), stream.samples(), rate_hz, channel, options.confidence);
+  const bool constant = !r.curve.points.empty() &&
+                        std::all_of(r.curve.points.begin(), r.curve.points.end(),
+                                    [](const AllanPoint& p) { return p.avar == 0.0; });
+  if (constant) {  // nothing to fit: say so rather than fit zeros
+    set_units(r.model, r.curve.units);
+    r.model.message = fmt::format("fit failed: the signal is constant over {} samples (every Allan variance is 0)",
+                                  stream.samples());
+    return r;
+  }
   r.model = fit_noise_model(r.curve, options);
   if (options.edf_from_model && r.model.ok) assign_intervals(r.curve, &r.model);
   return r;
@@ -592,65 +606,95 @@ KalibrParameters kalibr_parameters(const std::vector<ChannelResult>& channels, d
 namespace {
 
 // Sample index range [i0, i1) inside the options' time window [t_begin_s, t_end_s] [s].
-std::pair<std::size_t, std::size_t> selected_range(const Recording& rec, const AllanOptions& options) {
-  std::size_t i0 = 0, i1 = rec.samples.size();
-  if (std::isfinite(options.t_begin_s)) {
-    while (i0 < i1 && rec.samples[i0].t_s < options.t_begin_s) ++i0;
-  }
+IndexRange selected_range(const SampleSource& src, const AllanOptions& options) {
+  IndexRange r{0, src.size()};
+  if (std::isfinite(options.t_begin_s)) r.first = lower_bound_time(src, options.t_begin_s);
   if (std::isfinite(options.t_end_s)) {
-    while (i1 > i0 && rec.samples[i1 - 1].t_s > options.t_end_s) --i1;
+    r.last = lower_bound_time(src, std::nextafter(options.t_end_s, std::numeric_limits<double>::infinity()));
   }
-  return {i0, i1};
+  r.last = std::max(r.first, r.last);
+  return r;
 }
 
-// Sample rate [Hz]: the header's, or 1 / the median sample interval dt [s].
-double sample_rate(const Recording& rec, const std::vector<double>& dt, const std::string& source) {
-  std::vector<double> sorted = dt;
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
-  const double median_dt = sorted[sorted.size() / 2];
-  const double rate = rec.header.info.output_rate_hz;
-  if (rate > 0.0) return rate;
-  if (!(median_dt > 0.0)) {
-    throw std::runtime_error(fmt::format(
-        "Allan: {}: no output rate in the header and the timestamps do not increase", source));
-  }
-  return 1.0 / median_dt;
+// Sampling of the selected range, from one pass over time stamps and flags: the rate [Hz] (the
+// header's, or 1 / the median of the first kMedianIntervals sample intervals), lost-sample flags
+// and intervals off 1/rate by more than 50 %.
+struct Sampling {
+  double rate_hz = 0.0;
+  double t_begin_s = kNaN, t_end_s = kNaN;
+  std::uint64_t gaps = 0, irregular = 0;
+};
+constexpr std::size_t kMedianIntervals = 1u << 16;
+
+Sampling scan_sampling(const SampleSource& src, IndexRange range, double header_rate_hz,
+                       const std::string& source) {
+  Sampling s;
+  s.rate_hz = header_rate_hz;
+  std::vector<double> dt;  // intervals [s] seen before the rate is known
+  double prev_t = kNaN;
+  auto count_irregular = [&](double d) {
+    if (d > 1.5 / s.rate_hz || d < 0.5 / s.rate_hz) ++s.irregular;
+  };
+  auto fix_rate = [&] {
+    if (s.rate_hz > 0.0 || dt.empty()) return;
+    std::vector<double> sorted = dt;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+    const double median_dt = sorted[sorted.size() / 2];
+    if (!(median_dt > 0.0)) {
+      throw std::runtime_error(fmt::format(
+          "Allan: {}: no output rate in the header and the timestamps do not increase", source));
+    }
+    s.rate_hz = 1.0 / median_dt;
+    for (double d : dt) count_irregular(d);
+  };
+  for_each_chunk(src, range.first, range.last, [&](const ImuSample* chunk, std::size_t n, std::uint64_t first) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const double t = chunk[i].t_s;
+      if (first + i > range.first) {
+        if (chunk[i].flags & kGapBefore) ++s.gaps;
+        const double d = t - prev_t;
+        if (s.rate_hz > 0.0) count_irregular(d); else dt.push_back(d);
+        if (dt.size() == kMedianIntervals) fix_rate();
+      } else {
+        s.t_begin_s = t;
+      }
+      prev_t = t;
+    }
+  });
+  fix_rate();
+  s.t_end_s = prev_t;
+  return s;
 }
 
-// Warnings on lost samples and on intervals dt [s] off 1/rate by more than 50 %.
-void add_sampling_warnings(const Recording& rec, std::size_t i0, std::size_t i1, const std::vector<double>& dt,
-                           double rate, AllanReport& report) {
-  std::size_t gaps = 0, irregular = 0;
-  for (std::size_t i = i0 + 1; i < i1; ++i) {
-    if (rec.samples[i].flags & kGapBefore) ++gaps;
-    const double d = dt[i - i0 - 1];
-    if (d > 1.5 / rate || d < 0.5 / rate) ++irregular;
-  }
-  if (gaps > 0) {
+void add_sampling_warnings(const Sampling& s, AllanReport& report) {
+  if (s.gaps > 0) {
     report.warnings.push_back(fmt::format(
         "{} sample(s) flagged with lost samples before them; Allan deviation assumes uniform "
         "sampling, so intervals near those gaps are distorted",
-        gaps));
+        s.gaps));
   }
-  if (irregular > 0) {
+  if (s.irregular > 0) {
     report.warnings.push_back(fmt::format(
-        "{} sample interval(s) deviate by more than 50 % from 1/rate = {:.6g} s", irregular,
-        1.0 / rate));
+        "{} sample interval(s) deviate by more than 50 % from 1/rate = {:.6g} s", s.irregular,
+        1.0 / s.rate_hz));
   }
 }
 
 // Allan curve and noise model of channel ch (0..2 accelerometer [m/s²], 3..5 gyroscope [rad/s])
-// over samples [i0, i1), streamed in blocks.
-ChannelResult analyze_channel(const Recording& rec, std::size_t i0, std::size_t i1, int ch, double rate,
-                              const AllanOptions& options) {
+// over samples `range`, read a column chunk at a time (reads serialised by `read_lock`: a store
+// need not allow concurrent reads).
+ChannelResult analyze_channel(const SampleSource& src, IndexRange range, int ch, double rate,
+                              const AllanOptions& options, std::mutex& read_lock) {
   static const char* names[6] = {"ax", "ay", "az", "gx", "gy", "gz"};
-  std::vector<double> buf(OverlappingAllanStream::kBlock);
-  OverlappingAllanStream s(options.max_m, i1 - i0);
-  for (std::size_t i = i0; i < i1;) {
-    const std::size_t take = std::min(buf.size(), i1 - i);
-    for (std::size_t t = 0; t < take; ++t) {
-      const ImuSample& smp = rec.samples[i + t];
-      buf[t] = ch < 3 ? smp.accel_mps2[ch] : smp.gyro_radps[ch - 3];
+  static constexpr Channel columns[6] = {Channel::kAx, Channel::kAy, Channel::kAz,
+                                         Channel::kGx, Channel::kGy, Channel::kGz};
+  std::vector<double> buf(kDefaultChunkSamples);
+  OverlappingAllanStream s(options.max_m, range.size());
+  for (std::uint64_t i = range.first; i < range.last;) {
+    const auto take = static_cast<std::size_t>(std::min<std::uint64_t>(buf.size(), range.last - i));
+    {
+      std::lock_guard lock(read_lock);
+      src.read_column(columns[ch], i, take, buf.data());
     }
     s.add(buf.data(), take);
     i += take;
@@ -661,30 +705,50 @@ ChannelResult analyze_channel(const Recording& rec, std::size_t i0, std::size_t 
   return analyze(s, rate, info, options);
 }
 
+// Channels 0 … channels−1 on two threads (channel c on thread c mod 2, one stream per thread at
+// a time so that memory stays at two streams' state).
+std::vector<ChannelResult> analyze_channels(const SampleSource& src, IndexRange range, int channels,
+                                            double rate, const AllanOptions& options) {
+  std::vector<ChannelResult> out(static_cast<std::size_t>(channels));
+  std::mutex read_lock;
+  std::exception_ptr error[2];
+  auto work = [&](int parity) {
+    try {
+      for (int ch = parity; ch < channels; ch += 2) {
+        out[static_cast<std::size_t>(ch)] = analyze_channel(src, range, ch, rate, options, read_lock);
+      }
+    } catch (...) {
+      error[parity] = std::current_exception();
+    }
+  };
+  std::thread second(work, 1);
+  work(0);
+  second.join();
+  for (const auto& e : error) if (e) std::rethrow_exception(e);
+  return out;
+}
+
 }  // namespace
 
 AllanReport analyze_recording(const Recording& rec, const AllanOptions& options) {
   AllanReport report;
   report.source = rec.dir.string();
   if (!rec.header.experiment_name.empty()) report.source += " (" + rec.header.experiment_name + ")";
-  const auto [i0, i1] = selected_range(rec, options);
-  const std::size_t n = i1 - i0;
-  if (n < 2) {
+  const SampleSource& src = rec.sample_source();
+  const IndexRange range = selected_range(src, options);
+  if (range.size() < 2) {
     throw std::runtime_error(fmt::format("Allan: {} has {} sample(s) in the selected time range",
-                                         report.source, n));
+                                         report.source, range.size()));
   }
-  report.samples = n;
-  report.t_begin_s = rec.samples[i0].t_s;
-  report.t_end_s = rec.samples[i1 - 1].t_s;
-  std::vector<double> dt;
-  dt.reserve(n - 1);
-  for (std::size_t i = i0 + 1; i < i1; ++i) dt.push_back(rec.samples[i].t_s - rec.samples[i - 1].t_s);
-  const double rate = sample_rate(rec, dt, report.source);
-  report.rate_hz = rate;
-  add_sampling_warnings(rec, i0, i1, dt, rate, report);
+  report.samples = range.size();
+  const Sampling sampling = scan_sampling(src, range, rec.header.info.output_rate_hz, report.source);
+  report.t_begin_s = sampling.t_begin_s;
+  report.t_end_s = sampling.t_end_s;
+  report.rate_hz = sampling.rate_hz;
+  add_sampling_warnings(sampling, report);
   const int channels = rec.header.info.has_gyro ? 6 : 3;
-  for (int ch = 0; ch < channels; ++ch) report.channels.push_back(analyze_channel(rec, i0, i1, ch, rate, options));
-  report.kalibr = kalibr_parameters(report.channels, rate);
+  report.channels = analyze_channels(src, range, channels, sampling.rate_hz, options);
+  report.kalibr = kalibr_parameters(report.channels, sampling.rate_hz);
   return report;
 }
 

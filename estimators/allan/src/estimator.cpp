@@ -2,6 +2,7 @@
 #include "stend/allan/estimator.hpp"
 
 #include "stend/allan/allan.hpp"
+#include "stend/allan/deviation_report.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -24,11 +25,25 @@ const stend::fields::Table<estimation::EstimatorConfig>& AllanEstimator::fields(
 EstimatorResult AllanEstimator::fit(const EstimatorRequest& req) {
   if (req.recording == nullptr) throw std::invalid_argument("allan: no recording given");
   const YAML::Node root = YAML::LoadFile(req.model_file);
-  const AllanReport report = analyze_recording(*req.recording, options_from_yaml(root["allan"], req.model_file));
+  const AllanOptions options = options_from_yaml(root["allan"], req.model_file);
+  const DeviationRequest deviations = deviations_from_yaml(root["allan"], req.model_file);
+  const AllanReport report = analyze_recording(*req.recording, options);
+  std::string failures;
+  bool any_ok = false;
+  for (const auto& ch : report.channels) {
+    any_ok = any_ok || ch.model.ok;
+    if (!ch.model.ok) failures += fmt::format("{}{}: {}", failures.empty() ? "" : "; ", ch.curve.channel.name, ch.model.message);
+  }
+  if (!any_ok) return {false, "allan: no channel could be fitted: " + failures, {}, {}, config_.results_file};
   std::ostringstream text, json;
   write_summary_table(text, report);
   write_json(json, report);
-  return {true, {}, json.str(), text.str(), config_.results_file};
+  if (deviations.empty()) return {true, {}, json.str(), text.str(), config_.results_file};
+  const auto devs = recording_deviations(*req.recording, report, deviations, options);
+  write_deviation_table(text, devs);
+  nlohmann::json doc = nlohmann::json::parse(json.str());
+  add_deviations_json(doc, devs, deviations.tau);
+  return {true, {}, doc.dump(2), text.str(), config_.results_file};
 }
 
 namespace {

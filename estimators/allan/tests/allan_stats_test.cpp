@@ -105,9 +105,16 @@ TEST(Edf, WhiteNoiseMatchesExactEdf) {
     for (long m : {1L, 2L, 4L, 8L, 16L, 32L, 64L}) {
       if (2 * m >= N) continue;
       const double exact = exact_edf(white_kernel(m), N - 2 * m);
-      EXPECT_NEAR(edf_overlapping_adev(NoiseType::kWhite, static_cast<double>(N), static_cast<double>(m)) / exact,
-                  1.0, 0.005)
-          << "N=" << N << " m=" << m;
+      // Stable32's rule models the phase as averaged over τ0 (F = m) while m(d+1) ≤ 100, i.e.
+      // m ≤ 33: there it departs from the exact EDF of sampled white noise by −12 % … +17 %
+      // (+17 % at m = 1); beyond (F = ∞) it is exact.
+      const double ratio = edf_overlapping_adev(NoiseType::kWhite, static_cast<double>(N), static_cast<double>(m)) / exact;
+      if (3 * m <= 100) {
+        EXPECT_GT(ratio, 0.87) << "N=" << N << " m=" << m;
+        EXPECT_LT(ratio, 1.18) << "N=" << N << " m=" << m;
+      } else {
+        EXPECT_NEAR(ratio, 1.0, 0.005) << "N=" << N << " m=" << m;
+      }
       // The NIST SP 1065 closed form is close for white noise as well.
       EXPECT_NEAR(edf_overlapping_adev_simple(NoiseType::kWhite, static_cast<double>(N), static_cast<double>(m)) / exact,
                   1.0, 0.08);

@@ -78,10 +78,13 @@ struct AllanOptions {
 };
 
 // Options from a YAML mapping whose keys are the field names above (max_m, confidence,
-// edf_from_model, slope_tolerance, min_readoff_edf, min_readoff_points, t_begin_s, t_end_s);
-// see example/allan.yaml. Throws std::runtime_error naming file:line:column and the key for
-// unknown keys, wrong types and out-of-range values.
+// edf_from_model, slope_tolerance, min_readoff_edf, min_readoff_points, t_begin_s, t_end_s; the
+// keys `deviations` and `tau` are read by deviations_from_yaml); see example/allan.yaml. Throws
+// std::runtime_error naming file:line:column and the key for unknown keys, wrong types and
+// out-of-range values.
 AllanOptions options_from_yaml(const YAML::Node& node, const std::string& file = {});
+// "file:line:column" of a YAML node for messages ("<yaml>" without a file name).
+std::string yaml_location(const std::string& file, const YAML::Node& node);
 
 struct AllanPoint {
   double tau_s = 0.0;

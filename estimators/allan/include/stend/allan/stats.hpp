@@ -161,90 +161,143 @@ inline long double sx(long double t, long double F, int alpha) {
   if (F == 0) return sw(t, alpha + 2);
   return F * F * (2 * sw(t, alpha) - sw(t - 1 / F, alpha) - sw(t + 1 / F, alpha));
 }
-inline long double sz(long double t, long double F, int alpha) {  // d = 2 (Allan)
-  return 6 * sx(t, F, alpha) - 4 * sx(t - 1, F, alpha) - 4 * sx(t + 1, F, alpha) +
-         sx(t - 2, F, alpha) + sx(t + 2, F, alpha);
+// Difference order d: 1 first difference, 2 Allan, 3 Hadamard (Greenhall–Riley eq. 9).
+inline long double sz(long double t, long double F, int alpha, int d = 2) {
+  auto pair = [&](long double k) { return sx(t - k, F, alpha) + sx(t + k, F, alpha); };
+  switch (d) {
+    case 1: return 2 * sx(t, F, alpha) - pair(1);
+    case 2: return 6 * sx(t, F, alpha) - 4 * pair(1) + pair(2);
+    case 3: return 20 * sx(t, F, alpha) - 15 * pair(1) + 6 * pair(2) - pair(3);
+    default: throw std::domain_error("greenhall: d must be 1, 2 or 3");
+  }
 }
 inline long double basic_sum(long double J, long double M, long double S, long double F,
-                             int alpha) {
-  const long double s0 = sz(0, F, alpha);
+                             int alpha, int d = 2) {
+  const long double s0 = sz(0, F, alpha, d);
   long double sum = s0 * s0;
-  const long double sJ = sz(J / S, F, alpha);
+  const long double sJ = sz(J / S, F, alpha, d);
   sum += (1 - J / M) * sJ * sJ;
   for (long double j = 1; j < J; j += 1) {
-    const long double v = sz(j / S, F, alpha);
+    const long double v = sz(j / S, F, alpha, d);
     sum += 2 * (1 - j / M) * v * v;
   }
   return sum;
 }
 
+// Greenhall–Riley tables (a0, a1) by noise α (row 2 … −4) and d (column 1 … 3); {0, 0} where
+// the variance does not converge (α + 2d ≤ 1).
+struct A01 {
+  long double a0, a1;
+};
+inline A01 table1(int alpha, int d) {  // modified variances (F = 1)
+  static constexpr A01 t[7][3] = {
+      {{2.0L / 3, 1.0L / 3}, {7.0L / 9, 0.5L}, {22.0L / 25, 2.0L / 3}},
+      {{0.840L, 0.345L}, {0.997L, 0.616L}, {1.141L, 0.843L}},
+      {{1.079L, 0.368L}, {1.033L, 0.607L}, {1.184L, 0.848L}},
+      {{0, 0}, {1.048L, 0.534L}, {1.180L, 0.816L}},
+      {{0, 0}, {1.302L, 0.535L}, {1.175L, 0.777L}},
+      {{0, 0}, {0, 0}, {1.194L, 0.703L}},
+      {{0, 0}, {0, 0}, {1.489L, 0.702L}}};
+  return t[2 - alpha][d - 1];
+}
+inline A01 table2(int alpha, int d) {  // unmodified variances (F = m)
+  static constexpr A01 t[7][3] = {
+      {{1.5L, 0.5L}, {35.0L / 18, 1.0L}, {231.0L / 100, 1.5L}},
+      {{78.6L, 25.2L}, {790.0L, 410.0L}, {9950.0L, 6520.0L}},
+      {{2.0L / 3, 1.0L / 6}, {2.0L / 3, 1.0L / 3}, {7.0L / 9, 0.5L}},
+      {{0, 0}, {0.852L, 0.375L}, {0.997L, 0.617L}},
+      {{0, 0}, {1.079L, 0.368L}, {1.033L, 0.607L}},
+      {{0, 0}, {0, 0}, {1.053L, 0.553L}},
+      {{0, 0}, {0, 0}, {1.302L, 0.535L}}};
+  return t[2 - alpha][d - 1];
+}
+inline A01 table3(int d) {  // α = 1, unmodified: (b0, b1)
+  static constexpr A01 t[3] = {{6.0L, 4.0L}, {15.23L, 12.0L}, {47.8L, 40.0L}};
+  return t[d - 1];
+}
+
 }  // namespace greenhall
 
-// EDF of the fully overlapping Allan variance at averaging factor m from N *phase* points
-// (N rate samples give N + 1 phase points), for noise type `type`. Greenhall's algorithm
-// (d = 2, unmodified, S = m overlapping; F = ∞ for α ≤ 0, see below). NaN when no difference
-// exists.
-inline double edf_overlapping_adev(NoiseType type, double n_phase, double m) {
-  const int alpha = alpha_of(type);
-  constexpr int d = 2;
+// EDF of a d-th difference variance (d = 1 first difference, 2 Allan, 3 Hadamard) at
+// averaging factor m from N phase points, by Greenhall's algorithm exactly as in C. A. Greenhall,
+// W. J. Riley, "Uncertainty of stability variances based on finite differences" (PTTI 2003),
+// the algorithm Stable32 uses: overlapping → stride S = m (else 1); modified → filter factor
+// F = 1 (else F = m, with F = ∞ when m(d+1) > 100 for α ≤ 0). NaN where the variance has no
+// term or the noise does not converge (α + 2d ≤ 1).
+inline double edf_greenhall(int alpha, int d, double m, double n_phase, bool overlapping,
+                            bool modified) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  if (d < 1 || d > 3 || alpha > 2 || alpha < -4 || alpha + 2 * d <= 1) return kNaN;
+  using namespace greenhall;
   const long double N = n_phase, mm = m;
-  const long double L = 1 + mm * d;  // m/F + m·d with F = m
-  if (!(N >= L)) return std::numeric_limits<double>::quiet_NaN();
-  const long double S = mm;
+  const long double F = modified ? 1 : mm;
+  const long double S = overlapping ? mm : 1;
+  const long double L = mm / F + mm * d;
+  if (!(N >= L)) return kNaN;
   const long double M = 1 + std::floor(S * (N - L) / mm);
   const long double J = std::min(M, (d + 1) * S);
   constexpr long double J_max = 100;
   const long double r = M / S;
+  constexpr long double kInf = 0;  // F = 0 stands for F = ∞ in sx()
   long double inv = 0;
-  using greenhall::basic_sum;
-  using greenhall::sz;
-  if (alpha <= 0) {
+  auto direct = [&](long double Fz) {
+    const long double s0 = sz(0, Fz, alpha, d);
+    return basic_sum(J, M, S, Fz, alpha, d) / (s0 * s0 * M);
+  };
+  if (modified) {
     if (J <= J_max) {
-      // F = ∞ (phase point samples). Our phase is x_k = Σ y_i of rate samples that are
-      // averages over τ0, i.e. exact samples of the integrated signal; with F = ∞ the result
-      // equals the exact EDF of discrete white noise (Greenhall's table uses F = m for m ≤ 33,
-      // which models phase averaged over τ0 and overstates the EDF at m = 1 by ~17 %).
-      const long double s0 = sz(0, 0, alpha);
-      inv = basic_sum(J, M, S, 0, alpha) / (s0 * s0 * M);
+      inv = direct(1);
     } else if (r > d + 1) {
-      long double a0 = 0, a1 = 0;  // Greenhall–Riley Table 2, d = 2
-      switch (alpha) {
-        case 0: a0 = 2.0L / 3.0L; a1 = 1.0L / 3.0L; break;
-        case -1: a0 = 0.852L; a1 = 0.375L; break;
-        default: a0 = 1.079L; a1 = 0.368L; break;  // −2
-      }
-      inv = (a0 - a1 / r) / r;
+      const A01 a = table1(alpha, d);
+      inv = (a.a0 - a.a1 / r) / r;
     } else {
-      const long double mp = J_max / r;
-      const long double s0 = sz(0, 0, alpha);
-      inv = basic_sum(J_max, J_max, mp, 0, alpha) / (s0 * s0 * J_max);
+      const long double mp = J_max / r, s0 = sz(0, 1, alpha, d);
+      inv = basic_sum(J_max, J_max, mp, 1, alpha, d) / (s0 * s0 * J_max);
+    }
+  } else if (alpha <= 0) {
+    if (J <= J_max) {
+      inv = direct(mm * (d + 1) <= J_max ? mm : kInf);
+    } else if (r > d + 1) {
+      const A01 a = table2(alpha, d);
+      inv = (a.a0 - a.a1 / r) / r;
+    } else {
+      const long double mp = J_max / r, s0 = sz(0, kInf, alpha, d);
+      inv = basic_sum(J_max, J_max, mp, kInf, alpha, d) / (s0 * s0 * J_max);
     }
   } else if (alpha == 1) {
-    constexpr long double b0 = 15.23L, b1 = 12.0L;  // Table 3, d = 2
+    const A01 b = table3(d);
+    const long double bl = b.a0 + b.a1 * std::log(mm);
     if (J <= J_max) {
-      const long double s0 = sz(0, mm, 1);
-      inv = basic_sum(J, M, S, mm, 1) / (s0 * s0 * M);
+      inv = direct(mm);
     } else if (r > d + 1) {
-      constexpr long double a0 = 790.0L, a1 = 410.0L;
-      const long double b = b0 + b1 * std::log(mm);
-      inv = (a0 - a1 / r) / (b * b * r);
+      const A01 a = table2(1, d);
+      inv = (a.a0 - a.a1 / r) / (bl * bl * r);
     } else {
       const long double mp = J_max / r;
-      const long double b = b0 + b1 * std::log(mm);
-      inv = basic_sum(J_max, J_max, mp, mp, 1) / (b * b * J_max);
+      inv = basic_sum(J_max, J_max, mp, mp, 1, d) / (bl * bl * J_max);
     }
-  } else {  // alpha == 2
-    const long double K = std::ceil(r);
-    if (K <= d) {
-      // Few differences (M ≤ 2m): fall back to the NIST SP 1065 closed form.
-      const double e = static_cast<double>((N + 1) * (N - 2 * mm) / (2 * (N - mm)));
-      return e > 0 ? e : std::numeric_limits<double>::quiet_NaN();
-    }
-    const long double a0 = 70.0L / 36.0L;  // C(4d, 2d) / C(2d, d)²
-    const long double a1 = d / 2.0L;
-    inv = (a0 - a1 / r) / M;
+  } else {  // α = 2, unmodified
+    if (std::ceil(r) <= d) return kNaN;
+    const A01 a = table2(2, d);
+    inv = (a.a0 - a.a1 / r) / M;
   }
-  return inv > 0 ? static_cast<double>(1 / inv) : std::numeric_limits<double>::quiet_NaN();
+  return inv > 0 ? static_cast<double>(1 / inv) : kNaN;
+}
+
+// EDF of the fully overlapping Allan variance at averaging factor m from N *phase* points
+// (N rate samples give N + 1 phase points), for noise type `type`: Greenhall's algorithm as
+// Stable32 uses it (edf_greenhall with d = 2, overlapping, unmodified). NaN when no difference
+// exists.
+inline double edf_overlapping_adev(NoiseType type, double n_phase, double m) {
+  return edf_greenhall(alpha_of(type), 2, m, n_phase, true, false);
+}
+
+// EDF of the total variance (NIST SP 1065 Table 7: b·N/m − c) for white, flicker and
+// random-walk FM (α = 0, −1, −2); N phase points. NaN for other noise types.
+inline double edf_totdev(int alpha, double m, double n_phase) {
+  static constexpr double b[3] = {1.50, 1.17, 0.93}, c[3] = {0.0, 0.22, 0.36};
+  if (alpha > 0 || alpha < -2) return std::numeric_limits<double>::quiet_NaN();
+  return b[-alpha] * n_phase / m - c[-alpha];
 }
 
 // The simple closed forms of NIST SP 1065 Table 5 (Howe, Allan, Barnes 1981) for the

@@ -1,0 +1,597 @@
+// All frequency-stability deviations of one signal in one streaming pass, with Stable32's
+// equivalent degrees of freedom, noise identification and chi-squared intervals (header-only).
+//
+// Kinds (NIST SP 1065 §5, N phase points x_0 … x_{N−1}, τ = m·τ0, d2_k(m) = x_k − 2x_{k−m} + x_{k−2m},
+// d3_k(m) = d2_k(m) − d2_{k−m}(m)):
+//   ADEV   non-overlapped Allan:   Σ_{k ≡ 0 mod m, k ≥ 2m} d2_k² / (2τ² terms)
+//   OADEV  overlapping Allan:      Σ_{k ≥ 2m} d2_k² / (2τ² (N − 2m))
+//   MDEV   modified Allan:         Σ_{k ≥ 3m−1} (Σ_{j=k−m+1}^{k} d2_j)² / (2m²τ² (N − 3m + 1))
+//   TDEV   time deviation:         τ·MDEV/√3
+//   HDEV   non-overlapped Hadamard: Σ_{k ≡ 0 mod m, k ≥ 3m} d3_k² / (6τ² terms)
+//   OHDEV  overlapping Hadamard:   Σ_{k ≥ 3m} d3_k² / (6τ² (N − 3m))
+//   TOTDEV total deviation:        Σ_{c=1}^{N−2} (x*_{c−m} − 2x_c + x*_{c+m})² / (2τ² (N − 2)),
+//          x* the record reflected at both ends: x*_{−j} = 2x_0 − x_j, x*_{N−1+j} = 2x_{N−1} − x_{N−1−j}.
+// TOTDEV is the OADEV sum plus the centres within m of either end; those need the first 2m
+// points (a head buffer) and the last 2m points (the history), evaluated at the end.
+//
+// Input: phase x (time error, s) with add_phase, or rate y (the sensor's output: ω, a, or
+// fractional frequency) with add_rate, integrated to x_{k+1} = x_k + (y_k − y_0)·τ0 internally
+// (subtracting y_0 removes a linear phase ramp that every kind above ignores, and keeps the
+// integrated phase small). Deviations are in the unit of y: for phase input, x/τ0 is the rate.
+// TDEV is in the unit of x (s for phase input, unit of y × s for rate input).
+//
+// Memory: the last 3·max_m + 1 phase values twice over (a linear history that is shifted once
+// per block) plus the first 2·max_m + 1 values, whatever N is: 8·(8·max_m + …) bytes.
+//
+// Noise identification per averaging factor (the "Alpha" column of Stable32): the lag-1
+// autocorrelation of the phase decimated by m, differenced d = 0, 1, … times until
+// ρ = r1/(1 + r1) < 0.25 (W. J. Riley, C. A. Greenhall, "Power law noise identification using
+// the lag 1 autocorrelation", 2004), α = 2 − 2(ρ + d) rounded, when at least 30 decimated points
+// exist; otherwise Barnes' B1 ratio (standard over Allan variance of the m-averages) against its
+// theoretical value, with R(n) = MVAR/AVAR separating white from flicker PM, while at least
+// b1_min_averages averages exist; beyond that the type of the next shorter factor is kept. The autocorrelation
+// of the d-th difference is taken about its mean (differencing removes the trends that
+// Riley's recipe removes by a polynomial fit), from running sums over the first 2^16 decimated
+// points of each factor: bounded memory and time.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "stats.hpp"
+#include "stream.hpp"
+
+namespace stend::allan {
+
+enum class DeviationKind { kAdev, kOadev, kMdev, kTdev, kHdev, kOhdev, kTotdev };
+inline constexpr std::array<DeviationKind, 7> kAllDeviationKinds = {
+    DeviationKind::kAdev, DeviationKind::kOadev, DeviationKind::kMdev, DeviationKind::kTdev,
+    DeviationKind::kHdev, DeviationKind::kOhdev, DeviationKind::kTotdev};
+
+inline const char* to_string(DeviationKind k) {
+  switch (k) {
+    case DeviationKind::kAdev: return "adev";
+    case DeviationKind::kOadev: return "oadev";
+    case DeviationKind::kMdev: return "mdev";
+    case DeviationKind::kTdev: return "tdev";
+    case DeviationKind::kHdev: return "hdev";
+    case DeviationKind::kOhdev: return "ohdev";
+    case DeviationKind::kTotdev: return "totdev";
+  }
+  return "?";
+}
+
+// One deviation at one averaging factor.
+struct DeviationPoint {
+  std::uint64_t m = 0;        // averaging factor (samples)
+  double tau_s = 0.0;         // m·τ0
+  std::uint64_t terms = 0;    // Stable32's "#": differences (or windows) summed
+  int alpha = 0;              // identified power-law noise of y (S_y ∝ f^α), 2 … −2
+  double dev = 0.0;           // the deviation (see the header for its unit)
+  double edf = 0.0;           // equivalent degrees of freedom (NaN when undefined)
+  double lo = std::numeric_limits<double>::quiet_NaN();  // confidence bounds of dev
+  double hi = std::numeric_limits<double>::quiet_NaN();
+};
+
+// EDF of `kind` at factor m from N phase points for noise α (Stable32's choices: Greenhall's
+// algorithm with d = 2 for the Allan kinds, modified for MDEV/TDEV, d = 3 for Hadamard; SP 1065
+// Table 7 for TOTDEV).
+inline double deviation_edf(DeviationKind kind, int alpha, double m, double n_phase) {
+  switch (kind) {
+    case DeviationKind::kAdev: return stats::edf_greenhall(alpha, 2, m, n_phase, false, false);
+    case DeviationKind::kOadev: return stats::edf_greenhall(alpha, 2, m, n_phase, true, false);
+    case DeviationKind::kMdev:
+    case DeviationKind::kTdev: return stats::edf_greenhall(alpha, 2, m, n_phase, true, true);
+    case DeviationKind::kHdev: return stats::edf_greenhall(alpha, 3, m, n_phase, false, false);
+    case DeviationKind::kOhdev: return stats::edf_greenhall(alpha, 3, m, n_phase, true, false);
+    case DeviationKind::kTotdev: return stats::edf_totdev(alpha, m, n_phase);
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+// Largest factor reported: N phase points / this (Stable32's stop ratios, W. J. Riley,
+// "Evolution of frequency stability analysis software", Table III).
+inline std::uint64_t stop_ratio(DeviationKind kind) {
+  switch (kind) {
+    case DeviationKind::kAdev:
+    case DeviationKind::kHdev: return 5;
+    case DeviationKind::kTotdev: return 2;
+    default: return 4;
+  }
+}
+
+namespace detail {
+
+// Over i < n with d2_i = c_i − 2a_i + b_i, d3_i = d2_i − (a_i − 2b_i + e_i) (c, a, b, e the
+// phase at k, k−m, k−2m, k−3m): sums[0] += Σ d2², sums[1] += Σ d3², and with the running sum
+// w_i = w + Σ_{t≤i} d3_t, sums[2] += Σ w². Returns the last w. One pass, 16 points a step: the
+// running sum is an in-register prefix scan of each 8 lanes plus a carry, and the carry is
+// advanced by the two vectors' totals (computed off the carry), so the only loop-carried chain
+// is one add per 16 points.
+STEND_ALLAN_KERNEL
+inline double steady_sums(const double* c, const double* a, const double* b, const double* e,
+                          std::size_t n, double w, double* sums) {
+  const v8d zero = {};
+  v8d s2{}, s3{}, sw{};
+  v8d carry = zero + w;
+  auto step = [&](std::size_t i, v8d& u) {  // u ← d3 scanned within its 8 lanes
+    v8d vc, va, vb, ve;
+    load8(vc, c + i);
+    load8(va, a + i);
+    load8(vb, b + i);
+    load8(ve, e + i);
+    const v8d d2 = vc - 2.0 * va + vb;
+    u = d2 - (va - 2.0 * vb + ve);
+    s2 += d2 * d2;
+    s3 += u * u;
+    u += __builtin_shufflevector(zero, u, 0, 8, 9, 10, 11, 12, 13, 14);
+    u += __builtin_shufflevector(zero, u, 0, 1, 8, 9, 10, 11, 12, 13);
+    u += __builtin_shufflevector(zero, u, 0, 1, 2, 3, 8, 9, 10, 11);
+  };
+  std::size_t i = 0;
+  for (; i + 16 <= n; i += 16) {
+    v8d u1, u2;
+    step(i, u1);
+    step(i + 8, u2);
+    const v8d t1 = __builtin_shufflevector(u1, u1, 7, 7, 7, 7, 7, 7, 7, 7);
+    const v8d t2 = __builtin_shufflevector(u2, u2, 7, 7, 7, 7, 7, 7, 7, 7);
+    const v8d w1 = u1 + carry;
+    const v8d w2 = (u2 + t1) + carry;
+    sw += w1 * w1;
+    sw += w2 * w2;
+    carry += t1 + t2;
+  }
+  auto hsum = [](const v8d& v) {
+    return ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
+  };
+  double t2 = hsum(s2), t3 = hsum(s3), tw = hsum(sw);
+  w = carry[0];
+  for (std::size_t t = i; t < n; ++t) {
+    const double d2 = c[t] - 2.0 * a[t] + b[t];
+    const double d3 = d2 - (a[t] - 2.0 * b[t] + e[t]);
+    t2 += d2 * d2;
+    t3 += d3 * d3;
+    w += d3;
+    tw += w * w;
+  }
+  sums[0] += t2;
+  sums[1] += t3;
+  sums[2] += tw;
+  return w;
+}
+
+}  // namespace detail
+
+namespace noise_id {
+
+// Expected B1 ratio for n averages and bias exponent μ (Barnes 1974; Howe et al. 1981).
+inline double b1_theory(double n, int mu) {
+  switch (mu) {
+    case 2: return n * (n + 1.0) / 6.0;
+    case 1: return n / 2.0;
+    case 0: return n * std::log(n) / (2.0 * (n - 1.0) * std::log(2.0));
+    case -1: return 1.0;
+    case -2: return (n * n - 1.0) / (1.5 * n * (n - 1.0));
+    default: return n * (1.0 - std::pow(n, mu)) / (2.0 * (n - 1.0) * (1.0 - std::pow(2.0, mu)));
+  }
+}
+inline int mu_of_alpha(int alpha) { return alpha >= 1 ? -2 : -1 - alpha; }
+// Expected R(n) = MVAR/AVAR for white PM (α = 2), flicker PM (α = 1), else 1.
+inline double rn_theory(double m, int alpha) {
+  constexpr double pi2 = std::numbers::pi * std::numbers::pi;
+  if (alpha == 2) return 1.0 / m;
+  if (alpha == 1) {
+    const double avar = (1.038 + 3.0 * std::log(std::numbers::pi * m)) / (4.0 * pi2);
+    const double mvar = 3.0 * std::log(256.0 / 27.0) / (8.0 * pi2);
+    return mvar / avar;
+  }
+  return 1.0;
+}
+
+// α from the B1 ratio of n m-averages (and R(n) between white and flicker PM): the type whose
+// theoretical B1 is nearest on a geometric scale, walking from random walk FM up.
+inline int from_b1(double b1, double rn, double n, double m) {
+  for (int alpha = -2; alpha < 1; ++alpha) {
+    const double hi = b1_theory(n, mu_of_alpha(alpha));
+    const double lo = b1_theory(n, mu_of_alpha(alpha + 1));
+    if (b1 > std::sqrt(hi * lo)) return alpha;
+  }
+  return rn > std::sqrt(rn_theory(m, 1) * rn_theory(m, 2)) ? 1 : 2;
+}
+
+// α from lag-1 autocorrelations r1[d] of the d-times differenced decimated phase.
+inline int from_acf(const std::array<double, 4>& r1, int dmax) {
+  for (int d = 0;; ++d) {
+    const double rho = r1[static_cast<std::size_t>(d)] / (1.0 + r1[static_cast<std::size_t>(d)]);
+    if (!std::isfinite(rho)) return 0;  // a constant series: no type to tell, white FM
+    if (rho < 0.25 || d >= dmax) {
+      return std::clamp(static_cast<int>(-std::round(2.0 * rho)) - 2 * d + 2, -2, 2);
+    }
+  }
+}
+
+// Running sums for the lag-1 autocorrelation (about the mean) of one series, values shifted
+// by the first one for precision (double sums: only the rounded noise type depends on them).
+struct Lag1 {
+  std::uint64_t n = 0;
+  double shift = 0.0, first = 0.0, last = 0.0;
+  double s = 0, s2 = 0, s11 = 0;
+  void add(double v) {
+    if (n == 0) shift = v;
+    v -= shift;
+    if (n == 0) first = v; else s11 += last * v;
+    s += v;
+    s2 += v * v;
+    last = v;
+    ++n;
+  }
+  double r1() const {
+    if (n < 3) return std::numeric_limits<double>::quiet_NaN();
+    const long double nn = static_cast<long double>(n), mu = s / nn;
+    const long double den = s2 - nn * mu * mu;
+    const long double num = s11 - mu * (2 * s - first - last) + (nn - 1) * mu * mu;
+    return den > 0 ? static_cast<double>(num / den) : std::numeric_limits<double>::quiet_NaN();
+  }
+  double variance() const {  // sample variance (n − 1)
+    if (n < 2) return std::numeric_limits<double>::quiet_NaN();
+    const long double nn = static_cast<long double>(n), mu = s / nn;
+    return static_cast<double>((s2 - nn * mu * mu) / (nn - 1));
+  }
+};
+
+}  // namespace noise_id
+
+struct DeviationOptions {
+  std::vector<std::uint64_t> factors;  // averaging factors m; empty = octaves 1, 2, 4, … ≤ max_m
+  std::uint64_t max_m = 1ull << 20;    // largest factor kept in memory (fixes the memory)
+  double tau0_s = 1.0;                 // sample interval
+  double confidence = stats::kOneSigma;
+  // Noise identification: lag-1 autocorrelation from this many decimated points on, B1 below.
+  std::uint64_t acf_min_points = 30;
+  // Fewer m-averages than this: the noise type of the next shorter factor is kept (with 7
+  // averages B1 cannot tell white FM from PM noise; Stable32 keeps white FM on PHASE.DAT there).
+  std::uint64_t b1_min_averages = 10;
+
+  bool IsValid(std::string* why = nullptr) const {
+    auto fail = [&](const char* w) {
+      if (why) *why = w;
+      return false;
+    };
+    if (max_m == 0) return fail("max_m must be ≥ 1");
+    if (!(tau0_s > 0.0) || !std::isfinite(tau0_s)) return fail("tau0_s must be > 0");
+    if (!(confidence > 0.0 && confidence < 1.0)) return fail("confidence must be in (0, 1)");
+    for (auto m : factors) {
+      if (m == 0 || m > max_m) return fail("every factor must be in [1, max_m]");
+    }
+    return true;
+  }
+};
+
+// Every factor 1 … max_m (all τ), or about `per_decade` log-spaced factors per decade. The cost
+// is O(N · factors): all τ suits short records, log-spaced ones long records.
+inline std::vector<std::uint64_t> all_factors(std::uint64_t max_m) {
+  std::vector<std::uint64_t> out(max_m);
+  for (std::uint64_t m = 1; m <= max_m; ++m) out[m - 1] = m;
+  return out;
+}
+inline std::vector<std::uint64_t> log_factors(std::uint64_t max_m, int per_decade) {
+  std::vector<std::uint64_t> out;
+  for (int i = 0;; ++i) {
+    const auto m = static_cast<std::uint64_t>(std::llround(std::pow(10.0, i / double(per_decade))));
+    if (m > max_m) break;
+    if (out.empty() || out.back() != m) out.push_back(m);
+  }
+  return out;
+}
+
+class DeviationStream {
+ public:
+  explicit DeviationStream(DeviationOptions options = {}) : opt_(std::move(options)) {
+    std::string why;
+    if (!opt_.IsValid(&why)) throw std::invalid_argument("DeviationOptions: " + why);
+    if (opt_.factors.empty()) {
+      for (std::uint64_t m = 1; m <= opt_.max_m; m *= 2) opt_.factors.push_back(m);
+    }
+    std::sort(opt_.factors.begin(), opt_.factors.end());
+    opt_.factors.erase(std::unique(opt_.factors.begin(), opt_.factors.end()), opt_.factors.end());
+    keep_ = 3 * opt_.factors.back() + 1;
+    head_cap_ = 2 * opt_.factors.back() + 1;
+    block_ = std::max<std::size_t>(keep_, 8192);
+    hist_.resize(keep_ + block_);
+    per_m_.resize(opt_.factors.size());
+  }
+
+  // Phase samples (time error, s).
+  void add_phase(const double* x, std::size_t n) {
+    for (std::size_t i = 0; i < n;) {
+      const std::size_t take = std::min(n - i, hist_.size() - fill_);
+      std::memcpy(hist_.data() + fill_, x + i, take * sizeof(double));
+      push_head(x + i, take);
+      fill_ += take;
+      i += take;
+      if (fill_ == hist_.size()) process();
+    }
+  }
+  // Rate samples (the sensor's unit), integrated to phase.
+  void add_rate(const double* y, std::size_t n) {
+    std::array<double, 1024> x;
+    for (std::size_t i = 0; i < n;) {
+      const std::size_t take = std::min<std::size_t>(n - i, x.size());
+      std::size_t j = 0;
+      if (!rate_started_) {
+        rate_offset_ = y[i];
+        rate_started_ = true;
+        x[j++] = 0.0;  // x_0
+      }
+      const std::size_t now = std::min(take, x.size() - j);  // room after x_0
+      integrate(y + i, now, x.data() + j);
+      add_phase(x.data(), j + now);
+      i += now;
+    }
+  }
+
+  std::uint64_t phase_points() const { return count_ + (fill_ - done_); }
+  std::size_t state_bytes() const {
+    return sizeof(*this) + (hist_.size() + head_.capacity()) * sizeof(double) +
+           per_m_.size() * sizeof(PerM);
+  }
+  const DeviationOptions& options() const { return opt_; }
+
+  // The deviations of `kind` at every factor up to N / stop_ratio(kind) (Stable32's limits),
+  // with noise type, EDF and interval.
+  std::vector<DeviationPoint> result(DeviationKind kind) {
+    process();
+    std::vector<DeviationPoint> out;
+    const std::uint64_t N = count_;
+    const double tau0 = opt_.tau0_s;
+    for (std::size_t i = 0; i < opt_.factors.size(); ++i) {
+      const std::uint64_t m = opt_.factors[i];
+      const PerM& s = per_m_[i];
+      const long double tau = static_cast<long double>(m) * tau0;
+      DeviationPoint p;
+      p.m = m;
+      p.tau_s = static_cast<double>(tau);
+      long double var = 0;
+      switch (kind) {
+        case DeviationKind::kAdev:
+          p.terms = s.adev_terms;
+          var = s.adev / (2 * tau * tau * p.terms);
+          break;
+        case DeviationKind::kOadev:
+          p.terms = N >= 2 * m + 1 ? N - 2 * m : 0;
+          var = s.oadev / (2 * tau * tau * p.terms);
+          break;
+        case DeviationKind::kMdev:
+        case DeviationKind::kTdev:
+          p.terms = N + 1 >= 3 * m + 1 ? N + 1 - 3 * m : 0;
+          var = s.mdev / (2 * static_cast<long double>(m) * m * tau * tau * p.terms);
+          if (kind == DeviationKind::kTdev) var *= tau * tau / 3;
+          break;
+        case DeviationKind::kHdev:
+          p.terms = s.hdev_terms;
+          var = s.hdev / (6 * tau * tau * p.terms);
+          break;
+        case DeviationKind::kOhdev:
+          p.terms = N >= 3 * m + 1 ? N - 3 * m : 0;
+          var = s.ohdev / (6 * tau * tau * p.terms);
+          break;
+        case DeviationKind::kTotdev:
+          p.terms = (N >= 3 && 2 * m <= N - 1) ? N - 2 : 0;
+          if (p.terms) var = (s.oadev + total_ends(m)) / (2 * tau * tau * p.terms);
+          break;
+      }
+      if (p.terms == 0 || m * stop_ratio(kind) > N) continue;
+      p.dev = static_cast<double>(std::sqrt(var));
+      p.alpha = alpha(i, kind);
+      p.edf = deviation_edf(kind, p.alpha, static_cast<double>(m), static_cast<double>(N));
+      const auto ci = stats::deviation_interval(p.dev, p.edf, opt_.confidence);
+      p.lo = ci.lo;
+      p.hi = ci.hi;
+      out.push_back(p);
+    }
+    return out;
+  }
+
+ private:
+  // x[t] = τ0 · (Σ (y − y_0) so far, through y[t]); the sum carried in long double.
+  void integrate(const double* y, std::size_t n, double* x) {
+    const std::size_t n8 = n / 8 * 8;
+    const double total = detail::prefix_scan8(y, x, n8, static_cast<double>(phase_), rate_offset_);
+    long double run = phase_ + static_cast<long double>(total);
+    for (std::size_t t = n8; t < n; ++t) {
+      run += static_cast<long double>(y[t] - rate_offset_);
+      x[t] = static_cast<double>(run);
+    }
+    phase_ = run;
+    if (opt_.tau0_s != 1.0) {
+      for (std::size_t t = 0; t < n; ++t) x[t] *= opt_.tau0_s;
+    }
+  }
+
+  struct PerM {
+    long double oadev = 0, adev = 0, mdev = 0, ohdev = 0, hdev = 0;
+    std::uint64_t adev_terms = 0, hdev_terms = 0;
+    double window = 0;                  // Σ of the last m d2 (MDEV window)
+    std::array<noise_id::Lag1, 4> acf;  // decimated phase differenced 0 … 3 times
+    std::array<double, 3> prev{};       // last decimated values of differences 0 … 2
+  };
+
+  void push_head(const double* x, std::size_t n) {
+    const std::size_t take = std::min(n, head_cap_ - std::min(head_cap_, head_.size()));
+    head_.insert(head_.end(), x, x + take);
+  }
+
+  // Accumulates every phase point in hist_[done_, fill_) (global index count_ + i − done_),
+  // then keeps the last keep_ points.
+  void process() {
+    const std::uint64_t base = count_ - done_;  // global index of hist_[0]
+    const double* h = hist_.data();
+    // Sub-blocks of kSubBlock points, every factor on each, so the newest points stay in cache.
+    for (std::size_t from = done_; from < fill_; from += kSubBlock) {
+      const std::size_t to = std::min(fill_, from + kSubBlock);
+      for (std::size_t i = 0; i < opt_.factors.size(); ++i) {
+        accumulate(opt_.factors[i], per_m_[i], h, base, from, to);
+      }
+    }
+    count_ += fill_ - done_;
+    done_ = fill_;
+    if (fill_ > keep_) {
+      std::memmove(hist_.data(), hist_.data() + fill_ - keep_, keep_ * sizeof(double));
+      done_ = fill_ = keep_;
+    }
+  }
+
+  // Points k = base + [from, to) of one factor m (h[j] = x_{base+j}).
+  static void accumulate(std::uint64_t m, PerM& s, const double* h, std::uint64_t base,
+                         std::size_t from, std::size_t to) {
+    const std::size_t M = static_cast<std::size_t>(m);
+    // Startup (k < 3m) point by point.
+    std::size_t j = from;
+    for (; j < to && base + j < 3 * m; ++j) {
+      const std::uint64_t k = base + j;
+      if (k < 2 * m) continue;
+      const double d2 = h[j] - 2 * h[j - M] + h[j - 2 * M];
+      s.oadev += static_cast<long double>(d2) * d2;
+      if (k % m == 0) {
+        s.adev += static_cast<long double>(d2) * d2;
+        ++s.adev_terms;
+      }
+      s.window += d2;
+      if (k == 3 * m - 1) s.mdev += static_cast<long double>(s.window) * s.window;
+    }
+    // Steady state (k ≥ 3m), in vector kernels: Σ d2², Σ d3², and the MDEV window as a running
+    // sum of d3 (adding d3_k = d2_k − d2_{k−m} slides the window of the last m d2 by one).
+    if (j < to) {
+      const std::size_t n = to - j;
+      double sums[3] = {0, 0, 0};
+      s.window = detail::steady_sums(h + j, h + j - M, h + j - 2 * M, h + j - 3 * M, n,
+                                     s.window, sums);
+      s.oadev += sums[0];
+      s.ohdev += sums[1];
+      s.mdev += sums[2];
+      if (m == 1) {  // at m = 1 every difference is a non-overlapped one as well
+        s.adev += sums[0];
+        s.hdev += sums[1];
+        s.adev_terms += n;
+        s.hdev_terms += n;
+      }
+    }
+    // Non-overlapped terms and the decimated phase for noise identification.
+    const std::uint64_t k0 = base + from;
+    const std::uint64_t first = (k0 + m - 1) / m * m;
+    const bool want_id = s.acf[0].n < kNoiseIdPoints;
+    if (m == 1 && !want_id) return;
+    if (want_id) {
+      for (std::uint64_t k = first; k < base + to; k += m) add_decimated(s, h[k - base]);
+    }
+    if (m == 1) return;
+    // Local sums and count (members would be stored back on every step: s may alias h).
+    double a2 = 0, h2 = 0;
+    std::uint64_t terms = 0;
+    for (std::uint64_t k = std::max(first, 3 * m); k < base + to; k += m) {
+      const std::size_t t = static_cast<std::size_t>(k - base);
+      const double d2 = h[t] - 2 * h[t - M] + h[t - 2 * M];
+      const double d3 = d2 - (h[t - M] - 2 * h[t - 2 * M] + h[t - 3 * M]);
+      a2 += d2 * d2;
+      h2 += d3 * d3;
+      ++terms;
+    }
+    s.adev += a2;
+    s.hdev += h2;
+    s.adev_terms += terms;
+    s.hdev_terms += terms;
+  }
+
+  static constexpr std::size_t kSubBlock = 4096;
+  // Decimated points used for noise identification per factor: the lag-1 autocorrelation of
+  // 2^16 points has a standard error ≈ 1/256, far below the 0.25 steps that decide the type.
+  static constexpr std::uint64_t kNoiseIdPoints = 1u << 16;
+
+  static void add_decimated(PerM& s, double z) {
+    double v = z;
+    for (std::size_t d = 0; d < 4; ++d) {
+      const std::uint64_t n = s.acf[d].n;
+      s.acf[d].add(v);
+      if (d == 3) break;
+      const double prev = s.prev[d];
+      s.prev[d] = v;
+      if (n == 0) break;  // the next difference needs two values
+      v = v - prev;
+    }
+  }
+
+  // Noise type at factor index i for `kind` (Hadamard kinds may difference once more).
+  int alpha(std::size_t i, DeviationKind kind) const {
+    const PerM& s = per_m_[i];
+    const int dmax = (kind == DeviationKind::kHdev || kind == DeviationKind::kOhdev) ? 3 : 2;
+    if (s.acf[0].n >= opt_.acf_min_points) {
+      std::array<double, 4> r1{};
+      for (std::size_t d = 0; d < 4; ++d) r1[d] = s.acf[d].r1();
+      return noise_id::from_acf(r1, dmax);
+    }
+    // B1: sample variance of the m-averages (first differences of the decimated phase / τ)
+    // over their non-overlapped Allan variance; R(n) from MVAR/AVAR of the same record.
+    const double n = static_cast<double>(s.acf[1].n);
+    const double m = static_cast<double>(opt_.factors[i]);
+    if (s.acf[1].n < opt_.b1_min_averages || s.adev_terms == 0) {
+      return i > 0 ? alpha(i - 1, kind) : 0;  // too few averages: the type found at the shorter τ
+    }
+    const double avar = static_cast<double>(s.adev / (2.0L * s.adev_terms));
+    const double b1 = s.acf[1].variance() / avar;
+    const std::uint64_t N = count_;
+    double rn = 1.0;
+    if (N + 1 >= 3 * opt_.factors[i] + 1 && N >= 2 * opt_.factors[i] + 1) {
+      const long double mvar = s.mdev / (m * m * static_cast<long double>(N + 1 - 3 * opt_.factors[i]));
+      const long double oavar = s.oadev / static_cast<long double>(N - 2 * opt_.factors[i]);
+      rn = static_cast<double>(mvar / oavar);
+    }
+    return noise_id::from_b1(b1, rn, n, m);
+  }
+
+  // TOTDEV: squared centred differences at the centres c ∈ [1, N−2] within m of either end
+  // (those not in the OADEV sum), on the reflected record.
+  long double total_ends(std::uint64_t m) const {
+    const auto N = static_cast<std::int64_t>(count_);
+    const auto mm = static_cast<std::int64_t>(m);
+    const std::int64_t base = static_cast<std::int64_t>(count_ - fill_);  // hist_[0]
+    auto x = [&](std::int64_t i) -> double {
+      if (i < static_cast<std::int64_t>(head_.size())) return head_[static_cast<std::size_t>(i)];
+      return hist_[static_cast<std::size_t>(i - base)];
+    };
+    auto xs = [&](std::int64_t i) -> double {
+      if (i < 0) return 2 * x(0) - x(-i);
+      if (i > N - 1) return 2 * x(N - 1) - x(2 * (N - 1) - i);
+      return x(i);
+    };
+    long double sum = 0;
+    for (std::int64_t c = 1; c <= N - 2; ++c) {
+      if (c >= mm && c + mm <= N - 1) {
+        c = std::max(c, N - 1 - mm);  // jump over the centres of the OADEV sum
+        continue;
+      }
+      const double d = xs(c - mm) - 2 * x(c) + xs(c + mm);
+      sum += static_cast<long double>(d) * d;
+    }
+    return sum;
+  }
+
+  DeviationOptions opt_;
+  std::size_t keep_ = 0, head_cap_ = 0, block_ = 0;
+  std::vector<double> hist_;  // phase x_{count_ − done_ + j} at j < fill_
+  std::size_t fill_ = 0, done_ = 0;
+  std::uint64_t count_ = 0;   // phase points accumulated
+  std::vector<double> head_;  // the first 2·max factor + 1 phase points
+  std::vector<PerM> per_m_;
+  bool rate_started_ = false;
+  double rate_offset_ = 0.0;
+  long double phase_ = 0.0L;
+};
+
+}  // namespace stend::allan
