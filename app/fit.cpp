@@ -94,13 +94,11 @@ void write_results(std::filesystem::path json, const std::string& document, cons
 
 namespace {
 
-// Whether the estimator reads the samples through Recording::sample_source(): the built-in ones
-// but allan, whose core reads `samples`. The others (allan, plugins written against `samples`) get
-// the samples in memory.
+// Whether the estimator reads the samples through Recording::sample_source(): every built-in
+// one. Plugins written against `samples` get the samples in memory.
 bool reads_sample_source(const estimation::Registry& builtin, const estimation::EstimatorEntry& e) {
   const auto& all = builtin.entries();
-  return e.name != "allan" &&
-         std::any_of(all.begin(), all.end(), [&](const estimation::EstimatorEntry& b) { return b.name == e.name; });
+  return std::any_of(all.begin(), all.end(), [&](const estimation::EstimatorEntry& b) { return b.name == e.name; });
 }
 
 // The recording with its samples in memory (a copy when they are in the store).
