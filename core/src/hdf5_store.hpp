@@ -34,9 +34,8 @@ class Hdf5RunWriter {
   void add_event_record(std::string_view csv_record);
   // Everything buffered into the file, and the file flushed to the OS.
   void flush();
-  // Flushes, leaves SWMR mode and writes the final header (status, counts, end time).
-  void finish(RunStatus status, const std::string& final_header_json,
-              const std::string& end_time_utc, const std::string& message);
+  // Flushes, then writes how the run ended (message, end time, status last) in place.
+  void finish(RunStatus status, const std::string& end_time_utc, const std::string& message);
 
  private:
   struct Impl;
@@ -55,6 +54,7 @@ struct Hdf5Run {
   std::shared_ptr<const SampleSource> samples;
   std::uint64_t written_samples = 0;  // samples the file claims; samples->size() are readable
   std::string damage;                 // empty, or what is damaged (readable samples stop there)
+  std::int64_t gap_count = -1;        // from the summary (final, or as of the last flush)
 };
 // Throws std::runtime_error naming the file and what is unreadable when the file cannot be used.
 Hdf5Run open_hdf5_run(const std::filesystem::path& file);

@@ -628,7 +628,7 @@ void RecordingWriter::finish(RunStatus status, const std::string& message) {
   j["segment_count"] = I.segment_rows;
   j["event_count"] = I.event_rows;
   // run.h5 first: it is the source of truth, run.json its readable copy.
-  if (I.h5) I.h5->finish(status, dump_json(j), end_time, message);
+  if (I.h5) I.h5->finish(status, end_time, message);
   write_file_atomic(dir_ / "run.json", dump_json(j));
   fsync_dir(dir_);
   I.finished = true;
@@ -1196,6 +1196,7 @@ void open_hdf5(const fs::path& file, Recording& r, SampleLoading loading) {
   r.format = RecordingFormat::kHdf5;
   r.written_samples = h.written_samples;
   r.damage = std::move(h.damage);
+  r.gap_count = h.gap_count;
   if (loading == SampleLoading::kStream) {
     r.source = std::move(h.samples);
     return;
@@ -1222,6 +1223,8 @@ void open_csv(const fs::path& run_dir, Recording& r, SampleLoading loading) {
     read(rd, r);
   }
   r.written_samples = r.samples.size();
+  r.gap_count = std::count_if(r.samples.begin(), r.samples.end(),
+                              [](const ImuSample& s) { return (s.flags & kGapBefore) != 0; });
   if (loading == SampleLoading::kStream)
     r.source = std::make_shared<MemorySamples>(std::exchange(r.samples, {}));
 }
@@ -1263,6 +1266,19 @@ Recording Recording::open(const fs::path& run_dir, SampleLoading loading) {
   }
   open_csv(run_dir, r, loading);
   return r;
+}
+
+void write_recording(const Recording& rec, const fs::path& dir, const RecordingWriterOptions& options) {
+  RecordingWriter w(dir, rec.header, rec.experiment_yaml, options);
+  for_each_chunk(rec.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t) { w.add_samples(c, n); });
+  for (std::size_t i = 0; i < rec.truth_t.size(); ++i) w.add_truth(rec.truth_t[i], rec.truth[i]);
+  for (const auto& s : rec.segments) w.add_segment(s);
+  for (const auto& e : rec.events) w.add_event(e);
+  if (rec.header.status == RunStatus::kRunning) {
+    w.flush();
+  } else {
+    w.finish(rec.header.status);
+  }
 }
 
 const SampleSource& Recording::sample_source() const {

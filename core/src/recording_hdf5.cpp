@@ -228,6 +228,39 @@ herr_t read_rows(hid_t ds, hid_t mem_type, hsize_t at, hsize_t rows, hsize_t col
   return H5Dread(ds, mem_type, mspace.get(), fspace.get(), H5P_DEFAULT, out);
 }
 
+// Fixed-length text datasets (status, message, end time), written in place.
+constexpr std::size_t kStatusBytes = 16, kMessageBytes = 1024, kTimeBytes = 32;
+
+Handle fixed_string_type(std::size_t bytes) {
+  Handle t(H5Tcopy(H5T_C_S1), H5Tclose);
+  H5Tset_size(t.get(), bytes);
+  H5Tset_strpad(t.get(), H5T_STR_NULLPAD);
+  H5Tset_cset(t.get(), H5T_CSET_UTF8);
+  return t;
+}
+void write_text(hid_t ds, std::size_t bytes, std::string_view text, const fs::path& file) {
+  std::string v(text.substr(0, bytes));
+  v.resize(bytes, '\0');
+  const Handle t = fixed_string_type(bytes);
+  check(H5Dwrite(ds, t.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), file, "cannot write a text dataset");
+}
+Handle create_text(hid_t loc, const char* name, std::size_t bytes, std::string_view text, const fs::path& file) {
+  const Handle t = fixed_string_type(bytes);
+  Handle space(H5Screate(H5S_SCALAR), H5Sclose);
+  Handle ds = check(H5Dcreate2(loc, name, t.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
+                    file, fmt::format("cannot create dataset '{}'", name));
+  write_text(ds.get(), bytes, text, file);
+  return ds;
+}
+std::string read_text(hid_t loc, const char* name, const fs::path& file) {
+  Handle ds = check(H5Dopen2(loc, name, H5P_DEFAULT), H5Dclose, file, fmt::format("dataset /{} is missing or damaged", name));
+  Handle ft(H5Dget_type(ds.get()), H5Tclose);
+  std::string v(H5Tget_size(ft.get()), '\0');
+  check(H5Dread(ds.get(), ft.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), file, fmt::format("dataset /{} is damaged", name));
+  v.resize(std::strlen(v.c_str()));
+  return v;
+}
+
 // --- the counts→SI rule --------------------------------------------------------------------------
 
 // How one channel is stored: counts (int16 or int32) with SI = counts·lsb + offset derived on
@@ -298,7 +331,7 @@ struct Hdf5RunWriter::Impl {
   Handle file, samples_group;
   std::array<Codec, kChannels> codec;
   Handle ds_t, ds_flags, ds_counts[kChannels], ds_si[kChannels], ds_exceptions, ds_truth,
-      ds_segments, ds_events, ds_summary;
+      ds_segments, ds_events, ds_summary, ds_status, ds_status_message, ds_end_time;
   // Samples not yet in the file, column by column.
   std::vector<double> t;
   std::vector<std::int32_t> counts[kChannels];
@@ -323,12 +356,14 @@ void Hdf5RunWriter::Impl::create(const ImuSample* first, std::size_t n) {
   codec = choose_codecs(header.info, first, n);
   Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
   H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_LATEST, H5F_LIBVER_LATEST);  // required by SWMR
+  // No chunk cache: each chunk goes to the file when written, so chunks lie in the file in the
+  // order of their samples and a file cut short keeps the samples before the cut.
+  H5Pset_cache(fapl.get(), 0, 0, 0, 1.0);
   file = check(H5Fcreate(path.c_str(), H5F_ACC_EXCL, H5P_DEFAULT, fapl.get()), H5Fclose, path,
                "cannot create the HDF5 file");
   const hid_t root = file.get();
   put_attr(root, "format", std::string("stend-run"), path);
   put_attr(root, "format_version", std::int64_t{kHdf5FormatVersion}, path);
-  put_attr(root, "status", std::string(to_string(RunStatus::kRunning)), path);
   put_attr(root, "header_json", header_json, path);
   put_attr(root, "experiment_yaml", experiment_yaml, path);
   put_attr(root, "experiment_name", header.experiment_name, path);
@@ -372,6 +407,8 @@ void Hdf5RunWriter::Impl::create(const ImuSample* first, std::size_t n) {
   put_attr(ds_truth.get(), "columns", truth_columns, path);
   ds_segments = create_dataset(root, {"segments_csv", H5T_STD_U8LE, 0, kSmallChunk, true}, path);
   ds_events = create_dataset(root, {"events_csv", H5T_STD_U8LE, 0, kSmallChunk, true}, path);
+  // Fixed-size datasets overwritten in place (the file's metadata does not move when the run
+  // ends, so a file cut short keeps its header): summary, status and how the run ended.
   {
     const hsize_t dims[1] = {4};
     Handle space(H5Screate_simple(1, dims, nullptr), H5Sclose);
@@ -381,6 +418,10 @@ void Hdf5RunWriter::Impl::create(const ImuSample* first, std::size_t n) {
     put_attr(ds_summary.get(), "columns",
              std::string("sample_count,gap_count,t_first_s,t_last_s"), path);
   }
+  ds_status = create_text(root, "status", kStatusBytes, to_string(RunStatus::kRunning), path);
+  ds_status_message = create_text(root, "status_message", kMessageBytes, "", path);
+  ds_end_time = create_text(root, "end_time_utc", kTimeBytes, "", path);
+  write_summary();
   check(H5Fstart_swmr_write(root), path, "cannot start SWMR writing");
 }
 
@@ -494,32 +535,16 @@ void Hdf5RunWriter::flush() {
   check(H5Fflush(I.file.get(), H5F_SCOPE_GLOBAL), I.path, "cannot flush");
 }
 
-void Hdf5RunWriter::finish(RunStatus status, const std::string& final_header_json,
+void Hdf5RunWriter::finish(RunStatus status,
                            const std::string& end_time_utc, const std::string& message) {
   Impl& I = *impl_;
   if (!I.file) I.create(nullptr, 0);
   flush();
-  // Leave SWMR mode, then write the final header into the closed-and-reopened file.
-  for (auto* h : {&I.ds_t, &I.ds_flags, &I.ds_exceptions, &I.ds_truth, &I.ds_segments, &I.ds_events,
-                  &I.ds_summary, &I.samples_group})
-    h->reset();
-  for (int ch = 0; ch < kChannels; ++ch) {
-    I.ds_counts[ch].reset();
-    I.ds_si[ch].reset();
-  }
-  if (H5Fclose(std::exchange(I.file, Handle()).get()) < 0) fail(I.path, "cannot close");
-  Handle f = check(H5Fopen(I.path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), H5Fclose, I.path,
-                   "cannot reopen to write the final status");
-  put_attr(f.get(), "header_json", final_header_json, I.path);
-  put_attr(f.get(), "end_time_utc", end_time_utc, I.path);
-  put_attr(f.get(), "status_message", message, I.path);
-  put_attr(f.get(), "sample_count", static_cast<std::int64_t>(I.written), I.path);
-  put_attr(f.get(), "gap_count", static_cast<std::int64_t>(I.gaps), I.path);
-  put_attr(f.get(), "t_first_s", I.t_first, I.path);
-  put_attr(f.get(), "t_last_s", I.t_last, I.path);
-  put_attr(f.get(), "status", std::string(to_string(status)), I.path);  // last: the commit point
-  check(H5Fflush(f.get(), H5F_SCOPE_GLOBAL), I.path, "cannot flush");
-  if (H5Fclose(std::exchange(f, Handle()).get()) < 0) fail(I.path, "cannot close");
+  write_text(I.ds_status_message.get(), kMessageBytes, message, I.path);
+  write_text(I.ds_end_time.get(), kTimeBytes, end_time_utc, I.path);
+  check(H5Fflush(I.file.get(), H5F_SCOPE_GLOBAL), I.path, "cannot flush");
+  write_text(I.ds_status.get(), kStatusBytes, to_string(status), I.path);  // last: the commit point
+  check(H5Fflush(I.file.get(), H5F_SCOPE_GLOBAL), I.path, "cannot flush");
 }
 
 // =============================================================================================
@@ -669,24 +694,46 @@ Hdf5Run open_hdf5_run(const fs::path& path) {
   Hdf5Run run;
   // SWMR read opens a file whose writer is still running or was killed (its status flags still
   // say "open for SWMR writing"); a finished file opens the same way.
-  Handle file = check(H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, H5P_DEFAULT),
+  Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+  // A truncated file is opened anyway (the library's "skip_eof_check" file-access property, which
+  // h5clear uses): what lies past the end reads as damaged, and the samples before it are kept.
+  hbool_t skip_eof_check = 1;
+  if (H5Pexist(fapl.get(), "skip_eof_check") > 0) H5Pset(fapl.get(), "skip_eof_check", &skip_eof_check);
+  // A metadata block that fails its checksum is damage, not a write in progress: no retries (SWMR
+  // readers otherwise retry 100 times with growing sleeps).
+  H5Pset_metadata_read_attempts(fapl.get(), 2);
+  Handle file = check(H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl.get()),
                       H5Fclose, path, "cannot be opened as an HDF5 run store (damaged or not HDF5)");
   const hid_t root = file.get();
   if (!has_attr(root, "format") || get_string_attr(root, "format", path) != "stend-run")
-    fail(path, "not a Stend run store (attribute format = 'stend-run' is missing)");
+    fail(path, "not a Stend run store, or its header is damaged (attribute format = 'stend-run' cannot be read)");
   const double version = get_double_attr(root, "format_version", path);
   if (version < 1 || version > kHdf5FormatVersion) {
     throw std::runtime_error(fmt::format("{}: format_version {} is not readable by this Stend (reads 1..{})",
                                          path.string(), version, kHdf5FormatVersion));
   }
-  const std::string status = get_string_attr(root, "status", path);
+  const std::string status = read_text(root, "status", path);
   const auto st = run_status_from_string(status);
   if (!st) fail(path, fmt::format("attribute 'status' is '{}', not a run status", status));
   run.status = *st;
   run.header_json = get_string_attr(root, "header_json", path);
+  {
+    Handle ds = open_dataset(root, "summary", path, "/");
+    double v[4] = {0, -1, 0, 0};
+    if (H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0) run.gap_count = static_cast<std::int64_t>(v[1]);
+    H5Eclear2(H5E_DEFAULT);
+  }
   run.experiment_yaml = get_string_attr(root, "experiment_yaml", path);
 
-  {
+  // Truth, segments and events: a damaged one is reported and left empty; the samples stay.
+  auto keep_going = [&](auto&& read) {
+    try {
+      read();
+    } catch (const std::runtime_error& e) {
+      run.damage += (run.damage.empty() ? "" : "; ") + std::string(e.what());
+    }
+  };
+  keep_going([&] {
     Handle truth = open_dataset(root, "truth", path, "/");
     Handle space(H5Dget_space(truth.get()), H5Sclose);
     hsize_t dims[2] = {0, 0};
@@ -699,9 +746,9 @@ Hdf5Run open_hdf5_run(const fs::path& path) {
       run.truth.emplace_back(v.begin() + static_cast<std::ptrdiff_t>(r * dims[1] + 1),
                              v.begin() + static_cast<std::ptrdiff_t>((r + 1) * dims[1]));
     }
-  }
-  run.segments_csv = read_bytes(open_dataset(root, "segments_csv", path, "/").get(), path, "segments_csv");
-  run.events_csv = read_bytes(open_dataset(root, "events_csv", path, "/").get(), path, "events_csv");
+  });
+  keep_going([&] { run.segments_csv = read_bytes(open_dataset(root, "segments_csv", path, "/").get(), path, "segments_csv"); });
+  keep_going([&] { run.events_csv = read_bytes(open_dataset(root, "events_csv", path, "/").get(), path, "events_csv"); });
 
   Handle g = check(H5Gopen2(root, "samples", H5P_DEFAULT), H5Gclose, path,
                    "group /samples is missing or damaged");
@@ -734,7 +781,7 @@ Hdf5Run open_hdf5_run(const fs::path& path) {
   hsize_t good = chunks;
   for (hid_t ds : columns) good = std::min(good, first_missing_chunk(ds, chunks, file_size));
   if (good < chunks) {
-    run.damage = fmt::format("the file is truncated or damaged after sample {} of {} (a chunk of "
+    run.damage += (run.damage.empty() ? "" : "; ") + fmt::format("the file is truncated or damaged after sample {} of {} (a chunk of "
                              "the samples lies outside the file or cannot be located)",
                              good * kChunkSamples, n);
     n = good * kChunkSamples;
@@ -742,11 +789,12 @@ Hdf5Run open_hdf5_run(const fs::path& path) {
 
   std::vector<std::array<double, 4>> exceptions;
   {
+    // Without its exceptions a counts channel would give wrong SI values: this one is required.
     Handle ds = open_dataset(g.get(), "exceptions", path, "/samples/");
     const hsize_t rows = extent_rows(ds.get());
     exceptions.resize(rows);
     if (read_rows(ds.get(), H5T_NATIVE_DOUBLE, 0, rows, 4, exceptions.data()) < 0)
-      fail(path, "dataset /samples/exceptions is damaged");
+      fail(path, "dataset /samples/exceptions (the samples whose SI is not counts·lsb + offset) is damaged");
     std::stable_sort(exceptions.begin(), exceptions.end(),
                      [](const auto& a, const auto& b) { return a[0] < b[0]; });
   }

@@ -1024,3 +1024,96 @@ TEST_F(RecordingTest, Hdf5SurvivesAHundredSigkills) {
   std::printf("[          ] %d kills, every file reopened; worst loss %.3f s of run time\n", kKills,
               worst_loss_s);
 }
+
+namespace {
+
+// A finished 1 kHz MPU-class run of `n` samples in `dir`; returns the samples written.
+std::vector<ImuSample> write_mpu_run(const fs::path& dir, std::uint64_t n) {
+  std::vector<ImuSample> s;
+  for (std::uint64_t k = 1; k <= n; ++k) s.push_back(mpu_sample(k));
+  RecordingWriter w(dir, make_header(), "name: mpu\n");
+  for (std::size_t b = 0; b < s.size(); b += 100) w.add_samples(s.data() + b, std::min<std::size_t>(100, s.size() - b));
+  w.add_event({1.0, "info", "runner", "start"});
+  w.finish(stend::RunStatus::kComplete);
+  return s;
+}
+
+// Opens a damaged copy: either a clear error naming run.h5, or a recording whose readable samples
+// are exactly those written (reading them all succeeds or fails with an error naming the damage).
+// Returns the readable sample count, or -1 when the file does not open.
+long long open_damaged(const fs::path& dir, const std::vector<ImuSample>& written) {
+  Recording r;
+  try {
+    r = Recording::open(dir, stend::SampleLoading::kStream);
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find((dir / "run.h5").string()), std::string::npos) << e.what();
+    return -1;
+  }
+  const auto& src = r.sample_source();
+  EXPECT_LE(src.size(), written.size());
+  EXPECT_EQ(r.written_samples, written.size());
+  if (src.size() < written.size()) {
+    EXPECT_FALSE(r.damage.empty());
+  }
+  std::vector<ImuSample> got(stend::kDefaultChunkSamples);
+  for (std::uint64_t first = 0; first < src.size(); first += got.size()) {
+    const std::size_t n = std::min<std::uint64_t>(got.size(), src.size() - first);
+    try {
+      src.read(first, n, got.data());
+    } catch (const std::runtime_error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("run.h5"), std::string::npos) << what;
+      EXPECT_NE(what.find("damaged"), std::string::npos) << what;
+      return static_cast<long long>(first);
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      expect_same_sample(got[i], written[first + i], first + i);  // never wrong numbers
+      if (::testing::Test::HasFatalFailure()) return static_cast<long long>(first);
+    }
+  }
+  return static_cast<long long>(src.size());
+}
+
+}  // namespace
+
+TEST_F(RecordingTest, Hdf5TruncatedFileKeepsTheSamplesBeforeTheCut) {
+  const fs::path dir = root_ / "run";
+  const auto written = write_mpu_run(dir, 300'000);
+  const auto size = fs::file_size(dir / "run.h5");
+  int opened = 0;
+  for (double frac : {0.99, 0.9, 0.75, 0.5, 0.3, 0.1, 0.001}) {
+    const fs::path cut = root_ / ("cut" + std::to_string(static_cast<int>(frac * 1000)));
+    fs::copy(dir, cut);
+    fs::resize_file(cut / "run.h5", static_cast<std::uintmax_t>(static_cast<double>(size) * frac));
+    const long long readable = open_damaged(cut, written);
+    std::printf("[          ] cut at %.1f %%: %lld samples readable\n", frac * 100, readable);
+    if (HasFatalFailure()) return;
+    if (readable >= 0) {
+      ++opened;
+      // Roughly what lies before the cut is kept (the samples are most of the file).
+      if (frac >= 0.3) {
+        EXPECT_GE(static_cast<double>(readable), (frac - 0.3) * static_cast<double>(written.size())) << frac;
+      }
+    }
+  }
+  EXPECT_GE(opened, 4) << "a cut in the samples should leave the file readable";
+}
+
+TEST_F(RecordingTest, Hdf5FlippedBytesAreAnErrorNeverWrongNumbers) {
+  const fs::path dir = root_ / "run";
+  const auto written = write_mpu_run(dir, 300'000);
+  const auto size = fs::file_size(dir / "run.h5");
+  int detected = 0;
+  for (int k = 1; k <= 9; ++k) {
+    const fs::path bad = root_ / ("flip" + std::to_string(k));
+    fs::copy(dir, bad);
+    std::string bytes = read_text(bad / "run.h5");
+    const std::size_t at = size * static_cast<std::size_t>(k) / 10;
+    for (std::size_t i = at; i < at + 16 && i < bytes.size(); ++i) bytes[i] = static_cast<char>(~bytes[i]);
+    write_text(bad / "run.h5", bytes);
+    const long long readable = open_damaged(bad, written);
+    if (HasFatalFailure()) return;
+    detected += readable < static_cast<long long>(written.size());
+  }
+  EXPECT_GE(detected, 7) << "flipped bytes in the samples should be reported";
+}

@@ -183,6 +183,9 @@ struct Recording {
   // file is whole; sample_count() is what can be read).
   std::uint64_t written_samples = 0;
   std::string damage;
+  // Samples flagged kGapBefore, as the store's summary states (run.h5 as of its last flush; CSV
+  // counted on reading); −1 when unknown.
+  std::int64_t gap_count = -1;
 
   // Throws std::runtime_error naming the file and line when something is unreadable.
   static Recording open(const std::filesystem::path& run_dir,
@@ -197,5 +200,11 @@ struct Recording {
  private:
   mutable std::shared_ptr<const MemorySamples> memory_view_;  // sample_source() over `samples`
 };
+
+// Writes `rec` as a new run folder `dir` (must not exist) in `options.format`: the same header,
+// experiment, samples (streamed a chunk at a time), truth, segments and events; a finished run
+// keeps its status (its end time becomes the copy's), an unfinished one stays "running".
+void write_recording(const Recording& rec, const std::filesystem::path& dir,
+                     const RecordingWriterOptions& options);
 
 }  // namespace stend
