@@ -1,6 +1,7 @@
 // Recording store: round trip, tolerance of interrupted writes, durability under SIGKILL, scale.
 #include <stend/recording.hpp>
 #include <stend/testing/files.hpp>
+#include <stend/testing/program.hpp>
 
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -1116,4 +1117,53 @@ TEST_F(RecordingTest, Hdf5FlippedBytesAreAnErrorNeverWrongNumbers) {
     detected += readable < static_cast<long long>(written.size());
   }
   EXPECT_GE(detected, 7) << "flipped bytes in the samples should be reported";
+}
+
+TEST_F(RecordingTest, Hdf5RunReadsWithH5pyAlone) {
+  // Debian's python3 (h5py and numpy are Debian packages), else the first python3 on PATH.
+  const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  if (stend::testing::run_command(python + " -c 'import h5py, numpy' 2>&1").code != 0)
+    GTEST_SKIP() << "python3-h5py / python3-numpy are not installed (scripts/install-deps.sh installs them)";
+  const fs::path dir = root_ / "run";
+  auto written = write_mpu_run(dir, 150'000);
+  // The reading recipe of docs/recording-format.md: counts·lsb + offset, then the exceptions.
+  const std::string script = R"(
+import sys, h5py, numpy as np
+names = ["ax", "ay", "az", "gx", "gy", "gz", "temp"]
+with h5py.File(sys.argv[1], "r", swmr=True) as f:
+    g = f["samples"]
+    print(f["status"][()].decode(), g["t_s"].shape[0])
+    for k, name in enumerate(names):
+        d = g[name + "_counts"]
+        v = d[:] * d.attrs["lsb"] + d.attrs["offset"]
+        for i, ch, c, x in g["exceptions"][:]:
+            if int(ch) == k: v[int(i)] = x
+        print(name, repr(float(np.sum(v))), repr(float(v[-1])))
+    print("t_s", repr(float(np.sum(g["t_s"][:]))))
+)";
+  write_text(root_ / "read.py", script);
+  const auto out = stend::testing::run_command(python + " " + (root_ / "read.py").string() + " " +
+                                               (dir / "run.h5").string() + " 2>&1");
+  ASSERT_EQ(out.code, 0) << out.text;
+  std::istringstream in(out.text);
+  std::string status, name;
+  std::uint64_t n = 0;
+  in >> status >> n;
+  EXPECT_EQ(status, "complete");
+  const Recording r = Recording::open(dir, stend::SampleLoading::kStream);
+  ASSERT_EQ(n, r.sample_count());
+  for (auto c : {stend::Channel::kAx, stend::Channel::kAy, stend::Channel::kAz, stend::Channel::kGx,
+                 stend::Channel::kGy, stend::Channel::kGz, stend::Channel::kTemperature}) {
+    const auto col = stend::read_column(r.sample_source(), c, 0, n);
+    double sum = 0.0;
+    for (double v : col) sum += v;
+    double py_sum = 0.0, py_last = 0.0;
+    in >> name >> py_sum >> py_last;
+    EXPECT_NEAR(py_sum, sum, 1e-9 * std::abs(sum) + 1e-9) << name;
+    EXPECT_EQ(py_last, col.back()) << name;  // the same formula, bit for bit
+  }
+  double py_t = 0.0, t = 0.0;
+  in >> name >> py_t;
+  for (double v : stend::read_column(r.sample_source(), stend::Channel::kTime, 0, n)) t += v;
+  EXPECT_NEAR(py_t, t, 1e-9 * t);
 }
