@@ -1167,3 +1167,28 @@ with h5py.File(sys.argv[1], "r", swmr=True) as f:
   for (double v : stend::read_column(r.sample_source(), stend::Channel::kTime, 0, n)) t += v;
   EXPECT_NEAR(py_t, t, 1e-9 * t);
 }
+
+TEST_F(RecordingTest, Hdf5ExportsToTheCsvLayoutAndBack) {
+  // HDF5 → CSV (what `stend export --to csv` does) → HDF5: the same recording at every step.
+  const fs::path h5 = root_ / "h5";
+  Written w = write_small(root_ / "csv0");
+  {
+    RecordingWriter writer(h5, w.header, w.yaml);
+    writer.add_samples(w.samples.data(), w.samples.size());
+    for (std::size_t i = 0; i < w.truth.size(); ++i) writer.add_truth(w.truth_t[i], w.truth[i]);
+    for (const auto& s : w.segments) writer.add_segment(s);
+    for (const auto& ev : w.events) writer.add_event(ev);
+    writer.finish(stend::RunStatus::kInterrupted, "operator");
+  }
+  stend::write_recording(Recording::open(h5, stend::SampleLoading::kStream), root_ / "csv", kCsv);
+  for (const char* f : {"run.json", "experiment.yaml", "imu.csv", "truth.csv", "segments.csv", "events.csv"})
+    EXPECT_TRUE(fs::exists(root_ / "csv" / f)) << f;
+  EXPECT_EQ(read_text(root_ / "csv" / "segments.csv"), read_text(root_ / "csv0" / "segments.csv"));
+  EXPECT_EQ(read_text(root_ / "csv" / "imu.csv"), read_text(root_ / "csv0" / "imu.csv"));
+  const Recording c = Recording::open(root_ / "csv");
+  EXPECT_EQ(c.format, stend::RecordingFormat::kCsv);
+  EXPECT_EQ(c.header.status, stend::RunStatus::kInterrupted);
+  expect_same_recording(c, w);
+  stend::write_recording(c, root_ / "h5again", kHdf5);
+  expect_same_recording(Recording::open(root_ / "h5again"), w);
+}
