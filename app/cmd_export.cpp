@@ -1,5 +1,5 @@
-// `stend export RUN --to kalibr|matlab|imutk|px4|json [-o FILE]` — a run's results in another
-// tool's format (see reporting/include/stend/reporting/exports.hpp and docs/reports.md).
+// `stend export RUN --to kalibr|matlab|imutk|px4|json|csv [-o FILE]` — a run's results in another
+// tool's format, or (csv) the recording as a CSV run folder (see reporting/include/stend/reporting/exports.hpp and docs/reports.md).
 #include "commands.hpp"
 
 #include "stend/reporting/exports.hpp"
@@ -10,14 +10,16 @@ namespace stend::cli {
 
 void add_export_command(CLI::App& app, std::vector<Command>& out) {
   auto* sub = app.add_subcommand("export", "Export a run's results: Kalibr imu.yaml, MATLAB .mat (accelparams / "
-                                           "gyroparams), IMU-TK calib files, PX4 thermal parameters, results JSON");
+                                           "gyroparams), IMU-TK calib files, PX4 thermal parameters, results JSON; "
+                                           "or the recording itself as a CSV run folder");
   static std::string run, format, output;
   static stend::reporting::ExportOptions opt;
   sub->add_option("run", run, "Run folder")->required();
-  sub->add_option("--to", format, "kalibr | matlab | imutk | px4 | json")
+  sub->add_option("--to", format, "kalibr | matlab | imutk | px4 | json | csv")
       ->required()
-      ->check(CLI::IsMember({"kalibr", "matlab", "imutk", "px4", "json"}));
-  sub->add_option("-o,--output", output, "Output file (imutk: path prefix for _acc.calib / _gyro.calib); default RUN/export/");
+      ->check(CLI::IsMember(stend::reporting::export_formats()));
+  sub->add_option("-o,--output", output, "Output file (imutk: path prefix for _acc.calib / _gyro.calib; csv: a new "
+                                         "folder); default RUN/export/");
   sub->add_option("--rostopic", opt.rostopic, "Kalibr: the IMU's ROS topic (default /imu0)");
   sub->add_option("--px4-id", opt.px4_device_id, "PX4: the sensor's device id for TC_A0_ID / CAL_ACC0_ID … (default 0)");
   sub->add_option("--from", opt.from,

@@ -128,16 +128,28 @@ int cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, const
 }
 
 int cmd_info(const std::string& dir) {
-  const stend::Recording rec = stend::Recording::open(dir);
+  // Header, extents and the first and last samples only: no scan of the samples.
+  const stend::Recording rec = stend::Recording::open(dir, stend::SampleLoading::kStream);
   const auto& h = rec.header;
-  fmt::print("recording:  {}\nexperiment: {} (stend {})\nstatus:     {}{}\n", rec.dir.string(), h.experiment_name,
-             h.stend_version, stend::to_string(h.status), rec.complete() ? "" : " (incomplete)");
+  fmt::print("recording:  {} ({})\nexperiment: {} (stend {})\nstatus:     {}{}\n", rec.dir.string(),
+             stend::to_string(rec.format), h.experiment_name, h.stend_version, stend::to_string(h.status),
+             rec.complete() ? "" : " (incomplete)");
   fmt::print("sensor:     {} {} serial '{}' WHO_AM_I {} at {} Hz\n", h.identity.vendor, h.identity.model,
              h.identity.serial, h.identity.who_am_i, h.info.output_rate_hz);
   fmt::print("gravity:    {:.6f} m/s^2; clock {}; seed {}\n", h.gravity_mps2, h.clock, h.seed);
-  fmt::print("data:       {} samples", rec.samples.size());
-  if (!rec.samples.empty()) fmt::print(" from {:.3f} s to {:.3f} s", rec.samples.front().t_s, rec.samples.back().t_s);
+  const auto& src = rec.sample_source();
+  const std::uint64_t n = src.size();
+  fmt::print("data:       {} samples", n);
+  if (n > 0) {
+    stend::ImuSample first, last;
+    src.read(0, 1, &first);
+    src.read(n - 1, 1, &last);
+    fmt::print(" from {:.3f} s to {:.3f} s", first.t_s, last.t_s);
+  }
+  if (rec.gap_count >= 0) fmt::print(", {} gaps", rec.gap_count);
   fmt::print(", {} truth rows, {} segments, {} events\n", rec.truth_t.size(), rec.segments.size(), rec.events.size());
+  if (!rec.damage.empty())
+    fmt::print("damaged:    {} of {} samples are readable: {}\n", n, rec.written_samples, rec.damage);
   for (const auto& s : rec.segments)
     fmt::print("  #{:<3} {:<15} {:>7.2f}–{:<8.2f} s {}{}{}  {}\n", s.id, stend::to_string(s.kind), s.t_start_s, s.t_end_s,
                s.settled ? "" : "[unsettled] ", s.complete ? "" : "[incomplete] ", s.label, s.targets);

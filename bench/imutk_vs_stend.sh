@@ -34,8 +34,10 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 "$stend" run "$root/configs/multi_position_38.yaml" -o "$tmp" --name mp38 -q >/dev/null
 run=$tmp/mp38
+csv=$tmp/mp38_csv  # the same run in the CSV layout, for awk
+"$stend" export "$run" --to csv -o "$csv" >/dev/null
 "$peer" export "$run" "$tmp/acc_all.txt" "$tmp/gyro_all.txt"
-first_pose_s=$(awk -F, 'NR == 2 { print $8 }' "$run/segments.csv")
+first_pose_s=$(awk -F, 'NR == 2 { print $8 }' "$csv/segments.csv")
 awk -v t0="$first_pose_s" '$1 >= t0' "$tmp/acc_all.txt" >"$tmp/acc.txt"
 awk -v t0="$first_pose_s" '$1 >= t0' "$tmp/gyro_all.txt" >"$tmp/gyro.txt"
 gravity=$(sed -n 's/.*"gravity_mps2": *\([0-9.eE+-]*\).*/\1/p' "$run/run.json" | head -1)
@@ -67,7 +69,7 @@ for _ in $(seq "$runs"); do
   [ -z "$imutk" ] || timed "$tmp/imutk.times" "$imutk" "$tmp/acc.txt" "$tmp/gyro.txt" "$gravity" 2 0 1 "$tmp/imutk_out"
 done
 
-echo "record: configs/multi_position_38.yaml, $(($(wc -l <"$run/imu.csv") - 1)) samples; $runs runs each, alternating"
+echo "record: configs/multi_position_38.yaml, $(($(wc -l <"$csv/imu.csv") - 1)) samples; $runs runs each, alternating"
 echo "load average: $(cut -d' ' -f1-3 /proc/loadavg), $(nproc) cores"
 printf '%-8s %12s %12s %14s\n' "" "wall med [s]" "CPU med [s]" "peak RSS [MiB]"
 for who in stend imutk; do

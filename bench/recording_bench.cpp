@@ -1,4 +1,4 @@
-// Recording store throughput: cost of one imu.csv row written and read back.
+// Recording store throughput (CSV run folders): cost of one imu.csv row written and read back.
 //
 //   build-rec/bin/recording_bench                       # all
 //   build-rec/bin/recording_bench --benchmark_filter=Hour
@@ -113,7 +113,7 @@ void BM_WriteRows(benchmark::State& state) {
     const fs::path dir = scratch_dir("write");
     state.ResumeTiming();
     {
-      stend::RecordingWriter w(dir, header(), "name: bench\n");
+      stend::RecordingWriter w(dir, header(), "name: bench\n", {stend::RecordingFormat::kCsv});
       write_rows(w, sec, rows, scratch, unique);
       w.flush();
       state.PauseTiming();
@@ -135,7 +135,7 @@ void BM_Finish(benchmark::State& state) {
     state.PauseTiming();
     const fs::path dir = scratch_dir("finish");
     {
-      stend::RecordingWriter w(dir, header(), "name: bench\n");
+      stend::RecordingWriter w(dir, header(), "name: bench\n", {stend::RecordingFormat::kCsv});
       write_rows(w, sec, 1'000'000, scratch);
       state.ResumeTiming();
       w.finish(stend::RunStatus::kComplete);
@@ -153,7 +153,7 @@ void BM_ReadRows(benchmark::State& state) {
     std::mt19937_64 rng(3);
     const auto sec = one_second(1, rng);
     std::vector<stend::ImuSample> scratch;
-    stend::RecordingWriter w(dir, header(), "name: bench\n");
+    stend::RecordingWriter w(dir, header(), "name: bench\n", {stend::RecordingFormat::kCsv});
     write_rows(w, sec, rows, scratch);
     w.finish(stend::RunStatus::kComplete);
   }
@@ -180,7 +180,7 @@ void BM_OneHour(benchmark::State& state) {
     const auto t0 = clock::now();
     double write_s = 0.0, finish_s = 0.0;
     {
-      stend::RecordingWriter w(dir, header(), "name: hour\n");
+      stend::RecordingWriter w(dir, header(), "name: hour\n", {stend::RecordingFormat::kCsv});
       write_rows(w, sec, kRows, scratch);
       const auto t1 = clock::now();
       w.finish(stend::RunStatus::kComplete);

@@ -5,6 +5,7 @@ packages=(
   cmake ninja-build g++ pkg-config git
   libeigen3-dev libceres-dev libyaml-cpp-dev nlohmann-json3-dev libfmt-dev libspdlog-dev
   libcli11-dev libmodbus-dev libhidapi-dev libmatio-dev libhdf5-dev libsqlite3-dev libssl-dev
+  python3-h5py python3-numpy  # core tests: a run.h5 read with h5py alone
   libgtest-dev libgmock-dev libbenchmark-dev
   librosbag-storage-dev libzstd-dev liblz4-dev  # io: ROS 1 bags; MCAP chunk compression
   librosbag-dev lz4  # io tests: ROS 1 bags written with rosbag::Bag; lz4 MCAP chunks (npm packages: install-node-test-deps.sh)

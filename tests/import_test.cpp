@@ -84,11 +84,11 @@ void import_and_use(const fs::path& data, const std::string& model) {
   EXPECT_TRUE(fs::exists(dir / "export.json"));
 
   // An existing folder is refused, and nothing in it changes.
-  const std::string before = stend::testing::read_text(run / "imu.csv");
+  const std::string before = stend::testing::read_text(run / "run.h5");
   const ProgramOutput again = run_stend("import " + data.string() + " -o " + run.string());
   EXPECT_EQ(again.code, 2) << again.text;
   EXPECT_NE(again.text.find("exists"), std::string::npos) << again.text;
-  EXPECT_EQ(stend::testing::read_text(run / "imu.csv"), before);
+  EXPECT_EQ(stend::testing::read_text(run / "run.h5"), before);
 }
 
 }  // namespace

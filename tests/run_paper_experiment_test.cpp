@@ -126,9 +126,9 @@ procedure:
           static_cast<char*>(nullptr));
     _exit(127);
   }
-  const fs::path imu = tmp / "runs" / "killed" / "imu.csv";
-  for (int i = 0; i < 200 && (!fs::exists(imu) || fs::file_size(imu) < 200000); ++i) usleep(20000);
-  usleep(300000);
+  const fs::path store = tmp / "runs" / "killed" / "run.h5";  // flushed each second of wall time
+  for (int i = 0; i < 200 && (!fs::exists(store) || fs::file_size(store) < 100000); ++i) usleep(20000);
+  usleep(1300000);  // past the first flush (each second of wall time)
   kill(pid, SIGKILL);
   int status = 0;
   waitpid(pid, &status, 0);

@@ -3,6 +3,7 @@
 #include "stend/recording.hpp"
 
 #include "stend/csv.hpp"
+#include "hdf5_store.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -302,6 +303,7 @@ struct RecordingWriter::Impl {
   bool finished = false;
   std::string scratch;
   TextCache text[7];  // ax ay az gx gy gz temp_c
+  std::unique_ptr<detail::Hdf5RunWriter> h5;  // the HDF5 store; null when writing CSV
 
   void check_open(const char* what) const {
     if (finished) {
@@ -311,8 +313,18 @@ struct RecordingWriter::Impl {
   }
   // Writes run.json and experiment.yaml and creates the CSVs with their header lines.
   void create_files(const fs::path& run_dir, RecordingHeader h,
-                    const std::string& resolved_experiment_yaml);
+                    const std::string& resolved_experiment_yaml, RecordingFormat format);
+  // Flush rule: ≥ 1 s of wall time since the last flush, or (CSV) ≥ 1 s of run time.
+  bool flush_due(double run_time_s) const {
+    return (!h5 && run_time_s - last_flush_run_s >= kFlushInterval_s) ||
+           std::chrono::steady_clock::now() - last_flush_wall >= std::chrono::seconds(1);
+  }
   void flush_all() {
+    if (h5) {
+      h5->flush();
+      last_flush_wall = std::chrono::steady_clock::now();
+      return;
+    }
     imu.flush();
     truth.flush();
     segments.flush();
@@ -322,11 +334,24 @@ struct RecordingWriter::Impl {
 };
 
 void RecordingWriter::Impl::create_files(const fs::path& run_dir, RecordingHeader h,
-                                         const std::string& resolved_experiment_yaml) {
+                                         const std::string& resolved_experiment_yaml,
+                                         RecordingFormat format) {
   Impl& I = *this;
   I.header = std::move(h);
-  write_file_atomic(run_dir / "run.json", dump_json(header_json(I.header)));
+  const std::string run_json = dump_json(header_json(I.header));
+  write_file_atomic(run_dir / "run.json", run_json);
   write_file(run_dir / "experiment.yaml", resolved_experiment_yaml);
+  if (format == RecordingFormat::kHdf5) {
+    I.h5 = std::make_unique<detail::Hdf5RunWriter>(run_dir / detail::kHdf5FileName, I.header,
+                                                   run_json, resolved_experiment_yaml);
+    std::string line;
+    csv::append_record(line, kSegmentColumns);
+    I.h5->add_segment_record(line);
+    line.clear();
+    csv::append_record(line, kEventColumns);
+    I.h5->add_event_record(line);
+    return;
+  }
 
   I.imu.open(run_dir / "imu.csv", kImuBufferBytes);
   I.truth.open(run_dir / "truth.csv", kSmallBufferBytes);
@@ -351,7 +376,8 @@ void RecordingWriter::Impl::create_files(const fs::path& run_dir, RecordingHeade
 }
 
 RecordingWriter::RecordingWriter(const fs::path& run_dir, RecordingHeader header,
-                                 const std::string& resolved_experiment_yaml)
+                                 const std::string& resolved_experiment_yaml,
+                                 const RecordingWriterOptions& options)
     : impl_(std::make_unique<Impl>()), dir_(run_dir) {
   if (!header.mounting_R.empty() && header.mounting_R.size() != 9) {
     throw std::invalid_argument(fmt::format(
@@ -404,7 +430,7 @@ RecordingWriter::RecordingWriter(const fs::path& run_dir, RecordingHeader header
   }
 
   try {
-    impl_->create_files(run_dir, std::move(header), resolved_experiment_yaml);
+    impl_->create_files(run_dir, std::move(header), resolved_experiment_yaml, options.format);
   } catch (...) {
     // The folder is ours (mkdir succeeded): do not leave a half-made run behind.
     impl_.reset();
@@ -427,6 +453,12 @@ void RecordingWriter::add_samples(const ImuSample* samples, std::size_t count) {
   Impl& I = *impl_;
   I.check_open("add_samples");
   if (count == 0) return;
+  if (I.h5) {
+    I.h5->add_samples(samples, count);
+    I.samples += count;
+    if (I.flush_due(samples[count - 1].t_s)) I.flush_all();
+    return;
+  }
   OutFile& f = I.imu;
   char* const base = f.buf.get();
   for (std::size_t i = 0; i < count; ++i) {
@@ -484,6 +516,11 @@ void RecordingWriter::add_truth(double t_s, const std::vector<double>& values) {
         "RecordingWriter::add_truth: {} values for {} truth columns", values.size(),
         I.header.truth_columns.size()));
   }
+  ++I.truth_rows;
+  if (I.h5) {
+    I.h5->add_truth(t_s, values);
+    return;
+  }
   OutFile& f = I.truth;
   const std::size_t need = (values.size() + 1) * (csv::kMaxDoubleChars + 1);
   if (need > f.cap) {
@@ -506,7 +543,6 @@ void RecordingWriter::add_truth(double t_s, const std::vector<double>& values) {
     *p++ = '\n';
     f.len = static_cast<std::size_t>(p - f.buf.get());
   }
-  ++I.truth_rows;
 }
 
 void RecordingWriter::add_segment(const Segment& s) {
@@ -531,7 +567,11 @@ void RecordingWriter::add_segment(const Segment& s) {
   line.push_back(',');
   csv::append_double(line, s.rate);
   line.push_back('\n');
-  I.segments.append(line);
+  if (I.h5) {
+    I.h5->add_segment_record(line);
+  } else {
+    I.segments.append(line);
+  }
   ++I.segment_rows;
 }
 
@@ -548,15 +588,19 @@ void RecordingWriter::add_event(const Event& e) {
   line.push_back(',');
   csv::append_field(line, e.message);
   line.push_back('\n');
-  I.events.append(line);
-  I.events.flush();
+  if (I.h5) {
+    I.h5->add_event_record(line);
+    I.flush_all();
+  } else {
+    I.events.append(line);
+    I.events.flush();
+  }
   ++I.event_rows;
 }
 
 void RecordingWriter::tick(double run_time_s) {
   Impl& I = *impl_;
-  if (run_time_s - I.last_flush_run_s >= kFlushInterval_s ||
-      std::chrono::steady_clock::now() - I.last_flush_wall >= std::chrono::seconds(1)) {
+  if (I.flush_due(run_time_s)) {
     I.flush_all();
     I.last_flush_run_s = run_time_s;
   }
@@ -576,12 +620,15 @@ void RecordingWriter::finish(RunStatus status, const std::string& message) {
   I.events.sync();
   I.header.status = status;
   ojson j = header_json(I.header);
-  j["end_time_utc"] = utc_now_iso();
+  const std::string end_time = utc_now_iso();
+  j["end_time_utc"] = end_time;
   j["status_message"] = message;
   j["sample_count"] = I.samples;
   j["truth_count"] = I.truth_rows;
   j["segment_count"] = I.segment_rows;
   j["event_count"] = I.event_rows;
+  // run.h5 first: it is the source of truth, run.json its readable copy.
+  if (I.h5) I.h5->finish(status, end_time, message);
   write_file_atomic(dir_ / "run.json", dump_json(j));
   fsync_dir(dir_);
   I.finished = true;
@@ -666,8 +713,7 @@ class JsonFields {
 };
 
 // run.json's text as JSON; a syntax error names the file and line.
-nlohmann::json parse_run_json(const fs::path& file) {
-  const std::string text = read_whole_file(file);
+nlohmann::json parse_run_json(const fs::path& file, const std::string& text) {
   try {
     return nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
@@ -783,8 +829,9 @@ void read_plugins_and_truth_columns(const nlohmann::json& j, const JsonFields& f
   }
 }
 
-void read_run_json(const fs::path& file, RecordingHeader& h) {
-  const nlohmann::json j = parse_run_json(file);
+// The header from run.json's text; `file` names where the text came from in errors.
+void read_run_json(const fs::path& file, const std::string& text, RecordingHeader& h) {
+  const nlohmann::json j = parse_run_json(file, text);
   if (!j.is_object()) fail_at(file, 1, "expected a JSON object");
   const JsonFields f(j, file);
   read_version_and_status(j, f, file, h);
@@ -980,7 +1027,51 @@ void read_truth(const fs::path& file, Recording& r) {
 
 // --- segments.csv / events.csv ---------------------------------------------------------------
 
-void check_header(const csv::Reader& rd, const std::vector<std::string>& got,
+
+bool blank(const std::vector<std::string>& f) { return f.size() == 1 && f[0].empty(); }
+
+// CSV records of a text held in memory, with csv::Reader's interface and its rule for a trailing
+// record that lacks its line feed (not returned; counted in partial()).
+class TextRecords {
+ public:
+  TextRecords(fs::path name, std::string_view text) : path_(std::move(name)), text_(text) {}
+  bool next_record(std::vector<std::string>& fields) {
+    bool quoted = false;
+    std::size_t lines = 0;
+    for (std::size_t i = pos_; i < text_.size(); ++i) {
+      const char c = text_[i];
+      if (c == '"') quoted = !quoted;
+      if (c != '\n') continue;
+      ++lines;
+      if (quoted) continue;
+      std::string_view rec = text_.substr(pos_, i - pos_);
+      if (!rec.empty() && rec.back() == '\r') rec.remove_suffix(1);
+      line_ = next_line_;
+      next_line_ += lines;
+      pos_ = i + 1;
+      try {
+        fields = csv::split_record(rec);
+      } catch (const std::exception& e) {
+        throw std::runtime_error(fmt::format("{}:{}: {}", path_.string(), line_, e.what()));
+      }
+      return true;
+    }
+    partial_ += pos_ < text_.size();
+    pos_ = text_.size();
+    return false;
+  }
+  std::size_t line() const { return line_; }
+  std::size_t partial() const { return partial_; }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+  std::string_view text_;
+  std::size_t pos_ = 0, line_ = 0, next_line_ = 1, partial_ = 0;
+};
+
+template <class Records>
+void check_header(const Records& rd, const std::vector<std::string>& got,
                   const std::vector<std::string>& want) {
   if (got != want) {
     std::string a, b;
@@ -992,10 +1083,9 @@ void check_header(const csv::Reader& rd, const std::vector<std::string>& got,
   }
 }
 
-bool blank(const std::vector<std::string>& f) { return f.size() == 1 && f[0].empty(); }
-
-void read_segments(const fs::path& file, Recording& r) {
-  csv::Reader rd(file);
+template <class Records>
+void read_segments(Records& rd, Recording& r) {
+  const fs::path& file = rd.path();
   std::vector<std::string> f;
   if (!rd.next_record(f)) {
     r.dropped_partial_lines += rd.partial();
@@ -1048,8 +1138,9 @@ void read_segments(const fs::path& file, Recording& r) {
   r.dropped_partial_lines += rd.partial();
 }
 
-void read_events(const fs::path& file, Recording& r) {
-  csv::Reader rd(file);
+template <class Records>
+void read_events(Records& rd, Recording& r) {
+  const fs::path& file = rd.path();
   std::vector<std::string> f;
   if (!rd.next_record(f)) {
     r.dropped_partial_lines += rd.partial();
@@ -1074,6 +1165,70 @@ void read_events(const fs::path& file, Recording& r) {
   r.dropped_partial_lines += rd.partial();
 }
 
+// The experiment's YAML, checked.
+void check_experiment_yaml(const fs::path& where, const std::string& text) {
+  try {
+    (void)YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(fmt::format("{}:{}:{}: invalid YAML: {}", where.string(),
+                                         e.mark.line + 1, e.mark.column + 1, e.msg));
+  }
+}
+
+// run.h5: header, experiment, truth, segments and events; samples behind the file's source.
+void open_hdf5(const fs::path& file, Recording& r, SampleLoading loading) {
+  detail::Hdf5Run h = detail::open_hdf5_run(file);
+  const fs::path header_name = file.string() + ":header_json";
+  read_run_json(header_name, h.header_json, r.header);
+  r.header.status = h.status;
+  r.experiment_yaml = std::move(h.experiment_yaml);
+  check_experiment_yaml(file.string() + ":experiment_yaml", r.experiment_yaml);
+  if (h.truth.size() && h.truth[0].size() != r.header.truth_columns.size()) {
+    throw std::runtime_error(fmt::format("{}: dataset /truth has {} value columns, the header names {}",
+                                         file.string(), h.truth[0].size(), r.header.truth_columns.size()));
+  }
+  r.truth_t = std::move(h.truth_t);
+  r.truth = std::move(h.truth);
+  TextRecords segments(file.string() + ":segments_csv", h.segments_csv);
+  read_segments(segments, r);
+  TextRecords events(file.string() + ":events_csv", h.events_csv);
+  read_events(events, r);
+  r.format = RecordingFormat::kHdf5;
+  r.written_samples = h.written_samples;
+  r.damage = std::move(h.damage);
+  r.gap_count = h.gap_count;
+  if (loading == SampleLoading::kStream) {
+    r.source = std::move(h.samples);
+    return;
+  }
+  r.samples.resize(h.samples->size());
+  for_each_chunk(*h.samples, [&](const ImuSample* c, std::size_t n, std::uint64_t first) {
+    std::copy(c, c + n, r.samples.begin() + static_cast<std::ptrdiff_t>(first));
+  });
+}
+
+// The CSV files of a run folder.
+void open_csv(const fs::path& run_dir, Recording& r, SampleLoading loading) {
+  std::error_code ec;
+  const fs::path imu = run_dir / "imu.csv";
+  if (!fs::exists(imu, ec)) {
+    throw std::runtime_error(fmt::format("{}: missing (every recording has run.h5 or imu.csv)", imu.string()));
+  }
+  read_imu(imu, r);
+  if (fs::exists(run_dir / "truth.csv", ec)) read_truth(run_dir / "truth.csv", r);
+  for (const auto& [name, read] :
+       {std::pair{"segments.csv", &read_segments<csv::Reader>}, std::pair{"events.csv", &read_events<csv::Reader>}}) {
+    if (!fs::exists(run_dir / name, ec)) continue;
+    csv::Reader rd(run_dir / name);
+    read(rd, r);
+  }
+  r.written_samples = r.samples.size();
+  r.gap_count = std::count_if(r.samples.begin(), r.samples.end(),
+                              [](const ImuSample& s) { return (s.flags & kGapBefore) != 0; });
+  if (loading == SampleLoading::kStream)
+    r.source = std::make_shared<MemorySamples>(std::exchange(r.samples, {}));
+}
+
 }  // namespace
 
 Recording Recording::open(const fs::path& run_dir, SampleLoading loading) {
@@ -1085,36 +1240,45 @@ Recording Recording::open(const fs::path& run_dir, SampleLoading loading) {
   }
   Recording r;
   r.dir = run_dir;
+  const fs::path h5 = run_dir / detail::kHdf5FileName;
+  if (fs::exists(h5, ec)) {
+    open_hdf5(h5, r, loading);
+    return r;
+  }
   const fs::path run_json = run_dir / "run.json";
   if (!fs::exists(run_json, ec)) {
     throw std::runtime_error(fmt::format(
         "{}: missing; {} is not a Stend recording (or its writer died before starting)",
         run_json.string(), run_dir.string()));
   }
-  read_run_json(run_json, r.header);
+  read_run_json(run_json, read_whole_file(run_json), r.header);
 
   const fs::path yaml = run_dir / "experiment.yaml";
   if (fs::exists(yaml, ec)) {
     r.experiment_yaml = read_whole_file(yaml);
-    try {
-      (void)YAML::Load(r.experiment_yaml);
-    } catch (const YAML::Exception& e) {
-      throw std::runtime_error(fmt::format("{}:{}:{}: invalid YAML: {}", yaml.string(),
-                                           e.mark.line + 1, e.mark.column + 1, e.msg));
-    }
+    check_experiment_yaml(yaml, r.experiment_yaml);
   }
-
-  const fs::path imu = run_dir / "imu.csv";
-  if (!fs::exists(imu, ec)) {
-    throw std::runtime_error(fmt::format("{}: missing (every recording has imu.csv)", imu.string()));
+  // A run whose writer was killed before its first samples has run.json alone: no samples.
+  if (!fs::exists(run_dir / "imu.csv", ec) && r.header.status == RunStatus::kRunning) {
+    r.format = RecordingFormat::kHdf5;
+    if (loading == SampleLoading::kStream) r.source = std::make_shared<MemorySamples>(std::vector<ImuSample>{});
+    return r;
   }
-  read_imu(imu, r);
-  if (fs::exists(run_dir / "truth.csv", ec)) read_truth(run_dir / "truth.csv", r);
-  if (fs::exists(run_dir / "segments.csv", ec)) read_segments(run_dir / "segments.csv", r);
-  if (fs::exists(run_dir / "events.csv", ec)) read_events(run_dir / "events.csv", r);
-  if (loading == SampleLoading::kStream)
-    r.source = std::make_shared<MemorySamples>(std::exchange(r.samples, {}));
+  open_csv(run_dir, r, loading);
   return r;
+}
+
+void write_recording(const Recording& rec, const fs::path& dir, const RecordingWriterOptions& options) {
+  RecordingWriter w(dir, rec.header, rec.experiment_yaml, options);
+  for_each_chunk(rec.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t) { w.add_samples(c, n); });
+  for (std::size_t i = 0; i < rec.truth_t.size(); ++i) w.add_truth(rec.truth_t[i], rec.truth[i]);
+  for (const auto& s : rec.segments) w.add_segment(s);
+  for (const auto& e : rec.events) w.add_event(e);
+  if (rec.header.status == RunStatus::kRunning) {
+    w.flush();
+  } else {
+    w.finish(rec.header.status);
+  }
 }
 
 const SampleSource& Recording::sample_source() const {
@@ -1147,6 +1311,14 @@ std::optional<RunStatus> run_status_from_string(std::string_view name) {
 }
 
 std::ostream& operator<<(std::ostream& os, RunStatus s) { return os << to_string(s); }
+
+const char* to_string(RecordingFormat f) { return f == RecordingFormat::kHdf5 ? "hdf5" : "csv"; }
+
+std::optional<RecordingFormat> recording_format_from_string(std::string_view name) {
+  for (RecordingFormat f : {RecordingFormat::kHdf5, RecordingFormat::kCsv})
+    if (name == to_string(f)) return f;
+  return std::nullopt;
+}
 
 namespace {
 constexpr std::pair<SegmentKind, const char*> kSegmentKindNames[] = {

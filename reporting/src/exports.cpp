@@ -4,6 +4,7 @@
 #include "fitted_model.hpp"
 #include "stend/estimation/summary.hpp"
 #include "stend/reporting/results.hpp"
+#include "stend/recording.hpp"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -700,11 +701,21 @@ ExportResult export_matlab(const fs::path& run, const RunResults& rr, const fs::
 }  // namespace
 
 const std::vector<std::string>& export_formats() {
-  static const std::vector<std::string> f = {"kalibr", "matlab", "imutk", "px4", "json"};
+  static const std::vector<std::string> f = {"kalibr", "matlab", "imutk", "px4", "json", "csv"};
   return f;
 }
 
 ExportResult export_run(const fs::path& run_dir, const std::string& format, fs::path out, const ExportOptions& options) {
+  if (format == "csv") {  // the recording itself, as a CSV run folder
+    if (out.empty()) out = run_dir / "export" / "csv";
+    const Recording rec = Recording::open(run_dir, SampleLoading::kStream);
+    write_recording(rec, out, RecordingWriterOptions{RecordingFormat::kCsv});
+    ExportResult r;
+    for (const char* f : {"run.json", "experiment.yaml", "imu.csv", "truth.csv", "segments.csv", "events.csv"})
+      r.files.push_back(out / f);
+    if (!rec.damage.empty()) r.warnings.push_back(fmt::format("{} of {} samples exported: {}", rec.sample_count(), rec.written_samples, rec.damage));
+    return r;
+  }
   const RunResults rr = load_run_results(run_dir);
   const fs::path run = rr.dir;
   if (out.empty()) {

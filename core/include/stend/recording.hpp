@@ -1,6 +1,12 @@
 // The recording: the only contract between acquisition and analysis.
 //
-// A run folder, readable without Stend (CSV + JSON; layout in docs/recording-format.md):
+// A run folder, readable without Stend (layout in docs/recording-format.md), in one of two
+// formats. HDF5 (the default): run.json and experiment.yaml as below, and run.h5 holding the
+// samples (counts in their native width, SI derived from the stored conversion), truth, segments,
+// events and the header as attributes; written in SWMR mode and flushed each second of wall time,
+// so a SIGKILL loses at most about the last second and the file stays readable. run.h5 is the
+// source of truth: its header attributes win over run.json, a human-readable copy written at the
+// start and at finish(). CSV (RecordingFormat::kCsv, and every run folder of older versions):
 //   run.json        header: format version, experiment name, stend version, plugins, sensor
 //                   identity and info, gravity, mounting, seed, clock, truth columns, start time;
 //                   rewritten at finish() with status "complete" | "interrupted" | "failed"
@@ -113,11 +119,23 @@ struct Event {
   std::string message;
 };
 
+// How a run folder stores its data: run.h5 (HDF5) or the CSV files.
+enum class RecordingFormat { kHdf5, kCsv };
+// "hdf5" | "csv".
+const char* to_string(RecordingFormat f);
+// The format of that name, or nullopt.
+std::optional<RecordingFormat> recording_format_from_string(std::string_view name);
+
+struct RecordingWriterOptions {
+  RecordingFormat format = RecordingFormat::kHdf5;
+};
+
 class RecordingWriter {
  public:
   // Creates `run_dir` (must not exist), writes run.json and experiment.yaml, opens the streams.
   RecordingWriter(const std::filesystem::path& run_dir, RecordingHeader header,
-                  const std::string& resolved_experiment_yaml);
+                  const std::string& resolved_experiment_yaml,
+                  const RecordingWriterOptions& options = {});
   ~RecordingWriter();  // flushes; does not change the status
   RecordingWriter(const RecordingWriter&) = delete;
   RecordingWriter& operator=(const RecordingWriter&) = delete;
@@ -126,8 +144,8 @@ class RecordingWriter {
   void add_truth(double t_s, const std::vector<double>& values);  // size = truth_columns
   void add_segment(const Segment& s);
   void add_event(const Event& e);  // written (and flushed) at once
-  // Call often with the run time; flushes to the OS when ≥ 1 s of run time or of wall time has
-  // passed since the last flush.
+  // Call often with the run time; flushes to the OS when ≥ 1 s of wall time has passed since the
+  // last flush (CSV: also ≥ 1 s of run time).
   void tick(double run_time_s);
   void flush();
   // Final status and counts into run.json.
@@ -160,6 +178,14 @@ struct Recording {
   std::vector<Segment> segments;
   std::vector<Event> events;
   std::size_t dropped_partial_lines = 0;  // truncated trailing lines ignored by the reader
+  RecordingFormat format = RecordingFormat::kCsv;
+  // run.h5: samples the file claims, and what is damaged when fewer are readable (empty when the
+  // file is whole; sample_count() is what can be read).
+  std::uint64_t written_samples = 0;
+  std::string damage;
+  // Samples flagged kGapBefore, as the store's summary states (run.h5 as of its last flush; CSV
+  // counted on reading); −1 when unknown.
+  std::int64_t gap_count = -1;
 
   // Throws std::runtime_error naming the file and line when something is unreadable.
   static Recording open(const std::filesystem::path& run_dir,
@@ -174,5 +200,11 @@ struct Recording {
  private:
   mutable std::shared_ptr<const MemorySamples> memory_view_;  // sample_source() over `samples`
 };
+
+// Writes `rec` as a new run folder `dir` (must not exist) in `options.format`: the same header,
+// experiment, samples (streamed a chunk at a time), truth, segments and events; a finished run
+// keeps its status (its end time becomes the copy's), an unfinished one stays "running".
+void write_recording(const Recording& rec, const std::filesystem::path& dir,
+                     const RecordingWriterOptions& options);
 
 }  // namespace stend
