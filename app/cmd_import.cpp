@@ -35,16 +35,6 @@ std::string import_yaml(const ImportArgs& a, const std::string& format, const io
   return std::string(out.c_str()) + "\n";
 }
 
-// Writes `rec` as the run folder `dir` through the recording store, the samples a chunk at a time.
-void write_run(const Recording& rec, const std::filesystem::path& dir, const std::string& yaml) {
-  RecordingWriter w(dir, rec.header, yaml);
-  for_each_chunk(rec.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t) { w.add_samples(c, n); });
-  for (std::size_t i = 0; i < rec.truth_t.size(); ++i) w.add_truth(rec.truth_t[i], rec.truth[i]);
-  for (const auto& s : rec.segments) w.add_segment(s);
-  for (const auto& e : rec.events) w.add_event(e);
-  w.finish(RunStatus::kComplete);
-}
-
 int run_import(const ImportArgs& a) {
   const std::filesystem::path dir = a.output;
   if (std::filesystem::exists(dir)) {
@@ -62,7 +52,9 @@ int run_import(const ImportArgs& a) {
   io::add_provenance(rec, inputs, format);
   if (!a.name.empty()) rec.header.experiment_name = a.name;
   try {
-    write_run(rec, dir, import_yaml(a, format, options));
+    rec.experiment_yaml = import_yaml(a, format, options);
+    rec.header.status = RunStatus::kComplete;
+    write_recording(rec, dir);
   } catch (...) {
     std::error_code ec;
     std::filesystem::remove_all(dir, ec);  // the folder did not exist before: nothing else is lost

@@ -79,7 +79,7 @@ void print_progress(const stend::RunProgress& p, bool tty) {
 }
 
 int cmd_run(const std::string& file, const std::string& output, const std::string& name, const std::string& clock,
-            bool quiet) {
+            const std::string& store, bool quiet) {
   stend::PluginHost host;
   scan_plugins(host, stend::experiment_plugin_paths(file));
   const stend::Experiment exp = stend::load_experiment(file, host);
@@ -88,6 +88,7 @@ int cmd_run(const std::string& file, const std::string& output, const std::strin
   opt.output_dir = output;
   opt.run_name = name;
   opt.clock = clock;
+  opt.store.format = *stend::recording_format_from_string(store);  // checked by the option
   opt.stop = &g_stop;
   const bool tty = isatty(STDERR_FILENO) != 0;
   if (!quiet) {
@@ -172,13 +173,15 @@ int main(int argc, char** argv) {
   auto* validate = app.add_subcommand("validate", "Check an experiment file without running it");
   validate->add_option("experiment", file, "Experiment YAML")->required();
 
-  std::string output, name, clock;
+  std::string output, name, clock, store = "hdf5";
   bool quiet = false;
   auto* run = app.add_subcommand("run", "Run an experiment and record it");
   run->add_option("experiment", file, "Experiment YAML")->required();
   run->add_option("-o,--output", output, "Folder for run folders (default: the experiment's outputs.directory)");
   run->add_option("--name", name, "Run folder name (default: <experiment>-<UTC time>)");
   run->add_option("--clock", clock, "Override the clock")->check(CLI::IsMember({"simulated", "wall"}));
+  run->add_option("--store", store, "How the run folder stores its data: hdf5 (run.h5, default) or csv (the CSV files)")
+      ->check(CLI::IsMember({"hdf5", "csv"}));
   run->add_flag("-q,--quiet", quiet, "No progress display");
 
   std::string dir;
@@ -211,7 +214,7 @@ int main(int argc, char** argv) {
       if (*c.sub) return c.run();
     if (*plugins) return cmd_plugins(plugin_paths);
     if (*validate) return cmd_validate(file);
-    if (*run) return cmd_run(file, output, name, clock, quiet);
+    if (*run) return cmd_run(file, output, name, clock, store, quiet);
     if (*info) return cmd_info(dir);
     if (*fit) return cmd_fit(fit_data, model, json, estimator);
   } catch (const stend::ExperimentError& e) {

@@ -65,6 +65,27 @@ TEST(Cli, RunFitsThePaperModelAndWritesResults) {
   EXPECT_NE(info.text.find("status:     complete"), std::string::npos) << info.text;
 }
 
+// The store is HDF5 by default; `--store csv` writes the CSV files; both fit to the same numbers.
+TEST(Cli, RunStoresHdf5ByDefaultAndCsvOnRequest) {
+  const TempDir dir("cli-store");
+  const std::string cfg = src + "/configs/paper_mpu6050_z.yaml --quiet --output " + dir.str();
+  const ProgramOutput h5 = run_stend("run " + cfg + " --name h5");
+  const ProgramOutput csv = run_stend("run " + cfg + " --name csv --store csv");
+  ASSERT_EQ(h5.code, 0) << h5.text;
+  ASSERT_EQ(csv.code, 0) << csv.text;
+  EXPECT_TRUE(fs::exists(dir / "h5" / "run.h5"));
+  EXPECT_FALSE(fs::exists(dir / "h5" / "imu.csv"));
+  EXPECT_TRUE(fs::exists(dir / "csv" / "imu.csv"));
+  EXPECT_FALSE(fs::exists(dir / "csv" / "run.h5"));
+  const auto fitted = [](const std::string& text) {  // the line of the fitted cross-axis term
+    const auto at = text.find("cross_zx");
+    return at == std::string::npos ? std::string() : text.substr(at, text.find('\n', at) - at);
+  };
+  EXPECT_FALSE(fitted(h5.text).empty()) << h5.text;
+  EXPECT_EQ(fitted(h5.text), fitted(csv.text));
+  EXPECT_NE(run_stend("run " + cfg + " --name bad --store parquet").code, 0);
+}
+
 TEST(Cli, FitImportsTheMpu6050StaticDataset) {
   const fs::path data = stend::testing::shared_data("mpu6050_multipos/static_449s.csv");
   STEND_SKIP_IF_ABSENT(data);

@@ -456,7 +456,7 @@ RunResult run_experiment(const Experiment& exp, const PluginHost& host, const Ru
   std::filesystem::path dir = out / name;
   for (int n = 2; std::filesystem::exists(dir); ++n) dir = out / (name + "-" + std::to_string(n));
 
-  RecordingWriter writer(dir, std::move(header), exp.resolved_yaml);
+  RecordingWriter writer(dir, std::move(header), exp.resolved_yaml, options.store);
   RecordingSink sink(writer);
   RunResult result = execute(exp, bench, *make_clock(clock), sink, options);
   result.dir = dir;

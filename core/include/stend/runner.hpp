@@ -43,6 +43,7 @@ struct RunOptions {
   // A fixture whose link fails (FixtureLinkFault) is retried every period for this long (run
   // time) before the run fails; the gap is reported in events.csv and marks segments unsettled.
   double fixture_outage_s = 30.0;
+  RecordingWriterOptions store;      // how the run folder stores its data (HDF5 by default)
 };
 
 struct RunResult {
