@@ -3,8 +3,9 @@
 
     allantools_octave.py FILE --rate HZ [--out JSON] [--max-m M] [--allantools DIR]
 
-FILE is a Stend run folder's imu.csv (read with pandas) or an HDF5 file (read with h5py; one
-1-D dataset per channel, named by --h5-path, '{channel}' replaced by ax … gz). For each of the
+FILE is a Stend run folder's run.h5 (read with h5py as docs/recording-format.md shows: counts
+times the stored LSB plus offset, or the stored SI column, with the exceptions applied) or its
+imu.csv (CSV store; read with pandas). For each of the
 six channels (ax ay az in m/s², gx gy gz in rad/s) it computes allantools.oadev of the rate data
 at τ = m/rate, m = 1, 2, 4, … ≤ min(max_m, N/2), and the one-sigma interval from allantools'
 Greenhall EDF for white noise (ci.edf_greenhall, overlapping) and its chi-squared interval
@@ -20,11 +21,29 @@ CHANNELS = {"ax": "ax_mps2", "ay": "ay_mps2", "az": "az_mps2",
             "gx": "gx_radps", "gy": "gy_radps", "gz": "gz_radps"}
 
 
-def read_columns(path, h5_path):
+def read_h5(path):
+    import h5py
+    names = list(CHANNELS)
+    with h5py.File(path, "r", swmr=True) as f:
+        g = f["samples"]
+        exceptions = g["exceptions"][:]
+        out = {}
+        for k, name in enumerate(names):
+            if CHANNELS[name] in g:
+                out[name] = g[CHANNELS[name]][:]
+                continue
+            d = g[name + "_counts"]
+            v = d[:] * d.attrs["lsb"] + d.attrs["offset"]
+            for i, ch, _, x in exceptions:
+                if int(ch) == k:
+                    v[int(i)] = x
+            out[name] = v
+        return out
+
+
+def read_columns(path):
     if path.endswith((".h5", ".hdf5")):
-        import h5py
-        with h5py.File(path, "r") as f:
-            return {c: f[h5_path.format(channel=c)][()] for c in CHANNELS}
+        return read_h5(path)
     import pandas as pd
     frame = pd.read_csv(path, usecols=list(CHANNELS.values()), dtype="float64")
     return {c: frame[col].to_numpy() for c, col in CHANNELS.items()}
@@ -36,7 +55,6 @@ def main():
     ap.add_argument("--rate", type=float, required=True, help="sample rate [Hz]")
     ap.add_argument("--out", default="-")
     ap.add_argument("--max-m", type=int, default=1 << 22)
-    ap.add_argument("--h5-path", default="samples/{channel}")
     here = os.path.dirname(os.path.abspath(__file__))
     ap.add_argument("--allantools", default=os.path.join(here, "..", "..", "shared", "peers", "allantools"))
     args = ap.parse_args()
@@ -46,7 +64,7 @@ def main():
     from allantools import ci
 
     result = {}
-    for name, y in read_columns(args.file, args.h5_path).items():
+    for name, y in read_columns(args.file).items():
         n = len(y)
         ms = [1 << k for k in range(64) if (1 << k) <= args.max_m and 2 * (1 << k) <= n]
         taus = np.array(ms, dtype=float) / args.rate

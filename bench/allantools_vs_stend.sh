@@ -9,7 +9,7 @@
 # 1. Stend: `stend fit RUN --model estimators/allan/example/allan.yaml --json F` without the
 #    example's further deviations (read the run, octave OADEV of all six channels, EDF and
 #    intervals, noise model, write the results: what allantools computes);
-# 2. allantools: bench/allantools_octave.py RUN/imu.csv (pandas reads the six SI columns,
+# 2. allantools: bench/allantools_octave.py RUN/run.h5 (h5py; RUN/imu.csv with pandas for a CSV run),
 #    allantools.oadev at the same octave τ, Greenhall EDF and chi-squared intervals), run with
 #    Debian's python3 (numpy, pandas, scipy: scripts/install-deps.sh);
 # 3. each is timed RUNS times, alternating, with /usr/bin/time; prints medians of wall and CPU
@@ -33,6 +33,9 @@ if [ -z "$run" ]; then
   "$stend" run "$root/configs/long_static.yaml" -o "$tmp" --name static -q >/dev/null
   run=$tmp/static
 fi
+data=$run/run.h5
+[ -f "$data" ] || data=$run/imu.csv
+samples=$("$stend" info "$run" | sed -n 's/^data: *\([0-9]*\) samples.*/\1/p' | head -1)
 rate=$(sed -n 's/.*"output_rate_hz": *\([0-9.eE+-]*\).*/\1/p' "$run/run.json" | head -1)
 
 peer=""
@@ -54,10 +57,10 @@ column_median() { awk -v c="$2" '{ print $c }' "$1" | median; }
 for _ in $(seq "$runs"); do
   timed "$tmp/stend.times" "$stend" fit "$run" --model "$model" --json "$tmp/stend.json"
   [ -z "$peer" ] || timed "$tmp/allantools.times" "$python" "$root/bench/allantools_octave.py" \
-    "$run/imu.csv" --rate "$rate" --allantools "$peer_src" --out "$tmp/allantools.json"
+    "$data" --rate "$rate" --allantools "$peer_src" --out "$tmp/allantools.json"
 done
 
-echo "record: $run, $(($(wc -l <"$run/imu.csv") - 1)) samples at $rate Hz × 6 channels; $runs runs each, alternating"
+echo "record: $data, ${samples:-?} samples at $rate Hz × 6 channels; $runs runs each, alternating"
 echo "load average: $(cut -d' ' -f1-3 /proc/loadavg), $(nproc) cores"
 printf '%-11s %12s %12s %14s\n' "" "wall med [s]" "CPU med [s]" "peak RSS [MiB]"
 for who in stend allantools; do
