@@ -28,6 +28,13 @@ EstimatorResult AllanEstimator::fit(const EstimatorRequest& req) {
   std::ostringstream text, json;
   write_summary_table(text, report);
   write_json(json, report);
+  if (report_failed(report)) {
+    std::string why;
+    for (const auto& c : report.channels)
+      if (!c.model.ok) why += (why.empty() ? "" : "; ") + c.curve.channel.name + ": " + c.model.message;
+    return {false, "allan: noise-model fit failed — " + (why.empty() ? std::string("no channel") : why), json.str(),
+            text.str(), config_.results_file};
+  }
   return {true, {}, json.str(), text.str(), config_.results_file};
 }
 
@@ -69,7 +76,7 @@ estimation::FitSummary summarize(const nlohmann::json& doc) {
       s.message += c + ": " + m.value("message", "") + "; ";
       continue;
     }
-    for (const char* symbol : {"N", "K", "B"})
+    for (const char* symbol : {"N", "K", "B", "G", "Tc"})
       if (m.contains(symbol)) s.parameters.push_back(coefficient(m[symbol], std::string(symbol) + "_" + c));
   }
   return s;
