@@ -18,12 +18,6 @@
 
 namespace stend::allan {
 
-namespace {
-
-std::string fmt_value(double v) { return std::isfinite(v) ? fmt::format("{:.4g}", v) : "-"; }
-
-}  // namespace
-
 const char* to_string(Instrument i) {
   switch (i) {
     case Instrument::kAccelerometer: return "accelerometer";
@@ -118,7 +112,7 @@ bool set_allan_option(AllanOptions& o, const OptionValue& value) {
     o.t_end_s = value.number();
   } else if (key == "lowpass_hz") {
     o.lowpass_hz = value.number();
-    if (!(o.lowpass_hz >= 0.0)) value.fail("must be >= 0 (Hz; 0 = no output filter)");
+    if (o.lowpass_hz < 0.0) value.fail("must be >= 0 (Hz; 0 = no output filter) or .nan (not stated)");
   } else {
     return false;
   }

@@ -24,6 +24,10 @@ constexpr int kGm = 5;                    // index of the Gauss–Markov term
 constexpr double kTermPenalty = 6.6349;   // χ²₁ 99 % quantile: penalty per parameter
 constexpr double kZ95 = 1.959963984540054;
 constexpr int kMaxFilteredM = 32;         // an unstated filter may flatten points up to this m
+// The octave points share their samples, so the likelihood of independent points overstates the
+// information by about this factor: the deviance is divided by it (selection) and the Fisher
+// covariance multiplied by it (uncertainties). Calibrated on the simulator grid (README).
+constexpr double kOvercount = 4.0;
 
 Coefficient* coefficient(NoiseModel& m, int j) { return m.coefficients() + j; }
 const Coefficient* coefficient(const NoiseModel& m, int j) { return m.coefficients() + j; }
@@ -97,7 +101,7 @@ struct Candidate {
   double deviance = std::numeric_limits<double>::infinity();
   bool valid = false;
   int parameters() const { return __builtin_popcount(mask) + ((mask >> kGm) & 1u ? 1 : 0); }
-  double score() const { return deviance + kTermPenalty * parameters(); }
+  double score() const { return deviance / kOvercount + kTermPenalty * parameters(); }
 };
 
 double model_at(const FitPoint& p, const std::array<double, kTerms>& c) {
@@ -167,29 +171,31 @@ Candidate fit_terms(const std::vector<FitPoint>& pts, unsigned mask, double tc) 
   return cand;
 }
 
-// Best τc for the terms in `mask` (which contains G): a log grid (3 per octave over the fitted τ
-// range widened by 4× each way), then golden-section refinement of ln τc around the best node.
-Candidate fit_with_gm(std::vector<FitPoint>& pts, unsigned mask, const WhiteTerm& white) {
+// Best τc for the terms in `mask` (which contains G) on a log grid, 2 nodes per octave over the
+// fitted τ range widened by 4× each way; `step` is the grid's spacing in ln τc.
+Candidate fit_with_gm(std::vector<FitPoint>& pts, unsigned mask, const WhiteTerm& white, double& step) {
   const double l0 = std::log(pts.front().tau / 4.0), l1 = std::log(pts.back().tau * 4.0);
-  const int nodes = std::max(4, static_cast<int>(std::ceil((l1 - l0) / std::log(2.0) * 3.0)));
+  const int nodes = std::max(4, static_cast<int>(std::ceil((l1 - l0) / std::log(2.0) * 2.0)));
+  step = (l1 - l0) / nodes;
+  Candidate best;
+  for (int i = 0; i <= nodes; ++i) {
+    const double tc = std::exp(l0 + step * i);
+    set_basis(pts, white, tc);
+    Candidate c = fit_terms(pts, mask, tc);
+    if (c.valid && c.deviance < best.deviance) best = c;
+  }
+  return best;
+}
+
+// Golden-section refinement of ln τc within one grid step either side of the candidate's τc.
+Candidate refine_gm(std::vector<FitPoint>& pts, Candidate best, const WhiteTerm& white, double step) {
   auto at = [&](double l) {
     set_basis(pts, white, std::exp(l));
-    return fit_terms(pts, mask, std::exp(l));
+    return fit_terms(pts, best.mask, std::exp(l));
   };
-  Candidate best;
-  int best_i = -1;
-  for (int i = 0; i <= nodes; ++i) {
-    Candidate c = at(l0 + (l1 - l0) * i / nodes);
-    if (c.valid && c.deviance < best.deviance) {
-      best = c;
-      best_i = i;
-    }
-  }
-  if (best_i < 0) return best;
-  const double step = (l1 - l0) / nodes;
-  double a = l0 + step * (best_i - 1), b = l0 + step * (best_i + 1);
+  double a = std::log(best.tc) - step, b = std::log(best.tc) + step;
   const double g = 0.5 * (std::sqrt(5.0) - 1.0);
-  for (int it = 0; it < 24; ++it) {
+  for (int it = 0; it < 20; ++it) {
     const double x1 = b - g * (b - a), x2 = a + g * (b - a);
     const Candidate c1 = at(x1), c2 = at(x2);
     if (c1.valid && c1.deviance < best.deviance) best = c1;
@@ -203,23 +209,19 @@ Candidate fit_with_gm(std::vector<FitPoint>& pts, unsigned mask, const WhiteTerm
 // The candidate with the least penalised deviance over every non-empty subset of the terms.
 Candidate select_model(std::vector<FitPoint>& pts, const WhiteTerm& white) {
   Candidate best;
-  double best_score = std::numeric_limits<double>::infinity();
   set_basis(pts, white, 0.0);
   for (unsigned mask = 1; mask < (1u << kGm); ++mask) {
     const Candidate c = fit_terms(pts, mask, 0.0);
-    if (c.valid && c.score() < best_score) {
-      best = c;
-      best_score = c.score();
-    }
+    if (c.valid && c.score() < best.score()) best = c;
   }
+  double step = 0.0;
   for (unsigned mask = 1u << kGm; mask < (1u << kTerms); ++mask) {
     if (__builtin_popcount(mask) + 1 > static_cast<int>(pts.size()) - 1) continue;
-    const Candidate c = fit_with_gm(pts, mask, white);
-    if (c.valid && c.score() < best_score) {
-      best = c;
-      best_score = c.score();
-    }
+    if (mask & (1u << 2)) continue;  // B and G both make the plateau: the data cannot split them
+    const Candidate c = fit_with_gm(pts, mask, white, step);
+    if (c.valid && c.score() < best.score()) best = c;
   }
+  if ((best.mask >> kGm) & 1u) best = refine_gm(pts, best, white, step);
   set_basis(pts, white, best.tc);
   return best;
 }
@@ -248,7 +250,8 @@ void fisher_uncertainties(const std::vector<FitPoint>& pts, const Candidate& can
   const Eigen::MatrixXd cov = F.completeOrthogonalDecomposition().pseudoInverse();
   model.dof = static_cast<int>(pts.size()) - k;
   model.chi2_reduced = model.dof > 0 ? cand.deviance / model.dof : kNaN;
-  const double inflate = std::isfinite(model.chi2_reduced) ? std::max(1.0, model.chi2_reduced) : 1.0;
+  const double inflate =
+      kOvercount * (std::isfinite(model.chi2_reduced) ? std::max(1.0, model.chi2_reduced / kOvercount) : 1.0);
   for (std::size_t q = 0; q < cols.size(); ++q) {
     Coefficient* c = coefficient(model, cols[q]);
     const double var_c = cov(static_cast<int>(q), static_cast<int>(q)) * inflate;
