@@ -227,7 +227,8 @@ Candidate select_model(std::vector<FitPoint>& pts, const WhiteTerm& white) {
 }
 
 // σ of each selected coefficient (and of τc) from the inverse Fisher information
-// Σ ν/(2·model²)·∇model ∇modelᵀ over θ = (c_j…, ln τc), scaled by √max(1, D/dof).
+// Σ ν/(2·model²)·∇model ∇modelᵀ over θ = (c_j/ĉ_j…, ln τc), times the overcount (and D/c/dof
+// when above 1).
 void fisher_uncertainties(const std::vector<FitPoint>& pts, const Candidate& cand, NoiseModel& model) {
   std::vector<int> cols;
   for (int j = 0; j < kTerms; ++j)
@@ -238,7 +239,8 @@ void fisher_uncertainties(const std::vector<FitPoint>& pts, const Candidate& can
   const double h = 1e-4;
   for (const auto& p : pts) {
     Eigen::VectorXd g(k);
-    for (std::size_t q = 0; q < cols.size(); ++q) g(static_cast<int>(q)) = p.a[cols[q]];
+    // θ_q = c_q / ĉ_q (relative, so every column is of order 1 and F is well scaled).
+    for (std::size_t q = 0; q < cols.size(); ++q) g(static_cast<int>(q)) = cand.c[cols[q]] * p.a[cols[q]];
     if (gm) {
       const double up = model::allan::gauss_markov(1.0, cand.tc * std::exp(h), p.tau);
       const double dn = model::allan::gauss_markov(1.0, cand.tc * std::exp(-h), p.tau);
@@ -254,7 +256,7 @@ void fisher_uncertainties(const std::vector<FitPoint>& pts, const Candidate& can
       kOvercount * (std::isfinite(model.chi2_reduced) ? std::max(1.0, model.chi2_reduced / kOvercount) : 1.0);
   for (std::size_t q = 0; q < cols.size(); ++q) {
     Coefficient* c = coefficient(model, cols[q]);
-    const double var_c = cov(static_cast<int>(q), static_cast<int>(q)) * inflate;
+    const double var_c = cov(static_cast<int>(q), static_cast<int>(q)) * inflate * cand.c[cols[q]] * cand.c[cols[q]];
     c->fitted_sigma = std::sqrt(std::max(0.0, var_c)) / (2.0 * c->fitted);
   }
   if (gm) {
