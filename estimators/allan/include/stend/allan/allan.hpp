@@ -2,10 +2,10 @@
 //
 //   curve      overlapping ADEV at octave τ from the streaming estimator (stream.hpp), with
 //              chi-squared confidence intervals from the equivalent degrees of freedom (stats.hpp)
-//   model      the classical IEEE Std 952 / 1554 sum of independent terms,
-//                σ²(τ) = 3Q²/τ² + N²/τ + (2 ln2/π) B² + K²τ/3 + R²τ²/2,
-//              fitted by non-negative weighted least squares; a coefficient counts as identified
-//              only where its term dominates the model somewhere inside the measured τ range
+//   model      the IEEE Std 952 / 1554 terms plus a first-order Gauss–Markov bias,
+//                σ²(τ) = 3Q²/τ² + N²·w(m) + (2 ln2/π) B² + K²τ/3 + R²τ²/2 + σ_G²·g(τ/τc),
+//              with the sensor's output low-pass in the white term w; terms chosen by penalised
+//              likelihood, one verdict per coefficient (identified ± σ, upper bound, failed)
 //   read-offs  the textbook slope lines: N = σ(1 s) on the −1/2 line, K = σ(3 s) on the +1/2
 //              line, B = σ_min / 0.664 at the flat minimum
 //   outputs    continuous-time densities with units, Kalibr IMU noise parameters, a text table,
@@ -201,7 +201,7 @@ struct NoiseModel {
   double rate_hz = 0.0;
   double avar(double tau_s) const;
   NoiseType dominant(double tau_s) const;
-  // Q N B K R G Tc in a row (kCoefficients); the first kTerms are linear AVAR terms.
+  // Q N B K R G Tc in a row; the first six are AVAR terms, Tc is the correlation time of G.
   static constexpr int kCoefficients = 7;
   const Coefficient* coefficients() const { return &quantization; }
   Coefficient* coefficients() { return &quantization; }
