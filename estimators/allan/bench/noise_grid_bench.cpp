@@ -1,6 +1,6 @@
 // The simulator grid of the noise-model fit as a table (see README.md, "Validation on the
 // simulator"): output rate × low-pass × noise mix, `seeds` records each, every axis scored.
-//   noise_grid_bench [seeds (20)] [duration_s (600)]
+//   noise_grid_bench [seeds (20)] [duration_s (600)] [rate_hz (all)]
 #include "../tests/noise_grid.hpp"
 
 #include <fmt/format.h>
@@ -14,6 +14,7 @@ using namespace stend::allan;
 int main(int argc, char** argv) {
   const int seeds = argc > 1 ? std::atoi(argv[1]) : 20;
   const double duration = argc > 2 ? std::atof(argv[2]) : 600.0;
+  const double only_rate = argc > 3 ? std::atof(argv[3]) : 0.0;  // 0: every rate
   fmt::print("# {} seeds x 3 axes per instrument, {} s records; cov = reported interval (95 % or upper bound) "
              "covers the truth, off = identified and outside its interval, id = identified; absent terms: "
              "identified fraction\n",
@@ -21,6 +22,7 @@ int main(int argc, char** argv) {
   fmt::print("| rate Hz | low-pass | mix | inst | N cov/off | K cov/off/id | G cov/off/id | Tc cov | absent identified | s |\n");
   fmt::print("|---|---|---|---|---|---|---|---|---|---|\n");
   for (double rate : {100.0, 200.0, 1000.0, 4000.0}) {
+    if (only_rate > 0.0 && rate != only_rate) continue;
     for (bool lp : {false, true}) {
       for (grid::Mix mix : {grid::Mix::kWhite, grid::Mix::kWhiteGm, grid::Mix::kWhiteRw, grid::Mix::kAll}) {
         const grid::Cell cell{rate, lp, mix, duration};
