@@ -62,7 +62,13 @@ class WhiteTerm {
     r_.assign(h.size(), 0.0);
     for (std::size_t d = 0; d < h.size(); ++d)
       for (std::size_t n = 0; n + d < h.size(); ++n) r_[d] += h[n] * h[n + d];
+    double r2 = r_[0] * r_[0];
+    for (std::size_t d = 1; d < r_.size(); ++d) r2 += 2.0 * r_[d] * r_[d];
+    independent_ = r_[0] * r_[0] / r2;
   }
+  // Independent values per sample of the filtered white noise, r(0)²/Σ_d r(d)² (the effective
+  // sample size of a variance estimate from correlated Gaussian values); 1 without a filter.
+  double independent() const { return independent_; }
   double operator()(double m) const {
     if (r_.empty()) return fs_ / m;
     double s = 2.0 * m * r_[0];
@@ -76,6 +82,7 @@ class WhiteTerm {
 
  private:
   double fs_;
+  double independent_ = 1.0;
   std::vector<double> r_;  // empty: no filter
 };
 
@@ -349,12 +356,16 @@ std::vector<FitPoint> usable_points(const AllanCurve& curve) {
   return pts;
 }
 
-// EDF of each point for the noise type `type_at(τ)` and its interval at `confidence`.
+// EDF of each point for the noise type `type_at(τ)` and its interval at `confidence`. The output
+// filter leaves ρ = white.independent() independent values per sample: the EDF is Greenhall's for
+// ρ·N samples at ρ·m (at least 1) per cluster — unchanged where m ≫ 1/ρ, lower at the shortest τ,
+// where neighbouring filtered samples repeat each other.
 template <class TypeAt>
-void set_edf(std::vector<FitPoint>& pts, const AllanCurve& curve, TypeAt type_at) {
-  const double n_phase = static_cast<double>(curve.samples) + 1.0;
+void set_edf(std::vector<FitPoint>& pts, const AllanCurve& curve, const WhiteTerm& white, TypeAt type_at) {
+  const double rho = white.independent();
+  const double n_phase = rho * static_cast<double>(curve.samples) + 1.0;
   for (auto& p : pts) {
-    p.edf = stats::edf_overlapping_adev(type_at(p.tau), n_phase, p.m);
+    p.edf = stats::edf_overlapping_adev(type_at(p.tau), n_phase, std::max(1.0, rho * p.m));
     if (!(std::isfinite(p.edf) && p.edf > 0.0)) p.edf = 1.0;
     const auto ci = stats::deviation_interval(p.adev, p.edf, curve.confidence);
     p.lo = ci.lo;
@@ -501,7 +512,7 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
   model.tau_min_s = all.front().tau;
   model.tau_max_s = all.back().tau;
   const WhiteTerm white(curve.rate_hz, opt.lowpass_hz);
-  set_edf(all, curve, [](double) { return NoiseType::kWhite; });
+  set_edf(all, curve, white, [](double) { return NoiseType::kWhite; });
   const std::size_t skip = std::isnan(opt.lowpass_hz) ? filtered_prefix(all, opt.slope_tolerance) : 0;
   std::vector<FitPoint> pts(all.begin() + static_cast<std::ptrdiff_t>(skip), all.end());
   model.tau_fit_min_s = pts.front().tau;
@@ -513,7 +524,7 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
     for (int j = 0; j < kTerms; ++j) coefficient(model, j)->fitted = std::sqrt(best.c[j]);
     model.correlation_time.fitted = best.tc;
     model.ok = true;
-    set_edf(pts, curve, [&](double tau) { return model.dominant(tau); });
+    set_edf(pts, curve, white, [&](double tau) { return model.dominant(tau); });
   }
   if (!best.valid) return failed_model(model, "fit failed: no model with positive coefficients fits the Allan points");
   for (int j = 0; j < kTerms; ++j) {
@@ -526,7 +537,7 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
                                 term_names(best.mask), kTermPenalty, best.deviance);
   NoiseModel snapshot = model;
   mark_dominance(snapshot, white, model);
-  set_edf(all, curve, [&](double tau) { return model.dominant(tau); });
+  set_edf(all, curve, white, [&](double tau) { return model.dominant(tau); });
   identify_and_bound(all, white, model);
   std::vector<double> slope;
   local_slopes(all, slope);
