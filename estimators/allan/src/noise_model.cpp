@@ -213,6 +213,15 @@ Candidate refine_gm(std::vector<FitPoint>& pts, Candidate best, const WhiteTerm&
   return best;
 }
 
+// B and G both make the plateau, so choosing between them is a choice of its shape (flat over
+// decades, or rising as τ/τc then falling as 1/√τ), not of one more term: the shape that fits
+// better (the lower deviance) is kept, τc not counted against G.
+Candidate plateau_shape(std::vector<FitPoint>& pts, const Candidate& with_b, const WhiteTerm& white) {
+  double step = 0.0;
+  const Candidate with_g = fit_with_gm(pts, (with_b.mask & ~(1u << 2)) | (1u << kGm), white, step);
+  return with_g.valid && with_g.deviance < with_b.deviance ? with_g : with_b;
+}
+
 // The candidate with the least penalised deviance over every non-empty subset of the terms.
 Candidate select_model(std::vector<FitPoint>& pts, const WhiteTerm& white) {
   Candidate best;
@@ -228,6 +237,7 @@ Candidate select_model(std::vector<FitPoint>& pts, const WhiteTerm& white) {
     const Candidate c = fit_with_gm(pts, mask, white, step);
     if (c.valid && c.score() < best.score()) best = c;
   }
+  if ((best.mask >> 2) & 1u) best = plateau_shape(pts, best, white);
   if ((best.mask >> kGm) & 1u) best = refine_gm(pts, best, white, step);
   set_basis(pts, white, best.tc);
   return best;
