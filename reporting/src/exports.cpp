@@ -320,7 +320,7 @@ std::pair<double, std::string> kalibr_value(const RunResults& rr, const json& bl
     res.warnings.push_back(std::string(key) + " is an upper bound (the record is too short to identify it)");
     return {b, "UPPER BOUND: not identified"};
   }
-  res.warnings.push_back(std::string(key) + ": no axis identified by the model fit; the mean slope read-off is written");
+  res.warnings.push_back(std::string(key) + ": no axis identified by the model fit; the largest slope read-off of the axes is written");
   return {b, "from the slope read-off, not the model fit"};
 }
 

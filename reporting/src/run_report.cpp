@@ -389,22 +389,22 @@ std::string temp_section(const json& tp) {
 
 // The fitted noise model of a channel's "model" document (missing coefficients as 0), for the
 // Allan library's own formula.
-allan::NoiseModel noise_model_from_json(const json& m) {
+allan::NoiseModel noise_model_from_json(const json& m, double rate_hz) {
   allan::NoiseModel nm;
-  nm.quantization.fitted = num(m.value("Q", json::object()), "fitted");
-  nm.white.fitted = num(m.value("N", json::object()), "fitted");
-  nm.bias_instability.fitted = num(m.value("B", json::object()), "fitted");
-  nm.random_walk.fitted = num(m.value("K", json::object()), "fitted");
-  nm.rate_ramp.fitted = num(m.value("R", json::object()), "fitted");
-  for (auto* coef : {&nm.quantization, &nm.white, &nm.bias_instability, &nm.random_walk, &nm.rate_ramp})
-    if (!std::isfinite(coef->fitted)) coef->fitted = 0.0;
+  nm.rate_hz = rate_hz;
+  nm.lowpass_hz = num(m, "lowpass_hz");
+  for (int j = 0; j < allan::NoiseModel::kCoefficients; ++j) {
+    allan::Coefficient& c = nm.coefficients()[j];
+    c.fitted = num(m.value(c.symbol, json::object()), "fitted");
+    if (!std::isfinite(c.fitted)) c.fitted = 0.0;
+  }
   return nm;
 }
 
 // The fitted model's ADEV over its τ range [s] (61 log-spaced τ, dashed in color c), and the slope
 // lines of the identified coefficients: −½ (N/√τ), +½ (K·√(τ/3)); empty lines are left out.
-std::vector<Series> model_series(const json& m, const std::string& c) {
-  const allan::NoiseModel nm = noise_model_from_json(m);
+std::vector<Series> model_series(const json& m, double rate_hz, const std::string& c) {
+  const allan::NoiseModel nm = noise_model_from_json(m, rate_hz);
   const json tr = m.value("tau_range_s", json::array());
   const double t0 = at(tr, 0), t1 = at(tr, 1);
   Series model{"", Style::kLine, {}, {}, {}, {}, c, true, 1.0};
@@ -432,16 +432,22 @@ std::vector<Series> model_series(const json& m, const std::string& c) {
   return out;
 }
 
-// Table row of a channel's N, K and B: value ± σ when identified, else the upper bound.
+// Table row of a channel's N, K, B and Gauss–Markov bias (σ, τc): each coefficient's verdict —
+// value ± σ when identified, else the upper bound, or failed.
 std::string coefficient_row(const json& ch, const json& m) {
   auto cell = [](const json& coef) {
-    if (coef.value("identified", false))
-      return fmt::format("{} ± {}", g3(num(coef, "value")), g3(num(coef, "sigma")));
-    return fmt::format("≤ {} (not identified)", g3(num(coef, "upper_bound")));
+    const std::string v = coef.value("verdict", coef.value("identified", false) ? "identified" : "upper_bound");
+    if (v == "identified") return fmt::format("{} ± {}", g3(num(coef, "value")), g3(num(coef, "sigma")));
+    if (v == "failed") return std::string("failed");
+    const double ub = num(coef, "upper_bound");
+    return std::isfinite(ub) ? fmt::format("≤ {} (not identified)", g3(ub)) : std::string("not identified");
   };
   const json N = m.value("N", json::object()), K = m.value("K", json::object()), B = m.value("B", json::object());
-  return fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n", escape(str(ch, "channel")),
-                     cell(N), cell(K), cell(B), escape(str(N, "unit") + ", " + str(K, "unit") + ", " + str(B, "unit")));
+  const json G = m.value("G", json::object()), Tc = m.value("Tc", json::object());
+  const std::string gm = G.value("identified", false) ? cell(G) + ", τc " + cell(Tc) + " s" : cell(G);
+  return fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                     escape(str(ch, "channel")), cell(N), cell(K), cell(B), gm,
+                     escape(str(N, "unit") + ", " + str(K, "unit") + ", " + str(B, "unit")));
 }
 
 // One channel into the instrument's plot (confidence band, points, model curves in color c) and
@@ -461,11 +467,11 @@ void add_allan_channel(const json& ch, const std::string& c, Plot& p, std::strin
   p.series.push_back(pts);
   const json m = ch.value("model", json::object());
   if (!m.value("ok", false)) {
-    table += fmt::format("<tr><td>{}</td><td colspan=\"5\" class=\"bad\">model fit failed: {}</td></tr>\n",
+    table += fmt::format("<tr><td>{}</td><td colspan=\"6\" class=\"bad\">model fit failed: {}</td></tr>\n",
                          escape(str(ch, "channel")), escape(str(m, "message")));
     return;
   }
-  for (auto& s : model_series(m, c)) p.series.push_back(std::move(s));
+  for (auto& s : model_series(m, num(ch, "rate_hz"), c)) p.series.push_back(std::move(s));
   table += coefficient_row(ch, m);
 }
 
@@ -486,7 +492,7 @@ std::string allan_instrument(const json& al, const std::string& inst) {
                    "same color) and the slope lines of identified coefficients (grey dashed: −½ white noise N/√τ, "
                    "light grey: +½ random walk K·√(τ/3)).") +
          "<table><tr><th>channel</th><th>N (white)</th><th>K (random walk)</th><th>B (bias instability)</th>"
-         "<th>units N, K, B</th></tr>\n" + table + "</table>\n";
+         "<th>Gauss–Markov bias σ (unit of B)</th><th>units N, K, B</th></tr>\n" + table + "</table>\n";
 }
 
 // The Kalibr noise parameters (with identification and upper-bound flags).

@@ -9,6 +9,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <array>
 #include <cmath>
 #include <numbers>
@@ -21,32 +22,6 @@
 #include <thread>
 
 namespace stend::allan {
-
-namespace {
-
-constexpr int kTerms = 5;  // Q N B K R
-
-// Regressor of the model: σ²(τ) = Σ_j c_j · basis_j(τ), c = (Q², N², B², K², R²).
-std::array<double, kTerms> basis(double tau) {
-  return {3.0 / (tau * tau), 1.0 / tau, kFlickerFloor * kFlickerFloor, tau / 3.0,
-          tau * tau / 2.0};
-}
-
-NoiseType noise_of_term(int j) {
-  switch (j) {
-    case 0: return NoiseType::kQuantization;
-    case 1: return NoiseType::kWhite;
-    case 2: return NoiseType::kFlicker;
-    default: return NoiseType::kRandomWalk;  // K, and the ramp R (closest EDF model)
-  }
-}
-
-Coefficient* coefficient(NoiseModel& m, int j) { return &m.quantization + j; }
-const Coefficient* coefficient(const NoiseModel& m, int j) { return &m.quantization + j; }
-
-std::string fmt_value(double v) { return std::isfinite(v) ? fmt::format("{:.4g}", v) : "-"; }
-
-}  // namespace
 
 const char* to_string(Instrument i) {
   switch (i) {
@@ -62,18 +37,18 @@ Units units_for(Instrument instrument, const std::string& signal_unit) {
   switch (instrument) {
     case Instrument::kAccelerometer:
       if (signal_unit.empty() || signal_unit == "m/s^2") {
-        return {"m/s^2", "m/s", "m/s^2/sqrt(Hz)", "m/s^2", "m/s^3/sqrt(Hz)", "m/s^3"};
+        return {"m/s^2", "m/s", "m/s^2/sqrt(Hz)", "m/s^2", "m/s^3/sqrt(Hz)", "m/s^3", "m/s^2"};
       }
       break;
     case Instrument::kGyroscope:
       if (signal_unit.empty() || signal_unit == "rad/s") {
-        return {"rad/s", "rad", "rad/s/sqrt(Hz)", "rad/s", "rad/s^2/sqrt(Hz)", "rad/s^2"};
+        return {"rad/s", "rad", "rad/s/sqrt(Hz)", "rad/s", "rad/s^2/sqrt(Hz)", "rad/s^2", "rad/s"};
       }
       break;
     case Instrument::kOther: break;
   }
   const std::string s = signal_unit.empty() ? "unit" : signal_unit;
-  return {s, s + "*s", s + "/sqrt(Hz)", s, s + "/s/sqrt(Hz)", s + "/s"};
+  return {s, s + "*s", s + "/sqrt(Hz)", s, s + "/s/sqrt(Hz)", s + "/s", s};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -139,6 +114,9 @@ bool set_allan_option(AllanOptions& o, const OptionValue& value) {
     o.t_begin_s = value.number();
   } else if (key == "t_end_s") {
     o.t_end_s = value.number();
+  } else if (key == "lowpass_hz") {
+    o.lowpass_hz = value.number();
+    if (o.lowpass_hz < 0.0) value.fail("must be >= 0 (Hz; 0 = no output filter) or .nan (not stated)");
   } else {
     return false;
   }
@@ -154,7 +132,7 @@ AllanOptions options_from_yaml(const YAML::Node& node, const std::string& file) 
   static const std::vector<std::string> keys = {"max_m", "confidence", "edf_from_model",
                                                 "slope_tolerance", "min_readoff_edf",
                                                 "min_readoff_points", "t_begin_s", "t_end_s",
-                                                "deviations", "tau"};
+                                                "lowpass_hz", "deviations", "tau"};
   for (const auto& kv : node) {
     const std::string key = kv.first.as<std::string>();
     const YAML::Node& v = kv.second;
@@ -172,31 +150,6 @@ AllanOptions options_from_yaml(const YAML::Node& node, const std::string& file) 
 
 // ---------------------------------------------------------------------------------------------
 // Model
-
-double NoiseModel::avar(double tau_s) const {
-  const auto b = basis(tau_s);
-  double v = 0.0;
-  for (int j = 0; j < kTerms; ++j) {
-    const double c = coefficient(*this, j)->fitted;
-    v += c * c * b[j];
-  }
-  return v;
-}
-
-NoiseType NoiseModel::dominant(double tau_s) const {
-  const auto b = basis(tau_s);
-  int best = 1;
-  double best_v = 0.0;
-  for (int j = 0; j < kTerms; ++j) {
-    const double c = coefficient(*this, j)->fitted;
-    const double v = c * c * b[j];
-    if (v > best_v) {
-      best_v = v;
-      best = j;
-    }
-  }
-  return noise_of_term(best);
-}
 
 AllanCurve make_curve(const std::vector<OctaveVariance>& octaves, std::uint64_t samples,
                       double rate_hz, const ChannelInfo& channel, double confidence) {
@@ -232,296 +185,6 @@ void assign_intervals(AllanCurve& curve, const NoiseModel* model) {
   }
 }
 
-namespace {
-
-struct FitPoint {
-  double tau, avar, adev, edf, lo, hi;
-  std::array<double, kTerms> a;
-};
-
-// Non-negative least squares min ‖W(A c − b)‖, c ≥ 0, for 5 unknowns: the optimum is the
-// unconstrained solution on its support, so every support is tried (31 small solves).
-struct NnlsResult {
-  std::array<double, kTerms> c{};
-  std::array<bool, kTerms> active{};
-  double chi2 = 0.0;
-  Eigen::MatrixXd cov;  // over the active columns, in c units
-};
-
-NnlsResult nnls(const std::vector<FitPoint>& pts, const std::vector<double>& w) {
-  const int n = static_cast<int>(pts.size());
-  Eigen::MatrixXd A(n, kTerms);
-  Eigen::VectorXd b(n);
-  for (int i = 0; i < n; ++i) {
-    for (int j = 0; j < kTerms; ++j) A(i, j) = w[i] * pts[i].a[j];
-    b(i) = w[i] * pts[i].avar;
-  }
-  Eigen::VectorXd scale(kTerms);
-  for (int j = 0; j < kTerms; ++j) {
-    scale(j) = A.col(j).norm();
-    if (scale(j) > 0.0) A.col(j) /= scale(j);
-  }
-  NnlsResult best;
-  best.chi2 = b.squaredNorm();  // empty support
-  for (int mask = 1; mask < (1 << kTerms); ++mask) {
-    std::vector<int> cols;
-    for (int j = 0; j < kTerms; ++j) {
-      if (mask & (1 << j)) cols.push_back(j);
-    }
-    const int k = static_cast<int>(cols.size());
-    if (k > n) continue;
-    Eigen::MatrixXd As(n, k);
-    for (int q = 0; q < k; ++q) As.col(q) = A.col(cols[q]);
-    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(As);
-    qr.setThreshold(1e-12);
-    if (qr.rank() < k) continue;
-    const Eigen::VectorXd x = qr.solve(b);
-    if ((x.array() <= 0.0).any()) continue;
-    const double r = (As * x - b).squaredNorm();
-    if (r < best.chi2) {
-      best = NnlsResult{};
-      best.chi2 = r;
-      for (int q = 0; q < k; ++q) {
-        best.c[cols[q]] = x(q) / scale(cols[q]);
-        best.active[cols[q]] = true;
-      }
-      const Eigen::MatrixXd AtA = As.transpose() * As;
-      Eigen::MatrixXd cov = AtA.inverse();
-      for (int p = 0; p < k; ++p) {
-        for (int q = 0; q < k; ++q) cov(p, q) /= scale(cols[p]) * scale(cols[q]);
-      }
-      best.cov = cov;
-    }
-  }
-  return best;
-}
-
-void local_slopes(const std::vector<FitPoint>& pts, std::vector<double>& slope) {
-  const std::size_t n = pts.size();
-  slope.assign(n, kNaN);
-  if (n < 2) return;
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t a = i == 0 ? 0 : i - 1;
-    const std::size_t b = i + 1 == n ? n - 1 : i + 1;
-    slope[i] = (std::log(pts[b].adev) - std::log(pts[a].adev)) /
-               (std::log(pts[b].tau) - std::log(pts[a].tau));
-  }
-}
-
-// Read-off on a slope line: value_i = adev_i · (τ_ref/τ_i)^target, pooled over the points
-// whose local slope is within tolerance of `target` (log-mean weighted by EDF).
-Readoff slope_readoff(const char* name, const std::string& unit, const std::vector<FitPoint>& pts,
-                      const std::vector<double>& slope, double target, double tau_ref,
-                      const AllanOptions& opt) {
-  Readoff r;
-  r.name = name;
-  r.unit = unit;
-  double sw = 0.0, swl = 0.0;
-  int count = 0;
-  std::size_t best = pts.size();
-  for (std::size_t i = 0; i < pts.size(); ++i) {
-    if (!(pts[i].edf >= opt.min_readoff_edf)) continue;
-    if (!(std::abs(slope[i] - target) <= opt.slope_tolerance)) continue;
-    const double v = pts[i].adev * std::pow(tau_ref / pts[i].tau, target);
-    sw += pts[i].edf;
-    swl += pts[i].edf * std::log(v);
-    ++count;
-    if (best == pts.size() || pts[i].edf > pts[best].edf) best = i;
-    if (!std::isfinite(r.tau_lo_s)) r.tau_lo_s = pts[i].tau;
-    r.tau_hi_s = pts[i].tau;
-  }
-  if (count < std::max(1, opt.min_readoff_points)) {
-    r.note = fmt::format(
-        "no slope {:+.1f} region (>= {} points with |slope - {:+.1f}| <= {:.2f} and edf >= {:g}) "
-        "in the measured tau range",
-        target, std::max(1, opt.min_readoff_points), target, opt.slope_tolerance, opt.min_readoff_edf);
-    r.tau_lo_s = r.tau_hi_s = kNaN;
-    return r;
-  }
-  r.found = true;
-  r.value = std::exp(swl / sw);
-  r.lo = r.value * pts[best].lo / pts[best].adev;
-  r.hi = r.value * pts[best].hi / pts[best].adev;
-  return r;
-}
-
-// The unit of every coefficient and read-off, from the curve's units.
-void set_units(NoiseModel& model, const Units& u) {
-  model.quantization.unit = u.quantization;
-  model.white.unit = u.white;
-  model.bias_instability.unit = u.bias;
-  model.random_walk.unit = u.random_walk;
-  model.rate_ramp.unit = u.ramp;
-  model.white_line.unit = u.white;
-  model.random_walk_line.unit = u.random_walk;
-  model.bias_floor.unit = u.bias;
-}
-
-// Points with a positive, finite Allan variance from at least one term, with the basis at τ.
-std::vector<FitPoint> usable_points(const AllanCurve& curve) {
-  std::vector<FitPoint> pts;
-  for (const auto& p : curve.points) {
-    if (!(p.avar > 0.0) || !std::isfinite(p.avar) || p.terms < 1) continue;
-    pts.push_back({p.tau_s, p.avar, p.adev, kNaN, kNaN, kNaN, basis(p.tau_s)});
-  }
-  return pts;
-}
-
-// Averaging factor m = τ·rate of a point (samples per cluster).
-double averaging_factor(const FitPoint& p, const AllanCurve& curve) { return std::round(p.tau * curve.rate_hz); }
-
-// Iteratively reweighted non-negative fit of the term coefficients to the Allan variances:
-// Var(σ̂²) ≈ 2σ⁴/EDF with σ² from the current model (8 passes); fills the fitted coefficients and,
-// with opt.edf_from_model, the points' EDF from the dominant term.
-NnlsResult reweighted_fit(std::vector<FitPoint>& pts, const AllanCurve& curve, const AllanOptions& opt,
-                          NoiseModel& model) {
-  const double n_phase = static_cast<double>(curve.samples) + 1.0;
-  for (auto& p : pts) p.edf = stats::edf_overlapping_adev(NoiseType::kWhite, n_phase, averaging_factor(p, curve));
-  NnlsResult fit;
-  std::vector<double> w(pts.size());
-  for (int iter = 0; iter < 8; ++iter) {
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-      double v = pts[i].avar;
-      if (iter > 0) {
-        double mv = 0.0;
-        for (int j = 0; j < kTerms; ++j) mv += fit.c[j] * pts[i].a[j];
-        if (mv > 0.0) v = mv;
-      }
-      const double edf = std::isfinite(pts[i].edf) && pts[i].edf > 0 ? pts[i].edf : 1.0;
-      w[i] = std::sqrt(edf / 2.0) / v;
-    }
-    fit = nnls(pts, w);
-    for (int j = 0; j < kTerms; ++j) coefficient(model, j)->fitted = std::sqrt(fit.c[j]);
-    if (opt.edf_from_model && iter >= 2) {
-      model.ok = true;  // dominant() needs it
-      for (auto& p : pts) p.edf = stats::edf_overlapping_adev(model.dominant(p.tau), n_phase, averaging_factor(p, curve));
-    }
-  }
-  return fit;
-}
-
-// Degrees of freedom, reduced χ², and each active coefficient's σ: σ(c) from the covariance
-// (inflated by χ²_red when above 1), σ(√c) = σ(c) / (2√c).
-void fit_uncertainties(const NnlsResult& fit, std::size_t points, NoiseModel& model) {
-  int active = 0;
-  for (int j = 0; j < kTerms; ++j) active += fit.active[j] ? 1 : 0;
-  model.dof = static_cast<int>(points) - active;
-  model.chi2_reduced = model.dof > 0 ? fit.chi2 / model.dof : kNaN;
-  const double inflate = std::isfinite(model.chi2_reduced) ? std::max(1.0, model.chi2_reduced) : 1.0;
-  int q = 0;
-  for (int j = 0; j < kTerms; ++j) {
-    if (!fit.active[j]) continue;
-    const double var_c = fit.cov(q, q) * inflate;
-    ++q;
-    Coefficient* c = coefficient(model, j);
-    c->fitted_sigma = c->fitted > 0 ? std::sqrt(std::max(0.0, var_c)) / (2.0 * c->fitted) : kNaN;
-  }
-}
-
-// Confidence interval of each point's ADEV with its final EDF (for upper bounds and read-offs).
-void point_intervals(std::vector<FitPoint>& pts, double confidence) {
-  for (auto& p : pts) {
-    const auto ci = stats::deviation_interval(p.adev, p.edf, confidence);
-    p.lo = ci.lo;
-    p.hi = ci.hi;
-  }
-}
-
-// Where each term dominates the fitted variance inside [τ_min, τ_max] (400 log-spaced τ) [s].
-void mark_dominance(const NnlsResult& fit, NoiseModel& model) {
-  const int grid = 400;
-  const double l0 = std::log(model.tau_min_s), l1 = std::log(model.tau_max_s);
-  for (int g = 0; g <= grid; ++g) {
-    const double tau = std::exp(l0 + (l1 - l0) * g / grid);
-    const auto b = basis(tau);
-    int best = -1;
-    double best_v = 0.0;
-    for (int j = 0; j < kTerms; ++j) {
-      const double v = fit.c[j] * b[j];
-      if (v > best_v) {
-        best_v = v;
-        best = j;
-      }
-    }
-    if (best < 0) continue;
-    Coefficient* c = coefficient(model, best);
-    c->dominates = true;
-    if (!std::isfinite(c->tau_lo_s)) c->tau_lo_s = tau;
-    c->tau_hi_s = tau;
-  }
-}
-
-// A coefficient is identified where it dominates and is ≥ 2σ; each gets the largest value
-// compatible with every measured upper limit (term alone).
-void identify_and_bound(const std::vector<FitPoint>& pts, NoiseModel& model) {
-  for (int j = 0; j < kTerms; ++j) {
-    Coefficient* c = coefficient(model, j);
-    c->identified = c->dominates && std::isfinite(c->fitted_sigma) && c->fitted >= 2.0 * c->fitted_sigma;
-    if (c->identified) {
-      c->value = c->fitted;
-      c->sigma = c->fitted_sigma;
-    }
-    double bound = std::numeric_limits<double>::infinity();
-    for (const auto& p : pts) {
-      const double hi = std::isfinite(p.hi) ? p.hi : p.adev;
-      bound = std::min(bound, hi * hi / p.a[j]);
-    }
-    c->upper_bound = std::sqrt(bound);
-  }
-}
-
-// Bias-instability read-off at the ADEV minimum (ADEV / 0.664); found only for a flat minimum
-// inside the measured τ range.
-void read_bias_floor(const std::vector<FitPoint>& pts, const Units& u, Readoff& r) {
-  r.unit = u.bias;
-  std::size_t imin = 0;
-  for (std::size_t i = 1; i < pts.size(); ++i) {
-    if (pts[i].adev < pts[imin].adev) imin = i;
-  }
-  r.tau_lo_s = r.tau_hi_s = pts[imin].tau;
-  r.value = pts[imin].adev / kFlickerFloor;
-  r.lo = pts[imin].lo / kFlickerFloor;
-  r.hi = pts[imin].hi / kFlickerFloor;
-  if (imin + 1 == pts.size()) {
-    r.note = fmt::format("ADEV still falling at tau_max = {:.4g} s: no flat minimum; B <= {:.4g} {}",
-                         pts[imin].tau, r.value, u.bias);
-  } else if (imin == 0) {
-    r.note = "ADEV rises from the smallest tau: no flat minimum";
-  } else {
-    r.found = true;
-  }
-}
-
-}  // namespace
-
-NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
-  NoiseModel model;
-  const Units& u = curve.units;
-  set_units(model, u);
-  std::vector<FitPoint> pts = usable_points(curve);
-  if (pts.size() < 2) {
-    model.message = fmt::format("fit failed: {} usable Allan point(s), need at least 2",
-                                pts.size());
-    return model;
-  }
-  model.tau_min_s = pts.front().tau;
-  model.tau_max_s = pts.back().tau;
-  const NnlsResult fit = reweighted_fit(pts, curve, opt, model);
-  model.ok = true;
-  fit_uncertainties(fit, pts.size(), model);
-  point_intervals(pts, curve.confidence);
-  mark_dominance(fit, model);
-  identify_and_bound(pts, model);
-  std::vector<double> slope;
-  local_slopes(pts, slope);
-  model.white_line = slope_readoff(model.white_line.name, u.white, pts, slope, -0.5, 1.0, opt);
-  model.random_walk_line =
-      slope_readoff(model.random_walk_line.name, u.random_walk, pts, slope, 0.5, 3.0, opt);
-  read_bias_floor(pts, u, model.bias_floor);
-  if (model.dof <= 0) model.message = "as many active terms as points: no residual check";
-  return model;
-}
-
 ChannelResult analyze(const OverlappingAllanStream& stream, double rate_hz,
                       const ChannelInfo& channel, const AllanOptions& options) {
   ChannelResult r;
@@ -550,55 +213,80 @@ ChannelResult analyze(const double* y, std::size_t n, std::size_t stride, double
 // ---------------------------------------------------------------------------------------------
 // Recordings and Kalibr
 
+namespace {
+
+// One Kalibr density of one sensor: per axis the identified coefficient, else its slope read-off,
+// else (random walk only) its upper bound; the one number is the largest identified axis, else the
+// largest read-off, else the largest bound.
+struct KalibrDensity {
+  double value = kNaN;
+  bool identified = false, upper_bound = false;
+  std::array<double, 3> axes{kNaN, kNaN, kNaN};
+  std::array<Verdict, 3> verdicts{Verdict::kFailed, Verdict::kFailed, Verdict::kFailed};
+};
+
+KalibrDensity kalibr_density(const std::vector<const NoiseModel*>& axes, bool random_walk) {
+  KalibrDensity d;
+  double best_id = kNaN, best_line = kNaN, best_bound = kNaN;
+  bool all = !axes.empty();
+  auto larger = [](double a, double b) { return std::isfinite(a) && !(a <= b) ? a : b; };
+  for (std::size_t k = 0; k < axes.size() && k < 3; ++k) {
+    const Coefficient& c = random_walk ? axes[k]->random_walk : axes[k]->white;
+    const Readoff& line = random_walk ? axes[k]->random_walk_line : axes[k]->white_line;
+    d.verdicts[k] = c.verdict();
+    all = all && c.identified;
+    if (c.identified) {
+      d.axes[k] = c.value;
+      best_id = larger(c.value, best_id);
+    } else if (c.verdict() == Verdict::kFailed) {
+      continue;
+    } else if (line.found) {
+      d.axes[k] = line.value;
+      best_line = larger(line.value, best_line);
+    } else if (random_walk) {
+      d.axes[k] = c.upper_bound;
+      best_bound = larger(c.upper_bound, best_bound);
+    }
+  }
+  d.identified = all;
+  d.value = std::isfinite(best_id) ? best_id : std::isfinite(best_line) ? best_line : best_bound;
+  d.upper_bound = !std::isfinite(best_id) && !std::isfinite(best_line) && std::isfinite(best_bound);
+  return d;
+}
+
+}  // namespace
+
 KalibrParameters kalibr_parameters(const std::vector<ChannelResult>& channels, double rate_hz) {
   KalibrParameters k;
   k.update_rate = rate_hz;
-  for (Instrument inst : {Instrument::kAccelerometer, Instrument::kGyroscope}) {
-    double n_sum = 0.0, k_sum = 0.0;
-    int n_count = 0, k_count = 0, axes = 0;
-    bool n_all = true, k_all = true, k_bound = false;
-    for (const auto& c : channels) {
-      if (c.curve.channel.instrument != inst) continue;
-      ++axes;
-      const NoiseModel& m = c.model;
-      if (m.white.identified) {
-        n_sum += m.white.value;
-        ++n_count;
-      } else if (m.white_line.found) {
-        n_sum += m.white_line.value;
-        ++n_count;
-        n_all = false;
-      } else {
-        n_all = false;
-      }
-      if (m.random_walk.identified) {
-        k_sum += m.random_walk.value;
-      } else if (m.random_walk_line.found) {
-        k_sum += m.random_walk_line.value;
-        k_all = false;
-      } else {
-        k_sum += m.random_walk.upper_bound;
-        k_all = false;
-        k_bound = true;
-      }
-      ++k_count;
-    }
-    if (axes == 0) continue;
-    const double nd = n_count > 0 ? n_sum / n_count : kNaN;
-    const double rw = k_count > 0 ? k_sum / k_count : kNaN;
-    if (inst == Instrument::kAccelerometer) {
-      k.accelerometer_noise_density = nd;
-      k.accelerometer_random_walk = rw;
-      k.accelerometer_noise_identified = n_all && n_count == axes;
-      k.accelerometer_random_walk_identified = k_all;
-      k.accelerometer_random_walk_is_upper_bound = k_bound;
-    } else {
-      k.gyroscope_noise_density = nd;
-      k.gyroscope_random_walk = rw;
-      k.gyroscope_noise_identified = n_all && n_count == axes;
-      k.gyroscope_random_walk_identified = k_all;
-      k.gyroscope_random_walk_is_upper_bound = k_bound;
-    }
+  std::vector<const NoiseModel*> accel, gyro;
+  for (const auto& c : channels) {
+    if (c.curve.channel.instrument == Instrument::kAccelerometer) accel.push_back(&c.model);
+    if (c.curve.channel.instrument == Instrument::kGyroscope) gyro.push_back(&c.model);
+  }
+  if (!accel.empty()) {
+    const KalibrDensity n = kalibr_density(accel, false), w = kalibr_density(accel, true);
+    k.accelerometer_noise_density = n.value;
+    k.accelerometer_noise_identified = n.identified;
+    k.accelerometer_noise_density_axes = n.axes;
+    k.accelerometer_noise_verdict = n.verdicts;
+    k.accelerometer_random_walk = w.value;
+    k.accelerometer_random_walk_identified = w.identified;
+    k.accelerometer_random_walk_is_upper_bound = w.upper_bound;
+    k.accelerometer_random_walk_axes = w.axes;
+    k.accelerometer_random_walk_verdict = w.verdicts;
+  }
+  if (!gyro.empty()) {
+    const KalibrDensity n = kalibr_density(gyro, false), w = kalibr_density(gyro, true);
+    k.gyroscope_noise_density = n.value;
+    k.gyroscope_noise_identified = n.identified;
+    k.gyroscope_noise_density_axes = n.axes;
+    k.gyroscope_noise_verdict = n.verdicts;
+    k.gyroscope_random_walk = w.value;
+    k.gyroscope_random_walk_identified = w.identified;
+    k.gyroscope_random_walk_is_upper_bound = w.upper_bound;
+    k.gyroscope_random_walk_axes = w.axes;
+    k.gyroscope_random_walk_verdict = w.verdicts;
   }
   return k;
 }
@@ -680,6 +368,21 @@ void add_sampling_warnings(const Sampling& s, AllanReport& report) {
   }
 }
 
+// The sensor's output low-pass cutoff [Hz] as the run's experiment.yaml states it
+// (bench.sensor.config.lowpass_hz; the simulated IMU's default is 0 = off), NaN when the run does
+// not say (imports, sensors without that key).
+double stated_lowpass_hz(const Recording& rec) {
+  if (rec.experiment_yaml.empty()) return kNaN;
+  try {
+    const YAML::Node sensor = YAML::Load(rec.experiment_yaml)["bench"]["sensor"];
+    if (!sensor) return kNaN;
+    if (sensor["config"] && sensor["config"]["lowpass_hz"]) return sensor["config"]["lowpass_hz"].as<double>();
+    return sensor["plugin"] && sensor["plugin"].as<std::string>() == "sim_imu" ? 0.0 : kNaN;
+  } catch (const YAML::Exception&) {
+    return kNaN;  // an unreadable experiment copy: treat the filter as not stated
+  }
+}
+
 // Allan curve and noise model of channel ch (0..2 accelerometer [m/s²], 3..5 gyroscope [rad/s])
 // over samples `range`, read a column chunk at a time (reads serialised by `read_lock`: a store
 // need not allow concurrent reads).
@@ -747,7 +450,9 @@ AllanReport analyze_recording(const Recording& rec, const AllanOptions& options)
   report.rate_hz = sampling.rate_hz;
   add_sampling_warnings(sampling, report);
   const int channels = rec.header.info.has_gyro ? 6 : 3;
-  report.channels = analyze_channels(src, range, channels, sampling.rate_hz, options);
+  AllanOptions opt = options;
+  if (std::isnan(opt.lowpass_hz)) opt.lowpass_hz = stated_lowpass_hz(rec);
+  report.channels = analyze_channels(src, range, channels, sampling.rate_hz, opt);
   report.kalibr = kalibr_parameters(report.channels, sampling.rate_hz);
   return report;
 }
@@ -775,18 +480,16 @@ std::ostream& operator<<(std::ostream& os, const AllanCurve& c) {
 }
 
 std::ostream& operator<<(std::ostream& os, const Coefficient& c) {
-  if (c.identified) {
-    os << fmt::format("{} ({}) = {:.4g} ± {:.2g} {}  [dominates {:.3g} … {:.3g} s]", c.symbol,
-                      c.name, c.value, c.sigma, c.unit, c.tau_lo_s, c.tau_hi_s);
-  } else if (c.dominates) {
-    os << fmt::format("{} ({}): not identified — dominates {:.3g} … {:.3g} s but the fit "
-                      "{:.3g} ± {:.2g} is not significant; <= {:.3g} {}",
-                      c.symbol, c.name, c.tau_lo_s, c.tau_hi_s, c.fitted, c.fitted_sigma,
-                      c.upper_bound, c.unit);
-  } else {
-    os << fmt::format("{} ({}): not identified (no slope region in the measured tau range); "
-                      "<= {:.3g} {}",
-                      c.symbol, c.name, c.upper_bound, c.unit);
+  switch (c.verdict()) {
+    case Verdict::kFailed: return os << fmt::format("{} ({}): FIT FAILED", c.symbol, c.name);
+    case Verdict::kIdentified:
+      os << fmt::format("{} ({}) = {:.4g} ± {:.2g} {} (95 % {:.4g} … {:.4g})", c.symbol, c.name, c.value,
+                        c.sigma, c.unit, c.lo, c.hi);
+      if (c.dominates) os << fmt::format("  [dominates {:.3g} … {:.3g} s]", c.tau_lo_s, c.tau_hi_s);
+      return os;
+    case Verdict::kUpperBound:
+      if (!std::isfinite(c.upper_bound)) return os << fmt::format("{} ({}): not identified", c.symbol, c.name);
+      return os << fmt::format("{} ({}): not identified; <= {:.3g} {}", c.symbol, c.name, c.upper_bound, c.unit);
   }
   return os;
 }
@@ -803,9 +506,18 @@ std::ostream& operator<<(std::ostream& os, const Readoff& r) {
 
 std::ostream& operator<<(std::ostream& os, const NoiseModel& m) {
   if (!m.ok) return os << "noise model: FIT FAILED — " << m.message << "\n";
-  os << fmt::format("noise model over tau {:.3g} … {:.3g} s (reduced chi2 {:.3g}, {} dof):\n",
-                    m.tau_min_s, m.tau_max_s, m.chi2_reduced, m.dof);
-  for (int j = 0; j < kTerms; ++j) os << "  " << *coefficient(m, j) << "\n";
+  os << fmt::format("noise model fitted over tau {:.3g} … {:.3g} s (deviance per dof {:.3g}, {} dof), "
+                    "output low-pass {}:\n",
+                    m.tau_fit_min_s, m.tau_max_s, m.chi2_reduced, m.dof,
+                    std::isnan(m.lowpass_hz) ? std::string("not stated")
+                    : m.lowpass_hz > 0.0     ? fmt::format("{:g} Hz in the model", m.lowpass_hz)
+                                             : std::string("none"));
+  os << "  selected terms: " << m.selection << "\n";
+  for (int j = 0; j < NoiseModel::kCoefficients; ++j) {
+    const Coefficient& c = m.coefficients()[j];
+    if (std::string(c.symbol) == "Tc" && !c.identified) continue;  // τc only with its σ_G
+    os << "  " << c << "\n";
+  }
   os << "  read-offs: " << m.white_line << "\n";
   os << "             " << m.random_walk_line << "\n";
   os << "             " << m.bias_floor << "\n";
@@ -818,27 +530,36 @@ std::ostream& operator<<(std::ostream& os, const ChannelResult& r) {
 }
 
 namespace {
-std::string kalibr_line(const char* key, double v, const char* unit, bool identified,
-                        bool upper) {
-  std::string status = identified ? "identified" : (upper ? "UPPER BOUND: not identified"
-                                                          : "from slope read-off / partial");
+std::string kalibr_line(const char* key, double v, const char* unit, bool identified, bool upper,
+                        const std::array<double, 3>& axes, const std::array<Verdict, 3>& verdicts) {
+  std::string status = identified ? "identified on every axis, largest axis"
+                       : upper    ? "UPPER BOUND: not identified"
+                                  : "not identified on every axis: largest identified axis, else slope read-off";
   if (!std::isfinite(v)) status = "NOT AVAILABLE";
-  return fmt::format("{}: {}  # [{}] {}\n", key, std::isfinite(v) ? fmt::format("{:.6g}", v) : "null",
-                     unit, status);
+  std::string per_axis;
+  for (int k = 0; k < 3; ++k) {
+    per_axis += fmt::format("{}{} {} ({})", k ? ", " : "", "xyz"[k],
+                            std::isfinite(axes[k]) ? fmt::format("{:.6g}", axes[k]) : "-", to_string(verdicts[k]));
+  }
+  return fmt::format("{}: {}  # [{}] {}; per axis: {}\n", key, std::isfinite(v) ? fmt::format("{:.6g}", v) : "null",
+                     unit, status, per_axis);
 }
 }  // namespace
 
 void write_kalibr_yaml(std::ostream& os, const KalibrParameters& k) {
-  os << "# IMU noise parameters (Kalibr imu.yaml) from the Allan deviation, mean over axes\n";
-  os << kalibr_line("accelerometer_noise_density", k.accelerometer_noise_density,
-                    "m/s^2/sqrt(Hz)", k.accelerometer_noise_identified, false);
+  os << "# IMU noise parameters (Kalibr imu.yaml) from the Allan deviation. Kalibr takes one density\n"
+        "# per sensor: the largest axis is written, every axis is in the comment.\n";
+  os << kalibr_line("accelerometer_noise_density", k.accelerometer_noise_density, "m/s^2/sqrt(Hz)",
+                    k.accelerometer_noise_identified, false, k.accelerometer_noise_density_axes,
+                    k.accelerometer_noise_verdict);
   os << kalibr_line("accelerometer_random_walk", k.accelerometer_random_walk, "m/s^3/sqrt(Hz)",
-                    k.accelerometer_random_walk_identified,
-                    k.accelerometer_random_walk_is_upper_bound);
+                    k.accelerometer_random_walk_identified, k.accelerometer_random_walk_is_upper_bound,
+                    k.accelerometer_random_walk_axes, k.accelerometer_random_walk_verdict);
   os << kalibr_line("gyroscope_noise_density", k.gyroscope_noise_density, "rad/s/sqrt(Hz)",
-                    k.gyroscope_noise_identified, false);
+                    k.gyroscope_noise_identified, false, k.gyroscope_noise_density_axes, k.gyroscope_noise_verdict);
   os << kalibr_line("gyroscope_random_walk", k.gyroscope_random_walk, "rad/s^2/sqrt(Hz)",
-                    k.gyroscope_random_walk_identified, k.gyroscope_random_walk_is_upper_bound);
+                    k.gyroscope_random_walk_identified, k.gyroscope_random_walk_is_upper_bound,
+                    k.gyroscope_random_walk_axes, k.gyroscope_random_walk_verdict);
   os << fmt::format("update_rate: {:.6g}  # [Hz]\n", k.update_rate);
 }
 
@@ -847,12 +568,22 @@ std::ostream& operator<<(std::ostream& os, const KalibrParameters& k) {
   return os;
 }
 
+namespace {
+// A table cell of one coefficient's verdict: value ± σ, <= bound, or FAILED.
+std::string verdict_cell(const Coefficient& c, double factor = 1.0) {
+  switch (c.verdict()) {
+    case Verdict::kIdentified: return fmt::format("{:.4g}±{:.2g}", c.value * factor, c.sigma * factor);
+    case Verdict::kUpperBound:
+      return std::isfinite(c.upper_bound) ? fmt::format("<={:.3g}", c.upper_bound * factor) : std::string("n/i");
+    case Verdict::kFailed: return "FAILED";
+  }
+  return "?";
+}
+}  // namespace
+
 void write_summary_table(std::ostream& os, const AllanReport& r) {
-  os << fmt::format("{:<4} {:>12} {:>12} {:>12} {:>12} {:>12} | {:>12} {:>12} {:>12}  {}\n", "axis",
-                    "N", "K", "B", "Q", "R", "N@1s line", "K@3s line", "B=min/.664", "units");
-  auto cell = [](const Coefficient& c) {
-    return c.identified ? fmt::format("{:.4g}", c.value) : fmt::format("<={:.3g}", c.upper_bound);
-  };
+  os << fmt::format("{:<4} {:>18} {:>18} {:>18} {:>18} {:>18} {:>18} {:>16} | {:>10} {:>10} {:>10}  {}\n", "axis", "N",
+                    "K", "B", "G (GM sigma)", "Tc [s]", "Q", "R", "N@1s line", "K@3s line", "B=min/.664", "units");
   auto rcell = [](const Readoff& x) {
     return x.found ? fmt::format("{:.4g}", x.value)
                    : (std::isfinite(x.value) ? fmt::format("<={:.3g}", x.value) : std::string("-"));
@@ -860,30 +591,23 @@ void write_summary_table(std::ostream& os, const AllanReport& r) {
   for (const auto& c : r.channels) {
     const auto& m = c.model;
     const auto& u = c.curve.units;
-    os << fmt::format("{:<4} {:>12} {:>12} {:>12} {:>12} {:>12} | {:>12} {:>12} {:>12}  N {}, K {}, B {}, Q {}, R {}\n",
-                      c.curve.channel.name, cell(m.white), cell(m.random_walk),
-                      cell(m.bias_instability), cell(m.quantization), cell(m.rate_ramp),
-                      rcell(m.white_line), rcell(m.random_walk_line), rcell(m.bias_floor), u.white,
-                      u.random_walk, u.bias, u.quantization, u.ramp);
+    os << fmt::format("{:<4} {:>18} {:>18} {:>18} {:>18} {:>18} {:>18} {:>16} | {:>10} {:>10} {:>10}  N {}, K {}, B {}, G {}, Q {}, R {}\n",
+                      c.curve.channel.name, verdict_cell(m.white), verdict_cell(m.random_walk),
+                      verdict_cell(m.bias_instability), verdict_cell(m.gauss_markov),
+                      m.correlation_time.identified ? verdict_cell(m.correlation_time) : std::string("-"),
+                      verdict_cell(m.quantization), verdict_cell(m.rate_ramp), rcell(m.white_line),
+                      rcell(m.random_walk_line), rcell(m.bias_floor), u.white, u.random_walk, u.bias, u.gauss_markov,
+                      u.quantization, u.ramp);
   }
-  // Datasheet units.
+  // Datasheet units of the same verdicts (identified value ± σ, or the upper bound).
   for (const auto& c : r.channels) {
-    const auto& m = c.model;
-    const double n = m.white.identified ? m.white.value : m.white_line.value;
-    const double b = m.bias_floor.value;
-    if (c.curve.channel.instrument == Instrument::kGyroscope) {
-      // ARW: rad/√s → deg/√h is × 180/π × √3600.
-      os << fmt::format("{:<4} ARW {} deg/sqrt(h), bias instability {} deg/h{}\n",
-                        c.curve.channel.name, fmt_value(n * physics::kRadToDeg * 60.0),
-                        fmt_value(b / physics::kDegPerHour),
-                        m.bias_floor.found ? "" : " (upper bound)");
-    } else if (c.curve.channel.instrument == Instrument::kAccelerometer) {
-      os << fmt::format("{:<4} VRW {} m/s/sqrt(h) = {} ug/sqrt(Hz), bias instability {} ug{}\n",
-                        c.curve.channel.name, fmt_value(n * 60.0),
-                        fmt_value(n / physics::kMicroG),
-                        fmt_value(b / physics::kMicroG),
-                        m.bias_floor.found ? "" : " (upper bound)");
+    std::string line;
+    for (const Coefficient* coef : {&c.model.white, &c.model.random_walk, &c.model.bias_instability, &c.model.gauss_markov}) {
+      for (const auto& conv : datasheet_units(*coef, c.curve.channel.instrument)) {
+        line += fmt::format("{}{} {} {}", line.empty() ? "" : ", ", coef->symbol, verdict_cell(*coef, conv.factor), conv.unit);
+      }
     }
+    if (!line.empty()) os << fmt::format("{:<4} {}\n", c.curve.channel.name, line);
   }
 }
 
@@ -907,13 +631,23 @@ using nlohmann::json;
 
 json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
-json to_json(const Coefficient& c) {
+json to_json(const Coefficient& c, Instrument instrument) {
+  json datasheet = json::array();
+  for (const auto& conv : datasheet_units(c, instrument)) {
+    datasheet.push_back({{"unit", conv.unit},
+                         {"value", num(c.value * conv.factor)},
+                         {"sigma", num(c.sigma * conv.factor)},
+                         {"upper_bound", c.identified ? json(nullptr) : num(c.upper_bound * conv.factor)}});
+  }
   return {{"symbol", c.symbol},   {"name", c.name},
-          {"unit", c.unit},       {"identified", c.identified},
+          {"unit", c.unit},       {"verdict", to_string(c.verdict())},
+          {"identified", c.identified},
           {"value", num(c.value)}, {"sigma", num(c.sigma)},
+          {"interval95", c.identified ? json::array({num(c.lo), num(c.hi)}) : json(nullptr)},
           {"fitted", num(c.fitted)}, {"fitted_sigma", num(c.fitted_sigma)},
-          {"dominates", c.dominates}, {"upper_bound", num(c.upper_bound)},
-          {"dominates_tau_s", c.dominates ? json::array({c.tau_lo_s, c.tau_hi_s}) : json(nullptr)}};
+          {"dominates", c.dominates}, {"upper_bound", c.identified ? json(nullptr) : num(c.upper_bound)},
+          {"dominates_tau_s", c.dominates ? json::array({c.tau_lo_s, c.tau_hi_s}) : json(nullptr)},
+          {"datasheet", datasheet}};
 }
 
 json to_json(const Readoff& r) {
@@ -932,20 +666,20 @@ json to_json(const ChannelResult& r) {
                    {"noise", to_string(p.noise)}});
   }
   const NoiseModel& m = r.model;
+  const Instrument inst = r.curve.channel.instrument;
   json model = {{"ok", m.ok},
                 {"message", m.message},
+                {"selection", m.selection},
                 {"chi2_reduced", num(m.chi2_reduced)},
                 {"dof", m.dof},
+                {"lowpass_hz", num(m.lowpass_hz)},
                 {"tau_range_s", json::array({num(m.tau_min_s), num(m.tau_max_s)})},
-                {"Q", to_json(m.quantization)},
-                {"N", to_json(m.white)},
-                {"B", to_json(m.bias_instability)},
-                {"K", to_json(m.random_walk)},
-                {"R", to_json(m.rate_ramp)},
+                {"tau_fit_range_s", json::array({num(m.tau_fit_min_s), num(m.tau_max_s)})},
                 {"readoffs",
                  {{"N_line", to_json(m.white_line)},
                   {"K_line", to_json(m.random_walk_line)},
                   {"B_floor", to_json(m.bias_floor)}}}};
+  for (int j = 0; j < NoiseModel::kCoefficients; ++j) model[m.coefficients()[j].symbol] = to_json(m.coefficients()[j], inst);
   return {{"channel", r.curve.channel.name},
           {"instrument", to_string(r.curve.channel.instrument)},
           {"unit", r.curve.units.signal},
@@ -954,6 +688,13 @@ json to_json(const ChannelResult& r) {
           {"confidence", r.curve.confidence},
           {"points", pts},
           {"model", model}};
+}
+
+// Per-axis Kalibr values {x, y, z} and their verdicts.
+json axes(const std::array<double, 3>& v, const std::array<Verdict, 3>& verdicts) {
+  json j = json::object();
+  for (int k = 0; k < 3; ++k) j[std::string(1, "xyz"[k])] = {{"value", num(v[k])}, {"verdict", to_string(verdicts[k])}};
+  return j;
 }
 
 json to_json(const KalibrParameters& k) {
@@ -973,7 +714,12 @@ json to_json(const KalibrParameters& k) {
           {"accelerometer_random_walk_is_upper_bound", k.accelerometer_random_walk_is_upper_bound},
           {"gyroscope_noise_identified", k.gyroscope_noise_identified},
           {"gyroscope_random_walk_identified", k.gyroscope_random_walk_identified},
-          {"gyroscope_random_walk_is_upper_bound", k.gyroscope_random_walk_is_upper_bound}};
+          {"gyroscope_random_walk_is_upper_bound", k.gyroscope_random_walk_is_upper_bound},
+          {"per_axis",
+           {{"accelerometer_noise_density", axes(k.accelerometer_noise_density_axes, k.accelerometer_noise_verdict)},
+            {"accelerometer_random_walk", axes(k.accelerometer_random_walk_axes, k.accelerometer_random_walk_verdict)},
+            {"gyroscope_noise_density", axes(k.gyroscope_noise_density_axes, k.gyroscope_noise_verdict)},
+            {"gyroscope_random_walk", axes(k.gyroscope_random_walk_axes, k.gyroscope_random_walk_verdict)}}}};
 }
 }  // namespace
 
@@ -981,12 +727,17 @@ void write_json(std::ostream& os, const ChannelResult& result, int indent) {
   os << to_json(result).dump(indent) << "\n";
 }
 
+bool report_failed(const AllanReport& r) {
+  if (r.channels.empty()) return true;
+  return std::any_of(r.channels.begin(), r.channels.end(), [](const ChannelResult& c) { return !c.model.ok; });
+}
+
 void write_json(std::ostream& os, const AllanReport& r, int indent) {
   json ch = json::array();
   for (const auto& c : r.channels) ch.push_back(to_json(c));
   json j = {{"schema", kSchema},
             {"estimator", {{"name", kEstimatorName}, {"version", kEstimatorVersion}}},
-            {"status", "ok"},
+            {"status", report_failed(r) ? "failed" : "ok"},
             {"source", r.source},
             {"rate_hz", r.rate_hz},
             {"samples", r.samples},

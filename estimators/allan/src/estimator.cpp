@@ -28,16 +28,16 @@ EstimatorResult AllanEstimator::fit(const EstimatorRequest& req) {
   const AllanOptions options = options_from_yaml(root["allan"], req.model_file);
   const DeviationRequest deviations = deviations_from_yaml(root["allan"], req.model_file);
   const AllanReport report = analyze_recording(*req.recording, options);
-  std::string failures;
-  bool any_ok = false;
-  for (const auto& ch : report.channels) {
-    any_ok = any_ok || ch.model.ok;
-    if (!ch.model.ok) failures += fmt::format("{}{}: {}", failures.empty() ? "" : "; ", ch.curve.channel.name, ch.model.message);
-  }
-  if (!any_ok) return {false, "allan: no channel could be fitted: " + failures, {}, {}, config_.results_file};
   std::ostringstream text, json;
   write_summary_table(text, report);
   write_json(json, report);
+  if (report_failed(report)) {
+    std::string why;
+    for (const auto& c : report.channels)
+      if (!c.model.ok) why += (why.empty() ? "" : "; ") + c.curve.channel.name + ": " + c.model.message;
+    return {false, "allan: noise-model fit failed — " + (why.empty() ? std::string("no channel") : why), json.str(),
+            text.str(), config_.results_file};
+  }
   if (deviations.empty()) return {true, {}, json.str(), text.str(), config_.results_file};
   const auto devs = recording_deviations(*req.recording, report, deviations, options);
   write_deviation_table(text, devs);
@@ -84,7 +84,7 @@ estimation::FitSummary summarize(const nlohmann::json& doc) {
       s.message += c + ": " + m.value("message", "") + "; ";
       continue;
     }
-    for (const char* symbol : {"N", "K", "B"})
+    for (const char* symbol : {"N", "K", "B", "G", "Tc"})
       if (m.contains(symbol)) s.parameters.push_back(coefficient(m[symbol], std::string(symbol) + "_" + c));
   }
   return s;

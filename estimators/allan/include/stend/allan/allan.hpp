@@ -2,10 +2,10 @@
 //
 //   curve      overlapping ADEV at octave τ from the streaming estimator (stream.hpp), with
 //              chi-squared confidence intervals from the equivalent degrees of freedom (stats.hpp)
-//   model      the classical IEEE Std 952 / 1554 sum of independent terms,
-//                σ²(τ) = 3Q²/τ² + N²/τ + (2 ln2/π) B² + K²τ/3 + R²τ²/2,
-//              fitted by non-negative weighted least squares; a coefficient counts as identified
-//              only where its term dominates the model somewhere inside the measured τ range
+//   model      the IEEE Std 952 / 1554 terms plus a first-order Gauss–Markov bias,
+//                σ²(τ) = 3Q²/τ² + N²·w(m) + (2 ln2/π) B² + K²τ/3 + R²τ²/2 + σ_G²·g(τ/τc),
+//              with the sensor's output low-pass in the white term w; terms chosen by penalised
+//              likelihood, one verdict per coefficient (identified ± σ, upper bound, failed)
 //   read-offs  the textbook slope lines: N = σ(1 s) on the −1/2 line, K = σ(3 s) on the +1/2
 //              line, B = σ_min / 0.664 at the flat minimum
 //   outputs    continuous-time densities with units, Kalibr IMU noise parameters, a text table,
@@ -22,6 +22,7 @@
 #include <stend/allan/stream.hpp>
 #include <stend/recording.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <iosfwd>
@@ -53,6 +54,7 @@ struct Units {
   std::string bias;          // B: signal
   std::string random_walk;   // K: signal/s/√Hz
   std::string ramp;          // R: signal/s
+  std::string gauss_markov;  // σ of the Gauss–Markov bias: signal
 };
 // Accelerometer → m/s², gyroscope → rad/s; kOther uses `signal_unit` as given.
 Units units_for(Instrument instrument, const std::string& signal_unit = {});
@@ -75,13 +77,19 @@ struct AllanOptions {
   // Part of a recording to analyse (run time, s); NaN = from the start / to the end.
   double t_begin_s = kNaN;
   double t_end_s = kNaN;
+  // The sensor's output low-pass (second-order Butterworth, as core/model/output_stage.hpp runs
+  // it) at the record's rate, cutoff [Hz]: NaN = not stated (points at the short-τ end that such
+  // a filter flattens are left out of the fit, see fit_noise_model), 0 = no filter, > 0 = the
+  // filter is part of the model curve of the white-noise term. analyze_recording takes it from
+  // the run's experiment.yaml (bench.sensor.config.lowpass_hz) when not set here.
+  double lowpass_hz = kNaN;
 };
 
 // Options from a YAML mapping whose keys are the field names above (max_m, confidence,
-// edf_from_model, slope_tolerance, min_readoff_edf, min_readoff_points, t_begin_s, t_end_s; the
-// keys `deviations` and `tau` are read by deviations_from_yaml); see example/allan.yaml. Throws
-// std::runtime_error naming file:line:column and the key for unknown keys, wrong types and
-// out-of-range values.
+// edf_from_model, slope_tolerance, min_readoff_edf, min_readoff_points, t_begin_s, t_end_s,
+// lowpass_hz; the keys `deviations` and `tau` are read by deviations_from_yaml); see
+// example/allan.yaml. Throws std::runtime_error naming file:line:column and the key for unknown
+// keys, wrong types and out-of-range values.
 AllanOptions options_from_yaml(const YAML::Node& node, const std::string& file = {});
 // "file:line:column" of a YAML node for messages ("<yaml>" without a file name).
 std::string yaml_location(const std::string& file, const YAML::Node& node);
@@ -107,24 +115,44 @@ struct AllanCurve {
   std::vector<AllanPoint> points;
 };
 
-// One coefficient of the model. It is `identified` when its term dominates the fitted model
-// somewhere inside the measured τ range (its slope region exists) and the fitted value is at
-// least twice its standard uncertainty; only then is `value` set. Otherwise `upper_bound` says
-// how large it could be without the term alone exceeding any measured ADEV upper limit.
+// The verdict on one coefficient, the same in every output (text, JSON, report, exports):
+//   kIdentified  the term is in the selected model: value ± sigma, 95 % interval [lo, hi]
+//   kUpperBound  the data do not carry it: only upper_bound (the largest value whose term alone
+//                stays below every measured ADEV upper limit)
+//   kFailed      the fit failed: no number at all
+enum class Verdict { kIdentified, kUpperBound, kFailed };
+const char* to_string(Verdict v);
+
+// One coefficient of the model. It is `identified` when model selection (see fit_noise_model)
+// keeps its term: the data carry the information, whatever the term's relative size.
 struct Coefficient {
-  const char* symbol = "";  // "Q", "N", "B", "K", "R"
+  const char* symbol = "";  // "Q", "N", "B", "K", "R", "G" (Gauss–Markov σ), "Tc" (its τc)
   const char* name = "";    // "quantization", "white noise", …
   std::string unit;
   double value = kNaN;
-  double sigma = kNaN;          // 1-σ from the fit covariance (see README: approximate)
-  double fitted = 0.0;          // the NNLS estimate, whether identified or not
-  double fitted_sigma = kNaN;   // its 1-σ (NaN when the term is not in the NNLS support)
+  double sigma = kNaN;          // 1-σ from the fit's Fisher information
+  double lo = kNaN, hi = kNaN;  // 95 % interval of value (value ∓ 1.96 σ, clipped at 0)
+  double fitted = 0.0;          // the estimate of the full model, whether identified or not
+  double fitted_sigma = kNaN;   // its 1-σ (NaN when the term is not in the model)
   bool dominates = false;       // the term dominates the model somewhere in [τ_min, τ_max]
-  bool identified = false;      // dominates and fitted ≥ 2·fitted_sigma
+  bool identified = false;      // kept by model selection
   double tau_lo_s = kNaN;       // where it dominates
   double tau_hi_s = kNaN;
   double upper_bound = kNaN;
+  bool failed = false;          // the fit failed (no value, no bound)
+
+  Verdict verdict() const {
+    return failed ? Verdict::kFailed : identified ? Verdict::kIdentified : Verdict::kUpperBound;
+  }
 };
+
+// Datasheet units of a coefficient: the factor from its SI unit and the unit name, e.g. N of a
+// gyroscope in deg/√h. Empty for coefficients and instruments without a common datasheet unit.
+struct Conversion {
+  double factor = 1.0;
+  std::string unit;
+};
+std::vector<Conversion> datasheet_units(const Coefficient& c, Instrument instrument);
 
 // A slope-line read-off.
 struct Readoff {
@@ -155,19 +183,30 @@ struct NoiseModel {
   Coefficient bias_instability = named("B", "bias instability");
   Coefficient random_walk = named("K", "random walk density");
   Coefficient rate_ramp = named("R", "rate ramp");
+  // First-order Gauss–Markov bias (core/model/noise.hpp): stationary σ and correlation time τc.
+  Coefficient gauss_markov = named("G", "Gauss-Markov bias sigma");
+  Coefficient correlation_time = named("Tc", "Gauss-Markov correlation time");
   Readoff white_line = named_readoff("N (-1/2 line at 1 s)");
   Readoff random_walk_line = named_readoff("K (+1/2 line at 3 s)");
   Readoff bias_floor = named_readoff("B (minimum / 0.664)");
   bool ok = false;
   std::string message;        // why the fit failed / warnings
+  std::string selection;      // the selected terms and the criterion, e.g. "N+G (BIC …)"
+  double tau_fit_min_s = kNaN;  // the τ range fitted (may start after tau_min_s, see lowpass_hz)
+  double lowpass_hz = kNaN;     // output low-pass in the model curve (0 none, NaN not stated)
   double chi2_reduced = kNaN;  // weighted residual χ² per degree of freedom
   int dof = 0;
   double tau_min_s = kNaN, tau_max_s = kNaN;
 
   // σ² of the fitted model (all fitted terms, identified or not) at τ.
+  // (at m = τ·rate samples per cluster; rate_hz for the output stage)
+  double rate_hz = 0.0;
   double avar(double tau_s) const;
   NoiseType dominant(double tau_s) const;
-  const Coefficient* coefficients() const { return &quantization; }  // 5 in a row
+  // Q N B K R G Tc in a row; the first six are AVAR terms, Tc is the correlation time of G.
+  static constexpr int kCoefficients = 7;
+  const Coefficient* coefficients() const { return &quantization; }
+  Coefficient* coefficients() { return &quantization; }
 };
 
 // Curve from the stream's octaves; EDF and intervals assume white noise until a model is fitted.
@@ -177,6 +216,21 @@ AllanCurve make_curve(const std::vector<OctaveVariance>& octaves, std::uint64_t 
 // term at τ) or white noise when model is null.
 void assign_intervals(AllanCurve& curve, const NoiseModel* model);
 // Fits the model to the curve and makes the read-offs. Does not change the curve.
+//   model curve   AVAR(τ) = 3Q²/τ² + N²·w(m) + (2 ln2/π)B² + K²τ/3 + R²τ²/2 + σ_G²·g(τ/τc), with
+//                 w(m) = 1/τ without an output filter and, with options.lowpass_hz > 0, the exact
+//                 AVAR per unit N² of sampled white noise run through the sensor's Butterworth
+//                 low-pass; g the first-order Gauss–Markov AVAR (model::allan::gauss_markov).
+//   τ range       all points when the filter is stated (lowpass_hz ≥ 0); when it is not (NaN), the
+//                 leading points with m ≤ 32 whose slope to the next point is flatter than
+//                 −½ + slope_tolerance (a filter's flattening) are left out.
+//   likelihood    each AVAR point is σ²·χ²_ν/ν with ν its EDF (Var ≈ 2σ⁴/EDF): Gamma deviance
+//                 D = Σ ν (r − 1 − ln r), r = AVAR/model, minimised by Fisher scoring (IRLS).
+//   selection     every subset of the six terms (τc profiled on a grid, then refined); the one
+//                 with the least D + 6.63·(parameters) is kept (6.63 = χ²₁ at 99 %: a term enters
+//                 only when it lowers D by more than a 1 % likelihood-ratio test would allow).
+//   uncertainty   σ from the inverse Fisher information of the selected model, scaled by
+//                 √max(1, D/dof); the other coefficients get upper bounds.
+// Fewer than 3 usable points (constant, too short) → ok = false, every coefficient kFailed.
 NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& options = {});
 
 struct ChannelResult {
@@ -191,10 +245,11 @@ ChannelResult analyze(const double* y, std::size_t n, std::size_t stride, double
 ChannelResult analyze(const OverlappingAllanStream& stream, double rate_hz,
                       const ChannelInfo& channel, const AllanOptions& options = {});
 
-// Kalibr's IMU noise parameters (imu.yaml). Each value is the mean over the three axes of the
-// fitted coefficient where identified, else of the read-off; `*_identified` is true when all
-// three axes identified it. A random walk that no axis identified is reported as its upper bound
-// with `*_is_upper_bound` set — never as a default.
+// Kalibr's IMU noise parameters (imu.yaml). Kalibr takes ONE continuous-time density per sensor
+// (noise density = N, random walk = K); the per-axis values are kept beside it (`*_axes`, in the
+// JSON and as comments in imu.yaml). The one number is the largest (worst) axis whose coefficient
+// is identified; with no axis identified, the largest slope read-off, else the largest upper bound
+// (`*_is_upper_bound`) — never a default. `*_identified` is true when all three axes identified it.
 struct KalibrParameters {
   double accelerometer_noise_density = kNaN;  // m/s²/√Hz
   double accelerometer_random_walk = kNaN;    // m/s³/√Hz
@@ -207,6 +262,15 @@ struct KalibrParameters {
   bool gyroscope_random_walk_identified = false;
   bool accelerometer_random_walk_is_upper_bound = false;
   bool gyroscope_random_walk_is_upper_bound = false;
+  // Per axis x, y, z (NaN where the axis gives no value) and each axis's verdict.
+  std::array<double, 3> accelerometer_noise_density_axes{kNaN, kNaN, kNaN};
+  std::array<double, 3> accelerometer_random_walk_axes{kNaN, kNaN, kNaN};
+  std::array<double, 3> gyroscope_noise_density_axes{kNaN, kNaN, kNaN};
+  std::array<double, 3> gyroscope_random_walk_axes{kNaN, kNaN, kNaN};
+  std::array<Verdict, 3> accelerometer_noise_verdict{Verdict::kFailed, Verdict::kFailed, Verdict::kFailed};
+  std::array<Verdict, 3> accelerometer_random_walk_verdict{Verdict::kFailed, Verdict::kFailed, Verdict::kFailed};
+  std::array<Verdict, 3> gyroscope_noise_verdict{Verdict::kFailed, Verdict::kFailed, Verdict::kFailed};
+  std::array<Verdict, 3> gyroscope_random_walk_verdict{Verdict::kFailed, Verdict::kFailed, Verdict::kFailed};
 };
 
 struct AllanReport {
@@ -223,6 +287,9 @@ struct AllanReport {
 // t_end_s. The rate is the header's output rate, or the median sample interval when it is 0.
 AllanReport analyze_recording(const Recording& recording, const AllanOptions& options = {});
 KalibrParameters kalibr_parameters(const std::vector<ChannelResult>& channels, double rate_hz);
+// True when the report has no channel or any channel's model fit failed (a constant or too short
+// signal): JSON status "failed", and the estimator's fit fails (non-zero exit of `stend fit`).
+bool report_failed(const AllanReport& report);
 
 // Text and JSON.
 std::ostream& operator<<(std::ostream& os, const AllanPoint& p);

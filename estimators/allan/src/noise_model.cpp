@@ -1,0 +1,581 @@
+// The noise-model fit of an Allan curve: model curve with the sensor's output stage, Gamma
+// likelihood on the EDF, model selection among Q N B K R and a Gauss–Markov bias, Fisher
+// uncertainties, upper bounds, slope read-offs (see fit_noise_model in allan.hpp).
+#include <stend/allan/allan.hpp>
+#include <stend/model/noise.hpp>
+#include <stend/model/output_stage.hpp>
+#include <stend/physics/units.hpp>
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace stend::allan {
+
+namespace {
+
+constexpr int kTerms = 6;                 // Q N B K R G (linear in their squares at fixed τc)
+constexpr int kGm = 5;                    // index of the Gauss–Markov term
+constexpr double kTermPenalty = 6.6349;   // χ²₁ 99 % quantile: penalty per parameter
+constexpr double kZ95 = 1.959963984540054;
+constexpr int kMaxFilteredM = 32;         // an unstated filter may flatten points up to this m
+// The octave points share their samples, so the likelihood of independent points overstates the
+// information by about this factor: the deviance is divided by it (selection) and the Fisher
+// covariance multiplied by it (uncertainties). Calibrated on the simulator grid (README).
+constexpr double kOvercount = 4.0;
+
+Coefficient* coefficient(NoiseModel& m, int j) { return m.coefficients() + j; }
+const Coefficient* coefficient(const NoiseModel& m, int j) { return m.coefficients() + j; }
+
+NoiseType noise_of_term(int j) {
+  switch (j) {
+    case 0: return NoiseType::kQuantization;
+    case 1: return NoiseType::kWhite;
+    case 2: return NoiseType::kFlicker;
+    case kGm: return NoiseType::kFlicker;  // the GM plateau (EDF between white and random walk)
+    default: return NoiseType::kRandomWalk;  // K, and the ramp R (closest EDF model)
+  }
+}
+
+// AVAR per unit N² of the white-noise term at m samples per cluster, rate fs [Hz]: sampled white
+// noise of variance N²·fs (AVAR N²/τ unfiltered) through the output filter of impulse response h:
+// AVAR(m) = fs/(2m²) · Σ_d r(d)·R_g(d), r the autocorrelation of h, R_g that of the second
+// difference of m-sums (2m − 3|d| for |d| ≤ m, −(2m − |d|) for m < |d| < 2m).
+class WhiteTerm {
+ public:
+  WhiteTerm(double rate_hz, double lowpass_hz) : fs_(rate_hz) {
+    if (!(lowpass_hz > 0.0) || !(lowpass_hz < 0.5 * rate_hz)) return;
+    model::Biquad f = model::Biquad::butterworth_lowpass(lowpass_hz, rate_hz);
+    std::vector<double> h;
+    double peak = 0.0;
+    for (int n = 0; n < (1 << 16); ++n) {
+      const double v = f(n == 0 ? 1.0 : 0.0);
+      h.push_back(v);
+      peak = std::max(peak, std::abs(v));
+      if (n > 16 && std::abs(v) < 1e-13 * peak && std::abs(h[h.size() - 2]) < 1e-13 * peak) break;
+    }
+    r_.assign(h.size(), 0.0);
+    for (std::size_t d = 0; d < h.size(); ++d)
+      for (std::size_t n = 0; n + d < h.size(); ++n) r_[d] += h[n] * h[n + d];
+    double r2 = r_[0] * r_[0];
+    for (std::size_t d = 1; d < r_.size(); ++d) r2 += 2.0 * r_[d] * r_[d];
+    independent_ = r_[0] * r_[0] / r2;
+  }
+  // Independent values per sample of the filtered white noise, r(0)²/Σ_d r(d)² (the effective
+  // sample size of a variance estimate from correlated Gaussian values); 1 without a filter.
+  double independent() const { return independent_; }
+  double operator()(double m) const {
+    if (r_.empty()) return fs_ / m;
+    double s = 2.0 * m * r_[0];
+    const auto mm = static_cast<std::size_t>(m);
+    for (std::size_t d = 1; d < r_.size() && d < 2 * mm; ++d) {
+      const double dd = static_cast<double>(d);
+      s += 2.0 * r_[d] * (d <= mm ? 2.0 * m - 3.0 * dd : -(2.0 * m - dd));
+    }
+    return fs_ * s / (2.0 * m * m);
+  }
+
+ private:
+  double fs_;
+  double independent_ = 1.0;
+  std::vector<double> r_;  // empty: no filter
+};
+
+struct FitPoint {
+  double tau, m, avar, adev, edf, lo, hi;
+  std::array<double, kTerms> a;  // basis at τ (G at the current τc)
+};
+
+std::array<double, kTerms> basis(double tau, double m, const WhiteTerm& white, double tc) {
+  return {3.0 / (tau * tau), white(m), kFlickerFloor * kFlickerFloor, tau / 3.0, tau * tau / 2.0,
+          tc > 0.0 ? model::allan::gauss_markov(1.0, tc, tau) : 0.0};
+}
+
+void set_basis(std::vector<FitPoint>& pts, const WhiteTerm& white, double tc) {
+  for (auto& p : pts) p.a = basis(p.tau, p.m, white, tc);
+}
+
+// One candidate model: the terms in `mask`, τc for G.
+struct Candidate {
+  unsigned mask = 0;
+  double tc = 0.0;
+  std::array<double, kTerms> c{};  // squares of the coefficients (σ_G² for G)
+  double deviance = std::numeric_limits<double>::infinity();
+  bool valid = false;
+  int parameters() const { return __builtin_popcount(mask) + ((mask >> kGm) & 1u ? 1 : 0); }
+  double score() const { return deviance / kOvercount + kTermPenalty * parameters(); }
+};
+
+double model_at(const FitPoint& p, const std::array<double, kTerms>& c) {
+  double v = 0.0;
+  for (int j = 0; j < kTerms; ++j) v += c[j] * p.a[j];
+  return v;
+}
+
+// Gamma deviance D = Σ ν (r − 1 − ln r), r = AVAR/model.
+double deviance(const std::vector<FitPoint>& pts, const std::array<double, kTerms>& c) {
+  double d = 0.0;
+  for (const auto& p : pts) {
+    const double mv = model_at(p, c);
+    if (!(mv > 0.0)) return std::numeric_limits<double>::infinity();
+    const double r = p.avar / mv;
+    d += p.edf * (r - 1.0 - std::log(r));
+  }
+  return d;
+}
+
+// Fisher scoring for the terms in `mask` (basis already at τc): weighted least squares with
+// weights ν/(2·model²), repeated; invalid when a coefficient is not positive.
+Candidate fit_terms(const std::vector<FitPoint>& pts, unsigned mask, double tc) {
+  Candidate cand;
+  cand.mask = mask;
+  cand.tc = tc;
+  std::vector<int> cols;
+  for (int j = 0; j < kTerms; ++j)
+    if (mask & (1u << j)) cols.push_back(j);
+  const int n = static_cast<int>(pts.size()), k = static_cast<int>(cols.size());
+  if (k == 0 || k > n) return cand;
+  Eigen::MatrixXd A(n, k);
+  Eigen::VectorXd b(n), scale(k);
+  std::vector<double> v(pts.size());
+  for (int i = 0; i < n; ++i) v[i] = pts[i].avar;
+  for (int iter = 0; iter < 12; ++iter) {
+    for (int i = 0; i < n; ++i) {
+      const double w = std::sqrt(pts[i].edf / 2.0) / v[i];
+      for (int q = 0; q < k; ++q) A(i, q) = w * pts[i].a[cols[q]];
+      b(i) = w * pts[i].avar;
+    }
+    for (int q = 0; q < k; ++q) {
+      scale(q) = A.col(q).norm();
+      if (!(scale(q) > 0.0)) return cand;
+      A.col(q) /= scale(q);
+    }
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+    qr.setThreshold(1e-12);
+    if (qr.rank() < k) return cand;
+    const Eigen::VectorXd x = qr.solve(b);
+    std::array<double, kTerms> c{};
+    for (int q = 0; q < k; ++q) c[cols[q]] = x(q) / scale(q);
+    double change = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const double mv = model_at(pts[i], c);
+      if (!(mv > 0.0)) return cand;
+      change = std::max(change, std::abs(mv / v[i] - 1.0));
+      v[i] = mv;
+    }
+    cand.c = c;
+    if (change < 1e-9) break;
+  }
+  for (int q = 0; q < k; ++q)
+    if (!(cand.c[cols[q]] > 0.0)) return cand;
+  cand.deviance = deviance(pts, cand.c);
+  cand.valid = std::isfinite(cand.deviance);
+  return cand;
+}
+
+// Best τc for the terms in `mask` (which contains G) on a log grid, 2 nodes per octave over the
+// fitted τ range widened by 4× each way; `step` is the grid's spacing in ln τc.
+Candidate fit_with_gm(std::vector<FitPoint>& pts, unsigned mask, const WhiteTerm& white, double& step) {
+  const double l0 = std::log(pts.front().tau / 4.0), l1 = std::log(pts.back().tau * 4.0);
+  const int nodes = std::max(4, static_cast<int>(std::ceil((l1 - l0) / std::log(2.0) * 2.0)));
+  step = (l1 - l0) / nodes;
+  Candidate best;
+  for (int i = 0; i <= nodes; ++i) {
+    const double tc = std::exp(l0 + step * i);
+    set_basis(pts, white, tc);
+    Candidate c = fit_terms(pts, mask, tc);
+    if (c.valid && c.deviance < best.deviance) best = c;
+  }
+  return best;
+}
+
+// Golden-section refinement of ln τc within one grid step either side of the candidate's τc.
+Candidate refine_gm(std::vector<FitPoint>& pts, Candidate best, const WhiteTerm& white, double step) {
+  auto at = [&](double l) {
+    set_basis(pts, white, std::exp(l));
+    return fit_terms(pts, best.mask, std::exp(l));
+  };
+  double a = std::log(best.tc) - step, b = std::log(best.tc) + step;
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  for (int it = 0; it < 20; ++it) {
+    const double x1 = b - g * (b - a), x2 = a + g * (b - a);
+    const Candidate c1 = at(x1), c2 = at(x2);
+    if (c1.valid && c1.deviance < best.deviance) best = c1;
+    if (c2.valid && c2.deviance < best.deviance) best = c2;
+    if (c1.deviance < c2.deviance) b = x2;
+    else a = x1;
+  }
+  return best;
+}
+
+// B and G both make the plateau, so choosing between them is a choice of its shape (flat over
+// decades, or rising as τ/τc then falling as 1/√τ), not of one more term: the shape that fits
+// better (the lower deviance) is kept, τc not counted against G.
+Candidate plateau_shape(std::vector<FitPoint>& pts, const Candidate& with_b, const WhiteTerm& white) {
+  double step = 0.0;
+  const Candidate with_g = fit_with_gm(pts, (with_b.mask & ~(1u << 2)) | (1u << kGm), white, step);
+  return with_g.valid && with_g.deviance < with_b.deviance ? with_g : with_b;
+}
+
+// The candidate with the least penalised deviance over every non-empty subset of the terms.
+Candidate select_model(std::vector<FitPoint>& pts, const WhiteTerm& white) {
+  Candidate best;
+  set_basis(pts, white, 0.0);
+  for (unsigned mask = 1; mask < (1u << kGm); ++mask) {
+    const Candidate c = fit_terms(pts, mask, 0.0);
+    if (c.valid && c.score() < best.score()) best = c;
+  }
+  double step = 0.0;
+  for (unsigned mask = 1u << kGm; mask < (1u << kTerms); ++mask) {
+    if (__builtin_popcount(mask) + 1 > static_cast<int>(pts.size()) - 1) continue;
+    if (mask & (1u << 2)) continue;  // B and G both make the plateau: the data cannot split them
+    const Candidate c = fit_with_gm(pts, mask, white, step);
+    if (c.valid && c.score() < best.score()) best = c;
+  }
+  if ((best.mask >> 2) & 1u) best = plateau_shape(pts, best, white);
+  if ((best.mask >> kGm) & 1u) best = refine_gm(pts, best, white, step);
+  set_basis(pts, white, best.tc);
+  return best;
+}
+
+// σ of each selected coefficient (and of τc) from the inverse Fisher information
+// Σ ν/(2·model²)·∇model ∇modelᵀ over θ = (c_j/ĉ_j…, ln τc), times the overcount (and D/c/dof
+// when above 1).
+void fisher_uncertainties(const std::vector<FitPoint>& pts, const Candidate& cand, NoiseModel& model) {
+  std::vector<int> cols;
+  for (int j = 0; j < kTerms; ++j)
+    if (cand.mask & (1u << j)) cols.push_back(j);
+  const bool gm = (cand.mask >> kGm) & 1u;
+  const int k = static_cast<int>(cols.size()) + (gm ? 1 : 0);
+  Eigen::MatrixXd F = Eigen::MatrixXd::Zero(k, k);
+  const double h = 1e-4;
+  for (const auto& p : pts) {
+    Eigen::VectorXd g(k);
+    // θ_q = c_q / ĉ_q (relative, so every column is of order 1 and F is well scaled).
+    for (std::size_t q = 0; q < cols.size(); ++q) g(static_cast<int>(q)) = cand.c[cols[q]] * p.a[cols[q]];
+    if (gm) {
+      const double up = model::allan::gauss_markov(1.0, cand.tc * std::exp(h), p.tau);
+      const double dn = model::allan::gauss_markov(1.0, cand.tc * std::exp(-h), p.tau);
+      g(k - 1) = cand.c[kGm] * (up - dn) / (2.0 * h);
+    }
+    const double mv = model_at(p, cand.c);
+    F += (p.edf / (2.0 * mv * mv)) * g * g.transpose();
+  }
+  const Eigen::MatrixXd cov = F.completeOrthogonalDecomposition().pseudoInverse();
+  model.dof = static_cast<int>(pts.size()) - k;
+  model.chi2_reduced = model.dof > 0 ? cand.deviance / model.dof : kNaN;
+  const double inflate =
+      kOvercount * (std::isfinite(model.chi2_reduced) ? std::max(1.0, model.chi2_reduced / kOvercount) : 1.0);
+  for (std::size_t q = 0; q < cols.size(); ++q) {
+    Coefficient* c = coefficient(model, cols[q]);
+    const double var_c = cov(static_cast<int>(q), static_cast<int>(q)) * inflate * cand.c[cols[q]] * cand.c[cols[q]];
+    c->fitted_sigma = std::sqrt(std::max(0.0, var_c)) / (2.0 * c->fitted);
+  }
+  if (gm) {
+    model.correlation_time.fitted = cand.tc;
+    model.correlation_time.fitted_sigma = cand.tc * std::sqrt(std::max(0.0, cov(k - 1, k - 1) * inflate));
+  }
+}
+
+// Leading points an unstated output filter may have flattened: m ≤ kMaxFilteredM and the slope to
+// the next point flatter than −½ + tolerance. Returns how many to leave out.
+std::size_t filtered_prefix(const std::vector<FitPoint>& pts, double tolerance) {
+  std::size_t i = 0;
+  while (i + 3 < pts.size() && pts[i].m <= kMaxFilteredM) {
+    const double slope = (std::log(pts[i + 1].adev) - std::log(pts[i].adev)) /
+                         (std::log(pts[i + 1].tau) - std::log(pts[i].tau));
+    if (!(slope > -0.5 + tolerance)) break;
+    ++i;
+  }
+  return i;
+}
+
+void local_slopes(const std::vector<FitPoint>& pts, std::vector<double>& slope) {
+  const std::size_t n = pts.size();
+  slope.assign(n, kNaN);
+  if (n < 2) return;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t a = i == 0 ? 0 : i - 1;
+    const std::size_t b = i + 1 == n ? n - 1 : i + 1;
+    slope[i] = (std::log(pts[b].adev) - std::log(pts[a].adev)) /
+               (std::log(pts[b].tau) - std::log(pts[a].tau));
+  }
+}
+
+// Read-off on a slope line: value_i = adev_i · (τ_ref/τ_i)^target, pooled over the points
+// whose local slope is within tolerance of `target` (log-mean weighted by EDF).
+Readoff slope_readoff(const char* name, const std::string& unit, const std::vector<FitPoint>& pts,
+                      const std::vector<double>& slope, double target, double tau_ref,
+                      const AllanOptions& opt) {
+  Readoff r;
+  r.name = name;
+  r.unit = unit;
+  double sw = 0.0, swl = 0.0;
+  int count = 0;
+  std::size_t best = pts.size();
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    if (!(pts[i].edf >= opt.min_readoff_edf)) continue;
+    if (!(std::abs(slope[i] - target) <= opt.slope_tolerance)) continue;
+    const double v = pts[i].adev * std::pow(tau_ref / pts[i].tau, target);
+    sw += pts[i].edf;
+    swl += pts[i].edf * std::log(v);
+    ++count;
+    if (best == pts.size() || pts[i].edf > pts[best].edf) best = i;
+    if (!std::isfinite(r.tau_lo_s)) r.tau_lo_s = pts[i].tau;
+    r.tau_hi_s = pts[i].tau;
+  }
+  if (count < std::max(1, opt.min_readoff_points)) {
+    r.note = fmt::format(
+        "no slope {:+.1f} region (>= {} points with |slope - {:+.1f}| <= {:.2f} and edf >= {:g}) "
+        "in the measured tau range",
+        target, std::max(1, opt.min_readoff_points), target, opt.slope_tolerance, opt.min_readoff_edf);
+    r.tau_lo_s = r.tau_hi_s = kNaN;
+    return r;
+  }
+  r.found = true;
+  r.value = std::exp(swl / sw);
+  r.lo = r.value * pts[best].lo / pts[best].adev;
+  r.hi = r.value * pts[best].hi / pts[best].adev;
+  return r;
+}
+
+void set_units(NoiseModel& model, const Units& u) {
+  model.quantization.unit = u.quantization;
+  model.white.unit = u.white;
+  model.bias_instability.unit = u.bias;
+  model.random_walk.unit = u.random_walk;
+  model.rate_ramp.unit = u.ramp;
+  model.gauss_markov.unit = u.gauss_markov;
+  model.correlation_time.unit = "s";
+  model.white_line.unit = u.white;
+  model.random_walk_line.unit = u.random_walk;
+  model.bias_floor.unit = u.bias;
+}
+
+std::vector<FitPoint> usable_points(const AllanCurve& curve) {
+  std::vector<FitPoint> pts;
+  for (const auto& p : curve.points) {
+    if (!(p.avar > 0.0) || !std::isfinite(p.avar) || p.terms < 1) continue;
+    pts.push_back({p.tau_s, static_cast<double>(p.m), p.avar, p.adev, kNaN, kNaN, kNaN, {}});
+  }
+  return pts;
+}
+
+// EDF of each point for the noise type `type_at(τ)` and its interval at `confidence`. The output
+// filter leaves ρ = white.independent() independent values per sample: the EDF is Greenhall's for
+// ρ·N samples at ρ·m (at least 1) per cluster — unchanged where m ≫ 1/ρ, lower at the shortest τ,
+// where neighbouring filtered samples repeat each other.
+template <class TypeAt>
+void set_edf(std::vector<FitPoint>& pts, const AllanCurve& curve, const WhiteTerm& white, TypeAt type_at) {
+  const double rho = white.independent();
+  const double n_phase = rho * static_cast<double>(curve.samples) + 1.0;
+  for (auto& p : pts) {
+    p.edf = stats::edf_overlapping_adev(type_at(p.tau), n_phase, std::max(1.0, rho * p.m));
+    if (!(std::isfinite(p.edf) && p.edf > 0.0)) p.edf = 1.0;
+    const auto ci = stats::deviation_interval(p.adev, p.edf, curve.confidence);
+    p.lo = ci.lo;
+    p.hi = ci.hi;
+  }
+}
+
+// Where each term dominates the fitted variance inside [τ_min, τ_max] (400 log-spaced τ) [s].
+void mark_dominance(const NoiseModel& model, const WhiteTerm& white, NoiseModel& out) {
+  const int grid = 400;
+  const double l0 = std::log(model.tau_min_s), l1 = std::log(model.tau_max_s);
+  for (int g = 0; g <= grid; ++g) {
+    const double tau = std::exp(l0 + (l1 - l0) * g / grid);
+    const auto b = basis(tau, std::max(1.0, std::round(tau * model.rate_hz)), white, model.correlation_time.fitted);
+    int best = -1;
+    double best_v = 0.0;
+    for (int j = 0; j < kTerms; ++j) {
+      const double c = coefficient(model, j)->fitted;
+      if (c * c * b[j] > best_v) {
+        best_v = c * c * b[j];
+        best = j;
+      }
+    }
+    if (best < 0) continue;
+    Coefficient* c = coefficient(out, best);
+    c->dominates = true;
+    if (!std::isfinite(c->tau_lo_s)) c->tau_lo_s = tau;
+    c->tau_hi_s = tau;
+  }
+}
+
+// Identified coefficients get value ± σ and the 95 % interval; every linear term gets the largest
+// value whose term alone stays below every measured upper limit (G: the largest such σ over τc in
+// the fitted range, where the data can see a Gauss–Markov bias).
+void identify_and_bound(const std::vector<FitPoint>& pts, const WhiteTerm& white, NoiseModel& model) {
+  auto bound_of = [&](int j, double tc) {
+    double bound = std::numeric_limits<double>::infinity();
+    for (const auto& p : pts) {
+      const double hi = std::isfinite(p.hi) ? p.hi : p.adev;
+      const double a = basis(p.tau, p.m, white, tc)[j];
+      if (a > 0.0) bound = std::min(bound, hi * hi / a);
+    }
+    return std::sqrt(bound);
+  };
+  for (int j = 0; j < NoiseModel::kCoefficients; ++j) {
+    Coefficient* c = coefficient(model, j);
+    if (c->identified) {
+      c->value = c->fitted;
+      c->sigma = c->fitted_sigma;
+      c->lo = std::max(0.0, c->value - kZ95 * c->sigma);
+      c->hi = c->value + kZ95 * c->sigma;
+    }
+  }
+  for (int j = 0; j < kGm; ++j) coefficient(model, j)->upper_bound = bound_of(j, 0.0);
+  double gm = 0.0;
+  for (const auto& p : pts) gm = std::max(gm, bound_of(kGm, p.tau / model::allan::kGaussMarkovPeakTau));
+  model.gauss_markov.upper_bound = gm;
+}
+
+void read_bias_floor(const std::vector<FitPoint>& pts, const Units& u, Readoff& r) {
+  r.unit = u.bias;
+  std::size_t imin = 0;
+  for (std::size_t i = 1; i < pts.size(); ++i) {
+    if (pts[i].adev < pts[imin].adev) imin = i;
+  }
+  r.tau_lo_s = r.tau_hi_s = pts[imin].tau;
+  r.value = pts[imin].adev / kFlickerFloor;
+  r.lo = pts[imin].lo / kFlickerFloor;
+  r.hi = pts[imin].hi / kFlickerFloor;
+  if (imin + 1 == pts.size()) {
+    r.note = fmt::format("ADEV still falling at tau_max = {:.4g} s: no flat minimum; B <= {:.4g} {}",
+                         pts[imin].tau, r.value, u.bias);
+  } else if (imin == 0) {
+    r.note = "ADEV rises from the smallest tau: no flat minimum";
+  } else {
+    r.found = true;
+  }
+}
+
+std::string term_names(unsigned mask) {
+  static const char* names[kTerms] = {"Q", "N", "B", "K", "R", "G"};
+  std::string s;
+  for (int j = 0; j < kTerms; ++j)
+    if (mask & (1u << j)) s += (s.empty() ? "" : "+") + std::string(names[j]);
+  return s;
+}
+
+NoiseModel failed_model(NoiseModel model, std::string message) {
+  model.ok = false;
+  model.message = std::move(message);
+  for (int j = 0; j < NoiseModel::kCoefficients; ++j) coefficient(model, j)->failed = true;
+  return model;
+}
+
+}  // namespace
+
+const char* to_string(Verdict v) {
+  switch (v) {
+    case Verdict::kIdentified: return "identified";
+    case Verdict::kUpperBound: return "upper_bound";
+    case Verdict::kFailed: return "failed";
+  }
+  return "?";
+}
+
+double NoiseModel::avar(double tau_s) const {
+  // Without a rate the white term is N²/τ (m = 1 at rate 1/τ).
+  const double m = rate_hz > 0.0 ? std::max(1.0, std::round(tau_s * rate_hz)) : 1.0;
+  const WhiteTerm w = rate_hz > 0.0 ? WhiteTerm(rate_hz, lowpass_hz) : WhiteTerm(1.0 / tau_s, 0.0);
+  const auto b = basis(tau_s, m, w, correlation_time.fitted);
+  double v = 0.0;
+  for (int j = 0; j < kTerms; ++j) {
+    const double c = coefficient(*this, j)->fitted;
+    v += c * c * b[j];
+  }
+  return v;
+}
+
+NoiseType NoiseModel::dominant(double tau_s) const {
+  const double m = rate_hz > 0.0 ? std::max(1.0, std::round(tau_s * rate_hz)) : 1.0;
+  const auto b = basis(tau_s, m, WhiteTerm(rate_hz > 0.0 ? rate_hz : 1.0 / tau_s, 0.0), correlation_time.fitted);
+  int best = 1;
+  double best_v = 0.0;
+  for (int j = 0; j < kTerms; ++j) {
+    const double c = coefficient(*this, j)->fitted;
+    if (c * c * b[j] > best_v) {
+      best_v = c * c * b[j];
+      best = j;
+    }
+  }
+  return noise_of_term(best);
+}
+
+NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
+  NoiseModel model;
+  set_units(model, curve.units);
+  model.rate_hz = curve.rate_hz;
+  model.lowpass_hz = opt.lowpass_hz;
+  std::vector<FitPoint> all = usable_points(curve);
+  if (all.size() < 3) {
+    return failed_model(model, fmt::format("fit failed: {} usable Allan point(s) (AVAR > 0), need at least 3 "
+                                           "(a constant or too short signal)", all.size()));
+  }
+  model.tau_min_s = all.front().tau;
+  model.tau_max_s = all.back().tau;
+  const WhiteTerm white(curve.rate_hz, opt.lowpass_hz);
+  set_edf(all, curve, white, [](double) { return NoiseType::kWhite; });
+  const std::size_t skip = std::isnan(opt.lowpass_hz) ? filtered_prefix(all, opt.slope_tolerance) : 0;
+  std::vector<FitPoint> pts(all.begin() + static_cast<std::ptrdiff_t>(skip), all.end());
+  model.tau_fit_min_s = pts.front().tau;
+
+  Candidate best;
+  for (int pass = 0; pass < 2; ++pass) {  // EDF from white noise, then from the selected model
+    best = select_model(pts, white);
+    if (!best.valid) break;
+    for (int j = 0; j < kTerms; ++j) coefficient(model, j)->fitted = std::sqrt(best.c[j]);
+    model.correlation_time.fitted = best.tc;
+    model.ok = true;
+    set_edf(pts, curve, white, [&](double tau) { return model.dominant(tau); });
+  }
+  if (!best.valid) return failed_model(model, "fit failed: no model with positive coefficients fits the Allan points");
+  for (int j = 0; j < kTerms; ++j) {
+    coefficient(model, j)->fitted = std::sqrt(best.c[j]);
+    coefficient(model, j)->identified = (best.mask >> j) & 1u;
+  }
+  model.correlation_time.identified = model.gauss_markov.identified;
+  fisher_uncertainties(pts, best, model);
+  model.selection = fmt::format("{} (least D + {:.2f} x parameters over all term subsets; D = {:.4g})",
+                                term_names(best.mask), kTermPenalty, best.deviance);
+  NoiseModel snapshot = model;
+  mark_dominance(snapshot, white, model);
+  set_edf(all, curve, white, [&](double tau) { return model.dominant(tau); });
+  identify_and_bound(all, white, model);
+  std::vector<double> slope;
+  local_slopes(all, slope);
+  model.white_line = slope_readoff(model.white_line.name, curve.units.white, all, slope, -0.5, 1.0, opt);
+  model.random_walk_line =
+      slope_readoff(model.random_walk_line.name, curve.units.random_walk, all, slope, 0.5, 3.0, opt);
+  read_bias_floor(all, curve.units, model.bias_floor);
+  if (skip > 0) {
+    model.message = fmt::format("output filter not stated: the {} shortest tau point(s) (flattened, slope > {:.2f}) "
+                                "are left out of the fit",
+                                skip, -0.5 + opt.slope_tolerance);
+  }
+  if (model.dof <= 0) model.message += (model.message.empty() ? "" : "; ") + std::string("as many parameters as points: no residual check");
+  return model;
+}
+
+std::vector<Conversion> datasheet_units(const Coefficient& c, Instrument instrument) {
+  const std::string s = c.symbol;
+  const bool gyro = instrument == Instrument::kGyroscope, accel = instrument == Instrument::kAccelerometer;
+  const double deg = physics::kRadToDeg;
+  if (s == "N" && gyro) return {{deg * 60.0, "deg/sqrt(h)"}, {deg, "deg/s/sqrt(Hz)"}};
+  if (s == "N" && accel) return {{60.0, "m/s/sqrt(h)"}, {1.0 / physics::kMicroG, "ug/sqrt(Hz)"}};
+  if ((s == "B" || s == "G") && gyro) return {{1.0 / physics::kDegPerHour, "deg/h"}};
+  if ((s == "B" || s == "G") && accel) return {{1.0 / physics::kMicroG, "ug"}};
+  // K [unit/s/√Hz] = [unit/√s]: per √s and per √h (× 60).
+  if (s == "K" && gyro) return {{deg, "deg/s/sqrt(s)"}, {deg * 3600.0 * 60.0, "deg/h/sqrt(h)"}};
+  if (s == "K" && accel) return {{1.0 / physics::kMicroG, "ug/sqrt(s)"}, {60.0 / physics::kMicroG, "ug/sqrt(h)"}};
+  return {};
+}
+
+}  // namespace stend::allan
