@@ -54,7 +54,7 @@ int run_import(const ImportArgs& a) {
   try {
     rec.experiment_yaml = import_yaml(a, format, options);
     rec.header.status = RunStatus::kComplete;
-    write_recording(rec, dir);
+    write_recording(rec, dir, RecordingWriterOptions{});
   } catch (...) {
     std::error_code ec;
     std::filesystem::remove_all(dir, ec);  // the folder did not exist before: nothing else is lost

@@ -189,15 +189,6 @@ ChannelResult analyze(const OverlappingAllanStream& stream, double rate_hz,
                       const ChannelInfo& channel, const AllanOptions& options) {
   ChannelResult r;
   r.curve = make_curve(stream.octaves(), stream.samples(), rate_hz, channel, options.confidence);
-  const bool constant = !r.curve.points.empty() &&
-                        std::all_of(r.curve.points.begin(), r.curve.points.end(),
-                                    [](const AllanPoint& p) { return p.avar == 0.0; });
-  if (constant) {  // nothing to fit: say so rather than fit zeros
-    set_units(r.model, r.curve.units);
-    r.model.message = fmt::format("fit failed: the signal is constant over {} samples (every Allan variance is 0)",
-                                  stream.samples());
-    return r;
-  }
   r.model = fit_noise_model(r.curve, options);
   if (options.edf_from_model && r.model.ok) assign_intervals(r.curve, &r.model);
   return r;
