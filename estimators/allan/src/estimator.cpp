@@ -28,16 +28,16 @@ EstimatorResult AllanEstimator::fit(const EstimatorRequest& req) {
   const AllanOptions options = options_from_yaml(root["allan"], req.model_file);
   const DeviationRequest deviations = deviations_from_yaml(root["allan"], req.model_file);
   const AllanReport report = analyze_recording(*req.recording, options);
-  std::ostringstream text, json;
-  write_summary_table(text, report);
-  write_json(json, report);
-  if (report_failed(report)) {
+  if (report_failed(report)) {  // says which channel failed and why; no numbers
     std::string why;
     for (const auto& c : report.channels)
       if (!c.model.ok) why += (why.empty() ? "" : "; ") + c.curve.channel.name + ": " + c.model.message;
-    return {false, "allan: noise-model fit failed — " + (why.empty() ? std::string("no channel") : why), json.str(),
-            text.str(), config_.results_file};
+    return {false, "allan: noise-model fit failed — " + (why.empty() ? std::string("no channel") : why), {}, {},
+            config_.results_file};
   }
+  std::ostringstream text, json;
+  write_summary_table(text, report);
+  write_json(json, report);
   if (deviations.empty()) return {true, {}, json.str(), text.str(), config_.results_file};
   const auto devs = recording_deviations(*req.recording, report, deviations, options);
   write_deviation_table(text, devs);
