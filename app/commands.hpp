@@ -56,6 +56,8 @@ struct DatasetArgs {
 void write_results(std::filesystem::path json, const std::string& document, const std::string& text,
                    bool failed = false);
 
+// Whether the estimator `stend fit` would use for this model file reads the bench truth.
+bool fit_reads_truth(const std::string& model_file, const std::string& estimator = "auto");
 bool fit_recording(const stend::Recording& rec, const std::string& model_file, const std::filesystem::path& out_dir,
                    const std::string& json_out, const std::string& estimator = "auto");
 

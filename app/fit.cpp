@@ -112,6 +112,13 @@ stend::Recording with_samples_in_memory(const stend::Recording& rec) {
 
 }  // namespace
 
+bool fit_reads_truth(const std::string& model_file, const std::string& estimator) {
+  const estimation::Registry registry = estimators::builtin();
+  PluginHost host;
+  estimation::Registry with_plugins;
+  return resolve_estimator(registry, host, with_plugins, estimator, model_file).reads_truth;
+}
+
 bool fit_recording(const stend::Recording& rec, const std::string& model_file, const std::filesystem::path& out_dir,
                    const std::string& json_out, const std::string& estimator) {
   const estimation::Registry registry = estimators::builtin();

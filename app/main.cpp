@@ -121,7 +121,11 @@ int cmd_run(const std::string& file, const std::string& output, const std::strin
 
 int cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, const std::string& json,
             const std::string& estimator) {
-  const stend::Recording rec = data.open();
+  // A run opened for an estimator that needs no bench truth (allan) leaves the truth in the store.
+  const stend::Recording rec =
+      data.is_run() && !stend::cli::fit_reads_truth(model, estimator)
+          ? stend::Recording::open(data.inputs[0], stend::SampleLoading::kStream, stend::TruthLoading::kSkip)
+          : data.open();
   return fit_recording(rec, model, data.is_run() ? std::filesystem::path(data.inputs[0]) : std::filesystem::path(),
                        json, estimator)
              ? 0
@@ -130,7 +134,8 @@ int cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, const
 
 int cmd_info(const std::string& dir) {
   // Header, extents and the first and last samples only: no scan of the samples.
-  const stend::Recording rec = stend::Recording::open(dir, stend::SampleLoading::kStream);
+  const stend::Recording rec =
+      stend::Recording::open(dir, stend::SampleLoading::kStream, stend::TruthLoading::kSkip);
   const auto& h = rec.header;
   fmt::print("recording:  {} ({})\nexperiment: {} (stend {})\nstatus:     {}{}\n", rec.dir.string(),
              stend::to_string(rec.format), h.experiment_name, h.stend_version, stend::to_string(h.status),
@@ -148,7 +153,7 @@ int cmd_info(const std::string& dir) {
     fmt::print(" from {:.3f} s to {:.3f} s", first.t_s, last.t_s);
   }
   if (rec.gap_count >= 0) fmt::print(", {} gaps", rec.gap_count);
-  fmt::print(", {} truth rows, {} segments, {} events\n", rec.truth_t.size(), rec.segments.size(), rec.events.size());
+  fmt::print(", {} truth rows, {} segments, {} events\n", rec.truth_rows, rec.segments.size(), rec.events.size());
   if (!rec.damage.empty())
     fmt::print("damaged:    {} of {} samples are readable: {}\n", n, rec.written_samples, rec.damage);
   for (const auto& s : rec.segments)

@@ -50,6 +50,7 @@ struct Hdf5Run {
   std::string experiment_yaml;
   std::vector<double> truth_t;
   std::vector<std::vector<double>> truth;
+  std::uint64_t truth_rows = 0;
   std::string segments_csv, events_csv;  // the CSV text of segments.csv / events.csv
   std::shared_ptr<const SampleSource> samples;
   std::uint64_t written_samples = 0;  // samples the file claims; samples->size() are readable
@@ -57,6 +58,7 @@ struct Hdf5Run {
   std::int64_t gap_count = -1;        // from the summary (final, or as of the last flush)
 };
 // Throws std::runtime_error naming the file and what is unreadable when the file cannot be used.
-Hdf5Run open_hdf5_run(const std::filesystem::path& file);
+// With `truth` false the truth rows are counted, not read.
+Hdf5Run open_hdf5_run(const std::filesystem::path& file, bool truth = true);
 
 }  // namespace stend::detail

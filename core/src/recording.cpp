@@ -1176,8 +1176,8 @@ void check_experiment_yaml(const fs::path& where, const std::string& text) {
 }
 
 // run.h5: header, experiment, truth, segments and events; samples behind the file's source.
-void open_hdf5(const fs::path& file, Recording& r, SampleLoading loading) {
-  detail::Hdf5Run h = detail::open_hdf5_run(file);
+void open_hdf5(const fs::path& file, Recording& r, SampleLoading loading, TruthLoading truth) {
+  detail::Hdf5Run h = detail::open_hdf5_run(file, truth == TruthLoading::kLoad);
   const fs::path header_name = file.string() + ":header_json";
   read_run_json(header_name, h.header_json, r.header);
   r.header.status = h.status;
@@ -1189,6 +1189,7 @@ void open_hdf5(const fs::path& file, Recording& r, SampleLoading loading) {
   }
   r.truth_t = std::move(h.truth_t);
   r.truth = std::move(h.truth);
+  r.truth_rows = h.truth_rows;
   TextRecords segments(file.string() + ":segments_csv", h.segments_csv);
   read_segments(segments, r);
   TextRecords events(file.string() + ":events_csv", h.events_csv);
@@ -1208,14 +1209,15 @@ void open_hdf5(const fs::path& file, Recording& r, SampleLoading loading) {
 }
 
 // The CSV files of a run folder.
-void open_csv(const fs::path& run_dir, Recording& r, SampleLoading loading) {
+void open_csv(const fs::path& run_dir, Recording& r, SampleLoading loading, TruthLoading truth) {
   std::error_code ec;
   const fs::path imu = run_dir / "imu.csv";
   if (!fs::exists(imu, ec)) {
     throw std::runtime_error(fmt::format("{}: missing (every recording has run.h5 or imu.csv)", imu.string()));
   }
   read_imu(imu, r);
-  if (fs::exists(run_dir / "truth.csv", ec)) read_truth(run_dir / "truth.csv", r);
+  if (truth == TruthLoading::kLoad && fs::exists(run_dir / "truth.csv", ec)) read_truth(run_dir / "truth.csv", r);
+  r.truth_rows = r.truth_t.size();
   for (const auto& [name, read] :
        {std::pair{"segments.csv", &read_segments<csv::Reader>}, std::pair{"events.csv", &read_events<csv::Reader>}}) {
     if (!fs::exists(run_dir / name, ec)) continue;
@@ -1231,7 +1233,7 @@ void open_csv(const fs::path& run_dir, Recording& r, SampleLoading loading) {
 
 }  // namespace
 
-Recording Recording::open(const fs::path& run_dir, SampleLoading loading) {
+Recording Recording::open(const fs::path& run_dir, SampleLoading loading, TruthLoading truth) {
   std::error_code ec;
   if (!fs::is_directory(run_dir, ec)) {
     throw std::runtime_error(
@@ -1242,7 +1244,7 @@ Recording Recording::open(const fs::path& run_dir, SampleLoading loading) {
   r.dir = run_dir;
   const fs::path h5 = run_dir / detail::kHdf5FileName;
   if (fs::exists(h5, ec)) {
-    open_hdf5(h5, r, loading);
+    open_hdf5(h5, r, loading, truth);
     return r;
   }
   const fs::path run_json = run_dir / "run.json";
@@ -1264,7 +1266,7 @@ Recording Recording::open(const fs::path& run_dir, SampleLoading loading) {
     if (loading == SampleLoading::kStream) r.source = std::make_shared<MemorySamples>(std::vector<ImuSample>{});
     return r;
   }
-  open_csv(run_dir, r, loading);
+  open_csv(run_dir, r, loading, truth);
   return r;
 }
 

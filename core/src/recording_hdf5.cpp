@@ -596,8 +596,9 @@ class Hdf5Samples final : public SampleSource {
     if (count == 0) return;
     check_range(first, count);
     Hdf5Lock lock;
-    if (ch == Channel::kTime) {
-      read_into(t_.get(), H5T_NATIVE_DOUBLE, first, count, out, "t_s");
+    if (ch == Channel::kTime || ch == Channel::kFlags) {
+      const bool time = ch == Channel::kTime;
+      read_into((time ? t_ : flags_).get(), H5T_NATIVE_DOUBLE, first, count, out, time ? "t_s" : "flags");
       return;
     }
     const int k = static_cast<int>(ch) - static_cast<int>(Channel::kAx);
@@ -688,7 +689,7 @@ std::string read_bytes(hid_t ds, const fs::path& file, const char* name) {
 
 }  // namespace
 
-Hdf5Run open_hdf5_run(const fs::path& path) {
+Hdf5Run open_hdf5_run(const fs::path& path, bool truth) {
   silence_hdf5_errors();
   Hdf5Lock lock;
   Hdf5Run run;
@@ -734,12 +735,14 @@ Hdf5Run open_hdf5_run(const fs::path& path) {
     }
   };
   keep_going([&] {
-    Handle truth = open_dataset(root, "truth", path, "/");
-    Handle space(H5Dget_space(truth.get()), H5Sclose);
+    Handle ds = open_dataset(root, "truth", path, "/");
+    Handle space(H5Dget_space(ds.get()), H5Sclose);
     hsize_t dims[2] = {0, 0};
     H5Sget_simple_extent_dims(space.get(), dims, nullptr);
+    run.truth_rows = dims[0];
+    if (!truth) return;
     std::vector<double> v(dims[0] * dims[1]);
-    if (read_rows(truth.get(), H5T_NATIVE_DOUBLE, 0, dims[0], dims[1], v.data()) < 0)
+    if (read_rows(ds.get(), H5T_NATIVE_DOUBLE, 0, dims[0], dims[1], v.data()) < 0)
       fail(path, "dataset /truth is damaged");
     for (hsize_t r = 0; r < dims[0]; ++r) {
       run.truth_t.push_back(v[r * dims[1]]);

@@ -16,6 +16,7 @@ const char* to_string(Channel c) {
     case Channel::kGy: return "gy";
     case Channel::kGz: return "gz";
     case Channel::kTemperature: return "temp_c";
+    case Channel::kFlags: return "flags";
   }
   return "?";
 }
@@ -30,6 +31,7 @@ double value_of(const ImuSample& s, Channel c) {
     case Channel::kGy: return s.gyro_radps.y();
     case Channel::kGz: return s.gyro_radps.z();
     case Channel::kTemperature: return s.temperature_c;
+    case Channel::kFlags: return static_cast<double>(s.flags);
   }
   return 0.0;
 }

@@ -163,6 +163,9 @@ class RecordingWriter {
 // them in the store and read them through `source` a chunk at a time (kStream; a CSV run folder,
 // having no index, is still read whole, into the source).
 enum class SampleLoading { kInMemory, kStream };
+// Whether Recording::open reads the bench truth (kSkip: for analyses of the sensor's output alone,
+// such as `stend info` and the noise analysis; the truth of a long run grows with its length).
+enum class TruthLoading { kLoad, kSkip };
 
 // A recording for analysis: header, truth, segments and events in memory; the samples either in
 // memory (`samples`) or in the store (`source`). Analyses iterate sample_source().
@@ -175,6 +178,7 @@ struct Recording {
   std::shared_ptr<const SampleSource> source;    // the store's samples (SampleLoading::kStream)
   std::vector<double> truth_t;
   std::vector<std::vector<double>> truth;  // rows, each truth_columns.size()
+  std::uint64_t truth_rows = 0;  // rows in the store (loaded or, with TruthLoading::kSkip, not)
   std::vector<Segment> segments;
   std::vector<Event> events;
   std::size_t dropped_partial_lines = 0;  // truncated trailing lines ignored by the reader
@@ -189,7 +193,8 @@ struct Recording {
 
   // Throws std::runtime_error naming the file and line when something is unreadable.
   static Recording open(const std::filesystem::path& run_dir,
-                        SampleLoading loading = SampleLoading::kInMemory);
+                        SampleLoading loading = SampleLoading::kInMemory,
+                        TruthLoading truth = TruthLoading::kLoad);
   // The samples to iterate: `source` when set, else a view of `samples`.
   const SampleSource& sample_source() const;
   // Number of samples, wherever they are.

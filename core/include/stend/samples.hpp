@@ -18,9 +18,9 @@
 
 namespace stend {
 
-// One scalar column of the samples (SI: s, m/s², rad/s, °C).
-enum class Channel { kTime, kAx, kAy, kAz, kGx, kGy, kGz, kTemperature };
-// "t_s" | "ax" | "ay" | "az" | "gx" | "gy" | "gz" | "temp_c".
+// One scalar column of the samples (SI: s, m/s², rad/s, °C; the SampleFlags bits as a number).
+enum class Channel { kTime, kAx, kAy, kAz, kGx, kGy, kGz, kTemperature, kFlags };
+// "t_s" | "ax" | "ay" | "az" | "gx" | "gy" | "gz" | "temp_c" | "flags".
 const char* to_string(Channel c);
 // The channel's SI value in a sample.
 double value_of(const ImuSample& s, Channel c);

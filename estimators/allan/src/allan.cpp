@@ -326,11 +326,16 @@ Sampling scan_sampling(const SampleSource& src, IndexRange range, double header_
     s.rate_hz = 1.0 / median_dt;
     for (double d : dt) count_irregular(d);
   };
-  for_each_chunk(src, range.first, range.last, [&](const ImuSample* chunk, std::size_t n, std::uint64_t first) {
+  // The time and flag columns only (a columnar store decodes no sensor channel for this pass).
+  std::vector<double> times(kDefaultChunkSamples), flags(kDefaultChunkSamples);
+  for (std::uint64_t first = range.first; first < range.last; first += times.size()) {
+    const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(times.size(), range.last - first));
+    src.read_column(Channel::kTime, first, n, times.data());
+    src.read_column(Channel::kFlags, first, n, flags.data());
     for (std::size_t i = 0; i < n; ++i) {
-      const double t = chunk[i].t_s;
+      const double t = times[i];
       if (first + i > range.first) {
-        if (chunk[i].flags & kGapBefore) ++s.gaps;
+        if (static_cast<std::uint32_t>(flags[i]) & kGapBefore) ++s.gaps;
         const double d = t - prev_t;
         if (s.rate_hz > 0.0) count_irregular(d); else dt.push_back(d);
         if (dt.size() == kMedianIntervals) fix_rate();
@@ -339,7 +344,7 @@ Sampling scan_sampling(const SampleSource& src, IndexRange range, double header_
       }
       prev_t = t;
     }
-  });
+  }
   fix_rate();
   s.t_end_s = prev_t;
   return s;

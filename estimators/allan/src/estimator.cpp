@@ -101,6 +101,7 @@ estimation::EstimatorEntry estimator_entry() {
   e.claims = [](const YAML::Node& root) { return root.IsMap() && root["allan"]; };
   e.create = [] { return PluginPtr<Estimator>(new AllanEstimator(), [](Estimator* p) { delete p; }); };
   e.summarize = summarize;
+  e.reads_truth = false;
   return e;
 }
 

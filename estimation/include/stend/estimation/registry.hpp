@@ -44,6 +44,9 @@ struct EstimatorEntry {
   bool fallback = false;
   // A new estimator object (the same class its plugin exports).
   std::function<PluginPtr<Estimator>()> create;
+  // Whether its fit reads the bench truth; false lets `stend fit` open a run without it (a noise
+  // analysis of a day-long run need not hold the day's truth in memory).
+  bool reads_truth = true;
   // Reads this estimator's results document back as the typed summary (reports, database,
   // compare). Null: the document has the summary fields (estimation::summary_from_json).
   std::function<FitSummary(const nlohmann::json& doc)> summarize;
