@@ -1,6 +1,7 @@
-// The noise-model fit of an Allan curve: model curve with the sensor's output stage, Gamma
-// likelihood on the EDF, model selection among Q N B K R and a Gauss–Markov bias, Fisher
-// uncertainties, upper bounds, slope read-offs (see fit_noise_model in allan.hpp).
+// The noise-model fit of an Allan curve: model curve with the sensor's output stage, generalized
+// least squares on the octave points with their covariance (each point's EDF, the correlation of
+// overlapping estimates that share samples), model selection among Q N B K R and a Gauss–Markov
+// bias, Fisher uncertainties, upper bounds, slope read-offs (see fit_noise_model in allan.hpp).
 #include <stend/allan/allan.hpp>
 #include <stend/model/noise.hpp>
 #include <stend/model/output_stage.hpp>
@@ -23,11 +24,8 @@ constexpr int kTerms = 6;                 // Q N B K R G (linear in their square
 constexpr int kGm = 5;                    // index of the Gauss–Markov term
 constexpr double kTermPenalty = 6.6349;   // χ²₁ 99 % quantile: penalty per parameter
 constexpr double kZ95 = 1.959963984540054;
+constexpr double kCoverage = 0.95;        // level of the coefficients' intervals (z = kZ95)
 constexpr int kMaxFilteredM = 32;         // an unstated filter may flatten points up to this m
-// The octave points share their samples, so the likelihood of independent points overstates the
-// information by about this factor: the deviance is divided by it (selection) and the Fisher
-// covariance multiplied by it (uncertainties). Calibrated on the simulator grid (README).
-constexpr double kOvercount = 4.0;
 
 Coefficient* coefficient(NoiseModel& m, int j) { return m.coefficients() + j; }
 const Coefficient* coefficient(const NoiseModel& m, int j) { return m.coefficients() + j; }
@@ -89,15 +87,50 @@ class WhiteTerm {
 struct FitPoint {
   double tau, m, avar, adev, edf, lo, hi;
   std::array<double, kTerms> a;  // basis at τ (G at the current τc)
+  NoiseType noise;               // noise type of the EDF and of the correlation with other points
 };
+
+// The fitted points and the lower Cholesky factor L of their correlation matrix: the covariance
+// of the AVAR estimates is Σ = S·L·Lᵀ·S with S = diag(model·√(2/ν)), so whitening by (L·S)⁻¹ makes
+// the octave points, which share samples, independent for the least squares, the deviance and
+// the Fisher information (generalized least squares).
+struct FitSet {
+  std::vector<FitPoint> pts;
+  Eigen::MatrixXd L;
+  Eigen::MatrixXd whiten(Eigen::MatrixXd x) const { return L.triangularView<Eigen::Lower>().solve(x); }
+};
+
+// Correlation of two points' AVAR estimates: the mean of the correlations for each point's noise
+// type in a record of n_samples (stats::avar_correlation); shrunk towards the identity until
+// positive definite.
+void set_correlation(FitSet& set, double n_samples) {
+  const auto& pts = set.pts;
+  const int n = static_cast<int>(pts.size());
+  Eigen::MatrixXd R = Eigen::MatrixXd::Identity(n, n);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < i; ++j) {
+      const auto &p = pts[static_cast<std::size_t>(i)], &q = pts[static_cast<std::size_t>(j)];
+      R(i, j) = R(j, i) =
+          0.5 * (stats::avar_correlation(p.noise, p.m, q.m, n_samples) + stats::avar_correlation(q.noise, p.m, q.m, n_samples));
+    }
+  }
+  for (;;) {
+    Eigen::LLT<Eigen::MatrixXd> llt(R);
+    if (llt.info() == Eigen::Success) {
+      set.L = llt.matrixL();
+      return;
+    }
+    R = 0.9 * R + 0.1 * Eigen::MatrixXd::Identity(n, n);
+  }
+}
 
 std::array<double, kTerms> basis(double tau, double m, const WhiteTerm& white, double tc) {
   return {3.0 / (tau * tau), white(m), kFlickerFloor * kFlickerFloor, tau / 3.0, tau * tau / 2.0,
           tc > 0.0 ? model::allan::gauss_markov(1.0, tc, tau) : 0.0};
 }
 
-void set_basis(std::vector<FitPoint>& pts, const WhiteTerm& white, double tc) {
-  for (auto& p : pts) p.a = basis(p.tau, p.m, white, tc);
+void set_basis(FitSet& set, const WhiteTerm& white, double tc) {
+  for (auto& p : set.pts) p.a = basis(p.tau, p.m, white, tc);
 }
 
 // One candidate model: the terms in `mask`, τc for G.
@@ -107,8 +140,10 @@ struct Candidate {
   std::array<double, kTerms> c{};  // squares of the coefficients (σ_G² for G)
   double deviance = std::numeric_limits<double>::infinity();
   bool valid = false;
-  int parameters() const { return __builtin_popcount(mask) + ((mask >> kGm) & 1u ? 1 : 0); }
-  double score() const { return deviance / kOvercount + kTermPenalty * parameters(); }
+  // Parameters for the penalty: one per term, τc for G, and one more for R, which competes with K
+  // for the same rise at long τ and is named only when it beats K's explanation by the penalty.
+  int parameters() const { return __builtin_popcount(mask) + ((mask >> kGm) & 1u ? 1 : 0) + ((mask >> 4) & 1u ? 1 : 0); }
+  double score() const { return deviance + kTermPenalty * parameters(); }
 };
 
 double model_at(const FitPoint& p, const std::array<double, kTerms>& c) {
@@ -117,21 +152,26 @@ double model_at(const FitPoint& p, const std::array<double, kTerms>& c) {
   return v;
 }
 
-// Gamma deviance D = Σ ν (r − 1 − ln r), r = AVAR/model.
-double deviance(const std::vector<FitPoint>& pts, const std::array<double, kTerms>& c) {
-  double d = 0.0;
-  for (const auto& p : pts) {
-    const double mv = model_at(p, c);
+// Deviance of correlated Gamma points: the signed deviance residuals e_i = ±√(ν (r − 1 − ln r)),
+// r = AVAR/model (each ≈ N(0, 1)), whitened: D = ‖L⁻¹ e‖² (without correlation the Gamma
+// deviance Σ ν (r − 1 − ln r)).
+double deviance(const FitSet& set, const std::array<double, kTerms>& c) {
+  const auto& pts = set.pts;
+  Eigen::VectorXd e(static_cast<int>(pts.size()));
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const double mv = model_at(pts[i], c);
     if (!(mv > 0.0)) return std::numeric_limits<double>::infinity();
-    const double r = p.avar / mv;
-    d += p.edf * (r - 1.0 - std::log(r));
+    const double r = pts[i].avar / mv;
+    e(static_cast<int>(i)) = std::copysign(std::sqrt(std::max(0.0, pts[i].edf * (r - 1.0 - std::log(r)))), r - 1.0);
   }
-  return d;
+  return set.whiten(e).squaredNorm();
 }
 
-// Fisher scoring for the terms in `mask` (basis already at τc): weighted least squares with
-// weights ν/(2·model²), repeated; invalid when a coefficient is not positive.
-Candidate fit_terms(const std::vector<FitPoint>& pts, unsigned mask, double tc) {
+// Fisher scoring for the terms in `mask` (basis already at τc): generalized least squares with
+// the covariance at the current model (σ_i = model_i·√(2/ν_i), correlation L·Lᵀ), repeated;
+// invalid when a coefficient is not positive.
+Candidate fit_terms(const FitSet& set, unsigned mask, double tc) {
+  const auto& pts = set.pts;
   Candidate cand;
   cand.mask = mask;
   cand.tc = tc;
@@ -150,6 +190,8 @@ Candidate fit_terms(const std::vector<FitPoint>& pts, unsigned mask, double tc) 
       for (int q = 0; q < k; ++q) A(i, q) = w * pts[i].a[cols[q]];
       b(i) = w * pts[i].avar;
     }
+    A = set.whiten(A);
+    b = set.whiten(b);
     for (int q = 0; q < k; ++q) {
       scale(q) = A.col(q).norm();
       if (!(scale(q) > 0.0)) return cand;
@@ -173,32 +215,33 @@ Candidate fit_terms(const std::vector<FitPoint>& pts, unsigned mask, double tc) 
   }
   for (int q = 0; q < k; ++q)
     if (!(cand.c[cols[q]] > 0.0)) return cand;
-  cand.deviance = deviance(pts, cand.c);
+  cand.deviance = deviance(set, cand.c);
   cand.valid = std::isfinite(cand.deviance);
   return cand;
 }
 
 // Best τc for the terms in `mask` (which contains G) on a log grid, 2 nodes per octave over the
 // fitted τ range widened by 4× each way; `step` is the grid's spacing in ln τc.
-Candidate fit_with_gm(std::vector<FitPoint>& pts, unsigned mask, const WhiteTerm& white, double& step) {
+Candidate fit_with_gm(FitSet& set, unsigned mask, const WhiteTerm& white, double& step) {
+  const auto& pts = set.pts;
   const double l0 = std::log(pts.front().tau / 4.0), l1 = std::log(pts.back().tau * 4.0);
   const int nodes = std::max(4, static_cast<int>(std::ceil((l1 - l0) / std::log(2.0) * 2.0)));
   step = (l1 - l0) / nodes;
   Candidate best;
   for (int i = 0; i <= nodes; ++i) {
     const double tc = std::exp(l0 + step * i);
-    set_basis(pts, white, tc);
-    Candidate c = fit_terms(pts, mask, tc);
+    set_basis(set, white, tc);
+    Candidate c = fit_terms(set, mask, tc);
     if (c.valid && c.deviance < best.deviance) best = c;
   }
   return best;
 }
 
 // Golden-section refinement of ln τc within one grid step either side of the candidate's τc.
-Candidate refine_gm(std::vector<FitPoint>& pts, Candidate best, const WhiteTerm& white, double step) {
+Candidate refine_gm(FitSet& set, Candidate best, const WhiteTerm& white, double step) {
   auto at = [&](double l) {
-    set_basis(pts, white, std::exp(l));
-    return fit_terms(pts, best.mask, std::exp(l));
+    set_basis(set, white, std::exp(l));
+    return fit_terms(set, best.mask, std::exp(l));
   };
   double a = std::log(best.tc) - step, b = std::log(best.tc) + step;
   const double g = 0.5 * (std::sqrt(5.0) - 1.0);
@@ -216,45 +259,46 @@ Candidate refine_gm(std::vector<FitPoint>& pts, Candidate best, const WhiteTerm&
 // B and G both make the plateau, so choosing between them is a choice of its shape (flat over
 // decades, or rising as τ/τc then falling as 1/√τ), not of one more term: the shape that fits
 // better (the lower deviance) is kept, τc not counted against G.
-Candidate plateau_shape(std::vector<FitPoint>& pts, const Candidate& with_b, const WhiteTerm& white) {
+Candidate plateau_shape(FitSet& set, const Candidate& with_b, const WhiteTerm& white) {
   double step = 0.0;
-  const Candidate with_g = fit_with_gm(pts, (with_b.mask & ~(1u << 2)) | (1u << kGm), white, step);
+  const Candidate with_g = fit_with_gm(set, (with_b.mask & ~(1u << 2)) | (1u << kGm), white, step);
   return with_g.valid && with_g.deviance < with_b.deviance ? with_g : with_b;
 }
 
 // The candidate with the least penalised deviance over every non-empty subset of the terms.
-Candidate select_model(std::vector<FitPoint>& pts, const WhiteTerm& white) {
+Candidate select_model(FitSet& set, const WhiteTerm& white) {
   Candidate best;
-  set_basis(pts, white, 0.0);
+  set_basis(set, white, 0.0);
   for (unsigned mask = 1; mask < (1u << kGm); ++mask) {
-    const Candidate c = fit_terms(pts, mask, 0.0);
+    const Candidate c = fit_terms(set, mask, 0.0);
     if (c.valid && c.score() < best.score()) best = c;
   }
   double step = 0.0;
   for (unsigned mask = 1u << kGm; mask < (1u << kTerms); ++mask) {
-    if (__builtin_popcount(mask) + 1 > static_cast<int>(pts.size()) - 1) continue;
+    if (__builtin_popcount(mask) + 1 > static_cast<int>(set.pts.size()) - 1) continue;
     if (mask & (1u << 2)) continue;  // B and G both make the plateau: the data cannot split them
-    const Candidate c = fit_with_gm(pts, mask, white, step);
+    const Candidate c = fit_with_gm(set, mask, white, step);
     if (c.valid && c.score() < best.score()) best = c;
   }
-  if ((best.mask >> 2) & 1u) best = plateau_shape(pts, best, white);
-  if ((best.mask >> kGm) & 1u) best = refine_gm(pts, best, white, step);
-  set_basis(pts, white, best.tc);
+  if ((best.mask >> 2) & 1u) best = plateau_shape(set, best, white);
+  if ((best.mask >> kGm) & 1u) best = refine_gm(set, best, white, step);
+  set_basis(set, white, best.tc);
   return best;
 }
 
-// σ of each selected coefficient (and of τc) from the inverse Fisher information
-// Σ ν/(2·model²)·∇model ∇modelᵀ over θ = (c_j/ĉ_j…, ln τc), times the overcount (and D/c/dof
-// when above 1).
-void fisher_uncertainties(const std::vector<FitPoint>& pts, const Candidate& cand, NoiseModel& model) {
+// σ of each selected coefficient (and of τc) from the inverse Fisher information JᵀΣ⁻¹J of the
+// generalized least squares, J = ∇model over θ = (c_j/ĉ_j…, ln τc), times D/dof when above 1.
+void fisher_uncertainties(const FitSet& set, const Candidate& cand, NoiseModel& model) {
+  const auto& pts = set.pts;
   std::vector<int> cols;
   for (int j = 0; j < kTerms; ++j)
     if (cand.mask & (1u << j)) cols.push_back(j);
   const bool gm = (cand.mask >> kGm) & 1u;
   const int k = static_cast<int>(cols.size()) + (gm ? 1 : 0);
-  Eigen::MatrixXd F = Eigen::MatrixXd::Zero(k, k);
+  Eigen::MatrixXd J(static_cast<int>(pts.size()), k);
   const double h = 1e-4;
-  for (const auto& p : pts) {
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const FitPoint& p = pts[i];
     Eigen::VectorXd g(k);
     // θ_q = c_q / ĉ_q (relative, so every column is of order 1 and F is well scaled).
     for (std::size_t q = 0; q < cols.size(); ++q) g(static_cast<int>(q)) = cand.c[cols[q]] * p.a[cols[q]];
@@ -263,14 +307,14 @@ void fisher_uncertainties(const std::vector<FitPoint>& pts, const Candidate& can
       const double dn = model::allan::gauss_markov(1.0, cand.tc * std::exp(-h), p.tau);
       g(k - 1) = cand.c[kGm] * (up - dn) / (2.0 * h);
     }
-    const double mv = model_at(p, cand.c);
-    F += (p.edf / (2.0 * mv * mv)) * g * g.transpose();
+    J.row(static_cast<int>(i)) = std::sqrt(p.edf / 2.0) / model_at(p, cand.c) * g.transpose();
   }
+  const Eigen::MatrixXd Jw = set.whiten(J);
+  const Eigen::MatrixXd F = Jw.transpose() * Jw;
   const Eigen::MatrixXd cov = F.completeOrthogonalDecomposition().pseudoInverse();
   model.dof = static_cast<int>(pts.size()) - k;
   model.chi2_reduced = model.dof > 0 ? cand.deviance / model.dof : kNaN;
-  const double inflate =
-      kOvercount * (std::isfinite(model.chi2_reduced) ? std::max(1.0, model.chi2_reduced / kOvercount) : 1.0);
+  const double inflate = std::isfinite(model.chi2_reduced) ? std::max(1.0, model.chi2_reduced) : 1.0;
   for (std::size_t q = 0; q < cols.size(); ++q) {
     Coefficient* c = coefficient(model, cols[q]);
     const double var_c = cov(static_cast<int>(q), static_cast<int>(q)) * inflate * cand.c[cols[q]] * cand.c[cols[q]];
@@ -305,6 +349,17 @@ void local_slopes(const std::vector<FitPoint>& pts, std::vector<double>& slope) 
     slope[i] = (std::log(pts[b].adev) - std::log(pts[a].adev)) /
                (std::log(pts[b].tau) - std::log(pts[a].tau));
   }
+}
+
+// The power-law noise type nearest to the measured local ADEV slope at τ (−1, −½, 0, +½).
+NoiseType noise_of_slope(const std::vector<FitPoint>& pts, const std::vector<double>& slope, double tau) {
+  std::size_t i = 0;
+  while (i + 1 < pts.size() && pts[i].tau < tau) ++i;
+  const double s = slope[i];
+  if (!(s >= -0.75)) return NoiseType::kQuantization;
+  if (s < -0.25) return NoiseType::kWhite;
+  if (s < 0.25) return NoiseType::kFlicker;
+  return NoiseType::kRandomWalk;
 }
 
 // Read-off on a slope line: value_i = adev_i · (τ_ref/τ_i)^target, pooled over the points
@@ -361,7 +416,7 @@ std::vector<FitPoint> usable_points(const AllanCurve& curve) {
   std::vector<FitPoint> pts;
   for (const auto& p : curve.points) {
     if (!(p.avar > 0.0) || !std::isfinite(p.avar) || p.terms < 1) continue;
-    pts.push_back({p.tau_s, static_cast<double>(p.m), p.avar, p.adev, kNaN, kNaN, kNaN, {}});
+    pts.push_back({p.tau_s, static_cast<double>(p.m), p.avar, p.adev, kNaN, kNaN, kNaN, {}, NoiseType::kWhite});
   }
   return pts;
 }
@@ -375,7 +430,8 @@ void set_edf(std::vector<FitPoint>& pts, const AllanCurve& curve, const WhiteTer
   const double rho = white.independent();
   const double n_phase = rho * static_cast<double>(curve.samples) + 1.0;
   for (auto& p : pts) {
-    p.edf = stats::edf_overlapping_adev(type_at(p.tau), n_phase, std::max(1.0, rho * p.m));
+    p.noise = type_at(p.tau);
+    p.edf = stats::edf_overlapping_adev(p.noise, n_phase, std::max(1.0, rho * p.m));
     if (!(std::isfinite(p.edf) && p.edf > 0.0)) p.edf = 1.0;
     const auto ci = stats::deviation_interval(p.adev, p.edf, curve.confidence);
     p.lo = ci.lo;
@@ -425,8 +481,16 @@ void identify_and_bound(const std::vector<FitPoint>& pts, const WhiteTerm& white
     if (c->identified) {
       c->value = c->fitted;
       c->sigma = c->fitted_sigma;
+      // Normal interval; for the linear terms (c² a weighted sum of AVAR points, χ² with
+      // Satterthwaite's EDF c²/(2σ²)) widened to the χ² interval, which reaches further up when
+      // few long-τ points decide the coefficient.
       c->lo = std::max(0.0, c->value - kZ95 * c->sigma);
       c->hi = c->value + kZ95 * c->sigma;
+      if (j < NoiseModel::kCoefficients - 1) {
+        const auto ci = stats::deviation_interval(c->value, c->value * c->value / (2.0 * c->sigma * c->sigma), kCoverage);
+        c->lo = std::min(c->lo, ci.lo);
+        c->hi = std::max(c->hi, ci.hi);
+      }
     }
   }
   for (int j = 0; j < kGm; ++j) coefficient(model, j)->upper_bound = bound_of(j, 0.0);
@@ -522,19 +586,22 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
   model.tau_min_s = all.front().tau;
   model.tau_max_s = all.back().tau;
   const WhiteTerm white(curve.rate_hz, opt.lowpass_hz);
-  set_edf(all, curve, white, [](double) { return NoiseType::kWhite; });
+  std::vector<double> slope;
+  local_slopes(all, slope);
+  set_edf(all, curve, white, [&](double tau) { return noise_of_slope(all, slope, tau); });
   const std::size_t skip = std::isnan(opt.lowpass_hz) ? filtered_prefix(all, opt.slope_tolerance) : 0;
-  std::vector<FitPoint> pts(all.begin() + static_cast<std::ptrdiff_t>(skip), all.end());
-  model.tau_fit_min_s = pts.front().tau;
+  FitSet set{std::vector<FitPoint>(all.begin() + static_cast<std::ptrdiff_t>(skip), all.end()), {}};
+  model.tau_fit_min_s = set.pts.front().tau;
 
   Candidate best;
-  for (int pass = 0; pass < 2; ++pass) {  // EDF from white noise, then from the selected model
-    best = select_model(pts, white);
+  set_correlation(set, static_cast<double>(curve.samples));
+  for (int pass = 0; pass < 2; ++pass) {  // covariance from the measured slopes, then from the selected model
+    best = select_model(set, white);
     if (!best.valid) break;
     for (int j = 0; j < kTerms; ++j) coefficient(model, j)->fitted = std::sqrt(best.c[j]);
     model.correlation_time.fitted = best.tc;
     model.ok = true;
-    set_edf(pts, curve, white, [&](double tau) { return model.dominant(tau); });
+    set_edf(set.pts, curve, white, [&](double tau) { return model.dominant(tau); });
   }
   if (!best.valid) return failed_model(model, "fit failed: no model with positive coefficients fits the Allan points");
   for (int j = 0; j < kTerms; ++j) {
@@ -542,15 +609,13 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
     coefficient(model, j)->identified = (best.mask >> j) & 1u;
   }
   model.correlation_time.identified = model.gauss_markov.identified;
-  fisher_uncertainties(pts, best, model);
+  fisher_uncertainties(set, best, model);
   model.selection = fmt::format("{} (least D + {:.2f} x parameters over all term subsets; D = {:.4g})",
                                 term_names(best.mask), kTermPenalty, best.deviance);
   NoiseModel snapshot = model;
   mark_dominance(snapshot, white, model);
   set_edf(all, curve, white, [&](double tau) { return model.dominant(tau); });
   identify_and_bound(all, white, model);
-  std::vector<double> slope;
-  local_slopes(all, slope);
   model.white_line = slope_readoff(model.white_line.name, curve.units.white, all, slope, -0.5, 1.0, opt);
   model.random_walk_line =
       slope_readoff(model.random_walk_line.name, curve.units.random_walk, all, slope, 0.5, 3.0, opt);
