@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 #include <vector>
 
 using namespace stend::allan;
@@ -154,4 +155,81 @@ TEST(Interval, CoversTheEstimateAndShrinksWithEdf) {
   EXPECT_LT(b.hi - b.lo, a.hi - a.lo);
   // ±1/√(2·edf) for large edf.
   EXPECT_NEAR(b.hi - 1.0, 1.0 / std::sqrt(2.0 * 1000), 2e-3);
+}
+
+// Monte Carlo of the correlation between overlapping AVAR estimates: 1000 records of 2^12
+// samples of white or random-walk FM, AVAR at m = 1 … N/4 (phase x = Σ y, second differences).
+class AvarCorrelationMonteCarlo : public ::testing::TestWithParam<NoiseType> {};
+
+TEST_P(AvarCorrelationMonteCarlo, MatchesTheComputedCorrelation) {
+  const NoiseType type = GetParam();
+  constexpr long N = 1L << 12;
+  constexpr int kRecords = 1000, kOctaves = 11;  // m = 1 … 1024 = N/4
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> normal;
+  std::vector<std::vector<double>> avar(kOctaves, std::vector<double>(kRecords));
+  std::vector<double> x(N + 1);
+  for (int r = 0; r < kRecords; ++r) {
+    double walk = 0.0;
+    x[0] = 0.0;
+    for (long i = 0; i < N; ++i) {
+      walk = type == NoiseType::kRandomWalk ? walk + normal(rng) : normal(rng);
+      x[static_cast<std::size_t>(i + 1)] = x[static_cast<std::size_t>(i)] + walk;
+    }
+    for (int k = 0; k < kOctaves; ++k) {
+      const long m = 1L << k, M = N + 1 - 2 * m;
+      double s = 0.0;
+      for (long i = 0; i < M; ++i) {
+        const double d = x[static_cast<std::size_t>(i + 2 * m)] - 2.0 * x[static_cast<std::size_t>(i + m)] +
+                         x[static_cast<std::size_t>(i)];
+        s += d * d;
+      }
+      avar[static_cast<std::size_t>(k)][static_cast<std::size_t>(r)] = s / (2.0 * double(m * m) * double(M));
+    }
+  }
+  auto sample_correlation = [&](int i, int j) {
+    const auto &a = avar[static_cast<std::size_t>(i)], &b = avar[static_cast<std::size_t>(j)];
+    double ma = 0.0, mb = 0.0;
+    for (int r = 0; r < kRecords; ++r) {
+      ma += a[static_cast<std::size_t>(r)] / kRecords;
+      mb += b[static_cast<std::size_t>(r)] / kRecords;
+    }
+    double sab = 0.0, saa = 0.0, sbb = 0.0;
+    for (int r = 0; r < kRecords; ++r) {
+      const double u = a[static_cast<std::size_t>(r)] - ma, v = b[static_cast<std::size_t>(r)] - mb;
+      sab += u * v;
+      saa += u * u;
+      sbb += v * v;
+    }
+    return sab / std::sqrt(saa * sbb);
+  };
+  // Sampling error of a correlation from 1000 records: (1 − ρ²)/√1000 ≤ 0.032; 0.07 is > 2σ.
+  for (int i = 0; i + 1 < kOctaves; ++i) {
+    for (int j = i + 1; j < kOctaves && j <= i + 3; ++j) {
+      const double m1 = std::ldexp(1.0, i), m2 = std::ldexp(1.0, j);
+      EXPECT_NEAR(sample_correlation(i, j), avar_correlation(type, m1, m2, static_cast<double>(N)), 0.07)
+          << to_string(type) << " m = " << m1 << ", " << m2;
+    }
+  }
+  // The record's length matters for random walk at the longest τ: 0.79 against 0.89 for a long record.
+  if (type == NoiseType::kRandomWalk) {
+    EXPECT_LT(avar_correlation(type, N / 8, N / 4, static_cast<double>(N)), avar_correlation(type, N / 8, N / 4) - 0.05);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(WhiteAndRandomWalk, AvarCorrelationMonteCarlo,
+                         ::testing::Values(NoiseType::kWhite, NoiseType::kRandomWalk),
+                         [](const auto& p) { return p.param == NoiseType::kWhite ? "white" : "random_walk"; });
+
+TEST(AvarCorrelation, IsOneOnTheDiagonalAndFallsWithTheRatio) {
+  for (auto t : {NoiseType::kQuantization, NoiseType::kWhite, NoiseType::kFlicker, NoiseType::kRandomWalk}) {
+    EXPECT_NEAR(avar_correlation(t, 8, 8), 1.0, 1e-12) << to_string(t);
+    EXPECT_EQ(avar_correlation(t, 1, std::ldexp(1.0, kAvarCorrelationOctaves + 1)), 0.0);
+  }
+  for (auto t : {NoiseType::kWhite, NoiseType::kFlicker, NoiseType::kRandomWalk}) {
+    EXPECT_GT(avar_correlation(t, 8, 16), avar_correlation(t, 8, 64)) << to_string(t);
+  }
+  // The flatter the spectrum's slope, the more the octaves share: white < flicker < random walk FM.
+  EXPECT_LT(avar_correlation(NoiseType::kWhite, 16, 32), avar_correlation(NoiseType::kFlicker, 16, 32));
+  EXPECT_LT(avar_correlation(NoiseType::kFlicker, 16, 32), avar_correlation(NoiseType::kRandomWalk, 16, 32));
 }
