@@ -593,9 +593,11 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
   FitSet set{std::vector<FitPoint>(all.begin() + static_cast<std::ptrdiff_t>(skip), all.end()), {}};
   model.tau_fit_min_s = set.pts.front().tau;
 
+  // The correlation from the noise types of the measured slopes (a model's own types would favour
+  // it); the EDF from them, then again from the dominant term of the selected model.
   Candidate best;
   set_correlation(set, static_cast<double>(curve.samples));
-  for (int pass = 0; pass < 2; ++pass) {  // covariance from the measured slopes, then from the selected model
+  for (int pass = 0; pass < 2; ++pass) {
     best = select_model(set, white);
     if (!best.valid) break;
     for (int j = 0; j < kTerms; ++j) coefficient(model, j)->fitted = std::sqrt(best.c[j]);
