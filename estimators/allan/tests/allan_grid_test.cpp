@@ -58,17 +58,17 @@ TEST_P(NoiseGrid, IntervalsCoverTheTruthAndAbsentTermsAreNotIdentified) {
                                           cell.lowpass ? "on" : "off", grid::to_string(mix), example[0], example[1]);
     EXPECT_EQ(sc.failed, 0) << where;
     const bool white_only = mix == grid::Mix::kWhite;
-    // Levels on these 12 realisations (the bench's 30 per instrument in brackets): N ≥ 90 % in white
-    // noise, ≥ 80 % beside other terms [≥ 87 %]; K ≥ 65 % [73–100 %: the 600 s records hold few
-    // long-τ points]; G ≥ 90 % [≥ 90 %].
-    const double min_cover[7] = {1, white_only ? 0.9 : 0.8, 1, 0.65, 1, 0.9, 0.0};
+    // Levels on these 12 realisations (the bench's 60 per instrument in brackets): N ≥ 90 % in white
+    // noise, ≥ 80 % beside other terms [≥ 87 %]; K ≥ 65 % [77–95 %: the 600 s records hold few
+    // long-τ points]; G ≥ 80 % [≥ 90 %].
+    const double min_cover[7] = {1, white_only ? 0.9 : 0.8, 1, 0.65, 1, 0.8, 0.0};
     for (int j = 0; j < 7; ++j) {
       if (sc.present[j] > 0) {
         EXPECT_GE(sc.covered[j], min_cover[j] * sc.present[j]) << grid::symbol_of(j) << " coverage, " << where;
       }
-      // Absent terms: never in white noise; with other terms B ≤ 25 % [≤ 13 %], G ≤ 20 % [≤ 13 %: a
-      // random walk's slow wander read as a plateau], R ≤ 35 % [≤ 30 %: the random walk's upper end].
-      const double max_false = white_only ? 0.0 : j == 4 ? 0.35 : j == 2 ? 0.25 : j == 5 ? 0.2 : 0.1;
+      // Absent terms: at most one of the 12 in white noise [≤ 2 %]; with other terms R ≤ 10 % [≤ 2 %],
+      // B ≤ 25 % [≤ 10 %], G ≤ 30 % [≤ 23 %: a random walk's slow wander read as a plateau], Q, K ≤ 20 %.
+      const double max_false = white_only ? 0.1 : j == 4 ? 0.1 : j == 2 ? 0.25 : j == 5 ? 0.3 : 0.2;
       if (sc.absent[j] > 0 && j != 6) {
         EXPECT_LE(sc.false_identified[j], max_false * sc.absent[j]) << grid::symbol_of(j) << " absent, " << where;
       }
