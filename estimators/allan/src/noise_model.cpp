@@ -22,6 +22,7 @@ namespace {
 
 constexpr int kTerms = 6;                 // Q N B K R G (linear in their squares at fixed τc)
 constexpr int kGm = 5;                    // index of the Gauss–Markov term
+constexpr int kRamp = 4;                  // index of the rate ramp R
 constexpr double kTermPenalty = 6.6349;   // χ²₁ 99 % quantile: penalty per parameter
 constexpr double kZ95 = 1.959963984540054;
 constexpr double kCoverage = 0.95;        // level of the coefficients' intervals (z = kZ95)
@@ -142,7 +143,7 @@ struct Candidate {
   bool valid = false;
   // Parameters for the penalty: one per term, τc for G, and one more for R, which competes with K
   // for the same rise at long τ and is named only when it beats K's explanation by the penalty.
-  int parameters() const { return __builtin_popcount(mask) + ((mask >> kGm) & 1u ? 1 : 0) + ((mask >> 4) & 1u ? 1 : 0); }
+  int parameters() const { return __builtin_popcount(mask) + ((mask >> kGm) & 1u ? 1 : 0) + ((mask >> kRamp) & 1u ? 1 : 0); }
   double score() const { return deviance + kTermPenalty * parameters(); }
 };
 
