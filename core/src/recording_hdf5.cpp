@@ -607,8 +607,17 @@ class Hdf5Samples final : public SampleSource {
       read_into(si_[static_cast<std::size_t>(k)].get(), H5T_NATIVE_DOUBLE, first, count, out, kSiNames[k]);
       return;
     }
-    read_into(counts_[static_cast<std::size_t>(k)].get(), H5T_NATIVE_DOUBLE, first, count, out, kCountsNames[k]);
-    for (std::size_t i = 0; i < count; ++i) out[i] = out[i] * c.lsb + c.offset;
+    // Counts read in their stored width (no conversion inside the library, which serialises
+    // callers) and turned into SI here, in parallel across threads.
+    if (c.int16) {
+      std::vector<std::int16_t> raw(count);
+      read_into(counts_[static_cast<std::size_t>(k)].get(), H5T_NATIVE_INT16, first, count, raw.data(), kCountsNames[k]);
+      for (std::size_t i = 0; i < count; ++i) out[i] = static_cast<double>(raw[i]) * c.lsb + c.offset;
+    } else {
+      std::vector<std::int32_t> raw(count);
+      read_into(counts_[static_cast<std::size_t>(k)].get(), H5T_NATIVE_INT32, first, count, raw.data(), kCountsNames[k]);
+      for (std::size_t i = 0; i < count; ++i) out[i] = static_cast<double>(raw[i]) * c.lsb + c.offset;
+    }
     for (const auto* e = exceptions_in(first); e != exceptions_.data() + exceptions_.size() &&
                                                (*e)[0] < static_cast<double>(first + count); ++e) {
       if (static_cast<int>((*e)[1]) == k) out[static_cast<std::size_t>((*e)[0]) - first] = (*e)[3];

@@ -28,6 +28,8 @@ double value_of(const ImuSample& s, Channel c);
 // Samples per chunk when a caller does not choose: 64 Ki samples (≈ 7 MiB of ImuSample).
 inline constexpr std::size_t kDefaultChunkSamples = std::size_t{1} << 16;
 
+// read() and read_column() may be called from several threads at once (an implementation that
+// holds state serialises itself), so that channels can be analysed in parallel.
 class SampleSource {
  public:
   virtual ~SampleSource() = default;

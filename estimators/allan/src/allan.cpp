@@ -16,7 +16,6 @@
 #include <ostream>
 #include <exception>
 #include <limits>
-#include <mutex>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -380,10 +379,9 @@ double stated_lowpass_hz(const Recording& rec) {
 }
 
 // Allan curve and noise model of channel ch (0..2 accelerometer [m/s²], 3..5 gyroscope [rad/s])
-// over samples `range`, read a column chunk at a time (reads serialised by `read_lock`: a store
-// need not allow concurrent reads).
+// over samples `range`, read a column chunk at a time.
 ChannelResult analyze_channel(const SampleSource& src, IndexRange range, int ch, double rate,
-                              const AllanOptions& options, std::mutex& read_lock) {
+                              const AllanOptions& options) {
   static const char* names[6] = {"ax", "ay", "az", "gx", "gy", "gz"};
   static constexpr Channel columns[6] = {Channel::kAx, Channel::kAy, Channel::kAz,
                                          Channel::kGx, Channel::kGy, Channel::kGz};
@@ -391,10 +389,7 @@ ChannelResult analyze_channel(const SampleSource& src, IndexRange range, int ch,
   OverlappingAllanStream s(options.max_m, range.size());
   for (std::uint64_t i = range.first; i < range.last;) {
     const auto take = static_cast<std::size_t>(std::min<std::uint64_t>(buf.size(), range.last - i));
-    {
-      std::lock_guard lock(read_lock);
-      src.read_column(columns[ch], i, take, buf.data());
-    }
+    src.read_column(columns[ch], i, take, buf.data());
     s.add(buf.data(), take);
     i += take;
   }
@@ -409,12 +404,11 @@ ChannelResult analyze_channel(const SampleSource& src, IndexRange range, int ch,
 std::vector<ChannelResult> analyze_channels(const SampleSource& src, IndexRange range, int channels,
                                             double rate, const AllanOptions& options) {
   std::vector<ChannelResult> out(static_cast<std::size_t>(channels));
-  std::mutex read_lock;
   std::exception_ptr error[2];
   auto work = [&](int parity) {
     try {
       for (int ch = parity; ch < channels; ch += 2) {
-        out[static_cast<std::size_t>(ch)] = analyze_channel(src, range, ch, rate, options, read_lock);
+        out[static_cast<std::size_t>(ch)] = analyze_channel(src, range, ch, rate, options);
       }
     } catch (...) {
       error[parity] = std::current_exception();
