@@ -16,6 +16,7 @@
 #include <ostream>
 #include <exception>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -311,7 +312,7 @@ Sampling scan_sampling(const SampleSource& src, IndexRange range, double header_
   std::vector<double> dt;  // intervals [s] seen before the rate is known
   double prev_t = kNaN;
   auto count_irregular = [&](double d) {
-    if (d > 1.5 / s.rate_hz || d < 0.5 / s.rate_hz) ++s.irregular;
+    if (interval_irregular(d, s.rate_hz)) ++s.irregular;
   };
   auto fix_rate = [&] {
     if (s.rate_hz > 0.0 || dt.empty()) return;
@@ -346,6 +347,25 @@ Sampling scan_sampling(const SampleSource& src, IndexRange range, double header_
   }
   fix_rate();
   s.t_end_s = prev_t;
+  return s;
+}
+
+// The sampling of the whole of a finished, undamaged run from its store's summary (gap and
+// irregular-interval counts kept by the writer) and its two end samples; nullopt when the store
+// does not state them or only part of the run is selected.
+std::optional<Sampling> summarized_sampling(const Recording& rec, IndexRange range) {
+  const SampleSource& src = rec.sample_source();
+  if (!rec.complete() || !rec.damage.empty() || rec.written_samples != src.size() || range.first != 0 ||
+      range.last != src.size() || rec.gap_count < 0 || rec.irregular_count < 0 ||
+      !(rec.header.info.output_rate_hz > 0.0)) {
+    return std::nullopt;
+  }
+  Sampling s;
+  s.rate_hz = rec.header.info.output_rate_hz;
+  s.gaps = static_cast<std::uint64_t>(rec.gap_count);
+  s.irregular = static_cast<std::uint64_t>(rec.irregular_count);
+  src.read_column(Channel::kTime, range.first, 1, &s.t_begin_s);
+  src.read_column(Channel::kTime, range.last - 1, 1, &s.t_end_s);
   return s;
 }
 
@@ -434,7 +454,8 @@ AllanReport analyze_recording(const Recording& rec, const AllanOptions& options)
                                          report.source, range.size()));
   }
   report.samples = range.size();
-  const Sampling sampling = scan_sampling(src, range, rec.header.info.output_rate_hz, report.source);
+  const std::optional<Sampling> summary = summarized_sampling(rec, range);
+  const Sampling sampling = summary ? *summary : scan_sampling(src, range, rec.header.info.output_rate_hz, report.source);
   report.t_begin_s = sampling.t_begin_s;
   report.t_end_s = sampling.t_end_s;
   report.rate_hz = sampling.rate_hz;
