@@ -613,14 +613,17 @@ class Hdf5Samples final : public SampleSource {
     }
     // Counts read in their stored width (no conversion inside the library, which serialises
     // callers) and turned into SI here, in parallel across threads.
+    auto from_counts = [&](auto stored, hid_t mem_type) {
+      // One buffer per thread, kept between calls (a fresh one per chunk is a page-zeroing mmap).
+      thread_local std::vector<decltype(stored)> raw;
+      raw.resize(count);
+      read_into(counts_[static_cast<std::size_t>(k)].get(), mem_type, first, count, raw.data(), kCountsNames[k]);
+      for (std::size_t i = 0; i < count; ++i) out[i] = static_cast<double>(raw[i]) * c.lsb + c.offset;
+    };
     if (c.int16) {
-      std::vector<std::int16_t> raw(count);
-      read_into(counts_[static_cast<std::size_t>(k)].get(), H5T_NATIVE_INT16, first, count, raw.data(), kCountsNames[k]);
-      for (std::size_t i = 0; i < count; ++i) out[i] = static_cast<double>(raw[i]) * c.lsb + c.offset;
+      from_counts(std::int16_t{}, H5T_NATIVE_INT16);
     } else {
-      std::vector<std::int32_t> raw(count);
-      read_into(counts_[static_cast<std::size_t>(k)].get(), H5T_NATIVE_INT32, first, count, raw.data(), kCountsNames[k]);
-      for (std::size_t i = 0; i < count; ++i) out[i] = static_cast<double>(raw[i]) * c.lsb + c.offset;
+      from_counts(std::int32_t{}, H5T_NATIVE_INT32);
     }
     for (const auto* e = exceptions_in(first); e != exceptions_.data() + exceptions_.size() &&
                                                (*e)[0] < static_cast<double>(first + count); ++e) {
@@ -794,6 +797,8 @@ Hdf5Run open_hdf5_run(const fs::path& path, bool truth) {
     } else {
       codec[k].lsb = get_double_attr(counts[k].get(), "lsb", path);
       codec[k].offset = get_double_attr(counts[k].get(), "offset", path);
+      Handle type(H5Dget_type(counts[k].get()), H5Tclose);
+      codec[k].int16 = H5Tget_size(type.get()) == 2;  // read in the stored width
     }
   }
   run.written_samples = n;
