@@ -12,7 +12,12 @@
 //   TOTDEV total deviation:        Σ_{c=1}^{N−2} (x*_{c−m} − 2x_c + x*_{c+m})² / (2τ² (N − 2)),
 //          x* the record reflected at both ends: x*_{−j} = 2x_0 − x_j, x*_{N−1+j} = 2x_{N−1} − x_{N−1−j}.
 // TOTDEV is the OADEV sum plus the centres within m of either end; those need the first 2m
-// points (a head buffer) and the last 2m points (the history), evaluated at the end.
+// points (a head buffer) and the last 2m points (a tail ring), evaluated at the end.
+//
+// Octave factors (m = 2^l) come from one pyramid of MDEV windows V^m (DeviationStream::Level):
+// each level is a few vector operations per point on its own ring buffer, and every kind at m
+// is a difference of V^m at lags 1 and m. Other factors (all τ, log-spaced) are evaluated on
+// the phase history, factor by factor.
 //
 // Input: phase x (time error, s) with add_phase, or rate y (the sensor's output: ω, a, or
 // fractional frequency) with add_rate, integrated to x_{k+1} = x_k + (y_k − y_0)·τ0 internally
@@ -20,8 +25,10 @@
 // integrated phase small). Deviations are in the unit of y: for phase input, x/τ0 is the rate.
 // TDEV is in the unit of x (s for phase input, unit of y × s for rate input).
 //
-// Memory: the last 3·max_m + 1 phase values twice over (a linear history that is shifted once
-// per block) plus the first 2·max_m + 1 values, whatever N is: 8·(8·max_m + …) bytes.
+// Memory, whatever N is: the pyramid's rings (2m + 4096 values per octave level, ≈ 4·max_m in
+// all), the first and the last 2·max_m + 1 phase values, and for factors that are not powers of
+// two the last 3·m + 1 phase values twice over (a linear history shifted once per block):
+// ≈ 8·8·max_m bytes for octaves.
 //
 // Noise identification per averaging factor (the "Alpha" column of Stable32): the lag-1
 // autocorrelation of the phase decimated by m, differenced d = 0, 1, … times until
