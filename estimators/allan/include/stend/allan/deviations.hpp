@@ -584,7 +584,7 @@ class DeviationStream {
     }
   }
 
-  // Points k = base + [from, to) of one factor m (h[j] = x_{base+j}).
+  // Points k = base + [from, to) of one factor m that is not a power of two (h[j] = x_{base+j}).
   static void accumulate(std::uint64_t m, PerM& s, const double* h, std::uint64_t base,
                          std::size_t from, std::size_t to) {
     const std::size_t M = static_cast<std::size_t>(m);
@@ -612,12 +612,6 @@ class DeviationStream {
       s.oadev += sums[0];
       s.ohdev += sums[1];
       s.mdev += sums[2];
-      if (m == 1) {  // at m = 1 every difference is a non-overlapped one as well
-        s.adev += sums[0];
-        s.hdev += sums[1];
-        s.adev_terms += n;
-        s.hdev_terms += n;
-      }
     }
     // Non-overlapped terms and the decimated phase for noise identification.
     const std::uint64_t k0 = base + from;
