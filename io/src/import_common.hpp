@@ -4,6 +4,7 @@
 #pragma once
 
 #include <stend/io/importers.hpp>
+#include <stend/io/timestamps.hpp>
 
 #include "import_event.hpp"
 
@@ -117,6 +118,24 @@ struct TimestampSummary {
   std::string describe() const;  // for the info event
 };
 TimestampSummary check_log_timestamps(std::vector<ImuSample>& s);
+
+// check_log_timestamps on a stream, with memory bounded by kTimestampWindow: the first window fixes
+// the rate (its median interval); every window is flagged at its gaps and counted (its first
+// sample against the last of the window before), then passed on to `out`. A log of at most one
+// window is checked exactly as a whole. The rate goes into rate_into->output_rate_hz (when given)
+// before the first samples reach `out`.
+class LogTimestampStream final : public WindowSink {
+ public:
+  explicit LogTimestampStream(SampleSink& out, SensorInfo* rate_into = nullptr)
+      : WindowSink(out), rate_into_(rate_into) {}
+  // Passes the rest on.
+  TimestampSummary finish();
+
+ private:
+  void process(std::vector<ImuSample>& s, bool first, double prev_t) override;
+  SensorInfo* rate_into_;
+  TimestampSummary sum_;
+};
 
 // Linear interpolation of y(t) at `at`; t ascending. False outside [t.front() − tol, t.back() + tol]
 // (the value is then left alone); inside, clamped to the end values.
