@@ -112,7 +112,7 @@ Recording import_euroc(const fs::path& path, const EurocOptions& opt) {
   Recording rec;
   import_euroc(path, opt, rec, sink);
   rec.samples = std::move(samples);
-  for (auto& e : rec.events) e.t_s = rec.samples.front().t_s;  // events at the first sample's time
+  place_import_events(rec.events, rec.samples.front().t_s);
   return rec;
 }
 

@@ -370,7 +370,7 @@ Recording import_csv(const fs::path& file, const CsvMapping& map) {
   Recording rec;
   import_csv(file, map, rec, sink);
   rec.samples = std::move(samples);
-  for (auto& e : rec.events) e.t_s = rec.samples.front().t_s;  // events at the first sample's time
+  place_import_events(rec.events, rec.samples.front().t_s);
   return rec;
 }
 

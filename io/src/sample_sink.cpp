@@ -1,5 +1,7 @@
 #include <stend/io/sample_sink.hpp>
 
+#include "import_event.hpp"
+
 namespace stend::io {
 
 void RunSink::open() {
@@ -11,6 +13,7 @@ void RunSink::open() {
 
 void RunSink::add_samples(const ImuSample* samples, std::size_t count) {
   open();
+  if (count > 0 && writer_->sample_count() == 0) first_t_s_ = samples[0].t_s;
   writer_->add_samples(samples, count);
 }
 
@@ -18,7 +21,9 @@ void RunSink::finish() {
   open();
   for (std::size_t i = 0; i < rec_->truth_t.size(); ++i) writer_->add_truth(rec_->truth_t[i], rec_->truth[i]);
   for (const auto& s : rec_->segments) writer_->add_segment(s);
-  for (const auto& e : rec_->events) writer_->add_event(e);
+  std::vector<Event> events = rec_->events;
+  place_import_events(events, first_t_s_);
+  for (const auto& e : events) writer_->add_event(e);
   writer_->finish(rec_->header.status == RunStatus::kRunning ? RunStatus::kComplete : rec_->header.status);
 }
 

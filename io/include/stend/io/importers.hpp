@@ -114,7 +114,7 @@ struct CsvMapping {
 Recording import_csv(const std::filesystem::path& file, const CsvMapping& mapping);
 // The same, streaming: the samples go to `out` a chunk at a time (through the windowed timestamp
 // repair, stend/io/timestamps.hpp); `rec` receives everything else (header filled before the first
-// samples reach `out`), no samples, and its events at t = 0.
+// samples reach `out`), no samples, and its events at t = 0 (RunSink places them).
 void import_csv(const std::filesystem::path& file, const CsvMapping& mapping, Recording& rec, SampleSink& out);
 
 // ---------------------------------------------------------------------------------------------

@@ -36,7 +36,7 @@ class VectorSink final : public SampleSink {
 // Writes a new run folder: the writer is created at the first samples with the header of
 // `recording` as it is then (so a log without samples creates no folder), `experiment_yaml` and,
 // when not empty, `experiment_name`; finish() adds the recording's truth, segments and events and
-// its final status.
+// its final status, the import events (source "import") at the first sample's time.
 class RunSink final : public SampleSink {
  public:
   // `recording` must outlive the sink; `dir` must not exist.
@@ -57,6 +57,7 @@ class RunSink final : public SampleSink {
   std::string yaml_, name_;
   RecordingWriterOptions options_;
   std::unique_ptr<RecordingWriter> writer_;
+  double first_t_s_ = 0.0;  // the first sample's time [s]
 };
 
 }  // namespace stend::io
