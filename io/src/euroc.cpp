@@ -107,13 +107,7 @@ void import_euroc(const fs::path& path, const EurocOptions& opt, Recording& rec,
 }
 
 Recording import_euroc(const fs::path& path, const EurocOptions& opt) {
-  std::vector<ImuSample> samples;
-  VectorSink sink(samples);
-  Recording rec;
-  import_euroc(path, opt, rec, sink);
-  rec.samples = std::move(samples);
-  place_import_events(rec.events, rec.samples.front().t_s);
-  return rec;
+  return import_in_memory([&](Recording& rec, SampleSink& out) { import_euroc(path, opt, rec, out); });
 }
 
 }  // namespace stend::io

@@ -119,6 +119,16 @@ Recording new_recording(const fs::path& file, const std::string& format) {
   return rec;
 }
 
+Recording import_in_memory(const std::function<void(Recording& rec, SampleSink& out)>& import) {
+  std::vector<ImuSample> samples;
+  VectorSink sink(samples);
+  Recording rec;
+  import(rec, sink);
+  rec.samples = std::move(samples);
+  if (!rec.samples.empty()) place_import_events(rec.events, rec.samples.front().t_s);
+  return rec;
+}
+
 double median_interval(const std::vector<ImuSample>& s) {
   if (s.size() < 2) return 0.0;
   std::vector<double> dt;

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <string>
 #include <string_view>
@@ -97,6 +98,10 @@ std::string fixed_string(const std::uint8_t* p, std::size_t size);
 Recording new_recording(const std::filesystem::path& file, const std::string& format);
 // Events of source "import" (import_event.hpp).
 using stend::io::add_import_event;
+using stend::io::place_import_events;
+// A streaming import (rec, out) → the recording with its samples in memory and its import events at
+// the first sample's time: the in-memory form of every importer that streams.
+Recording import_in_memory(const std::function<void(Recording& rec, SampleSink& out)>& import);
 
 // Seconds from t0_us to t_us (timestamps in µs), exact to the microsecond.
 inline double seconds_since_us(std::uint64_t t0_us, std::uint64_t t_us) {

@@ -365,13 +365,7 @@ void import_csv(const fs::path& file, const CsvMapping& map, Recording& rec, Sam
 }
 
 Recording import_csv(const fs::path& file, const CsvMapping& map) {
-  std::vector<ImuSample> samples;
-  VectorSink sink(samples);
-  Recording rec;
-  import_csv(file, map, rec, sink);
-  rec.samples = std::move(samples);
-  place_import_events(rec.events, rec.samples.front().t_s);
-  return rec;
+  return import_in_memory([&](Recording& rec, SampleSink& out) { import_csv(file, map, rec, out); });
 }
 
 // =============================================================================================
