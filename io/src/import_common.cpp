@@ -119,6 +119,16 @@ Recording new_recording(const fs::path& file, const std::string& format) {
   return rec;
 }
 
+Recording import_in_memory(const std::function<void(Recording& rec, SampleSink& out)>& import) {
+  std::vector<ImuSample> samples;
+  VectorSink sink(samples);
+  Recording rec;
+  import(rec, sink);
+  rec.samples = std::move(samples);
+  if (!rec.samples.empty()) place_import_events(rec.events, rec.samples.front().t_s);
+  return rec;
+}
+
 double median_interval(const std::vector<ImuSample>& s) {
   if (s.size() < 2) return 0.0;
   std::vector<double> dt;
@@ -150,6 +160,31 @@ TimestampSummary check_log_timestamps(std::vector<ImuSample>& s) {
     if (s[i].t_s < s[i - 1].t_s) ++sum.decreasing;
   }
   return sum;
+}
+
+void LogTimestampStream::process(std::vector<ImuSample>& s, bool first, double prev_t) {
+  if (first) {
+    const double dt = median_interval(s);
+    sum_.rate_hz = dt > 0.0 ? 1.0 / dt : 0.0;
+    if (rate_into_) rate_into_->output_rate_hz = sum_.rate_hz;
+  }
+  if (s.empty()) return;
+  if (sum_.rate_hz > 0.0 && s[0].t_s - prev_t > 1.5 / sum_.rate_hz) {
+    s[0].flags |= kGapBefore;
+    ++sum_.gaps;
+  }
+  sum_.gaps += flag_time_gaps(s, sum_.rate_hz);
+  if (s[0].t_s == prev_t) ++sum_.repeated;
+  if (s[0].t_s < prev_t) ++sum_.decreasing;
+  for (std::size_t i = 1; i < s.size(); ++i) {
+    if (s[i].t_s == s[i - 1].t_s) ++sum_.repeated;
+    if (s[i].t_s < s[i - 1].t_s) ++sum_.decreasing;
+  }
+}
+
+TimestampSummary LogTimestampStream::finish() {
+  pass_rest();
+  return sum_;
 }
 
 std::string TimestampSummary::describe() const {

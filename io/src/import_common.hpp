@@ -4,6 +4,7 @@
 #pragma once
 
 #include <stend/io/importers.hpp>
+#include <stend/io/timestamps.hpp>
 
 #include "import_event.hpp"
 
@@ -12,6 +13,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <string>
 #include <string_view>
@@ -96,6 +98,10 @@ std::string fixed_string(const std::uint8_t* p, std::size_t size);
 Recording new_recording(const std::filesystem::path& file, const std::string& format);
 // Events of source "import" (import_event.hpp).
 using stend::io::add_import_event;
+using stend::io::place_import_events;
+// A streaming import (rec, out) → the recording with its samples in memory and its import events at
+// the first sample's time: the in-memory form of every importer that streams.
+Recording import_in_memory(const std::function<void(Recording& rec, SampleSink& out)>& import);
 
 // Seconds from t0_us to t_us (timestamps in µs), exact to the microsecond.
 inline double seconds_since_us(std::uint64_t t0_us, std::uint64_t t_us) {
@@ -117,6 +123,24 @@ struct TimestampSummary {
   std::string describe() const;  // for the info event
 };
 TimestampSummary check_log_timestamps(std::vector<ImuSample>& s);
+
+// check_log_timestamps on a stream, with memory bounded by kTimestampWindow: the first window fixes
+// the rate (its median interval); every window is flagged at its gaps and counted (its first
+// sample against the last of the window before), then passed on to `out`. A log of at most one
+// window is checked exactly as a whole. The rate goes into rate_into->output_rate_hz (when given)
+// before the first samples reach `out`.
+class LogTimestampStream final : public WindowSink {
+ public:
+  explicit LogTimestampStream(SampleSink& out, SensorInfo* rate_into = nullptr)
+      : WindowSink(out), rate_into_(rate_into) {}
+  // Passes the rest on.
+  TimestampSummary finish();
+
+ private:
+  void process(std::vector<ImuSample>& s, bool first, double prev_t) override;
+  SensorInfo* rate_into_;
+  TimestampSummary sum_;
+};
 
 // Linear interpolation of y(t) at `at`; t ascending. False outside [t.front() − tol, t.back() + tol]
 // (the value is then left alone); inside, clamped to the end values.

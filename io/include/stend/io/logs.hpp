@@ -64,5 +64,7 @@ struct EurocOptions {
 
 bool looks_like_euroc(const std::filesystem::path& path);
 Recording import_euroc(const std::filesystem::path& path, const EurocOptions& options = {});
+// The same, streaming (as import_csv with a SampleSink): the samples go to `out` a chunk at a time.
+void import_euroc(const std::filesystem::path& path, const EurocOptions& options, Recording& rec, SampleSink& out);
 
 }  // namespace stend::io

@@ -1,0 +1,172 @@
+// Streaming import: a long CSV log goes into a run folder a chunk at a time, with peak memory
+// bounded independently of its length (measured in a child process from /proc/self/status
+// VmHWM), and with the same samples as the in-memory import of the same lines; the windowed
+// timestamp repair flags a gap at a window boundary as a whole-log repair does.
+#include <stend/io/formats.hpp>
+#include <stend/io/importers.hpp>
+#include <stend/io/sample_sink.hpp>
+#include <stend/io/timestamps.hpp>
+#include <stend/testing/files.hpp>
+
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+using namespace stend;
+using namespace stend::io;
+using stend::testing::TempDir;
+
+namespace {
+
+constexpr double kRateHz = 1000.0;
+// A gap (three samples lost) just before the first sample of the fourth timestamp window.
+constexpr std::size_t kGapAt = 3 * kTimestampWindow;
+
+// A CSV log of n samples at kRateHz: t [s] with microsecond digits, accel [m/s²] and gyro [rad/s]
+// from a fixed integer pattern printed with 4 decimals (exactly reproducible on reading).
+void write_log(const fs::path& file, std::size_t n) {
+  std::FILE* f = std::fopen(file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fputs("t,ax,ay,az,gx,gy,gz\n", f);
+  std::uint64_t x = 12345;
+  for (std::size_t i = 0, k = 0; i < n; ++i, ++k) {
+    if (i == kGapAt) k += 3;
+    x = x * 6364136223846793005ULL + 1442695040888963407ULL;
+    const auto r = [&](int shift) { return static_cast<int>((x >> shift) & 0xFFF) - 2048; };
+    std::fprintf(f, "%.6f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", static_cast<double>(k) / kRateHz, r(10) * 1e-4,
+                 r(22) * 1e-4, 9.81 + r(34) * 1e-4, r(46) * 1e-5, r(52) * 1e-5, r(4) * 1e-5);
+  }
+  std::fclose(f);
+}
+
+ImportOptions csv_options() {
+  ImportOptions o;
+  o.set("time", "t");
+  o.set("accel", "ax,ay,az");
+  o.set("gyro", "gx,gy,gz");
+  return o;
+}
+
+// Peak resident memory of this process [KiB] (VmHWM), −1 when unreadable.
+long peak_rss_kib() {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stol(line.substr(6));
+  return -1;
+}
+
+// Imports `log` into the new run folder `run` in a child process; returns the growth of its peak
+// resident memory [KiB] over the import (−1 when the import failed).
+long import_in_child(const fs::path& log, const fs::path& run) {
+  int fds[2];
+  if (::pipe(fds) != 0) return -1;
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::close(fds[0]);
+    long growth = -1;
+    try {
+      const long before = peak_rss_kib();
+      Recording rec;
+      RunSink sink(rec, run, "name: streamed\n");
+      import_dataset({log}, "csv", rec, sink, csv_options());
+      sink.finish();
+      growth = peak_rss_kib() - before;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "import failed: %s\n", e.what());
+    }
+    [[maybe_unused]] const auto w = ::write(fds[1], &growth, sizeof growth);
+    ::_exit(0);
+  }
+  ::close(fds[1]);
+  long growth = -1;
+  if (::read(fds[0], &growth, sizeof growth) != sizeof growth) growth = -1;
+  ::close(fds[0]);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return growth;
+}
+
+void expect_same_samples(const SampleSource& a, const SampleSource& b, std::uint64_t count) {
+  std::vector<ImuSample> x(4096), y(4096);
+  for (std::uint64_t i = 0; i < count; i += x.size()) {
+    const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(x.size(), count - i));
+    a.read(i, n, x.data());
+    b.read(i, n, y.data());
+    for (std::size_t k = 0; k < n; ++k) {
+      ASSERT_EQ(x[k].t_s, y[k].t_s) << "sample " << i + k;
+      ASSERT_EQ(x[k].flags, y[k].flags) << "sample " << i + k;
+      ASSERT_EQ(x[k].accel_mps2, y[k].accel_mps2) << "sample " << i + k;
+      ASSERT_EQ(x[k].gyro_radps, y[k].gyro_radps) << "sample " << i + k;
+    }
+  }
+}
+
+TEST(ImportStream, LongCsvLogInBoundedMemoryWithTheSamplesOfAnInMemoryImport) {
+  TempDir tmp("import-stream");
+  constexpr std::size_t kLong = 2'000'000, kShort = 50'000;  // the short log fits one window
+  write_log(tmp / "long.csv", kLong);
+  write_log(tmp / "short.csv", kShort);
+
+  const long growth_kib = import_in_child(tmp / "long.csv", tmp / "long_run");
+  ASSERT_GE(growth_kib, 0) << "the streamed import failed";
+  // Whole in memory, the samples alone take 2 M × 96 bytes ≈ 183 MiB; streamed, the timestamp
+  // window, a chunk and the writer's buffers.
+  RecordProperty("peak_rss_growth_kib", static_cast<int>(growth_kib));
+  EXPECT_LT(growth_kib, 64 * 1024) << "peak RSS grew by " << growth_kib << " KiB";
+
+  const Recording run = Recording::open(tmp / "long_run", SampleLoading::kStream);
+  ASSERT_EQ(run.sample_count(), kLong);
+  EXPECT_EQ(run.header.experiment_name, "import:csv");
+  EXPECT_NEAR(run.header.info.output_rate_hz, kRateHz, 1e-9 * kRateHz);
+  // The gap at the window boundary, and only it, is flagged.
+  std::uint64_t gaps = 0, gap_at = 0;
+  const std::vector<double> flags = read_column(run.sample_source(), Channel::kFlags, 0, kLong);
+  for (std::size_t i = 0; i < flags.size(); ++i)
+    if (static_cast<std::uint32_t>(flags[i]) & kGapBefore) gap_at = i, ++gaps;
+  EXPECT_EQ(gaps, 1u);
+  EXPECT_EQ(gap_at, kGapAt);
+
+  // Today's import of the short log (whole in memory, then written) against the same lines of the
+  // streamed run.
+  Recording in_memory = open_dataset({tmp / "short.csv"}, "csv", csv_options());
+  in_memory.experiment_yaml = "name: in memory\n";
+  write_recording(in_memory, tmp / "short_run", RecordingWriterOptions{});
+  const Recording short_run = Recording::open(tmp / "short_run", SampleLoading::kStream);
+  ASSERT_EQ(short_run.sample_count(), kShort);
+  expect_same_samples(short_run.sample_source(), run.sample_source(), kShort);
+}
+
+// Repeated timestamps over several windows: each window is rebuilt from the rate the first one
+// fitted, so the times come out evenly spaced across window boundaries as in a whole-log repair.
+TEST(ImportStream, WindowedRepairRebuildsRepeatedTimesAcrossWindows) {
+  constexpr std::size_t n = 3 * kTimestampWindow + 124;  // even: every window holds whole pairs
+  Recording rec;
+  std::vector<ImuSample> out;
+  VectorSink sink(out);
+  TimestampRepairStream repair(rec, sink);
+  for (std::size_t i = 0; i < n; ++i) {
+    ImuSample s;
+    s.t_s = static_cast<double>(i / 2) * 0.01;  // 200 Hz logged with two decimals: pairs repeat
+    repair.add_samples(&s, 1);
+  }
+  const TimestampRepair r = repair.finish();
+  ASSERT_EQ(out.size(), n);
+  EXPECT_NEAR(r.rate_hz, 200.0, 1e-6);
+  EXPECT_EQ(r.gaps, 0u);
+  EXPECT_NEAR(rec.header.info.output_rate_hz, 200.0, 1e-6);
+  for (std::size_t i = 1; i < n; ++i) ASSERT_NEAR(out[i].t_s - out[i - 1].t_s, 0.005, 1e-6) << "sample " << i;
+  ASSERT_FALSE(rec.events.empty());
+  EXPECT_EQ(rec.events.front().level, "warning");
+}
+
+}  // namespace
