@@ -477,7 +477,7 @@ void SegmentEvidence::add(const ImuSample& x) {
   for (std::size_t a = 0; a < 3; ++a) {
     const double v = axis_value(x, accel_, static_cast<int>(a));
     sub_[a].add(v);
-    distinct_[a].insert(v);
+    if (distinct_[a].size() <= kMaxDistinct) distinct_[a].insert(v);
   }
 }
 
@@ -507,6 +507,7 @@ void SegmentEvidence::fill(SegmentData& d) const {
     d.ss_within[a] = ssw * len;
     // Distinct values and their smallest spacing (the LSB when the output is quantized).
     const std::set<double>& v = distinct_[static_cast<std::size_t>(a)];
+    if (v.size() > kMaxDistinct) continue;  // no lattice to see: both stay NaN
     std::size_t distinct = 1;
     double step = kNaN;
     const double tol = 1e-12 * std::max(std::abs(*v.begin()), std::abs(*v.rbegin()));

@@ -40,10 +40,12 @@ namespace stend::diagnosis::noise_stage {
 
 // Sub-block ANOVA, distinct values and value spacing of one segment's kept window of n samples,
 // per axis, fed a sample at a time in window order: fills SegmentData::ss_between, ss_within,
-// distinct_values, value_step, raw_samples. Memory: the 64 sub-block sums and the distinct values
-// of each axis (a quantized output has few; an unquantized one as many as samples).
+// distinct_values, value_step, raw_samples. Memory: the 64 sub-block sums and up to kMaxDistinct
+// distinct values per axis; an axis with more (no 16-bit output has) is not quantized at a visible
+// step, and its distinct_values and value_step stay NaN.
 class SegmentEvidence {
  public:
+  static constexpr std::size_t kMaxDistinct = std::size_t{1} << 16;
   SegmentEvidence(std::size_t n, bool accel);
   void add(const ImuSample& x);
   void fill(SegmentData& d) const;
