@@ -1,6 +1,6 @@
-// Streaming import: a long CSV log goes into a run folder a chunk at a time, with peak memory
-// bounded independently of its length (measured in a child process from /proc/self/status
-// VmHWM), and with the same samples as the in-memory import of the same lines; the windowed
+// Streaming import: a long CSV, ULog or DataFlash log goes into a run folder a chunk at a time,
+// with peak memory bounded independently of its length (measured in a child process from
+// /proc/self/status VmHWM), and with the same samples as the in-memory import; the windowed
 // timestamp repair flags a gap at a window boundary as a whole-log repair does.
 #include <stend/io/formats.hpp>
 #include <stend/io/importers.hpp>
