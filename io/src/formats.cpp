@@ -204,9 +204,15 @@ const std::vector<Format>& formats() {
        looks_like_static_table, open_table},
       {"imutk", "IMU-TK text 't x y z' (ACC [GYRO]; any extension, .mat included)", looks_like_imutk, open_imutk, 2},
       {"ulog", "PX4 ULog: sensor_accel + sensor_gyro (with temperature), else sensor_combined", looks_like_ulog,
-       [](const Inputs& in, const ImportOptions& o) { return import_ulog(in[0], {.instance = o.instance}); }},
+       [](const Inputs& in, const ImportOptions& o) { return import_ulog(in[0], {.instance = o.instance}); }, 1,
+       [](const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
+         import_ulog(in[0], {.instance = o.instance}, rec, out);
+       }},
       {"dataflash", "ArduPilot DataFlash .BIN: IMU records (with temperature)", looks_like_dataflash,
-       [](const Inputs& in, const ImportOptions& o) { return import_dataflash(in[0], {.instance = o.instance}); }},
+       [](const Inputs& in, const ImportOptions& o) { return import_dataflash(in[0], {.instance = o.instance}); }, 1,
+       [](const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
+         import_dataflash(in[0], {.instance = o.instance}, rec, out);
+       }},
       {"euroc", "EuRoC / ASL: mav0/imu0/data.csv (or the folder holding mav0/)", looks_like_euroc,
        [](const Inputs& in, const ImportOptions&) { return import_euroc(in[0]); }, 1,
        [](const Inputs& in, const ImportOptions&, Recording& rec, SampleSink& out) { import_euroc(in[0], {}, rec, out); }},

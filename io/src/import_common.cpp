@@ -6,7 +6,6 @@
 #include <cerrno>
 #include <charconv>
 #include <cstdio>
-#include <iterator>
 #include <system_error>
 #include <utility>
 
@@ -81,17 +80,38 @@ std::string fmt_hex(std::uint64_t v, int digits) {
   return buf;
 }
 
-BinaryFile::BinaryFile(const fs::path& file) : file_(file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw ImportError(file, 0, std::string("cannot open: ") + std::strerror(errno) + " (check the path)");
-  data_.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+BinaryReader::BinaryReader(const fs::path& file) : file_(file), in_(file, std::ios::binary) {
+  if (!in_) throw ImportError(file, 0, std::string("cannot open: ") + std::strerror(errno) + " (check the path)");
+  in_.seekg(0, std::ios::end);
+  size_ = static_cast<std::size_t>(in_.tellg());
 }
 
-void BinaryFile::need(std::size_t offset, std::size_t count, const std::string& what) const {
-  if (offset > data_.size() || count > data_.size() - offset) {
+void BinaryReader::need(std::size_t offset, std::size_t count, const std::string& what) const {
+  if (offset > size_ || count > size_ - offset) {
     fail(offset, "the file ends inside " + what + " (expected " + std::to_string(count) + " bytes, " +
-                     std::to_string(offset > data_.size() ? 0 : data_.size() - offset) + " remain; truncated?)");
+                     std::to_string(offset > size_ ? 0 : size_ - offset) + " remain; truncated?)");
   }
+  if (offset >= start_ && offset + count <= start_ + buffer_.size()) return;
+  start_ = offset;
+  buffer_.resize(std::min(std::max(count, kBinaryWindow), size_ - offset));
+  in_.clear();
+  in_.seekg(static_cast<std::streamoff>(offset));
+  in_.read(reinterpret_cast<char*>(buffer_.data()), static_cast<std::streamsize>(buffer_.size()));
+  if (static_cast<std::size_t>(in_.gcount()) != buffer_.size()) {
+    fail(offset, "cannot read " + what + ": " + std::strerror(errno) + " (the file changed while it was read?)");
+  }
+}
+
+std::optional<std::size_t> BinaryReader::find(std::size_t from, const std::uint8_t* pattern, std::size_t count) const {
+  // Windows overlapping by count − 1 bytes, so that a match across a window boundary is found.
+  for (std::size_t pos = from; pos + count <= size_; pos += kBinaryWindow - (count - 1)) {
+    const std::size_t n = std::min(kBinaryWindow, size_ - pos);
+    need(pos, n, "a search for a sync marker");
+    const std::uint8_t* begin = at(pos);
+    const auto* hit = std::search(begin, begin + n, pattern, pattern + count);
+    if (hit != begin + n) return pos + static_cast<std::size_t>(hit - begin);
+  }
+  return std::nullopt;
 }
 
 std::string file_prefix(const fs::path& file, std::size_t count) {
