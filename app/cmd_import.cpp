@@ -47,21 +47,23 @@ int run_import(const ImportArgs& a) {
     fmt::print(stderr, "stend import: '{}' is a run folder already\n", inputs[0].string());
     return 2;
   }
-  std::string format;
-  Recording rec = io::open_dataset(inputs, a.data.format, options, &format);
-  io::add_provenance(rec, inputs, format);
-  if (!a.name.empty()) rec.header.experiment_name = a.name;
+  // experiment.yaml names the format, written with the first samples: the format is chosen first.
+  const bool detect = a.data.format.empty() || a.data.format == "auto";
+  const std::string format = (detect ? io::detect_format(inputs, options) : io::find_format(a.data.format)).name;
+  Recording rec;
+  io::RunSink sink(rec, dir, import_yaml(a, format, options), a.name);
   try {
-    rec.experiment_yaml = import_yaml(a, format, options);
+    io::import_dataset(inputs, a.data.format, rec, sink, options);
+    io::add_provenance(rec, inputs, format);
     rec.header.status = RunStatus::kComplete;
-    write_recording(rec, dir, RecordingWriterOptions{});
+    sink.finish();
   } catch (...) {
     std::error_code ec;
     std::filesystem::remove_all(dir, ec);  // the folder did not exist before: nothing else is lost
     throw;
   }
   fmt::print("run folder: {}\nformat:     {}\nrecorded:   {} samples, {} segments, {} truth rows, {} events\n",
-             dir.string(), format, rec.sample_count(), rec.segments.size(), rec.truth_t.size(), rec.events.size());
+             dir.string(), format, sink.sample_count(), rec.segments.size(), rec.truth_t.size(), rec.events.size());
   for (const auto& e : rec.events)
     if (e.level == "warning") fmt::print("warning:    {}\n", e.message);
   return 0;

@@ -117,7 +117,7 @@ BENCHMARK(BM_AllDeviationsOctave)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->Iterations(1)
-    ->Repetitions(3)
+    ->Repetitions(5)
     ->ReportAggregatesOnly(true);
 BENCHMARK(BM_AllanOctaveOverlappingWithIntervals)
     ->Arg(1000000)

@@ -27,7 +27,7 @@ for record_s in "$short_s" "$long_s"; do
   sed "s/record_s: 20/record_s: $record_s/" configs/six_position.yaml >"$tmp/six_$record_s.yaml"
   "$stend" run "$tmp/six_$record_s.yaml" --quiet --output "$tmp" --name "six_$record_s" >/dev/null
   run=$tmp/six_$record_s
-  samples=$(($(wc -l <"$run/imu.csv") - 1))
+  samples=$("$stend" info "$run" | sed -n 's/^data: *\([0-9]*\) samples.*/\1/p' | head -1)
   for cmd in info fit gap; do
     case $cmd in
       info) args=(info "$run") ;;

@@ -56,6 +56,7 @@ struct Hdf5Run {
   std::uint64_t written_samples = 0;  // samples the file claims; samples->size() are readable
   std::string damage;                 // empty, or what is damaged (readable samples stop there)
   std::int64_t gap_count = -1;        // from the summary (final, or as of the last flush)
+  std::int64_t irregular_count = -1;  // likewise; −1 when the file does not say
 };
 // Throws std::runtime_error naming the file and what is unreadable when the file cannot be used.
 // With `truth` false the truth rows are counted, not read.

@@ -1198,6 +1198,7 @@ void open_hdf5(const fs::path& file, Recording& r, SampleLoading loading, TruthL
   r.written_samples = h.written_samples;
   r.damage = std::move(h.damage);
   r.gap_count = h.gap_count;
+  r.irregular_count = h.irregular_count;
   if (loading == SampleLoading::kStream) {
     r.source = std::move(h.samples);
     return;

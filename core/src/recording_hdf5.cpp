@@ -21,6 +21,7 @@ namespace fs = std::filesystem;
 constexpr int kHdf5FormatVersion = 1;
 // Samples per chunk: 64 Ki (65 s at 1 kHz); one chunk of a column is 128–512 KiB uncompressed.
 constexpr hsize_t kChunkSamples = hsize_t{1} << 16;
+constexpr hsize_t kSummaryColumns = 5;  // the /summary dataset's values
 constexpr hsize_t kSmallChunk = 4096;  // truth rows, segment/event bytes, exceptions
 // A counts channel is stored without its SI value when SI = counts·lsb + offset within this many
 // LSB for every sample (the rest go to the exceptions table).
@@ -340,7 +341,7 @@ struct Hdf5RunWriter::Impl {
   std::vector<double> exceptions;  // rows of (index, channel, counts, si)
   std::vector<double> truth_rows;  // rows of (t_s, values…)
   std::string segment_bytes, event_bytes;
-  std::uint64_t written = 0, gaps = 0;
+  std::uint64_t written = 0, gaps = 0, irregular = 0;
   hsize_t exceptions_written = 0, truth_written = 0, segment_bytes_written = 0, event_bytes_written = 0;
   double t_first = std::numeric_limits<double>::quiet_NaN(), t_last = t_first;
 
@@ -410,13 +411,13 @@ void Hdf5RunWriter::Impl::create(const ImuSample* first, std::size_t n) {
   // Fixed-size datasets overwritten in place (the file's metadata does not move when the run
   // ends, so a file cut short keeps its header): summary, status and how the run ended.
   {
-    const hsize_t dims[1] = {4};
+    const hsize_t dims[1] = {kSummaryColumns};
     Handle space(H5Screate_simple(1, dims, nullptr), H5Sclose);
     ds_summary = check(H5Dcreate2(root, "summary", H5T_IEEE_F64LE, space.get(), H5P_DEFAULT,
                                   H5P_DEFAULT, H5P_DEFAULT),
                        H5Dclose, path, "cannot create dataset 'summary'");
     put_attr(ds_summary.get(), "columns",
-             std::string("sample_count,gap_count,t_first_s,t_last_s"), path);
+             std::string("sample_count,gap_count,t_first_s,t_last_s,irregular_interval_count"), path);
   }
   ds_status = create_text(root, "status", kStatusBytes, to_string(RunStatus::kRunning), path);
   ds_status_message = create_text(root, "status_message", kMessageBytes, "", path);
@@ -463,7 +464,9 @@ void Hdf5RunWriter::Impl::write_records() {
 }
 
 void Hdf5RunWriter::Impl::write_summary() {
-  const double v[4] = {static_cast<double>(written), static_cast<double>(gaps), t_first, t_last};
+  const double rate_hz = header.info.output_rate_hz;
+  const double v[kSummaryColumns] = {static_cast<double>(written), static_cast<double>(gaps), t_first, t_last,
+                                     rate_hz > 0.0 ? static_cast<double>(irregular) : -1.0};
   check(H5Dwrite(ds_summary.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v), path,
         "cannot write dataset 'summary'");
 }
@@ -513,9 +516,10 @@ void Hdf5RunWriter::add_samples(const ImuSample* s, std::size_t n) {
     }
     I.flags.push_back(x.flags);
     I.gaps += (x.flags & kGapBefore) != 0;
+    if (index > 0) I.irregular += interval_irregular(x.t_s - I.t_last, I.header.info.output_rate_hz);
+    I.t_last = x.t_s;
     if (I.pending() == kChunkSamples) I.write_pending();
   }
-  I.t_last = s[n - 1].t_s;
 }
 
 void Hdf5RunWriter::add_truth(double t_s, const std::vector<double>& values) {
@@ -607,8 +611,20 @@ class Hdf5Samples final : public SampleSource {
       read_into(si_[static_cast<std::size_t>(k)].get(), H5T_NATIVE_DOUBLE, first, count, out, kSiNames[k]);
       return;
     }
-    read_into(counts_[static_cast<std::size_t>(k)].get(), H5T_NATIVE_DOUBLE, first, count, out, kCountsNames[k]);
-    for (std::size_t i = 0; i < count; ++i) out[i] = out[i] * c.lsb + c.offset;
+    // Counts read in their stored width (no conversion inside the library, which serialises
+    // callers) and turned into SI here, in parallel across threads.
+    auto from_counts = [&](auto stored, hid_t mem_type) {
+      // One buffer per thread, kept between calls (a fresh one per chunk is a page-zeroing mmap).
+      thread_local std::vector<decltype(stored)> raw;
+      raw.resize(count);
+      read_into(counts_[static_cast<std::size_t>(k)].get(), mem_type, first, count, raw.data(), kCountsNames[k]);
+      for (std::size_t i = 0; i < count; ++i) out[i] = static_cast<double>(raw[i]) * c.lsb + c.offset;
+    };
+    if (c.int16) {
+      from_counts(std::int16_t{}, H5T_NATIVE_INT16);
+    } else {
+      from_counts(std::int32_t{}, H5T_NATIVE_INT32);
+    }
     for (const auto* e = exceptions_in(first); e != exceptions_.data() + exceptions_.size() &&
                                                (*e)[0] < static_cast<double>(first + count); ++e) {
       if (static_cast<int>((*e)[1]) == k) out[static_cast<std::size_t>((*e)[0]) - first] = (*e)[3];
@@ -720,8 +736,15 @@ Hdf5Run open_hdf5_run(const fs::path& path, bool truth) {
   run.header_json = get_string_attr(root, "header_json", path);
   {
     Handle ds = open_dataset(root, "summary", path, "/");
-    double v[4] = {0, -1, 0, 0};
-    if (H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0) run.gap_count = static_cast<std::int64_t>(v[1]);
+    // Files from before the irregular-interval count hold 4 columns.
+    Handle space(H5Dget_space(ds.get()), H5Sclose);
+    hsize_t dims[1] = {0};
+    const bool whole = H5Sget_simple_extent_dims(space.get(), dims, nullptr) == 1 && dims[0] <= kSummaryColumns;
+    double v[kSummaryColumns] = {0, -1, 0, 0, -1};
+    if (whole && H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0) {
+      run.gap_count = static_cast<std::int64_t>(v[1]);
+      run.irregular_count = static_cast<std::int64_t>(v[4]);
+    }
     H5Eclear2(H5E_DEFAULT);
   }
   run.experiment_yaml = get_string_attr(root, "experiment_yaml", path);
@@ -774,6 +797,8 @@ Hdf5Run open_hdf5_run(const fs::path& path, bool truth) {
     } else {
       codec[k].lsb = get_double_attr(counts[k].get(), "lsb", path);
       codec[k].offset = get_double_attr(counts[k].get(), "offset", path);
+      Handle type(H5Dget_type(counts[k].get()), H5Tclose);
+      codec[k].int16 = H5Tget_size(type.get()) == 2;  // read in the stored width
     }
   }
   run.written_samples = n;

@@ -175,43 +175,52 @@ void segment_history(const std::vector<const Segment*>& segs, const batch_lsq::S
   d.time_since_change_s = p.t_start_s - last;
 }
 
-// Noise floor of the mean of the window [lo, hi) on axis a: sample std and the larger of the
-// batch-means (8 blocks) and white standard errors [unit]; needs ≥ 16 samples.
-void mean_noise(SampleIt lo, SampleIt hi, bool accel, int a, SegmentData& d) {
-  const auto n = static_cast<std::size_t>(hi - lo);
-  double sum = 0, sum2 = 0;
-  for (auto it = lo; it != hi; ++it) {
-    const double v = axis_value(*it, accel, a);
+// One axis of a kept window, accumulated a sample at a time: sum and sum of squares, and the sums
+// of kBatches equal batches.
+constexpr int kBatches = 8;
+struct AxisSums {
+  explicit AxisSums(std::size_t n) : batches(n, kBatches) {}
+  void add(double v) {
     sum += v;
     sum2 += v * v;
+    batches.add(v);
   }
-  const double mean = sum / static_cast<double>(n);
-  const double var = std::max(0.0, sum2 / static_cast<double>(n) - mean * mean);
+  double sum = 0.0, sum2 = 0.0;
+  BlockSums batches;
+};
+
+// Noise floor of axis a's mean over a window of n samples: the sample std, and the standard error
+// of the mean as the larger of the batch-means and the white-noise estimates.
+void mean_noise(const AxisSums& s, std::size_t n, int a, SegmentData& d) {
+  const double mean = s.sum / static_cast<double>(n);
+  const double var = std::max(0.0, s.sum2 / static_cast<double>(n) - mean * mean);
   d.raw_std[a] = std::sqrt(var * static_cast<double>(n) / static_cast<double>(n - 1));
-  constexpr int kB = 8;
   double bsum2 = 0.0;
-  for (int b = 0; b < kB; ++b) {
-    const auto b0 = lo + static_cast<std::ptrdiff_t>(n * static_cast<std::size_t>(b) / kB);
-    const auto b1 = lo + static_cast<std::ptrdiff_t>(n * static_cast<std::size_t>(b + 1) / kB);
-    double bs = 0.0;
-    for (auto it = b0; it != b1; ++it) bs += axis_value(*it, accel, a);
-    const double bm = bs / static_cast<double>(b1 - b0) - mean;
+  for (int b = 0; b < kBatches; ++b) {
+    const double bm = s.batches.sum(b) / static_cast<double>(s.batches.size(b)) - mean;
     bsum2 += bm * bm;
   }
-  const double se_bm = std::sqrt(bsum2 / (kB - 1) / kB);
+  const double se_bm = std::sqrt(bsum2 / (kBatches - 1) / kBatches);
   const double se_white = d.raw_std[a] / std::sqrt(static_cast<double>(n));
   d.mean_std_error[a] = std::max(se_bm, se_white);
 }
 
-// The raw-sample evidence of a point's kept window: noise floor of the mean per axis (the
-// processing stage's standard error when the window is short) and the noise-stage evidence.
+// The raw-sample evidence of a point's kept window, in one pass over the store: noise floor of the
+// mean per axis (the processing stage's standard error when the window is short) and the
+// noise-stage evidence.
 void window_evidence(const Recording& rec, const batch_lsq::StaticPoint& p, bool accel, SegmentData& d) {
-  const std::vector<ImuSample> S = read_window(rec, p.t_start_s, p.t_end_s);
-  const auto lo = S.begin(), hi = S.end();
-  if (hi - lo >= 16)
-    for (int a = 0; a < 3; ++a) mean_noise(lo, hi, accel, a, d);
+  const IndexRange w = window_range(rec, p.t_start_s, p.t_end_s);
+  const auto n = static_cast<std::size_t>(w.size());
+  std::vector<AxisSums> axes(3, AxisSums(n));
+  noise_stage::SegmentEvidence evidence(n, accel);
+  for_each_sample(rec, w, [&](const ImuSample& x) {
+    for (int a = 0; a < 3; ++a) axes[static_cast<std::size_t>(a)].add(axis_value(x, accel, a));
+    evidence.add(x);
+  });
+  if (n >= 16)
+    for (int a = 0; a < 3; ++a) mean_noise(axes[static_cast<std::size_t>(a)], n, a, d);
   if (!d.mean_std_error.allFinite()) d.mean_std_error = p.measured_std_error;
-  noise_stage::segment_evidence(d, S.data(), S.data() + S.size(), accel);
+  evidence.fill(d);
 }
 
 // Notes on the table candidates, and their stimulus derivatives cleared when the chain is unusable.

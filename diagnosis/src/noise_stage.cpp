@@ -2,6 +2,7 @@
 #include "noise_stage.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -63,39 +64,47 @@ bool clipped_sample(const GapInput& in, const ImuSample& x, bool accel, std::uin
   return c;
 }
 
-// Range unknown: samples in a pile of identical values at the window's extreme (a run of ≥ 3),
-// within 2.5 std of the mean (an unclipped Gaussian window of ≥ 16 samples reaches beyond that
-// once or twice).
-std::size_t piled_at_extremes(SampleIt lo, SampleIt hi, bool accel, int a) {
-  const auto n = static_cast<double>(hi - lo);
+// One axis of a static segment, accumulated a sample at a time: clipped samples (clipped_sample),
+// sum, sum of squares and extremes.
+struct ClipSums {
+  std::size_t clipped = 0;
   double sum = 0, sum2 = 0, vmax = -HUGE_VAL, vmin = HUGE_VAL;
-  for (auto it = lo; it != hi; ++it) {
-    const double v = axis_value(*it, accel, a);
+  void add(double v) {
     sum += v;
     sum2 += v * v;
     vmax = std::max(vmax, v);
     vmin = std::min(vmin, v);
   }
-  const double mean = sum / n;
-  const double sd = std::sqrt(std::max(0.0, sum2 / n - mean * mean));
-  std::size_t clipped = 0;
-  for (const double ext : {vmax, vmin}) {
-    if (!(sd > 0) || std::abs(ext - mean) > 2.5 * sd) continue;
-    std::size_t run = 0, best = 0, at = 0;
-    for (auto it = lo; it != hi; ++it) {
-      const bool eq = axis_value(*it, accel, a) == ext;
-      at += eq ? 1 : 0;
-      run = eq ? run + 1 : 0;
-      best = std::max(best, run);
-    }
-    if (best >= 3) clipped += at;
+};
+
+// Range unknown: the extremes of a window of n samples that count as piles of identical values
+// (a run of ≥ 3) when within 2.5 std of the mean (an unclipped Gaussian window of ≥ 16 samples
+// reaches beyond that once or twice); a second pass counts their runs and occurrences.
+struct PileAtExtremes {
+  std::array<double, 2> ext{kNaN, kNaN};  // vmax, vmin; NaN: not a candidate
+  std::array<std::size_t, 2> run{0, 0}, best{0, 0}, at{0, 0};
+  PileAtExtremes(const ClipSums& s, std::size_t n) {
+    const double mean = s.sum / static_cast<double>(n);
+    const double sd = std::sqrt(std::max(0.0, s.sum2 / static_cast<double>(n) - mean * mean));
+    const double e[2] = {s.vmax, s.vmin};
+    for (std::size_t k = 0; k < 2; ++k)
+      if (sd > 0 && !(std::abs(e[k] - mean) > 2.5 * sd)) ext[k] = e[k];
   }
-  return clipped;
-}
+  void add(double v) {
+    for (std::size_t k = 0; k < 2; ++k) {
+      const bool eq = v == ext[k];
+      at[k] += eq ? 1 : 0;
+      run[k] = eq ? run[k] + 1 : 0;
+      best[k] = std::max(best[k], run[k]);
+    }
+  }
+  std::size_t clipped() const { return (best[0] >= 3 ? at[0] : 0) + (best[1] >= 3 ? at[1] : 0); }
+};
 
 // Clipped and total samples per axis over the static segments of the model's segment kinds (≥ 16
-// samples each). A recording whose sensor flags saturation is judged by the flag alone (a value
-// near the range may be an unclipped sample rounded up); otherwise by the value.
+// samples each), read a chunk at a time. A recording whose sensor flags saturation is judged by
+// the flag alone (a value near the range may be an unclipped sample rounded up); otherwise by the
+// value.
 void count_clipped(GapInput& in, const Recording& rec, bool accel) {
   const std::uint32_t flag = accel ? kAccelSaturated : kGyroSaturated;
   in.clipped_samples.setZero();
@@ -106,16 +115,28 @@ void count_clipped(GapInput& in, const Recording& rec, bool accel) {
   });
   for (const auto& seg : rec.segments) {
     if (!in.spec.processing.selects(seg.kind)) continue;
-    const std::vector<ImuSample> S = read_window(rec, seg.t_start_s, seg.t_end_s);
-    const auto lo = S.begin(), hi = S.end();
-    const auto n = hi - lo;
+    const IndexRange w = window_range(rec, seg.t_start_s, seg.t_end_s);
+    const auto n = static_cast<std::size_t>(w.size());
     if (n < 16) continue;
+    std::array<ClipSums, 3> sums;
+    for_each_sample(rec, w, [&](const ImuSample& x) {
+      for (int a = 0; a < 3; ++a) {
+        auto& s = sums[static_cast<std::size_t>(a)];
+        s.clipped += clipped_sample(in, x, accel, flag, flags_used, a) ? 1 : 0;
+        s.add(axis_value(x, accel, a));
+      }
+    });
+    if (in.range <= 0) {
+      std::array<PileAtExtremes, 3> piles{PileAtExtremes(sums[0], n), PileAtExtremes(sums[1], n),
+                                          PileAtExtremes(sums[2], n)};
+      for_each_sample(rec, w, [&](const ImuSample& x) {
+        for (int a = 0; a < 3; ++a) piles[static_cast<std::size_t>(a)].add(axis_value(x, accel, a));
+      });
+      for (std::size_t a = 0; a < 3; ++a) sums[a].clipped += piles[a].clipped();
+    }
     for (int a = 0; a < 3; ++a) {
       in.static_samples[a] += static_cast<double>(n);
-      std::size_t clipped = 0;
-      for (auto it = lo; it != hi; ++it) clipped += clipped_sample(in, *it, accel, flag, flags_used, a) ? 1 : 0;
-      if (in.range <= 0) clipped += piled_at_extremes(lo, hi, accel, a);
-      in.clipped_samples[a] += static_cast<double>(clipped);
+      in.clipped_samples[a] += static_cast<double>(sums[static_cast<std::size_t>(a)].clipped);
     }
   }
 }
@@ -163,8 +184,7 @@ void allan_evidence(GapInput& in, const Recording& rec, bool accel) {
     if (!longest || d.averaging_s > longest->averaging_s) longest = &d;
   if (!longest || longest->averaging_s < 100.0) return;
   const SampleSource& src = rec.sample_source();
-  const IndexRange w = index_range(src, longest->point.t_start_s,
-                                   std::nextafter(longest->point.t_end_s, std::numeric_limits<double>::infinity()));
+  const IndexRange w = window_range(rec, longest->point.t_start_s, longest->point.t_end_s);
   const auto n = static_cast<std::size_t>(w.size());
   if (n < 1000) return;
   const std::vector<double> t = read_column(src, Channel::kTime, w.first, w.first + 1),
@@ -175,11 +195,17 @@ void allan_evidence(GapInput& in, const Recording& rec, bool accel) {
   ao.confidence = 0.95;
   for (int a = 0; a < 3; ++a) {
     const auto c = static_cast<Channel>(static_cast<int>(accel ? Channel::kAx : Channel::kGx) + a);
-    const std::vector<double> y = read_column(src, c, w.first, w.last);  // one axis of one window
+    allan::OverlappingAllanStream stream(ao.max_m, n);  // one axis of one window, a chunk at a time
+    std::vector<double> y(std::min(n, kDefaultChunkSamples));
+    for (std::uint64_t i = w.first; i < w.last; i += y.size()) {
+      const auto take = static_cast<std::size_t>(std::min<std::uint64_t>(y.size(), w.last - i));
+      src.read_column(c, i, take, y.data());
+      stream.add(y.data(), take);
+    }
     allan::ChannelInfo ch;
     ch.name = std::string(accel ? "a" : "g") + "xyz"[a];
     ch.instrument = accel ? allan::Instrument::kAccelerometer : allan::Instrument::kGyroscope;
-    const allan::ChannelResult r = allan::analyze(y.data(), n, 1, rate, ch, ao);
+    const allan::ChannelResult r = allan::analyze(stream, rate, ch, ao);
     const allan::NoiseModel& m = r.model;
     if (!m.ok || r.curve.points.empty()) continue;
     in.allan_white[a] = m.white.fitted;
@@ -443,21 +469,27 @@ CandidateResult coloured_noise(const GapInput& in, const std::vector<int>& axes,
 
 }  // namespace
 
-void segment_evidence(SegmentData& d, const ImuSample* first, const ImuSample* last, bool accel) {
-  const auto n = static_cast<std::size_t>(last - first);
+SegmentEvidence::SegmentEvidence(std::size_t n, bool accel)
+    : n_(n), accel_(accel), sub_(3, BlockSums(n, kSub)), distinct_(n >= 2 * kSub ? 3 : 0) {}
+
+void SegmentEvidence::add(const ImuSample& x) {
+  if (n_ < 2 * kSub) return;
+  for (std::size_t a = 0; a < 3; ++a) {
+    const double v = axis_value(x, accel_, static_cast<int>(a));
+    sub_[a].add(v);
+    if (distinct_[a].size() <= kMaxDistinct) distinct_[a].insert(v);
+  }
+}
+
+void SegmentEvidence::fill(SegmentData& d) const {
+  const std::size_t n = n_;
   d.raw_samples = n;
   if (n < 2 * kSub) return;
-  std::vector<double> v(n);
   for (int a = 0; a < 3; ++a) {
-    for (std::size_t i = 0; i < n; ++i) v[i] = axis_value(first[i], accel, a);
+    const BlockSums& sub = sub_[static_cast<std::size_t>(a)];
     // Sub-block means, grouped 8 × 8.
     double m[kSub];
-    for (int j = 0; j < kSub; ++j) {
-      const std::size_t b0 = n * static_cast<std::size_t>(j) / kSub, b1 = n * static_cast<std::size_t>(j + 1) / kSub;
-      double s = 0.0;
-      for (std::size_t i = b0; i < b1; ++i) s += v[i];
-      m[j] = s / static_cast<double>(b1 - b0);
-    }
+    for (int j = 0; j < kSub; ++j) m[j] = sub.sum(j) / static_cast<double>(sub.size(j));
     double grand = 0.0, gm[kGroups];
     for (int g = 0; g < kGroups; ++g) {
       gm[g] = 0.0;
@@ -474,12 +506,13 @@ void segment_evidence(SegmentData& d, const ImuSample* first, const ImuSample* l
     d.ss_between[a] = ssb * len;
     d.ss_within[a] = ssw * len;
     // Distinct values and their smallest spacing (the LSB when the output is quantized).
-    std::sort(v.begin(), v.end());
+    const std::set<double>& v = distinct_[static_cast<std::size_t>(a)];
+    if (v.size() > kMaxDistinct) continue;  // no lattice to see: both stay NaN
     std::size_t distinct = 1;
     double step = kNaN;
-    const double tol = 1e-12 * std::max(std::abs(v.front()), std::abs(v.back()));
-    for (std::size_t i = 1; i < n; ++i) {
-      const double dv = v[i] - v[i - 1];
+    const double tol = 1e-12 * std::max(std::abs(*v.begin()), std::abs(*v.rbegin()));
+    for (auto prev = v.begin(), it = std::next(prev); it != v.end(); prev = it++) {
+      const double dv = *it - *prev;
       if (dv > tol) {
         ++distinct;
         if (!(dv >= step)) step = dv;

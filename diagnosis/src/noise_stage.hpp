@@ -28,17 +28,34 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include <iosfwd>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "stend/diagnosis/gap.hpp"
 #include "stend/diagnosis/validate.hpp"
+#include "samples.hpp"
 
 namespace stend::diagnosis::noise_stage {
 
-// Sub-block ANOVA, distinct values and value spacing of one segment's kept window, per axis:
-// fills SegmentData::ss_between, ss_within, distinct_values, value_step, raw_samples.
-void segment_evidence(SegmentData& d, const ImuSample* first, const ImuSample* last, bool accel);
+// Sub-block ANOVA, distinct values and value spacing of one segment's kept window of n samples,
+// per axis, fed a sample at a time in window order: fills SegmentData::ss_between, ss_within,
+// distinct_values, value_step, raw_samples. Memory: the 64 sub-block sums and up to kMaxDistinct
+// distinct values per axis; an axis with more (no 16-bit output has) is not quantized at a visible
+// step, and its distinct_values and value_step stay NaN.
+class SegmentEvidence {
+ public:
+  static constexpr std::size_t kMaxDistinct = std::size_t{1} << 16;
+  SegmentEvidence(std::size_t n, bool accel);
+  void add(const ImuSample& x);
+  void fill(SegmentData& d) const;
+
+ private:
+  std::size_t n_;
+  bool accel_;
+  std::vector<BlockSums> sub_;               // per axis: the 64 sub-block sums
+  std::vector<std::set<double>> distinct_;  // per axis: the distinct values
+};
 
 // Clipped samples over the static segments of `spec`'s kinds, and the Allan analysis of the
 // longest kept window when ≥ 100 s: fills GapInput::clipped_samples, static_samples, allan_*.

@@ -13,6 +13,9 @@
 #include <stend/sim/imu.hpp>  // the real simulated sensor (sim/)
 #include "stend/diagnosis/gap.hpp"
 #include "stend/diagnosis/validate.hpp"
+#include "../src/noise_stage.hpp"  // SegmentEvidence (the stage's per-window reduction)
+
+#include <random>
 
 namespace stend::diagnosis {
 namespace {
@@ -253,6 +256,30 @@ TEST(GapNoiseStage, EndToEndThroughTheSimulatedSensor) {
     EXPECT_LE(c[2].ci_lo, cfg.accel_random_walk * 1.5);
     EXPECT_GE(c[2].ci_hi, cfg.accel_random_walk / 1.5);
   }
+}
+
+// A window's value lattice: a quantized axis gives its LSB as the smallest spacing; an axis with
+// more distinct values than any 16-bit output has gives none, in bounded memory.
+TEST(GapNoiseStage, ValueLatticeOfAQuantizedAndAnUnquantizedWindow) {
+  constexpr std::size_t n = 200'000;
+  constexpr double lsb = 0.01;
+  std::mt19937_64 gen(5);
+  std::normal_distribution<double> normal;
+  noise_stage::SegmentEvidence e(n, /*accel=*/true);
+  for (std::size_t i = 0; i < n; ++i) {
+    ImuSample s;
+    s.accel_mps2[0] = lsb * std::round(3.0 * normal(gen));  // quantized, a few dozen levels
+    s.accel_mps2[1] = 0.03 * normal(gen);                     // unquantized
+    s.accel_mps2[2] = 9.81;                                   // constant
+    e.add(s);
+  }
+  SegmentData d;
+  e.fill(d);
+  EXPECT_NEAR(d.value_step[0], lsb, 1e-12);
+  EXPECT_GT(d.distinct_values[0], 10.0);
+  EXPECT_TRUE(std::isnan(d.value_step[1]));
+  EXPECT_TRUE(std::isnan(d.distinct_values[1]));
+  EXPECT_EQ(d.distinct_values[2], 1.0);
 }
 
 }  // namespace

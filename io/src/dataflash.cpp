@@ -9,6 +9,7 @@
 #include <deque>
 #include <map>
 #include <optional>
+#include <set>
 #include <utility>
 #include <vector>
 
@@ -54,11 +55,12 @@ struct DfFormat {
   std::vector<std::string> columns;
   std::vector<std::size_t> offsets;  // of each column in the message, header included
   std::size_t defined_at = 0;        // byte offset of the FMT message
+  std::size_t index = 0;             // among the log's FMT messages, in file order
   std::string problem;               // why the format cannot be decoded (empty = it can)
 };
 
 // An FMT message at `pos`.
-DfFormat read_fmt(const BinaryFile& f, std::size_t pos) {
+DfFormat read_fmt(const BinaryReader& f, std::size_t pos) {
   f.need(pos, kFmtLength, "an FMT message");
   DfFormat fmt;
   fmt.type = *f.at(pos + 3);
@@ -95,71 +97,56 @@ bool wanted(const std::string& name) {
          name == "MSG";
 }
 
-struct DfRecord {
-  const DfFormat* fmt;
-  std::size_t offset;       // of the message header
-  std::size_t lost_before;  // resyncs before it
-};
-
-struct DfLog {
-  std::deque<DfFormat> formats;                     // every FMT in file order (stable addresses)
+// The formats a walk through the log has defined so far.
+struct DfFormats {
+  std::deque<DfFormat> all;                         // every FMT in file order (stable addresses)
   std::map<std::uint8_t, const DfFormat*> by_type;  // the latest FMT of each type
-  std::map<std::string, std::vector<DfRecord>> records;  // of the wanted messages, by name
-  std::map<std::string, std::size_t> counts;        // every message, by name
-  std::size_t resyncs = 0, skipped_bytes = 0;
 };
 
-// Offset of the next message header A3 95 at or after `from` (f.size() when none).
-std::size_t next_header(const BinaryFile& f, std::size_t from) {
-  const std::uint8_t head[2] = {kHead1, kHead2};
-  const std::uint8_t* begin = f.at(0);
-  const std::uint8_t* end = begin + f.size();
-  return static_cast<std::size_t>(std::search(begin + std::min(from, f.size()), end, head, head + 2) - begin);
-}
+struct DfMessage {
+  const DfFormat* fmt;  // nullptr for an FMT message (its definition is formats.all.back())
+  std::size_t offset;   // of the message header
+};
 
-// Reads every message: FMT messages define the types; a byte run that is not a message of a
-// defined type is skipped up to the next header (as DFReader does) and counted.
-DfLog read_dataflash(const BinaryFile& f) {
-  f.need(0, kHeaderBytes, "the first message header");
-  if (*f.at(0) != kHead1 || *f.at(1) != kHead2) {
-    f.fail(0, "not a DataFlash log (expected the message header bytes A3 95)");
-  }
-  DfLog log;
-  std::size_t pos = 0;
+// The message at `pos` (advancing `pos` past it, the message whole in the reader's buffer), false
+// at the end of the file. FMT messages define the types; a byte run that is not a message of a
+// defined type is skipped up to the next header (as DFReader does) and counted in `resyncs` and
+// `skipped_bytes`.
+bool next_message(const BinaryReader& f, std::size_t& pos, DfFormats& formats, std::size_t& resyncs,
+                  std::size_t& skipped_bytes, DfMessage& m) {
+  constexpr std::uint8_t kHead[2] = {kHead1, kHead2};
   while (pos < f.size()) {
     f.need(pos, kHeaderBytes, "a message header (A3 95 <type>)");
     const std::uint8_t type = *f.at(pos + 2);
     const bool header_ok = *f.at(pos) == kHead1 && *f.at(pos + 1) == kHead2;
     if (header_ok && type == kFmtType) {
-      log.formats.push_back(read_fmt(f, pos));
-      ++log.counts["FMT"];
-      log.by_type[log.formats.back().type] = &log.formats.back();
+      formats.all.push_back(read_fmt(f, pos));
+      formats.all.back().index = formats.all.size() - 1;
+      formats.by_type[formats.all.back().type] = &formats.all.back();
+      m = DfMessage{nullptr, pos};
       pos += kFmtLength;
-      continue;
+      return true;
     }
-    const auto it = header_ok ? log.by_type.find(type) : log.by_type.end();
-    if (it == log.by_type.end()) {
-      const std::size_t next = next_header(f, pos + 1);
-      if (next == f.size()) {
+    const auto it = header_ok ? formats.by_type.find(type) : formats.by_type.end();
+    if (it == formats.by_type.end()) {
+      const auto next = f.find(pos + 1, kHead, 2);
+      if (!next) {
         f.fail(pos, header_ok ? "message type " + std::to_string(type) + " has no FMT, and no message header follows"
                               : "expected a message header A3 95, and none follows");
       }
-      log.skipped_bytes += next - pos;
-      ++log.resyncs;
-      pos = next;
+      skipped_bytes += *next - pos;
+      ++resyncs;
+      pos = *next;
       continue;
     }
     const DfFormat& fmt = *it->second;
     if (fmt.length < kHeaderBytes) f.fail(fmt.defined_at, "FMT for '" + fmt.name + "' gives a length below 3");
     f.need(pos, fmt.length, "a '" + fmt.name + "' message");
-    ++log.counts[fmt.name];
-    if (wanted(fmt.name)) {
-      if (!fmt.problem.empty()) f.fail(fmt.defined_at, "FMT for '" + fmt.name + "': " + fmt.problem);
-      log.records[fmt.name].push_back({&fmt, pos, log.resyncs});
-    }
+    m = DfMessage{&fmt, pos};
     pos += fmt.length;
+    return true;
   }
-  return log;
+  return false;
 }
 
 std::optional<std::size_t> column(const DfFormat& fmt, const std::string& name) {
@@ -169,7 +156,7 @@ std::optional<std::size_t> column(const DfFormat& fmt, const std::string& name) 
 }
 
 // Column index by name; fails naming the format's columns when absent.
-std::size_t required_column(const BinaryFile& f, const DfFormat& fmt, const std::string& name) {
+std::size_t required_column(const BinaryReader& f, const DfFormat& fmt, const std::string& name) {
   const auto c = column(fmt, name);
   if (!c) {
     std::string columns;
@@ -180,8 +167,8 @@ std::size_t required_column(const BinaryFile& f, const DfFormat& fmt, const std:
 }
 
 // Numeric value of column c of the message at `msg`, with the type's own scale (c, e, L...). The
-// message is in the file (read_dataflash checked its length) and its FMT adds up to that length.
-double value(const BinaryFile& f, const DfFormat& fmt, std::size_t msg, std::size_t c) {
+// message is in the reader's buffer (next_message brought it whole) and its FMT adds up to that length.
+double value(const BinaryReader& f, const DfFormat& fmt, std::size_t msg, std::size_t c) {
   const TypeChar& t = *type_char(fmt.format[c]);
   const std::uint8_t* p = f.at(msg + fmt.offsets[c]);
   double v = 0.0;
@@ -207,7 +194,7 @@ double value(const BinaryFile& f, const DfFormat& fmt, std::size_t msg, std::siz
   return v * t.scale;
 }
 
-std::string text(const BinaryFile& f, const DfFormat& fmt, std::size_t msg, std::size_t c) {
+std::string text(const BinaryReader& f, const DfFormat& fmt, std::size_t msg, std::size_t c) {
   return fixed_string(f.at(msg + fmt.offsets[c]), type_char(fmt.format[c])->size);
 }
 
@@ -220,29 +207,21 @@ struct DfUnits {
   std::map<std::uint8_t, std::pair<std::string, std::string>> by_type;  // FMTU: unit ids, mult ids
 };
 
-DfUnits read_units(const BinaryFile& f, const DfLog& log) {
-  DfUnits u;
-  auto each = [&](const std::string& name, auto fn) {
-    const auto it = log.records.find(name);
-    if (it == log.records.end()) return;
-    for (const DfRecord& r : it->second) fn(*r.fmt, r.offset);
-  };
-  each("UNIT", [&](const DfFormat& fmt, std::size_t m) {
+// A UNIT, MULT or FMTU message into `u` (a later one of the same id replaces an earlier one).
+void read_unit(const BinaryReader& f, const DfFormat& fmt, std::size_t m, DfUnits& u) {
+  if (fmt.name == "UNIT") {
     u.labels[static_cast<char>(value(f, fmt, m, required_column(f, fmt, "Id")))] = text(f, fmt, m, required_column(f, fmt, "Label"));
-  });
-  each("MULT", [&](const DfFormat& fmt, std::size_t m) {
+  } else if (fmt.name == "MULT") {
     u.mults[static_cast<char>(value(f, fmt, m, required_column(f, fmt, "Id")))] = value(f, fmt, m, required_column(f, fmt, "Mult"));
-  });
-  each("FMTU", [&](const DfFormat& fmt, std::size_t m) {
+  } else if (fmt.name == "FMTU") {
     u.by_type[static_cast<std::uint8_t>(value(f, fmt, m, required_column(f, fmt, "FmtType")))] = {
         text(f, fmt, m, required_column(f, fmt, "UnitIds")), text(f, fmt, m, required_column(f, fmt, "MultIds"))};
-  });
-  return u;
+  }
 }
 
 // SI factor of column c of `fmt`: the FMTU multiplier (where the log defines it) times the unit
 // conversion the expected units allow (deg/s → rad/s for the gyro). Fails on another unit.
-double si_factor(const BinaryFile& f, const DfUnits& u, const DfFormat& fmt, std::size_t c,
+double si_factor(const BinaryReader& f, const DfUnits& u, const DfFormat& fmt, std::size_t c,
                  const std::vector<std::string>& accepted, std::string& note) {
   const auto it = u.by_type.find(fmt.type);
   if (it == u.by_type.end() || c >= it->second.first.size()) {
@@ -273,23 +252,12 @@ double si_factor(const BinaryFile& f, const DfUnits& u, const DfFormat& fmt, std
 // IMU messages
 
 // One IMU message's instance: its I column, else the message name (IMU, IMU2, IMU3 → 0, 1, 2).
-int instance_of(const BinaryFile& f, const DfFormat& fmt, std::size_t msg) {
+int instance_of(const BinaryReader& f, const DfFormat& fmt, std::size_t msg) {
   if (const auto c = column(fmt, "I")) return static_cast<int>(value(f, fmt, msg, *c));
   return fmt.name == "IMU" ? 0 : fmt.name[3] - '1';
 }
 
-std::map<int, std::vector<DfRecord>> imu_records_by_instance(const BinaryFile& f, const DfLog& log) {
-  std::map<int, std::vector<DfRecord>> out;
-  for (const char* name : {"IMU", "IMU2", "IMU3"}) {
-    const auto it = log.records.find(name);
-    if (it == log.records.end()) continue;
-    for (const DfRecord& r : it->second) out[instance_of(f, *r.fmt, r.offset)].push_back(r);
-  }
-  for (auto& [inst, v] : out) {
-    std::stable_sort(v.begin(), v.end(), [](const DfRecord& a, const DfRecord& b) { return a.offset < b.offset; });
-  }
-  return out;
-}
+bool is_imu(const std::string& name) { return name == "IMU" || name == "IMU2" || name == "IMU3"; }
 
 // An IMU format's columns (T may be absent) and their SI factors, with the unit note.
 struct ImuColumns {
@@ -299,7 +267,7 @@ struct ImuColumns {
   std::string note;
 };
 
-ImuColumns imu_columns(const BinaryFile& f, const DfUnits& u, const DfFormat& fmt) {
+ImuColumns imu_columns(const BinaryReader& f, const DfUnits& u, const DfFormat& fmt) {
   ImuColumns c{};
   c.time = required_column(f, fmt, "TimeUS");
   const char* axes = "XYZ";
@@ -314,39 +282,79 @@ ImuColumns imu_columns(const BinaryFile& f, const DfUnits& u, const DfFormat& fm
   return c;
 }
 
-// Identity: the vehicle firmware from the first MSG naming it ("ArduSub V4.1.0 (89639005)").
-std::string firmware(const BinaryFile& f, const DfLog& log) {
-  const auto it = log.records.find("MSG");
-  if (it == log.records.end()) return {};
-  for (const DfRecord& r : it->second) {
-    const auto c = column(*r.fmt, "Message");
-    if (!c) continue;
-    const std::string m = text(f, *r.fmt, r.offset, *c);
-    if (m.rfind("Ardu", 0) == 0) return m;
-  }
-  return {};
+// The vehicle firmware when `m` is a MSG naming it ("ArduSub V4.1.0 (89639005)"), else "".
+std::string firmware(const BinaryReader& f, const DfFormat& fmt, std::size_t m) {
+  if (fmt.name != "MSG") return {};
+  const auto c = column(fmt, "Message");
+  if (!c) return {};
+  std::string message = text(f, fmt, m, *c);
+  return message.rfind("Ardu", 0) == 0 ? message : std::string();
 }
 
-std::string describe_instances(const std::map<int, std::vector<DfRecord>>& by_instance) {
+// One IMU instance as the first pass finds it.
+struct DfInstance {
+  std::size_t messages = 0;
+  bool has_temperature = true;     // every message's format has a T column
+  std::set<std::size_t> formats;   // indices of the formats of its messages
+};
+
+// What the first pass finds: the IMU instances, the units, the firmware (the first MSG naming it).
+struct DfLog {
+  DfFormats formats;
+  std::map<int, DfInstance> imu;
+  DfUnits units;
+  std::string firmware;
+  std::size_t resyncs = 0, skipped_bytes = 0;
+};
+
+// The first pass: every message's header; FMT, UNIT, MULT, FMTU and MSG read, IMU messages counted
+// by instance. A format of the messages an import reads must be decodable.
+DfLog read_dataflash(const BinaryReader& f) {
+  f.need(0, kHeaderBytes, "the first message header");
+  if (*f.at(0) != kHead1 || *f.at(1) != kHead2) {
+    f.fail(0, "not a DataFlash log (expected the message header bytes A3 95)");
+  }
+  DfLog log;
+  std::size_t pos = 0;
+  DfMessage m{};
+  while (next_message(f, pos, log.formats, log.resyncs, log.skipped_bytes, m)) {
+    if (!m.fmt || !wanted(m.fmt->name)) continue;
+    const DfFormat& fmt = *m.fmt;
+    if (!fmt.problem.empty()) f.fail(fmt.defined_at, "FMT for '" + fmt.name + "': " + fmt.problem);
+    if (is_imu(fmt.name)) {
+      DfInstance& imu = log.imu[instance_of(f, fmt, m.offset)];
+      ++imu.messages;
+      imu.has_temperature = imu.has_temperature && column(fmt, "T").has_value();
+      imu.formats.insert(fmt.index);
+    } else if (fmt.name == "MSG") {
+      if (log.firmware.empty()) log.firmware = firmware(f, fmt, m.offset);
+    } else {
+      read_unit(f, fmt, m.offset, log.units);
+    }
+  }
+  return log;
+}
+
+std::string describe_instances(const std::map<int, DfInstance>& imu) {
   std::string s;
-  for (const auto& [inst, v] : by_instance) s += (s.empty() ? "" : ", ") + std::to_string(inst) + ": " + std::to_string(v.size());
+  for (const auto& [inst, v] : imu) s += (s.empty() ? "" : ", ") + std::to_string(inst) + ": " + std::to_string(v.messages);
   return s;
 }
 
-int choose_instance(const BinaryFile& f, const std::map<int, std::vector<DfRecord>>& by_instance, int wanted_instance) {
-  if (by_instance.empty()) {
+int choose_instance(const BinaryReader& f, const std::map<int, DfInstance>& imu, int wanted_instance) {
+  if (imu.empty()) {
     f.fail(f.size(), "no IMU data: expected IMU (or IMU2/IMU3) messages defined by an FMT; the log has none");
   }
   if (wanted_instance >= 0) {
-    if (!by_instance.count(wanted_instance)) {
+    if (!imu.count(wanted_instance)) {
       f.fail(f.size(), "no IMU instance " + std::to_string(wanted_instance) + " (messages per instance: " +
-                           describe_instances(by_instance) + ")");
+                           describe_instances(imu) + ")");
     }
     return wanted_instance;
   }
-  int best = by_instance.begin()->first;
-  for (const auto& [inst, v] : by_instance) {
-    if (v.size() > by_instance.at(best).size()) best = inst;
+  int best = imu.begin()->first;
+  for (const auto& [inst, v] : imu) {
+    if (v.messages > imu.at(best).messages) best = inst;
   }
   return best;
 }
@@ -359,60 +367,76 @@ bool looks_like_dataflash(const fs::path& file) {
          static_cast<std::uint8_t>(head[1]) == kHead2 && static_cast<std::uint8_t>(head[2]) == kFmtType;
 }
 
-Recording import_dataflash(const fs::path& file, const DataflashOptions& opt) {
-  const BinaryFile f(file);
+// Two passes over the file through a bounded buffer: the first reads every message header (the
+// formats, units, firmware, and how many IMU messages each instance holds), the second decodes the
+// chosen instance's IMU messages into samples.
+void import_dataflash(const fs::path& file, const DataflashOptions& opt, Recording& rec, SampleSink& out) {
+  const BinaryReader f(file);
   const DfLog log = read_dataflash(f);
-  const auto by_instance = imu_records_by_instance(f, log);
-  const int instance = choose_instance(f, by_instance, opt.instance);
-  const DfUnits units = read_units(f, log);
-  Recording rec = new_recording(file, "dataflash");
-  std::map<const DfFormat*, ImuColumns> columns;
+  const int instance = choose_instance(f, log.imu, opt.instance);
+  const DfInstance& imu = log.imu.at(instance);
+  std::map<std::size_t, ImuColumns> columns;  // by format index
+  std::string unit_notes;
+  for (const std::size_t index : imu.formats) {
+    const ImuColumns& c = columns.emplace(index, imu_columns(f, log.units, log.formats.all[index])).first->second;
+    unit_notes += c.note;
+  }
+  rec = new_recording(file, "dataflash");
+  SensorInfo& info = rec.header.info;
+  info.has_gyro = true;
+  info.has_temperature = imu.has_temperature;
+  rec.header.identity.vendor = "ArduPilot";
+  rec.header.identity.model = log.firmware;
+  rec.header.identity.who_am_i = "IMU instance " + std::to_string(instance);
+  LogTimestampStream times(out, &info);
+  std::vector<ImuSample> chunk;
+  chunk.reserve(kDefaultChunkSamples);
   std::uint64_t t0_us = 0;
-  bool has_temperature = true;
-  std::size_t lost_gaps = 0;
-  const std::vector<DfRecord>& records = by_instance.at(instance);
-  for (std::size_t i = 0; i < records.size(); ++i) {
-    const DfRecord& r = records[i];
-    auto it = columns.find(r.fmt);
-    if (it == columns.end()) it = columns.emplace(r.fmt, imu_columns(f, units, *r.fmt)).first;
-    const ImuColumns& c = it->second;
-    const auto t_us = static_cast<std::uint64_t>(value(f, *r.fmt, r.offset, c.time));
-    if (i == 0) t0_us = t_us;
+  std::size_t count = 0, lost_gaps = 0, prev_resyncs = 0;
+  DfFormats formats;
+  std::size_t pos = 0, resyncs = 0, skipped_bytes = 0;
+  DfMessage m{};
+  while (next_message(f, pos, formats, resyncs, skipped_bytes, m)) {
+    if (!m.fmt || !is_imu(m.fmt->name) || instance_of(f, *m.fmt, m.offset) != instance) continue;
+    const DfFormat& fmt = *m.fmt;
+    const ImuColumns& c = columns.at(fmt.index);
+    const auto t_us = static_cast<std::uint64_t>(value(f, fmt, m.offset, c.time));
+    if (count == 0) t0_us = t_us;
     ImuSample s;
     s.t_s = seconds_since_us(t0_us, t_us);
     for (int k = 0; k < 3; ++k) {
-      s.gyro_radps[k] = value(f, *r.fmt, r.offset, c.gyr[k]) * c.gyr_factor;
-      s.accel_mps2[k] = value(f, *r.fmt, r.offset, c.acc[k]) * c.acc_factor;
+      s.gyro_radps[k] = value(f, fmt, m.offset, c.gyr[k]) * c.gyr_factor;
+      s.accel_mps2[k] = value(f, fmt, m.offset, c.acc[k]) * c.acc_factor;
     }
-    has_temperature = has_temperature && c.temp.has_value();
-    if (c.temp) s.temperature_c = value(f, *r.fmt, r.offset, *c.temp) * c.temp_factor;
-    if (i > 0 && r.lost_before != records[i - 1].lost_before) {
+    if (c.temp) s.temperature_c = value(f, fmt, m.offset, *c.temp) * c.temp_factor;
+    if (count > 0 && resyncs != prev_resyncs) {
       s.flags |= kGapBefore;
       ++lost_gaps;
     }
-    rec.samples.push_back(s);
+    prev_resyncs = resyncs;
+    ++count;
+    chunk.push_back(s);
+    if (chunk.size() == kDefaultChunkSamples) {
+      times.add_samples(chunk.data(), chunk.size());
+      chunk.clear();
+    }
   }
-  const TimestampSummary ts = check_log_timestamps(rec.samples);
-  SensorInfo& info = rec.header.info;
-  info.output_rate_hz = ts.rate_hz;
-  info.has_gyro = true;
-  info.has_temperature = has_temperature;
-  const std::string fw = firmware(f, log);
-  rec.header.identity.vendor = "ArduPilot";
-  rec.header.identity.model = fw;
-  rec.header.identity.who_am_i = "IMU instance " + std::to_string(instance);
-  std::string unit_notes;
-  for (const auto& [fmt, c] : columns) unit_notes += c.note;
-  add_import_event(rec, "imported " + std::to_string(rec.samples.size()) + " samples from " + file.string() +
+  times.add_samples(chunk.data(), chunk.size());
+  const TimestampSummary ts = times.finish();
+  const std::string& fw = log.firmware;
+  add_import_event(rec, "imported " + std::to_string(count) + " samples from " + file.string() +
                             " (ArduPilot DataFlash; firmware '" + (fw.empty() ? "?" : fw) + "'; IMU instance " +
                             std::to_string(instance) + " (" +
                             (opt.instance >= 0 ? "as asked" : "the instance with the most messages") +
-                            "; messages per instance: " + describe_instances(by_instance) + "); units: " + unit_notes +
-                            (has_temperature ? "temperature from T" : "no temperature column") +
+                            "; messages per instance: " + describe_instances(log.imu) + "); units: " + unit_notes +
+                            (imu.has_temperature ? "temperature from T" : "no temperature column") +
                             "; t = TimeUS [us] relative to the first sample; " + ts.describe() + "; " +
                             std::to_string(log.resyncs) + " resync(s) (" + std::to_string(log.skipped_bytes) +
                             " bytes skipped) flagged " + std::to_string(lost_gaps) + " gap(s))");
-  return rec;
+}
+
+Recording import_dataflash(const fs::path& file, const DataflashOptions& opt) {
+  return import_in_memory([&](Recording& rec, SampleSink& out) { import_dataflash(file, opt, rec, out); });
 }
 
 }  // namespace stend::io

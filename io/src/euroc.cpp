@@ -57,7 +57,7 @@ bool looks_like_euroc(const fs::path& path) {
   }
 }
 
-Recording import_euroc(const fs::path& path, const EurocOptions& opt) {
+void import_euroc(const fs::path& path, const EurocOptions& opt, Recording& rec, SampleSink& out) {
   const fs::path file = euroc_csv(path);
   LineReader r(file);
   std::string line;
@@ -65,15 +65,22 @@ Recording import_euroc(const fs::path& path, const EurocOptions& opt) {
     r.fail("expected the EuRoC column-name line '#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],"
            "w_RS_S_z [rad s^-1],a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]'");
   }
-  Recording rec = new_recording(file, "euroc");
+  rec = new_recording(file, "euroc");
+  rec.header.info.has_gyro = true;
+  rec.header.info.has_temperature = false;
+  rec.header.identity = opt.identity;
+  LogTimestampStream times(out, &rec.header.info);
+  std::vector<ImuSample> chunk;
+  chunk.reserve(kDefaultChunkSamples);
   std::int64_t t0_ns = 0;
+  std::size_t count = 0;
   while (r.next(line)) {
     if (trim(line).empty()) continue;
     const auto f = split(line, ',');
     if (f.size() != 7) r.fail("expected 7 fields (timestamp, 3 gyro, 3 accel), found " + std::to_string(f.size()));
     std::int64_t t_ns = 0;
     if (!parse_ns(f[0], t_ns)) r.fail("timestamp '" + std::string(f[0]) + "' is not an integer [ns]");
-    if (rec.samples.empty()) t0_ns = t_ns;
+    if (count++ == 0) t0_ns = t_ns;
     ImuSample s;
     s.t_s = static_cast<double>(t_ns - t0_ns) * 1e-9;  // difference first: ns since 1970 exceed a double's 53 bits
     for (int k = 0; k < 3; ++k) {
@@ -84,19 +91,23 @@ Recording import_euroc(const fs::path& path, const EurocOptions& opt) {
       s.gyro_radps[k] = g;
       s.accel_mps2[k] = a;
     }
-    rec.samples.push_back(s);
+    chunk.push_back(s);
+    if (chunk.size() == kDefaultChunkSamples) {
+      times.add_samples(chunk.data(), chunk.size());
+      chunk.clear();
+    }
   }
-  if (rec.samples.empty()) throw ImportError(file, r.line(), "no samples after the column-name line");
-  const TimestampSummary ts = check_log_timestamps(rec.samples);
-  rec.header.info.output_rate_hz = ts.rate_hz;
-  rec.header.info.has_gyro = true;
-  rec.header.info.has_temperature = false;
-  rec.header.identity = opt.identity;
-  add_import_event(rec, "imported " + std::to_string(rec.samples.size()) + " samples from " + file.string() +
+  if (count == 0) throw ImportError(file, r.line(), "no samples after the column-name line");
+  times.add_samples(chunk.data(), chunk.size());
+  const TimestampSummary ts = times.finish();
+  add_import_event(rec, "imported " + std::to_string(count) + " samples from " + file.string() +
                             " (EuRoC/ASL IMU CSV; gyro w_RS_S [rad/s] and accel a_RS_S [m/s^2] in the sensor frame S "
                             "as written; t = #timestamp [ns] relative to the first sample; " + ts.describe() +
                             "; no temperature)");
-  return rec;
+}
+
+Recording import_euroc(const fs::path& path, const EurocOptions& opt) {
+  return import_in_memory([&](Recording& rec, SampleSink& out) { import_euroc(path, opt, rec, out); });
 }
 
 }  // namespace stend::io

@@ -106,6 +106,9 @@ Recording open_imutk(const Inputs& in, const ImportOptions& o) {
 Recording open_table(const Inputs& in, const ImportOptions& o) { return import_static_table(in[0], o.gravity_mps2); }
 
 Recording open_csv(const Inputs& in, const ImportOptions& o) { return import_csv(in[0], o.csv_mapping()); }
+void stream_csv(const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
+  import_csv(in[0], o.csv_mapping(), rec, out);
+}
 
 std::string sha256_hex(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -201,16 +204,23 @@ const std::vector<Format>& formats() {
        looks_like_static_table, open_table},
       {"imutk", "IMU-TK text 't x y z' (ACC [GYRO]; any extension, .mat included)", looks_like_imutk, open_imutk, 2},
       {"ulog", "PX4 ULog: sensor_accel + sensor_gyro (with temperature), else sensor_combined", looks_like_ulog,
-       [](const Inputs& in, const ImportOptions& o) { return import_ulog(in[0], {.instance = o.instance}); }},
+       [](const Inputs& in, const ImportOptions& o) { return import_ulog(in[0], {.instance = o.instance}); }, 1,
+       [](const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
+         import_ulog(in[0], {.instance = o.instance}, rec, out);
+       }},
       {"dataflash", "ArduPilot DataFlash .BIN: IMU records (with temperature)", looks_like_dataflash,
-       [](const Inputs& in, const ImportOptions& o) { return import_dataflash(in[0], {.instance = o.instance}); }},
+       [](const Inputs& in, const ImportOptions& o) { return import_dataflash(in[0], {.instance = o.instance}); }, 1,
+       [](const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
+         import_dataflash(in[0], {.instance = o.instance}, rec, out);
+       }},
       {"euroc", "EuRoC / ASL: mav0/imu0/data.csv (or the folder holding mav0/)", looks_like_euroc,
-       [](const Inputs& in, const ImportOptions&) { return import_euroc(in[0]); }},
+       [](const Inputs& in, const ImportOptions&) { return import_euroc(in[0]); }, 1,
+       [](const Inputs& in, const ImportOptions&, Recording& rec, SampleSink& out) { import_euroc(in[0], {}, rec, out); }},
       {"rosbag1", "ROS 1 bag v2.0: sensor_msgs/Imu (--topic)", looks_like_rosbag1,
        [](const Inputs& in, const ImportOptions& o) { return import_rosbag1(in[0], rosbag_options(o)); }},
       {"rosbag2", "ROS 2 bag (SQLite3 .db3 or MCAP, file or folder): sensor_msgs/msg/Imu (--topic)", looks_like_rosbag2,
        [](const Inputs& in, const ImportOptions& o) { return import_rosbag2(in[0], rosbag_options(o)); }},
-      {"csv", "generic delimited text with mapped columns (--accel/--mapping ...)", nullptr, open_csv},
+      {"csv", "generic delimited text with mapped columns (--accel/--mapping ...)", nullptr, open_csv, 1, stream_csv},
   };
   return table;
 }
@@ -241,8 +251,10 @@ const Format& detect_format(const Inputs& inputs, const ImportOptions& options) 
                            ": cannot tell the format from the content; give --format, one of:" + list);
 }
 
-Recording open_dataset(const Inputs& inputs, const std::string& format, const ImportOptions& options,
-                       std::string* used) {
+namespace {
+
+// The format to read `inputs` with, after checking the options and the input count.
+const Format& choose_format(const Inputs& inputs, const std::string& format, const ImportOptions& options) {
   std::string problem;
   if (!options.IsValid(&problem)) throw std::invalid_argument("import options: " + problem);
   const Format& f = format.empty() || format == "auto" ? detect_format(inputs, options) : find_format(format);
@@ -250,14 +262,42 @@ Recording open_dataset(const Inputs& inputs, const std::string& format, const Im
     throw std::invalid_argument("format " + f.name + " takes " +
                                 (f.max_inputs == 1 ? std::string("one input") : "1 to " + std::to_string(f.max_inputs) + " inputs") +
                                 ", got " + std::to_string(inputs.size()));
-  Recording rec = f.open(inputs, options);
-  if (used) *used = f.name;
-  if (f.name == "run") return rec;
+  return f;
+}
+
+// The event stating the format and the import options.
+void add_format_event(Recording& rec, const Format& f, const std::string& format, const ImportOptions& options) {
   std::string stated;
   for (const auto& s : options.stated) stated += (stated.empty() ? "" : "; ") + s;
   add_import_event(rec, "format " + f.name + (format.empty() || format == "auto" ? " (detected from the content)" : " (given)") +
                             "; import options: " + (stated.empty() ? "none (the format's defaults)" : stated));
+}
+
+}  // namespace
+
+Recording open_dataset(const Inputs& inputs, const std::string& format, const ImportOptions& options,
+                       std::string* used) {
+  const Format& f = choose_format(inputs, format, options);
+  Recording rec = f.open(inputs, options);
+  if (used) *used = f.name;
+  if (f.name == "run") return rec;
+  add_format_event(rec, f, format, options);
   return rec;
+}
+
+void import_dataset(const Inputs& inputs, const std::string& format, Recording& rec, SampleSink& out,
+                    const ImportOptions& options, std::string* used) {
+  const Format& f = choose_format(inputs, format, options);
+  if (used) *used = f.name;
+  if (f.stream) {
+    f.stream(inputs, options, rec, out);
+  } else {
+    rec = f.open(inputs, options);
+    for_each_chunk(rec.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t) { out.add_samples(c, n); });
+    rec.samples = {};
+    rec.source.reset();
+  }
+  if (f.name != "run") add_format_event(rec, f, format, options);
 }
 
 void add_provenance(Recording& rec, const Inputs& inputs, const std::string& format) {

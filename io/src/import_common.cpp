@@ -6,7 +6,6 @@
 #include <cerrno>
 #include <charconv>
 #include <cstdio>
-#include <iterator>
 #include <system_error>
 #include <utility>
 
@@ -81,17 +80,38 @@ std::string fmt_hex(std::uint64_t v, int digits) {
   return buf;
 }
 
-BinaryFile::BinaryFile(const fs::path& file) : file_(file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw ImportError(file, 0, std::string("cannot open: ") + std::strerror(errno) + " (check the path)");
-  data_.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+BinaryReader::BinaryReader(const fs::path& file) : file_(file), in_(file, std::ios::binary) {
+  if (!in_) throw ImportError(file, 0, std::string("cannot open: ") + std::strerror(errno) + " (check the path)");
+  in_.seekg(0, std::ios::end);
+  size_ = static_cast<std::size_t>(in_.tellg());
 }
 
-void BinaryFile::need(std::size_t offset, std::size_t count, const std::string& what) const {
-  if (offset > data_.size() || count > data_.size() - offset) {
+void BinaryReader::need(std::size_t offset, std::size_t count, const std::string& what) const {
+  if (offset > size_ || count > size_ - offset) {
     fail(offset, "the file ends inside " + what + " (expected " + std::to_string(count) + " bytes, " +
-                     std::to_string(offset > data_.size() ? 0 : data_.size() - offset) + " remain; truncated?)");
+                     std::to_string(offset > size_ ? 0 : size_ - offset) + " remain; truncated?)");
   }
+  if (offset >= start_ && offset + count <= start_ + buffer_.size()) return;
+  start_ = offset;
+  buffer_.resize(std::min(std::max(count, kBinaryWindow), size_ - offset));
+  in_.clear();
+  in_.seekg(static_cast<std::streamoff>(offset));
+  in_.read(reinterpret_cast<char*>(buffer_.data()), static_cast<std::streamsize>(buffer_.size()));
+  if (static_cast<std::size_t>(in_.gcount()) != buffer_.size()) {
+    fail(offset, "cannot read " + what + ": " + std::strerror(errno) + " (the file changed while it was read?)");
+  }
+}
+
+std::optional<std::size_t> BinaryReader::find(std::size_t from, const std::uint8_t* pattern, std::size_t count) const {
+  // Windows overlapping by count − 1 bytes, so that a match across a window boundary is found.
+  for (std::size_t pos = from; pos + count <= size_; pos += kBinaryWindow - (count - 1)) {
+    const std::size_t n = std::min(kBinaryWindow, size_ - pos);
+    need(pos, n, "a search for a sync marker");
+    const std::uint8_t* begin = at(pos);
+    const auto* hit = std::search(begin, begin + n, pattern, pattern + count);
+    if (hit != begin + n) return pos + static_cast<std::size_t>(hit - begin);
+  }
+  return std::nullopt;
 }
 
 std::string file_prefix(const fs::path& file, std::size_t count) {
@@ -116,6 +136,16 @@ Recording new_recording(const fs::path& file, const std::string& format) {
   rec.header.experiment_file = file.string();
   rec.header.stend_version = stend::version();
   rec.header.clock = "wall";
+  return rec;
+}
+
+Recording import_in_memory(const std::function<void(Recording& rec, SampleSink& out)>& import) {
+  std::vector<ImuSample> samples;
+  VectorSink sink(samples);
+  Recording rec;
+  import(rec, sink);
+  rec.samples = std::move(samples);
+  if (!rec.samples.empty()) place_import_events(rec.events, rec.samples.front().t_s);
   return rec;
 }
 
@@ -150,6 +180,31 @@ TimestampSummary check_log_timestamps(std::vector<ImuSample>& s) {
     if (s[i].t_s < s[i - 1].t_s) ++sum.decreasing;
   }
   return sum;
+}
+
+void LogTimestampStream::process(std::vector<ImuSample>& s, bool first, double prev_t) {
+  if (first) {
+    const double dt = median_interval(s);
+    sum_.rate_hz = dt > 0.0 ? 1.0 / dt : 0.0;
+    if (rate_into_) rate_into_->output_rate_hz = sum_.rate_hz;
+  }
+  if (s.empty()) return;
+  if (sum_.rate_hz > 0.0 && s[0].t_s - prev_t > 1.5 / sum_.rate_hz) {
+    s[0].flags |= kGapBefore;
+    ++sum_.gaps;
+  }
+  sum_.gaps += flag_time_gaps(s, sum_.rate_hz);
+  if (s[0].t_s == prev_t) ++sum_.repeated;
+  if (s[0].t_s < prev_t) ++sum_.decreasing;
+  for (std::size_t i = 1; i < s.size(); ++i) {
+    if (s[i].t_s == s[i - 1].t_s) ++sum_.repeated;
+    if (s[i].t_s < s[i - 1].t_s) ++sum_.decreasing;
+  }
+}
+
+TimestampSummary LogTimestampStream::finish() {
+  pass_rest();
+  return sum_;
 }
 
 std::string TimestampSummary::describe() const {

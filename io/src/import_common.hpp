@@ -4,6 +4,7 @@
 #pragma once
 
 #include <stend/io/importers.hpp>
+#include <stend/io/timestamps.hpp>
 
 #include "import_event.hpp"
 
@@ -12,6 +13,8 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <fstream>
 #include <string>
 #include <string_view>
@@ -59,28 +62,36 @@ T load_le(const std::uint8_t* p) {
   return v;
 }
 
-// A whole binary file in memory, read with bounds checks: every read past the end throws an
-// ImportError naming the offset and what was being read.
-class BinaryFile {
+// A binary file read through a bounded buffer (kBinaryWindow bytes, more only for a single larger
+// range), with bounds checks: every read past the end throws an ImportError naming the offset and
+// what was being read. need() brings bytes [offset, offset + count) into the buffer, reading from
+// the file only when they are not already in it; at() points into the buffer and stays valid until
+// a need() of bytes outside it. Reading is logically const (the buffer is a cache of the file).
+class BinaryReader {
  public:
-  explicit BinaryFile(const std::filesystem::path& file);
+  static constexpr std::size_t kBinaryWindow = std::size_t{1} << 20;  // 1 MiB
+  explicit BinaryReader(const std::filesystem::path& file);
   const std::filesystem::path& file() const { return file_; }
-  std::size_t size() const { return data_.size(); }
-  const std::uint8_t* at(std::size_t offset) const { return data_.data() + offset; }
-  // Throws unless bytes [offset, offset + count) are in the file.
+  std::size_t size() const { return size_; }
+  const std::uint8_t* at(std::size_t offset) const { return buffer_.data() + (offset - start_); }
   void need(std::size_t offset, std::size_t count, const std::string& what) const;
   template <class T>
   T get(std::size_t offset, const std::string& what) const {
     need(offset, sizeof(T), what);
-    return load_le<T>(data_.data() + offset);
+    return load_le<T>(at(offset));
   }
+  // Offset of the first occurrence of `pattern` at or after `from`, if any.
+  std::optional<std::size_t> find(std::size_t from, const std::uint8_t* pattern, std::size_t count) const;
   [[noreturn]] void fail(std::size_t offset, const std::string& message) const {
     throw ImportError(file_, ByteOffset{offset}, message);
   }
 
  private:
   std::filesystem::path file_;
-  std::vector<std::uint8_t> data_;
+  std::size_t size_ = 0;
+  mutable std::ifstream in_;
+  mutable std::vector<std::uint8_t> buffer_;
+  mutable std::size_t start_ = 0;  // file offset of buffer_[0]
 };
 
 // The first `count` bytes of a file (fewer when it is shorter; none when it cannot be read).
@@ -96,6 +107,10 @@ std::string fixed_string(const std::uint8_t* p, std::size_t size);
 Recording new_recording(const std::filesystem::path& file, const std::string& format);
 // Events of source "import" (import_event.hpp).
 using stend::io::add_import_event;
+using stend::io::place_import_events;
+// A streaming import (rec, out) → the recording with its samples in memory and its import events at
+// the first sample's time: the in-memory form of every importer that streams.
+Recording import_in_memory(const std::function<void(Recording& rec, SampleSink& out)>& import);
 
 // Seconds from t0_us to t_us (timestamps in µs), exact to the microsecond.
 inline double seconds_since_us(std::uint64_t t0_us, std::uint64_t t_us) {
@@ -117,6 +132,24 @@ struct TimestampSummary {
   std::string describe() const;  // for the info event
 };
 TimestampSummary check_log_timestamps(std::vector<ImuSample>& s);
+
+// check_log_timestamps on a stream, with memory bounded by kTimestampWindow: the first window fixes
+// the rate (its median interval); every window is flagged at its gaps and counted (its first
+// sample against the last of the window before), then passed on to `out`. A log of at most one
+// window is checked exactly as a whole. The rate goes into rate_into->output_rate_hz (when given)
+// before the first samples reach `out`.
+class LogTimestampStream final : public WindowSink {
+ public:
+  explicit LogTimestampStream(SampleSink& out, SensorInfo* rate_into = nullptr)
+      : WindowSink(out), rate_into_(rate_into) {}
+  // Passes the rest on.
+  TimestampSummary finish();
+
+ private:
+  void process(std::vector<ImuSample>& s, bool first, double prev_t) override;
+  SensorInfo* rate_into_;
+  TimestampSummary sum_;
+};
 
 // Linear interpolation of y(t) at `at`; t ascending. False outside [t.front() − tol, t.back() + tol]
 // (the value is then left alone); inside, clamped to the end values.

@@ -5,6 +5,7 @@
 #include <stend/recording.hpp>
 
 #include <string>
+#include <vector>
 
 namespace stend::io {
 
@@ -15,6 +16,13 @@ inline void add_import_event(Recording& rec, const std::string& message, const s
   e.source = "import";
   e.message = message;
   rec.events.push_back(std::move(e));
+}
+
+// The import events of a recording whose samples were streamed elsewhere (add_import_event then
+// saw none) moved to the first sample's time t_s.
+inline void place_import_events(std::vector<Event>& events, double t_s) {
+  for (auto& e : events)
+    if (e.source == "import") e.t_s = t_s;
 }
 
 }  // namespace stend::io

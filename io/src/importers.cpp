@@ -286,10 +286,14 @@ ImuSample csv_sample(const LineReader& r, const std::vector<std::string_view>& f
   return s;
 }
 
-// Every data line as a sample (blank and comment lines skipped); a time column must not go back
-// (repeats are repaired afterwards).
-void read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColumns& c, Recording& rec) {
+// Every data line as a sample (blank and comment lines skipped), passed to `out` in chunks; a time
+// column must not go back (repeats are repaired afterwards). Returns the number of samples.
+std::size_t read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColumns& c, SampleSink& out) {
   const int needed = c.needed();
+  std::vector<ImuSample> chunk;
+  chunk.reserve(kDefaultChunkSamples);
+  std::size_t count = 0;
+  double prev_t = 0.0;
   std::string line;
   while (r.next(line)) {
     if (is_blank(line)) continue;
@@ -300,13 +304,20 @@ void read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColumns& c,
     if (static_cast<int>(f.size()) < needed) {
       r.fail("expected at least " + std::to_string(needed) + " fields, found " + std::to_string(f.size()));
     }
-    const ImuSample s = csv_sample(r, f, map, c, rec.samples.size());
-    if (c.time >= 0 && !rec.samples.empty() && s.t_s < rec.samples.back().t_s) {
-      r.fail("time " + fmt_g(s.t_s) + " s goes back (previous " +
-             fmt_g(rec.samples.back().t_s) + " s)");
+    const ImuSample s = csv_sample(r, f, map, c, count);
+    if (c.time >= 0 && count > 0 && s.t_s < prev_t) {
+      r.fail("time " + fmt_g(s.t_s) + " s goes back (previous " + fmt_g(prev_t) + " s)");
     }
-    rec.samples.push_back(s);
+    prev_t = s.t_s;
+    ++count;
+    chunk.push_back(s);
+    if (chunk.size() == kDefaultChunkSamples) {
+      out.add_samples(chunk.data(), chunk.size());
+      chunk.clear();
+    }
   }
+  out.add_samples(chunk.data(), chunk.size());
+  return count;
 }
 
 // Sensor description from the mapping: rate [Hz] (given, or from the median sample step),
@@ -329,22 +340,32 @@ void set_csv_sensor_info(const CsvMapping& map, const CsvColumns& c, Recording& 
 
 }  // namespace
 
-Recording import_csv(const fs::path& file, const CsvMapping& map) {
+void import_csv(const fs::path& file, const CsvMapping& map, Recording& rec, SampleSink& out) {
   LineReader r(file);
   const CsvColumns c = resolve_csv_columns(r, map, read_csv_header(r, map));
-  Recording rec = new_recording(file, "csv");
-  read_csv_samples(r, map, c, rec);
-  if (rec.samples.empty()) throw ImportError(file, 0, "no data lines");
+  rec = new_recording(file, "csv");
   set_csv_sensor_info(map, c, rec);
-  const std::size_t gaps = c.time >= 0 ? repair_timestamps(rec, map.rate_hz).gaps : 0;
-  add_import_event(rec, "imported " + std::to_string(rec.samples.size()) + " samples from " +
+  std::size_t count = 0, gaps = 0;
+  if (c.time >= 0) {
+    TimestampRepairStream repair(rec, out, map.rate_hz);
+    count = read_csv_samples(r, map, c, repair);
+    if (count == 0) throw ImportError(file, 0, "no data lines");
+    gaps = repair.finish().gaps;
+  } else {
+    count = read_csv_samples(r, map, c, out);
+    if (count == 0) throw ImportError(file, 0, "no data lines");
+  }
+  add_import_event(rec, "imported " + std::to_string(count) + " samples from " +
                             file.string() + " (generic CSV; " +
                             (map.counts ? "counts" : "physical units") + ", accel scale " +
                             fmt_g(map.accel_scale) + " offset " + fmt_g(map.accel_offset_counts) + ", gyro scale " +
                             fmt_g(map.gyro_scale) + " offset " + fmt_g(map.gyro_offset_counts) +
                             (c.time >= 0 ? ", time column" : ", fixed rate " + fmt_g(map.rate_hz) + " Hz") +
                             (gaps ? ", " + std::to_string(gaps) + " gap(s) flagged" : "") + ")");
-  return rec;
+}
+
+Recording import_csv(const fs::path& file, const CsvMapping& map) {
+  return import_in_memory([&](Recording& rec, SampleSink& out) { import_csv(file, map, rec, out); });
 }
 
 // =============================================================================================

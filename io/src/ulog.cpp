@@ -67,7 +67,7 @@ struct Format {
 };
 
 // "float[3] accelerometer_m_s2" → type, count, name.
-Field parse_field(const BinaryFile& f, std::size_t at, const std::string& format, std::string_view text) {
+Field parse_field(const BinaryReader& f, std::size_t at, const std::string& format, std::string_view text) {
   text = trim(text);
   const auto space = text.rfind(' ');
   if (space == std::string_view::npos) {
@@ -91,7 +91,7 @@ Field parse_field(const BinaryFile& f, std::size_t at, const std::string& format
 }
 
 // An F message body "name:type field;type field;...".
-Format parse_format(const BinaryFile& f, std::size_t at, std::string_view body) {
+Format parse_format(const BinaryReader& f, std::size_t at, std::string_view body) {
   const auto colon = body.find(':');
   if (colon == std::string_view::npos) f.fail(at, "format definition without ':' (expected 'name:type field;...')");
   Format fmt;
@@ -104,7 +104,7 @@ Format parse_format(const BinaryFile& f, std::size_t at, std::string_view body) 
 }
 
 // Field offsets and sizes of `name` and of the formats it nests (depth-first).
-void resolve_format(const BinaryFile& f, std::map<std::string, Format>& formats, const std::string& name, int depth) {
+void resolve_format(const BinaryReader& f, std::map<std::string, Format>& formats, const std::string& name, int depth) {
   Format& fmt = formats.at(name);
   if (fmt.resolved) return;
   if (depth > 16) f.fail(fmt.defined_at, "format '" + name + "' nests formats more than 16 deep (a cycle?)");
@@ -136,21 +136,29 @@ const Field* find_field(const Format& fmt, const std::string& name) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The log: formats, subscriptions with the data of the topics an import reads, info messages
+// The log: formats, subscriptions with the number of data messages of each, info messages. The
+// data itself is read later, one record at a time (RecordCursor).
 
 // The topics an IMU import reads; data of others is skipped.
 const std::set<std::string> kImuTopics = {"sensor_accel", "sensor_gyro", "sensor_combined", "sensor_selection"};
 
 struct DataRecord {
-  std::size_t offset;      // of the message data (after msg_id)
+  std::size_t offset;  // of the message data (after msg_id)
   std::size_t size;
-  std::size_t lost_before;  // dropouts and resyncs seen before it
 };
 
 struct Subscription {
   std::string topic;
   int instance = 0;
-  std::vector<DataRecord> records;
+  std::size_t records = 0;                // data messages
+  std::optional<DataRecord> first;        // the first of them
+};
+
+// What a walk through the messages has lost so far: each dropout, resync and message cut by
+// appended data marks the data after it.
+struct Losses {
+  std::size_t lost = 0;  // dropouts + resyncs + cut messages
+  std::size_t resyncs = 0, skipped_bytes = 0;
 };
 
 struct UlogLog {
@@ -159,13 +167,12 @@ struct UlogLog {
   std::map<std::string, std::string> info;              // I messages: key name → value as text
   std::size_t parameters = 0;
   std::size_t dropouts = 0, dropout_ms = 0;
-  std::size_t resyncs = 0, skipped_bytes = 0;
-  std::size_t lost = 0;  // dropouts + resyncs so far (marks data records)
+  Losses losses;
   std::vector<std::uint64_t> appended_offsets;
 };
 
 // Value of a basic-typed element as text (info messages).
-std::string value_text(const BinaryFile& f, std::size_t at, const Field& fld, std::size_t size) {
+std::string value_text(const BinaryReader& f, std::size_t at, const Field& fld, std::size_t size) {
   if (fld.basic == Basic::kChar) return fixed_string(f.at(at), size);
   if (size < fld.element_size) return {};
   switch (fld.basic) {
@@ -184,7 +191,7 @@ std::string value_text(const BinaryFile& f, std::size_t at, const Field& fld, st
 }
 
 // I message: uint8 key_len, key "type name", value.
-void read_info(const BinaryFile& f, std::size_t at, std::size_t body, std::size_t size, UlogLog& log) {
+void read_info(const BinaryReader& f, std::size_t at, std::size_t body, std::size_t size, UlogLog& log) {
   if (size < 1) f.fail(at, "info message without a key length");
   const std::size_t key_len = *f.at(body);
   if (1 + key_len > size) f.fail(at, "info message key (" + std::to_string(key_len) + " bytes) runs past the message");
@@ -198,7 +205,7 @@ void read_info(const BinaryFile& f, std::size_t at, std::size_t body, std::size_
 }
 
 // B message: incompatible flags this reader does not know stop it; appended-data offsets are kept.
-void read_flag_bits(const BinaryFile& f, std::size_t at, std::size_t body, std::size_t size, UlogLog& log) {
+void read_flag_bits(const BinaryReader& f, std::size_t at, std::size_t body, std::size_t size, UlogLog& log) {
   if (size < 40) f.fail(at, "flag-bits message of " + std::to_string(size) + " bytes (expected 40)");
   const std::uint8_t incompat0 = *f.at(body + 8);
   for (std::size_t i = 0; i < 8; ++i) {
@@ -217,7 +224,7 @@ void read_flag_bits(const BinaryFile& f, std::size_t at, std::size_t body, std::
 }
 
 // A message: uint8 multi_id, uint16 msg_id, topic name.
-void read_subscription(const BinaryFile& f, std::size_t at, std::size_t body, std::size_t size, UlogLog& log) {
+void read_subscription(const BinaryReader& f, std::size_t at, std::size_t body, std::size_t size, UlogLog& log) {
   if (size < 3) f.fail(at, "subscription message of " + std::to_string(size) + " bytes (expected >= 3)");
   Subscription sub;
   sub.instance = *f.at(body);
@@ -229,25 +236,20 @@ void read_subscription(const BinaryFile& f, std::size_t at, std::size_t body, st
   log.subscriptions[id] = std::move(sub);
 }
 
-// D message: uint16 msg_id, data. Kept (as a position) for the IMU topics.
-void read_data(const BinaryFile& f, std::size_t at, std::size_t body, std::size_t size, UlogLog& log) {
+// D message: uint16 msg_id, data. Counted (and the first kept as a position) for the IMU topics.
+void read_data(const BinaryReader& f, std::size_t at, std::size_t body, std::size_t size, UlogLog& log) {
   if (size < 2) f.fail(at, "data message of " + std::to_string(size) + " bytes (expected a msg_id)");
   const auto id = f.get<std::uint16_t>(body, "a data msg_id");
   const auto it = log.subscriptions.find(id);
   if (it == log.subscriptions.end()) return;  // pyulog too ignores data without a subscription
-  if (kImuTopics.count(it->second.topic)) it->second.records.push_back({body + 2, size - 2, log.lost});
+  Subscription& sub = it->second;
+  if (!kImuTopics.count(sub.topic)) return;
+  if (!sub.first) sub.first = DataRecord{body + 2, size - 2};
+  ++sub.records;
 }
 
-// Offset after the next sync marker at or after `from`, if any.
-std::optional<std::size_t> next_sync(const BinaryFile& f, std::size_t from) {
-  const std::uint8_t* begin = f.at(0);
-  const std::uint8_t* end = begin + f.size();
-  const auto* hit = std::search(begin + std::min(from, f.size()), end, std::begin(kSyncMagic), std::end(kSyncMagic));
-  if (hit == end) return std::nullopt;
-  return static_cast<std::size_t>(hit - begin) + sizeof kSyncMagic;
-}
-
-void check_header(const BinaryFile& f) {
+void check_header(const BinaryReader& f) {
+  f.need(0, std::min(f.size(), sizeof kUlogMagic), "the ULog magic");
   const std::size_t compared = std::min(f.size(), sizeof kUlogMagic);
   if (!std::equal(kUlogMagic, kUlogMagic + compared, f.at(0))) {
     f.fail(0, "not a ULog file (expected the magic bytes 55 4c 6f 67 01 12 35, \"ULog\"...)");
@@ -255,57 +257,74 @@ void check_header(const BinaryFile& f) {
   f.need(0, kHeaderBytes, "the ULog header");
 }
 
-// Reads every message after the header.
-UlogLog read_ulog(const BinaryFile& f) {
-  check_header(f);
-  UlogLog log;
-  std::size_t pos = kHeaderBytes;
+// One message: type, offsets of its header and body, body size. In the reader's buffer whole.
+struct Message {
+  char type;
+  std::size_t at, body, size;
+};
+
+// The message at `pos` after the header (advancing `pos` past it), false at the end of the file.
+// A message cut by the start of appended data is lost (the log continues there), corrupt bytes are
+// skipped to the next sync marker (both as pyulog reads them); these and dropouts count in `losses`.
+bool next_message(const BinaryReader& f, const std::vector<std::uint64_t>& appended_offsets, std::size_t& pos,
+                  Losses& losses, Message& m) {
   while (pos < f.size()) {
     const auto size = f.get<std::uint16_t>(pos, "a message header (uint16 size, uint8 type)");
     const auto type = static_cast<char>(f.get<std::uint8_t>(pos + 2, "a message header (uint16 size, uint8 type)"));
     const std::size_t end = pos + kMessageHeader + size;
-    // A message cut by the start of appended data: the log continues there (pyulog does the same).
-    const auto cut = std::find_if(log.appended_offsets.begin(), log.appended_offsets.end(),
+    const auto cut = std::find_if(appended_offsets.begin(), appended_offsets.end(),
                                   [&](std::uint64_t off) { return pos < off && end > off; });
-    if (cut != log.appended_offsets.end()) {
-      ++log.lost;
+    if (cut != appended_offsets.end()) {
+      ++losses.lost;
       pos = static_cast<std::size_t>(*cut);
       continue;
     }
     if (std::string_view("FIMPQBARDLCSO").find(type) == std::string_view::npos) {
-      // Corrupt data: continue after the next sync marker, as pyulog does.
-      const auto sync = next_sync(f, pos + 1);
+      const auto sync = f.find(pos + 1, kSyncMagic, sizeof kSyncMagic);
       if (!sync) {
         f.fail(pos, "unknown message type " + fmt_hex(static_cast<std::uint8_t>(type), 2) +
                         " (expected one of F I M P Q B A R D L C S O) and no sync marker follows");
       }
-      log.skipped_bytes += *sync - pos;
-      ++log.resyncs;
-      ++log.lost;
-      pos = *sync;
+      losses.skipped_bytes += *sync + sizeof kSyncMagic - pos;
+      ++losses.resyncs;
+      ++losses.lost;
+      pos = *sync + sizeof kSyncMagic;
       continue;
     }
     f.need(pos, kMessageHeader + size, std::string("a '") + type + "' message (3-byte header + " + std::to_string(size) + " bytes)");
-    const std::size_t body = pos + kMessageHeader;
-    switch (type) {
+    m = Message{type, pos, pos + kMessageHeader, size};
+    if (type == 'O') ++losses.lost;
+    pos = end;
+    return true;
+  }
+  return false;
+}
+
+// The first pass: every message's header; definitions, info and parameters read, data messages of
+// the IMU topics counted.
+UlogLog read_ulog(const BinaryReader& f) {
+  check_header(f);
+  UlogLog log;
+  std::size_t pos = kHeaderBytes;
+  Message m{};
+  while (next_message(f, log.appended_offsets, pos, log.losses, m)) {
+    switch (m.type) {
       case 'F': {
-        Format fmt = parse_format(f, pos, fixed_string(f.at(body), size));
+        Format fmt = parse_format(f, m.at, fixed_string(f.at(m.body), m.size));
         log.formats[fmt.name] = std::move(fmt);
         break;
       }
-      case 'I': read_info(f, pos, body, size, log); break;
-      case 'B': read_flag_bits(f, pos, body, size, log); break;
-      case 'A': read_subscription(f, pos, body, size, log); break;
-      case 'D': read_data(f, pos, body, size, log); break;
+      case 'I': read_info(f, m.at, m.body, m.size, log); break;
+      case 'B': read_flag_bits(f, m.at, m.body, m.size, log); break;
+      case 'A': read_subscription(f, m.at, m.body, m.size, log); break;
+      case 'D': read_data(f, m.at, m.body, m.size, log); break;
       case 'P': ++log.parameters; break;
       case 'O':
         ++log.dropouts;
-        ++log.lost;
-        if (size >= 2) log.dropout_ms += f.get<std::uint16_t>(body, "a dropout duration");
+        if (m.size >= 2) log.dropout_ms += f.get<std::uint16_t>(m.body, "a dropout duration");
         break;
       default: break;  // M Q R L C S: not needed
     }
-    pos = end;
   }
   // Offsets of the formats the import decodes (their last definition, as pyulog keeps it).
   for (const auto& [id, sub] : log.subscriptions) {
@@ -327,20 +346,14 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // From data records to IMU series
 
-// One sensor's samples in file order: time [µs], vector (m/s² or rad/s), temperature [°C].
-struct Series {
-  std::string what;  // "sensor_accel instance 1"
-  std::vector<std::uint64_t> t_us;
-  std::vector<Eigen::Vector3d> v;
-  std::vector<double> temperature_c;  // empty when the topic has none
-  std::vector<std::size_t> lost_before;
-  std::optional<std::uint32_t> device_id;
-};
-
-// Reads basic-typed fields of one data record, with bounds checks against the record.
+// Reads basic-typed fields of one data record, with bounds checks against the record. The record
+// is brought into the reader's buffer on construction; the view is valid until the reader reads
+// elsewhere.
 class RecordView {
  public:
-  RecordView(const BinaryFile& f, const Format& fmt, const DataRecord& r) : f_(f), fmt_(fmt), r_(r) {}
+  RecordView(const BinaryReader& f, const Format& fmt, const DataRecord& r) : f_(f), fmt_(fmt), r_(r) {
+    f_.need(r_.offset, r_.size, "a '" + fmt_.name + "' data message");
+  }
 
   double number(const std::string& name, std::size_t index = 0) const {
     const Field& fld = field(name, index);
@@ -384,71 +397,131 @@ class RecordView {
     return *fld;
   }
 
-  const BinaryFile& f_;
+
+  const BinaryReader& f_;
   const Format& fmt_;
-  const DataRecord& r_;
+  const DataRecord r_;
 };
 
-std::vector<const Subscription*> subscriptions_of(const UlogLog& log, const std::string& topic, int instance) {
-  std::vector<const Subscription*> out;
+std::vector<std::uint16_t> subscription_ids(const UlogLog& log, const std::string& topic, int instance) {
+  std::vector<std::uint16_t> out;
   for (const auto& [id, sub] : log.subscriptions) {
-    if (sub.topic == topic && sub.instance == instance) out.push_back(&sub);
+    if (sub.topic == topic && sub.instance == instance) out.push_back(id);
   }
   return out;
 }
 
-// sensor_accel / sensor_gyro instance: x y z, temperature, time timestamp_sample (else timestamp).
-Series sensor_series(const BinaryFile& f, const UlogLog& log, const std::string& topic, int instance) {
-  Series s;
-  s.what = topic + " instance " + std::to_string(instance);
-  const Format& fmt = log.formats.at(topic);
-  const bool has_sample_time = find_field(fmt, "timestamp_sample") != nullptr;
-  const bool has_temperature = find_field(fmt, "temperature") != nullptr;
-  for (const Subscription* sub : subscriptions_of(log, topic, instance)) {
-    for (const DataRecord& r : sub->records) {
-      const RecordView v(f, fmt, r);
-      s.t_us.push_back(v.timestamp(has_sample_time ? "timestamp_sample" : "timestamp"));
-      s.v.emplace_back(v.number("x"), v.number("y"), v.number("z"));
-      if (has_temperature) s.temperature_c.push_back(v.number("temperature"));
-      s.lost_before.push_back(r.lost_before);
-      if (!s.device_id && find_field(fmt, "device_id")) s.device_id = static_cast<std::uint32_t>(v.number("device_id"));
+// The data records of some subscriptions, a subscription after the other (in msg_id order), each
+// in file order, read through a reader of its own: the second pass, decoding only these.
+class RecordCursor {
+ public:
+  RecordCursor(const fs::path& file, const UlogLog& log, std::vector<std::uint16_t> ids)
+      : f_(file), log_(&log), ids_(std::move(ids)) {}
+  const BinaryReader& reader() const { return f_; }
+  // The next record and the losses before it; false after the last.
+  bool next(DataRecord& r, std::size_t& lost_before) {
+    Message m{};
+    while (next_id_ < ids_.size()) {
+      while (next_message(f_, log_->appended_offsets, pos_, losses_, m)) {
+        if (m.type != 'D' || m.size < 2 || f_.get<std::uint16_t>(m.body, "a data msg_id") != ids_[next_id_]) continue;
+        r = DataRecord{m.body + 2, m.size - 2};
+        lost_before = losses_.lost;
+        return true;
+      }
+      ++next_id_;
+      pos_ = kHeaderBytes;
+      losses_ = {};
     }
+    return false;
   }
-  return s;
-}
 
-// sensor_combined instance: accelerometer_m_s2 at timestamp + accelerometer_timestamp_relative
-// (records marked invalid skipped), gyro_rad at timestamp.
-std::pair<Series, Series> combined_series(const BinaryFile& f, const UlogLog& log, int instance) {
-  Series acc, gyr;
-  acc.what = "sensor_combined instance " + std::to_string(instance) + " accelerometer_m_s2";
-  gyr.what = "sensor_combined instance " + std::to_string(instance) + " gyro_rad";
-  const Format& fmt = log.formats.at("sensor_combined");
-  for (const Subscription* sub : subscriptions_of(log, "sensor_combined", instance)) {
-    for (const DataRecord& r : sub->records) {
-      const RecordView v(f, fmt, r);
-      const std::uint64_t t = v.timestamp("timestamp");
-      gyr.t_us.push_back(t);
-      gyr.v.emplace_back(v.number("gyro_rad", 0), v.number("gyro_rad", 1), v.number("gyro_rad", 2));
-      gyr.lost_before.push_back(r.lost_before);
-      const double rel = v.number("accelerometer_timestamp_relative");
-      if (rel == kRelativeTimestampInvalid) continue;
-      acc.t_us.push_back(static_cast<std::uint64_t>(static_cast<std::int64_t>(t) + static_cast<std::int64_t>(rel)));
-      acc.v.emplace_back(v.number("accelerometer_m_s2", 0), v.number("accelerometer_m_s2", 1),
-                         v.number("accelerometer_m_s2", 2));
-      acc.lost_before.push_back(r.lost_before);
-    }
+ private:
+  BinaryReader f_;
+  const UlogLog* log_;
+  std::vector<std::uint16_t> ids_;
+  std::size_t next_id_ = 0, pos_ = kHeaderBytes;
+  Losses losses_;
+};
+
+// One sample of a series: time [µs], vector (m/s² or rad/s), temperature [°C] (when the topic has
+// one), the losses before it, its index in the series.
+struct Point {
+  std::uint64_t t_us = 0;
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();
+  double temperature_c = 0.0;
+  std::size_t lost_before = 0;
+  std::size_t index = 0;
+};
+
+// Which part of a topic's records a series is.
+enum class Part {
+  kSensor,          // sensor_accel / sensor_gyro: x y z, temperature, time timestamp_sample (else timestamp)
+  kCombinedAccel,   // sensor_combined: accelerometer_m_s2 at timestamp + accelerometer_timestamp_relative
+                    // (records marked invalid skipped)
+  kCombinedGyro,    // sensor_combined: gyro_rad at timestamp
+};
+
+// One sensor's samples in file order, decoded a record at a time.
+class SeriesReader {
+ public:
+  SeriesReader(const fs::path& file, const UlogLog& log, std::string topic_name, int instance, Part part)
+      : topic(std::move(topic_name)), cursor_(file, log, subscription_ids(log, topic, instance)),
+        fmt_(&log.formats.at(topic)), part_(part) {
+    what = topic + " instance " + std::to_string(instance) +
+           (part == Part::kCombinedAccel ? " accelerometer_m_s2" : part == Part::kCombinedGyro ? " gyro_rad" : "");
+    has_temperature = part == Part::kSensor && find_field(*fmt_, "temperature") != nullptr;
+    time_field_ = part == Part::kSensor && find_field(*fmt_, "timestamp_sample") ? "timestamp_sample" : "timestamp";
   }
-  return {std::move(acc), std::move(gyr)};
-}
+  std::string topic, what;  // "sensor_accel", "sensor_accel instance 1"
+  bool has_temperature = false;
+  std::size_t count() const { return count_; }  // points read so far
+
+  bool next(Point& p) {
+    DataRecord r{};
+    while (cursor_.next(r, p.lost_before)) {
+      const RecordView v(cursor_.reader(), *fmt_, r);
+      p.t_us = v.timestamp(time_field_);
+      if (part_ == Part::kSensor) {
+        p.v = Eigen::Vector3d(v.number("x"), v.number("y"), v.number("z"));
+        if (has_temperature) p.temperature_c = v.number("temperature");
+      } else if (part_ == Part::kCombinedGyro) {
+        p.v = Eigen::Vector3d(v.number("gyro_rad", 0), v.number("gyro_rad", 1), v.number("gyro_rad", 2));
+      } else {
+        const double rel = v.number("accelerometer_timestamp_relative");
+        if (rel == kRelativeTimestampInvalid) continue;
+        p.t_us = static_cast<std::uint64_t>(static_cast<std::int64_t>(p.t_us) + static_cast<std::int64_t>(rel));
+        p.v = Eigen::Vector3d(v.number("accelerometer_m_s2", 0), v.number("accelerometer_m_s2", 1),
+                              v.number("accelerometer_m_s2", 2));
+      }
+      p.index = count_++;
+      return true;
+    }
+    return false;
+  }
+
+ private:
+  RecordCursor cursor_;
+  const Format* fmt_;
+  Part part_;
+  const char* time_field_;
+  std::size_t count_ = 0;
+};
 
 // Number of data records per instance of a topic.
 std::map<int, std::size_t> instance_counts(const UlogLog& log, const std::string& topic) {
   std::map<int, std::size_t> out;
   for (const auto& [id, sub] : log.subscriptions) {
-    if (sub.topic == topic) out[sub.instance] += sub.records.size();
+    if (sub.topic == topic) out[sub.instance] += sub.records;
   }
   return out;
+}
+
+// The first data record of a topic's instance (its first subscription holding data), if any.
+std::optional<DataRecord> first_record(const UlogLog& log, const std::string& topic, int instance) {
+  for (const std::uint16_t id : subscription_ids(log, topic, instance)) {
+    if (log.subscriptions.at(id).first) return log.subscriptions.at(id).first;
+  }
+  return std::nullopt;
 }
 
 std::string describe_counts(const std::string& topic, const std::map<int, std::size_t>& counts) {
@@ -470,40 +543,55 @@ int choose_instance(const std::map<int, std::size_t>& counts, int wanted) {
   return best;
 }
 
-// What an import reads: the accelerometer and gyro series and why they were chosen.
+// What an import reads: the accelerometer and gyro series, their device ids, and why they were
+// chosen.
 struct UlogChoice {
-  Series acc, gyr;
-  Series temperature;  // when acc has none: a sensor_accel of the same device (time-ordered)
+  std::string topic;  // "sensor_accel" (with sensor_gyro) or "sensor_combined"
+  int instance = 0;
+  std::optional<std::uint32_t> acc_device_id, gyr_device_id;
+  int temperature_instance = -1;  // sensor_combined: a sensor_accel instance of the same device
   std::string why;
   std::string temperature_note;
 };
 
+// device_id of a sensor topic's instance (its first record), if the topic has one.
+std::optional<std::uint32_t> device_id(const BinaryReader& f, const UlogLog& log, const std::string& topic, int instance) {
+  const Format& fmt = log.formats.at(topic);
+  const auto r = first_record(log, topic, instance);
+  if (!r || !find_field(fmt, "device_id")) return std::nullopt;
+  return static_cast<std::uint32_t>(RecordView(f, fmt, *r).number("device_id"));
+}
+
 // sensor_combined: the devices sensor_selection names (its first message) as the accel's and
-// gyro's device ids, and the temperature of the sensor_accel instance with that device id.
-void add_selected_devices(const BinaryFile& f, const UlogLog& log, UlogChoice& c) {
+// gyro's device ids, and the sensor_accel instance with that device id and a temperature.
+void add_selected_devices(const BinaryReader& f, const UlogLog& log, UlogChoice& c) {
   const auto sel = std::find_if(log.subscriptions.begin(), log.subscriptions.end(), [](const auto& s) {
-    return s.second.topic == "sensor_selection" && !s.second.records.empty();
+    return s.second.topic == "sensor_selection" && s.second.first;
   });
   const Format* fmt = sel == log.subscriptions.end() ? nullptr : &log.formats.at("sensor_selection");
   if (!fmt || !find_field(*fmt, "accel_device_id") || !find_field(*fmt, "gyro_device_id")) {
     c.temperature_note = "no temperature (sensor_combined has none, and no sensor_selection names its devices)";
     return;
   }
-  const RecordView v(f, *fmt, sel->second.records.front());
-  c.acc.device_id = static_cast<std::uint32_t>(v.number("accel_device_id"));
-  c.gyr.device_id = static_cast<std::uint32_t>(v.number("gyro_device_id"));
+  {
+    const RecordView v(f, *fmt, *sel->second.first);
+    c.acc_device_id = static_cast<std::uint32_t>(v.number("accel_device_id"));
+    c.gyr_device_id = static_cast<std::uint32_t>(v.number("gyro_device_id"));
+  }
+  const bool has_temperature = log.formats.count("sensor_accel") &&
+                               find_field(log.formats.at("sensor_accel"), "temperature") != nullptr;
   for (const auto& [inst, n] : instance_counts(log, "sensor_accel")) {
-    Series t = sensor_series(f, log, "sensor_accel", inst);
-    if (t.device_id == c.acc.device_id && !t.temperature_c.empty()) {
-      c.temperature_note = "temperature interpolated from " + t.what + " (the device sensor_selection names)";
-      c.temperature = std::move(t);
+    if (n > 0 && has_temperature && device_id(f, log, "sensor_accel", inst) == c.acc_device_id) {
+      c.temperature_note = "temperature interpolated from sensor_accel instance " + std::to_string(inst) +
+                           " (the device sensor_selection names)";
+      c.temperature_instance = inst;
       return;
     }
   }
-  c.temperature_note = "no temperature (no sensor_accel of the selected device " + fmt_hex(*c.acc.device_id, 8) + ")";
+  c.temperature_note = "no temperature (no sensor_accel of the selected device " + fmt_hex(*c.acc_device_id, 8) + ")";
 }
 
-UlogChoice choose_series(const BinaryFile& f, const UlogLog& log, const UlogOptions& opt) {
+UlogChoice choose_series(const BinaryReader& f, const UlogLog& log, const UlogOptions& opt) {
   const auto accel = instance_counts(log, "sensor_accel");
   const auto gyro = instance_counts(log, "sensor_gyro");
   const auto combined = instance_counts(log, "sensor_combined");
@@ -534,94 +622,213 @@ UlogChoice choose_series(const BinaryFile& f, const UlogLog& log, const UlogOpti
                          " data (" + which + "); the log has " + available);
   }
   UlogChoice c;
+  c.topic = use_ag ? "sensor_accel" : "sensor_combined";
+  c.instance = use_ag ? ag : cb;
   if (use_ag) {
-    c.acc = sensor_series(f, log, "sensor_accel", ag);
-    c.gyr = sensor_series(f, log, "sensor_gyro", ag);
+    c.acc_device_id = device_id(f, log, "sensor_accel", ag);
+    c.gyr_device_id = device_id(f, log, "sensor_gyro", ag);
   } else {
-    std::tie(c.acc, c.gyr) = combined_series(f, log, cb);
     add_selected_devices(f, log, c);
   }
   c.why = "IMU from " + std::string(use_ag ? "sensor_accel + sensor_gyro" : "sensor_combined") + " instance " +
-          std::to_string(use_ag ? ag : cb) + " (" + which + "; " + why + "); available: " + available;
+          std::to_string(c.instance) + " (" + which + "; " + why + "); available: " + available;
   return c;
 }
 
-// A series' times [s, relative to t0_us] and values in time order, for interpolation.
-template <class V>
-struct Ordered {
-  std::vector<double> t;
-  std::vector<V> v;
-};
-template <class V>
-Ordered<V> in_time_order(const std::vector<std::uint64_t>& t_us, const std::vector<V>& v, std::uint64_t t0_us) {
-  std::vector<std::size_t> order(t_us.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return t_us[a] < t_us[b]; });
-  Ordered<V> out;
-  for (std::size_t i : order) {
-    out.t.push_back(seconds_since_us(t0_us, t_us[i]));
-    out.v.push_back(v[i]);
-  }
-  return out;
+SeriesReader accel_series(const fs::path& file, const UlogLog& log, const UlogChoice& c) {
+  return {file, log, c.topic, c.instance, c.topic == "sensor_accel" ? Part::kSensor : Part::kCombinedAccel};
+}
+SeriesReader gyro_series(const fs::path& file, const UlogLog& log, const UlogChoice& c) {
+  if (c.topic == "sensor_accel") return {file, log, "sensor_gyro", c.instance, Part::kSensor};
+  return {file, log, c.topic, c.instance, Part::kCombinedGyro};
 }
 
 constexpr double kTimestampUnitS = 1e-6;     // interpolation tolerance at the ends: one timestamp unit
 constexpr double kTemperatureHoldS = 2.0;    // a sparse temperature is held this long past its ends
 
-// Temperature [°C] at the samples from another topic's sparse series, linearly interpolated; none
-// at all (has_temperature false) unless it covers every sample. Returns the note.
-std::string add_interpolated_temperature(const UlogChoice& c, Recording& rec) {
-  const Ordered<double> temp = in_time_order(c.temperature.t_us, c.temperature.temperature_c, c.acc.t_us.front());
-  for (auto& s : rec.samples) {
-    if (!interpolate_at(temp.t, temp.v, s.t_s, kTemperatureHoldS, s.temperature_c)) {
-      for (auto& x : rec.samples) x.temperature_c = 0.0;
-      return "no temperature (" + c.temperature.what + " does not cover the samples within " +
-             fmt_g(kTemperatureHoldS) + " s)";
+// Linear interpolation over a series read in file order, as interpolate_at over the whole series
+// sorted by time, through a bounded window: points are read kLookAhead past the time asked
+// (inserted in time order, so that timestamps out of order by fewer points are sorted as a
+// whole-series sort would), and kHistory points at or before it are kept (the times asked may step
+// back that far). The series' time span [min, max] is that of the points read; once they are all
+// read, exactly the whole series'.
+template <class V>
+class StreamInterpolation {
+ public:
+  static constexpr std::size_t kLookAhead = 64, kHistory = 64;  // [points]
+
+  StreamInterpolation(SeriesReader& series, std::uint64_t t0_us, double tol_s, V (*value)(const Point&))
+      : series_(&series), t0_us_(t0_us), tol_s_(tol_s), value_(value) {}
+
+  // The value at t_s [s from t0]; false outside the series' span widened by the tolerance.
+  bool at(double t_s, V& out) {
+    fill(t_s);
+    if (t_.empty() || t_s < min_s_ - tol_s_ || (done_ && t_s > max_s_ + tol_s_)) return false;
+    interpolate_at(t_, v_, t_s, std::numeric_limits<double>::infinity(), out);
+    trim(t_s);
+    return true;
+  }
+
+  // The value of the series' point `index` when it is logged at t_s (one series paired with
+  // another sample by sample), if it is.
+  std::optional<V> paired(std::size_t index, double t_s) {
+    fill(t_s);
+    const auto j = static_cast<std::size_t>(std::upper_bound(t_.begin(), t_.end(), t_s) - t_.begin());
+    for (std::size_t k = j; k > 0 && t_[k - 1] == t_s; --k) {
+      if (index_[k - 1] == index) return v_[k - 1];
+    }
+    return std::nullopt;
+  }
+
+ private:
+  void fill(double t_s) {
+    while (!done_ && static_cast<std::size_t>(t_.end() - std::upper_bound(t_.begin(), t_.end(), t_s)) < kLookAhead) {
+      Point p;
+      if (!series_->next(p)) {
+        done_ = true;
+        break;
+      }
+      const double t = seconds_since_us(t0_us_, p.t_us);
+      min_s_ = std::min(min_s_, t);
+      max_s_ = std::max(max_s_, t);
+      const auto at = static_cast<std::ptrdiff_t>(std::upper_bound(t_.begin(), t_.end(), t) - t_.begin());
+      t_.insert(t_.begin() + at, t);
+      v_.insert(v_.begin() + at, value_(p));
+      index_.insert(index_.begin() + at, p.index);
     }
   }
-  rec.header.info.has_temperature = true;
-  return c.temperature_note + ", held at its end values up to " + fmt_g(kTemperatureHoldS) + " s beyond";
+  // Drops the points more than kHistory before t_s (in batches of kHistory, to move the window rarely).
+  void trim(double t_s) {
+    const auto before = static_cast<std::size_t>(std::upper_bound(t_.begin(), t_.end(), t_s) - t_.begin());
+    if (before < 2 * kHistory) return;
+    const auto n = static_cast<std::ptrdiff_t>(before - kHistory);
+    t_.erase(t_.begin(), t_.begin() + n);
+    v_.erase(v_.begin(), v_.begin() + n);
+    index_.erase(index_.begin(), index_.begin() + n);
+  }
+
+  SeriesReader* series_;
+  std::uint64_t t0_us_;
+  double tol_s_;
+  V (*value_)(const Point&);
+  std::vector<double> t_;
+  std::vector<V> v_;
+  std::vector<std::size_t> index_;
+  double min_s_ = std::numeric_limits<double>::infinity(), max_s_ = -std::numeric_limits<double>::infinity();
+  bool done_ = false;
+};
+
+Eigen::Vector3d vector_of(const Point& p) { return p.v; }
+double temperature_of(const Point& p) { return p.temperature_c; }
+
+// Time span [s from t0] of a series: [min, max] of its times, and of those inside `within` when given.
+struct Span {
+  double min = std::numeric_limits<double>::infinity(), max = -std::numeric_limits<double>::infinity();
+  bool contains(double t, double tol) const { return t >= min - tol && t <= max + tol; }
+};
+Span span_of(SeriesReader&& s, std::uint64_t t0_us, const Span* within = nullptr, double within_tol = 0.0) {
+  Span out;
+  Point p;
+  while (s.next(p)) {
+    const double t = seconds_since_us(t0_us, p.t_us);
+    if (within && !within->contains(t, within_tol)) continue;
+    out.min = std::min(out.min, t);
+    out.max = std::max(out.max, t);
+  }
+  return out;
 }
 
-// Samples at the accelerometer times [s from the first sample]: accel [m/s²], temperature [°C],
-// gyro [rad/s] as logged at the same time or linearly interpolated; a dropout or resync before a
-// sample flags a gap. Accelerometer samples outside the gyro's time span are dropped. Sets
-// has_temperature; returns the merge note.
-std::string merge_series(const BinaryFile& f, const UlogChoice& c, Recording& rec) {
-  if (c.acc.t_us.empty() || c.gyr.t_us.empty()) {
-    f.fail(f.size(), "no IMU data: " + c.acc.what + " has " + std::to_string(c.acc.t_us.size()) + " samples, " +
-                         c.gyr.what + " " + std::to_string(c.gyr.t_us.size()));
+// sensor_combined: whether the sparse temperature series covers every sample that is kept (those
+// inside the gyro's span) within kTemperatureHoldS — a pass over the three series' times. The
+// temperature is interpolated for all samples or for none.
+bool temperature_covers(const fs::path& file, const UlogLog& log, const UlogChoice& c, std::uint64_t t0_us) {
+  const Span gyro = span_of(gyro_series(file, log, c), t0_us);
+  const Span kept = span_of(accel_series(file, log, c), t0_us, &gyro, kTimestampUnitS);
+  const Span temp = span_of(SeriesReader(file, log, "sensor_accel", c.temperature_instance, Part::kSensor), t0_us);
+  return kept.min > kept.max || (temp.contains(kept.min, kTemperatureHoldS) && temp.contains(kept.max, kTemperatureHoldS));
+}
+
+// What the merge did, for the info event.
+struct MergeSummary {
+  std::size_t samples = 0, dropped = 0, lost_gaps = 0;
+  std::string note;
+};
+
+// Samples at the accelerometer times [s from the first accelerometer sample], a chunk at a time to
+// `out`: accel [m/s²], temperature [°C], gyro [rad/s] as logged at the same time (the gyro sample
+// of the same index with the same timestamp) or linearly interpolated; a dropout or resync before
+// a sample flags a gap. Accelerometer samples outside the gyro's time span are dropped. Sets
+// has_temperature before the first sample goes out.
+MergeSummary merge_series(const BinaryReader& f, const UlogLog& log, const UlogChoice& c, Recording& rec,
+                          SampleSink& out) {
+  SeriesReader acc = accel_series(f.file(), log, c), gyr = gyro_series(f.file(), log, c);
+  const std::size_t gyro_count = instance_counts(log, gyr.topic)[c.instance];
+  Point a;
+  const bool any = acc.next(a);
+  if (!any || gyro_count == 0) {
+    f.fail(f.size(), "no IMU data: " + acc.what + " has " + std::to_string(any ? acc.count() : 0) + " samples, " +
+                         gyr.what + " " + std::to_string(gyro_count));
   }
-  const bool same_times = c.acc.t_us == c.gyr.t_us;
-  const std::uint64_t t0 = c.acc.t_us.front();
-  const Ordered<Eigen::Vector3d> gyro = in_time_order(c.gyr.t_us, c.gyr.v, t0);
-  std::size_t dropped = 0;
-  for (std::size_t i = 0; i < c.acc.t_us.size(); ++i) {
+  const std::uint64_t t0 = a.t_us;
+  StreamInterpolation<Eigen::Vector3d> gyro(gyr, t0, kTimestampUnitS, vector_of);
+  MergeSummary m;
+  std::optional<SeriesReader> temp_series;
+  std::optional<StreamInterpolation<double>> temp;
+  std::string temperature_note = c.temperature_note;
+  rec.header.info.has_temperature = acc.has_temperature;
+  if (acc.has_temperature) {
+    temperature_note = "temperature from " + acc.what;
+  } else if (c.temperature_instance >= 0 && !temperature_covers(f.file(), log, c, t0)) {
+    temperature_note = "no temperature (sensor_accel instance " + std::to_string(c.temperature_instance) +
+                       " does not cover the samples within " + fmt_g(kTemperatureHoldS) + " s)";
+  } else if (c.temperature_instance >= 0) {
+    temp_series.emplace(f.file(), log, "sensor_accel", c.temperature_instance, Part::kSensor);
+    temp.emplace(*temp_series, t0, kTemperatureHoldS, temperature_of);
+    rec.header.info.has_temperature = true;
+    temperature_note += ", held at its end values up to " + fmt_g(kTemperatureHoldS) + " s beyond";
+  }
+  std::vector<ImuSample> chunk;
+  chunk.reserve(kDefaultChunkSamples);
+  bool same_times = true;
+  std::size_t prev_lost = a.lost_before;
+  do {
     ImuSample s;
-    s.t_s = seconds_since_us(t0, c.acc.t_us[i]);
-    s.accel_mps2 = c.acc.v[i];
-    if (!c.acc.temperature_c.empty()) s.temperature_c = c.acc.temperature_c[i];
-    if (same_times) {
-      s.gyro_radps = c.gyr.v[i];
-    } else if (!interpolate_at(gyro.t, gyro.v, s.t_s, kTimestampUnitS, s.gyro_radps)) {
-      ++dropped;
-      continue;
+    s.t_s = seconds_since_us(t0, a.t_us);
+    s.accel_mps2 = a.v;
+    if (acc.has_temperature) s.temperature_c = a.temperature_c;
+    const bool lost = a.index > 0 && a.lost_before != prev_lost;
+    prev_lost = a.lost_before;
+    if (const auto logged = gyro.paired(a.index, s.t_s)) {
+      s.gyro_radps = *logged;
+    } else {
+      same_times = false;
+      if (!gyro.at(s.t_s, s.gyro_radps)) {
+        ++m.dropped;
+        continue;
+      }
     }
-    if (i > 0 && c.acc.lost_before[i] != c.acc.lost_before[i - 1]) s.flags |= kGapBefore;
-    rec.samples.push_back(s);
+    if (temp) temp->at(s.t_s, s.temperature_c);
+    if (lost) s.flags |= kGapBefore, ++m.lost_gaps;
+    chunk.push_back(s);
+    if (chunk.size() == kDefaultChunkSamples) {
+      out.add_samples(chunk.data(), chunk.size());
+      m.samples += chunk.size();
+      chunk.clear();
+    }
+  } while (acc.next(a));
+  out.add_samples(chunk.data(), chunk.size());
+  m.samples += chunk.size();
+  if (m.samples == 0) {
+    f.fail(f.size(), "the gyro's timestamps do not overlap the accelerometer's (" + acc.what + ", " + gyr.what + ")");
   }
-  if (rec.samples.empty()) {
-    f.fail(f.size(), "the gyro's timestamps do not overlap the accelerometer's (" + c.acc.what + ", " + c.gyr.what + ")");
-  }
-  std::string note = same_times ? "gyro logged at the accelerometer times"
-                                : "gyro linearly interpolated at the accelerometer times" +
-                                      (dropped ? " (" + std::to_string(dropped) +
-                                                     " accelerometer sample(s) outside the gyro's time span dropped)"
-                                               : std::string());
-  rec.header.info.has_temperature = !c.acc.temperature_c.empty();
-  if (rec.header.info.has_temperature) return note + "; temperature from " + c.acc.what;
-  if (c.temperature.t_us.empty()) return note + "; " + c.temperature_note;
-  return note + "; " + add_interpolated_temperature(c, rec);
+  same_times = same_times && acc.count() == gyro_count;
+  m.note = (same_times ? "gyro logged at the accelerometer times"
+                       : "gyro linearly interpolated at the accelerometer times" +
+                             (m.dropped ? " (" + std::to_string(m.dropped) +
+                                              " accelerometer sample(s) outside the gyro's time span dropped)"
+                                        : std::string())) +
+           "; " + temperature_note;
+  return m;
 }
 
 std::string info_or(const UlogLog& log, const std::string& key, const std::string& fallback = {}) {
@@ -636,38 +843,42 @@ SensorIdentity ulog_identity(const UlogLog& log, const UlogChoice& c) {
   id.vendor = info_or(log, "sys_name");
   id.model = info_or(log, "ver_hw");
   id.serial = info_or(log, "sys_uuid");
-  if (c.acc.device_id) id.who_am_i = "accel device_id " + fmt_hex(*c.acc.device_id, 8);
-  if (c.gyr.device_id) id.who_am_i += (id.who_am_i.empty() ? "" : ", ") + std::string("gyro device_id ") + fmt_hex(*c.gyr.device_id, 8);
+  if (c.acc_device_id) id.who_am_i = "accel device_id " + fmt_hex(*c.acc_device_id, 8);
+  if (c.gyr_device_id) id.who_am_i += (id.who_am_i.empty() ? "" : ", ") + std::string("gyro device_id ") + fmt_hex(*c.gyr_device_id, 8);
   return id;
 }
 
 }  // namespace
 
-Recording import_ulog(const fs::path& file, const UlogOptions& opt) {
-  const BinaryFile f(file);
+// Two passes over the file through bounded buffers: the first reads every message header (the
+// definitions, info, and how many data messages each subscription holds), the second decodes the
+// chosen series' records (accelerometer and gyro, each with a reader of its own) into samples.
+void import_ulog(const fs::path& file, const UlogOptions& opt, Recording& rec, SampleSink& out) {
+  const BinaryReader f(file);
   const UlogLog log = read_ulog(f);
   const UlogChoice choice = choose_series(f, log, opt);
-  Recording rec = new_recording(file, "ulog");
-  const std::string merge = merge_series(f, choice, rec);
-  std::size_t lost_gaps = 0;
-  for (const auto& s : rec.samples) lost_gaps += (s.flags & kGapBefore) ? 1 : 0;
-  const TimestampSummary ts = check_log_timestamps(rec.samples);
+  rec = new_recording(file, "ulog");
   SensorInfo& info = rec.header.info;
-  info.output_rate_hz = ts.rate_hz;
   info.has_gyro = true;
   rec.header.identity = ulog_identity(log, choice);
+  LogTimestampStream times(out, &info);
+  const MergeSummary merge = merge_series(f, log, choice, rec, times);
+  const TimestampSummary ts = times.finish();
   add_import_event(
-      rec, "imported " + std::to_string(rec.samples.size()) + " samples from " + file.string() + " (PX4 ULog; " +
+      rec, "imported " + std::to_string(merge.samples) + " samples from " + file.string() + " (PX4 ULog; " +
                "sys_name '" + info_or(log, "sys_name", "?") + "', ver_hw '" + info_or(log, "ver_hw", "?") +
-               "', ver_sw '" + info_or(log, "ver_sw", "?") + "'; " + choice.why + "; " + merge +
+               "', ver_sw '" + info_or(log, "ver_sw", "?") + "'; " + choice.why + "; " + merge.note +
                "; values as logged: m/s^2, rad/s, degC" +
-               "; t = " + (choice.acc.what.rfind("sensor_combined", 0) == 0 ? "timestamp + accelerometer_timestamp_relative"
-                                                                            : "timestamp_sample") +
+               "; t = " + (choice.topic == "sensor_combined" ? "timestamp + accelerometer_timestamp_relative"
+                                                              : "timestamp_sample") +
                " [us] relative to the first sample; " + ts.describe() + "; " + std::to_string(log.dropouts) +
-               " dropout(s) (" + std::to_string(log.dropout_ms) + " ms) and " + std::to_string(log.resyncs) +
-               " resync(s) (" + std::to_string(log.skipped_bytes) + " bytes skipped) flagged " +
-               std::to_string(lost_gaps) + " gap(s); " + std::to_string(log.parameters) + " parameters not imported)");
-  return rec;
+               " dropout(s) (" + std::to_string(log.dropout_ms) + " ms) and " + std::to_string(log.losses.resyncs) +
+               " resync(s) (" + std::to_string(log.losses.skipped_bytes) + " bytes skipped) flagged " +
+               std::to_string(merge.lost_gaps) + " gap(s); " + std::to_string(log.parameters) + " parameters not imported)");
+}
+
+Recording import_ulog(const fs::path& file, const UlogOptions& opt) {
+  return import_in_memory([&](Recording& rec, SampleSink& out) { import_ulog(file, opt, rec, out); });
 }
 
 }  // namespace stend::io

@@ -190,6 +190,9 @@ struct Recording {
   // Samples flagged kGapBefore, as the store's summary states (run.h5 as of its last flush; CSV
   // counted on reading); −1 when unknown.
   std::int64_t gap_count = -1;
+  // Sample intervals that are interval_irregular() against header.info.output_rate_hz, as run.h5's
+  // summary states; −1 when unknown (CSV, no stated rate, a file from before this count).
+  std::int64_t irregular_count = -1;
 
   // Throws std::runtime_error naming the file and line when something is unreadable.
   static Recording open(const std::filesystem::path& run_dir,

@@ -28,6 +28,15 @@ double value_of(const ImuSample& s, Channel c);
 // Samples per chunk when a caller does not choose: 64 Ki samples (≈ 7 MiB of ImuSample).
 inline constexpr std::size_t kDefaultChunkSamples = std::size_t{1} << 16;
 
+// A sample interval dt_s [s] is irregular when it is off the nominal period 1/rate_hz [Hz] by more
+// than half a period.
+inline bool interval_irregular(double dt_s, double rate_hz) {
+  const double periods = dt_s * rate_hz;
+  return periods > 1.5 || periods < 0.5;
+}
+
+// read() and read_column() may be called from several threads at once (an implementation that
+// holds state serialises itself), so that channels can be analysed in parallel.
 class SampleSource {
  public:
   virtual ~SampleSource() = default;

@@ -16,7 +16,7 @@
 #include <ostream>
 #include <exception>
 #include <limits>
-#include <mutex>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -312,7 +312,7 @@ Sampling scan_sampling(const SampleSource& src, IndexRange range, double header_
   std::vector<double> dt;  // intervals [s] seen before the rate is known
   double prev_t = kNaN;
   auto count_irregular = [&](double d) {
-    if (d > 1.5 / s.rate_hz || d < 0.5 / s.rate_hz) ++s.irregular;
+    if (interval_irregular(d, s.rate_hz)) ++s.irregular;
   };
   auto fix_rate = [&] {
     if (s.rate_hz > 0.0 || dt.empty()) return;
@@ -350,6 +350,25 @@ Sampling scan_sampling(const SampleSource& src, IndexRange range, double header_
   return s;
 }
 
+// The sampling of the whole of a finished, undamaged run from its store's summary (gap and
+// irregular-interval counts kept by the writer) and its two end samples; nullopt when the store
+// does not state them or only part of the run is selected.
+std::optional<Sampling> summarized_sampling(const Recording& rec, IndexRange range) {
+  const SampleSource& src = rec.sample_source();
+  if (!rec.complete() || !rec.damage.empty() || rec.written_samples != src.size() || range.first != 0 ||
+      range.last != src.size() || rec.gap_count < 0 || rec.irregular_count < 0 ||
+      !(rec.header.info.output_rate_hz > 0.0)) {
+    return std::nullopt;
+  }
+  Sampling s;
+  s.rate_hz = rec.header.info.output_rate_hz;
+  s.gaps = static_cast<std::uint64_t>(rec.gap_count);
+  s.irregular = static_cast<std::uint64_t>(rec.irregular_count);
+  src.read_column(Channel::kTime, range.first, 1, &s.t_begin_s);
+  src.read_column(Channel::kTime, range.last - 1, 1, &s.t_end_s);
+  return s;
+}
+
 void add_sampling_warnings(const Sampling& s, AllanReport& report) {
   if (s.gaps > 0) {
     report.warnings.push_back(fmt::format(
@@ -380,10 +399,9 @@ double stated_lowpass_hz(const Recording& rec) {
 }
 
 // Allan curve and noise model of channel ch (0..2 accelerometer [m/s²], 3..5 gyroscope [rad/s])
-// over samples `range`, read a column chunk at a time (reads serialised by `read_lock`: a store
-// need not allow concurrent reads).
+// over samples `range`, read a column chunk at a time.
 ChannelResult analyze_channel(const SampleSource& src, IndexRange range, int ch, double rate,
-                              const AllanOptions& options, std::mutex& read_lock) {
+                              const AllanOptions& options) {
   static const char* names[6] = {"ax", "ay", "az", "gx", "gy", "gz"};
   static constexpr Channel columns[6] = {Channel::kAx, Channel::kAy, Channel::kAz,
                                          Channel::kGx, Channel::kGy, Channel::kGz};
@@ -391,10 +409,7 @@ ChannelResult analyze_channel(const SampleSource& src, IndexRange range, int ch,
   OverlappingAllanStream s(options.max_m, range.size());
   for (std::uint64_t i = range.first; i < range.last;) {
     const auto take = static_cast<std::size_t>(std::min<std::uint64_t>(buf.size(), range.last - i));
-    {
-      std::lock_guard lock(read_lock);
-      src.read_column(columns[ch], i, take, buf.data());
-    }
+    src.read_column(columns[ch], i, take, buf.data());
     s.add(buf.data(), take);
     i += take;
   }
@@ -409,12 +424,11 @@ ChannelResult analyze_channel(const SampleSource& src, IndexRange range, int ch,
 std::vector<ChannelResult> analyze_channels(const SampleSource& src, IndexRange range, int channels,
                                             double rate, const AllanOptions& options) {
   std::vector<ChannelResult> out(static_cast<std::size_t>(channels));
-  std::mutex read_lock;
   std::exception_ptr error[2];
   auto work = [&](int parity) {
     try {
       for (int ch = parity; ch < channels; ch += 2) {
-        out[static_cast<std::size_t>(ch)] = analyze_channel(src, range, ch, rate, options, read_lock);
+        out[static_cast<std::size_t>(ch)] = analyze_channel(src, range, ch, rate, options);
       }
     } catch (...) {
       error[parity] = std::current_exception();
@@ -440,7 +454,8 @@ AllanReport analyze_recording(const Recording& rec, const AllanOptions& options)
                                          report.source, range.size()));
   }
   report.samples = range.size();
-  const Sampling sampling = scan_sampling(src, range, rec.header.info.output_rate_hz, report.source);
+  const std::optional<Sampling> summary = summarized_sampling(rec, range);
+  const Sampling sampling = summary ? *summary : scan_sampling(src, range, rec.header.info.output_rate_hz, report.source);
   report.t_begin_s = sampling.t_begin_s;
   report.t_end_s = sampling.t_end_s;
   report.rate_hz = sampling.rate_hz;

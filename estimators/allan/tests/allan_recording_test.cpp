@@ -3,6 +3,8 @@
 // signal is a failed fit with a message, never a table of zeros or NaN.
 #include <stend/allan/allan.hpp>
 
+#include <stend/testing/files.hpp>
+
 #include <gtest/gtest.h>
 
 #include <memory>
@@ -51,6 +53,48 @@ TEST(AllanRecording, ReadsTheSampleSourceAndMatchesAnalyzePerChannel) {
     ASSERT_EQ(got.size(), direct.curve.points.size());
     for (std::size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i].avar, direct.curve.points[i].avar);
     EXPECT_TRUE(report.channels[static_cast<std::size_t>(ch)].model.ok);
+  }
+}
+
+// A finished run.h5 states its gap and irregular-interval counts; the analysis of the whole run
+// takes them from there instead of scanning the time stamps, and reports what a scan reports.
+TEST(AllanRecording, StoreSummaryGivesTheSamplingAScanGives) {
+  constexpr double rate = 200.0;
+  auto samples = noisy_samples(40000, rate);
+  for (std::size_t i = 1000; i < samples.size(); ++i) samples[i].t_s += 0.02;  // one 5-period gap
+  samples[1000].flags |= kGapBefore;
+  samples[7000].t_s -= 0.004;  // a short interval, then a long one
+  std::uint64_t irregular = 0;
+  for (std::size_t i = 1; i < samples.size(); ++i)
+    irregular += interval_irregular(samples[i].t_s - samples[i - 1].t_s, rate);
+  ASSERT_EQ(irregular, 3u);
+
+  const stend::testing::TempDir tmp("allan-summary");
+  RecordingHeader header;
+  header.info.output_rate_hz = rate;
+  header.info.has_gyro = true;
+  {
+    RecordingWriter writer(tmp / "run", header, "name: summary\n");
+    writer.add_samples(samples.data(), samples.size());
+    writer.finish(RunStatus::kComplete, "done");
+  }
+  const Recording stored = Recording::open(tmp / "run", SampleLoading::kStream);
+  EXPECT_EQ(stored.gap_count, 1);
+  EXPECT_EQ(stored.irregular_count, 3);
+  Recording scanned;  // the same samples with nothing stated about them
+  scanned.header = header;
+  scanned.samples = samples;
+  const AllanReport a = analyze_recording(stored), b = analyze_recording(scanned);
+  EXPECT_EQ(a.warnings, b.warnings);
+  EXPECT_EQ(a.warnings.size(), 2u);
+  EXPECT_EQ(a.t_begin_s, b.t_begin_s);
+  EXPECT_EQ(a.t_end_s, b.t_end_s);
+  EXPECT_EQ(a.rate_hz, b.rate_hz);
+  ASSERT_EQ(a.channels.size(), b.channels.size());
+  for (std::size_t ch = 0; ch < a.channels.size(); ++ch) {
+    ASSERT_EQ(a.channels[ch].curve.points.size(), b.channels[ch].curve.points.size());
+    for (std::size_t i = 0; i < a.channels[ch].curve.points.size(); ++i)
+      EXPECT_EQ(a.channels[ch].curve.points[i].avar, b.channels[ch].curve.points[i].avar);
   }
 }
 

@@ -175,4 +175,88 @@ TEST(Invariants, RateAndPhaseInputAgreeAndChunkingDoesNotMatter) {
   }
 }
 
+// Each deviation straight from its definition (deviations.hpp's header), in long double, on
+// phase x: the reference for the streaming pyramid.
+double reference_variance(DeviationKind kind, const std::vector<double>& x, std::uint64_t m,
+                          double tau0) {
+  const std::int64_t N = static_cast<std::int64_t>(x.size()), M = static_cast<std::int64_t>(m);
+  auto d2 = [&](std::int64_t k) -> long double {
+    return static_cast<long double>(x[k]) - 2.0L * x[k - M] + x[k - 2 * M];
+  };
+  const long double tau = static_cast<long double>(m) * tau0;
+  long double sum = 0;
+  std::int64_t terms = 0;
+  switch (kind) {
+    case DeviationKind::kAdev:
+    case DeviationKind::kOadev:
+      for (std::int64_t k = 2 * M; k < N; ++k) {
+        if (kind == DeviationKind::kAdev && k % M != 0) continue;
+        sum += d2(k) * d2(k);
+        ++terms;
+      }
+      return static_cast<double>(sum / (2 * tau * tau * terms));
+    case DeviationKind::kHdev:
+    case DeviationKind::kOhdev:
+      for (std::int64_t k = 3 * M; k < N; ++k) {
+        if (kind == DeviationKind::kHdev && k % M != 0) continue;
+        const long double d3 = d2(k) - d2(k - M);
+        sum += d3 * d3;
+        ++terms;
+      }
+      return static_cast<double>(sum / (6 * tau * tau * terms));
+    case DeviationKind::kMdev:
+    case DeviationKind::kTdev: {
+      long double window = 0;  // Σ of the last m d2
+      for (std::int64_t k = 2 * M; k < N; ++k) {
+        window += d2(k);
+        if (k >= 3 * M) window -= d2(k - M);
+        if (k < 3 * M - 1) continue;
+        sum += window * window;
+        ++terms;
+      }
+      const long double mvar = sum / (2 * static_cast<long double>(M) * M * tau * tau * terms);
+      return static_cast<double>(kind == DeviationKind::kTdev ? mvar * tau * tau / 3 : mvar);
+    }
+    case DeviationKind::kTotdev: {
+      auto xs = [&](std::int64_t i) -> long double {
+        if (i < 0) return 2.0L * x[0] - x[-i];
+        if (i > N - 1) return 2.0L * x[N - 1] - x[2 * (N - 1) - i];
+        return x[i];
+      };
+      for (std::int64_t c = 1; c <= N - 2; ++c) {
+        const long double d = xs(c - M) - 2.0L * x[c] + xs(c + M);
+        sum += d * d;
+      }
+      return static_cast<double>(sum / (2 * tau * tau * (N - 2)));
+    }
+  }
+  return 0;
+}
+
+TEST(Reference, EveryKindAtEveryOctaveMatchesTheDefinition) {
+  // 10^6 points of white rate noise, a rate random walk and a rate ramp (a drifting gyro), the
+  // top octave's ring wrapping many times; fed in uneven chunks.
+  constexpr std::size_t n = 1000000;
+  constexpr double tau0 = 0.01;
+  std::mt19937_64 gen(11);
+  std::normal_distribution<double> normal;
+  std::vector<double> x(n);
+  double rw = 0, phase = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    x[k] = phase;
+    rw += 1e-3 * normal(gen);
+    phase += (0.7 + normal(gen) + rw + 2e-6 * static_cast<double>(k)) * tau0;
+  }
+  DeviationStream stream(DeviationOptions{.factors = {}, .max_m = 1u << 16, .tau0_s = tau0});
+  for (std::size_t i = 0; i < n; i += 9973) stream.add_phase(x.data() + i, std::min<std::size_t>(9973, n - i));
+  for (auto kind : stend::allan::kAllDeviationKinds) {
+    const auto points = stream.result(kind);
+    ASSERT_GE(points.size(), 15u) << to_string(kind);
+    for (const auto& p : points) {
+      const double ref = std::sqrt(reference_variance(kind, x, p.m, tau0));
+      EXPECT_NEAR(p.dev / ref, 1.0, 1e-9) << to_string(kind) << " m " << p.m;
+    }
+  }
+}
+
 }  // namespace

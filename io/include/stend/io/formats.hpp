@@ -5,12 +5,14 @@
 //                nullptr: only chosen by --format (or, for csv, by mapped columns)
 //   open         inputs → Recording, with the import options (LSB, offsets, columns, rate, g)
 //   max_inputs   how many files one dataset may take (IMU-TK: the accelerometer and gyro files)
+//   stream       (optional) the same as open with the samples passed to a SampleSink in chunks
 // Adding a format is one line in formats() (src/formats.cpp), e.g.
 //   {"ulog", "PX4 ULog: sensor_accel / sensor_gyro with temperature", looks_like_ulog,
 //    [](const Inputs& in, const ImportOptions&) { return import_ulog(in[0]); }},
 #pragma once
 
 #include <stend/io/import_options.hpp>
+#include <stend/io/sample_sink.hpp>
 #include <stend/recording.hpp>
 
 #include <cstddef>
@@ -28,6 +30,9 @@ struct Format {
   bool (*detect)(const std::filesystem::path& file) = nullptr;
   Recording (*open)(const Inputs& inputs, const ImportOptions& options) = nullptr;
   std::size_t max_inputs = 1;
+  // inputs → `rec` without its samples, which go to `out` a chunk at a time (memory bounded
+  // independently of the log's length); nullptr: `open`, then its samples to the sink.
+  void (*stream)(const Inputs& inputs, const ImportOptions& options, Recording& rec, SampleSink& out) = nullptr;
 };
 
 // Every format, in detection order (the first whose detect() accepts the input wins).
@@ -49,6 +54,11 @@ const Format& detect_format(const Inputs& inputs, const ImportOptions& options =
 // *used (when given) receives the format's name.
 Recording open_dataset(const Inputs& inputs, const std::string& format, const ImportOptions& options = {},
                        std::string* used = nullptr);
+
+// open_dataset into `rec` with the samples passed to `out` a chunk at a time (through the format's
+// stream when it has one — csv, euroc, ulog, dataflash —, else read whole first) and not kept in `rec`.
+void import_dataset(const Inputs& inputs, const std::string& format, Recording& rec, SampleSink& out,
+                    const ImportOptions& options = {}, std::string* used = nullptr);
 
 // Provenance of the inputs as events (source "import"): path, size, SHA-256, format, Stend
 // version. For `stend import`, which makes a run folder of the recording.

@@ -17,6 +17,7 @@
 // place (binary files: the byte offset, or a record), for malformed input.
 #pragma once
 
+#include <stend/io/sample_sink.hpp>
 #include <stend/recording.hpp>
 
 #include <array>
@@ -111,6 +112,10 @@ struct CsvMapping {
 };
 
 Recording import_csv(const std::filesystem::path& file, const CsvMapping& mapping);
+// The same, streaming: the samples go to `out` a chunk at a time (through the windowed timestamp
+// repair, stend/io/timestamps.hpp); `rec` receives everything else (header filled before the first
+// samples reach `out`), no samples, and its events at t = 0 (RunSink places them).
+void import_csv(const std::filesystem::path& file, const CsvMapping& mapping, Recording& rec, SampleSink& out);
 
 // ---------------------------------------------------------------------------------------------
 // (b) imucal annotated session (mad-lab-fau/imucal example_data/annotated_session.csv):

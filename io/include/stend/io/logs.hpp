@@ -38,6 +38,9 @@ struct UlogOptions {
 
 bool looks_like_ulog(const std::filesystem::path& file);
 Recording import_ulog(const std::filesystem::path& file, const UlogOptions& options = {});
+// The same, streaming (as import_csv with a SampleSink): the file is read through bounded buffers
+// and the samples go to `out` a chunk at a time.
+void import_ulog(const std::filesystem::path& file, const UlogOptions& options, Recording& rec, SampleSink& out);
 
 // ---------------------------------------------------------------------------------------------
 // ArduPilot DataFlash (.BIN): messages 0xA3 0x95 <type> <payload>, each type defined by an FMT
@@ -51,6 +54,9 @@ struct DataflashOptions {
 
 bool looks_like_dataflash(const std::filesystem::path& file);
 Recording import_dataflash(const std::filesystem::path& file, const DataflashOptions& options = {});
+// The same, streaming (as import_ulog with a SampleSink).
+void import_dataflash(const std::filesystem::path& file, const DataflashOptions& options, Recording& rec,
+                      SampleSink& out);
 
 // ---------------------------------------------------------------------------------------------
 // EuRoC MAV / ASL dataset IMU file mav0/imu0/data.csv: the column-name line
@@ -64,5 +70,7 @@ struct EurocOptions {
 
 bool looks_like_euroc(const std::filesystem::path& path);
 Recording import_euroc(const std::filesystem::path& path, const EurocOptions& options = {});
+// The same, streaming (as import_csv with a SampleSink): the samples go to `out` a chunk at a time.
+void import_euroc(const std::filesystem::path& path, const EurocOptions& options, Recording& rec, SampleSink& out);
 
 }  // namespace stend::io

@@ -12,7 +12,12 @@
 //   TOTDEV total deviation:        Σ_{c=1}^{N−2} (x*_{c−m} − 2x_c + x*_{c+m})² / (2τ² (N − 2)),
 //          x* the record reflected at both ends: x*_{−j} = 2x_0 − x_j, x*_{N−1+j} = 2x_{N−1} − x_{N−1−j}.
 // TOTDEV is the OADEV sum plus the centres within m of either end; those need the first 2m
-// points (a head buffer) and the last 2m points (the history), evaluated at the end.
+// points (a head buffer) and the last 2m points (a tail ring), evaluated at the end.
+//
+// Octave factors (m = 2^l) come from one pyramid of MDEV windows V^m (DeviationStream::Level):
+// each level is a few vector operations per point on its own ring buffer, and every kind at m
+// is a difference of V^m at lags 1 and m. Other factors (all τ, log-spaced) are evaluated on
+// the phase history, factor by factor.
 //
 // Input: phase x (time error, s) with add_phase, or rate y (the sensor's output: ω, a, or
 // fractional frequency) with add_rate, integrated to x_{k+1} = x_k + (y_k − y_0)·τ0 internally
@@ -20,8 +25,10 @@
 // integrated phase small). Deviations are in the unit of y: for phase input, x/τ0 is the rate.
 // TDEV is in the unit of x (s for phase input, unit of y × s for rate input).
 //
-// Memory: the last 3·max_m + 1 phase values twice over (a linear history that is shifted once
-// per block) plus the first 2·max_m + 1 values, whatever N is: 8·(8·max_m + …) bytes.
+// Memory, whatever N is: the pyramid's rings (2m + 4096 values per octave level, ≈ 4·max_m in
+// all), the first and the last 2·max_m + 1 phase values, and for factors that are not powers of
+// two the last 3·m + 1 phase values twice over (a linear history shifted once per block):
+// ≈ 8·8·max_m bytes for octaves.
 //
 // Noise identification per averaging factor (the "Alpha" column of Stable32): the lag-1
 // autocorrelation of the phase decimated by m, differenced d = 0, 1, … times until
@@ -37,10 +44,12 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <new>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -109,6 +118,20 @@ inline std::uint64_t stop_ratio(DeviationKind kind) {
 
 namespace detail {
 
+// Allocator on cache lines, so that 8-double loads at positions ≡ 0 mod 8 never straddle two.
+template <class T>
+struct CacheLineAllocator {
+  using value_type = T;
+  static constexpr std::align_val_t kAlign{64};
+  CacheLineAllocator() = default;
+  template <class U>
+  CacheLineAllocator(const CacheLineAllocator<U>&) {}
+  T* allocate(std::size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), kAlign)); }
+  void deallocate(T* p, std::size_t) { ::operator delete(p, kAlign); }
+  bool operator==(const CacheLineAllocator&) const { return true; }
+};
+using AlignedDoubles = std::vector<double, CacheLineAllocator<double>>;
+
 // Over i < n with d2_i = c_i − 2a_i + b_i, d3_i = d2_i − (a_i − 2b_i + e_i) (c, a, b, e the
 // phase at k, k−m, k−2m, k−3m): sums[0] += Σ d2², sums[1] += Σ d3², and with the running sum
 // w_i = w + Σ_{t≤i} d3_t, sums[2] += Σ w². Returns the last w. One pass, 16 points a step: the
@@ -165,6 +188,75 @@ inline double steady_sums(const double* c, const double* a, const double* b, con
   sums[1] += t3;
   sums[2] += tw;
   return w;
+}
+
+// One octave level of the pyramid over n points (see DeviationStream): with V = V^m at k (v),
+// k − 1 (v1), k − m (q), k − m − 1 (q1) and k − 2m (r),
+//   d2 = V_k − V_{k−1},  e = V_k − V_{k−m},  d3 = e − (V_{k−1} − V_{k−m−1}),
+// sums[0] += Σ d2², sums[1] += Σ d3², sums[2] += Σ e²; with kMasked also
+// sums[3] += Σ mask·d2², sums[4] += Σ mask·d3² (mask[i mod 8]: 1 where k ≡ 0 mod m, m ≤ 8);
+// with kNext the next level's V^{2m}_k = V_k + 2V_{k−m} + V_{k−2m} into vn. Two sets of
+// accumulators, 16 points a step, so that no add waits on the previous one.
+template <bool kMasked, bool kNext>
+STEND_ALLAN_KERNEL inline void level_sums(const double* v, const double* v1, const double* q,
+                                          const double* q1, const double* r, double* vn,
+                                          std::size_t n, const double* mask, double* sums) {
+  v8d acc[2][5] = {};
+  v8d mk{};
+  if constexpr (kMasked) load8(mk, mask);
+  // V_{k−1} and V_{k−m−1}: lane 7 of the previous vector shifted in (an aligned load and a
+  // lane shift instead of a load across two cache lines).
+  const v8d zero{};
+  v8d pa = zero + v1[0], pb = zero + q1[0];
+  auto step = [&](std::size_t i, v8d* s) {
+    v8d a, b;
+    load8(a, v + i);
+    load8(b, q + i);
+    const v8d a1 = __builtin_shufflevector(pa, a, 7, 8, 9, 10, 11, 12, 13, 14);
+    const v8d b1 = __builtin_shufflevector(pb, b, 7, 8, 9, 10, 11, 12, 13, 14);
+    pa = a;
+    pb = b;
+    if constexpr (kNext) {
+      v8d c;
+      load8(c, r + i);
+      store8(vn + i, (a + c) + 2.0 * b);
+    }
+    const v8d d2 = a - a1;
+    const v8d e = a - b;
+    const v8d d3 = e - (a1 - b1);
+    s[0] += d2 * d2;
+    s[1] += d3 * d3;
+    s[2] += e * e;
+    if constexpr (kMasked) {
+      s[3] += (mk * d2) * d2;
+      s[4] += (mk * d3) * d3;
+    }
+  };
+  std::size_t i = 0;
+  for (; i + 16 <= n; i += 16) {
+    step(i, acc[0]);
+    step(i + 8, acc[1]);
+  }
+  for (; i + 8 <= n; i += 8) step(i, acc[0]);
+  double t[5];
+  for (int j = 0; j < 5; ++j) {
+    const v8d w = acc[0][j] + acc[1][j];
+    t[j] = ((w[0] + w[1]) + (w[2] + w[3])) + ((w[4] + w[5]) + (w[6] + w[7]));
+  }
+  for (; i < n; ++i) {
+    const double d2 = v[i] - v1[i];
+    const double e = v[i] - q[i];
+    const double d3 = e - (v1[i] - q1[i]);
+    t[0] += d2 * d2;
+    t[1] += d3 * d3;
+    t[2] += e * e;
+    if constexpr (kMasked) {
+      t[3] += mask[i % 8] * d2 * d2;
+      t[4] += mask[i % 8] * d3 * d3;
+    }
+    if constexpr (kNext) vn[i] = (v[i] + r[i]) + 2.0 * q[i];
+  }
+  for (int j = 0; j < 5; ++j) sums[j] += t[j];
 }
 
 }  // namespace detail
@@ -301,11 +393,30 @@ class DeviationStream {
     }
     std::sort(opt_.factors.begin(), opt_.factors.end());
     opt_.factors.erase(std::unique(opt_.factors.begin(), opt_.factors.end()), opt_.factors.end());
-    keep_ = 3 * opt_.factors.back() + 1;
-    head_cap_ = 2 * opt_.factors.back() + 1;
+    per_m_.resize(opt_.factors.size());
+    std::uint64_t generic_max = 0;  // largest factor that is not a power of two
+    for (std::size_t i = 0; i < opt_.factors.size(); ++i) {
+      const std::uint64_t m = opt_.factors[i];
+      if (!std::has_single_bit(m)) {
+        generic_max = m;
+        continue;
+      }
+      const auto l = static_cast<std::size_t>(std::countr_zero(m));
+      if (levels_.size() <= l) levels_.resize(l + 1);
+      levels_[l].factor = static_cast<int>(i);
+    }
+    for (std::size_t l = 0; l < levels_.size(); ++l) {
+      Level& L = levels_[l];
+      L.ring = ((std::size_t{2} << l) + kSubBlock + 7) / 8 * 8;  // k ≡ ring position mod 8
+      L.v.assign(L.ring, 0.0);
+    }
+    // History: lags up to 3m for the factors outside the pyramid (and one point for its first
+    // difference); the first and the last 2m + 1 points for TOTDEV's ends.
+    keep_ = 3 * generic_max + 1;
     block_ = std::max<std::size_t>(keep_, 8192);
     hist_.resize(keep_ + block_);
-    per_m_.resize(opt_.factors.size());
+    head_cap_ = 2 * opt_.factors.back() + 1;
+    tail_.assign(head_cap_, 0.0);
   }
 
   // Phase samples (time error, s).
@@ -339,8 +450,11 @@ class DeviationStream {
 
   std::uint64_t phase_points() const { return count_ + (fill_ - done_); }
   std::size_t state_bytes() const {
-    return sizeof(*this) + (hist_.size() + head_.capacity()) * sizeof(double) +
-           per_m_.size() * sizeof(PerM);
+    std::size_t bytes = sizeof(*this) +
+                        (hist_.size() + head_.capacity() + tail_.size()) * sizeof(double) +
+                        per_m_.size() * sizeof(PerM);
+    for (const Level& L : levels_) bytes += L.v.size() * sizeof(double);
+    return bytes;
   }
   const DeviationOptions& options() const { return opt_; }
 
@@ -423,6 +537,20 @@ class DeviationStream {
     std::array<double, 3> prev{};       // last decimated values of differences 0 … 2
   };
 
+  // Phase points k … k + n − 1 into the ring of the last head_cap_ points (TOTDEV's end).
+  void push_tail(const double* x, std::uint64_t k, std::size_t n) {
+    const std::size_t T = tail_.size();
+    if (n > T) {
+      x += n - T;
+      k += n - T;
+      n = T;
+    }
+    const auto at = static_cast<std::size_t>(k % T);
+    const std::size_t first = std::min(n, T - at);
+    std::memcpy(tail_.data() + at, x, first * sizeof(double));
+    std::memcpy(tail_.data(), x + first, (n - first) * sizeof(double));
+  }
+
   void push_head(const double* x, std::size_t n) {
     const std::size_t take = std::min(n, head_cap_ - std::min(head_cap_, head_.size()));
     head_.insert(head_.end(), x, x + take);
@@ -434,10 +562,18 @@ class DeviationStream {
     const std::uint64_t base = count_ - done_;  // global index of hist_[0]
     const double* h = hist_.data();
     // Sub-blocks of kSubBlock points, every factor on each, so the newest points stay in cache.
-    for (std::size_t from = done_; from < fill_; from += kSubBlock) {
-      const std::size_t to = std::min(fill_, from + kSubBlock);
+    // Sub-blocks end at global multiples of kSubBlock, so the vector kernels start at k ≡ 0 mod 8.
+    for (std::size_t from = done_, to = 0; from < fill_; from = to) {
+      to = std::min<std::size_t>(fill_, (base + from) / kSubBlock * kSubBlock + kSubBlock - base);
+      push_tail(h + from, base + from, to - from);
+      if (!levels_.empty()) pyramid(h, base, from, to);
       for (std::size_t i = 0; i < opt_.factors.size(); ++i) {
-        accumulate(opt_.factors[i], per_m_[i], h, base, from, to);
+        const std::uint64_t m = opt_.factors[i];
+        if (std::has_single_bit(m)) {
+          decimate(m, per_m_[i], h, base, from, to);
+        } else {
+          accumulate(m, per_m_[i], h, base, from, to);
+        }
       }
     }
     count_ += fill_ - done_;
@@ -448,7 +584,7 @@ class DeviationStream {
     }
   }
 
-  // Points k = base + [from, to) of one factor m (h[j] = x_{base+j}).
+  // Points k = base + [from, to) of one factor m that is not a power of two (h[j] = x_{base+j}).
   static void accumulate(std::uint64_t m, PerM& s, const double* h, std::uint64_t base,
                          std::size_t from, std::size_t to) {
     const std::size_t M = static_cast<std::size_t>(m);
@@ -476,22 +612,11 @@ class DeviationStream {
       s.oadev += sums[0];
       s.ohdev += sums[1];
       s.mdev += sums[2];
-      if (m == 1) {  // at m = 1 every difference is a non-overlapped one as well
-        s.adev += sums[0];
-        s.hdev += sums[1];
-        s.adev_terms += n;
-        s.hdev_terms += n;
-      }
     }
     // Non-overlapped terms and the decimated phase for noise identification.
     const std::uint64_t k0 = base + from;
     const std::uint64_t first = (k0 + m - 1) / m * m;
-    const bool want_id = s.acf[0].n < kNoiseIdPoints;
-    if (m == 1 && !want_id) return;
-    if (want_id) {
-      for (std::uint64_t k = first; k < base + to; k += m) add_decimated(s, h[k - base]);
-    }
-    if (m == 1) return;
+    decimate(m, s, h, base, from, to);
     // Local sums and count (members would be stored back on every step: s may alias h).
     double a2 = 0, h2 = 0;
     std::uint64_t terms = 0;
@@ -507,6 +632,166 @@ class DeviationStream {
     s.hdev += h2;
     s.adev_terms += terms;
     s.hdev_terms += terms;
+  }
+
+  // The decimated phase x_k, k ≡ 0 mod m, of points k = base + [from, to) for noise
+  // identification, while fewer than kNoiseIdPoints are in.
+  static void decimate(std::uint64_t m, PerM& s, const double* h, std::uint64_t base,
+                       std::size_t from, std::size_t to) {
+    if (s.acf[0].n >= kNoiseIdPoints) return;
+    for (std::uint64_t k = (base + from + m - 1) / m * m; k < base + to; k += m) {
+      add_decimated(s, h[k - base]);
+    }
+  }
+
+  // Octave factors m = 2^l share one pyramid: level l holds, for every k ≥ 2m − 1,
+  //   V^m_k = Σ_{j=k−m+1}^{k} (x_j − x_{j−m})   (the MDEV window of phase differences),
+  // in a ring buffer of the last 2m + kSubBlock points. Every kind follows from V alone:
+  //   d2_k(m) = V_k − V_{k−1},   MDEV's Σ_{j=k−m+1}^{k} d2_j = e_k = V_k − V_{k−m},
+  //   d3_k(m) = d2_k − d2_{k−m} = e_k − e_{k−1},
+  // and the next level from this one: V^{2m}_k = V_k + 2V_{k−m} + V_{k−2m} (V^1 is the first
+  // difference of the phase). A level reads its own ring at lags 1, m and 2m and writes the
+  // next one: a few vector operations per point, no running sums, no lag of 3m.
+  struct Level {
+    detail::AlignedDoubles v;  // V^m at ring position k mod ring
+    std::size_t ring = 0;
+    int factor = -1;           // index into factors, −1 for a level only passed through
+  };
+
+  // Points k = base + [from, to) (h[j] = x_{base+j}) through every level.
+  void pyramid(const double* h, std::uint64_t base, std::size_t from, std::size_t to) {
+    Level& first = levels_[0];
+    if (base + from == 0) {
+      first.v[0] = 0.0;  // x_{−1} does not exist
+      if (to - from >= 2) step_ = (h[to - 1] - h[from]) / static_cast<double>(to - from - 1);
+    }
+    for (std::size_t j = base + from == 0 ? from + 1 : from; j < to;) {
+      const auto at = static_cast<std::size_t>((base + j) % first.ring);
+      const std::size_t n = std::min(to - j, first.ring - at);
+      double* out = first.v.data() + at;
+      for (std::size_t t = 0; t < n; ++t) out[t] = (h[j + t] - h[j + t - 1]) - step_;
+      j += n;
+    }
+    for (std::size_t l = 0; l < levels_.size(); ++l) run_level(l, base + from, base + to);
+  }
+
+  // Level l at points [k0, k1): sums into its factor's PerM, the next level's V written.
+  void run_level(std::size_t l, std::uint64_t k0, std::uint64_t k1) {
+    const std::uint64_t m = std::uint64_t{1} << l;
+    Level& L = levels_[l];
+    Level* next = l + 1 < levels_.size() ? &levels_[l + 1] : nullptr;
+    PerM scratch;
+    PerM& s = L.factor >= 0 ? per_m_[static_cast<std::size_t>(L.factor)] : scratch;
+    const double* V = L.v.data();
+    const std::size_t R = L.ring;
+    auto at = [R](std::uint64_t k) { return static_cast<std::size_t>(k % R); };
+    const std::uint64_t steady = 4 * m;  // from here every term of every kind is defined
+    // Startup (k < 4m < 2R) point by point, each term from where it is defined.
+    auto at_early = [R](std::uint64_t k) { return static_cast<std::size_t>(k >= R ? k - R : k); };
+    for (std::uint64_t k = k0; k < std::min(k1, steady); ++k) {
+      const bool decimated = k % m == 0;
+      if (k >= 2 * m) {
+        const double d2 = V[at_early(k)] - V[at_early(k - 1)];
+        s.oadev += static_cast<long double>(d2) * d2;
+        if (decimated) {
+          s.adev += static_cast<long double>(d2) * d2;
+          ++s.adev_terms;
+        }
+      }
+      if (k + 1 >= 3 * m) {
+        const double e = V[at_early(k)] - V[at_early(k - m)];
+        s.mdev += static_cast<long double>(e) * e;
+        if (k >= 3 * m) {
+          const double d3 = e - (V[at_early(k - 1)] - V[at_early(k - m - 1)]);
+          s.ohdev += static_cast<long double>(d3) * d3;
+          if (decimated) {
+            s.hdev += static_cast<long double>(d3) * d3;
+            ++s.hdev_terms;
+          }
+        }
+      }
+      if (next) {  // k < 4m: no wrap in the next ring (4m + kSubBlock)
+        next->v[k] =
+            k + 1 >= 4 * m ? (V[at_early(k)] + V[at_early(k - 2 * m)]) + 2.0 * V[at_early(k - m)] : 0.0;
+      }
+    }
+    // Steady state in vector kernels, split where a ring wraps.
+    double sums[5] = {0, 0, 0, 0, 0};
+    const bool masked = m > 1 && m <= 8;  // non-overlapped terms inside the kernel
+    std::uint64_t masked_terms = 0;
+    const std::uint64_t k_steady = std::max(k0, steady);
+    for (std::uint64_t k = k_steady; k < k1;) {
+      const std::size_t i0 = at(k), i1 = at(k - 1), iq = at(k - m), iq1 = at(k - m - 1),
+                        ir = at(k - 2 * m);
+      std::size_t n = static_cast<std::size_t>(k1 - k);
+      n = std::min({n, R - i0, R - i1, R - iq, R - iq1, R - ir});
+      double* vn = nullptr;
+      if (next) {
+        const std::size_t io = static_cast<std::size_t>(k % next->ring);
+        n = std::min(n, next->ring - io);
+        vn = next->v.data() + io;
+      }
+      std::array<double, 8> mask{};
+      if (masked) {
+        for (std::size_t u = 0; u < 8; ++u) mask[u] = (k + u) % m == 0 ? 1.0 : 0.0;
+        masked_terms += (k + n - 1) / m - (k - 1) / m;
+      }
+      const double *v = V + i0, *v1 = V + i1, *q = V + iq, *q1 = V + iq1, *r = V + ir;
+      if (masked && next) {
+        detail::level_sums<true, true>(v, v1, q, q1, r, vn, n, mask.data(), sums);
+      } else if (masked) {
+        detail::level_sums<true, false>(v, v1, q, q1, r, vn, n, mask.data(), sums);
+      } else if (next) {
+        detail::level_sums<false, true>(v, v1, q, q1, r, vn, n, mask.data(), sums);
+      } else {
+        detail::level_sums<false, false>(v, v1, q, q1, r, vn, n, mask.data(), sums);
+      }
+      k += n;
+    }
+    s.oadev += sums[0];
+    s.ohdev += sums[1];
+    s.mdev += sums[2];
+    if (k1 > k_steady) {
+      if (m == 1) {  // every difference is a non-overlapped one as well
+        sums[3] = sums[0];
+        sums[4] = sums[1];
+        masked_terms = k1 - k_steady;
+      } else if (!masked) {
+        nonoverlapped(V, R, m, k_steady, k1, sums + 3, &masked_terms);
+      }
+      s.adev += sums[3];
+      s.hdev += sums[4];
+      s.adev_terms += masked_terms;
+      s.hdev_terms += masked_terms;
+    }
+  }
+
+  // Σ d2², Σ d3² over k ≡ 0 mod m in [k0, k1) (k0 ≥ 3m) from level m's ring V of size R;
+  // counts them.
+  static void nonoverlapped(const double* V, std::size_t R, std::uint64_t m, std::uint64_t k0,
+                            std::uint64_t k1, double* sums, std::uint64_t* terms) {
+    const std::uint64_t first = (k0 + m - 1) / m * m;
+    if (first >= k1) return;
+    const auto M = static_cast<std::size_t>(m);
+    auto wrap = [R](std::size_t i) { return i >= R ? i - R : i; };
+    std::size_t i0 = first % R, i1 = (first - 1) % R, iq = (first - m) % R,
+                iq1 = (first - m - 1) % R;
+    double a2 = 0, h2 = 0;
+    std::uint64_t n = 0;
+    for (std::uint64_t k = first; k < k1; k += m) {
+      const double d2 = V[i0] - V[i1];
+      const double d3 = d2 - (V[iq] - V[iq1]);
+      a2 += d2 * d2;
+      h2 += d3 * d3;
+      ++n;
+      i0 = wrap(i0 + M);
+      i1 = wrap(i1 + M);
+      iq = wrap(iq + M);
+      iq1 = wrap(iq1 + M);
+    }
+    sums[0] += a2;
+    sums[1] += h2;
+    *terms += n;
   }
 
   static constexpr std::size_t kSubBlock = 4096;
@@ -560,10 +845,9 @@ class DeviationStream {
   long double total_ends(std::uint64_t m) const {
     const auto N = static_cast<std::int64_t>(count_);
     const auto mm = static_cast<std::int64_t>(m);
-    const std::int64_t base = static_cast<std::int64_t>(count_ - fill_);  // hist_[0]
     auto x = [&](std::int64_t i) -> double {
       if (i < static_cast<std::int64_t>(head_.size())) return head_[static_cast<std::size_t>(i)];
-      return hist_[static_cast<std::size_t>(i - base)];
+      return tail_[static_cast<std::size_t>(i) % tail_.size()];
     };
     auto xs = [&](std::int64_t i) -> double {
       if (i < 0) return 2 * x(0) - x(-i);
@@ -588,7 +872,13 @@ class DeviationStream {
   std::size_t fill_ = 0, done_ = 0;
   std::uint64_t count_ = 0;   // phase points accumulated
   std::vector<double> head_;  // the first 2·max factor + 1 phase points
+  std::vector<double> tail_;  // the last ones, x_k at k mod tail_.size()
   std::vector<PerM> per_m_;
+  std::vector<Level> levels_;  // the octave pyramid, level l for m = 2^l
+  // Mean phase step of the first sub-block, taken off every step entering the pyramid: a
+  // linear phase cancels in every kind, and without it V^m grows as m² × the mean rate, whose
+  // rounding the differences V_k − V_{k−1} would then carry.
+  double step_ = 0.0;
   bool rate_started_ = false;
   double rate_offset_ = 0.0;
   long double phase_ = 0.0L;
