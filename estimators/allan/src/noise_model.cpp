@@ -24,6 +24,8 @@ constexpr int kTerms = 6;                 // Q N B K R G (linear in their square
 constexpr int kGm = 5;                    // index of the Gauss–Markov term
 constexpr int kRamp = 4;                  // index of the rate ramp R
 constexpr double kTermPenalty = 6.6349;   // χ²₁ 99 % quantile: penalty per parameter
+constexpr double kGmOverWalk = 10.828;    // χ²₁ 99.9 % quantile: deviance G must gain over K in its place
+constexpr double kMinClusters = 4.0;      // points with fewer clusters (N/m) are not fitted
 constexpr double kZ95 = 1.959963984540054;
 constexpr double kCoverage = 0.95;        // level of the coefficients' intervals (z = kZ95)
 constexpr int kMaxFilteredM = 32;         // an unstated filter may flatten points up to this m
@@ -266,6 +268,20 @@ Candidate plateau_shape(FitSet& set, const Candidate& with_b, const WhiteTerm& w
   return with_g.valid && with_g.deviance < with_b.deviance ? with_g : with_b;
 }
 
+// A random walk and a Gauss–Markov bias look alike over a finite τ range (G's rising flank is a
+// random walk of K² = 2σ²/τc; the walk of a short record often ends in a low point that looks like
+// G's fall). A model that holds G but not K is compared with the same model with K in G's place,
+// the nested and simpler one (G with τc → ∞ is K): G is kept only when it lowers the deviance by
+// more than a 0.1 % likelihood-ratio test allows, i.e. when the data show the fall after its peak.
+Candidate walk_or_gm(FitSet& set, const Candidate& best, const WhiteTerm& white) {
+  const unsigned gm = 1u << kGm, walk = 1u << 3;
+  if (!(best.mask & gm) || (best.mask & walk)) return best;
+  set_basis(set, white, 0.0);
+  const Candidate with_k = fit_terms(set, (best.mask & ~gm) | walk, 0.0);
+  set_basis(set, white, best.tc);
+  return with_k.valid && with_k.deviance - best.deviance <= kGmOverWalk ? with_k : best;
+}
+
 // The candidate with the least penalised deviance over every non-empty subset of the terms.
 Candidate select_model(FitSet& set, const WhiteTerm& white) {
   Candidate best;
@@ -283,6 +299,7 @@ Candidate select_model(FitSet& set, const WhiteTerm& white) {
   }
   if ((best.mask >> 2) & 1u) best = plateau_shape(set, best, white);
   if ((best.mask >> kGm) & 1u) best = refine_gm(set, best, white, step);
+  best = walk_or_gm(set, best, white);
   set_basis(set, white, best.tc);
   return best;
 }
@@ -338,6 +355,17 @@ std::size_t filtered_prefix(const std::vector<FitPoint>& pts, double tolerance) 
     ++i;
   }
   return i;
+}
+
+// End of the fitted points: those averaged over fewer than kMinClusters clusters (N/m < 4, EDF
+// about 1–2) are left out of the fit (kept for the bounds and read-offs): their χ² with one or two
+// degrees of freedom is far from the likelihood's Gaussian approximation, and in a random walk
+// such a point often falls an order of magnitude low, which the strong correlation with its
+// neighbour reads as a significant turn. At least 3 points are fitted.
+std::size_t fitted_end(const std::vector<FitPoint>& pts, std::uint64_t samples, std::size_t first) {
+  std::size_t end = pts.size();
+  while (end > first + 3 && static_cast<double>(samples) / pts[end - 1].m < kMinClusters) --end;
+  return end;
 }
 
 void local_slopes(const std::vector<FitPoint>& pts, std::vector<double>& slope) {
@@ -591,7 +619,10 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
   local_slopes(all, slope);
   set_edf(all, curve, white, [&](double tau) { return noise_of_slope(all, slope, tau); });
   const std::size_t skip = std::isnan(opt.lowpass_hz) ? filtered_prefix(all, opt.slope_tolerance) : 0;
-  FitSet set{std::vector<FitPoint>(all.begin() + static_cast<std::ptrdiff_t>(skip), all.end()), {}};
+  const std::size_t keep = fitted_end(all, curve.samples, skip);
+  FitSet set{std::vector<FitPoint>(all.begin() + static_cast<std::ptrdiff_t>(skip),
+                                   all.begin() + static_cast<std::ptrdiff_t>(keep)),
+             {}};
   model.tau_fit_min_s = set.pts.front().tau;
 
   // The correlation from the noise types of the measured slopes (a model's own types would favour
