@@ -24,7 +24,7 @@ constexpr int kTerms = 6;                 // Q N B K R G (linear in their square
 constexpr int kGm = 5;                    // index of the Gauss–Markov term
 constexpr int kRamp = 4;                  // index of the rate ramp R
 constexpr double kTermPenalty = 6.6349;   // χ²₁ 99 % quantile: penalty per parameter
-constexpr double kGmOverWalk = 10.828;    // χ²₁ 99.9 % quantile: deviance G must gain over K in its place
+constexpr double kPlateauOverWalk = 10.828;  // χ²₁ 99.9 %: deviance B or G must gain over K in its place
 constexpr double kMinClusters = 4.0;      // points with fewer clusters (N/m) are not fitted
 constexpr double kZ95 = 1.959963984540054;
 constexpr double kCoverage = 0.95;        // level of the coefficients' intervals (z = kZ95)
@@ -268,18 +268,19 @@ Candidate plateau_shape(FitSet& set, const Candidate& with_b, const WhiteTerm& w
   return with_g.valid && with_g.deviance < with_b.deviance ? with_g : with_b;
 }
 
-// A random walk and a Gauss–Markov bias look alike over a finite τ range (G's rising flank is a
-// random walk of K² = 2σ²/τc; the walk of a short record often ends in a low point that looks like
-// G's fall). A model that holds G but not K is compared with the same model with K in G's place,
-// the nested and simpler one (G with τc → ∞ is K): G is kept only when it lowers the deviance by
-// more than a 0.1 % likelihood-ratio test allows, i.e. when the data show the fall after its peak.
-Candidate walk_or_gm(FitSet& set, const Candidate& best, const WhiteTerm& white) {
-  const unsigned gm = 1u << kGm, walk = 1u << 3;
-  if (!(best.mask & gm) || (best.mask & walk)) return best;
+// A random walk and a plateau look alike over a finite τ range: G's rising flank is a random walk
+// of K² = 2σ²/τc, and the walk of a short record often ends in low points that look like G's fall
+// or B's flat top. A model that holds G or B but not K is compared with the same model with K in
+// their place, the simpler explanation of a rise (G with τc → ∞ is K): the plateau is kept only
+// when it lowers the deviance by more than a 0.1 % likelihood-ratio test allows, i.e. when the
+// data show it level off or fall.
+Candidate walk_or_plateau(FitSet& set, const Candidate& best, const WhiteTerm& white) {
+  const unsigned plateau = (1u << kGm) | (1u << 2), walk = 1u << 3;
+  if (!(best.mask & plateau) || (best.mask & walk)) return best;
   set_basis(set, white, 0.0);
-  const Candidate with_k = fit_terms(set, (best.mask & ~gm) | walk, 0.0);
+  const Candidate with_k = fit_terms(set, (best.mask & ~plateau) | walk, 0.0);
   set_basis(set, white, best.tc);
-  return with_k.valid && with_k.deviance - best.deviance <= kGmOverWalk ? with_k : best;
+  return with_k.valid && with_k.deviance - best.deviance <= kPlateauOverWalk ? with_k : best;
 }
 
 // The candidate with the least penalised deviance over every non-empty subset of the terms.
@@ -299,7 +300,7 @@ Candidate select_model(FitSet& set, const WhiteTerm& white) {
   }
   if ((best.mask >> 2) & 1u) best = plateau_shape(set, best, white);
   if ((best.mask >> kGm) & 1u) best = refine_gm(set, best, white, step);
-  best = walk_or_gm(set, best, white);
+  best = walk_or_plateau(set, best, white);
   set_basis(set, white, best.tc);
   return best;
 }
