@@ -1,17 +1,51 @@
-// The noise-model fit against the simulator's truth over the grid output rate (100, 200, 1000,
-// 4000 Hz) × the sensor's low-pass (off, 0.184·rate) × noise mix (white; white + Gauss–Markov;
-// white + random walk; all). Every record comes from sim::SimImu (its own noise processes and
-// output stage); the truth is its configuration. Each cell: kSeeds records × 3 axes per
-// instrument. bench/noise_grid_bench prints the same grid with more seeds.
+// The noise-model fit against the simulator's truth over the grid output rate × the sensor's
+// low-pass (off, 0.184·rate) × noise mix (white; white + Gauss–Markov; white + random walk; all).
+// Every record comes from sim::SimImu (its own noise processes and output stage); the truth is its
+// configuration. Each cell: kSeeds records × 3 axes per instrument, held to the full criteria per
+// instrument. Here the rates 100, 200 and 1000 Hz; bench/noise_grid_bench prints the whole grid,
+// 4000 Hz included, with the same seeds.
 #include "noise_grid.hpp"
 
 #include <gtest/gtest.h>
+
+#include <optional>
 
 using namespace stend::allan;
 
 namespace {
 
-constexpr int kSeeds = 2;  // × 6 axes = 12 realisations per cell (the bench runs more)
+constexpr int kSeeds = 20;  // × 3 axes = 60 fits per instrument and cell
+
+// The criteria: each present coefficient's interval covers the truth in ≥ 90 % of the fits, is off
+// (identified and outside its interval) in ≤ 10 %, and an absent term is identified in ≤ 5 %.
+constexpr double kMinCover = 0.9, kMaxOff = 0.1, kMaxFalse = 0.05;
+
+// Cells that fall short of the criteria on these seeds, with the measured figure and why. The
+// test holds them at the measured figure.
+struct Shortfall {
+  double rate_hz;
+  bool lowpass;
+  grid::Mix mix;
+  bool gyro;
+  int coefficient;  // Q N B K R G Tc = 0 … 6
+  double cover, off, false_identified;  // the limits that replace the criteria
+};
+const Shortfall kShortfalls[] = {
+    // N covered in 52 of 60 (87 %, off 13 %): beside the Gauss–Markov bias under the 18 Hz
+    // low-pass N scatters by 0.47 % where its σ says 0.42 % — the interval is ≈ 12 % narrow (the
+    // EDF of the filtered shortest-τ points is an effective-sample-size approximation).
+    {100.0, true, grid::Mix::kWhiteGm, true, 1, 52.0 / 60, 8.0 / 60, kMaxFalse},
+    // B named in 4 of 60 (7 %): a Gauss–Markov plateau beside a random walk read as flat.
+    {100.0, false, grid::Mix::kAll, false, 2, kMinCover, kMaxOff, 4.0 / 60},
+};
+
+std::optional<Shortfall> shortfall(const grid::Cell& cell, bool gyro, int j) {
+  for (const auto& s : kShortfalls) {
+    if (s.rate_hz == cell.rate_hz && s.lowpass == cell.lowpass && s.mix == cell.mix && s.gyro == gyro && s.coefficient == j)
+      return s;
+  }
+  return std::nullopt;
+}
 
 struct GridParam {
   double rate_hz;
@@ -39,38 +73,23 @@ TEST_P(NoiseGrid, IntervalsCoverTheTruthAndAbsentTermsAreNotIdentified) {
         }
       }
     }
-    // Pooled over both instruments. The white-only cells must meet the full criteria; the cells
-    // with a Gauss–Markov bias or a random walk are held at the levels the fit reaches today
-    // (README, "Validation on the simulator": where it falls short of 90 % coverage and ≤ 5 %
-    // false identification, and why).
-    grid::Score sc;
     for (int g = 0; g < 2; ++g) {
+      const grid::Score& sc = score[g];
+      const std::string where = fmt::format("{} Hz, low-pass {}, {}, {}; first record:\n{}", cell.rate_hz,
+                                            cell.lowpass ? "on" : "off", grid::to_string(mix), g ? "gyro" : "accel",
+                                            example[g]);
+      EXPECT_EQ(sc.failed, 0) << where;
       for (int j = 0; j < 7; ++j) {
-        sc.present[j] += score[g].present[j];
-        sc.covered[j] += score[g].covered[j];
-        sc.off[j] += score[g].off[j];
-        sc.absent[j] += score[g].absent[j];
-        sc.false_identified[j] += score[g].false_identified[j];
-      }
-      sc.failed += score[g].failed;
-    }
-    const std::string where = fmt::format("{} Hz, low-pass {}, {}; first records:\n{}\n{}", cell.rate_hz,
-                                          cell.lowpass ? "on" : "off", grid::to_string(mix), example[0], example[1]);
-    EXPECT_EQ(sc.failed, 0) << where;
-    const bool white_only = mix == grid::Mix::kWhite;
-    // Levels on these 12 realisations (the bench's 60 per instrument in brackets): N ≥ 90 % in white
-    // noise, ≥ 80 % beside other terms [≥ 87 %]; K ≥ 65 % [77–95 %: the 600 s records hold few
-    // long-τ points]; G ≥ 80 % [≥ 90 %].
-    const double min_cover[7] = {1, white_only ? 0.9 : 0.8, 1, 0.65, 1, 0.8, 0.0};
-    for (int j = 0; j < 7; ++j) {
-      if (sc.present[j] > 0) {
-        EXPECT_GE(sc.covered[j], min_cover[j] * sc.present[j]) << grid::symbol_of(j) << " coverage, " << where;
-      }
-      // Absent terms: at most one of the 12 in white noise [≤ 2 %]; with other terms R ≤ 10 % [≤ 2 %],
-      // B ≤ 25 % [≤ 10 %], G ≤ 30 % [≤ 23 %: a random walk's slow wander read as a plateau], Q, K ≤ 20 %.
-      const double max_false = white_only ? 0.1 : j == 4 ? 0.1 : j == 2 ? 0.25 : j == 5 ? 0.3 : 0.2;
-      if (sc.absent[j] > 0 && j != 6) {
-        EXPECT_LE(sc.false_identified[j], max_false * sc.absent[j]) << grid::symbol_of(j) << " absent, " << where;
+        const auto s = shortfall(cell, g == 1, j);
+        const double cover = s ? s->cover : kMinCover, off = s ? s->off : kMaxOff;
+        const double max_false = s ? s->false_identified : kMaxFalse;
+        if (sc.present[j] > 0) {
+          EXPECT_GE(sc.covered[j], cover * sc.present[j] - 1e-9) << grid::symbol_of(j) << " coverage, " << where;
+          EXPECT_LE(sc.off[j], off * sc.present[j] + 1e-9) << grid::symbol_of(j) << " off, " << where;
+        }
+        if (sc.absent[j] > 0 && j != 6) {
+          EXPECT_LE(sc.false_identified[j], max_false * sc.absent[j] + 1e-9) << grid::symbol_of(j) << " absent, " << where;
+        }
       }
     }
   }
@@ -78,8 +97,7 @@ TEST_P(NoiseGrid, IntervalsCoverTheTruthAndAbsentTermsAreNotIdentified) {
 
 INSTANTIATE_TEST_SUITE_P(RatesAndFilters, NoiseGrid,
                          ::testing::Values(GridParam{100.0, false}, GridParam{100.0, true}, GridParam{200.0, false},
-                                           GridParam{200.0, true}, GridParam{1000.0, false}, GridParam{1000.0, true},
-                                           GridParam{4000.0, false}, GridParam{4000.0, true}),
+                                           GridParam{200.0, true}, GridParam{1000.0, false}, GridParam{1000.0, true}),
                          [](const auto& p) {
                            return fmt::format("{}Hz_{}", static_cast<int>(p.param.rate_hz),
                                               p.param.lowpass ? "lowpass" : "nofilter");
