@@ -533,7 +533,7 @@ void identify_and_bound(const std::vector<FitPoint>& pts, const WhiteTerm& white
   auto bound_of = [&](int j, double tc) {
     double bound = std::numeric_limits<double>::infinity();
     for (const auto& p : pts) {
-      const double hi = std::isfinite(p.hi) ? p.hi : p.adev;
+      const double hi = std::isfinite(p.edf) ? stats::deviation_interval(p.adev, p.edf, kCoverage).hi : p.adev;
       const double a = basis(p.tau, p.m, white, tc)[j];
       if (a > 0.0) bound = std::min(bound, hi * hi / a);
     }
