@@ -519,7 +519,7 @@ std::ostream& operator<<(std::ostream& os, const NoiseModel& m) {
   if (!m.ok) return os << "noise model: FIT FAILED — " << m.message << "\n";
   os << fmt::format("noise model fitted over tau {:.3g} … {:.3g} s (deviance per dof {:.3g}, {} dof), "
                     "output low-pass {}:\n",
-                    m.tau_fit_min_s, m.tau_max_s, m.chi2_reduced, m.dof,
+                    m.tau_fit_min_s, m.tau_fit_max_s, m.chi2_reduced, m.dof,
                     std::isnan(m.lowpass_hz) ? std::string("not stated")
                     : m.lowpass_hz > 0.0     ? fmt::format("{:g} Hz in the model", m.lowpass_hz)
                                              : std::string("none"));
@@ -685,7 +685,7 @@ json to_json(const ChannelResult& r) {
                 {"dof", m.dof},
                 {"lowpass_hz", num(m.lowpass_hz)},
                 {"tau_range_s", json::array({num(m.tau_min_s), num(m.tau_max_s)})},
-                {"tau_fit_range_s", json::array({num(m.tau_fit_min_s), num(m.tau_max_s)})},
+                {"tau_fit_range_s", json::array({num(m.tau_fit_min_s), num(m.tau_fit_max_s)})},
                 {"readoffs",
                  {{"N_line", to_json(m.white_line)},
                   {"K_line", to_json(m.random_walk_line)},

@@ -646,6 +646,7 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
                                    all.begin() + static_cast<std::ptrdiff_t>(keep)),
              {}};
   model.tau_fit_min_s = set.pts.front().tau;
+  model.tau_fit_max_s = set.pts.back().tau;
 
   // The correlation from the noise types of the measured slopes (a model's own types would favour
   // it); the EDF from them, then again from the dominant term of the selected model.

@@ -192,7 +192,8 @@ struct NoiseModel {
   bool ok = false;
   std::string message;        // why the fit failed / warnings
   std::string selection;      // the selected terms and the criterion, e.g. "N+G (BIC …)"
-  double tau_fit_min_s = kNaN;  // the τ range fitted (may start after tau_min_s, see lowpass_hz)
+  double tau_fit_min_s = kNaN;  // the τ range fitted (may start after tau_min_s, see lowpass_hz,
+  double tau_fit_max_s = kNaN;  // and end before tau_max_s: points over fewer than 4 clusters)
   double lowpass_hz = kNaN;     // output low-pass in the model curve (0 none, NaN not stated)
   double chi2_reduced = kNaN;  // weighted residual χ² per degree of freedom
   int dof = 0;
@@ -222,14 +223,18 @@ void assign_intervals(AllanCurve& curve, const NoiseModel* model);
 //                 low-pass; g the first-order Gauss–Markov AVAR (model::allan::gauss_markov).
 //   τ range       all points when the filter is stated (lowpass_hz ≥ 0); when it is not (NaN), the
 //                 leading points with m ≤ 32 whose slope to the next point is flatter than
-//                 −½ + slope_tolerance (a filter's flattening) are left out.
+//                 −½ + slope_tolerance (a filter's flattening) are left out; points over fewer
+//                 than 4 clusters (N/m < 4) are never fitted.
 //   likelihood    each AVAR point is σ²·χ²_ν/ν with ν its EDF (Var ≈ 2σ⁴/EDF): Gamma deviance
 //                 D = Σ ν (r − 1 − ln r), r = AVAR/model, minimised by Fisher scoring (IRLS).
 //   selection     every subset of the six terms (τc profiled on a grid, then refined); the one
 //                 with the least D + 6.63·(parameters) is kept (6.63 = χ²₁ at 99 %: a term enters
-//                 only when it lowers D by more than a 1 % likelihood-ratio test would allow).
+//                 only when it lowers D by more than a 1 % likelihood-ratio test would allow);
+//                 a plateau (B or G) without K is kept over K in its place only when it lowers D
+//                 by more than 10.83 (χ²₁ at 99.9 %).
 //   uncertainty   σ from the inverse Fisher information of the selected model, scaled by
-//                 √max(1, D/dof); the other coefficients get upper bounds.
+//                 √max(1, D/dof); the other coefficients get upper bounds (from the points' 95 %
+//                 upper limits; K beside G also from the fit with K added).
 // Fewer than 3 usable points (constant, too short) → ok = false, every coefficient kFailed.
 NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& options = {});
 
