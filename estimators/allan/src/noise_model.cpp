@@ -508,28 +508,11 @@ void set_interval(Coefficient& c, bool linear) {
   }
 }
 
-// Upper bound of K when the selected model holds G but not K: G's rising flank is itself a random
-// walk, so the data bound the two together, not K alone by the points' upper limits. The same
-// model with K added is fitted and K's 95 % upper end is the bound; NaN when that fit fails (K
-// pushed to zero: the points' own bound holds).
-double walk_bound_beside_gm(FitSet& set, const Candidate& best, const WhiteTerm& white) {
-  const unsigned walk = 1u << 3;
-  if (!((best.mask >> kGm) & 1u) || (best.mask & walk)) return kNaN;
-  set_basis(set, white, best.tc);
-  const Candidate with_k = fit_terms(set, best.mask | walk, best.tc);
-  if (!with_k.valid) return kNaN;
-  NoiseModel m;
-  for (int j = 0; j < kTerms; ++j) coefficient(m, j)->fitted = std::sqrt(with_k.c[j]);
-  fisher_uncertainties(set, with_k, m);
-  set_interval(m.random_walk, true);
-  return m.random_walk.hi;
-}
-
 // Identified coefficients get value ± σ and the 95 % interval; every linear term gets the largest
 // value whose term alone stays below every measured upper limit (G: the largest such σ over τc in
-// the fitted range, where the data can see a Gauss–Markov bias); K beside G at least `walk_bound`
-// (NaN: none).
-void identify_and_bound(const std::vector<FitPoint>& pts, const WhiteTerm& white, double walk_bound, NoiseModel& model) {
+// the fitted range, where the data can see a Gauss–Markov bias). The upper limits are each point's
+// 95 % limit, the level of the intervals.
+void identify_and_bound(const std::vector<FitPoint>& pts, const WhiteTerm& white, NoiseModel& model) {
   auto bound_of = [&](int j, double tc) {
     double bound = std::numeric_limits<double>::infinity();
     for (const auto& p : pts) {
@@ -544,7 +527,6 @@ void identify_and_bound(const std::vector<FitPoint>& pts, const WhiteTerm& white
     if (c->identified) set_interval(*c, j < NoiseModel::kCoefficients - 1);
   }
   for (int j = 0; j < kGm; ++j) coefficient(model, j)->upper_bound = bound_of(j, 0.0);
-  if (std::isfinite(walk_bound)) model.random_walk.upper_bound = std::max(model.random_walk.upper_bound, walk_bound);
   double gm = 0.0;
   for (const auto& p : pts) gm = std::max(gm, bound_of(kGm, p.tau / model::allan::kGaussMarkovPeakTau));
   model.gauss_markov.upper_bound = gm;
@@ -667,13 +649,12 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
   }
   model.correlation_time.identified = model.gauss_markov.identified;
   fisher_uncertainties(set, best, model);
-  const double walk_bound = walk_bound_beside_gm(set, best, white);
   model.selection = fmt::format("{} (least D + {:.2f} x parameters over all term subsets; D = {:.4g})",
                                 term_names(best.mask), kTermPenalty, best.deviance);
   NoiseModel snapshot = model;
   mark_dominance(snapshot, white, model);
   set_edf(all, curve, white, [&](double tau) { return model.dominant(tau); });
-  identify_and_bound(all, white, walk_bound, model);
+  identify_and_bound(all, white, model);
   model.white_line = slope_readoff(model.white_line.name, curve.units.white, all, slope, -0.5, 1.0, opt);
   model.random_walk_line =
       slope_readoff(model.random_walk_line.name, curve.units.random_walk, all, slope, 0.5, 3.0, opt);

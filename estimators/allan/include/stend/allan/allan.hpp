@@ -233,8 +233,8 @@ void assign_intervals(AllanCurve& curve, const NoiseModel* model);
 //                 a plateau (B or G) without K is kept over K in its place only when it lowers D
 //                 by more than 10.83 (χ²₁ at 99.9 %).
 //   uncertainty   σ from the inverse Fisher information of the selected model, scaled by
-//                 √max(1, D/dof); the other coefficients get upper bounds (from the points' 95 %
-//                 upper limits; K beside G also from the fit with K added).
+//                 √max(1, D/dof); the other coefficients get upper bounds (the largest value whose
+//                 term alone stays below every point's 95 % upper limit).
 // Fewer than 3 usable points (constant, too short) → ok = false, every coefficient kFailed.
 NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& options = {});
 
