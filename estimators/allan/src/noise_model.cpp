@@ -493,21 +493,6 @@ void mark_dominance(const NoiseModel& model, const WhiteTerm& white, NoiseModel&
   }
 }
 
-// Value ± σ of a coefficient from its fit and the 95 % interval: normal; for the linear terms (c² a
-// weighted sum of AVAR points, χ² with Satterthwaite's EDF c²/(2σ²)) widened to the χ² interval,
-// which reaches further up when few long-τ points decide the coefficient.
-void set_interval(Coefficient& c, bool linear) {
-  c.value = c.fitted;
-  c.sigma = c.fitted_sigma;
-  c.lo = std::max(0.0, c.value - kZ95 * c.sigma);
-  c.hi = c.value + kZ95 * c.sigma;
-  if (linear) {
-    const auto ci = stats::deviation_interval(c.value, c.value * c.value / (2.0 * c.sigma * c.sigma), kCoverage);
-    c.lo = std::min(c.lo, ci.lo);
-    c.hi = std::max(c.hi, ci.hi);
-  }
-}
-
 // Identified coefficients get value ± σ and the 95 % interval; every linear term gets the largest
 // value whose term alone stays below every measured upper limit (G: the largest such σ over τc in
 // the fitted range, where the data can see a Gauss–Markov bias). The upper limits are each point's
@@ -524,7 +509,20 @@ void identify_and_bound(const std::vector<FitPoint>& pts, const WhiteTerm& white
   };
   for (int j = 0; j < NoiseModel::kCoefficients; ++j) {
     Coefficient* c = coefficient(model, j);
-    if (c->identified) set_interval(*c, j < NoiseModel::kCoefficients - 1);
+    if (c->identified) {
+      c->value = c->fitted;
+      c->sigma = c->fitted_sigma;
+      // Normal interval; for the linear terms (c² a weighted sum of AVAR points, χ² with
+      // Satterthwaite's EDF c²/(2σ²)) widened to the χ² interval, which reaches further up when
+      // few long-τ points decide the coefficient.
+      c->lo = std::max(0.0, c->value - kZ95 * c->sigma);
+      c->hi = c->value + kZ95 * c->sigma;
+      if (j < NoiseModel::kCoefficients - 1) {
+        const auto ci = stats::deviation_interval(c->value, c->value * c->value / (2.0 * c->sigma * c->sigma), kCoverage);
+        c->lo = std::min(c->lo, ci.lo);
+        c->hi = std::max(c->hi, ci.hi);
+      }
+    }
   }
   for (int j = 0; j < kGm; ++j) coefficient(model, j)->upper_bound = bound_of(j, 0.0);
   double gm = 0.0;
