@@ -2,8 +2,8 @@
 // low-pass (off, 0.184·rate) × noise mix (white; white + Gauss–Markov; white + random walk; all).
 // Every record comes from sim::SimImu (its own noise processes and output stage); the truth is its
 // configuration. Each cell: kSeeds records × 3 axes per instrument, held to the full criteria per
-// instrument. Here the rates 100, 200 and 1000 Hz; bench/noise_grid_bench prints the whole grid,
-// 4000 Hz included, with the same seeds.
+// instrument. Here 100 and 200 Hz with and without the low-pass and 1000 Hz with it (the issue's
+// 184 Hz case); bench/noise_grid_bench prints the whole grid with the same seeds.
 #include "noise_grid.hpp"
 
 #include <gtest/gtest.h>
@@ -97,7 +97,7 @@ TEST_P(NoiseGrid, IntervalsCoverTheTruthAndAbsentTermsAreNotIdentified) {
 
 INSTANTIATE_TEST_SUITE_P(RatesAndFilters, NoiseGrid,
                          ::testing::Values(GridParam{100.0, false}, GridParam{100.0, true}, GridParam{200.0, false},
-                                           GridParam{200.0, true}, GridParam{1000.0, false}, GridParam{1000.0, true}),
+                                           GridParam{200.0, true}, GridParam{1000.0, true}),
                          [](const auto& p) {
                            return fmt::format("{}Hz_{}", static_cast<int>(p.param.rate_hz),
                                               p.param.lowpass ? "lowpass" : "nofilter");
