@@ -217,9 +217,15 @@ const std::vector<Format>& formats() {
        [](const Inputs& in, const ImportOptions&) { return import_euroc(in[0]); }, 1,
        [](const Inputs& in, const ImportOptions&, Recording& rec, SampleSink& out) { import_euroc(in[0], {}, rec, out); }},
       {"rosbag1", "ROS 1 bag v2.0: sensor_msgs/Imu (--topic)", looks_like_rosbag1,
-       [](const Inputs& in, const ImportOptions& o) { return import_rosbag1(in[0], rosbag_options(o)); }},
+       [](const Inputs& in, const ImportOptions& o) { return import_rosbag1(in[0], rosbag_options(o)); }, 1,
+       [](const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
+         import_rosbag1(in[0], rosbag_options(o), rec, out);
+       }},
       {"rosbag2", "ROS 2 bag (SQLite3 .db3 or MCAP, file or folder): sensor_msgs/msg/Imu (--topic)", looks_like_rosbag2,
-       [](const Inputs& in, const ImportOptions& o) { return import_rosbag2(in[0], rosbag_options(o)); }},
+       [](const Inputs& in, const ImportOptions& o) { return import_rosbag2(in[0], rosbag_options(o)); }, 1,
+       [](const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
+         import_rosbag2(in[0], rosbag_options(o), rec, out);
+       }},
       {"csv", "generic delimited text with mapped columns (--accel/--mapping ...)", nullptr, open_csv, 1, stream_csv},
   };
   return table;
