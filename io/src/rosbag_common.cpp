@@ -178,9 +178,7 @@ void stream_recording(const fs::path& file, const BagReader& bag, const RosbagOp
   h.gravity_mps2 = options.gravity_mps2;
 
   LogTimestampStream times(out, &h.info);
-  constexpr std::size_t kChunk = 4096;
-  std::vector<ImuSample> chunk;
-  chunk.reserve(kChunk);
+  SampleChunker chunks(times);
   double t_last_s = 0.0;  // the first sample's time is 0
   const auto imu = bag.imu();
   for (ImuMessage m; imu->next(m);) {
@@ -190,13 +188,9 @@ void stream_recording(const fs::path& file, const BagReader& bag, const RosbagOp
     s.gyro_radps = m.gyro_radps;
     if (scan.temperature > 0) s.temperature_c = temperature.at(time_of(m));
     t_last_s = s.t_s;
-    chunk.push_back(s);
-    if (chunk.size() == kChunk) {
-      times.add_samples(chunk.data(), chunk.size());
-      chunk.clear();
-    }
+    chunks.add(s);
   }
-  times.add_samples(chunk.data(), chunk.size());
+  chunks.flush();
   const TimestampSummary sum = times.finish();
 
   std::string msg = bag.format + " " + file.string() + ": topic " + bag.imu_topic + ", " + std::to_string(scan.imu) +
