@@ -449,9 +449,22 @@ struct ImucalRun {
 // back at nearly every line) is refused with the advice to sort it.
 constexpr std::size_t kMaxImucalRuns = 1024;
 
-// Checks every data line and finds the runs.
-std::vector<ImucalRun> scan_imucal_runs(LineReader& r, const ImucalColumns& c) {
+// "<axis>_p" (+axis up) or "<axis>_a" (+axis down) for axis x, y or z: a part with known specific
+// force (truth).
+bool imucal_held_part(const std::string& part) {
+  return part.size() == 3 && part[0] >= 'x' && part[0] <= 'z' && part[1] == '_' && (part[2] == 'p' || part[2] == 'a');
+}
+
+// What the first pass finds: the runs, and whether a part gives truth.
+struct ImucalScan {
   std::vector<ImucalRun> runs;
+  bool truth = false;
+};
+
+// Checks every data line and finds the runs.
+ImucalScan scan_imucal(LineReader& r, const ImucalColumns& c) {
+  ImucalScan scan;
+  std::vector<ImucalRun>& runs = scan.runs;
   std::string line;
   std::int64_t prev = 0;
   for (std::streampos pos = r.tell(); r.next(line); pos = r.tell()) {
@@ -470,9 +483,10 @@ std::vector<ImucalRun> scan_imucal_runs(LineReader& r, const ImucalColumns& c) {
     }
     ++runs.back().rows;
     prev = row.index;
+    scan.truth = scan.truth || imucal_held_part(row.part);
   }
   if (runs.empty()) throw ImportError(r.file(), 0, "no data lines");
-  return runs;
+  return scan;
 }
 
 // The rows of every run merged in time order (by sample index; equal indices in file order), one
@@ -573,7 +587,7 @@ class ImucalSegments {
       const bool up = part_.size() == 3 && part_[1] == '_' && part_[2] == 'p';
       const bool down = part_.size() == 3 && part_[1] == '_' && part_[2] == 'a';
       if (up || down) seg.targets = "+" + axis + (up ? " up" : " down");
-      if ((up || down) && part_[0] >= 'x' && part_[0] <= 'z') {
+      if (imucal_held_part(part_)) {
         std::array<double, 3> f{};
         f[static_cast<std::size_t>(part_[0] - 'x')] = up ? g_mps2_ : -g_mps2_;
         add_held_truth(rec, seg.t_start_s, seg.t_end_s, f);
@@ -596,15 +610,16 @@ class ImucalSegments {
 void import_imucal_session(const fs::path& file, const ImucalOptions& opt, Recording& rec, SampleSink& out) {
   LineReader r(file);
   const ImucalColumns columns = read_imucal_header(r);
-  const std::vector<ImucalRun> runs = scan_imucal_runs(r, columns);
+  const ImucalScan scan = scan_imucal(r, columns);
   rec = new_recording(file, "imucal");
+  if (scan.truth) rec.header.truth_columns = kTruthColumns;  // before the samples: the run's layout
   const double acc_lsb = physics::kStandardGravity / opt.accel_lsb_per_g;
   const double gyr_lsb = physics::kDegPerSecond / opt.gyro_lsb_per_dps;
   set_int16_sensor_info(opt.rate_hz, acc_lsb, gyr_lsb, rec);
   rec.header.identity.model = "imucal example session";
   rec.header.gravity_mps2 = opt.gravity_mps2;
 
-  ImucalRows rows(file, columns, runs);
+  ImucalRows rows(file, columns, scan.runs);
   ImucalSegments segments(opt.gravity_mps2);
   SampleChunker chunks(out);
   std::size_t gaps = 0;

@@ -1,4 +1,5 @@
-// Streaming import: a long CSV, ULog, DataFlash log, ROS 1 bag or rosbag2 (SQLite3) goes into a run folder a chunk at a time,
+// Streaming import: a long CSV, ULog, DataFlash log, ROS 1 bag, rosbag2 (SQLite3), imucal,
+// MPU-6050 or IMU-TK log goes into a run folder a chunk at a time,
 // with peak memory bounded independently of its length (measured in a child process from
 // /proc/self/status VmHWM), and with the same samples as the in-memory import; the windowed
 // timestamp repair flags a gap at a window boundary as a whole-log repair does.
@@ -90,7 +91,7 @@ void expect_bounded_growth(long growth_kib) {
 
 // Imports `log` (as `format`) into the new run folder `run` in a child process; returns the growth
 // of its peak resident memory [KiB] over the import (−1 when the import failed).
-long import_in_child(const fs::path& log, const fs::path& run, const std::string& format = "csv",
+long import_in_child(const Inputs& log, const fs::path& run, const std::string& format = "csv",
                      const ImportOptions& options = csv_options()) {
   int fds[2];
   if (::pipe(fds) != 0) return -1;
@@ -102,7 +103,7 @@ long import_in_child(const fs::path& log, const fs::path& run, const std::string
       const long before = peak_rss_kib();
       Recording rec;
       RunSink sink(rec, run, "name: streamed\n");
-      import_dataset({log}, format, rec, sink, options);
+      import_dataset(log, format, rec, sink, options);
       sink.finish();
       growth = peak_rss_kib() - before;
     } catch (const std::exception& e) {
@@ -141,7 +142,7 @@ TEST(ImportStream, LongCsvLogInBoundedMemoryWithTheSamplesOfAnInMemoryImport) {
   write_log(tmp / "long.csv", kLong);
   write_log(tmp / "short.csv", kShort);
 
-  const long growth_kib = import_in_child(tmp / "long.csv", tmp / "long_run");
+  const long growth_kib = import_in_child({tmp / "long.csv"}, tmp / "long_run");
   ASSERT_GE(growth_kib, 0) << "the streamed import failed";
   // Whole in memory, the samples alone take 2 M × 96 bytes ≈ 183 MiB; streamed, the timestamp
   // window, a chunk and the writer's buffers.
@@ -258,16 +259,23 @@ void write_dataflash(const fs::path& file, std::size_t n) {
   std::fclose(f);
 }
 
-// Imports `file` (as `format`, with `options`) streamed into a run folder, in a child process, and
-// checks: peak memory growth bounded, n samples at kRateHz with temperature, each (time included)
-// as `expect_sample(i, sample)` wants, one gap (at kGapAt), and the same samples and info event as the in-memory import
+// Imports `files` (as `format`, with `options`) streamed into a run folder, in a child process, and
+// checks: peak memory growth bounded, n samples at kRateHz, with temperature and one gap (at kGapAt)
+// as `traits` say, each sample (time included) as `expect_sample(i, sample)` wants, and the same samples and info event as the in-memory import
 // `in_memory` (the same reader into a vector), written.
-void check_long_log(const fs::path& file, const std::string& format, std::size_t n,
+// What a long log holds besides its samples.
+struct LongLogTraits {
+  bool temperature = true;  // has a temperature
+  bool gap = true;          // one gap, at kGapAt (else none)
+};
+
+void check_long_log(const Inputs& files, const std::string& format, std::size_t n,
                     const std::function<Recording()>& in_memory,
                     const std::function<void(std::size_t, const ImuSample&)>& expect_sample,
-                    const ImportOptions& options = {}) {
+                    const ImportOptions& options = {}, const LongLogTraits& traits = {}) {
+  const fs::path& file = files.front();
   const fs::path run_dir = file.string() + ".run";
-  const long growth_kib = import_in_child(file, run_dir, format, options);
+  const long growth_kib = import_in_child(files, run_dir, format, options);
   ASSERT_GE(growth_kib, 0) << "the streamed import failed";
   // Whole in memory, the file alone is about 90 MiB and the samples 92 MiB; streamed, the readers'
   // buffers, the timestamp window, a chunk and the writer's buffers.
@@ -276,7 +284,7 @@ void check_long_log(const fs::path& file, const std::string& format, std::size_t
   const Recording run = Recording::open(run_dir, SampleLoading::kStream);
   ASSERT_EQ(run.sample_count(), n);
   EXPECT_EQ(run.header.experiment_name.rfind("import:", 0), 0u) << run.header.experiment_name;
-  EXPECT_TRUE(run.header.info.has_temperature);
+  EXPECT_EQ(run.header.info.has_temperature, traits.temperature);
   EXPECT_NEAR(run.header.info.output_rate_hz, kRateHz, 1e-9 * kRateHz);
   std::vector<ImuSample> chunk(4096);
   std::size_t gaps = 0;
@@ -292,7 +300,7 @@ void check_long_log(const fs::path& file, const std::string& format, std::size_t
       }
     }
   }
-  EXPECT_EQ(gaps, 1u);
+  EXPECT_EQ(gaps, traits.gap ? 1u : 0u);
 
   Recording memory = in_memory();
   ASSERT_EQ(memory.samples.size(), n);
@@ -309,7 +317,7 @@ TEST(ImportStream, LongUlogInBoundedMemoryWithTheSamplesOfAnInMemoryImport) {
   TempDir tmp("import-stream-ulog");
   constexpr std::size_t kLong = 1'000'000;
   write_ulog(tmp / "long.ulg", kLong);
-  check_long_log(tmp / "long.ulg", "ulog", kLong, [&] { return import_ulog(tmp / "long.ulg"); },
+  check_long_log({tmp / "long.ulg"}, "ulog", kLong, [&] { return import_ulog(tmp / "long.ulg"); },
                  [](std::size_t i, const ImuSample& s) {
                    ASSERT_EQ(s.t_s, static_cast<double>(1000 * i) * 1e-6);
                    ASSERT_EQ(s.accel_mps2.x(), static_cast<double>(i % 4096));
@@ -322,7 +330,7 @@ TEST(ImportStream, LongDataflashInBoundedMemoryWithTheSamplesOfAnInMemoryImport)
   TempDir tmp("import-stream-dataflash");
   constexpr std::size_t kLong = 1'000'000;
   write_dataflash(tmp / "long.BIN", kLong);
-  check_long_log(tmp / "long.BIN", "dataflash", kLong, [&] { return import_dataflash(tmp / "long.BIN"); },
+  check_long_log({tmp / "long.BIN"}, "dataflash", kLong, [&] { return import_dataflash(tmp / "long.BIN"); },
                  [](std::size_t i, const ImuSample& s) {
                    ASSERT_EQ(s.t_s, static_cast<double>(1000 * i) * 1e-6);
                    ASSERT_EQ(s.gyro_radps.z(), static_cast<double>(i % 4096));
@@ -469,7 +477,7 @@ TEST(ImportStream, LongRos1BagInBoundedMemoryWithTheSamplesOfAnInMemoryImport) {
   TempDir tmp("import-stream-rosbag1");
   write_long_ros1_bag(tmp / "long.bag", kBagMessages);
   const RosbagOptions o{.topic = {}, .temperature_topic = "/temp", .identity = {}, .gravity_mps2 = 0.0};
-  check_long_log(tmp / "long.bag", "rosbag1", kBagMessages, [&] { return import_rosbag1(tmp / "long.bag", o); },
+  check_long_log({tmp / "long.bag"}, "rosbag1", kBagMessages, [&] { return import_rosbag1(tmp / "long.bag", o); },
                  expect_bag_sample, bag_options());
 }
 
@@ -477,8 +485,99 @@ TEST(ImportStream, LongRosbag2SqliteInBoundedMemoryWithTheSamplesOfAnInMemoryImp
   TempDir tmp("import-stream-rosbag2");
   ASSERT_NO_FATAL_FAILURE(write_long_db3(tmp / "long.db3", kBagMessages));
   const RosbagOptions o{.topic = {}, .temperature_topic = "/temp", .identity = {}, .gravity_mps2 = 0.0};
-  check_long_log(tmp / "long.db3", "rosbag2", kBagMessages, [&] { return import_rosbag2(tmp / "long.db3", o); },
+  check_long_log({tmp / "long.db3"}, "rosbag2", kBagMessages, [&] { return import_rosbag2(tmp / "long.db3", o); },
                  expect_bag_sample, bag_options());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Text formats, printed: n samples at kRateHz; sample i has the index k = i, and i + 3 from kGapAt
+// on where the format can show a gap.
+
+constexpr std::size_t kTextLines = 1'000'000;
+
+std::size_t text_index(std::size_t i) { return i < kGapAt ? i : i + 3; }
+
+// imucal: the parts grouped as imucal writes them (x_p: the second half of the session first, then
+// x_a: the first half), counts acc_x = k mod 4096, gyr_z = −(k mod 512); the index jumps by 4 at kGapAt.
+void write_imucal(const fs::path& file, std::size_t n) {
+  std::FILE* f = std::fopen(file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fputs("part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n", f);
+  const auto rows = [&](const char* part, std::size_t from, std::size_t to) {
+    for (std::size_t i = from; i < to; ++i) {
+      const std::size_t k = text_index(i);
+      std::fprintf(f, "%s,%zu,%zu.0,0.0,2048.0,0.0,0.0,-%zu.0\n", part, k, k % 4096, k % 512);
+    }
+  };
+  rows("x_p", n / 2, n);
+  rows("x_a", 0, n / 2);
+  std::fclose(f);
+}
+
+// MPU-6050 multi-position: "key,value" header (Fs 1000 Hz), counts ax = i mod 4096, gz = −(i mod 512).
+void write_mpu6050(const fs::path& file, std::size_t n) {
+  std::FILE* f = std::fopen(file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fputs("Fs,1000\nLogging Type,1\nInitialization time,5\nWaiting time,10\nax,ay,az,gx,gy,gz\n", f);
+  for (std::size_t i = 0; i < n; ++i) std::fprintf(f, "%zu,0,16384,0,0,-%zu\n", i % 4096, i % 512);
+  std::fclose(f);
+}
+
+// IMU-TK: the accelerometer at t = k ms (x = k mod 4096 [m/s²]; three samples lost at kGapAt) and the
+// gyro on its own clock half a period later, t = (j + ½) ms for j = −1 … n + 3, z = j [rad/s]: at the
+// accelerometer times it interpolates to z = k − ½.
+void write_imutk(const fs::path& acc, const fs::path& gyro, std::size_t n) {
+  std::FILE* a = std::fopen(acc.c_str(), "w");
+  std::FILE* g = std::fopen(gyro.c_str(), "w");
+  ASSERT_TRUE(a && g);
+  for (std::size_t i = 0; i < n; ++i) std::fprintf(a, "%.6f %zu 0 9.81\n", static_cast<double>(text_index(i)) * 1e-3, text_index(i) % 4096);
+  for (long j = -1; j <= static_cast<long>(n) + 3; ++j) std::fprintf(g, "%.6f 0 0 %ld\n", (static_cast<double>(j) + 0.5) * 1e-3, j);
+  std::fclose(a);
+  std::fclose(g);
+}
+
+TEST(ImportStream, LongImucalSessionInBoundedMemoryWithTheSamplesOfAnInMemoryImport) {
+  TempDir tmp("import-stream-imucal");
+  ASSERT_NO_FATAL_FAILURE(write_imucal(tmp / "long.csv", kTextLines));
+  ImportOptions o;
+  o.set("rate_hz", "1000");
+  ImucalOptions m;
+  m.rate_hz = kRateHz;
+  check_long_log({tmp / "long.csv"}, "imucal", kTextLines, [&] { return import_imucal_session(tmp / "long.csv", m); },
+                 [](std::size_t i, const ImuSample& s) {
+                   const std::size_t k = text_index(i);
+                   ASSERT_EQ(s.t_s, static_cast<double>(k) / kRateHz);
+                   ASSERT_EQ(s.accel_counts[0], static_cast<std::int32_t>(k % 4096));
+                   ASSERT_EQ(s.gyro_counts[2], -static_cast<std::int32_t>(k % 512));
+                 },
+                 o, {.temperature = false, .gap = true});
+}
+
+TEST(ImportStream, LongMpu6050SessionInBoundedMemoryWithTheSamplesOfAnInMemoryImport) {
+  TempDir tmp("import-stream-mpu6050");
+  ASSERT_NO_FATAL_FAILURE(write_mpu6050(tmp / "long.csv", kTextLines));
+  check_long_log({tmp / "long.csv"}, "mpu6050_multipos", kTextLines,
+                 [&] { return import_mpu6050_multipos(tmp / "long.csv"); },
+                 [](std::size_t i, const ImuSample& s) {
+                   ASSERT_EQ(s.t_s, static_cast<double>(i) / kRateHz);
+                   ASSERT_EQ(s.accel_counts[0], static_cast<std::int32_t>(i % 4096));
+                   ASSERT_EQ(s.gyro_counts[2], -static_cast<std::int32_t>(i % 512));
+                 },
+                 {}, {.temperature = false, .gap = false});
+}
+
+TEST(ImportStream, LongImuTkFilesInBoundedMemoryWithTheSamplesOfAnInMemoryImport) {
+  TempDir tmp("import-stream-imutk");
+  ASSERT_NO_FATAL_FAILURE(write_imutk(tmp / "acc.txt", tmp / "gyro.txt", kTextLines));
+  check_long_log({tmp / "acc.txt", tmp / "gyro.txt"}, "imutk", kTextLines,
+                 [&] { return import_imutk(tmp / "acc.txt", tmp / "gyro.txt"); },
+                 [](std::size_t i, const ImuSample& s) {
+                   const std::size_t k = text_index(i);
+                   ASSERT_EQ(s.t_s, static_cast<double>(k) / kRateHz);
+                   ASSERT_EQ(s.accel_mps2.x(), static_cast<double>(k % 4096));
+                   ASSERT_NEAR(s.gyro_radps.z(), static_cast<double>(k) - 0.5, 1e-6);  // interpolated
+                 },
+                 {}, {.temperature = false, .gap = true});
 }
 
 }  // namespace
