@@ -4,11 +4,13 @@
 # interpolated; dataflash: IMU instance 0 and, every other sample, instance 1; rosbag1: a ROS 1 bag
 # through Debian's python3-rosbag, lz4 chunks; db3: a rosbag2 SQLite3 file in rosbag2's schema;
 # mcap: an MCAP file, uncompressed chunks of about 1 MiB; the bags: sensor_msgs Imu messages
-# and a Temperature message each second, imported with --temperature-topic), then imports it into a
+# and a Temperature message each second, imported with --temperature-topic; text: imucal (two
+# parts, the second half of the session first, --rate-hz 1000), mpu6050 (Fs,1000 header) and imutk
+# (accelerometer and gyro files, the gyro half a period later: interpolated)), then imports it into a
 # run folder under /usr/bin/time; prints samples, log size, wall [s], user + system CPU [s], peak RSS
 # [MiB]. STEND may be any build of `stend` (e.g. an older one).
 #
-#   bench/import_log_bench.sh ulog|dataflash|rosbag1|db3|mcap [STEND] [SAMPLES]
+#   bench/import_log_bench.sh ulog|dataflash|rosbag1|db3|mcap|imucal|mpu6050|imutk [STEND] [SAMPLES]
 #                                                  (defaults: build/bin/stend 10000000)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -21,6 +23,8 @@ trap 'rm -rf "$tmp"' EXIT
 extra=()
 case $format in
 rosbag1|db3|mcap) extra=(--temperature-topic /temp) ;;
+imucal) extra=(--rate-hz 1000) ;;
+imutk) extra=("$tmp/log.gyro") ;;
 esac
 case $format in
 rosbag1)  # python3-rosbag is a Debian package: Debian's interpreter
@@ -86,6 +90,24 @@ else:  # MCAP (mcap.dev/spec): records <opcode u8><length u64><content>; chunks 
     out.write(rec(2, struct.pack("<QQI", 0, 0, 0)) + b"\x89MCAP0\r\n")
 PY
 ;;
+imucal|mpu6050|imutk)
+python3 - "$format" "$n" "$tmp/log" <<'PY'
+import sys
+fmt, n, path = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+out = open(path, "w", buffering=1 << 20)
+if fmt == "imucal":
+    out.write("part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n")
+    for part, lo, hi in (("z_a", n // 2, n), ("z_p", 0, n // 2)):
+        out.writelines("%s,%d,%d,%d,2048,1,-2,%d\n" % (part, i, i % 64, -(i % 32), i % 16) for i in range(lo, hi))
+elif fmt == "mpu6050":
+    out.write("Fs,1000\nInitialization time,5\nax,ay,az,gx,gy,gz\n")
+    out.writelines("%d,%d,16384,1,-2,%d\n" % (i % 64, -(i % 32), i % 16) for i in range(n))
+else:
+    out.writelines("%.6f %.4f %.4f 9.81\n" % (i / 1000, (i % 64) * 1e-3, -(i % 32) * 1e-3) for i in range(n))
+    gyro = open(path + ".gyro", "w", buffering=1 << 20)
+    gyro.writelines("%.7f 0.001 -0.002 %.4f\n" % ((i + 0.5) / 1000, (i % 16) * 1e-3) for i in range(-1, n + 1))
+PY
+;;
 *)
 python3 - "$format" "$n" "$tmp/log" <<'PY'
 import struct, sys
@@ -113,7 +135,7 @@ else:
 PY
 ;;
 esac
-log_mb=$(du -m "$tmp/log" | cut -f1)
+log_mb=$(du -cm "$tmp"/log* | tail -1 | cut -f1)
 
 /usr/bin/time -f "%e %U %S %M" -o "$tmp/time" "$stend" import "$tmp/log" "${extra[@]}" -o "$tmp/run" >/dev/null
 awk -v n="$n" -v log_mb="$log_mb" '{
