@@ -10,6 +10,7 @@
 
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <ros/exception.h>
 #include <ros/serialization.h>
 
 #include <algorithm>
@@ -239,9 +240,7 @@ void import_rosbag1(const fs::path& path, const RosbagOptions& options, Recordin
     const std::string topic = choose_imu_topic(path, topics, options, kRos1Types);
     check_temperature_topic(path, topics, options, kRos1Types);
     stream_recording(path, Ros1Reader(path, bag, topic, options.temperature_topic), options, rec, out);
-  } catch (const ImportError&) {
-    throw;
-  } catch (const std::exception& e) {
+  } catch (const ros::Exception& e) {  // librosbag's (the sink's own errors pass as they are)
     throw ImportError(path, "chunks", std::string("librosbag cannot read a message: ") + e.what());
   }
 }
