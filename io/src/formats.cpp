@@ -209,7 +209,8 @@ RosbagOptions rosbag_options(const ImportOptions& o) {
 const std::vector<Format>& formats() {
   static const std::vector<Format> table = {
       {"run", "a Stend run folder (run.json, imu.csv, ...)", looks_like_run, open_run},
-      {"mat", "MATLAB .mat (v5; v7.3 through HDF5): t|fs, acc, gyro, temp, counts, segments", looks_like_mat, open_mat},
+      {"mat", "MATLAB .mat (v5; v7.3 through HDF5): t|fs, acc, gyro, temp, counts, segments (read whole into memory)",
+       looks_like_mat, open_mat},
       {"imucal", "imucal annotated session (part,samples,acc_*,gyr_* counts)", looks_like_imucal, open_imucal, 1,
        stream_imucal},
       {"mpu6050_multipos", "MPU-6050 multi-position session (Fs,… header, ax..gz counts)", looks_like_mpu6050_multipos,
