@@ -15,6 +15,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <numbers>
 #include <sstream>
 #include <string_view>
