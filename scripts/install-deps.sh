@@ -12,6 +12,7 @@ packages=(
   zlib1g-dev chromium  # reporting: PNG check of report screenshots; headless-browser test of the reports
   octave  # reporting: octave-cli loads the MATLAB export in a test (~1 min to install, no recommends)
   python3-numpy python3-pandas python3-scipy  # bench: allantools (the Allan peer, ../shared/peers) on Debian's numpy, pandas, scipy
+  python3-rosbag  # bench: import_log_bench.sh writes a long ROS 1 bag
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -68,7 +68,7 @@ Recording open_mat(const Inputs& in, const ImportOptions& o) {
   return import_mat(in[0], m);
 }
 
-Recording open_imucal(const Inputs& in, const ImportOptions& o) {
+ImucalOptions imucal_options(const ImportOptions& o) {
   ImucalOptions m;
   if (o.rate_hz > 0.0) m.rate_hz = o.rate_hz;
   m.accel_lsb_per_g = per_g(o.accel_value, m.accel_lsb_per_g);
@@ -76,21 +76,28 @@ Recording open_imucal(const Inputs& in, const ImportOptions& o) {
   m.accel_offset_counts = o.accel_value.offset;
   m.gyro_offset_counts = o.gyro_value.offset;
   if (o.gravity_mps2 > 0.0) m.gravity_mps2 = o.gravity_mps2;
-  return import_imucal_session(in[0], m);
+  return m;
+}
+Recording open_imucal(const Inputs& in, const ImportOptions& o) { return import_imucal_session(in[0], imucal_options(o)); }
+void stream_imucal(const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
+  import_imucal_session(in[0], imucal_options(o), rec, out);
 }
 
-Recording open_mpu6050(const Inputs& in, const ImportOptions& o) {
+Mpu6050MultiposOptions mpu6050_options(const ImportOptions& o) {
   Mpu6050MultiposOptions m;
   m.accel_lsb_per_g = per_g(o.accel_value, m.accel_lsb_per_g);
   m.gyro_lsb_per_dps = per_dps(o.gyro_value, m.gyro_lsb_per_dps);
   m.accel_offset_counts = o.accel_value.offset;
   m.gyro_offset_counts = o.gyro_value.offset;
-  Recording rec = import_mpu6050_multipos(in[0], m);
-  rec.header.gravity_mps2 = o.gravity_mps2;
-  return rec;
+  m.gravity_mps2 = o.gravity_mps2;
+  return m;
+}
+Recording open_mpu6050(const Inputs& in, const ImportOptions& o) { return import_mpu6050_multipos(in[0], mpu6050_options(o)); }
+void stream_mpu6050(const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
+  import_mpu6050_multipos(in[0], mpu6050_options(o), rec, out);
 }
 
-Recording open_imutk(const Inputs& in, const ImportOptions& o) {
+ImuTkOptions imutk_options(const ImportOptions& o) {
   ImuTkOptions m;
   m.time_scale_s = o.time_scale_s;
   m.counts = o.accel_value.counts();
@@ -100,7 +107,13 @@ Recording open_imutk(const Inputs& in, const ImportOptions& o) {
   m.gyro_offset_counts = o.gyro_value.offset;
   m.rate_hz = o.rate_hz;
   m.gravity_mps2 = o.gravity_mps2;
-  return import_imutk(in[0], in.size() > 1 ? in[1] : fs::path(), m);
+  return m;
+}
+Recording open_imutk(const Inputs& in, const ImportOptions& o) {
+  return import_imutk(in[0], in.size() > 1 ? in[1] : fs::path(), imutk_options(o));
+}
+void stream_imutk(const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
+  import_imutk(in[0], in.size() > 1 ? in[1] : fs::path(), imutk_options(o), rec, out);
 }
 
 Recording open_table(const Inputs& in, const ImportOptions& o) { return import_static_table(in[0], o.gravity_mps2); }
@@ -196,13 +209,16 @@ RosbagOptions rosbag_options(const ImportOptions& o) {
 const std::vector<Format>& formats() {
   static const std::vector<Format> table = {
       {"run", "a Stend run folder (run.json, imu.csv, ...)", looks_like_run, open_run},
-      {"mat", "MATLAB .mat (v5; v7.3 through HDF5): t|fs, acc, gyro, temp, counts, segments", looks_like_mat, open_mat},
-      {"imucal", "imucal annotated session (part,samples,acc_*,gyr_* counts)", looks_like_imucal, open_imucal},
+      {"mat", "MATLAB .mat (v5; v7.3 through HDF5): t|fs, acc, gyro, temp, counts, segments (read whole into memory)",
+       looks_like_mat, open_mat},
+      {"imucal", "imucal annotated session (part,samples,acc_*,gyr_* counts)", looks_like_imucal, open_imucal, 1,
+       stream_imucal},
       {"mpu6050_multipos", "MPU-6050 multi-position session (Fs,… header, ax..gz counts)", looks_like_mpu6050_multipos,
-       open_mpu6050},
+       open_mpu6050, 1, stream_mpu6050},
       {"static_table", "table of static means against known inputs (angle_deg or f_*_mps2, a_*_mps2)",
        looks_like_static_table, open_table},
-      {"imutk", "IMU-TK text 't x y z' (ACC [GYRO]; any extension, .mat included)", looks_like_imutk, open_imutk, 2},
+      {"imutk", "IMU-TK text 't x y z' (ACC [GYRO]; any extension, .mat included)", looks_like_imutk, open_imutk, 2,
+       stream_imutk},
       {"ulog", "PX4 ULog: sensor_accel + sensor_gyro (with temperature), else sensor_combined", looks_like_ulog,
        [](const Inputs& in, const ImportOptions& o) { return import_ulog(in[0], {.instance = o.instance}); }, 1,
        [](const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
@@ -217,9 +233,15 @@ const std::vector<Format>& formats() {
        [](const Inputs& in, const ImportOptions&) { return import_euroc(in[0]); }, 1,
        [](const Inputs& in, const ImportOptions&, Recording& rec, SampleSink& out) { import_euroc(in[0], {}, rec, out); }},
       {"rosbag1", "ROS 1 bag v2.0: sensor_msgs/Imu (--topic)", looks_like_rosbag1,
-       [](const Inputs& in, const ImportOptions& o) { return import_rosbag1(in[0], rosbag_options(o)); }},
+       [](const Inputs& in, const ImportOptions& o) { return import_rosbag1(in[0], rosbag_options(o)); }, 1,
+       [](const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
+         import_rosbag1(in[0], rosbag_options(o), rec, out);
+       }},
       {"rosbag2", "ROS 2 bag (SQLite3 .db3 or MCAP, file or folder): sensor_msgs/msg/Imu (--topic)", looks_like_rosbag2,
-       [](const Inputs& in, const ImportOptions& o) { return import_rosbag2(in[0], rosbag_options(o)); }},
+       [](const Inputs& in, const ImportOptions& o) { return import_rosbag2(in[0], rosbag_options(o)); }, 1,
+       [](const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
+         import_rosbag2(in[0], rosbag_options(o), rec, out);
+       }},
       {"csv", "generic delimited text with mapped columns (--accel/--mapping ...)", nullptr, open_csv, 1, stream_csv},
   };
   return table;

@@ -33,6 +33,13 @@ class LineReader {
   std::size_t line() const { return line_; }
   const std::filesystem::path& file() const { return file_; }
   [[noreturn]] void fail(const std::string& message) const { throw ImportError(file_, line_, message); }
+  // Where the next line starts, to come back to it with seek (line(): the lines before it).
+  std::streampos tell() { return in_.tellg(); }
+  void seek(std::streampos pos, std::size_t lines_before) {
+    in_.clear();
+    in_.seekg(pos);
+    line_ = lines_before;
+  }
 
  private:
   std::filesystem::path file_;
@@ -111,6 +118,28 @@ using stend::io::place_import_events;
 // A streaming import (rec, out) → the recording with its samples in memory and its import events at
 // the first sample's time: the in-memory form of every importer that streams.
 Recording import_in_memory(const std::function<void(Recording& rec, SampleSink& out)>& import);
+
+// Samples passed one at a time, handed on to `out` in chunks of kDefaultChunkSamples.
+class SampleChunker {
+ public:
+  explicit SampleChunker(SampleSink& out) : out_(&out) { chunk_.reserve(kDefaultChunkSamples); }
+  void add(const ImuSample& s) {
+    chunk_.push_back(s);
+    ++count_;
+    if (chunk_.size() == kDefaultChunkSamples) flush();
+  }
+  // Hands on what is held (call once at the end).
+  void flush() {
+    out_->add_samples(chunk_.data(), chunk_.size());
+    chunk_.clear();
+  }
+  std::size_t count() const { return count_; }
+
+ private:
+  SampleSink* out_;
+  std::vector<ImuSample> chunk_;
+  std::size_t count_ = 0;
+};
 
 // Seconds from t0_us to t_us (timestamps in µs), exact to the microsecond.
 inline double seconds_since_us(std::uint64_t t0_us, std::uint64_t t_us) {

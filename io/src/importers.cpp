@@ -15,6 +15,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <numbers>
 #include <sstream>
 #include <string_view>
@@ -127,35 +128,46 @@ void add_held_truth(Recording& rec, double t0, double t1, const std::array<doubl
 // ---------------------------------------------------------------------------------------------
 // IMU-TK helpers
 
-struct Triad {
-  std::vector<double> t, x, y, z;
-  std::vector<std::size_t> line;
+// One line of an IMU-TK triad file: time [s] (× the time scale), the three values, its line.
+struct TriadLine {
+  double t = 0.0;
+  std::array<double, 3> v{};
+  std::size_t line = 0;
 };
 
-Triad read_triad_file(const fs::path& file, double time_scale) {
-  LineReader r(file);
-  Triad out;
-  std::string line;
-  while (r.next(line)) {
-    std::string_view v = trim(line);
-    if (v.empty() || v.front() == '#' || v.front() == '%') continue;
-    const auto f = split_any(v);
-    if (f.size() != 4) {
-      r.fail("expected 4 values 't x y z', found " + std::to_string(f.size()));
+// The lines of an IMU-TK triad file one at a time ('#', '%' comments and blank lines skipped),
+// each checked: four values, time not going back.
+class TriadReader {
+ public:
+  TriadReader(const fs::path& file, double time_scale) : r_(file), time_scale_(time_scale) {}
+  bool next(TriadLine& out) {
+    std::string line;
+    while (r_.next(line)) {
+      std::string_view v = trim(line);
+      if (v.empty() || v.front() == '#' || v.front() == '%') continue;
+      const auto f = split_any(v);
+      if (f.size() != 4) r_.fail("expected 4 values 't x y z', found " + std::to_string(f.size()));
+      const double t = number(r_, f[0], "t") * time_scale_;
+      if (count_ > 0 && t < prev_t_) {  // repeats are repaired from the rate afterwards
+        r_.fail("timestamp " + fmt_g(t) + " s goes back (previous " + fmt_g(prev_t_) + " s)");
+      }
+      out.t = prev_t_ = t;
+      for (std::size_t k = 0; k < 3; ++k) out.v[k] = number(r_, f[k + 1], k == 0 ? "x" : k == 1 ? "y" : "z");
+      out.line = r_.line();
+      ++count_;
+      return true;
     }
-    const double t = number(r, f[0], "t") * time_scale;
-    if (!out.t.empty() && t < out.t.back()) {  // repeats are repaired from the rate afterwards
-      r.fail("timestamp " + fmt_g(t) + " s goes back (previous " + fmt_g(out.t.back()) + " s)");
-    }
-    out.t.push_back(t);
-    out.x.push_back(number(r, f[1], "x"));
-    out.y.push_back(number(r, f[2], "y"));
-    out.z.push_back(number(r, f[3], "z"));
-    out.line.push_back(r.line());
+    if (count_ == 0) throw ImportError(r_.file(), 0, "no samples (expected lines 't x y z')");
+    return false;
   }
-  if (out.t.empty()) throw ImportError(file, 0, "no samples (expected lines 't x y z')");
-  return out;
-}
+  const fs::path& file() const { return r_.file(); }
+
+ private:
+  LineReader r_;
+  double time_scale_;
+  double prev_t_ = 0.0;
+  std::size_t count_ = 0;
+};
 
 void write_number(std::string& out, double v) {
   char buf[32];
@@ -425,103 +437,207 @@ ImucalRow imucal_row(const LineReader& r, const std::vector<std::string_view>& f
   return row;
 }
 
-// Every data line as a row, in time order (the file is grouped by part; time order is the sample
-// index); a repeated sample index is an error.
-std::vector<ImucalRow> read_imucal_rows(LineReader& r, const ImucalColumns& c) {
-  std::vector<ImucalRow> rows;
+// A run of data lines whose sample index increases from line to line: where its first line starts
+// (file position, lines before it) and how many rows it holds. An imucal session is grouped by
+// part, so its time order (the sample index) interleaves a few such runs.
+struct ImucalRun {
+  std::streampos pos;
+  std::size_t lines_before = 0;
+  std::size_t rows = 0;
+};
+
+// More runs would mean a file read through as many readers at once: such a file (its index going
+// back at nearly every line) is refused with the advice to sort it.
+constexpr std::size_t kMaxImucalRuns = 1024;
+
+// "<axis>_p" (+axis up) or "<axis>_a" (+axis down) for axis x, y or z: a part with known specific
+// force (truth).
+bool imucal_held_part(const std::string& part) {
+  return part.size() == 3 && part[0] >= 'x' && part[0] <= 'z' && part[1] == '_' && (part[2] == 'p' || part[2] == 'a');
+}
+
+// What the first pass finds: the runs, and whether a part gives truth.
+struct ImucalScan {
+  std::vector<ImucalRun> runs;
+  bool truth = false;
+};
+
+// Checks every data line and finds the runs.
+ImucalScan scan_imucal(LineReader& r, const ImucalColumns& c) {
+  ImucalScan scan;
+  std::vector<ImucalRun>& runs = scan.runs;
   std::string line;
-  while (r.next(line)) {
+  std::int64_t prev = 0;
+  for (std::streampos pos = r.tell(); r.next(line); pos = r.tell()) {
     if (is_blank(line)) continue;
     const auto f = split(line, ',');
     if (f.size() < c.needed()) {
       r.fail("expected " + std::to_string(c.count) + " fields, found " + std::to_string(f.size()));
     }
-    rows.push_back(imucal_row(r, f, c));
-  }
-  if (rows.empty()) throw ImportError(r.file(), 0, "no data lines");
-  std::stable_sort(rows.begin(), rows.end(), [](const ImucalRow& a, const ImucalRow& b) { return a.index < b.index; });
-  for (std::size_t i = 1; i < rows.size(); ++i) {
-    if (rows[i].index == rows[i - 1].index) {
-      throw ImportError(r.file(), rows[i].line, "sample index " + std::to_string(rows[i].index) +
-                                                    " also appears on line " + std::to_string(rows[i - 1].line));
+    const ImucalRow row = imucal_row(r, f, c);
+    if (runs.empty() || row.index <= prev) {
+      if (runs.size() == kMaxImucalRuns) {
+        r.fail("the sample index goes back more than " + std::to_string(kMaxImucalRuns) +
+               " times; sort the file by the 'samples' column");
+      }
+      runs.push_back({pos, r.line() - 1, 0});
     }
+    ++runs.back().rows;
+    prev = row.index;
+    scan.truth = scan.truth || imucal_held_part(row.part);
   }
-  return rows;
+  if (runs.empty()) throw ImportError(r.file(), 0, "no data lines");
+  return scan;
 }
 
-// Rows as samples: t = index / rate [s], counts × LSB [m/s², rad/s]; a jump in the index flags a
-// gap. Returns the number of gaps.
-std::size_t add_imucal_samples(const std::vector<ImucalRow>& rows, const ImucalOptions& opt, double acc_lsb,
-                               double gyr_lsb, Recording& rec) {
-  std::size_t gaps = 0;
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    ImuSample s;
-    s.t_s = static_cast<double>(rows[i].index) / opt.rate_hz;
-    for (int k = 0; k < 3; ++k) {
-      s.accel_counts[k] = rows[i].counts[static_cast<std::size_t>(k)];
-      s.gyro_counts[k] = rows[i].counts[static_cast<std::size_t>(k + 3)];
-      s.accel_mps2[k] = (s.accel_counts[k] - opt.accel_offset_counts) * acc_lsb;
-      s.gyro_radps[k] = (s.gyro_counts[k] - opt.gyro_offset_counts) * gyr_lsb;
+// The rows of every run merged in time order (by sample index; equal indices in file order), one
+// reader per run; a repeated sample index is an error.
+class ImucalRows {
+ public:
+  ImucalRows(const fs::path& file, const ImucalColumns& c, const std::vector<ImucalRun>& runs) : columns_(c) {
+    for (const ImucalRun& run : runs) {
+      Cursor& k = cursors_.emplace_back(Cursor{std::make_unique<LineReader>(file), run.rows, {}});
+      k.reader->seek(run.pos, run.lines_before);
+      advance(k);
     }
-    if (i > 0 && rows[i].index != rows[i - 1].index + 1) {
-      s.flags |= kGapBefore;
-      ++gaps;
-    }
-    rec.samples.push_back(s);
   }
-  return gaps;
+  bool next(ImucalRow& out) {
+    Cursor* best = nullptr;
+    for (Cursor& k : cursors_)
+      if (k.has_row() && (!best || k.row.index < best->row.index)) best = &k;
+    if (!best) return false;
+    out = best->row;
+    if (emitted_ && out.index == last_.index) {
+      throw ImportError(best->reader->file(), out.line, "sample index " + std::to_string(out.index) +
+                                                         " also appears on line " + std::to_string(last_.line));
+    }
+    last_ = out;
+    emitted_ = true;
+    advance(*best);
+    return true;
+  }
+
+ private:
+  struct Cursor {
+    std::unique_ptr<LineReader> reader;
+    std::size_t rows_left;  // in its run, the current row included
+    ImucalRow row;
+    bool has_row() const { return rows_left > 0; }
+  };
+  void advance(Cursor& k) {
+    if (k.row.line != 0 && --k.rows_left == 0) return;
+    std::string line;
+    while (k.reader->next(line)) {
+      if (is_blank(line)) continue;
+      k.row = imucal_row(*k.reader, split(line, ','), columns_);
+      return;
+    }
+  }
+  ImucalColumns columns_;
+  std::vector<Cursor> cursors_;
+  ImucalRow last_{};
+  bool emitted_ = false;
+};
+
+// The sample of a row: t = index / rate [s], counts × LSB [m/s², rad/s].
+ImuSample imucal_sample(const ImucalRow& row, const ImucalOptions& opt, double acc_lsb, double gyr_lsb) {
+  ImuSample s;
+  s.t_s = static_cast<double>(row.index) / opt.rate_hz;
+  for (int k = 0; k < 3; ++k) {
+    s.accel_counts[k] = row.counts[static_cast<std::size_t>(k)];
+    s.gyro_counts[k] = row.counts[static_cast<std::size_t>(k + 3)];
+    s.accel_mps2[k] = (s.accel_counts[k] - opt.accel_offset_counts) * acc_lsb;
+    s.gyro_radps[k] = (s.gyro_counts[k] - opt.gyro_offset_counts) * gyr_lsb;
+  }
+  return s;
 }
 
-// One segment per contiguous run of a part: "<axis>_rot" is a 360° rotation about the axis,
-// any other part an orientation ("<axis>_p" = +axis up: f = +g along it, "<axis>_a" = +axis
-// down: f = −g, both held as truth).
-void add_imucal_segments(const std::vector<ImucalRow>& rows, double g_mps2, Recording& rec) {
-  int id = 0, orientation = 0;
-  std::vector<std::size_t> orientation_segments;
-  for (std::size_t i = 0; i < rows.size();) {
-    std::size_t j = i;
-    while (j + 1 < rows.size() && rows[j + 1].part == rows[i].part) ++j;
-    const std::string& part = rows[i].part;
-    const bool rotation = part.size() > 4 && part.compare(part.size() - 4, 4, "_rot") == 0;
-    Segment seg = make_segment(id++, rotation ? SegmentKind::kRotation : SegmentKind::kOrientation, part,
-                               rec.samples[i].t_s, rec.samples[j].t_s);
-    const std::string axis = part.substr(0, 1);
+// One segment per contiguous run of a part in time order: "<axis>_rot" is a 360° rotation about
+// the axis, any other part an orientation ("<axis>_p" = +axis up: f = +g along it, "<axis>_a" =
+// +axis down: f = −g, both held as truth). Parts come sample by sample (add), finish() closes the
+// last segment and counts the orientations.
+class ImucalSegments {
+ public:
+  explicit ImucalSegments(double g_mps2) : g_mps2_(g_mps2) {}
+  void add(const std::string& part, double t_s, Recording& rec) {
+    if (open_ && part == part_) {
+      t_end_ = t_s;
+      return;
+    }
+    close(rec);
+    open_ = true;
+    part_ = part;
+    t_start_ = t_end_ = t_s;
+  }
+  void finish(Recording& rec) {
+    close(rec);
+    for (std::size_t k : orientation_segments_) rec.segments[k].orientation_count = orientation_;
+  }
+
+ private:
+  void close(Recording& rec) {
+    if (!open_) return;
+    const bool rotation = part_.size() > 4 && part_.compare(part_.size() - 4, 4, "_rot") == 0;
+    Segment seg = make_segment(id_++, rotation ? SegmentKind::kRotation : SegmentKind::kOrientation, part_, t_start_,
+                               t_end_);
+    const std::string axis = part_.substr(0, 1);
     if (rotation) {
       seg.targets = "360 deg turn about " + axis;
     } else {
-      seg.orientation = orientation++;
-      const bool up = part.size() == 3 && part[1] == '_' && part[2] == 'p';
-      const bool down = part.size() == 3 && part[1] == '_' && part[2] == 'a';
+      seg.orientation = orientation_++;
+      const bool up = part_.size() == 3 && part_[1] == '_' && part_[2] == 'p';
+      const bool down = part_.size() == 3 && part_[1] == '_' && part_[2] == 'a';
       if (up || down) seg.targets = "+" + axis + (up ? " up" : " down");
-      if ((up || down) && part[0] >= 'x' && part[0] <= 'z') {
+      if (imucal_held_part(part_)) {
         std::array<double, 3> f{};
-        f[static_cast<std::size_t>(part[0] - 'x')] = up ? g_mps2 : -g_mps2;
+        f[static_cast<std::size_t>(part_[0] - 'x')] = up ? g_mps2_ : -g_mps2_;
         add_held_truth(rec, seg.t_start_s, seg.t_end_s, f);
       }
-      orientation_segments.push_back(rec.segments.size());
+      orientation_segments_.push_back(rec.segments.size());
     }
     rec.segments.push_back(seg);
-    i = j + 1;
+    open_ = false;
   }
-  for (std::size_t k : orientation_segments) rec.segments[k].orientation_count = orientation;
-}
+  double g_mps2_;
+  bool open_ = false;
+  std::string part_;
+  double t_start_ = 0.0, t_end_ = 0.0;
+  int id_ = 0, orientation_ = 0;
+  std::vector<std::size_t> orientation_segments_;
+};
 
 }  // namespace
 
-Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) {
+void import_imucal_session(const fs::path& file, const ImucalOptions& opt, Recording& rec, SampleSink& out) {
   LineReader r(file);
   const ImucalColumns columns = read_imucal_header(r);
-  const std::vector<ImucalRow> rows = read_imucal_rows(r, columns);
-  Recording rec = new_recording(file, "imucal");
+  const ImucalScan scan = scan_imucal(r, columns);
+  rec = new_recording(file, "imucal");
+  if (scan.truth) rec.header.truth_columns = kTruthColumns;  // before the samples: the run's layout
   const double acc_lsb = physics::kStandardGravity / opt.accel_lsb_per_g;
   const double gyr_lsb = physics::kDegPerSecond / opt.gyro_lsb_per_dps;
-  const std::size_t gaps = add_imucal_samples(rows, opt, acc_lsb, gyr_lsb, rec);
-  add_imucal_segments(rows, opt.gravity_mps2, rec);
   set_int16_sensor_info(opt.rate_hz, acc_lsb, gyr_lsb, rec);
   rec.header.identity.model = "imucal example session";
   rec.header.gravity_mps2 = opt.gravity_mps2;
+
+  ImucalRows rows(file, columns, scan.runs);
+  ImucalSegments segments(opt.gravity_mps2);
+  SampleChunker chunks(out);
+  std::size_t gaps = 0;
+  std::int64_t prev = 0;
+  for (ImucalRow row; rows.next(row); prev = row.index) {
+    ImuSample s = imucal_sample(row, opt, acc_lsb, gyr_lsb);
+    if (chunks.count() > 0 && row.index != prev + 1) {  // a jump in the index
+      s.flags |= kGapBefore;
+      ++gaps;
+    }
+    segments.add(row.part, s.t_s, rec);
+    chunks.add(s);
+  }
+  chunks.flush();
+  segments.finish(rec);
   add_import_event(
-      rec, "imported " + std::to_string(rec.samples.size()) + " samples from " + file.string() +
+      rec, "imported " + std::to_string(chunks.count()) + " samples from " + file.string() +
                " (imucal annotated session; rate " + fmt_g(opt.rate_hz) +
                " Hz; counts converted with the nominal " + fmt_g(opt.accel_lsb_per_g) +
                " LSB/g and " + fmt_g(opt.gyro_lsb_per_dps) +
@@ -530,7 +646,10 @@ Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) 
                fmt_g(opt.gravity_mps2) + " m/s^2 is imucal's expected_g; truth from the annotations: "
                "<axis>_p = axis up (f = +g along it), <axis>_a = axis down (-g), rate 0" +
                (gaps ? "; " + std::to_string(gaps) + " gap(s) in the sample index" : "") + ")");
-  return rec;
+}
+
+Recording import_imucal_session(const fs::path& file, const ImucalOptions& opt) {
+  return import_in_memory([&](Recording& rec, SampleSink& out) { import_imucal_session(file, opt, rec, out); });
 }
 
 // =============================================================================================
@@ -594,10 +713,12 @@ double mpu_rate(const fs::path& file, const MpuHeader& h) {
   return fs_it->second;
 }
 
-// Every data line as a sample at t = index / rate [s]; counts × LSB [m/s², rad/s].
-void read_mpu_samples(LineReader& r, const std::array<std::size_t, 6>& col, std::size_t fields, double rate,
-                      const Mpu6050MultiposOptions& opt, double acc_lsb, double gyr_lsb, Recording& rec) {
+// Every data line as a sample at t = index / rate [s]; counts × LSB [m/s², rad/s]. Returns the
+// number of samples.
+std::size_t read_mpu_samples(LineReader& r, const std::array<std::size_t, 6>& col, std::size_t fields, double rate,
+                             const Mpu6050MultiposOptions& opt, double acc_lsb, double gyr_lsb, SampleSink& out) {
   const std::size_t needed = *std::max_element(col.begin(), col.end()) + 1;
+  SampleChunker chunks(out);
   std::string line;
   while (r.next(line)) {
     if (is_blank(line)) continue;
@@ -606,7 +727,7 @@ void read_mpu_samples(LineReader& r, const std::array<std::size_t, 6>& col, std:
       r.fail("expected " + std::to_string(fields) + " fields, found " + std::to_string(f.size()));
     }
     ImuSample s;
-    s.t_s = static_cast<double>(rec.samples.size()) / rate;
+    s.t_s = static_cast<double>(chunks.count()) / rate;
     for (int k = 0; k < 3; ++k) {
       const auto ka = static_cast<std::size_t>(k), kg = static_cast<std::size_t>(k + 3);
       s.accel_counts[k] = to_counts(r, number(r, f[col[ka]], kMpuColumns[ka]), kMpuColumns[ka]);
@@ -614,15 +735,18 @@ void read_mpu_samples(LineReader& r, const std::array<std::size_t, 6>& col, std:
       s.accel_mps2[k] = (s.accel_counts[k] - opt.accel_offset_counts) * acc_lsb;
       s.gyro_radps[k] = (s.gyro_counts[k] - opt.gyro_offset_counts) * gyr_lsb;
     }
-    rec.samples.push_back(s);
+    chunks.add(s);
   }
+  chunks.flush();
+  return chunks.count();
 }
 
-// The still interval at the start ("Initialization time" [s] in the header) as an orientation segment.
-void add_initialization_segment(const MpuHeader& h, Recording& rec) {
+// The still interval at the start ("Initialization time" [s] in the header) as an orientation
+// segment, up to the last sample's time t_last_s at most.
+void add_initialization_segment(const MpuHeader& h, double t_last_s, Recording& rec) {
   const auto init = h.values.find("Initialization time");
   if (init == h.values.end() || !(init->second > 0.0)) return;
-  const double t_end = std::min(init->second, rec.samples.back().t_s);
+  const double t_end = std::min(init->second, t_last_s);
   Segment seg = make_segment(0, SegmentKind::kOrientation, "initialization", 0.0, t_end);
   seg.orientation = 0;
   seg.targets = "held still (Initialization time " + fmt_g(init->second) + " s)";
@@ -631,29 +755,34 @@ void add_initialization_segment(const MpuHeader& h, Recording& rec) {
 
 }  // namespace
 
-Recording import_mpu6050_multipos(const fs::path& file, const Mpu6050MultiposOptions& opt) {
+void import_mpu6050_multipos(const fs::path& file, const Mpu6050MultiposOptions& opt, Recording& rec,
+                             SampleSink& out) {
   LineReader r(file);
   const MpuHeader header = read_mpu_header(r);
   const std::array<std::size_t, 6> col = mpu_columns(file, header);
   const double rate = mpu_rate(file, header);
-  Recording rec = new_recording(file, "mpu6050_multipos");
+  rec = new_recording(file, "mpu6050_multipos");
   const double acc_lsb = physics::kStandardGravity / opt.accel_lsb_per_g;
   const double gyr_lsb = physics::kDegPerSecond / opt.gyro_lsb_per_dps;
-  read_mpu_samples(r, col, header.names.size(), rate, opt, acc_lsb, gyr_lsb, rec);
-  if (rec.samples.empty()) throw ImportError(file, 0, "no data lines after the column names");
   set_int16_sensor_info(rate, acc_lsb, gyr_lsb, rec);
   rec.header.identity.vendor = "InvenSense";
   rec.header.identity.model = "MPU-6050";
+  rec.header.gravity_mps2 = opt.gravity_mps2;
+  const std::size_t count = read_mpu_samples(r, col, header.names.size(), rate, opt, acc_lsb, gyr_lsb, out);
+  if (count == 0) throw ImportError(file, 0, "no data lines after the column names");
   std::string hdr;
   for (const auto& [k, v] : header.values) hdr += (hdr.empty() ? "" : ", ") + k + " = " + fmt_g(v);
-  add_initialization_segment(header, rec);
-  add_import_event(rec, "imported " + std::to_string(rec.samples.size()) + " samples from " +
+  add_initialization_segment(header, static_cast<double>(count - 1) / rate, rec);
+  add_import_event(rec, "imported " + std::to_string(count) + " samples from " +
                             file.string() + " (MPU-6050 multi-position session; header: " + hdr +
                             "; counts converted with " + fmt_g(opt.accel_lsb_per_g) + " LSB/g (+-2 g) and " +
                             fmt_g(opt.gyro_lsb_per_dps) +
                             " LSB/(deg/s) (+-250 deg/s), 1 g = " + fmt_g(physics::kStandardGravity) + " m/s^2; no orientation "
                             "annotations beyond the initial still interval)");
-  return rec;
+}
+
+Recording import_mpu6050_multipos(const fs::path& file, const Mpu6050MultiposOptions& opt) {
+  return import_in_memory([&](Recording& rec, SampleSink& out) { import_mpu6050_multipos(file, opt, rec, out); });
 }
 
 // =============================================================================================
@@ -661,80 +790,92 @@ Recording import_mpu6050_multipos(const fs::path& file, const Mpu6050MultiposOpt
 
 namespace {
 
-// Value v of line i of a triad file as an integer count (counts = true).
-std::int32_t triad_count(const Triad& tr, std::size_t i, double v, const fs::path& file) {
+// A value of a triad line as an integer count (counts = true).
+std::int32_t triad_count(const TriadLine& l, double v, const fs::path& file) {
   if (!std::isfinite(v) || std::abs(v - std::round(v)) > 1e-6 || std::abs(v) > 2147483647.0) {
-    throw ImportError(file, tr.line[i], fmt_g(v) + " is not an integer count (counts = true)");
+    throw ImportError(file, l.line, fmt_g(v) + " is not an integer count (counts = true)");
   }
   return static_cast<std::int32_t>(std::lround(v));
 }
 
+// What a first pass over a triad file finds: its lines (checked), time span [s] and median
+// interval [s] (over the first kTimestampWindow lines, as the timestamp repair takes its rate).
+struct TriadScan {
+  std::size_t lines = 0;
+  double t_first = 0.0, t_last = 0.0, median_dt = 0.0;
+};
+
+TriadScan scan_triad(const fs::path& file, double time_scale) {
+  TriadReader in(file, time_scale);
+  TriadScan scan;
+  std::vector<ImuSample> window;  // the first lines' times, for median_interval
+  for (TriadLine l; in.next(l); ++scan.lines) {
+    if (scan.lines == 0) scan.t_first = l.t;
+    scan.t_last = l.t;
+    if (window.size() < kTimestampWindow) window.emplace_back().t_s = l.t;
+  }
+  scan.median_dt = median_interval(window);
+  return scan;
+}
+
+// Whether the gyro lines have the accelerometer's timestamps (within tol [s]), read side by side.
+bool same_times(const fs::path& acc_file, const fs::path& gyro_file, double time_scale, double tol) {
+  TriadReader acc(acc_file, time_scale), gyr(gyro_file, time_scale);
+  for (TriadLine a, g;;) {
+    const bool more_a = acc.next(a), more_g = gyr.next(g);
+    if (more_a != more_g) return false;
+    if (!more_a) return true;
+    if (std::abs(g.t - a.t) > tol) return false;
+  }
+}
+
 // One sample per accelerometer line: time [s] and value × accel_scale [m/s²] (with the counts).
-void add_accel_samples(const Triad& acc, const fs::path& acc_file, const ImuTkOptions& opt, Recording& rec) {
-  for (std::size_t i = 0; i < acc.t.size(); ++i) {
-    ImuSample s;
-    s.t_s = acc.t[i];
-    const double a[3] = {acc.x[i], acc.y[i], acc.z[i]};
-    for (int k = 0; k < 3; ++k) {
-      if (opt.counts) s.accel_counts[k] = triad_count(acc, i, a[k], acc_file);
-      s.accel_mps2[k] = (a[k] - opt.accel_offset_counts) * opt.accel_scale;
-    }
-    rec.samples.push_back(s);
+ImuSample accel_sample(const TriadLine& a, const fs::path& acc_file, const ImuTkOptions& opt) {
+  ImuSample s;
+  s.t_s = a.t;
+  for (int k = 0; k < 3; ++k) {
+    const double v = a.v[static_cast<std::size_t>(k)];
+    if (opt.counts) s.accel_counts[k] = triad_count(a, v, acc_file);
+    s.accel_mps2[k] = (v - opt.accel_offset_counts) * opt.accel_scale;
+  }
+  return s;
+}
+
+// Gyro values g (file units) into a sample: g × gyro_scale [rad/s], with the counts (`count` turns
+// a value into one).
+template <class Count>
+void set_gyro(const std::array<double, 3>& g, const ImuTkOptions& opt, Count count, ImuSample& s) {
+  for (int k = 0; k < 3; ++k) {
+    const double v = g[static_cast<std::size_t>(k)];
+    if (opt.counts) s.gyro_counts[k] = count(v);
+    s.gyro_radps[k] = (v - opt.gyro_offset_counts) * opt.gyro_scale;
   }
 }
 
-// Whether the gyro lines have the accelerometer's timestamps (within tol [s]).
-bool same_times(const Triad& acc, const Triad& gyr, double tol) {
-  bool same = gyr.t.size() == acc.t.size();
-  for (std::size_t i = 0; same && i < acc.t.size(); ++i) same = std::abs(gyr.t[i] - acc.t[i]) <= tol;
-  return same;
-}
+// The gyro linearly interpolated at rising times t [s] from a two-line window sliding over the gyro
+// file (counts are the rounded interpolated values).
+class GyroInterpolator {
+ public:
+  GyroInterpolator(const fs::path& file, double time_scale) : in_(file, time_scale) {
+    in_.next(a_);
+    if (!in_.next(b_)) b_ = a_;
+  }
+  std::array<double, 3> at(double t) {
+    while (b_.t < t && a_.line != b_.line) {
+      a_ = b_;
+      if (!in_.next(b_)) b_ = a_;  // past the last line: its value
+    }
+    const double span = b_.t - a_.t;
+    const double u = span > 0.0 ? std::clamp((t - a_.t) / span, 0.0, 1.0) : 0.0;
+    std::array<double, 3> g{};
+    for (std::size_t k = 0; k < 3; ++k) g[k] = a_.v[k] + u * (b_.v[k] - a_.v[k]);
+    return g;
+  }
 
-// Gyro line i into sample i: value × gyro_scale [rad/s] (with the counts).
-void add_matched_gyro(const Triad& gyr, const fs::path& gyro_file, const ImuTkOptions& opt, Recording& rec) {
-  for (std::size_t i = 0; i < rec.samples.size(); ++i) {
-    const double g[3] = {gyr.x[i], gyr.y[i], gyr.z[i]};
-    for (int k = 0; k < 3; ++k) {
-      if (opt.counts) rec.samples[i].gyro_counts[k] = triad_count(gyr, i, g[k], gyro_file);
-      rec.samples[i].gyro_radps[k] = (g[k] - opt.gyro_offset_counts) * opt.gyro_scale;
-    }
-  }
-}
-
-// Gyro linearly interpolated at the accelerometer times (counts are the rounded interpolated
-// values); samples outside the gyro's time span (± tol [s]) are dropped. Returns the merge note.
-std::string add_interpolated_gyro(const Triad& acc, const Triad& gyr, const fs::path& gyro_file, double tol,
-                                  const ImuTkOptions& opt, Recording& rec) {
-  std::vector<ImuSample> kept;
-  std::size_t j = 0, dropped = 0;
-  for (auto& s : rec.samples) {
-    if (s.t_s < gyr.t.front() - tol || s.t_s > gyr.t.back() + tol) {
-      ++dropped;
-      continue;
-    }
-    while (j + 1 < gyr.t.size() && gyr.t[j + 1] < s.t_s) ++j;
-    const std::size_t j1 = std::min(j + 1, gyr.t.size() - 1);
-    const double span = gyr.t[j1] - gyr.t[j];
-    const double u = span > 0.0 ? std::clamp((s.t_s - gyr.t[j]) / span, 0.0, 1.0) : 0.0;
-    const double g[3] = {gyr.x[j] + u * (gyr.x[j1] - gyr.x[j]), gyr.y[j] + u * (gyr.y[j1] - gyr.y[j]),
-                         gyr.z[j] + u * (gyr.z[j1] - gyr.z[j])};
-    for (int k = 0; k < 3; ++k) {
-      if (opt.counts) s.gyro_counts[k] = static_cast<std::int32_t>(std::lround(g[k]));
-      s.gyro_radps[k] = (g[k] - opt.gyro_offset_counts) * opt.gyro_scale;
-    }
-    kept.push_back(s);
-  }
-  if (kept.empty()) {
-    throw ImportError(gyro_file, 0, "the gyro timestamps (" + fmt_g(gyr.t.front()) + " … " +
-                                        fmt_g(gyr.t.back()) + " s) do not overlap the accelerometer's (" +
-                                        fmt_g(acc.t.front()) + " … " + fmt_g(acc.t.back()) +
-                                        " s); check time_scale_s");
-  }
-  rec.samples = std::move(kept);
-  return "gyro linearly interpolated at the accelerometer times (the files' timestamps differ)" +
-         (dropped ? "; " + std::to_string(dropped) + " accelerometer sample(s) outside the gyro's time span dropped"
-                  : std::string());
-}
+ private:
+  TriadReader in_;
+  TriadLine a_, b_;  // the lines around the last time asked for (the same line at the file's end)
+};
 
 // Sensor description: rate [Hz] (given, else left to the timestamp repair) and the
 // LSB sizes when the files hold counts.
@@ -753,32 +894,64 @@ void set_imutk_sensor_info(const ImuTkOptions& opt, bool has_gyro, Recording& re
 
 }  // namespace
 
-Recording import_imutk(const fs::path& acc_file, const fs::path& gyro_file, const ImuTkOptions& opt) {
-  const Triad acc = read_triad_file(acc_file, opt.time_scale_s);
+void import_imutk(const fs::path& acc_file, const fs::path& gyro_file, const ImuTkOptions& opt, Recording& rec,
+                  SampleSink& out) {
+  const TriadScan acc = scan_triad(acc_file, opt.time_scale_s);
   const bool has_gyro = !gyro_file.empty();
-  Triad gyr;
-  if (has_gyro) gyr = read_triad_file(gyro_file, opt.time_scale_s);
-  Recording rec = new_recording(acc_file, "imutk");
-  add_accel_samples(acc, acc_file, opt, rec);
-  const double median_dt = median_interval(rec.samples);
-  const double tol = opt.time_tolerance_s >= 0.0 ? opt.time_tolerance_s : 0.01 * median_dt;
-  std::string merge_note;
-  if (has_gyro && same_times(acc, gyr, tol)) {
-    add_matched_gyro(gyr, gyro_file, opt, rec);
-    merge_note = "gyro samples matched by timestamp";
-  } else if (has_gyro) {
-    merge_note = add_interpolated_gyro(acc, gyr, gyro_file, tol, opt, rec);
-  }
+  const TriadScan gyr = has_gyro ? scan_triad(gyro_file, opt.time_scale_s) : TriadScan{};
+  const double tol = opt.time_tolerance_s >= 0.0 ? opt.time_tolerance_s : 0.01 * acc.median_dt;
+  const bool matched = has_gyro && acc.lines == gyr.lines && same_times(acc_file, gyro_file, opt.time_scale_s, tol);
+  rec = new_recording(acc_file, "imutk");
   set_imutk_sensor_info(opt, has_gyro, rec);
-  const std::size_t gaps = repair_timestamps(rec, opt.rate_hz).gaps;
-  add_import_event(rec, "imported " + std::to_string(rec.samples.size()) + " samples from " +
+
+  TimestampRepairStream repair(rec, out, opt.rate_hz);
+  SampleChunker chunks(repair);
+  TriadReader acc_in(acc_file, opt.time_scale_s);
+  std::optional<TriadReader> gyr_matched;
+  std::optional<GyroInterpolator> gyr_interpolated;
+  if (matched) gyr_matched.emplace(gyro_file, opt.time_scale_s);
+  if (has_gyro && !matched) gyr_interpolated.emplace(gyro_file, opt.time_scale_s);
+  std::size_t dropped = 0;
+  for (TriadLine a; acc_in.next(a);) {
+    ImuSample s = accel_sample(a, acc_file, opt);
+    if (gyr_matched) {
+      TriadLine g;
+      gyr_matched->next(g);
+      set_gyro(g.v, opt, [&](double v) { return triad_count(g, v, gyro_file); }, s);
+    } else if (gyr_interpolated) {
+      if (s.t_s < gyr.t_first - tol || s.t_s > gyr.t_last + tol) {
+        ++dropped;
+        continue;
+      }
+      set_gyro(gyr_interpolated->at(s.t_s), opt, [](double v) { return static_cast<std::int32_t>(std::lround(v)); }, s);
+    }
+    chunks.add(s);
+  }
+  if (chunks.count() == 0) {
+    throw ImportError(gyro_file, 0, "the gyro timestamps (" + fmt_g(gyr.t_first) + " … " + fmt_g(gyr.t_last) +
+                                        " s) do not overlap the accelerometer's (" + fmt_g(acc.t_first) + " … " +
+                                        fmt_g(acc.t_last) + " s); check time_scale_s");
+  }
+  chunks.flush();
+  const std::size_t gaps = repair.finish().gaps;
+  std::string merge_note;
+  if (matched) merge_note = "gyro samples matched by timestamp";
+  if (gyr_interpolated) {
+    merge_note = "gyro linearly interpolated at the accelerometer times (the files' timestamps differ)" +
+                 (dropped ? "; " + std::to_string(dropped) + " accelerometer sample(s) outside the gyro's time span dropped"
+                          : std::string());
+  }
+  add_import_event(rec, "imported " + std::to_string(chunks.count()) + " samples from " +
                             acc_file.string() + (has_gyro ? " and " + gyro_file.string() : std::string()) +
                             " (IMU-TK text; time scale " + fmt_g(opt.time_scale_s) + " s/unit, " +
                             (opt.counts ? "counts" : "physical units") + ", accel scale " +
                             fmt_g(opt.accel_scale) + ", gyro scale " + fmt_g(opt.gyro_scale) +
                             (merge_note.empty() ? "" : "; " + merge_note) +
                             (gaps ? "; " + std::to_string(gaps) + " gap(s) flagged" : "") + ")");
-  return rec;
+}
+
+Recording import_imutk(const fs::path& acc_file, const fs::path& gyro_file, const ImuTkOptions& opt) {
+  return import_in_memory([&](Recording& rec, SampleSink& out) { import_imutk(acc_file, gyro_file, opt, rec, out); });
 }
 
 void export_imutk(const Recording& rec, const fs::path& acc_file, const fs::path& gyro_file,

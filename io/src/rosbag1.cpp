@@ -5,16 +5,19 @@
 // sensor_msgs C++ headers do not compile as C++20: their allocator rebind was removed).
 #include <stend/io/rosbag.hpp>
 
+#include "import_common.hpp"
 #include "rosbag_common.hpp"
 
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <ros/exception.h>
 #include <ros/serialization.h>
 
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -113,33 +116,58 @@ void check_md5(const fs::path& file, const rosbag::MessageInstance& m, const cha
   }
 }
 
-BagContent read_messages(const fs::path& file, const rosbag::Bag& bag, const RosbagOptions& options,
-                         const std::string& imu_topic) {
-  BagContent c;
-  c.format = "ROS 1 bag v2.0";
-  c.imu_topic = imu_topic;
-  std::vector<std::string> wanted{imu_topic};
-  if (!options.temperature_topic.empty()) wanted.push_back(options.temperature_topic);
-  rosbag::View view(bag, rosbag::TopicQuery(wanted));
-  std::size_t index = 0;
-  for (const rosbag::MessageInstance& m : view) {
-    const std::string where = "message " + std::to_string(index + 1) + " of the view (topic " + m.getTopic() + ")";
+// The messages of one topic through a librosbag View (which reads the chunks as it goes).
+template <class Message>
+class ViewCursor final : public MessageCursor<Message> {
+ public:
+  using Decode = Message (*)(Bytes, std::int64_t);
+  ViewCursor(const fs::path& file, const rosbag::Bag& bag, const std::string& topic, const char* md5, Decode decode)
+      : file_(file), view_(bag, rosbag::TopicQuery(topic)), it_(view_.begin()), md5_(md5), decode_(decode) {}
+  bool next(Message& out) override {
+    if (it_ == view_.end()) return false;
+    const rosbag::MessageInstance& m = *it_;
+    ++index_;
     try {
-      const std::int64_t record_ns = static_cast<std::int64_t>(m.getTime().toNSec());
-      if (m.getTopic() == imu_topic) {
-        check_md5(file, m, kImuMd5);
-        c.imu.push_back(decode_imu(serialized(m), record_ns));
-      } else {
-        check_md5(file, m, kTemperatureMd5);
-        c.temperature.push_back(decode_temperature(serialized(m), record_ns));
-      }
+      check_md5(file_, m, md5_);
+      out = decode_(serialized(m), static_cast<std::int64_t>(m.getTime().toNSec()));
     } catch (const ros::serialization::StreamOverrunException& e) {
-      throw ImportError(file, where, std::string("message shorter than its type: ") + e.what());
+      throw ImportError(file_, "message " + std::to_string(index_) + " of topic " + m.getTopic(),
+                        std::string("message shorter than its type: ") + e.what());
     }
-    ++index;
+    ++it_;
+    return true;
   }
-  return c;
-}
+
+ private:
+  fs::path file_;
+  rosbag::View view_;
+  rosbag::View::iterator it_;
+  const char* md5_;
+  Decode decode_;
+  std::size_t index_ = 0;
+};
+
+class Ros1Reader final : public BagReader {
+ public:
+  Ros1Reader(const fs::path& file, const rosbag::Bag& bag, const std::string& topic, std::string temperature_topic)
+      : file_(file), bag_(bag), temperature_topic_(std::move(temperature_topic)) {
+    format = "ROS 1 bag v2.0";
+    imu_topic = topic;
+  }
+  std::unique_ptr<MessageCursor<ImuMessage>> imu() const override {
+    return std::make_unique<ViewCursor<ImuMessage>>(file_, bag_, imu_topic, kImuMd5, decode_imu);
+  }
+  std::unique_ptr<MessageCursor<TemperatureMessage>> temperature() const override {
+    if (temperature_topic_.empty()) return nullptr;
+    return std::make_unique<ViewCursor<TemperatureMessage>>(file_, bag_, temperature_topic_, kTemperatureMd5,
+                                                            decode_temperature);
+  }
+
+ private:
+  fs::path file_;
+  const rosbag::Bag& bag_;
+  std::string temperature_topic_;
+};
 
 // The bag header record's index_pos (where librosbag reads the connection and chunk index
 // from), or 0 when the header cannot be read. Record: uint32 header length, fields
@@ -197,7 +225,7 @@ bool looks_like_rosbag1(const fs::path& path) {
   return in.read(head, sizeof head) && std::memcmp(head, kMagic, sizeof head) == 0;
 }
 
-Recording import_rosbag1(const fs::path& path, const RosbagOptions& options) {
+void import_rosbag1(const fs::path& path, const RosbagOptions& options, Recording& rec, SampleSink& out) {
   if (!looks_like_rosbag1(path)) {
     throw ImportError(path, "byte 0", "not a ROS 1 bag: expected the magic line '#ROSBAG V2.0'");
   }
@@ -211,12 +239,14 @@ Recording import_rosbag1(const fs::path& path, const RosbagOptions& options) {
     const std::vector<TopicInfo> topics = bag_topics(bag);
     const std::string topic = choose_imu_topic(path, topics, options, kRos1Types);
     check_temperature_topic(path, topics, options, kRos1Types);
-    return make_recording(path, read_messages(path, bag, options, topic), options);
-  } catch (const ImportError&) {
-    throw;
-  } catch (const std::exception& e) {
+    stream_recording(path, Ros1Reader(path, bag, topic, options.temperature_topic), options, rec, out);
+  } catch (const ros::Exception& e) {  // librosbag's (the sink's own errors pass as they are)
     throw ImportError(path, "chunks", std::string("librosbag cannot read a message: ") + e.what());
   }
+}
+
+Recording import_rosbag1(const fs::path& path, const RosbagOptions& options) {
+  return detail::import_in_memory([&](Recording& rec, SampleSink& out) { import_rosbag1(path, options, rec, out); });
 }
 
 }  // namespace stend::io

@@ -10,6 +10,7 @@
 // storage files of a bag folder in order.
 #include <stend/io/rosbag.hpp>
 
+#include "import_common.hpp"
 #include "rosbag_common.hpp"
 
 #include <lz4frame.h>
@@ -62,12 +63,6 @@ Bytes read_prefix(const fs::path& file, std::size_t n) {
   return b;
 }
 
-Bytes read_all(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw ImportError(file, "byte 0", "cannot open (check the path)");
-  return Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
 // ---------------------------------------------------------------------------------------------
 // CDR (XCDR1): a 4-byte encapsulation header (0x00 0x00 big endian, 0x00 0x01 little endian,
 // then 2 option bytes); each primitive aligned to its size, counted from after the header;
@@ -75,9 +70,10 @@ Bytes read_all(const fs::path& file) {
 
 class CdrReader {
  public:
-  CdrReader(const Bytes& data, std::string where) : data_(data), where_(std::move(where)) {
-    if (data_.size() < 4 || data_[0] != 0x00 || data_[1] > 0x01) {
-      fail(data_.size() < 4 ? "shorter than the 4-byte CDR encapsulation header"
+  CdrReader(const std::uint8_t* data, std::size_t size, std::string where)
+      : data_(data), size_(size), where_(std::move(where)) {
+    if (size_ < 4 || data_[0] != 0x00 || data_[1] > 0x01) {
+      fail(size_ < 4 ? "shorter than the 4-byte CDR encapsulation header"
                             : "encapsulation " + std::to_string(data_[0]) + "," + std::to_string(data_[1]) +
                                   ", expected plain CDR (0,0 big endian or 0,1 little endian)");
     }
@@ -94,7 +90,7 @@ class CdrReader {
   std::string string() {
     const std::uint32_t n = u32();
     need(n);
-    std::string s(reinterpret_cast<const char*>(data_.data() + pos_), n);
+    std::string s(reinterpret_cast<const char*>(data_ + pos_), n);
     pos_ += n;
     if (!s.empty() && s.back() == '\0') s.pop_back();
     return s;
@@ -115,9 +111,9 @@ class CdrReader {
 
  private:
   void need(std::size_t n) const {
-    if (pos_ + n > data_.size()) {
-      fail("ends at byte " + std::to_string(data_.size()) + " of the payload, expected " + std::to_string(n) +
-           " more bytes at byte " + std::to_string(pos_) + " (" + std::to_string(data_.size()) +
+    if (pos_ + n > size_) {
+      fail("ends at byte " + std::to_string(size_) + " of the payload, expected " + std::to_string(n) +
+           " more bytes at byte " + std::to_string(pos_) + " (" + std::to_string(size_) +
            "-byte message too short for its type)");
     }
   }
@@ -134,7 +130,8 @@ class CdrReader {
     return v;
   }
 
-  const Bytes& data_;
+  const std::uint8_t* data_;
+  std::size_t size_;
   std::string where_;
   bool little_ = true;
   std::size_t pos_ = 4;
@@ -150,8 +147,8 @@ std::int64_t read_header(CdrReader& in, std::string& frame_id) {
 
 // sensor_msgs/msg/Imu: header, orientation (4 float64), covariance (9), angular_velocity (3),
 // covariance (9), linear_acceleration (3), covariance (9).
-ImuMessage decode_imu(const Bytes& data, std::int64_t record_ns, const std::string& where) {
-  CdrReader in(data, where);
+ImuMessage decode_imu(const std::uint8_t* data, std::size_t size, std::int64_t record_ns, const std::string& where) {
+  CdrReader in(data, size, where);
   ImuMessage m;
   m.record_ns = record_ns;
   m.stamp_ns = read_header(in, m.frame_id);
@@ -164,8 +161,9 @@ ImuMessage decode_imu(const Bytes& data, std::int64_t record_ns, const std::stri
 }
 
 // sensor_msgs/msg/Temperature: header, temperature [°C], variance.
-TemperatureMessage decode_temperature(const Bytes& data, std::int64_t record_ns, const std::string& where) {
-  CdrReader in(data, where);
+TemperatureMessage decode_temperature(const std::uint8_t* data, std::size_t size, std::int64_t record_ns,
+                                      const std::string& where) {
+  CdrReader in(data, size, where);
   TemperatureMessage m;
   m.record_ns = record_ns;
   std::string frame_id;
@@ -175,47 +173,69 @@ TemperatureMessage decode_temperature(const Bytes& data, std::int64_t record_ns,
 }
 
 // ---------------------------------------------------------------------------------------------
-// The raw messages of the topics the import needs, from any storage.
+// The raw messages of the Imu and Temperature topics, from any storage, one at a time.
 
+// A message as its storage holds it; data stays valid until the cursor's next step.
 struct RawMessage {
+  const std::string* topic = nullptr;
   std::int64_t record_ns = 0;
-  Bytes data;
-  std::string where;  // "byte 1234" / "messages row 17" in its storage file
-  fs::path file;
+  const std::uint8_t* data = nullptr;
+  std::size_t size = 0;
+  std::string where;  // "byte 1234" / "messages row id 17" in its storage file
 };
-
-struct RawBag {
-  std::vector<TopicInfo> topics;
-  std::map<std::string, std::vector<RawMessage>> messages;  // by topic, in storage order
-  std::vector<std::string> notes;
-};
-
-void add_topic(RawBag& bag, const std::string& name, const std::string& type) {
-  for (const TopicInfo& t : bag.topics) {
-    if (t.name == name) return;
-  }
-  bag.topics.push_back({name, type});
-}
 
 // Only Imu and Temperature messages are kept; the topic is chosen once every file is read.
 bool kept_type(const std::string& type) { return type == kRos2Types.imu || type == kRos2Types.temperature; }
 
-// ---------------------------------------------------------------------------------------------
-// MCAP
+void add_topic(std::vector<TopicInfo>& topics, const std::string& name, const std::string& type) {
+  for (const TopicInfo& t : topics) {
+    if (t.name == name) return;
+  }
+  topics.push_back({name, type});
+}
 
-class McapParser {
+// One storage file's kept messages in storage order.
+class StorageFile {
  public:
-  McapParser(const fs::path& file, RawBag& bag) : file_(file), bag_(bag) {}
+  virtual ~StorageFile() = default;
+  virtual bool next(RawMessage& m) = 0;
+  // The topics seen so far (MCAP: those whose Channel record came before the cursor).
+  virtual const std::vector<TopicInfo>& topics() const = 0;
+  // What was read, for the info event.
+  virtual std::string note() const = 0;
+};
 
-  void parse_file() {
-    const Bytes data = read_all(file_);
-    if (data.size() < 8 || std::memcmp(data.data(), kMcapMagic, 8) != 0) {
-      throw ImportError(file_, "byte 0", "not an MCAP file: expected the magic \\x89MCAP0\\r\\n");
+// ---------------------------------------------------------------------------------------------
+// MCAP, through a bounded buffer: a top-level record at a time, a chunk decompressed whole.
+
+class McapFile final : public StorageFile {
+ public:
+  explicit McapFile(const fs::path& file) : in_(file) {
+    if (in_.size() < 8 || std::memcmp(read(0, 8, "the magic"), kMcapMagic, 8) != 0) {
+      throw ImportError(file, "byte 0", "not an MCAP file: expected the magic \\x89MCAP0\\r\\n");
     }
-    const std::uint64_t end = parse_records(data, 8, data.size(), 0, true);
-    if (end + 8 > data.size() || std::memcmp(data.data() + end, kMcapMagic, 8) != 0) {
-      throw ImportError(file_, byte_at(end), "expected the closing MCAP magic after the Footer (truncated file?)");
+  }
+
+  bool next(RawMessage& m) override {
+    for (;;) {
+      if (chunk_pos_ < records_.size()) {
+        if (chunk_record(m)) return true;
+      } else if (done_) {
+        return false;
+      } else if (top_record(m)) {
+        return true;
+      }
     }
+  }
+
+  const std::vector<TopicInfo>& topics() const override { return topics_; }
+
+  std::string note() const override {
+    const std::string name = in_.file().filename().string();
+    if (chunks_.empty()) return "MCAP " + name + ": messages outside chunks";
+    std::string s = "MCAP " + name + ": chunks";
+    for (const auto& [compression, n] : chunks_) s += " " + std::to_string(n) + " " + compression;
+    return s;
   }
 
  private:
@@ -223,75 +243,129 @@ class McapParser {
     std::string topic, type, encoding;
   };
 
-  // Records in data[pos, end); `base` = file offset of data[0] for messages (0 for the file,
-  // the chunk's offset inside a chunk). Returns the offset after the Footer (top level).
-  std::uint64_t parse_records(const Bytes& data, std::uint64_t pos, std::uint64_t end, std::uint64_t base,
-                              bool top_level) {
-    while (pos < end) {
-      const std::string where = where_of(pos, base, top_level);
-      if (end - pos < 9) throw ImportError(file_, where, "truncated record header (expected opcode and 8-byte length)");
-      const std::uint8_t op = data[pos];
-      const std::uint64_t len = le(data, pos + 1, 8);
-      if (len > end - pos - 9) {
-        throw ImportError(file_, where,
-                          mcap_record_name(op) + " declares " + std::to_string(len) +
-                              " bytes, only " + std::to_string(end - pos - 9) + " follow (truncated file?)");
-      }
-      const std::uint64_t body = pos + 9;
-      pos = body + len;
-      if (op == 0x02 && top_level) return pos;  // Footer
-      Field f{data, body, body + len, file_, where};
-      switch (op) {
-        case 0x03: schema(f); break;
-        case 0x04: channel(f); break;
-        case 0x05: message(f); break;
-        case 0x06:
-          if (top_level) chunk(f, body);
-          break;
-        default: break;  // header, indexes, attachments, metadata, statistics, summary
-      }
+  const std::uint8_t* read(std::uint64_t pos, std::uint64_t n, const std::string& what) {
+    in_.need(pos, n, what);
+    return in_.at(pos);
+  }
+
+  // The top-level record at pos_: a message (true, in m), or anything else handled (false).
+  bool top_record(RawMessage& m) {
+    const fs::path& file = in_.file();
+    const std::uint64_t pos = pos_;
+    const std::string where = byte_at(pos);
+    if (in_.size() - pos < 9) {
+      throw ImportError(file, pos == in_.size() ? byte_at(pos) : where,
+                        pos == in_.size() ? "file ends without the MCAP Footer record (truncated file?)"
+                                          : "truncated record header (expected opcode and 8-byte length)");
     }
-    if (top_level) throw ImportError(file_, byte_at(pos), "file ends without the MCAP Footer record (truncated file?)");
-    return pos;
+    const std::uint8_t* head = read(pos, 9, "a record header");
+    const std::uint8_t op = head[0];
+    const std::uint64_t len = le(head + 1, 8);
+    if (len > in_.size() - pos - 9) {
+      throw ImportError(file, where,
+                        mcap_record_name(op) + " declares " + std::to_string(len) + " bytes, only " +
+                            std::to_string(in_.size() - pos - 9) + " follow (truncated file?)");
+    }
+    pos_ = pos + 9 + len;
+    if (op == 0x02) {  // Footer, then the closing magic
+      done_ = true;
+      if (pos_ + 8 > in_.size() || std::memcmp(read(pos_, 8, "the closing magic"), kMcapMagic, 8) != 0) {
+        throw ImportError(file, byte_at(pos_), "expected the closing MCAP magic after the Footer (truncated file?)");
+      }
+      return false;
+    }
+    if (op != 0x03 && op != 0x04 && op != 0x05 && op != 0x06) return false;  // indexes, attachments, ...
+    Field f{read(pos + 9, len, mcap_record_name(op)), 0, len, file, where};
+    if (op == 0x06) {
+      chunk(f, pos);
+      return false;
+    }
+    return record(op, f, m);
   }
 
-  std::string where_of(std::uint64_t pos, std::uint64_t base, bool top_level) const {
-    return top_level ? byte_at(pos) : "chunk at " + byte_at(base) + ", byte " + std::to_string(pos) + " of its records";
+  // The record at chunk_pos_ inside the current chunk.
+  bool chunk_record(RawMessage& m) {
+    const fs::path& file = in_.file();
+    const std::uint64_t pos = chunk_pos_, end = records_.size();
+    const std::string where = "chunk at " + byte_at(chunk_at_) + ", byte " + std::to_string(pos) + " of its records";
+    if (end - pos < 9) throw ImportError(file, where, "truncated record header (expected opcode and 8-byte length)");
+    const std::uint8_t op = records_[pos];
+    const std::uint64_t len = le(records_.data() + pos + 1, 8);
+    if (len > end - pos - 9) {
+      throw ImportError(file, where,
+                        mcap_record_name(op) + " declares " + std::to_string(len) + " bytes, only " +
+                            std::to_string(end - pos - 9) + " follow (truncated file?)");
+    }
+    chunk_pos_ = pos + 9 + len;
+    if (op != 0x03 && op != 0x04 && op != 0x05) return false;
+    Field f{records_.data() + pos + 9, 0, len, file, where};
+    return record(op, f, m);
   }
 
-  static std::uint64_t le(const Bytes& d, std::uint64_t pos, int n) {
+  static std::uint64_t le(const std::uint8_t* d, int n) {
     std::uint64_t v = 0;
-    for (int i = 0; i < n; ++i) v |= static_cast<std::uint64_t>(d[pos + static_cast<std::uint64_t>(i)]) << (8 * i);
+    for (int i = 0; i < n; ++i) v |= static_cast<std::uint64_t>(d[i]) << (8 * i);
     return v;
   }
 
-  // Sequential fields of one record's content.
+  // Sequential fields of one record's content d[0, end).
   struct Field {
-    const Bytes& d;
+    const std::uint8_t* d;
     std::uint64_t pos, end;
     const fs::path& file;
     const std::string& where;
+    void need(std::uint64_t n) const {
+      if (end - pos < n) throw ImportError(file, where, "record content shorter than its fields");
+    }
     std::uint64_t uint(int n) {
-      if (end - pos < static_cast<std::uint64_t>(n)) throw ImportError(file, where, "record content shorter than its fields");
-      const std::uint64_t v = le(d, pos, n);
+      need(static_cast<std::uint64_t>(n));
+      const std::uint64_t v = le(d + pos, n);
       pos += static_cast<std::uint64_t>(n);
       return v;
     }
-    Bytes bytes(std::uint64_t n) {
-      if (end - pos < n) throw ImportError(file, where, "record content shorter than its fields");
-      Bytes b(d.begin() + static_cast<std::ptrdiff_t>(pos), d.begin() + static_cast<std::ptrdiff_t>(pos + n));
+    const std::uint8_t* bytes(std::uint64_t n) {
+      need(n);
+      const std::uint8_t* p = d + pos;
       pos += n;
-      return b;
+      return p;
     }
     std::string string() {
-      const Bytes b = bytes(uint(4));
-      return std::string(b.begin(), b.end());
+      const std::uint64_t n = uint(4);
+      const auto* p = reinterpret_cast<const char*>(bytes(n));
+      return std::string(p, n);
     }
   };
 
-  void schema(Field& f) {
+  // A Schema, Channel or Message record; true for a kept message (in m).
+  bool record(std::uint8_t op, Field& f, RawMessage& m) {
+    if (op == 0x03) {
+      const auto id = static_cast<std::uint16_t>(f.uint(2));
+      schemas_[id] = f.string();  // name; encoding and data are not needed
+      return false;
+    }
+    if (op == 0x04) {
+      channel(f);
+      return false;
+    }
     const auto id = static_cast<std::uint16_t>(f.uint(2));
-    schemas_[id] = f.string();  // name; encoding and data are not needed
+    f.uint(4);  // sequence
+    const std::uint64_t log_time = f.uint(8);
+    f.uint(8);  // publish_time
+    const auto c = channels_.find(id);
+    if (c == channels_.end()) {
+      throw ImportError(in_.file(), f.where, "message on channel " + std::to_string(id) + " before its Channel record");
+    }
+    if (!kept_type(c->second.type)) return false;
+    if (c->second.encoding != "cdr") {
+      throw ImportError(in_.file(), f.where,
+                        "topic " + c->second.topic + " has message encoding '" + c->second.encoding + "', expected cdr");
+    }
+    m.topic = &c->second.topic;
+    m.record_ns = static_cast<std::int64_t>(log_time);
+    m.size = f.end - f.pos;
+    m.data = f.bytes(m.size);
+    m.where = f.where;
+    return true;
   }
 
   void channel(Field& f) {
@@ -302,100 +376,80 @@ class McapParser {
     c.encoding = f.string();
     const auto s = schemas_.find(schema_id);
     c.type = s == schemas_.end() ? std::string("(no schema)") : s->second;
-    add_topic(bag_, c.topic, c.type);
+    add_topic(topics_, c.topic, c.type);
     channels_[id] = c;
   }
 
-  void message(Field& f) {
-    const auto id = static_cast<std::uint16_t>(f.uint(2));
-    f.uint(4);  // sequence
-    const std::uint64_t log_time = f.uint(8);
-    f.uint(8);  // publish_time
-    const auto c = channels_.find(id);
-    if (c == channels_.end()) throw ImportError(file_, f.where, "message on channel " + std::to_string(id) + " before its Channel record");
-    if (!kept_type(c->second.type)) return;
-    if (c->second.encoding != "cdr") {
-      throw ImportError(file_, f.where, "topic " + c->second.topic + " has message encoding '" + c->second.encoding + "', expected cdr");
-    }
-    bag_.messages[c->second.topic].push_back({static_cast<std::int64_t>(log_time), f.bytes(f.end - f.pos), f.where, file_});
-  }
-
+  // A chunk's records into records_ (decompressed), to be read from chunk_pos_ = 0.
   void chunk(Field& f, std::uint64_t offset) {
     f.uint(8);  // message_start_time
     f.uint(8);  // message_end_time
     const std::uint64_t size = f.uint(8);
     const auto crc = static_cast<std::uint32_t>(f.uint(4));
     const std::string compression = f.string();
-    const Bytes stored = f.bytes(f.uint(8));
-    const Bytes records = decompress(stored, compression, size, f.where);
-    if (crc != 0 && static_cast<std::uint32_t>(crc32(0, records.data(), static_cast<uInt>(records.size()))) != crc) {
-      throw ImportError(file_, f.where, "chunk CRC mismatch (corrupt data)");
+    const std::uint64_t stored_size = f.uint(8);
+    const std::uint8_t* stored = f.bytes(stored_size);
+    decompress(stored, stored_size, compression, size, f.where);
+    if (crc != 0 && static_cast<std::uint32_t>(crc32(0, records_.data(), static_cast<uInt>(records_.size()))) != crc) {
+      throw ImportError(in_.file(), f.where, "chunk CRC mismatch (corrupt data)");
     }
     ++chunks_[compression.empty() ? "none" : compression];
-    parse_records(records, 0, records.size(), offset, false);
+    chunk_at_ = offset;
+    chunk_pos_ = 0;
   }
 
-  Bytes decompress(const Bytes& in, const std::string& compression, std::uint64_t size, const std::string& where) {
+  void decompress(const std::uint8_t* in, std::uint64_t in_size, const std::string& compression, std::uint64_t size,
+                  const std::string& where) {
+    const fs::path& file = in_.file();
     if (compression.empty()) {
-      if (in.size() != size) throw ImportError(file_, where, "uncompressed chunk size differs from its declared size");
-      return in;
+      if (in_size != size) throw ImportError(file, where, "uncompressed chunk size differs from its declared size");
+      records_.assign(in, in + in_size);
+      return;
     }
-    Bytes out(size);
+    records_.resize(size);
     if (compression == "zstd") {
-      const std::size_t n = ZSTD_decompress(out.data(), out.size(), in.data(), in.size());
+      const std::size_t n = ZSTD_decompress(records_.data(), records_.size(), in, in_size);
       if (ZSTD_isError(n) || n != size) {
-        throw ImportError(file_, where, std::string("zstd chunk does not decompress to its declared size: ") +
-                                            (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "size differs"));
+        throw ImportError(file, where, std::string("zstd chunk does not decompress to its declared size: ") +
+                                           (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "size differs"));
       }
-      return out;
+      return;
     }
-    if (compression == "lz4") return lz4_frame(in, size, where);
-    throw ImportError(file_, where, "chunk compression '" + compression + "', expected none, lz4 or zstd");
+    if (compression == "lz4") return lz4_frame(in, in_size, size, where);
+    throw ImportError(file, where, "chunk compression '" + compression + "', expected none, lz4 or zstd");
   }
 
-  Bytes lz4_frame(const Bytes& in, std::uint64_t size, const std::string& where) {
+  void lz4_frame(const std::uint8_t* in, std::uint64_t in_size, std::uint64_t size, const std::string& where) {
+    const fs::path& file = in_.file();
     LZ4F_dctx* ctx = nullptr;
-    if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION))) throw ImportError(file_, where, "lz4: no context");
+    if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION))) throw ImportError(file, where, "lz4: no context");
     const std::unique_ptr<LZ4F_dctx, decltype(&LZ4F_freeDecompressionContext)> guard(ctx, LZ4F_freeDecompressionContext);
-    Bytes out(size);
     std::size_t in_pos = 0, out_pos = 0;
     std::size_t hint = 1;
-    while (hint != 0 && in_pos < in.size()) {
-      std::size_t out_n = out.size() - out_pos, in_n = in.size() - in_pos;
-      hint = LZ4F_decompress(ctx, out.data() + out_pos, &out_n, in.data() + in_pos, &in_n, nullptr);
-      if (LZ4F_isError(hint)) throw ImportError(file_, where, std::string("lz4 chunk: ") + LZ4F_getErrorName(hint));
+    while (hint != 0 && in_pos < in_size) {
+      std::size_t out_n = records_.size() - out_pos, in_n = in_size - in_pos;
+      hint = LZ4F_decompress(ctx, records_.data() + out_pos, &out_n, in + in_pos, &in_n, nullptr);
+      if (LZ4F_isError(hint)) throw ImportError(file, where, std::string("lz4 chunk: ") + LZ4F_getErrorName(hint));
       in_pos += in_n;
       out_pos += out_n;
       if (in_n == 0 && out_n == 0) break;
     }
-    if (hint != 0 || out_pos != size) throw ImportError(file_, where, "lz4 chunk does not decompress to its declared size");
-    return out;
+    if (hint != 0 || out_pos != size) throw ImportError(file, where, "lz4 chunk does not decompress to its declared size");
   }
 
- public:
-  std::string chunk_note() const {
-    if (chunks_.empty()) return "MCAP " + file_.filename().string() + ": messages outside chunks";
-    std::string s = "MCAP " + file_.filename().string() + ": chunks";
-    for (const auto& [compression, n] : chunks_) s += " " + std::to_string(n) + " " + compression;
-    return s;
-  }
-
- private:
-  fs::path file_;
-  RawBag& bag_;
+  detail::BinaryReader in_;
+  std::uint64_t pos_ = 8;  // the next top-level record
+  bool done_ = false;      // the Footer was read
+  Bytes records_;          // the current chunk's records, decompressed
+  std::uint64_t chunk_pos_ = 0, chunk_at_ = 0;  // the next record in it; the chunk's file offset
   std::map<std::uint16_t, std::string> schemas_;
   std::map<std::uint16_t, Channel> channels_;
+  std::vector<TopicInfo> topics_;
   std::map<std::string, int> chunks_;
 };
 
-void read_mcap(const fs::path& file, RawBag& bag) {
-  McapParser p(file, bag);
-  p.parse_file();
-  bag.notes.push_back(p.chunk_note());
-}
-
 // ---------------------------------------------------------------------------------------------
-// SQLite3
+// SQLite3: stepping the messages query of the kept topics.
 
 struct Db {
   sqlite3* db = nullptr;
@@ -418,41 +472,58 @@ std::string column_text(sqlite3_stmt* s, int i) {
   return t ? reinterpret_cast<const char*>(t) : "";
 }
 
-void read_db3(const fs::path& file, RawBag& bag) {
-  Db db;
-  if (sqlite3_open_v2(file.c_str(), &db.db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
-    throw ImportError(file, "SQLite", std::string("cannot open: ") + sqlite3_errmsg(db.db));
+class Db3File final : public StorageFile {
+ public:
+  explicit Db3File(const fs::path& file) : file_(file) {
+    if (sqlite3_open_v2(file.c_str(), &db_.db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
+      throw ImportError(file, "SQLite", std::string("cannot open: ") + sqlite3_errmsg(db_.db));
+    }
+    read_topics();
+    prepare(file_, db_, messages_, "SELECT id, topic_id, timestamp, data FROM messages ORDER BY timestamp, id");
   }
-  std::map<std::int64_t, std::string> topic_of;
-  {
+
+  bool next(RawMessage& m) override {
+    for (;;) {
+      const int rc = sqlite3_step(messages_.s);
+      if (rc == SQLITE_DONE) return false;
+      if (rc != SQLITE_ROW) throw ImportError(file_, "messages table", std::string("read error: ") + sqlite3_errmsg(db_.db));
+      const auto t = topic_of_.find(sqlite3_column_int64(messages_.s, 1));
+      if (t == topic_of_.end()) continue;
+      m.topic = &t->second;
+      m.record_ns = sqlite3_column_int64(messages_.s, 2);
+      m.data = static_cast<const std::uint8_t*>(sqlite3_column_blob(messages_.s, 3));
+      m.size = static_cast<std::size_t>(sqlite3_column_bytes(messages_.s, 3));
+      m.where = "messages row id " + std::to_string(sqlite3_column_int64(messages_.s, 0));
+      return true;
+    }
+  }
+
+  const std::vector<TopicInfo>& topics() const override { return topics_; }
+  std::string note() const override { return "SQLite3 storage " + file_.filename().string(); }
+
+ private:
+  void read_topics() {
     Stmt st;
-    prepare(file, db, st, "SELECT id, name, type, serialization_format FROM topics ORDER BY id");
+    prepare(file_, db_, st, "SELECT id, name, type, serialization_format FROM topics ORDER BY id");
     int rc;
     while ((rc = sqlite3_step(st.s)) == SQLITE_ROW) {
       const std::string name = column_text(st.s, 1), type = column_text(st.s, 2), format = column_text(st.s, 3);
-      add_topic(bag, name, type);
+      add_topic(topics_, name, type);
       if (kept_type(type) && format != "cdr") {
-        throw ImportError(file, "topics row " + std::to_string(sqlite3_column_int64(st.s, 0)),
+        throw ImportError(file_, "topics row " + std::to_string(sqlite3_column_int64(st.s, 0)),
                           "topic " + name + " serialized as '" + format + "', expected cdr");
       }
-      if (kept_type(type)) topic_of[sqlite3_column_int64(st.s, 0)] = name;
+      if (kept_type(type)) topic_of_[sqlite3_column_int64(st.s, 0)] = name;
     }
-    if (rc != SQLITE_DONE) throw ImportError(file, "topics table", std::string("read error: ") + sqlite3_errmsg(db.db));
+    if (rc != SQLITE_DONE) throw ImportError(file_, "topics table", std::string("read error: ") + sqlite3_errmsg(db_.db));
   }
-  Stmt st;
-  prepare(file, db, st, "SELECT id, topic_id, timestamp, data FROM messages ORDER BY timestamp, id");
-  int rc;
-  while ((rc = sqlite3_step(st.s)) == SQLITE_ROW) {
-    const auto t = topic_of.find(sqlite3_column_int64(st.s, 1));
-    if (t == topic_of.end()) continue;
-    const auto* blob = static_cast<const std::uint8_t*>(sqlite3_column_blob(st.s, 3));
-    const int n = sqlite3_column_bytes(st.s, 3);
-    bag.messages[t->second].push_back({sqlite3_column_int64(st.s, 2), Bytes(blob, blob + n),
-                                       "messages row id " + std::to_string(sqlite3_column_int64(st.s, 0)), file});
-  }
-  if (rc != SQLITE_DONE) throw ImportError(file, "messages table", std::string("read error: ") + sqlite3_errmsg(db.db));
-  bag.notes.push_back("SQLite3 storage " + file.filename().string());
-}
+
+  fs::path file_;
+  Db db_;
+  Stmt messages_;
+  std::map<std::int64_t, std::string> topic_of_;
+  std::vector<TopicInfo> topics_;
+};
 
 bool is_sqlite(const fs::path& file) {
   const Bytes head = read_prefix(file, sizeof kSqliteMagic);
@@ -507,35 +578,86 @@ std::vector<fs::path> storage_files(const fs::path& dir) {
   return files;
 }
 
-RawBag read_storage(const fs::path& path) {
-  RawBag bag;
-  const std::vector<fs::path> files = fs::is_directory(path) ? storage_files(path) : std::vector<fs::path>{path};
-  if (files.empty()) throw ImportError(path, "folder", "no rosbag2 storage file (expected metadata.yaml, .db3 or MCAP)");
-  for (const fs::path& f : files) {
-    if (is_mcap(f)) {
-      read_mcap(f, bag);
-    } else if (is_sqlite(f)) {
-      read_db3(f, bag);  // says why when it is not a readable rosbag2 database
-    } else {
-      throw ImportError(f, "byte 0", "neither MCAP (magic \\x89MCAP0\\r\\n) nor a rosbag2 SQLite3 database");
-    }
-  }
-  return bag;
+std::unique_ptr<StorageFile> open_storage(const fs::path& f) {
+  if (is_mcap(f)) return std::make_unique<McapFile>(f);
+  if (is_sqlite(f)) return std::make_unique<Db3File>(f);  // says why when it is not a readable rosbag2 database
+  throw ImportError(f, "byte 0", "neither MCAP (magic \\x89MCAP0\\r\\n) nor a rosbag2 SQLite3 database");
 }
 
-template <class Message, class Decode>
-std::vector<Message> decode_all(const std::vector<RawMessage>& raw, const std::string& topic, Decode decode) {
-  std::vector<Message> out;
-  out.reserve(raw.size());
-  for (const RawMessage& m : raw) {
-    try {
-      out.push_back(decode(m.data, m.record_ns, m.where));
-    } catch (const CdrReader::Failure& e) {
-      throw ImportError(m.file, e.where, "topic " + topic + ": " + e.what);
+// The kept messages of every storage file of the bag, in order, one at a time; each message with
+// the file it is in.
+class StorageCursor {
+ public:
+  explicit StorageCursor(const std::vector<fs::path>& files) : files_(&files) {}
+  bool next(RawMessage& m) {
+    for (;;) {
+      if (!current_) {
+        if (index_ == files_->size()) return false;
+        current_ = open_storage((*files_)[index_++]);
+      }
+      if (current_->next(m)) return true;
+      finished(*current_);
+      current_.reset();
     }
   }
-  return out;
-}
+  const fs::path& file() const { return (*files_)[index_ - 1]; }
+  std::vector<TopicInfo> topics;    // of the files read to the end
+  std::vector<std::string> notes;   // of the files read to the end
+
+ private:
+  void finished(const StorageFile& f) {
+    for (const TopicInfo& t : f.topics()) add_topic(topics, t.name, t.type);
+    notes.push_back(f.note());
+  }
+  const std::vector<fs::path>* files_;
+  std::size_t index_ = 0;
+  std::unique_ptr<StorageFile> current_;
+};
+
+// The messages of one topic, decoded.
+template <class Message>
+class TopicCursor final : public MessageCursor<Message> {
+ public:
+  using Decode = Message (*)(const std::uint8_t*, std::size_t, std::int64_t, const std::string&);
+  TopicCursor(const std::vector<fs::path>& files, std::string topic, Decode decode)
+      : storage_(files), topic_(std::move(topic)), decode_(decode) {}
+  bool next(Message& out) override {
+    RawMessage m;
+    do {
+      if (!storage_.next(m)) return false;
+    } while (*m.topic != topic_);
+    try {
+      out = decode_(m.data, m.size, m.record_ns, m.where);
+    } catch (const CdrReader::Failure& e) {
+      throw ImportError(storage_.file(), e.where, "topic " + topic_ + ": " + e.what);
+    }
+    return true;
+  }
+
+ private:
+  StorageCursor storage_;
+  std::string topic_;
+  Decode decode_;
+};
+
+class Ros2Reader final : public BagReader {
+ public:
+  Ros2Reader(std::vector<fs::path> files, std::string temperature_topic)
+      : files_(std::move(files)), temperature_topic_(std::move(temperature_topic)) {
+    format = "rosbag2";
+  }
+  std::unique_ptr<MessageCursor<ImuMessage>> imu() const override {
+    return std::make_unique<TopicCursor<ImuMessage>>(files_, imu_topic, decode_imu);
+  }
+  std::unique_ptr<MessageCursor<TemperatureMessage>> temperature() const override {
+    if (temperature_topic_.empty()) return nullptr;
+    return std::make_unique<TopicCursor<TemperatureMessage>>(files_, temperature_topic_, decode_temperature);
+  }
+
+ private:
+  std::vector<fs::path> files_;
+  std::string temperature_topic_;
+};
 
 }  // namespace
 
@@ -549,21 +671,25 @@ bool looks_like_rosbag2(const fs::path& path) {
   return false;
 }
 
-Recording import_rosbag2(const fs::path& path, const RosbagOptions& options) {
+void import_rosbag2(const fs::path& path, const RosbagOptions& options, Recording& rec, SampleSink& out) {
   if (!fs::exists(path)) throw ImportError(path, "path", "no such file or folder");
-  RawBag raw = read_storage(path);
-  BagContent c;
-  c.format = "rosbag2";
-  c.imu_topic = choose_imu_topic(path, raw.topics, options, kRos2Types);
-  check_temperature_topic(path, raw.topics, options, kRos2Types);
-  c.imu = decode_all<ImuMessage>(raw.messages[c.imu_topic], c.imu_topic, decode_imu);
-  if (!options.temperature_topic.empty()) {
-    c.temperature = decode_all<TemperatureMessage>(raw.messages[options.temperature_topic], options.temperature_topic,
-                                                   decode_temperature);
+  const std::vector<fs::path> files = fs::is_directory(path) ? storage_files(path) : std::vector<fs::path>{path};
+  if (files.empty()) throw ImportError(path, "folder", "no rosbag2 storage file (expected metadata.yaml, .db3 or MCAP)");
+  // The first pass reads every file to the end for its topics (an MCAP file may declare a channel
+  // anywhere) and checks its records.
+  StorageCursor all(files);
+  for (RawMessage m; all.next(m);) {
   }
-  c.notes = std::move(raw.notes);
-  c.notes.push_back("CDR payloads");
-  return make_recording(path, c, options);
+  Ros2Reader reader(files, options.temperature_topic);
+  reader.imu_topic = choose_imu_topic(path, all.topics, options, kRos2Types);
+  check_temperature_topic(path, all.topics, options, kRos2Types);
+  reader.notes = std::move(all.notes);
+  reader.notes.push_back("CDR payloads");
+  stream_recording(path, reader, options, rec, out);
+}
+
+Recording import_rosbag2(const fs::path& path, const RosbagOptions& options) {
+  return detail::import_in_memory([&](Recording& rec, SampleSink& out) { import_rosbag2(path, options, rec, out); });
 }
 
 }  // namespace stend::io

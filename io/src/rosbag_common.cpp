@@ -42,34 +42,95 @@ void check_named_topic(const fs::path& file, const std::vector<TopicInfo>& topic
 // Nanoseconds since the first message → seconds (the difference is exact in int64).
 double seconds_since(std::int64_t t_ns, std::int64_t t0_ns) { return 1e-9 * static_cast<double>(t_ns - t0_ns); }
 
-// The temperature [°C] held at time t [ns]: the latest message at or before t (times sorted), the
-// first one before it.
-double held_temperature(const std::vector<std::pair<std::int64_t, double>>& sorted, std::int64_t t_ns) {
-  auto it = std::upper_bound(sorted.begin(), sorted.end(), t_ns,
-                             [](std::int64_t t, const std::pair<std::int64_t, double>& m) { return t < m.first; });
-  return it == sorted.begin() ? sorted.front().second : std::prev(it)->second;
-}
+// What the first pass over the messages finds.
+struct BagScan {
+  std::size_t imu = 0, temperature = 0;
+  std::size_t zero_stamps = 0;         // header stamps that are zero, on both topics
+  ImuMessage first;                    // the first Imu message
+  std::vector<std::string> frame_ids;  // distinct, in order of appearance
+  // Whether the times (header stamps resp. record times) never decrease, over both topics each.
+  bool stamps_sorted = true, records_sorted = true;
+};
 
-std::size_t count_zero_stamps(const BagContent& c) {
-  std::size_t n = 0;
-  for (const ImuMessage& m : c.imu) n += m.stamp_ns == 0 ? 1 : 0;
-  for (const TemperatureMessage& m : c.temperature) n += m.stamp_ns == 0 ? 1 : 0;
-  return n;
-}
-
-std::size_t count_non_increasing(const std::vector<ImuSample>& s) {
-  std::size_t n = 0;
-  for (std::size_t i = 1; i < s.size(); ++i) n += s[i].t_s <= s[i - 1].t_s ? 1 : 0;
-  return n;
-}
-
-std::size_t count_frame_ids(const BagContent& c) {
-  std::vector<std::string> ids;
-  for (const ImuMessage& m : c.imu) {
-    if (std::find(ids.begin(), ids.end(), m.frame_id) == ids.end()) ids.push_back(m.frame_id);
+// Whether a sequence of times never decreases.
+struct Ordered {
+  bool sorted = true;
+  bool any = false;
+  std::int64_t last = 0;
+  void add(std::int64_t t) {
+    sorted = sorted && (!any || t >= last);
+    any = true;
+    last = t;
   }
-  return ids.size();
+};
+
+BagScan scan_messages(const BagReader& bag) {
+  BagScan scan;
+  Ordered imu_stamp, imu_record;
+  const auto imu = bag.imu();
+  for (ImuMessage m; imu->next(m);) {
+    if (scan.imu == 0) scan.first = m;
+    scan.zero_stamps += m.stamp_ns == 0 ? 1 : 0;
+    if (std::find(scan.frame_ids.begin(), scan.frame_ids.end(), m.frame_id) == scan.frame_ids.end())
+      scan.frame_ids.push_back(m.frame_id);
+    imu_stamp.add(m.stamp_ns);
+    imu_record.add(m.record_ns);
+    ++scan.imu;
+  }
+  Ordered stamp, record;
+  if (const auto temperature = bag.temperature()) {
+    for (TemperatureMessage m; temperature->next(m); ++scan.temperature) {
+      scan.zero_stamps += m.stamp_ns == 0 ? 1 : 0;
+      stamp.add(m.stamp_ns);
+      record.add(m.record_ns);
+    }
+  }
+  scan.stamps_sorted = imu_stamp.sorted && stamp.sorted;
+  scan.records_sorted = imu_record.sorted && record.sorted;
+  return scan;
 }
+
+// The temperature [°C] held at time t [ns]: the latest Temperature message at or before t (the
+// first one before it). Pulled from its cursor alongside the Imu messages when both topics are in
+// time order (`streamed`; then t must not decrease from call to call), else read whole and sorted.
+class HeldTemperature {
+ public:
+  HeldTemperature(std::unique_ptr<MessageCursor<TemperatureMessage>> cursor, bool use_record_time, bool streamed)
+      : cursor_(std::move(cursor)), use_record_time_(use_record_time), streamed_(streamed) {
+    if (!cursor_) return;
+    if (streamed_) {
+      have_next_ = pull(next_);
+      held_ = next_.second;
+      return;
+    }
+    for (Timed m; pull(m);) sorted_.push_back(m);
+    std::stable_sort(sorted_.begin(), sorted_.end(), [](const Timed& x, const Timed& y) { return x.first < y.first; });
+  }
+  double at(std::int64_t t_ns) {
+    if (streamed_) {
+      for (; have_next_ && next_.first <= t_ns; have_next_ = pull(next_)) held_ = next_.second;
+      return held_;
+    }
+    const auto it = std::upper_bound(sorted_.begin(), sorted_.end(), t_ns,
+                                     [](std::int64_t t, const Timed& m) { return t < m.first; });
+    return it == sorted_.begin() ? sorted_.front().second : std::prev(it)->second;
+  }
+
+ private:
+  using Timed = std::pair<std::int64_t, double>;  // time [ns], temperature [°C]
+  bool pull(Timed& out) {
+    TemperatureMessage m;
+    if (!cursor_->next(m)) return false;
+    out = {use_record_time_ ? m.record_ns : m.stamp_ns, m.celsius};
+    return true;
+  }
+  std::unique_ptr<MessageCursor<TemperatureMessage>> cursor_;
+  bool use_record_time_, streamed_;
+  bool have_next_ = false;
+  Timed next_{0, 0.0};
+  double held_ = 0.0;
+  std::vector<Timed> sorted_;
+};
 
 }  // namespace
 
@@ -96,63 +157,62 @@ void check_temperature_topic(const fs::path& file, const std::vector<TopicInfo>&
   if (!options.temperature_topic.empty()) check_named_topic(file, topics, options.temperature_topic, types.temperature);
 }
 
-Recording make_recording(const fs::path& file, const BagContent& c, const RosbagOptions& options) {
-  if (c.imu.empty()) throw ImportError(file, "topic " + c.imu_topic, "no messages on the Imu topic");
+void stream_recording(const fs::path& file, const BagReader& bag, const RosbagOptions& options, Recording& rec,
+                      SampleSink& out) {
+  const BagScan scan = scan_messages(bag);
+  if (scan.imu == 0) throw ImportError(file, "topic " + bag.imu_topic, "no messages on the Imu topic");
   // One time base for both topics: header stamps, unless some are zero (unstamped driver).
-  const std::size_t zero_stamps = count_zero_stamps(c);
-  const bool use_record_time = zero_stamps > 0;
+  const bool use_record_time = scan.zero_stamps > 0;
   auto time_of = [&](const auto& m) { return use_record_time ? m.record_ns : m.stamp_ns; };
-  const std::int64_t t0_ns = time_of(c.imu.front());
+  const std::int64_t t0_ns = time_of(scan.first);
+  const bool in_time_order = use_record_time ? scan.records_sorted : scan.stamps_sorted;
+  HeldTemperature temperature(bag.temperature(), use_record_time, in_time_order);
 
-  std::vector<std::pair<std::int64_t, double>> temps;
-  for (const TemperatureMessage& m : c.temperature) temps.emplace_back(time_of(m), m.celsius);
-  std::stable_sort(temps.begin(), temps.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  rec = new_recording(file, "rosbag");
+  RecordingHeader& h = rec.header;
+  h.identity = options.identity;
+  if (h.identity.model.empty()) h.identity.model = bag.imu_topic;
+  if (h.identity.serial.empty()) h.identity.serial = scan.first.frame_id;
+  h.info.has_gyro = true;
+  h.info.has_temperature = scan.temperature > 0;
+  h.gravity_mps2 = options.gravity_mps2;
 
-  Recording rec = new_recording(file, "rosbag");
-  rec.samples.reserve(c.imu.size());
-  for (const ImuMessage& m : c.imu) {
+  LogTimestampStream times(out, &h.info);
+  SampleChunker chunks(times);
+  double t_last_s = 0.0;  // the first sample's time is 0
+  const auto imu = bag.imu();
+  for (ImuMessage m; imu->next(m);) {
     ImuSample s;
     s.t_s = seconds_since(time_of(m), t0_ns);
     s.accel_mps2 = m.accel_mps2;
     s.gyro_radps = m.gyro_radps;
-    if (!temps.empty()) s.temperature_c = held_temperature(temps, time_of(m));
-    rec.samples.push_back(s);
+    if (scan.temperature > 0) s.temperature_c = temperature.at(time_of(m));
+    t_last_s = s.t_s;
+    chunks.add(s);
   }
-  const double median_dt = median_interval(rec.samples);
-  const double rate_hz = median_dt > 0.0 ? 1.0 / median_dt : 0.0;
-  const std::size_t gaps = flag_time_gaps(rec.samples, rate_hz);
-  const std::size_t non_increasing = count_non_increasing(rec.samples);
+  chunks.flush();
+  const TimestampSummary sum = times.finish();
 
-  RecordingHeader& h = rec.header;
-  h.identity = options.identity;
-  if (h.identity.model.empty()) h.identity.model = c.imu_topic;
-  if (h.identity.serial.empty()) h.identity.serial = c.imu.front().frame_id;
-  h.info.output_rate_hz = rate_hz;
-  h.info.has_gyro = true;
-  h.info.has_temperature = !temps.empty();
-  h.gravity_mps2 = options.gravity_mps2;
-
-  const double duration_s = rec.samples.back().t_s - rec.samples.front().t_s;
-  std::string msg = c.format + " " + file.string() + ": topic " + c.imu_topic + ", " +
-                    std::to_string(c.imu.size()) + " messages over " + fmt_g(duration_s) + " s, frame_id '" +
-                    c.imu.front().frame_id + "'";
-  if (const std::size_t ids = count_frame_ids(c); ids > 1) msg += " (" + std::to_string(ids) + " different frame_ids)";
+  std::string msg = bag.format + " " + file.string() + ": topic " + bag.imu_topic + ", " + std::to_string(scan.imu) +
+                    " messages over " + fmt_g(t_last_s) + " s, frame_id '" + scan.first.frame_id + "'";
+  if (scan.frame_ids.size() > 1) msg += " (" + std::to_string(scan.frame_ids.size()) + " different frame_ids)";
   msg += use_record_time
              ? "; t_s from the bag's record time, relative to the first message, because " +
-                   std::to_string(zero_stamps) + " header stamps are zero (assumed: the recorder received each "
+                   std::to_string(scan.zero_stamps) + " header stamps are zero (assumed: the recorder received each "
                    "message when it was measured)"
              : "; t_s from header.stamp relative to the first message";
-  msg += "; rate " + fmt_g(rate_hz) + " Hz from the median interval; " + std::to_string(gaps) +
-         " gaps (> 1.5 intervals) flagged; " + std::to_string(non_increasing) +
+  msg += "; rate " + fmt_g(sum.rate_hz) + " Hz from the median interval; " + std::to_string(sum.gaps) +
+         " gaps (> 1.5 intervals) flagged; " + std::to_string(sum.repeated + sum.decreasing) +
          " timestamps do not increase (kept as recorded)";
-  msg += temps.empty() ? "; no temperature topic"
-                       : "; temperature from " + options.temperature_topic + " (" + std::to_string(temps.size()) +
-                             " messages, each held until the next; the first one before it)";
+  msg += scan.temperature == 0 ? "; no temperature topic"
+                               : "; temperature from " + options.temperature_topic + " (" +
+                                     std::to_string(scan.temperature) +
+                                     " messages, each held until the next; the first one before it" +
+                                     (in_time_order ? "" : "; out of time order, so read whole and sorted") + ")";
   msg += "; accel = linear_acceleration [m/s²], gyro = angular_velocity [rad/s] as the message defines "
          "them; orientation and covariances ignored; no raw counts";
-  for (const std::string& note : c.notes) msg += "; " + note;
+  for (const std::string& note : bag.notes) msg += "; " + note;
   add_import_event(rec, msg);
-  return rec;
 }
 
 }  // namespace stend::io::rosbag_detail

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -41,12 +42,25 @@ struct MessageTypes {
 inline constexpr MessageTypes kRos1Types{"sensor_msgs/Imu", "sensor_msgs/Temperature"};
 inline constexpr MessageTypes kRos2Types{"sensor_msgs/msg/Imu", "sensor_msgs/msg/Temperature"};
 
-// What a reader hands over, in the bag's order.
-struct BagContent {
-  std::string format;  // "ROS 1 bag v2.0", "rosbag2 (sqlite3)", "rosbag2 (mcap)"
+// The messages of one topic in the bag's order, pulled one at a time.
+template <class Message>
+class MessageCursor {
+ public:
+  virtual ~MessageCursor() = default;
+  // The next message into m; false after the last one.
+  virtual bool next(Message& m) = 0;
+};
+
+// What a reader hands over: the chosen topics' messages, each read anew (from the first message)
+// by every call, so that an import passes over the bag twice instead of holding it.
+class BagReader {
+ public:
+  virtual ~BagReader() = default;
+  virtual std::unique_ptr<MessageCursor<ImuMessage>> imu() const = 0;
+  // nullptr without a temperature topic.
+  virtual std::unique_ptr<MessageCursor<TemperatureMessage>> temperature() const = 0;
+  std::string format;  // "ROS 1 bag v2.0", "rosbag2"
   std::string imu_topic;
-  std::vector<ImuMessage> imu;
-  std::vector<TemperatureMessage> temperature;
   std::vector<std::string> notes;  // what the reader read (files, compression), for the info event
 };
 
@@ -58,8 +72,12 @@ std::string choose_imu_topic(const std::filesystem::path& file, const std::vecto
 void check_temperature_topic(const std::filesystem::path& file, const std::vector<TopicInfo>& topics,
                              const RosbagOptions& options, const MessageTypes& types);
 
-// The recording of rosbag.hpp's header comment. Throws ImportError when there is no message.
-Recording make_recording(const std::filesystem::path& file, const BagContent& content,
-                         const RosbagOptions& options);
+// The recording of rosbag.hpp's header comment, its samples passed to `out` a chunk at a time: a
+// first pass over the messages finds the time base, the first stamp and the frame ids, the second
+// converts them. The temperature is held from a second cursor running alongside the Imu one (both
+// in time order; else the Temperature messages are held in memory, sorted). Throws ImportError
+// when there is no message.
+void stream_recording(const std::filesystem::path& file, const BagReader& bag, const RosbagOptions& options,
+                      Recording& rec, SampleSink& out);
 
 }  // namespace stend::io::rosbag_detail

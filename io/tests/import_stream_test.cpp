@@ -1,15 +1,22 @@
-// Streaming import: a long CSV, ULog or DataFlash log goes into a run folder a chunk at a time,
+// Streaming import: a long CSV, ULog, DataFlash log, ROS 1 bag, rosbag2 (SQLite3), imucal,
+// MPU-6050 or IMU-TK log goes into a run folder a chunk at a time,
 // with peak memory bounded independently of its length (measured in a child process from
 // /proc/self/status VmHWM), and with the same samples as the in-memory import; the windowed
 // timestamp repair flags a gap at a window boundary as a whole-log repair does.
 #include <stend/io/formats.hpp>
 #include <stend/io/importers.hpp>
 #include <stend/io/logs.hpp>
+#include <stend/io/rosbag.hpp>
 #include <stend/io/sample_sink.hpp>
 #include <stend/io/timestamps.hpp>
 #include <stend/testing/files.hpp>
 
 #include <gtest/gtest.h>
+
+#include <ros/serialization.h>
+#include <rosbag/bag.h>
+#include <sqlite3.h>
+#include <topic_tools/shape_shifter.h>
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -84,7 +91,7 @@ void expect_bounded_growth(long growth_kib) {
 
 // Imports `log` (as `format`) into the new run folder `run` in a child process; returns the growth
 // of its peak resident memory [KiB] over the import (−1 when the import failed).
-long import_in_child(const fs::path& log, const fs::path& run, const std::string& format = "csv",
+long import_in_child(const Inputs& log, const fs::path& run, const std::string& format = "csv",
                      const ImportOptions& options = csv_options()) {
   int fds[2];
   if (::pipe(fds) != 0) return -1;
@@ -96,7 +103,7 @@ long import_in_child(const fs::path& log, const fs::path& run, const std::string
       const long before = peak_rss_kib();
       Recording rec;
       RunSink sink(rec, run, "name: streamed\n");
-      import_dataset({log}, format, rec, sink, options);
+      import_dataset(log, format, rec, sink, options);
       sink.finish();
       growth = peak_rss_kib() - before;
     } catch (const std::exception& e) {
@@ -135,7 +142,7 @@ TEST(ImportStream, LongCsvLogInBoundedMemoryWithTheSamplesOfAnInMemoryImport) {
   write_log(tmp / "long.csv", kLong);
   write_log(tmp / "short.csv", kShort);
 
-  const long growth_kib = import_in_child(tmp / "long.csv", tmp / "long_run");
+  const long growth_kib = import_in_child({tmp / "long.csv"}, tmp / "long_run");
   ASSERT_GE(growth_kib, 0) << "the streamed import failed";
   // Whole in memory, the samples alone take 2 M × 96 bytes ≈ 183 MiB; streamed, the timestamp
   // window, a chunk and the writer's buffers.
@@ -252,15 +259,23 @@ void write_dataflash(const fs::path& file, std::size_t n) {
   std::fclose(f);
 }
 
-// Imports `file` (as `format`) streamed into a run folder, in a child process, and checks: peak
-// memory growth bounded, n samples at kRateHz with temperature, each as `expect_sample(i, sample)`
-// wants, one gap (at kGapAt), and the same samples and info event as the in-memory import
+// Imports `files` (as `format`, with `options`) streamed into a run folder, in a child process, and
+// checks: peak memory growth bounded, n samples at kRateHz, with temperature and one gap (at kGapAt)
+// as `traits` say, each sample (time included) as `expect_sample(i, sample)` wants, and the same samples and info event as the in-memory import
 // `in_memory` (the same reader into a vector), written.
-void check_long_log(const fs::path& file, const std::string& format, std::size_t n,
+// What a long log holds besides its samples.
+struct LongLogTraits {
+  bool temperature = true;  // has a temperature
+  bool gap = true;          // one gap, at kGapAt (else none)
+};
+
+void check_long_log(const Inputs& files, const std::string& format, std::size_t n,
                     const std::function<Recording()>& in_memory,
-                    const std::function<void(std::size_t, const ImuSample&)>& expect_sample) {
+                    const std::function<void(std::size_t, const ImuSample&)>& expect_sample,
+                    const ImportOptions& options = {}, const LongLogTraits& traits = {}) {
+  const fs::path& file = files.front();
   const fs::path run_dir = file.string() + ".run";
-  const long growth_kib = import_in_child(file, run_dir, format, ImportOptions{});
+  const long growth_kib = import_in_child(files, run_dir, format, options);
   ASSERT_GE(growth_kib, 0) << "the streamed import failed";
   // Whole in memory, the file alone is about 90 MiB and the samples 92 MiB; streamed, the readers'
   // buffers, the timestamp window, a chunk and the writer's buffers.
@@ -268,8 +283,8 @@ void check_long_log(const fs::path& file, const std::string& format, std::size_t
 
   const Recording run = Recording::open(run_dir, SampleLoading::kStream);
   ASSERT_EQ(run.sample_count(), n);
-  EXPECT_EQ(run.header.experiment_name, "import:" + format);
-  EXPECT_TRUE(run.header.info.has_temperature);
+  EXPECT_EQ(run.header.experiment_name.rfind("import:", 0), 0u) << run.header.experiment_name;
+  EXPECT_EQ(run.header.info.has_temperature, traits.temperature);
   EXPECT_NEAR(run.header.info.output_rate_hz, kRateHz, 1e-9 * kRateHz);
   std::vector<ImuSample> chunk(4096);
   std::size_t gaps = 0;
@@ -278,7 +293,6 @@ void check_long_log(const fs::path& file, const std::string& format, std::size_t
     run.sample_source().read(i, count, chunk.data());
     for (std::size_t k = 0; k < count; ++k) {
       const ImuSample& s = chunk[k];
-      ASSERT_EQ(s.t_s, static_cast<double>(1000 * (i + k)) * 1e-6) << "sample " << i + k;
       ASSERT_NO_FATAL_FAILURE(expect_sample(i + k, s)) << "sample " << i + k;
       if (s.flags & kGapBefore) {
         EXPECT_EQ(i + k, kGapAt);
@@ -286,10 +300,11 @@ void check_long_log(const fs::path& file, const std::string& format, std::size_t
       }
     }
   }
-  EXPECT_EQ(gaps, 1u);
+  EXPECT_EQ(gaps, traits.gap ? 1u : 0u);
 
   Recording memory = in_memory();
   ASSERT_EQ(memory.samples.size(), n);
+  EXPECT_EQ(memory.header.experiment_name, run.header.experiment_name);
   memory.experiment_yaml = "name: in memory\n";
   write_recording(memory, file.string() + ".memory_run", RecordingWriterOptions{});
   const Recording memory_run = Recording::open(file.string() + ".memory_run", SampleLoading::kStream);
@@ -302,8 +317,9 @@ TEST(ImportStream, LongUlogInBoundedMemoryWithTheSamplesOfAnInMemoryImport) {
   TempDir tmp("import-stream-ulog");
   constexpr std::size_t kLong = 1'000'000;
   write_ulog(tmp / "long.ulg", kLong);
-  check_long_log(tmp / "long.ulg", "ulog", kLong, [&] { return import_ulog(tmp / "long.ulg"); },
+  check_long_log({tmp / "long.ulg"}, "ulog", kLong, [&] { return import_ulog(tmp / "long.ulg"); },
                  [](std::size_t i, const ImuSample& s) {
+                   ASSERT_EQ(s.t_s, static_cast<double>(1000 * i) * 1e-6);
                    ASSERT_EQ(s.accel_mps2.x(), static_cast<double>(i % 4096));
                    ASSERT_NEAR(s.gyro_radps.z(), static_cast<double>(i) + 0.5, 1e-6);  // interpolated
                    ASSERT_EQ(s.temperature_c, 20.0 + static_cast<double>(i % 64) / 4.0);
@@ -314,12 +330,254 @@ TEST(ImportStream, LongDataflashInBoundedMemoryWithTheSamplesOfAnInMemoryImport)
   TempDir tmp("import-stream-dataflash");
   constexpr std::size_t kLong = 1'000'000;
   write_dataflash(tmp / "long.BIN", kLong);
-  check_long_log(tmp / "long.BIN", "dataflash", kLong, [&] { return import_dataflash(tmp / "long.BIN"); },
+  check_long_log({tmp / "long.BIN"}, "dataflash", kLong, [&] { return import_dataflash(tmp / "long.BIN"); },
                  [](std::size_t i, const ImuSample& s) {
+                   ASSERT_EQ(s.t_s, static_cast<double>(1000 * i) * 1e-6);
                    ASSERT_EQ(s.gyro_radps.z(), static_cast<double>(i % 4096));
                    ASSERT_EQ(s.accel_mps2.x(), -static_cast<double>(i % 4096));
                    ASSERT_EQ(s.temperature_c, 20.0 + static_cast<double>(i % 64) / 4.0);
                  });
+}
+
+// ---------------------------------------------------------------------------------------------
+// ROS bags: n Imu messages at kRateHz, header stamps T0 + k ms where k = i, and i + 3 from kGapAt on
+// (three messages lost: a gap by the timestamps); accel x = i mod 4096 [m/s²], gyro z = −(i mod 512)
+// [rad/s], frame_id "imu"; a Temperature message on /temp every 1000 Imu messages (20 + k/1000 °C,
+// stamped with the Imu message it precedes, so sample i holds 20 + ⌊k/1000⌋).
+
+constexpr std::int64_t kBagT0_ns = 1'700'000'000'000'000'000;
+constexpr std::size_t kBagMessages = 300'000;
+
+std::int64_t bag_stamp_ns(std::size_t i) {
+  const auto k = static_cast<std::int64_t>(i < kGapAt ? i : i + 3);
+  return kBagT0_ns + k * 1'000'000;
+}
+double bag_temperature(std::size_t i) {
+  return 20.0 + static_cast<double>((i < kGapAt ? i : i + 3) / 1000);
+}
+void expect_bag_sample(std::size_t i, const ImuSample& s) {
+  ASSERT_EQ(s.t_s, 1e-9 * static_cast<double>(bag_stamp_ns(i) - kBagT0_ns));
+  ASSERT_EQ(s.accel_mps2.x(), static_cast<double>(i % 4096));
+  ASSERT_EQ(s.gyro_radps.z(), -static_cast<double>(i % 512));
+  ASSERT_EQ(s.temperature_c, bag_temperature(i));
+}
+
+// The fields of sensor_msgs/Imu after the header, as bag_stamp_ns's comment gives them.
+std::vector<double> imu_fields(std::size_t i) {
+  std::vector<double> v(4 + 9 + 3 + 9 + 3 + 9, 0.0);
+  v[3] = 1.0;                                 // orientation w
+  v[13 + 2] = -static_cast<double>(i % 512);  // angular_velocity z
+  v[25] = static_cast<double>(i % 4096);      // linear_acceleration x
+  return v;
+}
+
+ImportOptions bag_options() {
+  ImportOptions o;
+  o.set("temperature_topic", "/temp");
+  return o;
+}
+
+// Written by librosbag's own writer (rosbag::Bag; messages through topic_tools::ShapeShifter, as
+// rosbag_test.cpp does), lz4 chunks.
+void write_long_ros1_bag(const fs::path& file, std::size_t n) {
+  rosbag::Bag bag(file.string(), rosbag::bagmode::Write);
+  bag.setCompression(rosbag::compression::LZ4);
+  const auto message = [](const char* md5, const char* type, std::vector<std::uint8_t>& bytes) {
+    topic_tools::ShapeShifter s;
+    s.morph(md5, type, "(definition not needed by the reader)", "");
+    ros::serialization::IStream in(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
+    s.read(in);
+    return s;
+  };
+  const auto header = [](ros::serialization::OStream& o, std::int64_t stamp_ns) {
+    o.next(std::uint32_t{0});
+    o.next(static_cast<std::uint32_t>(stamp_ns / 1'000'000'000));
+    o.next(static_cast<std::uint32_t>(stamp_ns % 1'000'000'000));
+    o.next(std::string("imu"));
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int64_t stamp = bag_stamp_ns(i);
+    ros::Time record;
+    record.fromNSec(static_cast<std::uint64_t>(stamp));
+    if (i == 0 || bag_temperature(i) != bag_temperature(i - 1)) {
+      std::vector<std::uint8_t> b(4 * 3 + 4 + 3 + 16);
+      ros::serialization::OStream o(b.data(), static_cast<std::uint32_t>(b.size()));
+      header(o, stamp);
+      o.next(bag_temperature(i));
+      o.next(0.0);
+      bag.write("/temp", record, message("ff71b307acdbe7c871a5a6d7ed359100", "sensor_msgs/Temperature", b));
+    }
+    std::vector<std::uint8_t> b(4 * 3 + 4 + 3 + 8 * 37);
+    ros::serialization::OStream o(b.data(), static_cast<std::uint32_t>(b.size()));
+    header(o, stamp);
+    for (double v : imu_fields(i)) o.next(v);
+    bag.write("/imu", record, message("6a62c6daae103f4ff57a132d6f95cec2", "sensor_msgs/Imu", b));
+  }
+  bag.close();
+}
+
+// CDR (XCDR1, little endian): encapsulation 00 01 00 00, then the header (int32 sec, uint32
+// nanosec, string "imu" as uint32 length with NUL and bytes) and float64s aligned to 8 from the
+// end of the encapsulation (16 bytes of header: no padding).
+std::vector<std::uint8_t> cdr_message(std::int64_t stamp_ns, const std::vector<double>& fields) {
+  std::vector<std::uint8_t> b = {0x00, 0x01, 0x00, 0x00};
+  const auto put = [&](const auto& v) {
+    const auto* p = reinterpret_cast<const std::uint8_t*>(&v);
+    b.insert(b.end(), p, p + sizeof v);
+  };
+  put(static_cast<std::int32_t>(stamp_ns / 1'000'000'000));
+  put(static_cast<std::uint32_t>(stamp_ns % 1'000'000'000));
+  put(std::uint32_t{4});
+  b.insert(b.end(), {'i', 'm', 'u', '\0'});
+  for (double v : fields) put(v);
+  return b;
+}
+
+// A rosbag2 SQLite3 storage file in rosbag2's schema (as io/tests/rosbag2_writer/write_db3.py
+// builds it), written with SQLite3 itself; each message received at its stamp.
+void write_long_db3(const fs::path& file, std::size_t n) {
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(file.c_str(), &db), SQLITE_OK);
+  const char* schema = R"(
+    PRAGMA journal_mode = OFF; PRAGMA synchronous = OFF;
+    CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT NULL);
+    CREATE TABLE metadata(id INTEGER PRIMARY KEY, metadata_version INTEGER NOT NULL, metadata TEXT NOT NULL);
+    CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL,
+                        serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL);
+    CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, timestamp INTEGER NOT NULL,
+                          data BLOB NOT NULL);
+    CREATE INDEX timestamp_idx ON messages (timestamp ASC);
+    INSERT INTO schema VALUES (3, 'humble');
+    INSERT INTO topics VALUES (1, '/imu', 'sensor_msgs/msg/Imu', 'cdr', '');
+    INSERT INTO topics VALUES (2, '/temp', 'sensor_msgs/msg/Temperature', 'cdr', '');
+    BEGIN;)";
+  ASSERT_EQ(sqlite3_exec(db, schema, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+  sqlite3_stmt* insert = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(db, "INSERT INTO messages (topic_id, timestamp, data) VALUES (?, ?, ?)", -1, &insert,
+                               nullptr),
+            SQLITE_OK);
+  const auto add = [&](int topic, std::int64_t t_ns, const std::vector<std::uint8_t>& data) {
+    sqlite3_bind_int(insert, 1, topic);
+    sqlite3_bind_int64(insert, 2, t_ns);
+    sqlite3_bind_blob(insert, 3, data.data(), static_cast<int>(data.size()), SQLITE_TRANSIENT);
+    ASSERT_EQ(sqlite3_step(insert), SQLITE_DONE);
+    sqlite3_reset(insert);
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int64_t stamp = bag_stamp_ns(i);
+    if (i == 0 || bag_temperature(i) != bag_temperature(i - 1)) add(2, stamp, cdr_message(stamp, {bag_temperature(i), 0.0}));
+    add(1, stamp, cdr_message(stamp, imu_fields(i)));
+  }
+  sqlite3_finalize(insert);
+  ASSERT_EQ(sqlite3_exec(db, "COMMIT;", nullptr, nullptr, nullptr), SQLITE_OK);
+  sqlite3_close(db);
+}
+
+TEST(ImportStream, LongRos1BagInBoundedMemoryWithTheSamplesOfAnInMemoryImport) {
+  TempDir tmp("import-stream-rosbag1");
+  write_long_ros1_bag(tmp / "long.bag", kBagMessages);
+  const RosbagOptions o{.topic = {}, .temperature_topic = "/temp", .identity = {}, .gravity_mps2 = 0.0};
+  check_long_log({tmp / "long.bag"}, "rosbag1", kBagMessages, [&] { return import_rosbag1(tmp / "long.bag", o); },
+                 expect_bag_sample, bag_options());
+}
+
+TEST(ImportStream, LongRosbag2SqliteInBoundedMemoryWithTheSamplesOfAnInMemoryImport) {
+  TempDir tmp("import-stream-rosbag2");
+  ASSERT_NO_FATAL_FAILURE(write_long_db3(tmp / "long.db3", kBagMessages));
+  const RosbagOptions o{.topic = {}, .temperature_topic = "/temp", .identity = {}, .gravity_mps2 = 0.0};
+  check_long_log({tmp / "long.db3"}, "rosbag2", kBagMessages, [&] { return import_rosbag2(tmp / "long.db3", o); },
+                 expect_bag_sample, bag_options());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Text formats, printed: n samples at kRateHz; sample i has the index k = i, and i + 3 from kGapAt
+// on where the format can show a gap.
+
+constexpr std::size_t kTextLines = 1'000'000;
+
+std::size_t text_index(std::size_t i) { return i < kGapAt ? i : i + 3; }
+
+// imucal: the parts grouped as imucal writes them (x_p: the second half of the session first, then
+// x_a: the first half), counts acc_x = k mod 4096, gyr_z = −(k mod 512); the index jumps by 4 at kGapAt.
+void write_imucal(const fs::path& file, std::size_t n) {
+  std::FILE* f = std::fopen(file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fputs("part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n", f);
+  const auto rows = [&](const char* part, std::size_t from, std::size_t to) {
+    for (std::size_t i = from; i < to; ++i) {
+      const std::size_t k = text_index(i);
+      std::fprintf(f, "%s,%zu,%zu.0,0.0,2048.0,0.0,0.0,-%zu.0\n", part, k, k % 4096, k % 512);
+    }
+  };
+  rows("x_p", n / 2, n);
+  rows("x_a", 0, n / 2);
+  std::fclose(f);
+}
+
+// MPU-6050 multi-position: "key,value" header (Fs 1000 Hz), counts ax = i mod 4096, gz = −(i mod 512).
+void write_mpu6050(const fs::path& file, std::size_t n) {
+  std::FILE* f = std::fopen(file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fputs("Fs,1000\nLogging Type,1\nInitialization time,5\nWaiting time,10\nax,ay,az,gx,gy,gz\n", f);
+  for (std::size_t i = 0; i < n; ++i) std::fprintf(f, "%zu,0,16384,0,0,-%zu\n", i % 4096, i % 512);
+  std::fclose(f);
+}
+
+// IMU-TK: the accelerometer at t = k ms (x = k mod 4096 [m/s²]; three samples lost at kGapAt) and the
+// gyro on its own clock half a period later, t = (j + ½) ms for j = −1 … n + 3, z = j [rad/s]: at the
+// accelerometer times it interpolates to z = k − ½.
+void write_imutk(const fs::path& acc, const fs::path& gyro, std::size_t n) {
+  std::FILE* a = std::fopen(acc.c_str(), "w");
+  std::FILE* g = std::fopen(gyro.c_str(), "w");
+  ASSERT_TRUE(a && g);
+  for (std::size_t i = 0; i < n; ++i) std::fprintf(a, "%.6f %zu 0 9.81\n", static_cast<double>(text_index(i)) * 1e-3, text_index(i) % 4096);
+  for (long j = -1; j <= static_cast<long>(n) + 3; ++j) std::fprintf(g, "%.6f 0 0 %ld\n", (static_cast<double>(j) + 0.5) * 1e-3, j);
+  std::fclose(a);
+  std::fclose(g);
+}
+
+TEST(ImportStream, LongImucalSessionInBoundedMemoryWithTheSamplesOfAnInMemoryImport) {
+  TempDir tmp("import-stream-imucal");
+  ASSERT_NO_FATAL_FAILURE(write_imucal(tmp / "long.csv", kTextLines));
+  ImportOptions o;
+  o.set("rate_hz", "1000");
+  ImucalOptions m;
+  m.rate_hz = kRateHz;
+  check_long_log({tmp / "long.csv"}, "imucal", kTextLines, [&] { return import_imucal_session(tmp / "long.csv", m); },
+                 [](std::size_t i, const ImuSample& s) {
+                   const std::size_t k = text_index(i);
+                   ASSERT_EQ(s.t_s, static_cast<double>(k) / kRateHz);
+                   ASSERT_EQ(s.accel_counts[0], static_cast<std::int32_t>(k % 4096));
+                   ASSERT_EQ(s.gyro_counts[2], -static_cast<std::int32_t>(k % 512));
+                 },
+                 o, {.temperature = false, .gap = true});
+}
+
+TEST(ImportStream, LongMpu6050SessionInBoundedMemoryWithTheSamplesOfAnInMemoryImport) {
+  TempDir tmp("import-stream-mpu6050");
+  ASSERT_NO_FATAL_FAILURE(write_mpu6050(tmp / "long.csv", kTextLines));
+  check_long_log({tmp / "long.csv"}, "mpu6050_multipos", kTextLines,
+                 [&] { return import_mpu6050_multipos(tmp / "long.csv"); },
+                 [](std::size_t i, const ImuSample& s) {
+                   ASSERT_EQ(s.t_s, static_cast<double>(i) / kRateHz);
+                   ASSERT_EQ(s.accel_counts[0], static_cast<std::int32_t>(i % 4096));
+                   ASSERT_EQ(s.gyro_counts[2], -static_cast<std::int32_t>(i % 512));
+                 },
+                 {}, {.temperature = false, .gap = false});
+}
+
+TEST(ImportStream, LongImuTkFilesInBoundedMemoryWithTheSamplesOfAnInMemoryImport) {
+  TempDir tmp("import-stream-imutk");
+  ASSERT_NO_FATAL_FAILURE(write_imutk(tmp / "acc.txt", tmp / "gyro.txt", kTextLines));
+  check_long_log({tmp / "acc.txt", tmp / "gyro.txt"}, "imutk", kTextLines,
+                 [&] { return import_imutk(tmp / "acc.txt", tmp / "gyro.txt"); },
+                 [](std::size_t i, const ImuSample& s) {
+                   const std::size_t k = text_index(i);
+                   ASSERT_EQ(s.t_s, static_cast<double>(k) / kRateHz);
+                   ASSERT_EQ(s.accel_mps2.x(), static_cast<double>(k % 4096));
+                   ASSERT_NEAR(s.gyro_radps.z(), static_cast<double>(k) - 0.5, 1e-6);  // interpolated
+                 },
+                 {}, {.temperature = false, .gap = true});
 }
 
 }  // namespace

@@ -138,6 +138,11 @@ struct ImucalOptions {
   double gravity_mps2 = 9.81;  // the value imucal's Ferraris calibration assumes (expected_g)
 };
 Recording import_imucal_session(const std::filesystem::path& csv, const ImucalOptions& options = {});
+// The same, streaming: a first pass checks every line and finds the runs of increasing sample
+// index (the file is grouped by part), the second merges them (one line reader per run) and passes
+// the samples to `out` a chunk at a time; `rec` receives the rest (segments, truth, events).
+void import_imucal_session(const std::filesystem::path& csv, const ImucalOptions& options, Recording& rec,
+                           SampleSink& out);
 
 // ---------------------------------------------------------------------------------------------
 // (c) MPU-6050 multi-position session (tomisuarez2/ImuCalibration): a header of `key,value`
@@ -150,9 +155,14 @@ struct Mpu6050MultiposOptions {
   double gyro_lsb_per_dps = 131.0;
   double accel_offset_counts = 0.0;  // SI = (count − offset) · LSB
   double gyro_offset_counts = 0.0;
+  double gravity_mps2 = 0.0;  // header.gravity_mps2 (0 = unknown: the file does not state it)
 };
 Recording import_mpu6050_multipos(const std::filesystem::path& csv,
                                   const Mpu6050MultiposOptions& options = {});
+// The same, streaming: the samples go to `out` a chunk at a time (the file is read line by line),
+// `rec` receives the rest (header filled before the first samples reach `out`).
+void import_mpu6050_multipos(const std::filesystem::path& csv, const Mpu6050MultiposOptions& options, Recording& rec,
+                             SampleSink& out);
 
 // ---------------------------------------------------------------------------------------------
 // (d) IMU-TK text format: one file per triad, one sample per line `t x y z` (whitespace, comma or
@@ -175,6 +185,12 @@ struct ImuTkOptions {
 // gyro_file may be empty (accelerometer only).
 Recording import_imutk(const std::filesystem::path& acc_file,
                        const std::filesystem::path& gyro_file, const ImuTkOptions& options = {});
+// The same, streaming: the two files are read line by line side by side (after a first pass that
+// checks them and takes their time spans and the accelerometer's median interval from its first
+// kTimestampWindow lines); the samples go to `out` a chunk at a time through the windowed timestamp
+// repair, `rec` receives the rest.
+void import_imutk(const std::filesystem::path& acc_file, const std::filesystem::path& gyro_file,
+                  const ImuTkOptions& options, Recording& rec, SampleSink& out);
 // Writes `t x y z` lines (SI values, or counts when `counts`), full double precision.
 void export_imutk(const Recording& recording, const std::filesystem::path& acc_file,
                   const std::filesystem::path& gyro_file, bool counts = false);

@@ -16,7 +16,8 @@
 //   temperature_c  the latest Temperature message on `temperature_topic` at or before the sample
 //               (the first one for samples before it) [°C]; 0 and has_temperature false without it
 //   counts      0 (a bag holds SI values only)
-//   flags       kGapBefore after an interval longer than 1.5 median intervals
+//   flags       kGapBefore after an interval longer than 1.5 median intervals (the median of the
+//               first 65 536 intervals, as every log importer takes it)
 // Stamps that do not increase are kept as recorded (a later repair step fixes them); the info
 // event counts them. Identity: model = the topic, serial = the messages' header.frame_id, unless
 // the options give them.
@@ -41,9 +42,17 @@ struct RosbagOptions {
 // True when `path` is a file starting with the ROS 1 bag v2.0 magic.
 bool looks_like_rosbag1(const std::filesystem::path& path);
 Recording import_rosbag1(const std::filesystem::path& path, const RosbagOptions& options = {});
+// The same, streaming: two passes over the topic (librosbag's index of the bag stays in memory,
+// about 100 bytes per message); the samples go to `out` a chunk at a time, `rec` receives the rest
+// (header filled before the first samples reach `out`; events at t = 0, RunSink places them).
+void import_rosbag1(const std::filesystem::path& path, const RosbagOptions& options, Recording& rec, SampleSink& out);
 
 // True when `path` is an MCAP file, a rosbag2 SQLite3 file, or a folder holding one of them.
 bool looks_like_rosbag2(const std::filesystem::path& path);
 Recording import_rosbag2(const std::filesystem::path& path, const RosbagOptions& options = {});
+// The same, streaming: the storage is read a message at a time (SQLite3: stepping the messages
+// query; MCAP: a record, or one decompressed chunk, at a time), in three passes (topics, scan,
+// samples); memory does not grow with the bag.
+void import_rosbag2(const std::filesystem::path& path, const RosbagOptions& options, Recording& rec, SampleSink& out);
 
 }  // namespace stend::io
