@@ -47,6 +47,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <new>
@@ -118,16 +119,16 @@ inline std::uint64_t stop_ratio(DeviationKind kind) {
 
 namespace detail {
 
-// Allocator on cache lines, so that 8-double loads at positions ≡ 0 mod 8 never straddle two.
+// Allocator on cache lines, so that 8-double loads at positions ≡ 0 mod 8 never straddle two,
+// and on huge pages for the large rings (allocate_big).
 template <class T>
 struct CacheLineAllocator {
   using value_type = T;
-  static constexpr std::align_val_t kAlign{64};
   CacheLineAllocator() = default;
   template <class U>
   CacheLineAllocator(const CacheLineAllocator<U>&) {}
-  T* allocate(std::size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), kAlign)); }
-  void deallocate(T* p, std::size_t) { ::operator delete(p, kAlign); }
+  T* allocate(std::size_t n) { return allocate_big<T>(n).release(); }
+  void deallocate(T* p, std::size_t) { std::free(p); }
   bool operator==(const CacheLineAllocator&) const { return true; }
 };
 using AlignedDoubles = std::vector<double, CacheLineAllocator<double>>;

@@ -31,11 +31,17 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
+#include <new>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
 #define STEND_ALLAN_KERNEL \
@@ -134,6 +140,30 @@ inline void fused_octaves_n(int groups, const double* c, const double* const* la
   }
 }
 
+// Uninitialised storage for n values of T, 64-byte aligned; from 2 MiB on, 2 MiB-aligned and
+// advised as transparent huge pages (Linux). The lag streams reach far back into a long history,
+// each on its own pages: with 4 KiB pages their TLB misses cost a fifth of the stream's time
+// (10^8 samples, max_m = 2^22: 0.50 → 0.40 s CPU).
+struct FreeDeleter {
+  void operator()(void* p) const { std::free(p); }
+};
+template <class T>
+using BigArray = std::unique_ptr<T[], FreeDeleter>;
+
+template <class T>
+BigArray<T> allocate_big(std::size_t n) {
+  constexpr std::size_t kHugePage = std::size_t{2} << 20;
+  const std::size_t bytes = std::max<std::size_t>(n * sizeof(T), 1);
+  const std::size_t align = bytes >= kHugePage ? kHugePage : 64;
+  const std::size_t size = (bytes + align - 1) / align * align;
+  void* p = std::aligned_alloc(align, size);
+  if (!p) throw std::bad_alloc();
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  if (align == kHugePage) madvise(p, size, MADV_HUGEPAGE);  // advice only: ignored where THP is off
+#endif
+  return BigArray<T>(static_cast<T*>(p));
+}
+
 inline std::uint64_t floor_pow2(std::uint64_t v) {
   std::uint64_t p = 1;
   while (p <= v / 2) p *= 2;
@@ -159,8 +189,8 @@ class OverlappingAllanStream {
     const std::uint64_t history_blocks = std::max<std::uint64_t>(1, (2 * cap) / kBlock);
     slots_ = history_blocks + 1;  // +1: the block being written never overlaps a lag window
     // Uninitialised on purpose: pages of the history are only made resident when reached.
-    memory_ = std::make_unique_for_overwrite<double[]>((slots_ + 1) * kBlock);
-    ybuf_ = std::make_unique_for_overwrite<double[]>(kBlock);
+    memory_ = detail::allocate_big<double>((slots_ + 1) * kBlock);
+    ybuf_ = detail::allocate_big<double>(kBlock);
     // x_0 = 0 is "element kBlock−1 of block −1": in the mirror and in the last slot.
     mirror()[kBlock - 1] = 0.0;
     slot(slots_ - 1)[kBlock - 1] = 0.0;
@@ -321,8 +351,8 @@ class OverlappingAllanStream {
 
   std::uint64_t max_m_ = 0;
   std::uint64_t slots_ = 0;
-  std::unique_ptr<double[]> memory_;  // [mirror of the last slot | slot 0 | slot 1 | …]
-  std::unique_ptr<double[]> ybuf_;    // pending samples of the current block
+  detail::BigArray<double> memory_;  // [mirror of the last slot | slot 0 | slot 1 | …]
+  detail::BigArray<double> ybuf_;    // pending samples of the current block
   std::size_t fill_ = 0;
   std::uint64_t blocks_ = 0;          // committed blocks
   bool offset_set_ = false;
