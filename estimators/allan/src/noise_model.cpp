@@ -647,8 +647,10 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
   }
   model.correlation_time.identified = model.gauss_markov.identified;
   fisher_uncertainties(set, best, model);
-  model.selection = fmt::format("{} (least D + {:.2f} x parameters over all term subsets; D = {:.4g})",
-                                term_names(best.mask), kTermPenalty, best.deviance);
+  model.selection = fmt::format(
+      "{} (least D + {:.2f} x parameters over all term subsets; B or G only where they lower D by "
+      "more than {:.2f} against K in their place; D = {:.4g})",
+      term_names(best.mask), kTermPenalty, kPlateauOverWalk, best.deviance);
   NoiseModel snapshot = model;
   mark_dominance(snapshot, white, model);
   set_edf(all, curve, white, [&](double tau) { return model.dominant(tau); });
