@@ -399,14 +399,14 @@ double stated_lowpass_hz(const Recording& rec) {
 }
 
 // Allan curve and noise model of channel ch (0..2 accelerometer [m/s²], 3..5 gyroscope [rad/s])
-// over samples `range`, read a column chunk at a time.
+// over samples `range`, read a column chunk at a time through stream s (reset first).
 ChannelResult analyze_channel(const SampleSource& src, IndexRange range, int ch, double rate,
-                              const AllanOptions& options) {
+                              const AllanOptions& options, OverlappingAllanStream& s) {
   static const char* names[6] = {"ax", "ay", "az", "gx", "gy", "gz"};
   static constexpr Channel columns[6] = {Channel::kAx, Channel::kAy, Channel::kAz,
                                          Channel::kGx, Channel::kGy, Channel::kGz};
   std::vector<double> buf(kDefaultChunkSamples);
-  OverlappingAllanStream s(options.max_m, range.size());
+  s.reset();
   for (std::uint64_t i = range.first; i < range.last;) {
     const auto take = static_cast<std::size_t>(std::min<std::uint64_t>(buf.size(), range.last - i));
     src.read_column(columns[ch], i, take, buf.data());
@@ -419,16 +419,17 @@ ChannelResult analyze_channel(const SampleSource& src, IndexRange range, int ch,
   return analyze(s, rate, info, options);
 }
 
-// Channels 0 … channels−1 on two threads (channel c on thread c mod 2, one stream per thread at
-// a time so that memory stays at two streams' state).
+// Channels 0 … channels−1 on two threads (channel c on thread c mod 2), each thread with one
+// stream for all its channels, so that memory stays at two streams' state.
 std::vector<ChannelResult> analyze_channels(const SampleSource& src, IndexRange range, int channels,
                                             double rate, const AllanOptions& options) {
   std::vector<ChannelResult> out(static_cast<std::size_t>(channels));
   std::exception_ptr error[2];
   auto work = [&](int parity) {
     try {
+      OverlappingAllanStream s(options.max_m, range.size());
       for (int ch = parity; ch < channels; ch += 2) {
-        out[static_cast<std::size_t>(ch)] = analyze_channel(src, range, ch, rate, options);
+        out[static_cast<std::size_t>(ch)] = analyze_channel(src, range, ch, rate, options, s);
       }
     } catch (...) {
       error[parity] = std::current_exception();

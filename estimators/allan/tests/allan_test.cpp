@@ -136,6 +136,14 @@ TEST(AllanStream, ChunkingAndStrideDoNotChangeTheResult) {
   mid.add(y.data() + 10001, y.size() - 10001);
   const auto e = mid.octaves();
   for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i].avar, e[i].avar);
+  // A reset stream is a fresh one (its old history is never read).
+  OverlappingAllanStream reused;
+  reused.add(y.data() + 5000, 9000);
+  reused.reset();
+  reused.add(y.data(), y.size());
+  const auto f = reused.octaves();
+  ASSERT_EQ(f.size(), a.size());
+  for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i].avar, f[i].avar);
 }
 
 TEST(AllanStream, MemoryDoesNotGrowWithTheRecord) {

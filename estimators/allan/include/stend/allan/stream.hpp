@@ -191,6 +191,18 @@ class OverlappingAllanStream {
     // Uninitialised on purpose: pages of the history are only made resident when reached.
     memory_ = detail::allocate_big<double>((slots_ + 1) * kBlock);
     ybuf_ = detail::allocate_big<double>(kBlock);
+    reset();
+  }
+
+  // Back to no samples, keeping the history's memory (a new record of the same length and cap
+  // costs no page faults). Only history written since is ever read.
+  void reset() {
+    fill_ = 0;
+    blocks_ = 0;
+    offset_set_ = false;
+    offset_ = 0.0;
+    phase_ = 0.0L;
+    sums_ = {};
     // x_0 = 0 is "element kBlock−1 of block −1": in the mirror and in the last slot.
     mirror()[kBlock - 1] = 0.0;
     slot(slots_ - 1)[kBlock - 1] = 0.0;
