@@ -233,3 +233,11 @@ TEST(AvarCorrelation, IsOneOnTheDiagonalAndFallsWithTheRatio) {
   EXPECT_LT(avar_correlation(NoiseType::kWhite, 16, 32), avar_correlation(NoiseType::kFlicker, 16, 32));
   EXPECT_LT(avar_correlation(NoiseType::kFlicker, 16, 32), avar_correlation(NoiseType::kRandomWalk, 16, 32));
 }
+
+TEST(AvarCorrelation, TheKeptTableIsTheComputation) {
+  const auto computed = stats::detail::compute_avar_correlation_table();
+  for (std::size_t ty = 0; ty < computed.size(); ++ty)
+    for (std::size_t b = 0; b < computed[ty].size(); ++b)
+      for (std::size_t k = 0; k < computed[ty][b].size(); ++k)
+        EXPECT_NEAR(stats::kAvarCorrelation[ty][b][k], computed[ty][b][k], 1e-15) << ty << " " << b << " " << k;
+}
