@@ -424,28 +424,30 @@ inline double avar_correlation_finite(NoiseType type, long m1, long m2, long n) 
 
 }  // namespace detail
 
-// The long-record correlations per noise type (index alpha + 2), smaller factor 2^b and ratio 2^k.
+// The long-record correlations per noise type, smaller factor 2^b and ratio 2^k. Rows: random-walk
+// FM, flicker FM, white FM, white PM (row min(alpha + 2, 3): flicker PM shares white PM's
+// autocovariance, generalized_autocovariance).
 using AvarCorrelationTable =
-    std::array<std::array<std::array<double, kAvarCorrelationOctaves + 1>, kAvarCorrelationBase + 1>, 5>;
+    std::array<std::array<std::array<double, kAvarCorrelationOctaves + 1>, kAvarCorrelationBase + 1>, 4>;
+
+inline std::size_t avar_correlation_row(NoiseType type) {
+  return static_cast<std::size_t>(std::min(alpha_of(type) + 2, 3));
+}
 
 namespace detail {
 // The table from avar_cross_moment (kAvarCorrelation below holds its output).
 inline AvarCorrelationTable compute_avar_correlation_table() {
   AvarCorrelationTable t{};
-  const NoiseType types[5] = {NoiseType::kRandomWalk, NoiseType::kFlicker, NoiseType::kWhite,
-                              NoiseType::kFlickerPhase, NoiseType::kQuantization};
-  for (int ty = 0; ty < 5; ++ty) {
-    if (types[ty] == NoiseType::kFlickerPhase) continue;  // shares white PM's row below
+  for (const NoiseType type : {NoiseType::kRandomWalk, NoiseType::kFlicker, NoiseType::kWhite, NoiseType::kQuantization}) {
     std::array<double, kAvarCorrelationBase + kAvarCorrelationOctaves + 1> self{};
-    for (std::size_t j = 0; j < self.size(); ++j) self[j] = detail::avar_cross_moment(types[ty], 1L << j, 1L << j);
+    for (std::size_t j = 0; j < self.size(); ++j) self[j] = avar_cross_moment(type, 1L << j, 1L << j);
     for (int b = 0; b <= kAvarCorrelationBase; ++b) {
       for (int k = 0; k <= kAvarCorrelationOctaves; ++k) {
-        t[ty][b][k] = detail::avar_cross_moment(types[ty], 1L << b, 1L << (b + k)) /
-                      std::sqrt(self[static_cast<std::size_t>(b)] * self[static_cast<std::size_t>(b + k)]);
+        t[avar_correlation_row(type)][b][k] = avar_cross_moment(type, 1L << b, 1L << (b + k)) /
+            std::sqrt(self[static_cast<std::size_t>(b)] * self[static_cast<std::size_t>(b + k)]);
       }
     }
   }
-  t[3] = t[4];
   return t;
 }
 }  // namespace detail
@@ -495,21 +497,7 @@ inline constexpr AvarCorrelationTable kAvarCorrelation = {{
          0.023392368044815377, 0.0082706876478546628, 0.0029241505752675601, 0.0010338451991432308,
          0.00036551963890552112, 0.00012923072210613125, 4.5689961246002537e-05},
     }},
-    {{  // flicker PM (as white PM): b = 0 … 3, k = 0 … 10
-        {1, 0.40000000000000002, 0.51428571428571423, 0.51428571428571423,
-         0.51428571428571423, 0.51428571428571423, 0.51428571428571423, 0.51428571428571423,
-         0.51428571428571423, 0.51428571428571423, 0.51428571428571423},
-        {1, 0.40000000000000002, 0.51428571428571423, 0.51428571428571423,
-         0.51428571428571423, 0.51428571428571423, 0.51428571428571423, 0.51428571428571423,
-         0.51428571428571423, 0.51428571428571423, 0.51428571428571423},
-        {1, 0.40000000000000002, 0.51428571428571423, 0.51428571428571423,
-         0.51428571428571423, 0.51428571428571423, 0.51428571428571423, 0.51428571428571423,
-         0.51428571428571423, 0.51428571428571423, 0.51428571428571423},
-        {1, 0.40000000000000002, 0.51428571428571423, 0.51428571428571423,
-         0.51428571428571423, 0.51428571428571423, 0.51428571428571423, 0.51428571428571423,
-         0.51428571428571423, 0.51428571428571423, 0.51428571428571423},
-    }},
-    {{  // white PM: b = 0 … 3, k = 0 … 10
+    {{  // white PM (and flicker PM): b = 0 … 3, k = 0 … 10
         {1, 0.40000000000000002, 0.51428571428571423, 0.51428571428571423,
          0.51428571428571423, 0.51428571428571423, 0.51428571428571423, 0.51428571428571423,
          0.51428571428571423, 0.51428571428571423, 0.51428571428571423},
@@ -535,10 +523,10 @@ inline double avar_correlation(NoiseType type, double m1, double m2, double n_sa
     // Near the record's length: direct, scaled so that m1 is at most 2^kAvarCorrelationBase.
     const double scale = std::min(1.0, std::ldexp(1.0, kAvarCorrelationBase) / m1);
     const long a = std::lround(m1 * scale), b = std::lround(m2 * scale), n = std::lround(n_samples * scale);
-    if (n + 1 > 2 * b) return detail::avar_correlation_finite(type == NoiseType::kFlickerPhase ? NoiseType::kQuantization : type, a, b, n);
+    if (n + 1 > 2 * b) return detail::avar_correlation_finite(type, a, b, n);
   }
   const int b = std::clamp(static_cast<int>(std::lround(std::log2(m1))), 0, kAvarCorrelationBase);
-  return tables[static_cast<std::size_t>(alpha_of(type) + 2)][static_cast<std::size_t>(b)][static_cast<std::size_t>(k)];
+  return tables[avar_correlation_row(type)][static_cast<std::size_t>(b)][static_cast<std::size_t>(k)];
 }
 
 // The one-sigma confidence level, erf(1/√2).
