@@ -3,7 +3,7 @@
 # <!-- datasets:end -->, and every other one-line command that reads ../shared/data or datasets/, in
 # the README's order) exactly as written, as a new user would from the repository root: every
 # command must succeed. They run in a scratch copy of the root (links to the sources and the build)
-# with ../shared beside it, so nothing is written into the work tree.
+# with ../shared beside it, so nothing is written into the work tree, whatever its runs/ holds.
 # Usage: readme_datasets_test.sh SOURCE_DIR BUILD_DIR SHARED_DATA_DIR. Exit 77 (skipped) without the data.
 set -uo pipefail
 src=$1 build=$2 data=$3
@@ -15,9 +15,11 @@ scratch=$(mktemp -d)
 trap 'rm -rf "$scratch"' EXIT
 mkdir -p "$scratch/repo" "$scratch/shared"
 ln -s "$(cd "$data" && pwd)" "$scratch/shared/data"
+# The work tree's own build and run folders are left out: the commands write a fresh runs/ (run
+# folders a user has already made there would otherwise stop `stend import -o runs/…`).
 for entry in "$src"/*; do
   name=$(basename "$entry")
-  [ "$name" = build ] || ln -s "$entry" "$scratch/repo/$name"
+  [ "$name" = build ] || [ "$name" = runs ] || ln -s "$entry" "$scratch/repo/$name"
 done
 ln -s "$build" "$scratch/repo/build"
 commands=$(awk '/<!-- datasets:begin -->/ {inblock = 1} /<!-- datasets:end -->/ {inblock = 0}
