@@ -16,6 +16,7 @@
 #include <sstream>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <unistd.h>
 
@@ -41,29 +42,39 @@ std::string fmt_duration(double s) {
   return fmt::format("{}s", t);
 }
 
-// Loads plugins from the default search path plus the experiment's own plugin_paths (read
-// before full validation so that the experiment's plugins are known while validating it).
-void scan_plugins(stend::PluginHost& host, const std::vector<std::string>& extra) {
-  host.scan(stend::PluginHost::default_search_path(extra));
+// Loads plugins from the default search path. The experiment's own plugin_paths (read before full
+// validation so that its plugins are known while validating it) are loaded only when the user
+// allows it (--allow-plugins or STEND_ALLOW_PLUGINS=1, docs/plugins.md); otherwise their files
+// are listed as not loaded and no code of theirs runs.
+void scan_plugins(stend::PluginHost& host, const std::vector<std::string>& extra, bool allow_extra) {
+  if (const char* env = std::getenv("STEND_ALLOW_PLUGINS")) allow_extra = allow_extra || std::string(env) == "1";
+  if (allow_extra) return host.scan(stend::PluginHost::default_search_path(extra));
+  host.scan(stend::PluginHost::default_search_path());
+  std::vector<stend::SearchDir> unvetted;
+  for (const auto& dir : extra) unvetted.push_back({dir, "experiment"});
+  host.list_unloaded(unvetted, "not loaded: plugin folders named by an experiment file are loaded only with "
+                               "--allow-plugins (or STEND_ALLOW_PLUGINS=1)");
 }
 
 int cmd_plugins(const std::vector<std::string>& paths) {
   stend::PluginHost host;
-  scan_plugins(host, paths);
+  scan_plugins(host, paths, true);  // folders the user named on the command line
   std::cout << host.describe();
   return 0;
 }
 
-int cmd_validate(const std::string& file) {
+int cmd_validate(const std::string& file, bool allow_plugins) {
   stend::PluginHost host;
-  scan_plugins(host, stend::experiment_plugin_paths(file));
+  scan_plugins(host, stend::experiment_plugin_paths(file), allow_plugins);
   const stend::Experiment exp = stend::load_experiment(file, host);
   stend::Bench bench(exp, host);  // stage 2: procedure against the fixtures' declared limits
+  const stend::RunEstimate estimate = stend::estimate_run(exp, bench, {});
+  stend::check_run_limits(exp, estimate, exp.outputs.directory);
   std::size_t orientations = 0;
   for (const auto& s : exp.procedure) orientations += s.orientations.size();
-  fmt::print("{}: ok — experiment '{}', sensor {}, {} fixture(s), {} step(s), {} orientation(s), g = {:.6f} m/s^2\n",
+  fmt::print("{}: ok — experiment '{}', sensor {}, {} fixture(s), {} step(s), {} orientation(s), g = {:.6f} m/s^2; {}\n",
              file, exp.name, exp.sensor.plugin, exp.fixtures.size(), exp.procedure.size(), orientations,
-             exp.gravity.resolved_mps2);
+             exp.gravity.resolved_mps2, estimate.str());
   return 0;
 }
 
@@ -79,9 +90,9 @@ void print_progress(const stend::RunProgress& p, bool tty) {
 }
 
 int cmd_run(const std::string& file, const std::string& output, const std::string& name, const std::string& clock,
-            const std::string& store, bool quiet) {
+            const std::string& store, bool quiet, bool allow_plugins) {
   stend::PluginHost host;
-  scan_plugins(host, stend::experiment_plugin_paths(file));
+  scan_plugins(host, stend::experiment_plugin_paths(file), allow_plugins);
   const stend::Experiment exp = stend::load_experiment(file, host);
 
   stend::RunOptions opt;
@@ -106,6 +117,9 @@ int cmd_run(const std::string& file, const std::string& output, const std::strin
   fmt::print("status:     {}{}\n", stend::to_string(r.status), r.message.empty() ? "" : " — " + r.message);
   fmt::print("recorded:   {} samples, {} segments, {} of run time in {:.2f} s wall ({:.0f}x real time)\n", r.samples,
              r.segments, fmt_duration(r.run_time_s), r.wall_time_s, r.wall_time_s > 0 ? r.run_time_s / r.wall_time_s : 0.0);
+  for (const std::string& why : r.unsafe)
+    fmt::print(stderr, "error: safe state NOT confirmed, check the bench by hand: {}\n", why);
+  if (!r.unsafe.empty()) return 4;
   if (r.status != stend::RunStatus::kComplete) return r.status == stend::RunStatus::kInterrupted ? 130 : 1;
   if (exp.estimation && exp.estimation["model"]) {
     // The experiment names its model: fit it now, relative paths from the experiment's folder.
@@ -177,17 +191,22 @@ int main(int argc, char** argv) {
   std::string file;
   auto* validate = app.add_subcommand("validate", "Check an experiment file without running it");
   validate->add_option("experiment", file, "Experiment YAML")->required();
+  bool allow_plugins = false;
+  const std::string allow_help = "Load the plugin folders the experiment's plugin_paths name (their code runs); "
+                                 "also STEND_ALLOW_PLUGINS=1";
+  validate->add_flag("--allow-plugins", allow_plugins, allow_help);
 
   std::string output, name, clock, store = "hdf5";
   bool quiet = false;
   auto* run = app.add_subcommand("run", "Run an experiment and record it");
   run->add_option("experiment", file, "Experiment YAML")->required();
   run->add_option("-o,--output", output, "Folder for run folders (default: the experiment's outputs.directory)");
-  run->add_option("--name", name, "Run folder name (default: <experiment>-<UTC time>)");
+  auto* name_option = run->add_option("--name", name, "Run folder name (default: <experiment>-<UTC time>)");
   run->add_option("--clock", clock, "Override the clock")->check(CLI::IsMember({"simulated", "wall"}));
   run->add_option("--store", store, "How the run folder stores its data: hdf5 (run.h5, default) or csv (the CSV files)")
       ->check(CLI::IsMember({"hdf5", "csv"}));
   run->add_flag("-q,--quiet", quiet, "No progress display");
+  run->add_flag("--allow-plugins", allow_plugins, allow_help);
 
   std::string dir;
   auto* info = app.add_subcommand("info", "Summarize a recording (run folder)");
@@ -218,8 +237,11 @@ int main(int argc, char** argv) {
     for (const auto& c : commands)
       if (*c.sub) return c.run();
     if (*plugins) return cmd_plugins(plugin_paths);
-    if (*validate) return cmd_validate(file);
-    if (*run) return cmd_run(file, output, name, clock, store, quiet);
+    if (*validate) return cmd_validate(file, allow_plugins);
+    if (*run) {
+      if (*name_option) stend::check_run_name(name);  // given but empty is refused, not the default
+      return cmd_run(file, output, name, clock, store, quiet, allow_plugins);
+    }
     if (*info) return cmd_info(dir);
     if (*fit) return cmd_fit(fit_data, model, json, estimator);
   } catch (const stend::ExperimentError& e) {

@@ -71,8 +71,13 @@ void Bench::advance(double t_s) {
   for (auto& f : fixtures_) f->advance(t_s);
 }
 
-void Bench::safe_state() noexcept {
-  for (auto& f : fixtures_) f->safe_state();
+std::vector<std::string> Bench::safe_state() noexcept {
+  std::vector<std::string> failed;
+  for (std::size_t i = 0; i < fixtures_.size(); ++i) {
+    const std::string why = fixtures_[i]->safe_state();
+    if (!why.empty()) failed.push_back("fixture '" + fixture_id(i) + "': " + why);
+  }
+  return failed;
 }
 
 // The composition of the chain's poses k.poses (see at()) into k's kinematic fields.

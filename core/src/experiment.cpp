@@ -14,6 +14,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
+#include <tuple>
 #include <utility>
 
 namespace stend {
@@ -59,7 +60,7 @@ namespace {
 constexpr std::size_t kMaxOrientationsPerStep = 100000;
 constexpr std::size_t kMaxSteps = 100000;
 
-const std::vector<std::string> kTopKeys = {"experiment", "bench",      "procedure",
+const std::vector<std::string> kTopKeys = {"experiment", "bench",      "limits",  "procedure",
                                            "processing", "estimation", "outputs"};
 // Each step kind: its YAML name and the keys its body may hold. `repeat` is a step kind of the
 // file that expands into the others, so it has no Step::Kind.
@@ -201,6 +202,10 @@ std::vector<std::string> resolve_plugin_paths(const YAML::Node& node, const std:
     if (ec) abs = p;
     abs = abs.lexically_normal();
     if (abs.has_relative_path() && abs.filename().empty()) abs = abs.parent_path();
+    if (!fs::is_directory(abs, ec))
+      fail(yaml::location_of(node[i], file), epath,
+           "plugin path '" + s + "' (" + abs.string() + ") " + (fs::exists(abs, ec) ? "is not a folder" : "does not exist"),
+           "plugin_paths lists folders holding stend_<name>.so files, relative to the experiment file's folder");
     out.push_back(abs.string());
   }
   return out;
@@ -226,6 +231,7 @@ class Parser {
     experiment_section(top);
     top.require("bench", "the sensor under test and the fixtures it stands on");
     bench_section(top);
+    limits_section(top);  // before the procedure, whose durations it bounds
     top.require("procedure", "the list of steps to run");
     procedure_section(top);
     exp_.processing = free_mapping(top, "processing");
@@ -262,6 +268,22 @@ class Parser {
     if (m.has("plugin_paths"))
       exp_.plugin_paths =
           resolve_plugin_paths(m.get("plugin_paths"), file_, m.child_path("plugin_paths"));
+  }
+
+  // --- limits: what one run may produce (RunLimits) -------------------------------------------
+  void limits_section(const MapReader& top) {
+    RunLimits& l = exp_.limits;
+    l.where = SourceLocation{file_, 0, 0};
+    if (!top.has("limits")) return;
+    l.where = top.key_location("limits");
+    const MapReader m(top.get("limits"), file_, "limits", "'limits'", {"max_run_time_s", "max_samples", "max_bytes"},
+                      {}, l.where);
+    for (auto [key, value, words] : {std::tuple<const char*, double*, const char*>{"max_run_time_s", &l.max_run_time_s, "in seconds"},
+                                     {"max_samples", &l.max_samples, "sensor samples"},
+                                     {"max_bytes", &l.max_bytes, "bytes"}}) {
+      *value = m.number(key, *value, words);
+      if (!(*value > 0)) m.fail_value(key, std::string("'") + key + "' must be greater than 0, got " + format_number(*value));
+    }
   }
 
   // --- bench: --------------------------------------------------------------------------------
@@ -348,7 +370,8 @@ class Parser {
                       : "Loaded " + kw + " plugins: " +
                             (same_kind.empty() ? std::string("none") : yaml::join(same_kind)) +
                             " (all loaded: " + yaml::join(all) + ")";
-      m.fail_value("plugin", "unknown plugin '" + name + "'",
+      const std::string why = cat_.why_not_loaded(name);
+      m.fail_value("plugin", "unknown plugin '" + name + "'" + (why.empty() ? "" : ": " + why),
                    yaml::join_sentences(suggestion, loaded));
     }
     if (info->kind != kind) {
@@ -723,21 +746,35 @@ class Parser {
     return id;
   }
 
-  static double non_negative(const MapReader& m, const std::string& key, double fallback) {
+  // A duration [s] ≥ 0, at most the run-time limit.
+  double non_negative(const MapReader& m, const std::string& key, double fallback) const {
     const double v = m.number(key, fallback, "in seconds");
     if (v < 0)
       m.fail_value(key, "'" + key + "' must not be negative, got " + format_number(v) + " s",
                    "durations are in seconds");
+    within_run_time(m, key, v);
     return v;
   }
 
-  static double positive(const MapReader& m, const std::string& key, double fallback,
-                         const std::string& unit_words, const std::string& unit) {
+  // A value > 0; a duration (unit "s") also at most the run-time limit.
+  double positive(const MapReader& m, const std::string& key, double fallback, const std::string& unit_words,
+                  const std::string& unit) const {
     const double v = m.number(key, fallback, unit_words);
     if (m.has(key) && !(v > 0))
       m.fail_value(key,
                    "'" + key + "' must be greater than 0, got " + format_number(v) + " " + unit);
+    if (unit == "s") within_run_time(m, key, v);
     return v;
+  }
+
+  // One duration longer than the whole run may be is refused where it is written.
+  void within_run_time(const MapReader& m, const std::string& key, double v) const {
+    const double limit = exp_.limits.max_run_time_s;
+    if (m.has(key) && v > limit)
+      m.fail_value(key,
+                   "'" + key + "' is " + format_number(v) + " s, more than the run-time limit of " +
+                       format_number(limit) + " s (" + format_number(limit / 86400.0) + " days)",
+                   "durations are in seconds; raise limits.max_run_time_s if a run this long is meant");
   }
 
   // "<axis>_deg" -> "<axis>"
@@ -1053,6 +1090,11 @@ void emit_later_sections(YAML::Emitter& out, const Experiment& e) {
     else
       out << *node;
   }
+  out << YAML::Key << "limits" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "max_run_time_s" << YAML::Value << e.limits.max_run_time_s;
+  out << YAML::Key << "max_samples" << YAML::Value << e.limits.max_samples;
+  out << YAML::Key << "max_bytes" << YAML::Value << e.limits.max_bytes;
+  out << YAML::EndMap;
   out << YAML::Key << "outputs" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "directory" << YAML::Value;
   yaml::emit_string(out, e.outputs.directory);

@@ -183,22 +183,50 @@ PluginHost::~PluginHost() {
   for (auto it = handles_.rbegin(); it != handles_.rend(); ++it) ::dlclose(*it);
 }
 
+namespace {
+// The plugin files of one directory (non-recursive), sorted; none when it is not a directory.
+std::vector<std::string> plugin_files_in(const std::string& dir) {
+  std::vector<std::string> files;
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return files;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    std::error_code type_ec;
+    if (matches_plugin_file_name(name) && it->is_regular_file(type_ec)) files.push_back(it->path().string());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+}  // namespace
+
 void PluginHost::scan(const std::vector<SearchDir>& dirs) {
   for (const auto& dir : dirs) {
     searched_.push_back(dir);
-    std::error_code ec;
-    if (!fs::is_directory(dir.path, ec)) continue;
-    std::vector<std::string> files;
-    for (fs::directory_iterator it(dir.path, ec), end; !ec && it != end; it.increment(ec)) {
-      const std::string name = it->path().filename().string();
-      std::error_code type_ec;
-      if (matches_plugin_file_name(name) && it->is_regular_file(type_ec)) {
-        files.push_back(it->path().string());
-      }
-    }
-    std::sort(files.begin(), files.end());
-    for (const auto& file : files) load(file, dir.origin);
+    for (const auto& file : plugin_files_in(dir.path)) load(file, dir.origin);
   }
+}
+
+void PluginHost::list_unloaded(const std::vector<SearchDir>& dirs, const std::string& reason) {
+  for (const auto& dir : dirs) {
+    searched_.push_back(dir);
+    for (const auto& file : plugin_files_in(dir.path)) {
+      const std::string identity = identity_of(file);
+      if (std::any_of(records_.begin(), records_.end(), [&](const PluginRecord& r) { return identity_of(r.file) == identity; }))
+        continue;
+      PluginRecord record;
+      record.file = file;
+      record.origin = dir.origin;
+      record.refusal = reason;
+      records_.push_back(std::move(record));
+    }
+  }
+}
+
+std::string PluginHost::why_not_loaded(const std::string& name) const {
+  const std::string expected_file = kFilePrefix + name + kFileSuffix;
+  for (const auto& r : records_)
+    if (r.info == nullptr && fs::path(r.file).filename() == expected_file) return r.file + ": " + r.refusal;
+  return {};
 }
 
 const PluginRecord& PluginHost::load(const std::string& file, const std::string& origin) {
@@ -317,12 +345,7 @@ void* PluginHost::create(const std::string& name, stend_plugin_kind kind,
     std::ostringstream msg;
     msg << "no plugin named '" << name << "'";
     // A refused file that was probably meant to provide it says more than "not found".
-    const std::string expected_file = kFilePrefix + name + kFileSuffix;
-    for (const auto& other : records_) {
-      if (other.info == nullptr && fs::path(other.file).filename() == expected_file) {
-        msg << " (" << other.refusal << ")";
-      }
-    }
+    if (const std::string why = why_not_loaded(name); !why.empty()) msg << " (" << why << ")";
     const auto loaded = names();
     msg << "; loaded plugins: ";
     if (loaded.empty()) msg << "none";

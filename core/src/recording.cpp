@@ -276,8 +276,8 @@ ojson header_json(const RecordingHeader& h) {
   j["sensor"] = {{"identity", identity}, {"info", info}};
   ojson plugins = ojson::array();
   for (const auto& p : h.plugins) {
-    plugins.push_back(
-        {{"role", p.role}, {"name", p.name}, {"version", p.version}, {"file", p.file}});
+    plugins.push_back({{"role", p.role}, {"name", p.name}, {"version", p.version}, {"file", p.file},
+                       {"origin", p.origin}, {"hash", p.hash}});
   }
   j["plugins"] = plugins;
   j["truth_columns"] = h.truth_columns;
@@ -816,6 +816,8 @@ void read_plugins_and_truth_columns(const nlohmann::json& j, const JsonFields& f
       f.str(p, "name", path + ".name", u.name);
       f.str(p, "version", path + ".version", u.version);
       f.str(p, "file", path + ".file", u.file);
+      if (p.contains("origin")) f.str(p, "origin", path + ".origin", u.origin);  // absent before they were recorded
+      if (p.contains("hash")) f.str(p, "hash", path + ".hash", u.hash);
       h.plugins.push_back(std::move(u));
     }
   }
@@ -1321,6 +1323,15 @@ std::optional<RecordingFormat> recording_format_from_string(std::string_view nam
   for (RecordingFormat f : {RecordingFormat::kHdf5, RecordingFormat::kCsv})
     if (name == to_string(f)) return f;
   return std::nullopt;
+}
+
+// HDF5: t_s (double), 7 counts (int32), 7 SI values (double), flags (uint32); CSV: the longest
+// imu.csv row. A truth value is a double, or its longest text and a comma.
+std::size_t max_bytes_per_sample(RecordingFormat f) {
+  return f == RecordingFormat::kHdf5 ? 8 + 7 * 4 + 7 * 8 + 4 : kImuRowMax;
+}
+std::size_t max_bytes_per_truth_value(RecordingFormat f) {
+  return f == RecordingFormat::kHdf5 ? 8 : csv::kMaxDoubleChars + 1;
 }
 
 namespace {

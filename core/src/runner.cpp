@@ -5,9 +5,12 @@
 
 #include <fmt/format.h>
 
+#include <sys/statvfs.h>
+
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <fstream>
 #include <memory>
 #include <stdexcept>
 #include <utility>
@@ -25,8 +28,9 @@ std::string utc_stamp() {
   return buf;
 }
 
-// Planned run time of the procedure, for the progress display. Moves are counted at 2 s each
-// and temperature steps at their hold time, so this is an estimate.
+// Planned run time of the procedure, for the progress display and the run's estimate
+// (estimate_run). Moves are counted at 2 s each and temperature steps at their hold time, so this
+// is an estimate.
 double planned_duration(const Experiment& exp) {
   double t = 0.0;
   for (const Step& s : exp.procedure) {
@@ -131,6 +135,7 @@ class Run {
     progress_.phase = "settling";
     if (s.record_settling) begin_segment(index, s, SegmentKind::kSetTemperature, -1, 0, fmt::format("{}.temperature={} degC", s.fixture, s.setpoint_c));
     const double t0 = clock_.now_s();
+    if (!s.record_settling) writing_ = false;
     double in_band_since = -1.0;  // run time the measurement entered the band, −1 when outside
     while (true) {
       const double t = clock_.now_s();
@@ -149,6 +154,17 @@ class Run {
       advance_for(opt_.control_period_s);
     }
     if (open_) end_segment();
+    if (!s.record_settling) resume_writing(t0, s.fixture);
+  }
+
+  // After a stretch without samples written (record: false): the next sample written carries
+  // kGapBefore and an event says which stretch was left out.
+  void resume_writing(double since_s, const std::string& source) {
+    writing_ = true;
+    gap_ = true;
+    writer_.add_event({clock_.now_s(), "info", source,
+                       fmt::format("sensor samples from {:.3f} s to {:.3f} s not recorded (record: false)", since_s,
+                                   clock_.now_s())});
   }
 
   void orientations(int index, const Step& s) {
@@ -301,7 +317,7 @@ class Run {
       if (failures_ >= opt_.sensor_retries)
         throw std::runtime_error(fmt::format("sensor failed {} times in a row: {}", failures_, e.what()));
     }
-    if (!buffer_.empty()) {
+    if (!buffer_.empty() && writing_) {
       if (gap_) {
         buffer_.front().flags |= kGapBefore;
         gap_ = false;
@@ -352,6 +368,7 @@ class Run {
   Segment segment_;
   bool open_ = false;
   bool gap_ = false;
+  bool writing_ = true;  // sensor samples go to the sink (false while settling with record: false)
   int failures_ = 0;
   int segments_ = 0;
   std::uint64_t samples_ = 0;
@@ -386,6 +403,22 @@ std::unique_ptr<Clock> make_clock(const std::string& kind) {
   return std::make_unique<WallClock>();
 }
 
+// "fnv1a64:<16 hex digits>" of a file's content (provenance of a plugin library, not a security
+// check); "" when the file cannot be read.
+std::string file_hash(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return "";
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  char buf[1 << 16];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+    for (std::streamsize i = 0; i < in.gcount(); ++i) {
+      h ^= static_cast<unsigned char>(buf[i]);
+      h *= 0x100000001b3ULL;
+    }
+  }
+  return fmt::format("fnv1a64:{:016x}", h);
+}
+
 RecordingHeader run_header(const Experiment& exp, const PluginHost& host, Bench& bench, const std::string& clock) {
   RecordingHeader header;
   header.experiment_name = exp.name;
@@ -393,7 +426,8 @@ RecordingHeader run_header(const Experiment& exp, const PluginHost& host, Bench&
   header.stend_version = version();
   auto use = [&](const std::string& role, const std::string& name) {
     const PluginRecord* r = host.record_of(name);
-    header.plugins.push_back({role, name, r && r->info ? r->info->version : "", r ? r->file : ""});
+    header.plugins.push_back({role, name, r && r->info ? r->info->version : "", r ? r->file : "", r ? r->origin : "",
+                              r ? file_hash(r->file) : ""});
   };
   use("sensor", exp.sensor.plugin);
   for (const FixtureDecl& f : exp.fixtures) use(f.id, f.plugin);
@@ -427,9 +461,14 @@ RunResult execute(const Experiment& exp, Bench& bench, Clock& clock, RunSink& si
     sink.add_event({clock.now_s(), "error", "runner", e.what()});
   }
   if (result.status != RunStatus::kComplete) run.abandon();
-  bench.safe_state();
+  result.unsafe = bench.safe_state();
+  for (const std::string& why : result.unsafe)
+    sink.add_event({clock.now_s(), "error", "runner", "safe state NOT confirmed: " + why});
   if (result.status != RunStatus::kComplete)
-    sink.add_event({clock.now_s(), "warning", "runner", std::string("run ") + to_string(result.status) + "; fixtures put in their safe state"});
+    sink.add_event({clock.now_s(), "warning", "runner",
+                    std::string("run ") + to_string(result.status) +
+                        (result.unsafe.empty() ? "; fixtures put in their safe state (confirmed)"
+                                               : "; check the fixtures listed above by hand: their safe state is not confirmed")});
   try {
     bench.sensor().stop();
   } catch (const std::exception& e) {
@@ -443,16 +482,112 @@ RunResult execute(const Experiment& exp, Bench& bench, Clock& clock, RunSink& si
   return result;
 }
 
+std::string human_bytes(double bytes) {
+  const char* units[] = {"B", "kB", "MB", "GB", "TB", "PB"};
+  int u = 0;
+  while (bytes >= 1000.0 && u < 5) {
+    bytes /= 1000.0;
+    ++u;
+  }
+  return fmt::format("{:.3g} {}", bytes, units[u]);
+}
+
+// Run time in words: "3d04h05m06s", "1h02m40s", "12.5 s".
+std::string human_duration(double s) {
+  if (!(s < 1e15)) return fmt::format("{:.3g} s", s);
+  if (s < 60.0) return fmt::format("{:.3g} s", s);
+  const auto t = static_cast<long long>(s + 0.5);
+  if (t >= 86400) return fmt::format("{}d{:02}h{:02}m{:02}s", t / 86400, (t / 3600) % 24, (t / 60) % 60, t % 60);
+  if (t >= 3600) return fmt::format("{}h{:02}m{:02}s", t / 3600, (t / 60) % 60, t % 60);
+  return fmt::format("{}m{:02}s", t / 60, t % 60);
+}
+
+// Space free for this user on the file system holding `dir` or, when it does not exist yet, its
+// nearest existing ancestor [bytes]; NaN when it cannot be asked.
+double free_bytes(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::path p = std::filesystem::absolute(dir, ec);
+  if (ec) return NAN;
+  while (!std::filesystem::exists(p, ec) && p.has_parent_path() && p != p.parent_path()) p = p.parent_path();
+  struct statvfs st {};
+  if (::statvfs(p.c_str(), &st) != 0) return NAN;
+  return static_cast<double>(st.f_bavail) * static_cast<double>(st.f_frsize);
+}
+
 }  // namespace
 
+std::string RunEstimate::str() const {
+  return fmt::format("run time {}, {:.3g} samples, up to {} ({})", human_duration(run_time_s), samples,
+                     human_bytes(bytes), to_string(format));
+}
+
+RunEstimate estimate_run(const Experiment& exp, Bench& bench, const RunOptions& options) {
+  RunEstimate e;
+  e.format = options.store.format;
+  e.run_time_s = planned_duration(exp);
+  double unrecorded_s = 0.0;  // settling with record: false
+  for (const Step& s : exp.procedure)
+    if (s.kind == Step::Kind::kSetTemperature && !s.record_settling) unrecorded_s += s.hold_s;
+  e.samples = std::ceil(bench.sensor().info().output_rate_hz * (e.run_time_s - unrecorded_s));
+  const double truth_rows = std::ceil(e.run_time_s / options.truth_period_s) + 1.0;
+  e.bytes = e.samples * static_cast<double>(max_bytes_per_sample(e.format)) +
+            truth_rows * static_cast<double>((bench.truth_columns().size() + 1) * max_bytes_per_truth_value(e.format));
+  return e;
+}
+
+void check_run_limits(const Experiment& exp, const RunEstimate& e, const std::filesystem::path& output_dir) {
+  const RunLimits& l = exp.limits;
+  const std::string hint = "shorten the procedure (durations, repeats, orientations) or raise the limit in the experiment's "
+                           "'limits:' block (docs/experiment-format.md)";
+  auto refuse = [&](const std::string& key, const std::string& what) {
+    throw ExperimentError(l.where, key, "the run would exceed " + key + ": " + what + " [" + e.str() + "]", hint);
+  };
+  if (!(e.run_time_s <= l.max_run_time_s))
+    refuse("limits.max_run_time_s", fmt::format("expected run time {} ({:.6g} s) > {:.6g} s", human_duration(e.run_time_s),
+                                                e.run_time_s, l.max_run_time_s));
+  if (!(e.samples <= l.max_samples))
+    refuse("limits.max_samples", fmt::format("{:.6g} samples > {:.6g}", e.samples, l.max_samples));
+  if (!(e.bytes <= l.max_bytes))
+    refuse("limits.max_bytes", fmt::format("up to {} ({:.6g} bytes) > {:.6g} bytes", human_bytes(e.bytes), e.bytes, l.max_bytes));
+  const double free = free_bytes(output_dir);
+  if (std::isfinite(free) && e.bytes > free)
+    throw ExperimentError(l.where, "outputs.directory",
+                          fmt::format("the run would write up to {} ({:.6g} bytes) but the file system of '{}' has {} "
+                                      "({:.6g} bytes) free [{}]",
+                                      human_bytes(e.bytes), e.bytes, output_dir.string(), human_bytes(free), free, e.str()),
+                          "free space there, choose another output folder (-o), or shorten the procedure");
+}
+
+void check_run_name(const std::string& name) {
+  auto refuse = [&](const std::string& why) {
+    std::string shown;
+    for (const char c : name.substr(0, 80)) {
+      const auto u = static_cast<unsigned char>(c);
+      shown += u < 0x20 || u == 0x7f ? fmt::format("\\x{:02x}", u) : std::string(1, c);
+    }
+    throw std::invalid_argument(
+        fmt::format("run name '{}' {}: a run name names one folder inside the output folder", shown, why));
+  };
+  if (name.empty()) refuse("is empty");
+  if (name == "." || name == "..") refuse("is a dot name");
+  if (name.size() > 255) refuse(fmt::format("is {} bytes long, more than 255", name.size()));
+  for (const char c : name) {
+    const auto u = static_cast<unsigned char>(c);
+    if (c == '/' || c == '\\') refuse(fmt::format("contains the path separator '{}'", c));
+    if (u < 0x20 || u == 0x7f) refuse(fmt::format("contains the control character 0x{:02x}", u));
+  }
+}
+
 RunResult run_experiment(const Experiment& exp, const PluginHost& host, const RunOptions& options) {
+  const std::string name = options.run_name.empty() ? exp.name + "-" + utc_stamp() : options.run_name;
+  check_run_name(name);
   Bench bench(exp, host);  // throws ExperimentError on stage-2 problems: nothing written yet
   const std::string clock = clock_kind(exp, bench, options);
   RecordingHeader header = run_header(exp, host, bench, clock);
 
   const std::filesystem::path out = options.output_dir.empty() ? std::filesystem::path(exp.outputs.directory) : options.output_dir;
+  check_run_limits(exp, estimate_run(exp, bench, options), out);
   std::filesystem::create_directories(out);
-  std::string name = options.run_name.empty() ? exp.name + "-" + utc_stamp() : options.run_name;
   std::filesystem::path dir = out / name;
   for (int n = 2; std::filesystem::exists(dir); ++n) dir = out / (name + "-" + std::to_string(n));
 

@@ -98,7 +98,7 @@ class AxesFixture : public Fixture {
   double measured(std::size_t) const override { return 0.0; }
   double commanded(std::size_t) const override { return 0.0; }
   bool settled() const override { return true; }
-  void safe_state() noexcept override {}
+  std::string safe_state() noexcept override { return ""; }
 
  private:
   FixtureRole role_;
@@ -233,7 +233,7 @@ TEST_F(FullExperiment, Header) {
   ASSERT_EQ(e.plugin_paths.size(), 2u);
   const fs::path expected = (source_path("core/tests/data/experiments") / "my_plugins").lexically_normal();
   EXPECT_EQ(e.plugin_paths[0], expected.string());
-  EXPECT_EQ(e.plugin_paths[1], "/opt/stend/plugins");
+  EXPECT_EQ(e.plugin_paths[1], "/usr/lib");  // folders that exist
   EXPECT_EQ(e.outputs.directory, "my_runs");
   EXPECT_FALSE(e.outputs.report);
   ASSERT_TRUE(e.processing.IsMap());
@@ -542,6 +542,15 @@ TEST(Experiment, InlineErrors) {
       {"experiment: {name: x}\nbench:\n  sensor: {plugin: sim_imu_like, config: {serial: A, odr_hz: }}\nprocedure: [{record: {duration_s: 1}}]\n",
        "expected a number for 'odr_hz', got nothing", 3, 54},
       {head + "procedure:\n  - record: {duration_s: .inf}\n", "(numbers must be finite)", 5, 26},
+      // Durations longer than a whole run may be, where they are written.
+      {head + "procedure:\n  - record: {duration_s: 1e12}\n",
+       "'duration_s' is 1e+12 s, more than the run-time limit of 2592000 s (30 days)", 5, 26},
+      {head + "procedure:\n  - wait: {duration_s: 1e300}\n", "more than the run-time limit", 5, 24},
+      {head + "limits: {max_run_time_s: 10}\nprocedure:\n  - record: {duration_s: 11}\n",
+       "'duration_s' is 11 s, more than the run-time limit of 10 s", 6, 26},
+      {head + "limits: {max_samples: -1}\nprocedure:\n  - record: {duration_s: 1}\n",
+       "'max_samples' must be greater than 0, got -1", 4, 23},
+      {head + "limits: {max_byte: 1}\nprocedure:\n  - record: {duration_s: 1}\n", "unknown key 'max_byte'", 4, 10},
       {head + "procedure:\n  - record: {duration_s: 1}\n  - record: {duration_s: 1, label: \"\"}\n", "'label' must not be empty", 6, 36},
       {head + "procedure:\n  - wait: {duration_s: 1, <<: {label: x}}\n", "merge keys", 5, 27},
       {head + "procedure:\n\t- wait: {duration_s: 1}\n", "YAML syntax error", 5, 2},
@@ -566,6 +575,24 @@ TEST(Experiment, InlineErrors) {
       EXPECT_EQ(e.where().column, c.column) << e.what();
     }
   }
+}
+
+// Each default is written once (RunLimits); a `limits:` block overrides any of them and is kept in
+// the resolved YAML.
+TEST(Experiment, LimitsDefaultAndOverride) {
+  const Experiment d = parse(minimal("  - record: {duration_s: 1}\n"));
+  EXPECT_EQ(d.limits.max_run_time_s, RunLimits{}.max_run_time_s);
+  EXPECT_EQ(d.limits.max_samples, RunLimits{}.max_samples);
+  EXPECT_EQ(d.limits.max_bytes, RunLimits{}.max_bytes);
+  const Experiment e = parse("experiment: {name: x}\nbench:\n  sensor: {plugin: sim_imu_like, config: {serial: A}}\n"
+                             "limits: {max_run_time_s: 4e6, max_bytes: 5e9}\nprocedure: [{record: {duration_s: 3e6}}]\n");
+  EXPECT_EQ(e.limits.max_run_time_s, 4e6);
+  EXPECT_EQ(e.limits.max_samples, RunLimits{}.max_samples);
+  EXPECT_EQ(e.limits.max_bytes, 5e9);
+  EXPECT_EQ(e.limits.where.line, 4);
+  const Experiment b = parse(e.resolved_yaml);
+  EXPECT_EQ(b.limits.max_run_time_s, 4e6);
+  EXPECT_EQ(b.limits.max_bytes, 5e9);
 }
 
 TEST(Experiment, StageTwoNeedsOneObjectPerFixture) {

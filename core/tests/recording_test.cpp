@@ -56,8 +56,8 @@ RecordingHeader make_header() {
   h.experiment_name = "six-position, \"quoted\" & ünïcode";
   h.experiment_file = "/lab/configs/six_position.yaml";
   h.stend_version = "0.1.0";
-  h.plugins = {{"sensor", "sim_imu", "0.1.0", "/usr/lib/stend/plugins/libsim_imu.so"},
-               {"table", "sim_table", "0.2.0", "libsim_table.so"}};
+  h.plugins = {{"sensor", "sim_imu", "0.1.0", "/usr/lib/stend/plugins/libsim_imu.so", "install prefix", "fnv1a64:0123456789abcdef"},
+               {"table", "sim_table", "0.2.0", "libsim_table.so", "experiment", ""}};
   h.identity = {"InvenSense", "MPU-6050", "SN-0042", "0x68"};
   h.info.output_rate_hz = 1000.0;
   h.info.accel_range_mps2 = 2 * 9.80665;
@@ -234,6 +234,8 @@ TEST_F(RecordingTest, RoundTripIsExact) {
     EXPECT_EQ(h.plugins[i].name, w.header.plugins[i].name);
     EXPECT_EQ(h.plugins[i].version, w.header.plugins[i].version);
     EXPECT_EQ(h.plugins[i].file, w.header.plugins[i].file);
+    EXPECT_EQ(h.plugins[i].origin, w.header.plugins[i].origin);
+    EXPECT_EQ(h.plugins[i].hash, w.header.plugins[i].hash);
   }
   EXPECT_EQ(h.identity.vendor, "InvenSense");
   EXPECT_EQ(h.identity.model, "MPU-6050");

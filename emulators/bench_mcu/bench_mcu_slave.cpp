@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <thread>
 #include <vector>
 
 #include <stend/devices/bench_mcu_map.hpp>
@@ -24,7 +25,7 @@ BenchMcuSlave::BenchMcuSlave(BenchMcuConfig config, Mpu6050Model mpu)
 
 BenchMcuSlave::BenchMcuSlave(BenchMcuConfig config, Mpu6050Model mpu, std::shared_ptr<EmulatedI2cBus> i2c_bus)
     : c_(config), mpu_(std::move(mpu)), i2c_bus_(std::move(i2c_bus)), rtu_("bench MCU emulator", 921600, config.slave_id),
-      rng_(config.seed) {
+      boot_count_(config.boot_count), rng_(config.seed) {
   modbus_mapping_t* mapping = modbus_mapping_new(0, 0, map::kHoldMapSize,
                                                  map::kInWindowBase + static_cast<int>(map::kWindowSeqModulo) + map::kWindowMaxWords);
   if (mapping == nullptr) throw std::runtime_error("bench MCU emulator: libmodbus allocation failed");
@@ -43,6 +44,26 @@ void BenchMcuSlave::go_silent(std::chrono::milliseconds d) {
   silent_until_ns_ = steady_ns_after(d);
 }
 
+void BenchMcuSlave::stall(std::chrono::milliseconds d) {
+  stalled_until_ns_ = steady_ns_after(d);
+}
+
+void BenchMcuSlave::restart() {
+  restart_pending_ = true;
+}
+
+void BenchMcuSlave::reset() {
+  std::uint16_t* hold = MAP(mapping_)->tab_registers;
+  std::fill(hold, hold + map::kHoldMapSize, std::uint16_t{0});
+  if (running_) mpu_.write(mpu6050::kPwrMgmt1, mpu6050::kSleep);
+  running_ = false;
+  fifo_.clear();
+  front_seq_ = next_seq_ = 0;
+  overflows_ = 0;
+  overflow_flag_ = false;
+  ++boot_count_;
+}
+
 BenchMcuStats BenchMcuSlave::stats() const {
   std::lock_guard<std::mutex> lock(stats_mutex_);
   return stats_;
@@ -51,6 +72,11 @@ BenchMcuStats BenchMcuSlave::stats() const {
 void BenchMcuSlave::run() {
   std::vector<std::uint8_t> req(MODBUS_RTU_MAX_ADU_LENGTH);
   while (!stop_) {
+    if (restart_pending_.exchange(false)) reset();
+    if (steady_now_ns() < stalled_until_ns_.load()) {  // requests wait in the line's buffer
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      continue;
+    }
     const int rc = rtu_.receive(req.data());  // a broken frame is flushed there
     produce();
     if (rc > 0) handle(req.data(), rc);
@@ -203,6 +229,7 @@ void BenchMcuSlave::handle(const std::uint8_t* req, int len) {
       in[map::kInFifoCapacity] = static_cast<std::uint16_t>(std::min<std::size_t>(c_.fifo_depth, 0xFFFF));
       in[map::kInOverflows] = static_cast<std::uint16_t>(std::min<std::uint32_t>(overflows_, 0xFFFF));
       in[map::kInFirmware] = map::kFirmwareVersion;
+      in[map::kInBootCount] = boot_count_;
       if (address <= map::kInStatus) overflow_flag_ = false;
       ok = true;
     } else if (address >= map::kInI2cStatus && address + count <= map::kInI2cData + map::kI2cMaxRead / 2) {

@@ -5,7 +5,7 @@
 // I2C passthrough window (docs/bench-mcu-modbus.md): commands written to holding register
 // I2C_CMD run on the MCU's I2C bus — the MPU-6050 model at `mpu_address` and, when given, the
 // targets of an emulated I2C bus (emulators/i2c) — with status and data in input registers.
-// Fault injection for tests: corrupted replies (bad CRC) and periods of silence.
+// Fault injection for tests: corrupted replies (bad CRC), periods of silence, stalls and restarts.
 #pragma once
 
 #include <atomic>
@@ -28,6 +28,7 @@ struct BenchMcuConfig {
   std::size_t fifo_depth = 1024;  // samples buffered in the MCU's RAM
   std::uint64_t seed = 1;         // fault-injection random stream
   std::uint8_t mpu_address = 0x68;  // the MPU-6050's 7-bit address on the MCU's I2C bus
+  std::uint16_t boot_count = 1;     // BOOT_COUNT at power-on; restart() adds one
 };
 
 struct BenchMcuStats {
@@ -48,6 +49,13 @@ class BenchMcuSlave {
   void set_corrupt_probability(double p) { corrupt_p_.store(p); }
   // Read and drop every request for `d` from now (the sensor keeps sampling into the FIFO).
   void go_silent(std::chrono::milliseconds d);
+  // Stop serving for `d` from now, then answer every request that arrived meanwhile, in order (the
+  // MCU busy elsewhere; the sensor keeps sampling into the FIFO). Replies to requests the client
+  // gave up on arrive late, as they do on a real line.
+  void stall(std::chrono::milliseconds d);
+  // A reset of the MCU: FIFO, sequence numbers and holding registers cleared, sampling stopped,
+  // BOOT_COUNT incremented.
+  void restart();
   BenchMcuStats stats() const;
 
  private:
@@ -56,6 +64,7 @@ class BenchMcuSlave {
   void handle(const std::uint8_t* req, int len);
   bool window(int address, int count);
   void apply_ctrl();
+  void reset();
   void run_i2c_command();
 
   BenchMcuConfig c_;
@@ -72,10 +81,13 @@ class BenchMcuSlave {
   std::uint32_t overflows_ = 0;
   bool overflow_flag_ = false;
   bool running_ = false;
+  std::uint16_t boot_count_ = 1;
   std::uint64_t rng_;
 
   std::atomic<double> corrupt_p_{0.0};
   std::atomic<std::int64_t> silent_until_ns_{0};
+  std::atomic<std::int64_t> stalled_until_ns_{0};
+  std::atomic<bool> restart_pending_{false};
   std::atomic<bool> stop_{false};
   mutable std::mutex stats_mutex_;
   BenchMcuStats stats_;

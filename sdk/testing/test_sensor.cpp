@@ -1,9 +1,13 @@
 // Working C++ test sensors built with the SDK macro:
 //   STEND_TEST_GOOD          -> "test_good": reads truth.specific_force_mps2 + `offset_mps2`
 //   STEND_TEST_CREATE_FAILS  -> "test_create_fails": its constructor throws with a reason
+//   STEND_TEST_MARKER        -> "test_marker": test_good whose library, when loaded, appends a
+//                               line to the file $STEND_TEST_MARKER_FILE (shows that its code ran)
 #include <stend/sdk.hpp>
 
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <stdexcept>
 #include <vector>
 
@@ -58,9 +62,20 @@ class TestSensor final : public stend::Sensor {
   long next_ = 1;
 };
 
+#if defined(STEND_TEST_MARKER)
+// Runs at dlopen, before any entry point is called.
+[[maybe_unused]] const bool kMarked = [] {
+  if (const char* file = std::getenv("STEND_TEST_MARKER_FILE")) std::ofstream(file, std::ios::app) << "loaded\n";
+  return true;
+}();
+#endif
+
 }  // namespace
 
-#if defined(STEND_TEST_CREATE_FAILS)
+#if defined(STEND_TEST_MARKER)
+STEND_DEFINE_PLUGIN(STEND_KIND_SENSOR, "test_marker", "0.0.1", "test sensor whose library leaves a mark when loaded",
+                    kParams, TestSensor)
+#elif defined(STEND_TEST_CREATE_FAILS)
 STEND_DEFINE_PLUGIN(STEND_KIND_SENSOR, "test_create_fails", "0.0.1",
                     "test sensor whose construction fails", kParams, TestSensor)
 #else

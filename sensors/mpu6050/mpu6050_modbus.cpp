@@ -116,6 +116,7 @@ void Mpu6050Modbus::start(double t0_s) {
   open();
   const auto in = bus_->read_input_registers(map::kInStatus, map::kInCount);
   const unsigned who = in[map::kInWhoAmI];
+  boot_count_ = in[map::kInBootCount];
   who_am_i_ = hex2(who);
   if (who != kExpectedWhoAmI) {
     throw std::runtime_error("mpu6050_modbus: " + where() + ": WHO_AM_I (0x75) reads " + who_am_i_ +
@@ -162,9 +163,15 @@ bool Mpu6050Modbus::read_window(int max_samples) {
                              " samples, asked for " + std::to_string(k) + " (firmware mismatch?)");
   }
   const auto ahead = static_cast<std::int32_t>(first - next_seq_);
+  int skip = 0;  // samples at the window's start that were already received
   if (ahead < 0) {
-    throw std::runtime_error("mpu6050_modbus: " + where() + ": FIFO window starts at sequence " + std::to_string(first) +
-                             ", before the expected " + std::to_string(next_seq_) + " (bench MCU restarted?)");
+    const auto overlap = static_cast<std::uint32_t>(-ahead);
+    resynchronise(first, overlap);
+    skip = static_cast<int>(std::min<std::uint32_t>(overlap, static_cast<std::uint32_t>(n)));
+    if (skip == n) {  // nothing new in this window: ask again from next_seq_
+      estimate_ = remaining;
+      return n > 0;
+    }
   }
   if (ahead > 0 && n > 0) {
     report_.samples_lost += static_cast<std::uint64_t>(ahead);
@@ -174,7 +181,7 @@ bool Mpu6050Modbus::read_window(int max_samples) {
     next_seq_ = first;
   }
   const SensorInfo si = info();
-  for (int i = 0; i < n; ++i) {
+  for (int i = skip; i < n; ++i) {
     const std::uint16_t* p = &w[static_cast<std::size_t>(map::kWindowHeaderWords + map::kWordsPerSample * i)];
     auto v = [&](int j) { return static_cast<std::int32_t>(static_cast<std::int16_t>(p[j])); };
     ImuSample s;
@@ -201,6 +208,21 @@ bool Mpu6050Modbus::read_window(int max_samples) {
   }
   estimate_ = remaining;
   return remaining > 0;
+}
+
+void Mpu6050Modbus::resynchronise(std::uint32_t first, std::uint32_t overlap) {
+  const std::uint16_t boot = bus_->read_input_registers(map::kInBootCount, 1)[0];
+  if (boot != boot_count_) {
+    throw std::runtime_error("mpu6050_modbus: " + where() + ": bench MCU restarted (BOOT_COUNT " +
+                             std::to_string(boot_count_) + " -> " + std::to_string(boot) +
+                             "): its FIFO window starts at sequence " + std::to_string(first) + ", before the expected " +
+                             std::to_string(next_seq_) + "; samples from sequence " + std::to_string(next_seq_) +
+                             " on are lost");
+  }
+  report_.events.push_back("resynchronised: FIFO window started at sequence " + std::to_string(first) + ", " +
+                           std::to_string(overlap) + " sample(s) before the expected " + std::to_string(next_seq_) +
+                           " (a late reply to an earlier request; BOOT_COUNT unchanged); the overlap was dropped");
+  ++report_.resyncs;
 }
 
 void Mpu6050Modbus::acquire(double t_s, const TruthSource& /*truth*/, std::vector<ImuSample>& out) {

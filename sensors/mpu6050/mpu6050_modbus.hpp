@@ -36,6 +36,7 @@ struct LinkReport {
   std::uint64_t samples = 0;        // delivered
   std::uint64_t samples_lost = 0;   // sequence numbers skipped
   std::uint64_t gaps = 0;           // samples flagged kGapBefore
+  std::uint64_t resyncs = 0;        // windows behind next_seq_ whose overlap was dropped (late replies)
   std::uint64_t window_reads = 0;
   std::uint64_t payload_bytes = 0;  // 14 per sample delivered
   transport::ModbusStats bus;       // retries, CRC errors, time-outs, wire bytes
@@ -62,6 +63,9 @@ class Mpu6050Modbus final : public Sensor {
  private:
   void open();
   bool read_window(int max_samples);  // appends to pending_; false when the FIFO is drained
+  // A window starting `overlap` samples before next_seq_: a restart when the boot counter moved
+  // (throws), else a late reply to an earlier request whose overlap is dropped.
+  void resynchronise(std::uint32_t first, std::uint32_t overlap);
   std::string where() const;
 
   Mpu6050ModbusConfig c_;
@@ -71,6 +75,7 @@ class Mpu6050Modbus final : public Sensor {
   std::string who_am_i_;
   double t0_ = 0.0;
   std::uint32_t next_seq_ = 0;  // sequence number of the next sample expected
+  std::uint16_t boot_count_ = 0;  // the MCU's BOOT_COUNT when the stream started
   bool gap_pending_ = false;
   int estimate_ = 0;            // samples known to wait (0: estimate from the clock)
   std::chrono::steady_clock::time_point last_poll_{};

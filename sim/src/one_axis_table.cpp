@@ -151,6 +151,9 @@ void SimOneAxisTable::telemetry(std::vector<std::pair<std::string, double>>& out
   out.emplace_back("rate_dps", s.velocity);
 }
 
-void SimOneAxisTable::safe_state() noexcept { axis_.safe_state(now_); }
+std::string SimOneAxisTable::safe_state() noexcept {
+  axis_.safe_state(now_);
+  return "";
+}
 
 }  // namespace stend::sim

@@ -236,10 +236,11 @@ void SimThermochamber::telemetry(std::vector<std::pair<std::string, double>>& ou
   out.emplace_back("pid_integral", integral_);
 }
 
-void SimThermochamber::safe_state() noexcept {
+std::string SimThermochamber::safe_state() noexcept {
   active_ = false;
   heater_pwm_ = peltier_pwm_ = 0;
   in_band_ = false;
+  return "";
 }
 
 }  // namespace stend::sim

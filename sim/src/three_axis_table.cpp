@@ -126,8 +126,9 @@ void SimThreeAxisTable::telemetry(std::vector<std::pair<std::string, double>>& o
   }
 }
 
-void SimThreeAxisTable::safe_state() noexcept {
+std::string SimThreeAxisTable::safe_state() noexcept {
   for (auto& a : axes_) a.safe_state(now_);
+  return "";
 }
 
 }  // namespace stend::sim

@@ -125,12 +125,13 @@ Pose SimVibration::pose(double t_s) const {
   return p;
 }
 
-void SimVibration::safe_state() noexcept {
+std::string SimVibration::safe_state() noexcept {
   Segment s = cur_;
   s.phase0 = std::fmod(phase(now_), 2.0 * std::numbers::pi);
   s.t0 = now_;
   s.amplitude_g = 0.0;
   install(s);
+  return "";
 }
 
 }  // namespace stend::sim

@@ -28,8 +28,9 @@ class Bench final : public TruthSource {
 
   // Advance every fixture to run time t_s.
   void advance(double t_s);
-  // Bring every fixture to its safe state (never throws).
-  void safe_state() noexcept;
+  // Bring every fixture to its safe state and check it (Fixture::safe_state); one line
+  // "fixture '<id>': <what failed>" per fixture whose safe state is not confirmed. Never throws.
+  std::vector<std::string> safe_state() noexcept;
 
   // TruthSource: composes base → fixture chain → mounting → sensor at t_s.
   //   R_sensor_from_local = R_mount · R_n ⋯ R_1

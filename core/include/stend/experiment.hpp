@@ -45,6 +45,8 @@ class PluginCatalogue {
   // nullptr when no plugin of that name was loaded.
   virtual const stend_plugin_info* find(const std::string& name) const = 0;
   virtual std::vector<std::string> names() const = 0;  // for "did you mean"
+  // Why a plugin file that would provide `name` was not loaded ("" when there is none).
+  virtual std::string why_not_loaded(const std::string& /*name*/) const { return {}; }
 };
 
 // Validates a plugin `config:` mapping against the plugin's schema and fills defaults.
@@ -107,6 +109,17 @@ struct Step {
 // The kind's name in the experiment file: "set_temperature", "orientations", "rates", …
 const char* step_kind_name(Step::Kind kind);
 
+// Bounds on what one run may produce, each written once here. A single duration beyond
+// max_run_time_s is refused while the file is read; the whole run's expected figures
+// (estimate_run in runner.hpp) are checked before it starts. The experiment's `limits:` block
+// overrides them (docs/experiment-format.md).
+struct RunLimits {
+  double max_run_time_s = 30.0 * 86400.0;  // 30 days of run time
+  double max_samples = 1e10;               // sensor samples written
+  double max_bytes = 1e12;                 // 1 TB written into the run folder
+  SourceLocation where;                    // the `limits:` block; the file when absent
+};
+
 struct Outputs {
   std::string directory = "runs";  // run folders are created inside, relative to the CWD
   bool report = true;
@@ -127,6 +140,7 @@ struct Experiment {
   std::string mounted_on;  // fixture id carrying the sensor, or "base"; default the last fixture declared
   Eigen::Matrix3d R_sensor_from_mount = Eigen::Matrix3d::Identity();  // mounting rotation
 
+  RunLimits limits;
   std::vector<Step> procedure;  // repeats expanded
 
   YAML::Node processing;  // consumed by processing / estimators (validated there)

@@ -50,10 +50,16 @@ class PluginHost : public PluginCatalogue {
   void scan(const std::vector<SearchDir>& dirs);
   // Loads one file explicitly (also used by tests). Returns its record.
   const PluginRecord& load(const std::string& file, const std::string& origin);
+  // Lists the `stend_*.so` files in `dirs` without loading them (none of their code runs): each is
+  // recorded as refused with `reason`, so `stend plugins`, create() and an experiment's "unknown
+  // plugin" error name the file and why it was not loaded.
+  void list_unloaded(const std::vector<SearchDir>& dirs, const std::string& reason);
 
   const std::vector<PluginRecord>& records() const { return records_; }
   const stend_plugin_info* find(const std::string& name) const override;
   std::vector<std::string> names() const override;
+  // "FILE: REASON" for a refused file named after `name` (stend_<name>.so).
+  std::string why_not_loaded(const std::string& name) const override;
   const PluginRecord* record_of(const std::string& name) const;
   // Every directory scan() was given, in order (for `stend plugins`).
   const std::vector<SearchDir>& search_path() const { return searched_; }

@@ -52,6 +52,8 @@ std::ostream& operator<<(std::ostream& os, RunStatus s);
 struct PluginUse {
   std::string role;  // "sensor" or the fixture id
   std::string name, version, file;
+  std::string origin;  // the search-path entry it was found through (SearchDir::origin)
+  std::string hash;    // "fnv1a64:<16 hex digits>" of the file's content; "" when unreadable
 };
 
 struct RecordingHeader {
@@ -125,6 +127,10 @@ enum class RecordingFormat { kHdf5, kCsv };
 const char* to_string(RecordingFormat f);
 // The format of that name, or nullopt.
 std::optional<RecordingFormat> recording_format_from_string(std::string_view name);
+// Upper bounds of the bytes one sensor sample and one bench-truth value take in a run folder of
+// that format (uncompressed), for the size a run will reach before it starts.
+std::size_t max_bytes_per_sample(RecordingFormat f);
+std::size_t max_bytes_per_truth_value(RecordingFormat f);
 
 struct RecordingWriterOptions {
   RecordingFormat format = RecordingFormat::kHdf5;

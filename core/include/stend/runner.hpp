@@ -54,7 +54,33 @@ struct RunResult {
   int segments = 0;
   double run_time_s = 0.0;
   double wall_time_s = 0.0;
+  // One line per fixture whose safe state at the end of the run was not confirmed (also an
+  // "error" event in the recording); empty when every fixture confirmed it.
+  std::vector<std::string> unsafe;
 };
+
+// What a run would produce, before it starts: the run time expected from the procedure (moves at
+// 2 s each, temperature steps at their hold time), the sensor samples written in it and an upper
+// bound of the bytes the run folder takes.
+struct RunEstimate {
+  double run_time_s = 0.0;
+  double samples = 0.0;  // output rate × the run time with samples written
+  double bytes = 0.0;    // samples and bench truth at their largest size in the chosen store
+  RecordingFormat format = RecordingFormat::kHdf5;
+  std::string str() const;  // "run time 1h02m40s, 3.76e+06 samples, up to 361 MB (hdf5)"
+};
+
+// The estimate for `exp` on its assembled bench, stored as `options.store` says.
+RunEstimate estimate_run(const Experiment& exp, Bench& bench, const RunOptions& options);
+
+// Throws ExperimentError (at the experiment's `limits:` block, or its file) with the numbers when
+// the estimate exceeds exp.limits, or its bytes exceed the space free for this user on the file
+// system that holds `output_dir` (its nearest existing ancestor, statvfs).
+void check_run_limits(const Experiment& exp, const RunEstimate& estimate, const std::filesystem::path& output_dir);
+
+// Throws std::invalid_argument unless `name` can name a run folder inside the output folder:
+// not empty, not "." or "..", no '/' or '\\', no control characters, at most 255 bytes.
+void check_run_name(const std::string& name);
 
 // Where a run's records go, in the order they happen (the same calls as RecordingWriter's).
 // run_experiment writes them to a run folder; a benchmark of the bench alone passes a sink that

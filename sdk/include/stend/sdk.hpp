@@ -197,8 +197,10 @@ class Fixture {
   // Extra measured quantities recorded as bench truth, e.g. {"heater_pwm", 120}. The names (with
   // their unit in the name) must be the same on every call; values are the latest.
   virtual void telemetry(std::vector<std::pair<std::string, double>>& /*out*/) const {}
-  // Bring the fixture to rest / heater and cooler off. Must not throw.
-  virtual void safe_state() noexcept = 0;
+  // Bring the fixture to rest / heater and cooler off and check it where the device allows (read
+  // the command back, ask for errors). Returns "" when done and checked, else what failed (the
+  // runner records it as an error). Must not throw.
+  virtual std::string safe_state() noexcept = 0;
   // The sensor samples the runner just received (run clock), e.g. for a manual fixture that
   // waits until the operator's placement is still. Default: ignored.
   virtual void observe(const ImuSample* /*samples*/, std::size_t /*count*/) {}

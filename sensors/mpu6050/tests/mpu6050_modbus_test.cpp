@@ -281,3 +281,65 @@ TEST(Mpu6050Modbus, SlaveExceptionNamesTheRegister) {
 }
 
 }  // namespace
+
+// Checks the stream's invariants: one sample per period except after a flagged gap, whose length
+// is the samples lost; nothing duplicated.
+void expect_contiguous_but_for_gaps(const std::vector<ImuSample>& samples, std::uint64_t lost) {
+  std::uint64_t skipped = 0;
+  for (std::size_t k = 1; k < samples.size(); ++k) {
+    const double dt = samples[k].t_s - samples[k - 1].t_s;
+    ASSERT_GT(dt, 0.5e-3) << "sample " << k << " repeats or goes back in time";
+    if (samples[k].flags & stend::kGapBefore) skipped += static_cast<std::uint64_t>(std::llround(dt / 1e-3)) - 1;
+    else ASSERT_NEAR(dt, 1e-3, 1e-9) << "sample " << k;
+  }
+  EXPECT_EQ(skipped, lost);
+}
+
+// A 2 s stall of the MCU: the requests sent meanwhile are answered late, in order, so replies to
+// requests the driver gave up on arrive after it moved on. The driver drops the overlap (the
+// BOOT_COUNT is unchanged), marks the samples the overflowing FIFO lost as a gap and never
+// declares a restart.
+TEST(Mpu6050Modbus, StallIsRiddenOutWithoutDeclaringARestart) {
+  for (int trial = 0; trial < 3; ++trial) {
+    auto mcu = make_mcu(0x68, 1024);
+    auto c = driver_cfg(mcu->device_path());
+    Mpu6050Modbus s(c);
+    s.start(0.0);
+    bool stalled = false;
+    const PollResult r = poll(s, 3.0, 20, [&](double wall) {
+      if (!stalled && wall > 0.3) {
+        mcu->stall(std::chrono::milliseconds(2000));
+        stalled = true;
+      }
+    });
+    for (const auto& t : r.fault_texts) EXPECT_EQ(t.find("restarted"), std::string::npos) << t;
+    const auto& rep = s.report();
+    ASSERT_GT(r.samples.size(), 1000u);
+    expect_contiguous_but_for_gaps(r.samples, rep.samples_lost);
+    EXPECT_NEAR(r.samples.back().t_s, 3.0, 1e-9);
+    EXPECT_EQ(r.samples.size() + rep.samples_lost, 3000u);
+    EXPECT_GT(rep.samples_lost, 500u);  // 2 s at 1 kHz into a 1024-sample FIFO
+    std::printf("[figures] stall trial %d: %d acquire() faults, %llu samples lost, %llu resynchronisations\n", trial,
+                r.faults, static_cast<unsigned long long>(rep.samples_lost),
+                static_cast<unsigned long long>(rep.resyncs));
+  }
+}
+
+// A real restart of the MCU (BOOT_COUNT moves): the stream cannot continue, and the error says
+// why with both counter values.
+TEST(Mpu6050Modbus, RestartIsDeclaredFromTheBootCounter) {
+  auto mcu = make_mcu();
+  Mpu6050Modbus s(driver_cfg(mcu->device_path()));
+  s.start(0.0);
+  bool restarted = false;
+  const PollResult r = poll(s, 1.0, 20, [&](double wall) {
+    if (!restarted && wall > 0.3) {
+      mcu->restart();
+      restarted = true;
+    }
+  });
+  ASSERT_FALSE(r.fault_texts.empty());
+  EXPECT_NE(r.fault_texts.front().find("bench MCU restarted (BOOT_COUNT 1 -> 2)"), std::string::npos)
+      << r.fault_texts.front();
+  expect_contiguous_but_for_gaps(r.samples, 0);
+}

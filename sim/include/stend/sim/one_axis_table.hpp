@@ -60,7 +60,7 @@ class SimOneAxisTable final : public Fixture {
   bool settled() const override { return axis_.settled(); }
   Pose pose(double t_s) const override;
   void telemetry(std::vector<std::pair<std::string, double>>& out) const override;
-  void safe_state() noexcept override;
+  std::string safe_state() noexcept override;  // always reached: ""
 
   const SimAxis& axis() const { return axis_; }
   const OneAxisTableConfig& config() const { return c_; }

@@ -56,7 +56,7 @@ class SimThreeAxisTable final : public Fixture {
   bool settled() const override;
   Pose pose(double t_s) const override;
   void telemetry(std::vector<std::pair<std::string, double>>& out) const override;
-  void safe_state() noexcept override;
+  std::string safe_state() noexcept override;  // always reached: ""
 
   const SimAxis& axis(std::size_t i) const { return axes_.at(i); }
 
