@@ -1315,6 +1315,12 @@ Recording Recording::open(const fs::path& run_dir, SampleLoading loading, TruthL
   return r;
 }
 
+void require_whole(const Recording& rec) {
+  if (rec.damage.empty()) return;
+  throw std::runtime_error(fmt::format("{}: the run is damaged ({} of {} samples are readable): {}", rec.dir.string(),
+                                       rec.sample_count(), rec.written_samples, rec.damage));
+}
+
 void write_recording(const Recording& rec, const fs::path& dir, const RecordingWriterOptions& options) {
   RecordingWriter w(dir, rec.header, rec.experiment_yaml, options);
   for_each_chunk(rec.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t) { w.add_samples(c, n); });
