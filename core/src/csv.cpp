@@ -278,8 +278,9 @@ bool Reader::next_record(std::vector<std::string>& fields) {
             quote_line = next_line_ + inner_newlines;
           } else if (c == '\n') {
             found = true;
+          } else if (c != ',') {
+            st = kUnquoted;
           }
-          else if (c != ',') st = kUnquoted;
           break;
         case kUnquoted:
           if (c == ',') st = kStart;
