@@ -92,6 +92,7 @@ void add_apply_command(CLI::App& app, std::vector<Command>& out) {
                   "Results of a fit: ceres.json, fit.json, temp_poly.json, or the run folder that holds one")
       ->required();
   a.data.add_to(sub);  // the recording to calibrate: run folder or dataset file, as for `stend fit`
+  a.data.add_accept_damaged(sub);
   sub->add_option("-o,--output", a.output, "New run folder for the calibrated recording");
   sub->add_flag("--validate", a.validate, "Validate on the input (a recording the calibration was not fitted to)");
   sub->add_option("--expect-rotation", a.rotations,

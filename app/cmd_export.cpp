@@ -27,6 +27,9 @@ void add_export_command(CLI::App& app, std::vector<Command>& out) {
                   "temp_poly.json) | ceres | batch_lsq | temp_poly")
       ->check(CLI::IsMember({"auto", "ceres", "batch_lsq", "temp_poly"}));
   sub->add_option("--px4-instance", opt.px4_instance, "PX4: calibration slot n of TC_An / TC_Gn (default 0)");
+  sub->add_flag("--accept-damaged", opt.accept_damaged,
+                "csv: copy the readable part of a damaged run (a truncated file, rows missing against run.json) "
+                "instead of refusing it");
   out.push_back({sub, [] {
                    const auto r = stend::reporting::export_run(run, format, output, opt);
                    for (const auto& f : r.files) fmt::print("wrote {}\n", f.string());

@@ -104,6 +104,7 @@ void add_gap_command(CLI::App& app, std::vector<Command>& out) {
   auto* sub = app.add_subcommand("gap", "Sim-to-real gap: where the twin disagrees with a recording, which "
                                         "unmodelled effect explains it, how far it shrinks held out");
   args->data.add_to(sub, false);
+  args->data.add_accept_damaged(sub);
   sub->add_option("-m,--model", args->model, "Model YAML of a linear error model (instrument, axes, terms, extraction)");
   sub->add_option("--json", args->json, "Where to write gap.json (default RUN/gap.json, or ./gap.json for a dataset)");
   sub->add_option("--fold-by", args->fold_by, "Held-out groups: auto | orientation | temperature | ramp")

@@ -33,14 +33,20 @@ struct DatasetArgs {
   std::string format = "auto";
   std::string mapping;
   std::map<std::string, std::string> flags;  // import key → value as given
+  bool accept_damaged = false;  // analyse the readable part of a damaged run (else it is refused)
 
   // Adds the INPUT positional (one file or folder; two for IMU-TK's accelerometer and gyro files),
   // --format, --mapping and the import flags to `sub`; the input is required unless `required`
   // is false (a command with subcommands of its own).
   void add_to(CLI::App* sub, bool required = true);
+  // Adds --accept-damaged (for the analyses; without it open() and checked() refuse a damaged run).
+  void add_accept_damaged(CLI::App* sub);
   io::ImportOptions options() const;
   io::Inputs paths() const;
+  // The input, refused when it is a damaged run unless --accept-damaged.
   stend::Recording open() const;
+  // `rec` (opened from the input), refused when damaged unless --accept-damaged.
+  const stend::Recording& checked(const stend::Recording& rec) const;
   // The single input is a run folder (results may be written into it).
   bool is_run() const;
 };

@@ -25,6 +25,12 @@ void DatasetArgs::add_to(CLI::App* sub, bool required) {
   for (const auto& k : io::import_keys()) sub->add_option(io::import_flag(k.key), flags[k.key], k.help);
 }
 
+void DatasetArgs::add_accept_damaged(CLI::App* sub) {
+  sub->add_flag("--accept-damaged", accept_damaged,
+                "Analyse the readable part of a damaged run (a truncated file, rows missing against run.json) "
+                "instead of refusing it");
+}
+
 io::ImportOptions DatasetArgs::options() const {
   io::ImportOptions o;
   if (!mapping.empty()) io::read_import_mapping(mapping, o);
@@ -42,7 +48,21 @@ io::ImportOptions DatasetArgs::options() const {
 
 io::Inputs DatasetArgs::paths() const { return io::Inputs(inputs.begin(), inputs.end()); }
 
-stend::Recording DatasetArgs::open() const { return io::open_dataset(paths(), format, options()); }
+stend::Recording DatasetArgs::open() const {
+  stend::Recording rec = io::open_dataset(paths(), format, options());
+  checked(rec);
+  return rec;
+}
+
+const stend::Recording& DatasetArgs::checked(const stend::Recording& rec) const {
+  if (accept_damaged) return rec;
+  try {
+    require_whole(rec);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(std::string(e.what()) + " — --accept-damaged analyses the readable part");
+  }
+  return rec;
+}
 
 bool DatasetArgs::is_run() const { return inputs.size() == 1 && io::looks_like_run(inputs[0]); }
 

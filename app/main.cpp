@@ -140,7 +140,7 @@ int cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, const
       data.is_run() && !stend::cli::fit_reads_truth(model, estimator)
           ? stend::Recording::open(data.inputs[0], stend::SampleLoading::kStream, stend::TruthLoading::kSkip)
           : data.open();
-  return fit_recording(rec, model, data.is_run() ? std::filesystem::path(data.inputs[0]) : std::filesystem::path(),
+  return fit_recording(data.checked(rec), model, data.is_run() ? std::filesystem::path(data.inputs[0]) : std::filesystem::path(),
                        json, estimator)
              ? 0
              : 3;
@@ -216,6 +216,7 @@ int main(int argc, char** argv) {
   stend::cli::DatasetArgs fit_data;
   auto* fit = app.add_subcommand("fit", "Fit an error model (or the Allan noise model) to a recording or dataset");
   fit_data.add_to(fit);
+  fit_data.add_accept_damaged(fit);
   fit->add_option("-m,--model", model, "Model YAML (instrument, axes, terms, extraction)")->required();
   std::string estimator = "auto";
   fit->add_option("--estimator", estimator,

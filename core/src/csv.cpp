@@ -10,6 +10,7 @@
 #include <cstring>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 namespace stend::csv {
 
@@ -48,6 +49,11 @@ void append_record(std::string& out, const std::vector<std::string>& fields) {
     append_field(out, fields[i]);
   }
   out.push_back('\n');
+}
+
+std::string clip(std::string_view text, std::size_t max) {
+  if (text.size() <= max) return std::string(text);
+  return std::string(text.substr(0, max)) + "… (" + std::to_string(text.size() - max) + " more bytes)";
 }
 
 namespace {
@@ -196,6 +202,10 @@ Reader::Reader(const std::filesystem::path& file, std::size_t chunk_bytes)
 #endif
 }
 
+Reader::Reader(std::filesystem::path name, std::string_view text)
+    : path_(std::move(name)), buf_(text.begin(), text.end()), end_(text.size()), eof_(true),
+      file_size_(text.size()) {}
+
 Reader::~Reader() {
   if (fd_ >= 0) ::close(fd_);
 }
@@ -256,15 +266,21 @@ bool Reader::next_record(std::vector<std::string>& fields) {
     // Find the line feed that ends the record, outside double quotes.
     enum { kStart, kUnquoted, kQuoted, kQuoteInQuoted } st = kStart;
     std::size_t inner_newlines = 0;
+    std::size_t quote_line = 0;  // line of the quote that opened the current quoted field
     std::size_t i = pos_;
     bool found = false;
     for (; i < end_ && !found; ++i) {
       const char c = buf_[i];
       switch (st) {
         case kStart:
-          if (c == '"') st = kQuoted;
-          else if (c == '\n') found = true;
-          else if (c != ',') st = kUnquoted;
+          if (c == '"') {
+            st = kQuoted;
+            quote_line = next_line_ + inner_newlines;
+          } else if (c == '\n') {
+            found = true;
+          } else if (c != ',') {
+            st = kUnquoted;
+          }
           break;
         case kUnquoted:
           if (c == ',') st = kStart;
@@ -298,6 +314,13 @@ bool Reader::next_record(std::vector<std::string>& fields) {
       return true;
     }
     if (!fill()) {
+      // A quote still open at the end: an interrupted write when the file stops mid-line, else
+      // a quote that was never closed.
+      if (st == kQuoted && end_ > 0 && buf_[end_ - 1] == '\n') {
+        throw std::runtime_error(path_.string() + ":" + std::to_string(quote_line) +
+                                 ": unterminated double quote (the quoted field runs to the end of "
+                                 "the file)");
+      }
       if (end_ > pos_) {
         ++partial_;
         pos_ = end_;

@@ -73,6 +73,7 @@ struct OutFile {
   int fd = -1;
   std::unique_ptr<char[]> buf;
   std::size_t cap = 0, len = 0;
+  std::uint64_t bytes = 0;  // written to the file so far (run.json records it at finish)
 
   OutFile() = default;
   OutFile(const OutFile&) = delete;
@@ -96,11 +97,13 @@ struct OutFile {
     const std::size_t n = len;
     len = 0;  // a failed write drops the buffer rather than repeating the error forever
     write_all(fd, buf.get(), n, path);
+    bytes += n;
   }
   void append(std::string_view s) {
     if (cap - len < s.size()) flush();
     if (s.size() > cap) {
       write_all(fd, s.data(), s.size(), path);
+      bytes += s.size();
       return;
     }
     std::memcpy(buf.get() + len, s.data(), s.size());
@@ -627,6 +630,11 @@ void RecordingWriter::finish(RunStatus status, const std::string& message) {
   j["truth_count"] = I.truth_rows;
   j["segment_count"] = I.segment_rows;
   j["event_count"] = I.event_rows;
+  if (!I.h5) {
+    // Lengths beside the row counts: a reader tells a truncated or extended file from a whole one.
+    j["file_bytes"] = {{"imu.csv", I.imu.bytes}, {"truth.csv", I.truth.bytes},
+                       {"segments.csv", I.segments.bytes}, {"events.csv", I.events.bytes}};
+  }
   // run.h5 first: it is the source of truth, run.json its readable copy.
   if (I.h5) I.h5->finish(status, end_time, message);
   write_file_atomic(dir_ / "run.json", dump_json(j));
@@ -831,8 +839,9 @@ void read_plugins_and_truth_columns(const nlohmann::json& j, const JsonFields& f
   }
 }
 
-// The header from run.json's text; `file` names where the text came from in errors.
-void read_run_json(const fs::path& file, const std::string& text, RecordingHeader& h) {
+// The header from run.json's text; `file` names where the text came from in errors. Returns the
+// parsed JSON (for the counts the writer recorded at finish).
+nlohmann::json read_run_json(const fs::path& file, const std::string& text, RecordingHeader& h) {
   const nlohmann::json j = parse_run_json(file, text);
   if (!j.is_object()) fail_at(file, 1, "expected a JSON object");
   const JsonFields f(j, file);
@@ -840,6 +849,35 @@ void read_run_json(const fs::path& file, const std::string& text, RecordingHeade
   read_run_fields(j, f, h);
   read_sensor(j, f, h);
   read_plugins_and_truth_columns(j, f, h);
+  return j;
+}
+
+// What reading one CSV file found: its whole rows (header and blank lines not counted; nullopt when
+// the rows were not read), the line of the last whole one, whether the file ends inside a line (no
+// line feed), and its length [bytes].
+struct FileRead {
+  fs::path path;
+  bool exists = true;
+  std::optional<std::uint64_t> rows;
+  std::size_t last_line = 0;
+  bool cut = false;
+  std::uint64_t bytes = 0;
+};
+
+// The FileRead of a file that is not there, or whose rows were not read (its length only).
+FileRead file_not_read(const fs::path& file) {
+  FileRead f;
+  f.path = file;
+  std::error_code ec;
+  f.exists = fs::exists(file, ec);
+  if (f.exists) f.bytes = fs::file_size(file, ec);
+  return f;
+}
+
+// The FileRead of `rows` rows read through `rd`; a cut last line is counted in r.
+FileRead file_read(const csv::Reader& rd, std::uint64_t rows, Recording& r) {
+  r.dropped_partial_lines += rd.partial();
+  return {rd.path(), true, rows, rd.line(), rd.partial() > 0, rd.file_size()};
 }
 
 // --- imu.csv ---------------------------------------------------------------------------------
@@ -914,7 +952,7 @@ void parse_imu_slow(std::string_view line, ImuSample& s, const fs::path& file, s
   }
   auto bad = [&](std::size_t col, const char* what) {
     fail_at(file, ln, fmt::format("column {} ({}): '{}' is not {}", col + 1,
-                                  kImuColumnNames[col], f[col], what));
+                                  kImuColumnNames[col], csv::clip(f[col]), what));
   };
   auto dbl = [&](std::size_t col, double& out) {
     if (!csv::parse_double(f[col], out)) bad(col, "a number");
@@ -941,16 +979,13 @@ void parse_imu_slow(std::string_view line, ImuSample& s, const fs::path& file, s
   s.flags = static_cast<std::uint32_t>(flags);
 }
 
-void read_imu(const fs::path& file, Recording& r) {
+FileRead read_imu(const fs::path& file, Recording& r) {
   csv::Reader rd(file);
   std::string_view line;
-  if (!rd.next_line(line)) {  // empty, or the header itself was cut short
-    r.dropped_partial_lines += rd.partial();
-    return;
-  }
+  if (!rd.next_line(line)) return file_read(rd, 0, r);  // empty, or the header itself was cut short
   if (line != kImuHeader) {
     fail_at(file, rd.line(),
-            fmt::format("unexpected header '{}'; expected '{}'", line, kImuHeader));
+            fmt::format("unexpected header '{}'; expected '{}'", csv::clip(line), kImuHeader));
   }
   const std::uint64_t header_bytes = rd.bytes_consumed();
   bool reserved = false;
@@ -967,18 +1002,15 @@ void read_imu(const fs::path& file, Recording& r) {
       r.samples.reserve(4096 + static_cast<std::size_t>(remaining / per_row * 1.05) + 16);
     }
   }
-  r.dropped_partial_lines += rd.partial();
+  return file_read(rd, r.samples.size(), r);
 }
 
 // --- truth.csv -------------------------------------------------------------------------------
 
-void read_truth(const fs::path& file, Recording& r) {
+FileRead read_truth(const fs::path& file, Recording& r) {
   csv::Reader rd(file);
   std::vector<std::string> fields;
-  if (!rd.next_record(fields)) {
-    r.dropped_partial_lines += rd.partial();
-    return;
-  }
+  if (!rd.next_record(fields)) return file_read(rd, 0, r);
   std::vector<std::string> expected{"t_s"};
   expected.insert(expected.end(), r.header.truth_columns.begin(), r.header.truth_columns.end());
   if (fields != expected) {
@@ -988,8 +1020,8 @@ void read_truth(const fs::path& file, Recording& r) {
     got.pop_back();
     want.pop_back();
     fail_at(file, rd.line(),
-            fmt::format("header '{}' does not match run.json truth_columns (expected '{}')", got,
-                        want));
+            fmt::format("header '{}' does not match run.json truth_columns (expected '{}')",
+                        csv::clip(got), csv::clip(want)));
   }
   const std::size_t n = r.header.truth_columns.size();
   std::string_view line;
@@ -1012,7 +1044,7 @@ void read_truth(const fs::path& file, Recording& r) {
         double v = 0.0;
         if (!csv::parse_double(f[k], v)) {
           fail_at(file, rd.line(), fmt::format("column {} ({}): '{}' is not a number", k + 1,
-                                               expected[k], f[k]));
+                                               expected[k], csv::clip(f[k])));
         }
         if (k == 0) {
           t = v;
@@ -1024,7 +1056,7 @@ void read_truth(const fs::path& file, Recording& r) {
     r.truth_t.push_back(t);
     r.truth.push_back(row);
   }
-  r.dropped_partial_lines += rd.partial();
+  return file_read(rd, r.truth_t.size(), r);
 }
 
 // --- segments.csv / events.csv ---------------------------------------------------------------
@@ -1032,48 +1064,7 @@ void read_truth(const fs::path& file, Recording& r) {
 
 bool blank(const std::vector<std::string>& f) { return f.size() == 1 && f[0].empty(); }
 
-// CSV records of a text held in memory, with csv::Reader's interface and its rule for a trailing
-// record that lacks its line feed (not returned; counted in partial()).
-class TextRecords {
- public:
-  TextRecords(fs::path name, std::string_view text) : path_(std::move(name)), text_(text) {}
-  bool next_record(std::vector<std::string>& fields) {
-    bool quoted = false;
-    std::size_t lines = 0;
-    for (std::size_t i = pos_; i < text_.size(); ++i) {
-      const char c = text_[i];
-      if (c == '"') quoted = !quoted;
-      if (c != '\n') continue;
-      ++lines;
-      if (quoted) continue;
-      std::string_view rec = text_.substr(pos_, i - pos_);
-      if (!rec.empty() && rec.back() == '\r') rec.remove_suffix(1);
-      line_ = next_line_;
-      next_line_ += lines;
-      pos_ = i + 1;
-      try {
-        fields = csv::split_record(rec);
-      } catch (const std::exception& e) {
-        throw std::runtime_error(fmt::format("{}:{}: {}", path_.string(), line_, e.what()));
-      }
-      return true;
-    }
-    partial_ += pos_ < text_.size();
-    pos_ = text_.size();
-    return false;
-  }
-  std::size_t line() const { return line_; }
-  std::size_t partial() const { return partial_; }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-  std::string_view text_;
-  std::size_t pos_ = 0, line_ = 0, next_line_ = 1, partial_ = 0;
-};
-
-template <class Records>
-void check_header(const Records& rd, const std::vector<std::string>& got,
+void check_header(const csv::Reader& rd, const std::vector<std::string>& got,
                   const std::vector<std::string>& want) {
   if (got != want) {
     std::string a, b;
@@ -1081,19 +1072,17 @@ void check_header(const Records& rd, const std::vector<std::string>& got,
     csv::append_record(b, want);
     a.pop_back();
     b.pop_back();
-    fail_at(rd.path(), rd.line(), fmt::format("unexpected header '{}'; expected '{}'", a, b));
+    fail_at(rd.path(), rd.line(),
+            fmt::format("unexpected header '{}'; expected '{}'", csv::clip(a), b));
   }
 }
 
-template <class Records>
-void read_segments(Records& rd, Recording& r) {
+FileRead read_segments(csv::Reader& rd, Recording& r) {
   const fs::path& file = rd.path();
   std::vector<std::string> f;
-  if (!rd.next_record(f)) {
-    r.dropped_partial_lines += rd.partial();
-    return;
-  }
+  if (!rd.next_record(f)) return file_read(rd, 0, r);
   check_header(rd, f, kSegmentColumns);
+  std::uint64_t rows = 0;
   while (rd.next_record(f)) {
     if (blank(f)) continue;
     if (f.size() != kSegmentColumns.size()) {
@@ -1102,7 +1091,7 @@ void read_segments(Records& rd, Recording& r) {
     }
     auto bad = [&](std::size_t col, const char* what) {
       fail_at(file, rd.line(), fmt::format("column {} ({}): '{}' is not {}", col + 1,
-                                           kSegmentColumns[col], f[col], what));
+                                           kSegmentColumns[col], csv::clip(f[col]), what));
     };
     auto integer = [&](std::size_t col, int& out) {
       std::int64_t v = 0;
@@ -1136,19 +1125,17 @@ void read_segments(Records& rd, Recording& r) {
     number(12, s.setpoint_c);
     number(13, s.rate);
     r.segments.push_back(std::move(s));
+    ++rows;
   }
-  r.dropped_partial_lines += rd.partial();
+  return file_read(rd, rows, r);
 }
 
-template <class Records>
-void read_events(Records& rd, Recording& r) {
+FileRead read_events(csv::Reader& rd, Recording& r) {
   const fs::path& file = rd.path();
   std::vector<std::string> f;
-  if (!rd.next_record(f)) {
-    r.dropped_partial_lines += rd.partial();
-    return;
-  }
+  if (!rd.next_record(f)) return file_read(rd, 0, r);
   check_header(rd, f, kEventColumns);
+  std::uint64_t rows = 0;
   while (rd.next_record(f)) {
     if (blank(f)) continue;
     if (f.size() != kEventColumns.size()) {
@@ -1157,14 +1144,15 @@ void read_events(Records& rd, Recording& r) {
     }
     Event e;
     if (!csv::parse_double(f[0], e.t_s)) {
-      fail_at(file, rd.line(), fmt::format("column 1 (t_s): '{}' is not a number", f[0]));
+      fail_at(file, rd.line(), fmt::format("column 1 (t_s): '{}' is not a number", csv::clip(f[0])));
     }
     e.level = std::move(f[1]);
     e.source = std::move(f[2]);
     e.message = std::move(f[3]);
     r.events.push_back(std::move(e));
+    ++rows;
   }
-  r.dropped_partial_lines += rd.partial();
+  return file_read(rd, rows, r);
 }
 
 // The experiment's YAML, checked.
@@ -1192,9 +1180,9 @@ void open_hdf5(const fs::path& file, Recording& r, SampleLoading loading, TruthL
   r.truth_t = std::move(h.truth_t);
   r.truth = std::move(h.truth);
   r.truth_rows = h.truth_rows;
-  TextRecords segments(file.string() + ":segments_csv", h.segments_csv);
+  csv::Reader segments(file.string() + ":segments_csv", h.segments_csv);
   read_segments(segments, r);
-  TextRecords events(file.string() + ":events_csv", h.events_csv);
+  csv::Reader events(file.string() + ":events_csv", h.events_csv);
   read_events(events, r);
   r.format = RecordingFormat::kHdf5;
   r.written_samples = h.written_samples;
@@ -1211,23 +1199,79 @@ void open_hdf5(const fs::path& file, Recording& r, SampleLoading loading, TruthL
   });
 }
 
-// The CSV files of a run folder.
-void open_csv(const fs::path& run_dir, Recording& r, SampleLoading loading, TruthLoading truth) {
+// run.json's count `key` under `obj`, nullopt when absent (run folders from before that count).
+std::optional<std::uint64_t> recorded_count(const nlohmann::json& obj, const char* key) {
+  const auto it = obj.find(key);
+  if (it == obj.end() || !it->is_number_unsigned()) return std::nullopt;
+  return it->get<std::uint64_t>();
+}
+
+// What is damaged in one file of a finished run, against the rows and bytes run.json records
+// (absent counts are not compared); empty when the file is whole.
+std::string file_damage(const FileRead& f, std::optional<std::uint64_t> rows,
+                        std::optional<std::uint64_t> bytes) {
+  if (!f.exists) {
+    if (rows.value_or(0) == 0 && bytes.value_or(0) == 0) return {};
+    return fmt::format("{}: missing; run.json records {} rows", f.path.string(), rows.value_or(0));
+  }
+  std::vector<std::string> what;
+  if (f.cut) what.push_back("the last line is cut mid-line (no line feed at the end of the file)");
+  if (rows && f.rows && *rows != *f.rows) {
+    what.push_back(fmt::format("run.json records {} rows, {} whole rows found (the last good line is {})",
+                               *rows, *f.rows, f.last_line));
+  }
+  if (bytes && *bytes != f.bytes)
+    what.push_back(fmt::format("run.json records {} bytes, the file holds {}", *bytes, f.bytes));
+  if (what.empty()) return {};
+  std::string out = fmt::format("{}:{}: ", f.path.string(), f.cut ? f.last_line + 1 : f.last_line);
+  for (std::size_t i = 0; i < what.size(); ++i) out += (i ? "; " : "") + what[i];
+  return out;
+}
+
+// A finished run's files against what its writer recorded in run.json at finish: what differs
+// goes to r.damage (the rows read stay usable), and r.written_samples becomes the samples written.
+void check_recorded_counts(const nlohmann::json& run_json, const std::vector<FileRead>& files, Recording& r) {
+  if (r.header.status == RunStatus::kRunning) return;  // killed: no counts, a cut last line is expected
+  constexpr std::pair<const char*, const char*> kRowKeys[] = {
+      {"imu.csv", "sample_count"}, {"truth.csv", "truth_count"},
+      {"segments.csv", "segment_count"}, {"events.csv", "event_count"}};
+  const auto bytes_it = run_json.find("file_bytes");
+  for (const FileRead& f : files) {
+    const std::string name = f.path.filename().string();
+    std::optional<std::uint64_t> rows, bytes;
+    for (const auto& [file, key] : kRowKeys)
+      if (name == file) rows = recorded_count(run_json, key);
+    if (bytes_it != run_json.end() && bytes_it->is_object()) bytes = recorded_count(*bytes_it, name.c_str());
+    const std::string d = file_damage(f, rows, bytes);
+    if (d.empty()) continue;
+    r.damage += (r.damage.empty() ? "" : "; ") + d;
+    if (name == "imu.csv" && rows) r.written_samples = *rows;
+  }
+}
+
+// The CSV files of a run folder, checked against the counts in run.json.
+void open_csv(const fs::path& run_dir, const nlohmann::json& run_json, Recording& r, SampleLoading loading,
+              TruthLoading truth) {
   std::error_code ec;
   const fs::path imu = run_dir / "imu.csv";
   if (!fs::exists(imu, ec)) {
     throw std::runtime_error(fmt::format("{}: missing (every recording has run.h5 or imu.csv)", imu.string()));
   }
-  read_imu(imu, r);
-  if (truth == TruthLoading::kLoad && fs::exists(run_dir / "truth.csv", ec)) read_truth(run_dir / "truth.csv", r);
-  r.truth_rows = r.truth_t.size();
-  for (const auto& [name, read] :
-       {std::pair{"segments.csv", &read_segments<csv::Reader>}, std::pair{"events.csv", &read_events<csv::Reader>}}) {
-    if (!fs::exists(run_dir / name, ec)) continue;
-    csv::Reader rd(run_dir / name);
-    read(rd, r);
-  }
+  std::vector<FileRead> files{read_imu(imu, r)};
   r.written_samples = r.samples.size();
+  const fs::path truth_csv = run_dir / "truth.csv";
+  const bool read_truth_rows = truth == TruthLoading::kLoad && fs::exists(truth_csv, ec);
+  files.push_back(read_truth_rows ? read_truth(truth_csv, r) : file_not_read(truth_csv));
+  r.truth_rows = r.truth_t.size();
+  for (const auto& [name, read] : {std::pair{"segments.csv", &read_segments}, std::pair{"events.csv", &read_events}}) {
+    if (!fs::exists(run_dir / name, ec)) {
+      files.push_back(file_not_read(run_dir / name));
+      continue;
+    }
+    csv::Reader rd(run_dir / name);
+    files.push_back(read(rd, r));
+  }
+  check_recorded_counts(run_json, files, r);
   r.gap_count = std::count_if(r.samples.begin(), r.samples.end(),
                               [](const ImuSample& s) { return (s.flags & kGapBefore) != 0; });
   if (loading == SampleLoading::kStream)
@@ -1256,7 +1300,7 @@ Recording Recording::open(const fs::path& run_dir, SampleLoading loading, TruthL
         "{}: missing; {} is not a Stend recording (or its writer died before starting)",
         run_json.string(), run_dir.string()));
   }
-  read_run_json(run_json, read_whole_file(run_json), r.header);
+  const nlohmann::json run_json_fields = read_run_json(run_json, read_whole_file(run_json), r.header);
 
   const fs::path yaml = run_dir / "experiment.yaml";
   if (fs::exists(yaml, ec)) {
@@ -1269,8 +1313,14 @@ Recording Recording::open(const fs::path& run_dir, SampleLoading loading, TruthL
     if (loading == SampleLoading::kStream) r.source = std::make_shared<MemorySamples>(std::vector<ImuSample>{});
     return r;
   }
-  open_csv(run_dir, r, loading, truth);
+  open_csv(run_dir, run_json_fields, r, loading, truth);
   return r;
+}
+
+void require_whole(const Recording& rec) {
+  if (rec.damage.empty()) return;
+  throw std::runtime_error(fmt::format("{}: the run is damaged ({} of {} samples are readable): {}", rec.dir.string(),
+                                       rec.sample_count(), rec.written_samples, rec.damage));
 }
 
 void write_recording(const Recording& rec, const fs::path& dir, const RecordingWriterOptions& options) {

@@ -734,14 +734,16 @@ Hdf5Run open_hdf5_run(const fs::path& path, bool truth) {
   if (!st) fail(path, fmt::format("attribute 'status' is '{}', not a run status", status));
   run.status = *st;
   run.header_json = get_string_attr(root, "header_json", path);
+  double summary_samples = -1.0;  // samples written as of the last flush (/summary), −1 unknown
   {
     Handle ds = open_dataset(root, "summary", path, "/");
     // Files from before the irregular-interval count hold 4 columns.
     Handle space(H5Dget_space(ds.get()), H5Sclose);
     hsize_t dims[1] = {0};
     const bool whole = H5Sget_simple_extent_dims(space.get(), dims, nullptr) == 1 && dims[0] <= kSummaryColumns;
-    double v[kSummaryColumns] = {0, -1, 0, 0, -1};
+    double v[kSummaryColumns] = {-1, -1, 0, 0, -1};
     if (whole && H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0) {
+      summary_samples = v[0];
       run.gap_count = static_cast<std::int64_t>(v[1]);
       run.irregular_count = static_cast<std::int64_t>(v[4]);
     }
@@ -801,7 +803,15 @@ Hdf5Run open_hdf5_run(const fs::path& path, bool truth) {
       codec[k].int16 = H5Tget_size(type.get()) == 2;  // read in the stored width
     }
   }
-  run.written_samples = n;
+  // The writer extends the datasets before it records their rows in /summary: fewer rows than
+  // recorded is damage, and so is any difference once the run finished.
+  if (summary_samples >= 0.0 && (summary_samples > static_cast<double>(n) ||
+                                 (run.status != RunStatus::kRunning && summary_samples != static_cast<double>(n)))) {
+    run.damage += (run.damage.empty() ? "" : "; ") +
+                  fmt::format("{}: dataset /samples holds {} rows, dataset /summary records {} written", path.string(),
+                              n, static_cast<std::uint64_t>(summary_samples));
+  }
+  run.written_samples = summary_samples > static_cast<double>(n) ? static_cast<std::uint64_t>(summary_samples) : n;
   // Samples whose chunks are all inside the file: a truncated file keeps those before the cut.
   std::error_code ec;
   const std::uint64_t file_size = fs::file_size(path, ec);

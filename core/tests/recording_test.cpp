@@ -1194,3 +1194,164 @@ TEST_F(RecordingTest, Hdf5ExportsToTheCsvLayoutAndBack) {
   stend::write_recording(c, root_ / "h5again", kHdf5);
   expect_same_recording(Recording::open(root_ / "h5again"), w);
 }
+
+// --- Strict reading: quoting, column counts, rows and bytes against run.json -------------------
+
+namespace {
+// Position of the first byte of `line` (1-based) in `s`.
+std::size_t line_start(const std::string& s, int line) {
+  std::size_t p = 0;
+  for (int i = 1; i < line; ++i) p = s.find('\n', p) + 1;
+  return p;
+}
+}  // namespace
+
+TEST_F(RecordingTest, UnterminatedQuoteIsAnErrorWhereItOpened) {
+  const fs::path dir = root_ / "run";
+  write_small(dir);
+  const std::string seg = read_text(dir / "segments.csv");
+  // A quote opening the label of the first segment (line 2) is never closed: the rest of the file
+  // would be one field. The file still ends with its line feed, so this is not a cut write.
+  std::string bad = seg;
+  const auto label = bad.find(",set_temperature,", line_start(bad, 2)) + 17;
+  bad.insert(label, "\"");
+  ASSERT_EQ(std::count(bad.begin(), bad.end(), '"') % 2, 1);
+  write_text(dir / "segments.csv", bad);
+  expect_open_error(dir, {"segments.csv:2:", "double quote"});
+  // Alone in the file, the quote runs to the end.
+  write_text(dir / "segments.csv", seg.substr(0, line_start(seg, 2)) +
+                                       "0,0,record,\"a,0,-1,0,1,2,1,1,,,\n1,0,record,b,0,-1,0,2,3,1,1,,,\n");
+  expect_open_error(dir, {"segments.csv:2:", "unterminated double quote"});
+  // The same quote in events.csv.
+  write_text(dir / "segments.csv", seg);
+  const std::string ev = read_text(dir / "events.csv");
+  write_text(dir / "events.csv", ev.substr(0, line_start(ev, 3)) + "0.5,info,\"runner,x\n" +
+                                     ev.substr(line_start(ev, 3)));
+  expect_open_error(dir, {"events.csv:3:"});
+}
+
+TEST_F(RecordingTest, ExtraOrMissingColumnsNameFileLineAndCount) {
+  const fs::path dir = root_ / "run";
+  write_small(dir);
+  const std::string imu = read_text(dir / "imu.csv");
+  std::string bad = imu;
+  bad.insert(bad.find('\n', line_start(bad, 40)), ",7");
+  write_text(dir / "imu.csv", bad);
+  expect_open_error(dir, {"imu.csv:40:", "expected 16", "found 17"});
+  write_text(dir / "imu.csv", imu);
+  const std::string seg = read_text(dir / "segments.csv");
+  write_text(dir / "segments.csv", seg + "7,1,record,x,0,-1,0,1,2,1,1,,,,extra\n");
+  expect_open_error(dir, {"segments.csv:", "expected 14 fields, found 15"});
+  write_text(dir / "segments.csv", seg);
+  const std::string ev = read_text(dir / "events.csv");
+  write_text(dir / "events.csv", ev + "4,info,runner\n");
+  expect_open_error(dir, {"events.csv:", "expected 4 fields, found 3"});
+}
+
+TEST_F(RecordingTest, LongLinesAreCutInMessages) {
+  const fs::path dir = root_ / "run";
+  write_small(dir);
+  const std::string imu = read_text(dir / "imu.csv");
+  std::string bad = imu;
+  bad.insert(line_start(bad, 5), std::string(1'000'000, '7') + "x");
+  write_text(dir / "imu.csv", bad);
+  try {
+    (void)Recording::open(dir);
+    ADD_FAILURE() << "a garbage row was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("imu.csv:5:"), std::string::npos) << e.what();
+    EXPECT_LT(std::strlen(e.what()), 400u);
+    EXPECT_NE(std::string(e.what()).find("more bytes"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(RecordingTest, RunJsonRecordsRowsAndBytesOfEveryFile) {
+  const fs::path dir = root_ / "run";
+  const Written w = write_small(dir);
+  const auto j = nlohmann::json::parse(read_text(dir / "run.json"));
+  EXPECT_EQ(j.at("sample_count").get<std::uint64_t>(), w.samples.size());
+  for (const char* name : {"imu.csv", "truth.csv", "segments.csv", "events.csv"})
+    EXPECT_EQ(j.at("file_bytes").at(name).get<std::uint64_t>(), fs::file_size(dir / name)) << name;
+  const Recording r = Recording::open(dir);
+  EXPECT_TRUE(r.damage.empty()) << r.damage;
+  EXPECT_EQ(r.written_samples, w.samples.size());
+}
+
+TEST_F(RecordingTest, TruncatedFinishedRunIsDamagedAndSaysWhatIsReadable) {
+  const fs::path dir = root_ / "run";
+  const Written w = write_small(dir);
+  const std::string imu = read_text(dir / "imu.csv");
+  // Cut at 56 % on a line boundary: every line left is whole, only the counts can tell.
+  const std::size_t cut = imu.rfind('\n', imu.size() * 56 / 100) + 1;
+  const auto whole = static_cast<std::size_t>(std::count(imu.begin(), imu.begin() + static_cast<std::ptrdiff_t>(cut), '\n')) - 1;
+  write_text(dir / "imu.csv", imu.substr(0, cut));
+  Recording r = Recording::open(dir);
+  EXPECT_EQ(r.sample_count(), whole);
+  EXPECT_EQ(r.written_samples, w.samples.size());
+  EXPECT_NE(r.damage.find("imu.csv:" + std::to_string(whole + 1) + ":"), std::string::npos) << r.damage;
+  EXPECT_NE(r.damage.find("run.json records 2000 rows, " + std::to_string(whole) + " whole rows found"),
+            std::string::npos) << r.damage;
+  EXPECT_NE(r.damage.find("bytes"), std::string::npos) << r.damage;
+  // Cut mid-line: the cut line is named.
+  write_text(dir / "imu.csv", imu.substr(0, cut + 20));
+  r = Recording::open(dir);
+  EXPECT_EQ(r.sample_count(), whole);
+  EXPECT_NE(r.damage.find("imu.csv:" + std::to_string(whole + 2) + ": the last line is cut mid-line"),
+            std::string::npos) << r.damage;
+  // Rows appended after finish are damage too.
+  write_text(dir / "imu.csv", imu + imu.substr(line_start(imu, 2), line_start(imu, 3) - line_start(imu, 2)));
+  r = Recording::open(dir, stend::SampleLoading::kStream, stend::TruthLoading::kSkip);
+  EXPECT_EQ(r.sample_count(), w.samples.size() + 1);
+  EXPECT_NE(r.damage.find("run.json records 2000 rows, 2001"), std::string::npos) << r.damage;
+  // A missing file that run.json says holds rows.
+  write_text(dir / "imu.csv", imu);
+  fs::remove(dir / "segments.csv");
+  r = Recording::open(dir);
+  EXPECT_NE(r.damage.find("segments.csv: missing; run.json records 2 rows"), std::string::npos) << r.damage;
+}
+
+TEST_F(RecordingTest, RunFoldersWithoutCountsStillRead) {
+  const fs::path dir = root_ / "run";
+  const Written w = write_small(dir);
+  // run.json as the writer of earlier versions left it: no byte lengths; and with no counts at all.
+  auto j = nlohmann::json::parse(read_text(dir / "run.json"));
+  j.erase("file_bytes");
+  write_text(dir / "run.json", j.dump(2));
+  Recording r = Recording::open(dir);
+  EXPECT_TRUE(r.damage.empty()) << r.damage;
+  EXPECT_EQ(r.samples.size(), w.samples.size());
+  for (const char* key : {"sample_count", "truth_count", "segment_count", "event_count"}) j.erase(key);
+  write_text(dir / "run.json", j.dump(2));
+  const std::string imu = read_text(dir / "imu.csv");
+  write_text(dir / "imu.csv", imu.substr(0, line_start(imu, 1001)));
+  r = Recording::open(dir);
+  EXPECT_TRUE(r.damage.empty()) << r.damage;
+  EXPECT_EQ(r.samples.size(), 999u);
+  // A killed run (status running) keeps tolerating a cut last line.
+  const fs::path killed = root_ / "killed";
+  write_small(killed, false);
+  const std::string kimu = read_text(killed / "imu.csv");
+  write_text(killed / "imu.csv", kimu.substr(0, kimu.size() - 3));
+  r = Recording::open(killed);
+  EXPECT_TRUE(r.damage.empty()) << r.damage;
+  EXPECT_EQ(r.dropped_partial_lines, 1u);
+}
+
+TEST_F(RecordingTest, Hdf5SummaryBeyondTheSamplesIsDamage) {
+  const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  if (stend::testing::run_command(python + " -c 'import h5py, numpy' 2>&1").code != 0)
+    GTEST_SKIP() << "python3-h5py / python3-numpy are not installed (scripts/install-deps.sh installs them)";
+  const fs::path dir = root_ / "run";
+  const auto written = write_mpu_run(dir, 70'000);
+  EXPECT_TRUE(Recording::open(dir, stend::SampleLoading::kStream).damage.empty());
+  // /summary claims more samples than the datasets hold.
+  const auto edit = stend::testing::run_command(
+      python + " -c 'import sys, h5py\nwith h5py.File(sys.argv[1], \"r+\") as f: f[\"summary\"][0] = 80000' " +
+      (dir / "run.h5").string() + " 2>&1");
+  ASSERT_EQ(edit.code, 0) << edit.text;
+  const Recording rec = Recording::open(dir, stend::SampleLoading::kStream);
+  EXPECT_EQ(rec.sample_count(), written.size());
+  EXPECT_EQ(rec.written_samples, 80000u);
+  EXPECT_NE(rec.damage.find("dataset /samples holds 70000 rows, dataset /summary records 80000 written"),
+            std::string::npos) << rec.damage;
+}

@@ -1,3 +1,4 @@
+#include <stend/csv.hpp>
 #include <stend/io/importers.hpp>
 #include <stend/io/timestamps.hpp>
 #include <stend/physics/gravity.hpp>
@@ -87,7 +88,7 @@ std::vector<std::string_view> split_any(std::string_view line) {
 double number(const LineReader& r, std::string_view field, const std::string& what) {
   double v = 0.0;
   if (!parse_double(field, v)) {
-    r.fail("column '" + what + "': '" + std::string(field) + "' is not a number");
+    r.fail("column '" + what + "': '" + csv::clip(field) + "' is not a number");
   }
   return v;
 }
@@ -198,6 +199,7 @@ namespace {
 // Column indices (0-based, −1 = absent) that a CSV mapping resolves to.
 struct CsvColumns {
   std::vector<std::string> names;  // from the column-name line (empty without one)
+  std::size_t names_line = 0;      // its line
   std::array<int, 3> acc{}, gyr{};
   bool has_gyro = false;
   int time = -1, temperature = -1;
@@ -251,7 +253,7 @@ int resolve_column(const LineReader& r, const CsvMapping& map, const std::vector
 CsvColumns resolve_csv_columns(const LineReader& r, const CsvMapping& map, std::vector<std::string> names) {
   CsvColumns c;
   c.names = std::move(names);
-  const std::size_t names_line = r.line();
+  const std::size_t names_line = c.names_line = r.line();
   const char* axes[3] = {"x", "y", "z"};
   for (int k = 0; k < 3; ++k) {
     if (map.accel[k].empty()) {
@@ -298,10 +300,13 @@ ImuSample csv_sample(const LineReader& r, const std::vector<std::string_view>& f
   return s;
 }
 
-// Every data line as a sample (blank and comment lines skipped), passed to `out` in chunks; a time
+// Every data line as a sample (blank and comment lines skipped), passed to `out` in chunks; each
+// line has as many fields as the column-name line (without one: as the first data line), and a time
 // column must not go back (repeats are repaired afterwards). Returns the number of samples.
 std::size_t read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColumns& c, SampleSink& out) {
   const int needed = c.needed();
+  std::size_t fields = c.names.size();
+  std::string fields_from = "the column-name line (line " + std::to_string(c.names_line) + ")";
   std::vector<ImuSample> chunk;
   chunk.reserve(kDefaultChunkSamples);
   std::size_t count = 0;
@@ -315,6 +320,14 @@ std::size_t read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColu
     const auto f = split(line, map.delimiter);
     if (static_cast<int>(f.size()) < needed) {
       r.fail("expected at least " + std::to_string(needed) + " fields, found " + std::to_string(f.size()));
+    }
+    if (fields == 0) {
+      fields = f.size();
+      fields_from = "the first data line (line " + std::to_string(r.line()) + ")";
+    }
+    if (f.size() != fields) {
+      r.fail("expected " + std::to_string(fields) + " fields as on " + fields_from + ", found " +
+             std::to_string(f.size()));
     }
     const ImuSample s = csv_sample(r, f, map, c, count);
     if (c.time >= 0 && count > 0 && s.t_s < prev_t) {
@@ -392,7 +405,6 @@ constexpr const char* kImucalColumns[8] = {"part", "samples", "acc_x", "acc_y", 
 struct ImucalColumns {
   std::array<std::size_t, 8> index{};
   std::size_t count = 0;  // columns in the header
-  std::size_t needed() const { return *std::max_element(index.begin(), index.end()) + 1; }
 };
 
 // One data line: sample index, part label, the six raw counts (acc xyz, gyr xyz), source line.
@@ -471,8 +483,9 @@ ImucalScan scan_imucal(LineReader& r, const ImucalColumns& c) {
   for (std::streampos pos = r.tell(); r.next(line); pos = r.tell()) {
     if (is_blank(line)) continue;
     const auto f = split(line, ',');
-    if (f.size() < c.needed()) {
-      r.fail("expected " + std::to_string(c.count) + " fields, found " + std::to_string(f.size()));
+    if (f.size() != c.count) {
+      r.fail("expected " + std::to_string(c.count) + " fields as on the column-name line, found " +
+             std::to_string(f.size()));
     }
     const ImucalRow row = imucal_row(r, f, c);
     if (runs.empty() || row.index <= prev) {
@@ -674,7 +687,7 @@ MpuHeader read_mpu_header(LineReader& r) {
     const auto f = split(line, ',');
     double v = 0.0;
     if (f.size() == 2 && !parse_double(f[0], v)) {
-      if (!parse_double(f[1], v)) r.fail("header value '" + std::string(f[1]) + "' is not a number");
+      if (!parse_double(f[1], v)) r.fail("header value '" + csv::clip(f[1]) + "' is not a number");
       h.values[unquote(f[0])] = v;
       h.lines[unquote(f[0])] = r.line();
       continue;
@@ -717,14 +730,14 @@ double mpu_rate(const fs::path& file, const MpuHeader& h) {
 // number of samples.
 std::size_t read_mpu_samples(LineReader& r, const std::array<std::size_t, 6>& col, std::size_t fields, double rate,
                              const Mpu6050MultiposOptions& opt, double acc_lsb, double gyr_lsb, SampleSink& out) {
-  const std::size_t needed = *std::max_element(col.begin(), col.end()) + 1;
   SampleChunker chunks(out);
   std::string line;
   while (r.next(line)) {
     if (is_blank(line)) continue;
     const auto f = split(line, ',');
-    if (f.size() < needed) {
-      r.fail("expected " + std::to_string(fields) + " fields, found " + std::to_string(f.size()));
+    if (f.size() != fields) {
+      r.fail("expected " + std::to_string(fields) + " fields as on the column-name line, found " +
+             std::to_string(f.size()));
     }
     ImuSample s;
     s.t_s = static_cast<double>(chunks.count()) / rate;

@@ -1,6 +1,7 @@
 // Importers: the public datasets in ../shared/data (skipped when absent), generic CSV, and the
 // IMU-TK and MATLAB round trips on files this test writes.
 #include <stend/io/importers.hpp>
+#include <stend/io/logs.hpp>
 #include <stend/testing/files.hpp>
 #include <stend/testing/paths.hpp>
 
@@ -430,4 +431,52 @@ TEST(ImportMat, ErrorsNameTheFile) {
   o.struct_name = "nothere";
   EXPECT_NE(error_of([&] { import_mat(dir / "ok.mat", o); }).find("no struct variable named 'nothere'"),
             std::string::npos);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rows with extra or missing fields, in every text importer: refused with file, line and the count
+// expected (an extra field would shift or add values silently).
+
+TEST(ImportStrictRows, ExtraOrMissingFieldsAreRefusedWithTheExpectedCount) {
+  const TempDir dir("importers");
+  const auto f = dir / "rows.csv";
+  auto expect = [&](const std::function<void()>& import, const std::string& needle) {
+    const std::string e = error_of(import);
+    EXPECT_NE(e.find(needle), std::string::npos) << e;
+  };
+  // Generic CSV with a column-name line: every row has its field count.
+  CsvMapping named;
+  named.time = "t";
+  named.accel = {"ax", "ay", "az"};
+  write_text(f, "t,ax,ay,az\n0,1,2,3\n0.01,1,2,3,9\n0.02,1,2,3\n");
+  expect([&] { import_csv(f, named); }, "rows.csv:3: expected 4 fields as on the column-name line (line 1), found 5");
+  // Without one: as many as the first data row.
+  CsvMapping by_index;
+  by_index.column_names = false;
+  by_index.rate_hz = 100.0;
+  by_index.accel = {0, 1, 2};
+  write_text(f, "1,2,3,4\n1,2,3,4\n1,2,3,4,5\n");
+  expect([&] { import_csv(f, by_index); }, "rows.csv:3: expected 4 fields as on the first data line (line 1), found 5");
+  // imucal: the column-name line's count.
+  write_text(f, "part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\nx_p,0,1,2,3,4,5,6\nx_p,1,1,2,3,4,5,6,7\n");
+  expect([&] { import_imucal_session(f); }, "rows.csv:3: expected 8 fields as on the column-name line, found 9");
+  // MPU-6050 text: likewise.
+  write_text(f, "Fs,100\nax,ay,az,gx,gy,gz\n1,2,3,4,5,6\n1,2,3,4,5,6,7\n");
+  expect([&] { import_mpu6050_multipos(f); }, "rows.csv:4: expected 6 fields as on the column-name line, found 7");
+  // EuRoC and IMU-TK have fixed layouts.
+  write_text(f, "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+                "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n"
+                "1000,0,0,0,0,0,9.8\n2000,0,0,0,0,0,9.8,1\n");
+  expect([&] { import_euroc(f); }, "rows.csv:3: expected 7 fields");
+  write_text(f, "0 1 2 3\n0.01 1 2 3 4\n");
+  expect([&] { import_imutk(f, {}); }, "rows.csv:2: expected 4 values");
+}
+
+TEST(ImportStrictRows, LongFieldsAreCutInMessages) {
+  const TempDir dir("importers");
+  const auto f = dir / "rows.csv";
+  write_text(f, "Fs,100\nax,ay,az,gx,gy,gz\n1,2,3,4,5,6\n1,2," + std::string(100'000, '9') + "x,4,5,6\n");
+  const std::string e = error_of([&] { import_mpu6050_multipos(f); });
+  EXPECT_NE(e.find("rows.csv:4: column 'az'"), std::string::npos) << e;
+  EXPECT_LT(e.size(), 400u) << e.size();
 }

@@ -709,6 +709,7 @@ ExportResult export_run(const fs::path& run_dir, const std::string& format, fs::
   if (format == "csv") {  // the recording itself, as a CSV run folder
     if (out.empty()) out = run_dir / "export" / "csv";
     const Recording rec = Recording::open(run_dir, SampleLoading::kStream);
+    if (!options.accept_damaged) require_whole(rec);
     write_recording(rec, out, RecordingWriterOptions{RecordingFormat::kCsv});
     ExportResult r;
     for (const char* f : {"run.json", "experiment.yaml", "imu.csv", "truth.csv", "segments.csv", "events.csv"})

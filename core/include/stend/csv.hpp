@@ -5,7 +5,7 @@
 // RFC 4180-style only when they must be. Reading: a chunked file reader that hands out complete
 // lines (fast path, no quoting) or complete records (quoted fields, embedded line breaks), and
 // never returns a trailing record that lacks its line feed (an interrupted write) — it counts it
-// in partial() instead.
+// in partial() instead. Quoting is strict: malformed quoting is an error naming file and line.
 #pragma once
 
 #include <cstddef>
@@ -34,6 +34,11 @@ void append_field(std::string& out, std::string_view field);
 // Appends the fields joined by commas and a terminating '\n'.
 void append_record(std::string& out, const std::vector<std::string>& fields);
 
+// Longest text of a file that messages quote whole; longer text is cut (see clip).
+inline constexpr std::size_t kMessageTextChars = 120;
+// `text` for a message: whole up to `max` characters, else its start and "… (N more bytes)".
+std::string clip(std::string_view text, std::size_t max = kMessageTextChars);
+
 // Whole-field parsers; false when the text is not exactly one value of the type.
 // parse_double: empty, "nan", "NaN", "-nan" → NaN; "inf", "-inf", "Inf" → ±infinity.
 bool parse_double(std::string_view text, double& out) noexcept;
@@ -51,6 +56,8 @@ class Reader {
  public:
   // Throws std::runtime_error naming the file when it cannot be opened.
   explicit Reader(const std::filesystem::path& file, std::size_t chunk_bytes = 4u << 20);
+  // Reads `text` held in memory (copied); `name` stands for the file in errors.
+  Reader(std::filesystem::path name, std::string_view text);
   ~Reader();
   Reader(const Reader&) = delete;
   Reader& operator=(const Reader&) = delete;
@@ -60,7 +67,9 @@ class Reader {
   // counted in partial().
   bool next_line(std::string_view& line);
   // Next complete record with RFC 4180 quoting (quoted fields may hold line breaks).
-  // Throws std::runtime_error naming file and line on malformed quoting.
+  // Throws std::runtime_error naming file and line on malformed quoting: a double quote inside an
+  // unquoted field, text after a closing quote, or a quote left open at the end of the file (named
+  // at the line where it opened).
   bool next_record(std::vector<std::string>& fields);
 
   // First physical line (1-based) of what the last call returned.

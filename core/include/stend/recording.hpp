@@ -189,8 +189,10 @@ struct Recording {
   std::vector<Event> events;
   std::size_t dropped_partial_lines = 0;  // truncated trailing lines ignored by the reader
   RecordingFormat format = RecordingFormat::kCsv;
-  // run.h5: samples the file claims, and what is damaged when fewer are readable (empty when the
-  // file is whole; sample_count() is what can be read).
+  // Samples the writer wrote (run.h5's extent or summary; run.json's sample_count when imu.csv is
+  // damaged), and what is damaged: file:line or dataset, what was recorded and what was found
+  // (empty when the run is whole; sample_count() is what can be read). A killed run (status
+  // running) is not damaged by the last line its writer left unfinished.
   std::uint64_t written_samples = 0;
   std::string damage;
   // Samples flagged kGapBefore, as the store's summary states (run.h5 as of its last flush; CSV
@@ -214,6 +216,10 @@ struct Recording {
  private:
   mutable std::shared_ptr<const MemorySamples> memory_view_;  // sample_source() over `samples`
 };
+
+// Throws std::runtime_error when `rec` is damaged: the run folder, what is damaged and how many
+// samples are still readable. Analyses call it unless the user accepted the readable part.
+void require_whole(const Recording& rec);
 
 // Writes `rec` as a new run folder `dir` (must not exist) in `options.format`: the same header,
 // experiment, samples (streamed a chunk at a time), truth, segments and events; a finished run

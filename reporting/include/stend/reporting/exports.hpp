@@ -31,6 +31,8 @@ struct ExportOptions {
   // "batch_lsq" | "temp_poly". Temperature models always come from temp_poly*.json (one per
   // instrument), noise from allan.json.
   std::string from = "auto";
+  // csv: copy the readable part of a damaged run (else a damaged run is refused).
+  bool accept_damaged = false;
 };
 
 struct ExportResult {

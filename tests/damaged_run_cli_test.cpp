@@ -1,0 +1,78 @@
+// Damaged CSV run folders through the stend program: `info` says what is damaged and what is still
+// readable; the analyses refuse the run unless --accept-damaged; malformed rows name file:line.
+#include <gtest/gtest.h>
+
+#include "stend/testing/files.hpp"
+#include "stend/testing/program.hpp"
+
+#include <filesystem>
+#include <string>
+
+namespace fs = std::filesystem;
+using stend::testing::ProgramOutput;
+using stend::testing::read_text;
+using stend::testing::run_stend;
+using stend::testing::TempDir;
+using stend::testing::write_text;
+
+namespace {
+
+const std::string src = STEND_SOURCE_DIR;
+const std::string model = src + "/estimators/batch_lsq/examples/paper_z_channel.yaml";
+
+// The paper experiment recorded as a CSV run folder `dir/name`.
+fs::path record_csv_run(const TempDir& dir, const std::string& name) {
+  const ProgramOutput o = run_stend("run " + src + "/configs/paper_mpu6050_z.yaml --quiet --store csv --output " +
+                                    dir.str() + " --name " + name);
+  EXPECT_EQ(o.code, 0) << o.text;
+  return dir / name;
+}
+
+}  // namespace
+
+TEST(DamagedRunCli, TruncatedImuCsvIsNamedByInfoAndRefusedByTheAnalyses) {
+  const TempDir dir("cli-damaged");
+  const fs::path run = record_csv_run(dir, "run");
+  ASSERT_EQ(run_stend("fit " + run.string() + " --model " + model + " --json " + (dir / "whole.json").string()).code, 0);
+  const std::string imu = read_text(run / "imu.csv");
+  write_text(run / "imu.csv", imu.substr(0, imu.rfind('\n', imu.size() * 56 / 100) + 1));
+
+  const ProgramOutput info = run_stend("info " + run.string());
+  EXPECT_EQ(info.code, 0) << info.text;
+  EXPECT_NE(info.text.find("damaged:"), std::string::npos) << info.text;
+  EXPECT_NE(info.text.find("imu.csv:"), std::string::npos) << info.text;
+  EXPECT_NE(info.text.find("whole rows found (the last good line is"), std::string::npos) << info.text;
+
+  const ProgramOutput fit = run_stend("fit " + run.string() + " --model " + model + " --json " + (dir / "fit.json").string());
+  EXPECT_NE(fit.code, 0) << fit.text;
+  EXPECT_NE(fit.text.find("the run is damaged"), std::string::npos) << fit.text;
+  EXPECT_NE(fit.text.find("--accept-damaged"), std::string::npos) << fit.text;
+  EXPECT_FALSE(fs::exists(dir / "fit.json"));
+  const ProgramOutput accepted =
+      run_stend("fit " + run.string() + " --accept-damaged --model " + model + " --json " + (dir / "fit.json").string());
+  EXPECT_EQ(accepted.text.find("the run is damaged"), std::string::npos) << accepted.text;
+
+  const ProgramOutput gap = run_stend("gap " + run.string() + " --model " + model + " --json " + (dir / "gap.json").string());
+  EXPECT_NE(gap.code, 0) << gap.text;
+  EXPECT_NE(gap.text.find("the run is damaged"), std::string::npos) << gap.text;
+
+  const ProgramOutput exported = run_stend("export " + run.string() + " --to csv -o " + (dir / "copy").string());
+  EXPECT_NE(exported.code, 0) << exported.text;
+  EXPECT_FALSE(fs::exists(dir / "copy"));
+  EXPECT_EQ(run_stend("export " + run.string() + " --to csv --accept-damaged -o " + (dir / "copy").string()).code, 0);
+}
+
+TEST(DamagedRunCli, StrayQuoteInSegmentsCsvNamesItsLine) {
+  const TempDir dir("cli-quote");
+  const fs::path run = record_csv_run(dir, "run");
+  std::string seg = read_text(run / "segments.csv");
+  const auto line2 = seg.find('\n') + 1;
+  const auto third_field = seg.find(',', seg.find(',', line2) + 1) + 1;  // kind of the first segment
+  seg.insert(third_field, "\"");
+  write_text(run / "segments.csv", seg);
+  for (const std::string& command : {"info " + run.string(), "fit " + run.string() + " --model " + model}) {
+    const ProgramOutput o = run_stend(command);
+    EXPECT_NE(o.code, 0) << command << "\n" << o.text;
+    EXPECT_NE(o.text.find("segments.csv:2:"), std::string::npos) << command << "\n" << o.text;
+  }
+}
