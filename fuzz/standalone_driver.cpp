@@ -3,7 +3,9 @@
 // (byte flips, truncations, insertions, deletions, repeated chunks; splitmix64 from `-seed=S`), so
 // the suite replays the seed corpus and the regression set and explores a little around them.
 // A crash or sanitizer report aborts the process, which fails the test; the input is named first.
-//   fuzz_<target> [-mutations=N] [-seed=S] DIR_OR_FILE...
+// `-keep=FILE` writes each input to FILE before running it: after a crash or a hang FILE is the
+// reproducer (replay it with fuzz_<target> FILE, or under libFuzzer).
+//   fuzz_<target> [-mutations=N] [-seed=S] [-keep=FILE] DIR_OR_FILE...
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
@@ -66,8 +68,11 @@ void mutate(std::string& s, std::uint64_t& rng) {
   }
 }
 
+std::string keep_file;  // -keep=FILE
+
 void run_one(const std::string& input, const std::string& what) {
   const std::size_t n = std::min(input.size(), stend::fuzz::kMaxInputBytes);
+  if (!keep_file.empty()) std::ofstream(keep_file, std::ios::binary | std::ios::trunc) << input.substr(0, n);
   std::fprintf(stderr, "%s\r", what.c_str());  // named before a crash; overwritten after
   LLVMFuzzerTestOneInput(reinterpret_cast<const std::uint8_t*>(input.data()), n);
 }
@@ -82,6 +87,8 @@ int main(int argc, char** argv) {
     const std::string a = argv[i];
     if (a.rfind("-mutations=", 0) == 0) {
       mutations = std::strtol(a.c_str() + 11, nullptr, 10);
+    } else if (a.rfind("-keep=", 0) == 0) {
+      keep_file = a.substr(6);
     } else if (a.rfind("-seed=", 0) == 0) {
       seed = std::strtoull(a.c_str() + 6, nullptr, 10);
     } else if (fs::is_directory(a)) {
@@ -96,7 +103,7 @@ int main(int argc, char** argv) {
   }
   std::sort(inputs.begin(), inputs.end());
   if (inputs.empty()) {
-    std::fprintf(stderr, "usage: %s [-mutations=N] [-seed=S] DIR_OR_FILE...  (no input found)\n", argv[0]);
+    std::fprintf(stderr, "usage: %s [-mutations=N] [-seed=S] [-keep=FILE] DIR_OR_FILE...  (no input found)\n", argv[0]);
     return 1;
   }
   std::uint64_t rng = seed;
