@@ -415,3 +415,12 @@ TEST(Rosbag1, IndexRecordLengthBeyondTheEndIsRefusedBeforeOpening) {
   EXPECT_NE(msg.find("byte 28332: an index record's header declares 2173771485 bytes, but the file ends at byte 33316"),
             std::string::npos) << msg;
 }
+
+// An MCAP file the fuzz target found: a chunk declaring an uncompressed size its stored bytes
+// cannot hold is refused with its place before the size is allocated (was std::bad_alloc).
+TEST(Rosbag2Mcap, ChunkDeclaringMoreThanItsBytesHoldIsRefused) {
+  const fs::path mcap = stend::testing::source_path("fuzz/regressions/import_rosbag2_mcap/chunk_declares_huge_size.mcap");
+  const std::string msg = import_error([&] { stend::io::import_rosbag2(mcap); });
+  EXPECT_NE(msg.find("uncompressed bytes, more than its"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("(damaged header)"), std::string::npos) << msg;
+}
