@@ -6,7 +6,9 @@
 #include "import_common.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <deque>
+#include <limits>
 #include <map>
 #include <optional>
 #include <set>
@@ -207,14 +209,28 @@ struct DfUnits {
   std::map<std::uint8_t, std::pair<std::string, std::string>> by_type;  // FMTU: unit ids, mult ids
 };
 
+// Column c of message `msg` as an integer of type T; fails naming the column and its value when
+// the message holds something else there (a damaged or mis-declared message).
+template <class T>
+T integer_value(const BinaryReader& f, const DfFormat& fmt, std::size_t msg, std::size_t c) {
+  const double v = value(f, fmt, msg, c);
+  const double lo = static_cast<double>(std::numeric_limits<T>::min());
+  const double end = static_cast<double>(std::numeric_limits<T>::max()) + 1.0;  // exact: a power of two
+  if (!(v >= lo && v < end) || v != std::floor(v)) {
+    f.fail(msg, "'" + fmt.name + "." + fmt.columns[c] + "' is " + fmt_g(v) + ", not an integer in [" + fmt_g(lo) +
+                    ", " + fmt_g(end) + ")");
+  }
+  return static_cast<T>(v);
+}
+
 // A UNIT, MULT or FMTU message into `u` (a later one of the same id replaces an earlier one).
 void read_unit(const BinaryReader& f, const DfFormat& fmt, std::size_t m, DfUnits& u) {
   if (fmt.name == "UNIT") {
-    u.labels[static_cast<char>(value(f, fmt, m, required_column(f, fmt, "Id")))] = text(f, fmt, m, required_column(f, fmt, "Label"));
+    u.labels[integer_value<char>(f, fmt, m, required_column(f, fmt, "Id"))] = text(f, fmt, m, required_column(f, fmt, "Label"));
   } else if (fmt.name == "MULT") {
-    u.mults[static_cast<char>(value(f, fmt, m, required_column(f, fmt, "Id")))] = value(f, fmt, m, required_column(f, fmt, "Mult"));
+    u.mults[integer_value<char>(f, fmt, m, required_column(f, fmt, "Id"))] = value(f, fmt, m, required_column(f, fmt, "Mult"));
   } else if (fmt.name == "FMTU") {
-    u.by_type[static_cast<std::uint8_t>(value(f, fmt, m, required_column(f, fmt, "FmtType")))] = {
+    u.by_type[integer_value<std::uint8_t>(f, fmt, m, required_column(f, fmt, "FmtType"))] = {
         text(f, fmt, m, required_column(f, fmt, "UnitIds")), text(f, fmt, m, required_column(f, fmt, "MultIds"))};
   }
 }
@@ -253,7 +269,7 @@ double si_factor(const BinaryReader& f, const DfUnits& u, const DfFormat& fmt, s
 
 // One IMU message's instance: its I column, else the message name (IMU, IMU2, IMU3 → 0, 1, 2).
 int instance_of(const BinaryReader& f, const DfFormat& fmt, std::size_t msg) {
-  if (const auto c = column(fmt, "I")) return static_cast<int>(value(f, fmt, msg, *c));
+  if (const auto c = column(fmt, "I")) return integer_value<int>(f, fmt, msg, *c);
   return fmt.name == "IMU" ? 0 : fmt.name[3] - '1';
 }
 
@@ -400,7 +416,7 @@ void import_dataflash(const fs::path& file, const DataflashOptions& opt, Recordi
     if (!m.fmt || !is_imu(m.fmt->name) || instance_of(f, *m.fmt, m.offset) != instance) continue;
     const DfFormat& fmt = *m.fmt;
     const ImuColumns& c = columns.at(fmt.index);
-    const auto t_us = static_cast<std::uint64_t>(value(f, fmt, m.offset, c.time));
+    const auto t_us = integer_value<std::uint64_t>(f, fmt, m.offset, c.time);
     if (count == 0) t0_us = t_us;
     ImuSample s;
     s.t_s = seconds_since_us(t0_us, t_us);

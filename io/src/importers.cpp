@@ -440,7 +440,10 @@ ImucalRow imucal_row(const LineReader& r, const std::vector<std::string_view>& f
   row.part = unquote(f[c.index[0]]);
   if (row.part.empty()) r.fail("empty 'part'");
   const double idx = number(r, f[c.index[1]], "samples");
-  if (idx < 0 || idx != std::floor(idx)) r.fail("'samples' must be a non-negative integer index");
+  constexpr double kMaxIndex = 9007199254740992.0;  // 2^53: every integer up to it is exact in a double
+  if (!(idx >= 0 && idx <= kMaxIndex) || idx != std::floor(idx)) {
+    r.fail("'samples' must be a non-negative integer index (at most 2^53)");
+  }
   row.index = static_cast<std::int64_t>(idx);
   for (std::size_t k = 0; k < 6; ++k) {
     row.counts[k] = to_counts(r, number(r, f[c.index[k + 2]], kImucalColumns[k + 2]), kImucalColumns[k + 2]);
@@ -1151,16 +1154,52 @@ std::string text(const matvar_t* v) {
   return s;
 }
 
+// Refuses a MAT v5 file whose top-level elements (8-byte tag: uint32 data type, uint32 byte
+// count) are not matrices or compressed matrices lying inside the file, before matio allocates
+// a declared length. v7.3 files (HDF5, version 0x0200) are left to matio.
+void check_mat5_elements(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::string header(128, '\0');
+  if (!in.read(header.data(), 128)) return;  // matio says why it cannot open it
+  const bool swap = header[126] == 'M' && header[127] == 'I';
+  const auto u32 = [swap](const char* p) {
+    std::uint8_t b[4];
+    std::memcpy(b, p, 4);
+    if (swap) std::swap(b[0], b[3]), std::swap(b[1], b[2]);
+    return static_cast<std::uint32_t>(b[0] | b[1] << 8 | b[2] << 16 | static_cast<std::uint32_t>(b[3]) << 24);
+  };
+  const std::uint32_t version = swap ? static_cast<std::uint8_t>(header[124]) << 8 | static_cast<std::uint8_t>(header[125])
+                                     : static_cast<std::uint8_t>(header[125]) << 8 | static_cast<std::uint8_t>(header[124]);
+  if (version != 0x0100) return;
+  constexpr std::uint32_t kMiMatrix = 14, kMiCompressed = 15;
+  const std::uint64_t size = fs::file_size(file);
+  for (std::uint64_t pos = 128; pos + 8 <= size;) {
+    char tag[8];
+    in.seekg(static_cast<std::streamoff>(pos));
+    in.read(tag, 8);
+    const std::uint32_t type = u32(tag), bytes = u32(tag + 4);
+    if ((type != kMiMatrix && type != kMiCompressed) || bytes > size - pos - 8) {
+      throw ImportError(file, ByteOffset{pos},
+                        "a top-level element of data type " + std::to_string(type) + " declares " +
+                            std::to_string(bytes) + " bytes; expected a matrix (14) or compressed matrix (15) "
+                            "inside the file, which ends at byte " + std::to_string(size) + " (damaged or truncated .mat)");
+    }
+    pos += 8 + bytes + (type == kMiMatrix ? (8 - bytes % 8) % 8 : 0);
+  }
+}
+
 // The variables of the file (top level or one struct's fields), by name.
 class MatSource {
  public:
   MatSource(const fs::path& file, const std::string& struct_name) : file_(file) {
+    check_mat5_elements(file);
     mat_.reset(Mat_Open(file.c_str(), MAT_ACC_RDONLY));
     if (!mat_) throw ImportError(file, 0, "matio cannot open it as a MATLAB file (missing, or not a .mat)");
     std::size_t n = 0;
     char** dir = Mat_GetDir(mat_.get(), &n);
     if (!dir) throw ImportError(file, 0, "matio cannot list its variables");
     std::vector<std::string> names(dir, dir + n);
+    for (const auto& nm : names) check_declared_size(nm);
     if (!struct_name.empty()) {
       root_.reset(Mat_VarRead(mat_.get(), struct_name.c_str()));
       if (!root_ || root_->class_type != MAT_C_STRUCT) {
@@ -1185,6 +1224,21 @@ class MatSource {
       }
     }
   }
+  // Refuses a variable whose header declares more data than the file can hold (compressed
+  // variables: zlib's largest expansion, about 1032:1) before matio allocates it.
+  void check_declared_size(const std::string& name) const {
+    MatVar info(Mat_VarReadInfo(mat_.get(), name.c_str()));
+    if (!info) return;  // unreadable: Mat_VarRead says so, or skips it
+    const double file_bytes = static_cast<double>(fs::file_size(file_));
+    const double declared = static_cast<double>(Mat_VarGetSize(info.get()));
+    constexpr double kMaxExpansion = 1032.0;
+    if (declared > kMaxExpansion * file_bytes + 4096.0) {
+      throw ImportError(file_, 0, "variable '" + name + "' declares " + std::to_string(Mat_VarGetSize(info.get())) +
+                                      " bytes of data, more than a file of " + std::to_string(fs::file_size(file_)) +
+                                      " bytes can hold (damaged header?)");
+    }
+  }
+
   const matvar_t* get(std::initializer_list<const char*> names) const {
     for (const char* n : names) {
       if (root_) {

@@ -200,6 +200,36 @@ std::uint64_t index_position(const fs::path& file) {
   return 0;
 }
 
+// Refuses a bag whose index section (the records from index_pos to the end: uint32 header length,
+// header, uint32 data length, data) declares a length beyond the end of the file, before
+// librosbag allocates that length. A bag whose index_pos is not inside the file is left to
+// open_failed, which says why.
+void check_index_lengths(const fs::path& path) {
+  std::error_code ec;
+  const std::uint64_t size = fs::file_size(path, ec);
+  std::uint64_t pos = index_position(path);
+  if (ec || pos == 0 || pos >= size) return;
+  std::ifstream in(path, std::ios::binary);
+  while (pos < size) {
+    for (const char* part : {"header", "data"}) {
+      std::uint8_t b[4] = {};
+      in.seekg(static_cast<std::streamoff>(pos));
+      if (size - pos < 4 || !in.read(reinterpret_cast<char*>(b), 4)) {
+        throw ImportError(path, "byte " + std::to_string(pos),
+                          std::string("index record ") + part + " length cut off by the end of the file at byte " +
+                              std::to_string(size) + " (truncated or damaged)");
+      }
+      const std::uint32_t n = b[0] | b[1] << 8 | b[2] << 16 | static_cast<std::uint32_t>(b[3]) << 24;
+      if (n > size - pos - 4) {
+        throw ImportError(path, "byte " + std::to_string(pos),
+                          std::string("an index record's ") + part + " declares " + std::to_string(n) +
+                              " bytes, but the file ends at byte " + std::to_string(size) + " (truncated or damaged)");
+      }
+      pos += 4 + n;
+    }
+  }
+}
+
 // Why librosbag could not open the bag, with the offsets that explain it.
 [[noreturn]] void open_failed(const fs::path& path, const std::exception& e) {
   std::error_code ec;
@@ -229,6 +259,7 @@ void import_rosbag1(const fs::path& path, const RosbagOptions& options, Recordin
   if (!looks_like_rosbag1(path)) {
     throw ImportError(path, "byte 0", "not a ROS 1 bag: expected the magic line '#ROSBAG V2.0'");
   }
+  check_index_lengths(path);
   rosbag::Bag bag;
   try {
     bag.open(path.string(), rosbag::bagmode::Read);

@@ -26,6 +26,7 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -406,6 +407,7 @@ class McapFile final : public StorageFile {
       records_.assign(in, in + in_size);
       return;
     }
+    check_declared_size(in, in_size, compression, size, where);
     records_.resize(size);
     if (compression == "zstd") {
       const std::size_t n = ZSTD_decompress(records_.data(), records_.size(), in, in_size);
@@ -417,6 +419,23 @@ class McapFile final : public StorageFile {
     }
     if (compression == "lz4") return lz4_frame(in, in_size, size, where);
     throw ImportError(file, where, "chunk compression '" + compression + "', expected none, lz4 or zstd");
+  }
+
+  // Refuses a declared uncompressed size the stored bytes cannot produce, before allocating it:
+  // a zstd frame states its content size (when it does, the two must agree); lz4 expands at most
+  // 255:1.
+  void check_declared_size(const std::uint8_t* in, std::uint64_t in_size, const std::string& compression,
+                           std::uint64_t size, const std::string& where) const {
+    std::uint64_t most = 255 * in_size + 64;  // lz4, and a zstd frame that does not state its size
+    if (compression == "zstd") {
+      const unsigned long long framed = ZSTD_getFrameContentSize(in, in_size);
+      if (framed != ZSTD_CONTENTSIZE_UNKNOWN && framed != ZSTD_CONTENTSIZE_ERROR) most = framed;
+      else if (framed == ZSTD_CONTENTSIZE_UNKNOWN) most = std::numeric_limits<std::uint32_t>::max();
+    }
+    if (size > most) {
+      throw ImportError(in_.file(), where, "chunk declares " + std::to_string(size) + " uncompressed bytes, more than its " +
+                                               std::to_string(in_size) + " " + compression + " bytes can hold (damaged header)");
+    }
   }
 
   void lz4_frame(const std::uint8_t* in, std::uint64_t in_size, std::uint64_t size, const std::string& where) {

@@ -4,6 +4,7 @@
 #include "import_common.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <limits>
 #include <map>
@@ -374,6 +375,15 @@ class RecordView {
     f_.fail(r_.offset, "field '" + name + "' of '" + fmt_.name + "' is a nested type, expected a number");
   }
 
+  // A 32-bit device id field; fails when the record holds a value that is not one.
+  std::uint32_t id(const std::string& name) const {
+    const double v = number(name);
+    if (!(v >= 0.0 && v <= 4294967295.0) || v != std::floor(v)) {
+      f_.fail(r_.offset, "field '" + name + "' of '" + fmt_.name + "' is " + fmt_g(v) + ", not a 32-bit id");
+    }
+    return static_cast<std::uint32_t>(v);
+  }
+
   std::uint64_t timestamp(const std::string& name) const {
     const Field& fld = field(name, 0);
     if (fld.basic != Basic::kUInt64) {
@@ -559,7 +569,7 @@ std::optional<std::uint32_t> device_id(const BinaryReader& f, const UlogLog& log
   const Format& fmt = log.formats.at(topic);
   const auto r = first_record(log, topic, instance);
   if (!r || !find_field(fmt, "device_id")) return std::nullopt;
-  return static_cast<std::uint32_t>(RecordView(f, fmt, *r).number("device_id"));
+  return RecordView(f, fmt, *r).id("device_id");
 }
 
 // sensor_combined: the devices sensor_selection names (its first message) as the accel's and
@@ -575,8 +585,8 @@ void add_selected_devices(const BinaryReader& f, const UlogLog& log, UlogChoice&
   }
   {
     const RecordView v(f, *fmt, *sel->second.first);
-    c.acc_device_id = static_cast<std::uint32_t>(v.number("accel_device_id"));
-    c.gyr_device_id = static_cast<std::uint32_t>(v.number("gyro_device_id"));
+    c.acc_device_id = v.id("accel_device_id");
+    c.gyr_device_id = v.id("gyro_device_id");
   }
   const bool has_temperature = log.formats.count("sensor_accel") &&
                                find_field(log.formats.at("sensor_accel"), "temperature") != nullptr;

@@ -480,3 +480,19 @@ TEST(ImportStrictRows, LongFieldsAreCutInMessages) {
   EXPECT_NE(e.find("rows.csv:4: column 'az'"), std::string::npos) << e;
   EXPECT_LT(e.size(), 400u) << e.size();
 }
+
+// Inputs the fuzz targets found (fuzz/regressions/, replayed by the fuzz ctests): each is a clear
+// ImportError naming the place, not undefined behaviour or a multi-gigabyte allocation.
+TEST(ImportImucal, SampleIndexBeyondExactIntegersIsAnError) {
+  const fs::path csv = stend::testing::source_path("fuzz/regressions/import_imucal/samples_index_1e101.csv");
+  const std::string msg = error_of([&] { import_imucal_session(csv); });
+  EXPECT_NE(msg.find("samples_index_1e101.csv:19: 'samples' must be a non-negative integer index (at most 2^53)"),
+            std::string::npos) << msg;
+}
+
+TEST(ImportMat, ElementDeclaredBeyondTheEndIsRefusedBeforeMatioReadsIt) {
+  const fs::path mat = stend::testing::source_path("fuzz/regressions/import_mat/element_beyond_end.mat");
+  const std::string msg = error_of([&] { import_mat(mat); });
+  EXPECT_NE(msg.find("byte 264: a top-level element of data type 65536 declares 65536 bytes"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("ends at byte 1010"), std::string::npos) << msg;
+}

@@ -556,3 +556,20 @@ TEST(ImportEuroc, BadFiles) {
   e = error_of([&] { import_euroc(dir / "ns.csv"); });
   EXPECT_NE(e.what.find("ns.csv:2: timestamp '1.4e18' is not an integer [ns]"), std::string::npos) << e.what;
 }
+
+// Inputs the fuzz targets found (fuzz/regressions/, replayed by the fuzz ctests): an id field
+// holding a value its integer type cannot take is a clear ImportError at the record, not
+// undefined behaviour.
+TEST(ImportUlog, DeviceIdOutOfRangeIsAnError) {
+  const fs::path log = stend::testing::source_path("fuzz/regressions/import_ulog/device_id_out_of_range.ulg");
+  const Caught c = error_of([&] { stend::io::import_ulog(log); });
+  EXPECT_NE(c.what.find("byte 436: field 'device_id' of 'sensor_accel' is 1.47718e+19, not a 32-bit id"),
+            std::string::npos) << c.what;
+}
+
+TEST(ImportDataflash, UnitIdOutOfRangeIsAnError) {
+  const fs::path log = stend::testing::source_path("fuzz/regressions/import_dataflash/unit_id_out_of_range.BIN");
+  const Caught c = error_of([&] { stend::io::import_dataflash(log); });
+  EXPECT_NE(c.what.find("byte 741: 'FMTU.FmtType' is 1.16733e+19, not an integer in [0, 256)"), std::string::npos)
+      << c.what;
+}

@@ -406,3 +406,21 @@ TEST_F(Rosbag2, BadFilesNameFileAndPlace) {
 }
 
 }  // namespace
+
+// A bag the fuzz target found (fuzz/regressions/, replayed by the fuzz ctests): an index record
+// declaring a 2 GB header is refused with its offset before librosbag allocates it.
+TEST(Rosbag1, IndexRecordLengthBeyondTheEndIsRefusedBeforeOpening) {
+  const fs::path bag = stend::testing::source_path("fuzz/regressions/import_rosbag1/index_header_2GB.bag");
+  const std::string msg = import_error([&] { stend::io::import_rosbag1(bag); });
+  EXPECT_NE(msg.find("byte 28332: an index record's header declares 2173771485 bytes, but the file ends at byte 33316"),
+            std::string::npos) << msg;
+}
+
+// An MCAP file the fuzz target found: a chunk declaring an uncompressed size its stored bytes
+// cannot hold is refused with its place before the size is allocated (was std::bad_alloc).
+TEST(Rosbag2Mcap, ChunkDeclaringMoreThanItsBytesHoldIsRefused) {
+  const fs::path mcap = stend::testing::source_path("fuzz/regressions/import_rosbag2_mcap/chunk_declares_huge_size.mcap");
+  const std::string msg = import_error([&] { stend::io::import_rosbag2(mcap); });
+  EXPECT_NE(msg.find("uncompressed bytes, more than its"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("(damaged header)"), std::string::npos) << msg;
+}
