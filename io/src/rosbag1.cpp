@@ -200,34 +200,46 @@ std::uint64_t index_position(const fs::path& file) {
   return 0;
 }
 
-// Refuses a bag whose index section (the records from index_pos to the end: uint32 header length,
-// header, uint32 data length, data) declares a length beyond the end of the file, before
-// librosbag allocates that length. A bag whose index_pos is not inside the file is left to
-// open_failed, which says why.
-void check_index_lengths(const fs::path& path) {
+// Refuses a bag whose file header record or index section (the records from index_pos to the
+// end) declares a length beyond its bounds, before librosbag allocates or parses it: each record
+// is uint32 header length, header (fields: uint32 length, "name=value"), uint32 data length,
+// data. The index section of a bag whose index_pos is not inside the file is left to open_failed,
+// which says why.
+void check_record_lengths(const fs::path& path) {
   std::error_code ec;
   const std::uint64_t size = fs::file_size(path, ec);
-  std::uint64_t pos = index_position(path);
-  if (ec || pos == 0 || pos >= size) return;
+  const std::uint64_t index = index_position(path);
+  if (ec) return;
   std::ifstream in(path, std::ios::binary);
-  while (pos < size) {
-    for (const char* part : {"header", "data"}) {
-      std::uint8_t b[4] = {};
-      in.seekg(static_cast<std::streamoff>(pos));
-      if (size - pos < 4 || !in.read(reinterpret_cast<char*>(b), 4)) {
-        throw ImportError(path, "byte " + std::to_string(pos),
-                          std::string("index record ") + part + " length cut off by the end of the file at byte " +
-                              std::to_string(size) + " (truncated or damaged)");
-      }
-      const std::uint32_t n = b[0] | b[1] << 8 | b[2] << 16 | static_cast<std::uint32_t>(b[3]) << 24;
-      if (n > size - pos - 4) {
-        throw ImportError(path, "byte " + std::to_string(pos),
-                          std::string("an index record's ") + part + " declares " + std::to_string(n) +
-                              " bytes, but the file ends at byte " + std::to_string(size) + " (truncated or damaged)");
-      }
-      pos += 4 + n;
+  // `what` reaches past `end` (the end of the file, or of the record's header).
+  auto fail = [&](std::uint64_t at, const std::string& what, std::uint64_t end) {
+    throw ImportError(path, "byte " + std::to_string(at),
+                      what + ", past the end of the " + (end == size ? "file" : "record header") + " at byte " +
+                          std::to_string(end) + " (truncated or damaged)");
+  };
+  auto u32_at = [&](std::uint64_t at, std::uint64_t end, const char* what) {
+    std::uint8_t b[4] = {};
+    in.seekg(static_cast<std::streamoff>(at));
+    if (end < at + 4 || !in.read(reinterpret_cast<char*>(b), 4)) fail(at, std::string(what) + " length cut off", end);
+    return static_cast<std::uint32_t>(b[0] | b[1] << 8 | b[2] << 16 | static_cast<std::uint32_t>(b[3]) << 24);
+  };
+  // One record at `pos`: its header's fields and its data inside the file; returns the next record's position.
+  auto record = [&](std::uint64_t pos) {
+    const std::uint32_t header = u32_at(pos, size, "record header");
+    if (header > size - pos - 4) fail(pos, "a record's header declares " + std::to_string(header) + " bytes", size);
+    const std::uint64_t end = pos + 4 + header;
+    for (std::uint64_t at = pos + 4; at < end;) {
+      const std::uint32_t field = u32_at(at, end, "header field");
+      if (field > end - at - 4) fail(at, "a header field declares " + std::to_string(field) + " bytes", end);
+      at += 4 + field;
     }
-  }
+    const std::uint32_t data = u32_at(end, size, "record data");
+    if (data > size - end - 4) fail(end, "a record's data declares " + std::to_string(data) + " bytes", size);
+    return end + 4 + data;
+  };
+  record(sizeof kMagic - 1);  // the file header record
+  if (index == 0 || index >= size) return;
+  for (std::uint64_t pos = index; pos < size;) pos = record(pos);
 }
 
 // Why librosbag could not open the bag, with the offsets that explain it.
@@ -259,7 +271,7 @@ void import_rosbag1(const fs::path& path, const RosbagOptions& options, Recordin
   if (!looks_like_rosbag1(path)) {
     throw ImportError(path, "byte 0", "not a ROS 1 bag: expected the magic line '#ROSBAG V2.0'");
   }
-  check_index_lengths(path);
+  check_record_lengths(path);
   rosbag::Bag bag;
   try {
     bag.open(path.string(), rosbag::bagmode::Read);

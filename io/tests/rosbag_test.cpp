@@ -407,13 +407,21 @@ TEST_F(Rosbag2, BadFilesNameFileAndPlace) {
 
 }  // namespace
 
-// A bag the fuzz target found (fuzz/regressions/, replayed by the fuzz ctests): an index record
-// declaring a 2 GB header is refused with its offset before librosbag allocates it.
+// Bags the fuzz target found (fuzz/regressions/, replayed by the fuzz ctests): a length beyond its
+// bounds is refused with its offset before librosbag allocates 2 GB for an index record's header,
+// or reads past a header (heap-buffer-overflow in ros::Header::parse).
 TEST(Rosbag1, IndexRecordLengthBeyondTheEndIsRefusedBeforeOpening) {
   const fs::path bag = stend::testing::source_path("fuzz/regressions/import_rosbag1/index_header_2GB.bag");
   const std::string msg = import_error([&] { stend::io::import_rosbag1(bag); });
-  EXPECT_NE(msg.find("byte 28332: an index record's header declares 2173771485 bytes, but the file ends at byte 33316"),
+  EXPECT_NE(msg.find("byte 28332: a record's header declares 2173771485 bytes, past the end of the file at byte 33316"),
             std::string::npos) << msg;
+}
+
+TEST(Rosbag1, HeaderFieldBeyondItsHeaderIsRefusedBeforeOpening) {
+  const fs::path bag = stend::testing::source_path("fuzz/regressions/import_rosbag1/header_field_beyond_record.bag");
+  const std::string msg = import_error([&] { stend::io::import_rosbag1(bag); });
+  EXPECT_NE(msg.find("a header field declares"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("past the end of the record header at byte"), std::string::npos) << msg;
 }
 
 // An MCAP file the fuzz target found: a chunk declaring an uncompressed size its stored bytes
