@@ -23,6 +23,7 @@ namespace {
 
 std::atomic<bool> g_stop{false};
 
+using stend::cli::ExitCode;
 using stend::cli::fit_recording;
 
 extern "C" void on_sigint(int) {
@@ -47,14 +48,14 @@ void scan_plugins(stend::PluginHost& host, const std::vector<std::string>& extra
   host.scan(stend::PluginHost::default_search_path(extra));
 }
 
-int cmd_plugins(const std::vector<std::string>& paths) {
+ExitCode cmd_plugins(const std::vector<std::string>& paths) {
   stend::PluginHost host;
   scan_plugins(host, paths);
   std::cout << host.describe();
-  return 0;
+  return ExitCode::kOk;
 }
 
-int cmd_validate(const std::string& file) {
+ExitCode cmd_validate(const std::string& file) {
   stend::PluginHost host;
   scan_plugins(host, stend::experiment_plugin_paths(file));
   const stend::Experiment exp = stend::load_experiment(file, host);
@@ -64,7 +65,7 @@ int cmd_validate(const std::string& file) {
   fmt::print("{}: ok — experiment '{}', sensor {}, {} fixture(s), {} step(s), {} orientation(s), g = {:.6f} m/s^2\n",
              file, exp.name, exp.sensor.plugin, exp.fixtures.size(), exp.procedure.size(), orientations,
              exp.gravity.resolved_mps2);
-  return 0;
+  return ExitCode::kOk;
 }
 
 void print_progress(const stend::RunProgress& p, bool tty) {
@@ -78,7 +79,7 @@ void print_progress(const stend::RunProgress& p, bool tty) {
   std::fflush(stderr);
 }
 
-int cmd_run(const std::string& file, const std::string& output, const std::string& name, const std::string& clock,
+ExitCode cmd_run(const std::string& file, const std::string& output, const std::string& name, const std::string& clock,
             const std::string& store, bool quiet) {
   stend::PluginHost host;
   scan_plugins(host, stend::experiment_plugin_paths(file));
@@ -106,20 +107,21 @@ int cmd_run(const std::string& file, const std::string& output, const std::strin
   fmt::print("status:     {}{}\n", stend::to_string(r.status), r.message.empty() ? "" : " — " + r.message);
   fmt::print("recorded:   {} samples, {} segments, {} of run time in {:.2f} s wall ({:.0f}x real time)\n", r.samples,
              r.segments, fmt_duration(r.run_time_s), r.wall_time_s, r.wall_time_s > 0 ? r.run_time_s / r.wall_time_s : 0.0);
-  if (r.status != stend::RunStatus::kComplete) return r.status == stend::RunStatus::kInterrupted ? 130 : 1;
+  if (r.status != stend::RunStatus::kComplete)
+    return r.status == stend::RunStatus::kInterrupted ? ExitCode::kStopped : ExitCode::kIoFailure;
   if (exp.estimation && exp.estimation["model"]) {
     // The experiment names its model: fit it now, relative paths from the experiment's folder.
     std::filesystem::path model = exp.estimation["model"].as<std::string>();
     if (model.is_relative()) model = std::filesystem::path(file).parent_path() / model;
     fmt::print("\n");
-    if (!fit_recording(stend::Recording::open(r.dir, stend::SampleLoading::kStream), model.string(), r.dir, "")) return 3;
+    if (!fit_recording(stend::Recording::open(r.dir, stend::SampleLoading::kStream), model.string(), r.dir, ""))
+      return ExitCode::kFitFailed;
   }
-  const auto report = stend::cli::write_run_report(r.dir);
-  if (!report.empty()) fmt::print("report:     {}\n", report.string());
-  return 0;
+  fmt::print("report:     {}\n", stend::cli::write_run_report(r.dir).string());
+  return ExitCode::kOk;
 }
 
-int cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, const std::string& json,
+ExitCode cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, const std::string& json,
             const std::string& estimator) {
   // A run opened for an estimator that needs no bench truth (allan) leaves the truth in the store.
   const stend::Recording rec =
@@ -128,11 +130,11 @@ int cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, const
           : data.open();
   return fit_recording(rec, model, data.is_run() ? std::filesystem::path(data.inputs[0]) : std::filesystem::path(),
                        json, estimator)
-             ? 0
-             : 3;
+             ? ExitCode::kOk
+             : ExitCode::kFitFailed;
 }
 
-int cmd_info(const std::string& dir) {
+ExitCode cmd_info(const std::string& dir) {
   // Header, extents and the first and last samples only: no scan of the samples.
   const stend::Recording rec =
       stend::Recording::open(dir, stend::SampleLoading::kStream, stend::TruthLoading::kSkip);
@@ -160,7 +162,7 @@ int cmd_info(const std::string& dir) {
     fmt::print("  #{:<3} {:<15} {:>7.2f}–{:<8.2f} s {}{}{}  {}\n", s.id, stend::to_string(s.kind), s.t_start_s, s.t_end_s,
                s.settled ? "" : "[unsettled] ", s.complete ? "" : "[incomplete] ", s.label, s.targets);
   for (const auto& e : rec.events) fmt::print("  event {:.3f} s {} {}: {}\n", e.t_s, e.level, e.source, e.message);
-  return 0;
+  return ExitCode::kOk;
 }
 
 }  // namespace
@@ -213,21 +215,24 @@ int main(int argc, char** argv) {
   stend::cli::add_import_command(app, commands);
   stend::cli::add_apply_command(app, commands);
 
-  CLI11_PARSE(app, argc, argv);
   try {
-    for (const auto& c : commands)
-      if (*c.sub) return c.run();
-    if (*plugins) return cmd_plugins(plugin_paths);
-    if (*validate) return cmd_validate(file);
-    if (*run) return cmd_run(file, output, name, clock, store, quiet);
-    if (*info) return cmd_info(dir);
-    if (*fit) return cmd_fit(fit_data, model, json, estimator);
-  } catch (const stend::ExperimentError& e) {
-    fmt::print(stderr, "{}\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    fmt::print(stderr, "error: {}\n", e.what());
-    return 1;
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version end here too (exit code 0 from CLI11); every other parse error is usage.
+    return app.exit(e) == 0 ? to_int(ExitCode::kOk) : to_int(ExitCode::kUsage);
   }
-  return 0;
+  return to_int([&] {
+    try {
+      for (const auto& c : commands)
+        if (*c.sub) return c.run();
+      if (*plugins) return cmd_plugins(plugin_paths);
+      if (*validate) return cmd_validate(file);
+      if (*run) return cmd_run(file, output, name, clock, store, quiet);
+      if (*info) return cmd_info(dir);
+      if (*fit) return cmd_fit(fit_data, model, json, estimator);
+    } catch (...) {
+      return stend::cli::exit_code_of_current_exception();
+    }
+    return ExitCode::kOk;
+  }());
 }

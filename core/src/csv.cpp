@@ -1,5 +1,7 @@
 #include "stend/csv.hpp"
 
+#include "stend/errors.hpp"
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -212,7 +214,7 @@ bool Reader::fill() {
     const ssize_t n = ::read(fd_, buf_.data() + end_, buf_.size() - end_);
     if (n < 0) {
       if (errno == EINTR) continue;
-      throw std::runtime_error(path_.string() + ": read failed: " + std::strerror(errno));
+      throw IoError(path_.string() + ": read failed: " + std::strerror(errno));
     }
     if (n == 0) {
       eof_ = true;

@@ -79,7 +79,7 @@ void import_euroc(const fs::path& path, const EurocOptions& opt, Recording& rec,
     const auto f = split(line, ',');
     if (f.size() != 7) r.fail("expected 7 fields (timestamp, 3 gyro, 3 accel), found " + std::to_string(f.size()));
     std::int64_t t_ns = 0;
-    if (!parse_ns(f[0], t_ns)) r.fail("timestamp '" + std::string(f[0]) + "' is not an integer [ns]");
+    if (!parse_ns(f[0], t_ns)) r.fail("timestamp '" + excerpt(f[0]) + "' is not an integer [ns]");
     if (count++ == 0) t0_ns = t_ns;
     ImuSample s;
     s.t_s = static_cast<double>(t_ns - t0_ns) * 1e-9;  // difference first: ns since 1970 exceed a double's 53 bits
