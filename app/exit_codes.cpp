@@ -5,6 +5,7 @@
 #include "stend/devices/modbus_rtu.hpp"
 #include "stend/devices/text_command.hpp"
 #include "stend/errors.hpp"
+#include "stend/experiment.hpp"
 #include "stend/sdk.hpp"
 
 #include <fmt/format.h>
