@@ -6,6 +6,7 @@
 #include "stend/calibration/calibration.hpp"
 #include "stend/calibration/validation.hpp"
 #include "stend/estimators/builtin.hpp"
+#include "stend/physics/gravity.hpp"
 
 #include <fmt/format.h>
 
@@ -44,11 +45,13 @@ struct ApplyArgs {
   calibration::ValidationOptions options;
 };
 
-int run_apply(const ApplyArgs& a) {
+ExitCode run_apply(const ApplyArgs& a) {
   const calibration::Calibration cal = calibration::load_calibration(results_file(a.cal));
   const bool validating = a.validate || !a.rotations.empty() || a.options.rebias_from_start_s > 0.0;
-  if (a.output.empty() && !validating)
-    throw std::invalid_argument("nothing to do: give -o CALIBRATED to write the calibrated recording, and/or --validate");
+  if (a.output.empty() && !validating) {
+    fmt::print(stderr, "stend apply: nothing to do: give -o CALIBRATED to write the calibrated recording, and/or --validate\n");
+    return ExitCode::kUsage;
+  }
   calibration::ValidationOptions options = a.options;
   for (const auto& r : a.rotations) options.rotations.push_back(calibration::parse_expected_rotation(r));
   calibration::check_applicable(cal, options);  // before reading the recording or writing anything
@@ -71,7 +74,7 @@ int run_apply(const ApplyArgs& a) {
     calibration::write_calibrated(calibrated, cal, a.output);
     fmt::print("calibrated: {} ({} samples)\n", a.output, calibrated.sample_count());
   }
-  if (!validating) return 0;
+  if (!validating) return ExitCode::kOk;
   const calibration::ValidationReport report = calibration::validate(raw, calibrated, cal, options);
   std::ostringstream text;
   report.print(text);
@@ -79,7 +82,7 @@ int run_apply(const ApplyArgs& a) {
   fs::path json = a.json;
   if (json.empty() && !a.output.empty()) json = fs::path(a.output) / "validation.json";
   write_results(json, report.to_json(), text.str());
-  return report.ok ? 0 : 3;
+  return report.ok ? ExitCode::kOk : ExitCode::kFitFailed;
 }
 
 }  // namespace
@@ -98,18 +101,14 @@ void add_apply_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_option("--expect-rotation", a.rotations,
                   "AXIS:DEGREES, e.g. x:90: turns between still intervals to integrate and compare (repeatable)");
   sub->add_option("--rebias-from-start", a.options.rebias_from_start_s,
-                  "Re-estimate the gyro bias from the first S seconds (they must be still)");
-  sub->add_option("--gravity", a.options.gravity_mps2, "Local gravity [m/s^2] (default: the recording's)");
-  sub->add_option("--confidence", a.options.confidence, "Level of the turns' intervals (default 0.95)");
+                  "Re-estimate the gyro bias from the first S seconds (they must be still)")
+      ->check(above(0));
+  sub->add_option("--gravity", a.options.gravity_mps2, "Local gravity [m/s^2] (default: the recording's)")
+      ->check(within(physics::kMinPlausibleGravity_mps2, physics::kMaxPlausibleGravity_mps2));
+  sub->add_option("--confidence", a.options.confidence, "Level of the turns' intervals (default 0.95)")
+      ->check(strictly_within(0, 1));
   sub->add_option("--json", a.json, "Where to write the validation JSON (default CALIBRATED/validation.json)");
-  out.push_back({sub, [] {
-                   try {
-                     return run_apply(a);
-                   } catch (const std::invalid_argument& e) {
-                     fmt::print(stderr, "error: {}\n", e.what());
-                     return 2;
-                   }
-                 }});
+  out.push_back({sub, [] { return run_apply(a); }});
 }
 
 }  // namespace stend::cli

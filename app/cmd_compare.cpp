@@ -2,12 +2,12 @@
 // runs measured with the same procedure (same procedure fingerprint), and refuses otherwise.
 #include "commands.hpp"
 
+#include "stend/files.hpp"
 #include "stend/reporting/compare.hpp"
 #include "stend/reporting/results_db.hpp"
 
 #include <fmt/format.h>
 
-#include <fstream>
 #include <iostream>
 
 namespace stend::cli {
@@ -35,7 +35,7 @@ void add_compare_command(CLI::App& app, std::vector<Command>& out) {
                    if (runs.empty() && !fs::exists(dbfile)) {
                      fmt::print(stderr, "stend compare: no results database at {} (give --db, or run folders)\n",
                                 dbfile.string());
-                     return 2;
+                     return ExitCode::kInvalidInput;
                    }
                    rp::ResultsDb store(dbfile);
                    std::vector<rp::RunResults> selected;
@@ -49,7 +49,7 @@ void add_compare_command(CLI::App& app, std::vector<Command>& out) {
                        if (rr.dir.empty()) {
                          fmt::print(stderr, "stend compare: '{}' is neither a run folder nor a run in {}\n", r,
                                     dbfile.string());
-                         return 2;
+                         return ExitCode::kInvalidInput;
                        }
                        selected.push_back(std::move(rr));
                      }
@@ -59,7 +59,7 @@ void add_compare_command(CLI::App& app, std::vector<Command>& out) {
                      if (more.empty()) {
                        fmt::print(stderr, "stend compare: no run in {} has procedure fingerprint {}\n", dbfile.string(),
                                   procedure);
-                       return 2;
+                       return ExitCode::kInvalidInput;
                      }
                      for (auto& m : more) {
                        bool dup = false;
@@ -68,25 +68,14 @@ void add_compare_command(CLI::App& app, std::vector<Command>& out) {
                      }
                    }
                    if (runs.empty() && procedure.empty()) selected = store.all();
-                   rp::Comparison c;
-                   try {
-                     c = rp::compare_runs(selected);
-                   } catch (const rp::ComparisonRefused& e) {
-                     fmt::print(stderr, "stend compare: {}\n", e.what());
-                     return 2;
-                   }
+                   const rp::Comparison c = rp::compare_runs(selected);  // ComparisonRefused: an input error
                    std::cout << rp::comparison_text(c);
                    fs::path report = html;
                    if (report.empty())
                      report = fs::absolute(dbfile).parent_path() / fmt::format("compare-{}.html", c.fingerprint.substr(0, 16));
-                   std::ofstream f(report);
-                   f << rp::comparison_html(c);
-                   if (!f) {
-                     fmt::print(stderr, "stend compare: cannot write {}\n", report.string());
-                     return 1;
-                   }
+                   write_file_atomic(report, rp::comparison_html(c));
                    fmt::print("report:     {}\nresults db: {}\n", report.string(), dbfile.string());
-                   return 0;
+                   return ExitCode::kOk;
                  }});
 }
 

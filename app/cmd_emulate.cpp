@@ -9,6 +9,7 @@
 #include "commands.hpp"
 
 #include "stend/experiment.hpp"
+#include "stend/files.hpp"
 #include "stend/physics/gravity.hpp"
 #include "stend/plugin_host.hpp"
 
@@ -26,6 +27,8 @@
 
 namespace stend::cli {
 namespace {
+
+constexpr int kMaxPort = 65535;  // TCP
 
 std::atomic<bool> g_emulate_stop{false};
 extern "C" void on_emulate_signal(int) { g_emulate_stop.store(true); }
@@ -81,7 +84,7 @@ struct TableOpts {
 };
 
 // Serves a 1-axis (angle) or 3-axis (azimuth, tilt, rotation) text-command table.
-int run_table(const TableOpts& t) {
+ExitCode run_table(const TableOpts& t) {
   emu::TableTextConfig c;
   c.port = t.port;
   c.speed = t.speed;
@@ -93,18 +96,18 @@ int run_table(const TableOpts& t) {
               server.port());
   std::printf("  driver config: {preset: acutrol, host: 127.0.0.1, port: %d}\n", server.port());
   serve(t.duration);
-  return 0;
+  return ExitCode::kOk;
 }
 
 void add_table_command(CLI::App* sub, std::vector<Command>& out) {
   auto t = std::make_shared<TableOpts>();
   auto* table = sub->add_subcommand("table", "Rate table speaking the ACUTROL-style text dialect (docs/text-command-tables.md)");
   table->add_option("--axes", t->axes, "1 (angle) or 3 (azimuth, tilt, rotation)")->check(CLI::IsMember({1, 3}));
-  table->add_option("--port", t->port, "TCP port on 127.0.0.1 (0: any free port)");
-  table->add_option("--speed", t->speed, "emulated seconds per wall second");
-  table->add_option("--max-rate-dps", t->rate, "axis speed limit, deg/s");
-  table->add_option("--max-accel-dps2", t->accel, "axis acceleration limit, deg/s^2");
-  table->add_option("--duration-s", t->duration, "stop after this long (0: until Ctrl-C)");
+  table->add_option("--port", t->port, "TCP port on 127.0.0.1 (0: any free port)")->check(within(0, kMaxPort));
+  table->add_option("--speed", t->speed, "emulated seconds per wall second")->check(above(0));
+  table->add_option("--max-rate-dps", t->rate, "axis speed limit, deg/s")->check(above(0));
+  table->add_option("--max-accel-dps2", t->accel, "axis acceleration limit, deg/s^2")->check(above(0));
+  table->add_option("--duration-s", t->duration, "stop after this long (0: until Ctrl-C)")->check(at_least(0));
   out.push_back({table, [t] { return run_table(*t); }});
 }
 
@@ -145,7 +148,7 @@ void inject_fault(emu::ChamberServerBase& server, const std::string& fault) {
 }
 
 // Serves the chamber, injecting the fault (if any) after fault_after wall seconds.
-int run_chamber(const ChamberOpts& c) {
+ExitCode run_chamber(const ChamberOpts& c) {
   emu::ChamberEmuConfig ec;
   ec.plant.initial_c = c.initial;
   ec.speed = c.speed;
@@ -157,7 +160,7 @@ int run_chamber(const ChamberOpts& c) {
     injected = true;
     inject_fault(*server, c.fault);
   });
-  return 0;
+  return ExitCode::kOk;
 }
 
 void add_chamber_command(CLI::App* sub, std::vector<Command>& out) {
@@ -165,14 +168,16 @@ void add_chamber_command(CLI::App* sub, std::vector<Command>& out) {
   auto* chamber = sub->add_subcommand("chamber", "Thermochamber controller (docs/thermochamber-modbus.md) on the sim plant and the paper's PID");
   chamber->add_option("--protocol", c->protocol, "atmega328 (MODBUS RTU on a pty) | watlow_f4 (MODBUS TCP)")
       ->check(CLI::IsMember({"atmega328", "watlow_f4"}));
-  chamber->add_option("--port", c->port, "watlow_f4: TCP port on 127.0.0.1 (0: any free port)");
-  chamber->add_option("--speed", c->speed, "emulated seconds per wall second");
-  chamber->add_option("--initial-c", c->initial, "air temperature at power-on, degC");
+  chamber->add_option("--port", c->port, "watlow_f4: TCP port on 127.0.0.1 (0: any free port)")->check(within(0, kMaxPort));
+  chamber->add_option("--speed", c->speed, "emulated seconds per wall second")->check(above(0));
+  const sim::ThermochamberConfig plant;  // its setpoint limits bound the power-on temperature too
+  chamber->add_option("--initial-c", c->initial, "air temperature at power-on, degC")
+      ->check(within(plant.min_c, plant.max_c));
   chamber->add_flag("--published-firmware", c->published, "no sensor check, no trips (the paper's firmware)");
   chamber->add_option("--fault", c->fault, "inject: none | sensor_open | sensor_stuck | sensor_85 | runaway")
       ->check(CLI::IsMember({"none", "sensor_open", "sensor_stuck", "sensor_85", "runaway"}));
-  chamber->add_option("--fault-after-s", c->fault_after, "wall seconds before the fault");
-  chamber->add_option("--duration-s", c->duration, "stop after this long (0: until Ctrl-C)");
+  chamber->add_option("--fault-after-s", c->fault_after, "wall seconds before the fault")->check(at_least(0));
+  chamber->add_option("--duration-s", c->duration, "stop after this long (0: until Ctrl-C)")->check(at_least(0));
   out.push_back({chamber, [c] { return run_chamber(*c); }});
 }
 
@@ -183,7 +188,7 @@ struct McuOpts {
 };
 
 // Serves the bench MCU with a static MPU-6050 tilted about y by tilt_deg [deg] under standard gravity.
-int run_bench_mcu(const McuOpts& m) {
+ExitCode run_bench_mcu(const McuOpts& m) {
   BenchTruth truth;
   truth.specific_force_mps2 = physics::gravity_specific_force(
       physics::Ry(m.tilt_deg * physics::kDegToRad), physics::kStandardGravity);
@@ -193,14 +198,15 @@ int run_bench_mcu(const McuOpts& m) {
   std::printf("bench MCU (MODBUS RTU slave 1, MPU-6050): %s\n", slave.device_path().c_str());
   std::printf("  sensor config: {plugin: mpu6050_modbus, config: {device: %s}}\n", slave.device_path().c_str());
   serve(m.duration);
-  return 0;
+  return ExitCode::kOk;
 }
 
 void add_bench_mcu_command(CLI::App* sub, std::vector<Command>& out) {
   auto m = std::make_shared<McuOpts>();
   auto* mcu = sub->add_subcommand("bench-mcu", "Bench microcontroller with an MPU-6050 (docs/bench-mcu-modbus.md), static stimulus");
-  mcu->add_option("--tilt-deg", m->tilt_deg, "the sensor tilted about y by this angle (standard gravity)");
-  mcu->add_option("--duration-s", m->duration, "stop after this long (0: until Ctrl-C)");
+  mcu->add_option("--tilt-deg", m->tilt_deg, "the sensor tilted about y by this angle (standard gravity)")
+      ->check(within(-360, 360));
+  mcu->add_option("--duration-s", m->duration, "stop after this long (0: until Ctrl-C)")->check(at_least(0));
   out.push_back({mcu, [m] { return run_bench_mcu(*m); }});
 }
 
@@ -223,14 +229,12 @@ void write_world_config(const emu::BenchWorld& bw, const std::string& in, const 
   // Relative paths in the copy (estimation model) are resolved from its new folder.
   const auto from = std::filesystem::absolute(in).parent_path();
   replace_all(text, "model: models/", "model: " + (from / "models").string() + "/");
-  std::ofstream o(out);
-  o << text;
-  if (!o) throw std::runtime_error("cannot write " + out);
+  write_file_atomic(out, text);
   std::printf("  wrote %s: run it with `stend run %s`\n", out.c_str(), out.c_str());
 }
 
 // Serves table, chamber and bench MCU in one world copied from the twin experiment's bench.
-int run_world(const WorldOpts& w) {
+ExitCode run_world(const WorldOpts& w) {
   PluginHost host;
   host.scan(PluginHost::default_search_path({}));
   const Experiment twin = load_experiment(w.twin, host);
@@ -243,7 +247,7 @@ int run_world(const WorldOpts& w) {
   std::printf("  table (ACUTROL-style text):       tcp 127.0.0.1:%d\n", bw.table_port());
   if (w.write_config.size() == 2) write_world_config(bw, w.write_config[0], w.write_config[1]);
   serve(w.duration);
-  return 0;
+  return ExitCode::kOk;
 }
 
 void add_world_command(CLI::App* sub, std::vector<Command>& out) {
@@ -251,13 +255,15 @@ void add_world_command(CLI::App* sub, std::vector<Command>& out) {
   auto* world = sub->add_subcommand("world", "Table + chamber + bench MCU in one simulated world, the twin of an in-process bench");
   world->add_option("--twin", w->twin, "in-process experiment whose bench (sim_imu, sim_one_axis_table, sim_thermochamber) the world copies")
       ->required();
-  world->add_option("--chamber-speed", w->chamber_speed, "the chamber's plant runs this many times faster than the wall clock");
-  world->add_option("--table-port", w->table_port, "TCP port of the table on 127.0.0.1 (0: any free port)");
+  world->add_option("--chamber-speed", w->chamber_speed, "the chamber's plant runs this many times faster than the wall clock")
+      ->check(above(0));
+  world->add_option("--table-port", w->table_port, "TCP port of the table on 127.0.0.1 (0: any free port)")
+      ->check(within(0, kMaxPort));
   world->add_option("--write-config", w->write_config,
                     "IN OUT: copy the drivers experiment IN to OUT with /dev/ttyUSB0 (bench MCU), /dev/ttyUSB1 (chamber) "
                     "and port 5025 (table) replaced by the emulators'")
       ->expected(2);
-  world->add_option("--duration-s", w->duration, "stop after this long (0: until Ctrl-C)");
+  world->add_option("--duration-s", w->duration, "stop after this long (0: until Ctrl-C)")->check(at_least(0));
   out.push_back({world, [w] { return run_world(*w); }});
 }
 

@@ -21,12 +21,14 @@ void add_export_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_option("-o,--output", output, "Output file (imutk: path prefix for _acc.calib / _gyro.calib; csv: a new "
                                          "folder); default RUN/export/");
   sub->add_option("--rostopic", opt.rostopic, "Kalibr: the IMU's ROS topic (default /imu0)");
-  sub->add_option("--px4-id", opt.px4_device_id, "PX4: the sensor's device id for TC_A0_ID / CAL_ACC0_ID … (default 0)");
+  sub->add_option("--px4-id", opt.px4_device_id, "PX4: the sensor's device id for TC_A0_ID / CAL_ACC0_ID … (default 0)")
+      ->check(at_least(0));
   sub->add_option("--from", opt.from,
                   "Calibration source: auto (Ceres when it is a full 3-axis calibration, else fit.json, then "
                   "temp_poly.json) | ceres | batch_lsq | temp_poly")
       ->check(CLI::IsMember({"auto", "ceres", "batch_lsq", "temp_poly"}));
-  sub->add_option("--px4-instance", opt.px4_instance, "PX4: calibration slot n of TC_An / TC_Gn (default 0)");
+  sub->add_option("--px4-instance", opt.px4_instance, "PX4: calibration slot n of TC_An / TC_Gn (default 0)")
+      ->check(within(0, 3));
   sub->add_flag("--accept-damaged", opt.accept_damaged,
                 "csv: copy the readable part of a damaged run (a truncated file, rows missing against run.json) "
                 "instead of refusing it");
@@ -35,7 +37,7 @@ void add_export_command(CLI::App& app, std::vector<Command>& out) {
                    for (const auto& f : r.files) fmt::print("wrote {}\n", f.string());
                    for (const auto& n : r.notes) fmt::print("note: {}\n", n);
                    for (const auto& w : r.warnings) fmt::print(stderr, "warning: {}\n", w);
-                   return 0;
+                   return ExitCode::kOk;
                  }});
 }
 

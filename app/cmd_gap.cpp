@@ -3,7 +3,6 @@
 #include <fmt/core.h>
 
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -13,6 +12,8 @@
 #include "stend/estimators/builtin.hpp"
 #include "stend/diagnosis/gap.hpp"
 #include "stend/diagnosis/validate.hpp"
+#include "stend/files.hpp"
+#include "stend/yaml_util.hpp"
 
 namespace stend::cli {
 
@@ -43,7 +44,7 @@ diagnosis::FoldBy fold_of(const std::string& s) {
 // registry: the estimator the file is written for must have one.
 estimation::ModelSpec linear_model(const std::string& model_file) {
   const estimation::Registry registry = estimators::builtin();
-  const estimation::EstimatorEntry& e = registry.for_model(YAML::LoadFile(model_file), model_file);
+  const estimation::EstimatorEntry& e = registry.for_model(yaml::load_file(model_file, "model file"), model_file);
   if (!e.linear_model)
     throw std::runtime_error(model_file + ": a model file for '" + e.name +
                              "', which fits no linear error model; `stend gap` diagnoses one (a batch_lsq "
@@ -51,10 +52,10 @@ estimation::ModelSpec linear_model(const std::string& model_file) {
   return e.linear_model(model_file);
 }
 
-int run_gap(const GapArgs& a) {
+ExitCode run_gap(const GapArgs& a) {
   if (a.data.inputs.empty() || a.model.empty()) {
     fmt::print(stderr, "stend gap: give RUN_OR_DATASET and --model MODEL.yaml (or `stend gap validate`)\n");
-    return 2;
+    return ExitCode::kUsage;
   }
   const stend::Recording rec = a.data.open();
   const estimation::ModelSpec spec = linear_model(a.model);
@@ -71,10 +72,10 @@ int run_gap(const GapArgs& a) {
   std::filesystem::path json = a.json;
   if (json.empty() && a.data.is_run()) json = std::filesystem::path(a.data.inputs[0]) / "gap.json";
   write_results(json, diagnosis::to_json(rep), text.str());
-  return rep.ok ? 0 : 3;
+  return rep.ok ? ExitCode::kOk : ExitCode::kFitFailed;
 }
 
-int run_validate(const GapArgs& a) {
+ExitCode run_validate(const GapArgs& a) {
   diagnosis::ValidateOptions o;
   o.seeds = a.seeds;
   o.sizes = a.sizes;
@@ -89,12 +90,12 @@ int run_validate(const GapArgs& a) {
   const diagnosis::ValidationReport r = diagnosis::run_validation(o);
   diagnosis::print_validation(std::cout, r);
   if (!a.vjson.empty()) {
-    std::ofstream(a.vjson) << diagnosis::validation_json(r) << "\n";
+    write_file_atomic(a.vjson, diagnosis::validation_json(r) + "\n");
     fmt::print("results:    {}\n", a.vjson);
   }
   const bool pass = diagnosis::targets_met(r);
   fmt::print("targets:    {}\n", pass ? "met" : "NOT met");
-  return pass ? 0 : 1;
+  return pass ? ExitCode::kOk : ExitCode::kFitFailed;
 }
 
 }  // namespace
@@ -109,22 +110,28 @@ void add_gap_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_option("--json", args->json, "Where to write gap.json (default RUN/gap.json, or ./gap.json for a dataset)");
   sub->add_option("--fold-by", args->fold_by, "Held-out groups: auto | orientation | temperature | ramp")
       ->check(CLI::IsMember({"auto", "orientation", "temperature", "ramp"}));
-  sub->add_option("--max-steps", args->max_steps, "Forward-selection steps (default 4)");
-  sub->add_option("--max-folds", args->max_folds, "Held-out folds, groups dealt round-robin beyond (default 12; 0 = one per group)");
-  sub->add_option("--alpha", args->alpha, "Family-wise significance level (Bonferroni over candidates)");
+  sub->add_option("--max-steps", args->max_steps, "Forward-selection steps (default 4)")->check(at_least(1));
+  sub->add_option("--max-folds", args->max_folds, "Held-out folds, groups dealt round-robin beyond (default 12; 0 = one per group)")
+      ->check(at_least(0));
+  sub->add_option("--alpha", args->alpha, "Family-wise significance level (Bonferroni over candidates)")
+      ->check(strictly_within(0, 1));
 
   auto* val = sub->add_subcommand("validate", "Check the diagnoser on planted, null and out-of-vocabulary effects");
-  val->add_option("--seeds", args->seeds, "Runs per candidate and size (default 20)");
-  val->add_option("--sizes", args->sizes, "Planted sizes, multiples of the noise floor (default 1 2 5 10)")->delimiter(',');
-  val->add_option("--null", args->null_runs, "Null runs (default 40)");
-  val->add_option("--oov", args->oov_runs, "Out-of-vocabulary runs (default 20)");
+  val->add_option("--seeds", args->seeds, "Runs per candidate and size (default 20)")->check(at_least(1));
+  val->add_option("--sizes", args->sizes, "Planted sizes, multiples of the noise floor (default 1 2 5 10)")
+      ->delimiter(',')
+      ->check(above(0));
+  val->add_option("--null", args->null_runs, "Null runs (default 40)")->check(at_least(1));
+  val->add_option("--oov", args->oov_runs, "Out-of-vocabulary runs (default 20)")->check(at_least(1));
   val->add_option("--only", args->only, "Only these candidates (comma separated)")->delimiter(',');
-  val->add_option("--positions", args->positions, "Use an N-position single-temperature design instead of the default");
+  val->add_option("--positions", args->positions, "Use an N-position single-temperature design instead of the default")
+      ->check(at_least(diagnosis::kMinManyPositions));
   val->add_option("--seed", args->seed, "Master seed");
   val->add_option("--json", args->vjson, "Write the validation figures as JSON");
   val->add_option("--noise-seeds", args->noise_seeds,
-                  "Noise-stage experiments (quantization, saturation, coloured noise): runs per size (default 10; 0 = skip)");
-  val->add_option("--noise-null", args->noise_null_runs, "Noise-stage null runs (default 40)");
+                  "Noise-stage experiments (quantization, saturation, coloured noise): runs per size (default 10; 0 = skip)")
+      ->check(at_least(0));
+  val->add_option("--noise-null", args->noise_null_runs, "Noise-stage null runs (default 40)")->check(at_least(0));
 
   out.push_back({sub, [args, val] { return *val ? run_validate(*args) : run_gap(*args); }});
 }

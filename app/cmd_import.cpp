@@ -35,17 +35,17 @@ std::string import_yaml(const ImportArgs& a, const std::string& format, const io
   return std::string(out.c_str()) + "\n";
 }
 
-int run_import(const ImportArgs& a) {
+ExitCode run_import(const ImportArgs& a) {
   const std::filesystem::path dir = a.output;
   if (std::filesystem::exists(dir)) {
     fmt::print(stderr, "stend import: '{}' exists; give a new folder with -o (nothing was written)\n", dir.string());
-    return 2;
+    return ExitCode::kInvalidInput;
   }
   const io::ImportOptions options = a.data.options();
   const io::Inputs inputs = a.data.paths();
   if (a.data.is_run()) {
     fmt::print(stderr, "stend import: '{}' is a run folder already\n", inputs[0].string());
-    return 2;
+    return ExitCode::kInvalidInput;
   }
   // experiment.yaml names the format, written with the first samples: the format is chosen first.
   const bool detect = a.data.format.empty() || a.data.format == "auto";
@@ -66,7 +66,7 @@ int run_import(const ImportArgs& a) {
              dir.string(), format, sink.sample_count(), rec.segments.size(), rec.truth_t.size(), rec.events.size());
   for (const auto& e : rec.events)
     if (e.level == "warning") fmt::print("warning:    {}\n", e.message);
-  return 0;
+  return ExitCode::kOk;
 }
 
 }  // namespace

@@ -37,18 +37,12 @@ void add_report_command(CLI::App& app, std::vector<Command>& out) {
                    const auto path = stend::reporting::write_run_report(run);
                    fmt::print("report:     {}\n", path.string());
                    if (!no_db) record_in_db(run, db);
-                   return 0;
+                   return ExitCode::kOk;
                  }});
 }
 
 std::filesystem::path write_run_report(const std::filesystem::path& run_dir) {
-  std::filesystem::path path;
-  try {
-    path = stend::reporting::write_run_report(run_dir);
-  } catch (const std::exception& e) {
-    fmt::print(stderr, "report not written: {}\n", e.what());
-    return {};
-  }
+  const std::filesystem::path path = stend::reporting::write_run_report(run_dir);
   try {
     record_in_db(run_dir, {});
   } catch (const std::exception& e) {

@@ -2,6 +2,7 @@
 // subcommand lives in its own cmd_<name>.cpp and registers itself through add_<name>_command.
 #pragma once
 
+#include "exit_codes.hpp"
 #include "stend/io/formats.hpp"
 #include "stend/recording.hpp"
 
@@ -17,11 +18,20 @@
 namespace stend::cli {
 
 // A registered subcommand: `run` is called after parsing when `sub` was given on the command
-// line; its return value is the process exit code (0 ok, 1 error, 2 bad input, 3 fit failed).
+// line; its return value is the process exit code (exit_codes.hpp). An exception it throws is
+// mapped to one by exit_code_of_current_exception().
 struct Command {
   CLI::App* sub = nullptr;
-  std::function<int()> run;
+  std::function<ExitCode()> run;
 };
+
+// ---- range checks of numeric options (app/checks.cpp) ------------------------------------------
+// A value outside is refused while parsing (a usage error, exit 1) with the allowed range:
+// "--alpha: 7 is outside the allowed range (0, 1)".
+CLI::Validator at_least(double lo);                   // [lo, inf)
+CLI::Validator above(double lo);                      // (lo, inf)
+CLI::Validator within(double lo, double hi);          // [lo, hi]
+CLI::Validator strictly_within(double lo, double hi);  // (lo, hi)
 
 // ---- shared analysis helpers (app/fit.cpp) -----------------------------------------------------
 
@@ -51,19 +61,21 @@ struct DatasetArgs {
   bool is_run() const;
 };
 
-// Fits `model_file` to `rec` with the estimator named `estimator` ("auto": the one the model file
-// is written for, through the estimator registry), prints the report to stdout and writes the
-// results JSON (+ a .txt copy) to `json_out`, or to out_dir/<the estimator's results file> when
-// empty. Returns false when the fit failed (it says why, with no numbers).
-// Writes the results document to `json` and the printed text beside it (.txt); with no path (the
-// input is a dataset file, not a run folder, and no --json was given) writes nothing and says so.
-// `failed`: the document states a failed fit; it is written (so that no earlier results stand for
-// this fit) and said to hold no results.
+// Writes the results document to `json` and the printed text beside it (.txt), each through
+// write_file_atomic (a failed write throws IoError: no "results:" line is printed); with no path
+// (the input is a dataset file, not a run folder, and no --json was given) writes nothing and says
+// so. `failed`: the document states a failed fit; it is written (so that no earlier results stand
+// for this fit) and said to hold no results.
 void write_results(std::filesystem::path json, const std::string& document, const std::string& text,
                    bool failed = false);
 
 // Whether the estimator `stend fit` would use for this model file reads the bench truth.
 bool fit_reads_truth(const std::string& model_file, const std::string& estimator = "auto");
+
+// Fits `model_file` to `rec` with the estimator named `estimator` ("auto": the one the model file
+// is written for, through the estimator registry), prints the report to stdout and writes the
+// results JSON (+ a .txt copy) to `json_out`, or to out_dir/<the estimator's results file> when
+// empty. Returns false when the fit failed (it says why, with no numbers).
 bool fit_recording(const stend::Recording& rec, const std::string& model_file, const std::filesystem::path& out_dir,
                    const std::string& json_out, const std::string& estimator = "auto");
 
@@ -76,8 +88,9 @@ void add_emulate_command(CLI::App& app, std::vector<Command>& out);  // cmd_emul
 void add_import_command(CLI::App& app, std::vector<Command>& out);   // cmd_import.cpp
 void add_apply_command(CLI::App& app, std::vector<Command>& out);    // cmd_apply.cpp
 
-// Builds RUN/report.html from what the run folder holds (called at the end of `stend run`).
-// Returns the report path, or an empty path when no report could be written (says why on stderr).
+// Builds RUN/report.html from what the run folder holds and records the run in the results
+// database (called at the end of `stend run`). Returns the report path; throws when the report
+// cannot be written; a database that cannot take the run is said on stderr (the report stands).
 std::filesystem::path write_run_report(const std::filesystem::path& run_dir);
 
 }  // namespace stend::cli

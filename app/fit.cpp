@@ -3,13 +3,14 @@
 
 #include "stend/estimation/summary.hpp"
 #include "stend/estimators/builtin.hpp"
+#include "stend/files.hpp"
 #include "stend/plugin_host.hpp"
+#include "stend/yaml_util.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <fstream>
 #include <iostream>
 #include <optional>
 
@@ -22,7 +23,20 @@ void DatasetArgs::add_to(CLI::App* sub, bool required) {
       ->expected(1, 2);
   sub->add_option("--format", format, "auto (by content) | " + io::format_names());
   sub->add_option("--mapping", mapping, "YAML file of import keys (the flags below, '_' for '-')");
-  for (const auto& k : io::import_keys()) sub->add_option(io::import_flag(k.key), flags[k.key], k.help);
+  for (const auto& k : io::import_keys()) {
+    // The value is parsed as the import reads it, so that a bad one is refused as a usage error.
+    const CLI::Validator parses(
+        [key = k.key](std::string& value) -> std::string {
+          try {
+            io::ImportOptions().set(key, value);
+            return {};
+          } catch (const std::invalid_argument& e) {
+            return e.what();
+          }
+        },
+        "");
+    sub->add_option(io::import_flag(k.key), flags[k.key], k.help)->check(parses);
+  }
 }
 
 void DatasetArgs::add_accept_damaged(CLI::App* sub) {
@@ -36,12 +50,7 @@ io::ImportOptions DatasetArgs::options() const {
   if (!mapping.empty()) io::read_import_mapping(mapping, o);
   for (const auto& k : io::import_keys()) {
     const auto it = flags.find(k.key);
-    if (it == flags.end() || it->second.empty()) continue;
-    try {
-      o.set(k.key, it->second);
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(io::import_flag(k.key) + ": " + e.what());
-    }
+    if (it != flags.end() && !it->second.empty()) o.set(k.key, it->second);  // checked while parsing
   }
   return o;
 }
@@ -73,7 +82,7 @@ namespace {
 const estimation::EstimatorEntry& resolve_estimator(const estimation::Registry& registry, PluginHost& host,
                                                     estimation::Registry& with_plugins, const std::string& name,
                                                     const std::string& model_file) {
-  if (name == "auto") return registry.for_model(YAML::LoadFile(model_file), model_file);
+  if (name == "auto") return registry.for_model(yaml::load_file(model_file, "model file"), model_file);
   if (const auto* e = registry.find(name)) return *e;
   host.scan(PluginHost::default_search_path());
   with_plugins = registry;
@@ -102,9 +111,9 @@ void write_results(std::filesystem::path json, const std::string& document, cons
     fmt::print("results:    not written (the input is not a run folder; --json FILE writes them)\n");
     return;
   }
-  std::ofstream(json) << document << "\n";
+  write_file_atomic(json, document + "\n");
   std::filesystem::path txt = json;
-  std::ofstream(txt.replace_extension(".txt")) << text;
+  write_file_atomic(txt.replace_extension(".txt"), text);
   if (failed) {
     fmt::print("results:    none — the fit failed ({} says why)\n", json.string());
   } else {

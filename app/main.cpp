@@ -24,6 +24,7 @@ namespace {
 
 std::atomic<bool> g_stop{false};
 
+using stend::cli::ExitCode;
 using stend::cli::fit_recording;
 
 extern "C" void on_sigint(int) {
@@ -56,14 +57,14 @@ void scan_plugins(stend::PluginHost& host, const std::vector<std::string>& extra
                                "--allow-plugins (or STEND_ALLOW_PLUGINS=1)");
 }
 
-int cmd_plugins(const std::vector<std::string>& paths) {
+ExitCode cmd_plugins(const std::vector<std::string>& paths) {
   stend::PluginHost host;
   scan_plugins(host, paths, true);  // folders the user named on the command line
   std::cout << host.describe();
-  return 0;
+  return ExitCode::kOk;
 }
 
-int cmd_validate(const std::string& file, bool allow_plugins) {
+ExitCode cmd_validate(const std::string& file, bool allow_plugins) {
   stend::PluginHost host;
   scan_plugins(host, stend::experiment_plugin_paths(file), allow_plugins);
   const stend::Experiment exp = stend::load_experiment(file, host);
@@ -75,7 +76,7 @@ int cmd_validate(const std::string& file, bool allow_plugins) {
   fmt::print("{}: ok — experiment '{}', sensor {}, {} fixture(s), {} step(s), {} orientation(s), g = {:.6f} m/s^2; {}\n",
              file, exp.name, exp.sensor.plugin, exp.fixtures.size(), exp.procedure.size(), orientations,
              exp.gravity.resolved_mps2, estimate.str());
-  return 0;
+  return ExitCode::kOk;
 }
 
 void print_progress(const stend::RunProgress& p, bool tty) {
@@ -89,8 +90,8 @@ void print_progress(const stend::RunProgress& p, bool tty) {
   std::fflush(stderr);
 }
 
-int cmd_run(const std::string& file, const std::string& output, const std::string& name, const std::string& clock,
-            const std::string& store, bool quiet, bool allow_plugins) {
+ExitCode cmd_run(const std::string& file, const std::string& output, const std::string& name, const std::string& clock,
+                 const std::string& store, bool quiet, bool allow_plugins) {
   stend::PluginHost host;
   scan_plugins(host, stend::experiment_plugin_paths(file), allow_plugins);
   const stend::Experiment exp = stend::load_experiment(file, host);
@@ -119,21 +120,22 @@ int cmd_run(const std::string& file, const std::string& output, const std::strin
              r.segments, fmt_duration(r.run_time_s), r.wall_time_s, r.wall_time_s > 0 ? r.run_time_s / r.wall_time_s : 0.0);
   for (const std::string& why : r.unsafe)
     fmt::print(stderr, "error: safe state NOT confirmed, check the bench by hand: {}\n", why);
-  if (!r.unsafe.empty()) return 4;
-  if (r.status != stend::RunStatus::kComplete) return r.status == stend::RunStatus::kInterrupted ? 130 : 1;
+  if (!r.unsafe.empty()) return ExitCode::kIoFailure;
+  if (r.status != stend::RunStatus::kComplete)
+    return r.status == stend::RunStatus::kInterrupted ? ExitCode::kStopped : ExitCode::kIoFailure;
   if (exp.estimation && exp.estimation["model"]) {
     // The experiment names its model: fit it now, relative paths from the experiment's folder.
     std::filesystem::path model = exp.estimation["model"].as<std::string>();
     if (model.is_relative()) model = std::filesystem::path(file).parent_path() / model;
     fmt::print("\n");
-    if (!fit_recording(stend::Recording::open(r.dir, stend::SampleLoading::kStream), model.string(), r.dir, "")) return 3;
+    if (!fit_recording(stend::Recording::open(r.dir, stend::SampleLoading::kStream), model.string(), r.dir, ""))
+      return ExitCode::kFitFailed;
   }
-  const auto report = stend::cli::write_run_report(r.dir);
-  if (!report.empty()) fmt::print("report:     {}\n", report.string());
-  return 0;
+  fmt::print("report:     {}\n", stend::cli::write_run_report(r.dir).string());
+  return ExitCode::kOk;
 }
 
-int cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, const std::string& json,
+ExitCode cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, const std::string& json,
             const std::string& estimator) {
   // A run opened for an estimator that needs no bench truth (allan) leaves the truth in the store.
   const stend::Recording rec =
@@ -142,11 +144,11 @@ int cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, const
           : data.open();
   return fit_recording(data.checked(rec), model, data.is_run() ? std::filesystem::path(data.inputs[0]) : std::filesystem::path(),
                        json, estimator)
-             ? 0
-             : 3;
+             ? ExitCode::kOk
+             : ExitCode::kFitFailed;
 }
 
-int cmd_info(const std::string& dir) {
+ExitCode cmd_info(const std::string& dir) {
   // Header, extents and the first and last samples only: no scan of the samples.
   const stend::Recording rec =
       stend::Recording::open(dir, stend::SampleLoading::kStream, stend::TruthLoading::kSkip);
@@ -174,7 +176,7 @@ int cmd_info(const std::string& dir) {
     fmt::print("  #{:<3} {:<15} {:>7.2f}–{:<8.2f} s {}{}{}  {}\n", s.id, stend::to_string(s.kind), s.t_start_s, s.t_end_s,
                s.settled ? "" : "[unsettled] ", s.complete ? "" : "[incomplete] ", s.label, s.targets);
   for (const auto& e : rec.events) fmt::print("  event {:.3f} s {} {}: {}\n", e.t_s, e.level, e.source, e.message);
-  return 0;
+  return ExitCode::kOk;
 }
 
 }  // namespace
@@ -233,24 +235,27 @@ int main(int argc, char** argv) {
   stend::cli::add_import_command(app, commands);
   stend::cli::add_apply_command(app, commands);
 
-  CLI11_PARSE(app, argc, argv);
   try {
-    for (const auto& c : commands)
-      if (*c.sub) return c.run();
-    if (*plugins) return cmd_plugins(plugin_paths);
-    if (*validate) return cmd_validate(file, allow_plugins);
-    if (*run) {
-      if (*name_option) stend::check_run_name(name);  // given but empty is refused, not the default
-      return cmd_run(file, output, name, clock, store, quiet, allow_plugins);
-    }
-    if (*info) return cmd_info(dir);
-    if (*fit) return cmd_fit(fit_data, model, json, estimator);
-  } catch (const stend::ExperimentError& e) {
-    fmt::print(stderr, "{}\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    fmt::print(stderr, "error: {}\n", e.what());
-    return 1;
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version end here too (exit code 0 from CLI11); every other parse error is usage.
+    return app.exit(e) == 0 ? to_int(ExitCode::kOk) : to_int(ExitCode::kUsage);
   }
-  return 0;
+  return to_int([&] {
+    try {
+      for (const auto& c : commands)
+        if (*c.sub) return c.run();
+      if (*plugins) return cmd_plugins(plugin_paths);
+      if (*validate) return cmd_validate(file, allow_plugins);
+      if (*run) {
+        if (*name_option) stend::check_run_name(name);  // given but empty is refused, not the default
+        return cmd_run(file, output, name, clock, store, quiet, allow_plugins);
+      }
+      if (*info) return cmd_info(dir);
+      if (*fit) return cmd_fit(fit_data, model, json, estimator);
+    } catch (...) {
+      return stend::cli::exit_code_of_current_exception();
+    }
+    return ExitCode::kOk;
+  }());
 }

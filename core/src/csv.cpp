@@ -1,5 +1,7 @@
 #include "stend/csv.hpp"
 
+#include "stend/errors.hpp"
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -49,11 +51,6 @@ void append_record(std::string& out, const std::vector<std::string>& fields) {
     append_field(out, fields[i]);
   }
   out.push_back('\n');
-}
-
-std::string clip(std::string_view text, std::size_t max) {
-  if (text.size() <= max) return std::string(text);
-  return std::string(text.substr(0, max)) + "… (" + std::to_string(text.size() - max) + " more bytes)";
 }
 
 namespace {
@@ -222,7 +219,7 @@ bool Reader::fill() {
     const ssize_t n = ::read(fd_, buf_.data() + end_, buf_.size() - end_);
     if (n < 0) {
       if (errno == EINTR) continue;
-      throw std::runtime_error(path_.string() + ": read failed: " + std::strerror(errno));
+      throw IoError(path_.string() + ": read failed: " + std::strerror(errno));
     }
     if (n == 0) {
       eof_ = true;

@@ -3,6 +3,7 @@
 // The format is documented in docs/experiment-format.md; keep the two in step.
 #include <stend/experiment.hpp>
 #include <stend/physics/geometry.hpp>
+#include <stend/physics/gravity.hpp>
 #include <stend/yaml_util.hpp>
 
 #include <Eigen/LU>
@@ -46,7 +47,7 @@ std::string SourceLocation::str() const {
 
 ExperimentError::ExperimentError(SourceLocation where, std::string key, std::string message,
                                  std::string hint)
-    : std::runtime_error(compose(where, message, hint)),
+    : InputError(compose(where, message, hint)),
       where_(std::move(where)),
       key_(std::move(key)),
       message_(std::move(message)),
@@ -315,10 +316,11 @@ class Parser {
     m.at_most_one_of({"value_mps2", "height_m"}, hint);
     if (m.has("value_mps2")) {
       const double v = m.number("value_mps2", 0.0, "in m/s^2");
-      if (v < 9.7 || v > 9.9)
+      if (v < physics::kMinPlausibleGravity_mps2 || v > physics::kMaxPlausibleGravity_mps2)
         m.fail_value("value_mps2",
-                     "local gravity " + format_number(v) +
-                         " m/s^2 is not plausible on the Earth's surface (9.7 .. 9.9 m/s^2)",
+                     "local gravity " + format_number(v) + " m/s^2 is not plausible on the Earth's surface (" +
+                         format_number(physics::kMinPlausibleGravity_mps2) + " .. " +
+                         format_number(physics::kMaxPlausibleGravity_mps2) + " m/s^2)",
                      "value_mps2 is in m/s^2, e.g. 9.8154");
       g.value_mps2 = v;
       g.resolved_mps2 = v;

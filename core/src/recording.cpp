@@ -3,6 +3,8 @@
 #include "stend/recording.hpp"
 
 #include "stend/csv.hpp"
+#include "stend/errors.hpp"
+#include "stend/files.hpp"
 #include "hdf5_store.hpp"
 
 #include <fcntl.h>
@@ -60,7 +62,7 @@ void write_all(int fd, const char* p, std::size_t n, const fs::path& file) {
     const ssize_t w = ::write(fd, p, n);
     if (w < 0) {
       if (errno == EINTR) continue;
-      throw std::runtime_error(fmt::format("{}: write failed: {}", file.string(), errno_text(errno)));
+      throw IoError(fmt::format("{}: write failed: {}", file.string(), errno_text(errno)));
     }
     p += w;
     n -= static_cast<std::size_t>(w);
@@ -86,7 +88,7 @@ struct OutFile {
     path = p;
     fd = ::open(p.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (fd < 0) {
-      throw std::runtime_error(fmt::format("{}: cannot create: {}", p.string(), errno_text(errno)));
+      throw IoError(fmt::format("{}: cannot create: {}", p.string(), errno_text(errno)));
     }
     buf.reset(new char[capacity]);
     cap = capacity;
@@ -111,7 +113,7 @@ struct OutFile {
   }
   void sync() {
     if (fd >= 0 && ::fdatasync(fd) != 0 && errno != EINVAL && errno != EROFS) {
-      throw std::runtime_error(fmt::format("{}: fdatasync failed: {}", path.string(),
+      throw IoError(fmt::format("{}: fdatasync failed: {}", path.string(),
                                            errno_text(errno)));
     }
   }
@@ -211,33 +213,10 @@ void fsync_dir(const fs::path& dir) {
   }
 }
 
-// Writes `content` to a temporary file beside `file`, syncs it, and renames it over `file`, so a
-// reader sees either the old or the new content, never a mix.
-void write_file_atomic(const fs::path& file, const std::string& content) {
-  fs::path tmp = file;
-  tmp += ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) {
-    throw std::runtime_error(fmt::format("{}: cannot create: {}", tmp.string(), errno_text(errno)));
-  }
-  try {
-    write_all(fd, content.data(), content.size(), tmp);
-  } catch (...) {
-    ::close(fd);
-    throw;
-  }
-  ::fsync(fd);
-  ::close(fd);
-  if (::rename(tmp.c_str(), file.c_str()) != 0) {
-    throw std::runtime_error(fmt::format("{}: cannot rename to {}: {}", tmp.string(),
-                                         file.filename().string(), errno_text(errno)));
-  }
-}
-
 void write_file(const fs::path& file, const std::string& content) {
   const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) {
-    throw std::runtime_error(fmt::format("{}: cannot create: {}", file.string(), errno_text(errno)));
+    throw IoError(fmt::format("{}: cannot create: {}", file.string(), errno_text(errno)));
   }
   try {
     write_all(fd, content.data(), content.size(), file);
@@ -417,7 +396,7 @@ RecordingWriter::RecordingWriter(const fs::path& run_dir, RecordingHeader header
     std::error_code ec;
     fs::create_directories(target.parent_path(), ec);
     if (ec) {
-      throw std::runtime_error(fmt::format("{}: cannot create the parent directory: {}",
+      throw IoError(fmt::format("{}: cannot create the parent directory: {}",
                                            target.parent_path().string(), ec.message()));
     }
   }
@@ -428,7 +407,7 @@ RecordingWriter::RecordingWriter(const fs::path& run_dir, RecordingHeader header
           "run directory or remove this one",
           run_dir.string()));
     }
-    throw std::runtime_error(
+    throw IoError(
         fmt::format("{}: cannot create the run directory: {}", run_dir.string(), errno_text(errno)));
   }
 
@@ -666,7 +645,7 @@ std::string read_whole_file(const fs::path& file) {
       if (errno == EINTR) continue;
       const int err = errno;
       ::close(fd);
-      throw std::runtime_error(fmt::format("{}: read failed: {}", file.string(), errno_text(err)));
+      throw IoError(fmt::format("{}: read failed: {}", file.string(), errno_text(err)));
     }
     if (n == 0) break;
     out.append(buf, static_cast<std::size_t>(n));
@@ -952,7 +931,7 @@ void parse_imu_slow(std::string_view line, ImuSample& s, const fs::path& file, s
   }
   auto bad = [&](std::size_t col, const char* what) {
     fail_at(file, ln, fmt::format("column {} ({}): '{}' is not {}", col + 1,
-                                  kImuColumnNames[col], csv::clip(f[col]), what));
+                                  kImuColumnNames[col], excerpt(f[col]), what));
   };
   auto dbl = [&](std::size_t col, double& out) {
     if (!csv::parse_double(f[col], out)) bad(col, "a number");
@@ -985,7 +964,7 @@ FileRead read_imu(const fs::path& file, Recording& r) {
   if (!rd.next_line(line)) return file_read(rd, 0, r);  // empty, or the header itself was cut short
   if (line != kImuHeader) {
     fail_at(file, rd.line(),
-            fmt::format("unexpected header '{}'; expected '{}'", csv::clip(line), kImuHeader));
+            fmt::format("unexpected header '{}'; expected '{}'", excerpt(line), kImuHeader));
   }
   const std::uint64_t header_bytes = rd.bytes_consumed();
   bool reserved = false;
@@ -1020,8 +999,8 @@ FileRead read_truth(const fs::path& file, Recording& r) {
     got.pop_back();
     want.pop_back();
     fail_at(file, rd.line(),
-            fmt::format("header '{}' does not match run.json truth_columns (expected '{}')",
-                        csv::clip(got), csv::clip(want)));
+            fmt::format("header '{}' does not match run.json truth_columns (expected '{}')", excerpt(got),
+                        excerpt(want)));
   }
   const std::size_t n = r.header.truth_columns.size();
   std::string_view line;
@@ -1044,7 +1023,7 @@ FileRead read_truth(const fs::path& file, Recording& r) {
         double v = 0.0;
         if (!csv::parse_double(f[k], v)) {
           fail_at(file, rd.line(), fmt::format("column {} ({}): '{}' is not a number", k + 1,
-                                               expected[k], csv::clip(f[k])));
+                                               expected[k], excerpt(f[k])));
         }
         if (k == 0) {
           t = v;
@@ -1072,8 +1051,7 @@ void check_header(const csv::Reader& rd, const std::vector<std::string>& got,
     csv::append_record(b, want);
     a.pop_back();
     b.pop_back();
-    fail_at(rd.path(), rd.line(),
-            fmt::format("unexpected header '{}'; expected '{}'", csv::clip(a), b));
+    fail_at(rd.path(), rd.line(), fmt::format("unexpected header '{}'; expected '{}'", excerpt(a), b));
   }
 }
 
@@ -1091,7 +1069,7 @@ FileRead read_segments(csv::Reader& rd, Recording& r) {
     }
     auto bad = [&](std::size_t col, const char* what) {
       fail_at(file, rd.line(), fmt::format("column {} ({}): '{}' is not {}", col + 1,
-                                           kSegmentColumns[col], csv::clip(f[col]), what));
+                                           kSegmentColumns[col], excerpt(f[col]), what));
     };
     auto integer = [&](std::size_t col, int& out) {
       std::int64_t v = 0;
@@ -1144,7 +1122,7 @@ FileRead read_events(csv::Reader& rd, Recording& r) {
     }
     Event e;
     if (!csv::parse_double(f[0], e.t_s)) {
-      fail_at(file, rd.line(), fmt::format("column 1 (t_s): '{}' is not a number", csv::clip(f[0])));
+      fail_at(file, rd.line(), fmt::format("column 1 (t_s): '{}' is not a number", excerpt(f[0])));
     }
     e.level = std::move(f[1]);
     e.source = std::move(f[2]);
@@ -1280,7 +1258,10 @@ void open_csv(const fs::path& run_dir, const nlohmann::json& run_json, Recording
 
 }  // namespace
 
-Recording Recording::open(const fs::path& run_dir, SampleLoading loading, TruthLoading truth) {
+namespace {
+
+// Recording::open before its errors are classified.
+Recording open_run_folder(const fs::path& run_dir, SampleLoading loading, TruthLoading truth) {
   std::error_code ec;
   if (!fs::is_directory(run_dir, ec)) {
     throw std::runtime_error(
@@ -1317,10 +1298,24 @@ Recording Recording::open(const fs::path& run_dir, SampleLoading loading, TruthL
   return r;
 }
 
+}  // namespace
+
+Recording Recording::open(const fs::path& run_dir, SampleLoading loading, TruthLoading truth) {
+  try {
+    return open_run_folder(run_dir, loading, truth);
+  } catch (const InputError&) {
+    throw;
+  } catch (const IoError&) {
+    throw;
+  } catch (const std::runtime_error& e) {  // every other reader error is about the folder's content
+    throw InputError(e.what());
+  }
+}
+
 void require_whole(const Recording& rec) {
   if (rec.damage.empty()) return;
-  throw std::runtime_error(fmt::format("{}: the run is damaged ({} of {} samples are readable): {}", rec.dir.string(),
-                                       rec.sample_count(), rec.written_samples, rec.damage));
+  throw InputError(fmt::format("{}: the run is damaged ({} of {} samples are readable): {}", rec.dir.string(),
+                               rec.sample_count(), rec.written_samples, rec.damage));
 }
 
 void write_recording(const Recording& rec, const fs::path& dir, const RecordingWriterOptions& options) {

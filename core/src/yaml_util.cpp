@@ -3,8 +3,13 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <utility>
 
 namespace stend::yaml {
@@ -79,6 +84,26 @@ std::string with_unit(const std::string& what, const std::string& unit_words) {
 }
 
 }  // namespace
+
+std::string read_file(const std::string& file, const std::string& what) {
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec)) throw InputError(what + " not found: " + file);
+  if (std::filesystem::is_directory(file, ec)) throw InputError(what + " " + file + " is a folder, not a file");
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError("cannot read " + what + " " + file + ": " + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+YAML::Node load_file(const std::string& file, const std::string& what) {
+  const std::string text = read_file(file, what);
+  try {
+    return YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw ExperimentError({file, e.mark.line + 1, e.mark.column + 1}, "", "YAML syntax error: " + e.msg);
+  }
+}
 
 SourceLocation location_of(const YAML::Node& node, const std::string& file) {
   SourceLocation loc;

@@ -65,7 +65,8 @@ std::vector<batch_lsq::StaticPoint> static_points(const Recording& rec, const es
   in.notes = extraction.notes;
   if (points.size() < 2)
     throw std::runtime_error("'" + in.source + "': only " + std::to_string(points.size()) +
-                             " static segment(s) could be extracted; the gap needs several");
+                             " static segment(s) could be extracted (" + extraction.tally() +
+                             "); the gap needs several");
   return points;
 }
 

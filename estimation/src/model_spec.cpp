@@ -2,8 +2,6 @@
 #include "stend/estimation/model_spec.hpp"
 
 #include <algorithm>
-#include <fstream>
-#include <sstream>
 #include <stend/experiment.hpp>
 #include <stend/yaml_util.hpp>
 #include <yaml-cpp/yaml.h>
@@ -160,12 +158,7 @@ ModelSpec parse_model_spec(const std::string& yaml_text, const std::string& sour
 }
 
 ModelSpec load_model_spec(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  if (!in)
-    throw std::runtime_error("cannot open model specification '" + file.string() + "'");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_model_spec(ss.str(), file.string());
+  return parse_model_spec(yaml::read_file(file.string(), "model file"), file.string());
 }
 
 std::string to_yaml(const ModelSpec& spec) {

@@ -80,14 +80,14 @@ void import_euroc(const fs::path& path, const EurocOptions& opt, Recording& rec,
     const auto f = split(line, ',');
     if (f.size() != 7) r.fail("expected 7 fields (timestamp, 3 gyro, 3 accel), found " + std::to_string(f.size()));
     std::int64_t t_ns = 0;
-    if (!parse_ns(f[0], t_ns)) r.fail("timestamp '" + csv::clip(f[0]) + "' is not an integer [ns]");
+    if (!parse_ns(f[0], t_ns)) r.fail("timestamp '" + excerpt(f[0]) + "' is not an integer [ns]");
     if (count++ == 0) t0_ns = t_ns;
     ImuSample s;
     s.t_s = static_cast<double>(t_ns - t0_ns) * 1e-9;  // difference first: ns since 1970 exceed a double's 53 bits
     for (int k = 0; k < 3; ++k) {
       double g = 0.0, a = 0.0;
       if (!parse_double(f[1 + k], g) || !parse_double(f[4 + k], a)) {
-        r.fail("value '" + csv::clip(parse_double(f[1 + k], g) ? f[4 + k] : f[1 + k]) + "' is not a number");
+        r.fail("value '" + excerpt(parse_double(f[1 + k], g) ? f[4 + k] : f[1 + k]) + "' is not a number");
       }
       s.gyro_radps[k] = g;
       s.accel_mps2[k] = a;

@@ -259,14 +259,25 @@ const Format& find_format(const std::string& name) {
   throw std::invalid_argument("unknown format '" + name + "' (formats: " + format_names() + ")");
 }
 
+namespace {
+
+// Every input exists: a missing one is named as such, not as a format that cannot be told.
+void require_inputs_exist(const Inputs& inputs) {
+  std::error_code ec;
+  for (const auto& p : inputs)
+    if (!fs::exists(p, ec)) throw InputError("no such file: " + p.string());
+}
+
+}  // namespace
+
 const Format& detect_format(const Inputs& inputs, const ImportOptions& options) {
   if (inputs.empty()) throw std::invalid_argument("no input file");
+  require_inputs_exist(inputs);
   if (options.maps_columns()) return find_format("csv");
   for (const auto& f : formats()) {
     if (!f.detect || inputs.size() > f.max_inputs) continue;
     if (std::all_of(inputs.begin(), inputs.end(), [&](const fs::path& p) { return f.detect(p); })) return f;
   }
-  if (!fs::exists(inputs[0])) throw std::runtime_error(inputs[0].string() + ": no such file or folder");
   std::string list;
   for (const auto& f : formats()) list += "\n  " + f.name + ": " + f.description;
   throw std::runtime_error((inputs.size() > 1 ? "these " + std::to_string(inputs.size()) + " inputs" : inputs[0].string()) +
@@ -279,6 +290,7 @@ namespace {
 const Format& choose_format(const Inputs& inputs, const std::string& format, const ImportOptions& options) {
   std::string problem;
   if (!options.IsValid(&problem)) throw std::invalid_argument("import options: " + problem);
+  require_inputs_exist(inputs);
   const Format& f = format.empty() || format == "auto" ? detect_format(inputs, options) : find_format(format);
   if (inputs.empty() || inputs.size() > f.max_inputs)
     throw std::invalid_argument("format " + f.name + " takes " +

@@ -1,6 +1,8 @@
 // Import options: the keys, their parsing, the YAML mapping file. See stend/io/import_options.hpp.
 #include <stend/io/import_options.hpp>
 
+#include <stend/errors.hpp>
+#include <stend/physics/gravity.hpp>
 #include <stend/physics/units.hpp>
 #include <stend/yaml_util.hpp>
 
@@ -21,7 +23,7 @@ std::string trimmed(std::string s) {
 }
 
 [[noreturn]] void bad(const std::string& key, const std::string& value, const std::string& expected) {
-  throw std::invalid_argument(key + ": '" + value + "' is not " + expected);
+  throw std::invalid_argument(key + ": '" + excerpt(value) + "' is not " + expected);
 }
 
 double number(const std::string& key, const std::string& text) {
@@ -155,7 +157,11 @@ const std::vector<KeyDef>& key_table() {
       {{"gravity_mps2", "local gravity [m/s^2] (0: unknown, standard gravity where one is needed)"},
        [](ImportOptions& o, const std::string& k, const std::string& v) {
          o.gravity_mps2 = number(k, v);
-         if (o.gravity_mps2 != 0.0 && (o.gravity_mps2 < 9.7 || o.gravity_mps2 > 9.9)) bad(k, v, "a gravity in 9.7 … 9.9 m/s^2 (or 0)");
+         if (o.gravity_mps2 != 0.0 &&
+             (o.gravity_mps2 < physics::kMinPlausibleGravity_mps2 || o.gravity_mps2 > physics::kMaxPlausibleGravity_mps2))
+           bad(k, v,
+               "a gravity in " + yaml::format_number(physics::kMinPlausibleGravity_mps2) + " … " +
+                   yaml::format_number(physics::kMaxPlausibleGravity_mps2) + " m/s^2 (or 0)");
        }},
       {{"topic", "ROS bags: the sensor_msgs Imu topic (absent: the bag's only Imu topic)"},
        [](ImportOptions& o, const std::string&, const std::string& v) { o.topic = v; }},

@@ -40,19 +40,19 @@ namespace stend::io {
 namespace fs = std::filesystem;
 
 ImportError::ImportError(const fs::path& file, std::size_t line, const std::string& message)
-    : std::runtime_error(file.string() + (line > 0 ? ":" + std::to_string(line) : std::string()) +
-                         ": " + message),
+    : InputError(file.string() + (line > 0 ? ":" + std::to_string(line) : std::string()) +
+                 ": " + message),
       file_(file),
       line_(line) {}
 
 ImportError::ImportError(const fs::path& file, ByteOffset offset, const std::string& message)
-    : std::runtime_error(file.string() + ": byte " + std::to_string(offset.bytes) + ": " + message),
+    : InputError(file.string() + ": byte " + std::to_string(offset.bytes) + ": " + message),
       file_(file),
       offset_(offset.bytes),
       where_("byte " + std::to_string(offset.bytes)) {}
 
 ImportError::ImportError(const fs::path& file, const std::string& where, const std::string& message)
-    : std::runtime_error(file.string() + ": " + where + ": " + message), file_(file), where_(where) {}
+    : InputError(file.string() + ": " + where + ": " + message), file_(file), where_(where) {}
 
 namespace {
 
@@ -88,7 +88,7 @@ std::vector<std::string_view> split_any(std::string_view line) {
 double number(const LineReader& r, std::string_view field, const std::string& what) {
   double v = 0.0;
   if (!parse_double(field, v)) {
-    r.fail("column '" + what + "': '" + csv::clip(field) + "' is not a number");
+    r.fail("column '" + what + "': '" + excerpt(field) + "' is not a number");
   }
   return v;
 }
@@ -690,7 +690,7 @@ MpuHeader read_mpu_header(LineReader& r) {
     const auto f = split(line, ',');
     double v = 0.0;
     if (f.size() == 2 && !parse_double(f[0], v)) {
-      if (!parse_double(f[1], v)) r.fail("header value '" + csv::clip(f[1]) + "' is not a number");
+      if (!parse_double(f[1], v)) r.fail("header value '" + excerpt(f[1]) + "' is not a number");
       h.values[unquote(f[0])] = v;
       h.lines[unquote(f[0])] = r.line();
       continue;

@@ -224,6 +224,28 @@ std::size_t Extraction::count(SkipReason reason) const {
       std::count_if(skipped.begin(), skipped.end(), [&](const Skip& s) { return s.reason == reason; }));
 }
 
+std::string Extraction::tally() const {
+  const std::size_t intervals = points.size() + skipped.size();
+  std::string out = std::to_string(intervals) + " interval(s)";
+  if (intervals == 0 && !detection) return out + ": no segment of kind " + join(options.segment_kinds);
+  out += ", " + std::to_string(points.size()) + " kept";
+  std::vector<std::string> reasons;
+  for (SkipReason r : kAllSkipReasons)
+    if (count(r) > 0) reasons.push_back(std::to_string(count(r)) + " " + skip_reason_name(r));
+  if (!reasons.empty()) out += "; skipped: " + join(reasons);
+  if (detection) {
+    std::size_t rejected = 0;
+    reasons.clear();
+    for (Rejection r : kAllRejections) {
+      rejected += detection->count(r);
+      if (detection->count(r) > 0) reasons.push_back(std::to_string(detection->count(r)) + " " + rejection_name(r));
+    }
+    out += "; the detector rejected " + std::to_string(rejected) + " still run(s)" +
+           (reasons.empty() ? std::string() : ": " + join(reasons));
+  }
+  return out;
+}
+
 std::string describe(const Segment& s) {
   std::string out = "segment " + std::to_string(s.id) + " (" + to_string(s.kind);
   if (!s.label.empty()) out += " '" + s.label + "'";

@@ -2,7 +2,9 @@
 #include "stend/reporting/exports.hpp"
 
 #include "fitted_model.hpp"
+#include "stend/errors.hpp"
 #include "stend/estimation/summary.hpp"
+#include "stend/files.hpp"
 #include "stend/reporting/results.hpp"
 #include "stend/recording.hpp"
 
@@ -392,7 +394,7 @@ ExportResult export_kalibr(const fs::path& run, const RunResults& rr, const fs::
     if (o.from != "auto") throw;
     res.warnings.push_back(std::string("kalibr: no intrinsics written: ") + e.what());
   }
-  std::ofstream f(out);
+  std::ostringstream f;
   f << fmt::format("# Kalibr IMU noise model (imu.yaml), written by Stend from {}/allan.json\n", run.filename().string());
   f << fmt::format("# sensor: {} {} serial '{}'; Allan analysis of {} samples\n", rr.vendor, rr.model, rr.serial,
                    g17(jnum(*al, "samples")));
@@ -405,20 +407,20 @@ ExportResult export_kalibr(const fs::path& run, const RunResults& rr, const fs::
   f << fmt::format("rostopic: {}\n", o.rostopic);
   f << fmt::format("update_rate: {}  # [Hz]\n", g17(jnum(k, "update_rate")));
   f << intrinsics;
-  if (!f) throw std::runtime_error(out.string() + ": write failed");
+  write_file_atomic(out, f.str());
   res.files.push_back(out);
   return res;
 }
 
 // ---- IMU-TK -------------------------------------------------------------------------------------
 void write_imutk(const fs::path& file, const Eigen::Matrix3d& T, const Eigen::Matrix3d& K, const Eigen::Vector3d& B) {
-  std::ofstream f(file);
+  std::ostringstream f;
   for (int i = 0; i < 3; ++i) f << g17(T(i, 0)) << ' ' << g17(T(i, 1)) << ' ' << g17(T(i, 2)) << '\n';
   f << '\n';
   for (int i = 0; i < 3; ++i) f << g17(K(i, 0)) << ' ' << g17(K(i, 1)) << ' ' << g17(K(i, 2)) << '\n';
   f << '\n';
   for (int i = 0; i < 3; ++i) f << g17(B(i)) << '\n';
-  if (!f) throw std::runtime_error(file.string() + ": write failed");
+  write_file_atomic(file, f.str());
 }
 
 ExportResult export_imutk(const fs::path& run, const RunResults& rr, const fs::path& prefix, const ExportOptions& o) {
@@ -553,7 +555,7 @@ ExportResult export_px4(const fs::path& run, const RunResults& rr, const fs::pat
   if (body.str().empty())
     throw std::runtime_error("no calibration (ceres.json, fit.json) or temperature model (temp_poly.json) in " +
                              run.string() + ": nothing to export for PX4");
-  std::ofstream f(out);
+  std::ostringstream f;
   f << "# Onboard parameters for Vehicle 1\n#\n";
   f << fmt::format("# PX4 calibration written by Stend from {} (sensor {} {} serial '{}')\n", run.filename().string(),
                    rr.vendor, rr.model, rr.serial);
@@ -561,7 +563,7 @@ ExportResult export_px4(const fs::path& run, const RunResults& rr, const fs::pat
   f << "# CAL_*: accel corrected = (raw - OFF) * SCALE, gyro corrected = raw - OFF; SI units (m/s^2, rad/s)\n#\n";
   f << "# Vehicle-Id Component-Id Name Value Type\n";
   f << body.str();
-  if (!f) throw std::runtime_error(out.string() + ": write failed");
+  write_file_atomic(out, f.str());
   res.files.push_back(out);
   return res;
 }
@@ -587,8 +589,9 @@ struct MatStruct {
     std::size_t dims[2] = {1, 1};
     matvar_t* st = Mat_VarCreateStruct(name, 2, dims, fields.data(), static_cast<unsigned>(fields.size()));
     for (std::size_t i = 0; i < names.size(); ++i) Mat_VarSetStructFieldByName(st, names[i].c_str(), 0, values[i]);
-    Mat_VarWrite(mat, st, MAT_COMPRESSION_NONE);
+    const int failed = Mat_VarWrite(mat, st, MAT_COMPRESSION_NONE);
     Mat_VarFree(st);  // frees the fields too
+    if (failed != 0) throw IoError(fmt::format("cannot write the variable {} to the .mat file", name));
   }
 };
 
@@ -686,13 +689,20 @@ ExportResult export_matlab(const fs::path& run, const RunResults& rr, const fs::
   if (!ims[0].has_calib() && !ims[1].has_calib() && !ims[0].has_temp() && !ims[1].has_temp() && !noise)
     throw std::runtime_error("no calibration (ceres.json, fit.json, temp_poly.json) and no noise model (allan.json) in " +
                              run.string() + ": nothing to export for MATLAB");
-  mat_t* mat = Mat_CreateVer(out.c_str(), nullptr, MAT_FT_MAT5);
-  if (!mat) throw std::runtime_error(out.string() + ": cannot create the .mat file");
   std::string not_estimated;
-  write_matlab_params(mat, rr, info, ims[0], "accelerometer", res, not_estimated);
-  write_matlab_params(mat, rr, info, ims[1], "gyroscope", res, not_estimated);
-  write_matlab_info(mat, rr, not_estimated);
-  Mat_Close(mat);
+  write_file_atomic(out, [&](const fs::path& tmp) {
+    mat_t* mat = Mat_CreateVer(tmp.c_str(), nullptr, MAT_FT_MAT5);
+    if (!mat) throw IoError("cannot write " + out.string() + ": matio could not create the .mat file");
+    try {
+      write_matlab_params(mat, rr, info, ims[0], "accelerometer", res, not_estimated);
+      write_matlab_params(mat, rr, info, ims[1], "gyroscope", res, not_estimated);
+      write_matlab_info(mat, rr, not_estimated);
+    } catch (...) {
+      Mat_Close(mat);
+      throw;
+    }
+    if (Mat_Close(mat) != 0) throw IoError("cannot write " + out.string() + ": matio could not close the .mat file");
+  });
   if (!not_estimated.empty()) res.warnings.push_back("exported as 0 (not estimated): " + not_estimated);
   res.files.push_back(out);
   return res;
@@ -735,9 +745,7 @@ ExportResult export_run(const fs::path& run_dir, const std::string& format, fs::
   if (format == "px4") return export_px4(run, rr, out, options);
   if (format == "matlab") return export_matlab(run, rr, out, options);
   if (format == "json") {
-    std::ofstream f(out);
-    f << to_json(rr).dump(2) << '\n';
-    if (!f) throw std::runtime_error(out.string() + ": write failed");
+    write_file_atomic(out, to_json(rr).dump(2) + '\n');
     ExportResult r;
     r.files.push_back(out);
     return r;

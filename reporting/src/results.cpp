@@ -3,6 +3,7 @@
 
 #include "stend/estimators/builtin.hpp"
 #include "stend/reporting/fingerprint.hpp"
+#include "stend/recording.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -75,25 +76,19 @@ RunResults load_run_results(const fs::path& run_dir) {
   r.dir = fs::absolute(run_dir).lexically_normal();
   if (!r.dir.has_filename()) r.dir = r.dir.parent_path();
   r.run_name = r.dir.filename().string();
-  json run;
-  try {
-    run = json::parse(read_text(r.dir / "run.json"));
-  } catch (const json::exception& e) {
-    throw std::runtime_error((r.dir / "run.json").string() + ": " + e.what());
-  }
-  r.experiment = str_or(run, "experiment_name");
-  r.run_status = str_or(run, "status");
-  r.start_time_utc = str_or(run, "start_time_utc");
-  r.stend_version = str_or(run, "stend_version");
-  if (run.contains("sensor") && run["sensor"].contains("identity")) {
-    const json& id = run["sensor"]["identity"];
-    r.vendor = str_or(id, "vendor");
-    r.model = str_or(id, "model");
-    r.serial = str_or(id, "serial");
-  }
-  if (fs::exists(r.dir / "experiment.yaml")) {
+  // Opened as `stend info` and `stend fit` open it: a folder they refuse is refused here too.
+  const Recording rec = Recording::open(r.dir, SampleLoading::kStream, TruthLoading::kSkip);
+  const RecordingHeader& h = rec.header;
+  r.experiment = h.experiment_name;
+  r.run_status = to_string(h.status);
+  r.start_time_utc = h.start_time_utc;
+  r.stend_version = h.stend_version;
+  r.vendor = h.identity.vendor;
+  r.model = h.identity.model;
+  r.serial = h.identity.serial;
+  if (!rec.experiment_yaml.empty()) {
     try {
-      r.procedure_canonical = canonical_procedure(read_text(r.dir / "experiment.yaml"));
+      r.procedure_canonical = canonical_procedure(rec.experiment_yaml);
       r.procedure_fingerprint = sha256_hex(r.procedure_canonical);
     } catch (const std::exception& e) {
       r.notes.push_back(std::string("no procedure fingerprint: ") + e.what());

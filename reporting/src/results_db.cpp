@@ -1,6 +1,8 @@
 // SQLite results database (see results_db.hpp).
 #include "stend/reporting/results_db.hpp"
 
+#include "stend/errors.hpp"
+
 #include <sqlite3.h>
 
 #include <chrono>
@@ -84,7 +86,7 @@ ResultsDb::ResultsDb(const fs::path& file) : file_(file) {
     const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);
     db_ = nullptr;
-    throw std::runtime_error(file.string() + ": cannot open the results database: " + msg);
+    throw IoError(file.string() + ": cannot open the results database: " + msg);
   }
   sqlite3_busy_timeout(db_, 5000);
   char* err = nullptr;
@@ -121,7 +123,7 @@ long long ResultsDb::add(const RunResults& r) {
     if (sqlite3_exec(db_, sql, nullptr, nullptr, &err) != SQLITE_OK) {
       const std::string msg = err ? err : "?";
       sqlite3_free(err);
-      throw std::runtime_error(file_.string() + ": " + msg);
+      throw IoError(file_.string() + ": " + msg);
     }
   };
   exec("BEGIN IMMEDIATE");
@@ -141,7 +143,7 @@ long long ResultsDb::add(const RunResults& r) {
                                 r.stend_version, r.vendor, r.model, r.serial, r.procedure_fingerprint,
                                 r.procedure_canonical, notes, now_utc()};
     for (int i = 0; i < 13; ++i) ins.text(i + 1, vals[i]);
-    if (sqlite3_step(ins.s) != SQLITE_DONE) throw std::runtime_error(file_.string() + ": " + sqlite3_errmsg(db_));
+    if (sqlite3_step(ins.s) != SQLITE_DONE) throw IoError(file_.string() + ": " + sqlite3_errmsg(db_));
     const long long id = sqlite3_last_insert_rowid(db_);
     for (const auto& e : r.estimators) {
       Stmt s(db_, "INSERT INTO estimators(run_id, name, version, file, status, message) VALUES(?,?,?,?,?,?)");
@@ -151,7 +153,7 @@ long long ResultsDb::add(const RunResults& r) {
       s.text(4, e.file);
       s.text(5, e.status);
       s.text(6, e.message);
-      if (sqlite3_step(s.s) != SQLITE_DONE) throw std::runtime_error(file_.string() + ": " + sqlite3_errmsg(db_));
+      if (sqlite3_step(s.s) != SQLITE_DONE) throw IoError(file_.string() + ": " + sqlite3_errmsg(db_));
     }
     Stmt p(db_,
            "INSERT INTO parameters(run_id, estimator, name, unit, identifiable, value, std_error, interval_lo, "
@@ -169,7 +171,7 @@ long long ResultsDb::add(const RunResults& r) {
       p.real(9, q.hi);
       p.real(10, q.confidence);
       p.text(11, q.reason);
-      if (sqlite3_step(p.s) != SQLITE_DONE) throw std::runtime_error(file_.string() + ": " + sqlite3_errmsg(db_));
+      if (sqlite3_step(p.s) != SQLITE_DONE) throw IoError(file_.string() + ": " + sqlite3_errmsg(db_));
     }
     exec("COMMIT");
     return id;

@@ -3,6 +3,7 @@
 
 #include "stend/allan/allan.hpp"
 #include "stend/estimation/summary.hpp"
+#include "stend/files.hpp"
 #include "stend/model/terms.hpp"
 #include "stend/physics/units.hpp"
 #include "stend/reporting/results.hpp"
@@ -707,14 +708,7 @@ std::string run_report_html(const fs::path& run_dir) {
 fs::path write_run_report(const fs::path& run_dir) {
   const std::string html = run_report_html(run_dir);
   const fs::path out = run_dir / "report.html";
-  const fs::path tmp = run_dir / "report.html.tmp";
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) throw std::runtime_error(tmp.string() + ": cannot write");
-    f << html;
-    if (!f) throw std::runtime_error(tmp.string() + ": write failed");
-  }
-  fs::rename(tmp, out);
+  write_file_atomic(out, html);
   return out;
 }
 

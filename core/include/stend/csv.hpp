@@ -34,11 +34,6 @@ void append_field(std::string& out, std::string_view field);
 // Appends the fields joined by commas and a terminating '\n'.
 void append_record(std::string& out, const std::vector<std::string>& fields);
 
-// Longest text of a file that messages quote whole; longer text is cut (see clip).
-inline constexpr std::size_t kMessageTextChars = 120;
-// `text` for a message: whole up to `max` characters, else its start and "… (N more bytes)".
-std::string clip(std::string_view text, std::size_t max = kMessageTextChars);
-
 // Whole-field parsers; false when the text is not exactly one value of the type.
 // parse_double: empty, "nan", "NaN", "-nan" → NaN; "inf", "-inf", "Inf" → ±infinity.
 bool parse_double(std::string_view text, double& out) noexcept;

@@ -4,6 +4,7 @@
 // file it came from so later checks (against the limits plugins declare) can point at it.
 #pragma once
 
+#include <stend/errors.hpp>
 #include <stend/sdk.hpp>
 
 #include <Eigen/Core>
@@ -25,7 +26,7 @@ struct SourceLocation {
 
 // Every experiment problem is one of these. what() reads
 //   "FILE:LINE:COL: error: MESSAGE"   (plus "\n  hint: …" when there is a hint)
-class ExperimentError : public std::runtime_error {
+class ExperimentError : public InputError {
  public:
   ExperimentError(SourceLocation where, std::string key, std::string message, std::string hint = {});
   const SourceLocation& where() const { return where_; }

@@ -202,7 +202,9 @@ struct Recording {
   // summary states; −1 when unknown (CSV, no stated rate, a file from before this count).
   std::int64_t irregular_count = -1;
 
-  // Throws std::runtime_error naming the file and line when something is unreadable.
+  // Throws InputError (stend/errors.hpp) naming the file and line when the folder is not a
+  // readable recording (missing or damaged files, a format_version it does not read), IoError when
+  // reading itself fails.
   static Recording open(const std::filesystem::path& run_dir,
                         SampleLoading loading = SampleLoading::kInMemory,
                         TruthLoading truth = TruthLoading::kLoad);

@@ -14,6 +14,14 @@
 
 namespace stend::yaml {
 
+// The whole text of a hand-written file (`what` names it in messages: "model file"). Throws
+// InputError "<what> not found: FILE" when there is no such file, "<what> FILE is a folder" for a
+// folder, "cannot read <what> FILE: <reason>" otherwise.
+std::string read_file(const std::string& file, const std::string& what);
+
+// read_file, parsed as YAML; a syntax error is an ExperimentError at FILE:LINE:COLUMN.
+YAML::Node load_file(const std::string& file, const std::string& what);
+
 // 1-based location of a node (line 0 when the node has no mark, e.g. undefined or empty doc).
 SourceLocation location_of(const YAML::Node& node, const std::string& file);
 

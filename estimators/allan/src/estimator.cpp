@@ -3,6 +3,7 @@
 
 #include "stend/allan/allan.hpp"
 #include "stend/allan/deviation_report.hpp"
+#include "stend/yaml_util.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -24,7 +25,7 @@ const stend::fields::Table<estimation::EstimatorConfig>& AllanEstimator::fields(
 
 EstimatorResult AllanEstimator::fit(const EstimatorRequest& req) {
   if (req.recording == nullptr) throw std::invalid_argument("allan: no recording given");
-  const YAML::Node root = YAML::LoadFile(req.model_file);
+  const YAML::Node root = yaml::load_file(req.model_file, "model file");
   const AllanOptions options = options_from_yaml(root["allan"], req.model_file);
   const DeviationRequest deviations = deviations_from_yaml(root["allan"], req.model_file);
   const AllanReport report = analyze_recording(*req.recording, options);

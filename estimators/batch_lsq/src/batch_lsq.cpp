@@ -246,7 +246,7 @@ FitResult fit_recording(const Recording& rec, const ModelSpec& spec) {
     used.processing = ex.options;
     fr = fit_points(points, used);
     if (!fr.ok && points.empty())
-      fr.message = "no usable static segment in the recording; " + fr.message;
+      fr.message = "no usable static segment in the recording (" + ex.tally() + "); " + fr.message;
     fr.notes.insert(fr.notes.begin(), ex.notes.begin(), ex.notes.end());
   }
   fr.extracted = true;

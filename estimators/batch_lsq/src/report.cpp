@@ -1,11 +1,11 @@
 // Text table and JSON ("stend.fit/1") output of a batch_lsq fit.
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <stdexcept>
 
 #include "stend/batch_lsq/batch_lsq.hpp"
+#include "stend/files.hpp"
 
 namespace stend::batch_lsq {
 
@@ -258,11 +258,6 @@ std::string to_json(const FitResult& fr, int indent) {
   return j.dump(indent);
 }
 
-void write_json(const std::filesystem::path& file, const FitResult& fit) {
-  std::ofstream out(file);
-  if (!out) throw std::runtime_error("cannot write fit JSON '" + file.string() + "'");
-  out << to_json(fit) << "\n";
-  if (!out) throw std::runtime_error("error while writing fit JSON '" + file.string() + "'");
-}
+void write_json(const std::filesystem::path& file, const FitResult& fit) { write_file_atomic(file, to_json(fit) + "\n"); }
 
 }  // namespace stend::batch_lsq

@@ -119,15 +119,7 @@ ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& fi
 }
 
 ModelFileOptions load_model_file(const std::string& file) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(file);
-  } catch (const YAML::BadFile&) {
-    throw ExperimentError(SourceLocation{file, 0, 0}, "", "cannot open the model file");
-  } catch (const YAML::ParserException& e) {
-    throw ExperimentError(SourceLocation{file, e.mark.line + 1, e.mark.column + 1}, "", "YAML syntax error: " + e.msg);
-  }
-  return options_from_yaml(root, file);
+  return options_from_yaml(yaml::load_file(file, "model file"), file);
 }
 
 std::string describe_options(const ModelFileOptions& o) {

@@ -1,10 +1,8 @@
 // Text report, JSON and YAML options of temp_poly. See stend/temp_poly/temp_poly.hpp.
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <ostream>
-#include <sstream>
 #include <stend/experiment.hpp>
 #include <stend/yaml_util.hpp>
 #include <yaml-cpp/yaml.h>
@@ -256,11 +254,7 @@ TempPolyOptions parse_options(const std::string& yaml_text, const std::string& f
 }
 
 TempPolyOptions load_options(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  if (!in) throw std::runtime_error("cannot open temp_poly options '" + file.string() + "'");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return parse_options(ss.str(), file.string());
+  return parse_options(yaml::read_file(file.string(), "model file"), file.string());
 }
 
 }  // namespace stend::temp_poly

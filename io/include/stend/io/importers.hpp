@@ -17,6 +17,7 @@
 // place (binary files: the byte offset, or a record), for malformed input.
 #pragma once
 
+#include <stend/errors.hpp>
 #include <stend/io/sample_sink.hpp>
 #include <stend/recording.hpp>
 
@@ -38,7 +39,7 @@ struct ByteOffset {
   std::uint64_t bytes = 0;
 };
 
-class ImportError : public std::runtime_error {
+class ImportError : public InputError {
  public:
   // line = 0 when the problem is not tied to a line.
   ImportError(const std::filesystem::path& file, std::size_t line, const std::string& message);

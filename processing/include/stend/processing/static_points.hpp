@@ -83,6 +83,10 @@ struct Extraction {
   // How the intervals were detected and what the detector rejected (when they were detected).
   std::optional<DetectionSummary> detection;
   std::size_t count(SkipReason reason) const;  // skips with that reason
+  // Which rule took the intervals, counted per reason — for a message when too few points came
+  // out: "6 interval(s), 1 kept; skipped: 3 unsettled, 2 saturated; the detector rejected 4 still
+  // run(s): 3 too_short, 1 gap" (or "0 interval(s): no segment of kind orientation").
+  std::string tally() const;
 };
 
 // The stage. `options` are resolved against the recording's experiment (resolve()). Throws

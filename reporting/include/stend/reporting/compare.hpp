@@ -7,6 +7,7 @@
 // of the units' own standard errors (to tell real unit-to-unit spread from measurement noise).
 #pragma once
 
+#include "stend/errors.hpp"
 #include "stend/reporting/results.hpp"
 
 #include <stdexcept>
@@ -17,9 +18,9 @@ namespace stend::reporting {
 
 // Thrown when the runs were not measured the same way; the message names the fingerprints and the
 // runs behind each.
-class ComparisonRefused : public std::runtime_error {
+class ComparisonRefused : public InputError {
  public:
-  using std::runtime_error::runtime_error;
+  using InputError::InputError;
 };
 
 struct UnitValue {

@@ -49,8 +49,9 @@ struct RunResults {
   const ParameterResult* find(const std::string& estimator, const std::string& name) const;
 };
 
-// Reads run.json, experiment.yaml and the results files present. Throws std::runtime_error when
-// run.json is missing or unreadable; a results file that does not parse becomes a note.
+// Reads the recording's header (through Recording::open, which throws InputError for a folder
+// that is not a readable recording: missing or damaged files, an unknown format_version),
+// experiment.yaml and the results files present; a results file that does not parse becomes a note.
 RunResults load_run_results(const std::filesystem::path& run_dir);
 
 // Parameters of one results document ("stend.fit/1", "stend.temp_poly/1", Allan, ceres) — the

@@ -11,6 +11,11 @@ namespace stend::physics {
 
 inline constexpr double kEarthRateRadps = 7.2921150e-5;  // WGS-84 ω_ie
 
+// Local gravity a value given by hand must lie in [m/s²]: the Earth's surface spans about
+// 9.76 (equator, high ground) to 9.84 (poles); outside, the value is in the wrong unit or wrong.
+inline constexpr double kMinPlausibleGravity_mps2 = 9.7;
+inline constexpr double kMaxPlausibleGravity_mps2 = 9.9;
+
 // WGS-84 normal gravity (Somigliana) at geodetic latitude, with the second-order free-air
 // height correction. Returns m/s^2. Accurate to ~1e-6 m/s^2 against the full formula near
 // the surface; local anomalies (up to ~1e-3 m/s^2) are not modelled — give `value_mps2` then.

@@ -110,6 +110,7 @@ std::ostream& operator<<(std::ostream& os, const FitResult& fit);  // = print_ta
 
 // JSON document of schema "stend.fit/1" (estimators/batch_lsq/README.md).
 std::string to_json(const FitResult& fit, int indent = 2);
+// Through stend::write_file_atomic: throws IoError when the file cannot be written.
 void write_json(const std::filesystem::path& file, const FitResult& fit);
 
 }  // namespace stend::batch_lsq

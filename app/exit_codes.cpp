@@ -1,0 +1,72 @@
+// Exceptions that end a command → the program's exit code, in one place (exit_codes.hpp).
+#include "exit_codes.hpp"
+
+#include "stend/devices/i2c.hpp"
+#include "stend/devices/modbus_rtu.hpp"
+#include "stend/devices/text_command.hpp"
+#include "stend/errors.hpp"
+#include "stend/experiment.hpp"
+#include "stend/sdk.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <ios>
+#include <stdexcept>
+#include <system_error>
+
+namespace stend::cli {
+
+namespace {
+
+ExitCode say(ExitCode code, const char* prefix, const char* what) {
+  fmt::print(stderr, "{}{}\n", prefix, what);
+  return code;
+}
+
+}  // namespace
+
+ExitCode exit_code_of_current_exception() {
+  constexpr ExitCode kInput = ExitCode::kInvalidInput, kIo = ExitCode::kIoFailure;
+  try {
+    throw;
+  } catch (const ExperimentError& e) {  // its text reads "FILE:LINE:COL: error: …" already
+    return say(kInput, "", e.what());
+  } catch (const InputError& e) {
+    return say(kInput, "error: ", e.what());
+  } catch (const IoError& e) {
+    return say(kIo, "error: ", e.what());
+  } catch (const std::system_error& e) {  // filesystem and stream failures
+    return say(kIo, "error: ", e.what());
+  } catch (const FixtureLinkFault& e) {
+    return say(kIo, "error: ", e.what());
+  } catch (const transport::ModbusError& e) {
+    return say(kIo, "error: ", e.what());
+  } catch (const transport::TextCommandError& e) {
+    return say(kIo, "error: ", e.what());
+  } catch (const transport::I2cError& e) {
+    return say(kIo, "error: ", e.what());
+  } catch (const YAML::Exception& e) {
+    return say(kInput, "error: ", e.what());
+  } catch (const nlohmann::json::exception& e) {
+    return say(kInput, "error: ", e.what());
+  } catch (const std::runtime_error& e) {  // the libraries' "this input does not allow that"
+    return say(kInput, "error: ", e.what());
+  } catch (const std::invalid_argument& e) {
+    return say(kInput, "error: ", e.what());
+  } catch (const std::domain_error& e) {
+    return say(kInput, "error: ", e.what());
+  } catch (const std::out_of_range& e) {
+    return say(kInput, "error: ", e.what());
+  } catch (const std::exception& e) {
+    return say(ExitCode::kUsage, "internal error: ", e.what());
+  } catch (...) {
+    return say(ExitCode::kUsage, "internal error: ", "unknown exception");
+  }
+}
+
+}  // namespace stend::cli
