@@ -203,7 +203,15 @@ int main(int argc, char** argv) {
   auto* run = app.add_subcommand("run", "Run an experiment and record it");
   run->add_option("experiment", file, "Experiment YAML")->required();
   run->add_option("-o,--output", output, "Folder for run folders (default: the experiment's outputs.directory)");
-  auto* name_option = run->add_option("--name", name, "Run folder name (default: <experiment>-<UTC time>)");
+  run->add_option("--name", name, "Run folder name (default: <experiment>-<UTC time>)")
+      ->check([](const std::string& given) {  // a name, not a path: refused as a usage error
+        try {
+          stend::check_run_name(given);
+          return std::string();
+        } catch (const std::invalid_argument& e) {
+          return std::string(e.what());
+        }
+      });
   run->add_option("--clock", clock, "Override the clock")->check(CLI::IsMember({"simulated", "wall"}));
   run->add_option("--store", store, "How the run folder stores its data: hdf5 (run.h5, default) or csv (the CSV files)")
       ->check(CLI::IsMember({"hdf5", "csv"}));
@@ -247,10 +255,7 @@ int main(int argc, char** argv) {
         if (*c.sub) return c.run();
       if (*plugins) return cmd_plugins(plugin_paths);
       if (*validate) return cmd_validate(file, allow_plugins);
-      if (*run) {
-        if (*name_option) stend::check_run_name(name);  // given but empty is refused, not the default
-        return cmd_run(file, output, name, clock, store, quiet, allow_plugins);
-      }
+      if (*run) return cmd_run(file, output, name, clock, store, quiet, allow_plugins);
       if (*info) return cmd_info(dir);
       if (*fit) return cmd_fit(fit_data, model, json, estimator);
     } catch (...) {
