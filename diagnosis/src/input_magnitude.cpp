@@ -137,11 +137,13 @@ GapInput build_magnitude_input(const Recording& rec, const estimation::ModelSpec
   processing::StaticDetectorOptions det;  // the still start (an "initialization" segment) sets the threshold
   // Long enough for the extraction to keep something after settle_s at both ends.
   det.min_duration_s = 2.0 * spec.processing.extraction.settle_s + 1.0;
-  const auto ivs = processing::detect_static_intervals(rec, det);
+  const processing::Detection detection = processing::detect_static(rec, det);
+  const auto& ivs = detection.intervals;
   if (ivs.size() < 2)
     throw std::runtime_error("'" + rec.dir.string() + "': " + std::to_string(ivs.size()) +
                              " static interval(s) long enough for the extraction (settle_s at both ends) "
-                             "found; the magnitude form of the gap needs several orientations");
+                             "found (" + detection.summary.rejections() +
+                             "); the magnitude form of the gap needs several orientations");
   Recording aug = rec;
   aug.segments.clear();
   aug.truth_t.clear();

@@ -450,6 +450,16 @@ const char* rejection_name(Rejection r) {
   return "gap";
 }
 
+std::string DetectionSummary::rejections() const {
+  std::size_t total = 0;
+  std::string reasons;
+  for (Rejection r : kAllRejections) {
+    total += count(r);
+    if (count(r) > 0) reasons += std::string(reasons.empty() ? ": " : ", ") + std::to_string(count(r)) + " " + rejection_name(r);
+  }
+  return "the detector rejected " + std::to_string(total) + " still run(s)" + reasons;
+}
+
 std::string DetectionSummary::print() const {
   std::string out = "static detection: " + std::to_string(found) + " intervals; window " + num(window_s) +
                     " s at " + num(rate_hz) + " Hz, min duration " + num(min_duration_s) + " s\n";

@@ -233,16 +233,7 @@ std::string Extraction::tally() const {
   for (SkipReason r : kAllSkipReasons)
     if (count(r) > 0) reasons.push_back(std::to_string(count(r)) + " " + skip_reason_name(r));
   if (!reasons.empty()) out += "; skipped: " + join(reasons);
-  if (detection) {
-    std::size_t rejected = 0;
-    reasons.clear();
-    for (Rejection r : kAllRejections) {
-      rejected += detection->count(r);
-      if (detection->count(r) > 0) reasons.push_back(std::to_string(detection->count(r)) + " " + rejection_name(r));
-    }
-    out += "; the detector rejected " + std::to_string(rejected) + " still run(s)" +
-           (reasons.empty() ? std::string() : ": " + join(reasons));
-  }
+  if (detection) out += "; " + detection->rejections();
   return out;
 }
 

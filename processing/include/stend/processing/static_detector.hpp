@@ -102,6 +102,8 @@ struct DetectionSummary {
 
   std::size_t count(Rejection r) const { return rejected[static_cast<std::size_t>(r)]; }
   std::string print() const;  // a few lines with units
+  // What the rules took, for a message: "the detector rejected 4 still run(s): 3 too_short, 1 gap".
+  std::string rejections() const;
   bool equals(const DetectionSummary& other, double tol = 1e-12) const;
 };
 
