@@ -107,7 +107,10 @@ TEST(RunGuards, TheWholeRunIsCheckedAgainstTheLimits) {
   const fs::path raised =
       write(dir / "raised.yaml", experiment("limits: {max_run_time_s: 4e6}\n", steps, 10));
   const ProgramOutput ok = run_stend("validate " + raised.string());
-  EXPECT_EQ(ok.code, 0) << ok.text;
+  // The raised limit is honoured; the estimate (several GB) may still exceed this machine's free
+  // space, which is then the only refusal.
+  EXPECT_FALSE(contains(ok.text, "limits.")) << ok.text;
+  EXPECT_TRUE(ok.code == 0 || contains(ok.text, "free [run time 40d00h00m00s")) << ok.text;
   EXPECT_TRUE(contains(ok.text, "run time 40d00h00m00s, 3.46e+07 samples")) << ok.text;
 }
 
