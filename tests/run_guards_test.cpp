@@ -201,7 +201,7 @@ TEST(RunGuards, ExperimentPluginFoldersAreLoadedOnlyWhenAllowed) {
   EXPECT_EQ(p.name, "test_marker");
   EXPECT_EQ(p.file, (dir / "plugins/stend_test_marker.so").string());
   EXPECT_EQ(p.origin, "experiment");
-  EXPECT_EQ(p.hash.size(), std::string("fnv1a64:").size() + 16) << p.hash;
+  EXPECT_EQ(p.hash.size(), std::string("crc32:").size() + 8) << p.hash;
 }
 
 TEST(RunGuards, AMissingPluginFolderIsAnErrorAtItsEntry) {

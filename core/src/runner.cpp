@@ -4,6 +4,7 @@
 #include "stend/version.hpp"
 
 #include <fmt/format.h>
+#include <zlib.h>
 
 #include <sys/statvfs.h>
 
@@ -14,6 +15,7 @@
 #include <memory>
 #include <stdexcept>
 #include <utility>
+#include <vector>
 
 namespace stend {
 
@@ -403,20 +405,17 @@ std::unique_ptr<Clock> make_clock(const std::string& kind) {
   return std::make_unique<WallClock>();
 }
 
-// "fnv1a64:<16 hex digits>" of a file's content (provenance of a plugin library, not a security
-// check); "" when the file cannot be read.
+// "crc32:<8 hex digits>" (zlib's CRC-32, as `python3 -c 'import zlib…'` or `crc32 FILE` print it)
+// of a file's content: provenance of a plugin library, not a security check; "" when the file
+// cannot be read.
 std::string file_hash(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return "";
-  std::uint64_t h = 0xcbf29ce484222325ULL;
-  char buf[1 << 16];
-  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
-    for (std::streamsize i = 0; i < in.gcount(); ++i) {
-      h ^= static_cast<unsigned char>(buf[i]);
-      h *= 0x100000001b3ULL;
-    }
-  }
-  return fmt::format("fnv1a64:{:016x}", h);
+  uLong crc = crc32(0L, Z_NULL, 0);
+  std::vector<char> buf(1 << 16);
+  while (in.read(buf.data(), static_cast<std::streamsize>(buf.size())) || in.gcount() > 0)
+    crc = crc32(crc, reinterpret_cast<const Bytef*>(buf.data()), static_cast<uInt>(in.gcount()));
+  return fmt::format("crc32:{:08x}", crc);
 }
 
 RecordingHeader run_header(const Experiment& exp, const PluginHost& host, Bench& bench, const std::string& clock) {

@@ -56,7 +56,7 @@ RecordingHeader make_header() {
   h.experiment_name = "six-position, \"quoted\" & ünïcode";
   h.experiment_file = "/lab/configs/six_position.yaml";
   h.stend_version = "0.1.0";
-  h.plugins = {{"sensor", "sim_imu", "0.1.0", "/usr/lib/stend/plugins/libsim_imu.so", "install prefix", "fnv1a64:0123456789abcdef"},
+  h.plugins = {{"sensor", "sim_imu", "0.1.0", "/usr/lib/stend/plugins/libsim_imu.so", "install prefix", "crc32:0123abcd"},
                {"table", "sim_table", "0.2.0", "libsim_table.so", "experiment", ""}};
   h.identity = {"InvenSense", "MPU-6050", "SN-0042", "0x68"};
   h.info.output_rate_hz = 1000.0;

@@ -53,7 +53,7 @@ struct PluginUse {
   std::string role;  // "sensor" or the fixture id
   std::string name, version, file;
   std::string origin;  // the search-path entry it was found through (SearchDir::origin)
-  std::string hash;    // "fnv1a64:<16 hex digits>" of the file's content; "" when unreadable
+  std::string hash;    // "crc32:<8 hex digits>" (zlib CRC-32) of the file's content; "" when unreadable
 };
 
 struct RecordingHeader {
