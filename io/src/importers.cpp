@@ -1,4 +1,5 @@
 #include <stend/csv.hpp>
+#include <stend/files.hpp>
 #include <stend/io/importers.hpp>
 #include <stend/io/timestamps.hpp>
 #include <stend/physics/gravity.hpp>
@@ -987,10 +988,7 @@ void export_imutk(const Recording& rec, const fs::path& acc_file, const fs::path
       }
       out += '\n';
     }
-    std::ofstream f(file, std::ios::binary);
-    if (!f) throw ImportError(file, 0, std::string("cannot create: ") + std::strerror(errno));
-    f.write(out.data(), static_cast<std::streamsize>(out.size()));
-    if (!f) throw ImportError(file, 0, "write failed");
+    write_file_atomic(file, out);
   };
   write(acc_file, false);
   if (!gyro_file.empty()) write(gyro_file, true);

@@ -192,7 +192,8 @@ Recording import_imutk(const std::filesystem::path& acc_file,
 // repair, `rec` receives the rest.
 void import_imutk(const std::filesystem::path& acc_file, const std::filesystem::path& gyro_file,
                   const ImuTkOptions& options, Recording& rec, SampleSink& out);
-// Writes `t x y z` lines (SI values, or counts when `counts`), full double precision.
+// Writes `t x y z` lines (SI values, or counts when `counts`), full double precision; each file is
+// replaced whole (stend::write_file_atomic: IoError naming the path when a write fails).
 void export_imutk(const Recording& recording, const std::filesystem::path& acc_file,
                   const std::filesystem::path& gyro_file, bool counts = false);
 
