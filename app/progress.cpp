@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <string>
 #include <utility>
 
@@ -125,10 +126,18 @@ void StatusLine::keep() {
 TaskProgress::TaskProgress(std::string what)
     : what_(std::move(what)), start_(std::chrono::steady_clock::now()), last_(start_ - std::chrono::hours(1)) {}
 
+bool TaskProgress::due() const {
+  return line_.enabled() &&
+         std::chrono::duration<double>(std::chrono::steady_clock::now() - last_).count() >= kRedrawPeriod_s;
+}
+
+void TaskProgress::update_lazily(const std::function<double()>& fraction, const std::string& detail) {
+  if (due()) update(fraction(), detail);
+}
+
 void TaskProgress::update(double fraction, const std::string& detail) {
-  if (!line_.enabled()) return;
+  if (!due()) return;
   const auto now = std::chrono::steady_clock::now();
-  if (std::chrono::duration<double>(now - last_).count() < kRedrawPeriod_s) return;
   last_ = now;
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   fraction = std::clamp(fraction, 0.0, 1.0);
@@ -137,6 +146,41 @@ void TaskProgress::update(double fraction, const std::string& detail) {
     pieces.push_back({fmt::format("~{} left", fmt_duration(elapsed * (1.0 - fraction) / fraction)), 1});
   if (!detail.empty()) pieces.push_back({detail, 2});
   line_.show(fit_line(pieces, terminal_columns()));
+}
+
+}  // namespace stend::cli
+
+namespace stend::cli {
+
+double input_read_share(const std::vector<std::filesystem::path>& inputs) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  double total = 0.0, read = 0.0;
+  std::vector<fs::path> files;
+  for (const fs::path& in : inputs) {
+    if (fs::is_directory(in, ec)) {
+      for (const auto& e : fs::recursive_directory_iterator(in, ec))
+        if (e.is_regular_file(ec)) files.push_back(fs::canonical(e.path(), ec));
+    } else {
+      files.push_back(fs::canonical(in, ec));
+    }
+  }
+  for (const fs::path& f : files) {
+    const std::uintmax_t n = fs::file_size(f, ec);
+    if (!ec) total += static_cast<double>(n);
+  }
+  if (total <= 0.0) return 0.0;
+  for (const auto& fd : fs::directory_iterator("/proc/self/fd", ec)) {
+    const fs::path target = fs::read_symlink(fd.path(), ec);
+    if (ec || std::find(files.begin(), files.end(), target) == files.end()) continue;
+    std::ifstream info("/proc/self/fdinfo/" + fd.path().filename().string());
+    std::string key;
+    double pos = 0.0;
+    while (info >> key)
+      if (key == "pos:" && info >> pos) break;
+    read += pos;
+  }
+  return std::clamp(read / total, 0.0, 1.0);
 }
 
 }  // namespace stend::cli

@@ -7,6 +7,8 @@
 #include "stend/runner.hpp"
 
 #include <chrono>
+#include <functional>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -58,6 +60,9 @@ class TaskProgress {
  public:
   explicit TaskProgress(std::string what);
   void update(double fraction, const std::string& detail = "");
+  // The same, with the share asked for only when the line is redrawn (when it costs something).
+  void update_lazily(const std::function<double()>& fraction, const std::string& detail = "");
+  bool due() const;  // a redraw would happen now
   void clear() { line_.clear(); }
 
  private:
@@ -65,5 +70,10 @@ class TaskProgress {
   StatusLine line_;
   std::chrono::steady_clock::time_point start_, last_;
 };
+
+// How far this process has read the files `inputs`: the read offsets of its open descriptors on
+// them (/proc/self/fd, /proc/self/fdinfo) over their total size, 0…1; 0 when none is open (a
+// reader that reads twice shows its pass).
+double input_read_share(const std::vector<std::filesystem::path>& inputs);
 
 }  // namespace stend::cli

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 namespace {
@@ -59,6 +60,8 @@ TEST(EtaSweep, TimeLeftWithinTenPercentAtQuarterHalfAndThreeQuarters) {
       }
     ASSERT_NE(at, nullptr);
     const double truly_left = total - at->t_s;
+    std::printf("at %2.0f %%: run time %6.0f s, estimated %6.0f s left, truly %6.0f s (error %+.1f %%)\n", f * 100,
+                at->t_s, at->remaining_s, truly_left, 100.0 * (at->remaining_s - truly_left) / truly_left);
     EXPECT_LE(std::abs(at->remaining_s - truly_left), 0.1 * truly_left)
         << "at " << f * 100 << " % (run time " << at->t_s << " s of " << total << " s): estimated "
         << at->remaining_s << " s left, truly " << truly_left << " s";

@@ -118,6 +118,7 @@ RunStatus RunFolderFeed::refresh(LiveState& state) {
   ProcedureEta eta(procedure_);
   int current = procedure_.empty() ? -1 : 0;
   double step_t0 = 0.0;
+  int items_done = 0;  // of the current step
   eta.step_started(0, 0.0, temperatures.empty() ? kUnknown : temperatures.front().air_c);
   for (const Segment& s : rec.segments) {
     if (s.step < 0 || static_cast<std::size_t>(s.step) >= procedure_.size()) continue;
@@ -127,8 +128,10 @@ RunStatus RunFolderFeed::refresh(LiveState& state) {
       current = s.step;
       step_t0 = s.kind == SegmentKind::kSetTemperature ? s.t_start_s : s.t_start_s - st.dwell_s - eta.move_s();
       eta.step_started(static_cast<std::size_t>(s.step), step_t0, NAN);
+      items_done = 0;
     }
     if (is_item_step(st)) {
+      ++items_done;
       eta.item_started(s.t_start_s - st.dwell_s - eta.move_s());
       eta.move_finished(s.t_start_s - st.dwell_s);
     }
@@ -137,6 +140,7 @@ RunStatus RunFolderFeed::refresh(LiveState& state) {
       if (st.kind == Step::Kind::kSetTemperature) eta.band_entered(s.t_end_s - st.hold_s);
       eta.step_finished(s.t_end_s);
       current = s.step + 1;
+      items_done = 0;
       eta.step_started(static_cast<std::size_t>(current), s.t_end_s, p.air_c);
     }
   }
@@ -146,6 +150,7 @@ RunStatus RunFolderFeed::refresh(LiveState& state) {
     p.step_kind = step_kind_name(st.kind);
     p.step_label = st.label;
     p.item_count = is_item_step(st) ? item_count(st) : 0;
+    p.item = rec.header.status == RunStatus::kRunning ? std::min(items_done + 1, p.item_count) : items_done;
     // A set_temperature step in progress: in the band since the truth's last entry into it.
     if (st.kind == Step::Kind::kSetTemperature && air >= 0) {
       double since = NAN;

@@ -7,6 +7,7 @@
 #include <httplib.h>
 
 #include <arpa/inet.h>
+#include <sys/socket.h>
 
 #include <atomic>
 #include <chrono>
@@ -54,6 +55,12 @@ struct LiveServer::Impl {
 LiveServer::LiveServer(const LiveState& state, const LiveServerOptions& options) : impl_(std::make_unique<Impl>()) {
   options.check();
   httplib::Server& s = impl_->server;
+  // SO_REUSEADDR only: httplib's default adds SO_REUSEPORT, which would let a second stend listen
+  // on a port that is taken (and share its requests) instead of being told so.
+  s.set_socket_options([](socket_t sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
   // Read-only: only GET (and HEAD) are routed; the page loads nothing from elsewhere.
   s.set_default_headers({{"Cache-Control", "no-store"},
                          {"X-Content-Type-Options", "nosniff"},

@@ -108,7 +108,9 @@ TEST(LiveServer, ServesThePageAndStateReadOnlyOnLoopback) {
   EXPECT_EQ(json::parse(st->body)["run_time_s"], 12.0);
   const auto js = c.Get("/uPlot.iife.min.js");
   ASSERT_TRUE(js);
-  if (stend::live::charts_built_in()) EXPECT_EQ(js->status, 200);
+  if (stend::live::charts_built_in()) {
+    EXPECT_EQ(js->status, 200);
+  }
   const auto post = c.Post("/api/state", "{}", "application/json");
   ASSERT_TRUE(post);
   EXPECT_EQ(post->status, 405);
@@ -165,4 +167,4 @@ TEST_P(Feed, RunFolderGivesTheMeansTheRunReported) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Stores, Feed, ::testing::Values(stend::RecordingFormat::kHdf5, stend::RecordingFormat::kCsv),
-                         [](const auto& info) { return std::string(stend::to_string(info.param)); });
+                         [](const auto& p) { return std::string(stend::to_string(p.param)); });

@@ -22,9 +22,8 @@ using nlohmann::json;
 using stend::testing::shell_quote;
 
 // About 20 s of wall time: the chamber held at 25 °C, then three table positions.
-const char* kExperiment = R"(experiment: {name: live_wall, seed: 5}
+const char* kExperiment = R"(experiment: {name: live_wall, seed: 5, clock: wall}
 bench:
-  clock: wall
   sensor: {plugin: sim_imu, config: {output_rate_hz: 100}}
   fixtures:
     - {id: table, plugin: sim_three_axis_table}
@@ -54,12 +53,12 @@ int port_of(const std::string& url) {
 // The number the page shows in an element: <span id="updates">12</span>.
 int shown_count(const std::string& dom, const std::string& id) {
   std::smatch m;
-  return std::regex_search(dom, m, std::regex("id=\"" + id + "\">(\\d+)<")) ? std::stoi(m[1]) : -1;
+  return std::regex_search(dom, m, std::regex("id=\"" + id + "\"[^>]*>(\\d+)<")) ? std::stoi(m[1]) : -1;
 }
 
 std::string shown_text(const std::string& dom, const std::string& id) {
   std::smatch m;
-  return std::regex_search(dom, m, std::regex("id=\"" + id + "\">([^<]*)<")) ? std::string(m[1]) : "";
+  return std::regex_search(dom, m, std::regex("id=\"" + id + "\"[^>]*>([^<]*)<")) ? std::string(m[1]) : "";
 }
 
 // The page's three accelerometer traces (x red, y green, z blue) and the chamber's air temperature.
