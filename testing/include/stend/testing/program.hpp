@@ -55,6 +55,7 @@ class StartedCommand {
 };
 
 // This build tree's stend program started in the background: start_stend("emulate table --port 0").
+// The shell execs it, so interrupt() reaches the program itself.
 StartedCommand start_stend(const std::string& args, const Environment& env = {});
 
 }  // namespace stend::testing
