@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "progress.hpp"
 #include "stend/estimation/model_spec.hpp"
 #include "stend/estimators/builtin.hpp"
 #include "stend/diagnosis/gap.hpp"
@@ -87,7 +88,10 @@ ExitCode run_validate(const GapArgs& a) {
   o.noise_null_runs = a.noise_null_runs;
   o.gap.alpha = a.alpha;
   if (a.positions > 0) o.design = diagnosis::many_positions_design(a.positions);
+  TaskProgress progress("gap validate");
+  o.on_progress = [&progress](double done, const std::string& stage) { progress.update(done, stage); };
   const diagnosis::ValidationReport r = diagnosis::run_validation(o);
+  progress.clear();
   diagnosis::print_validation(std::cout, r);
   if (!a.vjson.empty()) {
     write_file_atomic(a.vjson, diagnosis::validation_json(r) + "\n");

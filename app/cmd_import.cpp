@@ -2,6 +2,7 @@
 // (info, fit, gap, report, export, compare) works on it. The dataset is read whole through the io/
 // format registry first; the folder is created only then, and removed again if writing fails.
 #include "commands.hpp"
+#include "progress.hpp"
 
 #include "stend/io/formats.hpp"
 #include "stend/yaml_util.hpp"
@@ -13,6 +14,25 @@
 namespace stend::cli {
 
 namespace {
+
+// Passes the samples on and shows how far the input files have been read.
+class ProgressSink final : public io::SampleSink {
+ public:
+  ProgressSink(io::SampleSink& inner, const io::Inputs& inputs) : inner_(inner), inputs_(inputs) {}
+  void add_samples(const ImuSample* samples, std::size_t count) override {
+    inner_.add_samples(samples, count);
+    samples_ += count;
+    if (progress_.due())
+      progress_.update(input_read_share(inputs_), fmt::format("{} samples", samples_));
+  }
+  void clear() { progress_.clear(); }
+
+ private:
+  io::SampleSink& inner_;
+  const io::Inputs& inputs_;
+  TaskProgress progress_{"import"};
+  std::uint64_t samples_ = 0;
+};
 
 struct ImportArgs {
   DatasetArgs data;
@@ -53,7 +73,9 @@ ExitCode run_import(const ImportArgs& a) {
   Recording rec;
   io::RunSink sink(rec, dir, import_yaml(a, format, options), a.name);
   try {
-    io::import_dataset(inputs, a.data.format, rec, sink, options);
+    ProgressSink shown(sink, inputs);
+    io::import_dataset(inputs, a.data.format, rec, shown, options);
+    shown.clear();
     io::add_provenance(rec, inputs, format);
     rec.header.status = RunStatus::kComplete;
     sink.finish();

@@ -87,6 +87,7 @@ void add_export_command(CLI::App& app, std::vector<Command>& out);   // cmd_expo
 void add_emulate_command(CLI::App& app, std::vector<Command>& out);  // cmd_emulate.cpp
 void add_import_command(CLI::App& app, std::vector<Command>& out);   // cmd_import.cpp
 void add_apply_command(CLI::App& app, std::vector<Command>& out);    // cmd_apply.cpp
+void add_watch_command(CLI::App& app, std::vector<Command>& out);    // cmd_watch.cpp
 
 // Builds RUN/report.html from what the run folder holds and records the run in the results
 // database (called at the end of `stend run`). Returns the report path; throws when the report

@@ -1,5 +1,7 @@
 // stend — drive a characterization bench from an experiment file and analyse its recordings.
 #include "commands.hpp"
+#include "live_view.hpp"
+#include "progress.hpp"
 
 #include "stend/estimators/builtin.hpp"
 #include "stend/experiment.hpp"
@@ -26,6 +28,7 @@ std::atomic<bool> g_stop{false};
 
 using stend::cli::ExitCode;
 using stend::cli::fit_recording;
+using stend::cli::fmt_duration;
 
 extern "C" void on_sigint(int) {
   if (g_stop.load()) {  // second Ctrl-C: stop now
@@ -33,14 +36,6 @@ extern "C" void on_sigint(int) {
     std::raise(SIGINT);
   }
   g_stop.store(true);
-}
-
-std::string fmt_duration(double s) {
-  if (!std::isfinite(s)) return "?";
-  const long t = static_cast<long>(s + 0.5);
-  if (t >= 3600) return fmt::format("{}h{:02}m{:02}s", t / 3600, (t / 60) % 60, t % 60);
-  if (t >= 60) return fmt::format("{}m{:02}s", t / 60, t % 60);
-  return fmt::format("{}s", t);
 }
 
 // Loads plugins from the default search path. The experiment's own plugin_paths (read before full
@@ -79,19 +74,8 @@ ExitCode cmd_validate(const std::string& file, bool allow_plugins) {
   return ExitCode::kOk;
 }
 
-void print_progress(const stend::RunProgress& p, bool tty) {
-  std::string item = p.item_count > 0 ? fmt::format(" {} {}/{}", p.step_kind == "rates" ? "rate" : "orientation", p.item, p.item_count) : "";
-  std::string temp = std::isfinite(p.air_c) ? fmt::format(" | air {:.2f} °C die {:.2f} °C", p.air_c, p.die_c) : "";
-  std::string line = fmt::format("step {}/{} {}{} [{}] | t {} | ~{} left{} | {} samples", p.step, p.step_count,
-                                 p.step_kind, item, p.phase, fmt_duration(p.run_time_s), fmt_duration(p.time_left_s()),
-                                 temp, p.samples);
-  if (tty) fmt::print(stderr, "\r\033[K{}", line);
-  else fmt::print(stderr, "{}\n", line);
-  std::fflush(stderr);
-}
-
 ExitCode cmd_run(const std::string& file, const std::string& output, const std::string& name, const std::string& clock,
-                 const std::string& store, bool quiet, bool allow_plugins) {
+                 const std::string& store, bool quiet, bool allow_plugins, const stend::cli::LiveArgs& live_args) {
   stend::PluginHost host;
   scan_plugins(host, stend::experiment_plugin_paths(file), allow_plugins);
   const stend::Experiment exp = stend::load_experiment(file, host);
@@ -102,17 +86,25 @@ ExitCode cmd_run(const std::string& file, const std::string& output, const std::
   opt.clock = clock;
   opt.store.format = *stend::recording_format_from_string(store);  // checked by the option
   opt.stop = &g_stop;
-  const bool tty = isatty(STDERR_FILENO) != 0;
-  if (!quiet) {
-    opt.progress_period_s = tty ? 0.2 : 5.0;
-    opt.on_progress = [tty](const stend::RunProgress& p) { print_progress(p, tty); };
+  // The progress line (a terminal only, unless --quiet) and the live view (--live) share the
+  // runner's progress reports.
+  stend::cli::StatusLine status;
+  stend::cli::LiveRun live(live_args, exp.name);
+  const bool show = !quiet && status.enabled();
+  if (show || live_args.live) {
+    opt.progress_period_s = 0.2;
+    opt.on_progress = [&](const stend::RunProgress& p) {
+      if (show) status.show(stend::cli::run_progress_line(p, stend::cli::terminal_columns()));
+      live.update(p);
+    };
   }
   std::signal(SIGINT, on_sigint);
   std::signal(SIGTERM, on_sigint);
   const stend::RunResult r = stend::run_experiment(exp, host, opt);
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
-  if (!quiet && tty) fmt::print(stderr, "\n");
+  status.keep();  // the final line stays: "100% | done | …"
+  live.finish(r.status, r.message);
 
   fmt::print("run folder: {}\n", r.dir.string());
   fmt::print("status:     {}{}\n", stend::to_string(r.status), r.message.empty() ? "" : " — " + r.message);
@@ -217,6 +209,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"hdf5", "csv"}));
   run->add_flag("-q,--quiet", quiet, "No progress display");
   run->add_flag("--allow-plugins", allow_plugins, allow_help);
+  stend::cli::LiveArgs live_args;
+  live_args.add_to(run, true);
 
   std::string dir;
   auto* info = app.add_subcommand("info", "Summarize a recording (run folder)");
@@ -242,6 +236,7 @@ int main(int argc, char** argv) {
   stend::cli::add_emulate_command(app, commands);
   stend::cli::add_import_command(app, commands);
   stend::cli::add_apply_command(app, commands);
+  stend::cli::add_watch_command(app, commands);
 
   try {
     app.parse(argc, argv);
@@ -255,7 +250,7 @@ int main(int argc, char** argv) {
         if (*c.sub) return c.run();
       if (*plugins) return cmd_plugins(plugin_paths);
       if (*validate) return cmd_validate(file, allow_plugins);
-      if (*run) return cmd_run(file, output, name, clock, store, quiet, allow_plugins);
+      if (*run) return cmd_run(file, output, name, clock, store, quiet, allow_plugins, live_args);
       if (*info) return cmd_info(dir);
       if (*fit) return cmd_fit(fit_data, model, json, estimator);
     } catch (...) {

@@ -14,6 +14,7 @@ packages=(
   python3-numpy python3-pandas python3-scipy  # bench: allantools (the Allan peer, ../shared/peers) on Debian's numpy, pandas, scipy
   python3-rosbag  # bench: import_log_bench.sh writes a long ROS 1 bag
   clang libclang-rt-14-dev  # scripts/fuzz.sh: the fuzz targets under libFuzzer, ASan and UBSan
+  libcpp-httplib-dev  # live/: the live view's loopback HTTP server (its charts, uPlot, from npm: vendor-web-deps.sh)
 )
 missing=()
 for p in "${packages[@]}"; do
@@ -22,6 +23,7 @@ done
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#packages[@]} packages present"
   "$(dirname "$0")/install-node-test-deps.sh"
+  "$(dirname "$0")/vendor-web-deps.sh"
   exit 0
 fi
 echo "install-deps: installing ${missing[*]}"
@@ -31,3 +33,4 @@ export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 "$(dirname "$0")/install-node-test-deps.sh"
+"$(dirname "$0")/vendor-web-deps.sh"

@@ -1,5 +1,6 @@
 #include "stend/runner.hpp"
 
+#include "stend/eta.hpp"
 #include "stend/recording.hpp"
 #include "stend/version.hpp"
 
@@ -30,25 +31,10 @@ std::string utc_stamp() {
   return buf;
 }
 
-// Planned run time of the procedure, for the progress display and the run's estimate
-// (estimate_run). Moves are counted at 2 s each and temperature steps at their hold time, so this
-// is an estimate.
-double planned_duration(const Experiment& exp) {
-  double t = 0.0;
-  for (const Step& s : exp.procedure) {
-    switch (s.kind) {
-      case Step::Kind::kSetTemperature: t += s.hold_s; break;
-      case Step::Kind::kOrientations:
-        t += static_cast<double>(s.orientations.size()) * (2.0 + s.dwell_s + s.record_s);
-        break;
-      case Step::Kind::kRates: t += static_cast<double>(s.rates.size()) * (2.0 + s.dwell_s + s.record_s); break;
-      case Step::Kind::kRecord: t += s.record_s; break;
-      case Step::Kind::kWait: t += s.dwell_s; break;
-      case Step::Kind::kSetVibration: break;
-    }
-  }
-  return t;
-}
+// Planned run time of the procedure, for the run's estimate (estimate_run): ProcedureEta's plan
+// before anything ran, with the chamber's start temperature unknown (temperature steps at their
+// hold time, moves at EtaDefaults::move_s), so this is an estimate.
+double planned_duration(const Experiment& exp) { return ProcedureEta(exp.procedure).remaining_s(0.0, NAN); }
 
 int axis_index(const Fixture& f, const std::string& name) {
   const auto axes = f.axes();
@@ -66,9 +52,9 @@ class Stopped : public std::exception {
 class Run {
  public:
   Run(const Experiment& exp, Bench& bench, Clock& clock, RunSink& writer, const RunOptions& opt)
-      : exp_(exp), bench_(bench), clock_(clock), writer_(writer), opt_(opt) {
+      : exp_(exp), bench_(bench), clock_(clock), writer_(writer), opt_(opt), eta_(exp.procedure) {
     progress_.step_count = static_cast<int>(exp.procedure.size());
-    progress_.planned_total_s = planned_duration(exp);
+    progress_.truth_columns = bench.truth_columns();
     wall_start_ = std::chrono::steady_clock::now();
     last_progress_ = wall_start_ - std::chrono::hours(1);
   }
@@ -81,9 +67,13 @@ class Run {
       const Step& s = exp_.procedure[i];
       progress_.step = static_cast<int>(i) + 1;
       progress_.step_kind = step_kind_name(s.kind);
+      progress_.step_label = s.label;
       progress_.item = progress_.item_count = 0;
+      eta_.step_started(i, clock_.now_s(), chamber_c());
       run_step(static_cast<int>(i), s);
+      eta_.step_finished(clock_.now_s());
     }
+    eta_.finished();
     progress_.phase = "done";
     report(true);
   }
@@ -134,6 +124,7 @@ class Run {
     chamber.command(0, CommandMode::kSetpoint, s.setpoint_c);
     setpoint_c_ = s.setpoint_c;
     tolerance_c_ = s.tolerance_c;
+    progress_.setpoint_c = s.setpoint_c;
     progress_.phase = "settling";
     if (s.record_settling) begin_segment(index, s, SegmentKind::kSetTemperature, -1, 0, fmt::format("{}.temperature={} degC", s.fixture, s.setpoint_c));
     const double t0 = clock_.now_s();
@@ -142,6 +133,8 @@ class Run {
     while (true) {
       const double t = clock_.now_s();
       const bool in_band = std::abs(chamber.measured(0) - s.setpoint_c) <= s.tolerance_c;
+      if (!in_band && in_band_since >= 0.0) eta_.band_left();
+      if (in_band && in_band_since < 0.0) eta_.band_entered(t);
       if (!in_band) in_band_since = -1.0;
       else if (in_band_since < 0.0) in_band_since = t;
       if (in_band_since >= 0.0 && t - in_band_since >= s.hold_s) break;
@@ -201,7 +194,9 @@ class Run {
   void move_and_record(int index, const Step& s, Fixture& table, SegmentKind kind, int k,
                        const std::string& targets, double rate) {
     progress_.phase = "moving";
+    eta_.item_started(clock_.now_s());
     wait_settled(table, s.fixture);
+    eta_.move_finished(clock_.now_s());
     progress_.phase = "dwell";
     advance_for(s.dwell_s);
     begin_segment(index, s, kind, k, static_cast<int>(s.orientations.empty() ? s.rates.size() : s.orientations.size()), targets);
@@ -238,10 +233,15 @@ class Run {
     segment_.targets = targets;
     segment_.setpoint_c = setpoint_c_;
     open_ = true;
+    segment_sum_.fill(0.0);
+    segment_n_ = 0;
   }
 
   void end_segment() {
     segment_.t_end_s = clock_.now_s();
+    progress_.closed_segment = segment_.id;
+    progress_.closed_label = segment_.targets.empty() ? segment_.label : segment_.targets;
+    progress_.closed_mean = segment_mean();
     writer_.add_segment(segment_);
     ++segments_;
     open_ = false;
@@ -326,7 +326,30 @@ class Run {
       }
       writer_.add_samples(buffer_.data(), buffer_.size());
       samples_ += buffer_.size();
+      if (open_) add_to_segment_mean();
     }
+  }
+
+  void add_to_segment_mean() {
+    for (const ImuSample& x : buffer_) {
+      for (int c = 0; c < 3; ++c) {
+        segment_sum_[static_cast<std::size_t>(c)] += x.accel_mps2[c];
+        segment_sum_[static_cast<std::size_t>(c) + 3] += x.gyro_radps[c];
+      }
+    }
+    segment_n_ += buffer_.size();
+  }
+
+  std::array<double, 6> segment_mean() const {
+    std::array<double, 6> m{NAN, NAN, NAN, NAN, NAN, NAN};
+    if (segment_n_ > 0)
+      for (std::size_t c = 0; c < 6; ++c) m[c] = segment_sum_[c] / static_cast<double>(segment_n_);
+    return m;
+  }
+
+  double chamber_c() {
+    if (bench_.chamber_index() < 0) return NAN;
+    return bench_.fixture(static_cast<std::size_t>(bench_.chamber_index())).measured(0);
   }
 
   void snapshot(double t) {
@@ -346,7 +369,20 @@ class Run {
     if (!force && std::chrono::duration<double>(now - last_progress_).count() < opt_.progress_period_s) return;
     last_progress_ = now;
     progress_.run_time_s = clock_.now_s();
+    progress_.remaining_s = eta_.remaining_s(progress_.run_time_s, chamber_c());
     progress_.samples = samples_;
+    if (!buffer_.empty()) {
+      const ImuSample& x = buffer_.back();
+      for (int c = 0; c < 3; ++c) {
+        progress_.latest[static_cast<std::size_t>(c)] = x.accel_mps2[c];
+        progress_.latest[static_cast<std::size_t>(c) + 3] = x.gyro_radps[c];
+      }
+      progress_.latest_t_s = x.t_s;
+    }
+    progress_.truth = row_;
+    progress_.segment = open_ ? segment_.id : -1;
+    progress_.segment_samples = open_ ? segment_n_ : 0;
+    progress_.segment_mean = segment_mean();
     if (bench_.chamber_index() >= 0) {
       double air = NAN, die = NAN;
       bench_.fixture(static_cast<std::size_t>(bench_.chamber_index())).thermal(progress_.run_time_s, air, die);
@@ -362,6 +398,9 @@ class Run {
   RunSink& writer_;
   const RunOptions& opt_;
   RunProgress progress_;
+  ProcedureEta eta_;
+  std::array<double, 6> segment_sum_{};  // the open segment's channel sums (segment_mean)
+  std::uint64_t segment_n_ = 0;
   std::chrono::steady_clock::time_point wall_start_, last_progress_;
   std::vector<ImuSample> buffer_;
   std::vector<double> outage_since_;       // per fixture: run time its link failed, −1 when up

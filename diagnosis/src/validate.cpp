@@ -447,8 +447,9 @@ void summarize(ExperimentValidation& ev, const Tally& tally, Tally& total, Valid
 // Declares aliases and identifiability from a probe of the design (rank only), plants each candidate at
 // each size in the experiment, fits the model without it and diagnoses blind; appends the
 // CandidateValidation rows, the confusion entries and the null / out-of-vocabulary runs.
+// `done(f)` is told the share of this experiment done, after each candidate.
 void validate_experiment(const Experiment& ex, const ValidateOptions& o, model::Rng& prng, std::uint64_t& seed,
-                         ValidationReport& rep, Tally& total) {
+                         ValidationReport& rep, Tally& total, const std::function<void(double)>& done) {
   ExperimentValidation ev;
   ev.experiment = ex.name;
   ev.unit = ex.fit_model.model.instrument == model::Instrument::kGyroscope ? "rad/s" : "m/s^2";
@@ -456,7 +457,11 @@ void validate_experiment(const Experiment& ex, const ValidateOptions& o, model::
   Tally tally;
   Sinks out{prng, seed, rep, tally};
   const Context cx = probe_design(ex, o, prng, seed);
-  for (const auto& c : planted_candidates(cx, ev)) rep.candidates.push_back(validate_candidate(cx, c, out));
+  const std::vector<Candidate> candidates = planted_candidates(cx, ev);
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    rep.candidates.push_back(validate_candidate(cx, candidates[i], out));
+    done(static_cast<double>(i + 1) / static_cast<double>(candidates.size() + 1));  // null + oov runs: one more share
+  }
   null_runs(cx, ev, out);
   oov_runs(cx, ev, out);
   summarize(ev, tally, total, rep);
@@ -547,7 +552,17 @@ ValidationReport run_validation(const ValidateOptions& o) {
     exps.push_back(rate_gyro_experiment(o));
     exps.push_back(rate_accel_experiment(o));
   }
-  for (const auto& e : exps) validate_experiment(e, o, prng, seed, rep, total);
+  // Progress: each experiment one share, the noise stage one more.
+  const double shares = static_cast<double>(exps.size() + 1);
+  const auto progress = [&o, shares](double share, double within, const std::string& stage) {
+    if (o.on_progress) o.on_progress((share + within) / shares, stage);
+  };
+  for (std::size_t k = 0; k < exps.size(); ++k) {
+    progress(static_cast<double>(k), 0.0, exps[k].name);
+    validate_experiment(exps[k], o, prng, seed, rep, total,
+                        [&](double within) { progress(static_cast<double>(k), within, exps[k].name); });
+  }
+  progress(static_cast<double>(exps.size()), 0.0, "noise stage");
   rep.top1_at5 = total.top1_n ? static_cast<double>(total.top1_ok) / total.top1_n : kNaN;
   rep.coverage = total.cov_n ? static_cast<double>(total.cov_ok) / total.cov_n : kNaN;
   rep.closed_at5 = total.closed_n ? total.closed_sum / total.closed_n : kNaN;

@@ -4,6 +4,7 @@
 
 #include <fcntl.h>
 #include <spawn.h>
+#include <csignal>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -85,6 +86,10 @@ std::string StartedCommand::wait_for(const std::string& pattern) {
   return "";
 }
 
+void StartedCommand::interrupt() {
+  if (pid_ > 0) ::kill(pid_, SIGINT);
+}
+
 ProgramOutput StartedCommand::finish() {
   ProgramOutput out;
   std::array<char, 4096> buf{};
@@ -105,7 +110,7 @@ ProgramOutput run_stend(const std::string& args, const Environment& env) {
 }
 
 StartedCommand start_stend(const std::string& args, const Environment& env) {
-  return StartedCommand(shell_quote(stend_program().string()) + " " + args, env);
+  return StartedCommand("exec " + shell_quote(stend_program().string()) + " " + args, env);
 }
 
 }  // namespace stend::testing

@@ -7,7 +7,9 @@
 #include <stend/plugin_host.hpp>
 #include <stend/recording.hpp>
 
+#include <array>
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -16,17 +18,41 @@
 
 namespace stend {
 
+// What the runner reports while it runs (RunOptions::on_progress): where in the procedure it is,
+// the time left (stend/eta.hpp: the plan with the settle behaviour seen so far), and what the bench
+// reads now — for the progress line and the live view.
 struct RunProgress {
   int step = 0, step_count = 0;   // 1-based step being executed
   std::string step_kind;          // "orientations", "set_temperature", …
+  std::string step_label;         // the step's label
   std::string phase;              // "moving", "settling", "dwell", "recording", "done"
   int item = 0, item_count = 0;   // orientation / rate k of K (1-based), 0 when n/a
   double run_time_s = 0.0;
-  double planned_total_s = 0.0;   // planned run time (settling steps at their hold time)
+  double remaining_s = 0.0;       // run time left (ProcedureEta), 0 once done
+  double setpoint_c = NAN;        // chamber setpoint, NaN without a chamber or before the first
   double air_c = NAN;             // chamber air temperature, NaN without a chamber
   double die_c = NAN;
   std::uint64_t samples = 0;
-  double time_left_s() const { return planned_total_s > run_time_s ? planned_total_s - run_time_s : 0.0; }
+  // The sensor's latest sample: specific force (m/s², sensor frame) and angular rate (rad/s).
+  std::array<double, 6> latest{NAN, NAN, NAN, NAN, NAN, NAN};
+  double latest_t_s = NAN;
+  // The bench truth's latest row and its column names (header.truth_columns: table angles, …).
+  std::vector<std::string> truth_columns;
+  std::vector<double> truth;
+  // Mean of the six channels over the segment being recorded (segment_samples of them; −1: none
+  // open), and over the last segment closed (closed_segment: its id, −1 before the first).
+  int segment = -1;
+  std::uint64_t segment_samples = 0;
+  std::array<double, 6> segment_mean{NAN, NAN, NAN, NAN, NAN, NAN};
+  int closed_segment = -1;
+  std::string closed_label;
+  std::array<double, 6> closed_mean{NAN, NAN, NAN, NAN, NAN, NAN};
+  double time_left_s() const { return remaining_s; }
+  // Share of the run done, 0…1, from the run time so far and the time left.
+  double fraction_done() const {
+    const double total = run_time_s + remaining_s;
+    return phase == "done" ? 1.0 : total > 0.0 ? run_time_s / total : 0.0;
+  }
 };
 
 struct RunOptions {

@@ -26,6 +26,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <map>
 #include <string>
@@ -130,6 +131,9 @@ struct ValidateOptions {
   // `stend gap validate` uses --noise-seeds 10 --noise-null 40.
   int noise_seeds = 3;
   int noise_null_runs = 20;
+  // Called as the validation goes on with the share done (0…1) and the experiment in progress,
+  // for a progress display (`stend gap validate`); empty: not called.
+  std::function<void(double done, const std::string& stage)> on_progress;
 };
 
 struct CandidateValidation {

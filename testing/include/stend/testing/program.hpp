@@ -45,12 +45,17 @@ class StartedCommand {
   // Reads the rest of the output and waits for the end: the exit status and what was not yet read.
   ProgramOutput finish();
 
+  // Sends SIGINT (as Ctrl-C would) to the command's process: the shell, or the program itself when
+  // the command line starts with `exec` (start_stend's does).
+  void interrupt();
+
  private:
   pid_t pid_ = -1;
   std::FILE* out_ = nullptr;  // read end of the command's stdout+stderr
 };
 
 // This build tree's stend program started in the background: start_stend("emulate table --port 0").
+// The shell execs it, so interrupt() reaches the program itself.
 StartedCommand start_stend(const std::string& args, const Environment& env = {});
 
 }  // namespace stend::testing
