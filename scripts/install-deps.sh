@@ -14,6 +14,8 @@ packages=(
   python3-numpy python3-pandas python3-scipy  # bench: allantools (the Allan peer, ../shared/peers) on Debian's numpy, pandas, scipy
   python3-rosbag  # bench: import_log_bench.sh writes a long ROS 1 bag
   clang libclang-rt-14-dev  # scripts/fuzz.sh: the fuzz targets under libFuzzer, ASan and UBSan
+  gcc-avr avr-libc binutils-avr  # firmware/bench_mcu: the bench microcontroller's firmware (ATmega328P)
+  simavr libsimavr-dev libelf-dev  # emulators/firmware: that firmware in the loop under simavr (libsimavr needs libelf)
 )
 missing=()
 for p in "${packages[@]}"; do
