@@ -10,12 +10,15 @@
 
 #define WINDOW_MAX_WORDS (STEND_BMCU_WINDOW_HEADER_WORDS + STEND_BMCU_WORDS_PER_SAMPLE * STEND_BMCU_WINDOW_MAX_SAMPLES)
 #define I2C_DATA_REGS (STEND_BMCU_I2C_MAX_READ / 2)
-#define MAX_DRAIN_PER_POLL 8 /* samples per poll, so a request waits at most ~3 ms */
+#define PART_FIFO_HIGH 60 /* of the part's 73 samples: above this the ring makes room */
+#define CAPACITY (RING_SAMPLES + PART_FIFO_HIGH)
+#define MAX_DRAIN_PER_POLL 4 /* samples per poll (0.4 ms of I2C each), so a request waits at most ~2 ms */
 
 static uint16_t hold[STEND_BMCU_HOLD_MAP_SIZE];
 static uint8_t ring[RING_SAMPLES][MPU_SAMPLE_BYTES];
 static uint8_t ring_head; /* index of the oldest sample */
 static uint8_t ring_size;
+static uint16_t part_pending; /* samples in the part's FIFO at the last drain */
 static uint32_t front_seq, next_seq; /* sequence numbers of the oldest and the next sample */
 static uint16_t overflows;
 static uint8_t overflow_flag, running;
@@ -32,6 +35,7 @@ static void put16(uint8_t* out, uint16_t v) {
 static void ring_clear(void) {
   ring_head = 0;
   ring_size = 0;
+  part_pending = 0;
 }
 
 static void ring_pop(void) {
@@ -68,11 +72,16 @@ static void drain_mpu(void) {
     overflow_flag = 1;
     return;
   }
+  part_pending = n;
+  /* Backpressure: while the ring is full, samples wait in the part's own FIFO; only when that
+   * nears its end are the ring's oldest overwritten (counted), so sequence numbers stay exact. */
+  if (ring_size == RING_SAMPLES && n < PART_FIFO_HIGH) return;
   if (n > MAX_DRAIN_PER_POLL) n = MAX_DRAIN_PER_POLL;
   for (uint16_t i = 0; i < n; ++i) {
     uint8_t sample[MPU_SAMPLE_BYTES];
     if (mpu_read_sample(sample) != STEND_BMCU_I2C_OK) return;
     memcpy(ring_push_slot(), sample, MPU_SAMPLE_BYTES);
+    --part_pending;
   }
 }
 
@@ -97,6 +106,7 @@ static uint8_t apply_ctrl(void) {
   uint16_t* ctrl = &hold[STEND_BMCU_HOLD_CTRL];
   if (*ctrl & STEND_BMCU_CTRL_FIFO_RESET) {
     ring_clear();
+    if (running) mpu_reset_fifo(); /* what waits in the part is older than the reset too */
     front_seq = next_seq;
     *ctrl &= (uint16_t)~STEND_BMCU_CTRL_FIFO_RESET;
   }
@@ -150,8 +160,8 @@ static void read_status_block(uint16_t address, uint8_t n, uint8_t* out) {
         overflow_flag = 0; /* cleared by reading */
         break;
       case STEND_BMCU_IN_WHO_AM_I: v = mpu_who_am_i(); break;
-      case STEND_BMCU_IN_FIFO_COUNT: v = ring_size; break;
-      case STEND_BMCU_IN_FIFO_CAPACITY: v = RING_SAMPLES; break;
+      case STEND_BMCU_IN_FIFO_COUNT: v = (uint16_t)(ring_size + part_pending); break;
+      case STEND_BMCU_IN_FIFO_CAPACITY: v = CAPACITY; break;
       case STEND_BMCU_IN_OVERFLOWS: v = overflows; break;
       case STEND_BMCU_IN_FIRMWARE: v = STEND_BMCU_FIRMWARE_VERSION; break;
       case STEND_BMCU_IN_BOOT_COUNT: v = boot_count; break;
@@ -187,7 +197,7 @@ static void read_fifo_window(uint16_t address, uint8_t n, uint8_t* out) {
   if (k > ring_size) k = ring_size;
   memset(out, 0, (size_t)(2 * n));
   put16(out, k);
-  put16(out + 2, (uint16_t)(ring_size - k));
+  put16(out + 2, (uint16_t)(ring_size - k + part_pending));
   put16(out + 4, (uint16_t)(front_seq >> 16));
   put16(out + 6, (uint16_t)(front_seq & 0xFFFF));
   for (uint8_t i = 0; i < k; ++i) memcpy(out + 8 + i * MPU_SAMPLE_BYTES, ring_at(i), MPU_SAMPLE_BYTES);

@@ -1,5 +1,6 @@
 #include "twi.h"
 
+#include <avr/interrupt.h>
 #include <avr/io.h>
 #include <util/twi.h>
 
@@ -15,15 +16,23 @@ void twi_init(void) {
   TWCR = (1 << TWEN);
 }
 
-static uint8_t twi_wait(void) {
-  for (uint16_t i = 0; i < TWI_WAIT_LOOPS; ++i)
-    if (TWCR & (1 << TWINT)) return 1;
-  return 0;
+/* Each step waits for the TWI interrupt, whose handler only notes it: the same code runs on the
+ * part and under simavr 1.6, whose TWINT stays set after software writes 1 to it (so polling
+ * TWINT would return at once there). */
+static volatile uint8_t twi_step_done;
+
+ISR(TWI_vect) {
+  TWCR &= (uint8_t)~((1 << TWIE) | (1 << TWINT)); /* TWINT written 0: left set for the status read */
+  twi_step_done = 1;
 }
 
 static uint8_t twi_cmd(uint8_t flags) {
-  TWCR = (uint8_t)((1 << TWINT) | (1 << TWEN) | flags);
-  return twi_wait();
+  twi_step_done = 0;
+  TWCR = (uint8_t)((1 << TWINT) | (1 << TWEN) | (1 << TWIE) | flags);
+  for (uint16_t i = 0; i < TWI_WAIT_LOOPS; ++i)
+    if (twi_step_done) return 1;
+  TWCR = (1 << TWEN); /* give up: no interrupt left armed */
+  return 0;
 }
 
 static void twi_stop(void) {
@@ -37,9 +46,12 @@ static uint8_t twi_start(uint8_t sla_rw) {
   if (TW_STATUS != TW_START && TW_STATUS != TW_REP_START) return STEND_BMCU_I2C_BUS_ERROR;
   TWDR = sla_rw;
   if (!twi_cmd(0)) return STEND_BMCU_I2C_BUS_ERROR;
+  /* After SLA+W the part reports 0x18/0x20; simavr 1.6 reports the data-phase codes 0x28/0x30
+   * instead, which a real TWI never gives here, so both are read as the address's ACK/NACK. */
   const uint8_t s = TW_STATUS;
-  if (s == TW_MT_SLA_ACK || s == TW_MR_SLA_ACK) return STEND_BMCU_I2C_OK;
-  return (s == TW_MT_SLA_NACK || s == TW_MR_SLA_NACK) ? STEND_BMCU_I2C_NACK_ADDRESS : STEND_BMCU_I2C_BUS_ERROR;
+  if (s == TW_MT_SLA_ACK || s == TW_MR_SLA_ACK || s == TW_MT_DATA_ACK) return STEND_BMCU_I2C_OK;
+  const uint8_t nack = s == TW_MT_SLA_NACK || s == TW_MR_SLA_NACK || s == TW_MT_DATA_NACK;
+  return nack ? STEND_BMCU_I2C_NACK_ADDRESS : STEND_BMCU_I2C_BUS_ERROR;
 }
 
 static uint8_t twi_send(const uint8_t* w, uint8_t wn) {

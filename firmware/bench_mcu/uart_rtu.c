@@ -28,10 +28,11 @@ static uint8_t tx_buf[RTU_TX_MAX];
 static volatile uint16_t tx_len, tx_pos;
 
 void rtu_init(void) {
+  /* U2X (8 samples a bit) first: simavr derives its line rate when UBRR is written. */
   const uint16_t ubrr = (uint16_t)((F_CPU + 4UL * BENCH_BAUD) / (8UL * BENCH_BAUD) - 1);
+  UCSR0A = (1 << U2X0);
   UBRR0H = (uint8_t)(ubrr >> 8);
   UBRR0L = (uint8_t)ubrr;
-  UCSR0A = (1 << U2X0);
   UCSR0C = (1 << UCSZ01) | (1 << UCSZ00); /* 8N1 */
   UCSR0B = (1 << RXEN0) | (1 << TXEN0) | (1 << RXCIE0);
   TCCR2A = (1 << WGM21); /* CTC, OCR2A = the 3.5-character silence */
