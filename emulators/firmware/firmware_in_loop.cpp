@@ -19,6 +19,8 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <cstdarg>
+#include <cstdio>
 #include <cstring>
 #include <deque>
 #include <mutex>
@@ -119,7 +121,14 @@ struct FirmwareInTheLoop::Impl {
 
   double now_s() const { return static_cast<double>(avr->cycle) / kCpuHz; }
 
+  // simavr's loader and core report through one process-wide logger: warnings and errors to
+  // stderr, its chatter ("Loaded 8884 .text …") dropped.
+  __attribute__((format(printf, 3, 0))) static void quiet_logger(avr_t*, const int level, const char* format, va_list ap) {
+    if (level <= LOG_WARNING) std::vfprintf(stderr, format, ap);
+  }
+
   void load() {
+    avr_global_logger_set(&Impl::quiet_logger);
     elf_firmware_t f{};
     if (elf_read_firmware(c.elf_path.c_str(), &f) != 0)
       throw std::runtime_error("firmware in the loop: cannot read " + c.elf_path +
