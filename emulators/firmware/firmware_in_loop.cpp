@@ -121,10 +121,10 @@ struct FirmwareInTheLoop::Impl {
 
   double now_s() const { return static_cast<double>(avr->cycle) / kCpuHz; }
 
-  // simavr's loader and core report through one process-wide logger: warnings and errors to
-  // stderr, its chatter ("Loaded 8884 .text …") dropped.
+  // simavr's loader and core report through one process-wide logger: errors to
+  // stderr, its chatter ("Loaded 8884 .text …", timer-mode notes) dropped.
   __attribute__((format(printf, 3, 0))) static void quiet_logger(avr_t*, const int level, const char* format, va_list ap) {
-    if (level <= LOG_WARNING) std::vfprintf(stderr, format, ap);
+    if (level <= LOG_ERROR) std::vfprintf(stderr, format, ap);
   }
 
   void load() {

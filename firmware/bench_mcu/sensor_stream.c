@@ -10,8 +10,9 @@
 
 #define WINDOW_MAX_WORDS (STEND_BMCU_WINDOW_HEADER_WORDS + STEND_BMCU_WORDS_PER_SAMPLE * STEND_BMCU_WINDOW_MAX_SAMPLES)
 #define I2C_DATA_REGS (STEND_BMCU_I2C_MAX_READ / 2)
-#define PART_FIFO_HIGH 60 /* of the part's 73 samples: above this the ring makes room */
+#define PART_FIFO_HIGH 40 /* of the part's 73 samples: above this the ring makes room (33 ms of margin at 1 kHz for the 1-Wire cycle, ~10 ms) */
 #define CAPACITY (RING_SAMPLES + PART_FIFO_HIGH)
+#define PART_FIFO_SAMPLES 73 /* 1024 bytes / 14 */
 #define MAX_DRAIN_PER_POLL 4 /* samples per poll (0.4 ms of I2C each), so a request waits at most ~2 ms */
 
 static uint16_t hold[STEND_BMCU_HOLD_MAP_SIZE];
@@ -68,7 +69,14 @@ static void drain_mpu(void) {
   uint16_t n = mpu_fifo_samples(&part_overflowed);
   if (part_overflowed) { /* frame alignment lost: start the part's FIFO afresh */
     mpu_reset_fifo();
-    if (overflows < 0xFFFF) ++overflows;
+    /* At least a FIFO's worth was dropped there. The ring's numbering is contiguous, so the ring
+     * is dropped too and the sequence numbers skip both: the master sees one gap (its length
+     * is this estimate, not an exact count). Needs a firmware stall of > 33 ms to happen. */
+    const uint16_t dropped = (uint16_t)(ring_size + PART_FIFO_SAMPLES);
+    next_seq += PART_FIFO_SAMPLES;
+    ring_clear();
+    front_seq = next_seq;
+    overflows = (uint16_t)(overflows > 0xFFFF - dropped ? 0xFFFF : overflows + dropped);
     overflow_flag = 1;
     return;
   }
