@@ -217,6 +217,12 @@ struct WorldOpts {
   std::vector<std::string> write_config;
   double chamber_speed = 50.0, duration = 0.0;
   int table_port = 5025;
+  bool firmware = false;
+#ifdef STEND_BENCH_MCU_ELF
+  std::string firmware_elf = STEND_BENCH_MCU_ELF;  // the build tree's firmware/bench_mcu
+#else
+  std::string firmware_elf;
+#endif
 };
 
 // Copies the drivers experiment `in` to `out` with the emulators' devices and table port in place
@@ -240,9 +246,11 @@ ExitCode run_world(const WorldOpts& w) {
   const Experiment twin = load_experiment(w.twin, host);
   auto cfg = emu::BenchWorldConfig::from_experiment(twin, w.chamber_speed);
   cfg.table_port = w.table_port;
+  if (w.firmware) cfg.firmware_elf = w.firmware_elf;
   emu::BenchWorld bw(cfg);
   std::printf("bench world, twin of %s:\n", w.twin.c_str());
-  std::printf("  bench MCU (MPU-6050, MODBUS RTU): %s\n", bw.mcu_device().c_str());
+  std::printf("  bench MCU (MPU-6050, MODBUS RTU): %s%s\n", bw.mcu_device().c_str(),
+              w.firmware ? ("  (firmware " + w.firmware_elf + " under simavr)").c_str() : "");
   std::printf("  chamber (ATmega328, MODBUS RTU):  %s  (plant at %gx)\n", bw.chamber_device().c_str(), w.chamber_speed);
   std::printf("  table (ACUTROL-style text):       tcp 127.0.0.1:%d\n", bw.table_port());
   if (w.write_config.size() == 2) write_world_config(bw, w.write_config[0], w.write_config[1]);
@@ -263,6 +271,9 @@ void add_world_command(CLI::App* sub, std::vector<Command>& out) {
                     "IN OUT: copy the drivers experiment IN to OUT with /dev/ttyUSB0 (bench MCU), /dev/ttyUSB1 (chamber) "
                     "and port 5025 (table) replaced by the emulators'")
       ->expected(2);
+  world->add_flag("--firmware", w->firmware,
+                  "the bench MCU is the real firmware (firmware/bench_mcu) under simavr, not the C++ emulation (docs/firmware.md)");
+  world->add_option("--firmware-elf", w->firmware_elf, "the firmware image for --firmware (default: the build tree's bench_mcu.elf)");
   world->add_option("--duration-s", w->duration, "stop after this long (0: until Ctrl-C)")->check(at_least(0));
   out.push_back({world, [w] { return run_world(*w); }});
 }

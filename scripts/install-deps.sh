@@ -15,6 +15,8 @@ packages=(
   python3-rosbag  # bench: import_log_bench.sh writes a long ROS 1 bag
   clang libclang-rt-14-dev  # scripts/fuzz.sh: the fuzz targets under libFuzzer, ASan and UBSan
   libcpp-httplib-dev  # live/: the live view's loopback HTTP server (its charts, uPlot, from npm: vendor-web-deps.sh)
+  gcc-avr avr-libc binutils-avr  # firmware/bench_mcu: the bench microcontroller's firmware (ATmega328P)
+  simavr libsimavr-dev libelf-dev  # emulators/firmware: that firmware in the loop under simavr (libsimavr needs libelf)
 )
 missing=()
 for p in "${packages[@]}"; do

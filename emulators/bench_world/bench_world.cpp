@@ -1,5 +1,9 @@
 #include "bench_world.hpp"
 
+#ifdef STEND_HAVE_FIRMWARE_LOOP
+#include "firmware_in_loop.hpp"
+#endif
+
 #include <stend/physics/gravity.hpp>
 #include <stend/physics/table_chain.hpp>
 
@@ -62,11 +66,33 @@ BenchWorld::BenchWorld(const BenchWorldConfig& c) : c_(c) {
   chamber_ = std::make_unique<AtmegaChamberSlave>(c.chamber);
   BenchMcuConfig mc;
   mcu_epoch_ = std::chrono::steady_clock::now();
-  mcu_ = std::make_unique<BenchMcuSlave>(
-      mc, Mpu6050Model(c.imu, Mpu6050Model::TruthFn([this](double t) { return truth(t); })));
+  Mpu6050Model mpu(c.imu, Mpu6050Model::TruthFn([this](double t) { return truth(t); }));
+  if (c.firmware_elf.empty()) {
+    mcu_ = std::make_unique<BenchMcuSlave>(mc, std::move(mpu));
+    return;
+  }
+#ifdef STEND_HAVE_FIRMWARE_LOOP
+  FirmwareLoopConfig fc;
+  fc.elf_path = c.firmware_elf;
+  fc.plant = c.chamber.plant;
+  fw_ = std::make_shared<FirmwareInTheLoop>(fc, std::move(mpu));
+#else
+  throw std::invalid_argument("bench world: this build has no firmware in the loop (install simavr, libsimavr-dev "
+                              "and gcc-avr: scripts/install-deps.sh, then rebuild)");
+#endif
 }
 
-BenchWorld::~BenchWorld() { mcu_.reset(); }
+BenchWorld::~BenchWorld() {
+  mcu_.reset();
+  fw_.reset();
+}
+
+const std::string& BenchWorld::mcu_device() const {
+#ifdef STEND_HAVE_FIRMWARE_LOOP
+  if (fw_) return fw_->device_path();
+#endif
+  return mcu_->device_path();
+}
 
 BenchTruth BenchWorld::truth(double t) {
   BenchTruth b;

@@ -27,6 +27,8 @@
 
 namespace stend::emu {
 
+class FirmwareInTheLoop;
+
 struct BenchWorldConfig {
   sim::SimImuConfig imu;            // the sensor's error model and noise (its rate/range/low-pass
                                     // come from the registers the driver writes)
@@ -38,6 +40,8 @@ struct BenchWorldConfig {
   double heading_deg = 0.0;
   Eigen::Matrix3d R_sensor_from_mount = Eigen::Matrix3d::Identity();
   int table_port = 0;               // 0: ephemeral
+  std::string firmware_elf;         // non-empty: the bench MCU is the real firmware (firmware/bench_mcu)
+                                    // under simavr (emulators/firmware) instead of the C++ emulation
 
   // The physics of an in-process experiment whose bench is sim_imu + sim_one_axis_table +
   // sim_thermochamber (e.g. configs/paper_mpu6050_z.yaml), so the world is that bench's twin.
@@ -52,10 +56,10 @@ class BenchWorld {
 
   int table_port() const { return table_->port(); }
   const std::string& chamber_device() const { return chamber_->device_path(); }
-  const std::string& mcu_device() const { return mcu_->device_path(); }
+  const std::string& mcu_device() const;
   TableTextServer& table() { return *table_; }
   AtmegaChamberSlave& chamber() { return *chamber_; }
-  BenchMcuSlave& mcu() { return *mcu_; }
+  BenchMcuSlave& mcu() { return *mcu_; }  // the C++ emulation (absent with firmware_elf)
 
   // What the sensor experiences at wall time `t_since_mcu_power_on_s` (thread-safe).
   BenchTruth truth(double t_since_mcu_power_on_s);
@@ -68,6 +72,7 @@ class BenchWorld {
   std::unique_ptr<AtmegaChamberSlave> chamber_;
   std::chrono::steady_clock::time_point mcu_epoch_;
   std::unique_ptr<BenchMcuSlave> mcu_;  // last: its thread reads the others, so it stops first
+  std::shared_ptr<FirmwareInTheLoop> fw_;  // or the firmware in the loop (shared_ptr: complete only where built)
 };
 
 }  // namespace stend::emu

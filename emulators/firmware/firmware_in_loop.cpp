@@ -1,0 +1,459 @@
+#include "firmware_in_loop.hpp"
+
+#include <avr_ioport.h>
+#include <avr_twi.h>
+#include <avr_uart.h>
+#include <sim_avr.h>
+#include <sim_elf.h>
+#include <sim_io.h>
+#include <sim_irq.h>
+#include <sim_cycle_timers.h>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <pty.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstring>
+#include <deque>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "stend/emulators/splitmix.hpp"
+#include "stend/emulators/steady_ns.hpp"
+
+namespace stend::emu {
+namespace {
+
+// ATmega328P data-space addresses (datasheet, "Register Summary") and the board's wiring
+// (firmware/bench_mcu/board.h).
+constexpr std::uint16_t kPinB = 0x23, kTccr1a = 0x80, kOcr1al = 0x88, kOcr1bl = 0x8A;
+constexpr std::uint8_t kCom1a1 = 1u << 7, kCom1b1 = 1u << 5;
+constexpr int kOneWireBit = 3;  // PB3, Arduino pin 11
+constexpr std::uint8_t kMpuAddress = 0x68;
+constexpr std::uint32_t kCpuHz = 16000000;
+constexpr avr_cycle_count_t kSliceCycles = kCpuHz / 1000;  // 1 ms of simulated time per step
+
+constexpr avr_cycle_count_t us(double v) { return static_cast<avr_cycle_count_t>(v * kCpuHz / 1e6); }
+
+std::uint8_t dallas_crc8(const std::uint8_t* d, int n) {
+  std::uint8_t crc = 0;
+  for (int i = 0; i < n; ++i) {
+    std::uint8_t b = d[i];
+    for (int k = 0; k < 8; ++k) {
+      const bool mix = ((crc ^ b) & 1) != 0;
+      crc = static_cast<std::uint8_t>(crc >> 1);
+      if (mix) crc ^= 0x8C;
+      b = static_cast<std::uint8_t>(b >> 1);
+    }
+  }
+  return crc;
+}
+
+}  // namespace
+
+struct FirmwareInTheLoop::Impl {
+  FirmwareLoopConfig c;
+  Mpu6050Model mpu;
+  avr_t* avr = nullptr;
+  int master_fd = -1, slave_fd = -1;
+  std::string path;
+  std::thread thread;
+  std::atomic<bool> stop{false};
+  std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
+
+  // Line (simulation thread only, except the atomics).
+  std::deque<std::uint8_t> to_mcu;
+  std::vector<std::uint8_t> from_mcu;
+  bool uart_full = false;
+  std::uint64_t rng;
+  std::atomic<double> reply_corrupt_p{0.0}, request_corrupt_p{0.0};
+  std::atomic<std::int64_t> silent_until_ns{0};
+  std::atomic<bool> reset_pending{false};
+
+  // TWI slave state (MPU-6050).
+  std::atomic<bool> mpu_present{true};
+  bool twi_selected = false, twi_expect_reg = false;
+  std::uint8_t twi_addr = 0, mpu_reg = 0;
+
+  // 1-Wire slave state (DS18B20).
+  enum class OwState { kIdle, kRom, kFunction, kSend };
+  std::atomic<Ds18b20Fault> ow_fault{Ds18b20Fault::kNone};
+  bool master_low = false, device_low = false;
+  avr_cycle_count_t fall_cycle = 0;
+  OwState ow_state = OwState::kIdle;
+  std::uint8_t ow_byte = 0;
+  int ow_bits = 0;
+  std::array<std::uint8_t, 9> scratchpad{};
+  int send_bit = 0;
+  bool converted = false;
+
+  // Plant.
+  double air = 0.0, die = 0.0;
+  std::atomic<int> heater{0}, peltier{0};
+  std::atomic<double> air_out{0.0}, sim_s{0.0}, busy_s{0.0};
+  mutable std::mutex stats_mutex;
+  FirmwareLoopStats st;
+
+  Impl(FirmwareLoopConfig cfg, Mpu6050Model m) : c(std::move(cfg)), mpu(std::move(m)), rng(c.seed) {
+    air = c.plant.initial_c;
+    die = c.plant.initial_c + c.plant.self_heating_c;
+    air_out = air;
+    load();
+    open_pty();
+    connect_peripherals();
+  }
+
+  ~Impl() {
+    if (avr != nullptr) avr_terminate(avr);
+    if (master_fd >= 0) ::close(master_fd);
+    if (slave_fd >= 0) ::close(slave_fd);
+  }
+
+  double now_s() const { return static_cast<double>(avr->cycle) / kCpuHz; }
+
+  // simavr's loader and core report through one process-wide logger: errors to
+  // stderr, its chatter ("Loaded 8884 .text …", timer-mode notes) dropped.
+  __attribute__((format(printf, 3, 0))) static void quiet_logger(avr_t*, const int level, const char* format, va_list ap) {
+    if (level <= LOG_ERROR) std::vfprintf(stderr, format, ap);
+  }
+
+  void load() {
+    avr_global_logger_set(&Impl::quiet_logger);
+    elf_firmware_t f{};
+    if (elf_read_firmware(c.elf_path.c_str(), &f) != 0)
+      throw std::runtime_error("firmware in the loop: cannot read " + c.elf_path +
+                               " (build the target bench_mcu_firmware, or install gcc-avr: scripts/install-deps.sh)");
+    std::strcpy(f.mmcu, "atmega328p");
+    f.frequency = kCpuHz;
+    avr = avr_make_mcu_by_name(f.mmcu);
+    if (avr == nullptr) throw std::runtime_error("firmware in the loop: simavr has no atmega328p core");
+    avr_init(avr);
+    avr->log = LOG_ERROR;
+    avr_load_firmware(avr, &f);
+  }
+
+  void open_pty() {
+    char name[256] = {};
+    if (openpty(&master_fd, &slave_fd, name, nullptr, nullptr) != 0)
+      throw std::runtime_error(std::string("firmware in the loop: openpty failed: ") + std::strerror(errno));
+    termios t{};
+    tcgetattr(slave_fd, &t);
+    cfmakeraw(&t);
+    tcsetattr(slave_fd, TCSANOW, &t);
+    fcntl(master_fd, F_SETFL, fcntl(master_fd, F_GETFL) | O_NONBLOCK);
+    path = name;
+  }
+
+  // ---- peripherals ------------------------------------------------------------------------
+  void connect_peripherals() {
+    std::uint32_t flags = 0;
+    avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
+    flags &= ~static_cast<std::uint32_t>(AVR_UART_FLAG_STDIO);
+    avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), &Impl::on_uart_out, this);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XON), &Impl::on_uart_xon, this);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XOFF), &Impl::on_uart_xoff, this);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_OUTPUT), &Impl::on_twi, this);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('B'), IOPORT_IRQ_DIRECTION_ALL), &Impl::on_ddrb, this);
+    set_line();
+  }
+
+  static void on_uart_out(avr_irq_t*, std::uint32_t value, void* p) {
+    static_cast<Impl*>(p)->from_mcu.push_back(static_cast<std::uint8_t>(value));
+  }
+  static void on_uart_xon(avr_irq_t*, std::uint32_t, void* p) {
+    auto* self = static_cast<Impl*>(p);
+    self->uart_full = false;
+    self->feed_uart();
+  }
+  static void on_uart_xoff(avr_irq_t*, std::uint32_t, void* p) { static_cast<Impl*>(p)->uart_full = true; }
+
+  void feed_uart() {
+    avr_irq_t* in = avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
+    while (!to_mcu.empty() && !uart_full) {
+      const std::uint8_t b = to_mcu.front();
+      to_mcu.pop_front();
+      avr_raise_irq(in, b);
+    }
+  }
+
+  // MPU-6050 as a TWI slave: START (address byte with R/W), WRITE bytes (register pointer, then
+  // data), READ bytes (the model's I2C read), STOP. An ACK is an input message with data bit 1.
+  static void on_twi(avr_irq_t*, std::uint32_t value, void* p) { static_cast<Impl*>(p)->twi(value); }
+
+  void twi_reply(std::uint8_t msg, std::uint8_t data) {
+    avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_INPUT), avr_twi_irq_msg(msg, twi_addr, data));
+  }
+
+  void twi(std::uint32_t value) {
+    avr_twi_msg_irq_t v;
+    v.u.v = value;
+    const std::uint8_t msg = v.u.twi.msg;
+    if (msg & TWI_COND_STOP) twi_selected = false;
+    if (msg & TWI_COND_START) {
+      twi_addr = v.u.twi.addr;
+      twi_selected = (twi_addr >> 1) == kMpuAddress && mpu_present.load();
+      if (!twi_selected) return;
+      mpu.advance(now_s(), [] {});
+      twi_expect_reg = (twi_addr & 1) == 0;
+      twi_reply(TWI_COND_ACK, 1);
+      return;
+    }
+    if (!twi_selected) return;
+    if (msg & TWI_COND_WRITE) {
+      twi_reply(TWI_COND_ACK, 1);
+      if (twi_expect_reg) {
+        mpu_reg = v.u.twi.data;
+        twi_expect_reg = false;
+      } else {
+        mpu.write(mpu_reg, v.u.twi.data);
+        mpu_reg = static_cast<std::uint8_t>(mpu_reg + 1);
+      }
+    } else if (msg & TWI_COND_READ) {
+      std::uint8_t b = 0;
+      mpu.i2c_read(mpu_reg, &b, 1);
+      twi_reply(TWI_COND_READ, b);
+    }
+  }
+
+  // DS18B20 on PB3: the line is low while the firmware drives it (DDRB bit set, PORTB bit 0)
+  // or the device pulls it; otherwise the pull-up holds it high. The level is written into PINB.
+  void set_line() {
+    const bool high = !(master_low || device_low);
+    std::uint8_t& pin = avr->data[kPinB];
+    pin = static_cast<std::uint8_t>(high ? (pin | (1u << kOneWireBit)) : (pin & ~(1u << kOneWireBit)));
+  }
+
+  static void on_ddrb(avr_irq_t*, std::uint32_t ddr, void* p) {
+    auto* self = static_cast<Impl*>(p);
+    const bool low = (ddr >> kOneWireBit) & 1;
+    if (low == self->master_low) return;
+    self->master_low = low;
+    if (low) self->ow_fall(); else self->ow_rise();
+    self->set_line();
+  }
+
+  static avr_cycle_count_t on_device_release(avr_t*, avr_cycle_count_t, void* p) {
+    auto* self = static_cast<Impl*>(p);
+    self->device_low = false;
+    self->set_line();
+    return 0;
+  }
+  static avr_cycle_count_t on_presence_start(avr_t* a, avr_cycle_count_t, void* p) {
+    auto* self = static_cast<Impl*>(p);
+    self->device_low = true;
+    self->set_line();
+    avr_cycle_timer_register(a, us(120), &Impl::on_device_release, p);
+    return 0;
+  }
+
+  void ow_fall() {
+    fall_cycle = avr->cycle;
+    if (ow_state == OwState::kSend && send_bit < 72) {
+      const int bit = (scratchpad[static_cast<std::size_t>(send_bit / 8)] >> (send_bit % 8)) & 1;
+      if (bit == 0) {  // hold the line low through the master's sample point
+        device_low = true;
+        avr_cycle_timer_register(avr, us(30), &Impl::on_device_release, this);
+      }
+    }
+  }
+
+  void ow_rise() {
+    const double low_us = static_cast<double>(avr->cycle - fall_cycle) * 1e6 / kCpuHz;
+    if (low_us >= 380.0) {  // reset pulse
+      ow_state = OwState::kIdle;
+      if (ow_fault.load() == Ds18b20Fault::kOpen) return;
+      ow_state = OwState::kRom;
+      ow_bits = 0;
+      ow_byte = 0;
+      avr_cycle_timer_register(avr, us(30), &Impl::on_presence_start, this);
+      return;
+    }
+    if (ow_state == OwState::kSend) {
+      ++send_bit;
+      return;
+    }
+    if (ow_state != OwState::kRom && ow_state != OwState::kFunction) return;
+    const int bit = low_us < 15.0 ? 1 : 0;
+    ow_byte = static_cast<std::uint8_t>(ow_byte | (bit << ow_bits));
+    if (++ow_bits < 8) return;
+    ow_command(ow_byte);
+    ow_bits = 0;
+    ow_byte = 0;
+  }
+
+  void ow_command(std::uint8_t cmd) {
+    if (ow_state == OwState::kRom) {
+      ow_state = cmd == 0xCC ? OwState::kFunction : OwState::kIdle;  // SKIP ROM (the only device)
+      return;
+    }
+    if (cmd == 0x44) {  // CONVERT T: the reading is latched now, ready before the firmware asks
+      converted = true;
+      fill_scratchpad();
+      ow_state = OwState::kIdle;
+    } else if (cmd == 0xBE) {  // READ SCRATCHPAD
+      if (!converted || ow_fault.load() == Ds18b20Fault::kPowerOnValue) fill_scratchpad(85.0);
+      if (ow_fault.load() == Ds18b20Fault::kCrcError) scratchpad[0] ^= 0x01;  // a bit flipped on the line
+      ow_state = OwState::kSend;
+      send_bit = 0;
+    } else {
+      ow_state = OwState::kIdle;
+    }
+  }
+
+  void fill_scratchpad(double forced_c = std::nan("")) {
+    const double t = std::isnan(forced_c) ? air : forced_c;
+    const auto raw = static_cast<std::int16_t>(std::clamp(std::round(t * 16.0), -880.0, 2000.0));
+    scratchpad = {static_cast<std::uint8_t>(raw & 0xFF), static_cast<std::uint8_t>((raw >> 8) & 0xFF), 0x4B, 0x46, 0x7F,
+                  0xFF, 0x0C, 0x10, 0};
+    scratchpad[8] = dallas_crc8(scratchpad.data(), 8);
+  }
+
+  // ---- the loop -----------------------------------------------------------------------------
+  void read_pwm() {
+    const std::uint8_t tccr1a = avr->data[kTccr1a];
+    heater = (tccr1a & kCom1b1) ? avr->data[kOcr1bl] : 0;
+    peltier = (tccr1a & kCom1a1) ? avr->data[kOcr1al] : 0;
+  }
+
+  void pump_host_to_mcu() {
+    std::uint8_t buf[512];
+    for (;;) {
+      const ssize_t n = ::read(master_fd, buf, sizeof buf);
+      if (n <= 0) break;
+      std::lock_guard<std::mutex> lock(stats_mutex);
+      if (steady_now_ns() < silent_until_ns.load()) {
+        ++st.dropped_requests;
+        continue;
+      }
+      if (splitmix_unit(rng) < request_corrupt_p.load()) {
+        buf[static_cast<std::size_t>(n) - 1] ^= 0x5A;  // the CRC no longer matches: the MCU must stay silent
+        ++st.corrupted_requests;
+      }
+      st.bytes_to_mcu += static_cast<std::uint64_t>(n);
+      to_mcu.insert(to_mcu.end(), buf, buf + n);
+    }
+    feed_uart();
+  }
+
+  void pump_mcu_to_host() {
+    if (from_mcu.empty()) return;
+    {
+      std::lock_guard<std::mutex> lock(stats_mutex);
+      st.bytes_from_mcu += from_mcu.size();
+      if (splitmix_unit(rng) < reply_corrupt_p.load()) {
+        from_mcu[from_mcu.size() / 2] ^= 0x5A;
+        ++st.corrupted_replies;
+      }
+    }
+    std::size_t off = 0;
+    while (off < from_mcu.size()) {
+      const ssize_t n = ::write(master_fd, from_mcu.data() + off, from_mcu.size() - off);
+      if (n <= 0) break;  // nobody reads the line: the bytes are lost, as on a real line
+      off += static_cast<std::size_t>(n);
+    }
+    from_mcu.clear();
+  }
+
+  void step_plant(double dt) {
+    sim::plant_step(c.plant, heater.load(), peltier.load(), dt, air, die);
+    air_out = air;
+  }
+
+  void reset_now() {
+    avr_reset(avr);
+    master_low = device_low = false;
+    ow_state = OwState::kIdle;
+    twi_selected = false;
+    uart_full = false;
+    set_line();
+    std::lock_guard<std::mutex> lock(stats_mutex);
+    ++st.resets;
+  }
+
+  // Waits until the wall clock catches up with simulated time (or a request arrives).
+  void pace() {
+    if (!(c.speed > 0.0)) return;
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double ahead = now_s() / c.speed - wall;
+    if (ahead <= 0.0) return;
+    pollfd pfd{master_fd, POLLIN, 0};
+    const timespec ts{0, static_cast<long>(ahead * 1e9)};
+    ppoll(&pfd, 1, &ts, nullptr);
+  }
+
+  void run() {
+    while (!stop.load()) {
+      if (reset_pending.exchange(false)) reset_now();
+      const auto busy0 = std::chrono::steady_clock::now();
+      const avr_cycle_count_t end = avr->cycle + kSliceCycles;
+      const double t_before = now_s();
+      while (avr->cycle < end) {
+        const int state = avr_run(avr);
+        if (state == cpu_Done || state == cpu_Crashed) {
+          reset_now();
+          break;
+        }
+      }
+      read_pwm();
+      step_plant(now_s() - t_before);
+      mpu.advance(now_s(), [] {});
+      pump_mcu_to_host();
+      pump_host_to_mcu();
+      sim_s = now_s();
+      busy_s = busy_s.load() + std::chrono::duration<double>(std::chrono::steady_clock::now() - busy0).count();
+      pace();
+    }
+  }
+};
+
+FirmwareInTheLoop::FirmwareInTheLoop(FirmwareLoopConfig config, Mpu6050Model mpu)
+    : impl_(std::make_unique<Impl>(std::move(config), std::move(mpu))) {
+  impl_->thread = std::thread([this] { impl_->run(); });
+}
+
+FirmwareInTheLoop::~FirmwareInTheLoop() {
+  impl_->stop = true;
+  if (impl_->thread.joinable()) impl_->thread.join();
+}
+
+const std::string& FirmwareInTheLoop::device_path() const { return impl_->path; }
+void FirmwareInTheLoop::set_reply_corrupt_probability(double p) { impl_->reply_corrupt_p = p; }
+void FirmwareInTheLoop::set_request_corrupt_probability(double p) { impl_->request_corrupt_p = p; }
+void FirmwareInTheLoop::go_silent(std::chrono::milliseconds d) { impl_->silent_until_ns = steady_ns_after(d); }
+void FirmwareInTheLoop::set_ds18b20_fault(Ds18b20Fault f) { impl_->ow_fault = f; }
+void FirmwareInTheLoop::set_mpu_present(bool present) { impl_->mpu_present = present; }
+void FirmwareInTheLoop::reset_mcu() { impl_->reset_pending = true; }
+int FirmwareInTheLoop::heater_pwm() const { return impl_->heater.load(); }
+int FirmwareInTheLoop::peltier_pwm() const { return impl_->peltier.load(); }
+double FirmwareInTheLoop::air_c() const { return impl_->air_out.load(); }
+
+bool FirmwareInTheLoop::wait_until_simulated(double t_s, std::chrono::milliseconds timeout) const {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (impl_->sim_s.load() < t_s) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return true;
+}
+
+FirmwareLoopStats FirmwareInTheLoop::stats() const {
+  std::lock_guard<std::mutex> lock(impl_->stats_mutex);
+  FirmwareLoopStats s = impl_->st;
+  s.simulated_s = impl_->sim_s.load();
+  s.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - impl_->t0).count();
+  s.busy_s = impl_->busy_s.load();
+  return s;
+}
+
+}  // namespace stend::emu

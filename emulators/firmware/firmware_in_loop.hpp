@@ -1,0 +1,77 @@
+// Firmware in the loop: the bench microcontroller's real firmware (firmware/bench_mcu, the .elf
+// avr-gcc built) running on simavr's ATmega328P, with its peripherals modelled against simavr's
+// API and backed by Stend's twin:
+//   - MPU-6050 on the TWI bus (address 0x68): the register model of emulators/mpu6050 (counts
+//     from stend::sim::SimImu, its FIFO), advanced to the simulated instant of every START;
+//   - DS18B20 on pin 11 (PB3): a 1-Wire slave decoding the firmware's slots by their length in
+//     CPU cycles (reset, presence, write 0/1, read slots), SKIP ROM, CONVERT T, READ SCRATCHPAD
+//     with the Dallas CRC-8, reading the thermal plant's air temperature;
+//   - thermal plant (stend::sim::plant_step, the sim_thermochamber equations) driven by the PWM
+//     duties the firmware sets in Timer1 (OCR1B heater pin 10, OCR1A Peltier pin 9);
+//   - USART0 bridged to a pseudo-terminal: a host driver opens device_path() like /dev/ttyUSB0.
+// Simulated time is paced to the wall clock × speed (the host drivers' time-outs are wall time).
+// Fault injection: corrupted replies and requests (CRC errors on the line), silence (time-outs),
+// DS18B20 open / CRC error / power-on value, MPU-6050 absent, a reset of the MCU.
+#pragma once
+
+#include <stend/sim/thermochamber.hpp>
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "mpu6050_model.hpp"
+
+namespace stend::emu {
+
+enum class Ds18b20Fault { kNone, kOpen, kCrcError, kPowerOnValue };
+
+struct FirmwareLoopConfig {
+  std::string elf_path;           // bench_mcu.elf (CMake: STEND_BENCH_MCU_ELF)
+  double speed = 1.0;             // simulated seconds per wall second; 0 = unpaced (as fast as simavr runs)
+  sim::ThermochamberConfig plant; // the chamber around the sensor
+  std::uint64_t seed = 1;         // fault-injection random stream
+};
+
+struct FirmwareLoopStats {
+  double simulated_s = 0.0;       // simulated time since power-on [s]
+  double wall_s = 0.0;            // wall time since construction [s]
+  double busy_s = 0.0;            // wall time spent simulating (not waiting for the wall clock) [s]
+  std::uint64_t bytes_to_mcu = 0, bytes_from_mcu = 0;
+  std::uint64_t corrupted_requests = 0, corrupted_replies = 0, dropped_requests = 0;
+  std::uint64_t resets = 0;       // reset_mcu() calls and watchdog resets
+};
+
+class FirmwareInTheLoop {
+ public:
+  // Loads the .elf (throws std::runtime_error naming the file when it cannot), opens the pty,
+  // starts the simulation thread.
+  FirmwareInTheLoop(FirmwareLoopConfig config, Mpu6050Model mpu);
+  ~FirmwareInTheLoop();
+  FirmwareInTheLoop(const FirmwareInTheLoop&) = delete;
+  FirmwareInTheLoop& operator=(const FirmwareInTheLoop&) = delete;
+
+  const std::string& device_path() const;  // the pty's slave end
+
+  // Line faults: each reply (request) burst gets one byte flipped with this probability.
+  void set_reply_corrupt_probability(double p);
+  void set_request_corrupt_probability(double p);
+  void go_silent(std::chrono::milliseconds d);  // requests are lost on the line for `d` (wall time)
+  void set_ds18b20_fault(Ds18b20Fault f);
+  void set_mpu_present(bool present);           // false: the MPU-6050 does not ACK its address
+  void reset_mcu();                             // pulse the RESET pin (BOOT_COUNT goes up)
+
+  int heater_pwm() const;   // Timer1 duty on pin 10, 0..255 (0 while the output is disconnected)
+  int peltier_pwm() const;  // pin 9
+  double air_c() const;     // the plant's air temperature [°C]
+  // Blocks until the simulation has reached `t_s` simulated seconds (or `timeout` wall time passed).
+  bool wait_until_simulated(double t_s, std::chrono::milliseconds timeout) const;
+  FirmwareLoopStats stats() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace stend::emu
