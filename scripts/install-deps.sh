@@ -14,6 +14,9 @@ packages=(
   python3-numpy python3-pandas python3-scipy  # bench: allantools (the Allan peer, ../shared/peers) on Debian's numpy, pandas, scipy
   python3-rosbag  # bench: import_log_bench.sh writes a long ROS 1 bag
   clang libclang-rt-14-dev  # scripts/fuzz.sh: the fuzz targets under libFuzzer, ASan and UBSan
+  python3-jsonschema  # tests: `--json` outputs checked against docs/schemas (tests/check_json_schema.py)
+  dpkg-dev  # cpack -G DEB: dpkg-shlibdeps computes the package's dependencies (scripts/deb-test.sh)
+  debootstrap  # scripts/deb-chroot-test.sh: the .deb on a clean Debian 12 chroot
 )
 missing=()
 for p in "${packages[@]}"; do
