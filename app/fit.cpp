@@ -1,6 +1,7 @@
 // Shared analysis helpers of the `stend` program: open a recording or dataset, fit a model file.
 #include "commands.hpp"
 
+#include "stend/estimation/registry.hpp"
 #include "stend/estimation/summary.hpp"
 #include "stend/estimators/builtin.hpp"
 #include "stend/files.hpp"
