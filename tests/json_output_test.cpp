@@ -181,7 +181,7 @@ TEST_F(JsonOutput, Report) {
 }
 
 TEST_F(JsonOutput, Export) {
-  const fs::path out = dir() / "export.json";
+  const fs::path out = dir() / "exported.json";  // not export.json: the command's own output
   const json j = command("export", "export " + run_dir().string() + " --to json -o " + out.string());
   expect_valid("export");
   ASSERT_EQ(j["files"].size(), 1u);
