@@ -75,7 +75,7 @@ struct DatasetArgs {
 
 // Writes the results document to `json` and the printed text beside it (.txt), each through
 // write_file_atomic (a failed write throws IoError: no "results:" line is printed); with no path
-// (the input is a dataset file, not a run folder, and no --json was given) writes nothing and says
+// (the input is a dataset file, not a run folder, and no --out was given) writes nothing and says
 // so. `failed`: the document states a failed fit; it is written (so that no earlier results stand
 // for this fit) and said to hold no results.
 void write_results(std::filesystem::path json, const std::string& document, const std::string& text,

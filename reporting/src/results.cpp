@@ -106,18 +106,18 @@ RunResults load_run_results(const fs::path& run_dir) {
   const estimation::Registry registry = estimators::builtin();
   for (const auto& entry : registry.entries())
     for (const auto& name : estimation::results_files_of(entry.results_file)) {
-    const fs::path f = r.dir / name;
-    const std::string stem = f.stem().string();
-    if (!fs::exists(f)) continue;
-    try {
-      EstimatorUse use;
-      auto ps = parameters_of(json::parse(read_text(f)), stem, &use);
-      use.file = f.filename().string();
-      r.estimators.push_back(use);
-      r.parameters.insert(r.parameters.end(), ps.begin(), ps.end());
-    } catch (const std::exception& e) {
-      r.notes.push_back(f.filename().string() + " not read: " + e.what());
-    }
+      const fs::path f = r.dir / name;
+      const std::string stem = f.stem().string();
+      if (!fs::exists(f)) continue;
+      try {
+        EstimatorUse use;
+        auto ps = parameters_of(json::parse(read_text(f)), stem, &use);
+        use.file = f.filename().string();
+        r.estimators.push_back(use);
+        r.parameters.insert(r.parameters.end(), ps.begin(), ps.end());
+      } catch (const std::exception& e) {
+        r.notes.push_back(f.filename().string() + " not read: " + e.what());
+      }
     }
   return r;
 }
