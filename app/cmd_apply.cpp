@@ -55,7 +55,7 @@ ExitCode run_apply(const ApplyArgs& a) {
   calibration::ValidationOptions options = a.options;
   for (const auto& r : a.rotations) options.rotations.push_back(calibration::parse_expected_rotation(r));
   calibration::check_applicable(cal, options);  // before reading the recording or writing anything
-  cal.print(std::cout);
+  cal.print(human_stream());
   const Recording raw = a.data.open();
   if (cal.needs_temperature() && std::isfinite(cal.valid_min_c) && raw.sample_count() > 0) {
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;  // [degC]
@@ -70,18 +70,29 @@ ExitCode run_apply(const ApplyArgs& a) {
                  lo, hi, cal.valid_min_c, cal.valid_max_c);
   }
   const Recording calibrated = calibration::apply_calibration(raw, cal);
+  // docs/schemas/apply.schema.json
+  nlohmann::json doc = {{"calibrated", nullptr}, {"validation", nullptr}};
   if (!a.output.empty()) {
     calibration::write_calibrated(calibrated, cal, a.output);
-    fmt::print("calibrated: {} ({} samples)\n", a.output, calibrated.sample_count());
+    fmt::print(human(), "calibrated: {} ({} samples)\n", a.output, calibrated.sample_count());
+    doc["calibrated"] = a.output;
   }
-  if (!validating) return ExitCode::kOk;
+  if (!validating) {
+    print_json(doc);
+    return ExitCode::kOk;
+  }
   const calibration::ValidationReport report = calibration::validate(raw, calibrated, cal, options);
   std::ostringstream text;
   report.print(text);
-  std::cout << "\n" << text.str();
+  human_stream() << "\n" << text.str();
   fs::path json = a.json;
   if (json.empty() && !a.output.empty()) json = fs::path(a.output) / "validation.json";
-  write_results(json, report.to_json(), text.str());
+  const std::string document = report.to_json();
+  write_results(json, document, text.str());
+  doc["validation"] = {{"ok", report.ok},
+                       {"results_file", json.empty() ? nlohmann::json(nullptr) : nlohmann::json(json.string())},
+                       {"document", nlohmann::json::parse(document, nullptr, false)}};
+  print_json(doc);
   return report.ok ? ExitCode::kOk : ExitCode::kFitFailed;
 }
 
@@ -107,7 +118,9 @@ void add_apply_command(CLI::App& app, std::vector<Command>& out) {
       ->check(within(physics::kMinPlausibleGravity_mps2, physics::kMaxPlausibleGravity_mps2));
   sub->add_option("--confidence", a.options.confidence, "Level of the turns' intervals (default 0.95)")
       ->check(strictly_within(0, 1));
-  sub->add_option("--json", a.json, "Where to write the validation JSON (default CALIBRATED/validation.json)");
+  sub->add_option("--validation-out", a.json,
+                  "Where to write the validation results (default CALIBRATED/validation.json; with no -o, only here)");
+  add_json_flag(sub, "what was written and the validation's outcome");
   out.push_back({sub, [] { return run_apply(a); }});
 }
 

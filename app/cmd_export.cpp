@@ -32,11 +32,18 @@ void add_export_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_flag("--accept-damaged", opt.accept_damaged,
                 "csv: copy the readable part of a damaged run (a truncated file, rows missing against run.json) "
                 "instead of refusing it");
+  add_json_flag(sub, "the files written");
   out.push_back({sub, [] {
                    const auto r = stend::reporting::export_run(run, format, output, opt);
-                   for (const auto& f : r.files) fmt::print("wrote {}\n", f.string());
-                   for (const auto& n : r.notes) fmt::print("note: {}\n", n);
+                   nlohmann::json files = nlohmann::json::array();
+                   for (const auto& f : r.files) {
+                     fmt::print(human(), "wrote {}\n", f.string());
+                     files.push_back(f.string());
+                   }
+                   for (const auto& n : r.notes) fmt::print(human(), "note: {}\n", n);
                    for (const auto& w : r.warnings) fmt::print(stderr, "warning: {}\n", w);
+                   // docs/schemas/export.schema.json
+                   print_json({{"files", files}, {"notes", r.notes}, {"warnings", r.warnings}});
                    return ExitCode::kOk;
                  }});
 }

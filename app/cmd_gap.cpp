@@ -69,10 +69,15 @@ ExitCode run_gap(const GapArgs& a) {
   const diagnosis::GapReport rep = diagnosis::diagnose(in, opt);
   std::ostringstream text;
   diagnosis::print_report(text, rep);
-  std::cout << text.str();
+  human_stream() << text.str();
   std::filesystem::path json = a.json;
   if (json.empty() && a.data.is_run()) json = std::filesystem::path(a.data.inputs[0]) / "gap.json";
-  write_results(json, diagnosis::to_json(rep), text.str());
+  const std::string document = diagnosis::to_json(rep);
+  write_results(json, document, text.str());
+  // docs/schemas/gap.schema.json
+  print_json({{"ok", rep.ok},
+              {"results_file", json.empty() ? nlohmann::json(nullptr) : nlohmann::json(json.string())},
+              {"document", nlohmann::json::parse(document, nullptr, false)}});
   return rep.ok ? ExitCode::kOk : ExitCode::kFitFailed;
 }
 
@@ -92,13 +97,18 @@ ExitCode run_validate(const GapArgs& a) {
   o.on_progress = [&progress](double done, const std::string& stage) { progress.update(done, stage); };
   const diagnosis::ValidationReport r = diagnosis::run_validation(o);
   progress.clear();
-  diagnosis::print_validation(std::cout, r);
+  diagnosis::print_validation(human_stream(), r);
+  const std::string document = diagnosis::validation_json(r);
   if (!a.vjson.empty()) {
-    write_file_atomic(a.vjson, diagnosis::validation_json(r) + "\n");
-    fmt::print("results:    {}\n", a.vjson);
+    write_file_atomic(a.vjson, document + "\n");
+    fmt::print(human(), "results:    {}\n", a.vjson);
   }
   const bool pass = diagnosis::targets_met(r);
-  fmt::print("targets:    {}\n", pass ? "met" : "NOT met");
+  fmt::print(human(), "targets:    {}\n", pass ? "met" : "NOT met");
+  // docs/schemas/gap-validate.schema.json
+  print_json({{"targets_met", pass},
+              {"results_file", a.vjson.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.vjson)},
+              {"document", nlohmann::json::parse(document, nullptr, false)}});
   return pass ? ExitCode::kOk : ExitCode::kFitFailed;
 }
 
@@ -111,7 +121,9 @@ void add_gap_command(CLI::App& app, std::vector<Command>& out) {
   args->data.add_to(sub, false);
   args->data.add_accept_damaged(sub);
   sub->add_option("-m,--model", args->model, "Model YAML of a linear error model (instrument, axes, terms, extraction)");
-  sub->add_option("--json", args->json, "Where to write gap.json (default RUN/gap.json, or ./gap.json for a dataset)");
+  sub->add_option("-o,--out", args->json,
+                  "Where to write the results (default RUN/gap.json; a dataset file's are written only with --out)");
+  add_json_flag(sub, "the diagnosis's outcome and results document");
   sub->add_option("--fold-by", args->fold_by, "Held-out groups: auto | orientation | temperature | ramp")
       ->check(CLI::IsMember({"auto", "orientation", "temperature", "ramp"}));
   sub->add_option("--max-steps", args->max_steps, "Forward-selection steps (default 4)")->check(at_least(1));
@@ -131,7 +143,8 @@ void add_gap_command(CLI::App& app, std::vector<Command>& out) {
   val->add_option("--positions", args->positions, "Use an N-position single-temperature design instead of the default")
       ->check(at_least(diagnosis::kMinManyPositions));
   val->add_option("--seed", args->seed, "Master seed");
-  val->add_option("--json", args->vjson, "Write the validation figures as JSON");
+  val->add_option("-o,--out", args->vjson, "Write the validation figures as JSON to this file");
+  add_json_flag(val, "the validation figures");
   val->add_option("--noise-seeds", args->noise_seeds,
                   "Noise-stage experiments (quantization, saturation, coloured noise): runs per size (default 10; 0 = skip)")
       ->check(at_least(0));

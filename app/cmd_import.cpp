@@ -84,10 +84,22 @@ ExitCode run_import(const ImportArgs& a) {
     std::filesystem::remove_all(dir, ec);  // the folder did not exist before: nothing else is lost
     throw;
   }
-  fmt::print("run folder: {}\nformat:     {}\nrecorded:   {} samples, {} segments, {} truth rows, {} events\n",
+  fmt::print(human(), "run folder: {}\nformat:     {}\nrecorded:   {} samples, {} segments, {} truth rows, {} events\n",
              dir.string(), format, sink.sample_count(), rec.segments.size(), rec.truth_t.size(), rec.events.size());
+  std::vector<std::string> warnings;
   for (const auto& e : rec.events)
-    if (e.level == "warning") fmt::print("warning:    {}\n", e.message);
+    if (e.level == "warning") {
+      fmt::print(human(), "warning:    {}\n", e.message);
+      warnings.push_back(e.message);
+    }
+  // docs/schemas/import.schema.json
+  print_json({{"run_dir", dir.string()},
+              {"format", format},
+              {"samples", sink.sample_count()},
+              {"segments", rec.segments.size()},
+              {"truth_rows", rec.truth_t.size()},
+              {"events", rec.events.size()},
+              {"warnings", warnings}});
   return ExitCode::kOk;
 }
 
@@ -100,6 +112,7 @@ void add_import_command(CLI::App& app, std::vector<Command>& out) {
   args->data.add_to(sub);
   sub->add_option("-o,--output", args->output, "The run folder to create (must not exist)")->required();
   sub->add_option("--name", args->name, "The recording's name (default import:<format>)");
+  add_json_flag(sub, "the run folder made and what it holds");
   out.push_back({sub, [args] { return run_import(*args); }});
 }
 

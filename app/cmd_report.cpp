@@ -13,14 +13,15 @@ namespace stend::cli {
 
 namespace {
 
-// Records the run folder in the results database; says why on stderr when it cannot.
-void record_in_db(const std::filesystem::path& run_dir, std::filesystem::path db) {
+// Records the run folder in the results database; returns the database's path.
+std::filesystem::path record_in_db(const std::filesystem::path& run_dir, std::filesystem::path db) {
   if (db.empty()) db = stend::reporting::default_db_path(run_dir);
   stend::reporting::ResultsDb store(db);
   const auto r = stend::reporting::load_run_results(run_dir);
   store.add(r);
-  fmt::print("results db: {} (run {}, procedure {}, {} parameter(s))\n", db.string(), r.run_name,
+  fmt::print(human(), "results db: {} (run {}, procedure {}, {} parameter(s))\n", db.string(), r.run_name,
              r.procedure_fingerprint.empty() ? "unknown" : r.procedure_fingerprint.substr(0, 16), r.parameters.size());
+  return db;
 }
 
 }  // namespace
@@ -33,10 +34,14 @@ void add_report_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_option("run", run, "Run folder")->required();
   sub->add_option("--db", db, "Results database (default: $STEND_RESULTS_DB, else stend-results.sqlite beside the run folder)");
   sub->add_flag("--no-db", no_db, "Do not record the run in the results database");
+  add_json_flag(sub, "the report and database written");
   out.push_back({sub, [] {
                    const auto path = stend::reporting::write_run_report(run);
-                   fmt::print("report:     {}\n", path.string());
-                   if (!no_db) record_in_db(run, db);
+                   fmt::print(human(), "report:     {}\n", path.string());
+                   const auto dbfile = no_db ? std::filesystem::path() : record_in_db(run, db);
+                   // docs/schemas/report.schema.json
+                   print_json({{"report", path.string()},
+                               {"results_db", dbfile.empty() ? nlohmann::json(nullptr) : nlohmann::json(dbfile.string())}});
                    return ExitCode::kOk;
                  }});
 }

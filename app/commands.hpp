@@ -7,8 +7,10 @@
 #include "stend/recording.hpp"
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -32,6 +34,16 @@ CLI::Validator at_least(double lo);                   // [lo, inf)
 CLI::Validator above(double lo);                      // (lo, inf)
 CLI::Validator within(double lo, double hi);          // [lo, hi]
 CLI::Validator strictly_within(double lo, double hi);  // (lo, hi)
+
+// ---- machine-readable output (app/output.cpp) ---------------------------------------------------
+// `--json` on a command that prints results or status: it prints one JSON document on stdout (its
+// schema in docs/schemas/<command>.schema.json, docs/json-output.md) and its human-readable lines
+// go to stderr instead, so that `stend CMD --json > out.json` is parseable.
+void add_json_flag(CLI::App* sub, const std::string& what);
+bool json_output();                 // whether --json was given
+std::FILE* human();                 // where human-readable lines go: stdout, or stderr under --json
+std::ostream& human_stream();       // the same as a stream
+void print_json(const nlohmann::json& doc);  // the document on stdout (under --json only)
 
 // ---- shared analysis helpers (app/fit.cpp) -----------------------------------------------------
 
@@ -63,7 +75,7 @@ struct DatasetArgs {
 
 // Writes the results document to `json` and the printed text beside it (.txt), each through
 // write_file_atomic (a failed write throws IoError: no "results:" line is printed); with no path
-// (the input is a dataset file, not a run folder, and no --json was given) writes nothing and says
+// (the input is a dataset file, not a run folder, and no --out was given) writes nothing and says
 // so. `failed`: the document states a failed fit; it is written (so that no earlier results stand
 // for this fit) and said to hold no results.
 void write_results(std::filesystem::path json, const std::string& document, const std::string& text,
@@ -72,12 +84,26 @@ void write_results(std::filesystem::path json, const std::string& document, cons
 // Whether the estimator `stend fit` would use for this model file reads the bench truth.
 bool fit_reads_truth(const std::string& model_file, const std::string& estimator = "auto");
 
+// What a fit gave: whether it succeeded, where its results went ("" when not written), its
+// estimator and its results document (the failure document when it failed: status and why).
+struct FitOutcome {
+  bool ok = false;
+  std::filesystem::path results_file;
+  std::string estimator;
+  nlohmann::json document;
+  nlohmann::json to_json() const;  // docs/schemas/fit.schema.json
+};
+
 // Fits `model_file` to `rec` with the estimator named `estimator` ("auto": the one the model file
-// is written for, through the estimator registry), prints the report to stdout and writes the
-// results JSON (+ a .txt copy) to `json_out`, or to out_dir/<the estimator's results file> when
-// empty. Returns false when the fit failed (it says why, with no numbers).
-bool fit_recording(const stend::Recording& rec, const std::string& model_file, const std::filesystem::path& out_dir,
+// is written for, through the estimator registry), prints the report (human()) and writes the
+// results JSON (+ a .txt copy) to `json_out`, or to out_dir/<the estimator's results file for the
+// model's instrument> (estimation::results_file_for) when empty. A failed fit says why, with no
+// numbers.
+FitOutcome fit_recording(const stend::Recording& rec, const std::string& model_file, const std::filesystem::path& out_dir,
                    const std::string& json_out, const std::string& estimator = "auto");
+
+// Whether `results_file` lies in the run folder `run_dir` (then the run's report shows it).
+bool results_in_run(const std::filesystem::path& run_dir, const std::filesystem::path& results_file);
 
 // ---- subcommands in their own files ------------------------------------------------------------
 void add_gap_command(CLI::App& app, std::vector<Command>& out);      // cmd_gap.cpp

@@ -1,6 +1,7 @@
 // Shared analysis helpers of the `stend` program: open a recording or dataset, fit a model file.
 #include "commands.hpp"
 
+#include "stend/estimation/registry.hpp"
 #include "stend/estimation/summary.hpp"
 #include "stend/estimators/builtin.hpp"
 #include "stend/files.hpp"
@@ -108,16 +109,16 @@ std::string failure_document(const estimation::EstimatorEntry& entry, const std:
 void write_results(std::filesystem::path json, const std::string& document, const std::string& text,
                    bool failed) {
   if (json.empty()) {
-    fmt::print("results:    not written (the input is not a run folder; --json FILE writes them)\n");
+    fmt::print(human(), "results:    not written (the input is not a run folder; --out FILE writes them)\n");
     return;
   }
   write_file_atomic(json, document + "\n");
   std::filesystem::path txt = json;
   write_file_atomic(txt.replace_extension(".txt"), text);
   if (failed) {
-    fmt::print("results:    none — the fit failed ({} says why)\n", json.string());
+    fmt::print(human(), "results:    none — the fit failed ({} says why)\n", json.string());
   } else {
-    fmt::print("results:    {}\n", json.string());
+    fmt::print(human(), "results:    {}\n", json.string());
   }
 }
 
@@ -148,8 +149,21 @@ bool fit_reads_truth(const std::string& model_file, const std::string& estimator
   return resolve_estimator(registry, host, with_plugins, estimator, model_file).reads_truth;
 }
 
-bool fit_recording(const stend::Recording& rec, const std::string& model_file, const std::filesystem::path& out_dir,
-                   const std::string& json_out, const std::string& estimator) {
+bool results_in_run(const std::filesystem::path& run_dir, const std::filesystem::path& results_file) {
+  if (run_dir.empty() || results_file.empty()) return false;
+  std::error_code ec;
+  return std::filesystem::equivalent(std::filesystem::absolute(results_file).parent_path(), run_dir, ec) && !ec;
+}
+
+nlohmann::json FitOutcome::to_json() const {
+  return {{"ok", ok},
+          {"estimator", estimator},
+          {"results_file", results_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(results_file.string())},
+          {"document", document}};
+}
+
+FitOutcome fit_recording(const stend::Recording& rec, const std::string& model_file, const std::filesystem::path& out_dir,
+                         const std::string& json_out, const std::string& estimator) {
   const estimation::Registry registry = estimators::builtin();
   PluginHost host;
   estimation::Registry with_plugins;
@@ -166,10 +180,18 @@ bool fit_recording(const stend::Recording& rec, const std::string& model_file, c
   if (!r.ok && !r.message.empty() && text.find(r.message) == std::string::npos)
     text += entry.name + ": FAILED — " + r.message + "\n";
   std::filesystem::path json = json_out;
-  if (json.empty() && !out_dir.empty()) json = out_dir / (r.json_name.empty() ? entry.results_file : r.json_name);
-  std::cout << text;
-  write_results(json, r.ok || !r.json.empty() ? r.json : failure_document(entry, r.message), text, !r.ok);
-  return r.ok;
+  if (json.empty() && !out_dir.empty())
+    json = out_dir / estimation::results_file_for(r.json_name.empty() ? entry.results_file : r.json_name,
+                                                  estimation::model_instrument(yaml::load_file(model_file, "model file")));
+  human_stream() << text;
+  const std::string document = r.ok || !r.json.empty() ? r.json : failure_document(entry, r.message);
+  write_results(json, document, text, !r.ok);
+  FitOutcome out;
+  out.ok = r.ok;
+  out.results_file = json;
+  out.estimator = entry.name;
+  out.document = nlohmann::json::parse(document, nullptr, false);
+  return out;
 }
 
 }  // namespace stend::cli

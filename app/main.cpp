@@ -12,6 +12,7 @@
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include <atomic>
 #include <fstream>
@@ -29,6 +30,40 @@ std::atomic<bool> g_stop{false};
 using stend::cli::ExitCode;
 using stend::cli::fit_recording;
 using stend::cli::fmt_duration;
+using stend::cli::human;
+using nlohmann::json;
+
+json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+const char* kind_name(long kind) {
+  switch (kind) {
+    case STEND_KIND_SENSOR: return "sensor";
+    case STEND_KIND_FIXTURE: return "fixture";
+    case STEND_KIND_ESTIMATOR: return "estimator";
+    default: return "unknown";
+  }
+}
+
+// docs/schemas/plugins.schema.json
+json plugins_json(const stend::PluginHost& host) {
+  json j;
+  j["search_path"] = json::array();
+  for (const auto& d : host.search_path()) j["search_path"].push_back({{"path", d.path}, {"origin", d.origin}});
+  j["plugins"] = json::array();
+  for (const auto& r : host.records()) {
+    json p = {{"file", r.file}, {"origin", r.origin}, {"loaded", r.info != nullptr && r.refusal.empty()}};
+    if (r.info != nullptr) {
+      p["name"] = r.info->name;
+      p["version"] = r.info->version;
+      p["kind"] = kind_name(static_cast<long>(r.info->kind));
+      p["description"] = r.info->description != nullptr ? r.info->description : "";
+    }
+    if (!r.refusal.empty()) p["refusal"] = r.refusal;
+    if (!r.shadowed_by.empty()) p["shadowed_by"] = r.shadowed_by;
+    j["plugins"].push_back(std::move(p));
+  }
+  return j;
+}
 
 extern "C" void on_sigint(int) {
   if (g_stop.load()) {  // second Ctrl-C: stop now
@@ -55,7 +90,8 @@ void scan_plugins(stend::PluginHost& host, const std::vector<std::string>& extra
 ExitCode cmd_plugins(const std::vector<std::string>& paths) {
   stend::PluginHost host;
   scan_plugins(host, paths, true);  // folders the user named on the command line
-  std::cout << host.describe();
+  fmt::print(human(), "{}", host.describe());
+  stend::cli::print_json(plugins_json(host));
   return ExitCode::kOk;
 }
 
@@ -68,9 +104,23 @@ ExitCode cmd_validate(const std::string& file, bool allow_plugins) {
   stend::check_run_limits(exp, estimate, exp.outputs.directory);
   std::size_t orientations = 0;
   for (const auto& s : exp.procedure) orientations += s.orientations.size();
-  fmt::print("{}: ok — experiment '{}', sensor {}, {} fixture(s), {} step(s), {} orientation(s), g = {:.6f} m/s^2; {}\n",
+  fmt::print(human(), "{}: ok — experiment '{}', sensor {}, {} fixture(s), {} step(s), {} orientation(s), g = {:.6f} m/s^2; {}\n",
              file, exp.name, exp.sensor.plugin, exp.fixtures.size(), exp.procedure.size(), orientations,
              exp.gravity.resolved_mps2, estimate.str());
+  json fixtures = json::array();
+  for (const auto& f : exp.fixtures) fixtures.push_back(f.plugin);
+  stend::cli::print_json({{"file", file},
+                          {"ok", true},
+                          {"experiment", exp.name},
+                          {"sensor", exp.sensor.plugin},
+                          {"fixtures", fixtures},
+                          {"steps", exp.procedure.size()},
+                          {"orientations", orientations},
+                          {"gravity_mps2", exp.gravity.resolved_mps2},
+                          {"estimate", {{"run_time_s", estimate.run_time_s},
+                                        {"samples", estimate.samples},
+                                        {"bytes", estimate.bytes},
+                                        {"store", stend::to_string(estimate.format)}}}});
   return ExitCode::kOk;
 }
 
@@ -106,38 +156,110 @@ ExitCode cmd_run(const std::string& file, const std::string& output, const std::
   status.keep();  // the final line stays: "100% | done | …"
   live.finish(r.status, r.message);
 
-  fmt::print("run folder: {}\n", r.dir.string());
-  fmt::print("status:     {}{}\n", stend::to_string(r.status), r.message.empty() ? "" : " — " + r.message);
-  fmt::print("recorded:   {} samples, {} segments, {} of run time in {:.2f} s wall ({:.0f}x real time)\n", r.samples,
+  fmt::print(human(), "run folder: {}\n", r.dir.string());
+  fmt::print(human(), "status:     {}{}\n", stend::to_string(r.status), r.message.empty() ? "" : " — " + r.message);
+  fmt::print(human(), "recorded:   {} samples, {} segments, {} of run time in {:.2f} s wall ({:.0f}x real time)\n", r.samples,
              r.segments, fmt_duration(r.run_time_s), r.wall_time_s, r.wall_time_s > 0 ? r.run_time_s / r.wall_time_s : 0.0);
   for (const std::string& why : r.unsafe)
     fmt::print(stderr, "error: safe state NOT confirmed, check the bench by hand: {}\n", why);
-  if (!r.unsafe.empty()) return ExitCode::kIoFailure;
+  // docs/schemas/run.schema.json
+  json summary = {{"run_dir", r.dir.string()},
+                  {"status", stend::to_string(r.status)},
+                  {"message", r.message},
+                  {"samples", r.samples},
+                  {"segments", r.segments},
+                  {"run_time_s", r.run_time_s},
+                  {"wall_time_s", r.wall_time_s},
+                  {"unsafe", r.unsafe},
+                  {"fit", nullptr},
+                  {"report", nullptr}};
+  const auto finish = [&summary](ExitCode code) {
+    summary["exit_code"] = stend::cli::to_int(code);
+    stend::cli::print_json(summary);
+    return code;
+  };
+  if (!r.unsafe.empty()) return finish(ExitCode::kIoFailure);
   if (r.status != stend::RunStatus::kComplete)
-    return r.status == stend::RunStatus::kInterrupted ? ExitCode::kStopped : ExitCode::kIoFailure;
+    return finish(r.status == stend::RunStatus::kInterrupted ? ExitCode::kStopped : ExitCode::kIoFailure);
   if (exp.estimation && exp.estimation["model"]) {
     // The experiment names its model: fit it now, relative paths from the experiment's folder.
     std::filesystem::path model = exp.estimation["model"].as<std::string>();
     if (model.is_relative()) model = std::filesystem::path(file).parent_path() / model;
-    fmt::print("\n");
-    if (!fit_recording(stend::Recording::open(r.dir, stend::SampleLoading::kStream), model.string(), r.dir, ""))
-      return ExitCode::kFitFailed;
+    fmt::print(human(), "\n");
+    const stend::cli::FitOutcome fit =
+        fit_recording(stend::Recording::open(r.dir, stend::SampleLoading::kStream), model.string(), r.dir, "");
+    summary["fit"] = fit.to_json();
+    if (!fit.ok) return finish(ExitCode::kFitFailed);
   }
-  fmt::print("report:     {}\n", stend::cli::write_run_report(r.dir).string());
-  return ExitCode::kOk;
+  const std::filesystem::path report = stend::cli::write_run_report(r.dir);
+  fmt::print(human(), "report:     {}\n", report.string());
+  summary["report"] = report.string();
+  return finish(ExitCode::kOk);
 }
 
-ExitCode cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, const std::string& json,
+ExitCode cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, const std::string& out,
             const std::string& estimator) {
   // A run opened for an estimator that needs no bench truth (allan) leaves the truth in the store.
   const stend::Recording rec =
       data.is_run() && !stend::cli::fit_reads_truth(model, estimator)
           ? stend::Recording::open(data.inputs[0], stend::SampleLoading::kStream, stend::TruthLoading::kSkip)
           : data.open();
-  return fit_recording(data.checked(rec), model, data.is_run() ? std::filesystem::path(data.inputs[0]) : std::filesystem::path(),
-                       json, estimator)
-             ? ExitCode::kOk
-             : ExitCode::kFitFailed;
+  const std::filesystem::path run_dir = data.is_run() ? std::filesystem::path(data.inputs[0]) : std::filesystem::path();
+  const stend::cli::FitOutcome fit = fit_recording(data.checked(rec), model, run_dir, out, estimator);
+  json doc = fit.to_json();
+  doc["report"] = nullptr;
+  if (run_dir.empty()) {
+    fmt::print(human(), "report:     none (the input is not a run folder; `stend import` makes one)\n");
+  } else if (stend::cli::results_in_run(run_dir, fit.results_file)) {
+    // A failed fit too: its results file now says so, and the report drops its earlier numbers.
+    const std::filesystem::path report = stend::cli::write_run_report(run_dir);
+    fmt::print(human(), "report:     {} (updated)\n", report.string());
+    doc["report"] = report.string();
+  } else {
+    fmt::print(human(), "report:     {} not updated (--out put the results outside the run folder)\n",
+               (run_dir / "report.html").string());
+  }
+  stend::cli::print_json(doc);
+  return fit.ok ? ExitCode::kOk : ExitCode::kFitFailed;
+}
+
+// docs/schemas/info.schema.json
+json info_json(const stend::Recording& rec, std::uint64_t n, const stend::ImuSample& first, const stend::ImuSample& last) {
+  const auto& h = rec.header;
+  json j = {{"recording", rec.dir.string()},
+            {"format", stend::to_string(rec.format)},
+            {"experiment", h.experiment_name},
+            {"stend_version", h.stend_version},
+            {"status", stend::to_string(h.status)},
+            {"complete", rec.complete()},
+            {"sensor", {{"vendor", h.identity.vendor},
+                        {"model", h.identity.model},
+                        {"serial", h.identity.serial},
+                        {"who_am_i", h.identity.who_am_i},
+                        {"output_rate_hz", h.info.output_rate_hz}}},
+            {"gravity_mps2", h.gravity_mps2},
+            {"clock", h.clock},
+            {"seed", h.seed},
+            {"samples", n},
+            {"t_first_s", n > 0 ? finite_or_null(first.t_s) : json(nullptr)},
+            {"t_last_s", n > 0 ? finite_or_null(last.t_s) : json(nullptr)},
+            {"gaps", rec.gap_count >= 0 ? json(rec.gap_count) : json(nullptr)},
+            {"truth_rows", rec.truth_rows},
+            {"damage", rec.damage}};
+  j["segments"] = json::array();
+  for (const auto& s : rec.segments)
+    j["segments"].push_back({{"id", s.id},
+                             {"kind", stend::to_string(s.kind)},
+                             {"t_start_s", finite_or_null(s.t_start_s)},
+                             {"t_end_s", finite_or_null(s.t_end_s)},
+                             {"settled", s.settled},
+                             {"complete", s.complete},
+                             {"label", s.label},
+                             {"targets", s.targets}});
+  j["events"] = json::array();
+  for (const auto& e : rec.events)
+    j["events"].push_back({{"t_s", finite_or_null(e.t_s)}, {"level", e.level}, {"source", e.source}, {"message", e.message}});
+  return j;
 }
 
 ExitCode cmd_info(const std::string& dir) {
@@ -145,42 +267,53 @@ ExitCode cmd_info(const std::string& dir) {
   const stend::Recording rec =
       stend::Recording::open(dir, stend::SampleLoading::kStream, stend::TruthLoading::kSkip);
   const auto& h = rec.header;
-  fmt::print("recording:  {} ({})\nexperiment: {} (stend {})\nstatus:     {}{}\n", rec.dir.string(),
+  std::FILE* out = human();
+  fmt::print(out, "recording:  {} ({})\nexperiment: {} (stend {})\nstatus:     {}{}\n", rec.dir.string(),
              stend::to_string(rec.format), h.experiment_name, h.stend_version, stend::to_string(h.status),
              rec.complete() ? "" : " (incomplete)");
-  fmt::print("sensor:     {} {} serial '{}' WHO_AM_I {} at {} Hz\n", h.identity.vendor, h.identity.model,
+  fmt::print(out, "sensor:     {} {} serial '{}' WHO_AM_I {} at {} Hz\n", h.identity.vendor, h.identity.model,
              h.identity.serial, h.identity.who_am_i, h.info.output_rate_hz);
-  fmt::print("gravity:    {:.6f} m/s^2; clock {}; seed {}\n", h.gravity_mps2, h.clock, h.seed);
+  fmt::print(out, "gravity:    {:.6f} m/s^2; clock {}; seed {}\n", h.gravity_mps2, h.clock, h.seed);
   const auto& src = rec.sample_source();
   const std::uint64_t n = src.size();
-  fmt::print("data:       {} samples", n);
+  fmt::print(out, "data:       {} samples", n);
+  stend::ImuSample first, last;
   if (n > 0) {
-    stend::ImuSample first, last;
     src.read(0, 1, &first);
     src.read(n - 1, 1, &last);
-    fmt::print(" from {:.3f} s to {:.3f} s", first.t_s, last.t_s);
+    fmt::print(out, " from {:.3f} s to {:.3f} s", first.t_s, last.t_s);
   }
-  if (rec.gap_count >= 0) fmt::print(", {} gaps", rec.gap_count);
-  fmt::print(", {} truth rows, {} segments, {} events\n", rec.truth_rows, rec.segments.size(), rec.events.size());
+  if (rec.gap_count >= 0) fmt::print(out, ", {} gaps", rec.gap_count);
+  fmt::print(out, ", {} truth rows, {} segments, {} events\n", rec.truth_rows, rec.segments.size(), rec.events.size());
   if (!rec.damage.empty())
-    fmt::print("damaged:    {} of {} samples are readable: {}\n", n, rec.written_samples, rec.damage);
+    fmt::print(out, "damaged:    {} of {} samples are readable: {}\n", n, rec.written_samples, rec.damage);
   for (const auto& s : rec.segments)
-    fmt::print("  #{:<3} {:<15} {:>7.2f}–{:<8.2f} s {}{}{}  {}\n", s.id, stend::to_string(s.kind), s.t_start_s, s.t_end_s,
+    fmt::print(out, "  #{:<3} {:<15} {:>7.2f}–{:<8.2f} s {}{}{}  {}\n", s.id, stend::to_string(s.kind), s.t_start_s, s.t_end_s,
                s.settled ? "" : "[unsettled] ", s.complete ? "" : "[incomplete] ", s.label, s.targets);
-  for (const auto& e : rec.events) fmt::print("  event {:.3f} s {} {}: {}\n", e.t_s, e.level, e.source, e.message);
+  for (const auto& e : rec.events) fmt::print(out, "  event {:.3f} s {} {}: {}\n", e.t_s, e.level, e.source, e.message);
+  stend::cli::print_json(info_json(rec, n, first, last));
   return ExitCode::kOk;
+}
+
+// `stend --version`: the version and where plugins are found.
+std::string version_text() {
+  std::string text = std::string("stend ") + stend::version() + "\nplugins searched, first wins (docs/plugins.md):\n" +
+                     stend::PluginHost::describe_search_path(stend::PluginHost::default_search_path());
+  if (!text.empty() && text.back() == '\n') text.pop_back();  // CLI11 ends the line
+  return text;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"stend — characterize MEMS inertial sensors on a lab bench"};
-  app.set_version_flag("--version", std::string("stend ") + stend::version());
+  app.set_version_flag("--version", version_text);
   app.require_subcommand(1);
 
   std::vector<std::string> plugin_paths;
   auto* plugins = app.add_subcommand("plugins", "List the plugins found on the search path and why any file was refused");
   plugins->add_option("--path", plugin_paths, "Extra plugin directory (searched first)");
+  stend::cli::add_json_flag(plugins, "the search path and every plugin file");
 
   std::string file;
   auto* validate = app.add_subcommand("validate", "Check an experiment file without running it");
@@ -189,6 +322,7 @@ int main(int argc, char** argv) {
   const std::string allow_help = "Load the plugin folders the experiment's plugin_paths name (their code runs); "
                                  "also STEND_ALLOW_PLUGINS=1";
   validate->add_flag("--allow-plugins", allow_plugins, allow_help);
+  stend::cli::add_json_flag(validate, "what was checked");
 
   std::string output, name, clock, store = "hdf5";
   bool quiet = false;
@@ -211,12 +345,14 @@ int main(int argc, char** argv) {
   run->add_flag("--allow-plugins", allow_plugins, allow_help);
   stend::cli::LiveArgs live_args;
   live_args.add_to(run, true);
+  stend::cli::add_json_flag(run, "the run's summary (folder, status, fit, report)");
 
   std::string dir;
   auto* info = app.add_subcommand("info", "Summarize a recording (run folder)");
   info->add_option("run", dir, "Run folder")->required();
+  stend::cli::add_json_flag(info, "the recording's summary");
 
-  std::string model, json;
+  std::string model, fit_out;
   stend::cli::DatasetArgs fit_data;
   auto* fit = app.add_subcommand("fit", "Fit an error model (or the Allan noise model) to a recording or dataset");
   fit_data.add_to(fit);
@@ -226,7 +362,10 @@ int main(int argc, char** argv) {
   fit->add_option("--estimator", estimator,
                   "auto (the one the model file is written for) | " + stend::estimators::builtin().names() +
                       " | the name of an estimator plugin on the search path");
-  fit->add_option("--json", json, "Where to write the results (default RUN/fit.json)");
+  fit->add_option("-o,--out", fit_out,
+                  "Where to write the results (default: the estimator's results file in the run folder, e.g. "
+                  "RUN/fit.json, RUN/temp_poly-gyroscope.json; a dataset file's are written only with --out)");
+  stend::cli::add_json_flag(fit, "the fit's outcome and results document");
 
   std::vector<stend::cli::Command> commands;
   stend::cli::add_gap_command(app, commands);
@@ -252,7 +391,7 @@ int main(int argc, char** argv) {
       if (*validate) return cmd_validate(file, allow_plugins);
       if (*run) return cmd_run(file, output, name, clock, store, quiet, allow_plugins, live_args);
       if (*info) return cmd_info(dir);
-      if (*fit) return cmd_fit(fit_data, model, json, estimator);
+      if (*fit) return cmd_fit(fit_data, model, fit_out, estimator);
     } catch (...) {
       return stend::cli::exit_code_of_current_exception();
     }

@@ -6,7 +6,7 @@
 #                                               `stend run configs/long_static.yaml`; RUNS: 3)
 #   BUILD=build dir, ALLANTOOLS=allantools source dir (default ../shared/peers/allantools)
 #
-# 1. Stend: `stend fit RUN --model estimators/allan/example/allan.yaml --json F` without the
+# 1. Stend: `stend fit RUN --model estimators/allan/example/allan.yaml --out F` without the
 #    example's further deviations (read the run, octave OADEV of all six channels, EDF and
 #    intervals, noise model, write the results: what allantools computes);
 # 2. allantools: bench/allantools_octave.py RUN/run.h5 (h5py; RUN/imu.csv with pandas for a CSV run),
@@ -55,7 +55,7 @@ median() { sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] 
 column_median() { awk -v c="$2" '{ print $c }' "$1" | median; }
 
 for _ in $(seq "$runs"); do
-  timed "$tmp/stend.times" "$stend" fit "$run" --model "$model" --json "$tmp/stend.json"
+  timed "$tmp/stend.times" "$stend" fit "$run" --model "$model" --out "$tmp/stend.json"
   [ -z "$peer" ] || timed "$tmp/allantools.times" "$python" "$root/bench/allantools_octave.py" \
     "$data" --rate "$rate" --allantools "$peer_src" --out "$tmp/allantools.json"
 done

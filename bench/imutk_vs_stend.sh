@@ -11,7 +11,7 @@
 # 3. builds IMU-TK from ../shared/peers/imu_tk with its own build.sh (-O3) into the temporary folder
 #    (skipped with a message when the peer is absent: Stend is then timed alone);
 # 4. times each whole process RUNS times, alternating, with /usr/bin/time: Stend
-#    `stend fit RUN --model estimators/ceres_nonlinear/examples/unknown_orientations.yaml --json F`
+#    `stend fit RUN --model estimators/ceres_nonlinear/examples/unknown_orientations.yaml --out F`
 #    (read the run, detect, accelerometer + gyro fits, covariances, write the results), IMU-TK
 #    `imutk_calib ACC GYRO g 2 0 1 PREFIX` (read both files, detect, accelerometer + gyro fits,
 #    write the results);
@@ -65,7 +65,7 @@ median() { sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] 
 column_median() { awk -v c="$2" '{ print $c }' "$1" | median; }
 
 for _ in $(seq "$runs"); do
-  timed "$tmp/stend.times" "$stend" fit "$run" --model "$model" --json "$tmp/stend.json"
+  timed "$tmp/stend.times" "$stend" fit "$run" --model "$model" --out "$tmp/stend.json"
   [ -z "$imutk" ] || timed "$tmp/imutk.times" "$imutk" "$tmp/acc.txt" "$tmp/gyro.txt" "$gravity" 2 0 1 "$tmp/imutk_out"
 done
 

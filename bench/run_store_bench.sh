@@ -12,7 +12,7 @@
 #    multiples of real time (recorded run time / wall time), and the run's size on disk in bytes
 #    and bytes per sample (samples as `stend info` counts them);
 # 2. times `stend info RUN` and `stend fit RUN --model estimators/allan/example/allan.yaml
-#    --json WORK/fit.json` three times each with /usr/bin/time (medians of wall, CPU, peak RSS);
+#    --out WORK/fit.json` three times each with /usr/bin/time (medians of wall, CPU, peak RSS);
 # 3. runs bench/allantools_vs_stend.sh on the same run when that script exists
 #    (`BUILD=… bench/allantools_vs_stend.sh RUN`), otherwise says it is skipped;
 # 4. prints the table.
@@ -65,7 +65,7 @@ bytes=$(du -sb "$run" | cut -f1)
 
 for _ in $(seq "$repeats"); do
   timed "$work/info.times" "$stend" info "$run"
-  timed "$work/fit.times" "$stend" fit "$run" --model "$model" --json "$work/fit.json"
+  timed "$work/fit.times" "$stend" fit "$run" --model "$model" --out "$work/fit.json"
 done
 recorded=$(sed -n 's/^data: *\([0-9]*\) samples.*/\1/p' "$work/info.times.out")
 [ -n "$recorded" ] || { echo "stend info printed no sample count:" >&2; cat "$work/info.times.out" >&2; exit 1; }

@@ -31,8 +31,8 @@ for record_s in "$short_s" "$long_s"; do
   for cmd in info fit gap; do
     case $cmd in
       info) args=(info "$run") ;;
-      fit) args=(fit "$run" --model "$model" --json "$tmp/fit.json") ;;
-      gap) args=(gap "$run" --model "$model" --json "$tmp/gap.json") ;;
+      fit) args=(fit "$run" --model "$model" --out "$tmp/fit.json") ;;
+      gap) args=(gap "$run" --model "$model" --out "$tmp/gap.json") ;;
     esac
     read -r wall rss < <(peak "$stend" "${args[@]}")
     printf '%-6s %10d %8s %10s %10s\n' "$cmd" "$samples" "$record_s" "$wall" "$rss"

@@ -28,12 +28,13 @@ function(stend_add_library name)
   add_library(Stend::${name} ALIAS ${target})
 endfunction()
 
-# stend_add_plugin(NAME SOURCES ... [LIBRARIES ...])
+# stend_add_plugin(NAME [TEST] SOURCES ... [LIBRARIES ...])
 # Builds a Stend plugin shared library `stend_NAME.so` into the plugin directory of the build
-# tree (and installs it into the install tree's plugin directory). In-tree plugins link the
+# tree (and installs it into the install tree's plugin directory, unless TEST: a plugin that only
+# the tests load is never installed). In-tree plugins link the
 # libraries they need (stend_sim, stend_devices, stend_core); out-of-tree plugins use the installed SDK's stend_add_plugin (same signature).
 function(stend_add_plugin name)
-  cmake_parse_arguments(ARG "" "" "SOURCES;LIBRARIES" ${ARGN})
+  cmake_parse_arguments(ARG "TEST" "" "SOURCES;LIBRARIES" ${ARGN})
   set(target stend_plugin_${name})
   add_library(${target} MODULE ${ARG_SOURCES})
   target_link_libraries(${target} PRIVATE stend_sdk stend_warnings ${ARG_LIBRARIES})
@@ -41,7 +42,9 @@ function(stend_add_plugin name)
     PREFIX "" OUTPUT_NAME stend_${name}
     LIBRARY_OUTPUT_DIRECTORY ${STEND_BUILD_PLUGIN_DIR}
     CXX_VISIBILITY_PRESET hidden VISIBILITY_INLINES_HIDDEN ON)
-  install(TARGETS ${target} LIBRARY DESTINATION ${STEND_PLUGIN_INSTALL_DIR})
+  if(NOT ARG_TEST)
+    install(TARGETS ${target} LIBRARY DESTINATION ${STEND_PLUGIN_INSTALL_DIR})
+  endif()
 endfunction()
 
 # Adds every immediate subfolder of the current source dir that has a CMakeLists.txt.

@@ -91,7 +91,7 @@ TEST(Cli, FitImportsTheMpu6050StaticDataset) {
   STEND_SKIP_IF_ABSENT(data);
   const TempDir dir("cli-allan");
   const fs::path json = dir / "allan.json";
-  const ProgramOutput o = run_stend("fit " + data.string() + " --model " + src + "/estimators/allan/example/allan.yaml --json " + json.string());
+  const ProgramOutput o = run_stend("fit " + data.string() + " --model " + src + "/estimators/allan/example/allan.yaml --out " + json.string());
   EXPECT_EQ(o.code, 0) << o.text;
   EXPECT_TRUE(fs::exists(json));
 }
@@ -106,7 +106,7 @@ TEST(Cli, FailedFitWritesAFailureDocumentAndClaimsNoResults) {
   const fs::path json = dir / "allan.json";
   stend::testing::write_text(json, "{\"status\": \"ok\", \"stale\": 1}\n");
   const ProgramOutput o = run_stend("fit " + (dir / "constant.csv").string() + " --format mpu6050_multipos --model " + src +
-                                    "/estimators/allan/example/allan.yaml --json " + json.string());
+                                    "/estimators/allan/example/allan.yaml --out " + json.string());
   EXPECT_NE(o.code, 0) << o.text;
   EXPECT_NE(o.text.find("FAILED"), std::string::npos) << o.text;
   EXPECT_NE(o.text.find("results:    none"), std::string::npos) << o.text;

@@ -33,7 +33,7 @@ fs::path record_csv_run(const TempDir& dir, const std::string& name) {
 TEST(DamagedRunCli, TruncatedImuCsvIsNamedByInfoAndRefusedByTheAnalyses) {
   const TempDir dir("cli-damaged");
   const fs::path run = record_csv_run(dir, "run");
-  ASSERT_EQ(run_stend("fit " + run.string() + " --model " + model + " --json " + (dir / "whole.json").string()).code, 0);
+  ASSERT_EQ(run_stend("fit " + run.string() + " --model " + model + " --out " + (dir / "whole.json").string()).code, 0);
   const std::string imu = read_text(run / "imu.csv");
   write_text(run / "imu.csv", imu.substr(0, imu.rfind('\n', imu.size() * 56 / 100) + 1));
 
@@ -43,16 +43,16 @@ TEST(DamagedRunCli, TruncatedImuCsvIsNamedByInfoAndRefusedByTheAnalyses) {
   EXPECT_NE(info.text.find("imu.csv:"), std::string::npos) << info.text;
   EXPECT_NE(info.text.find("whole rows found (the last good line is"), std::string::npos) << info.text;
 
-  const ProgramOutput fit = run_stend("fit " + run.string() + " --model " + model + " --json " + (dir / "fit.json").string());
+  const ProgramOutput fit = run_stend("fit " + run.string() + " --model " + model + " --out " + (dir / "fit.json").string());
   EXPECT_NE(fit.code, 0) << fit.text;
   EXPECT_NE(fit.text.find("the run is damaged"), std::string::npos) << fit.text;
   EXPECT_NE(fit.text.find("--accept-damaged"), std::string::npos) << fit.text;
   EXPECT_FALSE(fs::exists(dir / "fit.json"));
   const ProgramOutput accepted =
-      run_stend("fit " + run.string() + " --accept-damaged --model " + model + " --json " + (dir / "fit.json").string());
+      run_stend("fit " + run.string() + " --accept-damaged --model " + model + " --out " + (dir / "fit.json").string());
   EXPECT_EQ(accepted.text.find("the run is damaged"), std::string::npos) << accepted.text;
 
-  const ProgramOutput gap = run_stend("gap " + run.string() + " --model " + model + " --json " + (dir / "gap.json").string());
+  const ProgramOutput gap = run_stend("gap " + run.string() + " --model " + model + " --out " + (dir / "gap.json").string());
   EXPECT_NE(gap.code, 0) << gap.text;
   EXPECT_NE(gap.text.find("the run is damaged"), std::string::npos) << gap.text;
 

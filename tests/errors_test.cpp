@@ -105,11 +105,11 @@ TEST(Usage, OutOfRangeNumbersAreRefusedWithTheAllowedRange) {
 // ---- failed writes: an error naming the path, exit 4, no "results:" line ----
 
 TEST_F(Errors, ResultsIntoAMissingFolderFailWithExitFour) {
-  const ProgramOutput o = run_stend("fit " + run().string() + " -m " + kAllan + " --json /nonexistent/dir/fit.json");
+  const ProgramOutput o = run_stend("fit " + run().string() + " -m " + kAllan + " --out /nonexistent/dir/fit.json");
   EXPECT_EQ(o.code, 4) << o.text;
   EXPECT_TRUE(has(o, "cannot write /nonexistent/dir/fit.json: No such file or directory")) << o.text;
   EXPECT_FALSE(has(o, "results:")) << o.text;
-  const ProgramOutput g = run_stend("gap " + run().string() + " -m " + kBiasScale + " --json /nonexistent/dir/gap.json");
+  const ProgramOutput g = run_stend("gap " + run().string() + " -m " + kBiasScale + " --out /nonexistent/dir/gap.json");
   EXPECT_EQ(g.code, 4) << g.text;
   EXPECT_FALSE(has(g, "results:")) << g.text;
   const ProgramOutput e = run_stend("export " + run().string() + " --to json -o /dev/null/x/results.json");
@@ -130,7 +130,7 @@ TEST_F(Errors, AWriteCutShortByTheFileSizeLimitFailsWithExitFour) {
   const fs::path json = *tmp / "big.json";
   const ProgramOutput o = run_command("trap '' XFSZ; ulimit -f 1; exec " +
                                       shell_quote(stend::testing::stend_program().string()) + " fit " +
-                                      run().string() + " -m " + kAllan + " --json " + json.string());
+                                      run().string() + " -m " + kAllan + " --out " + json.string());
   EXPECT_EQ(o.code, 4) << o.text;
   EXPECT_TRUE(has(o, "cannot write " + json.string() + ": write failed: File too large")) << o.text;
   EXPECT_FALSE(fs::exists(json));

@@ -70,9 +70,9 @@ void import_and_use(const fs::path& data, const std::string& model) {
   EXPECT_NE(info.text.find("sha256"), std::string::npos) << info.text;
 
   const fs::path direct = dir / "direct.json";
-  const ProgramOutput f1 = run_stend("fit " + data.string() + " --model " + model + " --json " + direct.string());
+  const ProgramOutput f1 = run_stend("fit " + data.string() + " --model " + model + " --out " + direct.string());
   ASSERT_EQ(f1.code, 0) << f1.text;
-  const ProgramOutput f2 = run_stend("fit " + run.string() + " --model " + model + " --json " + (dir / "run.json").string());
+  const ProgramOutput f2 = run_stend("fit " + run.string() + " --model " + model + " --out " + (dir / "run.json").string());
   ASSERT_EQ(f2.code, 0) << f2.text;
   expect_same_results(direct, dir / "run.json");
 
@@ -137,7 +137,7 @@ TEST(Import, PaperTable2FitsLikeAnyRun) {
   std::snprintf(g_text, sizeof g_text, "%.17g", g_local);
   for (const Case& c : {Case{"", 1}, Case{std::string(" --gravity-mps2 ") + g_text, 0}}) {
     const fs::path json = dir / ("fit" + std::to_string(c.reproduction) + ".json");
-    const ProgramOutput o = run_stend("fit " + table.string() + " --model " + model + c.flags + " --json " + json.string());
+    const ProgramOutput o = run_stend("fit " + table.string() + " --model " + model + c.flags + " --out " + json.string());
     ASSERT_EQ(o.code, 0) << o.text;
     const auto p = parameters(json);
     const auto& fit = r.cases[c.reproduction].fit;

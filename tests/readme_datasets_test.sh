@@ -43,7 +43,7 @@ while IFS= read -r cmd; do
   fi
 done <<< "$commands"
 # Only the run folders the commands name may appear: nothing else in the scratch root (a dataset
-# file's results are written only with --json, which these commands do not give).
+# file's results are written only with --out, which these commands do not give).
 extra=$(find "$scratch/repo" -mindepth 1 -maxdepth 1 ! -type l ! -name runs)
 if [ -n "$extra" ]; then
   echo "FAIL: the commands wrote outside runs/: $extra"

@@ -27,6 +27,9 @@ namespace fs = std::filesystem;
 #ifndef STEND_BUILD_PLUGIN_DIR
 #define STEND_BUILD_PLUGIN_DIR ""
 #endif
+#ifndef STEND_PLUGIN_DIR_FROM_BIN
+#define STEND_PLUGIN_DIR_FROM_BIN "../lib/stend/plugins"
+#endif
 #ifndef STEND_INSTALL_PLUGIN_DIR
 #define STEND_INSTALL_PLUGIN_DIR ""
 #endif
@@ -81,7 +84,7 @@ std::string program_plugin_dir() {
   std::error_code ec;
   fs::path exe = fs::read_symlink("/proc/self/exe", ec);
   if (ec || exe.empty()) return {};
-  return (exe.parent_path() / ".." / "lib" / "stend" / "plugins").lexically_normal().string();
+  return (exe.parent_path() / STEND_PLUGIN_DIR_FROM_BIN).lexically_normal().string();
 }
 
 // Checks everything after abi_version and struct_size. Returns the reason, or "" when fine.
@@ -153,6 +156,10 @@ std::string pad(const std::string& s, std::size_t width) {
 
 // ---------------------------------------------------------------------------------------------
 
+namespace {
+std::vector<std::string> plugin_files_in(const std::string& dir);
+}  // namespace
+
 std::vector<SearchDir> PluginHost::default_search_path(const std::vector<std::string>& extra) {
   std::vector<SearchDir> dirs;
   std::set<std::string> seen;
@@ -173,10 +180,23 @@ std::vector<SearchDir> PluginHost::default_search_path(const std::vector<std::st
       begin = end + 1;
     }
   }
-  add(STEND_BUILD_PLUGIN_DIR, "build tree", true);
+  // The running program's own tree first: an installed stend loads the installed plugins, the
+  // build tree's stend the build tree's. The build tree is searched by a program of no Stend tree
+  // only (a test or tool outside bin/), never by an installed one.
+  const std::string own = program_plugin_dir();
+  const bool own_is_build = is_dir(own) && is_dir(STEND_BUILD_PLUGIN_DIR) && identity_of(own) == identity_of(STEND_BUILD_PLUGIN_DIR);
+  if (own_is_build) add(STEND_BUILD_PLUGIN_DIR, "build tree", true);
+  else add(own, "next to the program", true);
   add(STEND_INSTALL_PLUGIN_DIR, "install prefix", true);
-  add(program_plugin_dir(), "next to the program", true);
+  if (!is_dir(own)) add(STEND_BUILD_PLUGIN_DIR, "build tree", true);
   return dirs;
+}
+
+std::string PluginHost::describe_search_path(const std::vector<SearchDir>& dirs) {
+  std::ostringstream out;
+  for (const auto& d : dirs)
+    out << d.path << " (" << d.origin << ", " << plugin_files_in(d.path).size() << " plugin file(s))\n";
+  return out.str();
 }
 
 PluginHost::~PluginHost() {

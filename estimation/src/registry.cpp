@@ -3,6 +3,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <stdexcept>
 
 namespace stend::estimation {
@@ -10,6 +11,26 @@ namespace stend::estimation {
 std::vector<fields::Field<EstimatorConfig>> estimator_fields() {
   return {fields::Field<EstimatorConfig>("results_file", &EstimatorConfig::results_file, "",
                                          "default name of the results file")};
+}
+
+namespace {
+constexpr const char* kGyroscope = "gyroscope";
+}  // namespace
+
+std::string results_file_for(const std::string& results_file, const std::string& instrument) {
+  if (instrument != kGyroscope) return results_file;
+  const std::filesystem::path p(results_file);
+  return p.stem().string() + "-" + instrument + p.extension().string();
+}
+
+std::vector<std::string> results_files_of(const std::string& results_file) {
+  return {results_file, results_file_for(results_file, kGyroscope)};
+}
+
+std::string model_instrument(const YAML::Node& model_root) {
+  if (!model_root.IsMap()) return {};
+  const YAML::Node n = model_root["instrument"];
+  return n && n.IsScalar() ? n.as<std::string>() : std::string();
 }
 
 void Registry::add(EstimatorEntry entry) {
@@ -60,7 +81,8 @@ const EstimatorEntry* Registry::for_results(const nlohmann::json& doc, const std
   if (doc.contains("estimator") && doc["estimator"].is_object()) name = doc["estimator"].value("name", "");
   if (const EstimatorEntry* e = find(name)) return e;
   for (const auto& e : entries_)
-    if (e.results_file == file_name) return &e;
+    for (const auto& f : results_files_of(e.results_file))
+      if (f == file_name) return &e;
   return nullptr;
 }
 

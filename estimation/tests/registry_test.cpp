@@ -126,3 +126,29 @@ TEST(Summary, NotIdentifiedParameterNeverCarriesANumber) {
   row << s.parameters[0];
   EXPECT_NE(row.str().find("not estimated"), std::string::npos) << row.str();
 }
+
+TEST(ResultsFiles, OnePerInstrumentAndEstimator) {
+  using stend::estimation::model_instrument;
+  using stend::estimation::results_file_for;
+  using stend::estimation::results_files_of;
+  // The accelerometer's (and an instrument-less model's) name is the estimator's own; a gyroscope
+  // model's differs, so that fitting one never overwrites the other.
+  EXPECT_EQ(results_file_for("temp_poly.json", "accelerometer"), "temp_poly.json");
+  EXPECT_EQ(results_file_for("allan.json", ""), "allan.json");
+  EXPECT_EQ(results_file_for("temp_poly.json", "gyroscope"), "temp_poly-gyroscope.json");
+  EXPECT_NE(results_file_for("fit.json", "gyroscope"), results_file_for("fit.json", "accelerometer"));
+  const auto all = results_files_of("fit.json");
+  ASSERT_EQ(all.size(), 2u);
+  EXPECT_EQ(all[0], "fit.json");
+  EXPECT_EQ(all[1], "fit-gyroscope.json");
+  EXPECT_EQ(model_instrument(YAML::Load("instrument: gyroscope\naxes: [z]")), "gyroscope");
+  EXPECT_EQ(model_instrument(YAML::Load("allan: {max_m: 8}")), "");
+  // Reading results back: the gyroscope file is the same estimator's.
+  stend::estimation::Registry r;
+  stend::estimation::EstimatorEntry e;
+  e.name = "temp_poly";
+  e.results_file = "temp_poly.json";
+  r.add(e);
+  ASSERT_NE(r.for_results(nlohmann::json::object(), "temp_poly-gyroscope.json"), nullptr);
+  EXPECT_EQ(r.for_results(nlohmann::json::object(), "temp_poly-gyroscope.json")->name, "temp_poly");
+}

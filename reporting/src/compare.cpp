@@ -209,4 +209,37 @@ std::string comparison_html(const Comparison& c) {
   return html_page("Stend comparison", b);
 }
 
+nlohmann::json comparison_json(const Comparison& c) {
+  using nlohmann::json;
+  const auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  json j;
+  j["fingerprint"] = c.fingerprint;
+  j["runs"] = json::array();
+  for (const auto& r : c.runs)
+    j["runs"].push_back({{"name", r.run_name}, {"dir", r.dir.string()}, {"vendor", r.vendor}, {"model", r.model}, {"serial", r.serial}});
+  j["parameters"] = json::array();
+  for (const auto& p : c.parameters) {
+    json q = {{"estimator", p.estimator}, {"name", p.name}, {"unit", p.unit}, {"vendors", json::array()}, {"units", json::array()}};
+    for (const auto& v : p.vendors)
+      q["vendors"].push_back({{"vendor", v.vendor},
+                              {"units", v.units},
+                              {"identified", v.identified},
+                              {"mean", num(v.mean)},
+                              {"spread_sd", num(v.spread_sd)},
+                              {"mean_interval", {num(v.mean_lo), num(v.mean_hi)}},
+                              {"median_std_error", num(v.median_std_error)}});
+    for (const auto& u : p.units)
+      q["units"].push_back({{"run", u.run_name},
+                            {"vendor", u.vendor},
+                            {"model", u.model},
+                            {"serial", u.serial},
+                            {"identifiable", u.p.identifiable},
+                            {"value", num(u.p.value)},
+                            {"std_error", num(u.p.std_error)},
+                            {"interval", {num(u.p.lo), num(u.p.hi)}}});
+    j["parameters"].push_back(std::move(q));
+  }
+  return j;
+}
+
 }  // namespace stend::reporting

@@ -124,8 +124,8 @@ const EstimatorUse* use_of(const RunResults& rr, const std::string& file) {
 std::string failure_of(const EstimatorUse& e) { return fmt::format("{}: the fit failed: {}", e.file, e.message); }
 
 // The instrument's temperature model and its file: temp_poly.json, or another temp_poly*.json in
-// the run folder (a run holds one per instrument, e.g. `stend fit RUN -m GYRO_MODEL --json
-// RUN/temp_poly_gyro.json`); the first in name order whose fit is ok and is of this instrument.
+// the run folder (a run holds one per instrument: `stend fit RUN -m GYRO_MODEL` writes
+// RUN/temp_poly-gyroscope.json, estimation::results_file_for); the first in name order whose fit is ok and is of this instrument.
 std::optional<std::pair<json, std::string>> temp_poly_of(const fs::path& run, const std::string& instrument) {
   std::vector<std::string> names;
   for (const auto& e : fs::directory_iterator(run)) {

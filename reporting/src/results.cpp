@@ -53,9 +53,16 @@ std::vector<ParameterResult> parameters_of(const json& doc, const std::string& f
   u.status = estimation::to_string(summary.status);
   u.message = summary.message;
   std::vector<ParameterResult> out;
+  if (use) *use = u;
+  // A failed fit is marked (its status and why) and its numbers excluded: none is a result.
+  if (summary.status == estimation::FitStatus::kFailed) return out;
+  // A gyroscope model's results (temp_poly-gyroscope.json) are told apart from the accelerometer's.
+  const std::string instrument_suffix = "-gyroscope";
+  const bool gyro_file = file_stem.size() > instrument_suffix.size() &&
+                         file_stem.compare(file_stem.size() - instrument_suffix.size(), std::string::npos, instrument_suffix) == 0;
   for (const auto& p : summary.parameters) {
     ParameterResult r;
-    r.estimator = u.name;
+    r.estimator = gyro_file ? u.name + instrument_suffix : u.name;
     r.name = p.name;
     r.unit = p.unit;
     r.identifiable = p.identifiable;
@@ -97,20 +104,21 @@ RunResults load_run_results(const fs::path& run_dir) {
     r.notes.push_back("no experiment.yaml: no procedure fingerprint");
   }
   const estimation::Registry registry = estimators::builtin();
-  for (const auto& entry : registry.entries()) {
-    const fs::path f = r.dir / entry.results_file;
-    const std::string stem = f.stem().string();
-    if (!fs::exists(f)) continue;
-    try {
-      EstimatorUse use;
-      auto ps = parameters_of(json::parse(read_text(f)), stem, &use);
-      use.file = f.filename().string();
-      r.estimators.push_back(use);
-      r.parameters.insert(r.parameters.end(), ps.begin(), ps.end());
-    } catch (const std::exception& e) {
-      r.notes.push_back(f.filename().string() + " not read: " + e.what());
+  for (const auto& entry : registry.entries())
+    for (const auto& name : estimation::results_files_of(entry.results_file)) {
+      const fs::path f = r.dir / name;
+      const std::string stem = f.stem().string();
+      if (!fs::exists(f)) continue;
+      try {
+        EstimatorUse use;
+        auto ps = parameters_of(json::parse(read_text(f)), stem, &use);
+        use.file = f.filename().string();
+        r.estimators.push_back(use);
+        r.parameters.insert(r.parameters.end(), ps.begin(), ps.end());
+      } catch (const std::exception& e) {
+        r.notes.push_back(f.filename().string() + " not read: " + e.what());
+      }
     }
-  }
   return r;
 }
 

@@ -2,6 +2,7 @@
 #include "stend/reporting/run_report.hpp"
 
 #include "stend/allan/allan.hpp"
+#include "stend/estimation/registry.hpp"
 #include "stend/estimation/summary.hpp"
 #include "stend/files.hpp"
 #include "stend/model/terms.hpp"
@@ -69,7 +70,7 @@ std::string read_text(const fs::path& p) {
 }
 
 // Loads RUN/<name> when present; a parse failure becomes an error paragraph in `body`.
-bool load(const fs::path& dir, const char* name, json& out, std::string& body) {
+bool load(const fs::path& dir, const std::string& name, json& out, std::string& body) {
   const fs::path f = dir / name;
   if (!fs::exists(f)) return false;
   try {
@@ -372,8 +373,8 @@ std::string temp_axis(const json& ax, double vmin, double vmax, const TempDispla
   return o;
 }
 
-std::string temp_section(const json& tp) {
-  std::string o = "<h2>Temperature model — temp_poly <span class=\"file\">(temp_poly.json)</span></h2>\n";
+std::string temp_section(const json& tp, const std::string& file) {
+  std::string o = "<h2>Temperature model — temp_poly <span class=\"file\">(" + escape(file) + ")</span></h2>\n";
   if (estimation::status_of(tp) != estimation::FitStatus::kOk)
     return o + "<p class=\"bad\">TEMPERATURE FIT REFUSED OR FAILED: " + escape(str(tp, "message")) +
            " — no numbers are reported.</p>\n";
@@ -696,9 +697,13 @@ std::string run_report_html(const fs::path& run_dir) {
             "): results describe the data present only.</p>\n";
   for (const auto& n : rr.notes) body += "<p class=\"warn\">" + escape(n) + "</p>\n";
   json doc;
-  if (load(rr.dir, "fit.json", doc, body)) body += fit_section(doc, "fit.json");
-  if (load(rr.dir, "ceres.json", doc, body)) body += fit_section(doc, "ceres.json");
-  if (load(rr.dir, "temp_poly.json", doc, body)) body += temp_section(doc);
+  // One results file per instrument and estimator (estimation::results_files_of).
+  for (const auto& f : estimation::results_files_of("fit.json"))
+    if (load(rr.dir, f, doc, body)) body += fit_section(doc, f);
+  for (const auto& f : estimation::results_files_of("ceres.json"))
+    if (load(rr.dir, f, doc, body)) body += fit_section(doc, f);
+  for (const auto& f : estimation::results_files_of("temp_poly.json"))
+    if (load(rr.dir, f, doc, body)) body += temp_section(doc, f);
   if (load(rr.dir, "allan.json", doc, body)) body += allan_section(doc);
   if (load(rr.dir, "gap.json", doc, body)) body += gap_section(doc);
   body += "<p class=\"file\">Written by stend report. Plots are inline SVG; this file needs nothing else.</p>\n";

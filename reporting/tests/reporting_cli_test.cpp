@@ -463,8 +463,10 @@ TEST_F(Cli, Px4ExportHasTcAAndTcGFromOneRun) {
   model.replace(model.find("instrument: accelerometer"), 25, "instrument: gyroscope");
   write_text(dir / "cfg/temp_poly_gyro.yaml", model);
   const fs::path f = dir / "px4_ag.params";
+  // The default results file of a gyroscope model: the accelerometer's temp_poly.json stays.
+  const std::string accel_before = read_text(run / "temp_poly.json");
   ASSERT_EQ(sh("'" + kStend.string() + "' fit '" + run.string() + "' -m '" + (dir / "cfg/temp_poly_gyro.yaml").string() +
-                   "' --json '" + (run / "temp_poly_gyro.json").string() + "' && '" + kStend.string() + "' export '" +
+                   "' && '" + kStend.string() + "' export '" +
                    run.string() + "' --to px4 -o '" + f.string() + "'",
                dir / "px4_ag.log"),
             0)
@@ -481,7 +483,8 @@ TEST_F(Cli, Px4ExportHasTcAAndTcGFromOneRun) {
   }
   EXPECT_EQ(params.at("TC_A_ENABLE"), 1);
   EXPECT_EQ(params.at("TC_G_ENABLE"), 1);
-  for (const auto& [file, prefix] : {std::pair{"temp_poly.json", "TC_A0_"}, {"temp_poly_gyro.json", "TC_G0_"}}) {
+  EXPECT_EQ(read_text(run / "temp_poly.json"), accel_before) << "the gyroscope fit overwrote the accelerometer's";
+  for (const auto& [file, prefix] : {std::pair{"temp_poly.json", "TC_A0_"}, {"temp_poly-gyroscope.json", "TC_G0_"}}) {
     const json tp = json::parse(read_text(run / file));
     int checked = 0;
     for (int k = 0; k < 3; ++k)

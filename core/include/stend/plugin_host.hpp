@@ -33,11 +33,15 @@ struct PluginRecord {
 class PluginHost : public PluginCatalogue {
  public:
   // Search order: `extra` (e.g. the experiment's plugin_paths), then STEND_PLUGIN_PATH (':'-
-  // separated), then the build tree's plugin dir, then the install prefix's, then
-  // `../lib/stend/plugins` next to the running program (relocated installs). The last three are
-  // listed only when they exist; a directory reached twice is listed once. The first plugin of a
-  // name wins; later ones are listed as shadowed.
+  // separated), then `../lib/stend/plugins` next to the running program (its own tree: the install
+  // prefix for an installed stend, relocated or not; the build tree for the build tree's), then
+  // the configured install prefix's, then — only for a program with no plugin folder of its own
+  // (a test or tool outside bin/) — the build tree's. The last three are listed only when they
+  // exist; a directory reached twice is listed once. The first plugin of a name wins; later ones
+  // are listed as shadowed.
   static std::vector<SearchDir> default_search_path(const std::vector<std::string>& extra = {});
+  // One line per folder: its path, origin and number of plugin files (`stend --version`).
+  static std::string describe_search_path(const std::vector<SearchDir>& dirs);
 
   PluginHost() = default;
   ~PluginHost() override;

@@ -43,7 +43,7 @@ struct Param {
 
 std::map<std::string, Param> fit(const fs::path& run, const fs::path& json) {
   const std::string args =
-      "fit " + run.string() + " -m " + kSrc + "/configs/models/paper_z_channel_short.yaml --json " + json.string();
+      "fit " + run.string() + " -m " + kSrc + "/configs/models/paper_z_channel_short.yaml --out " + json.string();
   EXPECT_EQ(stend::testing::run_stend(args).code, 0) << args;
   std::map<std::string, Param> out;
   std::ifstream f(json);

@@ -93,7 +93,7 @@ TEST(CeresCli, UnknownOrientationsIntegrationCalibratesWithoutTruth) {
   const fs::path run = run_dir();
   const fs::path out = run / "ceres_unknown.json";
   const ProgramOutput o = run_stend("fit " + run.string() + " --model " + src +
-                         "/estimators/ceres_nonlinear/examples/unknown_orientations.yaml --json " + out.string());
+                         "/estimators/ceres_nonlinear/examples/unknown_orientations.yaml --out " + out.string());
   EXPECT_EQ(o.code, 0) << o.text;
   const json j = read_json(out);
   ASSERT_EQ(j["status"], "ok") << j["message"];
@@ -151,7 +151,7 @@ TEST(CeresCli, UnknownEstimatorNameRoutesToAnEstimatorPlugin) {
   const stend::testing::Environment env = {{"STEND_PLUGIN_PATH", STEND_CERES_TEST_PLUGIN_DIR}};
   const fs::path out = run / "mean.json";
   const ProgramOutput o = run_stend("fit " + run.string() + " --model " + src +
-                         "/estimators/ceres_nonlinear/examples/known_orientations.yaml --estimator mean_accel --json " +
+                         "/estimators/ceres_nonlinear/examples/known_orientations.yaml --estimator mean_accel --out " +
                          out.string(), env);
   EXPECT_EQ(o.code, 0) << o.text;
   EXPECT_NE(o.text.find("mean_accel:"), std::string::npos) << o.text;

@@ -33,6 +33,16 @@ struct EstimatorConfig {
 };
 std::vector<fields::Field<EstimatorConfig>> estimator_fields();
 
+// One results file per instrument and estimator in a run folder: `results_file` as named for an
+// accelerometer model (or a model of no single instrument, e.g. Allan over all channels), with
+// "-gyroscope" before the extension for a gyroscope model ("temp_poly.json" and
+// "temp_poly-gyroscope.json"), so that a gyroscope fit never overwrites the accelerometer's.
+std::string results_file_for(const std::string& results_file, const std::string& instrument);
+// Every results file name of `results_file` that results_file_for can give, accelerometer first.
+std::vector<std::string> results_files_of(const std::string& results_file);
+// The instrument a model file's root names ("" when it names none).
+std::string model_instrument(const YAML::Node& model_root);
+
 struct EstimatorEntry {
   std::string name;          // as in `stend fit --estimator NAME` and the results' "estimator"
   std::string version;

@@ -10,6 +10,8 @@
 #include "stend/errors.hpp"
 #include "stend/reporting/results.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -57,6 +59,10 @@ Comparison compare_runs(const std::vector<RunResults>& runs);
 
 // Plain-text comparison table (one row per parameter and vendor).
 std::string comparison_text(const Comparison& c);
+// The comparison as JSON (`stend compare --json`, docs/schemas/compare.schema.json): fingerprint,
+// runs, and per parameter the vendors' statistics and the units' values (null where not finite).
+nlohmann::json comparison_json(const Comparison& c);
+
 // Self-contained HTML report: table and one plot per parameter (units with intervals, grouped by
 // vendor, vendor means with their intervals).
 std::string comparison_html(const Comparison& c);

@@ -1,0 +1,30 @@
+// Machine-readable output of the `stend` program (--json): see commands.hpp.
+#include "commands.hpp"
+
+#include <iostream>
+
+namespace stend::cli {
+
+namespace {
+bool g_json = false;  // one process runs one command: set by that command's --json flag
+}  // namespace
+
+void add_json_flag(CLI::App* sub, const std::string& what) {
+  sub->add_flag("--json", g_json,
+                "Print " + what + " as one JSON document on stdout (schema in docs/schemas/); the human-readable "
+                "lines go to stderr");
+}
+
+bool json_output() { return g_json; }
+
+std::FILE* human() { return g_json ? stderr : stdout; }
+
+std::ostream& human_stream() { return g_json ? std::cerr : std::cout; }
+
+void print_json(const nlohmann::json& doc) {
+  if (!g_json) return;
+  std::cout << doc.dump(2) << "\n";
+  std::cout.flush();
+}
+
+}  // namespace stend::cli
