@@ -4,7 +4,7 @@
 
 #include "stend/files.hpp"
 #include "stend/reporting/compare.hpp"
-#include "stend/reporting/results_db.hpp"
+#include "stend/reporting/results_store.hpp"
 
 #include <fmt/format.h>
 
@@ -18,26 +18,21 @@ void add_compare_command(CLI::App& app, std::vector<Command>& out) {
   static std::vector<std::string> runs;
   static std::string db, procedure, html;
   sub->add_option("runs", runs, "Run folders (recorded into the database first) or run names already in it");
-  sub->add_option("--db", db, "Results database (default: $STEND_RESULTS_DB, else stend-results.sqlite beside the "
-                              "first run folder, else ./stend-results.sqlite)");
+  sub->add_option("--db", db, kDbOptionHelp);
   sub->add_option("--procedure", procedure, "Compare every run in the database with this procedure fingerprint "
                                             "(or a prefix of at least 8 hex digits)");
   sub->add_option("-o,--output", html, "HTML report (default: compare-<fingerprint>.html beside the database)");
   out.push_back({sub, [] {
                    namespace fs = std::filesystem;
                    namespace rp = stend::reporting;
-                   fs::path dbfile = db;
-                   if (dbfile.empty()) {
-                     if (!runs.empty() && fs::is_directory(runs.front())) dbfile = rp::default_db_path(runs.front());
-                     else if (const char* env = std::getenv("STEND_RESULTS_DB"); env && *env) dbfile = env;
-                     else dbfile = "stend-results.sqlite";
-                   }
-                   if (runs.empty() && !fs::exists(dbfile)) {
+                   const std::string location = rp::results_store_location(
+                       db, !runs.empty() && fs::is_directory(runs.front()) ? fs::path(runs.front()) : fs::path());
+                   if (runs.empty() && !rp::is_postgres_location(location) && !fs::exists(location)) {
                      fmt::print(stderr, "stend compare: no results database at {} (give --db, or run folders)\n",
-                                dbfile.string());
+                                location);
                      return ExitCode::kInvalidInput;
                    }
-                   rp::ResultsDb store(dbfile);
+                   rp::ResultsStore store(location);
                    std::vector<rp::RunResults> selected;
                    for (const auto& r : runs) {
                      if (fs::is_directory(r)) {
@@ -48,7 +43,7 @@ void add_compare_command(CLI::App& app, std::vector<Command>& out) {
                        rp::RunResults rr = store.find_run(r);
                        if (rr.dir.empty()) {
                          fmt::print(stderr, "stend compare: '{}' is neither a run folder nor a run in {}\n", r,
-                                    dbfile.string());
+                                    store.where());
                          return ExitCode::kInvalidInput;
                        }
                        selected.push_back(std::move(rr));
@@ -57,7 +52,7 @@ void add_compare_command(CLI::App& app, std::vector<Command>& out) {
                    if (!procedure.empty()) {
                      auto more = store.with_fingerprint(procedure);
                      if (more.empty()) {
-                       fmt::print(stderr, "stend compare: no run in {} has procedure fingerprint {}\n", dbfile.string(),
+                       fmt::print(stderr, "stend compare: no run in {} has procedure fingerprint {}\n", store.where(),
                                   procedure);
                        return ExitCode::kInvalidInput;
                      }
@@ -72,9 +67,9 @@ void add_compare_command(CLI::App& app, std::vector<Command>& out) {
                    std::cout << rp::comparison_text(c);
                    fs::path report = html;
                    if (report.empty())
-                     report = fs::absolute(dbfile).parent_path() / fmt::format("compare-{}.html", c.fingerprint.substr(0, 16));
+                     report = (store.is_postgres() ? fs::current_path() : fs::absolute(location).parent_path()) / fmt::format("compare-{}.html", c.fingerprint.substr(0, 16));
                    write_file_atomic(report, rp::comparison_html(c));
-                   fmt::print("report:     {}\nresults db: {}\n", report.string(), dbfile.string());
+                   fmt::print("report:     {}\nresults db: {}\n", report.string(), store.where());
                    return ExitCode::kOk;
                  }});
 }

@@ -2,7 +2,7 @@
 // Also defines write_run_report(), which `stend run` calls at the end of a run.
 #include "commands.hpp"
 
-#include "stend/reporting/results_db.hpp"
+#include "stend/reporting/results_store.hpp"
 #include "stend/reporting/run_report.hpp"
 
 #include <fmt/format.h>
@@ -11,19 +11,13 @@
 
 namespace stend::cli {
 
-namespace {
-
-// Records the run folder in the results database; says why on stderr when it cannot.
-void record_in_db(const std::filesystem::path& run_dir, std::filesystem::path db) {
-  if (db.empty()) db = stend::reporting::default_db_path(run_dir);
-  stend::reporting::ResultsDb store(db);
+void record_in_store(const std::filesystem::path& run_dir, const std::string& db) {
+  stend::reporting::ResultsStore store(stend::reporting::results_store_location(db, run_dir));
   const auto r = stend::reporting::load_run_results(run_dir);
   store.add(r);
-  fmt::print("results db: {} (run {}, procedure {}, {} parameter(s))\n", db.string(), r.run_name,
+  fmt::print("results db: {} (run {}, procedure {}, {} parameter(s))\n", store.where(), r.run_name,
              r.procedure_fingerprint.empty() ? "unknown" : r.procedure_fingerprint.substr(0, 16), r.parameters.size());
 }
-
-}  // namespace
 
 void add_report_command(CLI::App& app, std::vector<Command>& out) {
   auto* sub = app.add_subcommand("report", "Build RUN/report.html (plots, parameter tables) and record the run in the "
@@ -31,20 +25,20 @@ void add_report_command(CLI::App& app, std::vector<Command>& out) {
   static std::string run, db;
   static bool no_db = false;
   sub->add_option("run", run, "Run folder")->required();
-  sub->add_option("--db", db, "Results database (default: $STEND_RESULTS_DB, else stend-results.sqlite beside the run folder)");
+  sub->add_option("--db", db, kDbOptionHelp);
   sub->add_flag("--no-db", no_db, "Do not record the run in the results database");
   out.push_back({sub, [] {
                    const auto path = stend::reporting::write_run_report(run);
                    fmt::print("report:     {}\n", path.string());
-                   if (!no_db) record_in_db(run, db);
+                   if (!no_db) record_in_store(run, db);
                    return ExitCode::kOk;
                  }});
 }
 
-std::filesystem::path write_run_report(const std::filesystem::path& run_dir) {
+std::filesystem::path write_run_report(const std::filesystem::path& run_dir, const std::string& db) {
   const std::filesystem::path path = stend::reporting::write_run_report(run_dir);
   try {
-    record_in_db(run_dir, {});
+    record_in_store(run_dir, db);
   } catch (const std::exception& e) {
     fmt::print(stderr, "run not recorded in the results database: {}\n", e.what());
   }

@@ -91,7 +91,7 @@ void print_progress(const stend::RunProgress& p, bool tty) {
 }
 
 ExitCode cmd_run(const std::string& file, const std::string& output, const std::string& name, const std::string& clock,
-                 const std::string& store, bool quiet, bool allow_plugins) {
+                 const std::string& store, const std::string& db, bool quiet, bool allow_plugins) {
   stend::PluginHost host;
   scan_plugins(host, stend::experiment_plugin_paths(file), allow_plugins);
   const stend::Experiment exp = stend::load_experiment(file, host);
@@ -131,21 +131,23 @@ ExitCode cmd_run(const std::string& file, const std::string& output, const std::
     if (!fit_recording(stend::Recording::open(r.dir, stend::SampleLoading::kStream), model.string(), r.dir, ""))
       return ExitCode::kFitFailed;
   }
-  fmt::print("report:     {}\n", stend::cli::write_run_report(r.dir).string());
+  fmt::print("report:     {}\n", stend::cli::write_run_report(r.dir, db).string());
   return ExitCode::kOk;
 }
 
 ExitCode cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, const std::string& json,
-            const std::string& estimator) {
+            const std::string& estimator, const std::string& db) {
   // A run opened for an estimator that needs no bench truth (allan) leaves the truth in the store.
   const stend::Recording rec =
       data.is_run() && !stend::cli::fit_reads_truth(model, estimator)
           ? stend::Recording::open(data.inputs[0], stend::SampleLoading::kStream, stend::TruthLoading::kSkip)
           : data.open();
-  return fit_recording(data.checked(rec), model, data.is_run() ? std::filesystem::path(data.inputs[0]) : std::filesystem::path(),
-                       json, estimator)
-             ? ExitCode::kOk
-             : ExitCode::kFitFailed;
+  const bool ok = fit_recording(data.checked(rec), model,
+                                data.is_run() ? std::filesystem::path(data.inputs[0]) : std::filesystem::path(), json,
+                                estimator);
+  // With --db the run is recorded in the store as it now stands (a failed fit: its status, no numbers).
+  if (!db.empty() && data.is_run() && json.empty()) stend::cli::record_in_store(data.inputs[0], db);
+  return ok ? ExitCode::kOk : ExitCode::kFitFailed;
 }
 
 ExitCode cmd_info(const std::string& dir) {
@@ -215,6 +217,8 @@ int main(int argc, char** argv) {
   run->add_option("--clock", clock, "Override the clock")->check(CLI::IsMember({"simulated", "wall"}));
   run->add_option("--store", store, "How the run folder stores its data: hdf5 (run.h5, default) or csv (the CSV files)")
       ->check(CLI::IsMember({"hdf5", "csv"}));
+  std::string db;
+  run->add_option("--db", db, stend::cli::kDbOptionHelp);
   run->add_flag("-q,--quiet", quiet, "No progress display");
   run->add_flag("--allow-plugins", allow_plugins, allow_help);
 
@@ -233,6 +237,8 @@ int main(int argc, char** argv) {
                   "auto (the one the model file is written for) | " + stend::estimators::builtin().names() +
                       " | the name of an estimator plugin on the search path");
   fit->add_option("--json", json, "Where to write the results (default RUN/fit.json)");
+  fit->add_option("--db", db, std::string(stend::cli::kDbOptionHelp) +
+                                  "; given, a run folder fitted is recorded there (its results as they now stand)");
 
   std::vector<stend::cli::Command> commands;
   stend::cli::add_gap_command(app, commands);
@@ -242,6 +248,8 @@ int main(int argc, char** argv) {
   stend::cli::add_emulate_command(app, commands);
   stend::cli::add_import_command(app, commands);
   stend::cli::add_apply_command(app, commands);
+  stend::cli::add_db_command(app, commands);
+  stend::cli::add_batch_command(app, commands);
 
   try {
     app.parse(argc, argv);
@@ -255,9 +263,9 @@ int main(int argc, char** argv) {
         if (*c.sub) return c.run();
       if (*plugins) return cmd_plugins(plugin_paths);
       if (*validate) return cmd_validate(file, allow_plugins);
-      if (*run) return cmd_run(file, output, name, clock, store, quiet, allow_plugins);
+      if (*run) return cmd_run(file, output, name, clock, store, db, quiet, allow_plugins);
       if (*info) return cmd_info(dir);
-      if (*fit) return cmd_fit(fit_data, model, json, estimator);
+      if (*fit) return cmd_fit(fit_data, model, json, estimator, db);
     } catch (...) {
       return stend::cli::exit_code_of_current_exception();
     }
