@@ -193,9 +193,16 @@ exit "$rc"
                      o);
 }
 
+// "0-3,7,9-10" (indices ascending), with "%N" when the array may run at most N tasks at once.
 std::string array_spec(const std::vector<std::size_t>& indices, unsigned workers) {
   std::string spec;
-  for (std::size_t i : indices) spec += (spec.empty() ? "" : ",") + std::to_string(i);
+  for (std::size_t k = 0; k < indices.size();) {
+    std::size_t end = k;
+    while (end + 1 < indices.size() && indices[end + 1] == indices[end] + 1) ++end;
+    spec += (spec.empty() ? "" : ",") + std::to_string(indices[k]);
+    if (end > k) spec += "-" + std::to_string(indices[end]);
+    k = end + 1;
+  }
   return workers ? fmt::format("{}%{}", spec, workers) : spec;
 }
 

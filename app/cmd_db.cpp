@@ -3,6 +3,7 @@
 // duplicated (docs/lab-scale.md).
 #include "commands.hpp"
 
+#include "stend/errors.hpp"
 #include "stend/reporting/results_store.hpp"
 
 #include <fmt/format.h>

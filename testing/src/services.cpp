@@ -199,7 +199,7 @@ bool TempSlurm::start() {
                         "\nProctrackType=proctrack/linuxproc\nTaskPlugin=task/none\nJobAcctGatherType=jobacct_gather/none"
                         "\nAccountingStorageType=accounting_storage/none\nMpiDefault=none\nReturnToService=2"
                         "\nSchedulerType=sched/builtin\nSelectType=select/cons_tres\nSelectTypeParameters=CR_Core"
-                        "\nSlurmctldTimeout=30\nSlurmdTimeout=30\nInactiveLimit=0\nKillWait=5\nMinJobAge=30"
+                        "\nMaxArraySize=100001\nMaxJobCount=200000\nSlurmctldTimeout=30\nSlurmdTimeout=30\nInactiveLimit=0\nKillWait=5\nMinJobAge=30"
                         "\nNodeName=" + host + " NodeAddr=127.0.0.1 CPUs=" + std::to_string(cpus) +
                         " State=UNKNOWN\nPartitionName=" + partition_ + " Nodes=" + host +
                         " Default=YES MaxTime=INFINITE State=UP OverSubscribe=NO\n");
