@@ -69,7 +69,7 @@ void add_db_command(CLI::App& app, std::vector<Command>& out) {
   push->add_option("runs", runs, "Run folders")->required();
   out.push_back({sub, [migrate, push] {
                    const std::string location =
-                       reporting::results_store_location(db, runs.empty() ? std::filesystem::path() : runs.front());
+                       reporting::results_store_location(db, runs.empty() ? std::filesystem::path() : std::filesystem::path(runs.front()));
                    if (*migrate) return run_migrate(location);
                    if (*push) return run_push(location, runs);
                    return run_check(location);

@@ -23,7 +23,7 @@ double Value::as_real() const {
   switch (kind) {
     case Kind::kReal: return real;
     case Kind::kInteger: return static_cast<double>(integer);
-    case Kind::kText: return text.empty() ? NAN : std::strtod(text.c_str(), nullptr);
+    case Kind::kText: return text.empty() ? std::nan("") : std::strtod(text.c_str(), nullptr);
     case Kind::kNull: break;
   }
   return NAN;
