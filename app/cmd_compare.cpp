@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include <iostream>
+#include <set>
 
 namespace stend::cli {
 
@@ -56,11 +57,10 @@ void add_compare_command(CLI::App& app, std::vector<Command>& out) {
                                   procedure);
                        return ExitCode::kInvalidInput;
                      }
-                     for (auto& m : more) {
-                       bool dup = false;
-                       for (const auto& s : selected) dup = dup || s.dir == m.dir;
-                       if (!dup) selected.push_back(std::move(m));
-                     }
+                     std::set<std::string> have;  // a set, not a scan per run: campaigns hold thousands
+                     for (const auto& s : selected) have.insert(s.dir.string());
+                     for (auto& m : more)
+                       if (have.insert(m.dir.string()).second) selected.push_back(std::move(m));
                    }
                    if (runs.empty() && procedure.empty()) selected = store.all();
                    const rp::Comparison c = rp::compare_runs(selected);  // ComparisonRefused: an input error
