@@ -5,13 +5,14 @@
 #include "stend/errors.hpp"
 #include "stend/files.hpp"
 #include "stend/reporting/compare.hpp"
-#include "stend/reporting/results_db.hpp"
+#include "stend/reporting/results_store.hpp"
 
 #include <fmt/format.h>
 
 #include <cstdlib>
 #include <iostream>
 #include <optional>
+#include <set>
 
 namespace stend::cli {
 
@@ -20,28 +21,26 @@ namespace {
 namespace fs = std::filesystem;
 namespace rp = stend::reporting;
 
-// The database to read: --db (recorded into), else $STEND_RESULTS_DB, else the one beside the
-// first run folder; "" when none is named and none exists (nothing is created unasked).
-fs::path database_of(const std::vector<std::string>& runs, const std::string& db) {
-  if (!db.empty()) return db;
-  if (const char* env = std::getenv("STEND_RESULTS_DB"); env && *env) return env;
-  if (!runs.empty() && fs::is_directory(runs.front())) {
-    const fs::path beside = rp::default_db_path(runs.front());
-    if (fs::exists(beside)) return beside;
-  }
+// The store to read: --db (recorded into), else $STEND_RESULTS_DB, else the SQLite file beside
+// the first run folder (results_store_location); "" when that is an SQLite file that does not
+// exist and none was named (nothing is created unasked).
+std::string store_of(const std::vector<std::string>& runs, const std::string& db) {
+  const bool beside_run = !runs.empty() && fs::is_directory(runs.front());
+  const std::string location = rp::results_store_location(db, beside_run ? fs::path(runs.front()) : fs::path());
+  if (!db.empty() || rp::is_postgres_location(location) || fs::exists(location)) return location;
   return {};
 }
 
 // The runs to compare: run folders read directly (and recorded into an explicit --db), names
 // looked up in the database, and every run of --procedure; all runs of the database when none.
 std::vector<rp::RunResults> select_runs(const std::vector<std::string>& runs, const std::string& procedure,
-                                        const fs::path& dbfile, bool record) {
-  std::optional<rp::ResultsDb> store;
-  if (!dbfile.empty() && (record || fs::exists(dbfile))) store.emplace(dbfile);
-  const auto need_db = [&](const std::string& why) -> rp::ResultsDb& {
+                                        const std::string& location, bool record) {
+  std::optional<rp::ResultsStore> store;
+  if (!location.empty()) store.emplace(location);
+  const auto need_db = [&](const std::string& why) -> rp::ResultsStore& {
     if (!store)
-      throw InputError("stend compare: " + why + " needs a results database: give --db FILE (or $STEND_RESULTS_DB)" +
-                       (dbfile.empty() ? std::string() : "; there is none at " + dbfile.string()));
+      throw InputError("stend compare: " + why +
+                       " needs a results store: give --db FILE|postgresql://… (or $STEND_RESULTS_DB)");
     return *store;
   };
   std::vector<rp::RunResults> selected;
@@ -54,18 +53,17 @@ std::vector<rp::RunResults> select_runs(const std::vector<std::string>& runs, co
     }
     rp::RunResults rr = need_db("the run name '" + r + "'").find_run(r);
     if (rr.dir.empty())
-      throw InputError("stend compare: '" + r + "' is neither a run folder nor a run in " + dbfile.string());
+      throw InputError("stend compare: '" + r + "' is neither a run folder nor a run in " + store->where());
     selected.push_back(std::move(rr));
   }
   if (!procedure.empty()) {
     auto more = need_db("--procedure").with_fingerprint(procedure);
     if (more.empty())
-      throw InputError("stend compare: no run in " + dbfile.string() + " has procedure fingerprint " + procedure);
-    for (auto& m : more) {
-      bool dup = false;
-      for (const auto& s : selected) dup = dup || s.dir == m.dir;
-      if (!dup) selected.push_back(std::move(m));
-    }
+      throw InputError("stend compare: no run in " + store->where() + " has procedure fingerprint " + procedure);
+    std::set<std::string> have;  // a set, not a scan per run: campaigns hold thousands
+    for (const auto& s : selected) have.insert(s.dir.string());
+    for (auto& m : more)
+      if (have.insert(m.dir.string()).second) selected.push_back(std::move(m));
   }
   if (runs.empty() && procedure.empty()) selected = need_db("comparing without run folders").all();
   return selected;
@@ -73,8 +71,8 @@ std::vector<rp::RunResults> select_runs(const std::vector<std::string>& runs, co
 
 ExitCode run_compare(const std::vector<std::string>& runs, const std::string& db, const std::string& procedure,
                      const std::string& html) {
-  const fs::path dbfile = database_of(runs, db);
-  const rp::Comparison c = rp::compare_runs(select_runs(runs, procedure, dbfile, !db.empty()));  // refused: input error
+  const std::string location = store_of(runs, db);
+  const rp::Comparison c = rp::compare_runs(select_runs(runs, procedure, location, !db.empty()));  // refused: input error
   human_stream() << rp::comparison_text(c);
   nlohmann::json doc = rp::comparison_json(c);
   doc["report"] = nullptr;
@@ -85,7 +83,7 @@ ExitCode run_compare(const std::vector<std::string>& runs, const std::string& db
   } else {
     fmt::print(human(), "report:     none (-o FILE.html writes the HTML report)\n");
   }
-  if (!db.empty()) fmt::print(human(), "results db: {}\n", dbfile.string());
+  if (!db.empty()) fmt::print(human(), "results db: {}\n", rp::redact_url(location));
   print_json(doc);
   return ExitCode::kOk;
 }
@@ -98,8 +96,8 @@ void add_compare_command(CLI::App& app, std::vector<Command>& out) {
   static std::vector<std::string> runs;
   static std::string db, procedure, html;
   sub->add_option("runs", runs, "Run folders, or run names already in the database");
-  sub->add_option("--db", db, "Results database: the run folders given are recorded into it (default, read only: "
-                              "$STEND_RESULTS_DB, else stend-results.sqlite beside the first run folder when it exists)");
+  sub->add_option("--db", db, std::string(kDbOptionHelp) + "; run folders given are recorded into --db only, "
+                              "the default store is only read (and only when it exists)");
   sub->add_option("--procedure", procedure, "Compare every run in the database with this procedure fingerprint "
                                             "(or a prefix of at least 8 hex digits)");
   sub->add_option("-o,--out", html, "Write the HTML report to this file (none without it)");

@@ -116,8 +116,21 @@ void add_apply_command(CLI::App& app, std::vector<Command>& out);    // cmd_appl
 void add_watch_command(CLI::App& app, std::vector<Command>& out);    // cmd_watch.cpp
 
 // Builds RUN/report.html from what the run folder holds and records the run in the results
-// database (called at the end of `stend run`). Returns the report path; throws when the report
-// cannot be written; a database that cannot take the run is said on stderr (the report stands).
-std::filesystem::path write_run_report(const std::filesystem::path& run_dir);
+// store `db` (--db; "" for the default, results_store_location) — called at the end of `stend run`.
+// Returns the report path; throws when the report cannot be written; a store that cannot take the
+// run is said on stderr (the report stands).
+std::filesystem::path write_run_report(const std::filesystem::path& run_dir, const std::string& db = "");
+
+// ---- the results store (cmd_report.cpp, cmd_db.cpp) -------------------------------------------
+// The help of every command's --db option, written once.
+inline constexpr const char* kDbOptionHelp =
+    "Results store: an SQLite file or postgresql://user@host:port/db (password from PGPASSWORD or ~/.pgpass); "
+    "default $STEND_RESULTS_DB, else stend-results.sqlite beside the run folder";
+// Records the run folder in the results store at results_store_location(db, run_dir) and says so
+// (the location printed with any password redacted); returns that printable location. Throws when
+// the store cannot take it.
+std::string record_in_store(const std::filesystem::path& run_dir, const std::string& db);
+void add_db_command(CLI::App& app, std::vector<Command>& out);     // cmd_db.cpp
+void add_batch_command(CLI::App& app, std::vector<Command>& out);  // cmd_batch.cpp
 
 }  // namespace stend::cli

@@ -125,7 +125,8 @@ ExitCode cmd_validate(const std::string& file, bool allow_plugins) {
 }
 
 ExitCode cmd_run(const std::string& file, const std::string& output, const std::string& name, const std::string& clock,
-                 const std::string& store, bool quiet, bool allow_plugins, const stend::cli::LiveArgs& live_args) {
+                 const std::string& store, const std::string& db, bool quiet, bool allow_plugins,
+                 const stend::cli::LiveArgs& live_args) {
   stend::PluginHost host;
   scan_plugins(host, stend::experiment_plugin_paths(file), allow_plugins);
   const stend::Experiment exp = stend::load_experiment(file, host);
@@ -191,14 +192,14 @@ ExitCode cmd_run(const std::string& file, const std::string& output, const std::
     summary["fit"] = fit.to_json();
     if (!fit.ok) return finish(ExitCode::kFitFailed);
   }
-  const std::filesystem::path report = stend::cli::write_run_report(r.dir);
+  const std::filesystem::path report = stend::cli::write_run_report(r.dir, db);
   fmt::print(human(), "report:     {}\n", report.string());
   summary["report"] = report.string();
   return finish(ExitCode::kOk);
 }
 
 ExitCode cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, const std::string& out,
-            const std::string& estimator) {
+            const std::string& estimator, const std::string& db) {
   // A run opened for an estimator that needs no bench truth (allan) leaves the truth in the store.
   const stend::Recording rec =
       data.is_run() && !stend::cli::fit_reads_truth(model, estimator)
@@ -212,7 +213,8 @@ ExitCode cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, 
     fmt::print(human(), "report:     none (the input is not a run folder; `stend import` makes one)\n");
   } else if (stend::cli::results_in_run(run_dir, fit.results_file)) {
     // A failed fit too: its results file now says so, and the report drops its earlier numbers.
-    const std::filesystem::path report = stend::cli::write_run_report(run_dir);
+    // The run is recorded in the results store (--db, else the default) as it now stands.
+    const std::filesystem::path report = stend::cli::write_run_report(run_dir, db);
     fmt::print(human(), "report:     {} (updated)\n", report.string());
     doc["report"] = report.string();
   } else {
@@ -341,6 +343,8 @@ int main(int argc, char** argv) {
   run->add_option("--clock", clock, "Override the clock")->check(CLI::IsMember({"simulated", "wall"}));
   run->add_option("--store", store, "How the run folder stores its data: hdf5 (run.h5, default) or csv (the CSV files)")
       ->check(CLI::IsMember({"hdf5", "csv"}));
+  std::string db;
+  run->add_option("--db", db, stend::cli::kDbOptionHelp);
   run->add_flag("-q,--quiet", quiet, "No progress display");
   run->add_flag("--allow-plugins", allow_plugins, allow_help);
   stend::cli::LiveArgs live_args;
@@ -366,6 +370,8 @@ int main(int argc, char** argv) {
                   "Where to write the results (default: the estimator's results file in the run folder, e.g. "
                   "RUN/fit.json, RUN/temp_poly-gyroscope.json; a dataset file's are written only with --out)");
   stend::cli::add_json_flag(fit, "the fit's outcome and results document");
+  fit->add_option("--db", db, std::string(stend::cli::kDbOptionHelp) +
+                                  "; the run folder fitted is recorded there with its refreshed report");
 
   std::vector<stend::cli::Command> commands;
   stend::cli::add_gap_command(app, commands);
@@ -376,6 +382,8 @@ int main(int argc, char** argv) {
   stend::cli::add_import_command(app, commands);
   stend::cli::add_apply_command(app, commands);
   stend::cli::add_watch_command(app, commands);
+  stend::cli::add_db_command(app, commands);
+  stend::cli::add_batch_command(app, commands);
 
   try {
     app.parse(argc, argv);
@@ -389,9 +397,9 @@ int main(int argc, char** argv) {
         if (*c.sub) return c.run();
       if (*plugins) return cmd_plugins(plugin_paths);
       if (*validate) return cmd_validate(file, allow_plugins);
-      if (*run) return cmd_run(file, output, name, clock, store, quiet, allow_plugins, live_args);
+      if (*run) return cmd_run(file, output, name, clock, store, db, quiet, allow_plugins, live_args);
       if (*info) return cmd_info(dir);
-      if (*fit) return cmd_fit(fit_data, model, fit_out, estimator);
+      if (*fit) return cmd_fit(fit_data, model, fit_out, estimator, db);
     } catch (...) {
       return stend::cli::exit_code_of_current_exception();
     }

@@ -13,6 +13,8 @@ packages=(
   octave  # reporting: octave-cli loads the MATLAB export in a test (~1 min to install, no recommends)
   python3-numpy python3-pandas python3-scipy  # bench: allantools (the Allan peer, ../shared/peers) on Debian's numpy, pandas, scipy
   python3-rosbag  # bench: import_log_bench.sh writes a long ROS 1 bag
+  libpq-dev  # reporting: the PostgreSQL results store (libpq)
+  postgresql slurm-wlm munge  # tests and bench: a real PostgreSQL cluster and a single-node Slurm started in a temp dir (docs/lab-scale.md)
   clang libclang-rt-14-dev  # scripts/fuzz.sh: the fuzz targets under libFuzzer, ASan and UBSan
   libcpp-httplib-dev  # live/: the live view's loopback HTTP server (its charts, uPlot, from npm: vendor-web-deps.sh)
   gcc-avr avr-libc binutils-avr  # firmware/bench_mcu: the bench microcontroller's firmware (ATmega328P)

@@ -1,0 +1,110 @@
+// PostgreSQL backend of the results store (sql.hpp) through libpq. Credentials come only from
+// libpq's own sources (PGPASSWORD, PGSERVICE, ~/.pgpass, the URL itself); what is printed of the
+// URL has its password redacted.
+#include "sql.hpp"
+
+#include "stend/errors.hpp"
+#include "stend/reporting/results_store.hpp"
+
+#include <fmt/format.h>
+#include <libpq-fe.h>
+
+#include <cstdlib>
+
+namespace stend::reporting::sql {
+
+namespace {
+
+// PostgreSQL type OIDs of the columns the store reads (catalog/pg_type.h).
+constexpr Oid kOidBool = 16, kOidInt8 = 20, kOidInt2 = 21, kOidInt4 = 23, kOidFloat4 = 700, kOidFloat8 = 701,
+              kOidNumeric = 1700;
+// Any two concurrent `stend db migrate` / store opens serialize their schema changes on this key.
+constexpr long long kSchemaLockKey = 0x5374656e64L;  // "Stend"
+
+class PostgresConnection final : public Connection {
+ public:
+  explicit PostgresConnection(const std::string& url) : where_(redact_url(url)) {
+    conn_ = PQconnectdb(url.c_str());
+    if (!conn_ || PQstatus(conn_) != CONNECTION_OK) {
+      const std::string msg = conn_ ? PQerrorMessage(conn_) : "out of memory";
+      PQfinish(conn_);
+      throw IoError(where_ + ": cannot connect to the results store: " + trimmed(msg) +
+                    " (check the server runs and the URL; the password comes from PGPASSWORD or ~/.pgpass)");
+    }
+    PQsetNoticeProcessor(conn_, [](void*, const char*) {}, nullptr);  // "relation exists, skipping"
+  }
+  ~PostgresConnection() override { PQfinish(conn_); }
+  PostgresConnection(const PostgresConnection&) = delete;
+  PostgresConnection& operator=(const PostgresConnection&) = delete;
+
+  Dialect dialect() const override { return Dialect::kPostgres; }
+  std::string where() const override { return where_; }
+  void begin_write() override { exec("BEGIN"); }
+  void lock_schema() override { exec(fmt::format("SELECT pg_advisory_xact_lock({})", kSchemaLockKey)); }
+
+  void exec(const std::string& statements) override {
+    PGresult* r = PQexec(conn_, statements.c_str());
+    check(r);
+    PQclear(r);
+  }
+
+  std::vector<Row> query(const std::string& statement, const std::vector<Value>& params) override {
+    std::vector<std::string> texts(params.size());
+    std::vector<const char*> values(params.size(), nullptr);
+    for (std::size_t i = 0; i < params.size(); ++i) {
+      if (params[i].is_null()) continue;
+      texts[i] = params[i].kind == Value::Kind::kReal ? fmt::format("{}", params[i].real) : params[i].as_text();
+      values[i] = texts[i].c_str();
+    }
+    PGresult* r = PQexecParams(conn_, statement.c_str(), static_cast<int>(params.size()), nullptr, values.data(),
+                               nullptr, nullptr, 0);
+    check(r);
+    std::vector<Row> rows;
+    const int n = PQntuples(r), m = PQnfields(r);
+    rows.reserve(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) {
+      Row row;
+      row.reserve(static_cast<std::size_t>(m));
+      for (int c = 0; c < m; ++c) row.push_back(cell(r, i, c));
+      rows.push_back(std::move(row));
+    }
+    PQclear(r);
+    return rows;
+  }
+
+ private:
+  static std::string trimmed(std::string s) {
+    while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
+    return s;
+  }
+  void check(PGresult* r) const {
+    const ExecStatusType st = PQresultStatus(r);
+    if (st == PGRES_COMMAND_OK || st == PGRES_TUPLES_OK) return;
+    const std::string msg = trimmed(r ? PQresultErrorMessage(r) : PQerrorMessage(conn_));
+    PQclear(r);
+    throw IoError(where_ + ": " + msg);
+  }
+  static Value cell(PGresult* r, int i, int c) {
+    if (PQgetisnull(r, i, c)) return Value::null();
+    const char* t = PQgetvalue(r, i, c);
+    switch (PQftype(r, c)) {
+      case kOidInt2:
+      case kOidInt4:
+      case kOidInt8: return Value::of(static_cast<long long>(std::atoll(t)));
+      case kOidBool: return Value::of(static_cast<long long>(t[0] == 't' ? 1 : 0));
+      case kOidFloat4:
+      case kOidFloat8:
+      case kOidNumeric: return Value::of(std::strtod(t, nullptr));
+      default: return Value::of(std::string(t));
+    }
+  }
+
+  PGconn* conn_ = nullptr;
+  std::string where_;
+};
+
+}  // namespace
+
+std::unique_ptr<Connection> open_postgres(const std::string& url) { return std::make_unique<PostgresConnection>(url); }
+
+}  // namespace stend::reporting::sql
