@@ -535,6 +535,10 @@ void Hdf5RunWriter::flush() {
   if (!I.file) return;  // nothing to flush into until the first samples
   I.write_pending();
   I.write_records();
+  // The rows reach the file before /summary counts them: /summary is contiguous, so its values go
+  // to the file at H5Dwrite, while the datasets' new extents wait in the metadata cache for the
+  // flush. Summary first, a kill during the flush could leave it counting rows the file lacks.
+  check(H5Fflush(I.file.get(), H5F_SCOPE_GLOBAL), I.path, "cannot flush");
   I.write_summary();
   check(H5Fflush(I.file.get(), H5F_SCOPE_GLOBAL), I.path, "cannot flush");
 }
