@@ -4,6 +4,7 @@
 // its target format's own conventions.
 #include "stend/model/terms.hpp"
 #include "stend/reporting/results.hpp"
+#include "stend/testing/browser.hpp"
 #include "stend/testing/files.hpp"
 #include "stend/testing/paths.hpp"
 #include "stend/testing/program.hpp"
@@ -12,7 +13,6 @@
 #include <matio.h>
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
-#include <zlib.h>
 
 #include <Eigen/Dense>
 
@@ -93,71 +93,9 @@ class Cli : public ::testing::Test {
   }
 };
 
-// ---- a small PNG reader (8-bit RGB / RGBA, non-interlaced: what Chromium writes) ----------------
-struct Image {
-  int w = 0, h = 0, channels = 0;
-  std::vector<unsigned char> px;
-};
-std::uint32_t be32(const unsigned char* p) {
-  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | p[3];
-}
-bool read_png(const fs::path& file, Image& img) {
-  const std::string d = read_text(file);
-  const auto* b = reinterpret_cast<const unsigned char*>(d.data());
-  if (d.size() < 8 || d.compare(1, 3, "PNG") != 0) return false;
-  std::string idat;
-  int depth = 0, type = 0;
-  for (std::size_t p = 8; p + 8 <= d.size();) {
-    const std::uint32_t len = be32(b + p);
-    const std::string tag = d.substr(p + 4, 4);
-    if (tag == "IHDR") {
-      img.w = static_cast<int>(be32(b + p + 8));
-      img.h = static_cast<int>(be32(b + p + 12));
-      depth = b[p + 16];
-      type = b[p + 17];
-    } else if (tag == "IDAT") {
-      idat.append(d, p + 8, len);
-    }
-    p += 12 + len;
-  }
-  if (depth != 8 || (type != 2 && type != 6)) return false;
-  img.channels = type == 6 ? 4 : 3;
-  const std::size_t stride = static_cast<std::size_t>(img.w) * static_cast<std::size_t>(img.channels);
-  std::vector<unsigned char> raw((stride + 1) * static_cast<std::size_t>(img.h));
-  uLongf n = raw.size();
-  if (uncompress(raw.data(), &n, reinterpret_cast<const Bytef*>(idat.data()), idat.size()) != Z_OK) return false;
-  img.px.assign(stride * static_cast<std::size_t>(img.h), 0);
-  const auto bpp = static_cast<std::size_t>(img.channels);
-  for (std::size_t y = 0; y < static_cast<std::size_t>(img.h); ++y) {
-    const unsigned char f = raw[y * (stride + 1)];
-    const unsigned char* in = &raw[y * (stride + 1) + 1];
-    unsigned char* out = &img.px[y * stride];
-    const unsigned char* up = y ? &img.px[(y - 1) * stride] : nullptr;
-    for (std::size_t x = 0; x < stride; ++x) {
-      const int a = x >= bpp ? out[x - bpp] : 0, u = up ? up[x] : 0, c = (x >= bpp && up) ? up[x - bpp] : 0;
-      int v = in[x];
-      switch (f) {
-        case 1: v += a; break;
-        case 2: v += u; break;
-        case 3: v += (a + u) / 2; break;
-        case 4: {
-          const int p = a + u - c, pa = std::abs(p - a), pb = std::abs(p - u), pc = std::abs(p - c);
-          v += (pa <= pb && pa <= pc) ? a : (pb <= pc ? u : c);
-          break;
-        }
-        default: break;
-      }
-      out[x] = static_cast<unsigned char>(v & 0xff);
-    }
-  }
-  return true;
-}
-
-std::string find_chromium() {
-  for (const char* c : {"/usr/bin/chromium", "/usr/bin/chromium-browser", "/usr/bin/google-chrome"})
-    if (fs::exists(c)) return c;
-  return {};
-}
+using stend::testing::find_chromium;
+using stend::testing::Image;
+using stend::testing::read_png;
 
 const char* kGapFixture = R"json({"schema":"stend.gap/1","model":"paper_z_channel",
  "noise_floor":{"static_mean_mps2":[0.0001,0.0001,0.0001],"source":"segment noise"},
@@ -251,14 +189,10 @@ TEST_F(Cli, GapChartsFromGapJsonAndChromiumRendersThem) {
   const std::string chromium = find_chromium();
   if (chromium.empty()) GTEST_SKIP() << "chromium is not installed (Debian package 'chromium'): browser check skipped";
   const fs::path png = dir / "shot.png";
-  const fs::path log = dir / "chromium.log";
-  const int rc = sh("timeout 120 '" + chromium + "' --headless --no-sandbox --disable-gpu --hide-scrollbars "
-                    "--enable-logging=stderr --v=0 --window-size=1200,3000 --screenshot='" + png.string() +
-                    "' 'file://" + (run / "report.html").string() + "'",
-                    log);
-  ASSERT_EQ(rc, 0) << read_text(log);
-  const std::string out = read_text(log);
-  EXPECT_EQ(out.find(":CONSOLE"), std::string::npos) << "console messages while loading the report:\n" << out;
+  const stend::testing::BrowserOutput out =
+      stend::testing::headless_chromium("file://" + (run / "report.html").string(), 1000, png, 1200, 3000);
+  ASSERT_EQ(out.code, 0) << out.log;
+  EXPECT_TRUE(out.console.empty()) << "console messages while loading the report:\n" << out.console;
   Image img;
   ASSERT_TRUE(read_png(png, img)) << "cannot decode " << png;
   EXPECT_EQ(img.w, 1200);
