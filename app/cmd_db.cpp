@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include <filesystem>
+
 namespace stend::cli {
 
 namespace {
@@ -22,6 +24,10 @@ ExitCode run_migrate(const std::string& location) {
 }
 
 ExitCode run_check(const std::string& location) {
+  // Checking never creates: an SQLite file that is not there is said, not made empty.
+  if (!rp::is_postgres_location(location) && !std::filesystem::exists(location))
+    throw InputError("stend db check: no results store at " + location + " (`stend db migrate --db " + location +
+                     "` creates one)");
   const rp::ResultsStore store(location, rp::ResultsStore::Open::kAsIs);
   const rp::StoreCheck c = store.check();
   fmt::print("results db: {}\n{}", store.where(), c.print());

@@ -208,6 +208,15 @@ INSERT INTO parameters VALUES(1, 'batch_lsq', 'bias_z', 'm/s^2', 1, 0.05, 0.001,
 
 // SQLite's documented limit: one file on a local disk, writers take turns (one write lock, busy
 // timeout); with that, concurrent writers lose or duplicate nothing either.
+TEST(ResultsStore, DbCheckOfAMissingFileCreatesNothing) {
+  const stend::testing::TempDir tmp("store-missing");
+  const fs::path missing = tmp.path() / "nowhere.sqlite";
+  const auto check = run_stend("db check --db " + shell_quote(missing.string()));
+  EXPECT_EQ(check.code, 2) << check.text;
+  EXPECT_NE(check.text.find("no results store at " + missing.string()), std::string::npos) << check.text;
+  EXPECT_FALSE(fs::exists(missing));
+}
+
 TEST(ResultsStore, SqliteEightConcurrentWritersLoseAndDuplicateNothing) {
   // In memory-backed /dev/shm when there is one: the 1800 commits then cost no disk syncs (what is
   // tested is the locking, not the disk); else the temp folder (~50 s on this VM's disk).
