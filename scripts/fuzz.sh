@@ -9,13 +9,17 @@
 # STEND_FUZZ_UPDATE_CORPUS=1, which merges new coverage back into fuzz/corpus/<target>/.
 # Exit status: 0 when every target ran clean, 1 when any target crashed, leaked, hung or ran out of
 # memory (the reproducer's path is printed; replay it with build-fuzz/bin/fuzz_<target> FILE).
+# On a machine shared with other work, STEND_FUZZ_BUDGET=cpu counts SECONDS_PER_TARGET as the
+# fuzzer's own CPU time (user + system) instead of the wall clock, and STEND_FUZZ_TIMEOUT (default
+# 10 s) raises the wall-clock time one input may take before it counts as a hang — run at idle
+# priority (chrt --idle 0) a starved fuzzer otherwise reports false hangs.
 set -euo pipefail
 
 root="$(cd "$(dirname "$0")/.." && pwd)"
 seconds="${1:-60}"
 [ $# -gt 0 ] && shift
 build="${STEND_FUZZ_BUILD_DIR:-$root/build-fuzz}"
-timeout_s=10      # one input taking longer is a hang
+timeout_s="${STEND_FUZZ_TIMEOUT:-10}"  # one input taking longer (wall clock) is a hang
 rss_limit_mb=2048
 max_len=65536     # fuzz/fuzz_support.hpp kMaxInputBytes
 
@@ -36,6 +40,34 @@ cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DSTEND_FUZZ=ON -DSTEND_WERROR=OFF -DSTEND_BUILD_TESTS=OFF -DSTEND_BUILD_BENCHMARKS=OFF >/dev/null
 ninja -C "$build" "${targets[@]/#/fuzz_}"
 
+# Runs one target into $2/log; returns libFuzzer's exit status (0: clean).
+run_fuzzer() {
+  local t="$1" work="$2" wall="$seconds"
+  [ "${STEND_FUZZ_BUDGET:-wall}" = cpu ] && wall=$((seconds * 1000))
+  ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=1" UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
+    "$build/bin/fuzz_$t" -max_total_time="$wall" -timeout="$timeout_s" -rss_limit_mb="$rss_limit_mb" \
+    -max_len="$max_len" -print_final_stats=1 -artifact_prefix="$work/artifacts/" "$work/corpus" \
+    >"$work/log" 2>&1 &
+  local pid=$! started=$SECONDS
+  if [ "${STEND_FUZZ_BUDGET:-wall}" = cpu ]; then
+    local tick; tick=$(getconf CLK_TCK)
+    while kill -0 "$pid" 2>/dev/null; do
+      local cpu; cpu=$(awk -v t="$tick" '{print int(($14 + $15) / t)}' "/proc/$pid/stat" 2>/dev/null || echo 0)
+      if [ "$cpu" -ge "$seconds" ]; then
+        kill -INT "$pid"
+        wait "$pid"
+        echo "fuzz.sh: stopped after ${cpu} s CPU, $((SECONDS - started)) s wall" >>"$work/log"
+        return 0
+      fi
+      sleep 5
+    done
+  fi
+  wait "$pid"
+  local rc=$?
+  echo "fuzz.sh: $((SECONDS - started)) s wall" >>"$work/log"
+  return "$rc"
+}
+
 failed=0
 summary=()
 for t in "${targets[@]}"; do
@@ -45,13 +77,11 @@ for t in "${targets[@]}"; do
   [ -d "$root/fuzz/regressions/$t" ] && cp -n "$root/fuzz/regressions/$t/"* "$work/corpus/"
   echo "== $t: ${seconds} s"
   set +e
-  ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=1" UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
-    "$build/bin/fuzz_$t" -max_total_time="$seconds" -timeout="$timeout_s" -rss_limit_mb="$rss_limit_mb" \
-    -max_len="$max_len" -print_final_stats=1 -artifact_prefix="$work/artifacts/" "$work/corpus" \
-    >"$work/log" 2>&1
+  run_fuzzer "$t" "$work"
   rc=$?
   set -e
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$work/log" | tail -1)
+  [ -n "$execs" ] || execs=$(grep -o '^#[0-9]*' "$work/log" | tail -1 | tr -d '#')
   cov=$(grep -o 'cov: [0-9]* ft: [0-9]*' "$work/log" | tail -1)
   corpus=$(ls "$work/corpus" | wc -l)
   if [ "$rc" -eq 0 ]; then
