@@ -7,6 +7,7 @@
 #include <stend/yaml_util.hpp>
 
 #include <Eigen/LU>
+#include <yaml-cpp/eventhandler.h>
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -156,31 +157,90 @@ std::string read_text_file(const std::string& path) {
   return ss.str();
 }
 
-YAML::Node load_root(const std::string& text, const std::string& file) {
-  std::vector<YAML::Node> docs;
+// Where each YAML document of a text starts (its first node) and whether it is only a null,
+// from yaml-cpp's event parser.
+class DocumentStarts final : public YAML::EventHandler {
+ public:
+  struct Start {
+    YAML::Mark mark;
+    bool null;
+  };
+  std::vector<Start> starts;
+
+  void OnDocumentStart(const YAML::Mark&) override { first_ = true; }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark& m, YAML::anchor_t) override { node(m, true); }
+  void OnAlias(const YAML::Mark& m, YAML::anchor_t) override { node(m, false); }
+  void OnScalar(const YAML::Mark& m, const std::string&, YAML::anchor_t, const std::string&) override { node(m, false); }
+  void OnSequenceStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    node(m, false);
+  }
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    node(m, false);
+  }
+  void OnMapEnd() override {}
+
+ private:
+  void node(const YAML::Mark& m, bool null) {
+    if (first_) starts.push_back({m, null});
+    first_ = false;
+  }
+  bool first_ = false;
+};
+
+// The documents of an experiment file, walked with the event parser rather than YAML::LoadAll:
+// yaml-cpp 0.7 (Debian 12) loops for ever there, allocating a null document per turn, when a
+// document starts with a token no node starts with, e.g. a stray ',' (jbeder/yaml-cpp#1319). Two
+// null documents in a row at the same place are the parser stuck on such a token: a syntax error
+// there. The walk stops at the second document that holds something (an experiment is one).
+std::vector<DocumentStarts::Start> document_starts(const std::string& text, const std::string& file) {
+  std::istringstream in(text);
+  YAML::Parser parser(in);
+  DocumentStarts docs;
   try {
-    docs = YAML::LoadAll(text);
-  } catch (const YAML::ParserException& e) {
-    syntax_error(e.mark, e.msg, file);
+    while (parser.HandleNextDocument(docs)) {
+      const auto& s = docs.starts;
+      const std::size_t n = s.size();
+      if (n >= 2 && s[n - 1].null && s[n - 2].null && s[n - 1].mark.pos == s[n - 2].mark.pos) {
+        const auto pos = static_cast<std::size_t>(std::max(0, s[n - 1].mark.pos));
+        syntax_error(s[n - 1].mark,
+                     pos < text.size() ? "unexpected '" + text.substr(pos, 1) + "': no YAML node starts with it"
+                                       : "unexpected end of the text",
+                     file);
+      }
+      if (std::count_if(s.begin(), s.end(), [](const auto& d) { return !d.null; }) >= 2) break;
+    }
   } catch (const YAML::Exception& e) {
     syntax_error(e.mark, e.msg, file);
   }
-  while (docs.size() > 1 && docs.back().IsNull()) docs.pop_back();
-  if (docs.empty() || docs[0].IsNull())
+  return docs.starts;
+}
+
+YAML::Node load_root(const std::string& text, const std::string& file) {
+  std::vector<DocumentStarts::Start> docs = document_starts(text, file);
+  while (docs.size() > 1 && docs.back().null) docs.pop_back();
+  if (docs.empty() || docs[0].null)
     fail({file, 1, 1}, "", "the experiment file is empty",
          "an experiment has 'experiment:', 'bench:' and 'procedure:' sections; see "
          "docs/experiment-format.md");
   if (docs.size() > 1)
-    fail(yaml::location_of(docs[1], file), "",
-         "the file holds " + std::to_string(docs.size()) +
-             " YAML documents; an experiment is a single document",
+    fail({file, docs[1].mark.line + 1, docs[1].mark.column + 1}, "",
+         "a second YAML document starts here; an experiment is a single document",
          "remove the '---' separator and merge the documents");
-  if (!docs[0].IsMap())
-    fail(yaml::location_of(docs[0], file), "",
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);  // the first document
+  } catch (const YAML::Exception& e) {
+    syntax_error(e.mark, e.msg, file);
+  }
+  if (!root.IsMap())
+    fail(yaml::location_of(root, file), "",
          "expected the experiment as a mapping with 'experiment:', 'bench:' and 'procedure:' "
-         "sections, got " + yaml::describe(docs[0]));
-  return docs[0];
+         "sections, got " + yaml::describe(root));
+  return root;
 }
+
 
 std::vector<std::string> resolve_plugin_paths(const YAML::Node& node, const std::string& file,
                                               const std::string& path) {

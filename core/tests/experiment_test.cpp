@@ -554,6 +554,10 @@ TEST(Experiment, InlineErrors) {
       {head + "procedure:\n  - record: {duration_s: 1}\n  - record: {duration_s: 1, label: \"\"}\n", "'label' must not be empty", 6, 36},
       {head + "procedure:\n  - wait: {duration_s: 1, <<: {label: x}}\n", "merge keys", 5, 27},
       {head + "procedure:\n\t- wait: {duration_s: 1}\n", "YAML syntax error", 5, 2},
+      // yaml-cpp 0.7's LoadAll looped for ever here, allocating (the fuzz target found it).
+      {", {angle_deg: 60}], dwell_s: 2\n", "YAML syntax error: unexpected ',': no YAML node starts with it", 1, 1},
+      {head + "procedure: [{record: {duration_s: 1}}]\n---\nexperiment: {name: y}\n",
+       "a second YAML document starts here; an experiment is a single document", 6, 1},
       {head + "procedure:\n  - set_vibration: {fixture: shaker, amplitude_g: 0}\n", "unknown fixture 'shaker'", 5, 30},
       {head + "procedure:\n  - record: {duration_s: 1}\noutputs: {directory: \"\"}\n", "'directory' must not be empty", 6, 22},
       {head + "procedure:\n  - record: {duration_s: 1}\nprocessing: [1]\n", "expected a mapping for 'processing'", 6, 13},

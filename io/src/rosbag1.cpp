@@ -200,11 +200,13 @@ std::uint64_t index_position(const fs::path& file) {
   return 0;
 }
 
-// Refuses a bag whose file header record or index section (the records from index_pos to the
-// end) declares a length beyond its bounds, before librosbag allocates or parses it: each record
-// is uint32 header length, header (fields: uint32 length, "name=value"), uint32 data length,
-// data. The index section of a bag whose index_pos is not inside the file is left to open_failed,
-// which says why.
+// Refuses a bag any record of which librosbag would read at open time lies beyond its bounds,
+// before librosbag allocates or parses it. A bag is a sequence of records from the file header
+// record to the end — uint32 header length, header (fields: uint32 length, "name=value"), uint32
+// data length, data — and its index (the records from index_pos on) points back into it: every
+// chunk info's chunk_pos must be where a record starts, and a chunk must be able to hold the
+// uncompressed size it declares (librosbag allocates that size to decompress it). The records of a
+// bag whose index_pos is not inside the file are left to open_failed, which says why.
 void check_record_lengths(const fs::path& path) {
   std::error_code ec;
   const std::uint64_t size = fs::file_size(path, ec);
@@ -223,23 +225,82 @@ void check_record_lengths(const fs::path& path) {
     if (end < at + 4 || !in.read(reinterpret_cast<char*>(b), 4)) fail(at, std::string(what) + " length cut off", end);
     return static_cast<std::uint32_t>(b[0] | b[1] << 8 | b[2] << 16 | static_cast<std::uint32_t>(b[3]) << 24);
   };
-  // One record at `pos`: its header's fields and its data inside the file; returns the next record's position.
+  struct Record {
+    std::uint64_t pos, data_pos, data_len, next;
+    std::string op, compression;
+    std::uint64_t chunk_pos = 0, size = 0;  // a chunk info's chunk_pos, a chunk's uncompressed size
+  };
+  // The value of one header field (at most 8 bytes: the fields read here).
+  auto field_value = [&](std::uint64_t at, std::uint32_t n, std::size_t name_len) {
+    std::string v(std::min<std::size_t>(n - name_len, 8), '\0');
+    in.seekg(static_cast<std::streamoff>(at + 4 + name_len));
+    in.read(v.data(), static_cast<std::streamsize>(v.size()));
+    return v;
+  };
+  auto little_endian = [](const std::string& v) {
+    std::uint64_t x = 0;
+    for (std::size_t i = v.size(); i-- > 0;) x = x << 8 | static_cast<std::uint8_t>(v[i]);
+    return x;
+  };
+  // One record at `pos`: its header's fields and its data inside the file.
   auto record = [&](std::uint64_t pos) {
     const std::uint32_t header = u32_at(pos, size, "record header");
     if (header > size - pos - 4) fail(pos, "a record's header declares " + std::to_string(header) + " bytes", size);
+    Record r{pos, 0, 0, 0, {}, {}};
     const std::uint64_t end = pos + 4 + header;
     for (std::uint64_t at = pos + 4; at < end;) {
       const std::uint32_t field = u32_at(at, end, "header field");
       if (field > end - at - 4) fail(at, "a header field declares " + std::to_string(field) + " bytes", end);
+      std::string name(std::min<std::uint32_t>(field, 16), '\0');
+      in.read(name.data(), static_cast<std::streamsize>(name.size()));
+      name.resize(std::min(name.find('='), name.size()));
+      auto value = [&] { return field_value(at, field, name.size() + 1); };
+      if (name.size() < field) {
+        if (name == "op") r.op = value().substr(0, 1);
+        else if (name == "compression") r.compression = value();
+        else if (name == "chunk_pos") r.chunk_pos = little_endian(value());
+        else if (name == "size") r.size = little_endian(value().substr(0, 4));
+      }
       at += 4 + field;
     }
     const std::uint32_t data = u32_at(end, size, "record data");
     if (data > size - end - 4) fail(end, "a record's data declares " + std::to_string(data) + " bytes", size);
-    return end + 4 + data;
+    r.data_pos = end + 4;
+    r.data_len = data;
+    r.next = end + 4 + data;
+    return r;
   };
-  record(sizeof kMagic - 1);  // the file header record
+  // A chunk's uncompressed size against its stored bytes: equal when stored plainly, at most
+  // 255:1 for lz4 (its format's limit), 1032:1 for bz2 (zlib's limit, far beyond any IMU bag's).
+  auto check_chunk_size = [&](const Record& r) {
+    const std::uint64_t limit = r.compression == "none" ? r.data_len
+                                : r.compression == "lz4" ? 255 * r.data_len + 64
+                                                         : 1032 * r.data_len + 64;
+    if (r.compression == "none" ? r.size != r.data_len : r.size > limit) {
+      throw ImportError(path, "byte " + std::to_string(r.pos),
+                        "a chunk (" + r.compression + ") declares " + std::to_string(r.size) +
+                            " uncompressed bytes, which its " + std::to_string(r.data_len) +
+                            " stored bytes cannot hold (damaged chunk header)");
+    }
+  };
+  const Record first = record(sizeof kMagic - 1);  // the file header record
   if (index == 0 || index >= size) return;
-  for (std::uint64_t pos = index; pos < size;) pos = record(pos);
+  std::vector<std::uint64_t> starts;
+  std::vector<std::uint64_t> chunk_positions;
+  for (std::uint64_t pos = first.next; pos < size;) {
+    const Record r = record(pos);
+    starts.push_back(pos);
+    if (r.op == "\x05") check_chunk_size(r);
+    if (r.op == "\x06" && pos >= index) chunk_positions.push_back(r.chunk_pos);
+    pos = r.next;
+  }
+  for (const std::uint64_t c : chunk_positions) {
+    if (!std::binary_search(starts.begin(), starts.end(), c)) {
+      throw ImportError(path, "index at byte " + std::to_string(index),
+                        "a chunk info points at byte " + std::to_string(c) +
+                            ", where no record starts (damaged index; `rosbag reindex` rebuilds it)");
+    }
+  }
 }
 
 // Why librosbag could not open the bag, with the offsets that explain it.

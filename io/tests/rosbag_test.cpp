@@ -424,6 +424,25 @@ TEST(Rosbag1, HeaderFieldBeyondItsHeaderIsRefusedBeforeOpening) {
   EXPECT_NE(msg.find("past the end of the record header at byte"), std::string::npos) << msg;
 }
 
+// The records librosbag reads at open time through the index are checked too: a chunk whose own
+// header declares 3.3 GB (the fuzz target found it: librosbag allocated 4 GB to read it), a chunk
+// info pointing into the middle of a record, a chunk declaring more uncompressed bytes than its
+// compressed ones can hold (librosbag allocates that size to decompress).
+TEST(Rosbag1, EveryRecordTheIndexReachesIsCheckedBeforeOpening) {
+  const auto refusal = [](const char* name) {
+    const fs::path bag = stend::testing::source_path(std::string("fuzz/regressions/import_rosbag1/") + name);
+    return import_error([&] { stend::io::import_rosbag1(bag); });
+  };
+  const std::string header = refusal("chunk_header_4GB.bag");
+  EXPECT_NE(header.find("byte 4117: a record's header declares 3286536728 bytes, past the end of the file at byte 34621"),
+            std::string::npos) << header;
+  const std::string pos = refusal("chunk_pos_inside_a_record.bag");
+  EXPECT_NE(pos.find("a chunk info points at byte 4125, where no record starts"), std::string::npos) << pos;
+  const std::string size = refusal("chunk_size_4GB.bag");
+  EXPECT_NE(size.find("byte 4117: a chunk (bz2) declares 4026531840 uncompressed bytes, which its 496 stored bytes"),
+            std::string::npos) << size;
+}
+
 // An MCAP file the fuzz target found: a chunk declaring an uncompressed size its stored bytes
 // cannot hold is refused with its place before the size is allocated (was std::bad_alloc).
 TEST(Rosbag2Mcap, ChunkDeclaringMoreThanItsBytesHoldIsRefused) {
