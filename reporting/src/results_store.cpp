@@ -71,6 +71,9 @@ CREATE UNIQUE INDEX IF NOT EXISTS documents_run_kind ON documents(run_id, kind);
 )sql"},
 };
 
+// The schema version that added the documents table (an older store, checked as it is, has none).
+constexpr int kDocumentsSinceVersion = 3;
+
 std::string spelled(const char* statements, Dialect d) {
   const bool pg = d == Dialect::kPostgres;
   return fmt::format(fmt::runtime(statements), fmt::arg("id", pg ? "BIGSERIAL PRIMARY KEY" : "INTEGER PRIMARY KEY"),
@@ -422,7 +425,7 @@ StoreCheck ResultsStore::check() const {
   c.runs = count(*db_, "SELECT COUNT(*) FROM runs");
   c.estimators = count(*db_, "SELECT COUNT(*) FROM estimators");
   c.parameters = count(*db_, "SELECT COUNT(*) FROM parameters");
-  c.documents = count(*db_, "SELECT COUNT(*) FROM documents");
+
   c.duplicate_runs =
       count(*db_, "SELECT COUNT(*) FROM (SELECT run_dir FROM runs GROUP BY run_dir HAVING COUNT(*) > 1) d");
   c.duplicate_estimators = count(
@@ -435,6 +438,8 @@ StoreCheck ResultsStore::check() const {
   c.orphan_parameters = count(*db_,
                               "SELECT COUNT(*) FROM parameters p WHERE NOT EXISTS (SELECT 1 FROM estimators e "
                               "WHERE e.run_id = p.run_id AND e.name = p.estimator)");
+  if (c.schema_version < kDocumentsSinceVersion) return c;
+  c.documents = count(*db_, "SELECT COUNT(*) FROM documents");
   c.duplicate_documents = count(
       *db_, "SELECT COUNT(*) FROM (SELECT run_id, kind FROM documents GROUP BY run_id, kind HAVING COUNT(*) > 1) d");
   c.orphan_documents =
