@@ -1,7 +1,8 @@
 // `stend batch fit|gap|report (RUN… | --procedure FP) [--model M] [--db L] [--workers N]
-// [--retries K] [--slurm --out DIR]` — campaign re-analysis: one task per run, each the very
-// `stend` command one would type for that run (fit RUN -m M --db L …), run by a local worker pool
-// or as a Slurm job array (sbatch). Failed tasks are retried, then reported (docs/lab-scale.md).
+// [--retries K] [--slurm --out DIR [--runs-per-task N]]` — campaign re-analysis: one task per run,
+// each the very `stend` command one would type for that run (fit RUN -m M --db L …), run by a local
+// worker pool or as a Slurm job array (sbatch) whose array tasks each run a chunk of those
+// commands. Failed tasks are retried, then reported (docs/lab-scale.md).
 #include "commands.hpp"
 
 #include "stend/errors.hpp"
@@ -37,12 +38,16 @@ namespace rp = stend::reporting;
 
 // Lines of a failed task's output quoted in the report.
 constexpr std::size_t kFailureTailLines = 4;
+// Slurm, automatic packing: about this many array tasks per CPU the array may use, so that the
+// scheduler starts a few jobs per CPU rather than one per run, yet a slow node still shares work.
+constexpr std::size_t kArrayTasksPerSlot = 4;
 
 struct BatchArgs {
   std::string verb;  // fit | gap | report
   std::vector<std::string> runs;
   std::string procedure, model, db, estimator, out, partition;
   unsigned workers = 0;  // 0: one per core
+  unsigned runs_per_task = 0;  // Slurm: runs per array task; 0: automatic (kArrayTasksPerSlot)
   int retries = 1;
   bool slurm = false;
 };
@@ -141,7 +146,7 @@ std::vector<Task> plan(const BatchArgs& a) {
     t.argv = {self.string(), a.verb, run};
     if (!a.model.empty()) t.argv.insert(t.argv.end(), {"-m", a.model});
     if (a.verb == "fit" && !a.estimator.empty()) t.argv.insert(t.argv.end(), {"--estimator", a.estimator});
-    if (a.verb != "gap") t.argv.insert(t.argv.end(), {"--db", rp::results_store_location(a.db, run)});
+    t.argv.insert(t.argv.end(), {"--db", rp::results_store_location(a.db, run)});
     tasks.push_back(std::move(t));
   }
   return tasks;
@@ -178,19 +183,52 @@ void run_local(std::vector<Task>& tasks, const BatchArgs& a) {
 
 // ---- Slurm job array -------------------------------------------------------------------------
 
-// The job script: array task i runs line i + 1 of tasks.txt and leaves its exit code in
-// status/<i>.rc (written then renamed, so a partial file is never read).
+// The job script: array task k runs the runs listed on line k + 1 of the chunk file ($1), one
+// after another, each with its line of tasks.txt (the command the local pool runs), its output in
+// logs/run-<i>.log and its exit code in status/<i>.rc (written then renamed, so a partial file is
+// never read). The array task fails when one of its runs failed.
 std::string job_script(const fs::path& out) {
   const std::string o = shell_quoted(out.string());
   return fmt::format(R"(#!/bin/bash
-# stend batch: one array task per run; the command is the one `stend batch` runs locally.
-line=$(sed -n "$((SLURM_ARRAY_TASK_ID + 1))p" {0}/tasks.txt)
-eval "$line"
-rc=$?
-echo "$rc" > {0}/status/"$SLURM_ARRAY_TASK_ID".rc.tmp && mv {0}/status/"$SLURM_ARRAY_TASK_ID".rc.tmp {0}/status/"$SLURM_ARRAY_TASK_ID".rc
-exit "$rc"
+# stend batch: each array task runs a chunk of runs; each run's command is the one `stend batch` runs locally.
+failed=0
+for i in $(sed -n "$((SLURM_ARRAY_TASK_ID + 1))p" "$1"); do
+  line=$(sed -n "$((i + 1))p" {0}/tasks.txt)
+  (eval "$line") > {0}/logs/run-"$i".log 2>&1
+  rc=$?
+  [ "$rc" -eq 0 ] || failed=1
+  echo "$rc" > {0}/status/"$i".rc.tmp && mv {0}/status/"$i".rc.tmp {0}/status/"$i".rc
+done
+exit "$failed"
 )",
                      o);
+}
+
+// The CPUs of the partition (sinfo's total), 0 when sinfo cannot say.
+unsigned partition_cpus(const std::string& partition) {
+  std::vector<std::string> sinfo = {"sinfo", "-h", "-o", "%C"};
+  if (!partition.empty()) sinfo.insert(sinfo.end(), {"-p", partition});
+  const Outcome o = run_program(sinfo);  // "allocated/idle/other/total"
+  const std::size_t slash = o.output.rfind('/');
+  return o.code == 0 && slash != std::string::npos ? static_cast<unsigned>(std::atoi(o.output.c_str() + slash + 1)) : 0;
+}
+
+// Runs per array task: --runs-per-task, else enough that the array has about kArrayTasksPerSlot
+// tasks per CPU it may use (-j, else the partition's CPUs), else (unknown) one.
+std::size_t runs_per_array_task(std::size_t runs, const BatchArgs& a) {
+  if (a.runs_per_task) return a.runs_per_task;
+  const std::size_t slots = a.workers ? a.workers : partition_cpus(a.partition);
+  if (slots == 0) return 1;
+  const std::size_t array_tasks = kArrayTasksPerSlot * slots;
+  return std::max<std::size_t>(1, (runs + array_tasks - 1) / array_tasks);
+}
+
+// The chunk file: line k = the task indices array task k runs.
+std::string chunk_lines(const std::vector<std::size_t>& pending, std::size_t per_task) {
+  std::string lines;
+  for (std::size_t k = 0; k < pending.size(); ++k)
+    lines += std::to_string(pending[k]) + ((k + 1) % per_task == 0 || k + 1 == pending.size() ? "\n" : " ");
+  return lines;
 }
 
 // "0-3,7,9-10" (indices ascending), with "%N" when the array may run at most N tasks at once.
@@ -224,25 +262,35 @@ void run_slurm(std::vector<Task>& tasks, const BatchArgs& a) {
   std::vector<std::size_t> pending(tasks.size());
   for (std::size_t i = 0; i < tasks.size(); ++i) pending[i] = i;
   for (int attempt = 1; !pending.empty() && attempt <= a.retries + 1; ++attempt) {
+    // Only the runs still pending are (re)run, packed among themselves: a failed run's neighbours
+    // in its first array task are not run again.
     for (std::size_t i : pending) fs::remove(out / "status" / fmt::format("{}.rc", i));
+    const std::size_t per_task = runs_per_array_task(pending.size(), a);
+    const std::size_t array_tasks = (pending.size() + per_task - 1) / per_task;
+    const fs::path chunks = out / fmt::format("chunks-{}.txt", attempt);
+    write_file_atomic(chunks, chunk_lines(pending, per_task));
+    std::vector<std::size_t> array_indices(array_tasks);
+    for (std::size_t k = 0; k < array_tasks; ++k) array_indices[k] = k;
     std::vector<std::string> sbatch = {"sbatch", "--wait", "--parsable", "--job-name=stend-batch",
-                                       "--array=" + array_spec(pending, a.workers),
-                                       "--output=" + (out / "logs" / "task-%a.log").string()};
+                                       "--array=" + array_spec(array_indices, a.workers),
+                                       "--output=" + (out / "logs" / fmt::format("array-{}-%a.log", attempt)).string()};
     if (!a.partition.empty()) sbatch.push_back("--partition=" + a.partition);
-    sbatch.push_back((out / "stend-batch.sbatch").string());
+    sbatch.insert(sbatch.end(), {(out / "stend-batch.sbatch").string(), chunks.string()});
     const Outcome o = run_program(sbatch);  // --wait: exits non-zero when a task failed
     const std::string job = o.output.substr(0, o.output.find_first_of(";\n"));
     if (job.empty() || job.find_first_not_of("0123456789") != std::string::npos)
       throw IoError("stend batch --slurm: sbatch refused the job array: " + tail(o.output, 3) +
                     " (check `sinfo`, the partition and that slurmctld runs)");
-    fmt::print("slurm job {} (attempt {}): {} task(s)\n", job, attempt, pending.size());
+    fmt::print("slurm job {} (attempt {}): {} task(s) in {} array task(s) of up to {} run(s)\n", job, attempt,
+               pending.size(), array_tasks, per_task);
+    std::fflush(stdout);
     std::vector<std::size_t> failed;
     for (std::size_t i : pending) {
       Task& t = tasks[i];
       t.attempts = attempt;
       t.exit_code = read_status(out / "status" / fmt::format("{}.rc", i));
       if (t.exit_code == 0) continue;
-      std::ifstream log(out / "logs" / fmt::format("task-{}.log", i));
+      std::ifstream log(out / "logs" / fmt::format("run-{}.log", i));
       std::stringstream text;
       text << log.rdbuf();
       t.output_tail = t.exit_code < 0 ? "no exit status: the task did not run to its end (see the node's log)"
@@ -294,6 +342,10 @@ void add_batch_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_option("--retries", a.retries, "Times a failed task is run again (default 1)")->check(within(0, 10));
   sub->add_flag("--slurm", a.slurm, "Submit a Slurm job array (sbatch --wait) instead of running locally");
   sub->add_option("--partition", a.partition, "Slurm partition (default: the cluster's default)");
+  sub->add_option("--runs-per-task", a.runs_per_task,
+                  "Slurm: runs each array task runs one after another (default: about 4 array tasks per CPU "
+                  "of -j or the partition)")
+      ->check(at_least(1));
   sub->add_option("--out", a.out, "Slurm: folder on shared storage for the job script, task list, logs and statuses");
   out.push_back({sub, [] {
                    if ((a.verb == "fit" || a.verb == "gap") && a.model.empty())

@@ -1,25 +1,75 @@
 // `stend export RUN --to kalibr|matlab|imutk|px4|json|csv [-o FILE]` — a run's results in another
 // tool's format, or (csv) the recording as a CSV run folder (see reporting/include/stend/reporting/exports.hpp and docs/reports.md).
+// `stend export (RUN | --procedure FP) --db LOCATION --to json -o FILE` — the same results JSON read
+// from the results store instead of the folder (docs/lab-scale.md): the store only holds the
+// parameters and documents, so the other formats, which need the estimators' files, read folders.
 #include "commands.hpp"
 
+#include "stend/errors.hpp"
+#include "stend/files.hpp"
 #include "stend/reporting/exports.hpp"
+#include "stend/reporting/results_store.hpp"
 
 #include <fmt/format.h>
 
 namespace stend::cli {
 
+namespace {
+
+namespace rp = stend::reporting;
+
+// The schema of a campaign exported from the store: stend.results/1 documents of every run.
+constexpr const char* kResultsSetSchema = "stend.results_set/1";
+
+rp::ExportResult export_from_store(const std::string& run, const std::string& procedure, const std::string& db,
+                                   const std::string& format, const std::string& output) {
+  if (format != "json")
+    throw InputError(fmt::format("stend export --db: only --to json reads the results store (--to {} needs the run "
+                                 "folder's results files: give the folder without --db)",
+                                 format));
+  if (output.empty()) throw InputError("stend export --db: give the file to write with -o FILE");
+  if (run.empty() == procedure.empty())
+    throw InputError("stend export --db: give either one run (its folder or name) or --procedure FINGERPRINT");
+  const rp::ResultsStore store(rp::results_store_location(db));
+  nlohmann::json doc;
+  std::size_t runs = 1;
+  if (!run.empty()) {
+    const rp::RunResults r = store.find_run(run);
+    if (r.dir.empty()) throw InputError(fmt::format("stend export: no run '{}' in {}", run, store.where()));
+    doc = rp::to_json(r);
+  } else {
+    const auto found = store.with_fingerprint(procedure);
+    if (found.empty())
+      throw InputError(fmt::format("stend export: no run in {} has procedure fingerprint {}", store.where(), procedure));
+    doc = {{"schema", kResultsSetSchema}, {"store", store.where()}, {"procedure", procedure},
+           {"runs", nlohmann::json::array()}};
+    for (const auto& r : found) doc["runs"].push_back(rp::to_json(r));
+    runs = found.size();
+  }
+  write_file_atomic(output, doc.dump(2) + '\n');
+  rp::ExportResult result;
+  result.files.push_back(output);
+  result.notes.push_back(fmt::format("{} run(s) read from the results store {}", runs, store.where()));
+  return result;
+}
+
+}  // namespace
+
 void add_export_command(CLI::App& app, std::vector<Command>& out) {
   auto* sub = app.add_subcommand("export", "Export a run's results: Kalibr imu.yaml, MATLAB .mat (accelparams / "
                                            "gyroparams), IMU-TK calib files, PX4 thermal parameters, results JSON; "
                                            "or the recording itself as a CSV run folder");
-  static std::string run, format, output;
+  static std::string run, format, output, db, procedure;
   static stend::reporting::ExportOptions opt;
-  sub->add_option("run", run, "Run folder")->required();
+  sub->add_option("run", run, "Run folder (with --db: a run folder or name in the store)");
   sub->add_option("--to", format, "kalibr | matlab | imutk | px4 | json | csv")
       ->required()
       ->check(CLI::IsMember(stend::reporting::export_formats()));
   sub->add_option("-o,--output", output, "Output file (imutk: path prefix for _acc.calib / _gyro.calib; csv: a new "
                                          "folder); default RUN/export/");
+  sub->add_option("--db", db, std::string(kDbOptionHelp) + "; given, --to json reads the results from the store");
+  sub->add_option("--procedure", procedure, "With --db: every run of this procedure fingerprint (or a prefix of at "
+                                            "least 8 hex digits) into one stend.results_set/1 file");
   sub->add_option("--rostopic", opt.rostopic, "Kalibr: the IMU's ROS topic (default /imu0)");
   sub->add_option("--px4-id", opt.px4_device_id, "PX4: the sensor's device id for TC_A0_ID / CAL_ACC0_ID … (default 0)")
       ->check(at_least(0));
@@ -34,7 +84,11 @@ void add_export_command(CLI::App& app, std::vector<Command>& out) {
                 "instead of refusing it");
   add_json_flag(sub, "the files written");
   out.push_back({sub, [] {
-                   const auto r = stend::reporting::export_run(run, format, output, opt);
+                   if (db.empty() && !procedure.empty())
+                     throw InputError("stend export --procedure: give the results store with --db LOCATION");
+                   if (db.empty() && run.empty()) throw InputError("stend export: give the run folder");
+                   const auto r = db.empty() ? stend::reporting::export_run(run, format, output, opt)
+                                             : export_from_store(run, procedure, db, format, output);
                    nlohmann::json files = nlohmann::json::array();
                    for (const auto& f : r.files) {
                      fmt::print(human(), "wrote {}\n", f.string());

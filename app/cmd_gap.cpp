@@ -2,6 +2,7 @@
 // and `stend gap validate` — the diagnoser checked on withheld effects.
 #include <fmt/core.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -14,6 +15,7 @@
 #include "stend/diagnosis/gap.hpp"
 #include "stend/diagnosis/validate.hpp"
 #include "stend/files.hpp"
+#include "stend/reporting/results.hpp"
 #include "stend/yaml_util.hpp"
 
 namespace stend::cli {
@@ -22,7 +24,7 @@ namespace {
 
 struct GapArgs {
   DatasetArgs data;
-  std::string model, json, fold_by = "auto";
+  std::string model, json, fold_by = "auto", db;
   int max_steps = 4, max_folds = 12;
   double alpha = 0.05;
   // validate
@@ -53,6 +55,20 @@ estimation::ModelSpec linear_model(const std::string& model_file) {
   return e.linear_model(model_file);
 }
 
+// With --db (or $STEND_RESULTS_DB) the run is recorded with its gap.json as a stored result kind
+// (a failed diagnosis too: its document says so); not when the results went outside the folder.
+void record_gap(const GapArgs& a, const std::filesystem::path& in_run, const std::filesystem::path& written) {
+  const char* env = std::getenv("STEND_RESULTS_DB");
+  if (a.db.empty() && !(env && *env)) return;
+  std::error_code ec;
+  if (in_run.empty() || !std::filesystem::equivalent(in_run, written, ec)) {
+    fmt::print(stderr, "stend gap: not recorded in the results store: the results were not written into a run "
+                       "folder (--out)\n");
+    return;
+  }
+  record_in_store(in_run.parent_path(), a.db);
+}
+
 ExitCode run_gap(const GapArgs& a) {
   if (a.data.inputs.empty() || a.model.empty()) {
     fmt::print(stderr, "stend gap: give RUN_OR_DATASET and --model MODEL.yaml (or `stend gap validate`)\n");
@@ -71,9 +87,12 @@ ExitCode run_gap(const GapArgs& a) {
   diagnosis::print_report(text, rep);
   human_stream() << text.str();
   std::filesystem::path json = a.json;
-  if (json.empty() && a.data.is_run()) json = std::filesystem::path(a.data.inputs[0]) / "gap.json";
+  const std::filesystem::path in_run =
+      a.data.is_run() ? std::filesystem::path(a.data.inputs[0]) / reporting::kGapResultsFile : std::filesystem::path();
+  if (json.empty()) json = in_run;
   const std::string document = diagnosis::to_json(rep);
   write_results(json, document, text.str());
+  record_gap(a, in_run, json);
   // docs/schemas/gap.schema.json
   print_json({{"ok", rep.ok},
               {"results_file", json.empty() ? nlohmann::json(nullptr) : nlohmann::json(json.string())},
@@ -124,6 +143,8 @@ void add_gap_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_option("-o,--out", args->json,
                   "Where to write the results (default RUN/gap.json; a dataset file's are written only with --out)");
   add_json_flag(sub, "the diagnosis's outcome and results document");
+  sub->add_option("--db", args->db, std::string(kDbOptionHelp) +
+                                        "; given (or $STEND_RESULTS_DB), the run is recorded there with its gap.json");
   sub->add_option("--fold-by", args->fold_by, "Held-out groups: auto | orientation | temperature | ramp")
       ->check(CLI::IsMember({"auto", "orientation", "temperature", "ramp"}));
   sub->add_option("--max-steps", args->max_steps, "Forward-selection steps (default 4)")->check(at_least(1));

@@ -2,7 +2,8 @@
 //   1. a campaign of N small simulated runs (default 1000: copies of one six-position unit)
 //      re-fitted with `stend batch fit` on 1 and 2 local workers and through a Slurm job array
 //      on a single-node cluster the bench starts (as the tests do; skipped, saying why, when it
-//      cannot start) — runs/s, and every run's results checked equal to one `stend fit` by hand;
+//      cannot start; runs packed into array tasks automatically) — runs/s with the machine's load
+//      average, and every run's results checked equal to one `stend fit` by hand;
 //   2. `stend compare --procedure` over 10^5 stored parameter rows, SQLite and PostgreSQL
 //      (a server started in a temporary folder): the median wall time of 5 calls.
 //   build/bin/campaign_bench [--runs N] [--no-slurm] [--no-campaign]
@@ -17,6 +18,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -31,6 +33,13 @@ namespace {
 
 constexpr int kCompareRuns = 5000, kCompareParametersPerRun = 20;  // 10^5 parameter rows
 constexpr int kCompareRepeats = 5;
+
+// The 1-minute load average (/proc/loadavg), "?" where there is none.
+std::string load_average() {
+  std::ifstream in("/proc/loadavg");
+  std::string one;
+  return in >> one ? one : std::string("?");
+}
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -87,18 +96,21 @@ void campaign(int n, bool with_slurm) {
   stend::testing::write_text(tmp / "runs.txt", list);
   const std::string words = "$(cat " + shell_quote((tmp / "runs.txt").string()) + ")";
   fmt::print("campaign: {} runs (six-position, 200 Hz, 6 × 20 s), one `stend fit` by hand {:.3f} s\n", n, one_fit_s);
-  fmt::print("| how | runs | wall [s] | runs/s | same as by hand | store rows (runs) |\n|---|---|---|---|---|---|\n");
+  fmt::print("| how | runs | wall [s] | runs/s | same as by hand | store rows (runs) | load avg before → after |\n"
+             "|---|---|---|---|---|---|---|\n");
   auto measure = [&](const std::string& how, const std::string& args, const stend::testing::Environment& env) {
     clear_fits(runs);
     const std::string db = (tmp / fmt::format("{}.sqlite", how.substr(0, how.find(' ')))).string();
     fs::remove(db);
+    const std::string load_before = load_average();
     const auto t = std::chrono::steady_clock::now();
     const ProgramOutput o = stend_cmd("batch fit " + words + " -m " + shell_quote(model) + " --db " + shell_quote(db) +
                                       " " + args, env);
     const double wall = seconds_since(t);
     if (o.code != 0) fmt::print(stderr, "{}: exit {}: {}\n", how, o.code, o.text.substr(o.text.size() > 2000 ? o.text.size() - 2000 : 0));
-    fmt::print("| {} | {} | {:.1f} | {:.2f} | {} of {} | {} |\n", how, n, wall, n / wall,
-               n - static_cast<int>(mismatches(runs, by_hand)), n, rp::ResultsStore(db).check().runs);
+    fmt::print("| {} | {} | {:.1f} | {:.2f} | {} of {} | {} | {} → {} |\n", how, n, wall, n / wall,
+               n - static_cast<int>(mismatches(runs, by_hand)), n, rp::ResultsStore(db).check().runs, load_before,
+               load_average());
     std::fflush(stdout);
   };
   measure("local -j 1", "-j 1", {});
@@ -109,7 +121,7 @@ void campaign(int n, bool with_slurm) {
     fmt::print("slurm: skipped: {}\n", slurm.why_not());
     return;
   }
-  measure("slurm array (2 CPUs)", "--slurm --out " + shell_quote((tmp / "slurm-job").string()), slurm.env());
+  measure("slurm array (2 CPUs, runs packed automatically)", "--slurm --out " + shell_quote((tmp / "slurm-job").string()), slurm.env());
 }
 
 rp::RunResults synthetic_run(int i) {

@@ -10,6 +10,7 @@
 #include "stend/testing/services.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <memory>
 #include <regex>
@@ -130,6 +131,8 @@ TEST_F(Batch, RunsChosenByProcedureFromAPostgresStore) {
   EXPECT_TRUE(store.check().ok());
 }
 
+// Two runs per array task: the bad run shares its first array task with unit-c; only the bad run
+// is submitted again.
 TEST_F(Batch, SlurmJobArrayMatchesHandFitsAndRetriesAFailedTask) {
   stend::testing::TempSlurm slurm;
   STEND_SKIP_UNLESS_RUNNING(slurm);
@@ -139,12 +142,80 @@ TEST_F(Batch, SlurmJobArrayMatchesHandFitsAndRetriesAFailedTask) {
   const auto r = run_stend("batch fit" + words(runs) + " " + shell_quote(bad) + " -m " + shell_quote(kModel) +
                                " --db " + shell_quote(db) + " --slurm --out " +
                                shell_quote((*tmp / "slurm-job").string()) + " --partition " + slurm.partition() +
-                               " --retries 1",
+                               " --retries 1 --runs-per-task 2",
                            slurm.env());
   EXPECT_EQ(r.code, 3) << r.text;
-  EXPECT_NE(r.text.find("(attempt 2): 1 task(s)"), std::string::npos) << r.text;  // only the failed one again
+  EXPECT_NE(r.text.find("(attempt 1): 4 task(s) in 2 array task(s) of up to 2 run(s)"), std::string::npos) << r.text;
+  EXPECT_NE(r.text.find("(attempt 2): 1 task(s) in 1 array task(s)"), std::string::npos) << r.text;
+  // The retry's array runs task 3 (the bad run) alone, not its neighbour (task 2, unit-c).
+  EXPECT_EQ(stend::testing::read_text(*tmp / "slurm-job" / "chunks-1.txt"), "0 1\n2 3\n");
+  EXPECT_EQ(stend::testing::read_text(*tmp / "slurm-job" / "chunks-2.txt"), "3\n");
   EXPECT_NE(r.text.find("failed:     " + bad + " (exit 2 after 2 attempt(s))"), std::string::npos) << r.text;
   EXPECT_NE(r.text.find("3 ok, 1 failed"), std::string::npos) << r.text;
   expect_same_as_by_hand("slurm");
   EXPECT_EQ(rp::ResultsStore(db).check().runs, 3);
+}
+
+// `stend gap RUN --db` records gap.json as a stored result kind, once per run however often it is
+// recorded (by hand or by `stend batch gap`); `stend export --db --procedure --to json` gives back
+// every run of the procedure from the store, the diagnosis whole. SQLite, then PostgreSQL.
+namespace {
+
+void expect_gap_stored_and_exported(const std::vector<std::string>& runs, const std::string& db,
+                                    const std::string& out, const stend::testing::Environment& env) {
+  for (const auto& run : runs) {
+    const auto g = run_stend("gap " + shell_quote(run) + " -m " + shell_quote(kModel) + " --db " + shell_quote(db), env);
+    ASSERT_NE(g.code, 4) << g.text;  // ran (a diagnosis may say "failed"; it is recorded all the same)
+  }
+  const auto b = run_stend("batch gap" + std::string([&] {
+                             std::string s;
+                             for (const auto& r : runs) s += " " + shell_quote(r);
+                             return s;
+                           }()) + " -m " + shell_quote(kModel) + " --db " + shell_quote(db) + " -j 2",
+                           env);  // the same runs again: replaced, not duplicated
+  EXPECT_NE(b.text.find("3 task(s)"), std::string::npos) << b.text;
+  const std::string fp = rp::load_run_results(runs[0]).procedure_fingerprint;
+  const auto e = run_stend("export --db " + shell_quote(db) + " --procedure " + fp.substr(0, 10) + " --to json -o " +
+                               shell_quote(out),
+                           env);
+  ASSERT_EQ(e.code, 0) << e.text;
+  EXPECT_NE(e.text.find("3 run(s) read from the results store"), std::string::npos) << e.text;
+  const auto doc = nlohmann::json::parse(stend::testing::read_text(out));
+  EXPECT_EQ(doc.at("schema"), "stend.results_set/1");
+  ASSERT_EQ(doc.at("runs").size(), 3u);
+  for (const auto& r : doc.at("runs")) {
+    const fs::path dir = r.at("run").at("dir").get<std::string>();
+    ASSERT_EQ(r.at("documents").size(), 1u) << dir;
+    EXPECT_EQ(r["documents"][0].at("kind"), "gap");
+    // The stored diagnosis is the folder's gap.json, whole.
+    EXPECT_EQ(r["documents"][0].at("document"), nlohmann::json::parse(stend::testing::read_text(dir / "gap.json")));
+  }
+  const auto one = run_stend("export " + shell_quote(runs[1]) + " --db " + shell_quote(db) + " --to json -o " +
+                                 shell_quote(out + ".one.json"),
+                             env);
+  ASSERT_EQ(one.code, 0) << one.text;
+  EXPECT_EQ(nlohmann::json::parse(stend::testing::read_text(out + ".one.json")).at("run").at("dir"), runs[1]);
+  EXPECT_EQ(run_stend("export --db " + shell_quote(db) + " --procedure " + fp.substr(0, 10) + " --to kalibr -o " +
+                          shell_quote(out + ".yaml"),
+                      env)
+                .code,
+            2);  // Kalibr needs allan.json: the folder, not the store
+  const auto check = run_stend("db check --db " + shell_quote(db), env);
+  EXPECT_EQ(check.code, 0) << check.text;
+  EXPECT_NE(check.text.find("documents:  3\n"), std::string::npos) << check.text;
+  EXPECT_NE(check.text.find("verdict:    consistent"), std::string::npos) << check.text;
+}
+
+}  // namespace
+
+TEST_F(Batch, GapAndExportWithDbOnSqlite) {
+  expect_gap_stored_and_exported(copies("gap-lite"), (*tmp / "gap.sqlite").string(), (*tmp / "gap-lite.json").string(),
+                                 {});
+}
+
+TEST_F(Batch, GapAndExportWithDbOnPostgres) {
+  stend::testing::TempPostgres pg;
+  STEND_SKIP_UNLESS_RUNNING(pg);
+  ASSERT_EQ(run_stend("db migrate --db " + shell_quote(pg.url()), pg.env()).code, 0);
+  expect_gap_stored_and_exported(copies("gap-pg"), pg.url(), (*tmp / "gap-pg.json").string(), pg.env());
 }

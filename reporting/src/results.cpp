@@ -78,6 +78,22 @@ std::vector<ParameterResult> parameters_of(const json& doc, const std::string& f
   return out;
 }
 
+namespace {
+
+// gap.json, kept whole when it parses (else a note, as for any results file).
+void add_gap_document(RunResults& r) {
+  const fs::path f = r.dir / kGapResultsFile;
+  if (!fs::exists(f)) return;
+  try {
+    const json doc = json::parse(read_text(f));
+    r.documents.push_back({"gap", kGapResultsFile, str_or(doc, "status"), doc.dump()});
+  } catch (const std::exception& e) {
+    r.notes.push_back(std::string(kGapResultsFile) + " not read: " + e.what());
+  }
+}
+
+}  // namespace
+
 RunResults load_run_results(const fs::path& run_dir) {
   RunResults r;
   r.dir = fs::absolute(run_dir).lexically_normal();
@@ -119,6 +135,7 @@ RunResults load_run_results(const fs::path& run_dir) {
         r.notes.push_back(f.filename().string() + " not read: " + e.what());
       }
     }
+  add_gap_document(r);
   return r;
 }
 
@@ -147,6 +164,14 @@ json to_json(const RunResults& r) {
               {"confidence", finite_or_null(p.confidence)}};
     if (!p.reason.empty()) q["reason"] = p.reason;
     j["parameters"].push_back(std::move(q));
+  }
+  if (!r.documents.empty()) {  // optional: absent in a document without any
+    j["documents"] = json::array();
+    for (const auto& d : r.documents)
+      j["documents"].push_back({{"kind", d.kind},
+                                {"file", d.file},
+                                {"status", d.status},
+                                {"document", json::parse(d.document, nullptr, false)}});
   }
   j["notes"] = r.notes;
   return j;
@@ -187,6 +212,10 @@ RunResults from_json(const json& j) {
     q.reason = str_or(p, "reason");
     r.parameters.push_back(std::move(q));
   }
+  if (j.contains("documents"))
+    for (const auto& d : j["documents"])
+      r.documents.push_back({str_or(d, "kind"), str_or(d, "file"), str_or(d, "status"),
+                             d.contains("document") ? d["document"].dump() : std::string("null")});
   if (j.contains("notes"))
     for (const auto& n : j["notes"]) r.notes.push_back(n.get<std::string>());
   return r;

@@ -63,7 +63,16 @@ CREATE INDEX IF NOT EXISTS parameters_run_estimator ON parameters(run_id, estima
 CREATE INDEX IF NOT EXISTS parameters_name ON parameters(name, estimator);
 CREATE INDEX IF NOT EXISTS runs_vendor_model ON runs(vendor, model);
 )sql"},
+    {3, "whole results documents by (run, kind): the gap diagnosis (gap.json)", R"sql(
+CREATE TABLE IF NOT EXISTS documents(
+  run_id {int64} NOT NULL REFERENCES runs(id) ON DELETE CASCADE,
+  kind TEXT NOT NULL, file TEXT, status TEXT, document TEXT NOT NULL);
+CREATE UNIQUE INDEX IF NOT EXISTS documents_run_kind ON documents(run_id, kind);
+)sql"},
 };
+
+// The schema version that added the documents table (an older store, checked as it is, has none).
+constexpr int kDocumentsSinceVersion = 3;
 
 std::string spelled(const char* statements, Dialect d) {
   const bool pg = d == Dialect::kPostgres;
@@ -149,6 +158,21 @@ void insert_parameters(sql::Connection& db, long long run_id, const std::vector<
   }
 }
 
+// The run's documents, one per kind: upserted; kinds the folder no longer holds removed.
+void upsert_documents(sql::Connection& db, long long run_id, const std::vector<ResultDocument>& docs) {
+  std::set<std::string> kinds;
+  for (const auto& d : docs) {
+    kinds.insert(d.kind);
+    db.query("INSERT INTO documents(run_id, kind, file, status, document) VALUES($1,$2,$3,$4,$5) "
+             "ON CONFLICT(run_id, kind) DO UPDATE SET file = excluded.file, status = excluded.status, "
+             "document = excluded.document",
+             {Value::of(run_id), Value::of(d.kind), Value::of(d.file), Value::of(d.status), Value::of(d.document)});
+  }
+  for (const auto& row : db.query("SELECT kind FROM documents WHERE run_id = $1", {Value::of(run_id)}))
+    if (!kinds.count(row[0].as_text()))
+      db.query("DELETE FROM documents WHERE run_id = $1 AND kind = $2", {Value::of(run_id), row[0]});
+}
+
 long long count(sql::Connection& db, const std::string& statement) {
   const auto rows = db.query(statement);
   return rows.empty() ? 0 : rows[0][0].as_integer();
@@ -198,21 +222,24 @@ std::string redact_url(const std::string& location) {
 
 bool StoreCheck::ok() const {
   return schema_version == kResultsStoreSchemaVersion && duplicate_runs == 0 && duplicate_estimators == 0 &&
-         duplicate_parameters == 0 && orphan_estimators == 0 && orphan_parameters == 0;
+         duplicate_parameters == 0 && duplicate_documents == 0 && orphan_estimators == 0 && orphan_parameters == 0 &&
+         orphan_documents == 0;
 }
 
 std::string StoreCheck::print() const {
   return fmt::format(
-      "schema:     {} (this Stend: {})\nruns:       {}\nestimators: {}\nparameters: {}\n"
-      "duplicated: {} run(s), {} (run, estimator), {} (run, estimator, parameter)\n"
-      "orphaned:   {} estimator row(s), {} parameter row(s)\nverdict:    {}\n",
-      schema_version, kResultsStoreSchemaVersion, runs, estimators, parameters, duplicate_runs, duplicate_estimators,
-      duplicate_parameters, orphan_estimators, orphan_parameters, ok() ? "consistent" : "NOT consistent");
+      "schema:     {} (this Stend: {})\nruns:       {}\nestimators: {}\nparameters: {}\ndocuments:  {}\n"
+      "duplicated: {} run(s), {} (run, estimator), {} (run, estimator, parameter), {} (run, document kind)\n"
+      "orphaned:   {} estimator row(s), {} parameter row(s), {} document row(s)\nverdict:    {}\n",
+      schema_version, kResultsStoreSchemaVersion, runs, estimators, parameters, documents, duplicate_runs,
+      duplicate_estimators, duplicate_parameters, duplicate_documents, orphan_estimators, orphan_parameters,
+      orphan_documents, ok() ? "consistent" : "NOT consistent");
 }
 
 bool StoreCheck::equals(const StoreCheck& o) const {
   return schema_version == o.schema_version && runs == o.runs && estimators == o.estimators &&
-         parameters == o.parameters && duplicate_runs == o.duplicate_runs &&
+         parameters == o.parameters && documents == o.documents && duplicate_runs == o.duplicate_runs &&
+         duplicate_documents == o.duplicate_documents && orphan_documents == o.orphan_documents &&
          duplicate_estimators == o.duplicate_estimators && duplicate_parameters == o.duplicate_parameters &&
          orphan_estimators == o.orphan_estimators && orphan_parameters == o.orphan_parameters;
 }
@@ -308,6 +335,7 @@ long long ResultsStore::add(const RunResults& r) {
       db_->query("DELETE FROM estimators WHERE run_id = $1 AND name = $2", {Value::of(id), row[0]});
   db_->query("DELETE FROM parameters WHERE run_id = $1", {Value::of(id)});
   insert_parameters(*db_, id, r.parameters);
+  upsert_documents(*db_, id, r.documents);
   tx.commit();
   return id;
 }
@@ -362,6 +390,11 @@ std::vector<RunResults> ResultsStore::query(const std::string& where, const std:
     q.reason = row[10].as_text();
     out[index.at(row[0].as_integer())].parameters.push_back(std::move(q));
   }
+  for (const auto& row : db_->query("SELECT run_id, kind, file, status, document FROM documents WHERE run_id IN (" +
+                                        selected + ") ORDER BY run_id, kind",
+                                    params))
+    out[index.at(row[0].as_integer())].documents.push_back(
+        {row[1].as_text(), row[2].as_text(), row[3].as_text(), row[4].as_text()});
   return out;
 }
 
@@ -392,6 +425,7 @@ StoreCheck ResultsStore::check() const {
   c.runs = count(*db_, "SELECT COUNT(*) FROM runs");
   c.estimators = count(*db_, "SELECT COUNT(*) FROM estimators");
   c.parameters = count(*db_, "SELECT COUNT(*) FROM parameters");
+
   c.duplicate_runs =
       count(*db_, "SELECT COUNT(*) FROM (SELECT run_dir FROM runs GROUP BY run_dir HAVING COUNT(*) > 1) d");
   c.duplicate_estimators = count(
@@ -404,6 +438,12 @@ StoreCheck ResultsStore::check() const {
   c.orphan_parameters = count(*db_,
                               "SELECT COUNT(*) FROM parameters p WHERE NOT EXISTS (SELECT 1 FROM estimators e "
                               "WHERE e.run_id = p.run_id AND e.name = p.estimator)");
+  if (c.schema_version < kDocumentsSinceVersion) return c;
+  c.documents = count(*db_, "SELECT COUNT(*) FROM documents");
+  c.duplicate_documents = count(
+      *db_, "SELECT COUNT(*) FROM (SELECT run_id, kind FROM documents GROUP BY run_id, kind HAVING COUNT(*) > 1) d");
+  c.orphan_documents =
+      count(*db_, "SELECT COUNT(*) FROM documents d WHERE NOT EXISTS (SELECT 1 FROM runs r WHERE r.id = d.run_id)");
   return c;
 }
 

@@ -45,6 +45,7 @@ rp::RunResults campaign_run(int writer, int i, int version = 0) {
   r.procedure_fingerprint = "ab12cd34ef56" + std::string(52, '0');
   r.run_status = "complete";
   r.estimators = {{"batch_lsq", "1.0", "fit.json", "ok", ""}, {"allan", "1.0", "allan.json", "ok", ""}};
+  r.documents = {{"gap", "gap.json", "ok", R"({"schema":"stend.gap/1","status":"ok","version":)" + std::to_string(version) + "}"}};
   for (int k = 0; k < kParametersPerRun; ++k) {
     rp::ParameterResult p;
     p.estimator = k < 4 ? "batch_lsq" : "allan";
@@ -71,6 +72,12 @@ void expect_same_run(const rp::RunResults& a, const rp::RunResults& b) {
   EXPECT_EQ(a.serial, b.serial);
   ASSERT_EQ(a.estimators.size(), b.estimators.size());
   for (std::size_t i = 0; i < a.estimators.size(); ++i) EXPECT_EQ(a.estimators[i].name, b.estimators[i].name);
+  ASSERT_EQ(a.documents.size(), b.documents.size());
+  for (std::size_t i = 0; i < a.documents.size(); ++i) {
+    EXPECT_EQ(a.documents[i].kind, b.documents[i].kind);
+    EXPECT_EQ(a.documents[i].status, b.documents[i].status);
+    EXPECT_EQ(a.documents[i].document, b.documents[i].document);  // the text, whole
+  }
   ASSERT_EQ(a.parameters.size(), b.parameters.size());
   for (std::size_t i = 0; i < a.parameters.size(); ++i) {
     const auto &p = a.parameters[i], &q = b.parameters[i];
@@ -116,6 +123,7 @@ void expect_store_complete(const std::string& location, const stend::testing::En
   EXPECT_NE(check.text.find("estimators: " + std::to_string(2 * runs) + "\n"), std::string::npos) << check.text;
   EXPECT_NE(check.text.find("parameters: " + std::to_string(kParametersPerRun * runs) + "\n"), std::string::npos)
       << check.text;
+  EXPECT_NE(check.text.find("documents:  " + std::to_string(runs) + "\n"), std::string::npos) << check.text;
   EXPECT_NE(check.text.find("verdict:    consistent"), std::string::npos) << check.text;
   // And the rows are the runs written, number for number.
   const rp::ResultsStore store(location);
@@ -191,6 +199,7 @@ INSERT INTO parameters VALUES(1, 'batch_lsq', 'bias_z', 'm/s^2', 1, 0.05, 0.001,
     EXPECT_EQ(m.from, 1);
     EXPECT_EQ(m.to, rp::kResultsStoreSchemaVersion);
     EXPECT_NE(m.print().find("migrated to schema 2"), std::string::npos);
+    EXPECT_NE(m.print().find("migrated to schema 3"), std::string::npos);
   }
   rp::ResultsStore store(file.string());
   const rp::RunResults old = store.find_run("/old/run");
@@ -245,8 +254,9 @@ TEST_F(Postgres, WritersRefuseAnUnmigratedStoreUntilDbMigrate) {
   ASSERT_EQ(m.code, 0) << m.text;
   EXPECT_NE(m.text.find("migrated to schema 1"), std::string::npos) << m.text;
   EXPECT_NE(m.text.find("migrated to schema 2"), std::string::npos) << m.text;
+  EXPECT_NE(m.text.find("migrated to schema 3"), std::string::npos) << m.text;
   const auto again = run_stend("db migrate --db " + shell_quote(url), pg->env());
-  EXPECT_NE(again.text.find("schema 2 is current"), std::string::npos) << again.text;
+  EXPECT_NE(again.text.find("schema 3 is current"), std::string::npos) << again.text;
   rp::ResultsStore store(url);
   EXPECT_EQ(store.schema_version(), rp::kResultsStoreSchemaVersion);
 }
@@ -265,6 +275,35 @@ TEST_F(Postgres, RoundTripIsExactAndLikeSqlite) {
   EXPECT_EQ(pg_store.with_fingerprint("ab12cd34").size(), 5u);  // a prefix of 8 hex digits
   EXPECT_EQ(pg_store.with_fingerprint("ab12").size(), 0u);      // shorter: exact only
   EXPECT_TRUE(pg_store.check().equals(lite.check()));
+}
+
+// The gap diagnosis is one document per (run, kind) on both stores: recorded again it is replaced,
+// never duplicated; recorded without it (gap.json removed) it is gone.
+void expect_documents_upserted(const std::string& location) {
+  rp::ResultsStore store(location);
+  store.add(campaign_run(0, 0, 0));
+  store.add(campaign_run(0, 0, 1));  // the same run, a newer diagnosis
+  rp::RunResults back = store.find_run("/lab/campaign/w0-r0");
+  ASSERT_EQ(back.documents.size(), 1u);
+  EXPECT_EQ(back.documents[0].document, campaign_run(0, 0, 1).documents[0].document);
+  EXPECT_EQ(store.check().documents, 1);
+  rp::RunResults without = campaign_run(0, 0, 2);
+  without.documents.clear();
+  store.add(without);
+  EXPECT_TRUE(store.find_run("/lab/campaign/w0-r0").documents.empty());
+  EXPECT_EQ(store.check().documents, 0);
+  EXPECT_TRUE(store.check().ok());
+}
+
+TEST(ResultsStore, SqliteGapDocumentIsUpsertedByRunAndKind) {
+  const stend::testing::TempDir d("store-documents");
+  expect_documents_upserted((d / "r.sqlite").string());
+}
+
+TEST_F(Postgres, GapDocumentIsUpsertedByRunAndKind) {
+  const std::string url = fresh_database("documents");
+  ASSERT_EQ(run_stend("db migrate --db " + shell_quote(url), pg->env()).code, 0);
+  expect_documents_upserted(url);
 }
 
 TEST_F(Postgres, PasswordIsNeverPrinted) {

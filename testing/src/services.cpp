@@ -199,7 +199,12 @@ bool TempSlurm::start() {
                         "\nProctrackType=proctrack/linuxproc\nTaskPlugin=task/none\nJobAcctGatherType=jobacct_gather/none"
                         "\nAccountingStorageType=accounting_storage/none\nMpiDefault=none\nReturnToService=2"
                         "\nSchedulerType=sched/builtin\nSelectType=select/cons_tres\nSelectTypeParameters=CR_Core"
-                        "\nMaxArraySize=100001\nMaxJobCount=200000\nSlurmctldTimeout=30\nSlurmdTimeout=30\nInactiveLimit=0\nKillWait=5\nMinJobAge=30"
+                        "\nMaxArraySize=100001\nMaxJobCount=200000\nSlurmctldTimeout=30\nSlurmdTimeout=30\nInactiveLimit=0\nKillWait=5"
+                        // A test cluster runs short jobs back to back (slurm.conf(5), Slurm 22.05):
+                        // batch jobs are scheduled as a node frees, not every batch_sched_delay
+                        // (default 3 s); `sbatch --wait` polls every 2 s only while its sleep is
+                        // below MinJobAge/2 (else 2, 8, 32 s …), and a finished job is kept 4 s.
+                        "\nSchedulerParameters=batch_sched_delay=0\nMinJobAge=4"
                         "\nNodeName=" + host + " NodeAddr=127.0.0.1 CPUs=" + std::to_string(cpus) +
                         " State=UNKNOWN\nPartitionName=" + partition_ + " Nodes=" + host +
                         " Default=YES MaxTime=INFINITE State=UP OverSubscribe=NO\n");

@@ -15,6 +15,8 @@
 namespace stend::reporting {
 
 inline constexpr const char* kResultsSchema = "stend.results/1";
+// The sim-to-real gap diagnosis `stend gap RUN` writes into the run folder (docs/gap-diagnosis.md).
+inline constexpr const char* kGapResultsFile = "gap.json";
 
 struct ParameterResult {
   std::string estimator;  // "batch_lsq", "temp_poly", "allan", "ceres_nonlinear"
@@ -35,6 +37,15 @@ struct EstimatorUse {
   std::string message;
 };
 
+// A results document kept whole, by kind: "gap" (gap.json, schema stend.gap/1) — a diagnosis,
+// not parameters; the results store holds one per (run, kind).
+struct ResultDocument {
+  std::string kind;      // "gap"
+  std::string file;      // in the run folder ("gap.json")
+  std::string status;    // the document's own: "ok" | "failed"
+  std::string document;  // its JSON text
+};
+
 struct RunResults {
   std::filesystem::path dir;  // absolute
   std::string run_name;       // folder name
@@ -44,6 +55,7 @@ struct RunResults {
   std::string procedure_canonical;
   std::vector<EstimatorUse> estimators;
   std::vector<ParameterResult> parameters;
+  std::vector<ResultDocument> documents;  // gap.json when present
   std::vector<std::string> notes;  // e.g. a results file that did not parse
 
   const ParameterResult* find(const std::string& estimator, const std::string& name) const;
@@ -51,7 +63,8 @@ struct RunResults {
 
 // Reads the recording's header (through Recording::open, which throws InputError for a folder
 // that is not a readable recording: missing or damaged files, an unknown format_version),
-// experiment.yaml and the results files present; a results file that does not parse becomes a note.
+// experiment.yaml, the results files present and gap.json; a results file that does not parse
+// becomes a note.
 RunResults load_run_results(const std::filesystem::path& run_dir);
 
 // Parameters of one results document ("stend.fit/1", "stend.temp_poly/1", Allan, ceres) — the

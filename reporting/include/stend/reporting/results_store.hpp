@@ -28,8 +28,8 @@ class Connection;
 
 // The schema version this Stend writes (meta.schema_version); older stores are migrated.
 // 1: runs, estimators, parameters. 2: one row per (run, estimator), insertion order kept (seq),
-// indexes for vendor/model and parameter name.
-inline constexpr int kResultsStoreSchemaVersion = 2;
+// indexes for vendor/model and parameter name. 3: whole results documents by (run, kind): gap.json.
+inline constexpr int kResultsStoreSchemaVersion = 3;
 
 // Where a command records or reads results: `given` (--db) when not empty, else
 // $STEND_RESULTS_DB, else `stend-results.sqlite` in the folder that holds `run_dir` (the runs of
@@ -46,12 +46,14 @@ std::string redact_url(const std::string& location);
 // What `stend db check` finds.
 struct StoreCheck {
   int schema_version = 0;
-  long long runs = 0, estimators = 0, parameters = 0;
+  long long runs = 0, estimators = 0, parameters = 0, documents = 0;
   long long duplicate_runs = 0;        // run folders held more than once
   long long duplicate_estimators = 0;  // (run, estimator) held more than once
   long long duplicate_parameters = 0;  // (run, estimator, parameter) held more than once
+  long long duplicate_documents = 0;   // (run, kind) held more than once
   long long orphan_estimators = 0;     // estimator rows without their run
   long long orphan_parameters = 0;     // parameter rows without their (run, estimator)
+  long long orphan_documents = 0;      // document rows without their run
   bool ok() const;
   std::string print() const;
   bool equals(const StoreCheck& o) const;
@@ -83,7 +85,8 @@ class ResultsStore {
   MigrationReport migrate();
   int schema_version() const;
 
-  // Upserts one run with its estimators and parameters in one transaction; returns its row id.
+  // Upserts one run with its estimators, parameters and documents (gap.json) in one transaction;
+  // returns its row id.
   long long add(const RunResults& r);
   // Every run, or those with a fingerprint (exact, or a prefix of at least 8 hex digits).
   std::vector<RunResults> all() const;
