@@ -425,7 +425,6 @@ StoreCheck ResultsStore::check() const {
   c.runs = count(*db_, "SELECT COUNT(*) FROM runs");
   c.estimators = count(*db_, "SELECT COUNT(*) FROM estimators");
   c.parameters = count(*db_, "SELECT COUNT(*) FROM parameters");
-
   c.duplicate_runs =
       count(*db_, "SELECT COUNT(*) FROM (SELECT run_dir FROM runs GROUP BY run_dir HAVING COUNT(*) > 1) d");
   c.duplicate_estimators = count(
