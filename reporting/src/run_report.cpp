@@ -403,6 +403,7 @@ std::string fit_section(const json& fit, const std::string& file) {
 struct TempDisplay {
   double scale;
   std::string unit;
+  double min_scale_input;  // smallest input that observes the scale factor [m/s² or rad/s]
 };
 
 // The candidate orders with their BIC, CV error and rank, and the chosen one.
@@ -463,9 +464,10 @@ Series partial_residuals(const FittedModel& fm, const json& fit, const std::stri
 }
 
 // Partial residuals of the scale-factor error of axis a (index k) [ppm]: each static orientation
-// with a large input on that axis (over half the largest) contributes its residual over that input,
+// with a large input on that axis (over half the largest, and at least min_input) contributes its residual over that input,
 // added to the fitted scale error at its temperature, against temperature [°C].
-Series scale_partial_residuals(const FittedModel& fm, const json& fit, const std::string& a, int k) {
+Series scale_partial_residuals(const FittedModel& fm, const json& fit, const std::string& a, int k,
+                               double min_input) {
   const json points = fit.value("points", json::array());
   const auto uk = static_cast<std::size_t>(k);
   const model::Vec3<double> zero = model::Vec3<double>::Zero();
@@ -479,7 +481,7 @@ Series scale_partial_residuals(const FittedModel& fm, const json& fit, const std
     const auto pi = static_cast<std::size_t>(std::max(0.0, num(row, "point")));
     if (pi >= points.size()) continue;
     const double u = at(points[pi].value("true_input", json::array()), uk);
-    if (!(std::abs(u) > 0.5 * largest)) continue;
+    if (!(std::abs(u) > 0.5 * largest) || !(std::abs(u) >= min_input)) continue;
     const double T = num(points[pi], "temperature_c");
     pts.x.push_back(T);
     pts.y.push_back((contribution(fm, k, unit_in, T, &zero).first + num(row, "residual") / u) * 1e6);
@@ -510,7 +512,11 @@ std::string temperature_plots(const json& ax, const json& fit, const FittedModel
   s.title = "scale-factor error against temperature, axis " + a;
   s.x_label = "die temperature [°C]";
   s.y_label = "scale-factor error [ppm]";
-  s.series = {sband, scurve, scale_partial_residuals(fm, fit, a, k)};
+  const Series observed = scale_partial_residuals(fm, fit, a, k, d.min_scale_input);
+  if (observed.x.empty())
+    return o + "<p>No static orientation has an input on axis " + escape(a) +
+           ": its scale-factor error is not observed by this run (no plot).</p>\n";
+  s.series = {sband, scurve, observed};
   return o + figure(s, "Fitted scale-factor error (scale + scale_temperature terms) with its interval band; points: "
                        "each orientation with a large input on this axis, its residual over that input added to the "
                        "fitted scale error at its temperature.");
@@ -554,7 +560,10 @@ std::string temp_section(const json& tp, const std::string& file) {
   o += fmt::format("<p>Reference temperature T0 = {} °C; coefficients valid over {} … {} °C (die temperature).</p>\n",
                    g(num(tp, "reference_c")), g(vmin), g(vmax));
   const bool accel = str(tp, "unit") != "rad/s";
-  const TempDisplay d{accel ? 1.0 / physics::kMilliG : 1.0 / physics::kDegPerHour, accel ? "mg" : "deg/h"};
+  // The scale factor is observed by inputs of ≥ 0.1 g (accelerometer) or ≥ 1 deg/s (gyroscope): an
+  // Earth-rate or noise-sized input would divide the residual by almost nothing.
+  const TempDisplay d{accel ? 1.0 / physics::kMilliG : 1.0 / physics::kDegPerHour, accel ? "mg" : "deg/h",
+                      accel ? 0.1 * physics::kStandardGravity : physics::kDegPerSecond};
   for (const auto& ax : tp.value("axes", json::array())) o += temp_axis(ax, vmin, vmax, d);
   return o;
 }
@@ -746,11 +755,12 @@ std::string gap_where_figure(const json& where_all, bool temperature_recorded) {
   return figure(p, "Localization: the share of the residual each (dimension, place) holds.");
 }
 
-// The span [°C] of the segments' temperatures; NaN when none was recorded.
-double temperature_span_c(const json& segs) {
+// The span of the segments' values of `key` (temperature [°C], time since the last change [s]);
+// NaN when none has one.
+double segment_span(const json& segs, const char* key) {
   double lo = INFINITY, hi = -INFINITY;
   for (const auto& sg : segs) {
-    const double t = num(sg, "temperature_c");
+    const double t = num(sg, key);
     if (!std::isfinite(t)) continue;
     lo = std::min(lo, t);
     hi = std::max(hi, t);
@@ -758,21 +768,25 @@ double temperature_span_c(const json& segs) {
   return hi >= lo ? hi - lo : kNaN;
 }
 
-// A residual against a temperature range narrower than this [°C] is a vertical stripe: not plotted.
-constexpr double kMinPlottedSpanC = 2.0;
+// A residual against a range narrower than this is a vertical stripe: not plotted [°C, s].
+constexpr double kMinPlottedSpanC = 2.0, kMinPlottedSpanS = 1.0;
 
 // Segment residual per axis [mg] against temperature [°C] (when the segments span a range of
 // temperatures) and against time since the last change [s].
 std::string gap_segment_figures(const json& segs, const GapAxes& axes, bool temperature_recorded) {
   std::string o;
-  const double span = temperature_recorded ? temperature_span_c(segs) : kNaN;
+  const double span = temperature_recorded ? segment_span(segs, "temperature_c") : kNaN;
+  const double span_s = segment_span(segs, "time_since_change_s");
   if (!std::isfinite(span))
     o += "<p>No temperature was recorded: no residual-against-temperature plot.</p>\n";
   else if (span < kMinPlottedSpanC)
     o += fmt::format("<p>All segments lie within {} °C of each other: no residual-against-temperature plot (a "
                      "vertical stripe).</p>\n", g3(span));
+  if (!(span_s >= kMinPlottedSpanS))
+    o += fmt::format("<p>All segments began {} after the last change: no residual-against-time plot.</p>\n",
+                     std::isfinite(span_s) ? "within " + g3(span_s) + " s of each other" : "at an unknown time");
   for (const char* dim : {"temperature_c", "time_since_change_s"}) {
-    if (dim[1] == 'e' && !(span >= kMinPlottedSpanC)) continue;
+    if (dim[1] == 'e' ? !(span >= kMinPlottedSpanC) : !(span_s >= kMinPlottedSpanS)) continue;
     Plot p;
     p.title = std::string("segment residual against ") + (dim[0] == 't' && dim[1] == 'e' ? "temperature" : "time since change");
     p.x_label = dim[1] == 'e' ? "temperature [°C]" : "time since the last change [s]";

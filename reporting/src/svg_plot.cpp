@@ -208,6 +208,7 @@ double text_width(const std::string& s, double font_px) {
 
 constexpr double kFont = 11.0, kTitleFont = 13.0;  // px
 constexpr double kLegendRow = 15.0;                  // px per legend entry
+constexpr double kMinLabelSpacing = 14.0;            // px between slanted category labels
 constexpr double kLegendRightMax = 0.30;             // a wider legend goes below the plot (× plot width)
 
 std::vector<std::size_t> named_series(const Plot& p) {
@@ -255,7 +256,8 @@ Frame layout(const Plot& p) {
   double longest_category = 0.0, first_category = 0.0;
   for (const auto& c : p.x_categories) longest_category = std::max(longest_category, text_width(c, kFont));
   if (!p.x_categories.empty()) first_category = text_width(p.x_categories.front(), kFont);
-  const double slot = p.x_categories.empty() ? 0.0 : (p.width - 94.0) / static_cast<double>(std::min<std::size_t>(p.x_categories.size(), 12));
+  // Horizontal labels when the longest fits its category's slot, else slanted.
+  const double slot = p.x_categories.empty() ? 0.0 : (p.width - 94.0) / static_cast<double>(p.x_categories.size());
   f.slanted = !p.x_categories.empty() && longest_category > slot;
   // Slanted (−40°) labels reach down 0.64 and left 0.77 of their length from their tick.
   const double bottom = f.slanted ? 50 + 0.64 * longest_category : 50;
@@ -281,6 +283,7 @@ Frame layout(const Plot& p) {
   } else {
     f.lx = f.px0;
     f.ly = f.py1 + bottom;
+    if (f.legend) f.width = std::max(f.width, f.lx + f.lw + 6);  // a legend wider than the plot widens the picture
   }
   f.ax = Axis{f.data.xlo, f.data.xhi, p.x_log, f.px0, f.px1};
   f.ay = Axis{f.data.ylo, f.data.yhi, p.y_log, f.py1, f.py0};
@@ -309,11 +312,16 @@ std::string svg_open(const Plot& p, const Frame& f) {
   return o;
 }
 
-// Category ticks and labels under the plot box (at most about 12 labelled).
+// Category ticks and labels under the plot box: every category labelled while the labels stay
+// kMinLabelSpacing apart (slanted ones are one text line high), else every k-th.
 std::string category_ticks(const Plot& p, const Frame& f) {
   std::string o;
   const std::size_t n = p.x_categories.size();
-  const std::size_t every = std::max<std::size_t>(1, n / 12 + (n % 12 ? 1 : 0));
+  const double slot = (f.px1 - f.px0) / static_cast<double>(std::max<std::size_t>(1, n));
+  double longest = 0.0;
+  for (const auto& c : p.x_categories) longest = std::max(longest, text_width(c, kFont));
+  const double needed = f.slanted ? kMinLabelSpacing : longest + 6.0;
+  const auto every = static_cast<std::size_t>(std::max(1.0, std::ceil(needed / std::max(slot, 1e-9))));
   for (std::size_t i = 0; i < n; i += every) {
     const double X = f.ax.map(static_cast<double>(i));
     o += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{0}\" y2=\"{2}\" stroke=\"#333\"/>", num(X), num(f.py1),

@@ -102,8 +102,8 @@ const char* kGapFixture = R"json({"schema":"stend.gap/1","model":"paper_z_channe
  "noise_floor":{"static_mean_mps2":[0.0001,0.0001,0.0001],"source":"segment noise"},
  "gap":{"static_rms_mps2":[0.002,0.001,0.004],"static_rms_over_floor":[20,10,40],"noise_ratio":[1.1,1.0,1.3]},
  "segments":[{"id":1,"label":"tilt","axis_residual_mps2":[0.001,0.0,0.004],"temperature_c":25.1,"orientation":"0","time_since_change_s":5},
-             {"id":2,"label":"tilt","axis_residual_mps2":[0.002,-0.001,0.006],"temperature_c":25.4,"orientation":"1","time_since_change_s":5},
-             {"id":3,"label":"tilt","axis_residual_mps2":[-0.001,0.001,0.002],"temperature_c":25.6,"orientation":"2","time_since_change_s":5}],
+             {"id":2,"label":"tilt","axis_residual_mps2":[0.002,-0.001,0.006],"temperature_c":25.4,"orientation":"1","time_since_change_s":20},
+             {"id":3,"label":"tilt","axis_residual_mps2":[-0.001,0.001,0.002],"temperature_c":25.6,"orientation":"2","time_since_change_s":60}],
  "where":[{"dimension":"axis","place":"z","share":0.7,"rms_mps2":0.004},{"dimension":"orientation","place":"tilted","share":0.2,"rms_mps2":0.002},
           {"dimension":"temperature","place":"25-26 degC","share":0.1,"rms_mps2":0.001}],
  "candidates":[{"term":"nonlinear_k2","axis":"z","heldout_improvement":0.62,"delta_bic":-41.5,"p_value":1e-6,"size":0.00021,
@@ -131,7 +131,7 @@ TEST_F(Cli, RunWritesASelfContainedReportWithPlots) {
   // One plotted point per static orientation in the residual plot (23 orientations).
   const auto p0 = html.find("residual against orientation");
   const auto p1 = html.find("</svg>", p0);
-  EXPECT_EQ(count(html.substr(p0, p1 - p0), "<circle"), 23u);
+  EXPECT_EQ(count(html.substr(p0, p1 - p0), "<circle class=\"d\""), 23u);
   // Recorded in the results database named by STEND_RESULTS_DB.
   EXPECT_TRUE(fs::exists(dir / "results.sqlite"));
 }
@@ -551,7 +551,9 @@ TEST_F(Cli, EveryPlotOfEveryReportKindKeepsItsLegendOffTheDataAndItsPointsInside
   EXPECT_NE(paper.find("segment (shaded)"), std::string::npos);
   const std::string temp = read_text(reports["temperature"]);
   EXPECT_NE(temp.find("temp_poly-gyroscope.json"), std::string::npos);
-  EXPECT_EQ(count(temp, "aria-label=\"scale-factor error against temperature"), 6u);  // 3 axes × 2 instruments
+  // Accelerometer: 3 axes; the gyroscope at rest has no input that observes its scale factor.
+  EXPECT_EQ(count(temp, "aria-label=\"scale-factor error against temperature"), 3u);
+  EXPECT_NE(temp.find("its scale-factor error is not observed by this run"), std::string::npos);
   const std::string ceres = read_text(reports["ceres"]);
   EXPECT_NE(ceres.find("|a| − g per static interval, before and after"), std::string::npos);
   EXPECT_NE(ceres.find("gravity-direction mismatch per move, before and after"), std::string::npos);
