@@ -780,8 +780,8 @@ std::string gap_segment_figures(const json& segs, const GapAxes& axes, bool temp
   if (!std::isfinite(span))
     o += "<p>No temperature was recorded: no residual-against-temperature plot.</p>\n";
   else if (span < kMinPlottedSpanC)
-    o += fmt::format("<p>All segments lie within {} °C of each other: no residual-against-temperature plot (a "
-                     "vertical stripe).</p>\n", g3(span));
+    o += fmt::format("<p>The segments' temperatures span {} °C (under {} °C): no residual-against-temperature plot "
+                     "(it would be a vertical stripe).</p>\n", g3(span), g3(kMinPlottedSpanC));
   if (!(span_s >= kMinPlottedSpanS))
     o += fmt::format("<p>All segments began {} after the last change: no residual-against-time plot.</p>\n",
                      std::isfinite(span_s) ? "within " + g3(span_s) + " s of each other" : "at an unknown time");

@@ -253,15 +253,20 @@ double y_tick_width(const Plot& p, const Ranges& r) {
 Frame layout(const Plot& p) {
   Frame f;
   f.data = data_ranges(p);
-  double longest_category = 0.0, first_category = 0.0;
+  double longest_category = 0.0;
   for (const auto& c : p.x_categories) longest_category = std::max(longest_category, text_width(c, kFont));
-  if (!p.x_categories.empty()) first_category = text_width(p.x_categories.front(), kFont);
   // Horizontal labels when the longest fits its category's slot, else slanted.
   const double slot = p.x_categories.empty() ? 0.0 : (p.width - 94.0) / static_cast<double>(p.x_categories.size());
   f.slanted = !p.x_categories.empty() && longest_category > slot;
-  // Slanted (−40°) labels reach down 0.64 and left 0.77 of their length from their tick.
+  // Slanted (−40°) labels reach down 0.64 and left 0.77 of their length from their tick; label i's
+  // tick is about (i + 0.6) slots right of the plot box's left edge.
+  double slanted_reach = 0.0;
+  if (f.slanted)
+    for (std::size_t i = 0; i < p.x_categories.size(); ++i)
+      slanted_reach = std::max(slanted_reach, 0.77 * text_width(p.x_categories[i], kFont) -
+                                                  (static_cast<double>(i) + 0.6) * slot + 6.0);
   const double bottom = f.slanted ? 50 + 0.64 * longest_category : 50;
-  const double left = std::max({50.0, 26.0 + y_tick_width(p, f.data) + 6.0, f.slanted ? 0.77 * first_category - 4.0 : 0.0});
+  const double left = std::max({50.0, 26.0 + y_tick_width(p, f.data) + 6.0, slanted_reach});
   const double top = p.title.empty() ? 14 : 32;
   const std::vector<std::size_t> named = named_series(p);
   double longest_name = 0.0;
