@@ -212,7 +212,7 @@ FitOutcome fit_recording(const stend::Recording& rec, const std::string& model_f
       [counter, start] {
         const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         return counter && counter->passes() < 1.0 ? std::string("reading the samples")
-                                                  : fmt::format("solving, {}", fmt_duration(s));
+                                                  : fmt::format("solving, {} elapsed", fmt_duration(s));
       });
   const stend::Recording& input = counted ? *counted : rec;
   std::optional<stend::Recording> in_memory;
