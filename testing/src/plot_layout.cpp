@@ -78,6 +78,32 @@ void check_point(PlotLayout& p, double x, double y) {
     p.violations.push_back("point " + at_text(x, y) + " under the legend");
 }
 
+// Horizontal texts (titles, tick and axis labels, legend entries) inside the picture: their
+// extent estimated at 0.62 em a character (what a sans-serif font stays under), or their
+// textLength when the plotter squeezed them. Rotated texts are left to the screenshots.
+void check_texts(PlotLayout& p, const std::string& svg) {
+  static const std::regex text_tag(R"(<text([^>]*)>([^<]*)</text>)");
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), text_tag); it != std::sregex_iterator(); ++it) {
+    const std::string attrs = " " + (*it)[1].str() + " ";
+    if (attrs.find("transform=") != std::string::npos) continue;
+    std::string text = (*it)[2].str();
+    std::size_t chars = 0;
+    for (std::size_t i = 0; i < text.size(); ++i) {
+      if (text[i] == '&') i = text.find(';', i);  // one escaped character
+      else if ((static_cast<unsigned char>(text[i]) & 0xC0) == 0x80) continue;
+      ++chars;
+      if (i == std::string::npos) break;
+    }
+    const std::string size = attribute(attrs, "font-size"), length = attribute(attrs, "textLength");
+    const double font = size.empty() ? 11.0 : std::atof(size.c_str());
+    const double w = length.empty() ? 0.62 * font * static_cast<double>(chars) : std::atof(length.c_str());
+    const double x = std::atof(attribute(attrs, "x").c_str());
+    const std::string anchor = attribute(attrs, "text-anchor");
+    const double x0 = anchor == "middle" ? x - w / 2 : anchor == "end" ? x - w : x;
+    if (x0 < -0.5 || x0 + w > p.width + 0.5) p.violations.push_back("text '" + text + "' is clipped at the picture's edge");
+  }
+}
+
 PlotLayout check_svg(const std::string& svg) {
   PlotLayout p;
   const std::string open = svg.substr(0, svg.find('>'));
@@ -97,6 +123,7 @@ PlotLayout check_svg(const std::string& svg) {
   static const std::regex data_tag(R"(<(circle|rect|polyline|polygon|path) class="d"[^>]*>)");
   for (auto it = std::sregex_iterator(svg.begin(), svg.end(), data_tag); it != std::sregex_iterator(); ++it)
     for (const auto& [x, y] : coordinates(it->str())) check_point(p, x, y);
+  check_texts(p, svg);
   return p;
 }
 

@@ -2,7 +2,8 @@
 // file declares its plot box (data-plot-box="x0 y0 x1 y1") and, when it has one, its legend box
 // (data-legend-box="x0 y0 x1 y1") in pixels; every drawn data element carries class="d" (markers,
 // error bars, lines, bands, bars). The check reads what was written — not the plotter's objects —
-// and reports each point outside its axes and each point under the legend.
+// and reports each point outside its axes, each point under the legend, and each horizontal text
+// that reaches past the picture's edge (its width estimated generously, or its textLength).
 #pragma once
 
 #include <string>
