@@ -169,9 +169,9 @@ void run_local(std::vector<Task>& tasks, const BatchArgs& a) {
         if (t.attempts > a.retries) break;
       }
       const std::lock_guard<std::mutex> lock(print);
-      fmt::print("[{}/{}] {} {}{}\n", ++done, tasks.size(), t.exit_code == 0 ? "ok    " : "FAILED", t.run,
+      fmt::print(human(), "[{}/{}] {} {}{}\n", ++done, tasks.size(), t.exit_code == 0 ? "ok    " : "FAILED", t.run,
                  t.attempts > 1 ? fmt::format(" (attempt {})", t.attempts) : "");
-      std::fflush(stdout);
+      std::fflush(human());
     }
   };
   const unsigned n = std::max(1u, std::min<unsigned>(a.workers ? a.workers : std::thread::hardware_concurrency(),
@@ -281,9 +281,9 @@ void run_slurm(std::vector<Task>& tasks, const BatchArgs& a) {
     if (job.empty() || job.find_first_not_of("0123456789") != std::string::npos)
       throw IoError("stend batch --slurm: sbatch refused the job array: " + tail(o.output, 3) +
                     " (check `sinfo`, the partition and that slurmctld runs)");
-    fmt::print("slurm job {} (attempt {}): {} task(s) in {} array task(s) of up to {} run(s)\n", job, attempt,
+    fmt::print(human(), "slurm job {} (attempt {}): {} task(s) in {} array task(s) of up to {} run(s)\n", job, attempt,
                pending.size(), array_tasks, per_task);
-    std::fflush(stdout);
+    std::fflush(human());
     std::vector<std::size_t> failed;
     for (std::size_t i : pending) {
       Task& t = tasks[i];
@@ -311,15 +311,22 @@ ExitCode report(const std::vector<Task>& tasks, const BatchArgs& a, double wall_
   }
   for (const auto& t : tasks)
     if (t.exit_code != 0)
-      fmt::print("failed:     {} (exit {} after {} attempt(s))\n  {}\n", t.run, t.exit_code, t.attempts,
+      fmt::print(human(), "failed:     {} (exit {} after {} attempt(s))\n  {}\n", t.run, t.exit_code, t.attempts,
                  [&] {
                    std::string s = t.output_tail;
                    for (std::size_t p = 0; (p = s.find('\n', p)) != std::string::npos; p += 3) s.replace(p, 1, "\n  ");
                    return s;
                  }());
-  fmt::print("batch {}:  {} task(s) {}: {} ok, {} failed, {} retried; {:.2f} s, {:.2f} runs/s\n", a.verb, tasks.size(),
+  fmt::print(human(), "batch {}:  {} task(s) {}: {} ok, {} failed, {} retried; {:.2f} s, {:.2f} runs/s\n", a.verb, tasks.size(),
              a.slurm ? "on Slurm" : fmt::format("on {} local worker(s)", a.workers ? a.workers : std::thread::hardware_concurrency()),
              ok, tasks.size() - ok, retried, wall_s, wall_s > 0 ? static_cast<double>(tasks.size()) / wall_s : 0.0);
+  // docs/schemas/batch.schema.json
+  nlohmann::json js = nlohmann::json::array();
+  for (const auto& t : tasks)
+    js.push_back({{"run", t.run}, {"ok", t.exit_code == 0}, {"exit_code", t.exit_code}, {"attempts", t.attempts},
+                  {"output_tail", t.exit_code == 0 ? nlohmann::json(nullptr) : nlohmann::json(t.output_tail)}});
+  print_json({{"verb", a.verb}, {"ok", ok == tasks.size()}, {"where", a.slurm ? "slurm" : "local"}, {"tasks", js},
+              {"succeeded", ok}, {"failed", tasks.size() - ok}, {"retried", retried}, {"wall_s", wall_s}});
   return ok == tasks.size() ? ExitCode::kOk : ExitCode::kFitFailed;
 }
 
@@ -347,6 +354,7 @@ void add_batch_command(CLI::App& app, std::vector<Command>& out) {
                   "of -j or the partition)")
       ->check(at_least(1));
   sub->add_option("--out", a.out, "Slurm: folder on shared storage for the job script, task list, logs and statuses");
+  add_json_flag(sub, "every task's outcome and the totals");
   out.push_back({sub, [] {
                    if ((a.verb == "fit" || a.verb == "gap") && a.model.empty())
                      throw InputError(fmt::format("stend batch {}: give the model with -m MODEL.yaml", a.verb));

@@ -7,6 +7,7 @@
 #include "stend/reporting/results_store.hpp"
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include <filesystem>
 
@@ -19,7 +20,9 @@ namespace rp = stend::reporting;
 ExitCode run_migrate(const std::string& location) {
   rp::ResultsStore store(location, rp::ResultsStore::Open::kAsIs);
   const rp::MigrationReport m = store.migrate();
-  fmt::print("results db: {}\n{}", store.where(), m.print());
+  fmt::print(human(), "results db: {}\n{}", store.where(), m.print());
+  // docs/schemas/db.schema.json
+  print_json({{"command", "migrate"}, {"ok", true}, {"store", store.where()}, {"schema_from", m.from}, {"schema_to", m.to}});
   return ExitCode::kOk;
 }
 
@@ -30,7 +33,12 @@ ExitCode run_check(const std::string& location) {
                      "` creates one)");
   const rp::ResultsStore store(location, rp::ResultsStore::Open::kAsIs);
   const rp::StoreCheck c = store.check();
-  fmt::print("results db: {}\n{}", store.where(), c.print());
+  fmt::print(human(), "results db: {}\n{}", store.where(), c.print());
+  print_json({{"command", "check"}, {"ok", c.ok()}, {"store", store.where()}, {"schema_version", c.schema_version},
+              {"schema_current", rp::kResultsStoreSchemaVersion}, {"runs", c.runs}, {"estimators", c.estimators},
+              {"parameters", c.parameters}, {"duplicate_runs", c.duplicate_runs},
+              {"duplicate_estimators", c.duplicate_estimators}, {"duplicate_parameters", c.duplicate_parameters},
+              {"orphan_estimators", c.orphan_estimators}, {"orphan_parameters", c.orphan_parameters}});
   if (c.ok()) return ExitCode::kOk;
   if (c.schema_version != rp::kResultsStoreSchemaVersion)
     fmt::print(stderr, "stend db check: schema {} is not this Stend's ({}): run `stend db migrate`\n", c.schema_version,
@@ -54,8 +62,10 @@ ExitCode run_push(const std::string& location, const std::vector<std::string>& r
       refused.push_back(run);
     }
   }
-  fmt::print("results db: {}\npushed:     {} run(s), {} parameter(s){}\n", store.where(), pushed, parameters,
+  fmt::print(human(), "results db: {}\npushed:     {} run(s), {} parameter(s){}\n", store.where(), pushed, parameters,
              refused.empty() ? "" : fmt::format("; {} refused (said above)", refused.size()));
+  print_json({{"command", "push"}, {"ok", refused.empty()}, {"store", store.where()}, {"pushed", pushed},
+              {"parameters", parameters}, {"refused", refused}});
   return refused.empty() ? ExitCode::kOk : ExitCode::kInvalidInput;
 }
 
@@ -71,7 +81,10 @@ void add_db_command(CLI::App& app, std::vector<Command>& out) {
                                            "replaced, never duplicated)");
   auto* check = sub->add_subcommand("check", "Check the store: schema version, counts, no duplicated or orphaned row "
                                              "(exit 2 when not consistent)");
-  for (auto* s : {migrate, push, check}) s->add_option("--db", db, kDbOptionHelp);
+  for (auto* s : {migrate, push, check}) {
+    s->add_option("--db", db, kDbOptionHelp);
+    add_json_flag(s, "the store and what was done or found");
+  }
   push->add_option("runs", runs, "Run folders")->required();
   out.push_back({sub, [migrate, push] {
                    const std::string location =

@@ -1,18 +1,23 @@
 // Shared analysis helpers of the `stend` program: open a recording or dataset, fit a model file.
 #include "commands.hpp"
+#include "progress.hpp"
 
 #include "stend/estimation/registry.hpp"
 #include "stend/estimation/summary.hpp"
 #include "stend/estimators/builtin.hpp"
 #include "stend/files.hpp"
 #include "stend/plugin_host.hpp"
+#include "stend/samples.hpp"
 #include "stend/yaml_util.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <iostream>
+#include <memory>
 #include <optional>
 
 namespace stend::cli {
@@ -131,6 +136,31 @@ bool reads_sample_source(const estimation::Registry& builtin, const estimation::
   return std::any_of(all.begin(), all.end(), [&](const estimation::EstimatorEntry& b) { return b.name == e.name; });
 }
 
+// The samples of a stored recording, counting what the fit reads (for its progress line): whole
+// samples, and a sixth of a sample per value of one channel (the six sensor channels).
+class CountingSource final : public stend::SampleSource {
+ public:
+  explicit CountingSource(std::shared_ptr<const stend::SampleSource> inner) : inner_(std::move(inner)) {}
+  std::uint64_t size() const override { return inner_->size(); }
+  void read(std::uint64_t first, std::size_t count, stend::ImuSample* out) const override {
+    inner_->read(first, count, out);
+    values_ += 6 * count;
+  }
+  void read_column(stend::Channel c, std::uint64_t first, std::size_t count, double* out) const override {
+    inner_->read_column(c, first, count, out);
+    values_ += count;
+  }
+  // Samples read over the recording's samples (passes: 1 = each read once).
+  double passes() const {
+    const std::uint64_t n = inner_->size();
+    return n ? static_cast<double>(values_.load()) / 6.0 / static_cast<double>(n) : 0.0;
+  }
+
+ private:
+  std::shared_ptr<const stend::SampleSource> inner_;
+  mutable std::atomic<std::uint64_t> values_{0};
+};
+
 // The recording with its samples in memory (a copy when they are in the store).
 stend::Recording with_samples_in_memory(const stend::Recording& rec) {
   stend::Recording out = rec;
@@ -168,14 +198,32 @@ FitOutcome fit_recording(const stend::Recording& rec, const std::string& model_f
   PluginHost host;
   estimation::Registry with_plugins;
   const estimation::EstimatorEntry& entry = resolve_estimator(registry, host, with_plugins, estimator, model_file);
+  // Progress on a terminal: the share of the samples read (first pass), then the solve's time.
+  std::optional<stend::Recording> counted;
+  std::shared_ptr<const CountingSource> counter;
+  if (rec.source) {
+    counter = std::make_shared<const CountingSource>(rec.source);
+    counted = rec;
+    counted->source = counter;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  BackgroundProgress progress(
+      "fit " + entry.name + ", samples read", [counter] { return counter ? std::min(1.0, counter->passes()) : 1.0; },
+      [counter, start] {
+        const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        return counter && counter->passes() < 1.0 ? std::string("reading the samples")
+                                                  : fmt::format("solving, {} elapsed", fmt_duration(s));
+      });
+  const stend::Recording& input = counted ? *counted : rec;
   std::optional<stend::Recording> in_memory;
-  if (rec.source && !reads_sample_source(registry, entry)) in_memory = with_samples_in_memory(rec);
+  if (input.source && !reads_sample_source(registry, entry)) in_memory = with_samples_in_memory(input);
   EstimatorRequest request;
-  request.recording = in_memory ? &*in_memory : &rec;
+  request.recording = in_memory ? &*in_memory : &input;
   request.input = rec.dir.string();
   request.model_file = model_file;
   request.output_dir = out_dir.string();
   const EstimatorResult r = entry.create()->fit(request);
+  progress.stop();
   std::string text = r.text;
   if (!r.ok && !r.message.empty() && text.find(r.message) == std::string::npos)
     text += entry.name + ": FAILED — " + r.message + "\n";

@@ -6,6 +6,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -151,6 +154,43 @@ void TaskProgress::update(double fraction, const std::string& detail) {
 }  // namespace stend::cli
 
 namespace stend::cli {
+
+struct BackgroundProgress::State {
+  TaskProgress progress;
+  std::function<double()> fraction;
+  std::function<std::string()> detail;
+  std::mutex mutex;
+  std::condition_variable wake;
+  bool stopping = false;
+  std::thread thread;
+};
+
+BackgroundProgress::BackgroundProgress(std::string what, std::function<double()> fraction,
+                                       std::function<std::string()> detail)
+    : state_(new State{TaskProgress(std::move(what)), std::move(fraction), std::move(detail), {}, {}, false, {}}) {
+  if (!state_->progress.due()) return;  // stderr is not a terminal
+  State* st = state_.get();
+  st->thread = std::thread([st] {
+    std::unique_lock<std::mutex> lock(st->mutex);
+    while (!st->stopping) {
+      st->progress.update_lazily(st->fraction, st->detail());
+      st->wake.wait_for(lock, std::chrono::duration<double>(kRedrawPeriod_s));
+    }
+    st->progress.clear();
+  });
+}
+
+BackgroundProgress::~BackgroundProgress() { stop(); }
+
+void BackgroundProgress::stop() {
+  if (!state_ || !state_->thread.joinable()) return;
+  {
+    const std::lock_guard<std::mutex> lock(state_->mutex);
+    state_->stopping = true;
+  }
+  state_->wake.notify_all();
+  state_->thread.join();
+}
 
 double input_read_share(const std::vector<std::filesystem::path>& inputs) {
   namespace fs = std::filesystem;

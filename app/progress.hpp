@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <functional>
+#include <memory>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -69,6 +70,23 @@ class TaskProgress {
   std::string what_;
   StatusLine line_;
   std::chrono::steady_clock::time_point start_, last_;
+};
+
+// A TaskProgress redrawn by a thread of its own, for a step that reports nothing itself (an
+// estimator's fit): `fraction` and `detail` are asked from that thread at each redraw. Nothing
+// runs when stderr is not a terminal. stop() (or the destructor) ends the thread and clears the line;
+// call it before printing anything else.
+class BackgroundProgress {
+ public:
+  BackgroundProgress(std::string what, std::function<double()> fraction, std::function<std::string()> detail);
+  ~BackgroundProgress();
+  BackgroundProgress(const BackgroundProgress&) = delete;
+  BackgroundProgress& operator=(const BackgroundProgress&) = delete;
+  void stop();
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
 };
 
 // How far this process has read the files `inputs`: the read offsets of its open descriptors on

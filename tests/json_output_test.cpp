@@ -195,3 +195,54 @@ TEST_F(JsonOutput, Import) {
   EXPECT_TRUE(fs::equivalent(j["run_dir"].get<std::string>(), out));
   EXPECT_GT(j["samples"].get<int>() + j["segments"].get<int>(), 0);
 }
+
+TEST_F(JsonOutput, DbMigratePushCheck) {
+  const std::string db = (dir() / "db.sqlite").string();
+  const json m = command("db_migrate", "db migrate --db " + db);
+  expect_valid("db");
+  EXPECT_EQ(m["command"], "migrate");
+  EXPECT_GE(m["schema_to"].get<int>(), 1);
+  const json p = command("db_push", "db push " + run_dir().string() + " --db " + db);
+  expect_valid("db");
+  EXPECT_EQ(p["pushed"], 1);
+  EXPECT_TRUE(p["refused"].empty());
+  const json c = command("db_check", "db check --db " + db);
+  expect_valid("db");
+  EXPECT_TRUE(c["ok"].get<bool>());
+  EXPECT_EQ(c["runs"], 1);
+  EXPECT_EQ(c["parameters"].get<long long>(), p["parameters"].get<long long>());
+}
+
+TEST_F(JsonOutput, BatchReport) {
+  const json j = command("batch", "batch report " + run_dir().string() + " -j 1 --db " + (dir() / "batch.sqlite").string());
+  expect_valid("batch");
+  EXPECT_TRUE(j["ok"].get<bool>());
+  ASSERT_EQ(j["tasks"].size(), 1u);
+  EXPECT_EQ(j["tasks"][0]["exit_code"], 0);
+  EXPECT_TRUE(j["tasks"][0]["output_tail"].is_null());
+  // A task that fails (no such run folder) is reported with its exit code and output, exit 3.
+  const json f = command("batch_failed", "batch report " + (dir() / "no-such-run").string() + " -j 1 --retries 0", 3);
+  expect_valid("batch");
+  EXPECT_FALSE(f["ok"].get<bool>());
+  EXPECT_EQ(f["failed"], 1);
+  EXPECT_NE(f["tasks"][0]["exit_code"], 0);
+}
+
+TEST_F(JsonOutput, ApplyAndValidate) {
+  const fs::path out = dir() / "calibrated";
+  const json j = command("apply", "apply " + (run_dir() / "fit.json").string() + " " + run_dir().string() + " -o " +
+                                      out.string() + " --validate");
+  expect_valid("apply");
+  EXPECT_TRUE(fs::equivalent(j["calibrated"].get<std::string>(), out));
+  ASSERT_TRUE(j["validation"].is_object());
+}
+
+TEST_F(JsonOutput, GapValidate) {
+  // A small validation (one candidate, one seed, no noise stage; seconds): its targets are met.
+  const json j = command("gap_validate", "gap validate --only nonlinear_k2 --seeds 1 --sizes 10 --null 2 --oov 1 "
+                                         "--noise-seeds 0 --noise-null 0 --seed 7");
+  expect_valid("gap-validate");
+  EXPECT_TRUE(j["targets_met"].get<bool>());
+  EXPECT_TRUE(j["results_file"].is_null());
+  EXPECT_TRUE(j["document"].is_object());
+}

@@ -4,6 +4,7 @@
 #include "stend/estimation/linear_lsq.hpp"
 #include "stend/reporting/run_report.hpp"
 #include "stend/reporting/svg_plot.hpp"
+#include "display_unit.hpp"
 
 #include <fmt/format.h>
 
@@ -155,22 +156,29 @@ std::string comparison_html(const Comparison& c) {
   b += "</table>\n<h2>Summary</h2>\n<table><tr><th>estimator</th><th>parameter</th><th>vendor</th><th>identified / "
        "units</th><th>mean</th><th>unit-to-unit SD</th><th>95 % interval of the mean</th><th>median unit SE</th>"
        "<th>unit</th></tr>\n";
-  for (const auto& p : c.parameters)
+  // Shown in the reports' display units (mg, deg/h, ppm), as the plots below are.
+  for (const auto& p : c.parameters) {
+    const detail::DisplayUnit du = detail::display_unit(p.unit);
     for (const auto& v : p.vendors)
       b += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}/{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>"
                        "<td>{}</td></tr>\n",
-                       escape(p.estimator), escape(p.name), escape(v.vendor), v.identified, v.units, g(v.mean),
-                       g(v.spread_sd),
-                       std::isfinite(v.mean_lo) ? fmt::format("[{}, {}]", g(v.mean_lo), g(v.mean_hi)) : "—",
-                       g(v.median_std_error), escape(p.unit));
+                       escape(p.estimator), escape(p.name), escape(v.vendor), v.identified, v.units, g(v.mean * du.scale),
+                       g(v.spread_sd * du.scale),
+                       std::isfinite(v.mean_lo)
+                           ? fmt::format("[{}, {}]", g(v.mean_lo * du.scale), g(v.mean_hi * du.scale))
+                           : "—",
+                       g(v.median_std_error * du.scale), escape(du.unit));
+  }
   b += "</table>\n<h2>Parameters by unit</h2>\n";
   for (const auto& p : c.parameters) {
     bool any = false;
     for (const auto& u : p.units) any = any || u.p.identifiable;
     if (!any) continue;
+    const detail::DisplayUnit du = detail::display_unit(p.unit);
+    const double k = du.scale;
     svg::Plot plot;
     plot.title = p.estimator + ": " + p.name;
-    plot.y_label = p.name + " [" + p.unit + "]";
+    plot.y_label = p.name + " [" + du.unit + "]";
     plot.x_label = "unit (grouped by vendor)";
     plot.width = 520;
     plot.height = 320;
@@ -187,16 +195,16 @@ std::string comparison_html(const Comparison& c) {
       }
       auto& s = units[u.vendor];
       s.x.push_back(static_cast<double>(i));
-      s.y.push_back(u.p.value);
-      s.y_lo.push_back(u.p.lo);
-      s.y_hi.push_back(u.p.hi);
+      s.y.push_back(u.p.value * k);
+      s.y_lo.push_back(u.p.lo * k);
+      s.y_hi.push_back(u.p.hi * k);
     }
     for (const auto& v : p.vendors) {
       const auto& s = units[v.vendor];
       if (s.x.empty()) continue;
       const double x0 = s.x.front() - 0.3, x1 = s.x.back() + 0.3;
-      svg::Series m{"", svg::Style::kLine, {x0, x1}, {v.mean, v.mean}, {}, {}, svg::palette(color[v.vendor]), true, 1.0};
-      svg::Series band{"", svg::Style::kBand, {x0, x1}, {}, {v.mean_lo, v.mean_lo}, {v.mean_hi, v.mean_hi},
+      svg::Series m{"", svg::Style::kLine, {x0, x1}, {v.mean * k, v.mean * k}, {}, {}, svg::palette(color[v.vendor]), true, 1.0};
+      svg::Series band{"", svg::Style::kBand, {x0, x1}, {}, {v.mean_lo * k, v.mean_lo * k}, {v.mean_hi * k, v.mean_hi * k},
                        svg::palette(color[v.vendor]), false, 0.18};
       plot.series.push_back(band);
       plot.series.push_back(m);

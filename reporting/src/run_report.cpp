@@ -9,7 +9,9 @@
 #include "stend/physics/units.hpp"
 #include "stend/reporting/results.hpp"
 #include "stend/recording.hpp"
+#include "stend/samples.hpp"
 #include "stend/reporting/svg_plot.hpp"
+#include "display_unit.hpp"
 #include "fitted_model.hpp"
 
 #include <fmt/format.h>
@@ -33,6 +35,8 @@ using svg::Plot;
 using svg::Series;
 using svg::Style;
 using detail::contribution;
+using detail::display_unit;
+using detail::DisplayUnit;
 using detail::fitted_model;
 using detail::FittedModel;
 
@@ -141,24 +145,76 @@ double display_scale(const json& fit) {
   return 1.0;
 }
 
-// Residual against orientation: one series per fitted axis, x = orientation (point) number, with
-// ±σ lines (residuals scaled to the display unit by ds).
+// The physical quantity each static point is plotted against: the tilt of the sensor [deg] when
+// every true input lies in one plane through the sensor's z axis (a one-axis tilt, as in the
+// paper), else the true input on the one axis that varies [unit], else the point number.
+struct PointAxis {
+  std::vector<double> x;  // per point
+  std::string label;
+  bool categories = false;
+};
+
+PointAxis point_axis(const json& points, const std::string& unit) {
+  PointAxis a;
+  std::array<double, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+  double mag = 0.0;
+  for (const auto& pt : points)
+    for (std::size_t k = 0; k < 3; ++k) {
+      const double u = at(pt.value("true_input", json::array()), k);
+      lo[k] = std::min(lo[k], u);
+      hi[k] = std::max(hi[k], u);
+      mag = std::max(mag, std::abs(u));
+    }
+  std::vector<std::size_t> varying, still_zero;
+  for (std::size_t k = 0; k < 3; ++k) {
+    if (!(hi[k] >= lo[k])) return {{}, "point number", true};  // a point without truth
+    if (hi[k] - lo[k] > 1e-3 * mag) varying.push_back(k);
+    else if (std::max(std::abs(lo[k]), std::abs(hi[k])) <= 1e-3 * mag) still_zero.push_back(k);
+  }
+  const bool tilt = unit == "m/s^2" && varying.size() == 2 && still_zero.size() == 1 && still_zero[0] != 2;
+  for (const auto& pt : points) {
+    const json u = pt.value("true_input", json::array());
+    if (tilt) {
+      const std::size_t h = still_zero[0] == 0 ? 1 : 0;  // the horizontal axis in the tilt plane
+      a.x.push_back(std::atan2(at(u, h), at(u, 2)) * physics::kRadToDeg);
+    } else if (varying.size() == 1) {
+      a.x.push_back(at(u, varying[0]));
+    }
+  }
+  if (tilt) {
+    const std::size_t h = still_zero[0] == 0 ? 1 : 0;
+    a.label = fmt::format("tilt: gravity direction from +z toward +{} [deg]", kAxes[h]);
+  } else if (varying.size() == 1) {
+    a.label = fmt::format("true input, axis {} [{}]", kAxes[varying[0]], unit);
+  } else {
+    a.categories = true;
+    a.label = "orientation (point number; the truth varies on three axes)";
+    a.x.clear();
+  }
+  return a;
+}
+
+// Residual against the physical quantity of each static point (point_axis): one series per fitted
+// axis, with ±σ lines (residuals scaled to the display unit by ds).
 std::string residual_plot(const json& fit, const json& points, const json& rows, const std::string& what,
-                          const std::string& dunit, double ds) {
+                          const std::string& unit, const std::string& dunit, double ds) {
+  const PointAxis pa = point_axis(points, unit);
   Plot r;
   r.title = what + ": residual against orientation";
-  r.x_label = "orientation (segment id)";
+  r.x_label = pa.label;
   r.y_label = "residual [" + dunit + "]";
   r.width = 760;
-  for (std::size_t i = 0; i < points.size(); ++i)
-    r.x_categories.push_back(fmt::format("{}", points[i].value("segment", static_cast<int>(i))));
+  if (pa.categories)
+    for (std::size_t i = 0; i < points.size(); ++i) r.x_categories.push_back(fmt::format("{}", i));
   std::map<std::string, Series> by_axis;
   for (const auto& row : rows) {
     const std::string ax = str(row, "axis");
     auto& s = by_axis[ax];
     s.name = "axis " + ax;
-    s.style = Style::kLinePoints;
-    s.x.push_back(num(row, "point"));
+    s.style = pa.categories ? Style::kLinePoints : Style::kPoints;
+    const double pi = num(row, "point");
+    const auto i = static_cast<std::size_t>(std::max(0.0, pi));
+    s.x.push_back(pa.categories || !std::isfinite(pi) || i >= pa.x.size() ? pi : pa.x[i]);
     s.y.push_back(num(row, "residual") * ds);
   }
   for (auto& [ax, s] : by_axis) {
@@ -214,7 +270,7 @@ std::string fit_plots(const json& fit, const std::string& what) {
   const std::string unit = fit.value("units", json::object()).value("residual", "m/s^2");
   const std::string dunit = fit.value("units", json::object()).value("residual_display", unit);
   const double ds = display_scale(fit);
-  std::string o = residual_plot(fit, points, rows, what, dunit, ds);
+  std::string o = residual_plot(fit, points, rows, what, unit, dunit, ds);
   std::set<std::string> axes;
   for (const auto& row : rows) axes.insert(str(row, "axis"));
   for (const std::string& ax : axes) {
@@ -223,6 +279,94 @@ std::string fit_plots(const json& fit, const std::string& what) {
     o += static_mean_plot(points, rows, what, ax, static_cast<std::size_t>(k), unit, dunit, ds);
   }
   return o;
+}
+
+// ---- Ceres (ceres_nonlinear) -----------------------------------------------------------------
+
+// Each estimated parameter with its interval, one plot per display unit (values against names).
+std::string parameter_interval_plots(const json& fit) {
+  std::map<std::string, Plot> by_unit;
+  for (const auto& p : fit.value("parameters", json::array())) {
+    if (!p.value("identifiable", false) || p.value("fixed", false)) continue;
+    const DisplayUnit du = display_unit(str(p, "unit"));
+    Plot& pl = by_unit[du.unit];
+    if (pl.series.empty()) {
+      pl.title = "estimated parameters [" + du.unit + "] with their intervals";
+      pl.x_label = "parameter";
+      pl.y_label = "value [" + du.unit + "]";
+      pl.width = 760;
+      pl.series.push_back(Series{"value with its interval", Style::kPoints, {}, {}, {}, {}, svg::palette(0), false, 1.0});
+      pl.lines.push_back({true, 0.0, "", "#555"});
+    }
+    const json iv = p.value("interval", json::array());
+    Series& s = pl.series[0];
+    s.x.push_back(static_cast<double>(pl.x_categories.size()));
+    s.y.push_back(num(p, "value") * du.scale);
+    s.y_lo.push_back(at(iv, 0) * du.scale);
+    s.y_hi.push_back(at(iv, 1) * du.scale);
+    pl.x_categories.push_back(str(p, "name"));
+  }
+  std::string o;
+  for (const auto& [unit, pl] : by_unit)
+    o += figure(pl, "Each estimated parameter's value with its interval (fixed and unidentified parameters left out).");
+  return o;
+}
+
+// Accelerometer: each static interval's |a| − g before and after calibration [mg], against time.
+std::string ceres_norm_plot(const json& acc) {
+  Plot p;
+  p.title = "accelerometer: |a| − g per static interval, before and after calibration";
+  p.x_label = "time of the static interval (middle) [s]";
+  p.y_label = "|a| − g [mg]";
+  p.width = 760;
+  Series before{"raw |ȳ| − g", Style::kPoints, {}, {}, {}, {}, svg::palette(1), false, 0.9};
+  Series after{"calibrated |correct(ȳ)| − g", Style::kPoints, {}, {}, {}, {}, svg::palette(0), false, 0.9};
+  for (const auto& iv : acc.value("intervals", json::array())) {
+    const double t = 0.5 * (num(iv, "t_start_s") + num(iv, "t_end_s"));
+    before.x.push_back(t);
+    before.y.push_back(num(iv, "norm_error_before_mps2") / physics::kMilliG);
+    after.x.push_back(t);
+    after.y.push_back(num(iv, "norm_error_after_mps2") / physics::kMilliG);
+  }
+  if (before.x.empty() || !std::any_of(before.y.begin(), before.y.end(), [](double v) { return std::isfinite(v); }))
+    return "";
+  p.series = {before, after};
+  p.lines.push_back({true, 0.0, "", "#555"});
+  return figure(p, fmt::format("The magnitude of each static interval's mean minus local gravity g = {} m/s², raw and "
+                               "with the fitted calibration applied (RMS {} → {} mg).",
+                               g(num(acc, "gravity_mps2")), g3(num(acc, "rms_norm_before_mps2") / physics::kMilliG),
+                               g3(num(acc, "rms_norm_after_mps2") / physics::kMilliG)));
+}
+
+// Gyroscope (integration): each move's gravity-direction mismatch before and after [deg].
+std::string ceres_move_plot(const json& gy) {
+  const json moves = gy.value("moves", json::array());
+  if (moves.empty()) return "";
+  Plot p;
+  p.title = "gyroscope: gravity-direction mismatch per move, before and after calibration";
+  p.x_label = "end of the move [s]";
+  p.y_label = "mismatch [deg]";
+  p.width = 760;
+  p.y_include_zero = true;
+  Series before{"raw rate", Style::kPoints, {}, {}, {}, {}, svg::palette(1), false, 0.9};
+  Series after{"calibrated rate", Style::kPoints, {}, {}, {}, {}, svg::palette(0), false, 0.9};
+  for (const auto& m : moves) {
+    before.x.push_back(num(m, "t_end_s"));
+    before.y.push_back(num(m, "mismatch_before_rad") * physics::kRadToDeg);
+    after.x.push_back(num(m, "t_end_s"));
+    after.y.push_back(num(m, "mismatch_after_rad") * physics::kRadToDeg);
+  }
+  p.series = {before, after};
+  return figure(p, "Angle between the gravity direction carried over each move by the integrated gyro rate and the one "
+                   "measured in the static interval after it, with the raw and the calibrated rate.");
+}
+
+// The Ceres calibration's plots: |a| − g, the move mismatch, the parameters with their intervals.
+std::string ceres_plots(const json& fit) {
+  std::string o;
+  if (fit.contains("accelerometer")) o += ceres_norm_plot(fit["accelerometer"]);
+  if (fit.contains("gyroscope")) o += ceres_move_plot(fit["gyroscope"]);
+  return o + parameter_interval_plots(fit);
 }
 
 std::string fit_section(const json& fit, const std::string& file) {
@@ -249,6 +393,7 @@ std::string fit_section(const json& fit, const std::string& file) {
       g(num(sol, "condition_number_identified")));
   o += parameter_table(fit);
   o += fit_plots(fit, str(est, "name"));
+  if (fit.contains("accelerometer") || fit.contains("gyroscope")) o += ceres_plots(fit);
   return o;
 }
 
@@ -258,6 +403,7 @@ std::string fit_section(const json& fit, const std::string& file) {
 struct TempDisplay {
   double scale;
   std::string unit;
+  double min_scale_input;  // smallest input that observes the scale factor [m/s² or rad/s]
 };
 
 // The candidate orders with their BIC, CV error and rank, and the chosen one.
@@ -317,6 +463,32 @@ Series partial_residuals(const FittedModel& fm, const json& fit, const std::stri
   return pts;
 }
 
+// Partial residuals of the scale-factor error of axis a (index k) [ppm]: each static orientation
+// with a large input on that axis (over half the largest, and at least min_input) contributes its residual over that input,
+// added to the fitted scale error at its temperature, against temperature [°C].
+Series scale_partial_residuals(const FittedModel& fm, const json& fit, const std::string& a, int k,
+                               double min_input) {
+  const json points = fit.value("points", json::array());
+  const auto uk = static_cast<std::size_t>(k);
+  const model::Vec3<double> zero = model::Vec3<double>::Zero();
+  model::Vec3<double> unit_in = zero;
+  unit_in[k] = 1.0;
+  double largest = 0.0;
+  for (const auto& pt : points) largest = std::max(largest, std::abs(at(pt.value("true_input", json::array()), uk)));
+  Series pts{"observations (partial residuals)", Style::kPoints, {}, {}, {}, {}, "#222", false, 0.7};
+  for (const auto& row : fit.value("residuals", json::object()).value("rows", json::array())) {
+    if (str(row, "axis") != a) continue;
+    const auto pi = static_cast<std::size_t>(std::max(0.0, num(row, "point")));
+    if (pi >= points.size()) continue;
+    const double u = at(points[pi].value("true_input", json::array()), uk);
+    if (!(std::abs(u) > 0.5 * largest) || !(std::abs(u) >= min_input)) continue;
+    const double T = num(points[pi], "temperature_c");
+    pts.x.push_back(T);
+    pts.y.push_back((contribution(fm, k, unit_in, T, &zero).first + num(row, "residual") / u) * 1e6);
+  }
+  return pts;
+}
+
 // Zero-offset and scale-factor plots of axis a (index k) over the valid range and the points'
 // temperatures [°C]; nothing when that range is empty.
 std::string temperature_plots(const json& ax, const json& fit, const FittedModel& fm, const std::string& a, int k,
@@ -340,8 +512,14 @@ std::string temperature_plots(const json& ax, const json& fit, const FittedModel
   s.title = "scale-factor error against temperature, axis " + a;
   s.x_label = "die temperature [°C]";
   s.y_label = "scale-factor error [ppm]";
-  s.series = {sband, scurve};
-  return o + figure(s, "Fitted scale-factor error (scale + scale_temperature terms) with its interval band.");
+  const Series observed = scale_partial_residuals(fm, fit, a, k, d.min_scale_input);
+  if (observed.x.empty())
+    return o + "<p>No static orientation has an input on axis " + escape(a) +
+           ": its scale-factor error is not observed by this run (no plot).</p>\n";
+  s.series = {sband, scurve, observed};
+  return o + figure(s, "Fitted scale-factor error (scale + scale_temperature terms) with its interval band; points: "
+                       "each orientation with a large input on this axis, its residual over that input added to the "
+                       "fitted scale error at its temperature.");
 }
 
 // Cooling-minus-heating hysteresis per level with its standard error and interval.
@@ -382,7 +560,10 @@ std::string temp_section(const json& tp, const std::string& file) {
   o += fmt::format("<p>Reference temperature T0 = {} °C; coefficients valid over {} … {} °C (die temperature).</p>\n",
                    g(num(tp, "reference_c")), g(vmin), g(vmax));
   const bool accel = str(tp, "unit") != "rad/s";
-  const TempDisplay d{accel ? 1.0 / physics::kMilliG : 1.0 / physics::kDegPerHour, accel ? "mg" : "deg/h"};
+  // The scale factor is observed by inputs of ≥ 0.1 g (accelerometer) or ≥ 1 deg/s (gyroscope): an
+  // Earth-rate or noise-sized input would divide the residual by almost nothing.
+  const TempDisplay d{accel ? 1.0 / physics::kMilliG : 1.0 / physics::kDegPerHour, accel ? "mg" : "deg/h",
+                      accel ? 0.1 * physics::kStandardGravity : physics::kDegPerSecond};
   for (const auto& ax : tp.value("axes", json::array())) o += temp_axis(ax, vmin, vmax, d);
   return o;
 }
@@ -541,17 +722,22 @@ std::string gap_summary(const json& gp, const GapAxes& axes) {
          "along the estimated gravity direction, and rotations of the sensor frame cannot be seen.</p>\n";
   std::string rms, ratio;
   for (int k = 0; k < axes.count; ++k) {
-    rms += fmt::format("{}{} {}", k ? ", " : "", axes.label(k), g3(at(gap.value("static_rms_mps2", json::array()), static_cast<std::size_t>(k))));
+    rms += fmt::format("{}{} {}", k ? ", " : "", axes.label(k),
+                       g3(at(gap.value("static_rms_mps2", json::array()), static_cast<std::size_t>(k)) / physics::kMilliG));
     ratio += fmt::format("{}{} {}", k ? ", " : "", axes.label(k),
                          g3(at(gap.value("static_rms_over_floor", json::array()), static_cast<std::size_t>(k))));
   }
-  o += fmt::format("<p>Static residual RMS [m/s²]: {}; over the noise floor: {} (floor source: {}).</p>\n", rms, ratio,
+  o += fmt::format("<p>Static residual RMS [mg]: {}; over the noise floor: {} (floor source: {}).</p>\n", rms, ratio,
                    escape(str(floor, "source")));
   return o;
 }
 
-// Where: bar chart of the share of the residual energy each (dimension, place) holds.
-std::string gap_where_figure(const json& where) {
+// Where: bar chart of the share of the residual energy each (dimension, place) holds; without a
+// recorded temperature, the temperature places (all at the importer's placeholder) are left out.
+std::string gap_where_figure(const json& where_all, bool temperature_recorded) {
+  json where = json::array();
+  for (const auto& w : where_all)
+    if (temperature_recorded || str(w, "dimension") != "temperature") where.push_back(w);
   Plot p;
   p.title = "where the gap lies";
   p.y_label = "share of the residual energy";
@@ -569,10 +755,38 @@ std::string gap_where_figure(const json& where) {
   return figure(p, "Localization: the share of the residual each (dimension, place) holds.");
 }
 
-// Segment residual per axis [mg] against temperature [°C] and against time since the last change [s].
-std::string gap_segment_figures(const json& segs, const GapAxes& axes) {
+// The span of the segments' values of `key` (temperature [°C], time since the last change [s]);
+// NaN when none has one.
+double segment_span(const json& segs, const char* key) {
+  double lo = INFINITY, hi = -INFINITY;
+  for (const auto& sg : segs) {
+    const double t = num(sg, key);
+    if (!std::isfinite(t)) continue;
+    lo = std::min(lo, t);
+    hi = std::max(hi, t);
+  }
+  return hi >= lo ? hi - lo : kNaN;
+}
+
+// A residual against a range narrower than this is a vertical stripe: not plotted [°C, s].
+constexpr double kMinPlottedSpanC = 2.0, kMinPlottedSpanS = 1.0;
+
+// Segment residual per axis [mg] against temperature [°C] (when the segments span a range of
+// temperatures) and against time since the last change [s].
+std::string gap_segment_figures(const json& segs, const GapAxes& axes, bool temperature_recorded) {
   std::string o;
+  const double span = temperature_recorded ? segment_span(segs, "temperature_c") : kNaN;
+  const double span_s = segment_span(segs, "time_since_change_s");
+  if (!std::isfinite(span))
+    o += "<p>No temperature was recorded: no residual-against-temperature plot.</p>\n";
+  else if (span < kMinPlottedSpanC)
+    o += fmt::format("<p>The segments' temperatures span {} °C (under {} °C): no residual-against-temperature plot "
+                     "(it would be a vertical stripe).</p>\n", g3(span), g3(kMinPlottedSpanC));
+  if (!(span_s >= kMinPlottedSpanS))
+    o += fmt::format("<p>All segments began {} after the last change: no residual-against-time plot.</p>\n",
+                     std::isfinite(span_s) ? "within " + g3(span_s) + " s of each other" : "at an unknown time");
   for (const char* dim : {"temperature_c", "time_since_change_s"}) {
+    if (dim[1] == 'e' ? !(span >= kMinPlottedSpanC) : !(span_s >= kMinPlottedSpanS)) continue;
     Plot p;
     p.title = std::string("segment residual against ") + (dim[0] == 't' && dim[1] == 'e' ? "temperature" : "time since change");
     p.x_label = dim[1] == 'e' ? "temperature [°C]" : "time since the last change [s]";
@@ -591,11 +805,11 @@ std::string gap_segment_figures(const json& segs, const GapAxes& axes) {
   return o;
 }
 
-// Shrink: held-out and in-sample RMS [m/s²] after each forward-selection step, against the noise floor.
+// Shrink: held-out and in-sample RMS [mg] after each forward-selection step, against the noise floor.
 std::string gap_shrink_figure(const json& steps) {
   Plot p;
   p.title = "how far the gap shrinks";
-  p.y_label = "RMS [m/s²]";
+  p.y_label = "RMS [mg]";
   p.x_label = "model after step";
   p.width = 760;
   Series held{"held-out RMS", Style::kLinePoints, {}, {}, {}, {}, svg::palette(0), false, 1.0};
@@ -605,11 +819,11 @@ std::string gap_shrink_figure(const json& steps) {
     const std::string added = str(steps[i], "added");
     p.x_categories.push_back(added.empty() ? fmt::format("step {}", i) : "+" + added);
     held.x.push_back(static_cast<double>(i));
-    held.y.push_back(num(steps[i], "heldout_rms_mps2"));
+    held.y.push_back(num(steps[i], "heldout_rms_mps2") / physics::kMilliG);
     ins.x.push_back(static_cast<double>(i));
-    ins.y.push_back(num(steps[i], "in_sample_rms_mps2"));
+    ins.y.push_back(num(steps[i], "in_sample_rms_mps2") / physics::kMilliG);
     fl.x.push_back(static_cast<double>(i));
-    fl.y.push_back(num(steps[i], "noise_floor_mps2"));
+    fl.y.push_back(num(steps[i], "noise_floor_mps2") / physics::kMilliG);
   }
   p.series = {held, ins, fl};
   p.y_include_zero = true;
@@ -617,40 +831,208 @@ std::string gap_shrink_figure(const json& steps) {
                    "noise floor.");
 }
 
-// Table of the candidate terms: held-out improvement, ΔBIC, p, size with its 95 % interval, aliases.
+// Groups of candidates that stand in for each other (each names another among its aliases, either
+// by term or by term_axis): the group number of each candidate, 0 for one without a stand-in.
+std::vector<int> alias_groups(const json& cands) {
+  const std::size_t n = cands.size();
+  std::vector<std::size_t> parent(n);
+  for (std::size_t i = 0; i < n; ++i) parent[i] = i;
+  auto root = [&](std::size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (std::size_t i = 0; i < n; ++i)
+    for (const auto& a : cands[i].value("aliases", json::array())) {
+      if (!a.is_string()) continue;
+      for (std::size_t j = 0; j < n; ++j) {
+        const std::string t = str(cands[j], "term");
+        if (j != i && (a == t || a == t + "_" + str(cands[j], "axis"))) parent[root(i)] = root(j);
+      }
+    }
+  std::map<std::size_t, int> size, number;
+  for (std::size_t i = 0; i < n; ++i) ++size[root(i)];
+  std::vector<int> group(n, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    if (size[root(i)] > 1) group[i] = number.emplace(root(i), static_cast<int>(number.size()) + 1).first->second;
+  return group;
+}
+
+// Table of the candidate terms: held-out improvement, ΔBIC, p, size with its 95 % interval, aliases;
+// candidates that stand in for each other are listed together under one group label, and only the
+// group's best (largest held-out improvement) is called significant — the others can replace it.
 std::string gap_candidates_table(const json& cands) {
-  std::string o = "<table><tr><th>term</th><th>axis</th><th>held-out improvement</th><th>ΔBIC</th><th>p</th><th>size</th>"
-                  "<th>95 % interval</th><th>aliases</th><th>significant</th></tr>\n";
-  for (const auto& c : cands) {
+  const std::vector<int> group = alias_groups(cands);
+  std::vector<std::size_t> order(cands.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const int ga = group[a] ? group[a] : 1 << 20, gb = group[b] ? group[b] : 1 << 20;
+    return ga != gb ? ga < gb : num(cands[a], "heldout_improvement") > num(cands[b], "heldout_improvement");
+  });
+  std::string o = "<table><tr><th>group</th><th>term</th><th>axis</th><th>held-out improvement</th><th>ΔBIC</th><th>p</th>"
+                  "<th>size</th><th>95 % interval</th><th>aliases</th><th>significant</th></tr>\n";
+  std::set<int> led;
+  for (std::size_t i : order) {
+    const json& c = cands[i];
     std::string al;
     for (const auto& a : c.value("aliases", json::array())) al += (al.empty() ? "" : ", ") + (a.is_string() ? a.get<std::string>() : a.dump());
-    o += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} {}</td><td>[{}, {}]</td>"
+    const bool sig = c.value("significant", false);
+    std::string verdict = sig ? "YES" : "no";
+    if (group[i] && sig)
+      verdict = led.insert(group[i]).second ? "YES (for its group: the data cannot tell its members apart)"
+                                            : "stands in for the group's first — not a separate finding";
+    o += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} {}</td><td>[{}, {}]</td>"
                      "<td>{}</td><td>{}</td></tr>\n",
-                     escape(str(c, "term")), escape(str(c, "axis")), g3(num(c, "heldout_improvement")),
-                     g3(num(c, "delta_bic")), g3(num(c, "p_value")), g3(num(c, "size")), escape(str(c, "size_unit")),
+                     group[i] ? fmt::format("aliased group {}", group[i]) : "—", escape(str(c, "term")),
+                     escape(str(c, "axis")), g3(num(c, "heldout_improvement")), g3(num(c, "delta_bic")),
+                     g3(num(c, "p_value")), g3(num(c, "size")), escape(str(c, "size_unit")),
                      g3(at(c.value("ci95", json::array()), 0)), g3(at(c.value("ci95", json::array()), 1)), escape(al),
-                     c.value("significant", false) ? "YES" : "no");
+                     verdict);
   }
   return o + "</table>\n";
 }
 
-std::string gap_section(const json& gp) {
+std::string gap_section(const json& gp, bool temperature_recorded) {
   GapAxes axes;
   axes.magnitude = str(gp, "form") == "magnitude";
   axes.count = axes.magnitude ? 1 : 3;
   std::string o = gap_summary(gp, axes);
   const json where = gp.value("where", json::array());
-  if (!where.empty()) o += gap_where_figure(where);
+  if (!where.empty()) o += gap_where_figure(where, temperature_recorded);
   const json segs = gp.value("segments", json::array());
-  if (!segs.empty()) o += gap_segment_figures(segs, axes);
+  if (!segs.empty()) o += gap_segment_figures(segs, axes, temperature_recorded);
   const json steps = gp.value("steps", json::array());
   if (!steps.empty()) o += gap_shrink_figure(steps);
   const json cands = gp.value("candidates", json::array());
   if (!cands.empty()) o += gap_candidates_table(cands);
   const json un = gp.value("unexplained", json::object());
   if (!un.empty())
-    o += fmt::format("<p><b>Unexplained:</b> held-out RMS {} m/s² = {} × floor. {}</p>\n", g3(num(un, "heldout_rms_mps2")),
+    o += fmt::format("<p><b>Unexplained:</b> held-out RMS {} mg = {} × floor. {}</p>\n",
+                     g3(num(un, "heldout_rms_mps2") / physics::kMilliG),
                      g3(num(un, "over_floor")), escape(str(un, "statement")));
+  return o;
+}
+
+// ---- recording overview --------------------------------------------------------------------
+
+// The recording's channels reduced to kOverviewBins time bins: per bin the minimum, maximum and
+// mean of each channel (ax ay az [m/s²], gx gy gz [rad/s], temperature [°C]), so that a run of any
+// length is drawn with a fixed number of points, read a chunk at a time.
+constexpr std::size_t kOverviewBins = 400;
+constexpr std::array<Channel, 7> kOverviewChannels = {Channel::kAx, Channel::kAy, Channel::kAz, Channel::kGx,
+                                                      Channel::kGy, Channel::kGz, Channel::kTemperature};
+struct Overview {
+  double t0 = 0.0, t1 = 0.0;  // [s]
+  std::array<std::vector<double>, 7> lo, hi, sum;
+  std::vector<double> count;
+};
+
+Overview overview_of(const Recording& rec) {
+  Overview ov;
+  const SampleSource& src = rec.sample_source();
+  if (src.size() == 0) return ov;
+  ov.t0 = sample_at(src, 0).t_s;
+  ov.t1 = sample_at(src, src.size() - 1).t_s;
+  for (std::size_t c = 0; c < kOverviewChannels.size(); ++c) {
+    ov.lo[c].assign(kOverviewBins, INFINITY);
+    ov.hi[c].assign(kOverviewBins, -INFINITY);
+    ov.sum[c].assign(kOverviewBins, 0.0);
+  }
+  ov.count.assign(kOverviewBins, 0.0);
+  const double span = std::max(ov.t1 - ov.t0, 1e-9);
+  for_each_chunk(src, [&](const ImuSample* chunk, std::size_t n, std::uint64_t) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const double f = (chunk[i].t_s - ov.t0) / span * static_cast<double>(kOverviewBins);
+      const auto b = static_cast<std::size_t>(std::clamp(f, 0.0, static_cast<double>(kOverviewBins - 1)));
+      ov.count[b] += 1.0;
+      for (std::size_t c = 0; c < kOverviewChannels.size(); ++c) {
+        const double v = value_of(chunk[i], kOverviewChannels[c]);
+        ov.lo[c][b] = std::min(ov.lo[c][b], v);
+        ov.hi[c][b] = std::max(ov.hi[c][b], v);
+        ov.sum[c][b] += v;
+      }
+    }
+  });
+  return ov;
+}
+
+// One overview plot: channels c0 … c0+n−1 scaled by `scale`, each a min–max band and a mean line
+// over time, with the recording's segments shaded behind them.
+Plot overview_plot(const Overview& ov, const Recording& rec, std::size_t c0, std::size_t n, double scale,
+                   const std::string& title, const std::string& y_label, const std::vector<std::string>& names) {
+  Plot p;
+  p.title = title;
+  p.x_label = "time since the start of the recording [s]";
+  p.y_label = y_label;
+  p.width = 760;
+  p.height = 300;
+  double lo = INFINITY, hi = -INFINITY;
+  for (std::size_t c = c0; c < c0 + n; ++c)
+    for (std::size_t b = 0; b < kOverviewBins; ++b)
+      if (ov.count[b] > 0 && std::isfinite(ov.lo[c][b]) && std::isfinite(ov.hi[c][b])) {
+        lo = std::min(lo, ov.lo[c][b] * scale);
+        hi = std::max(hi, ov.hi[c][b] * scale);
+      }
+  if (!(hi >= lo)) return p;
+  // Segments: shaded over the channels' range, alternating two greys so neighbours stay apart.
+  for (std::size_t k = 0; k < rec.segments.size(); ++k) {
+    const Segment& sg = rec.segments[k];
+    Series sh{k == 0 ? "segment (shaded)" : "", Style::kBand, {}, {}, {}, {}, k % 2 ? "#999" : "#666", false, 0.12};
+    sh.x = {sg.t_start_s - ov.t0, sg.t_end_s - ov.t0};
+    sh.y_lo = {lo, lo};
+    sh.y_hi = {hi, hi};
+    p.series.push_back(sh);
+  }
+  const double bin_s = (ov.t1 - ov.t0) / static_cast<double>(kOverviewBins);
+  for (std::size_t c = c0; c < c0 + n; ++c) {
+    const std::string color = svg::palette(c - c0);
+    Series band{"", Style::kBand, {}, {}, {}, {}, color, false, 0.25};
+    Series mean{names[c - c0], Style::kLine, {}, {}, {}, {}, color, false, 1.0};
+    for (std::size_t b = 0; b < kOverviewBins; ++b) {
+      const double t = (static_cast<double>(b) + 0.5) * bin_s;
+      const bool any = ov.count[b] > 0 && std::isfinite(ov.lo[c][b]);
+      band.x.push_back(t);
+      band.y_lo.push_back(any ? ov.lo[c][b] * scale : kNaN);
+      band.y_hi.push_back(any ? ov.hi[c][b] * scale : kNaN);
+      mean.x.push_back(t);
+      mean.y.push_back(any ? ov.sum[c][b] / ov.count[b] * scale : kNaN);
+    }
+    p.series.push_back(band);
+    p.series.push_back(mean);
+  }
+  return p;
+}
+
+// Whether the recording has a temperature: some finite temperature sample.
+bool has_temperature(const Overview& ov) {
+  constexpr std::size_t t = 6;
+  for (std::size_t b = 0; b < kOverviewBins; ++b)
+    if (ov.count[b] > 0 && std::isfinite(ov.lo[t][b]) && std::isfinite(ov.hi[t][b])) return true;
+  return false;
+}
+
+// The raw time series of the recording (accelerometer, gyroscope, temperature when recorded),
+// reduced to bins, with its segments shaded; a paragraph instead when the samples cannot be read.
+std::string overview_section(const fs::path& dir, bool& temperature_recorded) {
+  std::string o = "<h2>Recording overview <span class=\"file\">(run samples)</span></h2>\n";
+  try {
+    const Recording rec = Recording::open(dir, SampleLoading::kStream, TruthLoading::kSkip);
+    const Overview ov = overview_of(rec);
+    temperature_recorded = rec.header.info.has_temperature && has_temperature(ov);
+    if (ov.count.empty()) return o + "<p class=\"warn\">The recording has no samples.</p>\n";
+    const std::string cap = fmt::format("Raw samples over the whole recording ({} samples, {} s): each channel's "
+                                        "minimum–maximum per time bin (band) and mean (line); grey: the segments.",
+                                        rec.sample_count(), g3(ov.t1 - ov.t0));
+    o += figure(overview_plot(ov, rec, 0, 3, 1.0, "accelerometer, raw", "specific force [m/s²]", {"ax", "ay", "az"}), cap);
+    if (rec.header.info.has_gyro)
+      o += figure(overview_plot(ov, rec, 3, 3, physics::kRadToDeg, "gyroscope, raw", "rate [deg/s]", {"gx", "gy", "gz"}),
+                  cap);
+    if (rec.header.info.has_temperature && has_temperature(ov))
+      o += figure(overview_plot(ov, rec, 6, 1, 1.0, "sensor temperature", "temperature [°C]", {"temperature"}), cap);
+    else
+      o += "<p>No temperature was recorded.</p>\n";
+  } catch (const std::exception& e) {
+    o += "<p class=\"warn\">The samples could not be read for the overview: " + escape(e.what()) + "</p>\n";
+  }
   return o;
 }
 
@@ -696,6 +1078,8 @@ std::string run_report_html(const fs::path& run_dir) {
     body += "<p class=\"bad\">This recording is not complete (status " + escape(rr.run_status) +
             "): results describe the data present only.</p>\n";
   for (const auto& n : rr.notes) body += "<p class=\"warn\">" + escape(n) + "</p>\n";
+  bool temperature_recorded = true;  // the gap section's temperature plots need one
+  body += overview_section(rr.dir, temperature_recorded);
   json doc;
   // One results file per instrument and estimator (estimation::results_files_of).
   for (const auto& f : estimation::results_files_of("fit.json"))
@@ -705,7 +1089,7 @@ std::string run_report_html(const fs::path& run_dir) {
   for (const auto& f : estimation::results_files_of("temp_poly.json"))
     if (load(rr.dir, f, doc, body)) body += temp_section(doc, f);
   if (load(rr.dir, "allan.json", doc, body)) body += allan_section(doc);
-  if (load(rr.dir, "gap.json", doc, body)) body += gap_section(doc);
+  if (load(rr.dir, "gap.json", doc, body)) body += gap_section(doc, temperature_recorded);
   body += "<p class=\"file\">Written by stend report. Plots are inline SVG; this file needs nothing else.</p>\n";
   return html_page("Stend report — " + rr.run_name, body);
 }

@@ -185,65 +185,148 @@ Ranges data_ranges(const Plot& p) {
     finish_range(r.xlo, r.xhi, p.x_log);
   }
   finish_range(r.ylo, r.yhi, p.y_log);
+  // Forced ranges only widen: every drawable point stays inside the axes.
   if (p.fixed_x) {
-    r.xlo = p.x_min;
-    r.xhi = p.x_max;
+    r.xlo = std::min(r.xlo, p.x_min);
+    r.xhi = std::max(r.xhi, p.x_max);
   }
   if (p.fixed_y) {
-    r.ylo = p.y_min;
-    r.yhi = p.y_max;
+    r.ylo = std::min(r.ylo, p.y_min);
+    r.yhi = std::max(r.yhi, p.y_max);
   }
   return r;
 }
 
-// Where everything goes [px]: the plot box inside the margins, and the axes mapping data onto it.
+// Estimated width [px] of a text line at `font_px` in the plots' sans-serif font: the UTF-8 code
+// points times a generous mean advance (0.62 em), so that a text laid out by it is never clipped.
+double text_width(const std::string& s, double font_px) {
+  std::size_t points = 0;
+  for (unsigned char c : s)
+    if ((c & 0xC0) != 0x80) ++points;
+  return 0.62 * font_px * static_cast<double>(points);
+}
+
+constexpr double kFont = 11.0, kTitleFont = 13.0;  // px
+constexpr double kLegendRow = 15.0;                  // px per legend entry
+constexpr double kMinLabelSpacing = 14.0;            // px between slanted category labels
+constexpr double kLegendRightMax = 0.30;             // a wider legend goes below the plot (× plot width)
+
+std::vector<std::size_t> named_series(const Plot& p) {
+  std::vector<std::size_t> named;
+  for (std::size_t k = 0; k < p.series.size(); ++k)
+    if (!p.series[k].name.empty()) named.push_back(k);
+  return named;
+}
+
+// Where everything goes [px]: the plot box inside the margins, the legend outside it, the whole
+// picture's size, and the axes mapping data onto the plot box.
 struct Frame {
   bool slanted = false;  // category labels too long for their slot are drawn slanted
+  double width = 0.0, height = 0.0;                   // the <svg> element
+  double bottom = 0.0;  // from the plot box to the end of the x-axis label
   double px0 = 0.0, px1 = 0.0, py0 = 0.0, py1 = 0.0;  // plot box: left, right, top, bottom
+  bool legend = false;
+  double lx = 0.0, ly = 0.0, lw = 0.0, lh = 0.0;      // legend box
   Ranges data;
   Axis ax, ay;
 };
 
+// Width [px] of the widest x tick label (numbers; categories are laid out on their own).
+double x_tick_width(const Plot& p, const Ranges& r) {
+  double w = 0.0;
+  if (p.x_categories.empty())
+    for (double v : nice_ticks(r.xlo, r.xhi, p.x_log)) w = std::max(w, text_width(tick_text(v), kFont));
+  return w;
+}
+
+// Width [px] of the widest y tick label.
+double y_tick_width(const Plot& p, const Ranges& r) {
+  double w = 0.0;
+  for (double v : nice_ticks(r.ylo, r.yhi, p.y_log)) w = std::max(w, text_width(tick_text(v), kFont));
+  return w;
+}
+
+// The layout rule every plot obeys by construction: the legend sits outside the plot box — to the
+// right when it is narrow, else below the x-axis label — so it never covers data; the axis ranges
+// contain every drawable point (data_ranges); the margins make room for the tick, category and
+// axis labels, so no text is clipped.
 Frame layout(const Plot& p) {
   Frame f;
-  std::size_t longest_category = 0;
-  for (const auto& c : p.x_categories) longest_category = std::max(longest_category, c.size());
-  const double slot = p.x_categories.empty() ? 0.0 : (p.width - 94.0) / static_cast<double>(std::min<std::size_t>(p.x_categories.size(), 12));
-  f.slanted = !p.x_categories.empty() && 6.0 * static_cast<double>(longest_category) > slot;
-  // The bottom margin makes room for slanted labels.
-  const double left = 78, right = 16, top = p.title.empty() ? 14 : 32,
-               bottom = f.slanted ? 50 + std::min(170.0, 4.0 * static_cast<double>(longest_category)) : 50;
-  const double W = p.width, H = p.height;
-  f.px0 = left;
-  f.px1 = W - right;
-  f.py0 = top;
-  f.py1 = H - bottom;
   f.data = data_ranges(p);
-  f.ax = Axis{f.data.xlo, f.data.xhi, p.x_log, left, W - right};
-  f.ay = Axis{f.data.ylo, f.data.yhi, p.y_log, H - bottom, top};
+  double longest_category = 0.0;
+  for (const auto& c : p.x_categories) longest_category = std::max(longest_category, text_width(c, kFont));
+  // Horizontal labels when the longest fits its category's slot, else slanted.
+  const double slot = p.x_categories.empty() ? 0.0 : (p.width - 94.0) / static_cast<double>(p.x_categories.size());
+  f.slanted = !p.x_categories.empty() && longest_category > slot;
+  // Slanted (−40°) labels reach down 0.64 and left 0.77 of their length from their tick; label i's
+  // tick is about (i + 0.6) slots right of the plot box's left edge.
+  double slanted_reach = 0.0;
+  if (f.slanted)
+    for (std::size_t i = 0; i < p.x_categories.size(); ++i)
+      slanted_reach = std::max(slanted_reach, 0.77 * text_width(p.x_categories[i], kFont) -
+                                                  (static_cast<double>(i) + 0.6) * slot + 6.0);
+  const double bottom = f.slanted ? 50 + 0.64 * longest_category : 50;
+  const double left = std::max({50.0, 26.0 + y_tick_width(p, f.data) + 6.0, slanted_reach});
+  const double top = p.title.empty() ? 14 : 32;
+  const std::vector<std::size_t> named = named_series(p);
+  double longest_name = 0.0;
+  for (std::size_t k : named) longest_name = std::max(longest_name, text_width(p.series[k].name, kFont));
+  f.legend = !named.empty();
+  f.lw = 30 + longest_name;
+  f.lh = 6 + kLegendRow * static_cast<double>(named.size());
+  const bool right = f.lw <= kLegendRightMax * p.width;
+  f.width = p.width + (f.legend && right ? f.lw + 12 : 0.0);
+  f.height = p.height + bottom - 50 + (f.legend && !right ? f.lh + 6 : 0.0);
+  f.bottom = bottom;
+  f.px0 = left;
+  f.px1 = p.width - std::max(16.0, 0.5 * x_tick_width(p, f.data) + 4.0);
+  f.py0 = top;
+  f.py1 = f.height - bottom - (f.legend && !right ? f.lh + 6 : 0.0);
+  if (right) {
+    f.lx = f.px1 + 10;
+    f.ly = f.py0;
+  } else {
+    f.lx = f.px0;
+    f.ly = f.py1 + bottom;
+    if (f.legend) f.width = std::max(f.width, f.lx + f.lw + 6);  // a legend wider than the plot widens the picture
+  }
+  f.ax = Axis{f.data.xlo, f.data.xhi, p.x_log, f.px0, f.px1};
+  f.ay = Axis{f.data.ylo, f.data.yhi, p.y_log, f.py1, f.py0};
   return f;
+}
+
+// A text attribute that squeezes a text into `room` [px] when its estimated width exceeds it.
+std::string fit_text(const std::string& s, double font_px, double room) {
+  return text_width(s, font_px) > room ? fmt::format(" textLength=\"{}\" lengthAdjust=\"spacingAndGlyphs\"", num(room)) : "";
 }
 
 // The <svg> element's opening, white background, title and plot box.
 std::string svg_open(const Plot& p, const Frame& f) {
   std::string o = fmt::format(
       "<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"plot\" width=\"{0}\" height=\"{1}\" viewBox=\"0 0 {0} {1}\" "
-      "font-family=\"sans-serif\" font-size=\"11\" role=\"img\" aria-label=\"{2}\">\n",
-      p.width, p.height, escape(p.title));
-  o += fmt::format("<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"#fff\"/>\n", p.width, p.height);
+      "font-family=\"sans-serif\" font-size=\"11\" role=\"img\" aria-label=\"{2}\" data-plot-box=\"{3} {4} {5} {6}\"",
+      num(f.width), num(f.height), escape(p.title), num(f.px0), num(f.py0), num(f.px1), num(f.py1));
+  if (f.legend) o += fmt::format(" data-legend-box=\"{} {} {} {}\"", num(f.lx), num(f.ly), num(f.lx + f.lw), num(f.ly + f.lh));
+  o += ">\n";
+  o += fmt::format("<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"#fff\"/>\n", num(f.width), num(f.height));
   if (!p.title.empty())
-    o += fmt::format("<text x=\"{}\" y=\"18\" text-anchor=\"middle\" font-size=\"13\" font-weight=\"bold\">{}</text>\n",
-                     num(p.width / 2.0), escape(p.title));
+    o += fmt::format("<text x=\"{}\" y=\"18\" text-anchor=\"middle\" font-size=\"13\" font-weight=\"bold\"{}>{}</text>\n",
+                     num(f.width / 2.0), fit_text(p.title, kTitleFont, f.width - 8), escape(p.title));
   o += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#333\"/>\n", num(f.px0),
                    num(f.py0), num(f.px1 - f.px0), num(f.py1 - f.py0));
   return o;
 }
 
-// Category ticks and labels under the plot box (at most about 12 labelled).
+// Category ticks and labels under the plot box: every category labelled while the labels stay
+// kMinLabelSpacing apart (slanted ones are one text line high), else every k-th.
 std::string category_ticks(const Plot& p, const Frame& f) {
   std::string o;
   const std::size_t n = p.x_categories.size();
-  const std::size_t every = std::max<std::size_t>(1, n / 12 + (n % 12 ? 1 : 0));
+  const double slot = (f.px1 - f.px0) / static_cast<double>(std::max<std::size_t>(1, n));
+  double longest = 0.0;
+  for (const auto& c : p.x_categories) longest = std::max(longest, text_width(c, kFont));
+  const double needed = f.slanted ? kMinLabelSpacing : longest + 6.0;
+  const auto every = static_cast<std::size_t>(std::max(1.0, std::ceil(needed / std::max(slot, 1e-9))));
   for (std::size_t i = 0; i < n; i += every) {
     const double X = f.ax.map(static_cast<double>(i));
     o += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{0}\" y2=\"{2}\" stroke=\"#333\"/>", num(X), num(f.py1),
@@ -284,10 +367,11 @@ std::string grid_and_ticks(const Plot& p, const Frame& f) {
 
 // Axis labels (x below, y rotated on the left), and "no data" in an empty plot.
 std::string axis_labels(const Plot& p, const Frame& f) {
-  std::string o = fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n",
-                              num((f.px0 + f.px1) / 2), num(p.height - 12.0), escape(p.x_label));
-  o += fmt::format("<text x=\"14\" y=\"{0}\" text-anchor=\"middle\" transform=\"rotate(-90 14 {0})\">{1}</text>\n",
-                   num((f.py0 + f.py1) / 2), escape(p.y_label));
+  const double x_label_y = f.py1 + f.bottom - 12.0;
+  std::string o = fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\"{}>{}</text>\n", num((f.px0 + f.px1) / 2),
+                              num(x_label_y), fit_text(p.x_label, kFont, f.width - 8), escape(p.x_label));
+  o += fmt::format("<text x=\"14\" y=\"{0}\" text-anchor=\"middle\" transform=\"rotate(-90 14 {0})\"{1}>{2}</text>\n",
+                   num((f.py0 + f.py1) / 2), fit_text(p.y_label, kFont, f.py1 - 4), escape(p.y_label));
   if (!f.data.any)
     o += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" fill=\"#999\">no data</text>\n",
                      num((f.px0 + f.px1) / 2), num((f.py0 + f.py1) / 2));
@@ -314,7 +398,7 @@ std::string band(const Plot& p, const Frame& f, const Series& s, const std::stri
     down = fmt::format("{},{} ", num(f.ax.map(s.x[i])), num(f.ay.map(s.y_lo[i]))) + down;
   }
   if (up.empty()) return {};
-  return fmt::format("<polygon points=\"{}{}\" fill=\"{}\" fill-opacity=\"{}\" stroke=\"none\"/>\n", up, down, color,
+  return fmt::format("<polygon class=\"d\" points=\"{}{}\" fill=\"{}\" fill-opacity=\"{}\" stroke=\"none\"/>\n", up, down, color,
                      s.opacity < 1.0 ? s.opacity : 0.25);
 }
 
@@ -326,7 +410,7 @@ std::string bars(const Plot& p, const Frame& f, const Series& s, const std::stri
   for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
     if (!usable(s.x[i], p.x_log) || !usable(s.y[i], p.y_log)) continue;
     const double X = f.ax.map(s.x[i]), Y = f.ay.map(s.y[i]), Y0 = f.ay.map(ybase);
-    o += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"{}\" fill-opacity=\"{}\"/>\n",
+    o += fmt::format("<rect class=\"d\" x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"{}\" fill-opacity=\"{}\"/>\n",
                      num(X - w / 2), num(std::min(Y, Y0)), num(w), num(std::abs(Y0 - Y)), color, s.opacity);
   }
   return o;
@@ -338,7 +422,7 @@ std::string polyline(const Plot& p, const Frame& f, const Series& s, const std::
   const char* dash = s.dashed ? " stroke-dasharray=\"6 4\"" : "";
   auto flush = [&] {
     if (!pts.empty())
-      o += fmt::format("<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.6\"{}/>\n", pts, color,
+      o += fmt::format("<polyline class=\"d\" points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.6\"{}/>\n", pts, color,
                        dash);
     pts.clear();
   };
@@ -361,12 +445,13 @@ std::string markers(const Plot& p, const Frame& f, const Series& s, const std::s
     const double X = f.ax.map(s.x[i]);
     if (i < s.y_lo.size() && i < s.y_hi.size() && usable(s.y_lo[i], p.y_log) && usable(s.y_hi[i], p.y_log)) {
       const double a = f.ay.map(s.y_lo[i]), b = f.ay.map(s.y_hi[i]);
-      o += fmt::format(
-          "<path d=\"M{0},{1}V{2}M{3},{1}H{4}M{3},{2}H{4}\" stroke=\"{5}\" stroke-width=\"1.2\" fill=\"none\"/>",
-          num(X), num(a), num(b), num(X - 3), num(X + 3), color);
+      o += fmt::format("<path class=\"d\" d=\"M{0},{1}L{0},{2}\" stroke=\"{3}\" stroke-width=\"1.2\"/>", num(X), num(a),
+                       num(b), color);
+      o += fmt::format("<path d=\"M{0},{1}H{2}M{0},{3}H{2}\" stroke=\"{4}\" stroke-width=\"1.2\" fill=\"none\"/>",
+                       num(X - 3), num(a), num(X + 3), num(b), color);
     }
     if (!usable(s.y[i], p.y_log)) continue;
-    o += fmt::format("<circle cx=\"{}\" cy=\"{}\" r=\"3\" fill=\"{}\" fill-opacity=\"{}\"/>\n", num(X),
+    o += fmt::format("<circle class=\"d\" cx=\"{}\" cy=\"{}\" r=\"3\" fill=\"{}\" fill-opacity=\"{}\"/>\n", num(X),
                      num(f.ay.map(s.y[i])), color, s.opacity);
   }
   return o;
@@ -414,23 +499,18 @@ std::string reference_lines(const Plot& p, const Frame& f) {
   return o;
 }
 
-// The legend of the named series: a box inside the plot, top right, one swatch and name a row.
+// The legend of the named series in its box outside the plot (Frame): one swatch and name a row.
 std::string legend(const Plot& p, const Frame& f) {
-  std::vector<std::size_t> named;
-  for (std::size_t k = 0; k < p.series.size(); ++k)
-    if (!p.series[k].name.empty()) named.push_back(k);
-  if (named.empty()) return {};
-  std::size_t longest = 0;
-  for (std::size_t k : named) longest = std::max(longest, p.series[k].name.size());
-  const double lw = 30 + 6.2 * static_cast<double>(longest), lh = 6 + 15.0 * static_cast<double>(named.size());
-  const double lx = f.px1 - lw - 6, ly = f.py0 + 6;
-  std::string o = fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"#fff\" fill-opacity=\"0.85\" "
+  if (!f.legend) return {};
+  const std::vector<std::size_t> named = named_series(p);
+  const double lx = f.lx, ly = f.ly;
+  std::string o = fmt::format("<rect class=\"legend\" x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"#fff\" "
                               "stroke=\"#bbb\"/>\n",
-                              num(lx), num(ly), num(lw), num(lh));
+                              num(lx), num(ly), num(f.lw), num(f.lh));
   for (std::size_t j = 0; j < named.size(); ++j) {
     const Series& s = p.series[named[j]];
     const std::string c = series_color(s, named[j]);
-    const double Y = ly + 13 + 15.0 * static_cast<double>(j);
+    const double Y = ly + 13 + kLegendRow * static_cast<double>(j);
     if (s.style == Style::kBand || s.style == Style::kBars)
       o += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"16\" height=\"9\" fill=\"{}\" fill-opacity=\"{}\"/>",
                        num(lx + 5), num(Y - 8), c, s.style == Style::kBand ? 0.3 : 1.0);

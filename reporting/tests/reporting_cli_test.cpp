@@ -7,6 +7,7 @@
 #include "stend/testing/browser.hpp"
 #include "stend/testing/files.hpp"
 #include "stend/testing/paths.hpp"
+#include "stend/testing/plot_layout.hpp"
 #include "stend/testing/program.hpp"
 
 #include <gtest/gtest.h>
@@ -101,8 +102,8 @@ const char* kGapFixture = R"json({"schema":"stend.gap/1","model":"paper_z_channe
  "noise_floor":{"static_mean_mps2":[0.0001,0.0001,0.0001],"source":"segment noise"},
  "gap":{"static_rms_mps2":[0.002,0.001,0.004],"static_rms_over_floor":[20,10,40],"noise_ratio":[1.1,1.0,1.3]},
  "segments":[{"id":1,"label":"tilt","axis_residual_mps2":[0.001,0.0,0.004],"temperature_c":25.1,"orientation":"0","time_since_change_s":5},
-             {"id":2,"label":"tilt","axis_residual_mps2":[0.002,-0.001,0.006],"temperature_c":25.4,"orientation":"1","time_since_change_s":5},
-             {"id":3,"label":"tilt","axis_residual_mps2":[-0.001,0.001,0.002],"temperature_c":25.6,"orientation":"2","time_since_change_s":5}],
+             {"id":2,"label":"tilt","axis_residual_mps2":[0.002,-0.001,0.006],"temperature_c":25.4,"orientation":"1","time_since_change_s":20},
+             {"id":3,"label":"tilt","axis_residual_mps2":[-0.001,0.001,0.002],"temperature_c":25.6,"orientation":"2","time_since_change_s":60}],
  "where":[{"dimension":"axis","place":"z","share":0.7,"rms_mps2":0.004},{"dimension":"orientation","place":"tilted","share":0.2,"rms_mps2":0.002},
           {"dimension":"temperature","place":"25-26 degC","share":0.1,"rms_mps2":0.001}],
  "candidates":[{"term":"nonlinear_k2","axis":"z","heldout_improvement":0.62,"delta_bic":-41.5,"p_value":1e-6,"size":0.00021,
@@ -130,7 +131,7 @@ TEST_F(Cli, RunWritesASelfContainedReportWithPlots) {
   // One plotted point per static orientation in the residual plot (23 orientations).
   const auto p0 = html.find("residual against orientation");
   const auto p1 = html.find("</svg>", p0);
-  EXPECT_EQ(count(html.substr(p0, p1 - p0), "<circle"), 23u);
+  EXPECT_EQ(count(html.substr(p0, p1 - p0), "<circle class=\"d\""), 23u);
   // Recorded in the results database named by STEND_RESULTS_DB.
   EXPECT_TRUE(fs::exists(dir / "results.sqlite"));
 }
@@ -451,4 +452,137 @@ TEST_F(Cli, ResultsJsonExportFollowsItsSchema) {
   EXPECT_GT(p->hi, p->value);
   EXPECT_EQ(p->unit, "m/s^2/degC");
   EXPECT_EQ(j["estimators"][0]["name"], "temp_poly");
+}
+
+// The plot layout rule (issue 16) on every report kind: in every plot written into the HTML, no
+// data point lies under the legend and every point lies inside the axes (the plotter writes its
+// plot and legend boxes and marks its data elements; stend::testing::plot_layout_violations reads
+// them back). Report kinds: the paper's batch_lsq run, a temperature sweep with accelerometer and
+// gyroscope temp_poly, a Ceres 3-axis calibration, Allan, the gap section (a real `stend gap` and
+// a fixture with aliased candidates), compare, and an imported dataset without temperature.
+// With STEND_REPORT_SHOTS=DIR, each report is also rendered in headless Chromium into DIR/<kind>.png.
+TEST_F(Cli, EveryPlotOfEveryReportKindKeepsItsLegendOffTheDataAndItsPointsInsideTheAxes) {
+  const std::string stend = "'" + kStend.string() + "'";
+  std::map<std::string, fs::path> reports;  // kind → report.html
+  auto copy_run = [&](const std::string& from, const std::string& to) {
+    fs::remove_all(dir / to);
+    fs::copy(dir / from, dir / to, fs::copy_options::recursive);
+    return dir / to;
+  };
+  reports["paper"] = dir / "paper/report.html";
+  // Temperature sweep, accelerometer and gyroscope models in one run.
+  const fs::path sweep = copy_run("sweep", "layout_sweep");
+  std::string gyro = read_text(kSrc / "configs/vendor_study/temp_poly.yaml");
+  gyro.replace(gyro.find("instrument: accelerometer"), 25, "instrument: gyroscope");
+  write_text(dir / "cfg/layout_gyro.yaml", gyro);
+  ASSERT_EQ(sh(stend + " fit '" + sweep.string() + "' -m '" + (dir / "cfg/layout_gyro.yaml").string() + "' --db '" +
+                   (dir / "layout.sqlite").string() + "'",
+               dir / "layout_sweep.log"),
+            0)
+      << read_text(dir / "layout_sweep.log");
+  reports["temperature"] = sweep / "report.html";
+  reports["allan"] = dir / "static/report.html";
+  // The gap section: a real diagnosis of the paper run, and the fixture (aliased candidates).
+  const fs::path gap = copy_run("paper", "layout_gap");
+  ASSERT_EQ(sh(stend + " gap '" + gap.string() + "' -m '" + (kSrc / "estimators/batch_lsq/examples/paper_z_channel.yaml").string() +
+                   "' && " + stend + " report '" + gap.string() + "' --no-db",
+               dir / "layout_gap.log"),
+            0)
+      << read_text(dir / "layout_gap.log");
+  reports["gap"] = gap / "report.html";
+  const fs::path gapf = copy_run("paper", "layout_gap_fixture");
+  std::string fixture = kGapFixture;
+  const std::string cand = "\"candidates\":[";
+  fixture.replace(fixture.find(cand), cand.size(),
+                  cand + R"({"term":"scale","axis":"z","heldout_improvement":0.5,"delta_bic":-30,"p_value":1e-5,"size":0.001,)"
+                         R"("size_unit":"1","ci95":[0.0008,0.0012],"aliases":["nonlinear_k2"],"significant":true},)");
+  write_text(gapf / "gap.json", fixture);
+  ASSERT_EQ(sh(stend + " report '" + gapf.string() + "' --no-db", dir / "layout_gapf.log"), 0) << read_text(dir / "layout_gapf.log");
+  reports["gap_fixture"] = gapf / "report.html";
+  // A Ceres 3-axis calibration (unknown orientations, gyro by integration).
+  ASSERT_EQ(sh("cd '" + kSrc.string() + "' && " + stend + " run configs/multi_position_38.yaml -q -o '" + dir.string() +
+                   "' --name mp38 && " + stend + " fit '" + (dir / "mp38").string() + "' -m '" +
+                   (kSrc / "estimators/ceres_nonlinear/examples/unknown_orientations.yaml").string() + "' --db '" +
+                   (dir / "layout.sqlite").string() + "'",
+               dir / "layout_ceres.log"),
+            0)
+      << read_text(dir / "layout_ceres.log");
+  reports["ceres"] = dir / "mp38/report.html";
+  // Compare: the paper run and a copy of it (one procedure).
+  copy_run("paper", "layout_paper2");
+  ASSERT_EQ(sh(stend + " compare '" + (dir / "paper").string() + "' '" + (dir / "layout_paper2").string() + "' --db '" +
+                   (dir / "layout_compare.sqlite").string() + "' -o '" + (dir / "layout_compare.html").string() + "'",
+               dir / "layout_compare.log"),
+            0)
+      << read_text(dir / "layout_compare.log");
+  reports["compare"] = dir / "layout_compare.html";
+  // An imported dataset without temperature (imucal: accelerometer and gyro counts only).
+  const fs::path csv = stend::testing::shared_data("imucal/annotated_session.csv");
+  if (fs::exists(csv)) {
+    const fs::path run = dir / "layout_imucal";
+    fs::remove_all(run);
+    ASSERT_EQ(sh(stend + " import '" + csv.string() + "' -o '" + run.string() + "' && " + stend + " fit '" + run.string() +
+                     "' -m '" + (kSrc / "diagnosis/examples/imucal_bias_scale.yaml").string() + "' --db '" +
+                     (dir / "layout.sqlite").string() + "' && " + stend + " gap '" + run.string() + "' -m '" +
+                     (kSrc / "diagnosis/examples/imucal_bias_scale.yaml").string() + "' && " + stend + " report '" +
+                     run.string() + "' --no-db",
+                 dir / "layout_imucal.log"),
+              0)
+        << read_text(dir / "layout_imucal.log");
+    reports["imported"] = run / "report.html";
+  } else {
+    std::printf("imported-dataset report not checked: %s is absent\n", csv.c_str());
+  }
+
+  for (const auto& [kind, file] : reports) {
+    const std::string html = read_text(file);
+    ASSERT_FALSE(html.empty()) << kind << ": no report at " << file;
+    const auto plots = stend::testing::check_plot_layout(html);
+    EXPECT_GE(plots.size(), 2u) << kind;
+    EXPECT_EQ(stend::testing::plot_layout_violations(html), "") << kind << " (" << file << ")";
+    std::size_t points = 0;
+    for (const auto& p : plots) points += p.points;
+    std::printf("%-12s %2zu plots, %6zu data coordinates checked\n", kind.c_str(), plots.size(), points);
+  }
+  // The story each kind tells.
+  const std::string paper = read_text(reports["paper"]);
+  EXPECT_NE(paper.find("tilt: gravity direction from +z toward"), std::string::npos) << "residual x axis not the tilt";
+  EXPECT_NE(paper.find("Recording overview"), std::string::npos);
+  EXPECT_NE(paper.find("segment (shaded)"), std::string::npos);
+  const std::string temp = read_text(reports["temperature"]);
+  EXPECT_NE(temp.find("temp_poly-gyroscope.json"), std::string::npos);
+  // Accelerometer: 3 axes; the gyroscope at rest has no input that observes its scale factor.
+  EXPECT_EQ(count(temp, "aria-label=\"scale-factor error against temperature"), 3u);
+  EXPECT_NE(temp.find("its scale-factor error is not observed by this run"), std::string::npos);
+  const std::string ceres = read_text(reports["ceres"]);
+  EXPECT_NE(ceres.find("|a| − g per static interval, before and after"), std::string::npos);
+  EXPECT_NE(ceres.find("gravity-direction mismatch per move, before and after"), std::string::npos);
+  EXPECT_NE(ceres.find("with their intervals"), std::string::npos);
+  for (const char* kind : {"gap", "gap_fixture"}) {
+    const std::string html = read_text(reports[kind]);
+    const std::string section = html.substr(html.find("Sim-to-real gap"));
+    EXPECT_EQ(section.find("m/s²"), std::string::npos) << kind << ": the gap section mixes m/s² and mg";
+    EXPECT_EQ(section.find("residual against temperature\""), std::string::npos)
+        << kind << ": a residual-against-temperature plot at one temperature (a vertical stripe)";
+  }
+  const std::string gf = read_text(reports["gap_fixture"]);
+  EXPECT_NE(gf.find("aliased group 1"), std::string::npos);
+  EXPECT_NE(gf.find("stands in for the group"), std::string::npos);
+  if (reports.count("imported")) {
+    const std::string imp = read_text(reports["imported"]);
+    EXPECT_EQ(imp.find(">0 °C"), std::string::npos);
+    EXPECT_EQ(imp.find(" 0 °C"), std::string::npos);
+    EXPECT_EQ(imp.find("0 degC"), std::string::npos);
+    EXPECT_NE(imp.find("No temperature was recorded"), std::string::npos);
+  }
+
+  const char* shots = std::getenv("STEND_REPORT_SHOTS");
+  if (shots == nullptr || find_chromium().empty()) return;
+  fs::create_directories(shots);
+  for (const auto& [kind, file] : reports) {
+    const fs::path png = fs::path(shots) / (kind + ".png");
+    const auto out = stend::testing::headless_chromium("file://" + file.string(), 1000, png, 1200, 6000);
+    EXPECT_EQ(out.code, 0) << out.log;
+    EXPECT_TRUE(out.console.empty()) << kind << ": " << out.console;
+  }
 }

@@ -7,6 +7,8 @@
 #include "stend/reporting/svg_plot.hpp"
 #include "stend/testing/files.hpp"
 
+#include "stend/testing/plot_layout.hpp"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -36,6 +38,39 @@ TEST(Svg, LogTicksAreDecades) {
   for (std::size_t i = 0; i < t.size(); ++i) EXPECT_NEAR(std::log10(t[i]), -2.0 + static_cast<double>(i), 1e-12);
   const auto narrow = rp::svg::nice_ticks(1.0, 30.0, true);  // < 2 decades: 1, 2, 5 steps
   EXPECT_EQ(narrow, (std::vector<double>{1, 2, 5, 10, 20}));
+}
+
+// The layout rule by construction: points where the old in-plot legend sat (top right), a legend
+// too wide for the right side (then below), forced ranges narrower than the data, and long tick,
+// axis and category labels — every point inside the axes and none under the legend.
+TEST(Svg, LegendStaysOffTheDataAndEveryPointInsideTheAxes) {
+  for (const std::string& name : {std::string("short"), std::string(120, 'w')}) {
+    rp::svg::Plot p;
+    p.title = "layout";
+    p.y_label = "a rather long label of the y axis that would not fit otherwise [m/s^2]";
+    rp::svg::Series s{name, rp::svg::Style::kPoints, {}, {}, {}, {}, "", false, 1.0};
+    for (int i = 0; i <= 20; ++i) {
+      s.x.push_back(i);
+      s.y.push_back(1e-4 * i * i);  // the largest values at the top right
+    }
+    s.y_lo = s.y;
+    s.y_hi = s.y;
+    for (auto& v : s.y_hi) v += 0.002;
+    p.series = {s, {"a curve", rp::svg::Style::kLine, s.x, s.y, {}, {}, "", true, 1.0}};
+    p.fixed_x = p.fixed_y = true;
+    p.x_min = 2;
+    p.x_max = 10;  // narrower than the data: widened to contain it
+    p.y_min = 0;
+    p.y_max = 0.01;
+    const std::string svg = p.render();
+    const auto plots = stend::testing::check_plot_layout(svg);
+    ASSERT_EQ(plots.size(), 1u);
+    EXPECT_TRUE(plots[0].has_legend);
+    EXPECT_EQ(plots[0].points, 21u + 21u * 2 + 21u);  // markers, error bars (2 ends), line vertices
+    EXPECT_EQ(stend::testing::plot_layout_violations(svg), "") << name;
+    if (name.size() > 100) EXPECT_GT(plots[0].legend[1], plots[0].box[3]) << "a wide legend goes below the plot";
+    else EXPECT_GT(plots[0].legend[0], plots[0].box[2]) << "a narrow legend goes to the right of the plot";
+  }
 }
 
 TEST(Svg, RenderEscapesTextAndSkipsBadData) {

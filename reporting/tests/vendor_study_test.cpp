@@ -6,6 +6,7 @@
 #include "stend/reporting/results_db.hpp"
 #include "stend/testing/files.hpp"
 #include "stend/testing/paths.hpp"
+#include "stend/testing/plot_layout.hpp"
 #include "stend/testing/program.hpp"
 
 #include <gtest/gtest.h>
@@ -123,6 +124,8 @@ TEST(VendorStudy, VendorsDifferAsPlantedAndIntervalsCoverTheUnits) {
   std::size_t plots = 0;
   for (auto p = html.find("<svg"); p != std::string::npos; p = html.find("<svg", p + 1)) ++plots;
   EXPECT_EQ(plots, names.size());
+  // The layout rule: no unit's point under the vendors' legend, every point inside the axes.
+  EXPECT_EQ(st::plot_layout_violations(html), "");
   // Every run also got its own report.
   for (const auto& p : planted) EXPECT_TRUE(fs::exists(dir / "runs" / p.at("run") / "report.html")) << p.at("run");
 }

@@ -690,9 +690,22 @@ std::string CalibrationResult::to_json() const {
   for (const auto& p : gyro_parameters) j["gyro_parameters"].push_back(prm(p));
   if (detection) j["detection"] = detection_json(*detection);
   j["intervals"] = json::array();
-  for (const auto& iv : intervals)
-    j["intervals"].push_back({{"label", iv.label}, {"t_start_s", iv.t_start_s}, {"t_end_s", iv.t_end_s},
-                              {"samples", iv.count}});
+  // Accelerometer: each interval's |ȳ| − g raw and |correct(ȳ)| − g calibrated [m/s^2].
+  for (const auto& iv : intervals) {
+    json e = {{"label", iv.label}, {"t_start_s", iv.t_start_s}, {"t_end_s", iv.t_end_s}, {"samples", iv.count}};
+    if (!gyro) {
+      e["norm_error_before_mps2"] = num(iv.accel_mean.norm() - gravity_mps2);
+      e["norm_error_after_mps2"] = ok ? num(correct(iv.accel_mean).norm() - gravity_mps2) : json(nullptr);
+    }
+    j["intervals"].push_back(e);
+  }
+  // Gyro integration: each move's gravity-direction mismatch raw and calibrated [rad].
+  if (!moves.empty()) {
+    j["moves"] = json::array();
+    for (const auto& m : moves)
+      j["moves"].push_back({{"t_end_s", m.t_end_s}, {"mismatch_before_rad", num(m.before_rad)},
+                            {"mismatch_after_rad", num(m.after_rad)}});
+  }
   return j.dump(2);
 }
 
@@ -1476,7 +1489,8 @@ void add_upstream_uncertainty(const IntegrationData& d, const CalibrationResult&
 // Gravity-direction mismatch after each move (RMS over the moves of |v − ĝ_end|, and per axis),
 // raw (θ unused, readings as they are, directions of the raw means) or calibrated with θ.
 std::pair<double, Eigen::Vector3d> gravity_mismatch(const IntegrationData& d, const model::ErrorModel& m,
-                                                    const std::vector<double>& th, bool raw) {
+                                                    const std::vector<double>& th, bool raw,
+                                                    std::vector<MoveMismatch>* per_move = nullptr, bool after = false) {
   const auto& ivs = d.ivs;
   // Calibrated: A⁻¹·(y − b − G·f) (the gyro model is affine in the rate; G·f only moves its offset).
   const Eigen::Matrix3d ai = raw ? Eigen::Matrix3d::Identity() : m.affine<double>(th.data()).a_inv;
@@ -1505,6 +1519,11 @@ std::pair<double, Eigen::Vector3d> gravity_mismatch(const IntegrationData& d, co
     acc += (v - target).cwiseAbs2();
     sum += (v - target).squaredNorm();
     ++count;
+    if (per_move) {
+      const auto j = static_cast<std::size_t>(count - 1);
+      if (per_move->size() <= j) per_move->push_back({ivs[k + 1].t_start_s, kNaN, kNaN});
+      (after ? (*per_move)[j].after_rad : (*per_move)[j].before_rad) = std::atan2(v.cross(target).norm(), v.dot(target));
+    }
   }
   const double dm = std::max(1, count);
   return std::make_pair(std::sqrt(sum / dm), Eigen::Vector3d((acc / dm).cwiseSqrt()));
@@ -1548,9 +1567,9 @@ CalibrationResult calibrate_gyro_integration(const Recording& rec, const Calibra
   r.theta = r1.theta;
   for (int i : kScaleCrossIndex) r.theta[static_cast<std::size_t>(i)] = r2.theta[static_cast<std::size_t>(i)];
   add_upstream_uncertainty(d, r1, r2, x1, x2, go.tolerances, r);
-  std::tie(r.rms_norm_before, r.rms_axis_before) =
-      gravity_mismatch(d, r.model, std::vector<double>(static_cast<std::size_t>(r.model.size()), 0.0), true);
-  std::tie(r.rms_norm_after, r.rms_axis_after) = gravity_mismatch(d, r.model, r.theta, false);
+  std::tie(r.rms_norm_before, r.rms_axis_before) = gravity_mismatch(
+      d, r.model, std::vector<double>(static_cast<std::size_t>(r.model.size()), 0.0), true, &r.moves, false);
+  std::tie(r.rms_norm_after, r.rms_axis_after) = gravity_mismatch(d, r.model, r.theta, false, &r.moves, true);
   return r;
 }
 

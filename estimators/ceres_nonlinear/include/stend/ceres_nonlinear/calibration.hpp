@@ -112,6 +112,15 @@ struct Parameter : estimation::ParameterEstimate {
   bool fixed = false;              // held at zero by construction (not estimated)
 };
 
+// One move between static intervals (gyro integration): the angle between the gravity direction
+// carried over the move by the integrated rate and the one measured after it [rad], raw and
+// calibrated; t_end_s: the start of the static interval the move ends in.
+struct MoveMismatch {
+  double t_end_s = 0.0;
+  double before_rad = std::numeric_limits<double>::quiet_NaN();
+  double after_rad = std::numeric_limits<double>::quiet_NaN();
+};
+
 struct CalibrationResult {
   bool ok = false;
   std::string message;             // why it failed; empty on success
@@ -140,6 +149,7 @@ struct CalibrationResult {
   // Integration: the gravity-direction mismatch per axis [rad] (NaN "before" when not computed).
   Eigen::Vector3d rms_axis_before = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   Eigen::Vector3d rms_axis_after = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  std::vector<MoveMismatch> moves;  // gyro integration: per move (empty otherwise)
   // Covariance of the estimated parameters (scaled by σ², order of free_index = their positions
   // in `parameters`); empty when the fit failed.
   Eigen::MatrixXd covariance;
