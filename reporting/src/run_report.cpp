@@ -1089,7 +1089,7 @@ std::string run_report_html(const fs::path& run_dir) {
   for (const auto& f : estimation::results_files_of("temp_poly.json"))
     if (load(rr.dir, f, doc, body)) body += temp_section(doc, f);
   if (load(rr.dir, "allan.json", doc, body)) body += allan_section(doc);
-  if (load(rr.dir, "gap.json", doc, body)) body += gap_section(doc, temperature_recorded);
+  if (load(rr.dir, kGapResultsFile, doc, body)) body += gap_section(doc, temperature_recorded);
   body += "<p class=\"file\">Written by stend report. Plots are inline SVG; this file needs nothing else.</p>\n";
   return html_page("Stend report — " + rr.run_name, body);
 }
