@@ -202,6 +202,54 @@ void check_window_sequence(const std::string& path, const std::function<void(dou
   m.write_register(bm::kHoldCtrl, 0);
 }
 
+// OVERFLOWS counts only samples the host could never have read. At 100 Hz: a window returns the
+// first 17 samples (delivered, not acknowledged), then the master stalls. (a) The buffer fills and
+// overwrites some of those 17 — the window at 0 now starts after 0 — but nothing the host never
+// saw was dropped: OVERFLOWS stays 0 and STATUS shows no overflow. (b) It stalls on, undelivered
+// samples are overwritten: OVERFLOWS equals the gap the master sees from 17 on.
+void check_overflow_counting(const std::string& path, const std::function<void(double)>& pause) {
+  constexpr double kRateHz = 100.0;
+  constexpr std::uint32_t kSent = bm::kWindowMaxSamples;
+  auto m = client(path);
+  m.write_register(bm::kHoldSmplrtDiv, 9);  // 1 kHz / (1 + 9)
+  m.write_register(bm::kHoldDlpfCfg, 3);    // 44 Hz, below the 50 Hz Nyquist limit
+  m.write_register(bm::kHoldCtrl, bm::kCtrlRun);
+  const auto front = [&m] {  // the oldest sample still buffered (a window at 0 acknowledges nothing)
+    const auto w = m.read_input_registers(bm::kInWindowBase, bm::kWindowHeaderWords);
+    return (static_cast<std::uint32_t>(w[2]) << 16) | w[3];
+  };
+  const auto overflows = [&m] { return static_cast<std::uint32_t>(m.read_input_registers(bm::kInOverflows, 1)[0]); };
+  const double first_read_s = 0.25;
+  pause(first_read_s);
+  const auto w = m.read_input_registers(bm::kInWindowBase, bm::kWindowMaxWords);
+  ASSERT_EQ(w[0], kSent);
+  ASSERT_EQ((static_cast<std::uint32_t>(w[2]) << 16) | w[3], 0u);
+  const int capacity = m.read_input_registers(bm::kInFifoCapacity, 1)[0];
+  // (a) about capacity + 8 samples since RUN: 8 of the 17 delivered ones overwritten
+  pause((capacity + kSent / 2.0) / kRateHz - first_read_s);
+  const std::uint32_t f0 = front();
+  const std::uint32_t o1 = overflows();
+  const std::uint32_t f1 = front();
+  ASSERT_GT(f0, 0u) << "delivered samples were overwritten during the stall";
+  ASSERT_LE(f1, kSent) << "no sample the host had not received was dropped yet (a host this slow misses the window)";
+  EXPECT_EQ(o1, 0u) << "a delivered but unacknowledged sample is not lost";
+  EXPECT_EQ(m.read_input_registers(bm::kInStatus, 1)[0] & bm::kStatusOverflow, 0);
+  // (b) 30 more samples: real loss, exactly what OVERFLOWS counts
+  pause(0.3);
+  const std::uint32_t o2 = overflows();
+  const std::uint32_t f2 = front();
+  const std::uint32_t o3 = overflows();
+  ASSERT_GT(f2, kSent);
+  EXPECT_LE(o2, f2 - kSent);
+  EXPECT_GE(o3, f2 - kSent);
+  EXPECT_NE(m.read_input_registers(bm::kInStatus, 1)[0] & bm::kStatusOverflow, 0);
+  const auto next = m.read_input_registers(bm::kInWindowBase + static_cast<int>(kSent), bm::kWindowMaxWords);
+  const std::uint32_t gap = ((static_cast<std::uint32_t>(next[2]) << 16) | next[3]) - kSent;
+  EXPECT_GE(gap, f2 - kSent);
+  EXPECT_LE(gap, overflows()) << "the gap the master marks is what OVERFLOWS counts";
+  m.write_register(bm::kHoldCtrl, 0);
+}
+
 class Conformance : public ::testing::TestWithParam<bool> {};
 
 TEST_P(Conformance, RegisterMapAndWindowSequence) {
@@ -219,6 +267,24 @@ TEST_P(Conformance, RegisterMapAndWindowSequence) {
   }
   check_register_map(path);
   check_window_sequence(path, pause);
+}
+
+TEST_P(Conformance, OverflowsCountOnlySamplesTheHostNeverReceived) {
+  std::unique_ptr<FirmwareInTheLoop> fw;
+  std::unique_ptr<stend::emu::BenchMcuSlave> emu;
+  std::string path;
+  std::function<void(double)> pause = [](double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); };
+  if (GetParam()) {
+    fw = make_fw();
+    path = fw->device_path();
+    pause = [&fw](double s) { sim_sleep(*fw, s); };
+  } else {
+    stend::emu::BenchMcuConfig c;
+    c.fifo_depth = 48;  // the firmware's RAM ring, so a stall of half a second fills it
+    emu = std::make_unique<stend::emu::BenchMcuSlave>(c, make_mpu());
+    path = emu->device_path();
+  }
+  check_overflow_counting(path, pause);
 }
 
 INSTANTIATE_TEST_SUITE_P(FirmwareAndEmulation, Conformance, ::testing::Values(true, false),
