@@ -42,6 +42,9 @@ constexpr int kOneWireBit = 3;  // PB3, Arduino pin 11
 constexpr std::uint8_t kMpuAddress = 0x68;
 constexpr std::uint32_t kCpuHz = 16000000;
 constexpr avr_cycle_count_t kSliceCycles = kCpuHz / 1000;  // 1 ms of simulated time per step
+// How far (wall time) a paced simulation starved of CPU may fall behind and still catch up; a
+// longer lag is given up rather than raced through (Impl::pace).
+constexpr double kMaxCatchUpS = 0.010;
 
 constexpr avr_cycle_count_t us(double v) { return static_cast<avr_cycle_count_t>(v * kCpuHz / 1e6); }
 
@@ -70,6 +73,7 @@ struct FirmwareInTheLoop::Impl {
   std::thread thread;
   std::atomic<bool> stop{false};
   std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point pace_origin = t0;  // wall instant of simulated time 0 (pacing)
 
   // Line (simulation thread only, except the atomics).
   std::deque<std::uint8_t> to_mcu;
@@ -78,7 +82,8 @@ struct FirmwareInTheLoop::Impl {
   std::uint64_t rng;
   std::atomic<double> reply_corrupt_p{0.0}, request_corrupt_p{0.0};
   std::atomic<std::int64_t> silent_until_ns{0};
-  std::atomic<bool> reset_pending{false};
+  std::atomic<bool> reset_pending{false}, hang_pending{false};
+  void (*core_reset)(avr_t*) = nullptr;  // the core's own reset hook, chained by on_avr_reset
 
   // TWI slave state (MPU-6050).
   std::atomic<bool> mpu_present{true};
@@ -119,7 +124,17 @@ struct FirmwareInTheLoop::Impl {
     if (slave_fd >= 0) ::close(slave_fd);
   }
 
-  double now_s() const { return static_cast<double>(avr->cycle) / kCpuHz; }
+  // Cycles since power-on: simavr 1.6's avr_reset() sets avr->cycle back to 0, so the cycles
+  // before each reset are kept in cycle_base (simulated time never runs backwards).
+  avr_cycle_count_t cycle_base = 0, cycle_at_reset = 0;
+  bool reset_seen = false;
+  avr_cycle_count_t cycles() const { return cycle_base + avr->cycle; }
+  double now_s() const { return static_cast<double>(cycles()) / kCpuHz; }
+  void account_reset() {
+    if (!reset_seen) return;
+    reset_seen = false;
+    if (avr->cycle < cycle_at_reset) cycle_base += cycle_at_reset;
+  }
 
   // simavr's loader and core report through one process-wide logger: errors to
   // stderr, its chatter ("Loaded 8884 .text …", timer-mode notes) dropped.
@@ -140,6 +155,43 @@ struct FirmwareInTheLoop::Impl {
     avr_init(avr);
     avr->log = LOG_ERROR;
     avr_load_firmware(avr, &f);
+    core_reset = avr->reset;
+    avr->custom.data = this;  // read back by on_avr_reset (custom.init/deinit stay unset)
+    avr->reset = &Impl::on_avr_reset;
+  }
+
+  // Every reset of the part — the RESET pin (reset_mcu), the AVR's own watchdog, a crash: the
+  // pins are inputs again, so the harness's view of the 1-Wire line, the TWI transfer and the
+  // UART's flow control starts afresh too.
+  static void on_avr_reset(avr_t* a) {
+    auto* self = static_cast<Impl*>(a->custom.data);
+    if (self->core_reset != nullptr) self->core_reset(a);
+    self->after_reset();
+  }
+
+  void after_reset() {
+    cycle_at_reset = avr->cycle;
+    reset_seen = true;
+    master_low = device_low = false;
+    ow_state = OwState::kIdle;
+    twi_selected = false;
+    uart_full = false;
+    set_line();
+    std::lock_guard<std::mutex> lock(stats_mutex);
+    ++st.resets;
+  }
+
+  // A firmware hang as a bug would cause one: the CPU jumps into avr-libc's _exit (cli; rjmp .),
+  // a tight loop with interrupts off that never calls wdt_reset(). Timers and PWM keep running.
+  void hang_now() {
+    static constexpr std::uint8_t kCliRjmpSelf[] = {0xF8, 0x94, 0xFF, 0xCF};
+    for (avr_flashaddr_t a = 0; a + sizeof kCliRjmpSelf <= avr->flashend; a += 2) {
+      if (std::memcmp(avr->flash + a, kCliRjmpSelf, sizeof kCliRjmpSelf) == 0) {
+        avr->pc = a;
+        return;
+      }
+    }
+    std::fprintf(stderr, "firmware in the loop: %s has no _exit loop (cli; rjmp .) to hang in\n", c.elf_path.c_str());
   }
 
   void open_pty() {
@@ -370,36 +422,43 @@ struct FirmwareInTheLoop::Impl {
     air_out = air;
   }
 
-  void reset_now() {
+  void reset_now() {  // on_avr_reset does the rest
     avr_reset(avr);
-    master_low = device_low = false;
-    ow_state = OwState::kIdle;
-    twi_selected = false;
-    uart_full = false;
-    set_line();
-    std::lock_guard<std::mutex> lock(stats_mutex);
-    ++st.resets;
+    account_reset();
   }
 
-  // Waits until the wall clock catches up with simulated time (or a request arrives).
+  // Waits until the wall clock catches up with simulated time (or a request arrives). When the
+  // simulation thread was starved of CPU and fell behind by more than kMaxCatchUpS, the rest of the
+  // lag is given up (counted in lag_given_up_s) instead of raced through: a real MCU never runs
+  // faster than its clock, and a burst of simulated time would fill the firmware's buffers faster
+  // than any host polls them (the same starvation usually holds the host's polling thread back).
   void pace() {
     if (!(c.speed > 0.0)) return;
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - pace_origin).count();
     const double ahead = now_s() / c.speed - wall;
+    if (ahead < -kMaxCatchUpS) give_up_lag(-ahead - kMaxCatchUpS);
     if (ahead <= 0.0) return;
     pollfd pfd{master_fd, POLLIN, 0};
     const timespec ts{0, static_cast<long>(ahead * 1e9)};
     ppoll(&pfd, 1, &ts, nullptr);
   }
 
+  void give_up_lag(double wall_s) {
+    pace_origin += std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(wall_s));
+    std::lock_guard<std::mutex> lock(stats_mutex);
+    st.lag_given_up_s += wall_s;
+  }
+
   void run() {
     while (!stop.load()) {
       if (reset_pending.exchange(false)) reset_now();
+      if (hang_pending.exchange(false)) hang_now();
       const auto busy0 = std::chrono::steady_clock::now();
-      const avr_cycle_count_t end = avr->cycle + kSliceCycles;
+      const avr_cycle_count_t end = cycles() + kSliceCycles;
       const double t_before = now_s();
-      while (avr->cycle < end) {
+      while (cycles() < end) {
         const int state = avr_run(avr);
+        account_reset();  // the AVR's watchdog resets the part from inside avr_run
         if (state == cpu_Done || state == cpu_Crashed) {
           reset_now();
           break;
@@ -434,6 +493,7 @@ void FirmwareInTheLoop::go_silent(std::chrono::milliseconds d) { impl_->silent_u
 void FirmwareInTheLoop::set_ds18b20_fault(Ds18b20Fault f) { impl_->ow_fault = f; }
 void FirmwareInTheLoop::set_mpu_present(bool present) { impl_->mpu_present = present; }
 void FirmwareInTheLoop::reset_mcu() { impl_->reset_pending = true; }
+void FirmwareInTheLoop::hang_mcu() { impl_->hang_pending = true; }
 int FirmwareInTheLoop::heater_pwm() const { return impl_->heater.load(); }
 int FirmwareInTheLoop::peltier_pwm() const { return impl_->peltier.load(); }
 double FirmwareInTheLoop::air_c() const { return impl_->air_out.load(); }

@@ -19,7 +19,7 @@
 #define MPU_ADDRESS 0x68
 
 /* Sample ring in RAM, 14 bytes per sample (the MPU-6050's 0x3B..0x48 burst). */
-#define RING_SAMPLES 48
+#define RING_SAMPLES 60
 /* How often the MPU-6050's own FIFO is drained into the ring [ms]. */
 #define MPU_DRAIN_PERIOD_MS 2
 

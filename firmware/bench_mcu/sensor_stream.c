@@ -10,7 +10,7 @@
 
 #define WINDOW_MAX_WORDS (STEND_BMCU_WINDOW_HEADER_WORDS + STEND_BMCU_WORDS_PER_SAMPLE * STEND_BMCU_WINDOW_MAX_SAMPLES)
 #define I2C_DATA_REGS (STEND_BMCU_I2C_MAX_READ / 2)
-#define PART_FIFO_HIGH 40 /* of the part's 73 samples: above this the ring makes room (33 ms of margin at 1 kHz for the 1-Wire cycle, ~10 ms) */
+#define PART_FIFO_HIGH 52 /* of the part's 73 samples: above this the ring makes room (21 ms of margin at 1 kHz, twice the ~10 ms 1-Wire cycle) */
 #define CAPACITY (RING_SAMPLES + PART_FIFO_HIGH)
 #define PART_FIFO_SAMPLES 73 /* 1024 bytes / 14 */
 #define MAX_DRAIN_PER_POLL 4 /* samples per poll (0.4 ms of I2C each), so a request waits at most ~2 ms */

@@ -389,6 +389,41 @@ TEST(FirmwareInLoop, BootCountTellsARestart) {
   EXPECT_EQ(m.read_input_registers(bm::kInBootCount, 1)[0], boots + 1) << "BOOT_COUNT lives in EEPROM";
 }
 
+// The firmware hangs (a tight loop with interrupts off, as a bug leaves it): the outputs stay as
+// they were until the AVR's own watchdog (250 ms) resets the part — every pin an input, heater and
+// Peltier off, BOOT_COUNT up by one, RUN cleared: the host sees the restart.
+TEST(FirmwareInLoop, HardwareWatchdogResetsAHungFirmware) {
+  auto fw = make_fw(1.0, 35.0);
+  auto chamber = client(fw->device_path(), kChamberSlave);
+  auto sensor = client(fw->device_path());
+  chamber.write_register(cm::kHoldSetpoint, 2500);  // 10 °C below the air: the Peltier runs
+  chamber.write_register(cm::kHoldCtrl, cm::kCtrlRun);
+  sensor.write_register(bm::kHoldCtrl, bm::kCtrlRun);
+  sim_sleep(*fw, 1.5);
+  ASSERT_EQ(fw->peltier_pwm(), 255);
+  const auto boots = sensor.read_input_registers(bm::kInBootCount, 1)[0];
+  const auto resets = fw->stats().resets;
+  fw->hang_mcu();
+  sim_sleep(*fw, 0.1);
+  EXPECT_EQ(fw->peltier_pwm(), 255) << "hung, not yet reset: Timer1 keeps the duty";
+  EXPECT_EQ(fw->stats().resets, resets);
+  sim_sleep(*fw, 0.3);  // past the 250 ms watchdog
+  EXPECT_EQ(fw->stats().resets, resets + 1) << "the AVR's watchdog reset the part";
+  EXPECT_EQ(fw->peltier_pwm(), 0);
+  EXPECT_EQ(fw->heater_pwm(), 0);
+  const auto in = sensor.read_input_registers(0, bm::kInCount);
+  EXPECT_EQ(in[bm::kInBootCount], boots + 1) << "BOOT_COUNT tells the host the MCU restarted";
+  EXPECT_EQ(in[bm::kInStatus] & bm::kStatusRunning, 0) << "the stream stopped with the reset";
+  const auto ch = chamber.read_input_registers(0, cm::kInCount);
+  EXPECT_EQ(ch[cm::kInPeltierPwm], 0);
+  EXPECT_EQ(ch[cm::kInHeaterPwm], 0);
+  EXPECT_EQ(chamber.read_holding_registers(cm::kHoldCtrl, 1)[0] & cm::kCtrlRun, 0) << "the loop waits to be told to RUN again";
+  const double t = fw->stats().simulated_s;
+  sim_sleep(*fw, 0.5);
+  EXPECT_GT(fw->stats().simulated_s, t + 0.49) << "simulated time runs on across the reset";
+  EXPECT_EQ(fw->stats().resets, resets + 1) << "the restarted firmware feeds its watchdog again";
+}
+
 TEST(FirmwareInLoop, Ds18b20ReadingCrcErrorAndOpenSensor) {
   auto fw = make_fw(1.0, 22.0);
   auto m = client(fw->device_path(), kChamberSlave);
