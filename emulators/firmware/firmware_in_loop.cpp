@@ -45,6 +45,11 @@ constexpr avr_cycle_count_t kSliceCycles = kCpuHz / 1000;  // 1 ms of simulated 
 // How far (wall time) a paced simulation starved of CPU may fall behind and still catch up; a
 // longer lag is given up rather than raced through (Impl::pace).
 constexpr double kMaxCatchUpS = 0.010;
+// Two host ports share the one UART (FirmwareLoopConfig::host_ports): a transaction ends this long
+// after the MCU's last reply byte, or without a reply after kNoReplyCycles (a request the firmware
+// drops: bad CRC, another slave id). Simulated time.
+constexpr avr_cycle_count_t kReplyQuietCycles = 2 * (kCpuHz / 1000);
+constexpr avr_cycle_count_t kNoReplyCycles = 30 * (kCpuHz / 1000);
 
 constexpr avr_cycle_count_t us(double v) { return static_cast<avr_cycle_count_t>(v * kCpuHz / 1e6); }
 
@@ -68,8 +73,12 @@ struct FirmwareInTheLoop::Impl {
   FirmwareLoopConfig c;
   Mpu6050Model mpu;
   avr_t* avr = nullptr;
-  int master_fd = -1, slave_fd = -1;
-  std::string path;
+  struct HostPort {
+    int master_fd = -1, slave_fd = -1;
+    std::string path;
+    std::deque<std::vector<std::uint8_t>> frames;  // requests waiting for the line (two ports only)
+  };
+  std::vector<HostPort> ports;
   std::thread thread;
   std::atomic<bool> stop{false};
   std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
@@ -78,6 +87,10 @@ struct FirmwareInTheLoop::Impl {
   // Line (simulation thread only, except the atomics).
   std::deque<std::uint8_t> to_mcu;
   std::vector<std::uint8_t> from_mcu;
+  // The line's transaction with two host ports: whose request the MCU is answering.
+  std::size_t owner = 0;
+  bool line_busy = false, replied = false;
+  avr_cycle_count_t busy_since = 0, last_reply = 0;
   bool uart_full = false;
   std::uint64_t rng;
   std::atomic<double> reply_corrupt_p{0.0}, request_corrupt_p{0.0};
@@ -105,7 +118,7 @@ struct FirmwareInTheLoop::Impl {
   // Plant.
   double air = 0.0, die = 0.0;
   std::atomic<int> heater{0}, peltier{0};
-  std::atomic<double> air_out{0.0}, sim_s{0.0}, busy_s{0.0};
+  std::atomic<double> air_out{0.0}, die_out{0.0}, sim_s{0.0}, busy_s{0.0};
   mutable std::mutex stats_mutex;
   FirmwareLoopStats st;
 
@@ -113,15 +126,18 @@ struct FirmwareInTheLoop::Impl {
     air = c.plant.initial_c;
     die = c.plant.initial_c + c.plant.self_heating_c;
     air_out = air;
+    die_out = die;
     load();
-    open_pty();
+    for (int i = 0; i < std::clamp(c.host_ports, 1, 2); ++i) open_pty();
     connect_peripherals();
   }
 
   ~Impl() {
     if (avr != nullptr) avr_terminate(avr);
-    if (master_fd >= 0) ::close(master_fd);
-    if (slave_fd >= 0) ::close(slave_fd);
+    for (const HostPort& hp : ports) {
+      if (hp.master_fd >= 0) ::close(hp.master_fd);
+      if (hp.slave_fd >= 0) ::close(hp.slave_fd);
+    }
   }
 
   // Cycles since power-on: simavr 1.6's avr_reset() sets avr->cycle back to 0, so the cycles
@@ -196,14 +212,15 @@ struct FirmwareInTheLoop::Impl {
 
   void open_pty() {
     char name[256] = {};
-    if (openpty(&master_fd, &slave_fd, name, nullptr, nullptr) != 0)
+    HostPort& hp = ports.emplace_back();
+    if (openpty(&hp.master_fd, &hp.slave_fd, name, nullptr, nullptr) != 0)
       throw std::runtime_error(std::string("firmware in the loop: openpty failed: ") + std::strerror(errno));
     termios t{};
-    tcgetattr(slave_fd, &t);
+    tcgetattr(hp.slave_fd, &t);
     cfmakeraw(&t);
-    tcsetattr(slave_fd, TCSANOW, &t);
-    fcntl(master_fd, F_SETFL, fcntl(master_fd, F_GETFL) | O_NONBLOCK);
-    path = name;
+    tcsetattr(hp.slave_fd, TCSANOW, &t);
+    fcntl(hp.master_fd, F_SETFL, fcntl(hp.master_fd, F_GETFL) | O_NONBLOCK);
+    hp.path = name;
   }
 
   // ---- peripherals ------------------------------------------------------------------------
@@ -221,7 +238,10 @@ struct FirmwareInTheLoop::Impl {
   }
 
   static void on_uart_out(avr_irq_t*, std::uint32_t value, void* p) {
-    static_cast<Impl*>(p)->from_mcu.push_back(static_cast<std::uint8_t>(value));
+    auto* self = static_cast<Impl*>(p);
+    self->from_mcu.push_back(static_cast<std::uint8_t>(value));
+    self->replied = true;
+    self->last_reply = self->cycles();
   }
   static void on_uart_xon(avr_irq_t*, std::uint32_t, void* p) {
     auto* self = static_cast<Impl*>(p);
@@ -378,24 +398,65 @@ struct FirmwareInTheLoop::Impl {
     peltier = (tccr1a & kCom1a1) ? avr->data[kOcr1al] : 0;
   }
 
-  void pump_host_to_mcu() {
+  // Bytes the host wrote (one read = one request: libmodbus writes a frame at once), after the
+  // line faults: lost while silent, one byte flipped with the request-corruption probability.
+  bool read_request(HostPort& hp, std::vector<std::uint8_t>& out) {
     std::uint8_t buf[512];
-    for (;;) {
-      const ssize_t n = ::read(master_fd, buf, sizeof buf);
-      if (n <= 0) break;
-      std::lock_guard<std::mutex> lock(stats_mutex);
-      if (steady_now_ns() < silent_until_ns.load()) {
-        ++st.dropped_requests;
-        continue;
+    const ssize_t n = ::read(hp.master_fd, buf, sizeof buf);
+    if (n <= 0) return false;
+    std::lock_guard<std::mutex> lock(stats_mutex);
+    if (steady_now_ns() < silent_until_ns.load()) {
+      ++st.dropped_requests;
+      return true;
+    }
+    if (splitmix_unit(rng) < request_corrupt_p.load()) {
+      buf[static_cast<std::size_t>(n) - 1] ^= 0x5A;  // the CRC no longer matches: the MCU must stay silent
+      ++st.corrupted_requests;
+    }
+    st.bytes_to_mcu += static_cast<std::uint64_t>(n);
+    out.assign(buf, buf + n);
+    return true;
+  }
+
+  void pump_host_to_mcu() {
+    std::vector<std::uint8_t> frame;
+    if (ports.size() == 1) {  // one host: its bytes go straight onto the line
+      while (read_request(ports[0], frame)) {
+        to_mcu.insert(to_mcu.end(), frame.begin(), frame.end());
+        frame.clear();
       }
-      if (splitmix_unit(rng) < request_corrupt_p.load()) {
-        buf[static_cast<std::size_t>(n) - 1] ^= 0x5A;  // the CRC no longer matches: the MCU must stay silent
-        ++st.corrupted_requests;
+    } else {
+      for (HostPort& hp : ports) {
+        while (read_request(hp, frame)) {
+          if (!frame.empty()) hp.frames.push_back(frame);
+          frame.clear();
+        }
       }
-      st.bytes_to_mcu += static_cast<std::uint64_t>(n);
-      to_mcu.insert(to_mcu.end(), buf, buf + n);
+      arbitrate();
     }
     feed_uart();
+  }
+
+  // Two host ports in front of the one UART, as a two-port RS-485 hub: one transaction on the
+  // line at a time (a request, then the MCU's reply or its silence), the ports taking turns.
+  void arbitrate() {
+    if (line_busy) {
+      const bool done = replied ? cycles() - last_reply >= kReplyQuietCycles : cycles() - busy_since >= kNoReplyCycles;
+      if (!done || !from_mcu.empty()) return;
+      line_busy = false;
+    }
+    for (std::size_t k = 1; k <= ports.size(); ++k) {
+      const std::size_t p = (owner + k) % ports.size();
+      if (ports[p].frames.empty()) continue;
+      const std::vector<std::uint8_t>& f = ports[p].frames.front();
+      to_mcu.insert(to_mcu.end(), f.begin(), f.end());
+      ports[p].frames.pop_front();
+      owner = p;
+      line_busy = true;
+      replied = false;
+      busy_since = cycles();
+      return;
+    }
   }
 
   void pump_mcu_to_host() {
@@ -409,8 +470,9 @@ struct FirmwareInTheLoop::Impl {
       }
     }
     std::size_t off = 0;
+    const int fd = ports[owner].master_fd;  // the reply goes to the port whose request is on the line
     while (off < from_mcu.size()) {
-      const ssize_t n = ::write(master_fd, from_mcu.data() + off, from_mcu.size() - off);
+      const ssize_t n = ::write(fd, from_mcu.data() + off, from_mcu.size() - off);
       if (n <= 0) break;  // nobody reads the line: the bytes are lost, as on a real line
       off += static_cast<std::size_t>(n);
     }
@@ -420,6 +482,7 @@ struct FirmwareInTheLoop::Impl {
   void step_plant(double dt) {
     sim::plant_step(c.plant, heater.load(), peltier.load(), dt, air, die);
     air_out = air;
+    die_out = die;
   }
 
   void reset_now() {  // on_avr_reset does the rest
@@ -438,9 +501,9 @@ struct FirmwareInTheLoop::Impl {
     const double ahead = now_s() / c.speed - wall;
     if (ahead < -kMaxCatchUpS) give_up_lag(-ahead - kMaxCatchUpS);
     if (ahead <= 0.0) return;
-    pollfd pfd{master_fd, POLLIN, 0};
+    pollfd pfd[2] = {{ports[0].master_fd, POLLIN, 0}, {ports.back().master_fd, POLLIN, 0}};
     const timespec ts{0, static_cast<long>(ahead * 1e9)};
-    ppoll(&pfd, 1, &ts, nullptr);
+    ppoll(pfd, ports.size(), &ts, nullptr);
   }
 
   void give_up_lag(double wall_s) {
@@ -486,7 +549,10 @@ FirmwareInTheLoop::~FirmwareInTheLoop() {
   if (impl_->thread.joinable()) impl_->thread.join();
 }
 
-const std::string& FirmwareInTheLoop::device_path() const { return impl_->path; }
+const std::string& FirmwareInTheLoop::device_path(int port) const {
+  return impl_->ports.at(static_cast<std::size_t>(port)).path;
+}
+double FirmwareInTheLoop::die_c() const { return impl_->die_out.load(); }
 void FirmwareInTheLoop::set_reply_corrupt_probability(double p) { impl_->reply_corrupt_p = p; }
 void FirmwareInTheLoop::set_request_corrupt_probability(double p) { impl_->request_corrupt_p = p; }
 void FirmwareInTheLoop::go_silent(std::chrono::milliseconds d) { impl_->silent_until_ns = steady_ns_after(d); }

@@ -34,6 +34,10 @@ struct FirmwareLoopConfig {
   double speed = 1.0;             // simulated seconds per wall second; 0 = unpaced (as fast as simavr runs)
   sim::ThermochamberConfig plant; // the chamber around the sensor
   std::uint64_t seed = 1;         // fault-injection random stream
+  // Pseudo-terminals in front of the one UART: 2 gives a second host driver its own port (the
+  // bench world's chamber driver, slave 2, beside the sensor's, slave 1), the requests of both
+  // taking turns on the line one transaction at a time, as behind a two-port RS-485 hub.
+  int host_ports = 1;
 };
 
 struct FirmwareLoopStats {
@@ -55,7 +59,7 @@ class FirmwareInTheLoop {
   FirmwareInTheLoop(const FirmwareInTheLoop&) = delete;
   FirmwareInTheLoop& operator=(const FirmwareInTheLoop&) = delete;
 
-  const std::string& device_path() const;  // the pty's slave end
+  const std::string& device_path(int port = 0) const;  // the pty's slave end (port < host_ports)
 
   // Line faults: each reply (request) burst gets one byte flipped with this probability.
   void set_reply_corrupt_probability(double p);
@@ -71,6 +75,7 @@ class FirmwareInTheLoop {
   int heater_pwm() const;   // Timer1 duty on pin 10, 0..255 (0 while the output is disconnected)
   int peltier_pwm() const;  // pin 9
   double air_c() const;     // the plant's air temperature [°C]
+  double die_c() const;     // the sensor die's temperature in the plant [°C]
   // Blocks until the simulation has reached `t_s` simulated seconds (or `timeout` wall time passed).
   bool wait_until_simulated(double t_s, std::chrono::milliseconds timeout) const;
   FirmwareLoopStats stats() const;

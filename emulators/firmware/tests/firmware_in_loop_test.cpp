@@ -42,7 +42,7 @@ using stend::transport::ModbusRtuClient;
 using stend::transport::ModbusRtuConfig;
 using namespace std::chrono_literals;
 
-constexpr int kChamberSlave = 2;  // firmware/bench_mcu/board.h: SLAVE_ID_CHAMBER
+constexpr int kChamberSlave = bm::kFirmwareChamberSlave;
 
 stend::BenchTruth level_truth() {
   stend::BenchTruth t;
