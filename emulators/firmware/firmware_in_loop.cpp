@@ -42,9 +42,11 @@ constexpr int kOneWireBit = 3;  // PB3, Arduino pin 11
 constexpr std::uint8_t kMpuAddress = 0x68;
 constexpr std::uint32_t kCpuHz = 16000000;
 constexpr avr_cycle_count_t kSliceCycles = kCpuHz / 1000;  // 1 ms of simulated time per step
-// How far (wall time) a paced simulation starved of CPU may fall behind and still catch up; a
-// longer lag is given up rather than raced through (Impl::pace).
-constexpr double kMaxCatchUpS = 0.010;
+// A paced simulation starved of CPU catches up at most this many times faster than the wall
+// clock, and gives up a lag beyond kMaxLagS (wall time; Impl::pace).
+constexpr double kCatchUpRate = 2.0;
+constexpr double kMaxLagS = 0.5;
+constexpr double kSliceS = static_cast<double>(kSliceCycles) / kCpuHz;
 // Two host ports share the one UART (FirmwareLoopConfig::host_ports): a transaction ends this long
 // after the MCU's last reply byte, or without a reply after kNoReplyCycles (a request the firmware
 // drops: bad CRC, another slave id). Simulated time.
@@ -83,6 +85,7 @@ struct FirmwareInTheLoop::Impl {
   std::atomic<bool> stop{false};
   std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
   std::chrono::steady_clock::time_point pace_origin = t0;  // wall instant of simulated time 0 (pacing)
+  std::chrono::steady_clock::time_point last_paced = t0;   // when the previous slice was let go
 
   // Line (simulation thread only, except the atomics).
   std::deque<std::uint8_t> to_mcu;
@@ -490,20 +493,26 @@ struct FirmwareInTheLoop::Impl {
     account_reset();
   }
 
-  // Waits until the wall clock catches up with simulated time (or a request arrives). When the
-  // simulation thread was starved of CPU and fell behind by more than kMaxCatchUpS, the rest of the
-  // lag is given up (counted in lag_given_up_s) instead of raced through: a real MCU never runs
-  // faster than its clock, and a burst of simulated time would fill the firmware's buffers faster
-  // than any host polls them (the same starvation usually holds the host's polling thread back).
+  // Waits until the wall clock catches up with simulated time (or a request arrives). A simulation
+  // starved of CPU falls behind the wall clock; it catches up, but at most kCatchUpRate times
+  // faster than real time: the firmware's clock keeps the wall clock's (the drivers time-stamp
+  // samples by it) without a burst of samples faster than any host polls them. A lag beyond
+  // kMaxLagS is given up (lag_given_up_s: the MCU's clock then runs behind the host's).
   void pace() {
     if (!(c.speed > 0.0)) return;
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - pace_origin).count();
-    const double ahead = now_s() / c.speed - wall;
-    if (ahead < -kMaxCatchUpS) give_up_lag(-ahead - kMaxCatchUpS);
-    if (ahead <= 0.0) return;
-    pollfd pfd[2] = {{ports[0].master_fd, POLLIN, 0}, {ports.back().master_fd, POLLIN, 0}};
-    const timespec ts{0, static_cast<long>(ahead * 1e9)};
-    ppoll(pfd, ports.size(), &ts, nullptr);
+    using Clock = std::chrono::steady_clock;
+    const auto wall = [](double s) { return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s)); };
+    const double behind = std::chrono::duration<double>(Clock::now() - pace_origin).count() - now_s() / c.speed;
+    if (behind > kMaxLagS) give_up_lag(behind - kMaxLagS);
+    const Clock::time_point until =
+        std::max(pace_origin + wall(now_s() / c.speed), last_paced + wall(kSliceS / (c.speed * kCatchUpRate)));
+    const double wait_s = std::chrono::duration<double>(until - Clock::now()).count();
+    if (wait_s > 0.0) {
+      pollfd pfd[2] = {{ports[0].master_fd, POLLIN, 0}, {ports.back().master_fd, POLLIN, 0}};
+      const timespec ts{static_cast<time_t>(wait_s), static_cast<long>(std::fmod(wait_s, 1.0) * 1e9)};
+      ppoll(pfd, ports.size(), &ts, nullptr);
+    }
+    last_paced = Clock::now();
   }
 
   void give_up_lag(double wall_s) {

@@ -10,8 +10,8 @@
 //     duties the firmware sets in Timer1 (OCR1B heater pin 10, OCR1A Peltier pin 9);
 //   - USART0 bridged to a pseudo-terminal: a host driver opens device_path() like /dev/ttyUSB0.
 // Simulated time is paced to the wall clock × speed (the host drivers' time-outs are wall time);
-// a simulation starved of CPU catches up at most 10 ms and gives up the rest of its lag, so the
-// firmware never produces samples faster than the wall clock (see docs/firmware.md, Pacing).
+// a simulation starved of CPU catches up at most 2× faster than the wall clock, and gives up a lag
+// beyond 0.5 s (docs/firmware.md, Pacing).
 // Fault injection: corrupted replies and requests (CRC errors on the line), silence (time-outs),
 // DS18B20 open / CRC error / power-on value, MPU-6050 absent, a reset of the MCU.
 #pragma once
@@ -44,7 +44,7 @@ struct FirmwareLoopStats {
   double simulated_s = 0.0;       // simulated time since power-on [s]
   double wall_s = 0.0;            // wall time since construction [s]
   double busy_s = 0.0;            // wall time spent simulating (not waiting for the wall clock) [s]
-  double lag_given_up_s = 0.0;    // paced: wall time the simulation fell behind and did not race to catch up [s]
+  double lag_given_up_s = 0.0;    // paced: lag beyond 0.5 s given up, not caught up [s] (the MCU's clock fell behind)
   std::uint64_t bytes_to_mcu = 0, bytes_from_mcu = 0;
   std::uint64_t corrupted_requests = 0, corrupted_replies = 0, dropped_requests = 0;
   std::uint64_t resets = 0;       // resets of the part: reset_mcu(), the AVR watchdog, a crash

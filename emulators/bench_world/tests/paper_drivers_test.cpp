@@ -183,7 +183,7 @@ std::unique_ptr<stend::emu::BenchWorld> make_firmware_world(const stend::PluginH
 
 // The paper's experiment end to end through the firmware: the real drivers, the real firmware, a
 // run folder the estimator fits with bias_z, scale_z, cross_zx within 2 standard errors of the
-// twin's truth (12 tilts instead of 23).
+// twin's truth (12 tilts, 0…44° in 4° steps, instead of 23: ≈ 30 s of wall time, 40 s at load 18).
 TEST(PaperThroughFirmware, FitFindsTheTwinsTruthWithinTwoStandardErrors) {
   const stend::testing::TempDir tmp("paper-firmware");
   const stend::PluginHost& host = stend::testing::build_tree_plugins();
@@ -194,7 +194,7 @@ TEST(PaperThroughFirmware, FitFindsTheTwinsTruthWithinTwoStandardErrors) {
   const stend::RunResult r = stend::testing::run_in_process(drivers, tmp.path(), opt);
   ASSERT_EQ(r.status, stend::RunStatus::kComplete) << r.message;
   EXPECT_EQ(r.segments, 13);  // the temperature hold and 12 tilts
-  EXPECT_LT(r.wall_time_s, 45.0);
+  EXPECT_LT(r.wall_time_s, 60.0);
   std::printf("[figures] firmware run: %llu samples, %d segments, %.1f s run time in %.1f s wall\n",
               static_cast<unsigned long long>(r.samples), r.segments, r.run_time_s, r.wall_time_s);
   const auto fd = fit(r.dir, tmp / "firmware.json");
