@@ -279,7 +279,7 @@ void add_world_command(CLI::App* sub, std::vector<Command>& out) {
   auto* world = sub->add_subcommand("world", "Table + chamber + bench MCU in one simulated world, the twin of an in-process bench");
   world->add_option("--twin", w->twin, "in-process experiment whose bench (sim_imu, sim_one_axis_table, sim_thermochamber) the world copies")
       ->required();
-  world->add_option("--chamber-speed", w->chamber_speed, "the chamber's plant runs this many times faster than the wall clock")
+  world->add_option("--chamber-speed", w->chamber_speed, "the chamber's plant runs this many times faster than the wall clock (not with --firmware: its PID runs in wall time)")
       ->check(above(0));
   world->add_option("--table-port", w->table_port, "TCP port of the table on 127.0.0.1 (0: any free port)")
       ->check(within(0, kMaxPort));
@@ -288,7 +288,7 @@ void add_world_command(CLI::App* sub, std::vector<Command>& out) {
                     "and port 5025 (table) replaced by the emulators'")
       ->expected(2);
   world->add_flag("--firmware", w->firmware,
-                  "the bench MCU is the real firmware (firmware/bench_mcu) under simavr, not the C++ emulation (docs/firmware.md)");
+                  "the bench MCU and the chamber controller are the real firmware (firmware/bench_mcu) under simavr, not the C++ emulations (docs/firmware.md)");
   world->add_option("--firmware-elf", w->firmware_elf, "the firmware image for --firmware (default: the build tree's bench_mcu.elf)");
   world->add_option("--duration-s", w->duration, "stop after this long (0: until Ctrl-C)")->check(at_least(0));
   out.push_back({world, [w] { return run_world(*w); }});
