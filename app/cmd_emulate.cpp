@@ -225,6 +225,17 @@ struct WorldOpts {
 #endif
 };
 
+// After the line naming `device`, a `slave_id` at the same indentation (the chamber is slave 2 of the
+// firmware; the drivers file, written for a chamber of its own, gives none).
+void add_slave_id_after(std::string& text, const std::string& device, int slave_id) {
+  const std::size_t at = text.find("device: " + device);
+  if (at == std::string::npos) return;
+  const std::size_t line = text.rfind('\n', at) + 1;
+  const std::size_t end = text.find('\n', at);
+  const std::string indent = text.substr(line, at - line);
+  text.insert(end == std::string::npos ? text.size() : end + 1, indent + "slave_id: " + std::to_string(slave_id) + "\n");
+}
+
 // Copies the drivers experiment `in` to `out` with the emulators' devices and table port in place
 // of /dev/ttyUSB0 (bench MCU), /dev/ttyUSB1 (chamber) and port 5025.
 void write_world_config(const emu::BenchWorld& bw, const std::string& in, const std::string& out) {
@@ -232,6 +243,7 @@ void write_world_config(const emu::BenchWorld& bw, const std::string& in, const 
   replace_all(text, "/dev/ttyUSB0", bw.mcu_device());
   replace_all(text, "/dev/ttyUSB1", bw.chamber_device());
   replace_all(text, "port: 5025", "port: " + std::to_string(bw.table_port()));
+  if (bw.chamber_slave_id() != 1) add_slave_id_after(text, bw.chamber_device(), bw.chamber_slave_id());
   // Relative paths in the copy (estimation model) are resolved from its new folder.
   const auto from = std::filesystem::absolute(in).parent_path();
   replace_all(text, "model: models/", "model: " + (from / "models").string() + "/");
@@ -251,7 +263,11 @@ ExitCode run_world(const WorldOpts& w) {
   std::printf("bench world, twin of %s:\n", w.twin.c_str());
   std::printf("  bench MCU (MPU-6050, MODBUS RTU): %s%s\n", bw.mcu_device().c_str(),
               w.firmware ? ("  (firmware " + w.firmware_elf + " under simavr)").c_str() : "");
-  std::printf("  chamber (ATmega328, MODBUS RTU):  %s  (plant at %gx)\n", bw.chamber_device().c_str(), w.chamber_speed);
+  if (w.firmware)
+    std::printf("  chamber (the firmware's slave %d):  %s  (plant in wall time, driven by its PWM)\n", bw.chamber_slave_id(),
+                bw.chamber_device().c_str());
+  else
+    std::printf("  chamber (ATmega328, MODBUS RTU):  %s  (plant at %gx)\n", bw.chamber_device().c_str(), w.chamber_speed);
   std::printf("  table (ACUTROL-style text):       tcp 127.0.0.1:%d\n", bw.table_port());
   if (w.write_config.size() == 2) write_world_config(bw, w.write_config[0], w.write_config[1]);
   serve(w.duration);
@@ -263,7 +279,7 @@ void add_world_command(CLI::App* sub, std::vector<Command>& out) {
   auto* world = sub->add_subcommand("world", "Table + chamber + bench MCU in one simulated world, the twin of an in-process bench");
   world->add_option("--twin", w->twin, "in-process experiment whose bench (sim_imu, sim_one_axis_table, sim_thermochamber) the world copies")
       ->required();
-  world->add_option("--chamber-speed", w->chamber_speed, "the chamber's plant runs this many times faster than the wall clock")
+  world->add_option("--chamber-speed", w->chamber_speed, "the chamber's plant runs this many times faster than the wall clock (not with --firmware: its PID runs in wall time)")
       ->check(above(0));
   world->add_option("--table-port", w->table_port, "TCP port of the table on 127.0.0.1 (0: any free port)")
       ->check(within(0, kMaxPort));
@@ -272,7 +288,7 @@ void add_world_command(CLI::App* sub, std::vector<Command>& out) {
                     "and port 5025 (table) replaced by the emulators'")
       ->expected(2);
   world->add_flag("--firmware", w->firmware,
-                  "the bench MCU is the real firmware (firmware/bench_mcu) under simavr, not the C++ emulation (docs/firmware.md)");
+                  "the bench MCU and the chamber controller are the real firmware (firmware/bench_mcu) under simavr, not the C++ emulations (docs/firmware.md)");
   world->add_option("--firmware-elf", w->firmware_elf, "the firmware image for --firmware (default: the build tree's bench_mcu.elf)");
   world->add_option("--duration-s", w->duration, "stop after this long (0: until Ctrl-C)")->check(at_least(0));
   out.push_back({world, [w] { return run_world(*w); }});

@@ -58,7 +58,7 @@ void BenchMcuSlave::reset() {
   if (running_) mpu_.write(mpu6050::kPwrMgmt1, mpu6050::kSleep);
   running_ = false;
   fifo_.clear();
-  front_seq_ = next_seq_ = 0;
+  front_seq_ = next_seq_ = sent_seq_ = 0;
   overflows_ = 0;
   overflow_flag_ = false;
   ++boot_count_;
@@ -91,11 +91,14 @@ void BenchMcuSlave::produce() {
     mpu_.read_burst(mpu6050::kAccelXoutH, b, sizeof b);  // the MCU's 14-byte I2C burst
     std::array<std::int16_t, 7> s{};
     for (int i = 0; i < 7; ++i) s[i] = static_cast<std::int16_t>((b[2 * i] << 8) | b[2 * i + 1]);
-    if (fifo_.size() >= c_.fifo_depth) {
+    if (fifo_.size() >= c_.fifo_depth) {  // the oldest is dropped; lost only if no window returned it
+      const bool lost = front_seq_ >= sent_seq_;
       fifo_.pop_front();
       ++front_seq_;
-      ++overflows_;
-      overflow_flag_ = true;
+      if (lost) {
+        ++overflows_;
+        overflow_flag_ = true;
+      }
     }
     fifo_.push_back(s);
     ++next_seq_;
@@ -117,7 +120,7 @@ void BenchMcuSlave::apply_ctrl() {
     mpu_.write(mpu6050::kAccelConfig, static_cast<std::uint8_t>((hold[map::kHoldAccelFsSel] & 3) << 3));
     mpu_.write(mpu6050::kPwrMgmt1, 0x01);  // wake, PLL with X gyro
     fifo_.clear();
-    front_seq_ = next_seq_ = 0;
+    front_seq_ = next_seq_ = sent_seq_ = 0;
     overflows_ = 0;
     overflow_flag_ = false;
   } else if (!run && running_) {
@@ -195,6 +198,7 @@ bool BenchMcuSlave::window(int address, int count) {
   in[1] = static_cast<std::uint16_t>(std::min<std::size_t>(fifo_.size() - n, 0xFFFF));
   in[2] = static_cast<std::uint16_t>(front_seq_ >> 16);
   in[3] = static_cast<std::uint16_t>(front_seq_ & 0xFFFF);
+  sent_seq_ = std::max(sent_seq_, front_seq_ + static_cast<std::uint32_t>(n));
   for (std::size_t i = 0; i < n; ++i) {
     for (int w = 0; w < map::kWordsPerSample; ++w) {
       in[map::kWindowHeaderWords + static_cast<int>(i) * map::kWordsPerSample + w] = static_cast<std::uint16_t>(fifo_[i][static_cast<std::size_t>(w)]);

@@ -78,7 +78,8 @@ class BenchMcuSlave {
   std::deque<std::array<std::int16_t, 7>> fifo_;
   std::uint32_t front_seq_ = 0;  // sequence number of fifo_.front()
   std::uint32_t next_seq_ = 0;   // sequence number of the next sample
-  std::uint32_t overflows_ = 0;
+  std::uint32_t sent_seq_ = 0;   // one past the last sample a window returned (reached the host, maybe unacknowledged)
+  std::uint32_t overflows_ = 0;  // samples dropped before any window returned them (docs/bench-mcu-modbus.md)
   bool overflow_flag_ = false;
   bool running_ = false;
   std::uint16_t boot_count_ = 1;

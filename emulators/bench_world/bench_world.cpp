@@ -9,10 +9,16 @@
 
 #include <stdexcept>
 
+#include <stend/devices/bench_mcu_map.hpp>
+
 #include <stend/sim/one_axis_table.hpp>
 #include <stend/sim/thermochamber.hpp>
 
 namespace stend::emu {
+
+namespace {
+constexpr double kFirstReadingS = 1.2;  // simulated: the firmware's first DS18B20 reading (firmware/bench_mcu/chamber.c)
+}  // namespace
 
 BenchWorldConfig BenchWorldConfig::from_experiment(const Experiment& e, double chamber_speed) {
   BenchWorldConfig c;
@@ -63,19 +69,28 @@ BenchWorld::BenchWorld(const BenchWorldConfig& c) : c_(c) {
   tc.port = c.table_port;
   tc.identity = "Stend,BenchWorldTable,0,0.1";
   table_ = std::make_unique<TableTextServer>(tc);
-  chamber_ = std::make_unique<AtmegaChamberSlave>(c.chamber);
   BenchMcuConfig mc;
   mcu_epoch_ = std::chrono::steady_clock::now();
   Mpu6050Model mpu(c.imu, Mpu6050Model::TruthFn([this](double t) { return truth(t); }));
   if (c.firmware_elf.empty()) {
+    chamber_ = std::make_unique<AtmegaChamberSlave>(c.chamber);
     mcu_ = std::make_unique<BenchMcuSlave>(mc, std::move(mpu));
     return;
   }
 #ifdef STEND_HAVE_FIRMWARE_LOOP
+  // The firmware is also the chamber's controller (slave 2: the paper's PID on its DS18B20, the
+  // heater and Peltier PWM driving the plant), in wall time like the MCU; the chamber driver gets
+  // a port of its own in front of the same UART.
   FirmwareLoopConfig fc;
   fc.elf_path = c.firmware_elf;
   fc.plant = c.chamber.plant;
+  fc.host_ports = 2;
   fw_ = std::make_shared<FirmwareInTheLoop>(fc, std::move(mpu));
+  fw_plant_ = fw_.get();
+  // Powered up a moment before the drivers connect, as on a bench: the first control cycle (1 s)
+  // has read the DS18B20 (the temperature registers read 0 until then).
+  if (!fw_->wait_until_simulated(kFirstReadingS, std::chrono::seconds(10)))
+    throw std::runtime_error("bench world: the firmware under simavr did not reach its first control cycle in 10 s");
 #else
   throw std::invalid_argument("bench world: this build has no firmware in the loop (install simavr, libsimavr-dev "
                               "and gcc-avr: scripts/install-deps.sh, then rebuild)");
@@ -89,10 +104,19 @@ BenchWorld::~BenchWorld() {
 
 const std::string& BenchWorld::mcu_device() const {
 #ifdef STEND_HAVE_FIRMWARE_LOOP
-  if (fw_) return fw_->device_path();
+  if (fw_) return fw_->device_path(0);
 #endif
   return mcu_->device_path();
 }
+
+const std::string& BenchWorld::chamber_device() const {
+#ifdef STEND_HAVE_FIRMWARE_LOOP
+  if (fw_) return fw_->device_path(1);
+#endif
+  return chamber_->device_path();
+}
+
+int BenchWorld::chamber_slave_id() const { return fw_ ? bench_mcu::kFirmwareChamberSlave : 1; }
 
 BenchTruth BenchWorld::truth(double t) {
   BenchTruth b;
@@ -108,6 +132,13 @@ BenchTruth BenchWorld::truth(double t) {
   b.R_sensor_from_local = R;
   b.specific_force_mps2 = physics::gravity_specific_force(R, c_.gravity_mps2);
   b.angular_rate_radps = M * m.omega_top_radps + R * earth_local_;
+#ifdef STEND_HAVE_FIRMWARE_LOOP
+  if (fw_plant_ != nullptr) {  // the plant the firmware's PWM drives
+    b.air_temperature_c = fw_plant_->air_c();
+    b.die_temperature_c = fw_plant_->die_c();
+    return b;
+  }
+#endif
   chamber_->with_firmware([&](ChamberFirmware& f) {
     b.air_temperature_c = f.air_c();
     b.die_temperature_c = f.die_c();

@@ -9,6 +9,9 @@
 //   (stend/physics: paper_table_motion, gravity_specific_force)
 //   air / die temperature from the chamber's plant.
 // The table and the sensor run in wall time; the chamber's plant may run faster (chamber_speed).
+// With firmware_elf the bench MCU and the chamber controller are the real firmware under simavr
+// (emulators/firmware): slave 1 on mcu_device(), slave 2 on chamber_device(), one UART behind
+// both ports, the plant driven by the firmware's PWM in wall time (chamber_speed does not apply).
 #pragma once
 
 #include <stend/experiment.hpp>
@@ -40,8 +43,9 @@ struct BenchWorldConfig {
   double heading_deg = 0.0;
   Eigen::Matrix3d R_sensor_from_mount = Eigen::Matrix3d::Identity();
   int table_port = 0;               // 0: ephemeral
-  std::string firmware_elf;         // non-empty: the bench MCU is the real firmware (firmware/bench_mcu)
-                                    // under simavr (emulators/firmware) instead of the C++ emulation
+  std::string firmware_elf;         // non-empty: the bench MCU and the chamber controller are the real
+                                    // firmware (firmware/bench_mcu) under simavr (emulators/firmware)
+                                    // instead of the C++ emulations
 
   // The physics of an in-process experiment whose bench is sim_imu + sim_one_axis_table +
   // sim_thermochamber (e.g. configs/paper_mpu6050_z.yaml), so the world is that bench's twin.
@@ -55,11 +59,13 @@ class BenchWorld {
   ~BenchWorld();
 
   int table_port() const { return table_->port(); }
-  const std::string& chamber_device() const { return chamber_->device_path(); }
+  const std::string& chamber_device() const;  // with firmware_elf: the firmware's second host port
+  int chamber_slave_id() const;               // 1, or the firmware's chamber slave (2) with firmware_elf
   const std::string& mcu_device() const;
   TableTextServer& table() { return *table_; }
-  AtmegaChamberSlave& chamber() { return *chamber_; }
+  AtmegaChamberSlave& chamber() { return *chamber_; }  // the C++ emulation (absent with firmware_elf)
   BenchMcuSlave& mcu() { return *mcu_; }  // the C++ emulation (absent with firmware_elf)
+  FirmwareInTheLoop* firmware() { return fw_.get(); }  // with firmware_elf: the MCU and the chamber
 
   // What the sensor experiences at wall time `t_since_mcu_power_on_s` (thread-safe).
   BenchTruth truth(double t_since_mcu_power_on_s);
@@ -73,6 +79,9 @@ class BenchWorld {
   std::chrono::steady_clock::time_point mcu_epoch_;
   std::unique_ptr<BenchMcuSlave> mcu_;  // last: its thread reads the others, so it stops first
   std::shared_ptr<FirmwareInTheLoop> fw_;  // or the firmware in the loop (shared_ptr: complete only where built)
+  // Its plant for truth(), called from the firmware's own thread: kept while fw_ is destroyed (its
+  // thread is joined before its state goes).
+  FirmwareInTheLoop* fw_plant_ = nullptr;
 };
 
 }  // namespace stend::emu

@@ -3,6 +3,8 @@
 #ifndef BENCH_MCU_BOARD_H
 #define BENCH_MCU_BOARD_H
 
+#include <stend/devices/bench_mcu_regs.h> /* the slave ids, shared with the host */
+
 #ifndef F_CPU
 #define F_CPU 16000000UL /* Hz, the Uno's / Nano's crystal */
 #endif
@@ -11,15 +13,15 @@
 #ifndef BENCH_BAUD
 #define BENCH_BAUD 921600UL
 #endif
-#define SLAVE_ID_SENSOR 1  /* the sensor stream and I2C window (docs/bench-mcu-modbus.md) */
-#define SLAVE_ID_CHAMBER 2 /* the chamber's PID loop (docs/thermochamber-modbus.md) */
+#define SLAVE_ID_SENSOR STEND_BMCU_SLAVE_SENSOR   /* the sensor stream and I2C window (docs/bench-mcu-modbus.md) */
+#define SLAVE_ID_CHAMBER STEND_BMCU_SLAVE_CHAMBER /* the chamber's PID loop (docs/thermochamber-modbus.md) */
 
 /* I2C (TWI): SDA = A4 (PC4), SCL = A5 (PC5); the MPU-6050 at 0x68 (AD0 low). */
 #define TWI_SCL_HZ 400000UL
 #define MPU_ADDRESS 0x68
 
 /* Sample ring in RAM, 14 bytes per sample (the MPU-6050's 0x3B..0x48 burst). */
-#define RING_SAMPLES 48
+#define RING_SAMPLES 60
 /* How often the MPU-6050's own FIFO is drained into the ring [ms]. */
 #define MPU_DRAIN_PERIOD_MS 2
 

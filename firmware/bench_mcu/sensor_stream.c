@@ -10,7 +10,7 @@
 
 #define WINDOW_MAX_WORDS (STEND_BMCU_WINDOW_HEADER_WORDS + STEND_BMCU_WORDS_PER_SAMPLE * STEND_BMCU_WINDOW_MAX_SAMPLES)
 #define I2C_DATA_REGS (STEND_BMCU_I2C_MAX_READ / 2)
-#define PART_FIFO_HIGH 40 /* of the part's 73 samples: above this the ring makes room (33 ms of margin at 1 kHz for the 1-Wire cycle, ~10 ms) */
+#define PART_FIFO_HIGH 52 /* of the part's 73 samples: above this the ring makes room (21 ms of margin at 1 kHz, twice the ~10 ms 1-Wire cycle) */
 #define CAPACITY (RING_SAMPLES + PART_FIFO_HIGH)
 #define PART_FIFO_SAMPLES 73 /* 1024 bytes / 14 */
 #define MAX_DRAIN_PER_POLL 4 /* samples per poll (0.4 ms of I2C each), so a request waits at most ~2 ms */
@@ -21,6 +21,7 @@ static uint8_t ring_head; /* index of the oldest sample */
 static uint8_t ring_size;
 static uint16_t part_pending; /* samples in the part's FIFO at the last drain */
 static uint32_t front_seq, next_seq; /* sequence numbers of the oldest and the next sample */
+static uint32_t sent_seq; /* one past the last sample a window has returned (delivered, maybe not yet acknowledged) */
 static uint16_t overflows;
 static uint8_t overflow_flag, running;
 static uint16_t boot_count;
@@ -47,12 +48,22 @@ static void ring_pop(void) {
 
 static uint8_t* ring_at(uint8_t i) { return ring[(ring_head + i) % RING_SAMPLES]; }
 
-/* The slot for the next sample; the oldest is dropped (an overflow) when the ring is full. */
+static void count_lost(uint16_t n) {
+  if (n == 0) return;
+  overflows = (uint16_t)(overflows > 0xFFFF - n ? 0xFFFF : overflows + n);
+  overflow_flag = 1;
+}
+
+/* Samples in the ring no window has returned yet: the ones the host could still lose. */
+static uint8_t ring_unsent(void) { return (uint8_t)(sent_seq > front_seq ? next_seq - sent_seq : ring_size); }
+
+/* The slot for the next sample; the oldest is dropped when the ring is full. Only a dropped sample
+ * no window had returned is lost (OVERFLOWS): one returned but not yet acknowledged reached the host. */
 static uint8_t* ring_push_slot(void) {
   if (ring_size == RING_SAMPLES) {
+    const uint8_t lost = front_seq >= sent_seq;
     ring_pop();
-    if (overflows < 0xFFFF) ++overflows;
-    overflow_flag = 1;
+    count_lost(lost);
   }
   ++ring_size;
   ++next_seq;
@@ -72,12 +83,11 @@ static void drain_mpu(void) {
     /* At least a FIFO's worth was dropped there. The ring's numbering is contiguous, so the ring
      * is dropped too and the sequence numbers skip both: the master sees one gap (its length
      * is this estimate, not an exact count). Needs a firmware stall of > 33 ms to happen. */
-    const uint16_t dropped = (uint16_t)(ring_size + PART_FIFO_SAMPLES);
+    const uint16_t dropped = (uint16_t)(ring_unsent() + PART_FIFO_SAMPLES);
     next_seq += PART_FIFO_SAMPLES;
     ring_clear();
     front_seq = next_seq;
-    overflows = (uint16_t)(overflows > 0xFFFF - dropped ? 0xFFFF : overflows + dropped);
-    overflow_flag = 1;
+    count_lost(dropped);
     return;
   }
   part_pending = n;
@@ -104,7 +114,7 @@ static uint8_t start_stream(void) {
   const MpuConfig c = {(uint8_t)(hold[STEND_BMCU_HOLD_SMPLRT_DIV] & 0xFF), (uint8_t)hold[STEND_BMCU_HOLD_DLPF_CFG],
                        (uint8_t)hold[STEND_BMCU_HOLD_GYRO_FS_SEL], (uint8_t)hold[STEND_BMCU_HOLD_ACCEL_FS_SEL]};
   ring_clear();
-  front_seq = next_seq = 0;
+  front_seq = next_seq = sent_seq = 0;
   overflows = 0;
   overflow_flag = 0;
   return mpu_start(&c) == STEND_BMCU_I2C_OK;
@@ -208,6 +218,7 @@ static void read_fifo_window(uint16_t address, uint8_t n, uint8_t* out) {
   put16(out + 2, (uint16_t)(ring_size - k + part_pending));
   put16(out + 4, (uint16_t)(front_seq >> 16));
   put16(out + 6, (uint16_t)(front_seq & 0xFFFF));
+  if (front_seq + k > sent_seq) sent_seq = front_seq + k;
   for (uint8_t i = 0; i < k; ++i) memcpy(out + 8 + i * MPU_SAMPLE_BYTES, ring_at(i), MPU_SAMPLE_BYTES);
 }
 

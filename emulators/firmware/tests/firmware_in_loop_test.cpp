@@ -42,7 +42,7 @@ using stend::transport::ModbusRtuClient;
 using stend::transport::ModbusRtuConfig;
 using namespace std::chrono_literals;
 
-constexpr int kChamberSlave = 2;  // firmware/bench_mcu/board.h: SLAVE_ID_CHAMBER
+constexpr int kChamberSlave = bm::kFirmwareChamberSlave;
 
 stend::BenchTruth level_truth() {
   stend::BenchTruth t;
@@ -181,6 +181,7 @@ void check_window_sequence(const std::string& path, const std::function<void(dou
         const auto az = static_cast<std::int16_t>(w[static_cast<std::size_t>(bm::kWindowHeaderWords + 7 * i + 2)]);
         EXPECT_NEAR(az, 16384, 400);
       }
+      std::uint32_t next = first + w[0];
       if (++reads % 4 == 0) {  // a repeated read every 4th window (each costs a window's time)
         const auto again = m.read_input_registers(addr, bm::kWindowMaxWords);
         const std::uint32_t shift = first_of(again) - first;  // > 0 only after an overflow
@@ -191,14 +192,66 @@ void check_window_sequence(const std::string& path, const std::function<void(dou
             EXPECT_EQ(again[at(i - shift)], w[at(i)]) << "the same counts again";
           }
         }
+        // The host has what either read returned: samples the MCU returned are not lost to it,
+        // even when they are dropped before it acknowledges them (OVERFLOWS does not count them).
+        if (first_of(again) > next) gaps += first_of(again) - next;
+        next = std::max(next, first_of(again) + again[0]);
       }
-      s = first + w[0];
+      s = next;
       got += w[0];
       if (w[1] == 0 || w[0] == 0) break;
     }
   }
   EXPECT_GT(got, 200);  // most of 400 samples
   EXPECT_LE(gaps, m.read_input_registers(bm::kInOverflows, 1)[0]) << "every gap is counted as overflow";
+  m.write_register(bm::kHoldCtrl, 0);
+}
+
+// OVERFLOWS counts only samples the host could never have read. At 100 Hz: a window returns the
+// first 17 samples (delivered, not acknowledged), then the master stalls. (a) The buffer fills and
+// overwrites some of those 17 — the window at 0 now starts after 0 — but nothing the host never
+// saw was dropped: OVERFLOWS stays 0 and STATUS shows no overflow. (b) It stalls on, undelivered
+// samples are overwritten: OVERFLOWS equals the gap the master sees from 17 on.
+void check_overflow_counting(const std::string& path, const std::function<void(double)>& pause) {
+  constexpr double kRateHz = 100.0;
+  constexpr std::uint32_t kSent = bm::kWindowMaxSamples;
+  auto m = client(path);
+  m.write_register(bm::kHoldSmplrtDiv, 9);  // 1 kHz / (1 + 9)
+  m.write_register(bm::kHoldDlpfCfg, 3);    // 44 Hz, below the 50 Hz Nyquist limit
+  m.write_register(bm::kHoldCtrl, bm::kCtrlRun);
+  const auto front = [&m] {  // the oldest sample still buffered (a window at 0 acknowledges nothing)
+    const auto w = m.read_input_registers(bm::kInWindowBase, bm::kWindowHeaderWords);
+    return (static_cast<std::uint32_t>(w[2]) << 16) | w[3];
+  };
+  const auto overflows = [&m] { return static_cast<std::uint32_t>(m.read_input_registers(bm::kInOverflows, 1)[0]); };
+  const double first_read_s = 0.25;
+  pause(first_read_s);
+  const auto w = m.read_input_registers(bm::kInWindowBase, bm::kWindowMaxWords);
+  ASSERT_EQ(w[0], kSent);
+  ASSERT_EQ((static_cast<std::uint32_t>(w[2]) << 16) | w[3], 0u);
+  const int capacity = m.read_input_registers(bm::kInFifoCapacity, 1)[0];
+  // (a) about capacity + 8 samples since RUN: 8 of the 17 delivered ones overwritten
+  pause((capacity + kSent / 2.0) / kRateHz - first_read_s);
+  const std::uint32_t f0 = front();
+  const std::uint32_t o1 = overflows();
+  const std::uint32_t f1 = front();
+  ASSERT_GT(f0, 0u) << "delivered samples were overwritten during the stall";
+  ASSERT_LE(f1, kSent) << "no sample the host had not received was dropped yet (a host this slow misses the window)";
+  EXPECT_EQ(o1, 0u) << "a delivered but unacknowledged sample is not lost";
+  EXPECT_EQ(m.read_input_registers(bm::kInStatus, 1)[0] & bm::kStatusOverflow, 0);
+  // (b) 30 more samples: real loss, exactly what OVERFLOWS counts
+  pause(0.3);
+  const std::uint32_t o2 = overflows();
+  const std::uint32_t f2 = front();
+  const std::uint32_t o3 = overflows();
+  ASSERT_GT(f2, kSent);
+  EXPECT_LE(o2, f2 - kSent);
+  EXPECT_GE(o3, f2 - kSent);
+  EXPECT_NE(m.read_input_registers(bm::kInStatus, 1)[0] & bm::kStatusOverflow, 0);
+  const auto next = m.read_input_registers(bm::kInWindowBase + static_cast<int>(kSent), bm::kWindowMaxWords);
+  const std::uint32_t gap = ((static_cast<std::uint32_t>(next[2]) << 16) | next[3]) - kSent;
+  EXPECT_GE(gap, f2 - kSent);
+  EXPECT_LE(gap, overflows()) << "the gap the master marks is what OVERFLOWS counts";
   m.write_register(bm::kHoldCtrl, 0);
 }
 
@@ -219,6 +272,24 @@ TEST_P(Conformance, RegisterMapAndWindowSequence) {
   }
   check_register_map(path);
   check_window_sequence(path, pause);
+}
+
+TEST_P(Conformance, OverflowsCountOnlySamplesTheHostNeverReceived) {
+  std::unique_ptr<FirmwareInTheLoop> fw;
+  std::unique_ptr<stend::emu::BenchMcuSlave> emu;
+  std::string path;
+  std::function<void(double)> pause = [](double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); };
+  if (GetParam()) {
+    fw = make_fw();
+    path = fw->device_path();
+    pause = [&fw](double s) { sim_sleep(*fw, s); };
+  } else {
+    stend::emu::BenchMcuConfig c;
+    c.fifo_depth = 48;  // the firmware's RAM ring, so a stall of half a second fills it
+    emu = std::make_unique<stend::emu::BenchMcuSlave>(c, make_mpu());
+    path = emu->device_path();
+  }
+  check_overflow_counting(path, pause);
 }
 
 INSTANTIATE_TEST_SUITE_P(FirmwareAndEmulation, Conformance, ::testing::Values(true, false),
@@ -287,9 +358,10 @@ TEST(FirmwareInLoop, WindowAcrossAStallMarksTheGapAndCountsOverflows) {
   const auto in = m.read_input_registers(0, bm::kInCount);
   EXPECT_NE(in[bm::kInStatus] & bm::kStatusOverflow, 0);
   EXPECT_GT(in[bm::kInOverflows], 0);
-  // The master catches up (the buffers drain faster than 1 kHz fills them) …
+  // The master catches up (the buffers drain faster than 1 kHz fills them; a window is ≈ 4 ms of
+  // the line, longer for a host slowed by load or sanitizers) …
   s = first + w[0];
-  for (int k = 0; k < 30 && w[1] > 0; ++k) {
+  for (int k = 0; k < 200 && w[1] > 0; ++k) {
     w = m.read_input_registers(bm::kInWindowBase + static_cast<int>(s % bm::kWindowSeqModulo), bm::kWindowMaxWords);
     s = ((static_cast<std::uint32_t>(w[2]) << 16) | w[3]) + w[0];
   }
@@ -321,6 +393,41 @@ TEST(FirmwareInLoop, BootCountTellsARestart) {
   fw->reset_mcu();
   sim_sleep(*fw, 0.05);
   EXPECT_EQ(m.read_input_registers(bm::kInBootCount, 1)[0], boots + 1) << "BOOT_COUNT lives in EEPROM";
+}
+
+// The firmware hangs (a tight loop with interrupts off, as a bug leaves it): the outputs stay as
+// they were until the AVR's own watchdog (250 ms) resets the part — every pin an input, heater and
+// Peltier off, BOOT_COUNT up by one, RUN cleared: the host sees the restart.
+TEST(FirmwareInLoop, HardwareWatchdogResetsAHungFirmware) {
+  auto fw = make_fw(1.0, 35.0);
+  auto chamber = client(fw->device_path(), kChamberSlave);
+  auto sensor = client(fw->device_path());
+  chamber.write_register(cm::kHoldSetpoint, 2500);  // 10 °C below the air: the Peltier runs
+  chamber.write_register(cm::kHoldCtrl, cm::kCtrlRun);
+  sensor.write_register(bm::kHoldCtrl, bm::kCtrlRun);
+  sim_sleep(*fw, 1.5);
+  ASSERT_EQ(fw->peltier_pwm(), 255);
+  const auto boots = sensor.read_input_registers(bm::kInBootCount, 1)[0];
+  const auto resets = fw->stats().resets;
+  fw->hang_mcu();
+  sim_sleep(*fw, 0.1);
+  EXPECT_EQ(fw->peltier_pwm(), 255) << "hung, not yet reset: Timer1 keeps the duty";
+  EXPECT_EQ(fw->stats().resets, resets);
+  sim_sleep(*fw, 0.3);  // past the 250 ms watchdog
+  EXPECT_EQ(fw->stats().resets, resets + 1) << "the AVR's watchdog reset the part";
+  EXPECT_EQ(fw->peltier_pwm(), 0);
+  EXPECT_EQ(fw->heater_pwm(), 0);
+  const auto in = sensor.read_input_registers(0, bm::kInCount);
+  EXPECT_EQ(in[bm::kInBootCount], boots + 1) << "BOOT_COUNT tells the host the MCU restarted";
+  EXPECT_EQ(in[bm::kInStatus] & bm::kStatusRunning, 0) << "the stream stopped with the reset";
+  const auto ch = chamber.read_input_registers(0, cm::kInCount);
+  EXPECT_EQ(ch[cm::kInPeltierPwm], 0);
+  EXPECT_EQ(ch[cm::kInHeaterPwm], 0);
+  EXPECT_EQ(chamber.read_holding_registers(cm::kHoldCtrl, 1)[0] & cm::kCtrlRun, 0) << "the loop waits to be told to RUN again";
+  const double t = fw->stats().simulated_s;
+  sim_sleep(*fw, 0.5);
+  EXPECT_GT(fw->stats().simulated_s, t + 0.49) << "simulated time runs on across the reset";
+  EXPECT_EQ(fw->stats().resets, resets + 1) << "the restarted firmware feeds its watchdog again";
 }
 
 TEST(FirmwareInLoop, Ds18b20ReadingCrcErrorAndOpenSensor) {

@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <thread>
@@ -112,9 +113,12 @@ int bench_stream() {
   }
   const auto in = m.read_input_registers(0, bm::kInCount);
   const auto st = fw->stats();
-  std::printf("stream, 1 kHz for 60 s simulated (%.1f s wall, busy %.1f s): %llu samples, %llu lost, OVERFLOWS %u\n",
-              st.wall_s, st.busy_s, static_cast<unsigned long long>(got), static_cast<unsigned long long>(lost),
-              in[bm::kInOverflows]);
+  double load[3] = {0, 0, 0};
+  getloadavg(load, 3);
+  std::printf("stream, 1 kHz for 60 s simulated (%.1f s wall, busy %.1f s, lag given up %.2f s, load %.1f %.1f %.1f): "
+              "%llu samples, %llu lost, OVERFLOWS %u\n",
+              st.wall_s, st.busy_s, st.lag_given_up_s, load[0], load[1], load[2], static_cast<unsigned long long>(got),
+              static_cast<unsigned long long>(lost), in[bm::kInOverflows]);
   return lost == 0 ? 0 : 1;
 }
 

@@ -10,6 +10,10 @@
 
 namespace stend::bench_mcu {
 
+// The firmware's slave ids (firmware/bench_mcu serves both maps on one line).
+inline constexpr int kFirmwareSensorSlave = STEND_BMCU_SLAVE_SENSOR;
+inline constexpr int kFirmwareChamberSlave = STEND_BMCU_SLAVE_CHAMBER;
+
 // Holding registers (FC 03 read, FC 06 write).
 inline constexpr int kHoldCtrl = STEND_BMCU_HOLD_CTRL;         // bit0 RUN; bit1 FIFO reset (self-clearing)
 inline constexpr int kHoldSmplrtDiv = STEND_BMCU_HOLD_SMPLRT_DIV;    // MPU-6050 SMPLRT_DIV (0..255)

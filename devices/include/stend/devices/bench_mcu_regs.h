@@ -6,6 +6,11 @@
 #ifndef STEND_DEVICES_BENCH_MCU_REGS_H
 #define STEND_DEVICES_BENCH_MCU_REGS_H
 
+/* Slave ids of the firmware's two maps on its one line (the C++ emulations serve each map as slave 1
+ * on a line of its own). */
+#define STEND_BMCU_SLAVE_SENSOR 1
+#define STEND_BMCU_SLAVE_CHAMBER 2
+
 /* ---- Sensor stream (docs/bench-mcu-modbus.md) ---- */
 /* Holding registers (FC 03 read, FC 06/16 write). */
 #define STEND_BMCU_HOLD_CTRL 0x0000
