@@ -827,10 +827,11 @@ std::string read_bytes(hid_t ds, const fs::path& file, const char* name) {
 
 }  // namespace
 
-Hdf5Run open_hdf5_run(const fs::path& path, bool truth) {
+namespace {
+
+void read_hdf5_run(const fs::path& path, bool truth, Hdf5Run& run) {
   silence_hdf5_errors();
   Hdf5Lock lock;
-  Hdf5Run run;
   // SWMR read opens a file whose writer is still running or was killed (its status flags still
   // say "open for SWMR writing"); a finished file opens the same way.
   Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
@@ -968,6 +969,19 @@ Hdf5Run open_hdf5_run(const fs::path& path, bool truth) {
   }
   run.samples = std::make_shared<Hdf5Samples>(path, std::move(file), n, std::move(t), std::move(flags),
                                               std::move(counts), std::move(si), codec, std::move(exceptions));
+}
+
+}  // namespace
+
+Hdf5Run open_hdf5_run(const fs::path& path, bool truth) {
+  Hdf5Run run;
+  try {
+    read_hdf5_run(path, truth, run);
+  } catch (const std::runtime_error& e) {
+    if (run.header_damage.empty()) throw;
+    // A damaged global heap first: it is what the rest of the damage most likely goes with.
+    throw std::runtime_error(fmt::format("{}; besides, {}", run.header_damage, e.what()));
+  }
   return run;
 }
 
