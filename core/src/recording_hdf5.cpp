@@ -215,7 +215,7 @@ std::string get_string_attr(hid_t obj, const char* name, const fs::path& file, G
   std::error_code ec;
   const std::size_t n = H5Tget_size(ft.get());
   if (n == 0 || n > fs::file_size(file, ec))
-    fail(file, fmt::format("attribute '{}' declares a string of {} bytes, more than the file holds (damaged)", name, n));
+    fail(file, fmt::format("attribute '{}' declares a string of {} bytes, not 1 to the file's size (damaged)", name, n));
   const Handle t = fixed_string_type(n);
   std::string s(n, '\0');
   check(H5Aread(a.get(), t.get(), s.data()), file, fmt::format("cannot read attribute '{}'", name));
