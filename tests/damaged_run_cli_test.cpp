@@ -76,3 +76,40 @@ TEST(DamagedRunCli, StrayQuoteInSegmentsCsvNamesItsLine) {
     EXPECT_NE(o.text.find("segments.csv:2:"), std::string::npos) << command << "\n" << o.text;
   }
 }
+
+TEST(DamagedRunCli, DamagedGlobalHeapOfAFormat1RunH5IsNamedNeverAHang) {
+  // libhdf5 1.10.8 looped for ever on this run.h5 (docs/fuzzing.md): now `info` names the damage,
+  // reads the header from run.json and says how many samples are readable; without run.json, exit 2.
+  const TempDir dir("cli-gcol");
+  const fs::path run = dir / "run";
+  fs::copy(src + "/fuzz/run_template/h5", run, fs::copy_options::recursive);
+  std::string h5 = read_text(src + "/fuzz/corpus/run_h5/seed_imucal_import.h5");
+  // The collection's last object (its free space) declared 0 bytes long: the loop.
+  const std::size_t gcol = h5.find("GCOL");
+  ASSERT_NE(gcol, std::string::npos);
+  auto u64 = [&](std::size_t at) {
+    std::uint64_t v = 0;
+    for (int i = 7; i >= 0; --i) v = (v << 8) | static_cast<unsigned char>(h5[at + static_cast<std::size_t>(i)]);
+    return v;
+  };
+  std::size_t p = gcol + 16;
+  while (h5[p] != 0 || h5[p + 1] != 0) p += 16 + (u64(p + 8) + 7) / 8 * 8;
+  h5.replace(p + 8, 8, std::string(8, '\0'));
+  write_text(run / "run.h5", h5);
+
+  const ProgramOutput info = run_stend("info " + run.string());
+  EXPECT_EQ(info.code, 0) << info.text;
+  EXPECT_NE(info.text.find("damaged:    42 of 42 samples are readable: " + (run / "run.h5").string() +
+                           ": the global heap collection at byte " + std::to_string(gcol)),
+            std::string::npos)
+      << info.text;
+  const ProgramOutput fit = run_stend("fit " + run.string() + " --model " + model);
+  EXPECT_EQ(fit.code, 2) << fit.text;
+  EXPECT_NE(fit.text.find("the run is damaged"), std::string::npos) << fit.text;
+
+  fs::remove(run / "run.json");
+  const ProgramOutput bare = run_stend("info " + run.string());
+  EXPECT_EQ(bare.code, 2) << bare.text;
+  EXPECT_NE(bare.text.find("global heap collection at byte"), std::string::npos) << bare.text;
+  EXPECT_NE(bare.text.find("run.json is missing"), std::string::npos) << bare.text;
+}

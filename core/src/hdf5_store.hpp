@@ -45,7 +45,10 @@ class Hdf5RunWriter {
 // What Recording::open needs from run.h5: header, experiment, truth, segment and event records
 // in memory, and the samples behind a SampleSource on the file.
 struct Hdf5Run {
-  std::string header_json;      // the header as run.json states it
+  std::string header_json;      // the header as run.json states it; empty when header_damage says why
+  // Empty, or why the header attributes (header_json, experiment_yaml) cannot be read: a damaged
+  // global heap in a format 1 file. The samples, truth, segments and events are read all the same.
+  std::string header_damage;
   RunStatus status = RunStatus::kRunning;
   std::string experiment_yaml;
   std::vector<double> truth_t;

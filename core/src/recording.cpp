@@ -1143,14 +1143,33 @@ void check_experiment_yaml(const fs::path& where, const std::string& text) {
   }
 }
 
+// When run.h5's header attributes cannot be read (`damage`), the header the writer also put in
+// run.json (and the experiment in experiment.yaml) beside it; without run.json the run is unreadable.
+void read_header_beside_damaged_hdf5(const fs::path& file, const std::string& damage, Recording& r) {
+  std::error_code ec;
+  const fs::path run_json = file.parent_path() / "run.json";
+  if (!fs::exists(run_json, ec))
+    throw std::runtime_error(fmt::format("{}; {} is missing, so the run's header cannot be read", damage, run_json.string()));
+  read_run_json(run_json, read_whole_file(run_json), r.header);
+  const fs::path yaml = file.parent_path() / "experiment.yaml";
+  if (fs::exists(yaml, ec)) {
+    r.experiment_yaml = read_whole_file(yaml);
+    check_experiment_yaml(yaml, r.experiment_yaml);
+  }
+}
+
 // run.h5: header, experiment, truth, segments and events; samples behind the file's source.
 void open_hdf5(const fs::path& file, Recording& r, SampleLoading loading, TruthLoading truth) {
   detail::Hdf5Run h = detail::open_hdf5_run(file, truth == TruthLoading::kLoad);
-  const fs::path header_name = file.string() + ":header_json";
-  read_run_json(header_name, h.header_json, r.header);
+  if (h.header_damage.empty()) {
+    read_run_json(file.string() + ":header_json", h.header_json, r.header);
+    r.experiment_yaml = std::move(h.experiment_yaml);
+    check_experiment_yaml(file.string() + ":experiment_yaml", r.experiment_yaml);
+  } else {
+    read_header_beside_damaged_hdf5(file, h.header_damage, r);
+    h.damage = h.header_damage + (h.damage.empty() ? "" : "; " + h.damage);
+  }
   r.header.status = h.status;
-  r.experiment_yaml = std::move(h.experiment_yaml);
-  check_experiment_yaml(file.string() + ":experiment_yaml", r.experiment_yaml);
   if (h.truth.size() && h.truth[0].size() != r.header.truth_columns.size()) {
     throw std::runtime_error(fmt::format("{}: dataset /truth has {} value columns, the header names {}",
                                          file.string(), h.truth[0].size(), r.header.truth_columns.size()));

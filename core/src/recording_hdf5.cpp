@@ -1,6 +1,8 @@
 // The HDF5 run store (run.h5): layout, durability and damage rules in docs/recording-format.md.
 #include "hdf5_store.hpp"
 
+#include "hdf5_global_heap.hpp"
+
 #include <hdf5.h>
 
 #include <fmt/format.h>
@@ -18,7 +20,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kHdf5FormatVersion = 1;
+// 2: every string attribute is fixed-length (1 kept variable-length ones in the global heap,
+// which libhdf5 1.10 can loop on for ever when the file is damaged; version 1 stays readable).
+constexpr int kHdf5FormatVersion = 2;
 // Samples per chunk: 64 Ki (65 s at 1 kHz); one chunk of a column is 128–512 KiB uncompressed.
 constexpr hsize_t kChunkSamples = hsize_t{1} << 16;
 constexpr hsize_t kSummaryColumns = 5;  // the /summary dataset's values
@@ -110,6 +114,14 @@ void check(herr_t r, const fs::path& file, const std::string& what) {
 
 // --- attributes --------------------------------------------------------------------------------
 
+Handle fixed_string_type(std::size_t bytes) {
+  Handle t(H5Tcopy(H5T_C_S1), H5Tclose);
+  H5Tset_size(t.get(), bytes);
+  H5Tset_strpad(t.get(), H5T_STR_NULLPAD);
+  H5Tset_cset(t.get(), H5T_CSET_UTF8);
+  return t;
+}
+
 Handle vl_string_type() {
   Handle t(H5Tcopy(H5T_C_S1), H5Tclose);
   H5Tset_size(t.get(), H5T_VARIABLE);
@@ -125,10 +137,13 @@ void put_attr(hid_t obj, const char* name, hid_t type, const void* value, const 
                    file, fmt::format("cannot create attribute '{}'", name));
   check(H5Awrite(a.get(), type, value), file, fmt::format("cannot write attribute '{}'", name));
 }
+// A fixed-length string (format 2): the text lives in the attribute itself, never in the global
+// heap. NUL-padded to at least one byte (HDF5 has no zero-size type).
 void put_attr(hid_t obj, const char* name, const std::string& v, const fs::path& file) {
-  const Handle t = vl_string_type();
-  const char* p = v.c_str();
-  put_attr(obj, name, t.get(), &p, file);
+  std::string bytes = v;
+  if (bytes.empty()) bytes.push_back('\0');
+  const Handle t = fixed_string_type(bytes.size());
+  put_attr(obj, name, t.get(), bytes.data(), file);
 }
 void put_attr(hid_t obj, const char* name, double v, const fs::path& file) {
   put_attr(obj, name, H5T_NATIVE_DOUBLE, &v, file);
@@ -139,29 +154,82 @@ void put_attr(hid_t obj, const char* name, std::int64_t v, const fs::path& file)
 
 bool has_attr(hid_t obj, const char* name) { return H5Aexists(obj, name) > 0; }
 
-std::string get_string_attr(hid_t obj, const char* name, const fs::path& file) {
+// The number of values of an attribute or dataset's dataspace (a scalar is 1), -1 when unreadable.
+hssize_t value_count(hid_t space) { return space >= 0 ? H5Sget_simple_extent_npoints(space) : -1; }
+
+// What Stend reads from the file may be damaged: before any variable-length value is read (format
+// 1's string attributes live in the global heap), the file's global heap collections are walked
+// once (hdf5_global_heap.hpp); a damaged one is an error, never a read that loops for ever.
+class GlobalHeapGuard {
+ public:
+  GlobalHeapGuard(fs::path file, hid_t h5) : file_(std::move(file)), h5_(h5) {}
+  // Empty, or what is damaged ("FILE: the global heap collection at byte N … is damaged: …").
+  const std::string& damage() {
+    if (!checked_) {
+      damage_ = global_heap_damage(file_, [&](std::uint64_t at) { return inside_a_chunk(at); });
+      if (!damage_.empty()) damage_ = fmt::format("{}: {}", file_.string(), damage_);
+      checked_ = true;
+    }
+    return damage_;
+  }
+  void check() {
+    if (!damage().empty()) throw std::runtime_error(damage_);
+  }
+
+ private:
+  // Whether byte `at` lies inside a chunk of one of the file's datasets (recorded samples that
+  // happen to spell "GCOL"); asked only about collections that fail the walk.
+  bool inside_a_chunk(std::uint64_t at) const;
+
+  fs::path file_;
+  hid_t h5_;
+  bool checked_ = false;
+  std::string damage_;
+};
+
+bool is_variable_string_attr(hid_t obj, const char* name) {
+  if (H5Aexists(obj, name) <= 0) return false;
+  Handle a(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
+  Handle t(a ? H5Aget_type(a.get()) : H5I_INVALID_HID, H5Tclose);
+  return t && H5Tis_variable_str(t.get()) > 0;
+}
+
+// A scalar string attribute: fixed-length (format 2) or variable-length (format 1, read only after
+// the global heap was checked).
+std::string get_string_attr(hid_t obj, const char* name, const fs::path& file, GlobalHeapGuard& heap) {
   Handle a = check(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose, file,
                    fmt::format("attribute '{}' is missing or damaged", name));
   Handle ft(H5Aget_type(a.get()), H5Tclose);
-  if (H5Tget_class(ft.get()) != H5T_STRING) fail(file, fmt::format("attribute '{}' is not a string", name));
+  Handle space(H5Aget_space(a.get()), H5Sclose);
+  if (H5Tget_class(ft.get()) != H5T_STRING || value_count(space.get()) != 1)
+    fail(file, fmt::format("attribute '{}' is not one string (damaged)", name));
   if (H5Tis_variable_str(ft.get()) > 0) {
+    heap.check();
     const Handle t = vl_string_type();
     char* p = nullptr;
     check(H5Aread(a.get(), t.get(), &p), file, fmt::format("cannot read attribute '{}'", name));
     std::string s = p ? p : "";
-    Handle space(H5Aget_space(a.get()), H5Sclose);
     H5Dvlen_reclaim(t.get(), space.get(), H5P_DEFAULT, &p);
     return s;
   }
+  std::error_code ec;
   const std::size_t n = H5Tget_size(ft.get());
+  if (n == 0 || n > fs::file_size(file, ec))
+    fail(file, fmt::format("attribute '{}' declares a string of {} bytes, not 1 to the file's size (damaged)", name, n));
+  const Handle t = fixed_string_type(n);
   std::string s(n, '\0');
-  check(H5Aread(a.get(), ft.get(), s.data()), file, fmt::format("cannot read attribute '{}'", name));
+  check(H5Aread(a.get(), t.get(), s.data()), file, fmt::format("cannot read attribute '{}'", name));
   s.resize(std::strlen(s.c_str()));
   return s;
 }
 double get_double_attr(hid_t obj, const char* name, const fs::path& file) {
   Handle a = check(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose, file,
                    fmt::format("attribute '{}' is missing or damaged", name));
+  Handle ft(H5Aget_type(a.get()), H5Tclose);
+  Handle space(H5Aget_space(a.get()), H5Sclose);
+  const H5T_class_t cls = H5Tget_class(ft.get());
+  if ((cls != H5T_INTEGER && cls != H5T_FLOAT) || value_count(space.get()) != 1)
+    fail(file, fmt::format("attribute '{}' is not one number (damaged)", name));
   double v = 0.0;
   check(H5Aread(a.get(), H5T_NATIVE_DOUBLE, &v), file, fmt::format("cannot read attribute '{}'", name));
   return v;
@@ -232,13 +300,6 @@ herr_t read_rows(hid_t ds, hid_t mem_type, hsize_t at, hsize_t rows, hsize_t col
 // Fixed-length text datasets (status, message, end time), written in place.
 constexpr std::size_t kStatusBytes = 16, kMessageBytes = 1024, kTimeBytes = 32;
 
-Handle fixed_string_type(std::size_t bytes) {
-  Handle t(H5Tcopy(H5T_C_S1), H5Tclose);
-  H5Tset_size(t.get(), bytes);
-  H5Tset_strpad(t.get(), H5T_STR_NULLPAD);
-  H5Tset_cset(t.get(), H5T_CSET_UTF8);
-  return t;
-}
 void write_text(hid_t ds, std::size_t bytes, std::string_view text, const fs::path& file) {
   std::string v(text.substr(0, bytes));
   v.resize(bytes, '\0');
@@ -256,8 +317,15 @@ Handle create_text(hid_t loc, const char* name, std::size_t bytes, std::string_v
 std::string read_text(hid_t loc, const char* name, const fs::path& file) {
   Handle ds = check(H5Dopen2(loc, name, H5P_DEFAULT), H5Dclose, file, fmt::format("dataset /{} is missing or damaged", name));
   Handle ft(H5Dget_type(ds.get()), H5Tclose);
-  std::string v(H5Tget_size(ft.get()), '\0');
-  check(H5Dread(ds.get(), ft.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), file, fmt::format("dataset /{} is damaged", name));
+  Handle space(H5Dget_space(ds.get()), H5Sclose);
+  const std::size_t bytes = H5Tget_size(ft.get());
+  // Only what the writer makes: one fixed-length string of at most kMessageBytes.
+  if (H5Tget_class(ft.get()) != H5T_STRING || H5Tis_variable_str(ft.get()) != 0 || value_count(space.get()) != 1 ||
+      bytes == 0 || bytes > kMessageBytes)
+    fail(file, fmt::format("dataset /{} is not a fixed-length string of at most {} bytes (damaged)", name, kMessageBytes));
+  const Handle t = fixed_string_type(bytes);
+  std::string v(bytes, '\0');
+  check(H5Dread(ds.get(), t.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), file, fmt::format("dataset /{} is damaged", name));
   v.resize(std::strlen(v.c_str()));
   return v;
 }
@@ -696,8 +764,58 @@ Handle open_dataset(hid_t loc, const char* name, const fs::path& file, const cha
   Handle dapl(H5Pcreate(H5P_DATASET_ACCESS), H5Pclose);
   // A modest cache: one uncompressed chunk of a double column (512 KiB) and a little more.
   H5Pset_chunk_cache(dapl.get(), 101, std::size_t{1} << 20, 1.0);
-  return check(H5Dopen2(loc, name, dapl.get()), H5Dclose, file,
-               fmt::format("dataset {}{} is missing or damaged", where, name));
+  Handle ds = check(H5Dopen2(loc, name, dapl.get()), H5Dclose, file,
+                    fmt::format("dataset {}{} is missing or damaged", where, name));
+  // Stend writes numbers and bytes only: a variable-length or reference type (whose values libhdf5
+  // would look up in the global heap) is damage.
+  Handle type(H5Dget_type(ds.get()), H5Tclose);
+  if (!type || H5Tis_variable_str(type.get()) != 0 || H5Tdetect_class(type.get(), H5T_VLEN) != 0 ||
+      H5Tdetect_class(type.get(), H5T_REFERENCE) != 0)
+    fail(file, fmt::format("dataset {}{} has a variable-length or reference type, not a number (damaged)", where, name));
+  return ds;
+}
+
+// Whether byte `at` of the file lies inside the stored data (a chunk, or contiguous storage) of
+// one of its datasets.
+struct ChunkSearch {
+  std::uint64_t at;
+  bool found = false;
+};
+herr_t search_dataset(hid_t root, const char* name, const H5O_info_t* info, void* data) {
+  auto& s = *static_cast<ChunkSearch*>(data);
+  if (info->type != H5O_TYPE_DATASET) return 0;
+  Handle ds(H5Dopen2(root, name, H5P_DEFAULT), H5Dclose);
+  if (!ds) return 0;
+  const haddr_t contiguous = H5Dget_offset(ds.get());
+  if (contiguous != HADDR_UNDEF) {
+    s.found = s.at >= contiguous && s.at - contiguous < H5Dget_storage_size(ds.get());
+    return s.found ? 1 : 0;
+  }
+  hsize_t chunks = 0;
+  if (H5Dget_num_chunks(ds.get(), H5S_ALL, &chunks) < 0) return 0;
+  const int rank = [&] {
+    Handle space(H5Dget_space(ds.get()), H5Sclose);
+    return H5Sget_simple_extent_ndims(space.get());
+  }();
+  std::vector<hsize_t> offset(static_cast<std::size_t>(std::max(rank, 1)) + 1);
+  for (hsize_t i = 0; i < chunks; ++i) {
+    unsigned mask = 0;
+    haddr_t addr = HADDR_UNDEF;
+    hsize_t bytes = 0;
+    if (H5Dget_chunk_info(ds.get(), H5S_ALL, i, offset.data(), &mask, &addr, &bytes) < 0) break;
+    if (addr != HADDR_UNDEF && s.at >= addr && s.at - addr < bytes) {
+      s.found = true;
+      return 1;
+    }
+  }
+  return 0;
+}
+
+bool GlobalHeapGuard::inside_a_chunk(std::uint64_t at) const {
+  ChunkSearch s{at};
+  H5Ovisit2(h5_, H5_INDEX_NAME, H5_ITER_NATIVE, search_dataset, &s, H5O_INFO_BASIC);
+  H5Eclear2(H5E_DEFAULT);
+  return s.found;
 }
 
 std::string read_bytes(hid_t ds, const fs::path& file, const char* name) {
@@ -709,10 +827,11 @@ std::string read_bytes(hid_t ds, const fs::path& file, const char* name) {
 
 }  // namespace
 
-Hdf5Run open_hdf5_run(const fs::path& path, bool truth) {
+namespace {
+
+void read_hdf5_run(const fs::path& path, bool truth, Hdf5Run& run) {
   silence_hdf5_errors();
   Hdf5Lock lock;
-  Hdf5Run run;
   // SWMR read opens a file whose writer is still running or was killed (its status flags still
   // say "open for SWMR writing"); a finished file opens the same way.
   Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
@@ -726,18 +845,26 @@ Hdf5Run open_hdf5_run(const fs::path& path, bool truth) {
   Handle file = check(H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl.get()),
                       H5Fclose, path, "cannot be opened as an HDF5 run store (damaged or not HDF5)");
   const hid_t root = file.get();
-  if (!has_attr(root, "format") || get_string_attr(root, "format", path) != "stend-run")
-    fail(path, "not a Stend run store, or its header is damaged (attribute format = 'stend-run' cannot be read)");
-  const double version = get_double_attr(root, "format_version", path);
-  if (version < 1 || version > kHdf5FormatVersion) {
-    throw std::runtime_error(fmt::format("{}: format_version {} is not readable by this Stend (reads 1..{})",
-                                         path.string(), version, kHdf5FormatVersion));
+  GlobalHeapGuard heap(path, root);
+  // Format 1's string attributes live in the global heap: when that is damaged the header cannot
+  // be read from this file (Recording::open takes it from run.json), the samples still can.
+  const bool header_readable = !is_variable_string_attr(root, "format") || heap.damage().empty();
+  if (header_readable) {
+    if (!has_attr(root, "format") || get_string_attr(root, "format", path, heap) != "stend-run")
+      fail(path, "not a Stend run store, or its header is damaged (attribute format = 'stend-run' cannot be read)");
+    const double version = get_double_attr(root, "format_version", path);
+    if (version < 1 || version > kHdf5FormatVersion) {
+      throw std::runtime_error(fmt::format("{}: format_version {} is not readable by this Stend (reads 1..{})",
+                                           path.string(), version, kHdf5FormatVersion));
+    }
+  } else {
+    run.header_damage = heap.damage();
   }
   const std::string status = read_text(root, "status", path);
   const auto st = run_status_from_string(status);
   if (!st) fail(path, fmt::format("attribute 'status' is '{}', not a run status", status));
   run.status = *st;
-  run.header_json = get_string_attr(root, "header_json", path);
+  if (header_readable) run.header_json = get_string_attr(root, "header_json", path, heap);
   double summary_samples = -1.0;  // samples written as of the last flush (/summary), −1 unknown
   {
     Handle ds = open_dataset(root, "summary", path, "/");
@@ -753,7 +880,7 @@ Hdf5Run open_hdf5_run(const fs::path& path, bool truth) {
     }
     H5Eclear2(H5E_DEFAULT);
   }
-  run.experiment_yaml = get_string_attr(root, "experiment_yaml", path);
+  if (header_readable) run.experiment_yaml = get_string_attr(root, "experiment_yaml", path, heap);
 
   // Truth, segments and events: a damaged one is reported and left empty; the samples stay.
   auto keep_going = [&](auto&& read) {
@@ -842,6 +969,19 @@ Hdf5Run open_hdf5_run(const fs::path& path, bool truth) {
   }
   run.samples = std::make_shared<Hdf5Samples>(path, std::move(file), n, std::move(t), std::move(flags),
                                               std::move(counts), std::move(si), codec, std::move(exceptions));
+}
+
+}  // namespace
+
+Hdf5Run open_hdf5_run(const fs::path& path, bool truth) {
+  Hdf5Run run;
+  try {
+    read_hdf5_run(path, truth, run);
+  } catch (const std::runtime_error& e) {
+    if (run.header_damage.empty()) throw;
+    // A damaged global heap first: it is what the rest of the damage most likely goes with.
+    throw std::runtime_error(fmt::format("{}; besides, {}", run.header_damage, e.what()));
+  }
   return run;
 }
 

@@ -1,6 +1,8 @@
 // Recording store: round trip, tolerance of interrupted writes, durability under SIGKILL, scale.
+#include <stend/errors.hpp>
 #include <stend/recording.hpp>
 #include <stend/testing/files.hpp>
+#include <stend/testing/paths.hpp>
 #include <stend/testing/program.hpp>
 
 #include <gtest/gtest.h>
@@ -1130,11 +1132,13 @@ TEST_F(RecordingTest, Hdf5RunReadsWithH5pyAlone) {
   auto written = write_mpu_run(dir, 150'000);
   // The reading recipe of docs/recording-format.md: counts·lsb + offset, then the exceptions.
   const std::string script = R"(
-import sys, h5py, numpy as np
+import json, sys, h5py, numpy as np
 names = ["ax", "ay", "az", "gx", "gy", "gz", "temp"]
 with h5py.File(sys.argv[1], "r", swmr=True) as f:
     g = f["samples"]
     print(f["status"][()].decode(), g["t_s"].shape[0])
+    header = json.loads(f.attrs["header_json"])
+    print(f.attrs["format"].decode(), int(f.attrs["format_version"]), header["sensor"]["info"]["output_rate_hz"])
     for k, name in enumerate(names):
         d = g[name + "_counts"]
         v = d[:] * d.attrs["lsb"] + d.attrs["offset"]
@@ -1152,6 +1156,13 @@ with h5py.File(sys.argv[1], "r", swmr=True) as f:
   std::uint64_t n = 0;
   in >> status >> n;
   EXPECT_EQ(status, "complete");
+  std::string format;
+  int version = 0;
+  double rate_hz = 0.0;
+  in >> format >> version >> rate_hz;  // the string attributes as the recipe reads them
+  EXPECT_EQ(format, "stend-run");
+  EXPECT_EQ(version, 2);
+  EXPECT_EQ(rate_hz, make_header().info.output_rate_hz);
   const Recording r = Recording::open(dir, stend::SampleLoading::kStream);
   ASSERT_EQ(n, r.sample_count());
   for (auto c : {stend::Channel::kAx, stend::Channel::kAy, stend::Channel::kAz, stend::Channel::kGx,
@@ -1354,4 +1365,139 @@ TEST_F(RecordingTest, Hdf5SummaryBeyondTheSamplesIsDamage) {
   EXPECT_EQ(rec.written_samples, 80000u);
   EXPECT_NE(rec.damage.find("dataset /samples holds 70000 rows, dataset /summary records 80000 written"),
             std::string::npos) << rec.damage;
+}
+
+// --- run.h5 string attributes and the global heap (format 1 → 2) -------------------------------
+
+namespace {
+
+// A format 1 run folder: the run_h5 fuzz seed (run.h5 written by `stend import` before format 2,
+// its string attributes variable-length in a global heap collection) with its run.json and
+// experiment.yaml, or with `h5` in place of its run.h5.
+fs::path format1_run(const fs::path& dir, const std::string& h5 = "") {
+  fs::copy(stend::testing::source_path("fuzz/run_template/h5"), dir, fs::copy_options::recursive);
+  fs::copy_file(stend::testing::source_path("fuzz/corpus/run_h5/seed_imucal_import.h5"), dir / "run.h5");
+  if (!h5.empty()) write_text(dir / "run.h5", h5);
+  return dir;
+}
+
+// Byte offset of the (first) global heap collection and of its objects' headers.
+struct Collection {
+  std::size_t at = std::string::npos;
+  std::vector<std::size_t> objects;  // offsets of the object headers, free space last
+};
+Collection walk_collection(const std::string& h5) {
+  Collection c;
+  c.at = h5.find("GCOL");
+  if (c.at == std::string::npos) return c;
+  auto u64 = [&](std::size_t p) {
+    std::uint64_t v = 0;
+    for (int i = 7; i >= 0; --i) v = (v << 8) | static_cast<unsigned char>(h5[p + static_cast<std::size_t>(i)]);
+    return v;
+  };
+  const std::size_t end = c.at + u64(c.at + 8);
+  for (std::size_t p = c.at + 16; p + 16 <= end;) {
+    c.objects.push_back(p);
+    const bool free_space = h5[p] == 0 && h5[p + 1] == 0;
+    if (free_space) break;
+    p += 16 + (u64(p + 8) + 7) / 8 * 8;
+  }
+  return c;
+}
+void put_u64(std::string& s, std::size_t at, std::uint64_t v) {
+  for (int i = 0; i < 8; ++i) s[at + static_cast<std::size_t>(i)] = static_cast<char>(v >> (8 * i));
+}
+
+}  // namespace
+
+TEST_F(RecordingTest, Hdf5StringAttributesAreFixedLengthWithoutAGlobalHeap) {
+  // Format 2 keeps no global heap (the structure libhdf5 1.10 loops on when damaged); a long
+  // experiment (beyond HDF5's 64 KiB object header message) still round-trips.
+  Written x = write_small(root_ / "csv");
+  std::string yaml = "name: long\nsteps:\n";
+  while (yaml.size() < 200'000) yaml += "  - {dwell_s: 1.0, note: \"ünïcode line " + std::to_string(yaml.size()) + "\"}\n";
+  const fs::path dir = root_ / "run";
+  {
+    RecordingWriter writer(dir, x.header, yaml);
+    writer.add_samples(x.samples.data(), x.samples.size());
+    writer.finish(stend::RunStatus::kComplete);
+  }
+  EXPECT_EQ(read_text(dir / "run.h5").find("GCOL"), std::string::npos) << "run.h5 holds a global heap collection";
+  const Recording r = Recording::open(dir, stend::SampleLoading::kStream);
+  EXPECT_EQ(r.experiment_yaml, yaml);
+  EXPECT_EQ(r.header.experiment_name, x.header.experiment_name);
+  EXPECT_EQ(r.sample_count(), x.samples.size());
+  EXPECT_TRUE(r.damage.empty()) << r.damage;
+}
+
+TEST_F(RecordingTest, Hdf5Format1WithVariableLengthAttributesStaysReadable) {
+  const fs::path dir = format1_run(root_ / "v1");
+  const std::string h5 = read_text(dir / "run.h5");
+  ASSERT_NE(walk_collection(h5).at, std::string::npos) << "the seed should be a format 1 file (global heap)";
+  const Recording r = Recording::open(dir, stend::SampleLoading::kStream);
+  EXPECT_TRUE(r.damage.empty()) << r.damage;
+  EXPECT_EQ(r.header.experiment_name, "import:imucal");
+  EXPECT_EQ(r.header.identity.model, "imucal example session");
+  EXPECT_GT(r.sample_count(), 0u);
+  EXPECT_EQ(r.sample_count(), r.written_samples);
+  EXPECT_NE(r.experiment_yaml.find("stend import"), std::string::npos) << r.experiment_yaml;
+}
+
+TEST_F(RecordingTest, Hdf5DamagedGlobalHeapIsAnErrorNeverAHang) {
+  // fuzz/regressions/run_h5/run_h5_global_heap_loop.h5 (on which libhdf5 1.10.8 looped for ever),
+  // and the class it belongs to, made from the format 1 seed: a free-space object of size 0 (the
+  // loop) and an object running past its collection.
+  const std::string seed = read_text(stend::testing::source_path("fuzz/corpus/run_h5/seed_imucal_import.h5"));
+  const Collection c = walk_collection(seed);
+  ASSERT_GE(c.objects.size(), 3u);
+  std::string zero_free_space = seed;
+  put_u64(zero_free_space, c.objects.back() + 8, 0);
+  std::string past_the_end = seed;
+  put_u64(past_the_end, c.objects[1] + 8, 1u << 20);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"zero_free_space", zero_free_space},
+      {"past_the_end", past_the_end}};
+  {
+    // The regression input is cut short as well (7 KB of 43): the run does not open, and the
+    // error names the global heap first.
+    const fs::path dir = format1_run(root_ / "regression", read_text(stend::testing::source_path(
+                                                                "fuzz/regressions/run_h5/run_h5_global_heap_loop.h5")));
+    try {
+      (void)Recording::open(dir, stend::SampleLoading::kStream);
+      ADD_FAILURE() << "the regression input opened";
+    } catch (const stend::InputError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind((dir / "run.h5").string() + ": the global heap collection at byte " + std::to_string(c.at) +
+                               " (where format 1 keeps its string attributes) is damaged: ",
+                           0),
+                0u)
+          << what;
+    }
+  }
+  for (const auto& [name, bytes] : cases) {
+    SCOPED_TRACE(name);
+    const fs::path dir = format1_run(root_ / name, bytes);
+    // With run.json beside it the header comes from there; the samples stay readable, the damage is named.
+    const Recording r = Recording::open(dir, stend::SampleLoading::kStream);
+    EXPECT_NE(r.damage.find((dir / "run.h5").string() + ": the global heap collection at byte " +
+                            std::to_string(c.at)),
+              std::string::npos)
+        << r.damage;
+    EXPECT_NE(r.damage.find("is damaged"), std::string::npos) << r.damage;
+    EXPECT_EQ(r.header.experiment_name, "import:imucal");
+    const Recording whole = Recording::open(format1_run(root_ / (name + "_ok")), stend::SampleLoading::kStream);
+    EXPECT_EQ(r.sample_count(), whole.sample_count()) << "the samples are not in the global heap";
+    EXPECT_GT(r.sample_count(), 0u);
+    EXPECT_THROW(stend::require_whole(r), stend::InputError);
+    // Without it the run cannot be read: an InputError (exit 2) naming the file and the damage.
+    fs::remove(dir / "run.json");
+    try {
+      (void)Recording::open(dir, stend::SampleLoading::kStream);
+      ADD_FAILURE() << "opened without run.json";
+    } catch (const stend::InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("global heap collection at byte"), std::string::npos) << what;
+      EXPECT_NE(what.find("run.json is missing"), std::string::npos) << what;
+    }
+  }
 }
