@@ -413,7 +413,8 @@ TEST_F(Rosbag2, BadFilesNameFileAndPlace) {
 TEST(Rosbag1, IndexRecordLengthBeyondTheEndIsRefusedBeforeOpening) {
   const fs::path bag = stend::testing::source_path("fuzz/regressions/import_rosbag1/index_header_2GB.bag");
   const std::string msg = import_error([&] { stend::io::import_rosbag1(bag); });
-  EXPECT_NE(msg.find("byte 28332: a record's header declares 2173771485 bytes, past the end of the file at byte 33316"),
+  // Its records are walked from the start now, and a chunk before the index is damaged too.
+  EXPECT_NE(msg.find("byte 4117: a record's header declares 538976288 bytes, past the end of the file at byte 33316"),
             std::string::npos) << msg;
 }
 
