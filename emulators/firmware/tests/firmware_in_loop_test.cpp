@@ -255,41 +255,41 @@ void check_overflow_counting(const std::string& path, const std::function<void(d
   m.write_register(bm::kHoldCtrl, 0);
 }
 
+// The bench MCU a conformance test talks to: the firmware under simavr, or the C++ emulation
+// (configured by `emulation`), with its serial device and a pause on its own clock.
+struct McuUnderTest {
+  std::unique_ptr<FirmwareInTheLoop> fw;
+  std::unique_ptr<stend::emu::BenchMcuSlave> emu;
+  std::string path;
+  std::function<void(double)> pause = [](double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); };
+
+  McuUnderTest(bool firmware, const stend::emu::BenchMcuConfig& emulation) {
+    if (firmware) {
+      fw = make_fw();
+      path = fw->device_path();
+      pause = [this](double s) { sim_sleep(*fw, s); };
+    } else {
+      emu = std::make_unique<stend::emu::BenchMcuSlave>(emulation, make_mpu());
+      path = emu->device_path();
+    }
+  }
+  McuUnderTest(const McuUnderTest&) = delete;  // `pause` holds `this`
+  McuUnderTest& operator=(const McuUnderTest&) = delete;
+};
+
 class Conformance : public ::testing::TestWithParam<bool> {};
 
 TEST_P(Conformance, RegisterMapAndWindowSequence) {
-  std::unique_ptr<FirmwareInTheLoop> fw;
-  std::unique_ptr<stend::emu::BenchMcuSlave> emu;
-  std::string path;
-  std::function<void(double)> pause = [](double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); };
-  if (GetParam()) {
-    fw = make_fw();
-    path = fw->device_path();
-    pause = [&fw](double s) { sim_sleep(*fw, s); };
-  } else {
-    emu = std::make_unique<stend::emu::BenchMcuSlave>(stend::emu::BenchMcuConfig{}, make_mpu());
-    path = emu->device_path();
-  }
-  check_register_map(path);
-  check_window_sequence(path, pause);
+  McuUnderTest mcu(GetParam(), stend::emu::BenchMcuConfig{});
+  check_register_map(mcu.path);
+  check_window_sequence(mcu.path, mcu.pause);
 }
 
 TEST_P(Conformance, OverflowsCountOnlySamplesTheHostNeverReceived) {
-  std::unique_ptr<FirmwareInTheLoop> fw;
-  std::unique_ptr<stend::emu::BenchMcuSlave> emu;
-  std::string path;
-  std::function<void(double)> pause = [](double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); };
-  if (GetParam()) {
-    fw = make_fw();
-    path = fw->device_path();
-    pause = [&fw](double s) { sim_sleep(*fw, s); };
-  } else {
-    stend::emu::BenchMcuConfig c;
-    c.fifo_depth = 48;  // the firmware's RAM ring, so a stall of half a second fills it
-    emu = std::make_unique<stend::emu::BenchMcuSlave>(c, make_mpu());
-    path = emu->device_path();
-  }
-  check_overflow_counting(path, pause);
+  stend::emu::BenchMcuConfig c;
+  c.fifo_depth = 48;  // small, so a stall of half a second fills it
+  McuUnderTest mcu(GetParam(), c);
+  check_overflow_counting(mcu.path, mcu.pause);
 }
 
 INSTANTIATE_TEST_SUITE_P(FirmwareAndEmulation, Conformance, ::testing::Values(true, false),
