@@ -31,6 +31,7 @@
 // PkgConfig::MATIO and defines STEND_HAVE_MATIO. Without it the .mat functions say so.
 #if defined(STEND_HAVE_MATIO) && __has_include(<matio.h>)
 #include <matio.h>
+#include <zlib.h>
 #define STEND_IMPORT_MATIO 1
 #else
 #define STEND_IMPORT_MATIO 0
@@ -1152,9 +1153,53 @@ std::string text(const matvar_t* v) {
   return s;
 }
 
+// The first bytes of the matrix in the top-level element at `pos` (its subelements' tags, from
+// the array flags on): as stored, or inflated from a compressed element (whose inflated bytes
+// start with the matrix's own tag).
+std::string matrix_head(std::ifstream& in, std::uint64_t pos, bool compressed, std::uint32_t bytes) {
+  constexpr std::size_t kHead = 64;
+  std::string stored(std::min<std::size_t>(bytes, compressed ? 4096 : kHead), '\0');
+  in.seekg(static_cast<std::streamoff>(pos + 8));
+  in.read(stored.data(), static_cast<std::streamsize>(stored.size()));
+  stored.resize(static_cast<std::size_t>(std::max<std::streamsize>(0, in.gcount())));
+  if (!compressed) return stored;
+  std::string head(kHead + 8, '\0');
+  z_stream z{};
+  if (inflateInit(&z) != Z_OK) return {};
+  z.next_in = reinterpret_cast<Bytef*>(stored.data());
+  z.avail_in = static_cast<uInt>(stored.size());
+  z.next_out = reinterpret_cast<Bytef*>(head.data());
+  z.avail_out = static_cast<uInt>(head.size());
+  inflate(&z, Z_SYNC_FLUSH);  // as far as it gets: a damaged stream is matio's to report
+  head.resize(head.size() - z.avail_out);
+  inflateEnd(&z);
+  return head.size() > 8 ? head.substr(8) : std::string();
+}
+
+// Refuses a matrix whose dimensions subelement (the second, after the array flags) declares
+// more than 256 dimensions, before matio allocates them (a damaged tag declared 3.2 GB and
+// matio's Mat_GetDir asked for 6.3 GB).
+template <class U32>
+void check_mat5_dimensions(const fs::path& file, std::uint64_t pos, const std::string& head, const U32& u32) {
+  constexpr std::uint32_t kMaxDimensionBytes = 256 * 4;
+  std::size_t at = 0;
+  for (int sub = 0; sub < 2 && at + 8 <= head.size(); ++sub) {
+    const std::uint32_t type = u32(head.data() + at), bytes = u32(head.data() + at + 4);
+    const bool small = (type >> 16) != 0;  // a small data element: its length in the upper half, data in the tag
+    const std::uint32_t n = small ? type >> 16 : bytes;
+    if (sub == 1 && n > kMaxDimensionBytes) {
+      throw ImportError(file, ByteOffset{pos},
+                        "the matrix in this element declares " + std::to_string(n) +
+                            " bytes of dimensions (at most 256 dimensions of 4 bytes; damaged .mat)");
+    }
+    at += small ? 8 : 8 + n + (8 - n % 8) % 8;
+  }
+}
+
 // Refuses a MAT v5 file whose top-level elements (8-byte tag: uint32 data type, uint32 byte
-// count) are not matrices or compressed matrices lying inside the file, before matio allocates
-// a declared length. v7.3 files (HDF5, version 0x0200) are left to matio.
+// count) are not matrices or compressed matrices lying inside the file, or whose matrix declares
+// more dimensions than any array has, before matio allocates a declared length. v7.3 files
+// (HDF5, version 0x0200) are left to matio.
 void check_mat5_elements(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   std::string header(128, '\0');
@@ -1171,6 +1216,12 @@ void check_mat5_elements(const fs::path& file) {
   if (version != 0x0100) return;
   constexpr std::uint32_t kMiMatrix = 14, kMiCompressed = 15;
   const std::uint64_t size = fs::file_size(file);
+  struct Element {
+    std::uint64_t pos;
+    bool compressed;
+    std::uint32_t bytes;
+  };
+  std::vector<Element> elements;  // all inside the file, then each one's dimensions
   for (std::uint64_t pos = 128; pos + 8 <= size;) {
     char tag[8];
     in.seekg(static_cast<std::streamoff>(pos));
@@ -1182,8 +1233,10 @@ void check_mat5_elements(const fs::path& file) {
                             std::to_string(bytes) + " bytes; expected a matrix (14) or compressed matrix (15) "
                             "inside the file, which ends at byte " + std::to_string(size) + " (damaged or truncated .mat)");
     }
+    elements.push_back({pos, type == kMiCompressed, bytes});
     pos += 8 + bytes + (type == kMiMatrix ? (8 - bytes % 8) % 8 : 0);
   }
+  for (const auto& e : elements) check_mat5_dimensions(file, e.pos, matrix_head(in, e.pos, e.compressed, e.bytes), u32);
 }
 
 // The variables of the file (top level or one struct's fields), by name.

@@ -214,15 +214,16 @@ void check_record_lengths(const fs::path& path) {
   if (ec) return;
   std::ifstream in(path, std::ios::binary);
   // `what` reaches past `end` (the end of the file, or of the record's header).
-  auto fail = [&](std::uint64_t at, const std::string& what, std::uint64_t end) {
+  auto fail = [&](std::uint64_t at, const std::string& what, std::uint64_t end, const char* region = "record header") {
     throw ImportError(path, "byte " + std::to_string(at),
-                      what + ", past the end of the " + (end == size ? "file" : "record header") + " at byte " +
+                      what + ", past the end of the " + (end == size ? "file" : region) + " at byte " +
                           std::to_string(end) + " (truncated or damaged)");
   };
-  auto u32_at = [&](std::uint64_t at, std::uint64_t end, const char* what) {
+  auto u32_at = [&](std::uint64_t at, std::uint64_t end, const char* what, const char* region = "record header") {
     std::uint8_t b[4] = {};
     in.seekg(static_cast<std::streamoff>(at));
-    if (end < at + 4 || !in.read(reinterpret_cast<char*>(b), 4)) fail(at, std::string(what) + " length cut off", end);
+    if (end < at + 4 || !in.read(reinterpret_cast<char*>(b), 4))
+      fail(at, std::string(what) + " length cut off", end, region);
     return static_cast<std::uint32_t>(b[0] | b[1] << 8 | b[2] << 16 | static_cast<std::uint32_t>(b[3]) << 24);
   };
   struct Record {
@@ -242,15 +243,23 @@ void check_record_lengths(const fs::path& path) {
     for (std::size_t i = v.size(); i-- > 0;) x = x << 8 | static_cast<std::uint8_t>(v[i]);
     return x;
   };
+  // Calls f(at, length) for each field of the header [begin, end) — uint32 length, "name=value" —
+  // after checking that the field lies inside it.
+  auto for_each_field = [&](std::uint64_t begin, std::uint64_t end, const char* region, const auto& f) {
+    for (std::uint64_t at = begin; at < end;) {
+      const std::uint32_t field = u32_at(at, end, "header field", region);
+      if (field > end - at - 4) fail(at, "a header field declares " + std::to_string(field) + " bytes", end, region);
+      f(at, field);
+      at += 4 + field;
+    }
+  };
   // One record at `pos`: its header's fields and its data inside the file.
   auto record = [&](std::uint64_t pos) {
     const std::uint32_t header = u32_at(pos, size, "record header");
     if (header > size - pos - 4) fail(pos, "a record's header declares " + std::to_string(header) + " bytes", size);
     Record r{pos, 0, 0, 0, {}, {}};
     const std::uint64_t end = pos + 4 + header;
-    for (std::uint64_t at = pos + 4; at < end;) {
-      const std::uint32_t field = u32_at(at, end, "header field");
-      if (field > end - at - 4) fail(at, "a header field declares " + std::to_string(field) + " bytes", end);
+    for_each_field(pos + 4, end, "record header", [&](std::uint64_t at, std::uint32_t field) {
       std::string name(std::min<std::uint32_t>(field, 16), '\0');
       in.read(name.data(), static_cast<std::streamsize>(name.size()));
       name.resize(std::min(name.find('='), name.size()));
@@ -261,13 +270,14 @@ void check_record_lengths(const fs::path& path) {
         else if (name == "chunk_pos") r.chunk_pos = little_endian(value());
         else if (name == "size") r.size = little_endian(value().substr(0, 4));
       }
-      at += 4 + field;
-    }
+    });
     const std::uint32_t data = u32_at(end, size, "record data");
     if (data > size - end - 4) fail(end, "a record's data declares " + std::to_string(data) + " bytes", size);
     r.data_pos = end + 4;
     r.data_len = data;
     r.next = end + 4 + data;
+    // A connection record's data is the connection's own header, parsed by librosbag like one.
+    if (r.op == "\x07") for_each_field(r.data_pos, r.next, "connection header", [](std::uint64_t, std::uint32_t) {});
     return r;
   };
   // A chunk's uncompressed size against its stored bytes: equal when stored plainly, at most

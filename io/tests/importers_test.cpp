@@ -496,3 +496,12 @@ TEST(ImportMat, ElementDeclaredBeyondTheEndIsRefusedBeforeMatioReadsIt) {
   EXPECT_NE(msg.find("byte 264: a top-level element of data type 65536 declares 65536 bytes"), std::string::npos) << msg;
   EXPECT_NE(msg.find("ends at byte 1010"), std::string::npos) << msg;
 }
+
+// The fuzz target's next find: a matrix whose dimensions subelement declares 3.2 GB made matio's
+// Mat_GetDir ask for 6.3 GB; the dimensions are checked (stored or inflated) before matio opens it.
+TEST(ImportMat, DimensionsDeclaringGigabytesAreRefusedBeforeMatioListsTheVariables) {
+  const fs::path mat = stend::testing::source_path("fuzz/regressions/import_mat/dimensions_declare_3GB.mat");
+  const std::string msg = error_of([&] { import_mat(mat); });
+  EXPECT_NE(msg.find("byte 624: the matrix in this element declares 3172925448 bytes of dimensions"), std::string::npos)
+      << msg;
+}

@@ -427,8 +427,10 @@ TEST(Rosbag1, HeaderFieldBeyondItsHeaderIsRefusedBeforeOpening) {
 
 // The records librosbag reads at open time through the index are checked too: a chunk whose own
 // header declares 3.3 GB (the fuzz target found it: librosbag allocated 4 GB to read it), a chunk
-// info pointing into the middle of a record, a chunk declaring more uncompressed bytes than its
-// compressed ones can hold (librosbag allocates that size to decompress).
+// info pointing into the middle of a record, a connection record whose data (the connection's
+// header, which librosbag parses) holds a field longer than itself (ASan: ros::Header::parse read
+// past its buffer), a chunk declaring more uncompressed bytes than its compressed ones can hold
+// (librosbag allocates that size to decompress).
 TEST(Rosbag1, EveryRecordTheIndexReachesIsCheckedBeforeOpening) {
   const auto refusal = [](const char* name) {
     const fs::path bag = stend::testing::source_path(std::string("fuzz/regressions/import_rosbag1/") + name);
@@ -439,6 +441,9 @@ TEST(Rosbag1, EveryRecordTheIndexReachesIsCheckedBeforeOpening) {
             std::string::npos) << header;
   const std::string pos = refusal("chunk_pos_inside_a_record.bag");
   EXPECT_NE(pos.find("a chunk info points at byte 4125, where no record starts"), std::string::npos) << pos;
+  const std::string conn = refusal("connection_header_field_beyond.bag");
+  EXPECT_NE(conn.find("byte 28418: a header field declares 43576 bytes, past the end of the connection header at byte 28502"),
+            std::string::npos) << conn;
   const std::string size = refusal("chunk_size_4GB.bag");
   EXPECT_NE(size.find("byte 4117: a chunk (bz2) declares 4026531840 uncompressed bytes, which its 496 stored bytes"),
             std::string::npos) << size;
