@@ -110,13 +110,13 @@ std::string parameter_table(const json& fit) {
       std::isfinite(conf) ? fmt::format("{:.0f} %", 100 * conf) : "");
   for (const auto& p : fit["parameters"]) {
     const bool id = p.value("identifiable", false);
+    const detail::DisplayUnit du = detail::display_unit(str(p, "unit"));  // the unit family of the plots
     std::string interval = "—";
     if (p.contains("interval") && p["interval"].is_array())
-      interval = fmt::format("[{}, {}]", g(at(p["interval"], 0)), g(at(p["interval"], 1)));
+      interval = fmt::format("[{}, {}]", g(at(p["interval"], 0) * du.scale), g(at(p["interval"], 1) * du.scale));
     o += fmt::format("<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
-                     id ? "" : " class=\"nid\"", escape(str(p, "name")), id ? g(num(p, "value")) : "not estimated",
-                     escape(str(p, "unit")), g(num(p, "std_error")), interval,
-                     verdict_text(p));
+                     id ? "" : " class=\"nid\"", escape(str(p, "name")), id ? g(num(p, "value") * du.scale) : "not estimated",
+                     escape(du.unit), g(num(p, "std_error") * du.scale), interval, verdict_text(p));
   }
   o += "</table>\n";
   if (fit.contains("aliases") && fit["aliases"].is_array())
@@ -384,12 +384,15 @@ std::string fit_section(const json& fit, const std::string& file) {
   const json model = fit.value("model", json::object());
   std::string terms;
   for (const auto& t : model.value("terms", json::array())) terms += (terms.empty() ? "" : ", ") + str(t, "kind");
+  const std::string residual_unit = fit.value("units", json::object()).value("residual", "");
+  const detail::DisplayUnit sigma_unit =
+      residual_unit.empty() ? detail::DisplayUnit{1.0, ""} : detail::display_unit(residual_unit);
   if (fit.contains("solution")) o += fmt::format(
       "<p>{} model, terms: {}. Observations k = {}, parameters p = {}, rank {}, dof {}, σ = {} {}, "
       "condition number {} (identified subspace {}).</p>\n",
       escape(str(model, "instrument")), escape(terms), g(num(sol, "observations")), g(num(sol, "parameters")),
-      g(num(sol, "rank")), g(num(sol, "dof")), g(num(sol, "sigma")),
-      escape(fit.value("units", json::object()).value("residual", "")), g(num(sol, "condition_number")),
+      g(num(sol, "rank")), g(num(sol, "dof")), g(num(sol, "sigma") * sigma_unit.scale), escape(sigma_unit.unit),
+      g(num(sol, "condition_number")),
       g(num(sol, "condition_number_identified")));
   o += parameter_table(fit);
   o += fit_plots(fit, str(est, "name"));

@@ -123,6 +123,14 @@ TEST_F(Cli, RunWritesASelfContainedReportWithPlots) {
   EXPECT_NE(html.find("static mean − truth, axis z"), std::string::npos);
   EXPECT_NE(html.find("cross_zx"), std::string::npos);
   EXPECT_NE(html.find("NO: not excited"), std::string::npos);  // identifiability in the table
+  // The table in the plots' unit family: bias in mg, scale and cross-axis in ppm, σ in mg.
+  EXPECT_NE(html.find("<tr><td>bias_z</td><td>"), std::string::npos);
+  const std::string bias_row = html.substr(html.find("<tr><td>bias_z</td>"), 120);
+  EXPECT_NE(bias_row.find("<td>mg</td>"), std::string::npos) << bias_row;
+  const std::string cross_row = html.substr(html.find("<tr><td>cross_zx</td>"), 120);
+  EXPECT_NE(cross_row.find("<td>ppm</td>"), std::string::npos) << cross_row;
+  EXPECT_NE(html.find(" mg, condition number"), std::string::npos);
+  EXPECT_EQ(html.find("<td>m/s^2</td>"), std::string::npos);
   // Self-contained: no script, no external resource.
   EXPECT_EQ(html.find("<script"), std::string::npos);
   EXPECT_EQ(html.find("src="), std::string::npos);
