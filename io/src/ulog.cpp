@@ -80,8 +80,11 @@ Field parse_field(const BinaryReader& f, std::size_t at, const std::string& form
   if (const auto bracket = type.find('['); bracket != std::string_view::npos) {
     const auto close = type.find(']', bracket);
     double n = 0.0;
+    // A message is at most 65535 bytes (its uint16 size), so no array is longer; bounded before the
+    // integer cast, which a larger value would make undefined (the fuzz target found 3.7e78).
+    constexpr double kMaxArray = 65535.0;
     if (close == std::string_view::npos || !parse_double(type.substr(bracket + 1, close - bracket - 1), n) ||
-        !(n >= 1.0) || n != static_cast<double>(static_cast<std::size_t>(n))) {
+        !(n >= 1.0 && n <= kMaxArray) || n != std::floor(n)) {
       f.fail(at, "format '" + format + "': field '" + fld.name + "' has a bad array size in '" + std::string(type) + "'");
     }
     fld.count = static_cast<std::size_t>(n);

@@ -567,6 +567,14 @@ TEST(ImportUlog, DeviceIdOutOfRangeIsAnError) {
             std::string::npos) << c.what;
 }
 
+// A format's array size beyond any message (the fuzz target: 3.7e78, cast to an integer — UBSan).
+TEST(ImportUlog, ArraySizeBeyondAnyMessageIsAnError) {
+  const fs::path log = stend::testing::source_path("fuzz/regressions/import_ulog/array_size_3e78.ulg");
+  const Caught c = error_of([&] { stend::io::import_ulog(log); });
+  EXPECT_NE(c.what.find("byte 59: format 'sensor_combined': field 'gyro_rad' has a bad array size"), std::string::npos)
+      << c.what;
+}
+
 TEST(ImportDataflash, UnitIdOutOfRangeIsAnError) {
   const fs::path log = stend::testing::source_path("fuzz/regressions/import_dataflash/unit_id_out_of_range.BIN");
   const Caught c = error_of([&] { stend::io::import_dataflash(log); });
