@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <memory>
 
 namespace stend::cli {
@@ -55,12 +56,52 @@ std::string import_yaml(const ImportArgs& a, const std::string& format, const io
   return std::string(out.c_str()) + "\n";
 }
 
+// What an import made, on stdout (human lines) and as JSON (docs/schemas/import.schema.json).
+void print_imported(const std::filesystem::path& dir, const std::string& format, std::uint64_t samples,
+                    const Recording& rec) {
+  fmt::print(human(), "run folder: {}\nformat:     {}\nrecorded:   {} samples, {} segments, {} truth rows, {} events\n",
+             dir.string(), format, samples, rec.segments.size(), rec.truth_t.size(), rec.events.size());
+  std::vector<std::string> warnings;
+  for (const auto& e : rec.events)
+    if (e.level == "warning") {
+      fmt::print(human(), "warning:    {}\n", e.message);
+      warnings.push_back(e.message);
+    }
+  print_json({{"run_dir", dir.string()},
+              {"format", format},
+              {"samples", samples},
+              {"segments", rec.segments.size()},
+              {"truth_rows", rec.truth_t.size()},
+              {"events", rec.events.size()},
+              {"warnings", warnings}});
+}
+
+// Whether `dir` is a complete run folder that this very import made already: the same
+// experiment.yaml (format, absolute sources, options, name) and the same provenance events
+// (each source's size and sha256, this Stend's version). Running the same command again is then
+// a no-op, as with make; anything else in `dir` stays untouched and is an error.
+bool already_imported(const std::filesystem::path& dir, const std::string& yaml_text, const io::Inputs& inputs,
+                      const std::string& format) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(dir / "experiment.yaml", ec)) return false;
+  try {
+    if (yaml::read_file((dir / "experiment.yaml").string(), "experiment file") != yaml_text) return false;
+    const Recording old = Recording::open(dir, SampleLoading::kStream, TruthLoading::kSkip);
+    if (old.header.status != RunStatus::kComplete || !old.damage.empty()) return false;
+    Recording now;
+    io::add_provenance(now, inputs, format);
+    for (const auto& e : now.events) {
+      const auto same = [&e](const Event& o) { return o.message == e.message; };
+      if (std::none_of(old.events.begin(), old.events.end(), same)) return false;
+    }
+    return true;
+  } catch (const std::exception&) {
+    return false;  // not a readable run folder: not this import's
+  }
+}
+
 ExitCode run_import(const ImportArgs& a) {
   const std::filesystem::path dir = a.output;
-  if (std::filesystem::exists(dir)) {
-    fmt::print(stderr, "stend import: '{}' exists; give a new folder with -o (nothing was written)\n", dir.string());
-    return ExitCode::kInvalidInput;
-  }
   const io::ImportOptions options = a.data.options();
   const io::Inputs inputs = a.data.paths();
   if (a.data.is_run()) {
@@ -70,8 +111,20 @@ ExitCode run_import(const ImportArgs& a) {
   // experiment.yaml names the format, written with the first samples: the format is chosen first.
   const bool detect = a.data.format.empty() || a.data.format == "auto";
   const std::string format = (detect ? io::detect_format(inputs, options) : io::find_format(a.data.format)).name;
+  const std::string yaml_text = import_yaml(a, format, options);
+  if (std::filesystem::exists(dir)) {
+    if (!already_imported(dir, yaml_text, inputs, format)) {
+      fmt::print(stderr, "stend import: '{}' exists; give a new folder with -o (nothing was written)\n", dir.string());
+      return ExitCode::kInvalidInput;
+    }
+    fmt::print(human(), "already imported: {} holds these sources (same sha256), format and options; nothing to do\n",
+               dir.string());
+    const Recording done = Recording::open(dir, SampleLoading::kStream);
+    print_imported(dir, format, done.sample_count(), done);
+    return ExitCode::kOk;
+  }
   Recording rec;
-  io::RunSink sink(rec, dir, import_yaml(a, format, options), a.name);
+  io::RunSink sink(rec, dir, yaml_text, a.name);
   try {
     ProgressSink shown(sink, inputs);
     io::import_dataset(inputs, a.data.format, rec, shown, options);
@@ -84,22 +137,7 @@ ExitCode run_import(const ImportArgs& a) {
     std::filesystem::remove_all(dir, ec);  // the folder did not exist before: nothing else is lost
     throw;
   }
-  fmt::print(human(), "run folder: {}\nformat:     {}\nrecorded:   {} samples, {} segments, {} truth rows, {} events\n",
-             dir.string(), format, sink.sample_count(), rec.segments.size(), rec.truth_t.size(), rec.events.size());
-  std::vector<std::string> warnings;
-  for (const auto& e : rec.events)
-    if (e.level == "warning") {
-      fmt::print(human(), "warning:    {}\n", e.message);
-      warnings.push_back(e.message);
-    }
-  // docs/schemas/import.schema.json
-  print_json({{"run_dir", dir.string()},
-              {"format", format},
-              {"samples", sink.sample_count()},
-              {"segments", rec.segments.size()},
-              {"truth_rows", rec.truth_t.size()},
-              {"events", rec.events.size()},
-              {"warnings", warnings}});
+  print_imported(dir, format, sink.sample_count(), rec);
   return ExitCode::kOk;
 }
 
@@ -110,7 +148,7 @@ void add_import_command(CLI::App& app, std::vector<Command>& out) {
   auto* sub = app.add_subcommand("import", "Turn another tool's log into a run folder (then info, fit, gap, "
                                            "report, export and compare work on it)");
   args->data.add_to(sub);
-  sub->add_option("-o,--output", args->output, "The run folder to create (must not exist)")->required();
+  sub->add_option("-o,--output", args->output, "The run folder to create (must not exist, unless it is this same import already: then nothing is done)")->required();
   sub->add_option("--name", args->name, "The recording's name (default import:<format>)");
   add_json_flag(sub, "the run folder made and what it holds");
   out.push_back({sub, [args] { return run_import(*args); }});

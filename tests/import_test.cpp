@@ -83,11 +83,21 @@ void import_and_use(const fs::path& data, const std::string& model) {
   EXPECT_EQ(exp.code, 0) << exp.text;
   EXPECT_TRUE(fs::exists(dir / "export.json"));
 
-  // An existing folder is refused, and nothing in it changes.
+  // The same command again (the README's, run twice) is a no-op that says so; another source into
+  // the existing folder is refused. Nothing in the folder changes either way.
   const std::string before = stend::testing::read_text(run / "run.h5");
   const ProgramOutput again = run_stend("import " + data.string() + " -o " + run.string());
-  EXPECT_EQ(again.code, 2) << again.text;
-  EXPECT_NE(again.text.find("exists"), std::string::npos) << again.text;
+  EXPECT_EQ(again.code, 0) << again.text;
+  EXPECT_NE(again.text.find("already imported"), std::string::npos) << again.text;
+  EXPECT_EQ(stend::testing::read_text(run / "run.h5"), before);
+  const fs::path other = dir / "other.csv";
+  fs::copy_file(data, other);
+  std::FILE* f = std::fopen(other.string().c_str(), "ab");  // the same format, other content
+  std::fputs("\n", f);
+  std::fclose(f);
+  const ProgramOutput different = run_stend("import " + other.string() + " -o " + run.string());
+  EXPECT_EQ(different.code, 2) << different.text;
+  EXPECT_NE(different.text.find("exists"), std::string::npos) << different.text;
   EXPECT_EQ(stend::testing::read_text(run / "run.h5"), before);
 }
 
