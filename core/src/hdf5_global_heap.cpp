@@ -8,13 +8,13 @@
 // header is free space.
 #include "hdf5_global_heap.hpp"
 
+#include "hdf5_file_bytes.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <array>
 #include <cstring>
 #include <fstream>
-#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -22,48 +22,11 @@ namespace stend::detail {
 namespace {
 
 namespace fs = std::filesystem;
+using hdf5::FileBytes;
+using hdf5::little_endian;
 
 constexpr std::string_view kSignature = "GCOL";
 constexpr std::uint64_t kAlignment = 8;
-
-std::uint64_t little_endian(const unsigned char* p, unsigned bytes) {
-  std::uint64_t v = 0;
-  for (unsigned i = bytes; i-- > 0;) v = (v << 8) | p[i];
-  return v;
-}
-
-class FileBytes {
- public:
-  explicit FileBytes(const fs::path& file) : in_(file, std::ios::binary), size_(fs::file_size(file)) {}
-  std::uint64_t size() const { return size_; }
-  // `bytes` bytes at `offset`, nullopt when they are not all inside the file.
-  std::optional<std::vector<unsigned char>> read(std::uint64_t offset, std::uint64_t bytes) {
-    if (offset > size_ || bytes > size_ - offset) return std::nullopt;
-    std::vector<unsigned char> out(bytes);
-    in_.clear();
-    in_.seekg(static_cast<std::streamoff>(offset));
-    in_.read(reinterpret_cast<char*>(out.data()), static_cast<std::streamsize>(bytes));
-    if (static_cast<std::uint64_t>(in_.gcount()) != bytes) return std::nullopt;
-    return out;
-  }
-
- private:
-  std::ifstream in_;
-  std::uint64_t size_;
-};
-
-// The superblock's size of lengths; where libhdf5 looks for it: byte 0, then 512, 1024, 2048, …
-// 0 when there is no superblock (libhdf5 would not have opened the file).
-unsigned size_of_lengths(FileBytes& f) {
-  static constexpr std::array<unsigned char, 8> kHdf5Signature = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
-  for (std::uint64_t at = 0; at < f.size(); at = at ? at * 2 : 512) {
-    const auto b = f.read(at, 16);
-    if (!b || !std::equal(kHdf5Signature.begin(), kHdf5Signature.end(), b->begin())) continue;
-    const unsigned version = (*b)[8];
-    return version <= 1 ? (*b)[14] : (*b)[10];  // versions 0, 1: byte 14; 2, 3: byte 10
-  }
-  return 0;
-}
 
 // Byte offsets of every "GCOL" in the file, read sequentially in blocks.
 std::vector<std::uint64_t> signature_offsets(const fs::path& file) {
@@ -126,8 +89,9 @@ std::string collection_damage(FileBytes& f, std::uint64_t at, unsigned length_by
 
 std::string global_heap_damage(const fs::path& file, const IsChunkData& is_chunk_data) {
   FileBytes f(file);
-  const unsigned length_bytes = size_of_lengths(f);
-  if (length_bytes != 2 && length_bytes != 4 && length_bytes != 8) return {};  // libhdf5 refuses those
+  const auto superblock = hdf5::find_superblock(f);
+  if (!superblock) return {};  // libhdf5 refuses the file itself
+  const unsigned length_bytes = superblock->size_of_lengths;
   for (const std::uint64_t at : signature_offsets(file)) {
     const std::string what = collection_damage(f, at, length_bytes);
     if (!what.empty() && !(is_chunk_data && is_chunk_data(at)))

@@ -1430,6 +1430,49 @@ TEST_F(RecordingTest, Hdf5StringAttributesAreFixedLengthWithoutAGlobalHeap) {
   EXPECT_TRUE(r.damage.empty()) << r.damage;
 }
 
+TEST_F(RecordingTest, Hdf5MetadataDeclaringMoreThanTheFileIsRefusedBeforeLibhdf5AllocatesIt) {
+  // libhdf5 1.10 allocates the size a metadata block declares before reading it: the regression
+  // input (a mutation found by the fuzzer) made it ask malloc for 2^64 − 1 bytes, an abort under
+  // ASan. The class, made from the format 1 seed (superblock version 0: the root object header at
+  // byte 96, its first chunk holding a continuation to byte 800; the root group's local heap at
+  // byte 680): each declared size beyond the whole file is refused before libhdf5 sees it.
+  auto u32 = [](std::string& s, std::size_t at, std::uint32_t v) {
+    for (int i = 0; i < 4; ++i) s[at + static_cast<std::size_t>(i)] = static_cast<char>(v >> (8 * i));
+  };
+  const std::string seed = read_text(stend::testing::source_path("fuzz/corpus/run_h5/seed_imucal_import.h5"));
+  std::string first_chunk = seed, continuation = seed, heap = seed;
+  u32(first_chunk, 96 + 8, 0xfffffff0u);
+  put_u64(continuation, 112 + 8 + 8, std::uint64_t{1} << 40);
+  put_u64(heap, 680 + 8, std::uint64_t{1} << 36);
+  const std::string regression =
+      read_text(stend::testing::source_path("fuzz/regressions/run_h5/run_h5_h5c_protect_alloc_size_max.h5"));
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {first_chunk, "the object header at byte 96: its first chunk declares 4294967280 bytes"},
+      {continuation, "the object header at byte 96: its continuation message (chunk at byte 800) declares "
+                     "1099511627776 bytes"},
+      {heap, "the local heap at byte 680: its data segment declares 68719476736 bytes"},
+      {regression, "the object header at byte 96: its continuation message (chunk at byte 281476138861344) "
+                   "declares 18446744073709551615 bytes"}};
+  int n = 0;
+  for (const auto& [bytes, expected] : cases) {
+    SCOPED_TRACE(expected);
+    const fs::path dir = format1_run(root_ / ("case" + std::to_string(n++)), bytes);
+    try {
+      (void)Recording::open(dir, stend::SampleLoading::kStream);
+      ADD_FAILURE() << "opened";
+    } catch (const stend::InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find((dir / "run.h5").string() + ": cannot be opened as an HDF5 run store: " + expected),
+                std::string::npos)
+          << what;
+      EXPECT_NE(what.find("more than the whole file (" + std::to_string(bytes.size()) + " bytes)"), std::string::npos)
+          << what;
+    }
+  }
+  // The seed itself opens: its sizes all fit.
+  EXPECT_GT(Recording::open(format1_run(root_ / "seed"), stend::SampleLoading::kStream).sample_count(), 0u);
+}
+
 TEST_F(RecordingTest, Hdf5Format1WithVariableLengthAttributesStaysReadable) {
   const fs::path dir = format1_run(root_ / "v1");
   const std::string h5 = read_text(dir / "run.h5");

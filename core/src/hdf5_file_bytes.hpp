@@ -1,0 +1,112 @@
+// Reading an HDF5 file's own bytes, for the checks Stend makes before libhdf5 reads a file
+// (hdf5_global_heap.hpp, hdf5_metadata_sizes.hpp). Internal to stend_core.
+//
+// HDF5 file format specification 3.0, "Superblock": the signature is looked for at byte 0, then
+// 512, 1024, 2048, …; versions 0 and 1 hold the sizes of offsets and lengths at bytes 13 and 14
+// and the root group's symbol table entry after four addresses (version 1 has 4 more bytes
+// before them); versions 2 and 3 hold the sizes at bytes 9 and 10, then the base address, the
+// superblock extension's address, the end-of-file address and the root group's object header
+// address. Addresses are relative to the base address; "undefined" is all bits set.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <vector>
+
+namespace stend::detail::hdf5 {
+
+inline std::uint64_t little_endian(const unsigned char* p, unsigned bytes) {
+  std::uint64_t v = 0;
+  for (unsigned i = bytes; i-- > 0;) v = (v << 8) | p[i];
+  return v;
+}
+
+class FileBytes {
+ public:
+  explicit FileBytes(const std::filesystem::path& file)
+      : in_(file, std::ios::binary), size_(std::filesystem::file_size(file)) {}
+  std::uint64_t size() const { return size_; }
+  // `bytes` bytes at `offset`, nullopt when they are not all inside the file.
+  std::optional<std::vector<unsigned char>> read(std::uint64_t offset, std::uint64_t bytes) {
+    if (offset > size_ || bytes > size_ - offset) return std::nullopt;
+    std::vector<unsigned char> out(bytes);
+    in_.clear();
+    in_.seekg(static_cast<std::streamoff>(offset));
+    in_.read(reinterpret_cast<char*>(out.data()), static_cast<std::streamsize>(bytes));
+    if (static_cast<std::uint64_t>(in_.gcount()) != bytes) return std::nullopt;
+    return out;
+  }
+
+ private:
+  std::ifstream in_;
+  std::uint64_t size_;
+};
+
+inline constexpr std::uint64_t kUndefinedAddress = ~std::uint64_t{0};
+
+struct Superblock {
+  std::uint64_t at = 0;  // byte offset of the signature
+  unsigned version = 0;
+  unsigned size_of_offsets = 0, size_of_lengths = 0;
+  std::uint64_t base = 0;                               // base address (absolute)
+  std::uint64_t driver_info = kUndefinedAddress;        // versions 0, 1
+  std::uint64_t extension = kUndefinedAddress;          // versions 2, 3
+  std::uint64_t root_header = kUndefinedAddress;        // the root group's object header
+  std::uint64_t cached_btree = kUndefinedAddress;       // versions 0, 1: the root entry's cached
+  std::uint64_t cached_heap = kUndefinedAddress;        // symbol table (scratch pad)
+};
+
+// An address of `size` bytes at p (all bits set: undefined).
+inline std::uint64_t address(const unsigned char* p, unsigned size) {
+  const std::uint64_t v = little_endian(p, size);
+  return size < 8 && v == (std::uint64_t{1} << (8 * size)) - 1 ? kUndefinedAddress : v;
+}
+
+// The superblock where libhdf5 looks for it; nullopt when there is none it could read (libhdf5
+// then refuses the file itself) or its sizes are not ones libhdf5 accepts.
+inline std::optional<Superblock> find_superblock(FileBytes& f) {
+  static constexpr std::array<unsigned char, 8> kSignature = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
+  for (std::uint64_t at = 0; at < f.size(); at = at ? at * 2 : 512) {
+    const auto b = f.read(at, 16);
+    if (!b || !std::equal(kSignature.begin(), kSignature.end(), b->begin())) continue;
+    Superblock s;
+    s.at = at;
+    s.version = (*b)[8];
+    const bool old = s.version <= 1;
+    s.size_of_offsets = old ? (*b)[13] : (*b)[9];
+    s.size_of_lengths = old ? (*b)[14] : (*b)[10];
+    auto valid = [](unsigned n) { return n == 2 || n == 4 || n == 8; };
+    if (s.version > 3 || !valid(s.size_of_offsets) || !valid(s.size_of_lengths)) return std::nullopt;
+    const unsigned o = s.size_of_offsets;
+    if (old) {
+      // Bytes 16–23: group K values and flags; version 1: 4 more. Then base, free-space info,
+      // end of file, driver info block; then the root entry: link name offset, object header
+      // address, cache type (4), reserved (4), scratch pad (B-tree address, heap address).
+      const std::uint64_t fixed = 24 + (s.version == 1 ? 4 : 0);
+      const auto v = f.read(at + fixed, 4 * o + 2 * o + 8 + 2 * o);
+      if (!v) return std::nullopt;
+      const unsigned char* p = v->data();
+      s.base = little_endian(p, o);
+      s.driver_info = address(p + 3 * o, o);
+      s.root_header = address(p + 5 * o, o);
+      if (little_endian(p + 6 * o, 4) == 1) {  // cache type 1: symbol table cached
+        s.cached_btree = address(p + 6 * o + 8, o);
+        s.cached_heap = address(p + 7 * o + 8, o);
+      }
+    } else {
+      const auto v = f.read(at + 12, 4 * o);
+      if (!v) return std::nullopt;
+      s.base = little_endian(v->data(), o);
+      s.extension = address(v->data() + o, o);
+      s.root_header = address(v->data() + 3 * o, o);
+    }
+    return s;
+  }
+  return std::nullopt;
+}
+
+}  // namespace stend::detail::hdf5
