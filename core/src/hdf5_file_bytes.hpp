@@ -1,5 +1,5 @@
 // Reading an HDF5 file's own bytes, for the checks Stend makes before libhdf5 reads a file
-// (hdf5_global_heap.hpp, hdf5_metadata_sizes.hpp). Internal to stend_core.
+// (hdf5_global_heap.hpp, hdf5_metadata.hpp). Internal to stend_core.
 //
 // HDF5 file format specification 3.0, "Superblock": the signature is looked for at byte 0, then
 // 512, 1024, 2048, …; versions 0 and 1 hold the sizes of offsets and lengths at bytes 13 and 14
@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -55,6 +56,7 @@ struct Superblock {
   std::uint64_t base = 0;                               // base address (absolute)
   std::uint64_t driver_info = kUndefinedAddress;        // versions 0, 1
   std::uint64_t extension = kUndefinedAddress;          // versions 2, 3
+  std::uint64_t end_of_file = kUndefinedAddress;        // end-of-file address (of what was allocated)
   std::uint64_t root_header = kUndefinedAddress;        // the root group's object header
   std::uint64_t cached_btree = kUndefinedAddress;       // versions 0, 1: the root entry's cached
   std::uint64_t cached_heap = kUndefinedAddress;        // symbol table (scratch pad)
@@ -91,6 +93,7 @@ inline std::optional<Superblock> find_superblock(FileBytes& f) {
       if (!v) return std::nullopt;
       const unsigned char* p = v->data();
       s.base = little_endian(p, o);
+      s.end_of_file = address(p + 2 * o, o);
       s.driver_info = address(p + 3 * o, o);
       s.root_header = address(p + 5 * o, o);
       if (little_endian(p + 6 * o, 4) == 1) {  // cache type 1: symbol table cached
@@ -102,11 +105,57 @@ inline std::optional<Superblock> find_superblock(FileBytes& f) {
       if (!v) return std::nullopt;
       s.base = little_endian(v->data(), o);
       s.extension = address(v->data() + o, o);
+      s.end_of_file = address(v->data() + 2 * o, o);
       s.root_header = address(v->data() + 3 * o, o);
     }
     return s;
   }
   return std::nullopt;
+}
+
+// Bob Jenkins' lookup3 hash (hashlittle, 2006, public domain) with initial value 0: the checksum of
+// HDF5's version 2 metadata (object headers "OHDR" and "OCHK", fractal heaps, v2 B-trees, …),
+// stored little-endian in the block's last 4 bytes over all bytes before them.
+inline std::uint32_t lookup3(const unsigned char* k, std::size_t length) {
+  auto rot = [](std::uint32_t x, int r) { return (x << r) | (x >> (32 - r)); };
+  std::uint32_t a, b, c;
+  a = b = c = 0xdeadbeefu + static_cast<std::uint32_t>(length);
+  auto word = [&](std::size_t i, std::size_t n) {  // up to 4 bytes from k[i], little-endian
+    std::uint32_t w = 0;
+    for (std::size_t j = 0; j < n; ++j) w |= static_cast<std::uint32_t>(k[i + j]) << (8 * j);
+    return w;
+  };
+  while (length > 12) {
+    a += word(0, 4);
+    b += word(4, 4);
+    c += word(8, 4);
+    a -= c; a ^= rot(c, 4); c += b;
+    b -= a; b ^= rot(a, 6); a += c;
+    c -= b; c ^= rot(b, 8); b += a;
+    a -= c; a ^= rot(c, 16); c += b;
+    b -= a; b ^= rot(a, 19); a += c;
+    c -= b; c ^= rot(b, 4); b += a;
+    length -= 12;
+    k += 12;
+  }
+  if (length == 0) return c;
+  a += word(0, std::min<std::size_t>(length, 4));
+  if (length > 4) b += word(4, std::min<std::size_t>(length - 4, 4));
+  if (length > 8) c += word(8, length - 8);
+  c ^= b; c -= rot(b, 14);
+  a ^= c; a -= rot(c, 11);
+  b ^= a; b -= rot(a, 25);
+  c ^= b; c -= rot(b, 16);
+  a ^= c; a -= rot(c, 4);
+  b ^= a; b -= rot(a, 14);
+  c ^= b; c -= rot(b, 24);
+  return c;
+}
+
+// Whether the last 4 bytes of `block` are the lookup3 checksum of the bytes before them.
+inline bool checksum_matches(const std::vector<unsigned char>& block) {
+  if (block.size() < 4) return false;
+  return lookup3(block.data(), block.size() - 4) == little_endian(block.data() + block.size() - 4, 4);
 }
 
 }  // namespace stend::detail::hdf5

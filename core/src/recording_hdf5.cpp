@@ -2,7 +2,7 @@
 #include "hdf5_store.hpp"
 
 #include "hdf5_global_heap.hpp"
-#include "hdf5_metadata_sizes.hpp"
+#include "hdf5_metadata.hpp"
 
 #include <hdf5.h>
 
@@ -843,8 +843,8 @@ void read_hdf5_run(const fs::path& path, bool truth, Hdf5Run& run) {
   // A metadata block that fails its checksum is damage, not a write in progress: no retries (SWMR
   // readers otherwise retry 100 times with growing sleeps).
   H5Pset_metadata_read_attempts(fapl.get(), 2);
-  // libhdf5 allocates the sizes the metadata declares before it reads them (hdf5_metadata_sizes.hpp).
-  if (const std::string damage = metadata_size_damage(path); !damage.empty())
+  // libhdf5 allocates the sizes the metadata declares before it reads them (hdf5_metadata.hpp).
+  if (const std::string damage = metadata_damage(path); !damage.empty())
     throw std::runtime_error(fmt::format("{}: cannot be opened as an HDF5 run store: {}", path.string(), damage));
   Handle file = check(H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl.get()),
                       H5Fclose, path, "cannot be opened as an HDF5 run store (damaged or not HDF5)");

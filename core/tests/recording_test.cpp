@@ -1430,7 +1430,7 @@ TEST_F(RecordingTest, Hdf5StringAttributesAreFixedLengthWithoutAGlobalHeap) {
   EXPECT_TRUE(r.damage.empty()) << r.damage;
 }
 
-TEST_F(RecordingTest, Hdf5MetadataDeclaringMoreThanTheFileIsRefusedBeforeLibhdf5AllocatesIt) {
+TEST_F(RecordingTest, Hdf5MetadataLibhdf5WouldMisreadIsRefusedBeforeItOpensTheFile) {
   // libhdf5 1.10 allocates the size a metadata block declares before reading it: the regression
   // input (a mutation found by the fuzzer) made it ask malloc for 2^64 − 1 bytes, an abort under
   // ASan. The class, made from the format 1 seed (superblock version 0: the root object header at
@@ -1446,13 +1446,23 @@ TEST_F(RecordingTest, Hdf5MetadataDeclaringMoreThanTheFileIsRefusedBeforeLibhdf5
   put_u64(heap, 680 + 8, std::uint64_t{1} << 36);
   const std::string regression =
       read_text(stend::testing::source_path("fuzz/regressions/run_h5/run_h5_h5c_protect_alloc_size_max.h5"));
+  // Version 2 object headers (the latest-format seed: the root's "OHDR" at byte 48, its first
+  // chunk 686 bytes with the checksum): libhdf5 lost the header it had decoded (a leak per open,
+  // found by the fuzzer) when the chunk then failed its checksum or ran past the end.
+  const std::string latest = read_text(stend::testing::source_path("fuzz/corpus/run_h5/seed_format2_latest.h5"));
+  ASSERT_EQ(latest.substr(48, 4), "OHDR");
+  std::string flipped = latest;
+  flipped[48 + 100] = static_cast<char>(flipped[48 + 100] ^ 0x10);
+  const std::string cut = latest.substr(0, 48 + 672);
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {first_chunk, "the object header at byte 96: its first chunk declares 4294967280 bytes"},
+      {first_chunk, "the object header at byte 96: its first chunk declares 4294967280 bytes, more than the whole file"},
       {continuation, "the object header at byte 96: its continuation message (chunk at byte 800) declares "
-                     "1099511627776 bytes"},
-      {heap, "the local heap at byte 680: its data segment declares 68719476736 bytes"},
+                     "1099511627776 bytes, more than the whole file"},
+      {heap, "the local heap at byte 680: its data segment declares 68719476736 bytes, more than the whole file"},
       {regression, "the object header at byte 96: its continuation message (chunk at byte 281476138861344) "
-                   "declares 18446744073709551615 bytes"}};
+                   "declares 18446744073709551615 bytes, more than the whole file"},
+      {flipped, "the object header at byte 48: its first chunk (686 bytes at byte 48) does not match its checksum"},
+      {cut, "the object header at byte 48: its first chunk (686 bytes at byte 48) runs past the end of the file"}};
   int n = 0;
   for (const auto& [bytes, expected] : cases) {
     SCOPED_TRACE(expected);
@@ -1465,12 +1475,11 @@ TEST_F(RecordingTest, Hdf5MetadataDeclaringMoreThanTheFileIsRefusedBeforeLibhdf5
       EXPECT_NE(what.find((dir / "run.h5").string() + ": cannot be opened as an HDF5 run store: " + expected),
                 std::string::npos)
           << what;
-      EXPECT_NE(what.find("more than the whole file (" + std::to_string(bytes.size()) + " bytes)"), std::string::npos)
-          << what;
     }
   }
-  // The seed itself opens: its sizes all fit.
+  // The seeds themselves open.
   EXPECT_GT(Recording::open(format1_run(root_ / "seed"), stend::SampleLoading::kStream).sample_count(), 0u);
+  EXPECT_GT(Recording::open(format1_run(root_ / "latest", latest), stend::SampleLoading::kStream).sample_count(), 0u);
 }
 
 TEST_F(RecordingTest, Hdf5Format1WithVariableLengthAttributesStaysReadable) {

@@ -1,4 +1,4 @@
-// Metadata sizes checked before libhdf5 allocates them (why: hdf5_metadata_sizes.hpp).
+// An HDF5 file's metadata checked before libhdf5 reads it (why: hdf5_metadata.hpp).
 //
 // HDF5 file format specification 3.0, the parts walked here:
 //   Object header version 1: version 1, reserved, message count (2), reference count (4), size of
@@ -7,7 +7,8 @@
 //   Object header version 2: "OHDR", version 2, flags (bit 5: four times, 16 bytes; bit 4: two
 //     attribute limits, 4 bytes; bits 0–1: the first chunk's size takes 1, 2, 4 or 8 bytes), the
 //     size; messages: type (1), size (2), flags (1), creation order (2, when flags bit 2); a
-//     checksum (4) after the chunk. A continuation chunk is "OCHK", messages, checksum.
+//     checksum (4, lookup3 of everything before it) after the chunk. A continuation chunk is
+//     "OCHK", messages, checksum.
 //   Messages followed: continuation (0x10: address, length), symbol table (0x11: v1 B-tree
 //     address, local heap address), link (0x06: a hard link's object header address).
 //   Local heap: "HEAP", version 0, 3 reserved, data segment size (a length), free list offset (a
@@ -18,14 +19,16 @@
 //   Symbol table node: "SNOD", version 1, reserved, symbol count (2), entries: link name offset,
 //     object header address, cache type (4), reserved (4), scratch pad (16).
 //   Driver information block (superblock versions 0, 1): version 0, 3 reserved, size (4), …
-#include "hdf5_metadata_sizes.hpp"
+#include "hdf5_metadata.hpp"
 
 #include <fmt/format.h>
 
+#include <chrono>
 #include <cstring>
 #include <deque>
 #include <set>
 #include <string_view>
+#include <thread>
 #include <vector>
 
 #include "hdf5_file_bytes.hpp"
@@ -39,8 +42,8 @@ using hdf5::kUndefinedAddress;
 using hdf5::little_endian;
 using Bytes = std::vector<unsigned char>;
 
-constexpr std::uint64_t kMaxBlocks = 1u << 16;      // blocks visited at most (a damaged file may loop)
-constexpr std::uint64_t kMaxParsedChunk = 1u << 24;  // bytes of one object header chunk parsed
+constexpr std::uint64_t kMaxBlocks = 1u << 16;  // blocks visited at most (a damaged file may loop)
+constexpr int kChecksumAttempts = 3;             // reads of a chunk before a checksum mismatch is damage
 
 bool starts_with(const Bytes& b, std::string_view signature) {
   return b.size() >= signature.size() && std::memcmp(b.data(), signature.data(), signature.size()) == 0;
@@ -49,7 +52,7 @@ bool starts_with(const Bytes& b, std::string_view signature) {
 class MetadataWalk {
  public:
   MetadataWalk(FileBytes& f, const hdf5::Superblock& s)
-      : f_(f), base_(s.base), o_(s.size_of_offsets), l_(s.size_of_lengths) {}
+      : f_(f), base_(s.base), end_of_file_(s.end_of_file), o_(s.size_of_offsets), l_(s.size_of_lengths) {}
 
   std::string run(const hdf5::Superblock& s) {
     driver_info(s.driver_info);
@@ -85,8 +88,7 @@ class MetadataWalk {
   // True (and the damage noted) when `bytes` declared at `what` exceed the whole file.
   bool too_big(std::uint64_t bytes, const std::string& what) {
     if (bytes <= f_.size()) return false;
-    if (damage_.empty())
-      damage_ = fmt::format("{} declares {} bytes, more than the whole file ({} bytes)", what, bytes, f_.size());
+    note(fmt::format("{} declares {} bytes, more than the whole file ({} bytes)", what, bytes, f_.size()));
     return true;
   }
 
@@ -109,15 +111,43 @@ class MetadataWalk {
       const std::uint64_t chunk0 = little_endian(prefix->data() + size_at, size_bytes);
       if (too_big(chunk0, where + ": its first chunk")) return;
       const std::uint64_t start = size_at + size_bytes;
-      const auto chunk = read(at, start + std::min(chunk0, kMaxParsedChunk));
-      if (chunk) messages(*chunk, start, chunk->size(), 2, (flags & 0x04) != 0, where);
+      if (const auto chunk = whole_chunk(at, start + chunk0 + 4, true, where + ": its first chunk"))
+        messages(*chunk, start, chunk->size() - 4, 2, (flags & 0x04) != 0, where);
     } else {
       if ((*prefix)[0] != 1) return;
       const std::uint64_t chunk0 = little_endian(prefix->data() + 8, 4);
       if (too_big(chunk0, where + ": its first chunk")) return;
-      const auto chunk = read(at, 16 + std::min(chunk0, kMaxParsedChunk));
-      if (chunk) messages(*chunk, 16, chunk->size(), 1, false, where);
+      if (const auto chunk = whole_chunk(at, 16 + chunk0, false, where + ": its first chunk"))
+        messages(*chunk, 16, chunk->size(), 1, false, where);
     }
+  }
+
+  // An object header chunk of `bytes` at `at`, read whole: libhdf5 decodes its header first and
+  // loses that (an object header, 424 bytes, unreachable) when the rest cannot be loaded, so a
+  // chunk past the end of the file or of its allocated space, or one whose checksum does not
+  // match (version 2), is damage here.
+  std::optional<Bytes> whole_chunk(std::uint64_t at, std::uint64_t bytes, bool checksummed, const std::string& what) {
+    auto chunk = read(at, bytes);
+    if (!chunk || chunk->size() != bytes || (end_of_file_ != kUndefinedAddress && at + bytes > end_of_file_)) {
+      note(fmt::format("{} ({} bytes at byte {}) runs past the end of the file", what, bytes, base_ + at));
+      return std::nullopt;
+    }
+    // A file still being written (SWMR) may be read while a header is rewritten: read again, as
+    // libhdf5 does, before calling it damaged.
+    for (int attempt = 1; checksummed && !hdf5::checksum_matches(*chunk); ++attempt) {
+      if (attempt == kChecksumAttempts) {
+        note(fmt::format("{} ({} bytes at byte {}) does not match its checksum", what, bytes, base_ + at));
+        return std::nullopt;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      chunk = read(at, bytes);
+      if (!chunk) return std::nullopt;
+    }
+    return chunk;
+  }
+
+  void note(std::string what) {
+    if (damage_.empty()) damage_ = std::move(what);
   }
 
   // The messages of one chunk in c[from, to).
@@ -140,8 +170,10 @@ class MetadataWalk {
       case 0x10: {  // continuation
         if (size < o_ + l_) return;
         const std::uint64_t at = hdf5::address(p, o_), length = little_endian(p + o_, l_);
-        if (too_big(length, fmt::format("{}: its continuation message (chunk at byte {})", where, base_ + at))) return;
-        const auto chunk = block(at, std::min(length, kMaxParsedChunk));
+        const std::string what = fmt::format("{}: its continuation message (chunk at byte {})", where, base_ + at);
+        if (too_big(length, what) || at == hdf5::kUndefinedAddress || !seen_.insert(at).second) return;
+        ++blocks_;
+        const auto chunk = whole_chunk(at, length, version == 2, what);
         if (!chunk) return;
         if (version == 1) messages(*chunk, 0, chunk->size(), 1, false, where);
         else if (starts_with(*chunk, "OCHK") && chunk->size() >= 8)
@@ -206,7 +238,7 @@ class MetadataWalk {
   }
 
   FileBytes& f_;
-  std::uint64_t base_;
+  std::uint64_t base_, end_of_file_;
   unsigned o_, l_;  // sizes of offsets and lengths
   std::deque<std::uint64_t> objects_;
   std::set<std::uint64_t> seen_;
@@ -216,7 +248,7 @@ class MetadataWalk {
 
 }  // namespace
 
-std::string metadata_size_damage(const fs::path& file) {
+std::string metadata_damage(const fs::path& file) {
   FileBytes f(file);
   const auto superblock = hdf5::find_superblock(f);
   if (!superblock) return {};
