@@ -83,7 +83,7 @@ TEST(DamagedRunCli, DamagedGlobalHeapOfAFormat1RunH5IsNamedNeverAHang) {
   const TempDir dir("cli-gcol");
   const fs::path run = dir / "run";
   fs::copy(src + "/fuzz/run_template/h5", run, fs::copy_options::recursive);
-  std::string h5 = read_text(src + "/fuzz/corpus/run_h5/seed_imucal_import.h5");
+  std::string h5 = read_text(src + "/fuzz/corpus/run_h5/seed_format1_latest.h5");
   // The collection's last object (its free space) declared 0 bytes long: the loop.
   const std::size_t gcol = h5.find("GCOL");
   ASSERT_NE(gcol, std::string::npos);

@@ -2,11 +2,11 @@
 // (hdf5_global_heap.hpp, hdf5_metadata.hpp). Internal to stend_core.
 //
 // HDF5 file format specification 3.0, "Superblock": the signature is looked for at byte 0, then
-// 512, 1024, 2048, …; versions 0 and 1 hold the sizes of offsets and lengths at bytes 13 and 14
-// and the root group's symbol table entry after four addresses (version 1 has 4 more bytes
-// before them); versions 2 and 3 hold the sizes at bytes 9 and 10, then the base address, the
+// 512, 1024, 2048, …; versions 0 and 1 hold the sizes of offsets and lengths at bytes 13 and 14;
+// versions 2 and 3 hold them at bytes 9 and 10, then (from byte 12) the base address, the
 // superblock extension's address, the end-of-file address and the root group's object header
-// address. Addresses are relative to the base address; "undefined" is all bits set.
+// address, and a checksum. Addresses are relative to the base address; "undefined" is all bits
+// set.
 #pragma once
 
 #include <algorithm>
@@ -53,13 +53,11 @@ struct Superblock {
   std::uint64_t at = 0;  // byte offset of the signature
   unsigned version = 0;
   unsigned size_of_offsets = 0, size_of_lengths = 0;
-  std::uint64_t base = 0;                               // base address (absolute)
-  std::uint64_t driver_info = kUndefinedAddress;        // versions 0, 1
-  std::uint64_t extension = kUndefinedAddress;          // versions 2, 3
-  std::uint64_t end_of_file = kUndefinedAddress;        // end-of-file address (of what was allocated)
-  std::uint64_t root_header = kUndefinedAddress;        // the root group's object header
-  std::uint64_t cached_btree = kUndefinedAddress;       // versions 0, 1: the root entry's cached
-  std::uint64_t cached_heap = kUndefinedAddress;        // symbol table (scratch pad)
+  // Versions 2 and 3 only (what the object header check reads; 0 and 1 are refused before):
+  std::uint64_t base = 0;                         // base address (absolute)
+  std::uint64_t extension = kUndefinedAddress;    // the superblock extension's object header
+  std::uint64_t end_of_file = kUndefinedAddress;  // end-of-file address (of what was allocated)
+  std::uint64_t root_header = kUndefinedAddress;  // the root group's object header
 };
 
 // An address of `size` bytes at p (all bits set: undefined).
@@ -83,24 +81,8 @@ inline std::optional<Superblock> find_superblock(FileBytes& f) {
     s.size_of_lengths = old ? (*b)[14] : (*b)[10];
     auto valid = [](unsigned n) { return n == 2 || n == 4 || n == 8; };
     if (s.version > 3 || !valid(s.size_of_offsets) || !valid(s.size_of_lengths)) return std::nullopt;
-    const unsigned o = s.size_of_offsets;
-    if (old) {
-      // Bytes 16–23: group K values and flags; version 1: 4 more. Then base, free-space info,
-      // end of file, driver info block; then the root entry: link name offset, object header
-      // address, cache type (4), reserved (4), scratch pad (B-tree address, heap address).
-      const std::uint64_t fixed = 24 + (s.version == 1 ? 4 : 0);
-      const auto v = f.read(at + fixed, 4 * o + 2 * o + 8 + 2 * o);
-      if (!v) return std::nullopt;
-      const unsigned char* p = v->data();
-      s.base = little_endian(p, o);
-      s.end_of_file = address(p + 2 * o, o);
-      s.driver_info = address(p + 3 * o, o);
-      s.root_header = address(p + 5 * o, o);
-      if (little_endian(p + 6 * o, 4) == 1) {  // cache type 1: symbol table cached
-        s.cached_btree = address(p + 6 * o + 8, o);
-        s.cached_heap = address(p + 7 * o + 8, o);
-      }
-    } else {
+    if (!old) {
+      const unsigned o = s.size_of_offsets;
       const auto v = f.read(at + 12, 4 * o);
       if (!v) return std::nullopt;
       s.base = little_endian(v->data(), o);

@@ -1,31 +1,48 @@
-// An HDF5 file's metadata, checked before libhdf5 reads it.
+// An HDF5 file's object headers, checked before libhdf5 reads them.
 //
-// libhdf5 1.10 allocates a metadata block's buffer from the size the file declares and only then
-// reads it: an object header's first chunk, a continuation chunk of the length its continuation
-// message gives, a local heap's data segment, the driver information block. The end-of-file
-// address it checks the read against comes from the superblock as well (and Stend opens truncated
-// files with that check off), and the check itself wraps around for lengths near 2^64. A damaged
-// file thus makes libhdf5 ask for up to 2^64 − 1 bytes: harmless where malloc fails cleanly, an
-// abort under AddressSanitizer, gigabytes of address space otherwise. And when an object header's
-// prefix decodes but the rest of its chunk cannot be loaded (past the end, or a version 2 header
-// whose checksum does not match), libhdf5 loses the object header it made (a leak per open).
-// Stend therefore walks the metadata reachable from the superblock (the object headers of every
-// object linked from the root, their continuation chunks, the groups' local heaps, B-tree nodes
-// and symbol table nodes) and refuses a file in which any of those declares more bytes than the
-// whole file holds, or an object header chunk runs past the end of the file (or of its allocated
-// space) or fails its checksum. Other blocks past the end of a truncated file are not damage here:
-// libhdf5 refuses them itself, and Stend keeps what comes before. Internal to stend_core
-// (recording_hdf5.cpp).
+// libhdf5 1.10 (Debian 12's 1.10.8) decodes metadata without bounds checks in many places, and
+// fuzzing run.h5 found it crashing on damaged files: a buffer of the size a continuation message
+// declared (malloc(2^64 − 1)), a use after free decoding an attribute message, an object header
+// lost (leaked) when its chunk failed to load. Its defence against damage is the checksum that
+// HDF5 ≥ 1.8's file format puts on every metadata block (superblock versions 2 and 3, version 2
+// object headers "OHDR"/"OCHK", v2 B-trees, fractal heaps and their direct blocks, extensible and
+// fixed arrays): damaged bytes fail their checksum before they are decoded. Stend's writer has
+// always written that format (SWMR requires it). So Stend reads run stores in that format only:
+//   - the superblock must be version 2 or 3 (versions 0 and 1, HDF5 1.6's layout — what
+//     `h5repack` writes without `-L` — keep object headers, B-trees and heaps without checksums);
+//   - every object header libhdf5 will load (the superblock extension's, the root group's, then
+//     each linked object's, checked as the links are visited, before libhdf5 loads it) must be a
+//     version 2 header whose chunks lie inside the file and match their checksums. libhdf5 would
+//     take a header whose "OHDR" signature is damaged for an unchecked version 1 header, and it
+//     allocates a chunk's declared size before it checks it against the end of the file.
+// Format 1's global heap (variable-length strings, no checksum) is walked separately
+// (hdf5_global_heap.hpp). Internal to stend_core (recording_hdf5.cpp).
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 
 namespace stend::detail {
 
-// Empty when the metadata reachable from the superblock passes the checks above (or there is no
-// superblock: libhdf5 refuses the file itself), else what is damaged: "the object header at byte
-// N: …".
-std::string metadata_damage(const std::filesystem::path& file);
+class Hdf5HeaderCheck {
+ public:
+  explicit Hdf5HeaderCheck(const std::filesystem::path& file);
+  ~Hdf5HeaderCheck();
+  Hdf5HeaderCheck(const Hdf5HeaderCheck&) = delete;
+  Hdf5HeaderCheck& operator=(const Hdf5HeaderCheck&) = delete;
+
+  // Before H5Fopen: the superblock and the object headers libhdf5 loads to open the file. Empty,
+  // or what is wrong ("the object header at byte N: …").
+  std::string at_open();
+  // Before libhdf5 loads the object header at `address` (relative to the base address, as
+  // H5L_info_t gives it). Empty, or what is wrong.
+  std::string object(std::uint64_t address);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace stend::detail

@@ -819,6 +819,29 @@ bool GlobalHeapGuard::inside_a_chunk(std::uint64_t at) const {
   return s.found;
 }
 
+// Every object linked from the root, recursively, checked before libhdf5 loads its header: the
+// link visit hands each link to the callback before it loads the object the link points to, and
+// stops when the callback does. Empty, or what is wrong.
+std::string check_linked_headers(hid_t root, Hdf5HeaderCheck& headers) {
+  struct Visit {
+    Hdf5HeaderCheck* headers;
+    std::string why;
+  } visit{&headers, {}};
+  const herr_t rc = H5Lvisit(
+      root, H5_INDEX_NAME, H5_ITER_NATIVE,
+      [](hid_t, const char* name, const H5L_info_t* info, void* data) -> herr_t {
+        auto& v = *static_cast<Visit*>(data);
+        if (info->type != H5L_TYPE_HARD) return 0;
+        v.why = v.headers->object(info->u.address);
+        if (!v.why.empty()) v.why = fmt::format("/{}: {}", name, v.why);
+        return v.why.empty() ? 0 : 1;
+      },
+      &visit);
+  if (rc < 0 && visit.why.empty()) visit.why = "its groups' links cannot be read (" + hdf5_error() + ")";
+  H5Eclear2(H5E_DEFAULT);
+  return visit.why;
+}
+
 std::string read_bytes(hid_t ds, const fs::path& file, const char* name) {
   std::string s(extent_rows(ds), '\0');
   if (read_rows(ds, H5T_NATIVE_UINT8, 0, s.size(), 0, s.data()) < 0)
@@ -843,12 +866,17 @@ void read_hdf5_run(const fs::path& path, bool truth, Hdf5Run& run) {
   // A metadata block that fails its checksum is damage, not a write in progress: no retries (SWMR
   // readers otherwise retry 100 times with growing sleeps).
   H5Pset_metadata_read_attempts(fapl.get(), 2);
-  // libhdf5 allocates the sizes the metadata declares before it reads them (hdf5_metadata.hpp).
-  if (const std::string damage = metadata_damage(path); !damage.empty())
-    throw std::runtime_error(fmt::format("{}: cannot be opened as an HDF5 run store: {}", path.string(), damage));
+  // libhdf5 decodes only object headers Stend has checked (hdf5_metadata.hpp): those it reads to
+  // open the file, then every linked object's, visited before anything else is opened.
+  Hdf5HeaderCheck headers(path);
+  auto refuse = [&](const std::string& why) {
+    throw std::runtime_error(fmt::format("{}: cannot be opened as an HDF5 run store: {}", path.string(), why));
+  };
+  if (const std::string why = headers.at_open(); !why.empty()) refuse(why);
   Handle file = check(H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl.get()),
                       H5Fclose, path, "cannot be opened as an HDF5 run store (damaged or not HDF5)");
   const hid_t root = file.get();
+  if (const std::string why = check_linked_headers(root, headers); !why.empty()) refuse(why);
   GlobalHeapGuard heap(path, root);
   // Format 1's string attributes live in the global heap: when that is damaged the header cannot
   // be read from this file (Recording::open takes it from run.json), the samples still can.
