@@ -513,7 +513,7 @@ class Parser {
     if (std::find(fixture_ids_.begin(), fixture_ids_.end(), on) != fixture_ids_.end()) return on;
     bool later = false;
     for (std::size_t j = i + 1; j < list.size(); ++j)
-      if (list[j].IsMap() && list[j]["id"].IsScalar() && list[j]["id"].Scalar() == on) later = true;
+      if (list[j].IsMap() && list[j]["id"].IsDefined() && list[j]["id"].IsScalar() && list[j]["id"].Scalar() == on) later = true;
     if (later || on == id)
       f.fail_value("on",
                    on == id ? "fixture '" + id + "' cannot stand on itself"

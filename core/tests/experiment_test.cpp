@@ -569,6 +569,11 @@ TEST(Experiment, InlineErrors) {
        "'resolved_mps2' is 9.8 but the gravity given resolves to", 4, 45},
       {head + "  mounting: {rpy_deg: [0, 90]}\nprocedure: [{record: {duration_s: 1}}]\n",
        "expected [roll, pitch, yaw] in degrees for 'rpy_deg', got 2 numbers", 4, 23},
+      // A later fixture without an `id` key while an earlier one stands on an unknown fixture
+      // (the fuzz target found yaml-cpp's InvalidNode escaping here).
+      {head + "  fixtures:\n    - {id: shaker, plugin: sim_shaker_like, on: table}\n    - {id config: {a: 1}}\n"
+              "procedure: [{record: {duration_s: 1}}]\n",
+       "unknown fixture 'table' in 'on'", 5, 49},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.text);
