@@ -387,6 +387,20 @@ class RecordView {
     return static_cast<std::uint32_t>(v);
   }
 
+  // `base` [us] moved by `offset` [us], read from field `name` (a relative timestamp, int32 in
+  // PX4's messages); fails when that is not a 32-bit offset or moves the time out of 0 … 2^64 µs.
+  std::uint64_t shifted(std::uint64_t base, double offset, const std::string& name) const {
+    constexpr double kMin = std::numeric_limits<std::int32_t>::min(), kMax = std::numeric_limits<std::int32_t>::max();
+    const bool offset_ok = offset >= kMin && offset <= kMax && offset == std::floor(offset);
+    const auto magnitude = offset_ok ? static_cast<std::uint64_t>(std::fabs(offset)) : 0;
+    if (!offset_ok || (offset < 0 && base < magnitude) ||
+        (offset > 0 && base > std::numeric_limits<std::uint64_t>::max() - magnitude)) {
+      f_.fail(r_.offset, "field '" + name + "' of '" + fmt_.name + "' is " + fmt_g(offset) +
+                             ", not a 32-bit offset from the record's timestamp " + std::to_string(base) + " us");
+    }
+    return offset < 0 ? base - magnitude : base + magnitude;
+  }
+
   std::uint64_t timestamp(const std::string& name) const {
     const Field& fld = field(name, 0);
     if (fld.basic != Basic::kUInt64) {
@@ -502,7 +516,7 @@ class SeriesReader {
       } else {
         const double rel = v.number("accelerometer_timestamp_relative");
         if (rel == kRelativeTimestampInvalid) continue;
-        p.t_us = static_cast<std::uint64_t>(static_cast<std::int64_t>(p.t_us) + static_cast<std::int64_t>(rel));
+        p.t_us = v.shifted(p.t_us, rel, "accelerometer_timestamp_relative");
         p.v = Eigen::Vector3d(v.number("accelerometer_m_s2", 0), v.number("accelerometer_m_s2", 1),
                               v.number("accelerometer_m_s2", 2));
       }

@@ -575,6 +575,15 @@ TEST(ImportUlog, ArraySizeBeyondAnyMessageIsAnError) {
       << c.what;
 }
 
+TEST(ImportUlog, RelativeTimestampOutsideA32BitOffsetIsAnError) {
+  // sensor_combined's accelerometer_timestamp_relative was added to the timestamp as a signed
+  // 64-bit sum (UBSan: overflow; the fuzz target found a field retyped to int64).
+  const fs::path log = stend::testing::source_path("fuzz/regressions/import_ulog/relative_timestamp_overflow.ulg");
+  const Caught c = error_of([&] { stend::io::import_ulog(log); });
+  EXPECT_NE(c.what.find("field 'accelerometer_timestamp_relative' of 'sensor_combined' is "), std::string::npos) << c.what;
+  EXPECT_NE(c.what.find("not a 32-bit offset from the record's timestamp"), std::string::npos) << c.what;
+}
+
 TEST(ImportDataflash, UnitIdOutOfRangeIsAnError) {
   const fs::path log = stend::testing::source_path("fuzz/regressions/import_dataflash/unit_id_out_of_range.BIN");
   const Caught c = error_of([&] { stend::io::import_dataflash(log); });
