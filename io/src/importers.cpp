@@ -1153,52 +1153,170 @@ std::string text(const matvar_t* v) {
   return s;
 }
 
-// The first bytes of the matrix in the top-level element at `pos` (its subelements' tags, from
-// the array flags on): as stored, or inflated from a compressed element (whose inflated bytes
-// start with the matrix's own tag).
-std::string matrix_head(std::ifstream& in, std::uint64_t pos, bool compressed, std::uint32_t bytes) {
-  constexpr std::size_t kHead = 64;
-  std::string stored(std::min<std::size_t>(bytes, compressed ? 4096 : kHead), '\0');
-  in.seekg(static_cast<std::streamoff>(pos + 8));
-  in.read(stored.data(), static_cast<std::streamsize>(stored.size()));
-  stored.resize(static_cast<std::size_t>(std::max<std::streamsize>(0, in.gcount())));
-  if (!compressed) return stored;
-  std::string head(kHead + 8, '\0');
-  z_stream z{};
-  if (inflateInit(&z) != Z_OK) return {};
-  z.next_in = reinterpret_cast<Bytef*>(stored.data());
-  z.avail_in = static_cast<uInt>(stored.size());
-  z.next_out = reinterpret_cast<Bytef*>(head.data());
-  z.avail_out = static_cast<uInt>(head.size());
-  inflate(&z, Z_SYNC_FLUSH);  // as far as it gets: a damaged stream is matio's to report
-  head.resize(head.size() - z.avail_out);
-  inflateEnd(&z);
-  return head.size() > 8 ? head.substr(8) : std::string();
-}
-
-// Refuses a matrix whose dimensions subelement (the second, after the array flags) declares
-// more than 256 dimensions, before matio allocates them (a damaged tag declared 3.2 GB and
-// matio's Mat_GetDir asked for 6.3 GB).
-template <class U32>
-void check_mat5_dimensions(const fs::path& file, std::uint64_t pos, const std::string& head, const U32& u32) {
-  constexpr std::uint32_t kMaxDimensionBytes = 256 * 4;
-  std::size_t at = 0;
-  for (int sub = 0; sub < 2 && at + 8 <= head.size(); ++sub) {
-    const std::uint32_t type = u32(head.data() + at), bytes = u32(head.data() + at + 4);
-    const bool small = (type >> 16) != 0;  // a small data element: its length in the upper half, data in the tag
-    const std::uint32_t n = small ? type >> 16 : bytes;
-    if (sub == 1 && n > kMaxDimensionBytes) {
-      throw ImportError(file, ByteOffset{pos},
-                        "the matrix in this element declares " + std::to_string(n) +
-                            " bytes of dimensions (at most 256 dimensions of 4 bytes; damaged .mat)");
-    }
-    at += small ? 8 : 8 + n + (8 - n % 8) % 8;
+// The bytes of one top-level element, as stored or inflated from a compressed one (whose
+// inflated bytes start with the matrix's own tag), read forwards; at most what it holds.
+class MatElementBytes {
+ public:
+  MatElementBytes(std::ifstream& in, std::uint64_t pos, std::uint32_t bytes, bool compressed)
+      : in_(in), next_(pos + 8), left_(bytes), compressed_(compressed) {
+    if (compressed_ && inflateInit(&z_) != Z_OK) throw std::bad_alloc();
   }
-}
+  ~MatElementBytes() {
+    if (compressed_) inflateEnd(&z_);
+  }
+  MatElementBytes(const MatElementBytes&) = delete;
+  MatElementBytes& operator=(const MatElementBytes&) = delete;
+
+  // n bytes into out (nullptr: skipped); false when the element (or its zlib stream) ends first.
+  bool read(char* out, std::uint64_t n) {
+    if (!out && !compressed_) {  // skipping stored bytes: no need to read them
+      if (n > left_) return false;
+      next_ += n;
+      left_ -= n;
+      return true;
+    }
+    char scratch[4096];
+    while (n > 0) {
+      const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(n, sizeof scratch));
+      char* to = out ? out : scratch;
+      const std::size_t got = compressed_ ? inflate_into(to, want) : read_stored(to, want);
+      if (got == 0) return false;
+      n -= got;
+      if (out) out += got;
+    }
+    return true;
+  }
+
+ private:
+  std::size_t read_stored(char* to, std::size_t want) {
+    const std::size_t take = static_cast<std::size_t>(std::min<std::uint64_t>(want, left_));
+    in_.clear();
+    in_.seekg(static_cast<std::streamoff>(next_));
+    in_.read(to, static_cast<std::streamsize>(take));
+    const auto got = static_cast<std::size_t>(std::max<std::streamsize>(0, in_.gcount()));
+    next_ += got;
+    left_ -= got;
+    return got;
+  }
+  std::size_t inflate_into(char* to, std::size_t want) {
+    z_.next_out = reinterpret_cast<Bytef*>(to);
+    z_.avail_out = static_cast<uInt>(want);
+    while (z_.avail_out > 0 && !ended_) {
+      if (z_.avail_in == 0) {
+        const std::size_t got = read_stored(in_buf_, sizeof in_buf_);
+        if (got == 0) break;
+        z_.next_in = reinterpret_cast<Bytef*>(in_buf_);
+        z_.avail_in = static_cast<uInt>(got);
+      }
+      const int rc = inflate(&z_, Z_NO_FLUSH);
+      if (rc == Z_STREAM_END) ended_ = true;
+      else if (rc != Z_OK) break;  // a damaged stream: matio reports it
+    }
+    return want - z_.avail_out;
+  }
+
+  std::ifstream& in_;
+  std::uint64_t next_, left_;
+  bool compressed_;
+  bool ended_ = false;
+  z_stream z_{};
+  char in_buf_[4096];
+};
+
+// Walks the matrix in a MAT v5 element the way matio's Mat_GetDir and Mat_VarReadInfo do (array
+// flags, dimensions, name; for structs and objects the field names and each field's matrix, for
+// cells each element's), and refuses any length they would allocate before checking: a
+// subelement or nested matrix longer than what is left of its parent, dimensions beyond 256,
+// nesting beyond 32 levels (damaged tags declared gigabytes, and matio asked for them).
+template <class U32>
+class MatMatrixWalk {
+ public:
+  MatMatrixWalk(const fs::path& file, std::uint64_t pos, MatElementBytes& bytes, const U32& u32)
+      : file_(file), pos_(pos), bytes_(bytes), u32_(u32) {}
+
+  // The top-level matrix: its own tag first (inflated, for a compressed element).
+  void top(bool compressed, std::uint32_t declared) {
+    std::uint64_t left = declared;
+    if (compressed) {
+      char tag[8];
+      if (!bytes_.read(tag, 8) || u32_(tag) != kMiMatrix) return;  // matio says what is wrong
+      left = u32_(tag + 4);
+    }
+    matrix(left, 0);
+  }
+
+ private:
+  static constexpr std::uint32_t kMiMatrix = 14;
+  static constexpr std::uint64_t kMaxDimensionBytes = 256 * 4;
+  static constexpr int kMaxDepth = 32;
+  enum : std::uint32_t { kCell = 1, kStruct = 2, kObject = 3 };
+
+  [[noreturn]] void fail(int depth, const std::string& what) const {
+    const std::string which =
+        depth == 0 ? "the matrix in this element" : "a matrix nested " + std::to_string(depth) + " deep in this element";
+    throw ImportError(file_, ByteOffset{pos_}, which + " " + what + " (damaged .mat)");
+  }
+
+  // One subelement inside the `left` bytes of its matrix: its tag, then its data (into `keep`, or
+  // skipped); `max` bounds its length. False when the element ends first (matio reports it).
+  bool subelement(std::uint64_t& left, int depth, const char* what, std::uint64_t max, std::string* keep = nullptr) {
+    char tag[8];
+    if (left < 8 || !bytes_.read(tag, 8)) return false;
+    left -= 8;
+    const std::uint32_t type = u32_(tag);
+    if ((type >> 16) != 0) {  // a small data element: its length in the upper half, its data in the tag
+      if (keep) keep->assign(tag + 4, std::min<std::uint32_t>(type >> 16, 4));
+      return true;
+    }
+    const std::uint64_t n = u32_(tag + 4), padded = n + (8 - n % 8) % 8;
+    if (n > max) fail(depth, "declares " + std::to_string(n) + " bytes of " + what);
+    if (padded > left)
+      fail(depth, "declares " + std::to_string(n) + " bytes of " + what + " where " + std::to_string(left) + " are left");
+    left -= padded;
+    if (!keep) return bytes_.read(nullptr, padded);
+    keep->resize(static_cast<std::size_t>(n));
+    return bytes_.read(keep->data(), n) && bytes_.read(nullptr, padded - n);
+  }
+
+  // The matrix whose `left` bytes follow (its tag read); returns with the stream wherever the
+  // walk stopped inside it.
+  void matrix(std::uint64_t& left, int depth) {
+    if (depth > kMaxDepth) fail(depth, "is nested deeper than " + std::to_string(kMaxDepth) + " levels");
+    constexpr std::uint64_t kAny = ~std::uint64_t{0};
+    std::string flags;
+    if (!subelement(left, depth, "array flags", kAny, &flags) || flags.size() < 4) return;
+    if (!subelement(left, depth, "dimensions (at most 256 dimensions of 4 bytes)", kMaxDimensionBytes)) return;
+    if (!subelement(left, depth, "name", kAny)) return;
+    const std::uint32_t cls = u32_(flags.data()) & 0xff;
+    if (cls == kObject && !subelement(left, depth, "class name", kAny)) return;
+    if (cls == kStruct || cls == kObject) {
+      if (!subelement(left, depth, "field name length", kAny) || !subelement(left, depth, "field names", kAny)) return;
+    } else if (cls != kCell) {
+      return;  // numeric, char, sparse, logical: data follows, which matio sizes from the dimensions
+    }
+    while (left >= 8) {  // the fields or cell elements, each a matrix
+      char tag[8];
+      if (!bytes_.read(tag, 8)) return;
+      left -= 8;
+      std::uint64_t n = u32_(tag + 4);
+      if (u32_(tag) != kMiMatrix)
+        fail(depth, "holds an element of data type " + std::to_string(u32_(tag)) + " where a matrix (14) is expected");
+      if (n > left) fail(depth, "holds a matrix of " + std::to_string(n) + " bytes where " + std::to_string(left) + " are left");
+      left -= n;
+      matrix(n, depth + 1);
+      if (!bytes_.read(nullptr, n)) return;  // the rest of the nested matrix (its data)
+    }
+  }
+
+  const fs::path& file_;
+  std::uint64_t pos_;
+  MatElementBytes& bytes_;
+  const U32& u32_;
+};
 
 // Refuses a MAT v5 file whose top-level elements (8-byte tag: uint32 data type, uint32 byte
-// count) are not matrices or compressed matrices lying inside the file, or whose matrix declares
-// more dimensions than any array has, before matio allocates a declared length. v7.3 files
+// count) are not matrices or compressed matrices lying inside the file, or whose matrices declare
+// lengths matio would allocate unchecked (MatMatrixWalk), before matio reads it. v7.3 files
 // (HDF5, version 0x0200) are left to matio.
 void check_mat5_elements(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -1236,7 +1354,10 @@ void check_mat5_elements(const fs::path& file) {
     elements.push_back({pos, type == kMiCompressed, bytes});
     pos += 8 + bytes + (type == kMiMatrix ? (8 - bytes % 8) % 8 : 0);
   }
-  for (const auto& e : elements) check_mat5_dimensions(file, e.pos, matrix_head(in, e.pos, e.compressed, e.bytes), u32);
+  for (const auto& e : elements) {
+    MatElementBytes bytes(in, e.pos, e.bytes, e.compressed);
+    MatMatrixWalk(file, e.pos, bytes, u32).top(e.compressed, e.bytes);
+  }
 }
 
 // The variables of the file (top level or one struct's fields), by name.

@@ -502,6 +502,32 @@ TEST(ImportMat, ElementDeclaredBeyondTheEndIsRefusedBeforeMatioReadsIt) {
 TEST(ImportMat, DimensionsDeclaringGigabytesAreRefusedBeforeMatioListsTheVariables) {
   const fs::path mat = stend::testing::source_path("fuzz/regressions/import_mat/dimensions_declare_3GB.mat");
   const std::string msg = error_of([&] { import_mat(mat); });
-  EXPECT_NE(msg.find("byte 624: the matrix in this element declares 3172925448 bytes of dimensions"), std::string::npos)
+  // The walk now checks every subelement against its matrix: an earlier element of this input
+  // already declares dimensions running past its end.
+  EXPECT_NE(msg.find("byte 264: the matrix in this element declares 264 bytes of dimensions (at most 256 "
+                     "dimensions of 4 bytes) where 32 are left"),
+            std::string::npos)
+      << msg;
+  // Its element at byte 624, alone after the header, is the 3 GB of dimensions.
+  std::string bytes = stend::testing::read_text(mat);
+  const TempDir dir("importers");
+  const fs::path one = dir / "dimensions_3GB_alone.mat";
+  const std::uint32_t len624 = static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[628])) |
+                               static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[629])) << 8 |
+                               static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[630])) << 16 |
+                               static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[631])) << 24;
+  stend::testing::write_text(one, bytes.substr(0, 128) + bytes.substr(624, 8 + len624));
+  const std::string msg624 = error_of([&] { import_mat(one); });
+  EXPECT_NE(msg624.find("byte 128: the matrix in this element declares 3172925448 bytes of dimensions"), std::string::npos)
+      << msg624;
+}
+
+TEST(ImportMat, NestedMatrixLongerThanItsStructIsRefusedBeforeMatioListsTheVariables) {
+  // A struct's last field declared 1080 bytes in a struct of 624; matio's Mat_GetDir, reading the
+  // fields' headers, asked for 2 GB (the fuzz target found it).
+  const fs::path mat = stend::testing::source_path("fuzz/regressions/import_mat/struct_field_longer_than_its_struct.mat");
+  const std::string msg = error_of([&] { import_mat(mat); });
+  EXPECT_NE(msg.find("byte 1584: the matrix in this element holds a matrix of 1080 bytes where 376 are left"),
+            std::string::npos)
       << msg;
 }
