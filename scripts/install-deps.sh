@@ -7,8 +7,8 @@ packages=(
   libcli11-dev libmodbus-dev libhidapi-dev libmatio-dev libhdf5-dev libsqlite3-dev libssl-dev
   python3-h5py python3-numpy  # core tests: a run.h5 read with h5py alone
   libgtest-dev libgmock-dev libbenchmark-dev
-  librosbag-storage-dev libzstd-dev liblz4-dev  # io: ROS 1 bags; MCAP chunk compression
-  librosbag-dev lz4  # io tests: ROS 1 bags written with rosbag::Bag; lz4 MCAP chunks (npm packages: install-node-test-deps.sh)
+  libbz2-dev libzstd-dev liblz4-dev  # io: chunk compression of ROS 1 bags (bz2, lz4) and MCAP (lz4, zstd)
+  librosbag-storage-dev librosbag-dev lz4  # io tests: ROS 1 bags written with rosbag::Bag; lz4 MCAP chunks (npm packages: install-node-test-deps.sh)
   zlib1g-dev chromium  # reporting: PNG check of report screenshots; headless-browser test of the reports
   octave  # reporting: octave-cli loads the MATLAB export in a test (~1 min to install, no recommends)
   python3-numpy python3-pandas python3-scipy  # bench: allantools (the Allan peer, ../shared/peers) on Debian's numpy, pandas, scipy

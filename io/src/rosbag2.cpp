@@ -13,7 +13,6 @@
 #include "import_common.hpp"
 #include "rosbag_common.hpp"
 
-#include <lz4frame.h>
 #include <sqlite3.h>
 #include <yaml-cpp/yaml.h>
 #include <zlib.h>
@@ -439,21 +438,8 @@ class McapFile final : public StorageFile {
   }
 
   void lz4_frame(const std::uint8_t* in, std::uint64_t in_size, std::uint64_t size, const std::string& where) {
-    const fs::path& file = in_.file();
-    LZ4F_dctx* ctx = nullptr;
-    if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION))) throw ImportError(file, where, "lz4: no context");
-    const std::unique_ptr<LZ4F_dctx, decltype(&LZ4F_freeDecompressionContext)> guard(ctx, LZ4F_freeDecompressionContext);
-    std::size_t in_pos = 0, out_pos = 0;
-    std::size_t hint = 1;
-    while (hint != 0 && in_pos < in_size) {
-      std::size_t out_n = records_.size() - out_pos, in_n = in_size - in_pos;
-      hint = LZ4F_decompress(ctx, records_.data() + out_pos, &out_n, in + in_pos, &in_n, nullptr);
-      if (LZ4F_isError(hint)) throw ImportError(file, where, std::string("lz4 chunk: ") + LZ4F_getErrorName(hint));
-      in_pos += in_n;
-      out_pos += out_n;
-      if (in_n == 0 && out_n == 0) break;
-    }
-    if (hint != 0 || out_pos != size) throw ImportError(file, where, "lz4 chunk does not decompress to its declared size");
+    const std::string why = decompress_lz4_frame(in, in_size, records_.data(), size);
+    if (!why.empty()) throw ImportError(in_.file(), where, why);
   }
 
   detail::BinaryReader in_;

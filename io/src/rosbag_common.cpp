@@ -2,8 +2,11 @@
 
 #include "import_common.hpp"
 
+#include <lz4frame.h>
+
 #include <algorithm>
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <utility>
 
@@ -133,6 +136,24 @@ class HeldTemperature {
 };
 
 }  // namespace
+
+std::string decompress_lz4_frame(const std::uint8_t* in, std::uint64_t in_size, std::uint8_t* out, std::uint64_t size) {
+  LZ4F_dctx* ctx = nullptr;
+  if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION))) return "lz4: no decompression context";
+  const std::unique_ptr<LZ4F_dctx, decltype(&LZ4F_freeDecompressionContext)> guard(ctx, LZ4F_freeDecompressionContext);
+  std::size_t in_pos = 0, out_pos = 0;
+  std::size_t hint = 1;
+  while (hint != 0 && in_pos < in_size) {
+    std::size_t out_n = size - out_pos, in_n = in_size - in_pos;
+    hint = LZ4F_decompress(ctx, out + out_pos, &out_n, in + in_pos, &in_n, nullptr);
+    if (LZ4F_isError(hint)) return std::string("lz4 chunk: ") + LZ4F_getErrorName(hint);
+    in_pos += in_n;
+    out_pos += out_n;
+    if (in_n == 0 && out_n == 0) break;
+  }
+  if (hint != 0 || out_pos != size) return "lz4 chunk does not decompress to its declared size";
+  return {};
+}
 
 std::string choose_imu_topic(const fs::path& file, const std::vector<TopicInfo>& topics,
                              const RosbagOptions& options, const MessageTypes& types) {

@@ -64,6 +64,10 @@ class BagReader {
   std::vector<std::string> notes;  // what the reader read (files, compression), for the info event
 };
 
+// An LZ4 frame (what MCAP's "lz4" chunks and ROS 1's roslz4 chunks hold) decompressed into
+// exactly `size` bytes at `out`; empty, or why not.
+std::string decompress_lz4_frame(const std::uint8_t* in, std::uint64_t in_size, std::uint8_t* out, std::uint64_t size);
+
 // The Imu topic the options name, or the bag's only Imu topic. Throws ImportError naming the
 // bag's topics when the named topic is absent or not Imu, or when there are none or several.
 std::string choose_imu_topic(const std::filesystem::path& file, const std::vector<TopicInfo>& topics,

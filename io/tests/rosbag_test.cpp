@@ -115,9 +115,9 @@ TEST(Rosbag1, RobotLocalizationRealBag) {
 
 // A bag written by librosbag: Imu messages on `topics` (stamp i·10 ms from 100 s, or 0;
 // accel (0.1 i, 0, 9.8), gyro (0, 0.01 i, 0); record time 200 s + i·10 ms) and Temperature at
-// 1 Hz (20 + k °C) on /temp.
+// 1 Hz (20 + k °C) on /temp; written in the order `order` gives the i (empty: 0 … n−1).
 void write_ros1_bag(const fs::path& file, const std::vector<std::string>& topics, int n, bool zero_stamps,
-                    rosbag::compression::CompressionType compression) {
+                    rosbag::compression::CompressionType compression, std::vector<int> order = {}) {
   rosbag::Bag bag(file.string(), rosbag::bagmode::Write);
   bag.setCompression(compression);
   bag.setChunkThreshold(2048);
@@ -134,7 +134,10 @@ void write_ros1_bag(const fs::path& file, const std::vector<std::string>& topics
     o.next(nsec);
     o.next(std::string("imu_frame"));
   };
-  for (int i = 0; i < n; ++i) {
+  if (order.empty()) {
+    for (int i = 0; i < n; ++i) order.push_back(i);
+  }
+  for (const int i : order) {
     const ros::Time stamp = zero_stamps ? ros::Time(0, 0) : ros::Time(100.0 + 0.01 * i);
     std::vector<std::uint8_t> b(4 * 3 + 4 + 9 + 8 * (4 + 9 + 3 + 9 + 3 + 9));
     ros::serialization::OStream o(b.data(), static_cast<std::uint32_t>(b.size()));
@@ -157,6 +160,30 @@ void write_ros1_bag(const fs::path& file, const std::vector<std::string>& topics
     }
   }
   bag.close();
+}
+
+// Messages come in record-time order, as rosbag's View gives them, whatever order the file holds
+// them in: chunks out of order (each read in turn by start time), and chunks overlapping in time
+// (the messages gathered and sorted first, which the info event says).
+TEST(Rosbag1, MessagesComeInTimeOrderWhateverTheFileOrder) {
+  stend::testing::TempDir dir("rosbag1");
+  std::vector<int> reversed, interleaved;
+  for (int i = 299; i >= 0; --i) reversed.push_back(i);
+  for (int i = 0; i < 300; i += 2) interleaved.push_back(i);
+  for (int i = 1; i < 300; i += 2) interleaved.push_back(i);
+  for (const auto& [name, order] : {std::pair{"reversed", reversed}, std::pair{"interleaved", interleaved}}) {
+    SCOPED_TRACE(name);
+    const fs::path file = dir / (std::string(name) + ".bag");
+    write_ros1_bag(file, {"/imu"}, 300, false, rosbag::compression::LZ4, order);
+    const Recording r = stend::io::import_rosbag1(file);
+    ASSERT_EQ(r.samples.size(), 300u);
+    for (std::size_t k = 0; k < r.samples.size(); ++k) {
+      EXPECT_NEAR(r.samples[k].accel_mps2.x(), 0.1 * static_cast<double>(k), 1e-12) << k;
+      EXPECT_NEAR(r.samples[k].t_s, 0.01 * static_cast<double>(k), 1e-6) << k;
+    }
+    const bool overlap = info_event(r).message.find("chunks overlap in time") != std::string::npos;
+    EXPECT_EQ(overlap, std::string(name) == "interleaved") << info_event(r).message;
+  }
 }
 
 TEST(Rosbag1, WrittenBagKnownValuesAndTemperature) {
@@ -447,6 +474,36 @@ TEST(Rosbag1, EveryRecordTheIndexReachesIsCheckedBeforeOpening) {
   const std::string size = refusal("chunk_size_4GB.bag");
   EXPECT_NE(size.find("byte 4117: a chunk (bz2) declares 4026531840 uncompressed bytes, which its 496 stored bytes"),
             std::string::npos) << size;
+}
+
+// What is inside a chunk is checked too (librosbag read a message at an offset the index gave,
+// past its chunk: ASan SEGV in Bag::readHeaderFromBuffer, found by the fuzz target): a chunk that
+// does not decompress to its declared size, and a record inside a chunk longer than the chunk.
+TEST(Rosbag1, ChunkContentsAreCheckedAndTheirDamageNamed) {
+  const fs::path found = stend::testing::source_path("fuzz/regressions/import_rosbag1/message_index_into_damaged_chunk.bag");
+  std::string msg = import_error([&] { stend::io::import_rosbag1(found); });
+  EXPECT_NE(msg.find("chunk at byte 22425: bz2 data does not decompress to the chunk's declared 2207 bytes"),
+            std::string::npos) << msg;
+
+  stend::testing::TempDir dir("rosbag1");
+  const fs::path plain = dir / "plain.bag";
+  write_ros1_bag(plain, {"/imu"}, 50, false, rosbag::compression::Uncompressed);
+  std::string bytes = stend::testing::read_text(plain);
+  auto u32 = [&](std::size_t at) {
+    std::uint32_t v = 0;
+    for (int i = 3; i >= 0; --i) v = v << 8 | static_cast<std::uint8_t>(bytes[at + static_cast<std::size_t>(i)]);
+    return v;
+  };
+  // The bag header record, then the first chunk: its data (the records inside) after its header.
+  const std::size_t chunk = 13 + 4 + u32(13) + 4 + u32(13 + 4 + u32(13));
+  const std::size_t inside = chunk + 4 + u32(chunk) + 4;
+  bytes[inside + 3] = '\x7f';  // the first inner record's header length: ~2 GB
+  const fs::path damaged = dir / "damaged.bag";
+  stend::testing::write_text(damaged, bytes);
+  msg = import_error([&] { stend::io::import_rosbag1(damaged); });
+  EXPECT_NE(msg.find("chunk at byte " + std::to_string(chunk) + ", byte 0 inside it: a record's header declares"),
+            std::string::npos) << msg;
+  EXPECT_NE(msg.find("past the chunk's end (damaged chunk)"), std::string::npos) << msg;
 }
 
 // An MCAP file the fuzz target found: a chunk declaring an uncompressed size its stored bytes

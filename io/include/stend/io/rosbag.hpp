@@ -1,8 +1,9 @@
 // ROS bags → a Recording (see importers.hpp for what every importer fills).
 //
 // Formats:
-//   ROS 1 bag v2.0 ("#ROSBAG V2.0" magic), read with Debian's librosbag; messages
-//   sensor_msgs/Imu and sensor_msgs/Temperature (ROS 1 serialization).
+//   ROS 1 bag v2.0 ("#ROSBAG V2.0" magic), read by Stend's own reader (records, index, chunks
+//   stored / bz2 / lz4, each length checked); messages sensor_msgs/Imu and
+//   sensor_msgs/Temperature (ROS 1 serialization).
 //   rosbag2: a folder with metadata.yaml and its storage files (SQLite3 .db3, or MCAP), a single
 //   .db3 file, or a single MCAP file; messages sensor_msgs/msg/Imu and sensor_msgs/msg/Temperature
 //   in CDR (XCDR1, little or big endian). Storage is recognised by content (SQLite header with the
@@ -42,8 +43,9 @@ struct RosbagOptions {
 // True when `path` is a file starting with the ROS 1 bag v2.0 magic.
 bool looks_like_rosbag1(const std::filesystem::path& path);
 Recording import_rosbag1(const std::filesystem::path& path, const RosbagOptions& options = {});
-// The same, streaming: two passes over the topic (librosbag's index of the bag stays in memory,
-// about 100 bytes per message); the samples go to `out` a chunk at a time, `rec` receives the rest
+// The same, streaming: two passes over the topic, a chunk of the bag at a time (memory holds one
+// chunk and a few numbers per chunk and connection; when the bag's chunks overlap in time, the
+// place of each message of the topic as well); the samples go to `out` a chunk at a time, `rec` receives the rest
 // (header filled before the first samples reach `out`; events at t = 0, RunSink places them).
 void import_rosbag1(const std::filesystem::path& path, const RosbagOptions& options, Recording& rec, SampleSink& out);
 
