@@ -128,6 +128,19 @@ std::string fixed_string(const std::uint8_t* p, std::size_t size) {
   return std::string(c, static_cast<std::size_t>(std::find(c, c + size, '\0') - c));
 }
 
+Segment make_segment(int id, SegmentKind kind, const std::string& label, double t0, double t1) {
+  Segment s;
+  s.id = id;
+  s.step = id;
+  s.kind = kind;
+  s.label = label;
+  s.t_start_s = t0;
+  s.t_end_s = t1;
+  s.settled = true;
+  s.complete = true;
+  return s;
+}
+
 Recording new_recording(const fs::path& file, const std::string& format) {
   Recording rec;
   rec.dir = file;

@@ -110,6 +110,8 @@ std::string fixed_string(const std::uint8_t* p, std::size_t size);
 // ---------------------------------------------------------------------------------------------
 // Recordings and timestamps
 
+// A closed, settled, complete segment `id` (its step too) of [t0, t1] s.
+Segment make_segment(int id, SegmentKind kind, const std::string& label, double t0, double t1);
 // Status complete, experiment "import:<format>", clock "wall", experiment_file and dir = file.
 Recording new_recording(const std::filesystem::path& file, const std::string& format);
 // Events of source "import" (import_event.hpp).

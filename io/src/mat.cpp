@@ -1,0 +1,686 @@
+// MATLAB .mat files: import (v5 and v7.3, through matio, with the structure of v5 files checked
+// first) and export. Declared in stend/io/importers.hpp.
+#include <stend/io/importers.hpp>
+#include <stend/io/timestamps.hpp>
+#include <stend/yaml_util.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "import_common.hpp"
+
+// MATLAB files go through matio, when stend_io is built with it: io/CMakeLists.txt links
+// PkgConfig::MATIO and defines STEND_HAVE_MATIO. Without it the .mat functions say so.
+#if defined(STEND_HAVE_MATIO) && __has_include(<matio.h>)
+#include <matio.h>
+#include <zlib.h>
+#define STEND_IMPORT_MATIO 1
+#else
+#define STEND_IMPORT_MATIO 0
+#endif
+
+namespace stend::io {
+
+namespace fs = std::filesystem;
+using namespace detail;
+
+#if STEND_IMPORT_MATIO
+
+bool mat_supported() { return true; }
+
+namespace {
+
+struct MatFileCloser {
+  void operator()(mat_t* m) const {
+    if (m) Mat_Close(m);
+  }
+};
+struct MatVarFree {
+  void operator()(matvar_t* v) const {
+    if (v) Mat_VarFree(v);
+  }
+};
+using MatFile = std::unique_ptr<mat_t, MatFileCloser>;
+using MatVar = std::unique_ptr<matvar_t, MatVarFree>;
+
+// Numeric content of a variable as doubles (column-major), with its dims.
+bool numeric(const matvar_t* v, std::vector<double>& out, std::size_t& rows, std::size_t& cols) {
+  if (!v || v->isComplex || v->rank != 2 || !v->data) return false;
+  rows = v->dims[0];
+  cols = v->dims[1];
+  const std::size_t n = rows * cols;
+  out.resize(n);
+  auto copy = [&](auto* p) {
+    for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<double>(p[i]);
+  };
+  switch (v->class_type) {
+    case MAT_C_DOUBLE: copy(static_cast<const double*>(v->data)); return true;
+    case MAT_C_SINGLE: copy(static_cast<const float*>(v->data)); return true;
+    case MAT_C_INT8: copy(static_cast<const std::int8_t*>(v->data)); return true;
+    case MAT_C_UINT8: copy(static_cast<const std::uint8_t*>(v->data)); return true;
+    case MAT_C_INT16: copy(static_cast<const std::int16_t*>(v->data)); return true;
+    case MAT_C_UINT16: copy(static_cast<const std::uint16_t*>(v->data)); return true;
+    case MAT_C_INT32: copy(static_cast<const std::int32_t*>(v->data)); return true;
+    case MAT_C_UINT32: copy(static_cast<const std::uint32_t*>(v->data)); return true;
+    case MAT_C_INT64: copy(static_cast<const std::int64_t*>(v->data)); return true;
+    case MAT_C_UINT64: copy(static_cast<const std::uint64_t*>(v->data)); return true;
+    default: return false;
+  }
+}
+
+std::string text(const matvar_t* v) {
+  if (!v || v->class_type != MAT_C_CHAR || !v->data) return {};
+  std::size_t n = 1;
+  for (int i = 0; i < v->rank; ++i) n *= v->dims[i];
+  std::string s;
+  if (v->data_size == 2 || v->data_type == MAT_T_UINT16 || v->data_type == MAT_T_UTF16) {
+    const auto* p = static_cast<const std::uint16_t*>(v->data);
+    for (std::size_t i = 0; i < n; ++i) s += p[i] < 128 ? static_cast<char>(p[i]) : '?';
+  } else {
+    const auto* p = static_cast<const char*>(v->data);
+    s.assign(p, n);
+  }
+  return s;
+}
+
+// The bytes of one top-level element, as stored or inflated from a compressed one (whose
+// inflated bytes start with the matrix's own tag), read forwards; at most what it holds.
+class MatElementBytes {
+ public:
+  MatElementBytes(std::ifstream& in, std::uint64_t pos, std::uint32_t bytes, bool compressed)
+      : in_(in), next_(pos + 8), left_(bytes), compressed_(compressed) {
+    if (compressed_ && inflateInit(&z_) != Z_OK) throw std::bad_alloc();
+  }
+  ~MatElementBytes() {
+    if (compressed_) inflateEnd(&z_);
+  }
+  MatElementBytes(const MatElementBytes&) = delete;
+  MatElementBytes& operator=(const MatElementBytes&) = delete;
+
+  // n bytes into out (nullptr: skipped); false when the element (or its zlib stream) ends first.
+  bool read(char* out, std::uint64_t n) {
+    if (!out && !compressed_) {  // skipping stored bytes: no need to read them
+      if (n > left_) return false;
+      next_ += n;
+      left_ -= n;
+      return true;
+    }
+    char scratch[4096];
+    while (n > 0) {
+      const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(n, sizeof scratch));
+      char* to = out ? out : scratch;
+      const std::size_t got = compressed_ ? inflate_into(to, want) : read_stored(to, want);
+      if (got == 0) return false;
+      n -= got;
+      if (out) out += got;
+    }
+    return true;
+  }
+
+ private:
+  std::size_t read_stored(char* to, std::size_t want) {
+    const std::size_t take = static_cast<std::size_t>(std::min<std::uint64_t>(want, left_));
+    in_.clear();
+    in_.seekg(static_cast<std::streamoff>(next_));
+    in_.read(to, static_cast<std::streamsize>(take));
+    const auto got = static_cast<std::size_t>(std::max<std::streamsize>(0, in_.gcount()));
+    next_ += got;
+    left_ -= got;
+    return got;
+  }
+  std::size_t inflate_into(char* to, std::size_t want) {
+    z_.next_out = reinterpret_cast<Bytef*>(to);
+    z_.avail_out = static_cast<uInt>(want);
+    while (z_.avail_out > 0 && !ended_) {
+      if (z_.avail_in == 0) {
+        const std::size_t got = read_stored(in_buf_, sizeof in_buf_);
+        if (got == 0) break;
+        z_.next_in = reinterpret_cast<Bytef*>(in_buf_);
+        z_.avail_in = static_cast<uInt>(got);
+      }
+      const int rc = inflate(&z_, Z_NO_FLUSH);
+      if (rc == Z_STREAM_END) ended_ = true;
+      else if (rc != Z_OK) break;  // a damaged stream: matio reports it
+    }
+    return want - z_.avail_out;
+  }
+
+  std::ifstream& in_;
+  std::uint64_t next_, left_;
+  bool compressed_;
+  bool ended_ = false;
+  z_stream z_{};
+  char in_buf_[4096];
+};
+
+// Walks the matrix in a MAT v5 element the way matio's Mat_GetDir and Mat_VarReadInfo do (array
+// flags, dimensions, name; for structs and objects the field names and each field's matrix, for
+// cells each element's), and refuses any length they would allocate before checking: a
+// subelement or nested matrix longer than what is left of its parent, dimensions beyond 256,
+// nesting beyond 32 levels (damaged tags declared gigabytes, and matio asked for them).
+template <class U32>
+class MatMatrixWalk {
+ public:
+  MatMatrixWalk(const fs::path& file, std::uint64_t pos, MatElementBytes& bytes, const U32& u32)
+      : file_(file), pos_(pos), bytes_(bytes), u32_(u32) {}
+
+  // The top-level matrix: its own tag first (inflated, for a compressed element).
+  void top(bool compressed, std::uint32_t declared) {
+    std::uint64_t left = declared;
+    if (compressed) {
+      char tag[8];
+      if (!bytes_.read(tag, 8) || u32_(tag) != kMiMatrix) return;  // matio says what is wrong
+      left = u32_(tag + 4);
+    }
+    matrix(left, 0);
+  }
+
+ private:
+  static constexpr std::uint32_t kMiMatrix = 14;
+  static constexpr std::uint64_t kMaxDimensionBytes = 256 * 4;
+  static constexpr int kMaxDepth = 32;
+  enum : std::uint32_t { kCell = 1, kStruct = 2, kObject = 3 };
+
+  [[noreturn]] void fail(int depth, const std::string& what) const {
+    const std::string which =
+        depth == 0 ? "the matrix in this element" : "a matrix nested " + std::to_string(depth) + " deep in this element";
+    throw ImportError(file_, ByteOffset{pos_}, which + " " + what + " (damaged .mat)");
+  }
+
+  // One subelement inside the `left` bytes of its matrix: its tag, then its data (into `keep`, or
+  // skipped); `max` bounds its length. False when the element ends first (matio reports it).
+  bool subelement(std::uint64_t& left, int depth, const char* what, std::uint64_t max, std::string* keep = nullptr) {
+    char tag[8];
+    if (left < 8 || !bytes_.read(tag, 8)) return false;
+    left -= 8;
+    const std::uint32_t type = u32_(tag);
+    if ((type >> 16) != 0) {  // a small data element: its length in the upper half, its data in the tag
+      if (keep) keep->assign(tag + 4, std::min<std::uint32_t>(type >> 16, 4));
+      return true;
+    }
+    const std::uint64_t n = u32_(tag + 4), padded = n + (8 - n % 8) % 8;
+    if (n > max) fail(depth, "declares " + std::to_string(n) + " bytes of " + what);
+    if (padded > left)
+      fail(depth, "declares " + std::to_string(n) + " bytes of " + what + " where " + std::to_string(left) + " are left");
+    left -= padded;
+    if (!keep) return bytes_.read(nullptr, padded);
+    keep->resize(static_cast<std::size_t>(n));
+    return bytes_.read(keep->data(), n) && bytes_.read(nullptr, padded - n);
+  }
+
+  // The matrix whose `left` bytes follow (its tag read); returns with the stream wherever the
+  // walk stopped inside it.
+  void matrix(std::uint64_t& left, int depth) {
+    if (depth > kMaxDepth) fail(depth, "is nested deeper than " + std::to_string(kMaxDepth) + " levels");
+    constexpr std::uint64_t kAny = ~std::uint64_t{0};
+    std::string flags;
+    if (!subelement(left, depth, "array flags", kAny, &flags) || flags.size() < 4) return;
+    if (!subelement(left, depth, "dimensions (at most 256 dimensions of 4 bytes)", kMaxDimensionBytes)) return;
+    if (!subelement(left, depth, "name", kAny)) return;
+    const std::uint32_t cls = u32_(flags.data()) & 0xff;
+    if (cls == kObject && !subelement(left, depth, "class name", kAny)) return;
+    if (cls == kStruct || cls == kObject) {
+      if (!subelement(left, depth, "field name length", kAny) || !subelement(left, depth, "field names", kAny)) return;
+    } else if (cls != kCell) {
+      return;  // numeric, char, sparse, logical: data follows, which matio sizes from the dimensions
+    }
+    while (left >= 8) {  // the fields or cell elements, each a matrix
+      char tag[8];
+      if (!bytes_.read(tag, 8)) return;
+      left -= 8;
+      std::uint64_t n = u32_(tag + 4);
+      if (u32_(tag) != kMiMatrix)
+        fail(depth, "holds an element of data type " + std::to_string(u32_(tag)) + " where a matrix (14) is expected");
+      if (n > left) fail(depth, "holds a matrix of " + std::to_string(n) + " bytes where " + std::to_string(left) + " are left");
+      left -= n;
+      matrix(n, depth + 1);
+      if (!bytes_.read(nullptr, n)) return;  // the rest of the nested matrix (its data)
+    }
+  }
+
+  const fs::path& file_;
+  std::uint64_t pos_;
+  MatElementBytes& bytes_;
+  const U32& u32_;
+};
+
+// Refuses a MAT v5 file whose top-level elements (8-byte tag: uint32 data type, uint32 byte
+// count) are not matrices or compressed matrices lying inside the file, or whose matrices declare
+// lengths matio would allocate unchecked (MatMatrixWalk), before matio reads it. v7.3 files
+// (HDF5, version 0x0200) are left to matio.
+void check_mat5_elements(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::string header(128, '\0');
+  if (!in.read(header.data(), 128)) return;  // matio says why it cannot open it
+  const bool swap = header[126] == 'M' && header[127] == 'I';
+  const auto u32 = [swap](const char* p) {
+    std::uint8_t b[4];
+    std::memcpy(b, p, 4);
+    if (swap) std::swap(b[0], b[3]), std::swap(b[1], b[2]);
+    return static_cast<std::uint32_t>(b[0] | b[1] << 8 | b[2] << 16 | static_cast<std::uint32_t>(b[3]) << 24);
+  };
+  const std::uint32_t version = swap ? static_cast<std::uint8_t>(header[124]) << 8 | static_cast<std::uint8_t>(header[125])
+                                     : static_cast<std::uint8_t>(header[125]) << 8 | static_cast<std::uint8_t>(header[124]);
+  if (version != 0x0100) return;
+  constexpr std::uint32_t kMiMatrix = 14, kMiCompressed = 15;
+  const std::uint64_t size = fs::file_size(file);
+  struct Element {
+    std::uint64_t pos;
+    bool compressed;
+    std::uint32_t bytes;
+  };
+  std::vector<Element> elements;  // all inside the file, then each one's dimensions
+  for (std::uint64_t pos = 128; pos + 8 <= size;) {
+    char tag[8];
+    in.seekg(static_cast<std::streamoff>(pos));
+    in.read(tag, 8);
+    const std::uint32_t type = u32(tag), bytes = u32(tag + 4);
+    if ((type != kMiMatrix && type != kMiCompressed) || bytes > size - pos - 8) {
+      throw ImportError(file, ByteOffset{pos},
+                        "a top-level element of data type " + std::to_string(type) + " declares " +
+                            std::to_string(bytes) + " bytes; expected a matrix (14) or compressed matrix (15) "
+                            "inside the file, which ends at byte " + std::to_string(size) + " (damaged or truncated .mat)");
+    }
+    elements.push_back({pos, type == kMiCompressed, bytes});
+    pos += 8 + bytes + (type == kMiMatrix ? (8 - bytes % 8) % 8 : 0);
+  }
+  for (const auto& e : elements) {
+    MatElementBytes bytes(in, e.pos, e.bytes, e.compressed);
+    MatMatrixWalk(file, e.pos, bytes, u32).top(e.compressed, e.bytes);
+  }
+}
+
+// The variables of the file (top level or one struct's fields), by name.
+class MatSource {
+ public:
+  MatSource(const fs::path& file, const std::string& struct_name) : file_(file) {
+    check_mat5_elements(file);
+    mat_.reset(Mat_Open(file.c_str(), MAT_ACC_RDONLY));
+    if (!mat_) throw ImportError(file, 0, "matio cannot open it as a MATLAB file (missing, or not a .mat)");
+    std::size_t n = 0;
+    char** dir = Mat_GetDir(mat_.get(), &n);
+    if (!dir) throw ImportError(file, 0, "matio cannot list its variables");
+    std::vector<std::string> names(dir, dir + n);
+    for (const auto& nm : names) check_declared_size(nm);
+    if (!struct_name.empty()) {
+      root_.reset(Mat_VarRead(mat_.get(), struct_name.c_str()));
+      if (!root_ || root_->class_type != MAT_C_STRUCT) {
+        throw ImportError(file, 0, "no struct variable named '" + struct_name + "'");
+      }
+      return;
+    }
+    for (const auto& nm : names) {
+      MatVar v(Mat_VarRead(mat_.get(), nm.c_str()));
+      if (!v) continue;
+      top_[nm] = std::move(v);
+    }
+    bool has_acc = top_.count("acc") || top_.count("accel") || top_.count("accelerometer") ||
+                   top_.count("acc_counts");
+    if (!has_acc) {
+      for (auto& [nm, v] : top_) {
+        if (v->class_type == MAT_C_STRUCT) {
+          root_ = std::move(v);
+          top_.clear();
+          break;
+        }
+      }
+    }
+  }
+  // Refuses a variable whose header declares more data than the file can hold (compressed
+  // variables: zlib's largest expansion, about 1032:1) before matio allocates it.
+  void check_declared_size(const std::string& name) const {
+    MatVar info(Mat_VarReadInfo(mat_.get(), name.c_str()));
+    if (!info) return;  // unreadable: Mat_VarRead says so, or skips it
+    const double file_bytes = static_cast<double>(fs::file_size(file_));
+    const double declared = static_cast<double>(Mat_VarGetSize(info.get()));
+    constexpr double kMaxExpansion = 1032.0;
+    if (declared > kMaxExpansion * file_bytes + 4096.0) {
+      throw ImportError(file_, 0, "variable '" + name + "' declares " + std::to_string(Mat_VarGetSize(info.get())) +
+                                      " bytes of data, more than a file of " + std::to_string(fs::file_size(file_)) +
+                                      " bytes can hold (damaged header?)");
+    }
+  }
+
+  const matvar_t* get(std::initializer_list<const char*> names) const {
+    for (const char* n : names) {
+      if (root_) {
+        matvar_t* f = Mat_VarGetStructFieldByName(root_.get(), n, 0);
+        if (f) return f;
+      } else {
+        auto it = top_.find(n);
+        if (it != top_.end()) return it->second.get();
+      }
+    }
+    return nullptr;
+  }
+  const fs::path& file() const { return file_; }
+
+ private:
+  fs::path file_;
+  MatFile mat_;
+  MatVar root_;
+  std::map<std::string, MatVar> top_;
+};
+
+// N×3 or 3×N → rows of 3 (returns false when absent).
+bool triad(const MatSource& src, std::initializer_list<const char*> names, std::vector<std::array<double, 3>>& out,
+           std::string& which) {
+  const matvar_t* v = src.get(names);
+  if (!v) return false;
+  which = v->name ? v->name : *names.begin();
+  std::vector<double> d;
+  std::size_t r = 0, c = 0;
+  if (!numeric(v, d, r, c)) throw ImportError(src.file(), 0, "'" + which + "' is not a real numeric matrix");
+  if (c == 3) {
+    out.resize(r);
+    for (std::size_t i = 0; i < r; ++i) out[i] = {d[i], d[i + r], d[i + 2 * r]};
+  } else if (r == 3) {
+    out.resize(c);
+    for (std::size_t i = 0; i < c; ++i) out[i] = {d[3 * i], d[3 * i + 1], d[3 * i + 2]};
+  } else {
+    throw ImportError(src.file(), 0, "'" + which + "' is " + std::to_string(r) + "x" + std::to_string(c) +
+                                         ", expected N x 3");
+  }
+  return true;
+}
+
+bool vector_of(const MatSource& src, std::initializer_list<const char*> names, std::vector<double>& out,
+               std::string& which) {
+  const matvar_t* v = src.get(names);
+  if (!v) return false;
+  which = v->name ? v->name : *names.begin();
+  std::size_t r = 0, c = 0;
+  if (!numeric(v, out, r, c) || (r != 1 && c != 1)) {
+    throw ImportError(src.file(), 0, "'" + which + "' is not a real numeric vector");
+  }
+  return true;
+}
+
+MatVar make_double(const char* name, std::size_t rows, std::size_t cols, const double* data) {
+  std::size_t dims[2] = {rows, cols};
+  return MatVar(Mat_VarCreate(name, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, const_cast<double*>(data), 0));
+}
+MatVar make_int32(const char* name, std::size_t rows, std::size_t cols, const std::int32_t* data) {
+  std::size_t dims[2] = {rows, cols};
+  return MatVar(Mat_VarCreate(name, MAT_C_INT32, MAT_T_INT32, 2, dims, const_cast<std::int32_t*>(data), 0));
+}
+MatVar make_text(const char* name, const std::string& s) {
+  std::size_t dims[2] = {1, s.size()};
+  return MatVar(Mat_VarCreate(name, MAT_C_CHAR, MAT_T_UINT8, 2, dims, const_cast<char*>(s.data()), 0));
+}
+
+// The variables an import looks for, as found (names as in the file, empty when absent).
+struct MatData {
+  std::vector<std::array<double, 3>> acc, gyr, acc_counts, gyr_counts;
+  std::string acc_name, gyr_name, acc_counts_name, gyr_counts_name, t_name, fs_name, temp_name, lsb_name;
+  bool have_acc = false, have_acc_counts = false, have_gyr = false, have_gyr_counts = false;
+  std::vector<double> t, rate_v, temp, acc_lsb_v, gyr_lsb_v;
+  bool have_t = false, have_fs = false, have_temp = false, have_acc_lsb = false, have_gyr_lsb = false;
+
+  std::size_t rows() const { return have_acc ? acc.size() : acc_counts.size(); }
+  bool fixed_rate() const { return have_fs && rate_v.size() == 1 && rate_v[0] > 0.0; }
+  double acc_lsb() const { return have_acc_lsb && !acc_lsb_v.empty() ? acc_lsb_v[0] : 0.0; }
+  double gyr_lsb() const { return have_gyr_lsb && !gyr_lsb_v.empty() ? gyr_lsb_v[0] : 0.0; }
+  bool has_gyro() const { return have_gyr || (have_gyr_counts && gyr_lsb() > 0.0); }
+};
+
+// Finds the variables (or struct fields) under their accepted names.
+MatData read_mat_data(const MatSource& src) {
+  MatData m;
+  m.have_acc = triad(src, {"acc", "accel", "accelerometer"}, m.acc, m.acc_name);
+  m.have_acc_counts = triad(src, {"acc_counts"}, m.acc_counts, m.acc_counts_name);
+  m.have_gyr = triad(src, {"gyro", "gyr", "gyroscope"}, m.gyr, m.gyr_name);
+  m.have_gyr_counts = triad(src, {"gyro_counts", "gyr_counts"}, m.gyr_counts, m.gyr_counts_name);
+  m.have_t = vector_of(src, {"t", "time", "timestamp"}, m.t, m.t_name);
+  m.have_fs = vector_of(src, {"fs", "rate_hz", "rate"}, m.rate_v, m.fs_name);
+  m.have_temp = vector_of(src, {"temp", "temperature"}, m.temp, m.temp_name);
+  m.have_acc_lsb = vector_of(src, {"acc_lsb"}, m.acc_lsb_v, m.lsb_name);
+  m.have_gyr_lsb = vector_of(src, {"gyro_lsb", "gyr_lsb"}, m.gyr_lsb_v, m.lsb_name);
+  return m;
+}
+
+// An accelerometer (SI or counts with LSB), every series as long as it, and a time or a rate.
+void check_mat_data(const fs::path& file, const MatData& m) {
+  if (!m.have_acc && !(m.have_acc_counts && m.have_acc_lsb)) {
+    throw ImportError(file, 0, "no accelerometer: expected a variable/field 'acc' (N x 3, m/s^2), or "
+                               "'acc_counts' with 'acc_lsb'");
+  }
+  const std::size_t n = m.rows();
+  auto check_len = [&](std::size_t len, const std::string& name) {
+    if (len != n) {
+      throw ImportError(file, 0, "'" + name + "' has " + std::to_string(len) + " rows, the accelerometer " +
+                                     std::to_string(n));
+    }
+  };
+  if (m.have_acc_counts) check_len(m.acc_counts.size(), m.acc_counts_name);
+  if (m.have_gyr) check_len(m.gyr.size(), m.gyr_name);
+  if (m.have_gyr_counts) check_len(m.gyr_counts.size(), m.gyr_counts_name);
+  if (m.have_temp) check_len(m.temp.size(), m.temp_name);
+  if (m.have_t) check_len(m.t.size(), m.t_name);
+  if (!m.have_t && !m.fixed_rate()) {
+    throw ImportError(file, 0, "no time: expected 't' (N-vector, s) or a positive scalar 'fs' (Hz)");
+  }
+}
+
+// Row i as a sample: time [s] (t × time_scale_s, or i / fs), acceleration [m/s²] and rate [rad/s]
+// (SI × scale, or counts × LSB), counts, temperature [°C].
+ImuSample mat_sample(const MatData& m, std::size_t i, const MatOptions& opt) {
+  ImuSample s;
+  s.t_s = m.have_t ? m.t[i] * opt.time_scale_s : static_cast<double>(i) / m.rate_v[0];
+  const bool has_gyro = m.has_gyro();
+  for (int k = 0; k < 3; ++k) {
+    const auto uk = static_cast<std::size_t>(k);
+    if (m.have_acc_counts) s.accel_counts[k] = static_cast<std::int32_t>(std::lround(m.acc_counts[i][uk]));
+    s.accel_mps2[k] = m.have_acc ? m.acc[i][uk] * opt.accel_scale : m.acc_counts[i][uk] * m.acc_lsb();
+    if (m.have_gyr_counts) s.gyro_counts[k] = static_cast<std::int32_t>(std::lround(m.gyr_counts[i][uk]));
+    if (m.have_gyr) {
+      s.gyro_radps[k] = m.gyr[i][uk] * opt.gyro_scale;
+    } else if (has_gyro) {
+      s.gyro_radps[k] = m.gyr_counts[i][uk] * m.gyr_lsb();
+    }
+  }
+  if (m.have_temp) s.temperature_c = m.temp[i];
+  return s;
+}
+
+// Segments from a struct array 'segments' with fields kind, label, t_start_s, t_end_s [s].
+void add_mat_segments(const MatSource& src, const fs::path& file, Recording& rec) {
+  const matvar_t* segs = src.get({"segments"});
+  if (!segs || segs->class_type != MAT_C_STRUCT) return;
+  std::size_t count = 1;
+  for (int d = 0; d < segs->rank; ++d) count *= segs->dims[d];
+  auto* sv = const_cast<matvar_t*>(segs);
+  for (std::size_t i = 0; i < count; ++i) {
+    std::vector<double> a, b;
+    std::size_t r = 0, c = 0;
+    matvar_t* t0 = Mat_VarGetStructFieldByName(sv, "t_start_s", i);
+    matvar_t* t1 = Mat_VarGetStructFieldByName(sv, "t_end_s", i);
+    if (!numeric(t0, a, r, c) || a.size() != 1 || !numeric(t1, b, r, c) || b.size() != 1) {
+      throw ImportError(file, 0, "segments(" + std::to_string(i + 1) +
+                                     ") needs scalar fields t_start_s and t_end_s");
+    }
+    // kind: a segment kind's name; absent or empty means a static position ("orientation").
+    const std::string kind_text = text(Mat_VarGetStructFieldByName(sv, "kind", i));
+    const auto kind = kind_text.empty() ? SegmentKind::kOrientation : segment_kind_from_string(kind_text);
+    if (!kind) {
+      throw ImportError(file, 0, "segments(" + std::to_string(i + 1) + ").kind '" + kind_text +
+                                     "' is not a segment kind (" + yaml::join(segment_kind_names()) + ")");
+    }
+    Segment seg = make_segment(static_cast<int>(i), *kind, text(Mat_VarGetStructFieldByName(sv, "label", i)), a[0], b[0]);
+    rec.segments.push_back(seg);
+  }
+}
+
+// Sensor description: rate [Hz] (fs, or from the median sample step), gyro, temperature, LSB sizes.
+void set_mat_sensor_info(const MatData& m, const MatOptions& opt, Recording& rec) {
+  SensorInfo& info = rec.header.info;
+  info.output_rate_hz = m.fixed_rate() ? m.rate_v[0] : 0.0;  // 0: set by the timestamp repair
+  info.has_gyro = m.has_gyro();
+  info.has_temperature = m.have_temp;
+  info.accel_lsb_mps2 = m.acc_lsb();
+  info.gyro_lsb_radps = m.gyr_lsb();
+  rec.header.identity = opt.identity;
+  rec.header.gravity_mps2 = opt.gravity_mps2;
+}
+
+}  // namespace
+
+Recording import_mat(const fs::path& file, const MatOptions& opt) {
+  MatSource src(file, opt.struct_name);
+  const MatData m = read_mat_data(src);
+  check_mat_data(file, m);
+  const std::size_t n = m.rows();
+  Recording rec = new_recording(file, "mat");
+  rec.samples.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    rec.samples[i] = mat_sample(m, i, opt);
+    if (m.have_t && i > 0 && rec.samples[i].t_s < rec.samples[i - 1].t_s) {  // repeats are repaired below
+      throw ImportError(file, 0, "'" + m.t_name + "' goes back at element " + std::to_string(i + 1));
+    }
+  }
+  add_mat_segments(src, file, rec);
+  set_mat_sensor_info(m, opt, rec);
+  const bool has_gyro = m.has_gyro();
+  const std::size_t gaps = m.have_t ? repair_timestamps(rec, m.fixed_rate() ? m.rate_v[0] : 0.0).gaps : 0;
+  add_import_event(rec, "imported " + std::to_string(n) + " samples from " + file.string() +
+                            " (MATLAB file" + (opt.struct_name.empty() ? "" : ", struct " + opt.struct_name) +
+                            "; accel from '" + (m.have_acc ? m.acc_name : m.acc_counts_name) + "'" +
+                            (has_gyro ? ", gyro from '" + (m.have_gyr ? m.gyr_name : m.gyr_counts_name) + "'" : ", no gyro") +
+                            (m.have_t ? ", time '" + m.t_name + "'" : ", rate '" + m.fs_name + "'") +
+                            (gaps ? "; " + std::to_string(gaps) + " gap(s) flagged" : "") + ")");
+  return rec;
+}
+
+namespace {
+
+// The samples as column-major N x 1 / N x 3 arrays: time [s], acceleration [m/s²], rate [rad/s],
+// their counts, temperature [°C].
+struct MatColumns {
+  std::vector<double> t, acc, gyr, temp;
+  std::vector<std::int32_t> acc_c, gyr_c;
+};
+
+MatColumns mat_columns(const Recording& rec) {
+  const std::size_t n = rec.samples.size();
+  MatColumns m{std::vector<double>(n), std::vector<double>(3 * n), std::vector<double>(3 * n), std::vector<double>(n),
+               std::vector<std::int32_t>(3 * n), std::vector<std::int32_t>(3 * n)};
+  for (std::size_t i = 0; i < n; ++i) {
+    const ImuSample& s = rec.samples[i];
+    m.t[i] = s.t_s;
+    m.temp[i] = s.temperature_c;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const int ik = static_cast<int>(k);
+      m.acc[i + k * n] = s.accel_mps2[ik];
+      m.gyr[i + k * n] = s.gyro_radps[ik];
+      m.acc_c[i + k * n] = s.accel_counts[k];
+      m.gyr_c[i + k * n] = s.gyro_counts[k];
+    }
+  }
+  return m;
+}
+
+// The segments as a struct array with fields kind, label, t_start_s, t_end_s [s].
+MatVar segments_struct(const Recording& rec, const fs::path& file) {
+  const char* segment_fields[] = {"kind", "label", "t_start_s", "t_end_s", nullptr};
+  std::size_t dims[2] = {rec.segments.size(), 1};
+  MatVar s(Mat_VarCreateStruct2("segments", 2, dims, segment_fields));
+  if (!s) throw ImportError(file, 0, "matio failed to create 'segments'");
+  for (std::size_t i = 0; i < rec.segments.size(); ++i) {
+    const Segment& seg = rec.segments[i];
+    Mat_VarSetStructFieldByName(s.get(), "kind", i, make_text("kind", to_string(seg.kind)).release());
+    Mat_VarSetStructFieldByName(s.get(), "label", i, make_text("label", seg.label).release());
+    Mat_VarSetStructFieldByName(s.get(), "t_start_s", i, make_double("t_start_s", 1, 1, &seg.t_start_s).release());
+    Mat_VarSetStructFieldByName(s.get(), "t_end_s", i, make_double("t_end_s", 1, 1, &seg.t_end_s).release());
+  }
+  return s;
+}
+
+// Writes variables to a MAT file: at the top level each at once, or (struct_name given)
+// collected and written as the fields of one struct by finish().
+class MatWriter {
+ public:
+  MatWriter(mat_t* mat, const fs::path& file, const std::string& struct_name)
+      : mat_(mat), file_(file), struct_name_(struct_name) {}
+
+  void write(MatVar v, const char* what) {
+    if (!v) throw ImportError(file_, 0, std::string("matio failed to create '") + what + "'");
+    if (!struct_name_.empty()) {
+      fields_.emplace_back(what, std::move(v));
+      return;
+    }
+    if (Mat_VarWrite(mat_, v.get(), MAT_COMPRESSION_NONE) != 0) {
+      throw ImportError(file_, 0, std::string("matio failed to write '") + what + "'");
+    }
+  }
+
+  void finish() {
+    if (struct_name_.empty()) return;
+    std::vector<const char*> names;
+    for (const auto& f : fields_) names.push_back(f.first.c_str());
+    names.push_back(nullptr);
+    std::size_t dims[2] = {1, 1};
+    MatVar root(Mat_VarCreateStruct2(struct_name_.c_str(), 2, dims, names.data()));
+    if (!root) throw ImportError(file_, 0, "matio failed to create struct '" + struct_name_ + "'");
+    for (auto& f : fields_) Mat_VarSetStructFieldByName(root.get(), f.first.c_str(), 0, f.second.release());
+    if (Mat_VarWrite(mat_, root.get(), MAT_COMPRESSION_NONE) != 0) {
+      throw ImportError(file_, 0, "matio failed to write struct '" + struct_name_ + "'");
+    }
+  }
+
+ private:
+  mat_t* mat_;
+  fs::path file_;
+  std::string struct_name_;
+  std::vector<std::pair<std::string, MatVar>> fields_;
+};
+
+}  // namespace
+
+void export_mat(const Recording& rec, const fs::path& file, const std::string& struct_name) {
+  MatFile mat(Mat_CreateVer(file.c_str(), nullptr, MAT_FT_MAT5));
+  if (!mat) throw ImportError(file, 0, "matio cannot create it");
+  const std::size_t n = rec.samples.size();
+  const MatColumns c = mat_columns(rec);
+  const double fs_hz = rec.header.info.output_rate_hz;
+  const double acc_lsb = rec.header.info.accel_lsb_mps2, gyr_lsb = rec.header.info.gyro_lsb_radps;
+  MatWriter w(mat.get(), file, struct_name);
+  w.write(make_double("t", n, 1, c.t.data()), "t");
+  w.write(make_double("fs", 1, 1, &fs_hz), "fs");
+  w.write(make_double("acc", n, 3, c.acc.data()), "acc");
+  w.write(make_int32("acc_counts", n, 3, c.acc_c.data()), "acc_counts");
+  w.write(make_double("acc_lsb", 1, 1, &acc_lsb), "acc_lsb");
+  if (rec.header.info.has_gyro) {
+    w.write(make_double("gyro", n, 3, c.gyr.data()), "gyro");
+    w.write(make_int32("gyro_counts", n, 3, c.gyr_c.data()), "gyro_counts");
+    w.write(make_double("gyro_lsb", 1, 1, &gyr_lsb), "gyro_lsb");
+  }
+  if (rec.header.info.has_temperature) w.write(make_double("temp", n, 1, c.temp.data()), "temp");
+  if (!rec.segments.empty()) w.write(segments_struct(rec, file), "segments");
+  w.finish();
+}
+
+#else  // built without matio
+
+namespace {
+constexpr const char* kNoMatio =
+    "MATLAB files need matio, and this stend_core was built without it (install libmatio-dev; "
+    "io/CMakeLists.txt links PkgConfig::MATIO and defines STEND_HAVE_MATIO)";
+}
+
+bool mat_supported() { return false; }
+
+Recording import_mat(const fs::path& file, const MatOptions&) { throw ImportError(file, 0, kNoMatio); }
+void export_mat(const Recording&, const fs::path& file, const std::string&) {
+  throw ImportError(file, 0, kNoMatio);
+}
+
+#endif
+
+}  // namespace stend::io
