@@ -59,13 +59,17 @@ double per_dps(const ValueScale& v, double fallback) { return v.counts() ? physi
 // A run folder's samples stay in its store; analyses read them a chunk at a time.
 Recording open_run(const Inputs& in, const ImportOptions&) { return Recording::open(in[0], SampleLoading::kStream); }
 
-Recording open_mat(const Inputs& in, const ImportOptions& o) {
+MatOptions mat_options(const ImportOptions& o) {
   MatOptions m;
   m.time_scale_s = o.time_scale_s;
   m.accel_scale = o.accel_value.unit;
   m.gyro_scale = o.gyro_value.unit;
   m.gravity_mps2 = o.gravity_mps2;
-  return import_mat(in[0], m);
+  return m;
+}
+Recording open_mat(const Inputs& in, const ImportOptions& o) { return import_mat(in[0], mat_options(o)); }
+void stream_mat(const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
+  import_mat(in[0], mat_options(o), rec, out);
 }
 
 ImucalOptions imucal_options(const ImportOptions& o) {
@@ -209,8 +213,8 @@ RosbagOptions rosbag_options(const ImportOptions& o) {
 const std::vector<Format>& formats() {
   static const std::vector<Format> table = {
       {"run", "a Stend run folder (run.json, imu.csv, ...)", looks_like_run, open_run},
-      {"mat", "MATLAB .mat (v5; v7.3 through HDF5): t|fs, acc, gyro, temp, counts, segments (read whole into memory)",
-       looks_like_mat, open_mat},
+      {"mat", "MATLAB .mat (v5; v7.3 through HDF5): t|fs, acc, gyro, temp, counts, segments",
+       looks_like_mat, open_mat, 1, stream_mat},
       {"imucal", "imucal annotated session (part,samples,acc_*,gyr_* counts)", looks_like_imucal, open_imucal, 1,
        stream_imucal},
       {"mpu6050_multipos", "MPU-6050 multi-position session (Fs,… header, ax..gz counts)", looks_like_mpu6050_multipos,

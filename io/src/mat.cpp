@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -110,6 +111,7 @@ class MatElementBytes {
       if (n > left_) return false;
       next_ += n;
       left_ -= n;
+      consumed_ += n;
       return true;
     }
     char scratch[4096];
@@ -118,11 +120,14 @@ class MatElementBytes {
       char* to = out ? out : scratch;
       const std::size_t got = compressed_ ? inflate_into(to, want) : read_stored(to, want);
       if (got == 0) return false;
+      consumed_ += got;
       n -= got;
       if (out) out += got;
     }
     return true;
   }
+  // Bytes read (or skipped) so far.
+  std::uint64_t consumed() const { return consumed_; }
 
  private:
   std::size_t read_stored(char* to, std::size_t want) {
@@ -156,6 +161,7 @@ class MatElementBytes {
   std::uint64_t next_, left_;
   bool compressed_;
   bool ended_ = false;
+  std::uint64_t consumed_ = 0;
   z_stream z_{};
   char in_buf_[4096];
 };
@@ -165,11 +171,25 @@ class MatElementBytes {
 // cells each element's), and refuses any length they would allocate before checking: a
 // subelement or nested matrix longer than what is left of its parent, dimensions beyond 256,
 // nesting beyond 32 levels (damaged tags declared gigabytes, and matio asked for them).
+// Where the walk finds the real-part data of a numeric matrix — a top-level variable ("name") or
+// a field of a top-level 1×1 struct ("struct.field") — so that it can be read later without
+// inflating it anew from the start for every part (what matio does for a compressed variable).
+struct Mat5Data {
+  std::uint64_t element = 0;  // the top-level element's tag
+  std::uint32_t element_bytes = 0;
+  bool compressed = false;
+  std::uint32_t type = 0;     // MAT data type of the values (miDOUBLE, miINT16, …)
+  std::uint64_t offset = 0;   // of the first value, in MatElementBytes' stream of the element
+  std::uint64_t bytes = 0;    // of the values
+};
+using Mat5Layout = std::map<std::string, Mat5Data>;
+
 template <class U32>
 class MatMatrixWalk {
  public:
-  MatMatrixWalk(const fs::path& file, std::uint64_t pos, MatElementBytes& bytes, const U32& u32)
-      : file_(file), pos_(pos), bytes_(bytes), u32_(u32) {}
+  MatMatrixWalk(const fs::path& file, std::uint64_t pos, MatElementBytes& bytes, const U32& u32,
+                Mat5Data where = {}, Mat5Layout* layout = nullptr)
+      : file_(file), pos_(pos), bytes_(bytes), u32_(u32), where_(where), layout_(layout) {}
 
   // The top-level matrix: its own tag first (inflated, for a compressed element).
   void top(bool compressed, std::uint32_t declared) {
@@ -179,7 +199,7 @@ class MatMatrixWalk {
       if (!bytes_.read(tag, 8) || u32_(tag) != kMiMatrix) return;  // matio says what is wrong
       left = u32_(tag + 4);
     }
-    matrix(left, 0);
+    matrix(left, 0, {});
   }
 
  private:
@@ -216,21 +236,36 @@ class MatMatrixWalk {
   }
 
   // The matrix whose `left` bytes follow (its tag read); returns with the stream wherever the
-  // walk stopped inside it.
-  void matrix(std::uint64_t& left, int depth) {
+  // walk stopped inside it. `field`: its name as a field of a top-level struct ("" otherwise).
+  void matrix(std::uint64_t& left, int depth, const std::string& field) {
     if (depth > kMaxDepth) fail(depth, "is nested deeper than " + std::to_string(kMaxDepth) + " levels");
     constexpr std::uint64_t kAny = ~std::uint64_t{0};
-    std::string flags;
+    std::string flags, dims, name;
     if (!subelement(left, depth, "array flags", kAny, &flags) || flags.size() < 4) return;
-    if (!subelement(left, depth, "dimensions (at most 256 dimensions of 4 bytes)", kMaxDimensionBytes)) return;
-    if (!subelement(left, depth, "name", kAny)) return;
+    if (!subelement(left, depth, "dimensions (at most 256 dimensions of 4 bytes)", kMaxDimensionBytes, &dims)) return;
+    if (!subelement(left, depth, "name", kAny, &name)) return;
     const std::uint32_t cls = u32_(flags.data()) & 0xff;
     if (cls == kObject && !subelement(left, depth, "class name", kAny)) return;
+    std::vector<std::string> fields;
     if (cls == kStruct || cls == kObject) {
-      if (!subelement(left, depth, "field name length", kAny) || !subelement(left, depth, "field names", kAny)) return;
+      std::string length, names;
+      if (!subelement(left, depth, "field name length", kAny, &length) ||
+          !subelement(left, depth, "field names", kAny, &names))
+        return;
+      // A 1×1 top-level struct's field names, NUL-padded to the stated length, in order.
+      const std::uint32_t each = length.size() == 4 ? u32_(length.data()) : 0;
+      if (depth == 0 && each > 0 && one_element(dims))
+        for (std::size_t at = 0; at + each <= names.size(); at += each)
+          fields.push_back(names.substr(at, names.find('\0', at) == std::string::npos
+                                                ? each
+                                                : std::min<std::size_t>(each, names.find('\0', at) - at)));
     } else if (cls != kCell) {
-      return;  // numeric, char, sparse, logical: data follows, which matio sizes from the dimensions
+      // Numeric, char, sparse, logical: data follows, which matio sizes from the dimensions.
+      if (layout_ && cls >= kFirstNumeric && cls <= kLastNumeric && (depth == 0 || !field.empty()))
+        note_data(depth == 0 ? name : field, left);
+      return;
     }
+    std::size_t index = 0;
     while (left >= 8) {  // the fields or cell elements, each a matrix
       char tag[8];
       if (!bytes_.read(tag, 8)) return;
@@ -240,25 +275,53 @@ class MatMatrixWalk {
         fail(depth, "holds an element of data type " + std::to_string(u32_(tag)) + " where a matrix (14) is expected");
       if (n > left) fail(depth, "holds a matrix of " + std::to_string(n) + " bytes where " + std::to_string(left) + " are left");
       left -= n;
-      matrix(n, depth + 1);
+      matrix(n, depth + 1, index < fields.size() ? name + "." + fields[index] : std::string());
+      ++index;
       if (!bytes_.read(nullptr, n)) return;  // the rest of the nested matrix (its data)
     }
   }
 
+  // Dimensions (int32 each) of exactly one element.
+  bool one_element(const std::string& dims) const {
+    for (std::size_t at = 0; at + 4 <= dims.size(); at += 4)
+      if (u32_(dims.data() + at) != 1) return false;
+    return !dims.empty();
+  }
+
+  // The real-part data subelement of numeric matrix `key`, whose tag comes next: where its values
+  // start and how many bytes they take.
+  void note_data(const std::string& key, std::uint64_t& left) {
+    char tag[8];
+    if (left < 8 || !bytes_.read(tag, 8)) return;
+    left -= 8;
+    Mat5Data d = where_;
+    const std::uint32_t type = u32_(tag);
+    const bool small = (type >> 16) != 0;
+    d.type = small ? type & 0xffff : type;
+    d.bytes = small ? type >> 16 : u32_(tag + 4);
+    d.offset = bytes_.consumed() - (small ? 4 : 0);
+    if (d.bytes <= left + (small ? 4 : 0)) (*layout_)[key] = d;
+  }
+
+  static constexpr std::uint32_t kFirstNumeric = 6, kLastNumeric = 15;  // mxDOUBLE … mxUINT64
   const fs::path& file_;
   std::uint64_t pos_;
   MatElementBytes& bytes_;
   const U32& u32_;
+  Mat5Data where_;
+  Mat5Layout* layout_;
 };
 
 // Refuses a MAT v5 file whose top-level elements (8-byte tag: uint32 data type, uint32 byte
 // count) are not matrices or compressed matrices lying inside the file, or whose matrices declare
-// lengths matio would allocate unchecked (MatMatrixWalk), before matio reads it. v7.3 files
-// (HDF5, version 0x0200) are left to matio.
-void check_mat5_elements(const fs::path& file) {
+// lengths matio would allocate unchecked (MatMatrixWalk), before matio reads it; returns where
+// the numeric variables' data lie (Mat5Data). v7.3 files (HDF5, version 0x0200) are left to
+// matio (an empty layout).
+Mat5Layout check_mat5_elements(const fs::path& file) {
+  Mat5Layout layout;
   std::ifstream in(file, std::ios::binary);
   std::string header(128, '\0');
-  if (!in.read(header.data(), 128)) return;  // matio says why it cannot open it
+  if (!in.read(header.data(), 128)) return layout;  // matio says why it cannot open it
   const bool swap = header[126] == 'M' && header[127] == 'I';
   const auto u32 = [swap](const char* p) {
     std::uint8_t b[4];
@@ -268,7 +331,7 @@ void check_mat5_elements(const fs::path& file) {
   };
   const std::uint32_t version = swap ? static_cast<std::uint8_t>(header[124]) << 8 | static_cast<std::uint8_t>(header[125])
                                      : static_cast<std::uint8_t>(header[125]) << 8 | static_cast<std::uint8_t>(header[124]);
-  if (version != 0x0100) return;
+  if (version != 0x0100) return layout;
   constexpr std::uint32_t kMiMatrix = 14, kMiCompressed = 15;
   const std::uint64_t size = fs::file_size(file);
   struct Element {
@@ -293,15 +356,155 @@ void check_mat5_elements(const fs::path& file) {
   }
   for (const auto& e : elements) {
     MatElementBytes bytes(in, e.pos, e.bytes, e.compressed);
-    MatMatrixWalk(file, e.pos, bytes, u32).top(e.compressed, e.bytes);
+    MatMatrixWalk(file, e.pos, bytes, u32, Mat5Data{e.pos, e.bytes, e.compressed}, &layout).top(e.compressed, e.bytes);
   }
+  if (swap) layout.clear();  // big-endian values: matio converts them
+  return layout;
 }
 
-// The variables of the file (top level or one struct's fields), by name.
+// The rows of a numeric variable — N×1, 1×N, N×3 or 3×N, taken as samples × components — read
+// forward a block at a time, so that no variable is held whole.
+class MatSeries {
+ public:
+  MatSeries(std::string which, std::size_t n_rows, std::size_t n_cols) : name(std::move(which)), rows(n_rows), cols(n_cols) {}
+  virtual ~MatSeries() = default;
+  // The next n rows into out (n × cols values, row after row).
+  virtual void read(std::size_t n, double* out) = 0;
+  // Every value (a scalar, or a short vector).
+  std::vector<double> all() {
+    std::vector<double> v(rows * cols);
+    read(rows, v.data());
+    return v;
+  }
+  std::string name;
+  std::size_t rows, cols;
+};
+
+// Through matio's Mat_VarReadData (a hyperslab of a v7.3 file's dataset, or a seek in a v5 file).
+class MatioSeries final : public MatSeries {
+ public:
+  MatioSeries(const fs::path& file, mat_t* mat, matvar_t* info, std::size_t n_rows, std::size_t n_cols, bool along_first)
+      : MatSeries(info->name ? info->name : "", n_rows, n_cols), file_(file), mat_(mat), info_(info),
+        along_first_(along_first) {}
+  void read(std::size_t n, double* out) override {
+    if (n == 0) return;
+    std::vector<char> raw(n * cols * Mat_SizeOfClass(info_->class_type));
+    int start[2] = {0, 0}, stride[2] = {1, 1}, edge[2] = {0, 0};
+    const int k = along_first_ ? 0 : 1;
+    start[k] = static_cast<int>(next_);
+    edge[k] = static_cast<int>(n);
+    edge[1 - k] = static_cast<int>(cols);
+    if (Mat_VarReadData(mat_, info_, raw.data(), start, stride, edge) != 0)
+      throw ImportError(file_, 0, "matio cannot read rows " + std::to_string(next_ + 1) + "… of '" + name + "'");
+    // Column-major: rows first (n × cols) when the samples run along the first dimension.
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t c = 0; c < cols; ++c)
+        out[i * cols + c] = value(raw.data(), along_first_ ? i + c * n : c + i * cols);
+    next_ += n;
+  }
+
+ private:
+  double value(const char* raw, std::size_t i) const {
+    auto at = [&](auto v) {
+      std::memcpy(&v, raw + i * sizeof v, sizeof v);
+      return static_cast<double>(v);
+    };
+    switch (info_->class_type) {
+      case MAT_C_DOUBLE: return at(double{});
+      case MAT_C_SINGLE: return at(float{});
+      case MAT_C_INT8: return at(std::int8_t{});
+      case MAT_C_UINT8: return at(std::uint8_t{});
+      case MAT_C_INT16: return at(std::int16_t{});
+      case MAT_C_UINT16: return at(std::uint16_t{});
+      case MAT_C_INT32: return at(std::int32_t{});
+      case MAT_C_UINT32: return at(std::uint32_t{});
+      case MAT_C_INT64: return at(std::int64_t{});
+      case MAT_C_UINT64: return at(std::uint64_t{});
+      default: return std::nan("");
+    }
+  }
+  fs::path file_;
+  mat_t* mat_;
+  matvar_t* info_;
+  bool along_first_;
+  std::size_t next_ = 0;
+};
+
+// A v5 variable's values read straight from its element (Mat5Data): a compressed one inflated
+// once, forwards, by one cursor per column (matio inflates it from its start for every read).
+class Mat5Series final : public MatSeries {
+ public:
+  Mat5Series(const fs::path& file, const std::string& which, const Mat5Data& d, std::size_t n_rows, std::size_t n_cols,
+             bool along_first)
+      : MatSeries(which, n_rows, n_cols), file_(file), in_(file, std::ios::binary), type_(d.type),
+        along_first_(along_first) {
+    const std::size_t streams = along_first ? cols : 1;
+    for (std::size_t c = 0; c < streams; ++c) {
+      cursors_.push_back(std::make_unique<MatElementBytes>(in_, d.element, d.element_bytes, d.compressed));
+      if (!cursors_.back()->read(nullptr, d.offset + c * rows * size_of(type_))) fail();
+    }
+  }
+  // Bytes of one value of MAT data type `type`, 0 for a type that is not a number.
+  static std::size_t size_of(std::uint32_t type) {
+    switch (type) {
+      case 1: case 2: return 1;     // miINT8, miUINT8
+      case 3: case 4: return 2;     // miINT16, miUINT16
+      case 5: case 6: case 7: return 4;  // miINT32, miUINT32, miSINGLE
+      case 9: case 12: case 13: return 8;  // miDOUBLE, miINT64, miUINT64
+      default: return 0;
+    }
+  }
+  void read(std::size_t n, double* out) override {
+    const std::size_t size = size_of(type_);
+    if (along_first_) {
+      raw_.resize(n * size);
+      for (std::size_t c = 0; c < cols; ++c) {
+        if (!cursors_[c]->read(raw_.data(), raw_.size())) fail();
+        for (std::size_t i = 0; i < n; ++i) out[i * cols + c] = value(raw_.data() + i * size);
+      }
+    } else {
+      raw_.resize(n * cols * size);
+      if (!cursors_[0]->read(raw_.data(), raw_.size())) fail();
+      for (std::size_t i = 0; i < n * cols; ++i) out[i] = value(raw_.data() + i * size);
+    }
+  }
+
+ private:
+  [[noreturn]] void fail() const {
+    throw ImportError(file_, 0, "the values of '" + name + "' end before its dimensions say (damaged .mat)");
+  }
+  double value(const char* p) const {
+    auto at = [p](auto v) {
+      std::memcpy(&v, p, sizeof v);
+      return static_cast<double>(v);
+    };
+    switch (type_) {
+      case 1: return at(std::int8_t{});
+      case 2: return at(std::uint8_t{});
+      case 3: return at(std::int16_t{});
+      case 4: return at(std::uint16_t{});
+      case 5: return at(std::int32_t{});
+      case 6: return at(std::uint32_t{});
+      case 7: return at(float{});
+      case 12: return at(std::int64_t{});
+      case 13: return at(std::uint64_t{});
+      default: return at(double{});
+    }
+  }
+  fs::path file_;
+  std::ifstream in_;
+  std::uint32_t type_;
+  bool along_first_;
+  std::vector<std::unique_ptr<MatElementBytes>> cursors_;
+  std::vector<char> raw_;
+};
+
+// The variables of the file (top level or one struct's fields), by name: their headers, and
+// their values through a MatSeries as they are needed.
 class MatSource {
  public:
   MatSource(const fs::path& file, const std::string& struct_name) : file_(file) {
-    check_mat5_elements(file);
+    layout_ = check_mat5_elements(file);
     mat_.reset(Mat_Open(file.c_str(), MAT_ACC_RDONLY));
     if (!mat_) throw ImportError(file, 0, "matio cannot open it as a MATLAB file (missing, or not a .mat)");
     std::size_t n = 0;
@@ -310,14 +513,14 @@ class MatSource {
     std::vector<std::string> names(dir, dir + n);
     for (const auto& nm : names) check_declared_size(nm);
     if (!struct_name.empty()) {
-      root_.reset(Mat_VarRead(mat_.get(), struct_name.c_str()));
+      root_.reset(Mat_VarReadInfo(mat_.get(), struct_name.c_str()));
       if (!root_ || root_->class_type != MAT_C_STRUCT) {
         throw ImportError(file, 0, "no struct variable named '" + struct_name + "'");
       }
       return;
     }
     for (const auto& nm : names) {
-      MatVar v(Mat_VarRead(mat_.get(), nm.c_str()));
+      MatVar v(Mat_VarReadInfo(mat_.get(), nm.c_str()));
       if (!v) continue;
       top_[nm] = std::move(v);
     }
@@ -348,7 +551,8 @@ class MatSource {
     }
   }
 
-  const matvar_t* get(std::initializer_list<const char*> names) const {
+  // The header of the first of `names` present (a struct field's, with a struct root).
+  matvar_t* get(std::initializer_list<const char*> names) const {
     for (const char* n : names) {
       if (root_) {
         matvar_t* f = Mat_VarGetStructFieldByName(root_.get(), n, 0);
@@ -360,47 +564,71 @@ class MatSource {
     }
     return nullptr;
   }
+
+  // The values of `v` (a header from get(), a real numeric matrix with one of its dimensions 1
+  // or `cols`, the other the samples) as `which` names it; nullptr when its shape is not that.
+  std::unique_ptr<MatSeries> series(matvar_t* v, const std::string& which, std::size_t cols) const {
+    if (v->rank != 2 || v->isComplex || v->class_type < MAT_C_DOUBLE || v->class_type > MAT_C_UINT64) return nullptr;
+    const std::size_t r = v->dims[0], c = v->dims[1];
+    const bool along_first = c == cols;  // N × cols (a 1 × 1 scalar too)
+    if (!along_first && r != cols) return nullptr;
+    const std::size_t rows = along_first ? r : c;
+    const std::string key = root_ && root_->name ? std::string(root_->name) + "." + which : which;
+    if (const auto it = layout_.find(key);
+        it != layout_.end() && Mat5Series::size_of(it->second.type) * rows * cols == it->second.bytes) {
+      return std::make_unique<Mat5Series>(file_, which, it->second, rows, cols, along_first);
+    }
+    return std::make_unique<MatioSeries>(file_, mat_.get(), v, rows, cols, along_first);
+  }
+
+  // The segments struct array, read whole (it is small); with a struct root holding it, the root
+  // is read whole as well (matio reads a struct's fields together).
+  const matvar_t* segments() {
+    if (!root_) {
+      if (!top_.count("segments")) return nullptr;
+      whole_.reset(Mat_VarRead(mat_.get(), "segments"));
+      return whole_.get();
+    }
+    if (!Mat_VarGetStructFieldByName(root_.get(), "segments", 0) || !root_->name) return nullptr;
+    whole_.reset(Mat_VarRead(mat_.get(), root_->name));
+    segments_in_root_ = true;
+    return whole_ ? Mat_VarGetStructFieldByName(whole_.get(), "segments", 0) : nullptr;
+  }
+  bool segments_in_root() const { return segments_in_root_; }
   const fs::path& file() const { return file_; }
 
  private:
   fs::path file_;
+  Mat5Layout layout_;
   MatFile mat_;
   MatVar root_;
   std::map<std::string, MatVar> top_;
+  MatVar whole_;
+  bool segments_in_root_ = false;
 };
 
-// N×3 or 3×N → rows of 3 (returns false when absent).
-bool triad(const MatSource& src, std::initializer_list<const char*> names, std::vector<std::array<double, 3>>& out,
-           std::string& which) {
-  const matvar_t* v = src.get(names);
-  if (!v) return false;
-  which = v->name ? v->name : *names.begin();
-  std::vector<double> d;
-  std::size_t r = 0, c = 0;
-  if (!numeric(v, d, r, c)) throw ImportError(src.file(), 0, "'" + which + "' is not a real numeric matrix");
-  if (c == 3) {
-    out.resize(r);
-    for (std::size_t i = 0; i < r; ++i) out[i] = {d[i], d[i + r], d[i + 2 * r]};
-  } else if (r == 3) {
-    out.resize(c);
-    for (std::size_t i = 0; i < c; ++i) out[i] = {d[3 * i], d[3 * i + 1], d[3 * i + 2]};
-  } else {
-    throw ImportError(src.file(), 0, "'" + which + "' is " + std::to_string(r) + "x" + std::to_string(c) +
-                                         ", expected N x 3");
+// The N×3 or 3×N matrix under the first of `names` present (nullptr when none is).
+std::unique_ptr<MatSeries> triad(const MatSource& src, std::initializer_list<const char*> names) {
+  matvar_t* v = src.get(names);
+  if (!v) return nullptr;
+  const std::string which = v->name ? v->name : *names.begin();
+  auto s = src.series(v, which, 3);
+  if (s) return s;
+  if (v->rank == 2 && !v->isComplex && v->class_type >= MAT_C_DOUBLE && v->class_type <= MAT_C_UINT64) {
+    throw ImportError(src.file(), 0, "'" + which + "' is " + std::to_string(v->dims[0]) + "x" +
+                                         std::to_string(v->dims[1]) + ", expected N x 3");
   }
-  return true;
+  throw ImportError(src.file(), 0, "'" + which + "' is not a real numeric matrix");
 }
 
-bool vector_of(const MatSource& src, std::initializer_list<const char*> names, std::vector<double>& out,
-               std::string& which) {
-  const matvar_t* v = src.get(names);
-  if (!v) return false;
-  which = v->name ? v->name : *names.begin();
-  std::size_t r = 0, c = 0;
-  if (!numeric(v, out, r, c) || (r != 1 && c != 1)) {
-    throw ImportError(src.file(), 0, "'" + which + "' is not a real numeric vector");
-  }
-  return true;
+// The vector (or scalar) under the first of `names` present (nullptr when none is).
+std::unique_ptr<MatSeries> vector_of(const MatSource& src, std::initializer_list<const char*> names) {
+  matvar_t* v = src.get(names);
+  if (!v) return nullptr;
+  const std::string which = v->name ? v->name : *names.begin();
+  auto s = src.series(v, which, 1);
+  if (!s) throw ImportError(src.file(), 0, "'" + which + "' is not a real numeric vector");
+  return s;
 }
 
 MatVar make_double(const char* name, std::size_t rows, std::size_t cols, const double* data) {
@@ -416,83 +644,119 @@ MatVar make_text(const char* name, const std::string& s) {
   return MatVar(Mat_VarCreate(name, MAT_C_CHAR, MAT_T_UINT8, 2, dims, const_cast<char*>(s.data()), 0));
 }
 
-// The variables an import looks for, as found (names as in the file, empty when absent).
+// The variables an import looks for, as found (nullptr when absent): the series read as the
+// samples are made, the scalars read whole.
 struct MatData {
-  std::vector<std::array<double, 3>> acc, gyr, acc_counts, gyr_counts;
-  std::string acc_name, gyr_name, acc_counts_name, gyr_counts_name, t_name, fs_name, temp_name, lsb_name;
-  bool have_acc = false, have_acc_counts = false, have_gyr = false, have_gyr_counts = false;
-  std::vector<double> t, rate_v, temp, acc_lsb_v, gyr_lsb_v;
-  bool have_t = false, have_fs = false, have_temp = false, have_acc_lsb = false, have_gyr_lsb = false;
+  std::unique_ptr<MatSeries> acc, gyr, acc_counts, gyr_counts, t, temp;
+  std::string fs_name;
+  std::vector<double> rate_v, acc_lsb_v, gyr_lsb_v;
+  bool have_fs = false, have_acc_lsb = false, have_gyr_lsb = false;
 
-  std::size_t rows() const { return have_acc ? acc.size() : acc_counts.size(); }
+  std::size_t rows() const { return acc ? acc->rows : acc_counts->rows; }
   bool fixed_rate() const { return have_fs && rate_v.size() == 1 && rate_v[0] > 0.0; }
   double acc_lsb() const { return have_acc_lsb && !acc_lsb_v.empty() ? acc_lsb_v[0] : 0.0; }
   double gyr_lsb() const { return have_gyr_lsb && !gyr_lsb_v.empty() ? gyr_lsb_v[0] : 0.0; }
-  bool has_gyro() const { return have_gyr || (have_gyr_counts && gyr_lsb() > 0.0); }
+  bool has_gyro() const { return gyr || (gyr_counts && gyr_lsb() > 0.0); }
 };
+
+// A scalar-like variable's values (at most kMaxScalar of them are kept: a longer one is no scalar).
+bool small_values(const MatSource& src, std::initializer_list<const char*> names, std::vector<double>& out,
+                  std::string* which = nullptr) {
+  constexpr std::size_t kMaxScalar = 16;
+  auto s = vector_of(src, names);
+  if (!s) return false;
+  if (which) *which = s->name;
+  if (s->rows * s->cols <= kMaxScalar) out = s->all();
+  else out.assign(2, 0.0);  // not one value
+  return true;
+}
 
 // Finds the variables (or struct fields) under their accepted names.
 MatData read_mat_data(const MatSource& src) {
   MatData m;
-  m.have_acc = triad(src, {"acc", "accel", "accelerometer"}, m.acc, m.acc_name);
-  m.have_acc_counts = triad(src, {"acc_counts"}, m.acc_counts, m.acc_counts_name);
-  m.have_gyr = triad(src, {"gyro", "gyr", "gyroscope"}, m.gyr, m.gyr_name);
-  m.have_gyr_counts = triad(src, {"gyro_counts", "gyr_counts"}, m.gyr_counts, m.gyr_counts_name);
-  m.have_t = vector_of(src, {"t", "time", "timestamp"}, m.t, m.t_name);
-  m.have_fs = vector_of(src, {"fs", "rate_hz", "rate"}, m.rate_v, m.fs_name);
-  m.have_temp = vector_of(src, {"temp", "temperature"}, m.temp, m.temp_name);
-  m.have_acc_lsb = vector_of(src, {"acc_lsb"}, m.acc_lsb_v, m.lsb_name);
-  m.have_gyr_lsb = vector_of(src, {"gyro_lsb", "gyr_lsb"}, m.gyr_lsb_v, m.lsb_name);
+  m.acc = triad(src, {"acc", "accel", "accelerometer"});
+  m.acc_counts = triad(src, {"acc_counts"});
+  m.gyr = triad(src, {"gyro", "gyr", "gyroscope"});
+  m.gyr_counts = triad(src, {"gyro_counts", "gyr_counts"});
+  m.t = vector_of(src, {"t", "time", "timestamp"});
+  m.have_fs = small_values(src, {"fs", "rate_hz", "rate"}, m.rate_v, &m.fs_name);
+  m.temp = vector_of(src, {"temp", "temperature"});
+  m.have_acc_lsb = small_values(src, {"acc_lsb"}, m.acc_lsb_v);
+  m.have_gyr_lsb = small_values(src, {"gyro_lsb", "gyr_lsb"}, m.gyr_lsb_v);
   return m;
 }
 
 // An accelerometer (SI or counts with LSB), every series as long as it, and a time or a rate.
 void check_mat_data(const fs::path& file, const MatData& m) {
-  if (!m.have_acc && !(m.have_acc_counts && m.have_acc_lsb)) {
+  if (!m.acc && !(m.acc_counts && m.have_acc_lsb)) {
     throw ImportError(file, 0, "no accelerometer: expected a variable/field 'acc' (N x 3, m/s^2), or "
                                "'acc_counts' with 'acc_lsb'");
   }
   const std::size_t n = m.rows();
-  auto check_len = [&](std::size_t len, const std::string& name) {
-    if (len != n) {
-      throw ImportError(file, 0, "'" + name + "' has " + std::to_string(len) + " rows, the accelerometer " +
+  for (const MatSeries* s : {m.acc_counts.get(), m.gyr.get(), m.gyr_counts.get(), m.temp.get(), m.t.get()}) {
+    if (s && s->rows != n) {
+      throw ImportError(file, 0, "'" + s->name + "' has " + std::to_string(s->rows) + " rows, the accelerometer " +
                                      std::to_string(n));
     }
-  };
-  if (m.have_acc_counts) check_len(m.acc_counts.size(), m.acc_counts_name);
-  if (m.have_gyr) check_len(m.gyr.size(), m.gyr_name);
-  if (m.have_gyr_counts) check_len(m.gyr_counts.size(), m.gyr_counts_name);
-  if (m.have_temp) check_len(m.temp.size(), m.temp_name);
-  if (m.have_t) check_len(m.t.size(), m.t_name);
-  if (!m.have_t && !m.fixed_rate()) {
+  }
+  if (!m.t && !m.fixed_rate()) {
     throw ImportError(file, 0, "no time: expected 't' (N-vector, s) or a positive scalar 'fs' (Hz)");
   }
 }
 
-// Row i as a sample: time [s] (t × time_scale_s, or i / fs), acceleration [m/s²] and rate [rad/s]
-// (SI × scale, or counts × LSB), counts, temperature [°C].
-ImuSample mat_sample(const MatData& m, std::size_t i, const MatOptions& opt) {
-  ImuSample s;
-  s.t_s = m.have_t ? m.t[i] * opt.time_scale_s : static_cast<double>(i) / m.rate_v[0];
+// The samples in blocks: each series' next rows, then row i of the block as a sample — time [s]
+// (t × time_scale_s, or i / fs), acceleration [m/s²] and rate [rad/s] (SI × scale, or counts ×
+// LSB), counts, temperature [°C] — handed to `out`. Returns how many.
+std::size_t stream_mat_samples(const fs::path& file, MatData& m, const MatOptions& opt, SampleSink& out) {
+  constexpr std::size_t kBlock = 1 << 14;
+  const std::size_t n = m.rows();
   const bool has_gyro = m.has_gyro();
-  for (int k = 0; k < 3; ++k) {
-    const auto uk = static_cast<std::size_t>(k);
-    if (m.have_acc_counts) s.accel_counts[k] = static_cast<std::int32_t>(std::lround(m.acc_counts[i][uk]));
-    s.accel_mps2[k] = m.have_acc ? m.acc[i][uk] * opt.accel_scale : m.acc_counts[i][uk] * m.acc_lsb();
-    if (m.have_gyr_counts) s.gyro_counts[k] = static_cast<std::int32_t>(std::lround(m.gyr_counts[i][uk]));
-    if (m.have_gyr) {
-      s.gyro_radps[k] = m.gyr[i][uk] * opt.gyro_scale;
-    } else if (has_gyro) {
-      s.gyro_radps[k] = m.gyr_counts[i][uk] * m.gyr_lsb();
+  std::vector<double> acc, acc_c, gyr, gyr_c, t, temp;
+  std::vector<ImuSample> block;
+  double t_prev = -std::numeric_limits<double>::infinity();
+  for (std::size_t first = 0; first < n; first += kBlock) {
+    const std::size_t k = std::min(kBlock, n - first);
+    auto take = [k](MatSeries* s, std::vector<double>& buf) {
+      if (!s) return;
+      buf.resize(k * s->cols);
+      s->read(k, buf.data());
+    };
+    take(m.acc.get(), acc);
+    take(m.acc_counts.get(), acc_c);
+    take(m.gyr.get(), gyr);
+    take(m.gyr_counts.get(), gyr_c);
+    take(m.t.get(), t);
+    take(m.temp.get(), temp);
+    block.assign(k, ImuSample{});
+    for (std::size_t j = 0; j < k; ++j) {
+      ImuSample& s = block[j];
+      const std::size_t i = first + j;
+      s.t_s = m.t ? t[j] * opt.time_scale_s : static_cast<double>(i) / m.rate_v[0];
+      if (m.t && s.t_s < t_prev) {  // repeats are repaired later
+        throw ImportError(file, 0, "'" + m.t->name + "' goes back at element " + std::to_string(i + 1));
+      }
+      t_prev = s.t_s;
+      for (std::size_t c = 0; c < 3; ++c) {
+        const int ic = static_cast<int>(c);
+        if (m.acc_counts) s.accel_counts[c] = static_cast<std::int32_t>(std::lround(acc_c[3 * j + c]));
+        s.accel_mps2[ic] = m.acc ? acc[3 * j + c] * opt.accel_scale : acc_c[3 * j + c] * m.acc_lsb();
+        if (m.gyr_counts) s.gyro_counts[c] = static_cast<std::int32_t>(std::lround(gyr_c[3 * j + c]));
+        if (m.gyr) {
+          s.gyro_radps[ic] = gyr[3 * j + c] * opt.gyro_scale;
+        } else if (has_gyro) {
+          s.gyro_radps[ic] = gyr_c[3 * j + c] * m.gyr_lsb();
+        }
+      }
+      if (m.temp) s.temperature_c = temp[j];
     }
+    out.add_samples(block.data(), block.size());
   }
-  if (m.have_temp) s.temperature_c = m.temp[i];
-  return s;
+  return n;
 }
 
 // Segments from a struct array 'segments' with fields kind, label, t_start_s, t_end_s [s].
-void add_mat_segments(const MatSource& src, const fs::path& file, Recording& rec) {
-  const matvar_t* segs = src.get({"segments"});
+void add_mat_segments(MatSource& src, const fs::path& file, Recording& rec) {
+  const matvar_t* segs = src.segments();
   if (!segs || segs->class_type != MAT_C_STRUCT) return;
   std::size_t count = 1;
   for (int d = 0; d < segs->rank; ++d) count *= segs->dims[d];
@@ -523,7 +787,7 @@ void set_mat_sensor_info(const MatData& m, const MatOptions& opt, Recording& rec
   SensorInfo& info = rec.header.info;
   info.output_rate_hz = m.fixed_rate() ? m.rate_v[0] : 0.0;  // 0: set by the timestamp repair
   info.has_gyro = m.has_gyro();
-  info.has_temperature = m.have_temp;
+  info.has_temperature = m.temp != nullptr;
   info.accel_lsb_mps2 = m.acc_lsb();
   info.gyro_lsb_radps = m.gyr_lsb();
   rec.header.identity = opt.identity;
@@ -532,30 +796,33 @@ void set_mat_sensor_info(const MatData& m, const MatOptions& opt, Recording& rec
 
 }  // namespace
 
-Recording import_mat(const fs::path& file, const MatOptions& opt) {
+void import_mat(const fs::path& file, const MatOptions& opt, Recording& rec, SampleSink& out) {
   MatSource src(file, opt.struct_name);
-  const MatData m = read_mat_data(src);
+  MatData m = read_mat_data(src);
   check_mat_data(file, m);
-  const std::size_t n = m.rows();
-  Recording rec = new_recording(file, "mat");
-  rec.samples.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    rec.samples[i] = mat_sample(m, i, opt);
-    if (m.have_t && i > 0 && rec.samples[i].t_s < rec.samples[i - 1].t_s) {  // repeats are repaired below
-      throw ImportError(file, 0, "'" + m.t_name + "' goes back at element " + std::to_string(i + 1));
-    }
-  }
+  rec = new_recording(file, "mat");
   add_mat_segments(src, file, rec);
   set_mat_sensor_info(m, opt, rec);
+  std::size_t n = 0, gaps = 0;
+  if (m.t) {
+    TimestampRepairStream repair(rec, out, m.fixed_rate() ? m.rate_v[0] : 0.0);
+    n = stream_mat_samples(file, m, opt, repair);
+    gaps = repair.finish().gaps;
+  } else {
+    n = stream_mat_samples(file, m, opt, out);
+  }
   const bool has_gyro = m.has_gyro();
-  const std::size_t gaps = m.have_t ? repair_timestamps(rec, m.fixed_rate() ? m.rate_v[0] : 0.0).gaps : 0;
   add_import_event(rec, "imported " + std::to_string(n) + " samples from " + file.string() +
                             " (MATLAB file" + (opt.struct_name.empty() ? "" : ", struct " + opt.struct_name) +
-                            "; accel from '" + (m.have_acc ? m.acc_name : m.acc_counts_name) + "'" +
-                            (has_gyro ? ", gyro from '" + (m.have_gyr ? m.gyr_name : m.gyr_counts_name) + "'" : ", no gyro") +
-                            (m.have_t ? ", time '" + m.t_name + "'" : ", rate '" + m.fs_name + "'") +
-                            (gaps ? "; " + std::to_string(gaps) + " gap(s) flagged" : "") + ")");
-  return rec;
+                            "; accel from '" + (m.acc ? m.acc->name : m.acc_counts->name) + "'" +
+                            (has_gyro ? ", gyro from '" + (m.gyr ? m.gyr->name : m.gyr_counts->name) + "'" : ", no gyro") +
+                            (m.t ? ", time '" + m.t->name + "'" : ", rate '" + m.fs_name + "'") +
+                            (gaps ? "; " + std::to_string(gaps) + " gap(s) flagged" : "") +
+                            (src.segments_in_root() ? "; the struct read whole for its segments" : "") + ")");
+}
+
+Recording import_mat(const fs::path& file, const MatOptions& opt) {
+  return import_in_memory([&](Recording& rec, SampleSink& out) { import_mat(file, opt, rec, out); });
 }
 
 namespace {
@@ -677,6 +944,7 @@ constexpr const char* kNoMatio =
 bool mat_supported() { return false; }
 
 Recording import_mat(const fs::path& file, const MatOptions&) { throw ImportError(file, 0, kNoMatio); }
+void import_mat(const fs::path& file, const MatOptions&, Recording&, SampleSink&) { throw ImportError(file, 0, kNoMatio); }
 void export_mat(const Recording&, const fs::path& file, const std::string&) {
   throw ImportError(file, 0, kNoMatio);
 }

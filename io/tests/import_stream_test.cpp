@@ -12,6 +12,7 @@
 #include <stend/testing/files.hpp>
 
 #include <gtest/gtest.h>
+#include <matio.h>
 
 #include <ros/serialization.h>
 #include <rosbag/bag.h>
@@ -578,6 +579,67 @@ TEST(ImportStream, LongImuTkFilesInBoundedMemoryWithTheSamplesOfAnInMemoryImport
                    ASSERT_NEAR(s.gyro_radps.z(), static_cast<double>(k) - 0.5, 1e-6);  // interpolated
                  },
                  {}, {.temperature = false, .gap = true});
+}
+
+// A MATLAB file of n samples at kRateHz (the gap at kGapAt): t, acc and gyro (N×3 doubles),
+// temp, acc_counts (N×3 int16); top-level, or the fields of a struct `root`; v5 compressed or
+// v7.3 (HDF5).
+void write_mat(const fs::path& file, std::size_t n, mat_ft version, bool in_struct) {
+  std::vector<double> t(n), acc(3 * n), gyro(3 * n), temp(n);
+  std::vector<std::int16_t> counts(3 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    t[i] = static_cast<double>(i + (i >= kGapAt ? 3 : 0)) / kRateHz;
+    temp[i] = 25.0 + static_cast<double>(i % 100) * 0.01;
+    for (std::size_t c = 0; c < 3; ++c) {
+      acc[i + c * n] = static_cast<double>(i % 4096) * static_cast<double>(c + 1) * 1e-3;
+      gyro[i + c * n] = -static_cast<double>(i % 512) * static_cast<double>(c + 1) * 1e-4;
+      counts[i + c * n] = static_cast<std::int16_t>(static_cast<int>(i % 4096) - static_cast<int>(c));
+    }
+  }
+  mat_t* mat = Mat_CreateVer(file.c_str(), nullptr, version);
+  ASSERT_NE(mat, nullptr);
+  std::size_t vec[2] = {n, 1}, tri[2] = {n, 3};
+  matvar_t* vars[] = {Mat_VarCreate("t", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, vec, t.data(), 0),
+                      Mat_VarCreate("acc", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, tri, acc.data(), 0),
+                      Mat_VarCreate("gyro", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, tri, gyro.data(), 0),
+                      Mat_VarCreate("temp", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, vec, temp.data(), 0),
+                      Mat_VarCreate("acc_counts", MAT_C_INT16, MAT_T_INT16, 2, tri, counts.data(), 0)};
+  if (in_struct) {
+    const char* fields[] = {"t", "acc", "gyro", "temp", "acc_counts"};
+    std::size_t one[2] = {1, 1};
+    matvar_t* root = Mat_VarCreateStruct("root", 2, one, fields, 5);
+    for (matvar_t* v : vars) Mat_VarSetStructFieldByName(root, v->name, 0, v);
+    ASSERT_EQ(Mat_VarWrite(mat, root, MAT_COMPRESSION_ZLIB), 0);
+    Mat_VarFree(root);
+  } else {
+    for (matvar_t* v : vars) {
+      ASSERT_EQ(Mat_VarWrite(mat, v, MAT_COMPRESSION_ZLIB), 0);
+      Mat_VarFree(v);
+    }
+  }
+  Mat_Close(mat);
+}
+
+TEST(ImportStream, LongMatFilesInBoundedMemoryWithTheSamplesOfAnInMemoryImport) {
+  struct Case {
+    const char* name;
+    mat_ft version;
+    bool in_struct;
+  };
+  for (const Case& c : {Case{"v5 compressed", MAT_FT_MAT5, false}, Case{"v5 compressed struct", MAT_FT_MAT5, true},
+                        Case{"v7.3", MAT_FT_MAT73, false}}) {
+    SCOPED_TRACE(c.name);
+    TempDir tmp("import-stream-mat");
+    ASSERT_NO_FATAL_FAILURE(write_mat(tmp / "long.mat", kTextLines, c.version, c.in_struct));
+    check_long_log({tmp / "long.mat"}, "mat", kTextLines, [&] { return import_mat(tmp / "long.mat"); },
+                   [](std::size_t i, const ImuSample& s) {
+                     ASSERT_EQ(s.t_s, static_cast<double>(i + (i >= kGapAt ? 3 : 0)) / kRateHz);
+                     ASSERT_EQ(s.accel_mps2.y(), static_cast<double>(i % 4096) * 2.0 * 1e-3);
+                     ASSERT_EQ(s.gyro_radps.z(), -static_cast<double>(i % 512) * 3.0 * 1e-4);
+                     ASSERT_EQ(s.accel_counts[2], static_cast<std::int32_t>(i % 4096) - 2);
+                     ASSERT_EQ(s.temperature_c, 25.0 + static_cast<double>(i % 100) * 0.01);
+                   });
+  }
 }
 
 }  // namespace

@@ -56,7 +56,7 @@ Recording open_dataset(const Inputs& inputs, const std::string& format, const Im
                        std::string* used = nullptr);
 
 // open_dataset into `rec` with the samples passed to `out` a chunk at a time (through the format's
-// stream when it has one — every format but mat and static_table —, else read whole first) and not
+// stream when it has one — every format but static_table —, else read whole first) and not
 // kept in `rec`.
 void import_dataset(const Inputs& inputs, const std::string& format, Recording& rec, SampleSink& out,
                     const ImportOptions& options = {}, std::string* used = nullptr);

@@ -222,6 +222,9 @@ struct MatOptions {
   double gravity_mps2 = 0.0;
 };
 Recording import_mat(const std::filesystem::path& file, const MatOptions& options = {});
+// The same, streaming: the samples go to `out` a block at a time (a compressed v5 variable is
+// inflated once, forwards; a v7.3 one read by hyperslabs), `rec` receives the rest.
+void import_mat(const std::filesystem::path& file, const MatOptions& options, Recording& rec, SampleSink& out);
 // Writes the layout above (t, fs, acc, gyro, temp, acc_counts, gyro_counts, acc_lsb, gyro_lsb,
 // segments) in MAT v5: as top-level variables, or as the fields of one struct variable named
 // `struct_name` when it is not empty.
