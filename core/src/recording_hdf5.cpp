@@ -906,9 +906,18 @@ void read_hdf5_run(const fs::path& path, bool truth, Hdf5Run& run) {
     const bool whole = H5Sget_simple_extent_dims(space.get(), dims, nullptr) == 1 && dims[0] <= kSummaryColumns;
     double v[kSummaryColumns] = {-1, -1, 0, 0, -1};
     if (whole && H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0) {
-      summary_samples = v[0];
-      run.gap_count = static_cast<std::int64_t>(v[1]);
-      run.irregular_count = static_cast<std::int64_t>(v[4]);
+      // Counts (samples, gaps, irregular intervals), −1 for unknown: anything else is damage.
+      auto count = [](double x) { return x >= -1.0 && x <= 9007199254740992.0 && x == std::floor(x); };
+      if (count(v[0]) && count(v[1]) && count(v[4])) {
+        summary_samples = v[0];
+        run.gap_count = static_cast<std::int64_t>(v[1]);
+        run.irregular_count = static_cast<std::int64_t>(v[4]);
+      } else {
+        run.damage += (run.damage.empty() ? "" : "; ") +
+                      fmt::format("{}: dataset /summary holds {:g}, {:g} and {:g} where counts of samples, gaps and "
+                                  "irregular intervals belong",
+                                  path.string(), v[0], v[1], v[4]);
+      }
     }
     H5Eclear2(H5E_DEFAULT);
   }
