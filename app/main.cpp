@@ -188,7 +188,8 @@ ExitCode cmd_run(const std::string& file, const std::string& output, const std::
     if (model.is_relative()) model = std::filesystem::path(file).parent_path() / model;
     fmt::print(human(), "\n");
     const stend::cli::FitOutcome fit =
-        fit_recording(stend::Recording::open(r.dir, stend::SampleLoading::kStream), model.string(), r.dir, "");
+        fit_recording(stend::Recording::open(r.dir, stend::SampleLoading::kStream, stend::TruthLoading::kStream),
+                      model.string(), r.dir, "");
     summary["fit"] = fit.to_json();
     if (!fit.ok) return finish(ExitCode::kFitFailed);
   }

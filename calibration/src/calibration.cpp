@@ -285,6 +285,7 @@ Recording apply_calibration(const Recording& raw, const Calibration& cal) {
   out.experiment_yaml = raw.experiment_yaml;
   out.truth_t = raw.truth_t;
   out.truth = raw.truth;
+  out.truth_store = raw.truth_store;
   out.segments = raw.segments;
   out.events = raw.events;
   out.dropped_partial_lines = raw.dropped_partial_lines;
@@ -319,7 +320,12 @@ void write_calibrated(const Recording& calibrated, const Calibration& cal, const
   w.add_event(e);
   for (const auto& ev : calibrated.events) w.add_event(ev);
   for_each_chunk(samples, [&](const ImuSample* c, std::size_t n, std::uint64_t) { w.add_samples(c, n); });
-  for (std::size_t i = 0; i < calibrated.truth_t.size(); ++i) w.add_truth(calibrated.truth_t[i], calibrated.truth[i]);
+  const auto truth = calibrated.recorded_truth();
+  std::vector<double> row;
+  for_each_truth_row(*truth, 0, truth->rows(), [&](double t, const double* values, bool) {
+    row.assign(values, values + truth->columns());
+    w.add_truth(t, row);
+  });
   for (const auto& s : calibrated.segments) w.add_segment(s);
   w.finish(calibrated.header.status == RunStatus::kRunning ? RunStatus::kInterrupted : calibrated.header.status);
 }

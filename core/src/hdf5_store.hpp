@@ -53,7 +53,9 @@ struct Hdf5Run {
   std::string experiment_yaml;
   std::vector<double> truth_t;
   std::vector<std::vector<double>> truth;
+  std::shared_ptr<const RecordedTruth> truth_store;  // TruthLoading::kStream
   std::uint64_t truth_rows = 0;
+  std::size_t truth_columns = 0;  // values per row (the dataset's columns after t_s)
   std::string segments_csv, events_csv;  // the CSV text of segments.csv / events.csv
   std::shared_ptr<const SampleSource> samples;
   std::uint64_t written_samples = 0;  // samples the file claims; samples->size() are readable
@@ -62,7 +64,7 @@ struct Hdf5Run {
   std::int64_t irregular_count = -1;  // likewise; −1 when the file does not say
 };
 // Throws std::runtime_error naming the file and what is unreadable when the file cannot be used.
-// With `truth` false the truth rows are counted, not read.
-Hdf5Run open_hdf5_run(const std::filesystem::path& file, bool truth = true);
+// The truth rows are read (kLoad), left behind truth_store (kStream) or counted (kSkip).
+Hdf5Run open_hdf5_run(const std::filesystem::path& file, TruthLoading truth = TruthLoading::kLoad);
 
 }  // namespace stend::detail

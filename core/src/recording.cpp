@@ -1160,7 +1160,7 @@ void read_header_beside_damaged_hdf5(const fs::path& file, const std::string& da
 
 // run.h5: header, experiment, truth, segments and events; samples behind the file's source.
 void open_hdf5(const fs::path& file, Recording& r, SampleLoading loading, TruthLoading truth) {
-  detail::Hdf5Run h = detail::open_hdf5_run(file, truth == TruthLoading::kLoad);
+  detail::Hdf5Run h = detail::open_hdf5_run(file, truth);
   if (h.header_damage.empty()) {
     read_run_json(file.string() + ":header_json", h.header_json, r.header);
     r.experiment_yaml = std::move(h.experiment_yaml);
@@ -1170,12 +1170,13 @@ void open_hdf5(const fs::path& file, Recording& r, SampleLoading loading, TruthL
     h.damage = h.header_damage + (h.damage.empty() ? "" : "; " + h.damage);
   }
   r.header.status = h.status;
-  if (h.truth.size() && h.truth[0].size() != r.header.truth_columns.size()) {
+  if (h.truth_columns != r.header.truth_columns.size() && h.truth_rows > 0) {
     throw std::runtime_error(fmt::format("{}: dataset /truth has {} value columns, the header names {}",
-                                         file.string(), h.truth[0].size(), r.header.truth_columns.size()));
+                                         file.string(), h.truth_columns, r.header.truth_columns.size()));
   }
   r.truth_t = std::move(h.truth_t);
   r.truth = std::move(h.truth);
+  r.truth_store = std::move(h.truth_store);
   r.truth_rows = h.truth_rows;
   csv::Reader segments(file.string() + ":segments_csv", h.segments_csv);
   read_segments(segments, r);
@@ -1257,7 +1258,7 @@ void open_csv(const fs::path& run_dir, const nlohmann::json& run_json, Recording
   std::vector<FileRead> files{read_imu(imu, r)};
   r.written_samples = r.samples.size();
   const fs::path truth_csv = run_dir / "truth.csv";
-  const bool read_truth_rows = truth == TruthLoading::kLoad && fs::exists(truth_csv, ec);
+  const bool read_truth_rows = truth != TruthLoading::kSkip && fs::exists(truth_csv, ec);  // kStream too: CSV has no index
   files.push_back(read_truth_rows ? read_truth(truth_csv, r) : file_not_read(truth_csv));
   r.truth_rows = r.truth_t.size();
   for (const auto& [name, read] : {std::pair{"segments.csv", &read_segments}, std::pair{"events.csv", &read_events}}) {
@@ -1340,7 +1341,12 @@ void require_whole(const Recording& rec) {
 void write_recording(const Recording& rec, const fs::path& dir, const RecordingWriterOptions& options) {
   RecordingWriter w(dir, rec.header, rec.experiment_yaml, options);
   for_each_chunk(rec.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t) { w.add_samples(c, n); });
-  for (std::size_t i = 0; i < rec.truth_t.size(); ++i) w.add_truth(rec.truth_t[i], rec.truth[i]);
+  const auto truth = rec.recorded_truth();
+  std::vector<double> row;
+  for_each_truth_row(*truth, 0, truth->rows(), [&](double t, const double* values, bool) {
+    row.assign(values, values + truth->columns());
+    w.add_truth(t, row);
+  });
   for (const auto& s : rec.segments) w.add_segment(s);
   for (const auto& e : rec.events) w.add_event(e);
   if (rec.header.status == RunStatus::kRunning) {
@@ -1355,6 +1361,11 @@ const SampleSource& Recording::sample_source() const {
   if (!memory_view_ || &memory_view_->samples() != &samples)
     memory_view_ = std::make_shared<MemorySamples>(samples);
   return *memory_view_;
+}
+
+std::shared_ptr<const RecordedTruth> Recording::recorded_truth() const {
+  if (truth_store) return truth_store;
+  return std::make_shared<MemoryTruth>(truth_t, truth, header.truth_columns.size());
 }
 
 int Recording::truth_column(const std::string& name) const {

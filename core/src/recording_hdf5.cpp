@@ -630,6 +630,40 @@ void Hdf5RunWriter::finish(RunStatus status,
 namespace {
 
 // The samples of run.h5, read a chunk at a time from the file.
+// The bench truth on the file: dataset /truth, rows of (t_s, values…), read a window at a time.
+class Hdf5Truth final : public RecordedTruth {
+ public:
+  Hdf5Truth(fs::path path, Handle ds, std::uint64_t rows, std::size_t width)
+      : path_(std::move(path)), ds_(std::move(ds)), rows_(rows), width_(width) {}
+  std::uint64_t rows() const override { return rows_; }
+  std::size_t columns() const override { return width_ > 0 ? width_ - 1 : 0; }
+  void read(std::uint64_t first, std::size_t count, double* t, double* values, bool* whole) const override {
+    if (count == 0) return;
+    if (first > rows_ || count > rows_ - first)
+      throw std::out_of_range(fmt::format("{}: truth rows {}..{} requested, {} stored", path_.string(), first,
+                                          first + count, rows_));
+    thread_local std::vector<double> v;
+    v.resize(count * width_);
+    {
+      Hdf5Lock lock;
+      if (read_rows(ds_.get(), H5T_NATIVE_DOUBLE, first, count, width_, v.data()) < 0)
+        fail(path_, fmt::format("dataset /truth is damaged (rows {}..{})", first, first + count));
+    }
+    const std::size_t cols = columns();
+    for (std::size_t i = 0; i < count; ++i) {
+      t[i] = v[i * width_];
+      whole[i] = true;
+      std::copy_n(v.data() + i * width_ + 1, cols, values + i * cols);
+    }
+  }
+
+ private:
+  fs::path path_;
+  Handle ds_;
+  std::uint64_t rows_;
+  std::size_t width_;
+};
+
 class Hdf5Samples final : public SampleSource {
  public:
   Hdf5Samples(fs::path path, Handle file, std::uint64_t size, Handle t, Handle flags,
@@ -853,7 +887,7 @@ std::string read_bytes(hid_t ds, const fs::path& file, const char* name) {
 
 namespace {
 
-void read_hdf5_run(const fs::path& path, bool truth, Hdf5Run& run) {
+void read_hdf5_run(const fs::path& path, TruthLoading truth, Hdf5Run& run) {
   silence_hdf5_errors();
   Hdf5Lock lock;
   // SWMR read opens a file whose writer is still running or was killed (its status flags still
@@ -937,7 +971,12 @@ void read_hdf5_run(const fs::path& path, bool truth, Hdf5Run& run) {
     hsize_t dims[2] = {0, 0};
     H5Sget_simple_extent_dims(space.get(), dims, nullptr);
     run.truth_rows = dims[0];
-    if (!truth) return;
+    run.truth_columns = dims[1] > 0 ? static_cast<std::size_t>(dims[1] - 1) : 0;
+    if (truth == TruthLoading::kSkip) return;
+    if (truth == TruthLoading::kStream) {
+      run.truth_store = std::make_shared<Hdf5Truth>(path, std::move(ds), dims[0], static_cast<std::size_t>(dims[1]));
+      return;
+    }
     std::vector<double> v(dims[0] * dims[1]);
     if (read_rows(ds.get(), H5T_NATIVE_DOUBLE, 0, dims[0], dims[1], v.data()) < 0)
       fail(path, "dataset /truth is damaged");
@@ -1014,7 +1053,7 @@ void read_hdf5_run(const fs::path& path, bool truth, Hdf5Run& run) {
 
 }  // namespace
 
-Hdf5Run open_hdf5_run(const fs::path& path, bool truth) {
+Hdf5Run open_hdf5_run(const fs::path& path, TruthLoading truth) {
   Hdf5Run run;
   try {
     read_hdf5_run(path, truth, run);

@@ -1,7 +1,11 @@
 // Chunked reading of a recording's samples (samples.hpp).
 #include "stend/samples.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <limits>
+#include <memory>
 #include <stdexcept>
 
 namespace stend {
@@ -128,6 +132,77 @@ std::vector<double> read_column(const SampleSource& src, Channel c, std::uint64_
   std::vector<double> out(static_cast<std::size_t>(last > first ? last - first : 0));
   if (!out.empty()) src.read_column(c, first, out.size(), out.data());
   return out;
+}
+
+// --- truth --------------------------------------------------------------------------------
+
+namespace {
+constexpr std::size_t kTruthChunkRows = 4096;
+}
+
+std::uint64_t RecordedTruth::lower_bound(double t_s) const {
+  std::uint64_t lo = 0, hi = rows();
+  while (lo < hi) {
+    const std::uint64_t mid = lo + (hi - lo) / 2;
+    if (time(mid) < t_s) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
+}
+
+std::uint64_t RecordedTruth::upper_bound(double t_s) const {
+  std::uint64_t lo = 0, hi = rows();
+  while (lo < hi) {
+    const std::uint64_t mid = lo + (hi - lo) / 2;
+    if (time(mid) <= t_s) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
+}
+
+double RecordedTruth::time(std::uint64_t i) const {
+  double t = 0.0;
+  std::vector<double> values(columns());
+  bool whole = true;
+  read(i, 1, &t, values.data(), &whole);
+  return t;
+}
+
+void MemoryTruth::read(std::uint64_t first, std::size_t count, double* t, double* values, bool* whole) const {
+  if (first > rows() || count > rows() - first)
+    throw std::out_of_range(fmt::format("truth rows {}..{} requested, {} held", first, first + count, rows()));
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::vector<double>& row = (*rows_)[first + i];
+    t[i] = (*t_)[first + i];
+    whole[i] = row.size() == columns_;
+    for (std::size_t c = 0; c < columns_; ++c)
+      values[i * columns_ + c] = whole[i] ? row[c] : std::numeric_limits<double>::quiet_NaN();
+  }
+}
+
+std::uint64_t MemoryTruth::lower_bound(double t_s) const {
+  return static_cast<std::uint64_t>(std::lower_bound(t_->begin(), t_->end(), t_s) - t_->begin());
+}
+
+std::uint64_t MemoryTruth::upper_bound(double t_s) const {
+  return static_cast<std::uint64_t>(std::upper_bound(t_->begin(), t_->end(), t_s) - t_->begin());
+}
+
+TruthRows truth_rows_in(const RecordedTruth& truth, double t0_s, double t1_s) {
+  return {truth.lower_bound(t0_s), truth.upper_bound(t1_s)};
+}
+
+void for_each_truth_row(const RecordedTruth& truth, std::uint64_t first, std::uint64_t last, const TruthRowFn& fn) {
+  last = std::min(last, truth.rows());
+  const std::size_t cols = truth.columns();
+  std::vector<double> t(kTruthChunkRows), values(kTruthChunkRows * cols);
+  std::unique_ptr<bool[]> whole(new bool[kTruthChunkRows]);
+  for (std::uint64_t at = first; at < last;) {
+    const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(kTruthChunkRows, last - at));
+    truth.read(at, n, t.data(), values.data(), whole.get());
+    for (std::size_t i = 0; i < n; ++i) fn(t[i], values.data() + i * cols, whole[i]);
+    at += n;
+  }
 }
 
 }  // namespace stend

@@ -148,6 +148,7 @@ GapInput build_magnitude_input(const Recording& rec, const estimation::ModelSpec
   aug.segments.clear();
   aug.truth_t.clear();
   aug.truth.clear();
+  aug.truth_store.reset();  // the provisional rows below replace the recording's truth
   aug.header.truth_columns = {"f_x_mps2", "f_y_mps2", "f_z_mps2", "w_x_radps", "w_y_radps", "w_z_radps"};
   int id = 0;
   for (const auto& iv : ivs) {

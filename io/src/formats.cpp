@@ -57,7 +57,9 @@ double per_g(const ValueScale& v, double fallback) { return v.counts() ? physics
 double per_dps(const ValueScale& v, double fallback) { return v.counts() ? physics::kDegPerSecond / v.lsb : fallback; }
 
 // A run folder's samples stay in its store; analyses read them a chunk at a time.
-Recording open_run(const Inputs& in, const ImportOptions&) { return Recording::open(in[0], SampleLoading::kStream); }
+Recording open_run(const Inputs& in, const ImportOptions&) {
+  return Recording::open(in[0], SampleLoading::kStream, TruthLoading::kStream);
+}
 
 MatOptions mat_options(const ImportOptions& o) {
   MatOptions m;

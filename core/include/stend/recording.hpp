@@ -169,9 +169,12 @@ class RecordingWriter {
 // them in the store and read them through `source` a chunk at a time (kStream; a CSV run folder,
 // having no index, is still read whole, into the source).
 enum class SampleLoading { kInMemory, kStream };
-// Whether Recording::open reads the bench truth (kSkip: for analyses of the sensor's output alone,
-// such as `stend info` and the noise analysis; the truth of a long run grows with its length).
-enum class TruthLoading { kLoad, kSkip };
+// How Recording::open treats the bench truth: read it all into `truth_t` / `truth` (kLoad), leave
+// it in the store and read it through `truth_store` a window at a time (kStream; a CSV run folder's
+// truth.csv is read whole), or only count its rows (kSkip: for analyses of the sensor's output
+// alone, such as `stend info` and the noise analysis). The truth of a long run grows with its
+// length (10 Hz rows).
+enum class TruthLoading { kLoad, kStream, kSkip };
 
 // A recording for analysis: header, truth, segments and events in memory; the samples either in
 // memory (`samples`) or in the store (`source`). Analyses iterate sample_source().
@@ -184,6 +187,7 @@ struct Recording {
   std::shared_ptr<const SampleSource> source;    // the store's samples (SampleLoading::kStream)
   std::vector<double> truth_t;
   std::vector<std::vector<double>> truth;  // rows, each truth_columns.size()
+  std::shared_ptr<const RecordedTruth> truth_store;  // the store's truth (TruthLoading::kStream)
   std::uint64_t truth_rows = 0;  // rows in the store (loaded or, with TruthLoading::kSkip, not)
   std::vector<Segment> segments;
   std::vector<Event> events;
@@ -212,6 +216,9 @@ struct Recording {
   const SampleSource& sample_source() const;
   // Number of samples, wherever they are.
   std::uint64_t sample_count() const { return source ? source->size() : samples.size(); }
+  // The truth to read: `truth_store` when set, else a view of `truth_t` / `truth` (valid while
+  // they live unchanged).
+  std::shared_ptr<const RecordedTruth> recorded_truth() const;
   // Column index of a truth column, −1 when absent.
   int truth_column(const std::string& name) const;
 

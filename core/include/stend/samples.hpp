@@ -94,4 +94,53 @@ std::vector<ImuSample> read_interval(const SampleSource& src, double t0_s, doubl
 std::vector<double> read_column(const SampleSource& src, Channel c, std::uint64_t first,
                                 std::uint64_t last);
 
+// ---------------------------------------------------------------------------------------------
+// A recording's bench truth (what was applied: table angles, rates, temperatures, specific force),
+// read a window at a time like the samples: rows of a time [s] and truth_columns values, ordered
+// by time and random-access by row. The run store's reader implements it on run.h5's /truth;
+// MemoryTruth wraps rows in memory. Analyses look up the rows of a time window (truth_rows_in)
+// and read only those.
+class RecordedTruth {
+ public:
+  virtual ~RecordedTruth() = default;
+  virtual std::uint64_t rows() const = 0;
+  virtual std::size_t columns() const = 0;  // values per row
+  // Rows [first, first + count): times into t[0 .. count), values row after row into
+  // values[0 .. count · columns()); whole[i] false for a row that has fewer values (its values
+  // then read NaN). Requires first + count ≤ rows(). Throws std::runtime_error naming the file
+  // when the rows cannot be read.
+  virtual void read(std::uint64_t first, std::size_t count, double* t, double* values, bool* whole) const = 0;
+  // The first row at or after t_s (rows() when none), and the first after it.
+  virtual std::uint64_t lower_bound(double t_s) const;
+  virtual std::uint64_t upper_bound(double t_s) const;
+  // Row i's time (one read: for searches, not for loops).
+  double time(std::uint64_t i) const;
+};
+
+// Truth rows held in memory (a view of vectors owned elsewhere).
+class MemoryTruth final : public RecordedTruth {
+ public:
+  MemoryTruth(const std::vector<double>& t, const std::vector<std::vector<double>>& rows, std::size_t columns)
+      : t_(&t), rows_(&rows), columns_(columns) {}
+  std::uint64_t rows() const override { return t_->size(); }
+  std::size_t columns() const override { return columns_; }
+  void read(std::uint64_t first, std::size_t count, double* t, double* values, bool* whole) const override;
+  std::uint64_t lower_bound(double t_s) const override;
+  std::uint64_t upper_bound(double t_s) const override;
+
+ private:
+  const std::vector<double>* t_;
+  const std::vector<std::vector<double>>* rows_;
+  std::size_t columns_;
+};
+
+// Rows [lo, hi) of `truth` with t0_s ≤ t ≤ t1_s.
+struct TruthRows {
+  std::uint64_t lo = 0, hi = 0;
+};
+TruthRows truth_rows_in(const RecordedTruth& truth, double t0_s, double t1_s);
+// Calls fn(t, values, whole) for each row of [first, last) in order, reading kTruthChunkRows at a time.
+using TruthRowFn = std::function<void(double t, const double* values, bool whole)>;
+void for_each_truth_row(const RecordedTruth& truth, std::uint64_t first, std::uint64_t last, const TruthRowFn& fn);
+
 }  // namespace stend

@@ -1,8 +1,8 @@
 // The bench truth over a window of a recording — the one rule every estimator and the diagnosis
 // use: the mean of the truth snapshots inside the window, else the last snapshot before it (the
-// bench held that state). Snapshots are rec.truth_t / rec.truth in time order, as the recording
-// store writes them; a row whose width differs from header.truth_columns (a truncated line) is
-// ignored.
+// bench held that state). Snapshots are rec.recorded_truth()'s rows in time order, as the
+// recording store writes them (read a window at a time: only the rows of the window); a row whose
+// width differs from header.truth_columns (a truncated line) is ignored.
 #pragma once
 
 #include <cstddef>
