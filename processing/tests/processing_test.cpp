@@ -1,6 +1,7 @@
 // The processing stage: options (ranges, YAML keys, the experiment's section as fallback), truth
 // means, the sliding-variance detector, and Recording → static points with its skip rules.
 #include <gtest/gtest.h>
+#include <stend/testing/files.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -210,6 +211,45 @@ TEST(TruthMean, InsideTheWindowElseTheLastSnapshotBefore) {
   EXPECT_DOUBLE_EQ(truth_mean(rec, 1, 0.5, 3.0), 20.0);
   EXPECT_DOUBLE_EQ(truth_slope(rec, 1, 0.0, 3.0), 10.0);
   EXPECT_DOUBLE_EQ(truth_slope(rec, 1, 3.0, 4.0), 0.0);  // one snapshot: no slope
+}
+
+// A long run's truth read from run.h5 a window at a time (TruthLoading::kStream: nothing loaded)
+// gives the means and slopes of the truth held in memory, row for row.
+TEST(TruthMean, StreamedFromTheStoreEqualsTheTruthInMemory) {
+  const stend::testing::TempDir dir("truth-stream");
+  RecordingHeader h;
+  h.experiment_name = "truth";
+  h.truth_columns = {"angle_deg", "air_c"};
+  h.info.output_rate_hz = 100.0;
+  {
+    RecordingWriter w(dir / "run", h, "name: truth\n");
+    std::vector<ImuSample> s(1);
+    for (int i = 0; i < 20000; ++i) {  // 2000 s of 10 Hz truth rows: several read chunks
+      const double t = 0.1 * i;
+      w.add_truth(t, {std::floor(t / 100.0) * 15.0, 25.0 + 0.001 * i});
+      s[0].t_s = t;
+      w.add_samples(s.data(), 1);
+    }
+    w.finish(RunStatus::kComplete);
+  }
+  const Recording loaded = Recording::open(dir / "run", SampleLoading::kStream, TruthLoading::kLoad);
+  const Recording streamed = Recording::open(dir / "run", SampleLoading::kStream, TruthLoading::kStream);
+  ASSERT_EQ(loaded.truth_t.size(), 20000u);
+  EXPECT_TRUE(streamed.truth_t.empty()) << "the truth rows are not loaded";
+  ASSERT_NE(streamed.truth_store, nullptr);
+  EXPECT_EQ(streamed.truth_rows, 20000u);
+  const int cols[2] = {0, 1};
+  for (const auto& [t0, t1] : {std::pair{0.0, 5.0}, {99.95, 500.0}, {1234.5, 1234.5}, {1999.0, 3000.0}, {-5.0, -1.0}}) {
+    const TruthMean a = truth_mean(loaded, cols, t0, t1), b = truth_mean(streamed, cols, t0, t1);
+    EXPECT_EQ(a.found, b.found) << t0;
+    EXPECT_EQ(a.rows, b.rows) << t0;
+    for (std::size_t c = 0; c < 2; ++c) {
+      if (std::isnan(a.values[c])) EXPECT_TRUE(std::isnan(b.values[c])) << t0;
+      else EXPECT_EQ(a.values[c], b.values[c]) << t0;
+    }
+    EXPECT_EQ(truth_slope(loaded, 1, t0, t1), truth_slope(streamed, 1, t0, t1)) << t0;
+  }
+  EXPECT_NEAR(truth_mean(streamed, 0, 100.0, 199.9), 15.0, 1e-12);
 }
 
 // ---------------------------------------------------------------------------------------------
