@@ -320,12 +320,7 @@ void write_calibrated(const Recording& calibrated, const Calibration& cal, const
   w.add_event(e);
   for (const auto& ev : calibrated.events) w.add_event(ev);
   for_each_chunk(samples, [&](const ImuSample* c, std::size_t n, std::uint64_t) { w.add_samples(c, n); });
-  const auto truth = calibrated.recorded_truth();
-  std::vector<double> row;
-  for_each_truth_row(*truth, 0, truth->rows(), [&](double t, const double* values, bool) {
-    row.assign(values, values + truth->columns());
-    w.add_truth(t, row);
-  });
+  w.add_truth(*calibrated.recorded_truth());
   for (const auto& s : calibrated.segments) w.add_segment(s);
   w.finish(calibrated.header.status == RunStatus::kRunning ? RunStatus::kInterrupted : calibrated.header.status);
 }

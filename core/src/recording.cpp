@@ -527,6 +527,14 @@ void RecordingWriter::add_truth(double t_s, const std::vector<double>& values) {
   }
 }
 
+void RecordingWriter::add_truth(const RecordedTruth& truth) {
+  std::vector<double> row;
+  for_each_truth_row(truth, 0, truth.rows(), [&](double t, const double* values, bool) {
+    row.assign(values, values + truth.columns());
+    add_truth(t, row);
+  });
+}
+
 void RecordingWriter::add_segment(const Segment& s) {
   Impl& I = *impl_;
   I.check_open("add_segment");
@@ -1341,12 +1349,7 @@ void require_whole(const Recording& rec) {
 void write_recording(const Recording& rec, const fs::path& dir, const RecordingWriterOptions& options) {
   RecordingWriter w(dir, rec.header, rec.experiment_yaml, options);
   for_each_chunk(rec.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t) { w.add_samples(c, n); });
-  const auto truth = rec.recorded_truth();
-  std::vector<double> row;
-  for_each_truth_row(*truth, 0, truth->rows(), [&](double t, const double* values, bool) {
-    row.assign(values, values + truth->columns());
-    w.add_truth(t, row);
-  });
+  w.add_truth(*rec.recorded_truth());
   for (const auto& s : rec.segments) w.add_segment(s);
   for (const auto& e : rec.events) w.add_event(e);
   if (rec.header.status == RunStatus::kRunning) {

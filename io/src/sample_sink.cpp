@@ -19,12 +19,7 @@ void RunSink::add_samples(const ImuSample* samples, std::size_t count) {
 
 void RunSink::finish() {
   open();
-  const auto truth = rec_->recorded_truth();
-  std::vector<double> row;
-  for_each_truth_row(*truth, 0, truth->rows(), [&](double t, const double* values, bool) {
-    row.assign(values, values + truth->columns());
-    writer_->add_truth(t, row);
-  });
+  writer_->add_truth(*rec_->recorded_truth());
   for (const auto& s : rec_->segments) writer_->add_segment(s);
   std::vector<Event> events = rec_->events;
   place_import_events(events, first_t_s_);

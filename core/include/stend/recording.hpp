@@ -148,6 +148,7 @@ class RecordingWriter {
 
   void add_samples(const ImuSample* samples, std::size_t count);
   void add_truth(double t_s, const std::vector<double>& values);  // size = truth_columns
+  void add_truth(const RecordedTruth& truth);  // every row of another recording's truth
   void add_segment(const Segment& s);
   void add_event(const Event& e);  // written (and flushed) at once
   // Call often with the run time; flushes to the OS when ≥ 1 s of wall time has passed since the
