@@ -630,6 +630,16 @@ void Hdf5RunWriter::finish(RunStatus status,
 namespace {
 
 // The samples of run.h5, read a chunk at a time from the file.
+// SI values of stored counts: out[i] = in[i] · lsb + offset, over every sample of every channel
+// read. Vectorised (at -O2, GCC's cheapest cost model leaves a widening conversion scalar).
+template <class Count>
+#if defined(__GNUC__) && !defined(__clang__)
+__attribute__((noinline, optimize("tree-vectorize", "vect-cost-model=dynamic")))
+#endif
+void counts_to_si(const Count* __restrict in, std::size_t n, double lsb, double offset, double* __restrict out) {
+  for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<double>(in[i]) * lsb + offset;
+}
+
 // The bench truth on the file: dataset /truth, rows of (t_s, values…), read a window at a time.
 class Hdf5Truth final : public RecordedTruth {
  public:
@@ -725,7 +735,7 @@ class Hdf5Samples final : public SampleSource {
       thread_local std::vector<decltype(stored)> raw;
       raw.resize(count);
       read_into(counts_[static_cast<std::size_t>(k)].get(), mem_type, first, count, raw.data(), kCountsNames[k]);
-      for (std::size_t i = 0; i < count; ++i) out[i] = static_cast<double>(raw[i]) * c.lsb + c.offset;
+      counts_to_si(raw.data(), count, c.lsb, c.offset, out);
     };
     if (c.int16) {
       from_counts(std::int16_t{}, H5T_NATIVE_INT16);
