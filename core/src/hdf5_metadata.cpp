@@ -79,6 +79,7 @@ struct Hdf5HeaderCheck::Impl {
     if (address == kUndefinedAddress || !checked.insert(address).second) return {};
     const std::string where = fmt::format("the object header at byte {}", superblock->base + address);
     const auto prefix = read(address, 48);
+    if (prefix && starts_with(*prefix, "OHDR") && prefix->size() < 6) return where + " is cut short by the end of the file";
     if (!prefix || !starts_with(*prefix, "OHDR") || (*prefix)[4] != 2) {
       return where + " is not a version 2 object header (\"OHDR\"): damaged, or not written in the format of "
                      "HDF5 1.8 and later";
