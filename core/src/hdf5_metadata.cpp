@@ -150,5 +150,13 @@ std::string Hdf5HeaderCheck::at_open() { return impl_->at_open(); }
 std::string Hdf5HeaderCheck::object(std::uint64_t address) {
   return impl_->superblock ? impl_->object(address) : std::string{};
 }
+std::string Hdf5HeaderCheck::linked_object(std::uint64_t address) {
+  if (impl_->superblock && impl_->checked.count(address) > 0) {
+    return fmt::format("links to the object at byte {}, which an earlier link or the root already reached (a "
+                       "second link or a loop: damaged)",
+                       impl_->superblock->base + address);
+  }
+  return object(address);
+}
 
 }  // namespace stend::detail

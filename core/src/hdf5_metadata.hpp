@@ -39,6 +39,11 @@ class Hdf5HeaderCheck {
   // Before libhdf5 loads the object header at `address` (relative to the base address, as
   // H5L_info_t gives it). Empty, or what is wrong.
   std::string object(std::uint64_t address);
+  // The object a hard link points to, before libhdf5 loads it: object(), and not one already
+  // reached (the root group, or an earlier link's target). Stend's run stores link each object
+  // once; a damaged link back to a group above it made libhdf5's link visit, which tracks only
+  // objects of more than one link, recurse until the stack overflowed.
+  std::string linked_object(std::uint64_t address);
 
  private:
   struct Impl;

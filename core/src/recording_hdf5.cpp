@@ -876,7 +876,7 @@ std::string check_linked_headers(hid_t root, Hdf5HeaderCheck& headers) {
       [](hid_t, const char* name, const H5L_info_t* info, void* data) -> herr_t {
         auto& v = *static_cast<Visit*>(data);
         if (info->type != H5L_TYPE_HARD) return 0;
-        v.why = v.headers->object(info->u.address);
+        v.why = v.headers->linked_object(info->u.address);
         if (!v.why.empty()) v.why = fmt::format("/{}: {}", name, v.why);
         return v.why.empty() ? 0 : 1;
       },

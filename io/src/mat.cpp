@@ -12,6 +12,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -51,42 +52,61 @@ struct MatVarFree {
 using MatFile = std::unique_ptr<mat_t, MatFileCloser>;
 using MatVar = std::unique_ptr<matvar_t, MatVarFree>;
 
-// Numeric content of a variable as doubles (column-major), with its dims.
+// The number of elements a variable's dims declare, when its data buffer holds them all at
+// element_bytes each; nullopt otherwise. matio's buffer is what the data element gave, which in a
+// damaged file is shorter than the dims (fuzz finding: a char array read 2052 bytes of 4).
+std::optional<std::size_t> held_elements(const matvar_t* v, std::size_t element_bytes) {
+  std::size_t n = 1;
+  for (int i = 0; i < v->rank; ++i) {
+    if (v->dims[i] != 0 && n > std::numeric_limits<std::size_t>::max() / v->dims[i]) return std::nullopt;
+    n *= v->dims[i];
+  }
+  if (n > v->nbytes / element_bytes) return std::nullopt;
+  return n;
+}
+
+// Numeric content of a variable as doubles (column-major), with its dims; false when it is not
+// numeric or its data does not hold its dims.
 bool numeric(const matvar_t* v, std::vector<double>& out, std::size_t& rows, std::size_t& cols) {
   if (!v || v->isComplex || v->rank != 2 || !v->data) return false;
   rows = v->dims[0];
   cols = v->dims[1];
-  const std::size_t n = rows * cols;
-  out.resize(n);
+  std::size_t n = 0;
   auto copy = [&](auto* p) {
+    const auto held = held_elements(v, sizeof(*p));
+    if (!held) return false;
+    n = *held;
+    out.resize(n);
     for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<double>(p[i]);
+    return true;
   };
   switch (v->class_type) {
-    case MAT_C_DOUBLE: copy(static_cast<const double*>(v->data)); return true;
-    case MAT_C_SINGLE: copy(static_cast<const float*>(v->data)); return true;
-    case MAT_C_INT8: copy(static_cast<const std::int8_t*>(v->data)); return true;
-    case MAT_C_UINT8: copy(static_cast<const std::uint8_t*>(v->data)); return true;
-    case MAT_C_INT16: copy(static_cast<const std::int16_t*>(v->data)); return true;
-    case MAT_C_UINT16: copy(static_cast<const std::uint16_t*>(v->data)); return true;
-    case MAT_C_INT32: copy(static_cast<const std::int32_t*>(v->data)); return true;
-    case MAT_C_UINT32: copy(static_cast<const std::uint32_t*>(v->data)); return true;
-    case MAT_C_INT64: copy(static_cast<const std::int64_t*>(v->data)); return true;
-    case MAT_C_UINT64: copy(static_cast<const std::uint64_t*>(v->data)); return true;
+    case MAT_C_DOUBLE: return copy(static_cast<const double*>(v->data));
+    case MAT_C_SINGLE: return copy(static_cast<const float*>(v->data));
+    case MAT_C_INT8: return copy(static_cast<const std::int8_t*>(v->data));
+    case MAT_C_UINT8: return copy(static_cast<const std::uint8_t*>(v->data));
+    case MAT_C_INT16: return copy(static_cast<const std::int16_t*>(v->data));
+    case MAT_C_UINT16: return copy(static_cast<const std::uint16_t*>(v->data));
+    case MAT_C_INT32: return copy(static_cast<const std::int32_t*>(v->data));
+    case MAT_C_UINT32: return copy(static_cast<const std::uint32_t*>(v->data));
+    case MAT_C_INT64: return copy(static_cast<const std::int64_t*>(v->data));
+    case MAT_C_UINT64: return copy(static_cast<const std::uint64_t*>(v->data));
     default: return false;
   }
 }
 
-std::string text(const matvar_t* v) {
-  if (!v || v->class_type != MAT_C_CHAR || !v->data) return {};
-  std::size_t n = 1;
-  for (int i = 0; i < v->rank; ++i) n *= v->dims[i];
+// A char array's text ("" when there is none); nullopt when its data does not hold its dims.
+std::optional<std::string> text(const matvar_t* v) {
+  if (!v || v->class_type != MAT_C_CHAR || !v->data) return std::string();
+  const bool wide = v->data_size == 2 || v->data_type == MAT_T_UINT16 || v->data_type == MAT_T_UTF16;
+  const auto n = held_elements(v, wide ? 2 : 1);
+  if (!n) return std::nullopt;
   std::string s;
-  if (v->data_size == 2 || v->data_type == MAT_T_UINT16 || v->data_type == MAT_T_UTF16) {
+  if (wide) {
     const auto* p = static_cast<const std::uint16_t*>(v->data);
-    for (std::size_t i = 0; i < n; ++i) s += p[i] < 128 ? static_cast<char>(p[i]) : '?';
+    for (std::size_t i = 0; i < *n; ++i) s += p[i] < 128 ? static_cast<char>(p[i]) : '?';
   } else {
-    const auto* p = static_cast<const char*>(v->data);
-    s.assign(p, n);
+    s.assign(static_cast<const char*>(v->data), *n);
   }
   return s;
 }
@@ -770,14 +790,22 @@ void add_mat_segments(MatSource& src, const fs::path& file, Recording& rec) {
       throw ImportError(file, 0, "segments(" + std::to_string(i + 1) +
                                      ") needs scalar fields t_start_s and t_end_s");
     }
+    auto field_text = [&](const char* name) {
+      const auto t = text(Mat_VarGetStructFieldByName(sv, name, i));
+      if (!t) {
+        throw ImportError(file, 0, "segments(" + std::to_string(i + 1) + ")." + name +
+                                       " declares more characters than its data holds (damaged)");
+      }
+      return *t;
+    };
     // kind: a segment kind's name; absent or empty means a static position ("orientation").
-    const std::string kind_text = text(Mat_VarGetStructFieldByName(sv, "kind", i));
+    const std::string kind_text = field_text("kind");
     const auto kind = kind_text.empty() ? SegmentKind::kOrientation : segment_kind_from_string(kind_text);
     if (!kind) {
       throw ImportError(file, 0, "segments(" + std::to_string(i + 1) + ").kind '" + kind_text +
                                      "' is not a segment kind (" + yaml::join(segment_kind_names()) + ")");
     }
-    Segment seg = make_segment(static_cast<int>(i), *kind, text(Mat_VarGetStructFieldByName(sv, "label", i)), a[0], b[0]);
+    Segment seg = make_segment(static_cast<int>(i), *kind, field_text("label"), a[0], b[0]);
     rec.segments.push_back(seg);
   }
 }

@@ -522,6 +522,15 @@ TEST(ImportMat, DimensionsDeclaringGigabytesAreRefusedBeforeMatioListsTheVariabl
       << msg624;
 }
 
+TEST(ImportMat, CharArrayDeclaringMoreThanItsDataIsDamageNamed) {
+  // A segment's label whose dimensions declare 2052 characters where matio's buffer holds 4: the
+  // text was copied from past the buffer (ASan, the fuzz target's find). Every char array and
+  // numeric field is read only as far as its data holds its dimensions.
+  const fs::path mat = stend::testing::source_path("fuzz/regressions/import_mat/segment_label_longer_than_its_data.mat");
+  const std::string msg = error_of([&] { import_mat(mat); });
+  EXPECT_NE(msg.find("segments(1).label declares more characters than its data holds (damaged)"), std::string::npos) << msg;
+}
+
 TEST(ImportMat, NestedMatrixLongerThanItsStructIsRefusedBeforeMatioListsTheVariables) {
   // A struct's last field declared 1080 bytes in a struct of 624; matio's Mat_GetDir, reading the
   // fields' headers, asked for 2 GB (the fuzz target found it).
