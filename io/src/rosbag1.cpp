@@ -175,7 +175,7 @@ std::uint64_t index_position(const fs::path& file) {
     if (field.substr(0, kField.size()) == kField && field.size() == kField.size() + 8) {
       return little_endian(field.substr(kField.size()));
     }
-    pos += 4 + n;
+    pos += 4 + std::size_t{n};  // widened first: 4 + n in 32 bits wraps to 0 for n = 2^32 − 4 (a loop)
   }
   return 0;
 }
@@ -227,7 +227,7 @@ BagLayout read_layout(const fs::path& path) {
       in.read(text.data(), static_cast<std::streamsize>(text.size()));
       const std::size_t eq = text.find('=');
       if (eq != std::string::npos) f(std::string_view(text).substr(0, eq), std::string_view(text).substr(eq + 1));
-      at += 4 + field;
+      at += 4 + std::uint64_t{field};
     }
   };
   struct Record {
@@ -394,7 +394,7 @@ std::vector<MessageRecord> message_records(const fs::path& path, const Chunk& c,
         else if (name == "conn") m.conn = static_cast<std::uint32_t>(little_endian(value.substr(0, 4)));
         else if (name == "time") m.time_ns = time_ns(value);
       }
-      f += 4 + n;
+      f += 4 + std::size_t{n};
     }
     if (b.size() - end < 4) fail(end, "a record's data length is cut off");
     const std::uint32_t data = u32(end);
