@@ -629,7 +629,6 @@ void Hdf5RunWriter::finish(RunStatus status,
 
 namespace {
 
-// The samples of run.h5, read a chunk at a time from the file.
 // SI values of stored counts: out[i] = in[i] · lsb + offset, over every sample of every channel
 // read. Vectorised (at -O2, GCC's cheapest cost model leaves a widening conversion scalar).
 template <class Count>
@@ -674,6 +673,7 @@ class Hdf5Truth final : public RecordedTruth {
   std::size_t width_;
 };
 
+// The samples of run.h5, read a chunk at a time from the file.
 class Hdf5Samples final : public SampleSource {
  public:
   Hdf5Samples(fs::path path, Handle file, std::uint64_t size, Handle t, Handle flags,

@@ -71,13 +71,11 @@ bool numeric(const matvar_t* v, std::vector<double>& out, std::size_t& rows, std
   if (!v || v->isComplex || v->rank != 2 || !v->data) return false;
   rows = v->dims[0];
   cols = v->dims[1];
-  std::size_t n = 0;
   auto copy = [&](auto* p) {
-    const auto held = held_elements(v, sizeof(*p));
-    if (!held) return false;
-    n = *held;
-    out.resize(n);
-    for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<double>(p[i]);
+    const auto n = held_elements(v, sizeof(*p));
+    if (!n) return false;
+    out.resize(*n);
+    for (std::size_t i = 0; i < *n; ++i) out[i] = static_cast<double>(p[i]);
     return true;
   };
   switch (v->class_type) {
