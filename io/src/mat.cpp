@@ -184,10 +184,10 @@ class MatElementBytes {
   char in_buf_[4096];
 };
 
-// Walks the matrix in a MAT v5 element the way matio's Mat_GetDir and Mat_VarReadInfo do (array
-// flags, dimensions, name; for structs and objects the field names and each field's matrix, for
-// cells each element's), and refuses any length they would allocate before checking: a
-// subelement or nested matrix longer than what is left of its parent, dimensions beyond 256,
+// Walks the matrix in a MAT v5 element the way matio's Mat_GetDir, Mat_VarReadInfo and Mat_VarRead
+// do (array flags, dimensions, name; for structs and objects the field names and each field's
+// matrix, for cells each element's; the data subelements' tags), and refuses any length they would
+// allocate before checking: a subelement or nested matrix longer than what is left of its parent, dimensions beyond 256,
 // nesting beyond 32 levels (damaged tags declared gigabytes, and matio asked for them).
 // Where the walk finds the real-part data of a numeric matrix — a top-level variable ("name") or
 // a field of a top-level 1×1 struct ("struct.field") — so that it can be read later without
@@ -278,9 +278,9 @@ class MatMatrixWalk {
                                                 ? each
                                                 : std::min<std::size_t>(each, names.find('\0', at) - at)));
     } else if (cls != kCell) {
-      // Numeric, char, sparse, logical: data follows, which matio sizes from the dimensions.
-      if (layout_ && cls >= kFirstNumeric && cls <= kLastNumeric && (depth == 0 || !field.empty()))
-        note_data(depth == 0 ? name : field, left);
+      const bool noted = layout_ && cls >= kFirstNumeric && cls <= kLastNumeric && (depth == 0 || !field.empty());
+      const bool complex = (u32_(flags.data()) & kComplexFlag) != 0;
+      data(left, depth, cls == kSparse || complex, noted ? (depth == 0 ? name : field) : std::string());
       return;
     }
     std::size_t index = 0;
@@ -306,22 +306,34 @@ class MatMatrixWalk {
     return !dims.empty();
   }
 
-  // The real-part data subelement of numeric matrix `key`, whose tag comes next: where its values
-  // start and how many bytes they take.
-  void note_data(const std::string& key, std::uint64_t& left) {
-    char tag[8];
-    if (left < 8 || !bytes_.read(tag, 8)) return;
-    left -= 8;
-    Mat5Data d = where_;
-    const std::uint32_t type = u32_(tag);
-    const bool small = (type >> 16) != 0;
-    d.type = small ? type & 0xffff : type;
-    d.bytes = small ? type >> 16 : u32_(tag + 4);
-    d.offset = bytes_.consumed() - (small ? 4 : 0);
-    if (d.bytes <= left + (small ? 4 : 0)) (*layout_)[key] = d;
+  // The data subelements of a numeric, char, sparse or logical matrix, whose first tag comes next:
+  // the real part (a sparse matrix's row and column indices before it, an imaginary part after).
+  // matio sizes some of them from their tags (a char array's UTF-8 data, the sparse parts), so each
+  // must lie inside its matrix. `all`: walk past the first one to the others (sparse, complex);
+  // a real matrix's one subelement is only checked, never read (it may be 10^7 compressed values).
+  // `key` (non-empty): note where the real part's values lie in the layout.
+  void data(std::uint64_t& left, int depth, bool all, const std::string& key) {
+    for (bool first = true; left >= 8; first = false) {
+      char tag[8];
+      if (!bytes_.read(tag, 8)) return;
+      left -= 8;
+      const std::uint32_t type = u32_(tag);
+      const bool small = (type >> 16) != 0;  // its length in the upper half, its data in the tag
+      const std::uint64_t n = small ? type >> 16 : u32_(tag + 4), padded = small ? 0 : n + (8 - n % 8) % 8;
+      if (!small && n > left)  // (the padding after the last one may be missing)
+        fail(depth, "declares " + std::to_string(n) + " bytes of data where " + std::to_string(left) + " are left");
+      if (first && !key.empty())
+        (*layout_)[key] = Mat5Data{where_.element, where_.element_bytes, where_.compressed, small ? type & 0xffff : type,
+                                   bytes_.consumed() - (small ? 4 : 0), n};
+      if (!all) return;
+      const std::uint64_t skip = std::min(padded, left);
+      left -= skip;
+      if (!bytes_.read(nullptr, skip)) return;
+    }
   }
 
   static constexpr std::uint32_t kFirstNumeric = 6, kLastNumeric = 15;  // mxDOUBLE … mxUINT64
+  static constexpr std::uint32_t kSparse = 5, kComplexFlag = 0x0800;     // array flags: class, complex bit
   const fs::path& file_;
   std::uint64_t pos_;
   MatElementBytes& bytes_;

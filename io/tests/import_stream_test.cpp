@@ -643,3 +643,44 @@ TEST(ImportStream, LongMatFilesInBoundedMemoryWithTheSamplesOfAnInMemoryImport) 
 }
 
 }  // namespace
+
+// The element walk that refuses damaged .mat files before matio reads them (io/src/mat.cpp) checks
+// every data subelement's tag: valid files with the other kinds of data subelement — a complex
+// matrix (real and imaginary parts), a sparse one (row and column indices, values), a logical,
+// a char array, small data elements packed into their tags — still import, plain and compressed.
+TEST(ImportStream, MatFilesWithComplexSparseLogicalAndCharVariablesImport) {
+  for (const matio_compression z : {MAT_COMPRESSION_NONE, MAT_COMPRESSION_ZLIB}) {
+    SCOPED_TRACE(z == MAT_COMPRESSION_NONE ? "plain" : "compressed");
+    TempDir tmp("import-stream-mat-kinds");
+    const fs::path file = tmp / "kinds.mat";
+    ASSERT_NO_FATAL_FAILURE(write_mat(file, 300, MAT_FT_MAT5, false));
+    mat_t* mat = Mat_Open(file.c_str(), MAT_ACC_RDWR);
+    ASSERT_NE(mat, nullptr);
+    std::size_t one[2] = {1, 1}, row[2] = {1, 5}, sq[2] = {4, 4};
+    double re[1] = {1.5}, im[1] = {-2.5};
+    mat_complex_split_t c{re, im};
+    double values[2] = {5.0, 6.0};
+    mat_uint32_t ir[2] = {0, 2}, jc[5] = {0, 0, 1, 1, 2};
+    mat_sparse_t sp{};
+    sp.nzmax = 2, sp.ir = ir, sp.nir = 2, sp.jc = jc, sp.njc = 5, sp.ndata = 2, sp.data = values;
+    std::uint8_t flags[5] = {1, 0, 1, 1, 0};
+    char text[] = "hello";
+    std::size_t two[2] = {1, 2};
+    matvar_t* vars[] = {Mat_VarCreate("z", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, one, &c, MAT_F_COMPLEX),
+                        Mat_VarCreate("sp", MAT_C_SPARSE, MAT_T_DOUBLE, 2, sq, &sp, MAT_F_DONT_COPY_DATA),
+                        Mat_VarCreate("ok", MAT_C_UINT8, MAT_T_UINT8, 2, row, flags, MAT_F_LOGICAL),
+                        Mat_VarCreate("note", MAT_C_CHAR, MAT_T_UTF8, 2, row, text, 0),
+                        Mat_VarCreate("ab", MAT_C_CHAR, MAT_T_UINT8, 2, two, text, 0),
+                        Mat_VarCreate("w", MAT_C_INT16, MAT_T_INT16, 2, one, jc, 0),
+                        Mat_VarCreate("k", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, one, re, 0)};
+    for (matvar_t* v : vars) {
+      ASSERT_NE(v, nullptr);
+      ASSERT_EQ(Mat_VarWrite(mat, v, z), 0);
+      Mat_VarFree(v);
+    }
+    Mat_Close(mat);
+    const Recording r = import_mat(file);
+    ASSERT_EQ(r.samples.size(), 300u);
+    EXPECT_EQ(r.samples[7].accel_mps2.y(), 7.0 * 2.0 * 1e-3);
+  }
+}

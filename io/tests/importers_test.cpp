@@ -531,6 +531,34 @@ TEST(ImportMat, CharArrayDeclaringMoreThanItsDataIsDamageNamed) {
   EXPECT_NE(msg.find("segments(1).label declares more characters than its data holds (damaged)"), std::string::npos) << msg;
 }
 
+TEST(ImportMat, DataSubelementLongerThanItsMatrixIsRefusedBeforeMatioReadsIt) {
+  // A segment label's UTF-8 data tag declared 1.8 GB inside a 56-byte matrix; matio sizes a char
+  // array's buffer from that tag and calloc'ed 1.8 GB (the fuzz target found it). Every data
+  // subelement's tag is now walked with the rest of the matrix.
+  const fs::path mat = stend::testing::source_path("fuzz/regressions/import_mat/segment_label_data_tag_declares_1_8_GB.mat");
+  const std::string msg = error_of([&] { import_mat(mat); });
+  EXPECT_NE(msg.find("byte 1584: a matrix nested 1 deep in this element declares 1879048196 bytes of data where 8 are left"),
+            std::string::npos) << msg;
+}
+
+// Files written by GNU Octave 7.3 (`save -v6` and `save -v7`, fuzz/corpus/import_mat/): beside the
+// samples a complex, a sparse, a logical and a char matrix, and segment labels of one and two
+// UTF-16 characters, which Octave packs into their tags (small data elements). The element walk
+// checks every data subelement and must take all of these.
+TEST(ImportMat, OctaveWrittenFilesWithEveryKindOfDataSubelementImport) {
+  for (const char* name : {"octave_v6.mat", "octave_v7_compressed.mat"}) {
+    SCOPED_TRACE(name);
+    const Recording r = import_mat(stend::testing::source_path(std::string("fuzz/corpus/import_mat/") + name));
+    ASSERT_EQ(r.samples.size(), 100u);
+    EXPECT_DOUBLE_EQ(r.samples[41].accel_mps2.x(), 0.42);
+    EXPECT_DOUBLE_EQ(r.samples[41].gyro_radps.z(), 0.003);
+    ASSERT_EQ(r.segments.size(), 2u);
+    EXPECT_EQ(r.segments[0].label, "a");
+    EXPECT_EQ(r.segments[1].label, "bb");
+    EXPECT_EQ(r.segments[1].t_end_s, 0.9);
+  }
+}
+
 TEST(ImportMat, NestedMatrixLongerThanItsStructIsRefusedBeforeMatioListsTheVariables) {
   // A struct's last field declared 1080 bytes in a struct of 624; matio's Mat_GetDir, reading the
   // fields' headers, asked for 2 GB (the fuzz target found it).
