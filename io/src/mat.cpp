@@ -342,6 +342,58 @@ class MatMatrixWalk {
   Mat5Layout* layout_;
 };
 
+// Whether the 128-byte header is a MAT 5 (version 0x0100) or 7.3 (0x0200, HDF5) file's: the
+// endian indicator "IM" (or "MI" from a big-endian writer) and the version beside it.
+bool is_mat5_or_73_header(const std::string& header) {
+  const bool le = header[126] == 'I' && header[127] == 'M', be = header[126] == 'M' && header[127] == 'I';
+  const auto lo = static_cast<std::uint8_t>(header[le ? 124 : 125]), hi = static_cast<std::uint8_t>(header[le ? 125 : 124]);
+  return (le || be) && lo == 0 && (hi == 1 || hi == 2);
+}
+
+// A file without a MAT 5 header is what matio then tries as a MAT v4 file: variables one after
+// another, each a header of five int32 (type MOPT, rows, columns, imaginary flag, name length with
+// its NUL), the name, the data. matio allocates the name length and the data as declared, so each
+// variable must be a valid v4 header whose name and data lie inside the file, else the file is
+// refused here (it was 1.8 GB for a 54-byte file whose "name length" was text).
+void check_mat4_variables(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  const std::uint64_t size = fs::file_size(file);
+  const auto refuse = [&](std::uint64_t pos, const std::string& why) {
+    throw ImportError(file, ByteOffset{pos}, why + " (not a MATLAB file: no MAT 5 header, and not a valid MAT v4 variable)");
+  };
+  for (std::uint64_t pos = 0; pos < size;) {
+    std::array<std::uint8_t, 20> h{};
+    if (size - pos < h.size()) refuse(pos, "a variable header needs 20 bytes, " + std::to_string(size - pos) + " are left");
+    in.seekg(static_cast<std::streamoff>(pos));
+    in.read(reinterpret_cast<char*>(h.data()), h.size());
+    const auto word = [&](std::size_t i, bool swap) {
+      std::uint32_t v = 0;
+      for (int b = 0; b < 4; ++b) v |= std::uint32_t{h[i * 4 + static_cast<std::size_t>(swap ? 3 - b : b)]} << (8 * b);
+      return v;
+    };
+    // MOPT: M the byte order (0 little-, 1 big-endian; the other digits of old machines), O = 0,
+    // P the data type (double, single, int32, int16, uint16, uint8), T full, text or sparse.
+    const auto valid = [](std::uint32_t t) { return t < 5000 && t / 100 % 10 == 0 && t / 10 % 10 <= 5 && t % 10 <= 2; };
+    const bool swap = !valid(word(0, false));
+    const std::uint32_t type = word(0, swap), rows = word(1, swap), cols = word(2, swap), imag = word(3, swap),
+                        name = word(4, swap);
+    if (!valid(type)) refuse(pos, "the type word " + std::to_string(word(0, false)) + " is no MAT v4 type");
+    if (rows > INT32_MAX || cols > INT32_MAX || imag > 1)
+      refuse(pos, "the variable header declares " + std::to_string(rows) + " x " + std::to_string(cols) +
+                      (imag > 1 ? " with an imaginary flag of " + std::to_string(imag) : std::string()));
+    constexpr std::uint64_t kSize[] = {8, 4, 4, 2, 2, 1};
+    const std::uint64_t left = size - pos - h.size();
+    if (name == 0 || name > left)
+      refuse(pos, "the variable name declares " + std::to_string(name) + " bytes where " + std::to_string(left) + " are left");
+    const long double data = static_cast<long double>(rows) * cols * kSize[type / 10 % 10] * (imag ? 2 : 1);
+    if (data > static_cast<long double>(left - name))
+      refuse(pos, "the variable's data (" + std::to_string(rows) + " x " + std::to_string(cols) + (imag ? " complex" : "") +
+                      " values of " + std::to_string(kSize[type / 10 % 10]) + " bytes) does not fit in the " +
+                      std::to_string(left - name) + " bytes left");
+    pos += h.size() + name + static_cast<std::uint64_t>(data);
+  }
+}
+
 // Refuses a MAT v5 file whose top-level elements (8-byte tag: uint32 data type, uint32 byte
 // count) are not matrices or compressed matrices lying inside the file, or whose matrices declare
 // lengths matio would allocate unchecked (MatMatrixWalk), before matio reads it; returns where
@@ -351,7 +403,10 @@ Mat5Layout check_mat5_elements(const fs::path& file) {
   Mat5Layout layout;
   std::ifstream in(file, std::ios::binary);
   std::string header(128, '\0');
-  if (!in.read(header.data(), 128)) return layout;  // matio says why it cannot open it
+  if (!in.read(header.data(), 128) || !is_mat5_or_73_header(header)) {
+    check_mat4_variables(file);  // what matio tries for a file without a MAT 5 header
+    return layout;
+  }
   const bool swap = header[126] == 'M' && header[127] == 'I';
   const auto u32 = [swap](const char* p) {
     std::uint8_t b[4];

@@ -559,6 +559,29 @@ TEST(ImportMat, OctaveWrittenFilesWithEveryKindOfDataSubelementImport) {
   }
 }
 
+// A file without a MAT 5 header is one matio tries as MAT v4, allocating the name length and data
+// its variable headers declare: 54 bytes of text made it allocate 1.8 GB (the fuzz target found
+// it). Every v4 variable header is now checked first; a v4 file written by Octave still imports,
+// one cut short is refused at the variable it cuts.
+TEST(ImportMat, Mat4HeadersAreCheckedBeforeMatioAllocatesWhatTheyDeclare) {
+  const fs::path found = stend::testing::source_path("fuzz/regressions/import_mat/mat4_name_length_is_text.mat");
+  const std::string msg = error_of([&] { import_mat(found); });
+  EXPECT_NE(msg.find("byte 0: the variable header declares 5 x 1698264147 with an imaginary flag of 1885692792 (not a "
+                     "MATLAB file: no MAT 5 header, and not a valid MAT v4 variable)"),
+            std::string::npos) << msg;
+
+  const fs::path v4 = stend::testing::source_path("fuzz/corpus/import_mat/octave_v4.mat");
+  const Recording r = import_mat(v4);
+  ASSERT_EQ(r.samples.size(), 100u);
+  EXPECT_DOUBLE_EQ(r.samples[41].accel_mps2.x(), 0.42);
+
+  const TempDir dir("importers");
+  const std::string bytes = stend::testing::read_text(v4);
+  write_text(dir / "cut.mat", bytes.substr(0, bytes.size() - 10));  // into the last variable's data
+  const std::string cut = error_of([&] { import_mat(dir / "cut.mat"); });
+  EXPECT_NE(cut.find("does not fit in the"), std::string::npos) << cut;
+}
+
 TEST(ImportMat, NestedMatrixLongerThanItsStructIsRefusedBeforeMatioListsTheVariables) {
   // A struct's last field declared 1080 bytes in a struct of 624; matio's Mat_GetDir, reading the
   // fields' headers, asked for 2 GB (the fuzz target found it).
