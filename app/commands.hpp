@@ -132,5 +132,6 @@ inline constexpr const char* kDbOptionHelp =
 std::string record_in_store(const std::filesystem::path& run_dir, const std::string& db);
 void add_db_command(CLI::App& app, std::vector<Command>& out);     // cmd_db.cpp
 void add_batch_command(CLI::App& app, std::vector<Command>& out);  // cmd_batch.cpp
+void add_deviations_command(CLI::App& app, std::vector<Command>& out);  // cmd_deviations.cpp
 
 }  // namespace stend::cli

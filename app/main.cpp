@@ -385,6 +385,7 @@ int main(int argc, char** argv) {
   stend::cli::add_watch_command(app, commands);
   stend::cli::add_db_command(app, commands);
   stend::cli::add_batch_command(app, commands);
+  stend::cli::add_deviations_command(app, commands);
 
   try {
     app.parse(argc, argv);

@@ -127,6 +127,14 @@ ChannelDeviations channel_deviations(const double* y, std::size_t n, double rate
   return collect(stream.get(), request, n, rate_hz, channel, options);
 }
 
+ChannelDeviations phase_deviations(const double* x, std::size_t n, double rate_hz, const ChannelInfo& channel,
+                                   const DeviationRequest& request, const AllanOptions& options) {
+  const std::size_t samples = n > 0 ? n - 1 : 0;
+  auto stream = make_stream(request, samples, rate_hz, options);
+  if (stream) stream->add_phase(x, n);
+  return collect(stream.get(), request, samples, rate_hz, channel, options);
+}
+
 std::vector<ChannelDeviations> recording_deviations(const Recording& recording, const AllanReport& report,
                                                     const DeviationRequest& request,
                                                     const AllanOptions& options) {

@@ -59,6 +59,10 @@ struct ChannelDeviations {
 // One channel's rate samples y[0 … n) at rate_hz.
 ChannelDeviations channel_deviations(const double* y, std::size_t n, double rate_hz, const ChannelInfo& channel,
                                      const DeviationRequest& request, const AllanOptions& options = {});
+// One channel's phase (time-error) points x[0 … n) taken 1/rate_hz apart — the n − 1 rate samples
+// between them (Stable32's phase data), without differencing and integrating again.
+ChannelDeviations phase_deviations(const double* x, std::size_t n, double rate_hz, const ChannelInfo& channel,
+                                   const DeviationRequest& request, const AllanOptions& options = {});
 // Every channel of `report` (its rate, time window and channel names) read again from the
 // recording's sample source.
 std::vector<ChannelDeviations> recording_deviations(const Recording& recording, const AllanReport& report,
