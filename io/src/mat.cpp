@@ -200,7 +200,10 @@ struct Mat5Data {
   std::uint64_t offset = 0;   // of the first value, in MatElementBytes' stream of the element
   std::uint64_t bytes = 0;    // of the values
 };
-using Mat5Layout = std::map<std::string, Mat5Data>;
+struct Mat5Layout {
+  std::map<std::string, Mat5Data> vars;
+  bool read_by_stend = false;  // a little-endian MAT 5 file: every numeric variable is read from here
+};
 
 template <class U32>
 class MatMatrixWalk {
@@ -323,7 +326,7 @@ class MatMatrixWalk {
       if (!small && n > left)  // (the padding after the last one may be missing)
         fail(depth, "declares " + std::to_string(n) + " bytes of data where " + std::to_string(left) + " are left");
       if (first && !key.empty())
-        (*layout_)[key] = Mat5Data{where_.element, where_.element_bytes, where_.compressed, small ? type & 0xffff : type,
+        layout_->vars[key] = Mat5Data{where_.element, where_.element_bytes, where_.compressed, small ? type & 0xffff : type,
                                    bytes_.consumed() - (small ? 4 : 0), n};
       if (!all) return;
       const std::uint64_t skip = std::min(padded, left);
@@ -443,7 +446,8 @@ Mat5Layout check_mat5_elements(const fs::path& file) {
     MatElementBytes bytes(in, e.pos, e.bytes, e.compressed);
     MatMatrixWalk(file, e.pos, bytes, u32, Mat5Data{e.pos, e.bytes, e.compressed}, &layout).top(e.compressed, e.bytes);
   }
-  if (swap) layout.clear();  // big-endian values: matio converts them
+  if (swap) layout.vars.clear();  // big-endian values: matio converts them
+  layout.read_by_stend = !swap;
   return layout;
 }
 
@@ -659,8 +663,19 @@ class MatSource {
     if (!along_first && r != cols) return nullptr;
     const std::size_t rows = along_first ? r : c;
     const std::string key = root_ && root_->name ? std::string(root_->name) + "." + which : which;
-    if (const auto it = layout_.find(key);
-        it != layout_.end() && Mat5Series::size_of(it->second.type) * rows * cols == it->second.bytes) {
+    // A little-endian MAT 5 variable (top level, or a field of a 1×1 struct) is read by Stend itself, never by matio (which leaked its
+    // inflate state reading a damaged compressed one: the fuzz target's find): it must have been
+    // found by the element walk, and its data must hold what its dimensions declare.
+    const bool walked = !root_ || (root_->rank == 2 && root_->dims[0] == 1 && root_->dims[1] == 1);
+    if (layout_.read_by_stend && walked) {
+      const auto it = layout_.vars.find(key);
+      if (it == layout_.vars.end())
+        throw ImportError(file_, 0, "'" + which + "': its data element was not found where its matrix declares it (damaged)");
+      const std::uint64_t needed = Mat5Series::size_of(it->second.type) * rows * cols;
+      if (needed != it->second.bytes)
+        throw ImportError(file_, 0, "'" + which + "' is " + std::to_string(r) + "x" + std::to_string(c) + ", " +
+                                        std::to_string(needed) + " bytes of data, but its data element holds " +
+                                        std::to_string(it->second.bytes) + " (damaged)");
       return std::make_unique<Mat5Series>(file_, which, it->second, rows, cols, along_first);
     }
     return std::make_unique<MatioSeries>(file_, mat_.get(), v, rows, cols, along_first);
