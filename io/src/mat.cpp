@@ -854,6 +854,17 @@ std::size_t stream_mat_samples(const fs::path& file, MatData& m, const MatOption
   return n;
 }
 
+// Whether matio read struct array `s` of `count` elements whole: every field name, and a field
+// pointer per element and field (Mat_VarGetStructFieldByName indexes both unchecked; a damaged
+// struct left them null: SEGV, the fuzz target's find).
+bool struct_holds_its_fields(matvar_t* s, std::size_t count) {
+  const unsigned nfields = Mat_VarGetNumberOfFields(s);
+  if (nfields == 0) return true;
+  char* const* names = Mat_VarGetStructFieldnames(s);
+  if (!names || !s->data || s->nbytes / sizeof(matvar_t*) < count * nfields) return false;
+  return std::all_of(names, names + nfields, [](const char* n) { return n != nullptr; });
+}
+
 // Segments from a struct array 'segments' with fields kind, label, t_start_s, t_end_s [s].
 void add_mat_segments(MatSource& src, const fs::path& file, Recording& rec) {
   const matvar_t* segs = src.segments();
@@ -861,6 +872,9 @@ void add_mat_segments(MatSource& src, const fs::path& file, Recording& rec) {
   std::size_t count = 1;
   for (int d = 0; d < segs->rank; ++d) count *= segs->dims[d];
   auto* sv = const_cast<matvar_t*>(segs);
+  if (!struct_holds_its_fields(sv, count))
+    throw ImportError(file, 0, "segments: a struct array of " + std::to_string(count) +
+                                   " whose field names or fields matio could not read (damaged)");
   for (std::size_t i = 0; i < count; ++i) {
     std::vector<double> a, b;
     std::size_t r = 0, c = 0;

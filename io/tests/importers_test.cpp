@@ -594,6 +594,15 @@ TEST(ImportMat, DamagedCompressedVariableIsRefusedNotHandedToMatio) {
       << msg;
 }
 
+// A damaged segments struct array that matio read without its fields (a mutation of Octave's v7
+// seed): Mat_VarGetStructFieldByName indexed them unchecked (SEGV, the fuzz target's find).
+TEST(ImportMat, SegmentsStructWithoutItsFieldsIsDamageNamed) {
+  const fs::path mat = stend::testing::source_path("fuzz/regressions/import_mat/segments_struct_fields_unread_segv.mat");
+  const std::string msg = error_of([&] { import_mat(mat); });
+  EXPECT_NE(msg.find("segments: a struct array of 2 whose field names or fields matio could not read (damaged)"),
+            std::string::npos) << msg;
+}
+
 TEST(ImportMat, NestedMatrixLongerThanItsStructIsRefusedBeforeMatioListsTheVariables) {
   // A struct's last field declared 1080 bytes in a struct of 624; matio's Mat_GetDir, reading the
   // fields' headers, asked for 2 GB (the fuzz target found it).
