@@ -262,7 +262,10 @@ class MatMatrixWalk {
     if (depth > kMaxDepth) fail(depth, "is nested deeper than " + std::to_string(kMaxDepth) + " levels");
     constexpr std::uint64_t kAny = ~std::uint64_t{0};
     std::string flags, dims, name;
-    if (!subelement(left, depth, "array flags", kAny, &flags) || flags.size() < 4) return;
+    if (!subelement(left, depth, "array flags", kAny, &flags)) return;
+    // matio reads the flags as 8 bytes whatever their tag says and the dimensions' tag right after:
+    // any other length would have the walk and matio read different bytes as the name's length.
+    if (flags.size() != 8) fail(depth, "declares " + std::to_string(flags.size()) + " bytes of array flags (8 expected)");
     if (!subelement(left, depth, "dimensions (at most 256 dimensions of 4 bytes)", kMaxDimensionBytes, &dims)) return;
     if (!subelement(left, depth, "name", kAny, &name)) return;
     const std::uint32_t cls = u32_(flags.data()) & 0xff;

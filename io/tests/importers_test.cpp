@@ -603,6 +603,16 @@ TEST(ImportMat, SegmentsStructWithoutItsFieldsIsDamageNamed) {
             std::string::npos) << msg;
 }
 
+// Array flags declaring 48 bytes: matio reads them as 8 whatever their tag says, so it took later
+// bytes as the name's length and Mat_GetDir allocated 2 GB (the fuzz target's find) where the walk,
+// following the tag, saw a sound name. Flags of any length but 8 are damage now.
+TEST(ImportMat, ArrayFlagsOfAnotherLengthThanMatioReadsAreDamage) {
+  const fs::path mat = stend::testing::source_path("fuzz/regressions/import_mat/array_flags_48_bytes_matio_reads_8.mat");
+  const std::string msg = error_of([&] { import_mat(mat); });
+  EXPECT_NE(msg.find("byte 1376: the matrix in this element declares 48 bytes of array flags (8 expected)"),
+            std::string::npos) << msg;
+}
+
 TEST(ImportMat, NestedMatrixLongerThanItsStructIsRefusedBeforeMatioListsTheVariables) {
   // A struct's last field declared 1080 bytes in a struct of 624; matio's Mat_GetDir, reading the
   // fields' headers, asked for 2 GB (the fuzz target found it).
