@@ -278,12 +278,15 @@ class MatMatrixWalk {
         return;
       // A 1×1 top-level struct's field names, NUL-padded to the stated length, in order.
       const std::uint32_t each = length.size() == 4 ? u32_(length.data()) : 0;
+      check_members(dims, each > 0 ? names.size() / each : 0, left, depth);
       if (depth == 0 && each > 0 && one_element(dims))
         for (std::size_t at = 0; at + each <= names.size(); at += each)
           fields.push_back(names.substr(at, names.find('\0', at) == std::string::npos
                                                 ? each
                                                 : std::min<std::size_t>(each, names.find('\0', at) - at)));
-    } else if (cls != kCell) {
+    } else if (cls == kCell) {
+      check_members(dims, 1, left, depth);
+    } else {
       const bool noted = layout_ && cls >= kFirstNumeric && cls <= kLastNumeric && (depth == 0 || !field.empty());
       const bool complex = (u32_(flags.data()) & kComplexFlag) != 0;
       data(left, depth, cls == kSparse || complex, noted ? (depth == 0 ? name : field) : std::string());
@@ -303,6 +306,18 @@ class MatMatrixWalk {
       ++index;
       if (!bytes_.read(nullptr, n)) return;  // the rest of the nested matrix (its data)
     }
+  }
+
+  // matio allocates a pointer per cell element (per element and field of a struct) before it reads
+  // them (2 GB for a cell declaring 2^28 elements: the fuzz target's find); each is a matrix of at
+  // least its 8-byte tag, so that many must fit in the `left` bytes.
+  void check_members(const std::string& dims, std::uint64_t per_element, std::uint64_t left, int depth) const {
+    long double count = per_element;
+    for (std::size_t at = 0; at + 4 <= dims.size(); at += 4) count *= u32_(dims.data() + at);
+    if (count * 8 > static_cast<long double>(left))
+      fail(depth, "declares " + (count < 1e18L ? std::to_string(static_cast<std::uint64_t>(count)) : std::string("over 10^18")) +
+                      " cell elements or struct fields where " +
+                      std::to_string(left) + " bytes hold at most " + std::to_string(left / 8));
   }
 
   // Dimensions (int32 each) of exactly one element.

@@ -613,6 +613,16 @@ TEST(ImportMat, ArrayFlagsOfAnotherLengthThanMatioReadsAreDamage) {
             std::string::npos) << msg;
 }
 
+// A cell or struct declaring 2^28 elements in a few hundred bytes: matio's Mat_GetDir calloc'ed a
+// pointer for each, 2 GB (the fuzz target's find). Each member is a matrix of at least 8 bytes.
+TEST(ImportMat, CellOrStructDeclaringMoreMembersThanItsBytesHoldIsDamage) {
+  const fs::path mat = stend::testing::source_path("fuzz/regressions/import_mat/cell_declaring_2e28_elements.mat");
+  const std::string msg = error_of([&] { import_mat(mat); });
+  EXPECT_NE(msg.find("byte 1584: the matrix in this element declares 268435464 cell elements or struct fields where 520 "
+                     "bytes hold at most 65"),
+            std::string::npos) << msg;
+}
+
 TEST(ImportMat, NestedMatrixLongerThanItsStructIsRefusedBeforeMatioListsTheVariables) {
   // A struct's last field declared 1080 bytes in a struct of 624; matio's Mat_GetDir, reading the
   // fields' headers, asked for 2 GB (the fuzz target found it).
