@@ -252,8 +252,16 @@ class MatMatrixWalk {
       fail(depth, "declares " + std::to_string(n) + " bytes of " + what + " where " + std::to_string(left) + " are left");
     left -= padded;
     if (!keep) return bytes_.read(nullptr, padded);
-    keep->resize(static_cast<std::size_t>(n));
-    return bytes_.read(keep->data(), n) && bytes_.read(nullptr, padded - n);
+    // Kept a piece at a time: a compressed element's declared lengths are not bytes that exist
+    // (3.6 GB reserved up front for a damaged name: the fuzz target's find).
+    keep->clear();
+    for (std::uint64_t got = 0; got < n;) {
+      const std::size_t piece = static_cast<std::size_t>(std::min<std::uint64_t>(n - got, 65536));
+      keep->resize(static_cast<std::size_t>(got) + piece);
+      if (!bytes_.read(keep->data() + got, piece)) return false;
+      got += piece;
+    }
+    return bytes_.read(nullptr, padded - n);
   }
 
   // The matrix whose `left` bytes follow (its tag read); returns with the stream wherever the
