@@ -697,6 +697,9 @@ class MatSource {
       const auto it = layout_.vars.find(key);
       if (it == layout_.vars.end())
         throw ImportError(file_, 0, "'" + which + "': its data element was not found where its matrix declares it (damaged)");
+      if (Mat5Series::size_of(it->second.type) == 0)
+        throw ImportError(file_, 0, "'" + which + "': its data element is of MAT data type " +
+                                        std::to_string(it->second.type) + ", not a numeric type (damaged)");
       const std::uint64_t needed = Mat5Series::size_of(it->second.type) * rows * cols;
       if (needed != it->second.bytes)
         throw ImportError(file_, 0, "'" + which + "' is " + std::to_string(r) + "x" + std::to_string(c) + ", " +

@@ -632,6 +632,17 @@ TEST(ImportMat, CompressedSubelementDeclaringGigabytesIsNotReservedUpFront) {
   EXPECT_NE(msg.find("matio cannot list its variables"), std::string::npos) << msg;
 }
 
+// A variable's data element of a type that is no numeric MAT type (here 7689) holding 0 bytes: its
+// size per value counted as 0, so "0 bytes for 1 value" matched and a value was read from an empty
+// buffer (the fuzz target's find: UBSan, memcpy from null). A numeric variable's data must be of a
+// numeric type.
+TEST(ImportMat, NumericVariableWhoseDataAreOfNoNumericTypeIsDamage) {
+  const fs::path mat = stend::testing::source_path("fuzz/regressions/import_mat/numeric_data_of_no_numeric_type.mat");
+  const std::string msg = error_of([&] { import_mat(mat); });
+  EXPECT_NE(msg.find("'acc_lsb': its data element is of MAT data type 7689, not a numeric type (damaged)"),
+            std::string::npos) << msg;
+}
+
 TEST(ImportMat, NestedMatrixLongerThanItsStructIsRefusedBeforeMatioListsTheVariables) {
   // A struct's last field declared 1080 bytes in a struct of 624; matio's Mat_GetDir, reading the
   // fields' headers, asked for 2 GB (the fuzz target found it).
