@@ -12,13 +12,13 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
-#include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using stend::testing::read_number_rows;
 using stend::testing::run_command;
 using stend::testing::run_stend;
 using stend::testing::shell_quote;
@@ -27,20 +27,6 @@ using stend::testing::TempDir;
 namespace {
 
 const std::string src = STEND_SOURCE_DIR;
-
-// Non-comment lines as whitespace-separated numbers.
-std::vector<std::vector<double>> read_table(const fs::path& path) {
-  std::ifstream in(path);
-  std::vector<std::vector<double>> rows;
-  for (std::string line; std::getline(in, line);) {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream ss(line);
-    std::vector<double> row;
-    for (double v; ss >> v;) row.push_back(v);
-    if (!row.empty()) rows.push_back(row);
-  }
-  return rows;
-}
 
 struct Outcome {
   int code;
@@ -77,7 +63,7 @@ TEST(DeviationsCli, Stable32PhaseDatEveryKindAsStable32Computes) {
   for (const char* kind : {"adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "totdev"}) {
     const fs::path ref = stend::testing::shared_data(std::string("stable32/phase_dat_") + kind + "_octave.txt");
     STEND_SKIP_IF_ABSENT(ref);
-    const auto rows = read_table(ref);  // AF Tau # Alpha Min Sigma Max
+    const auto rows = read_number_rows(ref);  // AF Tau # Alpha Min Sigma Max
     ASSERT_FALSE(rows.empty()) << kind;
     for (const auto& row : rows) {
       SCOPED_TRACE(std::string(kind) + " AF " + std::to_string(row[0]));
@@ -101,7 +87,7 @@ TEST(DeviationsCli, FrequencyValuesInACsvColumnGiveThePhaseDataResults) {
   STEND_SKIP_IF_ABSENT(phase);
   const TempDir dir("deviations-cli");
   // y_i = (x_{i+1} − x_i) / τ0 with τ0 = 0.5 s, in the second column of a CSV with a header comment.
-  const auto x = read_table(phase);
+  const auto x = read_number_rows(phase);
   std::string csv = "% index, fractional frequency\n";
   for (std::size_t i = 0; i + 1 < x.size(); ++i) {
     std::ostringstream line;

@@ -54,4 +54,17 @@ void write_text(const fs::path& file, const std::string& text) {
   out << text;
 }
 
+std::vector<std::vector<double>> read_number_rows(const fs::path& file) {
+  std::ifstream in(file);
+  std::vector<std::vector<double>> rows;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream words(line);
+    std::vector<double> row;
+    for (double v; words >> v;) row.push_back(v);
+    if (!row.empty()) rows.push_back(row);
+  }
+  return rows;
+}
+
 }  // namespace stend::testing

@@ -2,15 +2,14 @@
 // data PHASE.DAT (../shared/data/stable32), against analytic truth on white noise, and for
 // invariants (phase and rate input agree; the value does not depend on how the input is chunked).
 #include <stend/allan/deviations.hpp>
+#include <stend/testing/files.hpp>
 #include <stend/testing/paths.hpp>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <random>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -20,21 +19,7 @@ using stend::allan::DeviationKind;
 using stend::allan::DeviationOptions;
 using stend::allan::DeviationPoint;
 using stend::allan::DeviationStream;
-
-// Non-comment lines of a file as whitespace-separated numbers.
-std::vector<std::vector<double>> read_table(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::vector<std::vector<double>> rows;
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream ss(line);
-    std::vector<double> row;
-    for (double v; ss >> v;) row.push_back(v);
-    if (!row.empty()) rows.push_back(row);
-  }
-  return rows;
-}
+using stend::testing::read_number_rows;
 
 struct Stable32Case {
   DeviationKind kind;
@@ -49,7 +34,7 @@ TEST_P(Stable32, PhaseDatMatchesValueBoundsAndNoiseType) {
   STEND_SKIP_IF_ABSENT(phase_file);
   STEND_SKIP_IF_ABSENT(ref_file);
   std::vector<double> x;
-  for (const auto& row : read_table(phase_file)) x.push_back(row[0]);
+  for (const auto& row : read_number_rows(phase_file)) x.push_back(row[0]);
   ASSERT_EQ(x.size(), 1001u);
 
   DeviationStream stream(DeviationOptions{.factors = {}, .max_m = 256});
@@ -57,7 +42,7 @@ TEST_P(Stable32, PhaseDatMatchesValueBoundsAndNoiseType) {
   std::map<std::uint64_t, DeviationPoint> got;
   for (const auto& p : stream.result(GetParam().kind)) got[p.m] = p;
 
-  const auto ref = read_table(ref_file);  // AF Tau # Alpha Min Sigma Max
+  const auto ref = read_number_rows(ref_file);  // AF Tau # Alpha Min Sigma Max
   ASSERT_FALSE(ref.empty());
   for (const auto& r : ref) {
     const auto m = static_cast<std::uint64_t>(r[0]);
@@ -89,12 +74,12 @@ TEST(Stable32AllTau, OadevAtEveryFactor) {
   STEND_SKIP_IF_ABSENT(phase_file);
   STEND_SKIP_IF_ABSENT(ref_file);
   std::vector<double> x;
-  for (const auto& row : read_table(phase_file)) x.push_back(row[0]);
+  for (const auto& row : read_number_rows(phase_file)) x.push_back(row[0]);
   DeviationStream stream(DeviationOptions{.factors = stend::allan::all_factors(500), .max_m = 500});
   stream.add_phase(x.data(), x.size());
   std::map<std::uint64_t, double> got;
   for (const auto& p : stream.result(DeviationKind::kOadev)) got[p.m] = p.dev;
-  const auto ref = read_table(ref_file);
+  const auto ref = read_number_rows(ref_file);
   ASSERT_GT(ref.size(), 100u);
   for (const auto& r : ref) {
     const auto m = static_cast<std::uint64_t>(r[0]);

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace stend::testing {
 
@@ -30,5 +31,10 @@ std::string read_text(const std::filesystem::path& file);
 
 // Writes `text` as the whole file (created or truncated), byte for byte.
 void write_text(const std::filesystem::path& file, const std::string& text);
+
+// The file's lines as rows of whitespace-separated numbers, read up to the first word that is not
+// one (Stable32's result tables, PHASE.DAT); empty lines, lines starting with '#' and lines without
+// a leading number are skipped. Empty when the file cannot be read.
+std::vector<std::vector<double>> read_number_rows(const std::filesystem::path& file);
 
 }  // namespace stend::testing
