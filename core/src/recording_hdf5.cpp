@@ -3,6 +3,7 @@
 
 #include "hdf5_global_heap.hpp"
 #include "hdf5_metadata.hpp"
+#include "stend/hdf5.hpp"
 
 #include <hdf5.h>
 
@@ -38,11 +39,6 @@ constexpr const char* kSiNames[kChannels] = {"ax_mps2",  "ay_mps2",  "az_mps2", 
                                              "gy_radps", "gz_radps", "temp_c"};
 constexpr const char* kSiUnits[kChannels] = {"m/s^2", "m/s^2", "m/s^2", "rad/s",
                                              "rad/s", "rad/s", "degC"};
-
-void silence_hdf5_errors() {
-  static std::once_flag once;
-  std::call_once(once, [] { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); });
-}
 
 // The HDF5 library serializes calls itself when built thread-safe; otherwise Stend does.
 std::mutex& hdf5_mutex() {
@@ -422,7 +418,7 @@ struct Hdf5RunWriter::Impl {
 };
 
 void Hdf5RunWriter::Impl::create(const ImuSample* first, std::size_t n) {
-  silence_hdf5_errors();
+  silence_hdf5_error_printing();
   codec = choose_codecs(header.info, first, n);
   Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
   H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_LATEST, H5F_LIBVER_LATEST);  // required by SWMR
@@ -898,7 +894,7 @@ std::string read_bytes(hid_t ds, const fs::path& file, const char* name) {
 namespace {
 
 void read_hdf5_run(const fs::path& path, TruthLoading truth, Hdf5Run& run) {
-  silence_hdf5_errors();
+  silence_hdf5_error_printing();
   Hdf5Lock lock;
   // SWMR read opens a file whose writer is still running or was killed (its status flags still
   // say "open for SWMR writing"); a finished file opens the same way.
@@ -1076,3 +1072,10 @@ Hdf5Run open_hdf5_run(const fs::path& path, TruthLoading truth) {
 }
 
 }  // namespace stend::detail
+
+namespace stend {
+void silence_hdf5_error_printing() {
+  static std::once_flag once;
+  std::call_once(once, [] { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); });
+}
+}  // namespace stend

@@ -1,6 +1,7 @@
 // MATLAB .mat files: import (v5 and v7.3, through matio, with the structure of v5 files checked
 // first) and export. Declared in stend/io/importers.hpp.
 #include <stend/io/importers.hpp>
+#include <stend/hdf5.hpp>
 #include <stend/io/timestamps.hpp>
 #include <stend/yaml_util.hpp>
 
@@ -445,7 +446,14 @@ Mat5Layout check_mat5_elements(const fs::path& file) {
   };
   const std::uint32_t version = swap ? static_cast<std::uint8_t>(header[124]) << 8 | static_cast<std::uint8_t>(header[125])
                                      : static_cast<std::uint8_t>(header[125]) << 8 | static_cast<std::uint8_t>(header[124]);
-  if (version != 0x0100) return layout;
+  if (version == 0x0200) {  // MAT 7.3: an HDF5 file after the 512-byte header block
+    static const std::string kHdf5("\x89HDF\r\n\x1a\n", 8);
+    std::string signature(8, '\0');
+    if (!in.seekg(512) || !in.read(signature.data(), 8) || signature != kHdf5)
+      throw ImportError(file, ByteOffset{512}, "its header says MAT 7.3 (HDF5), but no HDF5 file signature follows "
+                                               "the header block (damaged or truncated .mat)");
+    return layout;
+  }
   constexpr std::uint32_t kMiMatrix = 14, kMiCompressed = 15;
   const std::uint64_t size = fs::file_size(file);
   struct Element {
@@ -620,6 +628,7 @@ class MatSource {
  public:
   MatSource(const fs::path& file, const std::string& struct_name) : file_(file) {
     layout_ = check_mat5_elements(file);
+    silence_hdf5_error_printing();  // a MAT 7.3 file is HDF5: its errors are this importer's to report
     mat_.reset(Mat_Open(file.c_str(), MAT_ACC_RDONLY));
     if (!mat_) throw ImportError(file, 0, "matio cannot open it as a MATLAB file (missing, or not a .mat)");
     std::size_t n = 0;

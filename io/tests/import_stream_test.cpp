@@ -642,6 +642,33 @@ TEST(ImportStream, LongMatFilesInBoundedMemoryWithTheSamplesOfAnInMemoryImport) 
   }
 }
 
+// A damaged MAT 7.3 file (HDF5 read by libhdf5 through matio) is an import error naming the file,
+// with nothing of libhdf5's own error stack on stderr ("HDF5-DIAG: Error detected …", which libhdf5
+// prints by default): its header without the HDF5 signature after it, or the file cut short.
+TEST(ImportStream, DamagedMat73FileIsAnErrorWithoutLibhdf5sOutput) {
+  TempDir tmp("import-stream-mat73");
+  const fs::path good = tmp / "good.mat";
+  ASSERT_NO_FATAL_FAILURE(write_mat(good, 300, MAT_FT_MAT73, false));
+  const std::string bytes = stend::testing::read_text(good);
+  std::string no_signature = bytes;
+  no_signature[513] = 'X';  // "\x89HDF" at byte 512
+  stend::testing::write_text(tmp / "no_signature.mat", no_signature);
+  stend::testing::write_text(tmp / "cut.mat", bytes.substr(0, bytes.size() * 6 / 10));
+  for (const char* name : {"no_signature.mat", "cut.mat"}) {
+    SCOPED_TRACE(name);
+    std::string msg;
+    ::testing::internal::CaptureStderr();
+    try {
+      import_mat(tmp / name);
+    } catch (const std::exception& e) {
+      msg = e.what();
+    }
+    const std::string err = ::testing::internal::GetCapturedStderr();
+    EXPECT_NE(msg.find(name), std::string::npos) << msg;
+    EXPECT_EQ(err.find("HDF5"), std::string::npos) << err;
+  }
+}
+
 }  // namespace
 
 // The element walk that refuses damaged .mat files before matio reads them (io/src/mat.cpp) checks
