@@ -58,6 +58,9 @@ struct Superblock {
   std::uint64_t extension = kUndefinedAddress;    // the superblock extension's object header
   std::uint64_t end_of_file = kUndefinedAddress;  // end-of-file address (of what was allocated)
   std::uint64_t root_header = kUndefinedAddress;  // the root group's object header
+  // File consistency flags (byte 11): a writer has the file open, or was killed with it open
+  // (bit 0: write access, bit 2: SWMR writing); its metadata may be read mid-update.
+  bool open_for_writing = false;
 };
 
 // An address of `size` bytes at p (all bits set: undefined).
@@ -89,6 +92,7 @@ inline std::optional<Superblock> find_superblock(FileBytes& f) {
       s.extension = address(v->data() + o, o);
       s.end_of_file = address(v->data() + 2 * o, o);
       s.root_header = address(v->data() + 3 * o, o);
+      s.open_for_writing = ((*b)[11] & 0x05) != 0;
     }
     return s;
   }

@@ -30,7 +30,7 @@ using hdf5::little_endian;
 using Bytes = std::vector<unsigned char>;
 
 constexpr std::uint64_t kMaxChunks = 1u << 12;  // chunks of one object header at most (a damaged one may loop)
-constexpr int kChecksumAttempts = 3;            // reads of a chunk before a checksum mismatch counts
+constexpr int kChecksumAttempts = 3;            // reads of a chunk before a mismatch counts (file open for writing)
 
 bool starts_with(const Bytes& b, std::string_view signature) {
   return b.size() >= signature.size() && std::memcmp(b.data(), signature.data(), signature.size()) == 0;
@@ -49,8 +49,8 @@ struct Hdf5HeaderCheck::Impl {
   }
 
   // A header chunk of `bytes` at `address`, read whole and matching its checksum; else why not.
-  // A file still being written (SWMR) may be read while a header is rewritten: read again, as
-  // libhdf5 does, before calling it damaged.
+  // A file still being written (SWMR; its superblock says so) may be read while a header is
+  // rewritten: read again, as libhdf5 does, before calling it damaged. A closed file cannot change.
   std::optional<Bytes> chunk(std::uint64_t address, std::uint64_t bytes, const std::string& what, std::string& why) {
     const std::uint64_t base = superblock->base, eof = superblock->end_of_file;
     const bool past_allocation = eof != kUndefinedAddress && (address > eof || bytes > eof - address);
@@ -60,8 +60,9 @@ struct Hdf5HeaderCheck::Impl {
                         base + address, f.size());
       return std::nullopt;
     }
+    const int attempts = superblock->open_for_writing ? kChecksumAttempts : 1;
     for (int attempt = 1; !hdf5::checksum_matches(*c); ++attempt) {
-      if (attempt == kChecksumAttempts) {
+      if (attempt == attempts) {
         why = fmt::format("{} ({} bytes at byte {}) does not match its checksum", what, bytes, base + address);
         return std::nullopt;
       }
