@@ -622,6 +622,24 @@ class Mat5Series final : public MatSeries {
   std::vector<char> raw_;
 };
 
+// Field `name` of element `index` of struct array `s` (nullptr when it has none). matio's
+// Mat_VarGetStructFieldByName indexes the field names and a field pointer per element and field
+// unchecked, and matio can return a damaged struct without them (SEGV, twice a fuzz target's find:
+// the segments struct, then a struct holding the variables): every field name and field pointer
+// must be there, else the struct is damage.
+matvar_t* struct_field(const fs::path& file, matvar_t* s, const char* name, std::size_t index) {
+  std::size_t count = 1;
+  for (int d = 0; d < s->rank; ++d) count *= s->dims[d];
+  const unsigned nfields = Mat_VarGetNumberOfFields(s);
+  char* const* names = Mat_VarGetStructFieldnames(s);
+  const bool whole = nfields == 0 || (names && s->data && s->nbytes / sizeof(matvar_t*) >= count * nfields &&
+                                      std::all_of(names, names + nfields, [](const char* n) { return n != nullptr; }));
+  if (!whole)
+    throw ImportError(file, 0, std::string(s->name ? s->name : "a struct") + ": a struct array of " +
+                                   std::to_string(count) + " whose field names or fields matio could not read (damaged)");
+  return index < count ? Mat_VarGetStructFieldByName(s, name, index) : nullptr;
+}
+
 // The variables of the file (top level or one struct's fields), by name: their headers, and
 // their values through a MatSeries as they are needed.
 class MatSource {
@@ -679,7 +697,7 @@ class MatSource {
   matvar_t* get(std::initializer_list<const char*> names) const {
     for (const char* n : names) {
       if (root_) {
-        matvar_t* f = Mat_VarGetStructFieldByName(root_.get(), n, 0);
+        matvar_t* f = struct_field(file_, root_.get(), n, 0);
         if (f) return f;
       } else {
         auto it = top_.find(n);
@@ -727,10 +745,10 @@ class MatSource {
       whole_.reset(Mat_VarRead(mat_.get(), "segments"));
       return whole_.get();
     }
-    if (!Mat_VarGetStructFieldByName(root_.get(), "segments", 0) || !root_->name) return nullptr;
+    if (!struct_field(file_, root_.get(), "segments", 0) || !root_->name) return nullptr;
     whole_.reset(Mat_VarRead(mat_.get(), root_->name));
     segments_in_root_ = true;
-    return whole_ ? Mat_VarGetStructFieldByName(whole_.get(), "segments", 0) : nullptr;
+    return whole_ ? struct_field(file_, whole_.get(), "segments", 0) : nullptr;
   }
   bool segments_in_root() const { return segments_in_root_; }
   const fs::path& file() const { return file_; }
@@ -892,17 +910,6 @@ std::size_t stream_mat_samples(const fs::path& file, MatData& m, const MatOption
   return n;
 }
 
-// Whether matio read struct array `s` of `count` elements whole: every field name, and a field
-// pointer per element and field (Mat_VarGetStructFieldByName indexes both unchecked; a damaged
-// struct left them null: SEGV, the fuzz target's find).
-bool struct_holds_its_fields(matvar_t* s, std::size_t count) {
-  const unsigned nfields = Mat_VarGetNumberOfFields(s);
-  if (nfields == 0) return true;
-  char* const* names = Mat_VarGetStructFieldnames(s);
-  if (!names || !s->data || s->nbytes / sizeof(matvar_t*) < count * nfields) return false;
-  return std::all_of(names, names + nfields, [](const char* n) { return n != nullptr; });
-}
-
 // Segments from a struct array 'segments' with fields kind, label, t_start_s, t_end_s [s].
 void add_mat_segments(MatSource& src, const fs::path& file, Recording& rec) {
   const matvar_t* segs = src.segments();
@@ -910,20 +917,17 @@ void add_mat_segments(MatSource& src, const fs::path& file, Recording& rec) {
   std::size_t count = 1;
   for (int d = 0; d < segs->rank; ++d) count *= segs->dims[d];
   auto* sv = const_cast<matvar_t*>(segs);
-  if (!struct_holds_its_fields(sv, count))
-    throw ImportError(file, 0, "segments: a struct array of " + std::to_string(count) +
-                                   " whose field names or fields matio could not read (damaged)");
   for (std::size_t i = 0; i < count; ++i) {
     std::vector<double> a, b;
     std::size_t r = 0, c = 0;
-    matvar_t* t0 = Mat_VarGetStructFieldByName(sv, "t_start_s", i);
-    matvar_t* t1 = Mat_VarGetStructFieldByName(sv, "t_end_s", i);
+    matvar_t* t0 = struct_field(file, sv, "t_start_s", i);
+    matvar_t* t1 = struct_field(file, sv, "t_end_s", i);
     if (!numeric(t0, a, r, c) || a.size() != 1 || !numeric(t1, b, r, c) || b.size() != 1) {
       throw ImportError(file, 0, "segments(" + std::to_string(i + 1) +
                                      ") needs scalar fields t_start_s and t_end_s");
     }
     auto field_text = [&](const char* name) {
-      const auto t = text(Mat_VarGetStructFieldByName(sv, name, i));
+      const auto t = text(struct_field(file, sv, name, i));
       if (!t) {
         throw ImportError(file, 0, "segments(" + std::to_string(i + 1) + ")." + name +
                                        " declares more characters than its data holds (damaged)");
