@@ -206,6 +206,9 @@ struct Mat5Layout {
   bool read_by_stend = false;  // a little-endian MAT 5 file: every numeric variable is read from here
 };
 
+// The most bytes deflate can inflate from one: zlib's largest expansion, 1032:1 (zlib's FAQ).
+constexpr std::uint64_t kMaxZlibExpansion = 1032;
+
 template <class U32>
 class MatMatrixWalk {
  public:
@@ -220,6 +223,11 @@ class MatMatrixWalk {
       char tag[8];
       if (!bytes_.read(tag, 8) || u32_(tag) != kMiMatrix) return;  // matio says what is wrong
       left = u32_(tag + 4);
+      // Every length inside is bounded by this one, which matio takes as given (4 GB calloc'ed for
+      // the dimensions of an 83-byte element declaring 1 GB: the fuzz target's find).
+      if (left > kMaxZlibExpansion * declared + 64)
+        fail(0, "declares " + std::to_string(left) + " bytes inflated from " + std::to_string(declared) +
+                    " compressed bytes (deflate inflates at most " + std::to_string(kMaxZlibExpansion) + " bytes from one)");
     }
     matrix(left, 0, {});
   }
@@ -271,10 +279,12 @@ class MatMatrixWalk {
     if (depth > kMaxDepth) fail(depth, "is nested deeper than " + std::to_string(kMaxDepth) + " levels");
     constexpr std::uint64_t kAny = ~std::uint64_t{0};
     std::string flags, dims, name;
-    if (!subelement(left, depth, "array flags", kAny, &flags)) return;
     // matio reads the flags as 8 bytes whatever their tag says and the dimensions' tag right after:
-    // any other length would have the walk and matio read different bytes as the name's length.
-    if (flags.size() != 8) fail(depth, "declares " + std::to_string(flags.size()) + " bytes of array flags (8 expected)");
+    // any other length would have the walk and matio read different bytes as the dimensions and the
+    // name (checked from the tag too: a longer one may not be there to be read).
+    constexpr const char* kFlags = "array flags (8 expected)";
+    if (!subelement(left, depth, kFlags, 8, &flags)) return;
+    if (flags.size() != 8) fail(depth, "declares " + std::to_string(flags.size()) + " bytes of " + kFlags);
     if (!subelement(left, depth, "dimensions (at most 256 dimensions of 4 bytes)", kMaxDimensionBytes, &dims)) return;
     if (!subelement(left, depth, "name", kAny, &name)) return;
     const std::uint32_t cls = u32_(flags.data()) & 0xff;
@@ -679,14 +689,13 @@ class MatSource {
     }
   }
   // Refuses a variable whose header declares more data than the file can hold (compressed
-  // variables: zlib's largest expansion, about 1032:1) before matio allocates it.
+  // variables: zlib's largest expansion) before matio allocates it.
   void check_declared_size(const std::string& name) const {
     MatVar info(Mat_VarReadInfo(mat_.get(), name.c_str()));
     if (!info) return;  // unreadable: Mat_VarRead says so, or skips it
     const double file_bytes = static_cast<double>(fs::file_size(file_));
     const double declared = static_cast<double>(Mat_VarGetSize(info.get()));
-    constexpr double kMaxExpansion = 1032.0;
-    if (declared > kMaxExpansion * file_bytes + 4096.0) {
+    if (declared > static_cast<double>(kMaxZlibExpansion) * file_bytes + 4096.0) {
       throw ImportError(file_, 0, "variable '" + name + "' declares " + std::to_string(Mat_VarGetSize(info.get())) +
                                       " bytes of data, more than a file of " + std::to_string(fs::file_size(file_)) +
                                       " bytes can hold (damaged header?)");
