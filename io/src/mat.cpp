@@ -233,7 +233,7 @@ class MatMatrixWalk {
   }
 
  private:
-  static constexpr std::uint32_t kMiMatrix = 14;
+  static constexpr std::uint32_t kMiInt8 = 1, kMiInt32 = 5, kMiUint32 = 6, kMiMatrix = 14;
   static constexpr std::uint64_t kMaxDimensionBytes = 256 * 4;
   static constexpr int kMaxDepth = 32;
   enum : std::uint32_t { kCell = 1, kStruct = 2, kObject = 3 };
@@ -244,15 +244,23 @@ class MatMatrixWalk {
     throw ImportError(file_, ByteOffset{pos_}, which + " " + what + " (damaged .mat)");
   }
 
-  // One subelement inside the `left` bytes of its matrix: its tag, then its data (into `keep`, or
-  // skipped); `max` bounds its length. False when the element ends first (matio reports it).
-  bool subelement(std::uint64_t& left, int depth, const char* what, std::uint64_t max, std::string* keep = nullptr) {
+  // One subelement of MAT data type `type` inside the `left` bytes of its matrix: its tag, then its
+  // data (into `keep`, or skipped); `max` bounds its length. False when the element ends first
+  // (matio reports it). A tag of another type, or a small element declaring more than the 4 bytes
+  // its tag holds, is damage: matio does not read such a tag as the walk would, and took the
+  // bytes after it for other lengths (4 GB for a name: the fuzz target's find).
+  bool subelement(std::uint64_t& left, int depth, const char* what, std::uint32_t type, std::uint64_t max,
+                  std::string* keep = nullptr) {
     char tag[8];
     if (left < 8 || !bytes_.read(tag, 8)) return false;
     left -= 8;
-    const std::uint32_t type = u32_(tag);
-    if ((type >> 16) != 0) {  // a small data element: its length in the upper half, its data in the tag
-      if (keep) keep->assign(tag + 4, std::min<std::uint32_t>(type >> 16, 4));
+    const std::uint32_t word = u32_(tag), small = word >> 16;  // a small element: its length in the upper half
+    if ((word & 0xffff) != type)
+      fail(depth, "declares " + std::string(what) + " of MAT data type " + std::to_string(small ? word & 0xffff : word) +
+                      " (" + std::to_string(type) + " expected)");
+    if (small > 4) fail(depth, "declares " + std::string(what) + " of " + std::to_string(small) + " bytes in a 4-byte small element");
+    if (small != 0) {  // its data in the tag
+      if (keep) keep->assign(tag + 4, small);
       return true;
     }
     const std::uint64_t n = u32_(tag + 4), padded = n + (8 - n % 8) % 8;
@@ -283,17 +291,20 @@ class MatMatrixWalk {
     // any other length would have the walk and matio read different bytes as the dimensions and the
     // name (checked from the tag too: a longer one may not be there to be read).
     constexpr const char* kFlags = "array flags (8 expected)";
-    if (!subelement(left, depth, kFlags, 8, &flags)) return;
+    if (!subelement(left, depth, kFlags, kMiUint32, 8, &flags)) return;
     if (flags.size() != 8) fail(depth, "declares " + std::to_string(flags.size()) + " bytes of " + kFlags);
-    if (!subelement(left, depth, "dimensions (at most 256 dimensions of 4 bytes)", kMaxDimensionBytes, &dims)) return;
-    if (!subelement(left, depth, "name", kAny, &name)) return;
+    if (!subelement(left, depth, "dimensions (at most 256 dimensions of 4 bytes)", kMiInt32, kMaxDimensionBytes, &dims))
+      return;
+    if (dims.size() < 8 || dims.size() % 4 != 0)
+      fail(depth, "declares " + std::to_string(dims.size()) + " bytes of dimensions (2 or more of 4 bytes expected)");
+    if (!subelement(left, depth, "name", kMiInt8, kAny, &name)) return;
     const std::uint32_t cls = u32_(flags.data()) & 0xff;
-    if (cls == kObject && !subelement(left, depth, "class name", kAny)) return;
+    if (cls == kObject && !subelement(left, depth, "class name", kMiInt8, kAny)) return;
     std::vector<std::string> fields;
     if (cls == kStruct || cls == kObject) {
       std::string length, names;
-      if (!subelement(left, depth, "field name length", kAny, &length) ||
-          !subelement(left, depth, "field names", kAny, &names))
+      if (!subelement(left, depth, "field name length", kMiInt32, 4, &length) ||
+          !subelement(left, depth, "field names", kMiInt8, kAny, &names))
         return;
       // A 1×1 top-level struct's field names, NUL-padded to the stated length, in order.
       const std::uint32_t each = length.size() == 4 ? u32_(length.data()) : 0;
@@ -360,6 +371,7 @@ class MatMatrixWalk {
       const std::uint32_t type = u32_(tag);
       const bool small = (type >> 16) != 0;  // its length in the upper half, its data in the tag
       const std::uint64_t n = small ? type >> 16 : u32_(tag + 4), padded = small ? 0 : n + (8 - n % 8) % 8;
+      if (n > 4 && small) fail(depth, "declares " + std::to_string(n) + " bytes of data in a 4-byte small element");
       if (!small && n > left)  // (the padding after the last one may be missing)
         fail(depth, "declares " + std::to_string(n) + " bytes of data where " + std::to_string(left) + " are left");
       if (first && !key.empty())

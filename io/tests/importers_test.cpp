@@ -57,6 +57,18 @@ std::string error_of(const std::function<void()>& fn) {
   return "(no ImportError)";
 }
 
+// The fuzz seed seed_ok.mat (fuzz/corpus/import_mat/: uncompressed MAT 5 with t, fs, acc, acc_counts,
+// acc_lsb at byte 816, gyro, …, and a 2 x 1 segments struct at byte 1584) with one damage: the
+// little-endian 32-bit words at the given byte offsets replaced. Each case damages one thing, so
+// the check it is about is the one that refuses it.
+fs::path damaged_mat_seed(const TempDir& dir, std::initializer_list<std::pair<std::size_t, std::uint32_t>> words) {
+  std::string bytes = stend::testing::read_text(stend::testing::source_path("fuzz/corpus/import_mat/seed_ok.mat"));
+  for (const auto& [at, value] : words)
+    for (std::size_t k = 0; k < 4; ++k) bytes.at(at + k) = static_cast<char>((value >> (8 * k)) & 0xff);
+  write_text(dir / "damaged.mat", bytes);
+  return dir / "damaged.mat";
+}
+
 Recording synthetic(std::size_t n, double rate, bool with_counts) {
   Recording r;
   r.header.info.output_rate_hz = rate;
@@ -502,12 +514,15 @@ TEST(ImportMat, ElementDeclaredBeyondTheEndIsRefusedBeforeMatioReadsIt) {
 TEST(ImportMat, DimensionsDeclaringGigabytesAreRefusedBeforeMatioListsTheVariables) {
   const fs::path mat = stend::testing::source_path("fuzz/regressions/import_mat/dimensions_declare_3GB.mat");
   const std::string msg = error_of([&] { import_mat(mat); });
-  // The walk now checks every subelement against its matrix: an earlier element of this input
-  // already declares dimensions running past its end.
-  EXPECT_NE(msg.find("byte 264: the matrix in this element declares 264 bytes of dimensions (at most 256 "
-                     "dimensions of 4 bytes) where 32 are left"),
+  // The walk checks every subelement against its matrix: an earlier element of this input already
+  // declares its dimensions of another MAT data type (and 264 bytes of them).
+  EXPECT_NE(msg.find("byte 128: the matrix in this element declares dimensions"), std::string::npos) << msg;
+  const TempDir seed_dir("importers");
+  const std::string too_long = error_of([&] { import_mat(damaged_mat_seed(seed_dir, {{844, 264}})); });
+  EXPECT_NE(too_long.find("byte 816: the matrix in this element declares 264 bytes of dimensions (at most 256 "
+                          "dimensions of 4 bytes) where 40 are left"),
             std::string::npos)
-      << msg;
+      << too_long;
   // Its element at byte 624, alone after the header, is the 3 GB of dimensions.
   std::string bytes = stend::testing::read_text(mat);
   const TempDir dir("importers");
@@ -526,9 +541,15 @@ TEST(ImportMat, CharArrayDeclaringMoreThanItsDataIsDamageNamed) {
   // A segment's label whose dimensions declare 2052 characters where matio's buffer holds 4: the
   // text was copied from past the buffer (ASan, the fuzz target's find). Every char array and
   // numeric field is read only as far as its data holds its dimensions.
+  // That input also has a label's data tag declaring 28494 bytes in a small (4-byte) element, which
+  // the element walk refuses first now; the dimensions alone (1 x 2052 for "z up") are refused here.
   const fs::path mat = stend::testing::source_path("fuzz/regressions/import_mat/segment_label_longer_than_its_data.mat");
   const std::string msg = error_of([&] { import_mat(mat); });
-  EXPECT_NE(msg.find("segments(1).label declares more characters than its data holds (damaged)"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("declares 28494 bytes of data in a 4-byte small element"), std::string::npos) << msg;
+  const TempDir dir("importers");
+  const std::string label = error_of([&] { import_mat(damaged_mat_seed(dir, {{1804, 2052}})); });
+  EXPECT_NE(label.find("segments(1).label declares more characters than its data holds (damaged)"), std::string::npos)
+      << label;
 }
 
 TEST(ImportMat, DataSubelementLongerThanItsMatrixIsRefusedBeforeMatioReadsIt) {
@@ -600,13 +621,16 @@ TEST(ImportMat, DamagedCompressedVariableIsRefusedNotHandedToMatio) {
 // variables were looked up in it unchecked (SEGV, the fuzz target's next find). Every struct field
 // goes through one checked lookup now.
 TEST(ImportMat, SegmentsStructWithoutItsFieldsIsDamageNamed) {
-  for (const char* name : {"segments_struct_fields_unread_segv.mat", "root_struct_fields_unread_segv.mat"}) {
-    SCOPED_TRACE(name);
-    const fs::path mat = stend::testing::source_path(std::string("fuzz/regressions/import_mat/") + name);
-    const std::string msg = error_of([&] { import_mat(mat); });
-    EXPECT_NE(msg.find("segments: a struct array of 2 whose field names or fields matio could not read (damaged)"),
-              std::string::npos) << msg;
-  }
+  const fs::path mat = stend::testing::source_path("fuzz/regressions/import_mat/segments_struct_fields_unread_segv.mat");
+  const std::string msg = error_of([&] { import_mat(mat); });
+  EXPECT_NE(msg.find("segments: a struct array of 2 whose field names or fields matio could not read (damaged)"),
+            std::string::npos) << msg;
+  // The second input's damage (a name of MAT data type 771) is refused by the element walk now,
+  // before matio reads the struct.
+  const fs::path root = stend::testing::source_path("fuzz/regressions/import_mat/root_struct_fields_unread_segv.mat");
+  const std::string root_msg = error_of([&] { import_mat(root); });
+  EXPECT_NE(root_msg.find("byte 526: the matrix in this element declares name of MAT data type 771 (1 expected)"),
+            std::string::npos) << root_msg;
 }
 
 // Array flags declaring 48 bytes: matio reads them as 8 whatever their tag says, so it took later
@@ -622,11 +646,16 @@ TEST(ImportMat, ArrayFlagsOfAnotherLengthThanMatioReadsAreDamage) {
 // A cell or struct declaring 2^28 elements in a few hundred bytes: matio's Mat_GetDir calloc'ed a
 // pointer for each, 2 GB (the fuzz target's find). Each member is a matrix of at least 8 bytes.
 TEST(ImportMat, CellOrStructDeclaringMoreMembersThanItsBytesHoldIsDamage) {
+  // The fuzz target's input has an earlier damage (dimensions of MAT data type 15621) refused first
+  // now; the segments struct's 2 x 1 made 268435464 x 1 (x 4 fields) alone is refused here.
   const fs::path mat = stend::testing::source_path("fuzz/regressions/import_mat/cell_declaring_2e28_elements.mat");
   const std::string msg = error_of([&] { import_mat(mat); });
-  EXPECT_NE(msg.find("byte 1584: the matrix in this element declares 268435464 cell elements or struct fields where 520 "
-                     "bytes hold at most 65"),
-            std::string::npos) << msg;
+  EXPECT_NE(msg.find("byte 888: the matrix in this element declares dimensions"), std::string::npos) << msg;
+  const TempDir dir("importers");
+  const std::string members = error_of([&] { import_mat(damaged_mat_seed(dir, {{1616, 268435464}})); });
+  EXPECT_NE(members.find("byte 1584: the matrix in this element declares 1073741856 cell elements or struct fields "
+                         "where 520 bytes hold at most 65"),
+            std::string::npos) << members;
 }
 
 // A compressed element's inflated length, which bounds every length inside it, declared past what
@@ -653,15 +682,37 @@ TEST(ImportMat, CompressedElementDeclaringMoreThanItCanInflateToIsDamage) {
   }
 }
 
+// Dimensions whose tag was of MAT data type 512 (miINT32, 5, expected) before a name whose small
+// element declared 59395 bytes (a small element holds at most 4): matio read those tags otherwise
+// than the element walk and malloc'ed 3.9 GB in Mat_GetDir (the fuzz target's find). Every header
+// subelement must be of the type matio reads it as, and no small element may declare more than 4.
+TEST(ImportMat, HeaderSubelementOfAnotherTypeOrAnOversizeSmallElementIsDamage) {
+  const fs::path mat = stend::testing::source_path("fuzz/regressions/import_mat/dimensions_of_type_512_name_of_59395_bytes.mat");
+  const std::string msg = error_of([&] { import_mat(mat); });
+  EXPECT_NE(msg.find("byte 264: the matrix in this element declares dimensions (at most 256 dimensions of 4 bytes) of "
+                     "MAT data type 512 (5 expected)"),
+            std::string::npos) << msg;
+  const TempDir dir("importers");
+  const std::string small = error_of([&] { import_mat(damaged_mat_seed(dir, {{856, 0xe8030001u}})); });
+  EXPECT_NE(small.find("byte 816: the matrix in this element declares name of 59395 bytes in a 4-byte small element"),
+            std::string::npos) << small;
+}
+
 // A variable's data element of a type that is no numeric MAT type (here 7689) holding 0 bytes: its
 // size per value counted as 0, so "0 bytes for 1 value" matched and a value was read from an empty
 // buffer (the fuzz target's find: UBSan, memcpy from null). A numeric variable's data must be of a
 // numeric type.
 TEST(ImportMat, NumericVariableWhoseDataAreOfNoNumericTypeIsDamage) {
+  // The fuzz target's input also has a name of MAT data type 0, which the element walk refuses
+  // first now; acc_lsb's data tag alone made (7689, 0 bytes) is refused here.
   const fs::path mat = stend::testing::source_path("fuzz/regressions/import_mat/numeric_data_of_no_numeric_type.mat");
   const std::string msg = error_of([&] { import_mat(mat); });
-  EXPECT_NE(msg.find("'acc_lsb': its data element is of MAT data type 7689, not a numeric type (damaged)"),
+  EXPECT_NE(msg.find("byte 888: the matrix in this element declares name of MAT data type 0 (1 expected)"),
             std::string::npos) << msg;
+  const TempDir dir("importers");
+  const std::string type = error_of([&] { import_mat(damaged_mat_seed(dir, {{872, 7689}, {876, 0}})); });
+  EXPECT_NE(type.find("'acc_lsb': its data element is of MAT data type 7689, not a numeric type (damaged)"),
+            std::string::npos) << type;
 }
 
 TEST(ImportMat, NestedMatrixLongerThanItsStructIsRefusedBeforeMatioListsTheVariables) {
