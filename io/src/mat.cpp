@@ -236,7 +236,7 @@ class MatMatrixWalk {
   static constexpr std::uint32_t kMiInt8 = 1, kMiInt32 = 5, kMiUint32 = 6, kMiMatrix = 14;
   static constexpr std::uint64_t kMaxDimensionBytes = 256 * 4;
   static constexpr int kMaxDepth = 32;
-  enum : std::uint32_t { kCell = 1, kStruct = 2, kObject = 3 };
+  enum : std::uint32_t { kCell = 1, kStruct = 2, kObject = 3, kOpaque = 17 };
 
   [[noreturn]] void fail(int depth, const std::string& what) const {
     const std::string which =
@@ -293,6 +293,11 @@ class MatMatrixWalk {
     constexpr const char* kFlags = "array flags (8 expected)";
     if (!subelement(left, depth, kFlags, kMiUint32, 8, &flags)) return;
     if (flags.size() != 8) fail(depth, "declares " + std::to_string(flags.size()) + " bytes of " + kFlags);
+    if ((u32_(flags.data()) & 0xff) == kOpaque) {  // a MATLAB object (datetime, string, table, …): no dimensions
+      if (subelement(left, depth, "name", kMiInt8, kAny) && subelement(left, depth, "type system name", kMiInt8, kAny))
+        subelement(left, depth, "class name", kMiInt8, kAny);
+      return;  // its data (a matrix only MATLAB reads) is not Stend's, nor read by matio to list it
+    }
     if (!subelement(left, depth, "dimensions (at most 256 dimensions of 4 bytes)", kMiInt32, kMaxDimensionBytes, &dims))
       return;
     if (dims.size() < 8 || dims.size() % 4 != 0)

@@ -698,6 +698,25 @@ TEST(ImportMat, HeaderSubelementOfAnotherTypeOrAnOversizeSmallElementIsDamage) {
             std::string::npos) << small;
 }
 
+// A MATLAB object variable (class 17, "opaque": datetime, string, table, …) has no dimensions: its
+// array flags are followed by its name, its type system ("MCOS") and its class name, then data only
+// MATLAB reads. The element walk's strict header types must not refuse a file for holding one (the
+// element below follows that layout; no MATLAB-written file was at hand).
+TEST(ImportMat, FileWithAMatlabObjectVariableBesideTheSeriesImports) {
+  const std::string opaque_hex =
+      "0e0000008000000006000000080000001100000000000000010004007768656e010004004d434f5301000000080000006461746574696d650e"
+      "0000004800000006000000080000000d000000000000000500000008000000060000000100000001000000000000000d000000180000000000"
+      "00dd0200000001000000010000000100000001000000";
+  std::string bytes = stend::testing::read_text(stend::testing::source_path("fuzz/corpus/import_mat/seed_ok.mat"));
+  for (std::size_t i = 0; i + 1 < opaque_hex.size(); i += 2)
+    bytes += static_cast<char>(std::stoi(opaque_hex.substr(i, 2), nullptr, 16));
+  const TempDir dir("importers");
+  write_text(dir / "with_datetime.mat", bytes);
+  const Recording rec = import_mat(dir / "with_datetime.mat");
+  EXPECT_EQ(rec.samples.size(), 10U);
+  EXPECT_EQ(rec.segments.size(), 2U);
+}
+
 // A variable's data element of a type that is no numeric MAT type (here 7689) holding 0 bytes: its
 // size per value counted as 0, so "0 bytes for 1 value" matched and a value was read from an empty
 // buffer (the fuzz target's find: UBSan, memcpy from null). A numeric variable's data must be of a
