@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <memory>
@@ -939,7 +940,15 @@ std::size_t stream_mat_samples(const fs::path& file, MatData& m, const MatOption
 // Segments from a struct array 'segments' with fields kind, label, t_start_s, t_end_s [s].
 void add_mat_segments(MatSource& src, const fs::path& file, Recording& rec) {
   const matvar_t* segs = src.segments();
-  if (!segs || segs->class_type != MAT_C_STRUCT) return;
+  if (!segs) return;
+  if (segs->class_type != MAT_C_STRUCT) {
+    static constexpr const char* kClasses[] = {"empty",  "cell",   "struct", "object", "char",     "sparse",
+                                               "double", "single", "int8",   "uint8",  "int16",    "uint16",
+                                               "int32",  "uint32", "int64",  "uint64", "function", "object (opaque)"};
+    const auto cls = static_cast<std::size_t>(segs->class_type);
+    throw ImportError(file, 0, std::string("'segments' is a ") + (cls < std::size(kClasses) ? kClasses[cls] : "matrix") +
+                                   " array; expected a struct array with fields kind, label, t_start_s, t_end_s [s]");
+  }
   std::size_t count = 1;
   for (int d = 0; d < segs->rank; ++d) count *= segs->dims[d];
   auto* sv = const_cast<matvar_t*>(segs);
@@ -953,7 +962,12 @@ void add_mat_segments(MatSource& src, const fs::path& file, Recording& rec) {
                                      ") needs scalar fields t_start_s and t_end_s");
     }
     auto field_text = [&](const char* name) {
-      const auto t = text(struct_field(file, sv, name, i));
+      const matvar_t* f = struct_field(file, sv, name, i);
+      std::size_t elements = f ? 1 : 0;
+      for (int d = 0; f && d < f->rank; ++d) elements *= f->dims[d];
+      if (f && f->class_type != MAT_C_CHAR && elements > 0)  // (MATLAB's [] for a field never set is fine)
+        throw ImportError(file, 0, "segments(" + std::to_string(i + 1) + ")." + name + " is not text (a char array)");
+      const auto t = text(f);
       if (!t) {
         throw ImportError(file, 0, "segments(" + std::to_string(i + 1) + ")." + name +
                                        " declares more characters than its data holds (damaged)");

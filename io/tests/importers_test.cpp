@@ -717,6 +717,18 @@ TEST(ImportMat, FileWithAMatlabObjectVariableBesideTheSeriesImports) {
   EXPECT_EQ(rec.segments.size(), 2U);
 }
 
+// A 'segments' variable that is no struct array (here the seed's made a char array) was ignored
+// without a word: the import had no segments. A segment's kind that is not text (made a double
+// array) was taken as no kind, a static position. Both are errors naming what they are.
+TEST(ImportMat, SegmentsThatAreNoStructArrayOrKindsThatAreNoTextAreAnError) {
+  const TempDir dir("importers");
+  const std::string msg = error_of([&] { import_mat(damaged_mat_seed(dir, {{1600, 4}})); });
+  EXPECT_NE(msg.find("'segments' is a char array; expected a struct array with fields kind, label, t_start_s, t_end_s"),
+            std::string::npos) << msg;
+  const std::string kind = error_of([&] { import_mat(damaged_mat_seed(dir, {{1712, 6}})); });
+  EXPECT_NE(kind.find("segments(1).kind is not text (a char array)"), std::string::npos) << kind;
+}
+
 // A variable's data element of a type that is no numeric MAT type (here 7689) holding 0 bytes: its
 // size per value counted as 0, so "0 bytes for 1 value" matched and a value was read from an empty
 // buffer (the fuzz target's find: UBSan, memcpy from null). A numeric variable's data must be of a
