@@ -309,11 +309,12 @@ class MatMatrixWalk {
     std::vector<std::string> fields;
     if (cls == kStruct || cls == kObject) {
       std::string length, names;
-      if (!subelement(left, depth, "field name length", kMiInt32, 4, &length) ||
-          !subelement(left, depth, "field names", kMiInt8, kAny, &names))
-        return;
+      constexpr const char* kLength = "field name length (4 expected)";  // matio reads 4 bytes whatever the tag says
+      if (!subelement(left, depth, kLength, kMiInt32, 4, &length)) return;
+      if (length.size() != 4) fail(depth, "declares " + std::to_string(length.size()) + " bytes of " + kLength);
+      if (!subelement(left, depth, "field names", kMiInt8, kAny, &names)) return;
       // A 1×1 top-level struct's field names, NUL-padded to the stated length, in order.
-      const std::uint32_t each = length.size() == 4 ? u32_(length.data()) : 0;
+      const std::uint32_t each = u32_(length.data());
       check_members(dims, each > 0 ? names.size() / each : 0, left, depth);
       if (depth == 0 && each > 0 && one_element(dims))
         for (std::size_t at = 0; at + each <= names.size(); at += each)

@@ -696,6 +696,13 @@ TEST(ImportMat, HeaderSubelementOfAnotherTypeOrAnOversizeSmallElementIsDamage) {
   const std::string small = error_of([&] { import_mat(damaged_mat_seed(dir, {{856, 0xe8030001u}})); });
   EXPECT_NE(small.find("byte 816: the matrix in this element declares name of 59395 bytes in a 4-byte small element"),
             std::string::npos) << small;
+  // A struct's field name length in a 1-byte small element: matio reads 4 bytes whatever the tag
+  // says (10, so 4 fields) where the walk had 1 byte and no fields to count, and calloc'ed 2^53
+  // bytes of field pointers for dimensions of 2^32 x 2^32 (the fuzz target's next find).
+  const fs::path length1 = stend::testing::source_path("fuzz/regressions/import_mat/field_name_length_of_1_byte.mat");
+  const std::string msg1 = error_of([&] { import_mat(length1); });
+  EXPECT_NE(msg1.find("byte 1584: the matrix in this element declares 1 bytes of field name length (4 expected)"),
+            std::string::npos) << msg1;
 }
 
 // A MATLAB object variable (class 17, "opaque": datetime, string, table, …) has no dimensions: its
