@@ -207,6 +207,17 @@ struct Mat5Layout {
   bool read_by_stend = false;  // a little-endian MAT 5 file: every numeric variable is read from here
 };
 
+// Bytes of one value of MAT data type `type`, 0 for a type that is not a number.
+std::size_t mat_value_bytes(std::uint32_t type) {
+  switch (type) {
+    case 1: case 2: return 1;     // miINT8, miUINT8
+    case 3: case 4: return 2;     // miINT16, miUINT16
+    case 5: case 6: case 7: return 4;  // miINT32, miUINT32, miSINGLE
+    case 9: case 12: case 13: return 8;  // miDOUBLE, miINT64, miUINT64
+    default: return 0;
+  }
+}
+
 // The most bytes deflate can inflate from one: zlib's largest expansion, 1032:1 (zlib's FAQ).
 constexpr std::uint64_t kMaxZlibExpansion = 1032;
 
@@ -237,7 +248,7 @@ class MatMatrixWalk {
   static constexpr std::uint32_t kMiInt8 = 1, kMiInt32 = 5, kMiUint32 = 6, kMiMatrix = 14;
   static constexpr std::uint64_t kMaxDimensionBytes = 256 * 4;
   static constexpr int kMaxDepth = 32;
-  enum : std::uint32_t { kCell = 1, kStruct = 2, kObject = 3, kOpaque = 17 };
+  enum : std::uint32_t { kCell = 1, kStruct = 2, kObject = 3, kFunction = 16, kOpaque = 17 };
 
   [[noreturn]] void fail(int depth, const std::string& what) const {
     const std::string which =
@@ -321,12 +332,14 @@ class MatMatrixWalk {
           fields.push_back(names.substr(at, names.find('\0', at) == std::string::npos
                                                 ? each
                                                 : std::min<std::size_t>(each, names.find('\0', at) - at)));
-    } else if (cls == kCell) {
+    } else if (cls == kCell || cls == kFunction) {  // (matio reads a function handle's parts as cell elements)
       check_members(dims, 1, left, depth);
     } else {
       const bool noted = layout_ && cls >= kFirstNumeric && cls <= kLastNumeric && (depth == 0 || !field.empty());
       const bool complex = (u32_(flags.data()) & kComplexFlag) != 0;
-      data(left, depth, cls == kSparse || complex, noted ? (depth == 0 ? name : field) : std::string());
+      const bool numeric = cls >= kFirstNumeric && cls <= kLastNumeric;
+      data(left, depth, cls == kSparse || complex, numeric ? elements(dims) : -1.0L,
+           noted ? (depth == 0 ? name : field) : std::string());
       return;
     }
     std::size_t index = 0;
@@ -349,12 +362,20 @@ class MatMatrixWalk {
   // them (2 GB for a cell declaring 2^28 elements: the fuzz target's find); each is a matrix of at
   // least its 8-byte tag, so that many must fit in the `left` bytes.
   void check_members(const std::string& dims, std::uint64_t per_element, std::uint64_t left, int depth) const {
-    long double count = per_element;
-    for (std::size_t at = 0; at + 4 <= dims.size(); at += 4) count *= u32_(dims.data() + at);
+    const long double count = per_element * elements(dims);
     if (count * 8 > static_cast<long double>(left))
-      fail(depth, "declares " + (count < 1e18L ? std::to_string(static_cast<std::uint64_t>(count)) : std::string("over 10^18")) +
-                      " cell elements or struct fields where " +
+      fail(depth, "declares " + count_text(count) + " cell elements or struct fields where " +
                       std::to_string(left) + " bytes hold at most " + std::to_string(left / 8));
+  }
+
+  // The number of elements dimensions (int32 each) declare; and such a count as text.
+  long double elements(const std::string& dims) const {
+    long double count = 1;
+    for (std::size_t at = 0; at + 4 <= dims.size(); at += 4) count *= u32_(dims.data() + at);
+    return count;
+  }
+  static std::string count_text(long double count) {
+    return count < 1e18L ? std::to_string(static_cast<std::uint64_t>(count)) : std::string("over 10^18");
   }
 
   // Dimensions (int32 each) of exactly one element.
@@ -369,8 +390,10 @@ class MatMatrixWalk {
   // matio sizes some of them from their tags (a char array's UTF-8 data, the sparse parts), so each
   // must lie inside its matrix. `all`: walk past the first one to the others (sparse, complex);
   // a real matrix's one subelement is only checked, never read (it may be 10^7 compressed values).
+  // `values` (numeric classes; else negative): how many its dimensions declare, which matio allocates
+  // before reading them, so the real part must be of a numeric type and hold them all.
   // `key` (non-empty): note where the real part's values lie in the layout.
-  void data(std::uint64_t& left, int depth, bool all, const std::string& key) {
+  void data(std::uint64_t& left, int depth, bool all, long double values, const std::string& key) {
     for (bool first = true; left >= 8; first = false) {
       char tag[8];
       if (!bytes_.read(tag, 8)) return;
@@ -381,6 +404,13 @@ class MatMatrixWalk {
       if (n > 4 && small) fail(depth, "declares " + std::to_string(n) + " bytes of data in a 4-byte small element");
       if (!small && n > left)  // (the padding after the last one may be missing)
         fail(depth, "declares " + std::to_string(n) + " bytes of data where " + std::to_string(left) + " are left");
+      if (first && values > 0) {
+        const std::uint32_t value_type = small ? type & 0xffff : type;
+        const std::size_t each = mat_value_bytes(value_type);
+        if (each == 0) fail(depth, "declares its values of MAT data type " + std::to_string(value_type) + ", not a number");
+        if (values * each > static_cast<long double>(n))
+          fail(depth, "declares " + count_text(values) + " values where its data holds " + std::to_string(n / each));
+      }
       if (first && !key.empty())
         layout_->vars[key] = Mat5Data{where_.element, where_.element_bytes, where_.compressed, small ? type & 0xffff : type,
                                    bytes_.consumed() - (small ? 4 : 0), n};
@@ -593,21 +623,11 @@ class Mat5Series final : public MatSeries {
     const std::size_t streams = along_first ? cols : 1;
     for (std::size_t c = 0; c < streams; ++c) {
       cursors_.push_back(std::make_unique<MatElementBytes>(in_, d.element, d.element_bytes, d.compressed));
-      if (!cursors_.back()->read(nullptr, d.offset + c * rows * size_of(type_))) fail();
-    }
-  }
-  // Bytes of one value of MAT data type `type`, 0 for a type that is not a number.
-  static std::size_t size_of(std::uint32_t type) {
-    switch (type) {
-      case 1: case 2: return 1;     // miINT8, miUINT8
-      case 3: case 4: return 2;     // miINT16, miUINT16
-      case 5: case 6: case 7: return 4;  // miINT32, miUINT32, miSINGLE
-      case 9: case 12: case 13: return 8;  // miDOUBLE, miINT64, miUINT64
-      default: return 0;
+      if (!cursors_.back()->read(nullptr, d.offset + c * rows * mat_value_bytes(type_))) fail();
     }
   }
   void read(std::size_t n, double* out) override {
-    const std::size_t size = size_of(type_);
+    const std::size_t size = mat_value_bytes(type_);
     if (along_first_) {
       raw_.resize(n * size);
       for (std::size_t c = 0; c < cols; ++c) {
@@ -752,10 +772,7 @@ class MatSource {
       const auto it = layout_.vars.find(key);
       if (it == layout_.vars.end())
         throw ImportError(file_, 0, "'" + which + "': its data element was not found where its matrix declares it (damaged)");
-      if (Mat5Series::size_of(it->second.type) == 0)
-        throw ImportError(file_, 0, "'" + which + "': its data element is of MAT data type " +
-                                        std::to_string(it->second.type) + ", not a numeric type (damaged)");
-      const std::uint64_t needed = Mat5Series::size_of(it->second.type) * rows * cols;
+      const std::uint64_t needed = mat_value_bytes(it->second.type) * rows * cols;
       if (needed != it->second.bytes)
         throw ImportError(file_, 0, "'" + which + "' is " + std::to_string(r) + "x" + std::to_string(c) + ", " +
                                         std::to_string(needed) + " bytes of data, but its data element holds " +
