@@ -54,16 +54,23 @@ struct MatVarFree {
 using MatFile = std::unique_ptr<mat_t, MatFileCloser>;
 using MatVar = std::unique_ptr<matvar_t, MatVarFree>;
 
-// The number of elements a variable's dims declare, when its data buffer holds them all at
-// element_bytes each; nullopt otherwise. matio's buffer is what the data element gave, which in a
-// damaged file is shorter than the dims (fuzz finding: a char array read 2052 bytes of 4).
-std::optional<std::size_t> held_elements(const matvar_t* v, std::size_t element_bytes) {
+// The number of elements a variable's dims declare (the product of its dims); nullopt when the
+// product does not fit a size_t (damage).
+std::optional<std::size_t> declared_elements(const matvar_t* v) {
   std::size_t n = 1;
   for (int i = 0; i < v->rank; ++i) {
     if (v->dims[i] != 0 && n > std::numeric_limits<std::size_t>::max() / v->dims[i]) return std::nullopt;
     n *= v->dims[i];
   }
-  if (n > v->nbytes / element_bytes) return std::nullopt;
+  return n;
+}
+
+// The number of elements a variable's dims declare, when its data buffer holds them all at
+// element_bytes each; nullopt otherwise. matio's buffer is what the data element gave, which in a
+// damaged file is shorter than the dims (fuzz finding: a char array read 2052 bytes of 4).
+std::optional<std::size_t> held_elements(const matvar_t* v, std::size_t element_bytes) {
+  const auto n = declared_elements(v);
+  if (!n || *n > v->nbytes / element_bytes) return std::nullopt;
   return n;
 }
 
@@ -671,22 +678,27 @@ class Mat5Series final : public MatSeries {
   std::vector<char> raw_;
 };
 
-// Field `name` of element `index` of struct array `s` (nullptr when it has none). matio's
-// Mat_VarGetStructFieldByName indexes the field names and a field pointer per element and field
-// unchecked, and matio can return a damaged struct without them (SEGV, twice a fuzz target's find:
-// the segments struct, then a struct holding the variables): every field name and field pointer
-// must be there, else the struct is damage.
-matvar_t* struct_field(const fs::path& file, matvar_t* s, const char* name, std::size_t index) {
-  std::size_t count = 1;
-  for (int d = 0; d < s->rank; ++d) count *= s->dims[d];
+// The number of elements of struct array `s`, checked. matio's Mat_VarGetStructFieldByName
+// indexes the field names and a field pointer per element and field unchecked, and matio can
+// return a damaged struct without them (SEGV, twice a fuzz target's find: the segments struct,
+// then a struct holding the variables): every field name and field pointer must be there, else the
+// struct is damage.
+std::size_t struct_elements(const fs::path& file, matvar_t* s) {
+  const auto count = declared_elements(s);
   const unsigned nfields = Mat_VarGetNumberOfFields(s);
   char* const* names = Mat_VarGetStructFieldnames(s);
-  const bool whole = nfields == 0 || (names && s->data && s->nbytes / sizeof(matvar_t*) >= count * nfields &&
-                                      std::all_of(names, names + nfields, [](const char* n) { return n != nullptr; }));
+  const bool whole = count && (nfields == 0 || (names && s->data && s->nbytes / sizeof(matvar_t*) / nfields >= *count &&
+                                                std::all_of(names, names + nfields, [](const char* n) { return n != nullptr; })));
   if (!whole)
     throw ImportError(file, 0, std::string(s->name ? s->name : "a struct") + ": a struct array of " +
-                                   std::to_string(count) + " whose field names or fields matio could not read (damaged)");
-  return index < count ? Mat_VarGetStructFieldByName(s, name, index) : nullptr;
+                                   (count ? std::to_string(*count) : "more elements than a size_t counts") +
+                                   " whose field names or fields matio could not read (damaged)");
+  return *count;
+}
+
+// Field `name` of element `index` of struct array `s` (nullptr when it has none; damage throws).
+matvar_t* struct_field(const fs::path& file, matvar_t* s, const char* name, std::size_t index) {
+  return index < struct_elements(file, s) ? Mat_VarGetStructFieldByName(s, name, index) : nullptr;
 }
 
 // The variables of the file (top level or one struct's fields), by name: their headers, and
@@ -967,9 +979,8 @@ void add_mat_segments(MatSource& src, const fs::path& file, Recording& rec) {
     throw ImportError(file, 0, std::string("'segments' is a ") + (cls < std::size(kClasses) ? kClasses[cls] : "matrix") +
                                    " array; expected a struct array with fields kind, label, t_start_s, t_end_s [s]");
   }
-  std::size_t count = 1;
-  for (int d = 0; d < segs->rank; ++d) count *= segs->dims[d];
   auto* sv = const_cast<matvar_t*>(segs);
+  const std::size_t count = struct_elements(file, sv);
   for (std::size_t i = 0; i < count; ++i) {
     std::vector<double> a, b;
     std::size_t r = 0, c = 0;
@@ -981,9 +992,7 @@ void add_mat_segments(MatSource& src, const fs::path& file, Recording& rec) {
     }
     auto field_text = [&](const char* name) {
       const matvar_t* f = struct_field(file, sv, name, i);
-      std::size_t elements = f ? 1 : 0;
-      for (int d = 0; f && d < f->rank; ++d) elements *= f->dims[d];
-      if (f && f->class_type != MAT_C_CHAR && elements > 0)  // (MATLAB's [] for a field never set is fine)
+      if (f && f->class_type != MAT_C_CHAR && declared_elements(f) != std::size_t{0})  // (MATLAB's [] for a field never set is fine)
         throw ImportError(file, 0, "segments(" + std::to_string(i + 1) + ")." + name + " is not text (a char array)");
       const auto t = text(f);
       if (!t) {
