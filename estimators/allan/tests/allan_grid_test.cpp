@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <optional>
+#include <ostream>
 
 using namespace stend::allan;
 
@@ -51,6 +52,9 @@ struct GridParam {
   double rate_hz;
   bool lowpass;
 };
+
+// GoogleTest prints a parameter without PrintTo as its bytes, padding included.
+void PrintTo(const GridParam& p, std::ostream* os) { *os << p.rate_hz << " Hz" << (p.lowpass ? ", low-pass" : ""); }
 
 class NoiseGrid : public ::testing::TestWithParam<GridParam> {};
 

@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <map>
+#include <ostream>
 #include <random>
 #include <string>
 #include <vector>
@@ -25,6 +26,9 @@ struct Stable32Case {
   DeviationKind kind;
   const char* file;
 };
+
+// GoogleTest prints a parameter without PrintTo as its bytes, padding included.
+void PrintTo(const Stable32Case& c, std::ostream* os) { *os << to_string(c.kind) << " against " << c.file; }
 
 class Stable32 : public ::testing::TestWithParam<Stable32Case> {};
 
