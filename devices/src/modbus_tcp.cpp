@@ -57,7 +57,12 @@ std::string ModbusTcpClient::where() const {
 }
 
 std::string ModbusTcpClient::connect() {
-  if (modbus_connect(ctx_of(context())) != 0) {
+  // A signal during libmodbus's wait for the connection (a stop request, a timer) fails it with
+  // EINTR, the socket closed: that is no answer from the controller, so try again.
+  int rc = 0;
+  do rc = modbus_connect(ctx_of(context()));
+  while (rc != 0 && errno == EINTR);
+  if (rc != 0) {
     connected_ = false;
     return modbus_strerror(errno);
   }

@@ -36,6 +36,30 @@ speed_t baud_constant(int baud) {
   }
 }
 
+// Connects the socket `fd` to `addr`, waiting at most `timeout_ms`; "" or why not. The wait is a
+// poll on a non-blocking connect, so a signal arriving meanwhile (a stop request, a timer) is
+// waited through instead of failing the connection, and an address that never answers ends at
+// the time-out instead of the kernel's two minutes of SYN retries.
+std::string connect_within(int fd, const sockaddr* addr, socklen_t addr_len, int timeout_ms) {
+  const int flags = ::fcntl(fd, F_GETFL);
+  if (flags < 0 || ::fcntl(fd, F_SETFL, flags | O_NONBLOCK) != 0) return std::strerror(errno);
+  if (::connect(fd, addr, addr_len) != 0 && errno != EINPROGRESS && errno != EINTR) return std::strerror(errno);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) return "no answer within " + std::to_string(timeout_ms) + " ms";
+    pollfd p{fd, POLLOUT, 0};
+    const int r = ::poll(&p, 1, static_cast<int>(left.count()));
+    if (r > 0) break;
+    if (r < 0 && errno != EINTR) return std::strerror(errno);
+  }
+  int err = 0;
+  socklen_t err_len = sizeof err;
+  if (::getsockopt(fd, SOL_SOCKET, SO_ERROR, &err, &err_len) != 0) return std::strerror(errno);
+  if (err != 0) return std::strerror(err);
+  return ::fcntl(fd, F_SETFL, flags) == 0 ? "" : std::strerror(errno);
+}
+
 std::string quoted(const std::string& s) {
   std::string out = "\"";
   for (char ch : s) {
@@ -91,13 +115,13 @@ std::string TextCommandClient::open_link() {
         why = std::strerror(errno);
         continue;
       }
-      if (::connect(fd, a->ai_addr, a->ai_addrlen) == 0) {
+      why = connect_within(fd, a->ai_addr, a->ai_addrlen, c_.timeout_ms);
+      if (why.empty()) {
         const int one = 1;
         ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
         fd_ = fd;
         break;
       }
-      why = std::strerror(errno);
       ::close(fd);
     }
     ::freeaddrinfo(res);
@@ -105,7 +129,9 @@ std::string TextCommandClient::open_link() {
   }
   const speed_t speed = baud_constant(c_.baud);
   if (speed == B0) return "unsupported baud rate " + std::to_string(c_.baud);
-  const int fd = ::open(c_.device.c_str(), O_RDWR | O_NOCTTY | O_CLOEXEC);
+  int fd = -1;
+  do fd = ::open(c_.device.c_str(), O_RDWR | O_NOCTTY | O_CLOEXEC);
+  while (fd < 0 && errno == EINTR);
   if (fd < 0) return std::strerror(errno);
   termios t{};
   if (::tcgetattr(fd, &t) == 0) {

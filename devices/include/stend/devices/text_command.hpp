@@ -20,7 +20,7 @@ struct TextCommandConfig {
   std::string device{};      // serial: "/dev/ttyUSB0" (used when host is empty)
   int baud = 115200;         // serial: 8N1, no flow control
   std::string terminator = "\n";  // appended to every command; ends every reply ("\r\n" accepted)
-  int timeout_ms = 500;      // per reply
+  int timeout_ms = 500;      // per reply, and per TCP connection attempt
   int retries = 2;           // extra attempts after a time-out or a broken link
   int backoff_initial_ms = 20;  // wait before the first retry; doubles each retry
   bool connect_now = true;   // false: the first command connects
