@@ -8,10 +8,10 @@
 //                           drivers experiment with the emulators' devices and port filled in.
 #include "commands.hpp"
 
-#include "stend/experiment.hpp"
-#include "stend/files.hpp"
+#include "stend/core/experiment.hpp"
+#include "stend/recording/files.hpp"
 #include "stend/physics/gravity.hpp"
-#include "stend/plugin_host.hpp"
+#include "stend/core/plugin_host.hpp"
 
 #include <atomic>
 #include <chrono>

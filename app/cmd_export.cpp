@@ -6,7 +6,7 @@
 #include "commands.hpp"
 
 #include "stend/errors.hpp"
-#include "stend/files.hpp"
+#include "stend/recording/files.hpp"
 #include "stend/reporting/exports.hpp"
 #include "stend/reporting/results_store.hpp"
 

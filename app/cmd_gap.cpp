@@ -14,9 +14,9 @@
 #include "stend/estimators/builtin.hpp"
 #include "stend/diagnosis/gap.hpp"
 #include "stend/diagnosis/validate.hpp"
-#include "stend/files.hpp"
+#include "stend/recording/files.hpp"
 #include "stend/reporting/results.hpp"
-#include "stend/yaml_util.hpp"
+#include "stend/yaml/reader.hpp"
 
 namespace stend::cli {
 

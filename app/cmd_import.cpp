@@ -5,7 +5,7 @@
 #include "progress.hpp"
 
 #include "stend/io/formats.hpp"
-#include "stend/yaml_util.hpp"
+#include "stend/yaml/reader.hpp"
 
 #include <fmt/format.h>
 

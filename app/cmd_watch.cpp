@@ -3,9 +3,9 @@
 #include "commands.hpp"
 #include "live_view.hpp"
 
-#include "stend/experiment.hpp"
+#include "stend/core/experiment.hpp"
 #include "stend/live/run_folder_feed.hpp"
-#include "stend/plugin_host.hpp"
+#include "stend/core/plugin_host.hpp"
 
 #include <fmt/format.h>
 

@@ -4,7 +4,7 @@
 
 #include "exit_codes.hpp"
 #include "stend/io/formats.hpp"
-#include "stend/recording.hpp"
+#include "stend/recording/recording.hpp"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>

@@ -1,11 +1,8 @@
 // Exceptions that end a command → the program's exit code, in one place (exit_codes.hpp).
 #include "exit_codes.hpp"
 
-#include "stend/devices/i2c.hpp"
-#include "stend/devices/modbus_rtu.hpp"
-#include "stend/devices/text_command.hpp"
 #include "stend/errors.hpp"
-#include "stend/experiment.hpp"
+#include "stend/core/experiment.hpp"
 #include "stend/sdk.hpp"
 
 #include <fmt/format.h>
@@ -38,17 +35,9 @@ ExitCode exit_code_of_current_exception() {
     return say(kInput, "", e.what());
   } catch (const InputError& e) {
     return say(kInput, "error: ", e.what());
-  } catch (const IoError& e) {
+  } catch (const IoError& e) {  // a failed write, a device or link that failed (FixtureLinkFault, transports)
     return say(kIo, "error: ", e.what());
   } catch (const std::system_error& e) {  // filesystem and stream failures
-    return say(kIo, "error: ", e.what());
-  } catch (const FixtureLinkFault& e) {
-    return say(kIo, "error: ", e.what());
-  } catch (const transport::ModbusError& e) {
-    return say(kIo, "error: ", e.what());
-  } catch (const transport::TextCommandError& e) {
-    return say(kIo, "error: ", e.what());
-  } catch (const transport::I2cError& e) {
     return say(kIo, "error: ", e.what());
   } catch (const YAML::Exception& e) {
     return say(kInput, "error: ", e.what());

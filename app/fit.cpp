@@ -5,10 +5,10 @@
 #include "stend/estimation/registry.hpp"
 #include "stend/estimation/summary.hpp"
 #include "stend/estimators/builtin.hpp"
-#include "stend/files.hpp"
-#include "stend/plugin_host.hpp"
-#include "stend/samples.hpp"
-#include "stend/yaml_util.hpp"
+#include "stend/recording/files.hpp"
+#include "stend/core/plugin_host.hpp"
+#include "stend/recording/samples.hpp"
+#include "stend/yaml/reader.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -83,6 +83,22 @@ bool DatasetArgs::is_run() const { return inputs.size() == 1 && io::looks_like_r
 
 namespace {
 
+// Estimator plugins found by `host` whose names are not already in `registry`; `host` must
+// outlive the registry and every estimator created through it.
+void add_plugin_estimators(estimation::Registry& registry, const PluginHost& host) {
+  for (const PluginRecord& rec : host.records()) {
+    if (rec.info == nullptr || rec.info->kind != STEND_KIND_ESTIMATOR || !rec.shadowed_by.empty()) continue;
+    if (registry.find(rec.info->name) != nullptr) continue;  // built in: the same code, linked
+    estimation::EstimatorEntry e;
+    e.name = rec.info->name;
+    e.version = rec.info->version;
+    e.description = rec.info->description;
+    e.results_file = e.name + ".json";
+    e.create = [&host, name = e.name] { return host.create_estimator(name, Params{}); };
+    registry.add(std::move(e));
+  }
+}
+
 // The estimator `name` (or the one the model file is written for, with "auto"): built in, or an
 // estimator plugin on the search path. `host` keeps a plugin loaded while it is used.
 const estimation::EstimatorEntry& resolve_estimator(const estimation::Registry& registry, PluginHost& host,
@@ -92,7 +108,7 @@ const estimation::EstimatorEntry& resolve_estimator(const estimation::Registry& 
   if (const auto* e = registry.find(name)) return *e;
   host.scan(PluginHost::default_search_path());
   with_plugins = registry;
-  with_plugins.add_plugins(host);
+  add_plugin_estimators(with_plugins, host);
   if (const auto* e = with_plugins.find(name)) return *e;
   throw std::runtime_error("no estimator '" + name + "': not built in (" + registry.names() +
                            ") and no estimator plugin of that name on the search path "

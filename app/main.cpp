@@ -4,11 +4,11 @@
 #include "progress.hpp"
 
 #include "stend/estimators/builtin.hpp"
-#include "stend/experiment.hpp"
-#include "stend/plugin_host.hpp"
-#include "stend/recording.hpp"
-#include "stend/runner.hpp"
-#include "stend/version.hpp"
+#include "stend/core/experiment.hpp"
+#include "stend/core/plugin_host.hpp"
+#include "stend/recording/recording.hpp"
+#include "stend/core/runner.hpp"
+#include "stend/recording/version.hpp"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>

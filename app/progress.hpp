@@ -1,10 +1,10 @@
 // Progress on the terminal: one line, rewritten in place, that fits the terminal's width (pieces
 // dropped by importance, then cut), and nothing at all when stderr is not a terminal. For
-// `stend run` (RunProgress: the procedure, the time left from stend/eta.hpp) and for any long
+// `stend run` (RunProgress: the procedure, the time left from stend/core/eta.hpp) and for any long
 // command (TaskProgress: a share done, the time left extrapolated from the elapsed time).
 #pragma once
 
-#include "stend/runner.hpp"
+#include "stend/core/runner.hpp"
 
 #include <chrono>
 #include <functional>

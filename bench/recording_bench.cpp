@@ -10,7 +10,7 @@
 // BM_OneHour: the whole 3.6 M-row, 1 kHz hour written, finished and read back once; reports the
 //   real-time factor of the write side (the bench needs >= 1000x including recording).
 #include <stend/physics/units.hpp>
-#include <stend/recording.hpp>
+#include <stend/recording/recording.hpp>
 
 #include <benchmark/benchmark.h>
 #include <unistd.h>

@@ -5,9 +5,9 @@
 //   build/bin/simulated_bench_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
-#include "stend/experiment.hpp"
-#include "stend/plugin_host.hpp"
-#include "stend/runner.hpp"
+#include "stend/core/experiment.hpp"
+#include "stend/core/plugin_host.hpp"
+#include "stend/core/runner.hpp"
 
 #include <cstdint>
 #include <filesystem>

@@ -2,7 +2,7 @@
 # are installed by their folders), and the Debian package (`cpack -G DEB`). docs/install.md.
 #
 #   <prefix>/bin/stend
-#   <prefix>/<libdir>/libstend_core.so, <libdir>/stend/plugins/stend_*.so (no test plugin)
+#   <prefix>/<libdir>/libstend_{core,recording,yaml}.so, <libdir>/stend/plugins/stend_*.so (no test plugin)
 #   <prefix>/include/stend/…, <libdir>/cmake/Stend/ (the SDK: headers, CMake package)
 #   <prefix>/share/stend/configs/…                    shipped experiments
 #   <prefix>/share/stend/estimators/<name>/examples/… example models, at the paths the configs

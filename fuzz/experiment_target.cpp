@@ -1,8 +1,8 @@
 // Experiment YAML → Experiment: structure, types, units, steps and every plugin config checked
 // against the schemas of the build tree's plugins (the plugin host's scan of its plugin folder;
 // nothing is created). parse_experiment either returns an Experiment or throws ExperimentError.
-#include <stend/experiment.hpp>
-#include <stend/plugin_host.hpp>
+#include <stend/core/experiment.hpp>
+#include <stend/core/plugin_host.hpp>
 
 #include <cstdint>
 #include <exception>

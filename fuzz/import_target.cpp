@@ -3,7 +3,7 @@
 // sample is read. Any std::exception is the importer refusing the input (a clear error is what it
 // should be); a crash, a hang, a leak or a sanitizer report is a finding.
 #include <stend/io/formats.hpp>
-#include <stend/samples.hpp>
+#include <stend/recording/samples.hpp>
 
 #include <cstdint>
 #include <exception>

@@ -4,8 +4,8 @@
 //                   run.json), the rest is its content.
 //   run.h5:         the input is run.h5.
 // Recording::open either returns or throws a std::runtime_error naming the file and place.
-#include <stend/recording.hpp>
-#include <stend/samples.hpp>
+#include <stend/recording/recording.hpp>
+#include <stend/recording/samples.hpp>
 
 #include <array>
 #include <cstdint>

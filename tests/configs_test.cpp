@@ -2,9 +2,9 @@
 // against the limits the simulated fixtures declare.
 #include <gtest/gtest.h>
 
-#include "stend/bench.hpp"
-#include "stend/experiment.hpp"
-#include "stend/plugin_host.hpp"
+#include "stend/core/bench.hpp"
+#include "stend/core/experiment.hpp"
+#include "stend/core/plugin_host.hpp"
 #include "stend/testing/sim_bench.hpp"
 
 #include <filesystem>

@@ -1,7 +1,7 @@
 // The time left that `stend run` shows (ProcedureEta through the runner) on the shipped temperature
 // sweep, on the simulated clock's schedule: at 25 %, 50 % and 75 % of the run its error is at most
 // 10 % of the time actually left, and the run ends with nothing left.
-#include "stend/runner.hpp"
+#include "stend/core/runner.hpp"
 #include "stend/testing/paths.hpp"
 #include "stend/testing/sim_bench.hpp"
 

@@ -3,7 +3,7 @@
 // folders from an experiment file loaded only when allowed (and recorded), `record: false`.
 #include <gtest/gtest.h>
 
-#include "stend/recording.hpp"
+#include "stend/recording/recording.hpp"
 #include "stend/testing/files.hpp"
 #include "stend/testing/paths.hpp"
 #include "stend/testing/program.hpp"

@@ -2,11 +2,11 @@
 // and recording store; then a clean stop and a SIGKILL of the stend program mid-run.
 #include <gtest/gtest.h>
 
-#include "stend/experiment.hpp"
+#include "stend/core/experiment.hpp"
 #include "stend/physics/geometry.hpp"
-#include "stend/plugin_host.hpp"
-#include "stend/recording.hpp"
-#include "stend/runner.hpp"
+#include "stend/core/plugin_host.hpp"
+#include "stend/recording/recording.hpp"
+#include "stend/core/runner.hpp"
 #include "stend/testing/files.hpp"
 #include "stend/testing/paths.hpp"
 #include "stend/testing/sim_bench.hpp"

@@ -1,4 +1,4 @@
-#include "stend/bench.hpp"
+#include "stend/core/bench.hpp"
 
 #include "stend/physics/geometry.hpp"
 

@@ -1,4 +1,4 @@
-#include "stend/eta.hpp"
+#include "stend/core/eta.hpp"
 
 #include <algorithm>
 #include <cmath>

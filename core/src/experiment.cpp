@@ -1,10 +1,10 @@
 // The experiment model: experiment YAML parsed, validated (stage 1: structure, types, units,
 // plugin configs; stage 2: procedure against the fixtures' declared limits), and resolved.
 // The format is documented in docs/experiment-format.md; keep the two in step.
-#include <stend/experiment.hpp>
+#include <stend/core/experiment.hpp>
 #include <stend/physics/geometry.hpp>
 #include <stend/physics/gravity.hpp>
-#include <stend/yaml_util.hpp>
+#include <stend/yaml/reader.hpp>
 
 #include <Eigen/LU>
 #include <yaml-cpp/eventhandler.h>
@@ -24,35 +24,6 @@ namespace stend {
 namespace fs = std::filesystem;
 using yaml::MapReader;
 using yaml::format_number;
-
-// ---------------------------------------------------------------------------------------------
-// Errors
-
-namespace {
-
-std::string compose(const SourceLocation& where, const std::string& message,
-                    const std::string& hint) {
-  std::string out = where.file.empty() && where.line == 0 ? std::string("<experiment>") : where.str();
-  out += ": error: " + message;
-  if (!hint.empty()) out += "\n  hint: " + hint;
-  return out;
-}
-
-}  // namespace
-
-std::string SourceLocation::str() const {
-  if (line <= 0) return file;
-  if (column <= 0) return file + ":" + std::to_string(line);
-  return file + ":" + std::to_string(line) + ":" + std::to_string(column);
-}
-
-ExperimentError::ExperimentError(SourceLocation where, std::string key, std::string message,
-                                 std::string hint)
-    : InputError(compose(where, message, hint)),
-      where_(std::move(where)),
-      key_(std::move(key)),
-      message_(std::move(message)),
-      hint_(std::move(hint)) {}
 
 // ---------------------------------------------------------------------------------------------
 // Stage 1

@@ -1,6 +1,6 @@
 // Plugin `config:` mappings validated against the plugin's parameter schema.
-#include <stend/experiment.hpp>
-#include <stend/yaml_util.hpp>
+#include <stend/core/experiment.hpp>
+#include <stend/yaml/reader.hpp>
 
 #include <algorithm>
 #include <cmath>

@@ -3,7 +3,7 @@
 // Nothing a plugin file contains may take the host down: every problem becomes a refusal naming
 // the file. (A plugin whose entry point or static initialisers crash can still crash the process;
 // that is outside what an in-process host can guard against.)
-#include <stend/plugin_host.hpp>
+#include <stend/core/plugin_host.hpp>
 
 #include <dlfcn.h>
 

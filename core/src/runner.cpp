@@ -1,8 +1,8 @@
-#include "stend/runner.hpp"
+#include "stend/core/runner.hpp"
 
-#include "stend/eta.hpp"
-#include "stend/recording.hpp"
-#include "stend/version.hpp"
+#include "stend/core/eta.hpp"
+#include "stend/recording/recording.hpp"
+#include "stend/recording/version.hpp"
 
 #include <fmt/format.h>
 #include <zlib.h>

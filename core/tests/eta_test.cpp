@@ -1,7 +1,7 @@
 // ProcedureEta on hand-made procedures: the plan before anything ran, the time left moving with
 // the steps, the chamber's approach rate learnt from a step and used for the next one of the same
 // direction, a hold that restarts when the measurement leaves the band, and nothing left once done.
-#include "stend/eta.hpp"
+#include "stend/core/eta.hpp"
 
 #include <gtest/gtest.h>
 

@@ -2,11 +2,11 @@
 // Uses an in-memory plugin catalogue and tiny fixtures; no real plugin is loaded.
 #include <gtest/gtest.h>
 
-#include <stend/experiment.hpp>
+#include <stend/core/experiment.hpp>
 #include <stend/physics/geometry.hpp>
 #include <stend/testing/files.hpp>
 #include <stend/testing/paths.hpp>
-#include <stend/yaml_util.hpp>
+#include <stend/yaml/reader.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -22,8 +22,6 @@ namespace fs = std::filesystem;
 using namespace stend;
 
 namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // ---------------------------------------------------------------------------------------------
 // Test plugins: schemas only.

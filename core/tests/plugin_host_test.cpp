@@ -1,8 +1,8 @@
 // The plugin host: search path, every refusal case (each with its own broken plugin built under
 // sdk/testing/), creating objects, `stend plugins` output, and the out-of-tree workflow a
 // researcher follows (install Stend, build sdk/template_sensor against it, load it).
-#include <stend/experiment.hpp>
-#include <stend/plugin_host.hpp>
+#include <stend/core/experiment.hpp>
+#include <stend/core/plugin_host.hpp>
 #include <stend/testing/files.hpp>
 #include <stend/testing/program.hpp>
 

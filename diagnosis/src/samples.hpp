@@ -9,7 +9,7 @@
 #include <limits>
 #include <vector>
 
-#include "stend/recording.hpp"
+#include "stend/recording/recording.hpp"
 
 namespace stend::diagnosis {
 

@@ -9,12 +9,12 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "stend/experiment.hpp"
+#include "stend/core/experiment.hpp"
 #include "stend/diagnosis/gap.hpp"
 #include "stend/diagnosis/validate.hpp"
 #include "stend/io/importers.hpp"
-#include "stend/plugin_host.hpp"
-#include "stend/runner.hpp"
+#include "stend/core/plugin_host.hpp"
+#include "stend/core/runner.hpp"
 #include "stend/testing/files.hpp"
 #include "stend/testing/paths.hpp"
 #include "stend/testing/sim_bench.hpp"

@@ -14,7 +14,7 @@
 // both ports, the plant driven by the firmware's PWM in wall time (chamber_speed does not apply).
 #pragma once
 
-#include <stend/experiment.hpp>
+#include <stend/core/experiment.hpp>
 #include <stend/physics/units.hpp>
 #include <stend/sim/motion_profile.hpp>
 

@@ -4,7 +4,7 @@
 #include "stend/estimation/summary.hpp"
 
 #include <stend/physics/units.hpp>
-#include <stend/yaml_util.hpp>
+#include <stend/yaml/reader.hpp>
 
 #include <fmt/format.h>
 

@@ -2,8 +2,8 @@
 #include "stend/estimation/model_spec.hpp"
 
 #include <algorithm>
-#include <stend/experiment.hpp>
-#include <stend/yaml_util.hpp>
+#include <stend/errors.hpp>
+#include <stend/yaml/reader.hpp>
 #include <yaml-cpp/yaml.h>
 
 namespace stend::estimation {

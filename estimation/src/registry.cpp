@@ -38,20 +38,6 @@ void Registry::add(EstimatorEntry entry) {
   entries_.push_back(std::move(entry));
 }
 
-void Registry::add_plugins(const PluginHost& host) {
-  for (const PluginRecord& rec : host.records()) {
-    if (rec.info == nullptr || rec.info->kind != STEND_KIND_ESTIMATOR || !rec.shadowed_by.empty()) continue;
-    if (find(rec.info->name) != nullptr) continue;  // built in: the same code, linked
-    EstimatorEntry e;
-    e.name = rec.info->name;
-    e.version = rec.info->version;
-    e.description = rec.info->description;
-    e.results_file = e.name + ".json";
-    e.create = [&host, name = e.name] { return host.create_estimator(name, Params{}); };
-    entries_.push_back(std::move(e));
-  }
-}
-
 const EstimatorEntry* Registry::find(const std::string& name) const {
   for (const auto& e : entries_)
     if (e.name == name) return &e;
@@ -94,6 +80,15 @@ FitSummary Registry::summarize(const nlohmann::json& doc, const std::string& fil
     if (s.version.empty()) s.version = e->version;
   }
   return s;
+}
+
+FitResult Registry::read(const nlohmann::json& doc, const std::string& file_name) const {
+  FitResult r;
+  r.summary = summarize(doc, file_name);
+  const EstimatorEntry* e = for_results(doc, file_name);
+  r.results_file = e != nullptr ? e->results_file : file_name;
+  r.document = doc;
+  return r;
 }
 
 std::string Registry::names() const {

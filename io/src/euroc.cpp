@@ -1,5 +1,5 @@
 // EuRoC MAV / ASL dataset IMU CSV (mav0/imu0/data.csv).
-#include <stend/csv.hpp>
+#include <stend/recording/csv.hpp>
 #include <stend/io/logs.hpp>
 
 #include "import_common.hpp"

@@ -5,7 +5,7 @@
 
 #include <stend/io/importers.hpp>
 #include <stend/physics/units.hpp>
-#include <stend/version.hpp>
+#include <stend/recording/version.hpp>
 
 #include <openssl/evp.h>
 

@@ -1,6 +1,6 @@
 #include "import_common.hpp"
 
-#include <stend/version.hpp>
+#include <stend/recording/version.hpp>
 
 #include <algorithm>
 #include <cerrno>

@@ -2,7 +2,7 @@
 // at the first sample's time.
 #pragma once
 
-#include <stend/recording.hpp>
+#include <stend/recording/recording.hpp>
 
 #include <string>
 #include <vector>

@@ -4,7 +4,7 @@
 #include <stend/errors.hpp>
 #include <stend/physics/gravity.hpp>
 #include <stend/physics/units.hpp>
-#include <stend/yaml_util.hpp>
+#include <stend/yaml/reader.hpp>
 
 #include <algorithm>
 #include <charconv>

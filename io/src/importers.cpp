@@ -1,12 +1,12 @@
-#include <stend/csv.hpp>
-#include <stend/files.hpp>
+#include <stend/recording/csv.hpp>
+#include <stend/recording/files.hpp>
 #include <stend/io/importers.hpp>
 #include <stend/io/timestamps.hpp>
 #include <stend/physics/gravity.hpp>
 #include <stend/physics/table_chain.hpp>
 #include <stend/physics/units.hpp>
-#include <stend/version.hpp>
-#include <stend/yaml_util.hpp>
+#include <stend/recording/version.hpp>
+#include <stend/yaml/reader.hpp>
 
 #include <algorithm>
 #include <charconv>

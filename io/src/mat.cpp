@@ -1,9 +1,9 @@
 // MATLAB .mat files: import (v5 and v7.3, through matio, with the structure of v5 files checked
 // first) and export. Declared in stend/io/importers.hpp.
 #include <stend/io/importers.hpp>
-#include <stend/hdf5.hpp>
+#include <stend/recording/hdf5.hpp>
 #include <stend/io/timestamps.hpp>
-#include <stend/yaml_util.hpp>
+#include <stend/yaml/reader.hpp>
 
 #include <algorithm>
 #include <cmath>

@@ -2,7 +2,7 @@
 // errors name file:line:col) and the timestamp repair every importer calls.
 #include <gtest/gtest.h>
 
-#include <stend/experiment.hpp>
+#include <stend/core/experiment.hpp>
 #include <stend/io/formats.hpp>
 #include <stend/io/importers.hpp>
 #include <stend/io/timestamps.hpp>

@@ -1,8 +1,8 @@
 #include "stend/live/run_folder_feed.hpp"
 
-#include "stend/eta.hpp"
-#include "stend/recording.hpp"
-#include "stend/samples.hpp"
+#include "stend/core/eta.hpp"
+#include "stend/recording/recording.hpp"
+#include "stend/recording/samples.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -4,9 +4,9 @@
 #include "fitted_model.hpp"
 #include "stend/errors.hpp"
 #include "stend/estimation/summary.hpp"
-#include "stend/files.hpp"
+#include "stend/recording/files.hpp"
 #include "stend/reporting/results.hpp"
-#include "stend/recording.hpp"
+#include "stend/recording/recording.hpp"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>

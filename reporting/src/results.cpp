@@ -3,7 +3,7 @@
 
 #include "stend/estimators/builtin.hpp"
 #include "stend/reporting/fingerprint.hpp"
-#include "stend/recording.hpp"
+#include "stend/recording/recording.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>

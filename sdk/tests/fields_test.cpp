@@ -2,10 +2,10 @@
 // entry point STEND_DEFINE_PLUGIN builds from a table.
 #include <gtest/gtest.h>
 
-#include <stend/experiment.hpp>
+#include <stend/core/experiment.hpp>
 #include <stend/fields.hpp>
 #include <stend/sdk.hpp>
-#include <stend/yaml_util.hpp>
+#include <stend/yaml/reader.hpp>
 
 #include <cmath>
 #include <cstdint>

@@ -5,7 +5,7 @@
 #include "stend/testing/program.hpp"
 #include "stend/testing/sim_bench.hpp"
 
-#include <stend/recording.hpp>
+#include <stend/recording/recording.hpp>
 
 #include <gtest/gtest.h>
 

@@ -4,10 +4,10 @@
 // in-process bench, within the reported uncertainty. Runs ≈ 40 s of wall time.
 #include <gtest/gtest.h>
 
-#include <stend/experiment.hpp>
-#include <stend/plugin_host.hpp>
-#include <stend/recording.hpp>
-#include <stend/runner.hpp>
+#include <stend/core/experiment.hpp>
+#include <stend/core/plugin_host.hpp>
+#include <stend/recording/recording.hpp>
+#include <stend/core/runner.hpp>
 #include <stend/testing/files.hpp>
 #include <stend/testing/program.hpp>
 #include <stend/testing/sim_bench.hpp>

@@ -3,7 +3,7 @@
 
 #include "stend/allan/allan.hpp"
 #include "stend/allan/deviation_report.hpp"
-#include "stend/yaml_util.hpp"
+#include "stend/yaml/reader.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>

@@ -5,7 +5,7 @@
 #include <stdexcept>
 
 #include "stend/batch_lsq/batch_lsq.hpp"
-#include "stend/files.hpp"
+#include "stend/recording/files.hpp"
 
 namespace stend::batch_lsq {
 

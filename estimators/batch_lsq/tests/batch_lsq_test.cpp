@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "stend/batch_lsq/batch_lsq.hpp"
-#include "stend/experiment.hpp"
+#include "stend/core/experiment.hpp"
 #include "stend/physics/geometry.hpp"
 #include "stend/testing/files.hpp"
 

@@ -10,7 +10,7 @@
 //       `residual_mps2 raw <r> stend <r> imutk <r>`.
 #include <stend/ceres_nonlinear/calibration.hpp>
 #include <stend/io/importers.hpp>
-#include <stend/recording.hpp>
+#include <stend/recording/recording.hpp>
 
 #include <nlohmann/json.hpp>
 

@@ -1,6 +1,6 @@
 #include <stend/ceres_nonlinear/model_file.hpp>
 #include <stend/physics/units.hpp>
-#include <stend/yaml_util.hpp>
+#include <stend/yaml/reader.hpp>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>

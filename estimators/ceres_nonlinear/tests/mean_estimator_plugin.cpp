@@ -1,7 +1,7 @@
 // A minimal estimator plugin built like an out-of-tree one (its own folder, found through
 // STEND_PLUGIN_PATH only): the mean accelerometer reading of the recording. ceres_cli_test checks
 // that `stend fit --estimator mean_accel` routes to it.
-#include <stend/recording.hpp>
+#include <stend/recording/recording.hpp>
 #include <stend/sdk.hpp>
 
 #include <cmath>

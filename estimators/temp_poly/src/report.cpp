@@ -3,8 +3,8 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <ostream>
-#include <stend/experiment.hpp>
-#include <stend/yaml_util.hpp>
+#include <stend/errors.hpp>
+#include <stend/yaml/reader.hpp>
 #include <yaml-cpp/yaml.h>
 
 #include "stend/temp_poly/temp_poly.hpp"

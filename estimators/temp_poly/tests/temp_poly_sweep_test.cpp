@@ -7,10 +7,10 @@
 #include <fstream>
 #include <cstdlib>
 
-#include "stend/experiment.hpp"
-#include "stend/plugin_host.hpp"
-#include "stend/recording.hpp"
-#include "stend/runner.hpp"
+#include "stend/core/experiment.hpp"
+#include "stend/core/plugin_host.hpp"
+#include "stend/recording/recording.hpp"
+#include "stend/core/runner.hpp"
 #include "stend/temp_poly/temp_poly.hpp"
 #include "stend/testing/files.hpp"
 #include "stend/testing/sim_bench.hpp"

@@ -7,7 +7,7 @@
 #include <random>
 #include <sstream>
 
-#include "stend/experiment.hpp"
+#include "stend/core/experiment.hpp"
 #include "stend/temp_poly/temp_poly.hpp"
 
 using namespace stend;

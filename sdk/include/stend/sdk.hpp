@@ -9,6 +9,7 @@
 // Rotation matrices are passive (frame transforms): v_top = R_top_from_base · v_base.
 #pragma once
 
+#include <stend/errors.hpp>
 #include <stend/plugin_abi.h>
 
 #include <Eigen/Core>
@@ -16,6 +17,9 @@
 #include <cstdio>
 #include <type_traits>
 #include <cstdint>
+#include <functional>
+#include <limits>
+#include <memory>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -24,6 +28,15 @@
 #include <vector>
 
 namespace stend {
+
+// A value that is not known (a missing temperature, a parameter the data did not identify): never
+// a default presented as a result. The one definition; code in namespace stend uses it unqualified.
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// A sensor, fixture or estimator made by a plugin's factory, deleted through the plugin's own
+// deleter (the plugin host hands these out).
+template <class T>
+using PluginPtr = std::unique_ptr<T, std::function<void(T*)>>;
 
 // ---------------------------------------------------------------------------------------------
 // Validated configuration handed to a plugin's create(). Every key of the plugin's schema is
@@ -211,16 +224,16 @@ class Fixture {
 // an event with the text, marks the recording's truth as a gap, keeps the sensor running and tries
 // again on the next period, for up to RunOptions::fixture_outage_s. Any other exception from a
 // fixture (a runaway chamber, a limit hit) ends the run at once.
-class __attribute__((visibility("default"))) FixtureLinkFault : public std::runtime_error {
+class __attribute__((visibility("default"))) FixtureLinkFault : public IoError {
  public:
-  using std::runtime_error::runtime_error;
+  using IoError::IoError;
 };
 
 // ---------------------------------------------------------------------------------------------
 // Estimators: fit a model to a recording. The host (`stend fit --estimator NAME`) opens the run
 // folder or dataset and hands the recording over; an estimator plugin links stend_core for the
-// Recording type (stend/recording.hpp) and parses its own section of the model YAML.
-struct Recording;  // stend/recording.hpp
+// Recording type (stend/recording/recording.hpp) and parses its own section of the model YAML.
+struct Recording;  // stend/recording/recording.hpp
 
 struct EstimatorRequest {
   const Recording* recording = nullptr;  // the opened recording (never null when fit() is called)

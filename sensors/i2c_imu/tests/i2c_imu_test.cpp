@@ -4,7 +4,7 @@
 // The models' counts come from SimImu driven by a known truth, so SI values are checked against it.
 #include <gtest/gtest.h>
 
-#include <stend/experiment.hpp>
+#include <stend/core/experiment.hpp>
 #include <stend/devices/i2c_hid.hpp>
 
 #include <dlfcn.h>

@@ -3,7 +3,7 @@
 // pty's slave-side path exactly as it would open /dev/ttyUSB0.
 #include <gtest/gtest.h>
 
-#include <stend/experiment.hpp>
+#include <stend/core/experiment.hpp>
 #include <stend/devices/modbus_rtu.hpp>
 
 #include <chrono>

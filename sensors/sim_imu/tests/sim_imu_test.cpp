@@ -2,7 +2,7 @@
 // against an independently built ErrorModel, noise statistics, output stage, timing, seeds.
 #include <gtest/gtest.h>
 
-#include <stend/experiment.hpp>
+#include <stend/core/experiment.hpp>
 #include <stend/physics/geometry.hpp>
 #include <stend/model/terms.hpp>
 

@@ -21,7 +21,7 @@
 #include <stend/estimation/model_spec.hpp>
 #include <stend/estimation/summary.hpp>
 #include <stend/model/terms.hpp>
-#include <stend/recording.hpp>
+#include <stend/recording/recording.hpp>
 
 #include <nlohmann/json_fwd.hpp>
 

@@ -10,6 +10,8 @@
 // one, the register ("no ACK from 0x68 on /dev/i2c-1 (register 0x75)").
 #pragma once
 
+#include <stend/errors.hpp>
+
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -18,7 +20,7 @@
 
 namespace stend::transport {
 
-class I2cError : public std::runtime_error {
+class I2cError : public IoError {
  public:
   enum class Kind {
     kOpen,      // the adapter could not be opened / found
@@ -27,7 +29,7 @@ class I2cError : public std::runtime_error {
     kBus,       // arbitration lost, bus error, I/O error of the adapter
     kProtocol,  // unexpected answer from a bridge, unsupported transfer
   };
-  I2cError(const std::string& what, Kind kind) : std::runtime_error(what), kind_(kind) {}
+  I2cError(const std::string& what, Kind kind) : IoError(what), kind_(kind) {}
   Kind kind() const { return kind_; }
   // Worth another attempt: a NACK may be a glitch (an absent device NACKs every attempt, which
   // costs only the back-off), time-outs and bus errors usually are.

@@ -7,6 +7,8 @@
 // from `backoff_initial_ms`; slave exceptions are not retried (the slave answered, definitively).
 #pragma once
 
+#include <stend/errors.hpp>
+
 #include <chrono>
 #include <cstdint>
 #include <stdexcept>
@@ -28,11 +30,11 @@ struct ModbusRtuConfig {
   int backoff_initial_ms = 5;  // wait before the first retry; doubles each retry
 };
 
-class ModbusError : public std::runtime_error {
+class ModbusError : public IoError {
  public:
   enum class Kind { kOpen, kTimeout, kCrc, kException, kOther };
   ModbusError(const std::string& what, Kind kind, int exception_code = 0)
-      : std::runtime_error(what), kind_(kind), exception_code_(exception_code) {}
+      : IoError(what), kind_(kind), exception_code_(exception_code) {}
   Kind kind() const { return kind_; }
   int exception_code() const { return exception_code_; }  // MODBUS exception, 0 if none
   bool transient() const { return kind_ == Kind::kTimeout || kind_ == Kind::kCrc || kind_ == Kind::kOther; }

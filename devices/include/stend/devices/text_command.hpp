@@ -7,6 +7,8 @@
 // "serial /dev/ttyUSB0"), the command sent and the reason.
 #pragma once
 
+#include <stend/errors.hpp>
+
 #include <cstdint>
 #include <map>
 #include <stdexcept>
@@ -26,10 +28,10 @@ struct TextCommandConfig {
   bool connect_now = true;   // false: the first command connects
 };
 
-class TextCommandError : public std::runtime_error {
+class TextCommandError : public IoError {
  public:
   enum class Kind { kOpen, kTimeout, kDisconnected, kDevice, kParse };
-  TextCommandError(const std::string& what, Kind kind) : std::runtime_error(what), kind_(kind) {}
+  TextCommandError(const std::string& what, Kind kind) : IoError(what), kind_(kind) {}
   Kind kind() const { return kind_; }
   // Worth retrying later: the link, not the command, failed.
   bool transient() const { return kind_ == Kind::kTimeout || kind_ == Kind::kDisconnected || kind_ == Kind::kOpen; }

@@ -30,7 +30,7 @@
 
 #include "stend/batch_lsq/batch_lsq.hpp"
 #include "stend/model/terms.hpp"
-#include "stend/recording.hpp"
+#include "stend/recording/recording.hpp"
 
 namespace stend::diagnosis {
 

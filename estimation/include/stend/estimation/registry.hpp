@@ -12,9 +12,9 @@
 #pragma once
 
 #include <stend/estimation/model_spec.hpp>
+#include <stend/estimation/result.hpp>
 #include <stend/estimation/summary.hpp>
 #include <stend/fields.hpp>
-#include <stend/plugin_host.hpp>
 #include <stend/sdk.hpp>
 
 #include <nlohmann/json_fwd.hpp>
@@ -69,9 +69,6 @@ class Registry {
  public:
   // Adds an entry; throws std::logic_error on a second entry of the same name.
   void add(EstimatorEntry entry);
-  // Estimator plugins found by `host` whose names are not already registered; `host` must
-  // outlive the registry and every estimator created through it.
-  void add_plugins(const PluginHost& host);
 
   const EstimatorEntry* find(const std::string& name) const;  // nullptr when absent
   // The entry a model file is for: the one claiming it, else the fallback. Throws
@@ -82,6 +79,9 @@ class Registry {
   const EstimatorEntry* for_results(const nlohmann::json& doc, const std::string& file_name) const;
   // The summary of a results document through its entry (summary_from_json without one).
   FitSummary summarize(const nlohmann::json& doc, const std::string& file_name) const;
+  // A results document read back as the typed result, through the entry that wrote it (its
+  // summary, the document itself and the default results file name).
+  FitResult read(const nlohmann::json& doc, const std::string& file_name) const;
 
   const std::vector<EstimatorEntry>& entries() const { return entries_; }
   std::string names() const;  // "batch_lsq, temp_poly, …" for messages

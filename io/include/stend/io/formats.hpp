@@ -13,7 +13,7 @@
 
 #include <stend/io/import_options.hpp>
 #include <stend/io/sample_sink.hpp>
-#include <stend/recording.hpp>
+#include <stend/recording/recording.hpp>
 
 #include <cstddef>
 #include <filesystem>

@@ -19,7 +19,7 @@
 
 #include <stend/errors.hpp>
 #include <stend/io/sample_sink.hpp>
-#include <stend/recording.hpp>
+#include <stend/recording/recording.hpp>
 
 #include <array>
 #include <cmath>

@@ -3,7 +3,7 @@
 // folder through the RecordingWriter (`stend import`).
 #pragma once
 
-#include <stend/recording.hpp>
+#include <stend/recording/recording.hpp>
 
 #include <cstddef>
 #include <filesystem>

@@ -4,7 +4,7 @@
 #pragma once
 
 #include <stend/io/sample_sink.hpp>
-#include <stend/recording.hpp>
+#include <stend/recording/recording.hpp>
 
 #include <cstddef>
 #include <cstdint>

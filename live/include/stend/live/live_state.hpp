@@ -4,8 +4,8 @@
 // "stend.live/1").
 #pragma once
 
-#include <stend/recording.hpp>
-#include <stend/runner.hpp>
+#include <stend/recording/recording.hpp>
+#include <stend/core/runner.hpp>
 
 #include <nlohmann/json.hpp>
 

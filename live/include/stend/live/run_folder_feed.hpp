@@ -4,7 +4,7 @@
 // (HDF5 SWMR run.h5 or CSV files read up to their last complete line) and on a finished one.
 #pragma once
 
-#include <stend/experiment.hpp>
+#include <stend/core/experiment.hpp>
 #include <stend/live/live_state.hpp>
 
 #include <filesystem>

@@ -28,8 +28,8 @@
 
 #include "stend/processing/static_detector.hpp"
 #include "stend/processing/static_extraction.hpp"
-#include "stend/recording.hpp"
-#include "stend/yaml_util.hpp"
+#include "stend/recording/recording.hpp"
+#include "stend/yaml/reader.hpp"
 
 namespace stend::processing {
 

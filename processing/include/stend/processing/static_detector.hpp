@@ -33,7 +33,7 @@
 #include <vector>
 
 #include "stend/physics/units.hpp"
-#include "stend/recording.hpp"
+#include "stend/recording/recording.hpp"
 
 namespace stend::processing {
 

@@ -24,7 +24,7 @@
 #include "stend/processing/options.hpp"
 #include "stend/processing/skip.hpp"
 #include "stend/processing/static_detector.hpp"
-#include "stend/recording.hpp"
+#include "stend/recording/recording.hpp"
 
 namespace stend::processing {
 

@@ -9,7 +9,7 @@
 #include <span>
 #include <vector>
 
-#include "stend/recording.hpp"
+#include "stend/recording/recording.hpp"
 
 namespace stend::processing {
 

@@ -2,9 +2,9 @@
 // plugins: the simulated bench, or real drivers against their emulators.
 #pragma once
 
-#include <stend/experiment.hpp>
-#include <stend/plugin_host.hpp>
-#include <stend/runner.hpp>
+#include <stend/core/experiment.hpp>
+#include <stend/core/plugin_host.hpp>
+#include <stend/core/runner.hpp>
 
 #include <filesystem>
 

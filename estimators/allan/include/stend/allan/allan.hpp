@@ -20,7 +20,7 @@
 
 #include <stend/allan/stats.hpp>
 #include <stend/allan/stream.hpp>
-#include <stend/recording.hpp>
+#include <stend/recording/recording.hpp>
 
 #include <array>
 #include <cmath>

@@ -28,7 +28,7 @@
 #include "stend/estimation/linear_lsq.hpp"
 #include "stend/model/terms.hpp"
 #include "stend/processing/static_points.hpp"
-#include "stend/recording.hpp"
+#include "stend/recording/recording.hpp"
 
 namespace stend::batch_lsq {
 

@@ -26,7 +26,7 @@
 #include <stend/estimation/summary.hpp>
 #include <stend/model/terms.hpp>
 #include <stend/processing/static_points.hpp>
-#include <stend/recording.hpp>
+#include <stend/recording/recording.hpp>
 
 #include <Eigen/Core>
 #include <Eigen/Dense>

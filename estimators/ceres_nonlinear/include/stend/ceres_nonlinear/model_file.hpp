@@ -12,8 +12,8 @@
 #pragma once
 
 #include <stend/ceres_nonlinear/calibration.hpp>
-#include <stend/experiment.hpp>  // ExperimentError
-#include <stend/recording.hpp>
+#include <stend/errors.hpp>  // ExperimentError
+#include <stend/recording/recording.hpp>
 
 #include <string>
 #include <vector>

@@ -24,7 +24,7 @@
 
 #include "stend/batch_lsq/batch_lsq.hpp"
 #include "stend/estimation/model_spec.hpp"
-#include "stend/recording.hpp"
+#include "stend/recording/recording.hpp"
 
 namespace stend::temp_poly {
 

@@ -1,5 +1,5 @@
 // Strict YAML reading with file:line:column messages and "did you mean" hints.
-#include <stend/yaml_util.hpp>
+#include <stend/yaml/reader.hpp>
 
 #include <algorithm>
 #include <array>

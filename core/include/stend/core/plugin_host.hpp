@@ -2,7 +2,7 @@
 // creates sensors, fixtures and estimators from them.
 #pragma once
 
-#include <stend/experiment.hpp>
+#include <stend/core/experiment.hpp>
 #include <stend/sdk.hpp>
 
 #include <functional>
@@ -11,9 +11,6 @@
 #include <vector>
 
 namespace stend {
-
-template <class T>
-using PluginPtr = std::unique_ptr<T, std::function<void(T*)>>;
 
 struct SearchDir {
   std::string path;

@@ -4,7 +4,7 @@
 // and the live view read remaining_s().
 #pragma once
 
-#include <stend/experiment.hpp>
+#include <stend/core/experiment.hpp>
 
 #include <cstddef>
 #include <vector>

@@ -1,10 +1,11 @@
 // Helpers for validating hand-written YAML with good messages: locations (1-based
 // file:line:column from yaml-cpp marks), "did you mean" suggestions, and a strict reader for one
 // mapping (unknown keys, duplicate keys, missing required keys, typed values with units).
-// Used by the experiment model; processing and estimator configs may use it the same way.
+// Used by the experiment model, processing, estimator and import configs alike; every error is an
+// ExperimentError (stend/errors.hpp) at the offending key or value.
 #pragma once
 
-#include <stend/experiment.hpp>
+#include <stend/errors.hpp>
 
 #include <cstdint>
 #include <string>
@@ -117,9 +118,5 @@ std::string format_number(double value);
 // Emits a string so that it reads back as the same string (quoted when it would otherwise read
 // as null or be empty).
 void emit_string(YAML::Emitter& out, const std::string& text);
-
-// Emits validated plugin parameters as a mapping, in the order of the plugin's schema (keys the
-// schema does not name follow in alphabetical order); `plugin` may be null.
-void emit_params(YAML::Emitter& out, const Params& params, const stend_plugin_info* plugin);
 
 }  // namespace stend::yaml

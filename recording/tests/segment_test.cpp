@@ -1,7 +1,7 @@
 // Segment: printed and compared as a value (GTSAM-style print/equals).
 #include <gtest/gtest.h>
 
-#include <stend/recording.hpp>
+#include <stend/recording/recording.hpp>
 
 #include <cmath>
 #include <sstream>

@@ -1,4 +1,4 @@
-#include "stend/version.hpp"
+#include "stend/recording/version.hpp"
 
 namespace stend {
 const char* version() { return STEND_VERSION; }

@@ -1,7 +1,7 @@
 // Chunked reading of samples: chunks cover the range once in order, time search and intervals
 // agree with a linear scan, a Recording's sample_source() follows its samples.
-#include <stend/recording.hpp>
-#include <stend/samples.hpp>
+#include <stend/recording/recording.hpp>
+#include <stend/recording/samples.hpp>
 
 #include <gtest/gtest.h>
 

@@ -3,7 +3,7 @@
 
 #include "hdf5_global_heap.hpp"
 #include "hdf5_metadata.hpp"
-#include "stend/hdf5.hpp"
+#include "stend/recording/hdf5.hpp"
 
 #include <hdf5.h>
 

@@ -17,28 +17,6 @@
 
 namespace stend {
 
-struct SourceLocation {
-  std::string file;
-  int line = 0;    // 1-based; 0 = unknown
-  int column = 0;  // 1-based
-  std::string str() const;  // "file:line:column"
-};
-
-// Every experiment problem is one of these. what() reads
-//   "FILE:LINE:COL: error: MESSAGE"   (plus "\n  hint: …" when there is a hint)
-class ExperimentError : public InputError {
- public:
-  ExperimentError(SourceLocation where, std::string key, std::string message, std::string hint = {});
-  const SourceLocation& where() const { return where_; }
-  const std::string& key() const { return key_; }  // dotted path, e.g. "procedure[2].dwell_s"
-  const std::string& message() const { return message_; }
-  const std::string& hint() const { return hint_; }
-
- private:
-  SourceLocation where_;
-  std::string key_, message_, hint_;
-};
-
 // Something the plugin host knows about a plugin, enough to validate its configuration.
 class PluginCatalogue {
  public:
@@ -55,6 +33,12 @@ class PluginCatalogue {
 // or value, what was expected (type, unit, range, choices) and suggest the closest known key.
 Params params_from_yaml(const YAML::Node& node, const stend_plugin_info& plugin,
                         const std::string& file, const std::string& key_path);
+
+namespace yaml {
+// Emits validated plugin parameters as a mapping, in the order of the plugin's schema (keys the
+// schema does not name follow in alphabetical order); `plugin` may be null.
+void emit_params(YAML::Emitter& out, const Params& params, const stend_plugin_info* plugin);
+}  // namespace yaml
 
 struct PluginInstance {
   std::string plugin;  // plugin name

@@ -1,10 +1,10 @@
 // The recording store: run folder writer (incremental, write(2)-based) and reader.
 // Format: docs/recording-format.md.
-#include "stend/recording.hpp"
+#include "stend/recording/recording.hpp"
 
-#include "stend/csv.hpp"
+#include "stend/recording/csv.hpp"
 #include "stend/errors.hpp"
-#include "stend/files.hpp"
+#include "stend/recording/files.hpp"
 #include "hdf5_store.hpp"
 
 #include <fcntl.h>

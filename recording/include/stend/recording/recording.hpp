@@ -23,7 +23,7 @@
 #pragma once
 
 #include <stend/physics/units.hpp>
-#include <stend/samples.hpp>
+#include <stend/recording/samples.hpp>
 #include <stend/sdk.hpp>
 
 #include <cstdint>

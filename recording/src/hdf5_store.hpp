@@ -2,7 +2,7 @@
 // docs/recording-format.md. Internal to stend_core; RecordingWriter and Recording::open use it.
 #pragma once
 
-#include "stend/recording.hpp"
+#include "stend/recording/recording.hpp"
 
 #include <cstdint>
 #include <filesystem>

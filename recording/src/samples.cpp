@@ -1,5 +1,5 @@
 // Chunked reading of a recording's samples (samples.hpp).
-#include "stend/samples.hpp"
+#include "stend/recording/samples.hpp"
 
 #include <fmt/format.h>
 

@@ -1,11 +1,11 @@
 // The runner: executes an experiment's procedure on a bench and writes the recording.
 #pragma once
 
-#include <stend/bench.hpp>
-#include <stend/clock.hpp>
-#include <stend/experiment.hpp>
-#include <stend/plugin_host.hpp>
-#include <stend/recording.hpp>
+#include <stend/core/bench.hpp>
+#include <stend/core/clock.hpp>
+#include <stend/core/experiment.hpp>
+#include <stend/core/plugin_host.hpp>
+#include <stend/recording/recording.hpp>
 
 #include <array>
 #include <atomic>
@@ -19,7 +19,7 @@
 namespace stend {
 
 // What the runner reports while it runs (RunOptions::on_progress): where in the procedure it is,
-// the time left (stend/eta.hpp: the plan with the settle behaviour seen so far), and what the bench
+// the time left (stend/core/eta.hpp: the plan with the settle behaviour seen so far), and what the bench
 // reads now — for the progress line and the live view.
 struct RunProgress {
   int step = 0, step_count = 0;   // 1-based step being executed

@@ -2,8 +2,8 @@
 // the composition of the fixture stack into the truth the sensor experiences.
 #pragma once
 
-#include <stend/experiment.hpp>
-#include <stend/plugin_host.hpp>
+#include <stend/core/experiment.hpp>
+#include <stend/core/plugin_host.hpp>
 #include <stend/sdk.hpp>
 
 #include <string>

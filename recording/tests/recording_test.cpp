@@ -1,6 +1,6 @@
 // Recording store: round trip, tolerance of interrupted writes, durability under SIGKILL, scale.
 #include <stend/errors.hpp>
-#include <stend/recording.hpp>
+#include <stend/recording/recording.hpp>
 #include <stend/testing/files.hpp>
 #include <stend/testing/paths.hpp>
 #include <stend/testing/program.hpp>

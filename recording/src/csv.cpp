@@ -1,4 +1,4 @@
-#include "stend/csv.hpp"
+#include "stend/recording/csv.hpp"
 
 #include "stend/errors.hpp"
 

@@ -1,5 +1,5 @@
 // Result files written whole through a checked temporary file (see files.hpp).
-#include "stend/files.hpp"
+#include "stend/recording/files.hpp"
 
 #include "stend/errors.hpp"
 
