@@ -435,7 +435,9 @@ TEST(PluginHostOutOfTree, TemplateSensorBuildsAgainstInstalledSdkAndWorks) {
   EXPECT_TRUE(fs::exists(config_dir / "StendConfigVersion.cmake"));
   EXPECT_TRUE(fs::exists(prefix / "include" / "stend" / "plugin_abi.h"));
   EXPECT_TRUE(fs::exists(prefix / "include" / "stend" / "sdk.hpp"));
-  EXPECT_TRUE(fs::exists(prefix / "include" / "stend" / "plugin_host.hpp"));
+  EXPECT_TRUE(fs::exists(prefix / "include" / "stend" / "errors.hpp"));
+  EXPECT_TRUE(fs::exists(prefix / "include" / "stend" / "core" / "plugin_host.hpp"));
+  EXPECT_TRUE(fs::exists(prefix / "include" / "stend" / "recording" / "recording.hpp"));
   EXPECT_FALSE(fs::exists(prefix / "lib" / "stend" / "test-plugins"))
       << "test plugins must never be installed";
 
