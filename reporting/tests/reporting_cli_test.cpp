@@ -223,8 +223,9 @@ TEST_F(Cli, CompareRefusesDifferentProcedures) {
                log),
             2);
   const std::string out = read_text(log);
-  const auto fp_paper = stend::reporting::load_run_results(dir / "paper", stend::estimators::builtin()).procedure_fingerprint;
-  const auto fp_sweep = stend::reporting::load_run_results(dir / "sweep", stend::estimators::builtin()).procedure_fingerprint;
+  const auto registry = stend::estimators::builtin();
+  const auto fp_paper = stend::reporting::load_run_results(dir / "paper", registry).procedure_fingerprint;
+  const auto fp_sweep = stend::reporting::load_run_results(dir / "sweep", registry).procedure_fingerprint;
   ASSERT_NE(fp_paper, fp_sweep);
   EXPECT_NE(out.find("refusing to compare"), std::string::npos) << out;
   EXPECT_NE(out.find(fp_paper.substr(0, 16)), std::string::npos) << out;

@@ -44,7 +44,8 @@ struct TempDisplay {
 
 // The chosen order, then the candidate orders with their BIC, CV error and rank.
 void add_orders(ReportSection& s, const json& ax) {
-  s.add(Paragraph{{Span{"chosen polynomial order: "}, Span{std::to_string(ax.value("chosen_order", -1)), Span::Kind::kStrong}}});
+  const std::string order = std::to_string(ax.value("chosen_order", -1));
+  s.add(Paragraph{{Span{"chosen polynomial order: "}, Span{order, Span::Kind::kStrong}}});
   Table t;
   t.header = {"order", "BIC", "CV MSE", "rank", "note"};
   for (const auto& sc : ax.value("scores", json::array()))
@@ -182,7 +183,8 @@ ReportSection report_section(const estimation::FitResult& result) {
     s.add(estimation::failure_paragraph("TEMPERATURE FIT REFUSED OR FAILED", result.summary.message));
     return s;
   }
-  const double vmin = at(tp.value("valid_range_c", json::array()), 0), vmax = at(tp.value("valid_range_c", json::array()), 1);
+  const json valid_range = tp.value("valid_range_c", json::array());
+  const double vmin = at(valid_range, 0), vmax = at(valid_range, 1);
   s.add_text("Reference temperature T0 = " + g(num(tp, "reference_c")) + " °C; coefficients valid over " + g(vmin) +
              " … " + g(vmax) + " °C (die temperature).");
   const bool accel = str(tp, "unit") != "rad/s";
