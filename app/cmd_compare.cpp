@@ -3,6 +3,7 @@
 #include "commands.hpp"
 
 #include "stend/errors.hpp"
+#include "stend/estimators/builtin.hpp"
 #include "stend/recording/files.hpp"
 #include "stend/reporting/compare.hpp"
 #include "stend/reporting/results_store.hpp"
@@ -46,7 +47,7 @@ std::vector<rp::RunResults> select_runs(const std::vector<std::string>& runs, co
   std::vector<rp::RunResults> selected;
   for (const auto& r : runs) {
     if (fs::is_directory(r)) {
-      rp::RunResults rr = rp::load_run_results(r);
+      rp::RunResults rr = rp::load_run_results(r, estimators::builtin());
       if (record && store) store->add(rr);
       selected.push_back(std::move(rr));
       continue;

@@ -4,6 +4,7 @@
 #include "commands.hpp"
 
 #include "stend/errors.hpp"
+#include "stend/estimators/builtin.hpp"
 #include "stend/reporting/results_store.hpp"
 
 #include <fmt/format.h>
@@ -53,7 +54,7 @@ ExitCode run_push(const std::string& location, const std::vector<std::string>& r
   std::vector<std::string> refused;
   for (const auto& run : runs) {
     try {
-      const rp::RunResults r = rp::load_run_results(run);
+      const rp::RunResults r = rp::load_run_results(run, estimators::builtin());
       store.add(r);
       ++pushed;
       parameters += r.parameters.size();

@@ -6,6 +6,7 @@
 #include "commands.hpp"
 
 #include "stend/errors.hpp"
+#include "stend/estimators/builtin.hpp"
 #include "stend/recording/files.hpp"
 #include "stend/reporting/exports.hpp"
 #include "stend/reporting/results_store.hpp"
@@ -87,7 +88,7 @@ void add_export_command(CLI::App& app, std::vector<Command>& out) {
                    if (db.empty() && !procedure.empty())
                      throw InputError("stend export --procedure: give the results store with --db LOCATION");
                    if (db.empty() && run.empty()) throw InputError("stend export: give the run folder");
-                   const auto r = db.empty() ? stend::reporting::export_run(run, format, output, opt)
+                   const auto r = db.empty() ? stend::reporting::export_run(run, format, output, estimators::builtin(), opt)
                                              : export_from_store(run, procedure, db, format, output);
                    nlohmann::json files = nlohmann::json::array();
                    for (const auto& f : r.files) {

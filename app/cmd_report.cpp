@@ -2,6 +2,7 @@
 // Also defines write_run_report(), which `stend run` calls at the end of a run.
 #include "commands.hpp"
 
+#include "stend/estimators/builtin.hpp"
 #include "stend/reporting/results_store.hpp"
 #include "stend/reporting/run_report.hpp"
 
@@ -13,7 +14,7 @@ namespace stend::cli {
 
 std::string record_in_store(const std::filesystem::path& run_dir, const std::string& db) {
   stend::reporting::ResultsStore store(stend::reporting::results_store_location(db, run_dir));
-  const auto r = stend::reporting::load_run_results(run_dir);
+  const auto r = stend::reporting::load_run_results(run_dir, estimators::builtin());
   store.add(r);
   fmt::print(human(), "results db: {} (run {}, procedure {}, {} parameter(s))\n", store.where(), r.run_name,
              r.procedure_fingerprint.empty() ? "unknown" : r.procedure_fingerprint.substr(0, 16), r.parameters.size());
@@ -30,7 +31,7 @@ void add_report_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_flag("--no-db", no_db, "Do not record the run in the results database");
   add_json_flag(sub, "the report and database written");
   out.push_back({sub, [] {
-                   const auto path = stend::reporting::write_run_report(run);
+                   const auto path = stend::reporting::write_run_report(run, estimators::builtin());
                    fmt::print(human(), "report:     {}\n", path.string());
                    const std::string where = no_db ? std::string() : record_in_store(run, db);
                    // docs/schemas/report.schema.json
@@ -41,7 +42,7 @@ void add_report_command(CLI::App& app, std::vector<Command>& out) {
 }
 
 std::filesystem::path write_run_report(const std::filesystem::path& run_dir, const std::string& db) {
-  const std::filesystem::path path = stend::reporting::write_run_report(run_dir);
+  const std::filesystem::path path = stend::reporting::write_run_report(run_dir, estimators::builtin());
   try {
     record_in_store(run_dir, db);
   } catch (const std::exception& e) {

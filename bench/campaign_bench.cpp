@@ -7,6 +7,7 @@
 //   2. `stend compare --procedure` over 10^5 stored parameter rows, SQLite and PostgreSQL
 //      (a server started in a temporary folder): the median wall time of 5 calls.
 //   build/bin/campaign_bench [--runs N] [--no-slurm] [--no-campaign]
+#include "stend/estimators/builtin.hpp"
 #include "stend/reporting/results_store.hpp"
 #include "stend/testing/files.hpp"
 #include "stend/testing/paths.hpp"
@@ -53,7 +54,7 @@ ProgramOutput stend_cmd(const std::string& args, const stend::testing::Environme
 std::size_t mismatches(const std::vector<fs::path>& runs, const rp::RunResults& by_hand) {
   std::size_t bad = 0;
   for (const auto& r : runs) {
-    const rp::RunResults b = rp::load_run_results(r);
+    const rp::RunResults b = rp::load_run_results(r, stend::estimators::builtin());
     bool same = b.parameters.size() == by_hand.parameters.size();
     for (std::size_t i = 0; same && i < b.parameters.size(); ++i)
       same = b.parameters[i].identifiable == by_hand.parameters[i].identifiable &&
@@ -79,7 +80,7 @@ void campaign(int n, bool with_slurm) {
   if (r.code != 0) throw std::runtime_error("stend run failed: " + r.text);
   r = stend_cmd("fit " + shell_quote((tmp / "unit").string()) + " -m " + shell_quote(model));
   if (r.code != 0) throw std::runtime_error("stend fit failed: " + r.text);
-  const rp::RunResults by_hand = rp::load_run_results(tmp / "unit");
+  const rp::RunResults by_hand = rp::load_run_results(tmp / "unit", stend::estimators::builtin());
   // One `stend fit` by hand, timed: the cost of one task.
   auto t0 = std::chrono::steady_clock::now();
   stend_cmd("fit " + shell_quote((tmp / "unit").string()) + " -m " + shell_quote(model));

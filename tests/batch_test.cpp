@@ -3,6 +3,7 @@
 // PostgreSQL store — each gives the same results, number for number, as `stend fit` run by hand
 // on each run; a task that fails is retried and then reported. Slurm and PostgreSQL are started
 // by the test (testing/services.hpp); their tests skip, saying why, when they cannot start.
+#include "stend/estimators/builtin.hpp"
 #include "stend/reporting/results_store.hpp"
 #include "stend/testing/files.hpp"
 #include "stend/testing/paths.hpp"
@@ -70,7 +71,8 @@ class Batch : public ::testing::Test {
   // Every fitted number of `set`'s runs equals the hand fit's, bit for bit.
   static void expect_same_as_by_hand(const std::string& set) {
     for (const char* u : kUnits) {
-      const rp::RunResults a = rp::load_run_results(*tmp / "by-hand" / u), b = rp::load_run_results(*tmp / set / u);
+      const rp::RunResults a = rp::load_run_results(*tmp / "by-hand" / u, stend::estimators::builtin());
+      const rp::RunResults b = rp::load_run_results(*tmp / set / u, stend::estimators::builtin());
       ASSERT_FALSE(b.parameters.empty()) << set << "/" << u << " was not fitted";
       ASSERT_EQ(a.parameters.size(), b.parameters.size());
       for (std::size_t i = 0; i < a.parameters.size(); ++i) {
@@ -115,7 +117,7 @@ TEST_F(Batch, RunsChosenByProcedureFromAPostgresStore) {
   const auto push = run_stend("db push" + words(runs) + " --db " + shell_quote(url), pg.env());  // recorded offline
   ASSERT_EQ(push.code, 0) << push.text;
   EXPECT_NE(push.text.find("pushed:     3 run(s)"), std::string::npos) << push.text;
-  const std::string fp = rp::load_run_results(runs[0]).procedure_fingerprint;
+  const std::string fp = rp::load_run_results(runs[0], stend::estimators::builtin()).procedure_fingerprint;
   const auto r = run_stend("batch fit --procedure " + fp.substr(0, 12) + " -m " + shell_quote(kModel) + " --db " +
                                shell_quote(url) + " -j 2",
                            pg.env());
@@ -174,7 +176,7 @@ void expect_gap_stored_and_exported(const std::vector<std::string>& runs, const 
                            }()) + " -m " + shell_quote(kModel) + " --db " + shell_quote(db) + " -j 2",
                            env);  // the same runs again: replaced, not duplicated
   EXPECT_NE(b.text.find("3 task(s)"), std::string::npos) << b.text;
-  const std::string fp = rp::load_run_results(runs[0]).procedure_fingerprint;
+  const std::string fp = rp::load_run_results(runs[0], stend::estimators::builtin()).procedure_fingerprint;
   const auto e = run_stend("export --db " + shell_quote(db) + " --procedure " + fp.substr(0, 10) + " --to json -o " +
                                shell_quote(out),
                            env);

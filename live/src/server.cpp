@@ -33,13 +33,15 @@ bool is_ip_literal(const std::string& address) {
 
 }  // namespace
 
-void LiveServerOptions::check() const {
+bool LiveServerOptions::IsValid(std::string* error) const {
+  std::string why;
   if (!is_ip_literal(address))
-    throw InputError(fmt::format("live view: '{}' is not an IP address; give one such as 127.0.0.1 (the default, "
-                                 "loopback only)",
-                                 address));
-  if (port < 0 || port > 65535)
-    throw InputError(fmt::format("live view: port {} is outside 0…65535 (0 picks a free port)", port));
+    why = fmt::format("live view: '{}' is not an IP address; give one such as 127.0.0.1 (the default, loopback only)",
+                      address);
+  else if (port < 0 || port > 65535)
+    why = fmt::format("live view: port {} is outside 0…65535 (0 picks a free port)", port);
+  if (error != nullptr) *error = why;
+  return why.empty();
 }
 
 bool charts_built_in() { return STEND_LIVE_CHARTS != 0; }
@@ -53,7 +55,7 @@ struct LiveServer::Impl {
 };
 
 LiveServer::LiveServer(const LiveState& state, const LiveServerOptions& options) : impl_(std::make_unique<Impl>()) {
-  options.check();
+  if (std::string why; !options.IsValid(&why)) throw InputError(why);
   httplib::Server& s = impl_->server;
   // SO_REUSEADDR only: httplib's default adds SO_REUSEPORT, which would let a second stend listen
   // on a port that is taken (and share its requests) instead of being told so.

@@ -118,7 +118,13 @@ TEST(LiveServer, ServesThePageAndStateReadOnlyOnLoopback) {
   // Only a literal address is accepted, and a port that is taken is an I/O error naming it.
   stend::live::LiveServerOptions bad;
   bad.address = "localhost";
-  EXPECT_THROW(bad.check(), stend::InputError);
+  std::string why;
+  EXPECT_FALSE(bad.IsValid(&why));
+  EXPECT_NE(why.find("'localhost' is not an IP address"), std::string::npos) << why;
+  EXPECT_THROW(stend::live::LiveServer(state, bad), stend::InputError);
+  bad.address = "127.0.0.1";
+  bad.port = 70000;
+  EXPECT_FALSE(bad.IsValid());
   stend::live::LiveServerOptions taken;
   taken.port = server.port();
   EXPECT_THROW(stend::live::LiveServer(state, taken), stend::IoError);

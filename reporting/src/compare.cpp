@@ -2,9 +2,9 @@
 #include "stend/reporting/compare.hpp"
 
 #include "stend/estimation/linear_lsq.hpp"
+#include "stend/estimation/report_section.hpp"
 #include "stend/reporting/run_report.hpp"
 #include "stend/reporting/svg_plot.hpp"
-#include "display_unit.hpp"
 
 #include <fmt/format.h>
 
@@ -142,6 +142,7 @@ std::string comparison_text(const Comparison& c) {
 
 std::string comparison_html(const Comparison& c) {
   using svg::escape;
+  namespace figure = estimation::figure;
   std::string b = "<h1>Stend comparison of units and vendors</h1>\n";
   b += fmt::format("<p>{} run(s), all measured with procedure fingerprint <code>{}</code>. Vendor mean intervals are "
                    "95 % Student-t intervals from the unit-to-unit spread; each unit's interval is its own fit's.</p>\n",
@@ -158,7 +159,7 @@ std::string comparison_html(const Comparison& c) {
        "<th>unit</th></tr>\n";
   // Shown in the reports' display units (mg, deg/h, ppm), as the plots below are.
   for (const auto& p : c.parameters) {
-    const detail::DisplayUnit du = detail::display_unit(p.unit);
+    const estimation::DisplayUnit du = estimation::display_unit(p.unit);
     for (const auto& v : p.vendors)
       b += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}/{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>"
                        "<td>{}</td></tr>\n",
@@ -174,9 +175,9 @@ std::string comparison_html(const Comparison& c) {
     bool any = false;
     for (const auto& u : p.units) any = any || u.p.identifiable;
     if (!any) continue;
-    const detail::DisplayUnit du = detail::display_unit(p.unit);
+    const estimation::DisplayUnit du = estimation::display_unit(p.unit);
     const double k = du.scale;
-    svg::Plot plot;
+    figure::Plot plot;
     plot.title = p.estimator + ": " + p.name;
     plot.y_label = p.name + " [" + du.unit + "]";
     plot.x_label = "unit (grouped by vendor)";
@@ -184,14 +185,14 @@ std::string comparison_html(const Comparison& c) {
     plot.height = 320;
     std::map<std::string, std::size_t> color;
     for (const auto& v : p.vendors) color.emplace(v.vendor, color.size());
-    std::map<std::string, svg::Series> units, means, bands;
+    std::map<std::string, figure::Series> units, means, bands;
     std::vector<std::string> order;
     for (std::size_t i = 0; i < p.units.size(); ++i) {
       const UnitValue& u = p.units[i];
       plot.x_categories.push_back(u.serial.empty() ? u.run_name : u.serial);
       if (!units.count(u.vendor)) {
         order.push_back(u.vendor);
-        units[u.vendor] = {u.vendor, svg::Style::kPoints, {}, {}, {}, {}, svg::palette(color[u.vendor]), false, 1.0};
+        units[u.vendor] = {u.vendor, figure::Style::kPoints, {}, {}, {}, {}, figure::palette(color[u.vendor]), false, 1.0};
       }
       auto& s = units[u.vendor];
       s.x.push_back(static_cast<double>(i));
@@ -203,14 +204,15 @@ std::string comparison_html(const Comparison& c) {
       const auto& s = units[v.vendor];
       if (s.x.empty()) continue;
       const double x0 = s.x.front() - 0.3, x1 = s.x.back() + 0.3;
-      svg::Series m{"", svg::Style::kLine, {x0, x1}, {v.mean * k, v.mean * k}, {}, {}, svg::palette(color[v.vendor]), true, 1.0};
-      svg::Series band{"", svg::Style::kBand, {x0, x1}, {}, {v.mean_lo * k, v.mean_lo * k}, {v.mean_hi * k, v.mean_hi * k},
-                       svg::palette(color[v.vendor]), false, 0.18};
+      const std::string vendor_color = figure::palette(color[v.vendor]);
+      figure::Series m{"", figure::Style::kLine, {x0, x1}, {v.mean * k, v.mean * k}, {}, {}, vendor_color, true, 1.0};
+      figure::Series band{"", figure::Style::kBand, {x0, x1}, {}, {v.mean_lo * k, v.mean_lo * k},
+                          {v.mean_hi * k, v.mean_hi * k}, vendor_color, false, 0.18};
       plot.series.push_back(band);
       plot.series.push_back(m);
     }
     for (const auto& v : order) plot.series.push_back(units[v]);
-    b += "<figure>" + plot.render() + "<figcaption>" + escape(p.name) +
+    b += "<figure>" + svg::render(plot) + "<figcaption>" + escape(p.name) +
          ": each unit's value with its own interval; dashed: vendor mean, shaded: its 95 % interval.</figcaption>"
          "</figure>\n";
   }

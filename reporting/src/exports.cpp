@@ -715,7 +715,8 @@ const std::vector<std::string>& export_formats() {
   return f;
 }
 
-ExportResult export_run(const fs::path& run_dir, const std::string& format, fs::path out, const ExportOptions& options) {
+ExportResult export_run(const fs::path& run_dir, const std::string& format, fs::path out,
+                        const estimation::Registry& registry, const ExportOptions& options) {
   if (format == "csv") {  // the recording itself, as a CSV run folder
     if (out.empty()) out = run_dir / "export" / "csv";
     const Recording rec = Recording::open(run_dir, SampleLoading::kStream);
@@ -727,7 +728,7 @@ ExportResult export_run(const fs::path& run_dir, const std::string& format, fs::
     if (!rec.damage.empty()) r.warnings.push_back(fmt::format("{} of {} samples exported: {}", rec.sample_count(), rec.written_samples, rec.damage));
     return r;
   }
-  const RunResults rr = load_run_results(run_dir);
+  const RunResults rr = load_run_results(run_dir, registry);
   const fs::path run = rr.dir;
   if (out.empty()) {
     fs::create_directories(run / "export");

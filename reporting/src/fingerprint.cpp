@@ -1,6 +1,8 @@
 // Procedure fingerprint: canonical YAML text + SHA-256 (see fingerprint.hpp).
 #include "stend/reporting/fingerprint.hpp"
 
+#include "stend/errors.hpp"
+
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
@@ -9,7 +11,6 @@
 #include <charconv>
 #include <cstdint>
 #include <map>
-#include <stdexcept>
 
 namespace stend::reporting {
 
@@ -147,10 +148,10 @@ std::string canonical_procedure(const std::string& experiment_yaml) {
   try {
     root = YAML::Load(experiment_yaml);
   } catch (const YAML::Exception& e) {
-    throw std::runtime_error(std::string("experiment.yaml does not parse: ") + e.what());
+    throw InputError(std::string("experiment.yaml does not parse: ") + e.what());
   }
   if (!root.IsMap() || !root["procedure"])
-    throw std::runtime_error("experiment.yaml has no 'procedure': cannot fingerprint the procedure");
+    throw InputError("experiment.yaml has no 'procedure': cannot fingerprint the procedure");
   std::string out = "{\"fixtures\":";
   const YAML::Node bench = root["bench"];
   canonical(bench && bench.IsMap() ? bench["fixtures"] : YAML::Node(), out);

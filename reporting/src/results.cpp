@@ -1,9 +1,10 @@
 // Run-folder results: identity, fingerprint and parameters of every estimator (see results.hpp).
 #include "stend/reporting/results.hpp"
 
-#include "stend/estimators/builtin.hpp"
-#include "stend/reporting/fingerprint.hpp"
+#include "stend/errors.hpp"
+#include "stend/estimation/registry.hpp"
 #include "stend/recording/recording.hpp"
+#include "stend/reporting/fingerprint.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -31,7 +32,7 @@ json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr
 
 std::string read_text(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
-  if (!in) throw std::runtime_error(p.string() + ": cannot open");
+  if (!in) throw IoError(p.string() + ": cannot open for reading; check that it exists and is readable");
   std::ostringstream s;
   s << in.rdbuf();
   return s.str();
@@ -45,8 +46,9 @@ const ParameterResult* RunResults::find(const std::string& estimator, const std:
   return nullptr;
 }
 
-std::vector<ParameterResult> parameters_of(const json& doc, const std::string& file_stem, EstimatorUse* use) {
-  const estimation::FitSummary summary = estimators::builtin().summarize(doc, file_stem + ".json");
+std::vector<ParameterResult> parameters_of(const json& doc, const std::string& file_stem,
+                                           const estimation::Registry& registry, EstimatorUse* use) {
+  const estimation::FitSummary summary = registry.summarize(doc, file_stem + ".json");
   EstimatorUse u;
   u.name = summary.estimator.empty() ? file_stem : summary.estimator;
   u.version = summary.version;
@@ -94,7 +96,7 @@ void add_gap_document(RunResults& r) {
 
 }  // namespace
 
-RunResults load_run_results(const fs::path& run_dir) {
+RunResults load_run_results(const fs::path& run_dir, const estimation::Registry& registry) {
   RunResults r;
   r.dir = fs::absolute(run_dir).lexically_normal();
   if (!r.dir.has_filename()) r.dir = r.dir.parent_path();
@@ -119,7 +121,6 @@ RunResults load_run_results(const fs::path& run_dir) {
   } else {
     r.notes.push_back("no experiment.yaml: no procedure fingerprint");
   }
-  const estimation::Registry registry = estimators::builtin();
   for (const auto& entry : registry.entries())
     for (const auto& name : estimation::results_files_of(entry.results_file)) {
       const fs::path f = r.dir / name;
@@ -127,7 +128,7 @@ RunResults load_run_results(const fs::path& run_dir) {
       if (!fs::exists(f)) continue;
       try {
         EstimatorUse use;
-        auto ps = parameters_of(json::parse(read_text(f)), stem, &use);
+        auto ps = parameters_of(json::parse(read_text(f)), stem, registry, &use);
         use.file = f.filename().string();
         r.estimators.push_back(use);
         r.parameters.insert(r.parameters.end(), ps.begin(), ps.end());
@@ -179,7 +180,8 @@ json to_json(const RunResults& r) {
 
 RunResults from_json(const json& j) {
   if (str_or(j, "schema") != kResultsSchema)
-    throw std::runtime_error("not a " + std::string(kResultsSchema) + " document (schema '" + str_or(j, "schema") + "')");
+    throw InputError("not a " + std::string(kResultsSchema) + " document (schema '" + str_or(j, "schema") +
+                     "'): give the results JSON that `stend export RUN --to json` writes");
   RunResults r;
   const json& run = j.at("run");
   r.dir = str_or(run, "dir");

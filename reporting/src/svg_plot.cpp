@@ -1,4 +1,4 @@
-// SVG plotting for the reports (see svg_plot.hpp).
+// A plot drawn as SVG for the reports (see svg_plot.hpp).
 #include "stend/reporting/svg_plot.hpp"
 
 #include <fmt/format.h>
@@ -11,6 +11,11 @@
 namespace stend::reporting::svg {
 
 namespace {
+
+using estimation::figure::palette;
+using estimation::figure::Plot;
+using estimation::figure::Series;
+using estimation::figure::Style;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
@@ -63,12 +68,6 @@ void finish_range(double& lo, double& hi, bool log_axis) {
 std::string num(double v) { return fmt::format("{:.2f}", v); }
 
 }  // namespace
-
-std::string palette(std::size_t k) {
-  static const char* colors[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e",
-                                 "#8c564b", "#e377c2", "#17becf", "#7f7f7f", "#bcbd22"};
-  return colors[k % (sizeof(colors) / sizeof(colors[0]))];
-}
 
 std::string escape(const std::string& s) {
   std::string out;
@@ -526,16 +525,16 @@ std::string legend(const Plot& p, const Frame& f) {
 
 }  // namespace
 
-std::string Plot::render() const {
-  const Frame f = layout(*this);
-  std::string o = svg_open(*this, f);
-  o += grid_and_ticks(*this, f);
-  o += axis_labels(*this, f);
+std::string render(const Plot& p) {
+  const Frame f = layout(p);
+  std::string o = svg_open(p, f);
+  o += grid_and_ticks(p, f);
+  o += axis_labels(p, f);
   o += clip_open(f);
-  o += series_layers(*this, f);
-  o += reference_lines(*this, f);
+  o += series_layers(p, f);
+  o += reference_lines(p, f);
   o += "</g>\n";
-  o += legend(*this, f);
+  o += legend(p, f);
   o += "</svg>\n";
   return o;
 }

@@ -4,6 +4,7 @@
 // keys and types through yaml-cpp. The exported numbers must equal the fit's, and applying each
 // format's correction to readings made by the planted error model must give back the true input.
 // Also: a failed Ceres fit and an absent source are refused with a non-zero exit naming them.
+#include "stend/estimators/builtin.hpp"
 #include "stend/model/terms.hpp"
 #include "stend/reporting/results.hpp"
 #include "stend/testing/files.hpp"
@@ -55,7 +56,7 @@ struct Fitted {
   Eigen::Vector3d b;
 };
 Fitted fitted(const fs::path& run, const std::string& prefix, bool gyro) {
-  const auto rr = stend::reporting::load_run_results(run);
+  const auto rr = stend::reporting::load_run_results(run, stend::estimators::builtin());
   stend::model::ErrorModel m;
   m.instrument = gyro ? stend::model::Instrument::kGyroscope : stend::model::Instrument::kAccelerometer;
   for (auto k : {stend::model::TermKind::kBias, stend::model::TermKind::kScale, stend::model::TermKind::kCrossAxis})
@@ -216,7 +217,7 @@ TEST_F(CeresExport, MatlabFileLoadsInOctaveWithTheFittedValues) {
   const Fitted a = fitted(known, "accel_", false), g = fitted(known, "gyro_", true);
   // MATLAB's layout: AxesMisalignment(i, j) = 100·A(i, j) [%], ConstantBias = b, gyro
   // AccelerationBias = diag(G); NoiseDensity per axis = the Allan N of that axis.
-  const auto rr = stend::reporting::load_run_results(known);
+  const auto rr = stend::reporting::load_run_results(known, stend::estimators::builtin());
   if (run_command("command -v octave-cli").code != 0)
     GTEST_SKIP() << "octave-cli not installed (scripts/install-deps.sh installs Debian's octave): the .mat file was "
                     "written but not loaded in Octave";
@@ -293,7 +294,7 @@ TEST_F(CeresExport, KalibrYamlHasWorstAxisNoiseAndScaleMisalignmentIntrinsics) {
   EXPECT_NE(o.text.find("Kalibr takes one number per sensor; worst axis"), std::string::npos) << o.text;
   const YAML::Node y = YAML::LoadFile(f.string());
   // Kalibr's keys and types: four doubles, a topic string, the rate.
-  const auto rr = stend::reporting::load_run_results(known);
+  const auto rr = stend::reporting::load_run_results(known, stend::estimators::builtin());
   for (const auto& [key, sym] : {std::pair{"accelerometer_noise_density", "N_a"}, {"gyroscope_noise_density", "N_g"}}) {
     double worst = 0;
     for (const char* c : {"x", "y", "z"})

@@ -2,6 +2,7 @@
 // report's plots (also rendered in headless Chromium when it is installed), the gap charts from a
 // fixture gap.json, the refusal to compare different procedures, and every export parsed back in
 // its target format's own conventions.
+#include "stend/estimators/builtin.hpp"
 #include "stend/model/terms.hpp"
 #include "stend/reporting/results.hpp"
 #include "stend/testing/browser.hpp"
@@ -222,8 +223,9 @@ TEST_F(Cli, CompareRefusesDifferentProcedures) {
                log),
             2);
   const std::string out = read_text(log);
-  const auto fp_paper = stend::reporting::load_run_results(dir / "paper").procedure_fingerprint;
-  const auto fp_sweep = stend::reporting::load_run_results(dir / "sweep").procedure_fingerprint;
+  const auto registry = stend::estimators::builtin();
+  const auto fp_paper = stend::reporting::load_run_results(dir / "paper", registry).procedure_fingerprint;
+  const auto fp_sweep = stend::reporting::load_run_results(dir / "sweep", registry).procedure_fingerprint;
   ASSERT_NE(fp_paper, fp_sweep);
   EXPECT_NE(out.find("refusing to compare"), std::string::npos) << out;
   EXPECT_NE(out.find(fp_paper.substr(0, 16)), std::string::npos) << out;
@@ -241,7 +243,7 @@ TEST_F(Cli, KalibrExportParsesAsKalibrYaml) {
   // Kalibr takes one number per sensor: the worst identified axis of the Allan fit, else (no axis
   // identified) allan.json's Kalibr block (slope read-off or upper bound).
   const json k = json::parse(read_text(dir / "static/allan.json"))["kalibr"];
-  const auto rr = stend::reporting::load_run_results(dir / "static");
+  const auto rr = stend::reporting::load_run_results(dir / "static", stend::estimators::builtin());
   for (const auto& [key, sym] : std::map<std::string, std::string>{{"accelerometer_noise_density", "N_a"},
                                                                     {"accelerometer_random_walk", "K_a"},
                                                                     {"gyroscope_noise_density", "N_g"},

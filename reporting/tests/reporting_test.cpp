@@ -1,9 +1,13 @@
 // Unit tests of the reporting library: SVG plotting, procedure fingerprint, results database,
-// comparison statistics and refusal.
+// comparison statistics and refusal, the run report drawing each results file through its registry entry.
+#include "stend/estimation/registry.hpp"
+#include "stend/estimators/builtin.hpp"
+#include "stend/recording/recording.hpp"
 #include "stend/reporting/compare.hpp"
 #include "stend/reporting/fingerprint.hpp"
 #include "stend/reporting/results.hpp"
 #include "stend/reporting/results_db.hpp"
+#include "stend/reporting/run_report.hpp"
 #include "stend/reporting/svg_plot.hpp"
 #include "stend/testing/files.hpp"
 
@@ -18,6 +22,7 @@
 
 namespace rp = stend::reporting;
 namespace fs = std::filesystem;
+namespace figure = stend::estimation::figure;
 
 TEST(Svg, LinearTicksAreNiceAndCoverTheRange) {
   const auto t = rp::svg::nice_ticks(-0.013, 0.047, false);
@@ -45,10 +50,10 @@ TEST(Svg, LogTicksAreDecades) {
 // axis and category labels — every point inside the axes and none under the legend.
 TEST(Svg, LegendStaysOffTheDataAndEveryPointInsideTheAxes) {
   for (const std::string& name : {std::string("short"), std::string(120, 'w')}) {
-    rp::svg::Plot p;
+    figure::Plot p;
     p.title = "layout";
     p.y_label = "a rather long label of the y axis that would not fit otherwise [m/s^2]";
-    rp::svg::Series s{name, rp::svg::Style::kPoints, {}, {}, {}, {}, "", false, 1.0};
+    figure::Series s{name, figure::Style::kPoints, {}, {}, {}, {}, "", false, 1.0};
     for (int i = 0; i <= 20; ++i) {
       s.x.push_back(i);
       s.y.push_back(1e-4 * i * i);  // the largest values at the top right
@@ -56,13 +61,13 @@ TEST(Svg, LegendStaysOffTheDataAndEveryPointInsideTheAxes) {
     s.y_lo = s.y;
     s.y_hi = s.y;
     for (auto& v : s.y_hi) v += 0.002;
-    p.series = {s, {"a curve", rp::svg::Style::kLine, s.x, s.y, {}, {}, "", true, 1.0}};
+    p.series = {s, {"a curve", figure::Style::kLine, s.x, s.y, {}, {}, "", true, 1.0}};
     p.fixed_x = p.fixed_y = true;
     p.x_min = 2;
     p.x_max = 10;  // narrower than the data: widened to contain it
     p.y_min = 0;
     p.y_max = 0.01;
-    const std::string svg = p.render();
+    const std::string svg = rp::svg::render(p);
     const auto plots = stend::testing::check_plot_layout(svg);
     ASSERT_EQ(plots.size(), 1u);
     EXPECT_TRUE(plots[0].has_legend);
@@ -74,16 +79,16 @@ TEST(Svg, LegendStaysOffTheDataAndEveryPointInsideTheAxes) {
 }
 
 TEST(Svg, RenderEscapesTextAndSkipsBadData) {
-  rp::svg::Plot p;
+  figure::Plot p;
   p.title = "a < b & \"c\"";
   p.x_log = p.y_log = true;
-  rp::svg::Series s;
+  figure::Series s;
   s.name = "curve<1>";
-  s.style = rp::svg::Style::kLinePoints;
+  s.style = figure::Style::kLinePoints;
   s.x = {0.1, 1.0, -1.0, 10.0, NAN};
   s.y = {1.0, 0.5, 2.0, 0.0, 1.0};  // x<0, y=0 and NaN are unusable on log axes
   p.series.push_back(s);
-  const std::string out = p.render();
+  const std::string out = rp::svg::render(p);
   EXPECT_NE(out.find("a &lt; b &amp; &quot;c&quot;"), std::string::npos);
   EXPECT_NE(out.find("curve&lt;1&gt;"), std::string::npos);
   EXPECT_EQ(out.find("nan"), std::string::npos);
@@ -91,8 +96,8 @@ TEST(Svg, RenderEscapesTextAndSkipsBadData) {
   // Exactly the two usable points are drawn.
   const std::regex circle("<circle ");
   EXPECT_EQ(std::distance(std::sregex_iterator(out.begin(), out.end(), circle), std::sregex_iterator()), 2);
-  rp::svg::Plot empty;
-  EXPECT_NE(empty.render().find("no data"), std::string::npos);
+  figure::Plot empty;
+  EXPECT_NE(rp::svg::render(empty).find("no data"), std::string::npos);
 }
 
 TEST(Fingerprint, Sha256KnownVectors) {
@@ -247,7 +252,7 @@ TEST(Results, ParametersOfEachEstimatorDocument) {
     {"name":"accel_cross_zy","unit":"1","value":null,"std_error":null,"interval":[null,null],"identifiable":false,
      "reason":"fixed by the frame convention"}]})json");
   rp::EstimatorUse use;
-  auto ps = rp::parameters_of(ceres, "ceres", &use);
+  auto ps = rp::parameters_of(ceres, "ceres", stend::estimators::builtin(), &use);
   ASSERT_EQ(ps.size(), 2u);
   EXPECT_EQ(use.name, "ceres_nonlinear");
   EXPECT_EQ(use.status, "ok");
@@ -259,7 +264,7 @@ TEST(Results, ParametersOfEachEstimatorDocument) {
   // A failed fit contributes no numbers.
   const auto failed = nlohmann::json::parse(
       R"json({"schema":"stend.fit/1","estimator":{"name":"batch_lsq","version":"0.1.0"},"status":"failed","message":"k < p"})json");
-  EXPECT_TRUE(rp::parameters_of(failed, "fit", &use).empty());
+  EXPECT_TRUE(rp::parameters_of(failed, "fit", stend::estimators::builtin(), &use).empty());
   EXPECT_EQ(use.status, "failed");
   EXPECT_EQ(use.message, "k < p");
   // Allan: identified coefficients get value ± 1.96 σ; the others only an upper bound.
@@ -267,10 +272,80 @@ TEST(Results, ParametersOfEachEstimatorDocument) {
     "N":{"identified":true,"value":1e-4,"sigma":1e-6,"unit":"rad/s/sqrt(Hz)","upper_bound":2e-4},
     "K":{"identified":false,"value":null,"sigma":null,"unit":"rad/s^2/sqrt(Hz)","upper_bound":3e-6},
     "B":{"identified":false,"value":null,"sigma":null,"unit":"rad/s","upper_bound":null}}}],"kalibr":{}})json");
-  ps = rp::parameters_of(allan, "allan", &use);
+  ps = rp::parameters_of(allan, "allan", stend::estimators::builtin(), &use);
   ASSERT_EQ(ps.size(), 3u);
   EXPECT_EQ(ps[0].name, "N_gz");
   EXPECT_NEAR(ps[0].hi - ps[0].value, 1.959963984540054e-6, 1e-18);
   EXPECT_FALSE(ps[1].identifiable);
   EXPECT_NE(ps[1].reason.find("upper bound 3e-06"), std::string::npos) << ps[1].reason;
+}
+
+// An estimator the program has never heard of reaches the run report through its registry entry
+// alone: its own section when it gives one (placed by its topic), else the generic section with the
+// parameter table of its summary.
+TEST(RunReport, EveryResultsFileIsDrawnByItsRegistryEntry) {
+  namespace se = stend::estimation;
+  const stend::testing::TempDir d("reporting-toy");
+  stend::Recording rec;
+  rec.header.experiment_name = "toy run";
+  rec.header.status = stend::RunStatus::kComplete;
+  rec.header.info.output_rate_hz = 100.0;
+  for (int i = 0; i < 200; ++i) {
+    stend::ImuSample s;
+    s.t_s = 0.01 * i;
+    s.accel_mps2 = {0.0, 0.0, 9.81};
+    s.temperature_c = 25.0;
+    rec.samples.push_back(s);
+  }
+  stend::write_recording(rec, d / "run", stend::RecordingWriterOptions{stend::RecordingFormat::kCsv});
+
+  se::Registry registry = stend::estimators::builtin();
+  se::EstimatorEntry noise;
+  noise.name = "toy_noise";
+  noise.version = "0.2";
+  noise.results_file = "toy_noise.json";
+  noise.report = [](const se::FitResult& r) {
+    se::ReportSection s;
+    s.heading = "Toy noise";
+    s.topic = se::ReportSection::Topic::kNoise;
+    s.add_text("density " + r.document.value("density", std::string()) + " <per √Hz>");
+    return s;
+  };
+  registry.add(noise);
+  se::EstimatorEntry bias;
+  bias.name = "toy_bias";
+  bias.version = "1.0";
+  bias.results_file = "toy_bias.json";
+  registry.add(bias);
+
+  se::FitSummary fit;
+  fit.estimator = "toy_bias";
+  fit.version = "1.0";
+  fit.status = se::FitStatus::kOk;
+  fit.confidence = 0.95;
+  se::ParameterEstimate b;
+  b.name = "bias_z";
+  b.unit = "m/s^2";
+  b.identifiable = true;
+  b.value = 0.0981;
+  b.std_error = 0.001;
+  b.lower = 0.0961;
+  b.upper = 0.1001;
+  fit.parameters.push_back(b);
+  stend::testing::write_text(d / "run/toy_bias.json", se::to_json(fit).dump());
+  nlohmann::json noise_doc = se::to_json(fit);
+  noise_doc["estimator"] = {{"name", "toy_noise"}, {"version", "0.2"}};
+  noise_doc["density"] = "0.004";
+  stend::testing::write_text(d / "run/toy_noise.json", noise_doc.dump());
+
+  const std::string html = rp::run_report_html(d / "run", registry);
+  const auto bias_at = html.find("<h2>Fit — toy_bias 1.0 <span class=\"file\">(toy_bias.json)</span></h2>");
+  const auto noise_at = html.find("<h2>Toy noise <span class=\"file\">(toy_noise.json)</span></h2>");
+  ASSERT_NE(bias_at, std::string::npos) << html;
+  ASSERT_NE(noise_at, std::string::npos) << html;
+  EXPECT_LT(bias_at, noise_at) << "an error model goes before noise, whatever the registry's order";
+  EXPECT_NE(html.find("<p>density 0.004 &lt;per √Hz&gt;</p>"), std::string::npos) << "texts are escaped";
+  EXPECT_NE(html.find("<table class=\"params\"><tr><th>parameter</th>"), std::string::npos);
+  EXPECT_NE(html.find("<tr><td>bias_z</td><td>10.0034</td><td>mg</td>"), std::string::npos);
+  EXPECT_NE(html.find("toy_bias 1.0 (toy_bias.json, ok)"), std::string::npos) << "listed among the run's estimators";
 }

@@ -1,5 +1,6 @@
 // allan as an Estimator and its registry entry (see stend/allan/estimator.hpp).
 #include "stend/allan/estimator.hpp"
+#include "report_section.hpp"
 
 #include "stend/allan/allan.hpp"
 #include "stend/allan/deviation_report.hpp"
@@ -103,6 +104,7 @@ estimation::EstimatorEntry estimator_entry() {
   e.create = [] { return PluginPtr<Estimator>(new AllanEstimator(), [](Estimator* p) { delete p; }); };
   e.summarize = summarize;
   e.reads_truth = false;
+  e.report = report_section;
   return e;
 }
 

@@ -1,5 +1,6 @@
 // batch_lsq as an Estimator and its registry entry (see stend/batch_lsq/estimator.hpp).
 #include "stend/batch_lsq/estimator.hpp"
+#include "report_section.hpp"
 
 #include "stend/batch_lsq/batch_lsq.hpp"
 
@@ -33,6 +34,7 @@ estimation::EstimatorEntry estimator_entry() {
   e.fallback = true;
   e.linear_model = [](const std::string& file) { return estimation::load_model_spec(file); };
   e.create = [] { return PluginPtr<Estimator>(new BatchLsqEstimator(), [](Estimator* p) { delete p; }); };
+  e.report = report_section;
   return e;
 }
 

@@ -1,5 +1,6 @@
 // ceres_nonlinear as an Estimator and its registry entry (see stend/ceres_nonlinear/estimator.hpp).
 #include "stend/ceres_nonlinear/estimator.hpp"
+#include "report_section.hpp"
 
 #include "stend/ceres_nonlinear/model_file.hpp"
 
@@ -29,6 +30,7 @@ estimation::EstimatorEntry estimator_entry() {
   e.results_file = kResultsFile;
   e.claims = [](const YAML::Node& root) { return root.IsMap() && root["ceres_nonlinear"]; };
   e.create = [] { return PluginPtr<Estimator>(new CeresNonlinearEstimator(), [](Estimator* p) { delete p; }); };
+  e.report = report_section;
   return e;
 }
 

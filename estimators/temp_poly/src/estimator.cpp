@@ -1,5 +1,6 @@
 // temp_poly as an Estimator and its registry entry (see stend/temp_poly/estimator.hpp).
 #include "stend/temp_poly/estimator.hpp"
+#include "report_section.hpp"
 
 #include "stend/temp_poly/temp_poly.hpp"
 
@@ -54,6 +55,7 @@ estimation::EstimatorEntry estimator_entry() {
   e.claims = [](const YAML::Node& root) { return root.IsMap() && (root["selection"] || root["max_order"]); };
   e.create = [] { return PluginPtr<Estimator>(new TempPolyEstimator(), [](Estimator* p) { delete p; }); };
   e.summarize = summarize;
+  e.report = report_section;
   return e;
 }
 

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <stend/estimation/model_spec.hpp>
+#include <stend/estimation/report_section.hpp>
 #include <stend/estimation/result.hpp>
 #include <stend/estimation/summary.hpp>
 #include <stend/fields.hpp>
@@ -63,6 +64,10 @@ struct EstimatorEntry {
   // For an estimator whose model file is a linear error model (model_spec.hpp): the file read as
   // that model — what `stend gap` fits, replays and extends. Null: no linear model to diagnose.
   std::function<ModelSpec(const std::string& model_file)> linear_model;
+  // This estimator's section of the run report, from its results read back (Registry::read): the
+  // page sets the section's `file` to the results file it read. Null: the generic section, the
+  // parameter table of the summary (estimation::generic_report_section, fit_report.hpp).
+  std::function<ReportSection(const FitResult& result)> report;
 };
 
 class Registry {

@@ -13,14 +13,16 @@ namespace stend::live {
 struct LiveServerOptions {
   std::string address = "127.0.0.1";  // loopback only by default
   int port = 8765;                     // 0: any free port (LiveServer::port() says which)
-  // Throws InputError unless the address is an IPv4 or IPv6 literal and 0 ≤ port ≤ 65535.
-  void check() const;
+  // Whether the address is an IPv4 or IPv6 literal and 0 ≤ port ≤ 65535; when not, `error` (if
+  // given) says which and what to give instead.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 class LiveServer {
  public:
-  // Binds and starts serving `state` on a thread of its own. Throws IoError naming the address
-  // and port when it cannot bind (in use, not allowed).
+  // Binds and starts serving `state` on a thread of its own. Throws InputError for options that
+  // are not valid (IsValid), IoError naming the address and port when it cannot bind (in use, not
+  // allowed).
   LiveServer(const LiveState& state, const LiveServerOptions& options);
   ~LiveServer();  // stops serving
   LiveServer(const LiveServer&) = delete;

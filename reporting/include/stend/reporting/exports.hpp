@@ -20,6 +20,10 @@
 #include <string>
 #include <vector>
 
+namespace stend::estimation {
+class Registry;
+}
+
 namespace stend::reporting {
 
 struct ExportOptions {
@@ -48,6 +52,6 @@ const std::vector<std::string>& export_formats();
 // (imutk: <out>_acc.calib, <out>_gyro.calib); empty → RUN/export/<default name>. Throws
 // std::runtime_error saying what is missing (e.g. "no allan.json: run stend fit … first").
 ExportResult export_run(const std::filesystem::path& run_dir, const std::string& format, std::filesystem::path out,
-                        const ExportOptions& options = {});
+                        const estimation::Registry& registry, const ExportOptions& options = {});
 
 }  // namespace stend::reporting

@@ -13,8 +13,8 @@
 
 namespace stend::reporting {
 
-// Canonical text of the normalized procedure of an experiment YAML document. Throws
-// std::runtime_error when the text is not YAML or has no `procedure`.
+// Canonical text of the normalized procedure of an experiment YAML document. Throws InputError
+// when the text is not YAML or has no `procedure`.
 std::string canonical_procedure(const std::string& experiment_yaml);
 // SHA-256 (FIPS 180-4) of bytes, lowercase hex.
 std::string sha256_hex(const std::string& bytes);

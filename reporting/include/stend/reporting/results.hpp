@@ -1,6 +1,7 @@
 // What a run folder says about one unit: sensor identity, the procedure fingerprint, and every
 // fitted parameter (with standard error, interval and identifiability) from the results files the
-// estimators wrote into the folder (fit.json, temp_poly.json, allan.json, ceres.json).
+// estimators wrote into the folder (fit.json, temp_poly.json, allan.json, ceres.json, …), each
+// read through its estimator's registry entry.
 // The same record feeds the results database, `stend compare` and the results-JSON export
 // (schema "stend.results/1", docs/reports.md).
 #pragma once
@@ -11,6 +12,10 @@
 #include <filesystem>
 #include <string>
 #include <vector>
+
+namespace stend::estimation {
+class Registry;
+}
 
 namespace stend::reporting {
 
@@ -63,16 +68,17 @@ struct RunResults {
 
 // Reads the recording's header (through Recording::open, which throws InputError for a folder
 // that is not a readable recording: missing or damaged files, an unknown format_version),
-// experiment.yaml, the results files present and gap.json; a results file that does not parse
-// becomes a note.
-RunResults load_run_results(const std::filesystem::path& run_dir);
+// experiment.yaml, the results files of every estimator in `registry` that are present, and
+// gap.json; a results file that does not parse becomes a note.
+RunResults load_run_results(const std::filesystem::path& run_dir, const estimation::Registry& registry);
 
-// Parameters of one results document ("stend.fit/1", "stend.temp_poly/1", Allan, ceres) — the
-// estimator name comes from the document. Exposed for tests.
+// Parameters of one results document, read through the registry entry that wrote it (its
+// summary): the estimator name comes from the document, else from the file name. Exposed for tests.
 std::vector<ParameterResult> parameters_of(const nlohmann::json& doc, const std::string& file_stem,
-                                           EstimatorUse* use);
+                                           const estimation::Registry& registry, EstimatorUse* use);
 
 // The results JSON (schema stend.results/1, docs/reports.md). Non-finite numbers are null.
+// from_json throws InputError for a document of another schema.
 nlohmann::json to_json(const RunResults& r);
 RunResults from_json(const nlohmann::json& j);
 

@@ -1,0 +1,11 @@
+// batch_lsq's section of the run report (set as its registry entry's `report`).
+#pragma once
+
+#include <stend/estimation/report_section.hpp>
+#include <stend/estimation/result.hpp>
+
+namespace stend::batch_lsq {
+
+estimation::ReportSection report_section(const estimation::FitResult& result);
+
+}  // namespace stend::batch_lsq
