@@ -58,15 +58,72 @@ macro(stend_add_plugin_folders)
   endforeach()
 endmacro()
 
-# stend_add_gtest(NAME SOURCES ... [LIBRARIES ...]) — one GoogleTest executable registered with
-# ctest, linked with the shared test support stend_testing (testing/: paths, the skip rule for
+# Every test carries one label, and each label its own time-out [s] (written here once):
+#   unit         no process, no server, no network: in-process code on fixed or simulated data,
+#                each test ≤ 10 s on the 2-core CI machine — `ctest -L unit` is the first loop
+#   integration  starts the stend program, a server (PostgreSQL, Slurm, HTTP), a browser, an emulated
+#                device on a pty or loopback socket, the firmware under simavr, or a long simulated run
+#   e2e          the program end to end: shipped configs, the README's commands, real data, install
+#   perf         speed guards and benchmark smoke runs (bench/)
+#   fuzz         the short deterministic replay of each fuzz target (fuzz/)
+# `ctest -L LABEL` runs one kind; scripts/test.sh runs them all.
+set(STEND_TEST_LABELS unit integration e2e perf fuzz)
+set(STEND_TEST_TIMEOUT_unit 60)
+set(STEND_TEST_TIMEOUT_integration 600)
+set(STEND_TEST_TIMEOUT_e2e 900)
+set(STEND_TEST_TIMEOUT_perf 600)
+set(STEND_TEST_TIMEOUT_fuzz 120)
+# Sanitized builds (STEND_SANITIZE) run 3–10× slower: their time-outs are five times longer.
+if(STEND_SANITIZE)
+  set(STEND_TEST_TIMEOUT_SCALE 5)
+else()
+  set(STEND_TEST_TIMEOUT_SCALE 1)
+endif()
+
+# The time-out of `label` into `out` [s].
+function(stend_test_timeout label out)
+  math(EXPR t "${STEND_TEST_TIMEOUT_${label}} * ${STEND_TEST_TIMEOUT_SCALE}")
+  set(${out} ${t} PARENT_SCOPE)
+endfunction()
+
+# stend_label_test(TEST LABEL): the label and its time-out on a test added with add_test().
+function(stend_label_test test label)
+  if(NOT label IN_LIST STEND_TEST_LABELS)
+    message(FATAL_ERROR "test ${test}: label '${label}' is not one of ${STEND_TEST_LABELS}")
+  endif()
+  stend_test_timeout(${label} timeout)
+  set_tests_properties(${test} PROPERTIES LABELS ${label} TIMEOUT ${timeout})
+endfunction()
+
+# stend_add_gtest(NAME LABEL unit|integration|e2e|perf SOURCES ... [LIBRARIES ...]) — one
+# GoogleTest executable registered with ctest, each of its tests labelled LABEL with that label's
+# time-out, linked with the shared test support stend_testing (testing/: paths, the skip rule for
 # absent shared data, temporary folders, running the stend program, in-process runs).
 function(stend_add_gtest name)
-  cmake_parse_arguments(ARG "" "" "SOURCES;LIBRARIES" ${ARGN})
+  cmake_parse_arguments(ARG "" "LABEL" "SOURCES;LIBRARIES" ${ARGN})
+  if(NOT ARG_LABEL IN_LIST STEND_TEST_LABELS)
+    message(FATAL_ERROR "stend_add_gtest(${name}): give LABEL, one of ${STEND_TEST_LABELS}")
+  endif()
+  stend_test_timeout(${ARG_LABEL} timeout)
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE stend_core stend_testing stend_warnings GTest::gtest GTest::gtest_main
     ${ARG_LIBRARIES})
-  gtest_discover_tests(${name} TEST_PREFIX "${name}." DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 600)
+  gtest_discover_tests(${name} TEST_PREFIX "${name}." DISCOVERY_TIMEOUT 60
+    PROPERTIES LABELS ${ARG_LABEL} TIMEOUT ${timeout})
+endfunction()
+
+# stend_add_benchmark(NAME SOURCES ... [LIBRARIES ...]) — a Google Benchmark executable (with
+# STEND_BUILD_BENCHMARKS; figures in docs/benchmarks.md) and, with the tests, its smoke run
+# `perf.NAME` (label perf): every benchmark once (--benchmark_min_time=0), so that none stops
+# building or running unnoticed.
+function(stend_add_benchmark name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;LIBRARIES" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE stend_warnings benchmark::benchmark ${ARG_LIBRARIES})
+  if(STEND_BUILD_TESTS)
+    add_test(NAME perf.${name} COMMAND ${name} --benchmark_min_time=0)
+    stend_label_test(perf.${name} perf)
+  endif()
 endfunction()
 
 # stend_add_estimator(NAME LIBRARY lib) — lists the estimator of folder estimators/NAME in the
