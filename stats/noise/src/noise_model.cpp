@@ -2,7 +2,8 @@
 // least squares on the octave points with their covariance (each point's EDF, the correlation of
 // overlapping estimates that share samples), model selection among Q N B K R and a Gauss–Markov
 // bias, Fisher uncertainties, upper bounds, slope read-offs (see fit_noise_model in allan.hpp).
-#include <stend/allan/allan.hpp>
+#include "stend/noise/noise_model.hpp"
+
 #include <stend/model/noise.hpp>
 #include <stend/model/output_stage.hpp>
 #include <stend/physics/units.hpp>
@@ -14,9 +15,12 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
-namespace stend::allan {
+#include "stend/stats/gls.hpp"
+
+namespace stend::noise {
 
 namespace {
 
@@ -26,8 +30,7 @@ constexpr int kRamp = 4;                  // index of the rate ramp R
 constexpr double kTermPenalty = 6.6349;   // χ²₁ 99 % quantile: penalty per parameter
 constexpr double kPlateauOverWalk = 10.828;  // χ²₁ 99.9 %: deviance B or G must gain over K in its place
 constexpr double kMinClusters = 4.0;      // points with fewer clusters (N/m) are not fitted
-constexpr double kZ95 = 1.959963984540054;
-constexpr double kCoverage = 0.95;        // level of the coefficients' intervals (z = kZ95)
+constexpr double kCoverage = 0.95;        // level of the coefficients' intervals (z = stats::kZ95)
 constexpr int kMaxFilteredM = 32;         // an unstated filter may flatten points up to this m
 
 Coefficient* coefficient(NoiseModel& m, int j) { return m.coefficients() + j; }
@@ -104,7 +107,7 @@ struct FitSet {
 };
 
 // Correlation of two points' AVAR estimates: the mean of the correlations for each point's noise
-// type in a record of n_samples (stats::avar_correlation); shrunk towards the identity until
+// type in a record of n_samples (avar_correlation); shrunk towards the identity until
 // positive definite.
 void set_correlation(FitSet& set, double n_samples) {
   const auto& pts = set.pts;
@@ -114,17 +117,10 @@ void set_correlation(FitSet& set, double n_samples) {
     for (int j = 0; j < i; ++j) {
       const auto &p = pts[static_cast<std::size_t>(i)], &q = pts[static_cast<std::size_t>(j)];
       R(i, j) = R(j, i) =
-          0.5 * (stats::avar_correlation(p.noise, p.m, q.m, n_samples) + stats::avar_correlation(q.noise, p.m, q.m, n_samples));
+          0.5 * (avar_correlation(p.noise, p.m, q.m, n_samples) + avar_correlation(q.noise, p.m, q.m, n_samples));
     }
   }
-  for (;;) {
-    Eigen::LLT<Eigen::MatrixXd> llt(R);
-    if (llt.info() == Eigen::Success) {
-      set.L = llt.matrixL();
-      return;
-    }
-    R = 0.9 * R + 0.1 * Eigen::MatrixXd::Identity(n, n);
-  }
+  set.L = stats::shrunk_cholesky(std::move(R));
 }
 
 std::array<double, kTerms> basis(double tau, double m, const WhiteTerm& white, double tc) {
@@ -396,7 +392,7 @@ NoiseType noise_of_slope(const std::vector<FitPoint>& pts, const std::vector<dou
 // whose local slope is within tolerance of `target` (log-mean weighted by EDF).
 Readoff slope_readoff(const char* name, const std::string& unit, const std::vector<FitPoint>& pts,
                       const std::vector<double>& slope, double target, double tau_ref,
-                      const AllanOptions& opt) {
+                      const AnalysisOptions& opt) {
   Readoff r;
   r.name = name;
   r.unit = unit;
@@ -461,9 +457,9 @@ void set_edf(std::vector<FitPoint>& pts, const AllanCurve& curve, const WhiteTer
   const double n_phase = rho * static_cast<double>(curve.samples) + 1.0;
   for (auto& p : pts) {
     p.noise = type_at(p.tau);
-    p.edf = stats::edf_overlapping_adev(p.noise, n_phase, std::max(1.0, rho * p.m));
+    p.edf = edf_overlapping_adev(p.noise, n_phase, std::max(1.0, rho * p.m));
     if (!(std::isfinite(p.edf) && p.edf > 0.0)) p.edf = 1.0;
-    const auto ci = stats::deviation_interval(p.adev, p.edf, curve.confidence);
+    const auto ci = deviation_interval(p.adev, p.edf, curve.confidence);
     p.lo = ci.lo;
     p.hi = ci.hi;
   }
@@ -501,7 +497,7 @@ void identify_and_bound(const std::vector<FitPoint>& pts, const WhiteTerm& white
   auto bound_of = [&](int j, double tc) {
     double bound = std::numeric_limits<double>::infinity();
     for (const auto& p : pts) {
-      const double hi = std::isfinite(p.edf) ? stats::deviation_interval(p.adev, p.edf, kCoverage).hi : p.adev;
+      const double hi = std::isfinite(p.edf) ? deviation_interval(p.adev, p.edf, kCoverage).hi : p.adev;
       const double a = basis(p.tau, p.m, white, tc)[j];
       if (a > 0.0) bound = std::min(bound, hi * hi / a);
     }
@@ -515,10 +511,10 @@ void identify_and_bound(const std::vector<FitPoint>& pts, const WhiteTerm& white
       // Normal interval; for the linear terms (c² a weighted sum of AVAR points, χ² with
       // Satterthwaite's EDF c²/(2σ²)) widened to the χ² interval, which reaches further up when
       // few long-τ points decide the coefficient.
-      c->lo = std::max(0.0, c->value - kZ95 * c->sigma);
-      c->hi = c->value + kZ95 * c->sigma;
+      c->lo = std::max(0.0, c->value - stats::kZ95 * c->sigma);
+      c->hi = c->value + stats::kZ95 * c->sigma;
       if (j < NoiseModel::kCoefficients - 1) {
-        const auto ci = stats::deviation_interval(c->value, c->value * c->value / (2.0 * c->sigma * c->sigma), kCoverage);
+        const auto ci = deviation_interval(c->value, c->value * c->value / (2.0 * c->sigma * c->sigma), kCoverage);
         c->lo = std::min(c->lo, ci.lo);
         c->hi = std::max(c->hi, ci.hi);
       }
@@ -604,7 +600,7 @@ NoiseType NoiseModel::dominant(double tau_s) const {
   return noise_of_term(best);
 }
 
-NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
+NoiseModel fit_noise_model(const AllanCurve& curve, const AnalysisOptions& opt) {
   NoiseModel model;
   set_units(model, curve.units);
   model.rate_hz = curve.rate_hz;
@@ -682,4 +678,4 @@ std::vector<Conversion> datasheet_units(const Coefficient& c, Instrument instrum
   return {};
 }
 
-}  // namespace stend::allan
+}  // namespace stend::noise
