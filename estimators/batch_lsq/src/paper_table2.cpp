@@ -83,20 +83,19 @@ ModelSpec table2_model() {
   return s;
 }
 
-std::vector<StaticPoint> table2_points(const std::vector<Table2Row>& rows, double g_mps2,
+std::vector<processing::StaticPoint> table2_points(const std::vector<Table2Row>& rows, double g_mps2,
                                        double tilt_h_deg) {
-  std::vector<StaticPoint> pts;
+  std::vector<processing::StaticPoint> pts;
   for (std::size_t i = 0; i < rows.size(); ++i) {
-    StaticPoint p;
-    p.segment_id = static_cast<int>(i);
-    p.label = number_text(rows[i].angle_deg) + " deg";
+    processing::StaticPoint p;
+    p.segment.id = static_cast<int>(i);
+    p.segment.label = number_text(rows[i].angle_deg) + " deg";
     const Eigen::Vector3d f = physics::gravity_specific_force(
         physics::paper_table(tilt_h_deg * physics::kDegToRad, rows[i].angle_deg * physics::kDegToRad), g_mps2);
     p.stimulus.input = f;
     p.stimulus.specific_force = f;
     p.stimulus.temperature_c = 25.0;  // one (unstated) temperature; no temperature terms fitted
-    p.measured = Eigen::Vector3d(std::numeric_limits<double>::quiet_NaN(),
-                                 std::numeric_limits<double>::quiet_NaN(), rows[i].a_z_mps2);
+    p.accel.mean = Eigen::Vector3d(kNaN, kNaN, rows[i].a_z_mps2);
     pts.push_back(p);
   }
   return pts;

@@ -37,7 +37,7 @@ std::vector<Table2Row> load_table2_csv(const std::filesystem::path& file);
 std::filesystem::path default_table2_csv();
 
 ModelSpec table2_model();
-std::vector<StaticPoint> table2_points(const std::vector<Table2Row>& rows, double g_mps2,
+std::vector<processing::StaticPoint> table2_points(const std::vector<Table2Row>& rows, double g_mps2,
                                        double tilt_h_deg);
 
 struct Table2Case {
