@@ -28,6 +28,7 @@ Eigen::MatrixXd shrunk_cholesky(Eigen::MatrixXd R) {
 std::optional<BlockWhitening> BlockWhitening::factor(std::vector<std::vector<Eigen::Index>> blocks,
                                                      const std::vector<Eigen::MatrixXd>& correlations) {
   BlockWhitening w;
+  w.factors_.reserve(correlations.size());  // no copies of factored matrices as the vector grows
   for (const auto& R : correlations) {
     w.factors_.emplace_back(R);
     if (w.factors_.back().info() != Eigen::Success) return std::nullopt;
