@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "stend/noise/noise_model.hpp"
+#include "stend/physics/units.hpp"
 
 namespace stend::noise {
 
@@ -98,6 +99,29 @@ ChannelResult analyze(const double* y, std::size_t n, std::size_t stride, double
   OverlappingAllanStream s(options.max_m, n);
   s.add(y, n, stride == 0 ? 1 : stride);
   return analyze(s, rate_hz, channel, options);
+}
+
+const char* to_string(Verdict v) {
+  switch (v) {
+    case Verdict::kIdentified: return "identified";
+    case Verdict::kUpperBound: return "upper_bound";
+    case Verdict::kFailed: return "failed";
+  }
+  return "?";
+}
+
+std::vector<Conversion> datasheet_units(const Coefficient& c, Instrument instrument) {
+  const std::string s = c.symbol;
+  const bool gyro = instrument == Instrument::kGyroscope, accel = instrument == Instrument::kAccelerometer;
+  const double deg = physics::kRadToDeg;
+  if (s == "N" && gyro) return {{deg * 60.0, "deg/sqrt(h)"}, {deg, "deg/s/sqrt(Hz)"}};
+  if (s == "N" && accel) return {{60.0, "m/s/sqrt(h)"}, {1.0 / physics::kMicroG, "ug/sqrt(Hz)"}};
+  if ((s == "B" || s == "G") && gyro) return {{1.0 / physics::kDegPerHour, "deg/h"}};
+  if ((s == "B" || s == "G") && accel) return {{1.0 / physics::kMicroG, "ug"}};
+  // K [unit/s/√Hz] = [unit/√s]: per √s and per √h (× 60).
+  if (s == "K" && gyro) return {{deg, "deg/s/sqrt(s)"}, {deg * 3600.0 * 60.0, "deg/h/sqrt(h)"}};
+  if (s == "K" && accel) return {{1.0 / physics::kMicroG, "ug/sqrt(s)"}, {60.0 / physics::kMicroG, "ug/sqrt(h)"}};
+  return {};
 }
 
 }  // namespace stend::noise
