@@ -25,7 +25,7 @@ struct DeviationsArgs {
   std::vector<std::string> kinds;
   std::string tau = allan::to_string(allan::TauSpacing::kOctave);
   std::uint64_t max_m = allan::OverlappingAllanStream::kDefaultMaxM;
-  double confidence = allan::stats::kOneSigma;
+  double confidence = stats::kOneSigma;
   std::string unit;
 };
 

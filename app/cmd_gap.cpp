@@ -14,6 +14,7 @@
 #include "stend/estimators/builtin.hpp"
 #include "stend/diagnosis/gap.hpp"
 #include "stend/diagnosis/validate.hpp"
+#include "stend/errors.hpp"
 #include "stend/recording/files.hpp"
 #include "stend/reporting/results.hpp"
 #include "stend/yaml/reader.hpp"
@@ -36,11 +37,11 @@ struct GapArgs {
   int noise_seeds = 10, noise_null_runs = 40;  // noise-stage experiments (sample level)
 };
 
-diagnosis::FoldBy fold_of(const std::string& s) {
-  if (s == "orientation") return diagnosis::FoldBy::kOrientation;
-  if (s == "temperature") return diagnosis::FoldBy::kTemperature;
-  if (s == "ramp") return diagnosis::FoldBy::kRamp;
-  return diagnosis::FoldBy::kAuto;
+// The --fold-by values: the keys of diagnosis::kFoldByNames.
+std::vector<std::string> fold_by_keys() {
+  std::vector<std::string> keys;
+  for (const auto& n : diagnosis::kFoldByNames) keys.emplace_back(n.key);
+  return keys;
 }
 
 // The model file as the linear error model the diagnosis fits and extends, through the estimator
@@ -78,10 +79,11 @@ ExitCode run_gap(const GapArgs& a) {
   const estimation::ModelSpec spec = linear_model(a.model);
   const diagnosis::GapInput in = diagnosis::build_input(rec, spec);
   diagnosis::GapOptions opt;
-  opt.fold_by = fold_of(a.fold_by);
+  opt.fold_by = diagnosis::fold_by_from_key(a.fold_by).value_or(diagnosis::FoldBy::kAuto);
   opt.max_steps = a.max_steps;
   opt.max_folds = a.max_folds;
   opt.alpha = a.alpha;
+  if (std::string why; !opt.IsValid(&why)) throw InputError("stend gap: " + why);
   const diagnosis::GapReport rep = diagnosis::diagnose(in, opt);
   std::ostringstream text;
   diagnosis::print_report(text, rep);
@@ -112,6 +114,7 @@ ExitCode run_validate(const GapArgs& a) {
   o.noise_null_runs = a.noise_null_runs;
   o.gap.alpha = a.alpha;
   if (a.positions > 0) o.design = diagnosis::many_positions_design(a.positions);
+  if (std::string why; !o.IsValid(&why)) throw InputError("stend gap validate: " + why);
   TaskProgress progress("gap validate");
   o.on_progress = [&progress](double done, const std::string& stage) { progress.update(done, stage); };
   const diagnosis::ValidationReport r = diagnosis::run_validation(o);
@@ -146,7 +149,7 @@ void add_gap_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_option("--db", args->db, std::string(kDbOptionHelp) +
                                         "; given (or $STEND_RESULTS_DB), the run is recorded there with its gap.json");
   sub->add_option("--fold-by", args->fold_by, "Held-out groups: auto | orientation | temperature | ramp")
-      ->check(CLI::IsMember({"auto", "orientation", "temperature", "ramp"}));
+      ->check(CLI::IsMember(fold_by_keys()));
   sub->add_option("--max-steps", args->max_steps, "Forward-selection steps (default 4)")->check(at_least(1));
   sub->add_option("--max-folds", args->max_folds, "Held-out folds, groups dealt round-robin beyond (default 12; 0 = one per group)")
       ->check(at_least(0));

@@ -1,19 +1,19 @@
 // Overlapping Allan deviation at octave τ over 10^8 samples, streaming, with confidence
 // intervals (Greenhall EDF + chi-squared quantiles) for every octave; and every deviation kind
 // together (ADEV, OADEV, MDEV, TDEV, HDEV, OHDEV, TOTDEV with noise identification and
-// intervals, stend/allan/deviations.hpp) over the same input.
+// intervals, stend/noise/deviations.hpp) over the same input.
 //
 //   ninja -C build allan_bench && build/bin/allan_bench
 //
-// The estimator core is header-only (estimators/allan/include/stend/allan/stream.hpp, stats.hpp),
-// so this benchmark needs only stend_core + benchmark. Input: a 2^16-sample table of Gaussian
+// The estimator core is the library stend_noise (stats/noise: the streams, EDF and intervals).
+// Input: a 2^16-sample table of Gaussian
 // noise fed in 4096-sample chunks at pseudo-random offsets (generating 10^8 normals would take
 // longer than the estimator; the table keeps the process small so that peak RSS measures the
 // estimator's state). Counters: peak_rss_MiB (getrusage, whole process), state_MiB (the
 // estimator's own allocation), octaves, and Msamples/s.
-#include "../estimators/allan/include/stend/allan/deviations.hpp"
-#include "../estimators/allan/include/stend/allan/stats.hpp"
-#include "../estimators/allan/include/stend/allan/stream.hpp"
+#include <stend/noise/allan_stream.hpp>
+#include <stend/noise/deviations.hpp>
+#include <stend/noise/edf.hpp>
 
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
@@ -24,8 +24,8 @@
 
 namespace {
 
-using stend::allan::NoiseType;
-using stend::allan::OverlappingAllanStream;
+using stend::noise::NoiseType;
+using stend::noise::OverlappingAllanStream;
 
 const std::vector<double>& noise_table() {
   static const std::vector<double> table = [] {
@@ -61,9 +61,9 @@ void BM_AllanOctaveOverlappingWithIntervals(benchmark::State& state) {
     double sink = 0.0;
     for (const auto& o : result) {
       const double adev = std::sqrt(o.avar);
-      const double edf = stend::allan::stats::edf_overlapping_adev(
+      const double edf = stend::noise::edf_overlapping_adev(
           NoiseType::kWhite, static_cast<double>(n) + 1.0, static_cast<double>(o.m));
-      const auto ci = stend::allan::stats::deviation_interval(adev, edf, stend::allan::stats::kOneSigma);
+      const auto ci = stend::noise::deviation_interval(adev, edf, stend::stats::kOneSigma);
       sink += ci.lo + ci.hi;
     }
     benchmark::DoNotOptimize(sink);
@@ -84,7 +84,7 @@ void BM_AllDeviationsOctave(benchmark::State& state) {
   std::size_t points = 0, state_bytes = 0;
   for (auto _ : state) {
     // Octave factors up to 2^20 (τ ≤ 17 min at 1 kHz): history and head of 64 MiB.
-    stend::allan::DeviationStream devs(stend::allan::DeviationOptions{.factors = {}, .max_m = 1u << 20});
+    stend::noise::DeviationStream devs(stend::noise::DeviationOptions{.factors = {}, .max_m = 1u << 20});
     std::uint64_t lcg = 12345;
     for (std::uint64_t done = 0; done < n; done += kChunk) {
       lcg = lcg * 6364136223846793005ull + 1442695040888963407ull;
@@ -93,7 +93,7 @@ void BM_AllDeviationsOctave(benchmark::State& state) {
     }
     double sink = 0.0;
     points = 0;
-    for (auto kind : stend::allan::kAllDeviationKinds) {
+    for (auto kind : stend::noise::kAllDeviationKinds) {
       for (const auto& p : devs.result(kind)) {
         sink += p.lo + p.hi;
         ++points;

@@ -1,6 +1,7 @@
 // stend gap, step 1: from a recording to static segments with their truth stimulus, groups and
-// noise floor. The static points and truth means are the processing stage's (through batch_lsq's
-// extract_points); this file only adds what the diagnoser needs around them.
+// noise floor. The static points and truth means are the processing stage's (through
+// estimation::extract_static_points); this file only adds what the diagnoser needs around them.
+// See stend/diagnosis/input.hpp.
 #include <ceres/jet.h>
 #include <yaml-cpp/yaml.h>
 
@@ -10,15 +11,17 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "stend/physics/gravity.hpp"
-#include "stend/physics/table_chain.hpp"
-#include "stend/diagnosis/gap.hpp"
-#include "stend/model/output_stage.hpp"
-#include "stend/sim/imu.hpp"
-#include "stend/processing/truth.hpp"
-#include "groups.hpp"
+#include <stend/errors.hpp>
+
 #include "noise_stage.hpp"
 #include "samples.hpp"
+#include "stend/diagnosis/input.hpp"
+#include "stend/estimation/static_fit.hpp"
+#include "stend/model/output_stage.hpp"
+#include "stend/physics/gravity.hpp"
+#include "stend/physics/table_chain.hpp"
+#include "stend/processing/truth.hpp"
+#include "stend/sim/imu.hpp"  // the twin's noise: sim_imu's defaults
 
 namespace stend::diagnosis {
 
@@ -56,18 +59,16 @@ double sim_twin_std(const YAML::Node& cfg, bool accel) {
 }
 
 // Static points of the processing stage; records its options, skips and notes in `in`.
-std::vector<batch_lsq::StaticPoint> static_points(const Recording& rec, const estimation::ModelSpec& spec,
-                                                  GapInput& in) {
-  processing::Extraction extraction;
-  std::vector<batch_lsq::StaticPoint> points = batch_lsq::extract_points(rec, spec, &extraction);
+std::vector<processing::StaticPoint> static_points(const Recording& rec, const estimation::ModelSpec& spec,
+                                                   GapInput& in) {
+  processing::Extraction extraction = estimation::extract_static_points(rec, spec);
   in.spec.processing = extraction.options;
   in.saturated_segments = extraction.count(processing::SkipReason::kSaturated);
   in.notes = extraction.notes;
-  if (points.size() < 2)
-    throw std::runtime_error("'" + in.source + "': only " + std::to_string(points.size()) +
-                             " static segment(s) could be extracted (" + extraction.tally() +
-                             "); the gap needs several");
-  return points;
+  if (extraction.points.size() < 2)
+    throw InputError("'" + in.source + "': only " + std::to_string(extraction.points.size()) +
+                     " static segment(s) could be extracted (" + extraction.tally() + "); the gap needs several");
+  return std::move(extraction.points);
 }
 
 // Twin noise of a simulated run: the white-noise std of one sample from the sim sensor's own
@@ -110,7 +111,7 @@ TruthColumns truth_columns(const Recording& rec) {
 
 // Truth specific force [m/s²] and rate [rad/s] over the point's window into its stimulus; returns
 // the specific force (NaN where the column is absent).
-Eigen::Vector3d truth_stimulus(const Recording& rec, const TruthColumns& c, const batch_lsq::StaticPoint& p,
+Eigen::Vector3d truth_stimulus(const Recording& rec, const TruthColumns& c, const processing::StaticPoint& p,
                                bool accel, model::Stimulus<double>& st) {
   Eigen::Vector3d f, w;
   for (int a = 0; a < 3; ++a) {
@@ -131,7 +132,7 @@ Eigen::Vector3d truth_stimulus(const Recording& rec, const TruthColumns& c, cons
 // Table geometry (sim three-axis table: R = Ry(δ)·Rx(h)·Rz(az)) from the measured angles [deg],
 // checked against the truth specific force f (within 2 % of g): its angle and tilt derivatives
 // into the stimulus; returns false when the chain does not reproduce f.
-bool table_derivatives(const Recording& rec, const TruthColumns& c, const batch_lsq::StaticPoint& p,
+bool table_derivatives(const Recording& rec, const TruthColumns& c, const processing::StaticPoint& p,
                        const Eigen::Vector3d& f, model::Stimulus<double>& st) {
   const double deg = physics::kDegToRad;
   const double az = processing::truth_mean(rec, c.table[0], p.t_start_s, p.t_end_s) * deg;
@@ -147,10 +148,10 @@ bool table_derivatives(const Recording& rec, const TruthColumns& c, const batch_
 
 // Ramp direction, setpoint [degC] and time since the last orientation or temperature change [s]
 // of the segment starting at p, from the time-ordered segments up to its start.
-void segment_history(const std::vector<const Segment*>& segs, const batch_lsq::StaticPoint& p, SegmentData& d) {
+void segment_history(const std::vector<const Segment*>& segs, const processing::StaticPoint& p, SegmentData& d) {
   const Segment* seg = nullptr;
   for (const auto* s : segs)
-    if (s->id == p.segment_id) seg = s;
+    if (s->id == p.segment.id) seg = s;
   double cur_sp = kNaN, prev_sp = kNaN, t_temp_change = kNaN, t_orient_change = kNaN;
   int dir = 0;
   const Segment* prev_orient = nullptr;
@@ -209,7 +210,7 @@ void mean_noise(const AxisSums& s, std::size_t n, int a, SegmentData& d) {
 // The raw-sample evidence of a point's kept window, in one pass over the store: noise floor of the
 // mean per axis (the processing stage's standard error when the window is short) and the
 // noise-stage evidence.
-void window_evidence(const Recording& rec, const batch_lsq::StaticPoint& p, bool accel, SegmentData& d) {
+void window_evidence(const Recording& rec, const processing::StaticPoint& p, bool accel, SegmentData& d) {
   const IndexRange w = window_range(rec, p.t_start_s, p.t_end_s);
   const auto n = static_cast<std::size_t>(w.size());
   std::vector<AxisSums> axes(3, AxisSums(n));
@@ -220,7 +221,7 @@ void window_evidence(const Recording& rec, const batch_lsq::StaticPoint& p, bool
   });
   if (n >= 16)
     for (int a = 0; a < 3; ++a) mean_noise(axes[static_cast<std::size_t>(a)], n, a, d);
-  if (!d.mean_std_error.allFinite()) d.mean_std_error = p.measured_std_error;
+  if (!d.mean_std_error.allFinite()) d.mean_std_error = (accel ? p.accel : p.gyro).std_error;
   evidence.fill(d);
 }
 
@@ -249,6 +250,23 @@ void assign_groups(std::vector<SegmentData>& segments) {
 }
 
 }  // namespace
+
+int orientation_group(std::map<std::string, int>& groups, const std::string& name) {
+  auto it = groups.find(name);
+  if (it == groups.end()) it = groups.emplace(name, static_cast<int>(groups.size())).first;
+  return it->second;
+}
+
+int temperature_group(std::vector<double>& levels_c, double t_c) {
+  int k = -1;
+  for (std::size_t i = 0; i < levels_c.size(); ++i)
+    if (std::abs(levels_c[i] - t_c) <= 2.0) k = static_cast<int>(i);
+  if (k < 0) {
+    levels_c.push_back(t_c);
+    k = static_cast<int>(levels_c.size()) - 1;
+  }
+  return k;
+}
 
 Eigen::Vector3d table_stimulus(model::Stimulus<double>& st, double az, double h, double dl,
                                const Eigen::Matrix3d& mount, double g) {
@@ -280,7 +298,7 @@ GapInput build_input(const Recording& recording_in, const estimation::ModelSpec&
   if (column(recording_in, accel ? "f_x_mps2" : "w_x_radps") < 0) return build_magnitude_input(recording_in, spec);
   const Recording* rec = &recording_in;
   in.truth_source = "truth columns";
-  const std::vector<batch_lsq::StaticPoint> points = static_points(*rec, spec, in);
+  const std::vector<processing::StaticPoint> points = static_points(*rec, spec, in);
   in.lsb = accel ? rec->header.info.accel_lsb_mps2 : rec->header.info.gyro_lsb_radps;
   in.range = accel ? rec->header.info.accel_range_mps2 : rec->header.info.gyro_range_radps;
   in.twin_sample_std = twin_sample_std(*rec, accel);

@@ -7,6 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <stend/errors.hpp>
+
 #include "magnitude.hpp"
 #include "stend/estimation/linear_lsq.hpp"
 #include "stend/processing/static_detector.hpp"
@@ -26,7 +28,7 @@ void fit_direction(const model::ErrorModel& m, const Eigen::VectorXd& theta, dou
     st.specific_force = f;
     st.input = f;
     st.gravity_up = f / f.norm();
-    const Eigen::Vector3d next = g * (f + (s.point.measured - m.measure<double>(theta.data(), st))).normalized();
+    const Eigen::Vector3d next = g * (f + (s.point.accel.mean - m.measure<double>(theta.data(), st))).normalized();
     const double step = (next - f).norm();
     f = next;
     if (step < 1e-12 * g) break;
@@ -45,9 +47,8 @@ double magnitude_std_error(const SegmentData& s) {
   return std::sqrt(v);
 }
 
-batch_lsq::FitResult fit_magnitude_rows(const GapInput& in) {
-  batch_lsq::FitResult fr;
-  fr.spec = in.spec;
+estimation::StaticFit fit_magnitude_rows(const GapInput& in) {
+  estimation::StaticFit fr;
   fr.unit = "m/s^2";
   fr.display_unit = "mg";
   const model::ErrorModel& m = in.spec.model;
@@ -61,7 +62,7 @@ batch_lsq::FitResult fit_magnitude_rows(const GapInput& in) {
     const auto& s = in.segments[static_cast<std::size_t>(i)];
     const Eigen::Vector3d u = s.point.stimulus.specific_force.normalized();
     pr.design.row(i) = u.transpose() * m.regressor(s.point.stimulus);
-    pr.observations[i] = u.dot(s.point.measured - s.point.stimulus.input);
+    pr.observations[i] = u.dot(s.point.accel.mean - s.point.stimulus.input);
     const double se = magnitude_std_error(s);
     if (std::isfinite(se)) {
       f2 += se * se;
@@ -92,11 +93,11 @@ batch_lsq::FitResult fit_magnitude_rows(const GapInput& in) {
 
 GapInput magnitude_form(GapInput in, double g) {
   if (in.spec.model.instrument != model::Instrument::kAccelerometer)
-    throw std::runtime_error("the magnitude form of the gap needs an accelerometer model (|g| is the only truth)");
-  if (in.segments.size() < 2) throw std::runtime_error("the magnitude form needs at least two static segments");
+    throw InputError("the magnitude form of the gap needs an accelerometer model (|g| is the only truth)");
+  if (in.segments.size() < 2) throw InputError("the magnitude form needs at least two static segments");
   const model::ErrorModel& m = in.spec.model;
   for (auto& s : in.segments) {
-    s.point.stimulus.specific_force = s.point.measured;  // first guess: the raw direction
+    s.point.stimulus.specific_force = s.point.accel.mean;  // first guess: the raw direction
     fit_direction(m, Eigen::VectorXd::Zero(m.size()), g, s);
   }
   in.magnitude = true;
@@ -104,8 +105,8 @@ GapInput magnitude_form(GapInput in, double g) {
   // first pass).
   double moved = 0.0;
   for (int outer = 0; outer < 8; ++outer) {
-    const batch_lsq::FitResult fr = fit_magnitude_rows(in);
-    if (!fr.ok) throw std::runtime_error(fr.message);
+    const estimation::StaticFit fr = fit_magnitude_rows(in);
+    if (!fr.ok) throw InputError(fr.message);
     moved = 0.0;
     for (auto& s : in.segments) {
       const Eigen::Vector3d before = s.point.stimulus.specific_force;
@@ -130,7 +131,7 @@ GapInput magnitude_form(GapInput in, double g) {
 
 GapInput build_magnitude_input(const Recording& rec, const estimation::ModelSpec& spec) {
   if (spec.model.instrument != model::Instrument::kAccelerometer)
-    throw std::runtime_error("'" + rec.dir.string() +
+    throw InputError("'" + rec.dir.string() +
                              "' has no rate truth: a gyroscope gap needs a rate table's truth columns "
                              "(w_x_radps …); sessions with unknown orientations give only |g|");
   const double g = rec.header.gravity_or_standard_mps2();
@@ -140,7 +141,7 @@ GapInput build_magnitude_input(const Recording& rec, const estimation::ModelSpec
   const processing::Detection detection = processing::detect_static(rec, det);
   const auto& ivs = detection.intervals;
   if (ivs.size() < 2)
-    throw std::runtime_error("'" + rec.dir.string() + "': " + std::to_string(ivs.size()) +
+    throw InputError("'" + rec.dir.string() + "': " + std::to_string(ivs.size()) +
                              " static interval(s) long enough for the extraction (settle_s at both ends) "
                              "found (" + detection.summary.rejections() +
                              "); the magnitude form of the gap needs several orientations");

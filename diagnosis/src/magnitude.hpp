@@ -2,7 +2,8 @@
 // input_magnitude.cpp (building the form) and gap.cpp (diagnosing it). See GapInput::magnitude.
 #pragma once
 
-#include "stend/diagnosis/gap.hpp"
+#include "stend/diagnosis/input.hpp"
+#include "stend/estimation/static_fit.hpp"
 
 namespace stend::diagnosis {
 
@@ -11,8 +12,8 @@ namespace stend::diagnosis {
 double magnitude_std_error(const SegmentData& segment);
 
 // The model as given, fitted on one row per segment: û·(measured − g·û) = û·R(θ; stimulus)·θ
-// (R the vocabulary's regressor), uniform weights 1/floor². FitResult holds every model
-// parameter (param_index = 0…p−1); rotations of the sensor frame come out not identifiable.
-batch_lsq::FitResult fit_magnitude_rows(const GapInput& input);
+// (R the vocabulary's regressor), uniform weights 1/floor². The fit holds every model parameter
+// (param_index = 0…p−1); rotations of the sensor frame come out not identifiable.
+estimation::StaticFit fit_magnitude_rows(const GapInput& input);
 
 }  // namespace stend::diagnosis

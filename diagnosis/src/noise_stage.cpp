@@ -8,9 +8,9 @@
 #include <sstream>
 
 #include "samples.hpp"
-#include "stats.hpp"
+#include "stend/noise/noise_model.hpp"
+#include "stend/stats/distributions.hpp"
 #include "text.hpp"
-#include "stend/allan/allan.hpp"
 
 namespace stend::diagnosis::noise_stage {
 
@@ -21,33 +21,11 @@ constexpr int kGroups = 8, kPerGroup = 8, kSub = kGroups * kPerGroup;  // 64 sub
 // last four octaves of τ (τ_max/16 … τ_max).
 constexpr double kSlopeSpan = 16.5;
 
-// x with P(F_{d1,d2} > x) = q, by bisection on log x.
-double f_quantile_upper(double q, double d1, double d2) {
-  double lo = 1e-6, hi = 1e6;
-  for (int i = 0; i < 200; ++i) {
-    const double mid = std::sqrt(lo * hi);
-    if (stats::f_sf(mid, d1, d2) > q)
-      lo = mid;
-    else
-      hi = mid;
-  }
-  return std::sqrt(lo * hi);
-}
-
 // Bias bound of a mean of a quantized Gaussian signal: first harmonic of the rounding error
 // (a sawtooth with Fourier series Σ (−1)^k (LSB/πk) sin(2πk x/LSB)) damped by the noise's
 // characteristic function at 2π/LSB.
 double dither_bias_bound(double sigma, double lsb) {
   return lsb / std::numbers::pi * std::exp(-2.0 * std::numbers::pi * std::numbers::pi * sigma * sigma / (lsb * lsb));
-}
-
-// Wilson 95 % interval of a binomial fraction.
-std::pair<double, double> wilson(double k, double n) {
-  if (!(n > 0)) return {kNaN, kNaN};
-  const double z = 1.959964, p = k / n, z2 = z * z;
-  const double c = (p + z2 / (2 * n)) / (1 + z2 / n);
-  const double h = z * std::sqrt(p * (1 - p) / n + z2 / (4 * n * n)) / (1 + z2 / n);
-  return {std::max(0.0, c - h), std::min(1.0, c + h)};
 }
 
 // Whether a sample counts as clipped on axis a: by the instrument's saturation flag, charged to
@@ -144,7 +122,7 @@ void count_clipped(GapInput& in, const Recording& rec, bool accel) {
 // Excess Allan deviation over white on axis a: the largest, as bias instability B = excess / 0.664
 // with that point's interval, and the weighted slope of ln(avar − white) against ln τ over the
 // last four octaves (var(ln avar) ≈ 2/EDF, through the white subtraction ×(avar/e)²).
-void allan_excess(GapInput& in, const allan::ChannelResult& r, int a) {
+void allan_excess(GapInput& in, const noise::ChannelResult& r, int a) {
   const double nw = r.model.white.fitted;
   double best = 0.0;
   const double tau_max = r.curve.points.back().tau_s;
@@ -155,9 +133,9 @@ void allan_excess(GapInput& in, const allan::ChannelResult& r, int a) {
     const double e = p.avar - white;
     if (e > best * best && std::isfinite(p.adev_lo)) {
       best = std::sqrt(e);
-      in.allan_bias_instability[a] = best / allan::kFlickerFloor;
-      in.allan_bias_instability_lo[a] = std::sqrt(std::max(0.0, p.adev_lo * p.adev_lo - white)) / allan::kFlickerFloor;
-      in.allan_bias_instability_hi[a] = std::sqrt(std::max(0.0, p.adev_hi * p.adev_hi - white)) / allan::kFlickerFloor;
+      in.allan_bias_instability[a] = best / noise::kFlickerFloor;
+      in.allan_bias_instability_lo[a] = std::sqrt(std::max(0.0, p.adev_lo * p.adev_lo - white)) / noise::kFlickerFloor;
+      in.allan_bias_instability_hi[a] = std::sqrt(std::max(0.0, p.adev_hi * p.adev_hi - white)) / noise::kFlickerFloor;
     }
     if (p.tau_s < tau_max / kSlopeSpan || !(e > 0) || !(p.edf > 0)) continue;
     const double w = 1.0 / (2.0 / p.edf * (p.avar / e) * (p.avar / e));
@@ -191,22 +169,22 @@ void allan_evidence(GapInput& in, const Recording& rec, bool accel) {
                             t_last = read_column(src, Channel::kTime, w.last - 1, w.last);
   const double rate = static_cast<double>(n - 1) / (t_last[0] - t[0]);  // [Hz]
   in.allan_window_s = longest->averaging_s;
-  allan::AllanOptions ao;
+  noise::AnalysisOptions ao;
   ao.confidence = 0.95;
   for (int a = 0; a < 3; ++a) {
     const auto c = static_cast<Channel>(static_cast<int>(accel ? Channel::kAx : Channel::kGx) + a);
-    allan::OverlappingAllanStream stream(ao.max_m, n);  // one axis of one window, a chunk at a time
+    noise::OverlappingAllanStream stream(ao.max_m, n);  // one axis of one window, a chunk at a time
     std::vector<double> y(std::min(n, kDefaultChunkSamples));
     for (std::uint64_t i = w.first; i < w.last; i += y.size()) {
       const auto take = static_cast<std::size_t>(std::min<std::uint64_t>(y.size(), w.last - i));
       src.read_column(c, i, take, y.data());
       stream.add(y.data(), take);
     }
-    allan::ChannelInfo ch;
+    noise::ChannelInfo ch;
     ch.name = std::string(accel ? "a" : "g") + "xyz"[a];
-    ch.instrument = accel ? allan::Instrument::kAccelerometer : allan::Instrument::kGyroscope;
-    const allan::ChannelResult r = allan::analyze(stream, rate, ch, ao);
-    const allan::NoiseModel& m = r.model;
+    ch.instrument = accel ? noise::Instrument::kAccelerometer : noise::Instrument::kGyroscope;
+    const noise::ChannelResult r = noise::analyze(stream, rate, ch, ao);
+    const noise::NoiseModel& m = r.model;
     if (!m.ok || r.curve.points.empty()) continue;
     in.allan_white[a] = m.white.fitted;
     in.allan_random_walk[a] = m.random_walk.fitted;
@@ -320,8 +298,8 @@ CandidateResult saturation(const GapInput& in, const std::vector<int>& axes, con
   double peak = 0, peak_std = kNaN;
   for (const auto& d : in.segments)
     for (int a : axes)
-      if (std::abs(d.point.measured[a]) > peak) {
-        peak = std::abs(d.point.measured[a]);
+      if (std::abs(d.point.axes(in.spec.model.instrument).mean[a]) > peak) {
+        peak = std::abs(d.point.axes(in.spec.model.instrument).mean[a]);
         peak_std = d.raw_std[a];
       }
   s.evaluated = in.static_samples.maxCoeff() > 0 || in.saturated_segments > 0;
@@ -338,9 +316,9 @@ CandidateResult saturation(const GapInput& in, const std::vector<int>& axes, con
   }
   s.axis = std::string(1, "xyz"[worst_axis]);
   s.size = std::max(0.0, worst_frac);
-  const auto wi = wilson(in.clipped_samples[worst_axis], in.static_samples[worst_axis]);
-  s.ci_lo = wi.first;
-  s.ci_hi = wi.second;
+  const stats::Interval wi = stats::wilson_interval(in.clipped_samples[worst_axis], in.static_samples[worst_axis], stats::kZ95);
+  s.ci_lo = wi.lo;
+  s.ci_hi = wi.hi;
   s.significant = clipped_total > 0 || in.saturated_segments > 0;
   const double headroom = in.range > 0 && peak_std > 0 ? (in.range - peak) / peak_std : kNaN;
   s.reason = fmt(clipped_total, 6) + " clipped sample(s) in the static segments (worst axis " + s.axis + ": " +
@@ -455,8 +433,8 @@ CandidateResult coloured_noise(const GapInput& in, const std::vector<int>& axes,
   c.significant = c.p_value < level;
   const double d1 = 7.0 * best.segments, d2 = 56.0 * best.segments;
   c.size = std::sqrt(best.f);
-  c.ci_lo = std::sqrt(best.f / f_quantile_upper(0.025, d1, d2));
-  c.ci_hi = std::sqrt(best.f / f_quantile_upper(0.975, d1, d2));
+  c.ci_lo = std::sqrt(best.f / stats::f_upper_quantile(0.025, d1, d2));
+  c.ci_hi = std::sqrt(best.f / stats::f_upper_quantile(0.975, d1, d2));
   c.reason = "within-segment test (64 sub-block means in 8 groups, pooled over " + std::to_string(best.segments) +
              " segments; F(" + fmt(d1, 6) + ", " + fmt(d2, 6) + ") under white noise, level " + fmt(level, 3) +
              " Bonferroni over axes):" + per_axis.str();

@@ -8,7 +8,7 @@
 //                   F(7K, 56K) under white (or low-passed white) noise. Level alpha/3, Bonferroni
 //                   over the fitted axes. Size: variance ratio of an 8-batch mean against white,
 //                   with its F interval. When a kept window ≥ 100 s exists, the overlapping Allan
-//                   deviation (estimators/allan) names the kind from the slope of the Allan
+//                   deviation (stend/noise/noise_model.hpp) names the kind from the slope of the Allan
 //                   variance above white over the last four octaves: > 0.5 random walk (K, the
 //                   Allan fit's value ± 1.96 σ), else bias instability (B = largest Allan
 //                   deviation above white / 0.664, with that point's 95 % EDF interval).
@@ -25,16 +25,12 @@
 //                   95 % interval; evidence: largest |mean| and its headroom in sample std.
 #pragma once
 
-#include <nlohmann/json_fwd.hpp>
-
-#include <iosfwd>
 #include <set>
 #include <string>
 #include <vector>
 
-#include "stend/diagnosis/gap.hpp"
-#include "stend/diagnosis/validate.hpp"
 #include "samples.hpp"
+#include "stend/diagnosis/gap.hpp"
 
 namespace stend::diagnosis::noise_stage {
 
@@ -65,9 +61,5 @@ void recording_evidence(GapInput& in, const Recording& recording);
 // `alpha`: the family-wise level of the diagnosis (each noise candidate is tested at alpha/3).
 std::vector<CandidateResult> candidates(const GapInput& in, const std::vector<int>& axes, const std::string& unit,
                                         double alpha);
-
-// The noise-stage section of `stend gap validate` (validate_noise.cpp): text and JSON.
-void print_validation(std::ostream& os, const std::vector<NoiseStageValidation>& v, double seconds);
-void add_json(nlohmann::json& j, const std::vector<NoiseStageValidation>& v, double seconds);
 
 }  // namespace stend::diagnosis::noise_stage

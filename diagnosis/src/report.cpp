@@ -33,8 +33,8 @@ json segments_json(const GapReport& r) {
   for (std::size_t i = 0; i < r.segments.size() && i < r.residual.size(); ++i) {
     const auto& s = r.segments[i];
     const double t = std::isfinite(s.setpoint_c) ? s.setpoint_c : s.point.stimulus.temperature_c;
-    segs.push_back({{"id", s.point.segment_id},
-                    {"label", s.point.label},
+    segs.push_back({{"id", s.point.segment.id},
+                    {"label", processing::label(s.point.segment)},
                     {"axis_residual_mps2", vec3(r.residual[i])},
                     {"temperature_c", num(t)},
                     {"die_temperature_c", num(s.point.stimulus.temperature_c)},
@@ -157,7 +157,7 @@ void print_noise_candidate(std::ostream& os, const CandidateResult& c) {
 
 // 3. Which: the evaluated vocabulary candidates ranked, those not assessable, the noise stage.
 void print_which(std::ostream& os, const GapReport& r) {
-  os << "\n3. WHICH — candidates the model lacks, held out by " << r.fold_by << " (" << r.folds << " folds)\n";
+  os << "\n3. WHICH — candidates the model lacks, held out by " << to_string(r.fold_by) << " (" << r.folds << " folds)\n";
   os << "   rank  term                          axis  held-out gain  dBIC      p          size [unit] (95% CI)\n";
   int rank = 0;
   for (const auto& c : r.candidates)
@@ -205,7 +205,7 @@ std::string to_json(const GapReport& r, int indent) {
   for (const auto& c : r.candidates) cands.push_back(candidate_json(c));
   j["candidates"] = cands;
   j["steps"] = steps_json(r);
-  j["heldout"] = {{"fold_by", r.fold_by}, {"folds", r.folds}};
+  j["heldout"] = {{"fold_by", to_string(r.fold_by)}, {"folds", r.folds}};
   j["unexplained"] = {{"heldout_rms_mps2", num(r.unexplained_heldout_rms)},
                       {"over_floor", num(r.unexplained_over_floor)},
                       {"at_noise_floor", r.at_floor},

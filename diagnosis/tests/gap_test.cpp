@@ -292,7 +292,7 @@ TEST(GapRealData, Mpu6050MultiposWithoutScaleNamesScaleInTheMagnitudeForm) {
 TEST(GapSimBench, TemperatureSweepNamesTheTemperaturePolynomials) {
   const GapReport r = diagnose(sim_input("configs/temperature_sweep.yaml", "bias_scale.yaml"));
   ASSERT_TRUE(r.ok) << r.message;
-  EXPECT_EQ(r.fold_by, "temperature");
+  EXPECT_EQ(r.fold_by, FoldBy::kTemperature);
   ASSERT_GE(r.selected.size(), 2u) << r.statement;
   EXPECT_EQ(r.selected[0].rfind("bias_temperature", 0), 0u) << r.selected[0];
   EXPECT_EQ(r.selected[1].rfind("scale_temperature", 0), 0u) << r.selected[1];

@@ -14,11 +14,13 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "stend/sdk.hpp"
+#include "stend/stats/distributions.hpp"
+
 namespace stend::estimation {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // A parameter whose row of the (scaled, orthonormal) null-space basis has a norm above this is not
 // identifiable; two parameters whose null-space projector entry exceeds it are aliased.
@@ -27,64 +29,6 @@ constexpr double kNullTolerance = 1e-7;
 // such as g·sin(0) computed through rotations would otherwise be rescaled to unit length).
 constexpr double kZeroColumnTolerance = 1e-12;
 
-
-// Regularised incomplete beta I_x(a, b): continued fraction (modified Lentz).
-double beta_cf(double a, double b, double x) {
-  constexpr double tiny = 1e-300, eps = 1e-16;
-  const double qab = a + b, qap = a + 1.0, qam = a - 1.0;
-  double c = 1.0, d = 1.0 - qab * x / qap;
-  if (std::abs(d) < tiny) d = tiny;
-  d = 1.0 / d;
-  double h = d;
-  for (int m = 1; m <= 1000; ++m) {
-    const double m2 = 2.0 * m;
-    double aa = m * (b - m) * x / ((qam + m2) * (a + m2));
-    d = 1.0 + aa * d;
-    if (std::abs(d) < tiny) d = tiny;
-    c = 1.0 + aa / c;
-    if (std::abs(c) < tiny) c = tiny;
-    d = 1.0 / d;
-    h *= d * c;
-    aa = -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2));
-    d = 1.0 + aa * d;
-    if (std::abs(d) < tiny) d = tiny;
-    c = 1.0 + aa / c;
-    if (std::abs(c) < tiny) c = tiny;
-    d = 1.0 / d;
-    const double del = d * c;
-    h *= del;
-    if (std::abs(del - 1.0) < eps) break;
-  }
-  return h;
-}
-
-double incomplete_beta(double a, double b, double x) {
-  if (x <= 0.0) return 0.0;
-  if (x >= 1.0) return 1.0;
-  const double lbt = std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) +
-                     b * std::log1p(-x);
-  const double bt = std::exp(lbt);
-  if (x < (a + 1.0) / (a + b + 2.0)) return bt * beta_cf(a, b, x) / a;
-  return 1.0 - bt * beta_cf(b, a, 1.0 - x) / b;
-}
-
-// Bisection for a monotone increasing cdf on (−∞, ∞), symmetric about 0.
-template <class Cdf>
-double symmetric_quantile(double p, Cdf cdf) {
-  if (!(p > 0.0 && p < 1.0)) throw std::domain_error("quantile: probability must lie in (0, 1)");
-  if (p == 0.5) return 0.0;
-  const double q = p > 0.5 ? p : 1.0 - p;
-  double lo = 0.0, hi = 1.0;
-  while (cdf(hi) < q && hi < 1e300) hi *= 2.0;
-  for (int i = 0; i < 400 && hi - lo > 1e-15 * hi; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (cdf(mid) < q ? lo : hi) = mid;
-  }
-  const double x = 0.5 * (lo + hi);
-  return p > 0.5 ? x : -x;
-}
-
-double normal_cdf(double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); }
 
 bool close(double a, double b, double rel, double abs_tol) {
   if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
@@ -450,22 +394,6 @@ void add_warnings(LsqResult& r, const LsqOptions& opt, const std::vector<std::st
 }
 
 }  // namespace
-
-double student_t_cdf(double t, double dof) {
-  if (!(dof > 0.0)) throw std::domain_error("Student t: degrees of freedom must be > 0");
-  if (std::isinf(dof)) return normal_cdf(t);
-  if (std::isinf(t)) return t > 0 ? 1.0 : 0.0;
-  const double x = dof / (dof + t * t);
-  const double tail = 0.5 * incomplete_beta(0.5 * dof, 0.5, x);
-  return t > 0 ? 1.0 - tail : tail;
-}
-
-double student_t_quantile(double p, double dof) {
-  if (!(dof > 0.0)) throw std::domain_error("Student t: degrees of freedom must be > 0");
-  return symmetric_quantile(p, [dof](double x) { return student_t_cdf(x, dof); });
-}
-
-double normal_quantile(double p) { return symmetric_quantile(p, normal_cdf); }
 
 int LsqResult::index(const std::string& name) const {
   for (std::size_t i = 0; i < parameters.size(); ++i)

@@ -121,46 +121,64 @@ bool ProcessingOptions::selects(SegmentKind k) const {
   return std::find(segment_kinds.begin(), segment_kinds.end(), to_string(k)) != segment_kinds.end();
 }
 
-std::optional<ProcessingOptions::Problem> ProcessingOptions::problem() const {
-  auto at_least = [](double v, double lo, bool open) { return std::isfinite(v) && (open ? v > lo : v >= lo); };
-  if (segment_kinds.empty()) return Problem{"segments", "expected a non-empty list of segment kinds such as [orientation]"};
-  for (const auto& k : segment_kinds)
-    if (!segment_kind_from_string(k))
-      return Problem{"segments", "unknown segment kind '" + k + "' (segment kinds: " + yaml::join(segment_kind_names()) + ")"};
-  const StaticExtractionSettings& e = extraction;
-  if (e.filter == Filter::kButterworth && (e.filter_order < 1 || e.filter_order > 20))
-    return Problem{"extraction.filter_order",
-                   "Butterworth order " + std::to_string(e.filter_order) + " is outside 1..20 (the paper uses 6)"};
-  if (e.filter == Filter::kButterworth && !at_least(e.cutoff_hz, 0.0, true))
-    return Problem{"extraction.cutoff_hz", "the cutoff frequency must be positive, got " + num(e.cutoff_hz) + " Hz"};
-  if (!at_least(e.settle_s, 0.0, false))
-    return Problem{"extraction.settle_s", "the settling time must not be negative, got " + num(e.settle_s) + " s"};
-  const StaticDetectorOptions& d = detector;
-  if (!at_least(d.window_s, 0.0, false))
-    return Problem{"detector.window_s", "must be >= 0 (in seconds; 0: from the sample rate), got " + num(d.window_s)};
-  if (!at_least(d.min_duration_s, 0.0, false))
-    return Problem{"detector.min_duration_s",
-                   "must be >= 0 (in seconds; 0: from the window), got " + num(d.min_duration_s)};
-  if (!at_least(d.variance_threshold, 0.0, false))
-    return Problem{"detector.variance_threshold_m2ps4",
-                   "must be >= 0 (in (m/s^2)^2; 0: automatic), got " + num(d.variance_threshold)};
-  if (!at_least(d.threshold_multiplier, 0.0, false))
-    return Problem{"detector.threshold_multiplier", "must be >= 0 (0: scanned), got " + num(d.threshold_multiplier)};
-  if (!at_least(d.init_duration_s, 0.0, false))
-    return Problem{"detector.init_duration_s", "must be >= 0 (in seconds; 0: the recording's initialization segment), got " + num(d.init_duration_s)};
-  if (!at_least(d.trim_s, 0.0, false))
-    return Problem{"detector.trim_s", "must be >= 0 (in seconds), got " + num(d.trim_s)};
-  if (!at_least(d.max_gyro_radps, 0.0, false))
-    return Problem{"detector.max_gyro_dps", "must be >= 0 (in deg/s; 0: no limit), got " +
-                                                num(d.max_gyro_radps / physics::kDegToRad)};
-  return std::nullopt;
-}
+namespace {
 
-bool ProcessingOptions::IsValid(std::string* message) const {
-  const auto p = problem();
+bool at_least(double v, double lo, bool open) { return std::isfinite(v) && (open ? v > lo : v >= lo); }
+
+// "KEY: what is wrong" of a problem, for IsValid.
+bool report(const std::optional<OptionProblem>& p, std::string* message) {
   if (p && message) *message = p->key + ": " + p->message;
   return !p;
 }
+
+}  // namespace
+
+std::optional<OptionProblem> StaticExtractionSettings::problem() const {
+  if (filter == Filter::kButterworth && (filter_order < 1 || filter_order > 20))
+    return OptionProblem{"filter_order",
+                         "Butterworth order " + std::to_string(filter_order) + " is outside 1..20 (the paper uses 6)"};
+  if (filter == Filter::kButterworth && !at_least(cutoff_hz, 0.0, true))
+    return OptionProblem{"cutoff_hz", "the cutoff frequency must be positive, got " + num(cutoff_hz) + " Hz"};
+  if (!at_least(settle_s, 0.0, false))
+    return OptionProblem{"settle_s", "the settling time must not be negative, got " + num(settle_s) + " s"};
+  return std::nullopt;
+}
+
+bool StaticExtractionSettings::IsValid(std::string* message) const { return report(problem(), message); }
+
+std::optional<OptionProblem> StaticDetectorOptions::problem() const {
+  if (!at_least(window_s, 0.0, false))
+    return OptionProblem{"window_s", "must be >= 0 (in seconds; 0: from the sample rate), got " + num(window_s)};
+  if (!at_least(min_duration_s, 0.0, false))
+    return OptionProblem{"min_duration_s", "must be >= 0 (in seconds; 0: from the window), got " + num(min_duration_s)};
+  if (!at_least(variance_threshold, 0.0, false))
+    return OptionProblem{"variance_threshold_m2ps4",
+                         "must be >= 0 (in (m/s^2)^2; 0: automatic), got " + num(variance_threshold)};
+  if (!at_least(threshold_multiplier, 0.0, false))
+    return OptionProblem{"threshold_multiplier", "must be >= 0 (0: scanned), got " + num(threshold_multiplier)};
+  if (!at_least(init_duration_s, 0.0, false))
+    return OptionProblem{"init_duration_s",
+                         "must be >= 0 (in seconds; 0: the recording's initialization segment), got " + num(init_duration_s)};
+  if (!at_least(trim_s, 0.0, false)) return OptionProblem{"trim_s", "must be >= 0 (in seconds), got " + num(trim_s)};
+  if (!at_least(max_gyro_radps, 0.0, false))
+    return OptionProblem{"max_gyro_dps",
+                         "must be >= 0 (in deg/s; 0: no limit), got " + num(max_gyro_radps / physics::kDegToRad)};
+  return std::nullopt;
+}
+
+bool StaticDetectorOptions::IsValid(std::string* message) const { return report(problem(), message); }
+
+std::optional<OptionProblem> ProcessingOptions::problem() const {
+  if (segment_kinds.empty()) return OptionProblem{"segments", "expected a non-empty list of segment kinds such as [orientation]"};
+  for (const auto& k : segment_kinds)
+    if (!segment_kind_from_string(k))
+      return OptionProblem{"segments", "unknown segment kind '" + k + "' (segment kinds: " + yaml::join(segment_kind_names()) + ")"};
+  if (auto p = extraction.problem()) return OptionProblem{"extraction." + p->key, p->message};
+  if (auto p = detector.problem()) return OptionProblem{"detector." + p->key, p->message};
+  return std::nullopt;
+}
+
+bool ProcessingOptions::IsValid(std::string* message) const { return report(problem(), message); }
 
 void read_options(const yaml::MapReader& m, ProcessingOptions& o, const std::set<std::string>& keep) {
   if (take(m, "intervals", "intervals", keep, o)) o.intervals = source_from(choice(m, "intervals", kSourceNames));

@@ -15,7 +15,6 @@ namespace stend::processing {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr const char* kInitSegmentLabel = "initialization";  // an importer's still start
 constexpr double kNoisePercentile = 0.10;
 constexpr std::size_t kQuadricUnknowns = 9;  // symmetric Q (6) and p (3) in uᵀQu + pᵀu = 1

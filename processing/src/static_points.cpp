@@ -2,10 +2,12 @@
 #include "stend/processing/static_points.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <stdexcept>
+#include <stend/errors.hpp>
 
 #include "stend/processing/static_detector.hpp"
 #include "stend/processing/truth.hpp"
@@ -33,7 +35,7 @@ void require_increasing_times(const Recording& rec) {
   for_each_chunk(rec.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t first) {
     for (std::size_t k = 0; k < n; ++k) {
       if (first + k > 0 && !(c[k].t_s > prev))
-        throw std::runtime_error("recording '" + rec.dir.string() + "': sample times are not " +
+        throw InputError("recording '" + rec.dir.string() + "': sample times are not " +
                                  "strictly increasing at sample " + std::to_string(first + k) + " (t = " +
                                  num(c[k].t_s) + " s)");
       prev = c[k].t_s;
@@ -92,12 +94,12 @@ class PointBuilder {
  public:
   PointBuilder(const Recording& rec, const ProcessingOptions& o, const Request& req, Extraction& out)
       : rec_(rec), o_(o), req_(req), out_(out) {
-    for (const auto& name : req.truth_columns) {
-      const int c = rec.truth_column(name);
-      if (c < 0)
-        throw std::invalid_argument("processing: the recording has no truth column '" + name + "'");
-      columns_.push_back(c);
+    for (const auto& name : req.truth_columns) add_column(name);
+    for (std::size_t a = 0; a < 3; ++a) {
+      input_at_[a] = req.stimulus.input[a].empty() ? -1 : add_column(req.stimulus.input[a]);
+      force_at_[a] = req.stimulus.specific_force[a].empty() ? -1 : add_column(req.stimulus.specific_force[a]);
     }
+    requests_truth_ = !columns_.empty();
     die_ = rec.truth_column(kDieTemperatureColumn);
     if (die_ >= 0) columns_.push_back(die_);
     saturation_ = (req.accel ? kAccelSaturated : 0u) | (req.gyro ? kGyroSaturated : 0u);
@@ -175,19 +177,34 @@ class PointBuilder {
     return w;
   }
 
-  // Step 5: truth means and temperature over the kept window; false when truth was requested and
-  // there is none.
+  // The requested truth column `name` read over every window; returns its place in columns_.
+  int add_column(const std::string& name) {
+    const int c = rec_.truth_column(name);
+    if (c < 0) throw std::invalid_argument("processing: the recording has no truth column '" + name + "'");
+    columns_.push_back(c);
+    return static_cast<int>(columns_.size()) - 1;
+  }
+
+  // Step 5: truth means, stimulus and temperature over the kept window; false when truth was
+  // requested and there is none.
   bool add_truth(StaticPoint& p, double sensor_temperature_c) const {
     const TruthMean truth = truth_mean(rec_, columns_, p.t_start_s, p.t_end_s);
-    if (!truth.found && !req_.truth_columns.empty()) return false;
+    if (!truth.found && requests_truth_) return false;
     p.truth.assign(truth.values.begin(), truth.values.begin() + static_cast<std::ptrdiff_t>(req_.truth_columns.size()));
+    model::Stimulus<double>& st = p.stimulus;
+    for (std::size_t a = 0; a < 3; ++a) {
+      const auto i = static_cast<Eigen::Index>(a);
+      if (input_at_[a] >= 0) st.input[i] = truth.values[static_cast<std::size_t>(input_at_[a])];
+      if (force_at_[a] >= 0) st.specific_force[i] = truth.values[static_cast<std::size_t>(force_at_[a])];
+    }
     if (die_ >= 0 && truth.found) {
-      p.temperature_c = truth.values.back();
-      p.temperature_rate_cps = truth_slope(rec_, die_, p.t_start_s, p.t_end_s);
+      st.temperature_c = truth.values.back();
+      st.temperature_rate_cps = truth_slope(rec_, die_, p.t_start_s, p.t_end_s);
       p.temperature_source = TemperatureSource::kDie;
     } else {
-      p.temperature_c = sensor_temperature_c;
+      st.temperature_c = sensor_temperature_c;
     }
+    st.time_s = 0.5 * (p.t_start_s + p.t_end_s);
     return true;
   }
 
@@ -200,7 +217,9 @@ class PointBuilder {
   const ProcessingOptions& o_;
   const Request& req_;
   Extraction& out_;
-  std::vector<int> columns_;  // truth columns requested, then die_c when present
+  std::vector<int> columns_;  // truth columns requested, the stimulus', then die_c when present
+  bool requests_truth_ = false;
+  std::array<int, 3> input_at_{-1, -1, -1}, force_at_{-1, -1, -1};  // places in columns_, −1 none
   int die_ = -1;
   std::uint32_t saturation_ = 0;
 };
@@ -235,6 +254,19 @@ std::string Extraction::tally() const {
   if (!reasons.empty()) out += "; skipped: " + join(reasons);
   if (detection) out += "; " + detection->rejections();
   return out;
+}
+
+const AxesValue& StaticPoint::axes(model::Instrument instrument) const {
+  return instrument == model::Instrument::kAccelerometer ? accel : gyro;
+}
+AxesValue& StaticPoint::axes(model::Instrument instrument) {
+  return instrument == model::Instrument::kAccelerometer ? accel : gyro;
+}
+
+std::string label(const Segment& s) {
+  if (!s.label.empty()) return s.label;
+  if (s.orientation >= 0) return std::string(to_string(s.kind)) + " " + std::to_string(s.orientation + 1);
+  return describe(s);
 }
 
 std::string describe(const Segment& s) {

@@ -468,8 +468,8 @@ TEST(StaticPoints, MeansTruthAndTemperatureOverTheKeptWindow) {
     EXPECT_DOUBLE_EQ(p.truth[static_cast<std::size_t>(a)], kSix[2][a]);
   }
   EXPECT_EQ(p.temperature_source, TemperatureSource::kDie);
-  EXPECT_NEAR(p.temperature_c, 20.0 + 0.1 * 5.0, 0.01);  // die ramp, mid-window
-  EXPECT_NEAR(p.temperature_rate_cps, 0.1, 1e-9);
+  EXPECT_NEAR(p.stimulus.temperature_c, 20.0 + 0.1 * 5.0, 0.01);  // die ramp, mid-window
+  EXPECT_NEAR(p.stimulus.temperature_rate_cps, 0.1, 1e-9);
 }
 
 TEST(StaticPoints, EveryRuleSkipsWithItsReasonAndANote) {
@@ -542,7 +542,7 @@ TEST(StaticPoints, DetectsWhenTheRecordingHasNoSegmentsAndTakesTheSensorTemperat
   EXPECT_EQ(ex.points[3].segment.label, "static_3");
   EXPECT_NEAR(ex.points[3].accel.mean.x(), -9.8, 0.01);
   EXPECT_EQ(ex.points[3].temperature_source, TemperatureSource::kSensor);
-  EXPECT_DOUBLE_EQ(ex.points[3].temperature_c, 30.0);
+  EXPECT_DOUBLE_EQ(ex.points[3].stimulus.temperature_c, 30.0);
   ASSERT_GE(ex.notes.size(), 2u);
   EXPECT_NE(ex.notes[0].find("no 'die_c' truth column"), std::string::npos);
   EXPECT_NE(ex.notes[1].find("6 static intervals detected"), std::string::npos) << ex.notes[1];

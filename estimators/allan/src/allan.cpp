@@ -1,5 +1,6 @@
 #include <stend/allan/allan.hpp>
 #include <stend/allan/deviation_report.hpp>
+#include <stend/errors.hpp>
 #include <stend/physics/units.hpp>
 
 #include <Eigen/Dense>
@@ -23,34 +24,6 @@
 
 namespace stend::allan {
 
-const char* to_string(Instrument i) {
-  switch (i) {
-    case Instrument::kAccelerometer: return "accelerometer";
-    case Instrument::kGyroscope: return "gyroscope";
-    case Instrument::kOther: return "other";
-  }
-  return "?";
-}
-
-Units units_for(Instrument instrument, const std::string& signal_unit) {
-  Units u;
-  switch (instrument) {
-    case Instrument::kAccelerometer:
-      if (signal_unit.empty() || signal_unit == "m/s^2") {
-        return {"m/s^2", "m/s", "m/s^2/sqrt(Hz)", "m/s^2", "m/s^3/sqrt(Hz)", "m/s^3", "m/s^2"};
-      }
-      break;
-    case Instrument::kGyroscope:
-      if (signal_unit.empty() || signal_unit == "rad/s") {
-        return {"rad/s", "rad", "rad/s/sqrt(Hz)", "rad/s", "rad/s^2/sqrt(Hz)", "rad/s^2", "rad/s"};
-      }
-      break;
-    case Instrument::kOther: break;
-  }
-  const std::string s = signal_unit.empty() ? "unit" : signal_unit;
-  return {s, s + "*s", s + "/sqrt(Hz)", s, s + "/s/sqrt(Hz)", s + "/s", s};
-}
-
 // ---------------------------------------------------------------------------------------------
 // Options
 
@@ -70,7 +43,7 @@ struct OptionValue {
   const YAML::Node& v;
 
   [[noreturn]] void fail(const std::string& what) const {
-    throw std::runtime_error(fmt::format("{}: allan option '{}': {}", yaml_location(file, v), key, what));
+    throw InputError(fmt::format("{}: allan option '{}': {}", yaml_location(file, v), key, what));
   }
   double number() const {
     try {
@@ -78,6 +51,12 @@ struct OptionValue {
     } catch (const YAML::Exception&) {
       fail("expected a number, got '" + (v.IsScalar() ? v.Scalar() : std::string("a non-scalar")) + "'");
     }
+  }
+  // A whole number in [lo, hi]: `range` says which, in the words of AllanOptions::IsValid.
+  double whole(double lo, double hi, const char* range) const {
+    const double n = number();
+    if (!(n >= lo && n <= hi) || n != std::floor(n)) fail(range);
+    return n;
   }
   bool boolean() const {
     try {
@@ -88,35 +67,28 @@ struct OptionValue {
   }
 };
 
-// Sets the option named value.key with its range check; false for an unknown name.
-bool set_allan_option(AllanOptions& o, const OptionValue& value) {
+// Reads the option named value.key (its type; ranges are AllanOptions::IsValid's); false for an
+// unknown name.
+bool read_allan_option(AllanOptions& o, const OptionValue& value) {
   const std::string& key = value.key;
   if (key == "max_m") {
-    const double m = value.number();
-    if (!(m >= 1.0) || m > 9.2e18 || m != std::floor(m)) value.fail("must be an integer >= 1 (samples)");
-    o.max_m = static_cast<std::uint64_t>(m);
+    o.max_m = static_cast<std::uint64_t>(value.whole(1.0, 9.2e18, "must be an integer >= 1 (samples)"));
   } else if (key == "confidence") {
     o.confidence = value.number();
-    if (!(o.confidence > 0.0 && o.confidence < 1.0)) value.fail("must be in (0, 1), e.g. 0.683 or 0.95");
   } else if (key == "edf_from_model") {
     o.edf_from_model = value.boolean();
   } else if (key == "slope_tolerance") {
     o.slope_tolerance = value.number();
-    if (!(o.slope_tolerance > 0.0 && o.slope_tolerance < 0.5)) value.fail("must be in (0, 0.5)");
   } else if (key == "min_readoff_edf") {
     o.min_readoff_edf = value.number();
-    if (!(o.min_readoff_edf >= 0.0)) value.fail("must be >= 0");
   } else if (key == "min_readoff_points") {
-    const double n = value.number();
-    if (!(n >= 1.0 && n <= 64.0) || n != std::floor(n)) value.fail("must be an integer in 1 … 64");
-    o.min_readoff_points = static_cast<int>(n);
+    o.min_readoff_points = static_cast<int>(value.whole(-1e9, 1e9, "must be an integer in 1 … 64"));
   } else if (key == "t_begin_s") {
     o.t_begin_s = value.number();
   } else if (key == "t_end_s") {
     o.t_end_s = value.number();
   } else if (key == "lowpass_hz") {
     o.lowpass_hz = value.number();
-    if (o.lowpass_hz < 0.0) value.fail("must be >= 0 (Hz; 0 = no output filter) or .nan (not stated)");
   } else {
     return false;
   }
@@ -125,80 +97,37 @@ bool set_allan_option(AllanOptions& o, const OptionValue& value) {
 
 }  // namespace
 
+bool AllanOptions::IsValid(std::string* why) const {
+  if (!noise::AnalysisOptions::IsValid(why)) return false;
+  if (std::isfinite(t_begin_s) && std::isfinite(t_end_s) && !(t_end_s > t_begin_s)) {
+    if (why) *why = "t_end_s: must be after t_begin_s";
+    return false;
+  }
+  return true;
+}
+
 AllanOptions options_from_yaml(const YAML::Node& node, const std::string& file) {
   AllanOptions o;
   if (!node || node.IsNull()) return o;
-  if (!node.IsMap()) throw std::runtime_error(yaml_location(file, node) + ": Allan options must be a mapping");
+  if (!node.IsMap()) throw InputError(yaml_location(file, node) + ": Allan options must be a mapping");
   static const std::vector<std::string> keys = {"max_m", "confidence", "edf_from_model",
                                                 "slope_tolerance", "min_readoff_edf",
                                                 "min_readoff_points", "t_begin_s", "t_end_s",
                                                 "lowpass_hz", "deviations", "tau"};
   for (const auto& kv : node) {
     const std::string key = kv.first.as<std::string>();
-    const YAML::Node& v = kv.second;
-    if (set_allan_option(o, OptionValue{file, key, v}) || is_deviation_key(key)) continue;
+    if (read_allan_option(o, OptionValue{file, key, kv.second}) || is_deviation_key(key)) continue;
     std::string all;
     for (const auto& k : keys) all += (all.empty() ? "" : ", ") + k;
-    throw std::runtime_error(fmt::format("{}: unknown allan option '{}' (known: {})",
-                                         yaml_location(file, kv.first), key, all));
+    throw InputError(fmt::format("{}: unknown allan option '{}' (known: {})", yaml_location(file, kv.first), key, all));
   }
-  if (std::isfinite(o.t_begin_s) && std::isfinite(o.t_end_s) && !(o.t_end_s > o.t_begin_s)) {
-    throw std::runtime_error(yaml_location(file, node) + ": allan options: t_end_s must be after t_begin_s");
+  std::string why;
+  if (!o.IsValid(&why)) {
+    // why = "KEY: what is wrong": said at the key's value.
+    const std::string key = why.substr(0, why.find(':'));
+    OptionValue{file, key, node[key]}.fail(why.substr(key.size() + 2));
   }
   return o;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Model
-
-AllanCurve make_curve(const std::vector<OctaveVariance>& octaves, std::uint64_t samples,
-                      double rate_hz, const ChannelInfo& channel, double confidence) {
-  if (!(rate_hz > 0.0)) throw std::invalid_argument("Allan curve: the sample rate must be > 0");
-  AllanCurve c;
-  c.channel = channel;
-  c.units = units_for(channel.instrument, channel.unit);
-  if (c.channel.unit.empty()) c.channel.unit = c.units.signal;
-  c.rate_hz = rate_hz;
-  c.samples = samples;
-  c.confidence = confidence;
-  for (const auto& o : octaves) {
-    AllanPoint p;
-    p.m = o.m;
-    p.terms = o.terms;
-    p.tau_s = static_cast<double>(o.m) / rate_hz;
-    p.avar = o.avar;
-    p.adev = std::sqrt(std::max(0.0, o.avar));
-    c.points.push_back(p);
-  }
-  assign_intervals(c, nullptr);
-  return c;
-}
-
-void assign_intervals(AllanCurve& curve, const NoiseModel* model) {
-  const double n_phase = static_cast<double>(curve.samples) + 1.0;
-  for (auto& p : curve.points) {
-    p.noise = model && model->ok ? model->dominant(p.tau_s) : NoiseType::kWhite;
-    p.edf = stats::edf_overlapping_adev(p.noise, n_phase, static_cast<double>(p.m));
-    const auto ci = stats::deviation_interval(p.adev, p.edf, curve.confidence);
-    p.adev_lo = ci.lo;
-    p.adev_hi = ci.hi;
-  }
-}
-
-ChannelResult analyze(const OverlappingAllanStream& stream, double rate_hz,
-                      const ChannelInfo& channel, const AllanOptions& options) {
-  ChannelResult r;
-  r.curve = make_curve(stream.octaves(), stream.samples(), rate_hz, channel, options.confidence);
-  r.model = fit_noise_model(r.curve, options);
-  if (options.edf_from_model && r.model.ok) assign_intervals(r.curve, &r.model);
-  return r;
-}
-
-ChannelResult analyze(const double* y, std::size_t n, std::size_t stride, double rate_hz,
-                      const ChannelInfo& channel, const AllanOptions& options) {
-  OverlappingAllanStream s(options.max_m, n);
-  s.add(y, n, stride == 0 ? 1 : stride);
-  return analyze(s, rate_hz, channel, options);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -320,7 +249,7 @@ Sampling scan_sampling(const SampleSource& src, IndexRange range, double header_
     std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
     const double median_dt = sorted[sorted.size() / 2];
     if (!(median_dt > 0.0)) {
-      throw std::runtime_error(fmt::format(
+      throw InputError(fmt::format(
           "Allan: {}: no output rate in the header and the timestamps do not increase", source));
     }
     s.rate_hz = 1.0 / median_dt;
@@ -451,7 +380,7 @@ AllanReport analyze_recording(const Recording& rec, const AllanOptions& options)
   const SampleSource& src = rec.sample_source();
   const IndexRange range = selected_range(src, options);
   if (range.size() < 2) {
-    throw std::runtime_error(fmt::format("Allan: {} has {} sample(s) in the selected time range",
+    throw InputError(fmt::format("Allan: {} has {} sample(s) in the selected time range",
                                          report.source, range.size()));
   }
   report.samples = range.size();
@@ -471,75 +400,6 @@ AllanReport analyze_recording(const Recording& rec, const AllanOptions& options)
 
 // ---------------------------------------------------------------------------------------------
 // Text
-
-std::ostream& operator<<(std::ostream& os, const AllanPoint& p) {
-  os << fmt::format("tau {:.6g} s (m {}): adev {:.5g} [{:.5g}, {:.5g}], edf {:.4g} ({})", p.tau_s,
-                    p.m, p.adev, p.adev_lo, p.adev_hi, p.edf, to_string(p.noise));
-  return os;
-}
-
-std::ostream& operator<<(std::ostream& os, const AllanCurve& c) {
-  os << fmt::format("Allan deviation of {} ({}, {}), {} samples at {:.6g} Hz, {:.1f} % intervals\n",
-                    c.channel.name, to_string(c.channel.instrument), c.units.signal, c.samples,
-                    c.rate_hz, 100.0 * c.confidence);
-  os << fmt::format("  {:>12} {:>10} {:>12} {:>12} {:>12} {:>10}  {}\n", "tau [s]", "m", "adev",
-                    "lo", "hi", "edf", "noise (EDF)");
-  for (const auto& p : c.points) {
-    os << fmt::format("  {:>12.6g} {:>10} {:>12.5g} {:>12.5g} {:>12.5g} {:>10.4g}  {}\n", p.tau_s,
-                      p.m, p.adev, p.adev_lo, p.adev_hi, p.edf, to_string(p.noise));
-  }
-  return os;
-}
-
-std::ostream& operator<<(std::ostream& os, const Coefficient& c) {
-  switch (c.verdict()) {
-    case Verdict::kFailed: return os << fmt::format("{} ({}): FIT FAILED", c.symbol, c.name);
-    case Verdict::kIdentified:
-      os << fmt::format("{} ({}) = {:.4g} ± {:.2g} {} (95 % {:.4g} … {:.4g})", c.symbol, c.name, c.value,
-                        c.sigma, c.unit, c.lo, c.hi);
-      if (c.dominates) os << fmt::format("  [dominates {:.3g} … {:.3g} s]", c.tau_lo_s, c.tau_hi_s);
-      return os;
-    case Verdict::kUpperBound:
-      if (!std::isfinite(c.upper_bound)) return os << fmt::format("{} ({}): not identified", c.symbol, c.name);
-      return os << fmt::format("{} ({}): not identified; <= {:.3g} {}", c.symbol, c.name, c.upper_bound, c.unit);
-  }
-  return os;
-}
-
-std::ostream& operator<<(std::ostream& os, const Readoff& r) {
-  if (r.found) {
-    os << fmt::format("{} = {:.4g} {} [{:.4g}, {:.4g}] from tau {:.3g} … {:.3g} s", r.name, r.value,
-                      r.unit, r.lo, r.hi, r.tau_lo_s, r.tau_hi_s);
-  } else {
-    os << fmt::format("{}: not found — {}", r.name, r.note);
-  }
-  return os;
-}
-
-std::ostream& operator<<(std::ostream& os, const NoiseModel& m) {
-  if (!m.ok) return os << "noise model: FIT FAILED — " << m.message << "\n";
-  os << fmt::format("noise model fitted over tau {:.3g} … {:.3g} s (deviance per dof {:.3g}, {} dof), "
-                    "output low-pass {}:\n",
-                    m.tau_fit_min_s, m.tau_fit_max_s, m.chi2_reduced, m.dof,
-                    std::isnan(m.lowpass_hz) ? std::string("not stated")
-                    : m.lowpass_hz > 0.0     ? fmt::format("{:g} Hz in the model", m.lowpass_hz)
-                                             : std::string("none"));
-  os << "  selected terms: " << m.selection << "\n";
-  for (int j = 0; j < NoiseModel::kCoefficients; ++j) {
-    const Coefficient& c = m.coefficients()[j];
-    if (std::string(c.symbol) == "Tc" && !c.identified) continue;  // τc only with its σ_G
-    os << "  " << c << "\n";
-  }
-  os << "  read-offs: " << m.white_line << "\n";
-  os << "             " << m.random_walk_line << "\n";
-  os << "             " << m.bias_floor << "\n";
-  if (!m.message.empty()) os << "  note: " << m.message << "\n";
-  return os;
-}
-
-std::ostream& operator<<(std::ostream& os, const ChannelResult& r) {
-  return os << r.curve << r.model;
-}
 
 namespace {
 std::string kalibr_line(const char* key, double v, const char* unit, bool identified, bool upper,

@@ -1,6 +1,7 @@
 // The requested deviations of every channel: options, streaming pass, JSON, table
 // (stend/allan/deviation_report.hpp).
 #include <stend/allan/deviation_report.hpp>
+#include <stend/errors.hpp>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -39,7 +40,7 @@ bool is_deviation_key(const std::string& key) { return key == "deviations" || ke
 namespace {
 
 [[noreturn]] void fail(const std::string& file, const YAML::Node& at, const std::string& what) {
-  throw std::runtime_error(fmt::format("{}: allan option {}", yaml_location(file, at), what));
+  throw InputError(fmt::format("{}: allan option {}", yaml_location(file, at), what));
 }
 
 DeviationKind kind_named(const std::string& file, const YAML::Node& v) {

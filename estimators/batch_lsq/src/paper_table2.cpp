@@ -1,6 +1,8 @@
 // Reproduction of the paper's Table 2 fit. See stend/batch_lsq/paper_table2.hpp.
 #include "stend/batch_lsq/paper_table2.hpp"
 
+#include <stend/errors.hpp>
+
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -36,7 +38,7 @@ std::filesystem::path default_table2_csv() {
 
 std::vector<Table2Row> load_table2_csv(const std::filesystem::path& file) {
   std::ifstream in(file);
-  if (!in) throw std::runtime_error("cannot open '" + file.string() + "'");
+  if (!in) throw InputError("cannot open '" + file.string() + "'");
   std::vector<Table2Row> rows;
   std::string line;
   int lineno = 0;
@@ -48,13 +50,13 @@ std::vector<Table2Row> load_table2_csv(const std::filesystem::path& file) {
     const std::string where = file.string() + ":" + std::to_string(lineno) + ": ";
     if (!header) {
       if (line != "angle_deg,a_z_mps2")
-        throw std::runtime_error(where + "expected the header 'angle_deg,a_z_mps2', got '" + line + "'");
+        throw InputError(where + "expected the header 'angle_deg,a_z_mps2', got '" + line + "'");
       header = true;
       continue;
     }
     const auto comma = line.find(',');
     if (comma == std::string::npos || line.find(',', comma + 1) != std::string::npos)
-      throw std::runtime_error(where + "expected two comma-separated numbers, got '" + line + "'");
+      throw InputError(where + "expected two comma-separated numbers, got '" + line + "'");
     Table2Row r;
     try {
       std::size_t used = 0;
@@ -64,11 +66,11 @@ std::vector<Table2Row> load_table2_csv(const std::filesystem::path& file) {
       r.a_z_mps2 = std::stod(b, &used);
       if (used != b.size()) throw std::invalid_argument(b);
     } catch (const std::exception&) {
-      throw std::runtime_error(where + "not a number in '" + line + "'");
+      throw InputError(where + "not a number in '" + line + "'");
     }
     rows.push_back(r);
   }
-  if (!header) throw std::runtime_error(file.string() + ": no header line 'angle_deg,a_z_mps2'");
+  if (!header) throw InputError(file.string() + ": no header line 'angle_deg,a_z_mps2'");
   return rows;
 }
 
@@ -83,20 +85,19 @@ ModelSpec table2_model() {
   return s;
 }
 
-std::vector<StaticPoint> table2_points(const std::vector<Table2Row>& rows, double g_mps2,
-                                       double tilt_h_deg) {
-  std::vector<StaticPoint> pts;
+std::vector<processing::StaticPoint> table2_points(const std::vector<Table2Row>& rows, double g_mps2,
+                                                   double tilt_h_deg) {
+  std::vector<processing::StaticPoint> pts;
   for (std::size_t i = 0; i < rows.size(); ++i) {
-    StaticPoint p;
-    p.segment_id = static_cast<int>(i);
-    p.label = number_text(rows[i].angle_deg) + " deg";
+    processing::StaticPoint p;
+    p.segment.id = static_cast<int>(i);
+    p.segment.label = number_text(rows[i].angle_deg) + " deg";
     const Eigen::Vector3d f = physics::gravity_specific_force(
         physics::paper_table(tilt_h_deg * physics::kDegToRad, rows[i].angle_deg * physics::kDegToRad), g_mps2);
     p.stimulus.input = f;
     p.stimulus.specific_force = f;
     p.stimulus.temperature_c = 25.0;  // one (unstated) temperature; no temperature terms fitted
-    p.measured = Eigen::Vector3d(std::numeric_limits<double>::quiet_NaN(),
-                                 std::numeric_limits<double>::quiet_NaN(), rows[i].a_z_mps2);
+    p.accel.mean = Eigen::Vector3d(kNaN, kNaN, rows[i].a_z_mps2);
     pts.push_back(p);
   }
   return pts;

@@ -78,17 +78,18 @@ json extraction_json(const FitResult& fr) {
 
 // "points": each static point's segment, times [s], mean reading, its standard error and the
 // true input (instrument unit, x y z), and its temperature [degC].
-json points_json(const std::vector<StaticPoint>& points) {
+json points_json(const std::vector<processing::StaticPoint>& points, model::Instrument instrument) {
   json pts = json::array();
   for (const auto& p : points) {
+    const processing::AxesValue& reading = p.axes(instrument);
     json m = json::array(), se = json::array(), in = json::array();
     for (int a = 0; a < 3; ++a) {
-      m.push_back(number_or_null(p.measured[a]));
-      se.push_back(number_or_null(p.measured_std_error[a]));
+      m.push_back(number_or_null(reading.mean[a]));
+      se.push_back(number_or_null(reading.std_error[a]));
       in.push_back(number_or_null(p.stimulus.input[a]));
     }
-    pts.push_back({{"segment", p.segment_id},
-                   {"label", p.label},
+    pts.push_back({{"segment", p.segment.id},
+                   {"label", processing::label(p.segment)},
                    {"t_start_s", p.t_start_s},
                    {"t_end_s", p.t_end_s},
                    {"samples", p.samples_used},
@@ -247,7 +248,7 @@ std::string to_json(const FitResult& fr, int indent) {
   j["units"] = {{"residual", fr.unit}, {"residual_display", fr.display_unit}};
   j["notes"] = fr.notes;
   j["excluded_parameters"] = fr.excluded;
-  j["points"] = points_json(fr.points);
+  j["points"] = points_json(fr.points, fr.spec.model.instrument);
   if (!fr.ok) return j.dump(indent);
   j["solution"] = solution_json(fr.lsq);
   j["parameters"] = parameters_json(fr);

@@ -285,17 +285,17 @@ TEST(BatchLsq, RecordingWithoutTruthColumnsFailsLoudly) {
 
 TEST(BatchLsq, RotationAboutOneAxisLeavesCrossZyUnidentifiable) {
   // The paper's Table 2 geometry with h = 0: f_y ≡ 0.
-  std::vector<StaticPoint> pts;
+  std::vector<processing::StaticPoint> pts;
   const model::ErrorModel m = bsc_model();
   const Eigen::VectorXd th = theta_bsc();
   std::mt19937 rng(3);
   std::normal_distribution<double> n(0.0, 0.0005);
   for (double d = 0; d <= 44; d += 2) {
-    StaticPoint p;
+    processing::StaticPoint p;
     p.stimulus.input = p.stimulus.specific_force =
         physics::paper_table(0.0, d * physics::kDegToRad) * Eigen::Vector3d(0, 0, 9.81);
-    p.measured = m.measure<double>(th.data(), p.stimulus) + Eigen::Vector3d(n(rng), n(rng), n(rng));
-    p.label = std::to_string(d);
+    p.accel.mean = m.measure<double>(th.data(), p.stimulus) + Eigen::Vector3d(n(rng), n(rng), n(rng));
+    p.segment.label = std::to_string(d);
     pts.push_back(p);
   }
   ModelSpec spec = estimation::parse_model_spec("instrument: accelerometer\naxes: [z]\nterms: [bias, scale, cross_axis]\n");
@@ -369,8 +369,8 @@ TEST(BatchLsq, SegmentNoiseWeighting) {
     EXPECT_NEAR(weighted.lsq.estimate[j], plain.lsq.estimate[j], 0.2 * plain.lsq.parameters[static_cast<std::size_t>(j)].std_error);
   EXPECT_EQ(nlohmann::json::parse(to_json(weighted))["weighting"], "segment_noise");
   // Points without a noise estimate cannot be weighted: refused with a reason.
-  std::vector<StaticPoint> pts = weighted.points;
-  pts[3].measured_std_error[1] = std::numeric_limits<double>::quiet_NaN();
+  std::vector<processing::StaticPoint> pts = weighted.points;
+  pts[3].accel.std_error[1] = std::numeric_limits<double>::quiet_NaN();
   const FitResult bad = fit_points(pts, spec);
   EXPECT_FALSE(bad.ok);
   EXPECT_NE(bad.message.find("segment_noise"), std::string::npos) << bad.message;

@@ -126,7 +126,7 @@ json levels_json(const std::vector<TemperatureLevel>& levels) {
 json points_json(const TempPolyResult& r) {
   json pts = json::array();
   for (std::size_t i = 0; i < r.points.size(); ++i)
-    pts.push_back({{"label", r.points[i].label},
+    pts.push_back({{"label", processing::label(r.points[i].segment)},
                    {"temperature_c", r.points[i].stimulus.temperature_c},
                    {"level", i < r.level_of.size() ? r.level_of[i] : -1},
                    {"leg", i < r.legs.size() ? leg_name(r.legs[i]) : "unknown"}});

@@ -32,7 +32,7 @@ bool all_identifiable(const batch_lsq::FitResult& f) {
 }
 
 // Δ predicted for point `pt` on axis `a` by a fit (NaN when a needed parameter is not identified).
-double predict(const batch_lsq::FitResult& f, const batch_lsq::StaticPoint& pt, int a) {
+double predict(const batch_lsq::FitResult& f, const processing::StaticPoint& pt, int a) {
   const Eigen::MatrixXd phi = f.spec.model.regressor(pt.stimulus);
   double s = 0.0;
   for (std::size_t j = 0; j < f.param_index.size(); ++j) {
@@ -45,7 +45,7 @@ double predict(const batch_lsq::FitResult& f, const batch_lsq::StaticPoint& pt, 
 // Steps 2–3 (see the header): checks, temperature levels and legs, the orders the data support.
 
 // Why the options or the points cannot be fitted at all; "" when they can.
-std::string refusal(const TempPolyOptions& o, const std::vector<batch_lsq::StaticPoint>& points) {
+std::string refusal(const TempPolyOptions& o, const std::vector<processing::StaticPoint>& points) {
   if (o.selection != "bic" && o.selection != "cv" && o.selection != "fixed")
     return "unknown selection '" + o.selection + "': use bic, cv or fixed";
   if (o.selection == "fixed" && (o.order < 0 || o.order > 6))
@@ -63,13 +63,13 @@ std::string refusal(const TempPolyOptions& o, const std::vector<batch_lsq::Stati
   if (points.empty()) return "no static points: nothing to fit";
   for (const auto& p : points)
     if (!std::isfinite(p.stimulus.temperature_c))
-      return "point '" + p.label + "' has no finite temperature";
+      return "point '" + processing::label(p.segment) + "' has no finite temperature";
   return {};
 }
 
 // Point indices ordered by `key` (stable: equal keys keep their input order).
 template <class Key>
-std::vector<std::size_t> order_by(const std::vector<batch_lsq::StaticPoint>& points, Key key) {
+std::vector<std::size_t> order_by(const std::vector<processing::StaticPoint>& points, Key key) {
   std::vector<std::size_t> idx(points.size());
   std::iota(idx.begin(), idx.end(), std::size_t{0});
   std::stable_sort(idx.begin(), idx.end(),
@@ -79,7 +79,7 @@ std::vector<std::size_t> order_by(const std::vector<batch_lsq::StaticPoint>& poi
 
 // Temperature levels: clusters of the ascending die temperatures, a gap above
 // level_tolerance_c [degC] starting a new level; fills levels, level_of and the valid range [degC].
-void group_levels(const std::vector<batch_lsq::StaticPoint>& points, double level_tolerance_c,
+void group_levels(const std::vector<processing::StaticPoint>& points, double level_tolerance_c,
                   TempPolyResult& r) {
   r.level_of.assign(points.size(), -1);
   double prev = kNaN;
@@ -103,7 +103,7 @@ void group_levels(const std::vector<batch_lsq::StaticPoint>& points, double leve
 
 // Legs: visits (runs of one level) in time order; a visit approached from a colder level is
 // heating, from a warmer one cooling, the first visit unknown. Fills legs and the level counts.
-void assign_legs(const std::vector<batch_lsq::StaticPoint>& points, TempPolyResult& r) {
+void assign_legs(const std::vector<processing::StaticPoint>& points, TempPolyResult& r) {
   r.legs.assign(points.size(), Leg::kUnknown);
   int prev_level = -1, cur_level = -1;
   Leg cur_leg = Leg::kUnknown;
@@ -201,13 +201,13 @@ OrderScore score_fit(const batch_lsq::FitResult& f, int order) {
 
 // Leave-one-temperature-out cross-validation of `spec` on axis a: the mean squared error
 // [unit²] of each level's points predicted by a fit without that level, into s.cv_mse.
-void cross_validate(const std::vector<batch_lsq::StaticPoint>& points, const TempPolyResult& r,
+void cross_validate(const std::vector<processing::StaticPoint>& points, const TempPolyResult& r,
                     const estimation::ModelSpec& spec, int a, OrderScore& s) {
   double sse = 0.0;
   int count = 0;
   std::string why;
   for (std::size_t lv = 0; lv < r.levels.size(); ++lv) {
-    std::vector<batch_lsq::StaticPoint> train;
+    std::vector<processing::StaticPoint> train;
     std::vector<std::size_t> test;
     for (std::size_t i = 0; i < points.size(); ++i)
       (r.level_of[i] == static_cast<int>(lv) ? (void)test.push_back(i) : train.push_back(points[i]));
@@ -218,7 +218,8 @@ void cross_validate(const std::vector<batch_lsq::StaticPoint>& points, const Tem
       break;
     }
     for (std::size_t i : test) {
-      const double e = points[i].measured[a] - points[i].stimulus.input[a] - predict(tf, points[i], a);
+      const double e = points[i].axes(spec.model.instrument).mean[a] - points[i].stimulus.input[a] -
+                       predict(tf, points[i], a);
       sse += e * e;
       ++count;
     }
@@ -289,7 +290,7 @@ void add_hysteresis(const TempPolyResult& r, AxisResult& ax) {
 }
 
 // One axis: candidate orders first..top fitted and scored, one chosen, its hysteresis.
-AxisResult fit_axis(const std::vector<batch_lsq::StaticPoint>& points, const TempPolyOptions& o,
+AxisResult fit_axis(const std::vector<processing::StaticPoint>& points, const TempPolyOptions& o,
                     const TempPolyResult& r, int first, int top, int a) {
   AxisResult ax;
   ax.axis = a;
@@ -354,7 +355,7 @@ estimation::ModelSpec candidate_spec(const TempPolyOptions& o, int order, int ax
   return spec;
 }
 
-TempPolyResult fit_temperature_points(const std::vector<batch_lsq::StaticPoint>& points,
+TempPolyResult fit_temperature_points(const std::vector<processing::StaticPoint>& points,
                                       const TempPolyOptions& o) {
   TempPolyResult r;
   r.options = o;
@@ -382,10 +383,9 @@ TempPolyResult fit_temperature_points(const std::vector<batch_lsq::StaticPoint>&
 
 TempPolyResult fit_temperature_model(const Recording& rec, const TempPolyOptions& o) {
   processing::Extraction ex;
-  std::vector<batch_lsq::StaticPoint> points;
   TempPolyResult r;
   try {
-    points = batch_lsq::extract_points(rec, candidate_spec(o, 0, -1), &ex);
+    ex = estimation::extract_static_points(rec, candidate_spec(o, 0, -1));
   } catch (const std::exception& e) {
     r.options = o;
     r.reference_c = o.reference_c;
@@ -396,8 +396,8 @@ TempPolyResult fit_temperature_model(const Recording& rec, const TempPolyOptions
   }
   TempPolyOptions used = o;
   used.processing = ex.options;
-  r = fit_temperature_points(points, used);
-  if (!r.ok && points.empty()) r.message = "no usable static segment in the recording; " + r.message;
+  r = fit_temperature_points(ex.points, used);
+  if (!r.ok && ex.points.empty()) r.message = "no usable static segment in the recording; " + r.message;
   r.notes.insert(r.notes.begin(), ex.notes.begin(), ex.notes.end());
   if (!rec.complete())
     r.notes.push_back("the recording's status is '" + std::string(to_string(rec.header.status)) + "', not 'complete'");

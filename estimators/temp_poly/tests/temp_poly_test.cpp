@@ -11,7 +11,7 @@
 #include "stend/temp_poly/temp_poly.hpp"
 
 using namespace stend;
-using stend::batch_lsq::StaticPoint;
+using stend::processing::StaticPoint;
 
 namespace {
 
@@ -49,7 +49,7 @@ std::vector<StaticPoint> make_points(const Truth& truth, const std::vector<doubl
   for (std::size_t v = 0; v < visits.size(); ++v) {
     for (int k = 0; k < 6; ++k) {
       StaticPoint p;
-      p.label = "visit " + std::to_string(v) + " orientation " + std::to_string(k);
+      p.segment.label = "visit " + std::to_string(v) + " orientation " + std::to_string(k);
       p.stimulus.input = Eigen::Vector3d::Zero();
       p.stimulus.input[k / 2] = (k % 2 == 0 ? 1.0 : -1.0) * kG;
       p.stimulus.specific_force = p.stimulus.input;
@@ -60,7 +60,7 @@ std::vector<StaticPoint> make_points(const Truth& truth, const std::vector<doubl
       t += 20.0;
       const Eigen::Vector3d y = truth.model.measure<double>(truth.theta.data(), p.stimulus);
       for (int a = 0; a < 3; ++a)
-        p.measured[a] = y[a] + noise(rng) + (offset_per_visit.empty() ? 0.0 : offset_per_visit[v]);
+        p.axes(truth.model.instrument).mean[a] = y[a] + noise(rng) + (offset_per_visit.empty() ? 0.0 : offset_per_visit[v]);
       pts.push_back(p);
     }
   }

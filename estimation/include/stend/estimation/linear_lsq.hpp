@@ -26,6 +26,7 @@
 #pragma once
 
 #include <stend/estimation/summary.hpp>
+#include <stend/stats/distributions.hpp>
 
 #include <Eigen/Core>
 #include <iosfwd>
@@ -134,9 +135,10 @@ std::ostream& operator<<(std::ostream& os, const Combination& c);
 bool approx_equal(const LsqResult& a, const LsqResult& b, double rel_tol = 1e-9,
                   double abs_tol = 0.0);
 
-// Student t distribution with `dof` > 0 degrees of freedom (dof = ∞ gives the normal).
-double student_t_cdf(double t, double dof);
-double student_t_quantile(double p, double dof);  // 0 < p < 1
-double normal_quantile(double p);
+// The intervals' distributions, defined once in stend/stats/distributions.hpp: Student t with
+// `dof` > 0 degrees of freedom (dof = ∞ gives the normal), the normal quantile.
+using stats::normal_quantile;
+using stats::student_t_cdf;
+using stats::student_t_quantile;
 
 }  // namespace stend::estimation

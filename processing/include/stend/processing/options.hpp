@@ -51,10 +51,7 @@ struct ProcessingOptions {
   std::set<std::string> stated;
 
   // The first value out of range: its key and what is wrong.
-  struct Problem {
-    std::string key, message;
-  };
-  std::optional<Problem> problem() const;
+  std::optional<OptionProblem> problem() const;
   // Ceres style: false, with "KEY: what is wrong" in *message, when a value is out of range.
   bool IsValid(std::string* message = nullptr) const;
   // Whether segments of kind k are static points under segment_kinds.

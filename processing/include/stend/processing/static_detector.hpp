@@ -29,10 +29,12 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "stend/physics/units.hpp"
+#include "stend/processing/option_problem.hpp"
 #include "stend/recording/recording.hpp"
 
 namespace stend::processing {
@@ -57,6 +59,11 @@ struct StaticDetectorOptions {
   // > 0: samples whose window-mean gyro reading, less the gyro bias estimated from the still data,
   // exceeds this norm [rad/s] are not still. 0: no gate.
   double max_gyro_radps = kDefaultMaxGyroRadps;
+
+  // The first value out of range (every one >= 0; key as in YAML: variance_threshold_m2ps4,
+  // max_gyro_dps); IsValid Ceres style, with "KEY: what is wrong" in *message.
+  std::optional<OptionProblem> problem() const;
+  bool IsValid(std::string* message = nullptr) const;
 };
 
 struct DetectedInterval {

@@ -5,9 +5,11 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <span>
 #include <string>
 
+#include "stend/processing/option_problem.hpp"
 #include "stend/processing/skip.hpp"
 
 namespace stend::processing {
@@ -21,6 +23,11 @@ struct StaticExtractionSettings {
   double cutoff_hz = 1.0;   // −3 dB frequency of the low-pass
   double settle_s = 2.0;    // discarded at the start AND at the end of the segment, after filtering
   bool zero_phase = true;   // forward-backward (no delay) or causal forward filtering
+
+  // The first value out of range (filter_order 1..20, cutoff_hz > 0, settle_s >= 0); IsValid Ceres
+  // style, with "KEY: what is wrong" in *message.
+  std::optional<OptionProblem> problem() const;
+  bool IsValid(std::string* message = nullptr) const;
 };
 
 struct StaticValue {

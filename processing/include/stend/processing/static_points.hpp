@@ -10,17 +10,20 @@
 //      skipped; gaps there (kGapBefore) are noted, not skipped;
 //   5. the truth over the kept window (stend/processing/truth.hpp): the means of the requested
 //      truth columns — an interval without any truth snapshot inside or before is skipped —, and
-//      the temperature: the die truth (column die_c) and its slope, else the sensor's reading.
+//      as the error model reads it (StaticPoint::stimulus, stend/model/terms.hpp) the requested
+//      true input and specific force, the temperature — the die truth (column die_c) and its
+//      slope, else the sensor's reading — and the window's mid-time.
 // Every skip comes back typed (SkipReason) with a human note.
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cstddef>
-#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "stend/model/terms.hpp"
 #include "stend/processing/options.hpp"
 #include "stend/processing/skip.hpp"
 #include "stend/processing/static_detector.hpp"
@@ -30,18 +33,28 @@ namespace stend::processing {
 
 inline constexpr const char* kDieTemperatureColumn = "die_c";  // truth column, degC
 
+// Truth columns whose window means make StaticPoint::stimulus, per axis x, y, z: the instrument's
+// true input (f_<axis>_mps2 for an accelerometer, w_<axis>_radps for a gyroscope) and the
+// specific force. An empty name leaves that value 0.
+struct StimulusColumns {
+  std::array<std::string, 3> input;
+  std::array<std::string, 3> specific_force;
+};
+
 // What the caller needs from each interval.
 struct Request {
   bool accel = true;  // extract the accelerometer axes (their saturation flag skips an interval)
   bool gyro = true;   // extract the gyroscope axes (likewise)
-  // Mean of each over every point's window, in this order; each must be a truth column of the
-  // recording. When not empty, an interval without truth is skipped.
+  // Mean of each over every point's window, in this order (StaticPoint::truth).
   std::vector<std::string> truth_columns;
+  // The truth the error model reads (StaticPoint::stimulus).
+  StimulusColumns stimulus;
+  // Every column named above must be a truth column of the recording; when any is named, an
+  // interval without truth is skipped.
 };
 
 // One instrument's three axes over a point's kept window, in the recording's SI unit.
 struct AxesValue {
-  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   Eigen::Vector3d mean = Eigen::Vector3d::Constant(kNaN);        // the static value (filtered)
   Eigen::Vector3d sample_std = Eigen::Vector3d::Constant(kNaN);  // of the raw samples
   // sample_std / √n: the standard error of the mean if the noise is white (coloured noise makes
@@ -61,10 +74,17 @@ struct StaticPoint {
   std::size_t gaps = 0;  // samples flagged kGapBefore inside the kept window (after its first)
   AxesValue accel;       // m/s^2; NaN unless requested
   AxesValue gyro;        // rad/s; NaN unless requested
-  double temperature_c = AxesValue::kNaN;
-  double temperature_rate_cps = 0.0;  // slope of the die truth over the window (0 otherwise)
+  // The truth over the kept window as the error model reads it: input and specific_force from
+  // Request::stimulus (0 where not requested), temperature_c [°C] (see temperature_source) and
+  // temperature_rate_cps [°C/s] (the slope of the die truth over the window, 0 otherwise),
+  // time_s the window's mid-time [s]. The other fields are the caller's (the gap diagnosis').
+  model::Stimulus<double> stimulus;
   TemperatureSource temperature_source = TemperatureSource::kSensor;
   std::vector<double> truth;  // means of Request::truth_columns
+
+  // The instrument's axes: accel for an accelerometer, else gyro.
+  const AxesValue& axes(model::Instrument instrument) const;
+  AxesValue& axes(model::Instrument instrument);
 };
 
 struct Skip {
@@ -91,11 +111,14 @@ struct Extraction {
 
 // The stage. `options` are resolved against the recording's experiment (resolve()). Throws
 // std::invalid_argument when the resolved options are invalid, nothing is requested, or a
-// requested truth column is missing; std::runtime_error when the sample times do not strictly
-// increase; ExperimentError for a bad experiment `processing:` section.
+// requested truth column is missing; InputError when the sample times do not strictly increase;
+// ExperimentError for a bad experiment `processing:` section.
 Extraction extract(const Recording& rec, const ProcessingOptions& options, const Request& request);
 
 // "segment 3 (orientation 'x up', orientation 1/6, 12–20 s)", as the notes name a segment.
 std::string describe(const Segment& segment);
+// A point's short name in tables and messages: its segment's label, else "orientation 3" for an
+// orientation (kind and 1-based number), else describe(segment).
+std::string label(const Segment& segment);
 
 }  // namespace stend::processing

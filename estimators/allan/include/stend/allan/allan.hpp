@@ -1,15 +1,9 @@
-// Allan-deviation noise characterization of inertial sensors (library stend_allan).
-//
-//   curve      overlapping ADEV at octave τ from the streaming estimator (stream.hpp), with
-//              chi-squared confidence intervals from the equivalent degrees of freedom (stats.hpp)
-//   model      the IEEE Std 952 / 1554 terms plus a first-order Gauss–Markov bias,
-//                σ²(τ) = 3Q²/τ² + N²·w(m) + (2 ln2/π) B² + K²τ/3 + R²τ²/2 + σ_G²·g(τ/τc),
-//              with the sensor's output low-pass in the white term w; terms chosen by penalised
-//              likelihood, one verdict per coefficient (identified ± σ, upper bound, failed)
-//   read-offs  the textbook slope lines: N = σ(1 s) on the −1/2 line, K = σ(3 s) on the +1/2
-//              line, B = σ_min / 0.664 at the flat minimum
-//   outputs    continuous-time densities with units, Kalibr IMU noise parameters, a text table,
-//              JSON
+// Allan-deviation noise characterization of inertial sensors (library stend_allan): every
+// accelerometer and gyroscope axis of a recording analysed, Kalibr's noise parameters, the text
+// table and the stend.allan/1 document. The analysis of one channel — the streaming overlapping
+// ADEV, its EDF intervals, the noise-model fit (Q N B K R and a Gauss–Markov bias, one verdict per
+// coefficient) and the slope read-offs — is stend_noise's (stats/noise, stend/noise/*.hpp), which
+// the gap diagnosis shares; its types are named here as allan's too.
 //
 // Units: for an accelerometer channel in m/s²: N [m/s²/√Hz] (velocity random walk), K [m/s³/√Hz]
 // (acceleration random walk), B [m/s²], Q [m/s], R [m/s³]; for a gyroscope in rad/s: N
@@ -18,15 +12,14 @@
 // accelerometer_random_walk / gyroscope_random_walk are K.
 #pragma once
 
-#include <stend/allan/stats.hpp>
-#include <stend/allan/stream.hpp>
+#include <stend/noise/allan_stream.hpp>
+#include <stend/noise/edf.hpp>
+#include <stend/noise/noise_model.hpp>
 #include <stend/recording/recording.hpp>
 
 #include <array>
-#include <cmath>
 #include <cstdint>
 #include <iosfwd>
-#include <limits>
 #include <string>
 #include <vector>
 
@@ -39,216 +32,52 @@ namespace stend::allan {
 inline constexpr const char* kEstimatorName = "allan";
 inline constexpr const char* kEstimatorVersion = "0.1.0";
 inline constexpr const char* kSchema = "stend.allan/1";
-inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-// √(2 ln 2 / π): the flicker (bias-instability) floor of the ADEV is 0.664·B.
-inline constexpr double kFlickerFloor = 0.66428200410814707;
 
-enum class Instrument { kAccelerometer, kGyroscope, kOther };
-const char* to_string(Instrument i);
+// The noise vocabulary of one channel (stend/noise/), under allan's names.
+using noise::AllanCurve;
+using noise::AllanPoint;
+using noise::analyze;
+using noise::assign_intervals;
+using noise::ChannelInfo;
+using noise::ChannelResult;
+using noise::Coefficient;
+using noise::Conversion;
+using noise::datasheet_units;
+using noise::fit_noise_model;
+using noise::Instrument;
+using noise::kFlickerFloor;
+using noise::make_curve;
+using noise::NoiseModel;
+using noise::NoiseType;
+using noise::OctaveVariance;
+using noise::OverlappingAllanStream;
+using noise::Readoff;
+using noise::to_string;
+using noise::Units;
+using noise::units_for;
+using noise::Verdict;
 
-// Unit strings of one channel and of its noise coefficients.
-struct Units {
-  std::string signal;        // "m/s^2", "rad/s"
-  std::string quantization;  // Q: signal·s
-  std::string white;         // N: signal/√Hz
-  std::string bias;          // B: signal
-  std::string random_walk;   // K: signal/s/√Hz
-  std::string ramp;          // R: signal/s
-  std::string gauss_markov;  // σ of the Gauss–Markov bias: signal
-};
-// Accelerometer → m/s², gyroscope → rad/s; kOther uses `signal_unit` as given.
-Units units_for(Instrument instrument, const std::string& signal_unit = {});
-
-struct ChannelInfo {
-  std::string name;  // "ax", "gz", …
-  Instrument instrument = Instrument::kOther;
-  std::string unit;  // signal unit; empty = the instrument's SI unit
-};
-
-struct AllanOptions {
-  std::uint64_t max_m = OverlappingAllanStream::kDefaultMaxM;  // largest averaging factor
-  double confidence = stats::kOneSigma;  // two-sided level of the ADEV intervals
-  // EDF from the noise type that dominates the fitted model at each τ (true), or white noise
-  // everywhere (false).
-  bool edf_from_model = true;
-  double slope_tolerance = 0.15;  // |local slope − target| for the read-off regions
-  double min_readoff_edf = 3.0;   // points with fewer EDF are not used for read-offs
-  int min_readoff_points = 2;     // a slope region needs at least this many points
+// The analysis of every channel (stend/noise/noise_model.hpp: max_m, confidence, edf_from_model,
+// slope_tolerance, min_readoff_edf, min_readoff_points, lowpass_hz) and the part of a recording
+// to analyse. analyze_recording takes lowpass_hz from the run's experiment.yaml
+// (bench.sensor.config.lowpass_hz) when not set here.
+struct AllanOptions : noise::AnalysisOptions {
   // Part of a recording to analyse (run time, s); NaN = from the start / to the end.
   double t_begin_s = kNaN;
   double t_end_s = kNaN;
-  // The sensor's output low-pass (second-order Butterworth, as core/model/output_stage.hpp runs
-  // it) at the record's rate, cutoff [Hz]: NaN = not stated (points at the short-τ end that such
-  // a filter flattens are left out of the fit, see fit_noise_model), 0 = no filter, > 0 = the
-  // filter is part of the model curve of the white-noise term. analyze_recording takes it from
-  // the run's experiment.yaml (bench.sensor.config.lowpass_hz) when not set here.
-  double lowpass_hz = kNaN;
+
+  // Ceres style: false, with "KEY: what is wrong" in *why, when a value is out of range.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 // Options from a YAML mapping whose keys are the field names above (max_m, confidence,
 // edf_from_model, slope_tolerance, min_readoff_edf, min_readoff_points, t_begin_s, t_end_s,
 // lowpass_hz; the keys `deviations` and `tau` are read by deviations_from_yaml); see
-// example/allan.yaml. Throws std::runtime_error naming file:line:column and the key for unknown
-// keys, wrong types and out-of-range values.
+// example/allan.yaml. Throws InputError naming file:line:column and the key for unknown keys,
+// wrong types and out-of-range values (AllanOptions::IsValid).
 AllanOptions options_from_yaml(const YAML::Node& node, const std::string& file = {});
 // "file:line:column" of a YAML node for messages ("<yaml>" without a file name).
 std::string yaml_location(const std::string& file, const YAML::Node& node);
-
-struct AllanPoint {
-  double tau_s = 0.0;
-  std::uint64_t m = 0;      // averaging factor
-  std::uint64_t terms = 0;  // second differences used
-  double avar = 0.0;        // signal unit²
-  double adev = 0.0;        // signal unit
-  double edf = kNaN;        // equivalent degrees of freedom
-  NoiseType noise = NoiseType::kWhite;  // noise type the EDF assumes
-  double adev_lo = kNaN;    // confidence interval (AllanCurve::confidence)
-  double adev_hi = kNaN;
-};
-
-struct AllanCurve {
-  ChannelInfo channel;
-  Units units;
-  double rate_hz = 0.0;
-  std::uint64_t samples = 0;
-  double confidence = stats::kOneSigma;
-  std::vector<AllanPoint> points;
-};
-
-// The verdict on one coefficient, the same in every output (text, JSON, report, exports):
-//   kIdentified  the term is in the selected model: value ± sigma, 95 % interval [lo, hi]
-//   kUpperBound  the data do not carry it: only upper_bound (the largest value whose term alone
-//                stays below every measured ADEV upper limit)
-//   kFailed      the fit failed: no number at all
-enum class Verdict { kIdentified, kUpperBound, kFailed };
-const char* to_string(Verdict v);
-
-// One coefficient of the model. It is `identified` when model selection (see fit_noise_model)
-// keeps its term: the data carry the information, whatever the term's relative size.
-struct Coefficient {
-  const char* symbol = "";  // "Q", "N", "B", "K", "R", "G" (Gauss–Markov σ), "Tc" (its τc)
-  const char* name = "";    // "quantization", "white noise", …
-  std::string unit;
-  double value = kNaN;
-  double sigma = kNaN;          // 1-σ from the fit's Fisher information
-  double lo = kNaN, hi = kNaN;  // 95 % interval of value (value ∓ 1.96 σ, clipped at 0)
-  double fitted = 0.0;          // the estimate of the full model, whether identified or not
-  double fitted_sigma = kNaN;   // its 1-σ (NaN when the term is not in the model)
-  bool dominates = false;       // the term dominates the model somewhere in [τ_min, τ_max]
-  bool identified = false;      // kept by model selection
-  double tau_lo_s = kNaN;       // where it dominates
-  double tau_hi_s = kNaN;
-  double upper_bound = kNaN;
-  bool failed = false;          // the fit failed (no value, no bound)
-
-  Verdict verdict() const {
-    return failed ? Verdict::kFailed : identified ? Verdict::kIdentified : Verdict::kUpperBound;
-  }
-};
-
-// Datasheet units of a coefficient: the factor from its SI unit and the unit name, e.g. N of a
-// gyroscope in deg/√h. Empty for coefficients and instruments without a common datasheet unit.
-struct Conversion {
-  double factor = 1.0;
-  std::string unit;
-};
-std::vector<Conversion> datasheet_units(const Coefficient& c, Instrument instrument);
-
-// A slope-line read-off.
-struct Readoff {
-  const char* name = "";
-  std::string unit;
-  bool found = false;
-  double value = kNaN;  // when found; for B not found, an upper bound (see note)
-  double lo = kNaN, hi = kNaN;  // interval at the curve's confidence
-  double tau_lo_s = kNaN, tau_hi_s = kNaN;  // points used (B: τ of the minimum)
-  std::string note;
-};
-
-inline Coefficient named(const char* symbol, const char* name) {
-  Coefficient c;
-  c.symbol = symbol;
-  c.name = name;
-  return c;
-}
-inline Readoff named_readoff(const char* name) {
-  Readoff r;
-  r.name = name;
-  return r;
-}
-
-struct NoiseModel {
-  Coefficient quantization = named("Q", "quantization");
-  Coefficient white = named("N", "white noise density");
-  Coefficient bias_instability = named("B", "bias instability");
-  Coefficient random_walk = named("K", "random walk density");
-  Coefficient rate_ramp = named("R", "rate ramp");
-  // First-order Gauss–Markov bias (core/model/noise.hpp): stationary σ and correlation time τc.
-  Coefficient gauss_markov = named("G", "Gauss-Markov bias sigma");
-  Coefficient correlation_time = named("Tc", "Gauss-Markov correlation time");
-  Readoff white_line = named_readoff("N (-1/2 line at 1 s)");
-  Readoff random_walk_line = named_readoff("K (+1/2 line at 3 s)");
-  Readoff bias_floor = named_readoff("B (minimum / 0.664)");
-  bool ok = false;
-  std::string message;        // why the fit failed / warnings
-  std::string selection;      // the selected terms and the criterion, e.g. "N+G (BIC …)"
-  double tau_fit_min_s = kNaN;  // the τ range fitted (may start after tau_min_s, see lowpass_hz,
-  double tau_fit_max_s = kNaN;  // and end before tau_max_s: points over fewer than 4 clusters)
-  double lowpass_hz = kNaN;     // output low-pass in the model curve (0 none, NaN not stated)
-  double chi2_reduced = kNaN;  // weighted residual χ² per degree of freedom
-  int dof = 0;
-  double tau_min_s = kNaN, tau_max_s = kNaN;
-
-  // σ² of the fitted model (all fitted terms, identified or not) at τ.
-  // (at m = τ·rate samples per cluster; rate_hz for the output stage)
-  double rate_hz = 0.0;
-  double avar(double tau_s) const;
-  NoiseType dominant(double tau_s) const;
-  // Q N B K R G Tc in a row; the first six are AVAR terms, Tc is the correlation time of G.
-  static constexpr int kCoefficients = 7;
-  const Coefficient* coefficients() const { return &quantization; }
-  Coefficient* coefficients() { return &quantization; }
-};
-
-// Curve from the stream's octaves; EDF and intervals assume white noise until a model is fitted.
-AllanCurve make_curve(const std::vector<OctaveVariance>& octaves, std::uint64_t samples,
-                      double rate_hz, const ChannelInfo& channel, double confidence);
-// Fills edf / noise / adev_lo / adev_hi of every point; the noise type from `model` (dominant
-// term at τ) or white noise when model is null.
-void assign_intervals(AllanCurve& curve, const NoiseModel* model);
-// Fits the model to the curve and makes the read-offs. Does not change the curve.
-//   model curve   AVAR(τ) = 3Q²/τ² + N²·w(m) + (2 ln2/π)B² + K²τ/3 + R²τ²/2 + σ_G²·g(τ/τc), with
-//                 w(m) = 1/τ without an output filter and, with options.lowpass_hz > 0, the exact
-//                 AVAR per unit N² of sampled white noise run through the sensor's Butterworth
-//                 low-pass; g the first-order Gauss–Markov AVAR (model::allan::gauss_markov).
-//   τ range       all points when the filter is stated (lowpass_hz ≥ 0); when it is not (NaN), the
-//                 leading points with m ≤ 32 whose slope to the next point is flatter than
-//                 −½ + slope_tolerance (a filter's flattening) are left out; points over fewer
-//                 than 4 clusters (N/m < 4) are never fitted.
-//   likelihood    each AVAR point is σ²·χ²_ν/ν with ν its EDF (Var ≈ 2σ⁴/EDF): Gamma deviance
-//                 D = Σ ν (r − 1 − ln r), r = AVAR/model, minimised by Fisher scoring (IRLS).
-//   selection     every subset of the six terms (τc profiled on a grid, then refined); the one
-//                 with the least D + 6.63·(parameters) is kept (6.63 = χ²₁ at 99 %: a term enters
-//                 only when it lowers D by more than a 1 % likelihood-ratio test would allow);
-//                 a plateau (B or G) without K is kept over K in its place only when it lowers D
-//                 by more than 10.83 (χ²₁ at 99.9 %).
-//   uncertainty   σ from the inverse Fisher information of the selected model, scaled by
-//                 √max(1, D/dof); the other coefficients get upper bounds (the largest value whose
-//                 term alone stays below every point's 95 % upper limit).
-// Fewer than 3 usable points (constant, too short) → ok = false, every coefficient kFailed.
-NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& options = {});
-
-struct ChannelResult {
-  AllanCurve curve;
-  NoiseModel model;
-};
-
-// One channel, one pass: the stream, the curve, the fit, the intervals from the fitted model.
-ChannelResult analyze(const double* y, std::size_t n, std::size_t stride, double rate_hz,
-                      const ChannelInfo& channel, const AllanOptions& options = {});
-// From a stream that has already seen the data.
-ChannelResult analyze(const OverlappingAllanStream& stream, double rate_hz,
-                      const ChannelInfo& channel, const AllanOptions& options = {});
 
 // Kalibr's IMU noise parameters (imu.yaml). Kalibr takes ONE continuous-time density per sensor
 // (noise density = N, random walk = K); the per-axis values are kept beside it (`*_axes`, in the
@@ -296,13 +125,7 @@ KalibrParameters kalibr_parameters(const std::vector<ChannelResult>& channels, d
 // signal): JSON status "failed", and the estimator's fit fails (non-zero exit of `stend fit`).
 bool report_failed(const AllanReport& report);
 
-// Text and JSON.
-std::ostream& operator<<(std::ostream& os, const AllanPoint& p);
-std::ostream& operator<<(std::ostream& os, const AllanCurve& c);
-std::ostream& operator<<(std::ostream& os, const Coefficient& c);
-std::ostream& operator<<(std::ostream& os, const Readoff& r);
-std::ostream& operator<<(std::ostream& os, const NoiseModel& m);
-std::ostream& operator<<(std::ostream& os, const ChannelResult& r);
+// Text and JSON (the curve, model and channel print themselves: stend/noise/noise_model.hpp).
 std::ostream& operator<<(std::ostream& os, const KalibrParameters& k);
 std::ostream& operator<<(std::ostream& os, const AllanReport& r);
 // The per-axis summary table (one row per channel: N, K, B, Q, R and the read-offs).

@@ -12,7 +12,7 @@
 #pragma once
 
 #include <stend/allan/allan.hpp>
-#include <stend/allan/deviations.hpp>
+#include <stend/noise/deviations.hpp>
 
 #include <nlohmann/json_fwd.hpp>
 
@@ -26,6 +26,18 @@ class Node;
 }
 
 namespace stend::allan {
+
+// The deviations of one signal (stend/noise/deviations.hpp), under allan's names.
+using noise::all_factors;
+using noise::deviation_edf;
+using noise::DeviationKind;
+using noise::DeviationOptions;
+using noise::DeviationPoint;
+using noise::DeviationStream;
+using noise::kAllDeviationKinds;
+using noise::log_factors;
+using noise::stop_ratio;
+using noise::to_string;  // its DeviationKind overload
 
 enum class TauSpacing { kOctave, kLog, kAll };
 const char* to_string(TauSpacing t);
@@ -41,8 +53,7 @@ struct DeviationRequest {
 
 // True for the keys of the allan mapping that deviations_from_yaml reads.
 bool is_deviation_key(const std::string& key);
-// The request from the allan mapping (null: empty). Throws std::runtime_error naming
-// file:line:column for an unknown kind, a kind given twice, a non-list or an unknown spacing.
+// The request from the allan mapping (null: empty). Throws InputError naming file:line:column for an unknown kind, a kind given twice, a non-list or an unknown spacing.
 DeviationRequest deviations_from_yaml(const YAML::Node& allan, const std::string& file = {});
 
 // The averaging factors of `spacing` for `samples` rate samples and the cap max_m.

@@ -30,15 +30,15 @@ struct PaperTable2Fit {
 // Taganrog (Southern Federal University's engineering campus) / Rostov-on-Don latitude.
 inline constexpr double kPaperLatitudeDeg = 47.2;
 
-// CSV with header "angle_deg,a_z_mps2"; '#' lines are comments. Throws std::runtime_error naming
-// file and line.
+// CSV with header "angle_deg,a_z_mps2"; '#' lines are comments. Throws InputError naming file and
+// line.
 std::vector<Table2Row> load_table2_csv(const std::filesystem::path& file);
 // datasets/paper_table2/table2.csv of the source tree this library was built from.
 std::filesystem::path default_table2_csv();
 
 ModelSpec table2_model();
-std::vector<StaticPoint> table2_points(const std::vector<Table2Row>& rows, double g_mps2,
-                                       double tilt_h_deg);
+std::vector<processing::StaticPoint> table2_points(const std::vector<Table2Row>& rows, double g_mps2,
+                                                   double tilt_h_deg);
 
 struct Table2Case {
   std::string label;

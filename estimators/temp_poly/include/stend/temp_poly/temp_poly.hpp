@@ -2,7 +2,7 @@
 // the batch least-squares estimator (stend/batch_lsq/batch_lsq.hpp) and the error-model vocabulary
 // (stend/model/terms.hpp: bias_temperature, scale_temperature) — no term formula is written here.
 //
-//   1. static points from the recording (batch_lsq::extract_points), each with its die temperature;
+//   1. static points from the recording (estimation::extract_static_points), each with its die temperature;
 //   2. points grouped into temperature levels (gap > level_tolerance_c starts a new level), and in
 //      time order into visits; a visit approached from a colder level is on the heating leg, from a
 //      warmer one on the cooling leg (the first visit's direction is unknown). All legs are fitted;
@@ -102,7 +102,7 @@ struct TempPolyResult {
   TempPolyOptions options;
   std::string recording_dir, experiment_name;
   std::vector<std::string> notes;
-  std::vector<batch_lsq::StaticPoint> points;
+  std::vector<processing::StaticPoint> points;
   std::vector<Leg> legs;      // per point
   std::vector<int> level_of;  // per point: index into levels
   std::vector<TemperatureLevel> levels;  // ascending temperature
@@ -120,7 +120,7 @@ struct TempPolyResult {
 estimation::ModelSpec candidate_spec(const TempPolyOptions& options, int order, int axis);
 
 // Steps 2–5 on given points (synthetic, or extracted). Never throws for data problems.
-TempPolyResult fit_temperature_points(const std::vector<batch_lsq::StaticPoint>& points,
+TempPolyResult fit_temperature_points(const std::vector<processing::StaticPoint>& points,
                                       const TempPolyOptions& options);
 // The whole procedure on a recording. Never throws for data problems.
 TempPolyResult fit_temperature_model(const Recording& recording, const TempPolyOptions& options);

@@ -1,71 +1,20 @@
-// All frequency-stability deviations of one signal in one streaming pass, with Stable32's
-// equivalent degrees of freedom, noise identification and chi-squared intervals (header-only).
-//
-// Kinds (NIST SP 1065 §5, N phase points x_0 … x_{N−1}, τ = m·τ0, d2_k(m) = x_k − 2x_{k−m} + x_{k−2m},
-// d3_k(m) = d2_k(m) − d2_{k−m}(m)):
-//   ADEV   non-overlapped Allan:   Σ_{k ≡ 0 mod m, k ≥ 2m} d2_k² / (2τ² terms)
-//   OADEV  overlapping Allan:      Σ_{k ≥ 2m} d2_k² / (2τ² (N − 2m))
-//   MDEV   modified Allan:         Σ_{k ≥ 3m−1} (Σ_{j=k−m+1}^{k} d2_j)² / (2m²τ² (N − 3m + 1))
-//   TDEV   time deviation:         τ·MDEV/√3
-//   HDEV   non-overlapped Hadamard: Σ_{k ≡ 0 mod m, k ≥ 3m} d3_k² / (6τ² terms)
-//   OHDEV  overlapping Hadamard:   Σ_{k ≥ 3m} d3_k² / (6τ² (N − 3m))
-//   TOTDEV total deviation:        Σ_{c=1}^{N−2} (x*_{c−m} − 2x_c + x*_{c+m})² / (2τ² (N − 2)),
-//          x* the record reflected at both ends: x*_{−j} = 2x_0 − x_j, x*_{N−1+j} = 2x_{N−1} − x_{N−1−j}.
-// TOTDEV is the OADEV sum plus the centres within m of either end; those need the first 2m
-// points (a head buffer) and the last 2m points (a tail ring), evaluated at the end.
-//
-// Octave factors (m = 2^l) come from one pyramid of MDEV windows V^m (DeviationStream::Level):
-// each level is a few vector operations per point on its own ring buffer, and every kind at m
-// is a difference of V^m at lags 1 and m. Other factors (all τ, log-spaced) are evaluated on
-// the phase history, factor by factor.
-//
-// Input: phase x (time error, s) with add_phase, or rate y (the sensor's output: ω, a, or
-// fractional frequency) with add_rate, integrated to x_{k+1} = x_k + (y_k − y_0)·τ0 internally
-// (subtracting y_0 removes a linear phase ramp that every kind above ignores, and keeps the
-// integrated phase small). Deviations are in the unit of y: for phase input, x/τ0 is the rate.
-// TDEV is in the unit of x (s for phase input, unit of y × s for rate input).
-//
-// Memory, whatever N is: the pyramid's rings (2m + 4096 values per octave level, ≈ 4·max_m in
-// all), the first and the last 2·max_m + 1 phase values, and for factors that are not powers of
-// two the last 3·m + 1 phase values twice over (a linear history shifted once per block):
-// ≈ 8·8·max_m bytes for octaves.
-//
-// Noise identification per averaging factor (the "Alpha" column of Stable32): the lag-1
-// autocorrelation of the phase decimated by m, differenced d = 0, 1, … times until
-// ρ = r1/(1 + r1) < 0.25 (W. J. Riley, C. A. Greenhall, "Power law noise identification using
-// the lag 1 autocorrelation", 2004), α = 2 − 2(ρ + d) rounded, when at least 30 decimated points
-// exist; otherwise Barnes' B1 ratio (standard over Allan variance of the m-averages) against its
-// theoretical value, with R(n) = MVAR/AVAR separating white from flicker PM, while at least
-// b1_min_averages averages exist; beyond that the type of the next shorter factor is kept. The autocorrelation
-// of the d-th difference is taken about its mean (differencing removes the trends that
-// Riley's recipe removes by a polynomial fit), from running sums over the first 2^16 decimated
-// points of each factor: bounded memory and time.
-#pragma once
+// All deviations of one signal in one streaming pass. See stend/noise/deviations.hpp.
+#include "stend/noise/deviations.hpp"
 
 #include <algorithm>
-#include <array>
 #include <bit>
 #include <cmath>
-#include <cstdint>
-#include <cstdlib>
 #include <cstring>
-#include <limits>
-#include <new>
+#include <numbers>
 #include <stdexcept>
-#include <string>
-#include <vector>
 
-#include "stats.hpp"
-#include "stream.hpp"
+#include "kernels.hpp"
+#include "noise_identification.hpp"
+#include "stend/noise/edf.hpp"
 
-namespace stend::allan {
+namespace stend::noise {
 
-enum class DeviationKind { kAdev, kOadev, kMdev, kTdev, kHdev, kOhdev, kTotdev };
-inline constexpr std::array<DeviationKind, 7> kAllDeviationKinds = {
-    DeviationKind::kAdev, DeviationKind::kOadev, DeviationKind::kMdev, DeviationKind::kTdev,
-    DeviationKind::kHdev, DeviationKind::kOhdev, DeviationKind::kTotdev};
-
-inline const char* to_string(DeviationKind k) {
+const char* to_string(DeviationKind k) {
   switch (k) {
     case DeviationKind::kAdev: return "adev";
     case DeviationKind::kOadev: return "oadev";
@@ -78,37 +27,20 @@ inline const char* to_string(DeviationKind k) {
   return "?";
 }
 
-// One deviation at one averaging factor.
-struct DeviationPoint {
-  std::uint64_t m = 0;        // averaging factor (samples)
-  double tau_s = 0.0;         // m·τ0
-  std::uint64_t terms = 0;    // Stable32's "#": differences (or windows) summed
-  int alpha = 0;              // identified power-law noise of y (S_y ∝ f^α), 2 … −2
-  double dev = 0.0;           // the deviation (see the header for its unit)
-  double edf = 0.0;           // equivalent degrees of freedom (NaN when undefined)
-  double lo = std::numeric_limits<double>::quiet_NaN();  // confidence bounds of dev
-  double hi = std::numeric_limits<double>::quiet_NaN();
-};
-
-// EDF of `kind` at factor m from N phase points for noise α (Stable32's choices: Greenhall's
-// algorithm with d = 2 for the Allan kinds, modified for MDEV/TDEV, d = 3 for Hadamard; SP 1065
-// Table 7 for TOTDEV).
-inline double deviation_edf(DeviationKind kind, int alpha, double m, double n_phase) {
+double deviation_edf(DeviationKind kind, int alpha, double m, double n_phase) {
   switch (kind) {
-    case DeviationKind::kAdev: return stats::edf_greenhall(alpha, 2, m, n_phase, false, false);
-    case DeviationKind::kOadev: return stats::edf_greenhall(alpha, 2, m, n_phase, true, false);
+    case DeviationKind::kAdev: return edf_greenhall(alpha, 2, m, n_phase, false, false);
+    case DeviationKind::kOadev: return edf_greenhall(alpha, 2, m, n_phase, true, false);
     case DeviationKind::kMdev:
-    case DeviationKind::kTdev: return stats::edf_greenhall(alpha, 2, m, n_phase, true, true);
-    case DeviationKind::kHdev: return stats::edf_greenhall(alpha, 3, m, n_phase, false, false);
-    case DeviationKind::kOhdev: return stats::edf_greenhall(alpha, 3, m, n_phase, true, false);
-    case DeviationKind::kTotdev: return stats::edf_totdev(alpha, m, n_phase);
+    case DeviationKind::kTdev: return edf_greenhall(alpha, 2, m, n_phase, true, true);
+    case DeviationKind::kHdev: return edf_greenhall(alpha, 3, m, n_phase, false, false);
+    case DeviationKind::kOhdev: return edf_greenhall(alpha, 3, m, n_phase, true, false);
+    case DeviationKind::kTotdev: return edf_totdev(alpha, m, n_phase);
   }
   return std::numeric_limits<double>::quiet_NaN();
 }
 
-// Largest factor reported: N phase points / this (Stable32's stop ratios, W. J. Riley,
-// "Evolution of frequency stability analysis software", Table III).
-inline std::uint64_t stop_ratio(DeviationKind kind) {
+std::uint64_t stop_ratio(DeviationKind kind) {
   switch (kind) {
     case DeviationKind::kAdev:
     case DeviationKind::kHdev: return 5;
@@ -117,264 +49,27 @@ inline std::uint64_t stop_ratio(DeviationKind kind) {
   }
 }
 
-namespace detail {
-
-// Allocator on cache lines, so that 8-double loads at positions ≡ 0 mod 8 never straddle two,
-// and on huge pages for the large rings (allocate_big).
-template <class T>
-struct CacheLineAllocator {
-  using value_type = T;
-  CacheLineAllocator() = default;
-  template <class U>
-  CacheLineAllocator(const CacheLineAllocator<U>&) {}
-  T* allocate(std::size_t n) { return allocate_big<T>(n).release(); }
-  void deallocate(T* p, std::size_t) { std::free(p); }
-  bool operator==(const CacheLineAllocator&) const { return true; }
-};
-using AlignedDoubles = std::vector<double, CacheLineAllocator<double>>;
-
-// Over i < n with d2_i = c_i − 2a_i + b_i, d3_i = d2_i − (a_i − 2b_i + e_i) (c, a, b, e the
-// phase at k, k−m, k−2m, k−3m): sums[0] += Σ d2², sums[1] += Σ d3², and with the running sum
-// w_i = w + Σ_{t≤i} d3_t, sums[2] += Σ w². Returns the last w. One pass, 16 points a step: the
-// running sum is an in-register prefix scan of each 8 lanes plus a carry, and the carry is
-// advanced by the two vectors' totals (computed off the carry), so the only loop-carried chain
-// is one add per 16 points.
-STEND_ALLAN_KERNEL
-inline double steady_sums(const double* c, const double* a, const double* b, const double* e,
-                          std::size_t n, double w, double* sums) {
-  const v8d zero = {};
-  v8d s2{}, s3{}, sw{};
-  v8d carry = zero + w;
-  auto step = [&](std::size_t i, v8d& u) {  // u ← d3 scanned within its 8 lanes
-    v8d vc, va, vb, ve;
-    load8(vc, c + i);
-    load8(va, a + i);
-    load8(vb, b + i);
-    load8(ve, e + i);
-    const v8d d2 = vc - 2.0 * va + vb;
-    u = d2 - (va - 2.0 * vb + ve);
-    s2 += d2 * d2;
-    s3 += u * u;
-    u += __builtin_shufflevector(zero, u, 0, 8, 9, 10, 11, 12, 13, 14);
-    u += __builtin_shufflevector(zero, u, 0, 1, 8, 9, 10, 11, 12, 13);
-    u += __builtin_shufflevector(zero, u, 0, 1, 2, 3, 8, 9, 10, 11);
+bool DeviationOptions::IsValid(std::string* why) const {
+  auto fail = [&](const char* w) {
+    if (why) *why = w;
+    return false;
   };
-  std::size_t i = 0;
-  for (; i + 16 <= n; i += 16) {
-    v8d u1, u2;
-    step(i, u1);
-    step(i + 8, u2);
-    const v8d t1 = __builtin_shufflevector(u1, u1, 7, 7, 7, 7, 7, 7, 7, 7);
-    const v8d t2 = __builtin_shufflevector(u2, u2, 7, 7, 7, 7, 7, 7, 7, 7);
-    const v8d w1 = u1 + carry;
-    const v8d w2 = (u2 + t1) + carry;
-    sw += w1 * w1;
-    sw += w2 * w2;
-    carry += t1 + t2;
+  if (max_m == 0) return fail("max_m must be ≥ 1");
+  if (!(tau0_s > 0.0) || !std::isfinite(tau0_s)) return fail("tau0_s must be > 0");
+  if (!(confidence > 0.0 && confidence < 1.0)) return fail("confidence must be in (0, 1)");
+  for (auto m : factors) {
+    if (m == 0 || m > max_m) return fail("every factor must be in [1, max_m]");
   }
-  auto hsum = [](const v8d& v) {
-    return ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
-  };
-  double t2 = hsum(s2), t3 = hsum(s3), tw = hsum(sw);
-  w = carry[0];
-  for (std::size_t t = i; t < n; ++t) {
-    const double d2 = c[t] - 2.0 * a[t] + b[t];
-    const double d3 = d2 - (a[t] - 2.0 * b[t] + e[t]);
-    t2 += d2 * d2;
-    t3 += d3 * d3;
-    w += d3;
-    tw += w * w;
-  }
-  sums[0] += t2;
-  sums[1] += t3;
-  sums[2] += tw;
-  return w;
+  return true;
 }
 
-// One octave level of the pyramid over n points (see DeviationStream): with V = V^m at k (v),
-// k − 1 (v1), k − m (q), k − m − 1 (q1) and k − 2m (r),
-//   d2 = V_k − V_{k−1},  e = V_k − V_{k−m},  d3 = e − (V_{k−1} − V_{k−m−1}),
-// sums[0] += Σ d2², sums[1] += Σ d3², sums[2] += Σ e²; with kMasked also
-// sums[3] += Σ mask·d2², sums[4] += Σ mask·d3² (mask[i mod 8]: 1 where k ≡ 0 mod m, m ≤ 8);
-// with kNext the next level's V^{2m}_k = V_k + 2V_{k−m} + V_{k−2m} into vn. Two sets of
-// accumulators, 16 points a step, so that no add waits on the previous one.
-template <bool kMasked, bool kNext>
-STEND_ALLAN_KERNEL inline void level_sums(const double* v, const double* v1, const double* q,
-                                          const double* q1, const double* r, double* vn,
-                                          std::size_t n, const double* mask, double* sums) {
-  v8d acc[2][5] = {};
-  v8d mk{};
-  if constexpr (kMasked) load8(mk, mask);
-  // V_{k−1} and V_{k−m−1}: lane 7 of the previous vector shifted in (an aligned load and a
-  // lane shift instead of a load across two cache lines).
-  const v8d zero{};
-  v8d pa = zero + v1[0], pb = zero + q1[0];
-  auto step = [&](std::size_t i, v8d* s) {
-    v8d a, b;
-    load8(a, v + i);
-    load8(b, q + i);
-    const v8d a1 = __builtin_shufflevector(pa, a, 7, 8, 9, 10, 11, 12, 13, 14);
-    const v8d b1 = __builtin_shufflevector(pb, b, 7, 8, 9, 10, 11, 12, 13, 14);
-    pa = a;
-    pb = b;
-    if constexpr (kNext) {
-      v8d c;
-      load8(c, r + i);
-      store8(vn + i, (a + c) + 2.0 * b);
-    }
-    const v8d d2 = a - a1;
-    const v8d e = a - b;
-    const v8d d3 = e - (a1 - b1);
-    s[0] += d2 * d2;
-    s[1] += d3 * d3;
-    s[2] += e * e;
-    if constexpr (kMasked) {
-      s[3] += (mk * d2) * d2;
-      s[4] += (mk * d3) * d3;
-    }
-  };
-  std::size_t i = 0;
-  for (; i + 16 <= n; i += 16) {
-    step(i, acc[0]);
-    step(i + 8, acc[1]);
-  }
-  for (; i + 8 <= n; i += 8) step(i, acc[0]);
-  double t[5];
-  for (int j = 0; j < 5; ++j) {
-    const v8d w = acc[0][j] + acc[1][j];
-    t[j] = ((w[0] + w[1]) + (w[2] + w[3])) + ((w[4] + w[5]) + (w[6] + w[7]));
-  }
-  for (; i < n; ++i) {
-    const double d2 = v[i] - v1[i];
-    const double e = v[i] - q[i];
-    const double d3 = e - (v1[i] - q1[i]);
-    t[0] += d2 * d2;
-    t[1] += d3 * d3;
-    t[2] += e * e;
-    if constexpr (kMasked) {
-      t[3] += mask[i % 8] * d2 * d2;
-      t[4] += mask[i % 8] * d3 * d3;
-    }
-    if constexpr (kNext) vn[i] = (v[i] + r[i]) + 2.0 * q[i];
-  }
-  for (int j = 0; j < 5; ++j) sums[j] += t[j];
-}
-
-}  // namespace detail
-
-namespace noise_id {
-
-// Expected B1 ratio for n averages and bias exponent μ (Barnes 1974; Howe et al. 1981).
-inline double b1_theory(double n, int mu) {
-  switch (mu) {
-    case 2: return n * (n + 1.0) / 6.0;
-    case 1: return n / 2.0;
-    case 0: return n * std::log(n) / (2.0 * (n - 1.0) * std::log(2.0));
-    case -1: return 1.0;
-    case -2: return (n * n - 1.0) / (1.5 * n * (n - 1.0));
-    default: return n * (1.0 - std::pow(n, mu)) / (2.0 * (n - 1.0) * (1.0 - std::pow(2.0, mu)));
-  }
-}
-inline int mu_of_alpha(int alpha) { return alpha >= 1 ? -2 : -1 - alpha; }
-// Expected R(n) = MVAR/AVAR for white PM (α = 2), flicker PM (α = 1), else 1.
-inline double rn_theory(double m, int alpha) {
-  constexpr double pi2 = std::numbers::pi * std::numbers::pi;
-  if (alpha == 2) return 1.0 / m;
-  if (alpha == 1) {
-    const double avar = (1.038 + 3.0 * std::log(std::numbers::pi * m)) / (4.0 * pi2);
-    const double mvar = 3.0 * std::log(256.0 / 27.0) / (8.0 * pi2);
-    return mvar / avar;
-  }
-  return 1.0;
-}
-
-// α from the B1 ratio of n m-averages (and R(n) between white and flicker PM): the type whose
-// theoretical B1 is nearest on a geometric scale, walking from random walk FM up.
-inline int from_b1(double b1, double rn, double n, double m) {
-  for (int alpha = -2; alpha < 1; ++alpha) {
-    const double hi = b1_theory(n, mu_of_alpha(alpha));
-    const double lo = b1_theory(n, mu_of_alpha(alpha + 1));
-    if (b1 > std::sqrt(hi * lo)) return alpha;
-  }
-  return rn > std::sqrt(rn_theory(m, 1) * rn_theory(m, 2)) ? 1 : 2;
-}
-
-// α from lag-1 autocorrelations r1[d] of the d-times differenced decimated phase.
-inline int from_acf(const std::array<double, 4>& r1, int dmax) {
-  for (int d = 0;; ++d) {
-    const double rho = r1[static_cast<std::size_t>(d)] / (1.0 + r1[static_cast<std::size_t>(d)]);
-    if (!std::isfinite(rho)) return 0;  // a constant series: no type to tell, white FM
-    if (rho < 0.25 || d >= dmax) {
-      return std::clamp(static_cast<int>(-std::round(2.0 * rho)) - 2 * d + 2, -2, 2);
-    }
-  }
-}
-
-// Running sums for the lag-1 autocorrelation (about the mean) of one series, values shifted
-// by the first one for precision (double sums: only the rounded noise type depends on them).
-struct Lag1 {
-  std::uint64_t n = 0;
-  double shift = 0.0, first = 0.0, last = 0.0;
-  double s = 0, s2 = 0, s11 = 0;
-  void add(double v) {
-    if (n == 0) shift = v;
-    v -= shift;
-    if (n == 0) first = v; else s11 += last * v;
-    s += v;
-    s2 += v * v;
-    last = v;
-    ++n;
-  }
-  double r1() const {
-    if (n < 3) return std::numeric_limits<double>::quiet_NaN();
-    const long double nn = static_cast<long double>(n), mu = s / nn;
-    const long double den = s2 - nn * mu * mu;
-    const long double num = s11 - mu * (2 * s - first - last) + (nn - 1) * mu * mu;
-    return den > 0 ? static_cast<double>(num / den) : std::numeric_limits<double>::quiet_NaN();
-  }
-  double variance() const {  // sample variance (n − 1)
-    if (n < 2) return std::numeric_limits<double>::quiet_NaN();
-    const long double nn = static_cast<long double>(n), mu = s / nn;
-    return static_cast<double>((s2 - nn * mu * mu) / (nn - 1));
-  }
-};
-
-}  // namespace noise_id
-
-struct DeviationOptions {
-  std::vector<std::uint64_t> factors;  // averaging factors m; empty = octaves 1, 2, 4, … ≤ max_m
-  std::uint64_t max_m = 1ull << 20;    // largest factor kept in memory (fixes the memory)
-  double tau0_s = 1.0;                 // sample interval
-  double confidence = stats::kOneSigma;
-  // Noise identification: lag-1 autocorrelation from this many decimated points on, B1 below.
-  std::uint64_t acf_min_points = 30;
-  // Fewer m-averages than this: the noise type of the next shorter factor is kept (with 7
-  // averages B1 cannot tell white FM from PM noise; Stable32 keeps white FM on PHASE.DAT there).
-  std::uint64_t b1_min_averages = 10;
-
-  bool IsValid(std::string* why = nullptr) const {
-    auto fail = [&](const char* w) {
-      if (why) *why = w;
-      return false;
-    };
-    if (max_m == 0) return fail("max_m must be ≥ 1");
-    if (!(tau0_s > 0.0) || !std::isfinite(tau0_s)) return fail("tau0_s must be > 0");
-    if (!(confidence > 0.0 && confidence < 1.0)) return fail("confidence must be in (0, 1)");
-    for (auto m : factors) {
-      if (m == 0 || m > max_m) return fail("every factor must be in [1, max_m]");
-    }
-    return true;
-  }
-};
-
-// Every factor 1 … max_m (all τ), or about `per_decade` log-spaced factors per decade. The cost
-// is O(N · factors): all τ suits short records, log-spaced ones long records.
-inline std::vector<std::uint64_t> all_factors(std::uint64_t max_m) {
+std::vector<std::uint64_t> all_factors(std::uint64_t max_m) {
   std::vector<std::uint64_t> out(max_m);
   for (std::uint64_t m = 1; m <= max_m; ++m) out[m - 1] = m;
   return out;
 }
-inline std::vector<std::uint64_t> log_factors(std::uint64_t max_m, int per_decade) {
+
+std::vector<std::uint64_t> log_factors(std::uint64_t max_m, int per_decade) {
   std::vector<std::uint64_t> out;
   for (int i = 0;; ++i) {
     const auto m = static_cast<std::uint64_t>(std::llround(std::pow(10.0, i / double(per_decade))));
@@ -384,9 +79,9 @@ inline std::vector<std::uint64_t> log_factors(std::uint64_t max_m, int per_decad
   return out;
 }
 
-class DeviationStream {
+class DeviationStream::State {
  public:
-  explicit DeviationStream(DeviationOptions options = {}) : opt_(std::move(options)) {
+  explicit State(DeviationOptions options) : opt_(std::move(options)) {
     std::string why;
     if (!opt_.IsValid(&why)) throw std::invalid_argument("DeviationOptions: " + why);
     if (opt_.factors.empty()) {
@@ -420,7 +115,7 @@ class DeviationStream {
     tail_.assign(head_cap_, 0.0);
   }
 
-  // Phase samples (time error, s).
+
   void add_phase(const double* x, std::size_t n) {
     for (std::size_t i = 0; i < n;) {
       const std::size_t take = std::min(n - i, hist_.size() - fill_);
@@ -431,7 +126,7 @@ class DeviationStream {
       if (fill_ == hist_.size()) process();
     }
   }
-  // Rate samples (the sensor's unit), integrated to phase.
+
   void add_rate(const double* y, std::size_t n) {
     std::array<double, 1024> x;
     for (std::size_t i = 0; i < n;) {
@@ -451,7 +146,7 @@ class DeviationStream {
 
   std::uint64_t phase_points() const { return count_ + (fill_ - done_); }
   std::size_t state_bytes() const {
-    std::size_t bytes = sizeof(*this) +
+    std::size_t bytes = sizeof(DeviationStream) + sizeof(*this) +
                         (hist_.size() + head_.capacity() + tail_.size()) * sizeof(double) +
                         per_m_.size() * sizeof(PerM);
     for (const Level& L : levels_) bytes += L.v.size() * sizeof(double);
@@ -459,8 +154,7 @@ class DeviationStream {
   }
   const DeviationOptions& options() const { return opt_; }
 
-  // The deviations of `kind` at every factor up to N / stop_ratio(kind) (Stable32's limits),
-  // with noise type, EDF and interval.
+
   std::vector<DeviationPoint> result(DeviationKind kind) {
     process();
     std::vector<DeviationPoint> out;
@@ -506,7 +200,7 @@ class DeviationStream {
       p.dev = static_cast<double>(std::sqrt(var));
       p.alpha = alpha(i, kind);
       p.edf = deviation_edf(kind, p.alpha, static_cast<double>(m), static_cast<double>(N));
-      const auto ci = stats::deviation_interval(p.dev, p.edf, opt_.confidence);
+      const auto ci = deviation_interval(p.dev, p.edf, opt_.confidence);
       p.lo = ci.lo;
       p.hi = ci.hi;
       out.push_back(p);
@@ -885,4 +579,16 @@ class DeviationStream {
   long double phase_ = 0.0L;
 };
 
-}  // namespace stend::allan
+DeviationStream::DeviationStream(DeviationOptions options) : state_(std::make_unique<State>(std::move(options))) {}
+DeviationStream::~DeviationStream() = default;
+DeviationStream::DeviationStream(DeviationStream&&) noexcept = default;
+DeviationStream& DeviationStream::operator=(DeviationStream&&) noexcept = default;
+
+void DeviationStream::add_phase(const double* x, std::size_t n) { state_->add_phase(x, n); }
+void DeviationStream::add_rate(const double* y, std::size_t n) { state_->add_rate(y, n); }
+std::uint64_t DeviationStream::phase_points() const { return state_->phase_points(); }
+std::size_t DeviationStream::state_bytes() const { return state_->state_bytes(); }
+const DeviationOptions& DeviationStream::options() const { return state_->options(); }
+std::vector<DeviationPoint> DeviationStream::result(DeviationKind kind) { return state_->result(kind); }
+
+}  // namespace stend::noise

@@ -15,9 +15,9 @@
 #include <ostream>
 #include <stdexcept>
 
-#include "noise_stage.hpp"
-#include "stend/allan/allan.hpp"
+#include "noise_validation.hpp"
 #include "stend/diagnosis/validate.hpp"
+#include "stend/noise/noise_model.hpp"
 #include "stend/model/noise.hpp"
 #include "stend/model/output_stage.hpp"
 
@@ -264,7 +264,7 @@ std::pair<double, double> planted_size(const NoiseExperiment& e, const Candidate
   if ((bi && e.name == "bias_instability") || (rw && e.name == "random_walk")) ++b.kind_right;
   if (e.name == "random_walk" && rw) return {tr.rw_coefficient, 1.0};
   if (e.name == "bias_instability" && bi)
-    return {tr.gm_sigma, allan::kFlickerFloor / model::allan::kGaussMarkovPeakDeviation};
+    return {tr.gm_sigma, noise::kFlickerFloor / model::allan::kGaussMarkovPeakDeviation};
   return {kNaN, 1.0};
 }
 

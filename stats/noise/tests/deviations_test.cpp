@@ -1,7 +1,7 @@
-// The streaming deviations (deviations.hpp) against Stable32's own results on its sample phase
+// The streaming deviations (stend/noise/deviations.hpp) against Stable32's own results on its sample phase
 // data PHASE.DAT (../shared/data/stable32), against analytic truth on white noise, and for
 // invariants (phase and rate input agree; the value does not depend on how the input is chunked).
-#include <stend/allan/deviations.hpp>
+#include <stend/noise/deviations.hpp>
 #include <stend/testing/files.hpp>
 #include <stend/testing/paths.hpp>
 
@@ -16,10 +16,10 @@
 
 namespace {
 
-using stend::allan::DeviationKind;
-using stend::allan::DeviationOptions;
-using stend::allan::DeviationPoint;
-using stend::allan::DeviationStream;
+using stend::noise::DeviationKind;
+using stend::noise::DeviationOptions;
+using stend::noise::DeviationPoint;
+using stend::noise::DeviationStream;
 using stend::testing::read_number_rows;
 
 struct Stable32Case {
@@ -79,7 +79,7 @@ TEST(Stable32AllTau, OadevAtEveryFactor) {
   STEND_SKIP_IF_ABSENT(ref_file);
   std::vector<double> x;
   for (const auto& row : read_number_rows(phase_file)) x.push_back(row[0]);
-  DeviationStream stream(DeviationOptions{.factors = stend::allan::all_factors(500), .max_m = 500});
+  DeviationStream stream(DeviationOptions{.factors = stend::noise::all_factors(500), .max_m = 500});
   stream.add_phase(x.data(), x.size());
   std::map<std::uint64_t, double> got;
   for (const auto& p : stream.result(DeviationKind::kOadev)) got[p.m] = p.dev;
@@ -152,7 +152,7 @@ TEST(Invariants, RateAndPhaseInputAgreeAndChunkingDoesNotMatter) {
   by_rate.add_rate(y.data(), y.size());
   by_phase.add_phase(x.data(), x.size());
   for (std::size_t i = 0; i < x.size(); i += 777) chunked.add_phase(x.data() + i, std::min<std::size_t>(777, x.size() - i));
-  for (auto kind : stend::allan::kAllDeviationKinds) {
+  for (auto kind : stend::noise::kAllDeviationKinds) {
     const auto a = by_rate.result(kind), b = by_phase.result(kind), c = chunked.result(kind);
     ASSERT_EQ(a.size(), b.size());
     ASSERT_EQ(a.size(), c.size());
@@ -238,7 +238,7 @@ TEST(Reference, EveryKindAtEveryOctaveMatchesTheDefinition) {
   }
   DeviationStream stream(DeviationOptions{.factors = {}, .max_m = 1u << 16, .tau0_s = tau0});
   for (std::size_t i = 0; i < n; i += 9973) stream.add_phase(x.data() + i, std::min<std::size_t>(9973, n - i));
-  for (auto kind : stend::allan::kAllDeviationKinds) {
+  for (auto kind : stend::noise::kAllDeviationKinds) {
     const auto points = stream.result(kind);
     ASSERT_GE(points.size(), 15u) << to_string(kind);
     for (const auto& p : points) {

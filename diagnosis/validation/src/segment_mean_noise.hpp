@@ -1,5 +1,5 @@
 // The noise of one segment mean in the segment-level validation generators (validate.cpp,
-// validate_rate.cpp): a Gauss–Markov bias instability stepped exactly between segment mid-times,
+// validate_rate.cpp; internal to stend_gap_validation): a Gauss–Markov bias instability stepped exactly between segment mid-times,
 // the white noise of the mean, and the floor an 8-batch-means estimate would report
 // (se·sqrt(χ²₇/7)), as build_input does on samples.
 #pragma once
@@ -23,8 +23,9 @@ class SegmentMeanNoise {
     for (int a = 0; a < 3; ++a) gm_[a] = bi_ * rng.normal();
   }
 
-  // Adds the noise of a mean at mid-time `mid_s` [s] to y; fills the segment's floor fields.
-  void apply(model::Rng& rng, double mid_s, Eigen::Vector3d& y, SegmentData& s) {
+  // Adds the noise of a mean at mid-time `mid_s` [s] to y; fills the segment's floor fields and
+  // the white standard error of the instrument's mean.
+  void apply(model::Rng& rng, double mid_s, Eigen::Vector3d& y, model::Instrument instrument, SegmentData& s) {
     const double phi = std::exp(-(mid_s - t_prev_s_) / tau_s_);
     t_prev_s_ = mid_s;
     for (int a = 0; a < 3; ++a) {
@@ -38,7 +39,7 @@ class SegmentMeanNoise {
       s.mean_std_error[a] = se_ * std::sqrt(chi / 7.0);
       s.raw_std[a] = sigma_;
     }
-    s.point.measured_std_error = Eigen::Vector3d::Constant(se_);
+    s.point.axes(instrument).std_error = Eigen::Vector3d::Constant(se_);
   }
 
  private:
@@ -61,7 +62,7 @@ inline GapInput generated_input(const estimation::ModelSpec& fit_model, const st
 // rate_hz [Hz]; returns the mid-time [s].
 inline double time_segment(SegmentData& s, int id, double t_start_s, double record_s, double rate_hz) {
   auto& p = s.point;
-  p.segment_id = id;
+  p.segment.id = id;
   p.t_start_s = t_start_s;
   p.t_end_s = t_start_s + record_s;
   p.samples_used = static_cast<std::size_t>(record_s * rate_hz);
@@ -74,9 +75,9 @@ inline void measure_segment(const Planted& truth, SegmentMeanNoise& noise, model
                             SegmentData& s) {
   auto& p = s.point;
   Eigen::Vector3d y = truth.model.measure<double>(truth.theta.data(), p.stimulus);
-  if (!truth.extra.empty()) y += truth.extra[static_cast<std::size_t>(p.segment_id) % truth.extra.size()];
-  noise.apply(rng, mid_s, y, s);
-  p.measured = y;
+  if (!truth.extra.empty()) y += truth.extra[static_cast<std::size_t>(p.segment.id) % truth.extra.size()];
+  noise.apply(rng, mid_s, y, truth.model.instrument, s);
+  p.axes(truth.model.instrument).mean = y;
 }
 
 }  // namespace stend::diagnosis

@@ -1,6 +1,7 @@
-// Statistics behind the Allan intervals: chi-squared quantiles against table values, the
-// regularized gamma function, and the EDF against the exact EDF of Gaussian second differences.
-#include <stend/allan/stats.hpp>
+// The EDF of the Allan variance against the exact EDF of Gaussian second differences, the
+// intervals, and the correlation of overlapping estimates against Monte Carlo and its kept table.
+// (The χ² quantiles and the gamma function behind them: stats/tests/distributions_test.cpp.)
+#include <stend/noise/edf.hpp>
 
 #include <gtest/gtest.h>
 
@@ -8,8 +9,8 @@
 #include <random>
 #include <vector>
 
-using namespace stend::allan;
-using namespace stend::allan::stats;
+using namespace stend::noise;
+using stend::stats::kOneSigma;
 
 namespace {
 
@@ -52,54 +53,6 @@ std::vector<double> random_walk_kernel(long m) {
 }
 
 }  // namespace
-
-TEST(ChiSquared, MatchesTableValues) {
-  struct Row {
-    double p, nu, x;
-  };
-  // Standard chi-squared table (7 significant digits).
-  const Row table[] = {{0.025, 1, 0.000982069}, {0.975, 1, 5.023886},  {0.05, 10, 3.940299},
-                       {0.95, 10, 18.30704},     {0.5, 2, 1.386294},    {0.01, 100, 70.06489},
-                       {0.99, 100, 135.8067},    {0.1, 5, 1.610308},    {0.9, 5, 9.236357},
-                       {0.005, 1000, 888.5635},  {0.995, 1000, 1118.948}, {0.05, 3, 0.3518463},
-                       {0.95, 3, 7.814728},      {0.001, 20, 5.921040}, {0.999, 20, 45.31475}};
-  for (const auto& r : table) {
-    EXPECT_NEAR(chi2_quantile(r.p, r.nu) / r.x, 1.0, 2e-6) << "p=" << r.p << " nu=" << r.nu;
-  }
-}
-
-TEST(ChiSquared, InvertsTheCdfForNonIntegerAndLargeDegrees) {
-  for (double nu : {0.3, 1.7, 7.5, 50.5, 1e4, 1e6}) {
-    for (double p : {1e-6, 0.0228, 0.1587, 0.5, 0.8413, 0.9772, 0.999999}) {
-      const double x = chi2_quantile(p, nu);
-      EXPECT_NEAR(chi2_cdf(x, nu), p, 1e-9 * std::max(1.0, p / (1 - p)) + 1e-12)
-          << "nu=" << nu << " p=" << p;
-    }
-  }
-  // Wilson–Hilferty regime: the median of χ²(ν) is ≈ ν(1 − 2/(9ν))³.
-  const double nu = 5e7;
-  EXPECT_NEAR(chi2_quantile(0.5, nu) / (nu * std::pow(1 - 2 / (9 * nu), 3)), 1.0, 1e-12);
-}
-
-TEST(ChiSquared, RejectsBadArguments) {
-  EXPECT_THROW(chi2_quantile(0.0, 3), std::domain_error);
-  EXPECT_THROW(chi2_quantile(1.0, 3), std::domain_error);
-  EXPECT_THROW(chi2_quantile(0.5, 0), std::domain_error);
-  EXPECT_THROW(normal_quantile(1.5), std::domain_error);
-}
-
-TEST(NormalQuantile, KnownValues) {
-  EXPECT_NEAR(normal_quantile(0.975), 1.959963984540054, 1e-12);
-  EXPECT_NEAR(normal_quantile(0.5), 0.0, 1e-15);
-  EXPECT_NEAR(normal_quantile(0.8413447460685429), 1.0, 1e-12);
-  EXPECT_NEAR(normal_quantile(1e-10), -6.361340902404056, 1e-9);
-}
-
-TEST(GammaP, KnownValues) {
-  EXPECT_NEAR(gamma_p(1.0, 1.0), 1.0 - std::exp(-1.0), 1e-15);
-  EXPECT_NEAR(gamma_p(0.5, 2.0), std::erf(std::sqrt(2.0)), 1e-14);
-  EXPECT_NEAR(gamma_p(3.0, 2.0), 1.0 - std::exp(-2.0) * (1 + 2 + 2), 1e-14);
-}
 
 TEST(Edf, WhiteNoiseMatchesExactEdf) {
   for (long N : {151L, 1001L, 20001L}) {
@@ -235,9 +188,9 @@ TEST(AvarCorrelation, IsOneOnTheDiagonalAndFallsWithTheRatio) {
 }
 
 TEST(AvarCorrelation, TheKeptTableIsTheComputation) {
-  const auto computed = stats::detail::compute_avar_correlation_table();
+  const auto computed = compute_avar_correlation_table();
   for (std::size_t ty = 0; ty < computed.size(); ++ty)
     for (std::size_t b = 0; b < computed[ty].size(); ++b)
       for (std::size_t k = 0; k < computed[ty][b].size(); ++k)
-        EXPECT_NEAR(stats::kAvarCorrelation[ty][b][k], computed[ty][b][k], 1e-15) << ty << " " << b << " " << k;
+        EXPECT_NEAR(avar_correlation_table()[ty][b][k], computed[ty][b][k], 1e-15) << ty << " " << b << " " << k;
 }

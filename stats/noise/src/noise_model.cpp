@@ -2,9 +2,9 @@
 // least squares on the octave points with their covariance (each point's EDF, the correlation of
 // overlapping estimates that share samples), model selection among Q N B K R and a Gauss–Markov
 // bias, Fisher uncertainties, upper bounds, slope read-offs (see fit_noise_model in allan.hpp).
-#include <stend/allan/allan.hpp>
+#include "stend/noise/noise_model.hpp"
+
 #include <stend/model/noise.hpp>
-#include <stend/model/output_stage.hpp>
 #include <stend/physics/units.hpp>
 
 #include <Eigen/Dense>
@@ -14,78 +14,24 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
-namespace stend::allan {
+#include "model_curve.hpp"
+#include "stend/stats/gls.hpp"
+
+namespace stend::noise {
 
 namespace {
 
-constexpr int kTerms = 6;                 // Q N B K R G (linear in their squares at fixed τc)
-constexpr int kGm = 5;                    // index of the Gauss–Markov term
-constexpr int kRamp = 4;                  // index of the rate ramp R
 constexpr double kTermPenalty = 6.6349;   // χ²₁ 99 % quantile: penalty per parameter
 constexpr double kPlateauOverWalk = 10.828;  // χ²₁ 99.9 %: deviance B or G must gain over K in its place
 constexpr double kMinClusters = 4.0;      // points with fewer clusters (N/m) are not fitted
-constexpr double kZ95 = 1.959963984540054;
-constexpr double kCoverage = 0.95;        // level of the coefficients' intervals (z = kZ95)
+constexpr double kCoverage = 0.95;        // level of the coefficients' intervals (z = stats::kZ95)
 constexpr int kMaxFilteredM = 32;         // an unstated filter may flatten points up to this m
 
 Coefficient* coefficient(NoiseModel& m, int j) { return m.coefficients() + j; }
 const Coefficient* coefficient(const NoiseModel& m, int j) { return m.coefficients() + j; }
-
-NoiseType noise_of_term(int j) {
-  switch (j) {
-    case 0: return NoiseType::kQuantization;
-    case 1: return NoiseType::kWhite;
-    case 2: return NoiseType::kFlicker;
-    case kGm: return NoiseType::kFlicker;  // the GM plateau (EDF between white and random walk)
-    default: return NoiseType::kRandomWalk;  // K, and the ramp R (closest EDF model)
-  }
-}
-
-// AVAR per unit N² of the white-noise term at m samples per cluster, rate fs [Hz]: sampled white
-// noise of variance N²·fs (AVAR N²/τ unfiltered) through the output filter of impulse response h:
-// AVAR(m) = fs/(2m²) · Σ_d r(d)·R_g(d), r the autocorrelation of h, R_g that of the second
-// difference of m-sums (2m − 3|d| for |d| ≤ m, −(2m − |d|) for m < |d| < 2m).
-class WhiteTerm {
- public:
-  WhiteTerm(double rate_hz, double lowpass_hz) : fs_(rate_hz) {
-    if (!(lowpass_hz > 0.0) || !(lowpass_hz < 0.5 * rate_hz)) return;
-    model::Biquad f = model::Biquad::butterworth_lowpass(lowpass_hz, rate_hz);
-    std::vector<double> h;
-    double peak = 0.0;
-    for (int n = 0; n < (1 << 16); ++n) {
-      const double v = f(n == 0 ? 1.0 : 0.0);
-      h.push_back(v);
-      peak = std::max(peak, std::abs(v));
-      if (n > 16 && std::abs(v) < 1e-13 * peak && std::abs(h[h.size() - 2]) < 1e-13 * peak) break;
-    }
-    r_.assign(h.size(), 0.0);
-    for (std::size_t d = 0; d < h.size(); ++d)
-      for (std::size_t n = 0; n + d < h.size(); ++n) r_[d] += h[n] * h[n + d];
-    double r2 = r_[0] * r_[0];
-    for (std::size_t d = 1; d < r_.size(); ++d) r2 += 2.0 * r_[d] * r_[d];
-    independent_ = r_[0] * r_[0] / r2;
-  }
-  // Independent values per sample of the filtered white noise, r(0)²/Σ_d r(d)² (the effective
-  // sample size of a variance estimate from correlated Gaussian values); 1 without a filter.
-  double independent() const { return independent_; }
-  double operator()(double m) const {
-    if (r_.empty()) return fs_ / m;
-    double s = 2.0 * m * r_[0];
-    const auto mm = static_cast<std::size_t>(m);
-    for (std::size_t d = 1; d < r_.size() && d < 2 * mm; ++d) {
-      const double dd = static_cast<double>(d);
-      s += 2.0 * r_[d] * (d <= mm ? 2.0 * m - 3.0 * dd : -(2.0 * m - dd));
-    }
-    return fs_ * s / (2.0 * m * m);
-  }
-
- private:
-  double fs_;
-  double independent_ = 1.0;
-  std::vector<double> r_;  // empty: no filter
-};
 
 struct FitPoint {
   double tau, m, avar, adev, edf, lo, hi;
@@ -104,7 +50,7 @@ struct FitSet {
 };
 
 // Correlation of two points' AVAR estimates: the mean of the correlations for each point's noise
-// type in a record of n_samples (stats::avar_correlation); shrunk towards the identity until
+// type in a record of n_samples (avar_correlation); shrunk towards the identity until
 // positive definite.
 void set_correlation(FitSet& set, double n_samples) {
   const auto& pts = set.pts;
@@ -114,22 +60,10 @@ void set_correlation(FitSet& set, double n_samples) {
     for (int j = 0; j < i; ++j) {
       const auto &p = pts[static_cast<std::size_t>(i)], &q = pts[static_cast<std::size_t>(j)];
       R(i, j) = R(j, i) =
-          0.5 * (stats::avar_correlation(p.noise, p.m, q.m, n_samples) + stats::avar_correlation(q.noise, p.m, q.m, n_samples));
+          0.5 * (avar_correlation(p.noise, p.m, q.m, n_samples) + avar_correlation(q.noise, p.m, q.m, n_samples));
     }
   }
-  for (;;) {
-    Eigen::LLT<Eigen::MatrixXd> llt(R);
-    if (llt.info() == Eigen::Success) {
-      set.L = llt.matrixL();
-      return;
-    }
-    R = 0.9 * R + 0.1 * Eigen::MatrixXd::Identity(n, n);
-  }
-}
-
-std::array<double, kTerms> basis(double tau, double m, const WhiteTerm& white, double tc) {
-  return {3.0 / (tau * tau), white(m), kFlickerFloor * kFlickerFloor, tau / 3.0, tau * tau / 2.0,
-          tc > 0.0 ? model::allan::gauss_markov(1.0, tc, tau) : 0.0};
+  set.L = stats::shrunk_cholesky(std::move(R));
 }
 
 void set_basis(FitSet& set, const WhiteTerm& white, double tc) {
@@ -396,7 +330,7 @@ NoiseType noise_of_slope(const std::vector<FitPoint>& pts, const std::vector<dou
 // whose local slope is within tolerance of `target` (log-mean weighted by EDF).
 Readoff slope_readoff(const char* name, const std::string& unit, const std::vector<FitPoint>& pts,
                       const std::vector<double>& slope, double target, double tau_ref,
-                      const AllanOptions& opt) {
+                      const AnalysisOptions& opt) {
   Readoff r;
   r.name = name;
   r.unit = unit;
@@ -461,9 +395,9 @@ void set_edf(std::vector<FitPoint>& pts, const AllanCurve& curve, const WhiteTer
   const double n_phase = rho * static_cast<double>(curve.samples) + 1.0;
   for (auto& p : pts) {
     p.noise = type_at(p.tau);
-    p.edf = stats::edf_overlapping_adev(p.noise, n_phase, std::max(1.0, rho * p.m));
+    p.edf = edf_overlapping_adev(p.noise, n_phase, std::max(1.0, rho * p.m));
     if (!(std::isfinite(p.edf) && p.edf > 0.0)) p.edf = 1.0;
-    const auto ci = stats::deviation_interval(p.adev, p.edf, curve.confidence);
+    const auto ci = deviation_interval(p.adev, p.edf, curve.confidence);
     p.lo = ci.lo;
     p.hi = ci.hi;
   }
@@ -501,7 +435,7 @@ void identify_and_bound(const std::vector<FitPoint>& pts, const WhiteTerm& white
   auto bound_of = [&](int j, double tc) {
     double bound = std::numeric_limits<double>::infinity();
     for (const auto& p : pts) {
-      const double hi = std::isfinite(p.edf) ? stats::deviation_interval(p.adev, p.edf, kCoverage).hi : p.adev;
+      const double hi = std::isfinite(p.edf) ? deviation_interval(p.adev, p.edf, kCoverage).hi : p.adev;
       const double a = basis(p.tau, p.m, white, tc)[j];
       if (a > 0.0) bound = std::min(bound, hi * hi / a);
     }
@@ -515,10 +449,10 @@ void identify_and_bound(const std::vector<FitPoint>& pts, const WhiteTerm& white
       // Normal interval; for the linear terms (c² a weighted sum of AVAR points, χ² with
       // Satterthwaite's EDF c²/(2σ²)) widened to the χ² interval, which reaches further up when
       // few long-τ points decide the coefficient.
-      c->lo = std::max(0.0, c->value - kZ95 * c->sigma);
-      c->hi = c->value + kZ95 * c->sigma;
+      c->lo = std::max(0.0, c->value - stats::kZ95 * c->sigma);
+      c->hi = c->value + stats::kZ95 * c->sigma;
       if (j < NoiseModel::kCoefficients - 1) {
-        const auto ci = stats::deviation_interval(c->value, c->value * c->value / (2.0 * c->sigma * c->sigma), kCoverage);
+        const auto ci = deviation_interval(c->value, c->value * c->value / (2.0 * c->sigma * c->sigma), kCoverage);
         c->lo = std::min(c->lo, ci.lo);
         c->hi = std::max(c->hi, ci.hi);
       }
@@ -567,15 +501,6 @@ NoiseModel failed_model(NoiseModel model, std::string message) {
 
 }  // namespace
 
-const char* to_string(Verdict v) {
-  switch (v) {
-    case Verdict::kIdentified: return "identified";
-    case Verdict::kUpperBound: return "upper_bound";
-    case Verdict::kFailed: return "failed";
-  }
-  return "?";
-}
-
 double NoiseModel::avar(double tau_s) const {
   // Without a rate the white term is N²/τ (m = 1 at rate 1/τ).
   const double m = rate_hz > 0.0 ? std::max(1.0, std::round(tau_s * rate_hz)) : 1.0;
@@ -604,7 +529,7 @@ NoiseType NoiseModel::dominant(double tau_s) const {
   return noise_of_term(best);
 }
 
-NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
+NoiseModel fit_noise_model(const AllanCurve& curve, const AnalysisOptions& opt) {
   NoiseModel model;
   set_units(model, curve.units);
   model.rate_hz = curve.rate_hz;
@@ -668,18 +593,4 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AllanOptions& opt) {
   return model;
 }
 
-std::vector<Conversion> datasheet_units(const Coefficient& c, Instrument instrument) {
-  const std::string s = c.symbol;
-  const bool gyro = instrument == Instrument::kGyroscope, accel = instrument == Instrument::kAccelerometer;
-  const double deg = physics::kRadToDeg;
-  if (s == "N" && gyro) return {{deg * 60.0, "deg/sqrt(h)"}, {deg, "deg/s/sqrt(Hz)"}};
-  if (s == "N" && accel) return {{60.0, "m/s/sqrt(h)"}, {1.0 / physics::kMicroG, "ug/sqrt(Hz)"}};
-  if ((s == "B" || s == "G") && gyro) return {{1.0 / physics::kDegPerHour, "deg/h"}};
-  if ((s == "B" || s == "G") && accel) return {{1.0 / physics::kMicroG, "ug"}};
-  // K [unit/s/√Hz] = [unit/√s]: per √s and per √h (× 60).
-  if (s == "K" && gyro) return {{deg, "deg/s/sqrt(s)"}, {deg * 3600.0 * 60.0, "deg/h/sqrt(h)"}};
-  if (s == "K" && accel) return {{1.0 / physics::kMicroG, "ug/sqrt(s)"}, {60.0 / physics::kMicroG, "ug/sqrt(h)"}};
-  return {};
-}
-
-}  // namespace stend::allan
+}  // namespace stend::noise

@@ -97,7 +97,7 @@ GapInput generate_rate(const RateDesign& d, const estimation::ModelSpec& fit_mod
       measure_segment(truth, mean_noise, rng, mid, s);
       char label[160];
       std::snprintf(label, sizeof label, "mount %zu, %s %g deg/s", mount + 1, oname, rate_dps);
-      p.label = label;
+      p.segment.label = label;
       s.orientation = static_cast<int>(o);
       s.orientation_name = oname;
       s.setpoint_c = d.temperature_c;

@@ -134,6 +134,10 @@ struct ValidateOptions {
   // Called as the validation goes on with the share done (0…1) and the experiment in progress,
   // for a progress display (`stend gap validate`); empty: not called.
   std::function<void(double done, const std::string& stage)> on_progress;
+
+  // Ceres style: false, with "KEY: what is wrong" in *why, when a value is out of range (seeds
+  // ≥ 1, sizes > 0, run counts ≥ 0, the gap options').
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 struct CandidateValidation {
