@@ -14,6 +14,7 @@
 #include <ctime>
 #include <fstream>
 #include <memory>
+#include <ostream>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -66,7 +67,7 @@ class Run {
     for (std::size_t i = 0; i < exp_.procedure.size(); ++i) {
       const Step& s = exp_.procedure[i];
       progress_.step = static_cast<int>(i) + 1;
-      progress_.step_kind = step_kind_name(s.kind);
+      progress_.step_kind = s.kind;
       progress_.step_label = s.label;
       progress_.item = progress_.item_count = 0;
       eta_.step_started(i, clock_.now_s(), chamber_c());
@@ -74,7 +75,7 @@ class Run {
       eta_.step_finished(clock_.now_s());
     }
     eta_.finished();
-    progress_.phase = "done";
+    progress_.phase = RunPhase::kDone;
     report(true);
   }
 
@@ -100,12 +101,12 @@ class Run {
       case Step::Kind::kRates: rates(index, s); break;
       case Step::Kind::kRecord:
         begin_segment(index, s, SegmentKind::kRecord, -1, 0, "");
-        progress_.phase = "recording";
+        progress_.phase = RunPhase::kRecording;
         advance_for(s.record_s);
         end_segment();
         break;
       case Step::Kind::kWait:
-        progress_.phase = "waiting";
+        progress_.phase = RunPhase::kWaiting;
         advance_for(s.dwell_s);
         break;
       case Step::Kind::kSetVibration: {
@@ -125,7 +126,7 @@ class Run {
     setpoint_c_ = s.setpoint_c;
     tolerance_c_ = s.tolerance_c;
     progress_.setpoint_c = s.setpoint_c;
-    progress_.phase = "settling";
+    progress_.phase = RunPhase::kSettling;
     if (s.record_settling) begin_segment(index, s, SegmentKind::kSetTemperature, -1, 0, fmt::format("{}.temperature={} degC", s.fixture, s.setpoint_c));
     const double t0 = clock_.now_s();
     if (!s.record_settling) writing_ = false;
@@ -187,21 +188,21 @@ class Run {
                       fmt::format("{}.{} rate={} deg/s", s.fixture, s.axis, s.rates[k]), s.rates[k]);
     }
     table.command(axis, CommandMode::kRate, 0.0);
-    progress_.phase = "moving";
+    progress_.phase = RunPhase::kMoving;
     wait_settled(table, s.fixture);
   }
 
   void move_and_record(int index, const Step& s, Fixture& table, SegmentKind kind, int k,
                        const std::string& targets, double rate) {
-    progress_.phase = "moving";
+    progress_.phase = RunPhase::kMoving;
     eta_.item_started(clock_.now_s());
     wait_settled(table, s.fixture);
     eta_.move_finished(clock_.now_s());
-    progress_.phase = "dwell";
+    progress_.phase = RunPhase::kDwell;
     advance_for(s.dwell_s);
     begin_segment(index, s, kind, k, static_cast<int>(s.orientations.empty() ? s.rates.size() : s.orientations.size()), targets);
     segment_.rate = rate;
-    progress_.phase = "recording";
+    progress_.phase = RunPhase::kRecording;
     const double t_end = clock_.now_s() + s.record_s;
     while (clock_.now_s() < t_end - 1e-9) {
       advance_to(std::min(t_end, clock_.now_s() + opt_.control_period_s));
@@ -614,6 +615,39 @@ void check_run_name(const std::string& name) {
     if (c == '/' || c == '\\') refuse(fmt::format("contains the path separator '{}'", c));
     if (u < 0x20 || u == 0x7f) refuse(fmt::format("contains the control character 0x{:02x}", u));
   }
+}
+
+namespace {
+constexpr std::pair<RunPhase, const char*> kRunPhaseNames[] = {
+    {RunPhase::kNone, ""},           {RunPhase::kMoving, "moving"},   {RunPhase::kDwell, "dwell"},
+    {RunPhase::kRecording, "recording"}, {RunPhase::kSettling, "settling"}, {RunPhase::kWaiting, "waiting"},
+    {RunPhase::kDone, "done"},       {RunPhase::kRunning, "running"}, {RunPhase::kInterrupted, "interrupted"},
+    {RunPhase::kFailed, "failed"},
+};
+}  // namespace
+
+const char* to_string(RunPhase p) {
+  for (const auto& [phase, name] : kRunPhaseNames)
+    if (phase == p) return name;
+  return "?";
+}
+
+std::optional<RunPhase> run_phase_from_string(std::string_view name) {
+  for (const auto& [phase, text] : kRunPhaseNames)
+    if (name == text) return phase;
+  return std::nullopt;
+}
+
+std::ostream& operator<<(std::ostream& os, RunPhase p) { return os << to_string(p); }
+
+RunPhase run_phase_of(RunStatus status) {
+  switch (status) {
+    case RunStatus::kRunning: return RunPhase::kRunning;
+    case RunStatus::kComplete: return RunPhase::kDone;
+    case RunStatus::kInterrupted: return RunPhase::kInterrupted;
+    case RunStatus::kFailed: return RunPhase::kFailed;
+  }
+  return RunPhase::kNone;
 }
 
 RunResult run_experiment(const Experiment& exp, const PluginHost& host, const RunOptions& options) {

@@ -227,7 +227,7 @@ struct Recording {
   mutable std::shared_ptr<const MemorySamples> memory_view_;  // sample_source() over `samples`
 };
 
-// Throws std::runtime_error when `rec` is damaged: the run folder, what is damaged and how many
+// Throws InputError when `rec` is damaged: the run folder, what is damaged and how many
 // samples are still readable. Analyses call it unless the user accepted the readable part.
 void require_whole(const Recording& rec);
 
