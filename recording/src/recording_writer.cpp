@@ -91,6 +91,10 @@ fs::path make_run_dir(const fs::path& run_dir) {
 
 }  // namespace
 
+bool RecordingWriterOptions::IsValid(std::string* error) const {
+  return format == RecordingFormat::kHdf5 || format == RecordingFormat::kCsv ? true : invalid(error, "unknown format");
+}
+
 struct RecordingWriter::Impl {
   RecordingHeader header;
   std::unique_ptr<detail::CsvRunWriter> csv;  // one of the two stores
@@ -162,6 +166,7 @@ RecordingWriter::RecordingWriter(const fs::path& run_dir, RecordingHeader header
                                  const std::string& resolved_experiment_yaml,
                                  const RecordingWriterOptions& options)
     : impl_(std::make_unique<Impl>()), dir_(run_dir) {
+  require_valid(options, "recording writer options");
   check_header(header, resolved_experiment_yaml);
   if (header.start_time_utc.empty()) header.start_time_utc = detail::utc_now_iso();
   header.status = RunStatus::kRunning;

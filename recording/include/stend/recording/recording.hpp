@@ -134,6 +134,8 @@ std::size_t max_bytes_per_truth_value(RecordingFormat f);
 
 struct RecordingWriterOptions {
   RecordingFormat format = RecordingFormat::kHdf5;
+
+  bool IsValid(std::string* error = nullptr) const;  // a known format
 };
 
 class RecordingWriter {
