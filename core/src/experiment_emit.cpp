@@ -83,7 +83,7 @@ void emit_experiment_section(YAML::Emitter& out, const Experiment& e) {
   out << YAML::Key << "description" << YAML::Value;
   yaml::emit_string(out, e.description);
   out << YAML::Key << "seed" << YAML::Value << e.seed;
-  out << YAML::Key << "clock" << YAML::Value << e.clock;
+  out << YAML::Key << "clock" << YAML::Value << to_string(e.clock);
   out << YAML::Key << "plugin_paths" << YAML::Value << YAML::Flow << YAML::BeginSeq;
   for (const auto& p : e.plugin_paths) yaml::emit_string(out, p);
   out << YAML::EndSeq << YAML::EndMap;

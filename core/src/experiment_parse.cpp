@@ -72,16 +72,21 @@ class ExperimentReader {
     if (seed < 0)
       m.fail_value("seed", "'seed' must be a non-negative integer, got " + std::to_string(seed));
     exp_.seed = static_cast<std::uint64_t>(seed);
-    exp_.clock = m.string("clock", "auto");
-    const std::vector<std::string> clocks = {"auto", "simulated", "wall"};
-    if (std::find(clocks.begin(), clocks.end(), exp_.clock) == clocks.end()) {
-      m.fail_value("clock", "unknown clock '" + exp_.clock + "'",
-                   yaml::join_sentences(yaml::did_you_mean(exp_.clock, clocks),
-                                        "clock is one of: auto, simulated, wall"));
-    }
+    exp_.clock = clock(m, exp_.clock);
     if (m.has("plugin_paths"))
       exp_.plugin_paths =
           resolve_plugin_paths(m.get("plugin_paths"), file_, m.child_path("plugin_paths"));
+  }
+
+  // `clock`: auto, simulated or wall.
+  static ClockKind clock(const MapReader& m, ClockKind fallback) {
+    const std::string name = m.string("clock", to_string(fallback));
+    const auto kind = clock_kind_from_string(name);
+    if (!kind)
+      m.fail_value("clock", "unknown clock '" + name + "'",
+                   yaml::join_sentences(yaml::did_you_mean(name, clock_kind_names()),
+                                        "clock is one of: " + yaml::join(clock_kind_names())));
+    return *kind;
   }
 
   // --- limits: what one run may produce (RunLimits) -------------------------------------------

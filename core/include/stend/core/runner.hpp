@@ -84,11 +84,14 @@ struct RunOptions {
   double progress_period_s = 0.2;    // wall seconds between progress callbacks
   std::function<void(const RunProgress&)> on_progress;
   const std::atomic<bool>* stop = nullptr;  // set (e.g. by SIGINT) to stop cleanly
-  std::string clock;                 // override the experiment's clock ("simulated" | "wall")
+  std::optional<ClockKind> clock;    // overrides the experiment's clock
   // A fixture whose link fails (FixtureLinkFault) is retried every period for this long (run
   // time) before the run fails; the gap is reported in events.csv and marks segments unsettled.
   double fixture_outage_s = 30.0;
   RecordingWriterOptions store;      // how the run folder stores its data (HDF5 by default)
+
+  // Positive periods and time-outs, at least one sensor attempt, no negative outage, a valid store.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 struct RunResult {
