@@ -186,7 +186,20 @@ void set_csv_sensor_info(const CsvMapping& map, const CsvColumns& c, Recording& 
 
 }  // namespace
 
+bool CsvMapping::IsValid(std::string* error) const {
+  if (!(time_scale_s > 0.0 && std::isfinite(time_scale_s))) return invalid(error, "time_scale_s must be > 0");
+  if (!(rate_hz >= 0.0 && std::isfinite(rate_hz))) return invalid(error, "rate_hz must be >= 0 (0: from the timestamps)");
+  for (double s : {accel_scale, gyro_scale, temperature_scale})
+    if (!finite_nonzero(s)) return invalid(error, "the scales must be finite and not 0");
+  for (double o : {accel_offset_counts, gyro_offset_counts, temperature_offset_c})
+    if (!std::isfinite(o)) return invalid(error, "the offsets must be finite");
+  if (!gravity_or_unknown(gravity_mps2)) return invalid(error, "gravity_mps2 must be >= 0 (0: unknown)");
+  if (!(accel_range_mps2 >= 0.0 && gyro_range_radps >= 0.0)) return invalid(error, "the ranges must be >= 0 (0: unknown)");
+  return true;
+}
+
 void import_csv(const fs::path& file, const CsvMapping& map, Recording& rec, SampleSink& out) {
+  require_valid(map, "csv mapping");
   LineReader r(file);
   const CsvColumns c = resolve_csv_columns(r, map, read_csv_header(r, map));
   rec = new_recording(file, "csv");

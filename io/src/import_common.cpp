@@ -29,6 +29,9 @@ ImportError::ImportError(const fs::path& file, ByteOffset offset, const std::str
 ImportError::ImportError(const fs::path& file, const std::string& where, const std::string& message)
     : InputError(file.string() + ": " + where + ": " + message), file_(file), where_(where) {}
 
+bool finite_nonzero(double v) { return std::isfinite(v) && v != 0.0; }
+bool gravity_or_unknown(double g_mps2) { return std::isfinite(g_mps2) && g_mps2 >= 0.0; }
+
 namespace detail {
 
 LineReader::LineReader(const fs::path& file) : file_(file), in_(file, std::ios::binary) {

@@ -247,7 +247,16 @@ class ImucalSegments {
 
 }  // namespace
 
+bool ImucalOptions::IsValid(std::string* error) const {
+  if (!(rate_hz > 0.0 && std::isfinite(rate_hz))) return invalid(error, "rate_hz must be > 0");
+  if (!(accel_lsb_per_g > 0.0 && gyro_lsb_per_dps > 0.0)) return invalid(error, "the LSBs must be > 0");
+  if (!(std::isfinite(accel_offset_counts) && std::isfinite(gyro_offset_counts))) return invalid(error, "the offsets must be finite");
+  if (!(gravity_mps2 > 0.0 && std::isfinite(gravity_mps2))) return invalid(error, "gravity_mps2 must be > 0");
+  return true;
+}
+
 void import_imucal_session(const fs::path& file, const ImucalOptions& opt, Recording& rec, SampleSink& out) {
+  require_valid(opt, "imucal options");
   LineReader r(file);
   const ImucalColumns columns = read_imucal_header(r);
   const ImucalScan scan = scan_imucal(r, columns);

@@ -188,8 +188,18 @@ void set_imutk_sensor_info(const ImuTkOptions& opt, bool has_gyro, Recording& re
 
 }  // namespace
 
+bool ImuTkOptions::IsValid(std::string* error) const {
+  if (!(time_scale_s > 0.0 && std::isfinite(time_scale_s))) return invalid(error, "time_scale_s must be > 0");
+  if (!(finite_nonzero(accel_scale) && finite_nonzero(gyro_scale))) return invalid(error, "the scales must be finite and not 0");
+  if (!(std::isfinite(accel_offset_counts) && std::isfinite(gyro_offset_counts))) return invalid(error, "the offsets must be finite");
+  if (!(rate_hz >= 0.0 && std::isfinite(rate_hz))) return invalid(error, "rate_hz must be >= 0 (0: from the timestamps)");
+  if (!gravity_or_unknown(gravity_mps2)) return invalid(error, "gravity_mps2 must be >= 0 (0: unknown)");
+  return true;
+}
+
 void import_imutk(const fs::path& acc_file, const fs::path& gyro_file, const ImuTkOptions& opt, Recording& rec,
                   SampleSink& out) {
+  require_valid(opt, "IMU-TK options");
   const TriadScan acc = scan_triad(acc_file, opt.time_scale_s);
   const bool has_gyro = !gyro_file.empty();
   const TriadScan gyr = has_gyro ? scan_triad(gyro_file, opt.time_scale_s) : TriadScan{};

@@ -193,7 +193,15 @@ void set_mat_sensor_info(const MatData& m, const MatOptions& opt, Recording& rec
 
 }  // namespace
 
+bool MatOptions::IsValid(std::string* error) const {
+  if (!(time_scale_s > 0.0 && std::isfinite(time_scale_s))) return invalid(error, "time_scale_s must be > 0");
+  if (!(finite_nonzero(accel_scale) && finite_nonzero(gyro_scale))) return invalid(error, "the scales must be finite and not 0");
+  if (!gravity_or_unknown(gravity_mps2)) return invalid(error, "gravity_mps2 must be >= 0 (0: unknown)");
+  return true;
+}
+
 void import_mat(const fs::path& file, const MatOptions& opt, Recording& rec, SampleSink& out) {
+  require_valid(opt, "MAT options");
   MatSource src(file, opt.struct_name);
   MatData m = read_mat_data(src);
   check_mat_data(file, m);

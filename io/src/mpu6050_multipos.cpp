@@ -115,8 +115,16 @@ void add_initialization_segment(const MpuHeader& h, double t_last_s, Recording& 
 
 }  // namespace
 
+bool Mpu6050MultiposOptions::IsValid(std::string* error) const {
+  if (!(accel_lsb_per_g > 0.0 && gyro_lsb_per_dps > 0.0)) return invalid(error, "the LSBs must be > 0");
+  if (!(std::isfinite(accel_offset_counts) && std::isfinite(gyro_offset_counts))) return invalid(error, "the offsets must be finite");
+  if (!gravity_or_unknown(gravity_mps2)) return invalid(error, "gravity_mps2 must be >= 0 (0: unknown)");
+  return true;
+}
+
 void import_mpu6050_multipos(const fs::path& file, const Mpu6050MultiposOptions& opt, Recording& rec,
                              SampleSink& out) {
+  require_valid(opt, "mpu6050_multipos options");
   LineReader r(file);
   const MpuHeader header = read_mpu_header(r);
   const std::array<std::size_t, 6> col = mpu_columns(file, header);

@@ -3,6 +3,7 @@
 #include "import_common.hpp"
 
 #include <stend/physics/gravity.hpp>
+#include <stend/physics/table_chain.hpp>
 #include <stend/physics/units.hpp>
 
 #include <algorithm>

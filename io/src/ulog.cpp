@@ -553,7 +553,14 @@ SensorIdentity ulog_identity(const UlogLog& log, const UlogChoice& c) {
 // Two passes over the file through bounded buffers: the first reads every message header (the
 // definitions, info, and how many data messages each subscription holds), the second decodes the
 // chosen series' records (accelerometer and gyro, each with a reader of its own) into samples.
+bool UlogOptions::IsValid(std::string* error) const {
+  if (source != UlogSource::kAuto && source != UlogSource::kSensorAccelGyro && source != UlogSource::kSensorCombined)
+    return invalid(error, "unknown source");
+  return instance >= -1 ? true : invalid(error, "instance must be >= 0, or -1 (the instance with the most samples)");
+}
+
 void import_ulog(const fs::path& file, const UlogOptions& opt, Recording& rec, SampleSink& out) {
+  require_valid(opt, "ULog options");
   const BinaryReader f(file);
   const UlogLog log = read_ulog(f);
   const UlogChoice choice = choose_series(f, log, opt);

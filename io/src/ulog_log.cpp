@@ -276,6 +276,7 @@ UlogLog read_ulog(const BinaryReader& f) {
 }  // namespace detail
 
 namespace fs = std::filesystem;
+using namespace detail;
 
 bool looks_like_ulog(const fs::path& file) {
   const std::string head = file_prefix(file, sizeof kUlogMagic);
