@@ -66,7 +66,7 @@ sim::AxisConfig table_axis(const std::string& name, double rate, double accel) {
 
 std::string slurp(const std::string& path) {
   std::ifstream f(path);
-  if (!f) throw std::runtime_error("cannot read " + path);
+  if (!f) throw InputError("cannot read " + path);
   std::stringstream s;
   s << f.rdbuf();
   return s.str();

@@ -41,7 +41,7 @@ void DatasetArgs::add_to(CLI::App* sub, bool required) {
           }
         },
         "");
-    sub->add_option(io::import_flag(k.key), flags[k.key], k.help)->check(parses);
+    sub->add_option(io::import_flag(k.key), flags[k.key], k.description())->type_name(k.type_name())->check(parses);
   }
 }
 

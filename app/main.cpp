@@ -134,7 +134,7 @@ ExitCode cmd_run(const std::string& file, const std::string& output, const std::
   stend::RunOptions opt;
   opt.output_dir = output;
   opt.run_name = name;
-  opt.clock = clock;
+  if (!clock.empty()) opt.clock = stend::clock_kind_from_string(clock);  // checked by the option
   opt.store.format = *stend::recording_format_from_string(store);  // checked by the option
   opt.stop = &g_stop;
   // The progress line (a terminal only, unless --quiet) and the live view (--live) share the

@@ -83,14 +83,14 @@ std::string fit_line(const std::vector<LinePiece>& pieces, int columns) {
 }
 
 std::string run_progress_line(const RunProgress& p, int columns) {
-  const bool done = p.phase == "done";
+  const bool done = p.phase == RunPhase::kDone;
   std::vector<LinePiece> pieces;
   pieces.push_back({fmt::format("{:.0f}%", 100.0 * p.fraction_done()), 0});
   pieces.push_back({done ? std::string("done") : fmt::format("~{} left", fmt_duration(p.time_left_s())), 0});
-  pieces.push_back({fmt::format("step {}/{} {}", p.step, p.step_count, p.step_kind), 1});
+  pieces.push_back({fmt::format("step {}/{} {}", p.step, p.step_count, p.step_kind_name()), 1});
   if (p.item_count > 0 && !done)
-    pieces.push_back({fmt::format("{} {}/{}", p.step_kind == "rates" ? "rate" : "orientation", p.item, p.item_count), 3});
-  if (!done) pieces.push_back({p.phase, 2});
+    pieces.push_back({fmt::format("{} {}/{}", p.step_kind == Step::Kind::kRates ? "rate" : "orientation", p.item, p.item_count), 3});
+  if (!done) pieces.push_back({to_string(p.phase), 2});
   if (std::isfinite(p.air_c)) {
     const std::string setpoint = std::isfinite(p.setpoint_c) ? fmt::format(" → {:.1f}", p.setpoint_c) : "";
     pieces.push_back({fmt::format("air {:.2f}{} °C", p.air_c, setpoint), 4});

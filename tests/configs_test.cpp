@@ -19,7 +19,7 @@ TEST(Configs, EveryShippedExperimentValidates) {
     SCOPED_TRACE(entry.path().string());
     try {
       const stend::Experiment exp = stend::load_experiment(entry.path().string(), host);
-      if (exp.clock == "wall") {  // real drivers: creating the bench opens devices (stage 1 only)
+      if (exp.clock == stend::ClockKind::kWall) {  // real drivers: creating the bench opens devices (stage 1 only)
         ++n;
         continue;
       }

@@ -34,10 +34,10 @@ TEST(EtaSweep, TimeLeftWithinTenPercentAtQuarterHalfAndThreeQuarters) {
   const auto file = stend::testing::source_path("configs/temperature_sweep.yaml");
   const stend::Experiment exp = stend::load_experiment(file.string(), stend::testing::build_tree_plugins());
   std::vector<Point> seen;
-  std::string last_phase;
+  stend::RunPhase last_phase = stend::RunPhase::kNone;
   double last_remaining = -1.0;
   stend::RunOptions opt;
-  opt.clock = "simulated";
+  opt.clock = stend::ClockKind::kSimulated;
   opt.progress_period_s = 0.0;  // every control period: the schedule in run time, not wall time
   opt.on_progress = [&](const stend::RunProgress& p) {
     if (seen.empty() || p.run_time_s - seen.back().t_s >= 1.0) seen.push_back({p.run_time_s, p.remaining_s});
@@ -47,7 +47,7 @@ TEST(EtaSweep, TimeLeftWithinTenPercentAtQuarterHalfAndThreeQuarters) {
   NullSink sink;
   const stend::RunResult r = stend::run_experiment_to(exp, stend::testing::build_tree_plugins(), opt, sink);
   ASSERT_EQ(r.status, stend::RunStatus::kComplete) << r.message;
-  EXPECT_EQ(last_phase, "done");
+  EXPECT_EQ(last_phase, stend::RunPhase::kDone);
   EXPECT_EQ(last_remaining, 0.0);
   const double total = r.run_time_s;
   ASSERT_GT(total, 3600.0) << "the sweep is expected to take hours of run time";

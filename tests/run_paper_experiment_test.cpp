@@ -89,7 +89,7 @@ TEST(PaperExperiment, StopRequestKeepsDataAndMarksRunInterrupted) {
   opt.stop = &stop;
   opt.progress_period_s = 0.0;
   opt.on_progress = [&](const stend::RunProgress& p) {
-    if (p.step_kind == "orientations" && p.item >= 5 && p.phase == "recording") stop = true;
+    if (p.step_kind == stend::Step::Kind::kOrientations && p.item >= 5 && p.phase == stend::RunPhase::kRecording) stop = true;
   };
   const stend::RunResult r =
       stend::testing::run_in_process(stend::testing::source_path("configs/paper_mpu6050_z.yaml"), tmp.path(), opt);

@@ -50,7 +50,7 @@ Bench::Bench(const Experiment& exp, const PluginHost& host) : exp_(exp) {
     std::string id = exp.mounted_on.empty() ? exp.fixtures.back().id : exp.mounted_on;
     while (!id.empty() && id != "base") {
       const int i = fixture_index(id);
-      if (i < 0) throw std::runtime_error("mounting refers to unknown fixture '" + id + "'");
+      if (i < 0) throw std::invalid_argument("mounting refers to unknown fixture '" + id + "'");
       chain_.insert(chain_.begin(), i);
       id = exp.fixtures[static_cast<std::size_t>(i)].on;
     }

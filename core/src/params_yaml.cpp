@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <variant>
 #include <string>
 #include <vector>
@@ -42,16 +43,33 @@ std::string unit_suffix_of(const stend_param_spec& spec) {
   return " " + unit;
 }
 
+// The types a schema declares (stend_param_spec::type, plugin_abi.h): one name table.
+enum class ParamType { kNumber, kInteger, kBool, kString, kVec3, kMat3, kNumbers, kMatrix3 };
+struct ParamTypeName {
+  ParamType type;
+  const char* name;   // as the schema writes it
+  const char* words;  // as a message reads it
+};
+constexpr ParamTypeName kParamTypes[] = {
+    {ParamType::kNumber, "number", "a number"},
+    {ParamType::kInteger, "integer", "an integer"},
+    {ParamType::kBool, "bool", "true or false"},
+    {ParamType::kString, "string", "text"},
+    {ParamType::kVec3, "vec3", "a list of 3 numbers"},
+    {ParamType::kMat3, "mat3", "a 3x3 matrix (3 lists of 3 numbers)"},
+    {ParamType::kNumbers, "numbers", "a list of numbers"},
+    {ParamType::kMatrix3, "matrix3", "3 rows of numbers of equal length"},
+};
+
+const ParamTypeName* param_type(const std::string& name) {
+  for (const auto& t : kParamTypes)
+    if (name == t.name) return &t;
+  return nullptr;
+}
+
 std::string type_words(const std::string& type) {
-  if (type == "number") return "a number";
-  if (type == "integer") return "an integer";
-  if (type == "bool") return "true or false";
-  if (type == "string") return "text";
-  if (type == "vec3") return "a list of 3 numbers";
-  if (type == "mat3") return "a 3x3 matrix (3 lists of 3 numbers)";
-  if (type == "numbers") return "a list of numbers";
-  if (type == "matrix3") return "3 rows of numbers of equal length";
-  return "a value of type '" + type + "'";
+  const ParamTypeName* t = param_type(type);
+  return t ? t->words : "a value of type '" + type + "'";
 }
 
 // "a number, in Hz, range [1, 1000]"
@@ -130,65 +148,79 @@ Params::Matrix read_matrix(const YAML::Node& node, const stend_param_spec& spec,
   return m;
 }
 
+// A string, one of the schema's choices when it lists some.
+std::string read_string(const YAML::Node& node, const stend_param_spec& spec, const std::string& file,
+                        const std::string& path, const std::string& name) {
+  const std::string v = yaml::as_string(node, file, path);
+  if (spec.choices) {
+    const auto choices = split_choices(spec.choices);
+    bool ok = false;
+    for (const auto& c : choices) ok = ok || c == v;
+    if (!ok) {
+      const std::string hint = yaml::join_sentences(yaml::did_you_mean(v, choices),
+                                                    "Choices: " + yaml::join(choices, " | "));
+      throw ExperimentError(yaml::location_of(node, file), path,
+                            "'" + v + "' is not one of the choices for '" + name + "'", hint);
+    }
+  }
+  return v;
+}
+
+// A list of numbers (exactly three for a vec3), each within the schema's range.
+std::vector<double> read_numbers(const YAML::Node& node, const stend_param_spec& spec, const std::string& file,
+                                 const std::string& path, const std::string& name, bool vec3) {
+  if (!node.IsSequence())
+    throw ExperimentError(yaml::location_of(node, file), path,
+                          "expected " + type_words(str_or(spec.type)) + " for '" + name + "', got " +
+                              yaml::describe(node),
+                          vec3 ? "write [x, y, z]" : "write a list like [1, 2, 3]");
+  if (vec3 && node.size() != 3)
+    throw ExperimentError(yaml::location_of(node, file), path,
+                          "expected a list of 3 numbers for '" + name + "', got " + std::to_string(node.size()),
+                          "write [x, y, z]" + (unit_suffix_of(spec).empty() ? std::string{}
+                                                                             : " in" + unit_suffix_of(spec)));
+  std::vector<double> out;
+  for (std::size_t i = 0; i < node.size(); ++i) {
+    const std::string epath = path + "[" + std::to_string(i) + "]";
+    const double v = yaml::as_number(node[i], file, epath, unit_words_of(spec));
+    check_range(v, node[i], spec, file, epath, name);
+    out.push_back(v);
+  }
+  return out;
+}
+
 Params::Value read_value(const YAML::Node& node, const stend_param_spec& spec,
                          const std::string& file, const std::string& path, const std::string& plugin) {
   const std::string type = str_or(spec.type);
   const std::string name = str_or(spec.key);
-  if (type == "number") {
-    const double v = yaml::as_number(node, file, path, unit_words_of(spec));
-    check_range(v, node, spec, file, path, name);
-    return v;
+  const ParamTypeName* t = param_type(type);
+  if (!t) {
+    std::string names;
+    for (std::size_t i = 0; i < std::size(kParamTypes); ++i)
+      names += (i == 0 ? "" : i + 1 == std::size(kParamTypes) ? " or " : ", ") + std::string(kParamTypes[i].name);
+    throw ExperimentError(yaml::location_of(node, file), path,
+                          "plugin '" + plugin + "' declares key '" + name + "' with unknown type '" + type + "'",
+                          "this is a bug in the plugin; its schema types must be " + names);
   }
-  if (type == "integer") {
-    const std::int64_t v = yaml::as_integer(node, file, path);
-    check_range(static_cast<double>(v), node, spec, file, path, name);
-    return v;
-  }
-  if (type == "bool") return yaml::as_bool(node, file, path);
-  if (type == "string") {
-    const std::string v = yaml::as_string(node, file, path);
-    if (spec.choices) {
-      const auto choices = split_choices(spec.choices);
-      bool ok = false;
-      for (const auto& c : choices) ok = ok || c == v;
-      if (!ok) {
-        const std::string hint = yaml::join_sentences(yaml::did_you_mean(v, choices),
-                                                      "Choices: " + yaml::join(choices, " | "));
-        throw ExperimentError(yaml::location_of(node, file), path,
-                              "'" + v + "' is not one of the choices for '" + name + "'", hint);
-      }
+  switch (t->type) {
+    case ParamType::kNumber: {
+      const double v = yaml::as_number(node, file, path, unit_words_of(spec));
+      check_range(v, node, spec, file, path, name);
+      return v;
     }
-    return v;
-  }
-  if (type == "vec3" || type == "numbers") {
-    if (!node.IsSequence())
-      throw ExperimentError(yaml::location_of(node, file), path,
-                            "expected " + type_words(type) + " for '" + name + "', got " +
-                                yaml::describe(node),
-                            type == "vec3" ? "write [x, y, z]" : "write a list like [1, 2, 3]");
-    if (type == "vec3" && node.size() != 3)
-      throw ExperimentError(yaml::location_of(node, file), path,
-                            "expected a list of 3 numbers for '" + name + "', got " +
-                                std::to_string(node.size()),
-                            "write [x, y, z]" + (unit_suffix_of(spec).empty()
-                                                     ? std::string{}
-                                                     : " in" + unit_suffix_of(spec)));
-    std::vector<double> out;
-    for (std::size_t i = 0; i < node.size(); ++i) {
-      const std::string epath = path + "[" + std::to_string(i) + "]";
-      const double v = yaml::as_number(node[i], file, epath, unit_words_of(spec));
-      check_range(v, node[i], spec, file, epath, name);
-      out.push_back(v);
+    case ParamType::kInteger: {
+      const std::int64_t v = yaml::as_integer(node, file, path);
+      check_range(static_cast<double>(v), node, spec, file, path, name);
+      return v;
     }
-    return out;
+    case ParamType::kBool: return yaml::as_bool(node, file, path);
+    case ParamType::kString: return read_string(node, spec, file, path, name);
+    case ParamType::kVec3:
+    case ParamType::kNumbers: return read_numbers(node, spec, file, path, name, t->type == ParamType::kVec3);
+    case ParamType::kMat3: return read_matrix(node, spec, file, path, name, true);
+    case ParamType::kMatrix3: return read_matrix(node, spec, file, path, name, false);
   }
-  if (type == "mat3") return read_matrix(node, spec, file, path, name, true);
-  if (type == "matrix3") return read_matrix(node, spec, file, path, name, false);
-  throw ExperimentError(yaml::location_of(node, file), path,
-                        "plugin '" + plugin + "' declares key '" + name + "' with unknown type '" +
-                            type + "'",
-                        "this is a bug in the plugin; its schema types must be number, integer, "
-                        "bool, string, vec3, mat3, numbers or matrix3");
+  return {};
 }
 
 }  // namespace

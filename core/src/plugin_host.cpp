@@ -371,14 +371,14 @@ void* PluginHost::create(const std::string& name, stend_plugin_kind kind,
     if (loaded.empty()) msg << "none";
     for (std::size_t i = 0; i < loaded.size(); ++i) msg << (i ? ", " : "") << loaded[i];
     msg << " (run `stend plugins` to see the search path and refused files)";
-    throw std::runtime_error(msg.str());
+    throw InputError(msg.str());
   }
   const stend_plugin_info& info = *r->info;
   const long actual = raw_kind(info);
   if (actual != kind) {
-    throw std::runtime_error("plugin '" + name + "' (" + r->file + ") is " +
-                             with_article(kind_word(actual)) + " plugin, not " +
-                             with_article(kind_word(kind)));
+    throw InputError("plugin '" + name + "' (" + r->file + ") is " +
+                     with_article(kind_word(actual)) + " plugin, not " +
+                     with_article(kind_word(kind)));
   }
   char error[1024] = {};
   void* object = nullptr;
@@ -394,8 +394,8 @@ void* PluginHost::create(const std::string& name, stend_plugin_kind kind,
   }
   if (object == nullptr) {
     if (reason.empty()) reason = "no reason given";
-    throw std::runtime_error("plugin '" + name + "' (" + r->file + ") could not create " +
-                             with_article(kind_word(kind)) + ": " + reason);
+    throw InputError("plugin '" + name + "' (" + r->file + ") could not create " +
+                     with_article(kind_word(kind)) + ": " + reason);
   }
   return object;
 }

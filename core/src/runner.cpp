@@ -7,13 +7,12 @@
 #include <fmt/format.h>
 #include <zlib.h>
 
-#include <sys/statvfs.h>
-
 #include <chrono>
 #include <cmath>
 #include <ctime>
 #include <fstream>
 #include <memory>
+#include <ostream>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -31,16 +30,11 @@ std::string utc_stamp() {
   return buf;
 }
 
-// Planned run time of the procedure, for the run's estimate (estimate_run): ProcedureEta's plan
-// before anything ran, with the chamber's start temperature unknown (temperature steps at their
-// hold time, moves at EtaDefaults::move_s), so this is an estimate.
-double planned_duration(const Experiment& exp) { return ProcedureEta(exp.procedure).remaining_s(0.0, NAN); }
-
 int axis_index(const Fixture& f, const std::string& name) {
   const auto axes = f.axes();
   for (std::size_t i = 0; i < axes.size(); ++i)
     if (axes[i].name == name) return static_cast<int>(i);
-  throw std::runtime_error("fixture has no axis '" + name + "'");
+  throw std::logic_error("fixture has no axis '" + name + "'");  // stage 2 checked every step's axes
 }
 
 class Stopped : public std::exception {
@@ -66,7 +60,7 @@ class Run {
     for (std::size_t i = 0; i < exp_.procedure.size(); ++i) {
       const Step& s = exp_.procedure[i];
       progress_.step = static_cast<int>(i) + 1;
-      progress_.step_kind = step_kind_name(s.kind);
+      progress_.step_kind = s.kind;
       progress_.step_label = s.label;
       progress_.item = progress_.item_count = 0;
       eta_.step_started(i, clock_.now_s(), chamber_c());
@@ -74,7 +68,7 @@ class Run {
       eta_.step_finished(clock_.now_s());
     }
     eta_.finished();
-    progress_.phase = "done";
+    progress_.phase = RunPhase::kDone;
     report(true);
   }
 
@@ -100,12 +94,12 @@ class Run {
       case Step::Kind::kRates: rates(index, s); break;
       case Step::Kind::kRecord:
         begin_segment(index, s, SegmentKind::kRecord, -1, 0, "");
-        progress_.phase = "recording";
+        progress_.phase = RunPhase::kRecording;
         advance_for(s.record_s);
         end_segment();
         break;
       case Step::Kind::kWait:
-        progress_.phase = "waiting";
+        progress_.phase = RunPhase::kWaiting;
         advance_for(s.dwell_s);
         break;
       case Step::Kind::kSetVibration: {
@@ -125,7 +119,7 @@ class Run {
     setpoint_c_ = s.setpoint_c;
     tolerance_c_ = s.tolerance_c;
     progress_.setpoint_c = s.setpoint_c;
-    progress_.phase = "settling";
+    progress_.phase = RunPhase::kSettling;
     if (s.record_settling) begin_segment(index, s, SegmentKind::kSetTemperature, -1, 0, fmt::format("{}.temperature={} degC", s.fixture, s.setpoint_c));
     const double t0 = clock_.now_s();
     if (!s.record_settling) writing_ = false;
@@ -187,21 +181,21 @@ class Run {
                       fmt::format("{}.{} rate={} deg/s", s.fixture, s.axis, s.rates[k]), s.rates[k]);
     }
     table.command(axis, CommandMode::kRate, 0.0);
-    progress_.phase = "moving";
+    progress_.phase = RunPhase::kMoving;
     wait_settled(table, s.fixture);
   }
 
   void move_and_record(int index, const Step& s, Fixture& table, SegmentKind kind, int k,
                        const std::string& targets, double rate) {
-    progress_.phase = "moving";
+    progress_.phase = RunPhase::kMoving;
     eta_.item_started(clock_.now_s());
     wait_settled(table, s.fixture);
     eta_.move_finished(clock_.now_s());
-    progress_.phase = "dwell";
+    progress_.phase = RunPhase::kDwell;
     advance_for(s.dwell_s);
     begin_segment(index, s, kind, k, static_cast<int>(s.orientations.empty() ? s.rates.size() : s.orientations.size()), targets);
     segment_.rate = rate;
-    progress_.phase = "recording";
+    progress_.phase = RunPhase::kRecording;
     const double t_end = clock_.now_s() + s.record_s;
     while (clock_.now_s() < t_end - 1e-9) {
       advance_to(std::min(t_end, clock_.now_s() + opt_.control_period_s));
@@ -215,7 +209,7 @@ class Run {
     advance_for(opt_.control_period_s);  // let the command take effect
     while (!f.settled()) {
       if (clock_.now_s() - t0 > opt_.move_timeout_s)
-        throw std::runtime_error(fmt::format("fixture '{}' did not settle within {} s", id, opt_.move_timeout_s));
+        throw IoError(fmt::format("fixture '{}' did not settle within {} s", id, opt_.move_timeout_s));
       advance_for(opt_.control_period_s);
     }
   }
@@ -299,8 +293,7 @@ class Run {
         }
         if (open_) segment_.settled = false;
         if (t - outage_since_[i] > opt_.fixture_outage_s)
-          throw std::runtime_error(fmt::format("fixture '{}' unreachable for {:.1f} s: {}", id, t - outage_since_[i],
-                                               e.what()));
+          throw IoError(fmt::format("fixture '{}' unreachable for {:.1f} s: {}", id, t - outage_since_[i], e.what()));
       }
     }
   }
@@ -317,7 +310,7 @@ class Run {
                                                             opt_.sensor_retries, e.what())});
       gap_ = true;
       if (failures_ >= opt_.sensor_retries)
-        throw std::runtime_error(fmt::format("sensor failed {} times in a row: {}", failures_, e.what()));
+        throw IoError(fmt::format("sensor failed {} times in a row: {}", failures_, e.what()));
     }
     if (!buffer_.empty() && writing_) {
       if (gap_) {
@@ -359,7 +352,7 @@ class Run {
 
   Fixture& fixture(const std::string& id) {
     const int i = bench_.fixture_index(id);
-    if (i < 0) throw std::runtime_error("no fixture '" + id + "'");
+    if (i < 0) throw std::logic_error("no fixture '" + id + "'");  // stage 2 checked every step's fixture
     return bench_.fixture(static_cast<std::size_t>(i));
   }
 
@@ -433,15 +426,11 @@ class RecordingSink final : public RunSink {
   RecordingWriter& w_;
 };
 
-std::string clock_kind(const Experiment& exp, const Bench& bench, const RunOptions& options) {
-  const std::string kind = options.clock.empty() ? exp.clock : options.clock;
-  if (kind == "auto") return bench.simulated() ? "simulated" : "wall";
+// The clock the run uses: the options', else the experiment's; auto resolved against the bench.
+ClockKind clock_kind(const Experiment& exp, const Bench& bench, const RunOptions& options) {
+  const ClockKind kind = options.clock.value_or(exp.clock);
+  if (kind == ClockKind::kAuto) return bench.simulated() ? ClockKind::kSimulated : ClockKind::kWall;
   return kind;
-}
-
-std::unique_ptr<Clock> make_clock(const std::string& kind) {
-  if (kind == "simulated") return std::make_unique<SimulatedClock>();
-  return std::make_unique<WallClock>();
 }
 
 // "crc32:<8 hex digits>" (zlib's CRC-32, as `python3 -c 'import zlib…'` or `crc32 FILE` print it)
@@ -457,7 +446,7 @@ std::string file_hash(const std::string& path) {
   return fmt::format("crc32:{:08x}", crc);
 }
 
-RecordingHeader run_header(const Experiment& exp, const PluginHost& host, Bench& bench, const std::string& clock) {
+RecordingHeader run_header(const Experiment& exp, const PluginHost& host, Bench& bench, ClockKind clock) {
   RecordingHeader header;
   header.experiment_name = exp.name;
   header.experiment_file = exp.file;
@@ -477,7 +466,7 @@ RecordingHeader run_header(const Experiment& exp, const PluginHost& host, Bench&
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) header.mounting_R.push_back(exp.R_sensor_from_mount(r, c));
   header.seed = exp.seed;
-  header.clock = clock;
+  header.clock = to_string(clock);
   header.truth_columns = bench.truth_columns();
   return header;
 }
@@ -520,107 +509,53 @@ RunResult execute(const Experiment& exp, Bench& bench, Clock& clock, RunSink& si
   return result;
 }
 
-std::string human_bytes(double bytes) {
-  const char* units[] = {"B", "kB", "MB", "GB", "TB", "PB"};
-  int u = 0;
-  while (bytes >= 1000.0 && u < 5) {
-    bytes /= 1000.0;
-    ++u;
-  }
-  return fmt::format("{:.3g} {}", bytes, units[u]);
-}
-
-// Run time in words: "3d04h05m06s", "1h02m40s", "12.5 s".
-std::string human_duration(double s) {
-  if (!(s < 1e15)) return fmt::format("{:.3g} s", s);
-  if (s < 60.0) return fmt::format("{:.3g} s", s);
-  const auto t = static_cast<long long>(s + 0.5);
-  if (t >= 86400) return fmt::format("{}d{:02}h{:02}m{:02}s", t / 86400, (t / 3600) % 24, (t / 60) % 60, t % 60);
-  if (t >= 3600) return fmt::format("{}h{:02}m{:02}s", t / 3600, (t / 60) % 60, t % 60);
-  return fmt::format("{}m{:02}s", t / 60, t % 60);
-}
-
-// Space free for this user on the file system holding `dir` or, when it does not exist yet, its
-// nearest existing ancestor [bytes]; NaN when it cannot be asked.
-double free_bytes(const std::filesystem::path& dir) {
-  std::error_code ec;
-  std::filesystem::path p = std::filesystem::absolute(dir, ec);
-  if (ec) return NAN;
-  while (!std::filesystem::exists(p, ec) && p.has_parent_path() && p != p.parent_path()) p = p.parent_path();
-  struct statvfs st {};
-  if (::statvfs(p.c_str(), &st) != 0) return NAN;
-  return static_cast<double>(st.f_bavail) * static_cast<double>(st.f_frsize);
-}
-
+constexpr std::pair<RunPhase, const char*> kRunPhaseNames[] = {
+    {RunPhase::kNone, ""},           {RunPhase::kMoving, "moving"},   {RunPhase::kDwell, "dwell"},
+    {RunPhase::kRecording, "recording"}, {RunPhase::kSettling, "settling"}, {RunPhase::kWaiting, "waiting"},
+    {RunPhase::kDone, "done"},       {RunPhase::kRunning, "running"}, {RunPhase::kInterrupted, "interrupted"},
+    {RunPhase::kFailed, "failed"},
+};
 }  // namespace
 
-std::string RunEstimate::str() const {
-  return fmt::format("run time {}, {:.3g} samples, up to {} ({})", human_duration(run_time_s), samples,
-                     human_bytes(bytes), to_string(format));
+const char* to_string(RunPhase p) {
+  for (const auto& [phase, name] : kRunPhaseNames)
+    if (phase == p) return name;
+  return "?";
 }
 
-RunEstimate estimate_run(const Experiment& exp, Bench& bench, const RunOptions& options) {
-  RunEstimate e;
-  e.format = options.store.format;
-  e.run_time_s = planned_duration(exp);
-  double unrecorded_s = 0.0;  // settling with record: false
-  for (const Step& s : exp.procedure)
-    if (s.kind == Step::Kind::kSetTemperature && !s.record_settling) unrecorded_s += s.hold_s;
-  e.samples = std::ceil(bench.sensor().info().output_rate_hz * (e.run_time_s - unrecorded_s));
-  const double truth_rows = std::ceil(e.run_time_s / options.truth_period_s) + 1.0;
-  e.bytes = e.samples * static_cast<double>(max_bytes_per_sample(e.format)) +
-            truth_rows * static_cast<double>((bench.truth_columns().size() + 1) * max_bytes_per_truth_value(e.format));
-  return e;
+std::optional<RunPhase> run_phase_from_string(std::string_view name) {
+  for (const auto& [phase, text] : kRunPhaseNames)
+    if (name == text) return phase;
+  return std::nullopt;
 }
 
-void check_run_limits(const Experiment& exp, const RunEstimate& e, const std::filesystem::path& output_dir) {
-  const RunLimits& l = exp.limits;
-  const std::string hint = "shorten the procedure (durations, repeats, orientations) or raise the limit in the experiment's "
-                           "'limits:' block (docs/experiment-format.md)";
-  auto refuse = [&](const std::string& key, const std::string& what) {
-    throw ExperimentError(l.where, key, "the run would exceed " + key + ": " + what + " [" + e.str() + "]", hint);
-  };
-  if (!(e.run_time_s <= l.max_run_time_s))
-    refuse("limits.max_run_time_s", fmt::format("expected run time {} ({:.6g} s) > {:.6g} s", human_duration(e.run_time_s),
-                                                e.run_time_s, l.max_run_time_s));
-  if (!(e.samples <= l.max_samples))
-    refuse("limits.max_samples", fmt::format("{:.6g} samples > {:.6g}", e.samples, l.max_samples));
-  if (!(e.bytes <= l.max_bytes))
-    refuse("limits.max_bytes", fmt::format("up to {} ({:.6g} bytes) > {:.6g} bytes", human_bytes(e.bytes), e.bytes, l.max_bytes));
-  const double free = free_bytes(output_dir);
-  if (std::isfinite(free) && e.bytes > free)
-    throw ExperimentError(l.where, "outputs.directory",
-                          fmt::format("the run would write up to {} ({:.6g} bytes) but the file system of '{}' has {} "
-                                      "({:.6g} bytes) free [{}]",
-                                      human_bytes(e.bytes), e.bytes, output_dir.string(), human_bytes(free), free, e.str()),
-                          "free space there, choose another output folder (-o), or shorten the procedure");
-}
+std::ostream& operator<<(std::ostream& os, RunPhase p) { return os << to_string(p); }
 
-void check_run_name(const std::string& name) {
-  auto refuse = [&](const std::string& why) {
-    std::string shown;
-    for (const char c : name.substr(0, 80)) {
-      const auto u = static_cast<unsigned char>(c);
-      shown += u < 0x20 || u == 0x7f ? fmt::format("\\x{:02x}", u) : std::string(1, c);
-    }
-    throw std::invalid_argument(
-        fmt::format("run name '{}' {}: a run name names one folder inside the output folder", shown, why));
-  };
-  if (name.empty()) refuse("is empty");
-  if (name == "." || name == "..") refuse("is a dot name");
-  if (name.size() > 255) refuse(fmt::format("is {} bytes long, more than 255", name.size()));
-  for (const char c : name) {
-    const auto u = static_cast<unsigned char>(c);
-    if (c == '/' || c == '\\') refuse(fmt::format("contains the path separator '{}'", c));
-    if (u < 0x20 || u == 0x7f) refuse(fmt::format("contains the control character 0x{:02x}", u));
+RunPhase run_phase_of(RunStatus status) {
+  switch (status) {
+    case RunStatus::kRunning: return RunPhase::kRunning;
+    case RunStatus::kComplete: return RunPhase::kDone;
+    case RunStatus::kInterrupted: return RunPhase::kInterrupted;
+    case RunStatus::kFailed: return RunPhase::kFailed;
   }
+  return RunPhase::kNone;
+}
+
+bool RunOptions::IsValid(std::string* error) const {
+  if (!(control_period_s > 0.0 && truth_period_s > 0.0 && move_timeout_s > 0.0))
+    return invalid(error, "control_period_s, truth_period_s and move_timeout_s must be > 0");
+  if (!(sensor_retries >= 1)) return invalid(error, "sensor_retries must be >= 1");
+  if (!(progress_period_s >= 0.0 && fixture_outage_s >= 0.0))
+    return invalid(error, "progress_period_s and fixture_outage_s must be >= 0");
+  return store.IsValid(error);
 }
 
 RunResult run_experiment(const Experiment& exp, const PluginHost& host, const RunOptions& options) {
+  require_valid(options, "run options");
   const std::string name = options.run_name.empty() ? exp.name + "-" + utc_stamp() : options.run_name;
   check_run_name(name);
   Bench bench(exp, host);  // throws ExperimentError on stage-2 problems: nothing written yet
-  const std::string clock = clock_kind(exp, bench, options);
+  const ClockKind clock = clock_kind(exp, bench, options);
   RecordingHeader header = run_header(exp, host, bench, clock);
 
   const std::filesystem::path out = options.output_dir.empty() ? std::filesystem::path(exp.outputs.directory) : options.output_dir;
@@ -637,6 +572,7 @@ RunResult run_experiment(const Experiment& exp, const PluginHost& host, const Ru
 }
 
 RunResult run_experiment_to(const Experiment& exp, const PluginHost& host, const RunOptions& options, RunSink& sink) {
+  require_valid(options, "run options");
   Bench bench(exp, host);
   return execute(exp, bench, *make_clock(clock_kind(exp, bench, options)), sink, options);
 }

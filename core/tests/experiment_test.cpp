@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <stend/core/experiment.hpp>
+#include <stend/core/runner.hpp>
 #include <stend/physics/geometry.hpp>
 #include <stend/testing/files.hpp>
 #include <stend/testing/paths.hpp>
@@ -227,7 +228,7 @@ TEST_F(FullExperiment, Header) {
   EXPECT_EQ(e.name, "paper_mpu6050_z");
   EXPECT_EQ(e.description, "Full example: every step kind, nested repeats");
   EXPECT_EQ(e.seed, 42u);
-  EXPECT_EQ(e.clock, "simulated");
+  EXPECT_EQ(e.clock, ClockKind::kSimulated);
   ASSERT_EQ(e.plugin_paths.size(), 2u);
   const fs::path expected = (source_path("core/tests/data/experiments") / "my_plugins").lexically_normal();
   EXPECT_EQ(e.plugin_paths[0], expected.string());
@@ -393,7 +394,7 @@ TEST(Experiment, DefaultsFilledIn) {
       "  - orientations: {fixture: table, list: [{angle_deg: 10}], record_s: 2}\n"));
   EXPECT_EQ(e.file, "mem.yaml");
   EXPECT_EQ(e.seed, 1u);
-  EXPECT_EQ(e.clock, "auto");
+  EXPECT_EQ(e.clock, ClockKind::kAuto);
   EXPECT_TRUE(e.plugin_paths.empty());
   EXPECT_EQ(e.description, "");
   EXPECT_DOUBLE_EQ(e.gravity.latitude_deg, 0.0);
@@ -769,3 +770,35 @@ TEST(GoodExperiments, ParseValidateRoundTrip) {
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// The closed sets of the runtime: one name table each, read back as written.
+
+TEST(Names, ClockKindsAndRunPhasesReadBackAsWritten) {
+  for (ClockKind k : {ClockKind::kAuto, ClockKind::kSimulated, ClockKind::kWall})
+    EXPECT_EQ(clock_kind_from_string(to_string(k)), k);
+  EXPECT_EQ(clock_kind_names(), (std::vector<std::string>{"auto", "simulated", "wall"}));
+  EXPECT_FALSE(clock_kind_from_string("sundial"));
+  for (RunPhase p : {RunPhase::kNone, RunPhase::kMoving, RunPhase::kDwell, RunPhase::kRecording, RunPhase::kSettling,
+                     RunPhase::kWaiting, RunPhase::kDone, RunPhase::kRunning, RunPhase::kInterrupted, RunPhase::kFailed})
+    EXPECT_EQ(run_phase_from_string(to_string(p)), p);
+  EXPECT_STREQ(to_string(RunPhase::kNone), "");  // nothing reported yet
+  EXPECT_EQ(run_phase_of(RunStatus::kComplete), RunPhase::kDone);
+  EXPECT_EQ(run_phase_of(RunStatus::kFailed), RunPhase::kFailed);
+  RunProgress p;
+  EXPECT_STREQ(p.step_kind_name(), "");
+  p.step_kind = Step::Kind::kSetTemperature;
+  EXPECT_STREQ(p.step_kind_name(), "set_temperature");
+}
+
+TEST(RunOptions, IsValidNamesWhatDoesNotHold) {
+  RunOptions o;
+  std::string why;
+  EXPECT_TRUE(o.IsValid(&why)) << why;
+  o.control_period_s = 0.0;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("control_period_s"), std::string::npos) << why;
+  o = RunOptions{};
+  o.sensor_retries = 0;
+  EXPECT_THROW(require_valid(o, "run options"), std::invalid_argument);
+}

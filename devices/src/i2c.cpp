@@ -78,9 +78,21 @@ void I2cDevice::write_reg(std::uint8_t reg, std::uint8_t value) {
   transact(reg, w, 2, nullptr, 0);
 }
 
+bool I2cRouteConfig::IsValid(std::string* error) const {
+  if (bus != "i2c-dev" && bus != "mcp2221a" && bus != "cp2112" && bus != "bench_mcu")
+    return invalid(error, "unknown I2C bus '" + bus + "'; use i2c-dev, mcp2221a, cp2112 or bench_mcu");
+  if (bus == "i2c-dev" && device.empty()) return invalid(error, "I2C route i2c-dev needs 'device', e.g. /dev/i2c-1");
+  if (bus == "bench_mcu" && device.empty())
+    return invalid(error, "I2C route bench_mcu needs 'device', the serial port, e.g. /dev/ttyUSB0");
+  if (!(speed_hz > 0 && baud > 0 && timeout_ms > 0)) return invalid(error, "I2C route: speed_hz, baud and timeout_ms must be > 0");
+  if (retries < 0) return invalid(error, "I2C route: retries must be >= 0");
+  return true;
+}
+
 std::shared_ptr<I2cBus> open_i2c_bus(const I2cRouteConfig& c) {
+  std::string why;
+  if (!c.IsValid(&why)) throw std::invalid_argument(why);
   if (c.bus == "i2c-dev") {
-    if (c.device.empty()) throw std::invalid_argument("I2C route i2c-dev needs 'device', e.g. /dev/i2c-1");
     return std::make_shared<I2cDevBus>(c.device, c.i2c_dev_file ? c.i2c_dev_file : linux_i2c_dev_file());
   }
   HidBridgeConfig h;
@@ -94,17 +106,13 @@ std::shared_ptr<I2cBus> open_i2c_bus(const I2cRouteConfig& c) {
     auto backend = c.hid_backend ? c.hid_backend : hidapi_backend();
     return std::make_shared<Cp2112Bus>(open_hid_bridge(*backend, kCp2112Vid, kCp2112Pid, c.serial, "CP2112"), h);
   }
-  if (c.bus == "bench_mcu") {
-    if (c.device.empty()) throw std::invalid_argument("I2C route bench_mcu needs 'device', the serial port, e.g. /dev/ttyUSB0");
-    ModbusRtuConfig m;
-    m.device = c.device;
-    m.baud = c.baud;
-    m.slave_id = c.slave_id;
-    m.response_timeout_ms = c.timeout_ms;
-    m.retries = c.retries;
-    return std::make_shared<BenchMcuI2cBus>(m);
-  }
-  throw std::invalid_argument("unknown I2C bus '" + c.bus + "'; use i2c-dev, mcp2221a, cp2112 or bench_mcu");
+  ModbusRtuConfig m;  // bench_mcu
+  m.device = c.device;
+  m.baud = c.baud;
+  m.slave_id = c.slave_id;
+  m.response_timeout_ms = c.timeout_ms;
+  m.retries = c.retries;
+  return std::make_shared<BenchMcuI2cBus>(m);
 }
 
 }  // namespace stend::transport

@@ -25,7 +25,8 @@ using Clock = std::chrono::steady_clock;
 // ----------------------------------------------------------------------------------------------
 // MCP2221A
 
-Mcp2221Bus::Mcp2221Bus(std::unique_ptr<HidDevice> device, HidBridgeConfig config) : dev_(std::move(device)), c_(config) {
+Mcp2221Bus::Mcp2221Bus(std::unique_ptr<HidDevice> device, HidBridgeConfig config)
+    : dev_(std::move(device)), c_(require_valid(config, "MCP2221A")) {
   const int divider = std::clamp(12000000 / std::max(1, c_.speed_hz) - 3, 0, 255);
   std::uint8_t rep[64];
   status(rep, false, divider);
@@ -123,7 +124,8 @@ void Mcp2221Bus::write_read(std::uint8_t address, const std::uint8_t* w, std::si
 // ----------------------------------------------------------------------------------------------
 // CP2112
 
-Cp2112Bus::Cp2112Bus(std::unique_ptr<HidDevice> device, HidBridgeConfig config) : dev_(std::move(device)), c_(config) {
+Cp2112Bus::Cp2112Bus(std::unique_ptr<HidDevice> device, HidBridgeConfig config)
+    : dev_(std::move(device)), c_(require_valid(config, "CP2112")) {
   const auto hz = static_cast<std::uint32_t>(c_.speed_hz);
   const auto to = static_cast<std::uint16_t>(std::clamp(c_.timeout_ms, 0, 1000));
   const std::uint8_t cfg[14] = {kCpSmbusConfig,

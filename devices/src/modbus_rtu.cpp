@@ -22,8 +22,20 @@ std::string hex4(int v) {
 
 }  // namespace
 
+bool ModbusRtuConfig::IsValid(std::string* error) const {
+  if (!(baud > 0)) return invalid(error, "baud must be > 0");
+  if (parity != 'N' && parity != 'E' && parity != 'O') return invalid(error, "parity must be N, E or O");
+  if (!(data_bits >= 5 && data_bits <= 8 && (stop_bits == 1 || stop_bits == 2)))
+    return invalid(error, "data_bits must be 5..8 and stop_bits 1 or 2");
+  if (!(slave_id >= 0 && slave_id <= 247)) return invalid(error, "slave_id must be 0..247");
+  if (!(response_timeout_ms > 0)) return invalid(error, "response_timeout_ms must be > 0");
+  if (!(retries >= 0 && backoff_initial_ms >= 0)) return invalid(error, "retries and backoff_initial_ms must be >= 0");
+  return true;
+}
+
 ModbusRtuClient::ModbusRtuClient(ModbusRtuConfig config)
-    : ModbusClient("MODBUS RTU", config.retries, config.backoff_initial_ms), c_(std::move(config)) {
+    : ModbusClient("MODBUS RTU", config.retries, config.backoff_initial_ms),
+      c_(require_valid(config, "MODBUS RTU")) {
   modbus_t* ctx = modbus_new_rtu(c_.device.c_str(), c_.baud, c_.parity, c_.data_bits, c_.stop_bits);
   if (ctx == nullptr) {
     throw ModbusError("MODBUS RTU: cannot create a context for device " + c_.device + " at " +

@@ -12,8 +12,18 @@ namespace {
 modbus_t* ctx_of(void* p) { return static_cast<modbus_t*>(p); }
 }  // namespace
 
+bool ModbusTcpConfig::IsValid(std::string* error) const {
+  if (host.empty()) return invalid(error, "host must not be empty");
+  if (!(port >= 1 && port <= 65535)) return invalid(error, "port must be 1..65535");
+  if (!(unit_id >= 0 && unit_id <= 255)) return invalid(error, "unit_id must be 0..255");
+  if (!(response_timeout_ms > 0)) return invalid(error, "response_timeout_ms must be > 0");
+  if (!(retries >= 0 && backoff_initial_ms >= 0)) return invalid(error, "retries and backoff_initial_ms must be >= 0");
+  return true;
+}
+
 ModbusTcpClient::ModbusTcpClient(ModbusTcpConfig config)
-    : ModbusClient("MODBUS TCP", config.retries, config.backoff_initial_ms), c_(std::move(config)) {
+    : ModbusClient("MODBUS TCP", config.retries, config.backoff_initial_ms),
+      c_(require_valid(config, "MODBUS TCP")) {
   modbus_t* ctx = modbus_new_tcp(c_.host.c_str(), c_.port);
   if (ctx == nullptr) {
     throw ModbusError("MODBUS TCP: cannot create a context for " + c_.host + ":" + std::to_string(c_.port) + ": " +

@@ -72,10 +72,17 @@ std::string quoted(const std::string& s) {
 
 }  // namespace
 
-TextCommandClient::TextCommandClient(TextCommandConfig config) : c_(std::move(config)) {
-  if (c_.terminator.empty()) throw std::invalid_argument("text command: the terminator must not be empty");
-  if (c_.host.empty() && c_.device.empty())
-    throw std::invalid_argument("text command: give a TCP host and port or a serial device");
+bool TextCommandConfig::IsValid(std::string* error) const {
+  if (terminator.empty()) return invalid(error, "the terminator must not be empty");
+  if (host.empty() && device.empty()) return invalid(error, "give a TCP host and port or a serial device");
+  if (!host.empty() && !(port >= 1 && port <= 65535)) return invalid(error, "port must be 1..65535");
+  if (host.empty() && !(baud > 0)) return invalid(error, "baud must be > 0");
+  if (!(timeout_ms > 0)) return invalid(error, "timeout_ms must be > 0");
+  if (!(retries >= 0 && backoff_initial_ms >= 0)) return invalid(error, "retries and backoff_initial_ms must be >= 0");
+  return true;
+}
+
+TextCommandClient::TextCommandClient(TextCommandConfig config) : c_(require_valid(config, "text command")) {
   if (c_.connect_now) {
     const std::string why = open_link();
     if (!why.empty())

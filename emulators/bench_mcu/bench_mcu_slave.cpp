@@ -1,5 +1,7 @@
 #include "bench_mcu_slave.hpp"
 
+#include <stend/errors.hpp>
+
 #include <modbus.h>
 
 #include <algorithm>
@@ -23,12 +25,19 @@ modbus_mapping_t* MAP(void* p) { return static_cast<modbus_mapping_t*>(p); }
 BenchMcuSlave::BenchMcuSlave(BenchMcuConfig config, Mpu6050Model mpu)
     : BenchMcuSlave(config, std::move(mpu), nullptr) {}
 
+bool BenchMcuConfig::IsValid(std::string* error) const {
+  if (!(slave_id >= 1 && slave_id <= 247)) return invalid(error, "slave_id must be 1..247");
+  if (fifo_depth == 0) return invalid(error, "fifo_depth must be > 0");
+  if (mpu_address > 0x7F) return invalid(error, "mpu_address must be a 7-bit I2C address");
+  return true;
+}
+
 BenchMcuSlave::BenchMcuSlave(BenchMcuConfig config, Mpu6050Model mpu, std::shared_ptr<EmulatedI2cBus> i2c_bus)
-    : c_(config), mpu_(std::move(mpu)), i2c_bus_(std::move(i2c_bus)), rtu_("bench MCU emulator", 921600, config.slave_id),
+    : c_(require_valid(config, "bench MCU emulator")), mpu_(std::move(mpu)), i2c_bus_(std::move(i2c_bus)), rtu_("bench MCU emulator", 921600, config.slave_id),
       boot_count_(config.boot_count), rng_(config.seed) {
   modbus_mapping_t* mapping = modbus_mapping_new(0, 0, map::kHoldMapSize,
                                                  map::kInWindowBase + static_cast<int>(map::kWindowSeqModulo) + map::kWindowMaxWords);
-  if (mapping == nullptr) throw std::runtime_error("bench MCU emulator: libmodbus allocation failed");
+  if (mapping == nullptr) throw IoError("bench MCU emulator: libmodbus allocation failed");
   mapping_ = mapping;
   power_on_ = std::chrono::steady_clock::now();
   thread_ = std::thread([this] { run(); });

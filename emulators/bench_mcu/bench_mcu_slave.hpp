@@ -29,6 +29,9 @@ struct BenchMcuConfig {
   std::uint64_t seed = 1;         // fault-injection random stream
   std::uint8_t mpu_address = 0x68;  // the MPU-6050's 7-bit address on the MCU's I2C bus
   std::uint16_t boot_count = 1;     // BOOT_COUNT at power-on; restart() adds one
+
+  // A slave address 1..247, a FIFO of at least one sample, a 7-bit MPU address.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 struct BenchMcuStats {

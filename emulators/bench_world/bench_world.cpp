@@ -61,7 +61,17 @@ BenchWorldConfig BenchWorldConfig::from_experiment(const Experiment& e, double c
   return c;
 }
 
-BenchWorld::BenchWorld(const BenchWorldConfig& c) : c_(c) {
+bool BenchWorldConfig::IsValid(std::string* error) const {
+  std::string why;
+  if (!imu.IsValid(&why)) return invalid(error, "sensor: " + why);
+  if (!table_axis.IsValid(&why)) return invalid(error, "table axis '" + table_axis.name + "': " + why);
+  if (!chamber.IsValid(&why)) return invalid(error, "chamber: " + why);
+  if (!(gravity_mps2 > 0.0)) return invalid(error, "gravity_mps2 must be > 0");
+  if (!(table_port >= 0 && table_port <= 65535)) return invalid(error, "table_port must be 0..65535 (0: any free port)");
+  return true;
+}
+
+BenchWorld::BenchWorld(const BenchWorldConfig& c) : c_(require_valid(c, "bench world")) {
   tilt_rad_ = c.table_tilt_deg * physics::kDegToRad;
   earth_local_ = physics::Rz(c.heading_deg * physics::kDegToRad) * physics::earth_rate_local(c.latitude_deg);
   TableTextConfig tc;
@@ -90,7 +100,7 @@ BenchWorld::BenchWorld(const BenchWorldConfig& c) : c_(c) {
   // Powered up a moment before the drivers connect, as on a bench: the first control cycle (1 s)
   // has read the DS18B20 (the temperature registers read 0 until then).
   if (!fw_->wait_until_simulated(kFirstReadingS, std::chrono::seconds(10)))
-    throw std::runtime_error("bench world: the firmware under simavr did not reach its first control cycle in 10 s");
+    throw IoError("bench world: the firmware under simavr did not reach its first control cycle in 10 s");
 #else
   throw std::invalid_argument("bench world: this build has no firmware in the loop (install simavr, libsimavr-dev "
                               "and gcc-avr: scripts/install-deps.sh, then rebuild)");

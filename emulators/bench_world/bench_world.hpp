@@ -51,6 +51,9 @@ struct BenchWorldConfig {
   // sim_thermochamber (e.g. configs/paper_mpu6050_z.yaml), so the world is that bench's twin.
   // Throws std::invalid_argument naming what does not fit.
   static BenchWorldConfig from_experiment(const Experiment& sim_exp, double chamber_speed);
+  // The sensor (SimImuConfig), the table's axis (AxisConfig) and the chamber (ChamberEmuConfig)
+  // valid, a positive gravity, a table port 0..65535.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 class BenchWorld {

@@ -1,5 +1,7 @@
 #include "chamber_emulator.hpp"
 
+#include <stend/errors.hpp>
+
 #include <modbus.h>
 
 #include <algorithm>
@@ -28,10 +30,16 @@ double from_s16(std::uint16_t v) { return static_cast<double>(static_cast<std::i
 }  // namespace
 
 // ------------------------------------------------------------------------------------------------
-ChamberFirmware::ChamberFirmware(const ChamberEmuConfig& c) : c_(c) {
+bool ChamberEmuConfig::IsValid(std::string* error) const {
+  if (!(plant.control_period_s > 0.0 && plant.heat_capacity_j_per_c > 0.0 && plant.conductance_w_per_c > 0.0))
+    return invalid(error, "control period, heat capacity and conductance must be > 0");
+  if (!(speed > 0.0)) return invalid(error, "speed must be > 0");
+  if (!(slave_id >= 1 && slave_id <= 247)) return invalid(error, "slave_id must be 1..247");
+  return true;
+}
+
+ChamberFirmware::ChamberFirmware(const ChamberEmuConfig& c) : c_(require_valid(c, "chamber emulator")) {
   const auto& p = c.plant;
-  if (!(p.control_period_s > 0.0 && p.heat_capacity_j_per_c > 0.0 && p.conductance_w_per_c > 0.0))
-    throw std::invalid_argument("chamber emulator: control period, heat capacity and conductance must be > 0");
   air_ = p.initial_c;
   die_ = p.initial_c + p.self_heating_c;
   raw_ = static_cast<std::int16_t>(std::round(air_ * 16.0));
@@ -152,10 +160,9 @@ void ChamberFirmware::advance_to(double t_s) {
 
 // ------------------------------------------------------------------------------------------------
 ChamberServerBase::ChamberServerBase(const ChamberEmuConfig& c)
-    : c_(c), fw_(c), t0_(std::chrono::steady_clock::now()), rng_(c.seed) {
-  if (!(c.speed > 0.0)) throw std::invalid_argument("chamber emulator: speed must be > 0");
+    : c_(c), fw_(c), t0_(std::chrono::steady_clock::now()), rng_(c.seed) {  // fw_ checks the config
   mapping_ = modbus_mapping_new(0, 0, 301, map::kInCount);
-  if (mapping_ == nullptr) throw std::runtime_error("chamber emulator: libmodbus allocation failed");
+  if (mapping_ == nullptr) throw IoError("chamber emulator: libmodbus allocation failed");
 }
 
 ChamberServerBase::~ChamberServerBase() { modbus_mapping_free(MAP(mapping_)); }
@@ -272,7 +279,7 @@ WatlowChamberServer::WatlowChamberServer(const ChamberEmuConfig& c, int port)
     : ChamberServerBase(c),
       tcp_("chamber emulator", LoopbackTcpOptions{.port = port, .newest_only = true, .poll_ms = 20, .down_sleep_ms = 10}) {
   modbus_t* ctx = modbus_new_tcp("127.0.0.1", 0);
-  if (ctx == nullptr) throw std::runtime_error("chamber emulator: libmodbus allocation failed");
+  if (ctx == nullptr) throw IoError("chamber emulator: libmodbus allocation failed");
   modbus_set_slave(ctx, c_.slave_id);
   modbus_set_indication_timeout(ctx, 0, 200000);
   ctx_ = ctx;

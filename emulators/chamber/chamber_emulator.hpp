@@ -32,6 +32,10 @@ struct ChamberEmuConfig {
   bool firmware_guards = true;     // false: the published firmware (no sensor check, no trips)
   int slave_id = 1;
   std::uint64_t seed = 1;
+
+  // What the firmware's plant needs (positive control period, heat capacity and conductance), a
+  // positive speed, a slave address 1..247.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 // The firmware and plant. Not thread-safe by itself (the servers lock around it).

@@ -139,7 +139,7 @@ struct FirmwareInTheLoop::Impl {
     air_out = air;
     die_out = die;
     load();
-    for (int i = 0; i < std::clamp(c.host_ports, 1, 2); ++i) open_pty();
+    for (int i = 0; i < c.host_ports; ++i) open_pty();
     connect_peripherals();
   }
 
@@ -186,12 +186,12 @@ struct FirmwareInTheLoop::Impl {
     avr_global_logger_set(&Impl::quiet_logger);
     elf_firmware_t& f = elf;
     if (elf_read_firmware(c.elf_path.c_str(), &f) != 0)
-      throw std::runtime_error("firmware in the loop: cannot read " + c.elf_path +
-                               " (build the target bench_mcu_firmware, or install gcc-avr: scripts/install-deps.sh)");
+      throw InputError("firmware in the loop: cannot read " + c.elf_path +
+                       " (build the target bench_mcu_firmware, or install gcc-avr: scripts/install-deps.sh)");
     std::strcpy(f.mmcu, "atmega328p");
     f.frequency = kCpuHz;
     avr = avr_make_mcu_by_name(f.mmcu);
-    if (avr == nullptr) throw std::runtime_error("firmware in the loop: simavr has no atmega328p core");
+    if (avr == nullptr) throw IoError("firmware in the loop: simavr has no atmega328p core");
     avr_init(avr);
     avr->log = LOG_ERROR;
     avr_load_firmware(avr, &f);
@@ -238,7 +238,7 @@ struct FirmwareInTheLoop::Impl {
     char name[256] = {};
     HostPort& hp = ports.emplace_back();
     if (openpty(&hp.master_fd, &hp.slave_fd, name, nullptr, nullptr) != 0)
-      throw std::runtime_error(std::string("firmware in the loop: openpty failed: ") + std::strerror(errno));
+      throw IoError(std::string("firmware in the loop: openpty failed: ") + std::strerror(errno));
     termios t{};
     tcgetattr(hp.slave_fd, &t);
     cfmakeraw(&t);
@@ -569,8 +569,15 @@ struct FirmwareInTheLoop::Impl {
   }
 };
 
+bool FirmwareLoopConfig::IsValid(std::string* error) const {
+  if (elf_path.empty()) return invalid(error, "no .elf given (elf_path)");
+  if (!(speed >= 0.0)) return invalid(error, "speed must be >= 0 (0: unpaced)");
+  if (host_ports != 1 && host_ports != 2) return invalid(error, "host_ports must be 1 or 2");
+  return true;
+}
+
 FirmwareInTheLoop::FirmwareInTheLoop(FirmwareLoopConfig config, Mpu6050Model mpu)
-    : impl_(std::make_unique<Impl>(std::move(config), std::move(mpu))) {
+    : impl_(std::make_unique<Impl>(require_valid(config, "firmware in the loop"), std::move(mpu))) {
   impl_->thread = std::thread([this] { impl_->run(); });
 }
 

@@ -38,6 +38,9 @@ struct FirmwareLoopConfig {
   // bench world's chamber driver, slave 2, beside the sensor's, slave 1), the requests of both
   // taking turns on the line one transaction at a time, as behind a two-port RS-485 hub.
   int host_ports = 1;
+
+  // An .elf path, a speed >= 0, one or two host ports.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 struct FirmwareLoopStats {
@@ -52,7 +55,7 @@ struct FirmwareLoopStats {
 
 class FirmwareInTheLoop {
  public:
-  // Loads the .elf (throws std::runtime_error naming the file when it cannot), opens the pty,
+  // Loads the .elf (throws InputError naming the file when it cannot), opens the pty,
   // starts the simulation thread.
   FirmwareInTheLoop(FirmwareLoopConfig config, Mpu6050Model mpu);
   ~FirmwareInTheLoop();

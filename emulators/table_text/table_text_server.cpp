@@ -31,17 +31,22 @@ std::string num(double v) {
   return b;
 }
 
-// The config, refused before anything listens.
-TableTextConfig checked(TableTextConfig c) {
-  if (c.axes.empty()) throw std::invalid_argument("table emulator: no axes");
-  if (!(c.speed > 0.0)) throw std::invalid_argument("table emulator: speed must be > 0");
-  return c;
-}
-
 }  // namespace
 
+bool TableTextConfig::IsValid(std::string* error) const {
+  if (axes.empty()) return invalid(error, "no axes");
+  if (!(speed > 0.0)) return invalid(error, "speed must be > 0");
+  if (!(port >= 0 && port <= 65535)) return invalid(error, "port must be 0..65535 (0: any free port)");
+  for (const sim::AxisConfig& a : axes) {
+    std::string why;
+    if (!a.IsValid(&why)) return invalid(error, "axis '" + a.name + "': " + why);
+  }
+  return true;
+}
+
+// The config is refused before anything listens.
 TableTextServer::TableTextServer(TableTextConfig c)
-    : c_(checked(std::move(c))),
+    : c_(require_valid(c, "table emulator")),
       t0_(std::chrono::steady_clock::now()),
       tcp_("table emulator", LoopbackTcpOptions{.port = c_.port, .poll_ms = 5, .down_sleep_ms = 5}) {
   for (std::size_t i = 0; i < c_.axes.size(); ++i) {

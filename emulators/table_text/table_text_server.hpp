@@ -33,6 +33,9 @@ struct TableTextConfig {
   int port = 0;                       // 0: an ephemeral port (see port())
   std::string identity = "Stend,TableEmulator,0,0.1";
   std::uint64_t seed = 1;
+
+  // Some axes (each AxisConfig::IsValid), a positive speed, a port 0..65535.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 class TableTextServer {

@@ -386,7 +386,14 @@ bool looks_like_dataflash(const fs::path& file) {
 // Two passes over the file through a bounded buffer: the first reads every message header (the
 // formats, units, firmware, and how many IMU messages each instance holds), the second decodes the
 // chosen instance's IMU messages into samples.
+bool DataflashOptions::IsValid(std::string* error) const {
+  return instance >= -1 && instance <= 255
+             ? true
+             : invalid(error, "instance must be 0 … 255, or -1 (the instance with the most samples)");
+}
+
 void import_dataflash(const fs::path& file, const DataflashOptions& opt, Recording& rec, SampleSink& out) {
+  require_valid(opt, "DataFlash options");
   const BinaryReader f(file);
   const DfLog log = read_dataflash(f);
   const int instance = choose_instance(f, log.imu, opt.instance);

@@ -59,6 +59,7 @@ bool looks_like_euroc(const fs::path& path) {
 }
 
 void import_euroc(const fs::path& path, const EurocOptions& opt, Recording& rec, SampleSink& out) {
+  require_valid(opt, "EuRoC options");
   const fs::path file = euroc_csv(path);
   LineReader r(file);
   std::string line;

@@ -131,7 +131,7 @@ void stream_csv(const Inputs& in, const ImportOptions& o, Recording& rec, Sample
 
 std::string sha256_hex(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
-  if (!in) throw std::runtime_error(p.string() + ": cannot read it to fingerprint it");
+  if (!in) throw InputError(p.string() + ": cannot read it to fingerprint it");
   std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx(EVP_MD_CTX_new(), EVP_MD_CTX_free);
   EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr);
   std::array<char, 1 << 16> buf{};
@@ -286,8 +286,8 @@ const Format& detect_format(const Inputs& inputs, const ImportOptions& options) 
   }
   std::string list;
   for (const auto& f : formats()) list += "\n  " + f.name + ": " + f.description;
-  throw std::runtime_error((inputs.size() > 1 ? "these " + std::to_string(inputs.size()) + " inputs" : inputs[0].string()) +
-                           ": cannot tell the format from the content; give --format, one of:" + list);
+  throw InputError((inputs.size() > 1 ? "these " + std::to_string(inputs.size()) + " inputs" : inputs[0].string()) +
+                   ": cannot tell the format from the content; give --format, one of:" + list);
 }
 
 namespace {

@@ -3,15 +3,36 @@
 #include <stend/recording/version.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cerrno>
 #include <charconv>
 #include <cstdio>
 #include <system_error>
 #include <utility>
 
-namespace stend::io::detail {
+namespace stend::io {
 
 namespace fs = std::filesystem;
+
+ImportError::ImportError(const fs::path& file, std::size_t line, const std::string& message)
+    : InputError(file.string() + (line > 0 ? ":" + std::to_string(line) : std::string()) +
+                 ": " + message),
+      file_(file),
+      line_(line) {}
+
+ImportError::ImportError(const fs::path& file, ByteOffset offset, const std::string& message)
+    : InputError(file.string() + ": byte " + std::to_string(offset.bytes) + ": " + message),
+      file_(file),
+      offset_(offset.bytes),
+      where_("byte " + std::to_string(offset.bytes)) {}
+
+ImportError::ImportError(const fs::path& file, const std::string& where, const std::string& message)
+    : InputError(file.string() + ": " + where + ": " + message), file_(file), where_(where) {}
+
+bool finite_nonzero(double v) { return std::isfinite(v) && v != 0.0; }
+bool gravity_or_unknown(double g_mps2) { return std::isfinite(g_mps2) && g_mps2 >= 0.0; }
+
+namespace detail {
 
 LineReader::LineReader(const fs::path& file) : file_(file), in_(file, std::ios::binary) {
   if (!in_) {
@@ -66,6 +87,53 @@ bool parse_double(std::string_view s, double& out) {
   if (s.empty()) return false;
   const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
   return ec == std::errc() && p == s.data() + s.size();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Text tables
+
+std::string unquote(std::string_view s) {
+  s = trim(s);
+  if (s.size() >= 2 && s.front() == '"' && s.back() == '"') s = s.substr(1, s.size() - 2);
+  return std::string(s);
+}
+
+bool is_blank(std::string_view s) { return trim(s).empty(); }
+
+double number(const LineReader& r, std::string_view field, const std::string& what) {
+  double v = 0.0;
+  if (!parse_double(field, v)) {
+    r.fail("column '" + what + "': '" + excerpt(field) + "' is not a number");
+  }
+  return v;
+}
+
+std::int32_t to_counts(const LineReader& r, double v, const std::string& what) {
+  if (!std::isfinite(v) || std::abs(v - std::round(v)) > 1e-6 || std::abs(v) > 2147483647.0) {
+    r.fail("column '" + what + "': " + std::to_string(v) +
+           " is not an integer count (set counts = false for values in physical units)");
+  }
+  return static_cast<std::int32_t>(std::lround(v));
+}
+
+void add_held_truth(Recording& rec, double t0, double t1, const std::array<double, 3>& f) {
+  rec.header.truth_columns = kTruthColumns;
+  for (const double t : {t0, 0.5 * (t0 + t1), t1}) {
+    if (!rec.truth_t.empty() && !(t > rec.truth_t.back())) continue;
+    rec.truth_t.push_back(t);
+    rec.truth.push_back({f[0], f[1], f[2], 0.0, 0.0, 0.0});
+  }
+}
+
+void set_int16_sensor_info(double rate_hz, double acc_lsb, double gyr_lsb, Recording& rec) {
+  SensorInfo& info = rec.header.info;
+  info.output_rate_hz = rate_hz;
+  info.accel_lsb_mps2 = acc_lsb;
+  info.gyro_lsb_radps = gyr_lsb;
+  info.accel_range_mps2 = 32768.0 * acc_lsb;
+  info.gyro_range_radps = 32768.0 * gyr_lsb;
+  info.has_gyro = true;
+  info.has_temperature = false;
 }
 
 std::string fmt_g(double v) {
@@ -226,4 +294,5 @@ std::string TimestampSummary::describe() const {
          " repeated and " + std::to_string(decreasing) + " decreasing timestamp(s), kept in file order";
 }
 
-}  // namespace stend::io::detail
+}  // namespace detail
+}  // namespace stend::io

@@ -9,6 +9,7 @@
 #include "import_event.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cstdint>
 #include <cstring>
@@ -53,6 +54,22 @@ std::vector<std::string_view> split(std::string_view line, char delim);
 bool parse_double(std::string_view s, double& out);
 // "%.6g"
 std::string fmt_g(double v);
+
+// --- text tables (the csv, imucal, mpu6050_multipos and static-table importers) ---------------
+
+// `s` trimmed, and without one pair of double quotes around it.
+std::string unquote(std::string_view s);
+bool is_blank(std::string_view s);
+// The number in `field`, column `what` of the line `r` read last; else fails naming both.
+double number(const LineReader& r, std::string_view field, const std::string& what);
+// `v` as an integer count (within 1e-6 of one, and of int32); else fails naming column `what`.
+std::int32_t to_counts(const LineReader& r, double v, const std::string& what);
+// Truth snapshots (kTruthColumns) holding specific force f [m/s²] and zero rate over t0 … t1 [s]:
+// at its start, middle and end (snapshots in time order; a time already passed is not repeated).
+void add_held_truth(Recording& rec, double t0, double t1, const std::array<double, 3>& f);
+// Sensor description of a 16-bit accelerometer + gyroscope without temperature: rate [Hz], LSB
+// sizes [m/s², rad/s per count] and the ±32768-count ranges.
+void set_int16_sensor_info(double rate_hz, double acc_lsb, double gyr_lsb, Recording& rec);
 // "0x" and `digits` upper-case hex digits: fmt_hex(0xA3, 2) = "0xA3".
 std::string fmt_hex(std::uint64_t v, int digits);
 

@@ -1,4 +1,5 @@
-// Import options: the keys, their parsing, the YAML mapping file. See stend/io/import_options.hpp.
+// Import options: the key table, the parsing of each key's text, the YAML mapping file. See
+// stend/io/import_options.hpp.
 #include <stend/io/import_options.hpp>
 
 #include <stend/errors.hpp>
@@ -103,58 +104,62 @@ char delimiter(const std::string& key, const std::string& text) {
 
 using Setter = void (*)(ImportOptions&, const std::string& key, const std::string& value);
 
+// A key: its description, and how its text (parsed and checked as its type says) sets the options.
 struct KeyDef {
   ImportKey info;
   Setter set;
 };
 
-// Every key: its help and how its text sets the options. The one table flags and files share.
+using T = ImportKeyType;
+
+// Every import key, declared once: the flags, the mapping file and the defaults all come from here.
 const std::vector<KeyDef>& key_table() {
   static const std::vector<KeyDef> table = {
-      {{"delimiter", "column delimiter: one character, space (runs of blanks) or tab [,]"},
+      {{"delimiter", T::kCharacter, "", ",", "column delimiter: one character, space (runs of blanks) or tab"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.delimiter = delimiter(k, v); }},
-      {{"skip_lines", "lines before the column-name line or the data [0]"},
+      {{"skip_lines", T::kCount, "lines", "0", "lines before the column-name line or the data"},
        [](ImportOptions& o, const std::string& k, const std::string& v) {
          const double n = number(k, v);
          if (n < 0 || n != std::floor(n)) bad(k, v, "a count of lines");
          o.skip_lines = static_cast<std::size_t>(n);
        }},
-      {{"column_names", "the first line names the columns: true | false [true]"},
+      {{"column_names", T::kBoolean, "", "true", "the first line names the columns: true | false"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.column_names = boolean(k, v); }},
-      {{"comment", "data lines starting with this are ignored [#]"},
+      {{"comment", T::kText, "", "#", "data lines starting with this are ignored (\"\": none)"},
        [](ImportOptions& o, const std::string&, const std::string& v) { o.comment = v; }},
-      {{"time", "time column: name or 0-based index (absent: t = i / rate_hz)"},
+      {{"time", T::kColumn, "", "", "time column: name or 0-based index (absent: t = i / rate_hz)"},
        [](ImportOptions& o, const std::string&, const std::string& v) { o.time = column(v); }},
-      {{"time_unit", "unit of the time column: s | ms | us | ns [s]"},
+      {{"time_unit", T::kUnit, "", "s", "unit of the time column: s | ms | us | ns"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.time_scale_s = time_unit(k, v); }},
-      {{"rate_hz", "sample rate [Hz]: required without a time column; with one, the rate bad timestamps are rebuilt from"},
+      {{"rate_hz", T::kNumber, "Hz", "",
+        "sample rate: required without a time column; with one, the rate bad timestamps are rebuilt from"},
        [](ImportOptions& o, const std::string& k, const std::string& v) {
          o.rate_hz = number(k, v);
          if (!(o.rate_hz > 0.0)) bad(k, v, "a positive rate");
        }},
-      {{"accel", "accelerometer columns x,y,z (names or 0-based indices)"},
+      {{"accel", T::kColumns, "", "", "accelerometer columns x,y,z (names or 0-based indices)"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.accel = three_columns(k, v); }},
-      {{"gyro", "gyroscope columns x,y,z (absent: no gyroscope)"},
+      {{"gyro", T::kColumns, "", "", "gyroscope columns x,y,z (absent: no gyroscope)"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.gyro = three_columns(k, v); }},
-      {{"temperature", "temperature column: name or 0-based index"},
+      {{"temperature", T::kColumn, "", "", "temperature column: name or 0-based index"},
        [](ImportOptions& o, const std::string&, const std::string& v) { o.temperature = column(v); }},
-      {{"accel_unit", "accelerometer values in physical units: m/s^2 | g [m/s^2]"},
+      {{"accel_unit", T::kUnit, "", "m/s^2", "accelerometer values in physical units: m/s^2 | g"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.accel_value.unit = unit_si(k, v, true); }},
-      {{"gyro_unit", "gyroscope values in physical units: rad/s | deg/s [rad/s]"},
+      {{"gyro_unit", T::kUnit, "", "rad/s", "gyroscope values in physical units: rad/s | deg/s"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.gyro_value.unit = unit_si(k, v, false); }},
-      {{"accel_lsb", "accelerometer values are counts of this size: NUMBER[/NUMBER] g|m/s^2 (e.g. 1/16384g)"},
+      {{"accel_lsb", T::kLsb, "", "", "accelerometer values are counts of this size: NUMBER[/NUMBER] g|m/s^2 (e.g. 1/16384g)"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.accel_value.lsb = lsb_si(k, v, true); }},
-      {{"accel_offset", "accelerometer count offset: SI = (count - offset) * lsb (e.g. 32768) [0]"},
+      {{"accel_offset", T::kNumber, "counts", "0", "accelerometer count offset: SI = (count - offset) * lsb (e.g. 32768)"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.accel_value.offset = number(k, v); }},
-      {{"gyro_lsb", "gyroscope values are counts of this size: NUMBER[/NUMBER] deg/s|rad/s (e.g. 1/131deg/s)"},
+      {{"gyro_lsb", T::kLsb, "", "", "gyroscope values are counts of this size: NUMBER[/NUMBER] deg/s|rad/s (e.g. 1/131deg/s)"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.gyro_value.lsb = lsb_si(k, v, false); }},
-      {{"gyro_offset", "gyroscope count offset [0]"},
+      {{"gyro_offset", T::kNumber, "counts", "0", "gyroscope count offset"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.gyro_value.offset = number(k, v); }},
-      {{"temperature_scale", "degC per temperature unit [1]"},
+      {{"temperature_scale", T::kNumber, "degC per unit", "1", "the temperature column's scale"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.temperature_scale = number(k, v); }},
-      {{"temperature_offset_c", "degC added after scaling [0]"},
+      {{"temperature_offset_c", T::kNumber, "degC", "0", "added to the temperature after scaling"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.temperature_offset_c = number(k, v); }},
-      {{"gravity_mps2", "local gravity [m/s^2] (0: unknown, standard gravity where one is needed)"},
+      {{"gravity_mps2", T::kNumber, "m/s^2", "0", "local gravity (0: unknown, standard gravity where one is needed)"},
        [](ImportOptions& o, const std::string& k, const std::string& v) {
          o.gravity_mps2 = number(k, v);
          if (o.gravity_mps2 != 0.0 &&
@@ -163,11 +168,11 @@ const std::vector<KeyDef>& key_table() {
                "a gravity in " + yaml::format_number(physics::kMinPlausibleGravity_mps2) + " … " +
                    yaml::format_number(physics::kMaxPlausibleGravity_mps2) + " m/s^2 (or 0)");
        }},
-      {{"topic", "ROS bags: the sensor_msgs Imu topic (absent: the bag's only Imu topic)"},
+      {{"topic", T::kText, "", "", "ROS bags: the sensor_msgs Imu topic (absent: the bag's only Imu topic)"},
        [](ImportOptions& o, const std::string&, const std::string& v) { o.topic = v; }},
-      {{"temperature_topic", "ROS bags: a sensor_msgs Temperature topic to take the temperature from"},
+      {{"temperature_topic", T::kText, "", "", "ROS bags: a sensor_msgs Temperature topic to take the temperature from"},
        [](ImportOptions& o, const std::string&, const std::string& v) { o.temperature_topic = v; }},
-      {{"instance", "ULog / DataFlash: the IMU instance (absent: the instance with the most samples)"},
+      {{"instance", T::kCount, "", "", "ULog / DataFlash: the IMU instance (absent: the instance with the most samples)"},
        [](ImportOptions& o, const std::string& k, const std::string& v) {
          const double n = number(k, v);
          if (n < 0 || n != std::floor(n) || n > 255) bad(k, v, "an instance number 0 … 255");
@@ -177,7 +182,33 @@ const std::vector<KeyDef>& key_table() {
   return table;
 }
 
+const KeyDef& key_def(const std::string& key) {
+  const auto& table = key_table();
+  const auto it = std::find_if(table.begin(), table.end(), [&](const KeyDef& d) { return d.info.key == key; });
+  if (it == table.end()) throw std::invalid_argument("unknown import key '" + key + "'");
+  return *it;
+}
+
 }  // namespace
+
+const char* ImportKey::type_name() const {
+  switch (type) {
+    case ImportKeyType::kText: return "TEXT";
+    case ImportKeyType::kCharacter: return "CHAR";
+    case ImportKeyType::kCount: return "COUNT";
+    case ImportKeyType::kBoolean: return "BOOL";
+    case ImportKeyType::kNumber: return "NUMBER";
+    case ImportKeyType::kColumn: return "COLUMN";
+    case ImportKeyType::kColumns: return "X,Y,Z";
+    case ImportKeyType::kUnit: return "UNIT";
+    case ImportKeyType::kLsb: return "LSB";
+  }
+  return "TEXT";
+}
+
+std::string ImportKey::description() const {
+  return help + (unit.empty() ? "" : ", in " + unit) + (fallback.empty() ? "" : " [" + fallback + "]");
+}
 
 const std::vector<ImportKey>& import_keys() {
   static const std::vector<ImportKey> keys = [] {
@@ -194,11 +225,13 @@ std::string import_flag(const std::string& key) {
   return f;
 }
 
+ImportOptions::ImportOptions() {
+  for (const auto& d : key_table())
+    if (!d.info.fallback.empty()) d.set(*this, d.info.key, d.info.fallback);
+}
+
 void ImportOptions::set(const std::string& key, const std::string& value) {
-  const auto& table = key_table();
-  const auto it = std::find_if(table.begin(), table.end(), [&](const KeyDef& d) { return d.info.key == key; });
-  if (it == table.end()) throw std::invalid_argument("unknown import key '" + key + "'");
-  it->set(*this, key, value);
+  key_def(key).set(*this, key, value);
   stated.push_back(key + ": " + value);
 }
 
@@ -206,11 +239,8 @@ bool ImportOptions::was_stated(const std::string& key) const {
   return std::any_of(stated.begin(), stated.end(), [&](const std::string& s) { return s.rfind(key + ": ", 0) == 0; });
 }
 
-bool ImportOptions::IsValid(std::string* message) const {
-  auto fail = [&](const std::string& m) {
-    if (message) *message = m;
-    return false;
-  };
+bool ImportOptions::IsValid(std::string* error) const {
+  const auto fail = [error](const std::string& why) { return invalid(error, why); };
   const bool some_gyro = !gyro[0].empty() || !gyro[1].empty() || !gyro[2].empty();
   if (some_gyro && (gyro[0].empty() || gyro[1].empty() || gyro[2].empty()))
     return fail("gyro: give x, y and z columns, or none");

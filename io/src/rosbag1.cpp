@@ -550,6 +550,7 @@ bool looks_like_rosbag1(const fs::path& path) {
 }
 
 void import_rosbag1(const fs::path& path, const RosbagOptions& options, Recording& rec, SampleSink& out) {
+  require_valid(options, "ROS bag options");
   if (!looks_like_rosbag1(path)) {
     throw ImportError(path, "byte 0", "not a ROS 1 bag: expected the magic line '#ROSBAG V2.0'");
   }

@@ -677,6 +677,7 @@ bool looks_like_rosbag2(const fs::path& path) {
 }
 
 void import_rosbag2(const fs::path& path, const RosbagOptions& options, Recording& rec, SampleSink& out) {
+  require_valid(options, "ROS bag options");
   if (!fs::exists(path)) throw ImportError(path, "path", "no such file or folder");
   const std::vector<fs::path> files = fs::is_directory(path) ? storage_files(path) : std::vector<fs::path>{path};
   if (files.empty()) throw ImportError(path, "folder", "no rosbag2 storage file (expected metadata.yaml, .db3 or MCAP)");

@@ -237,3 +237,11 @@ void stream_recording(const fs::path& file, const BagReader& bag, const RosbagOp
 }
 
 }  // namespace stend::io::rosbag_detail
+
+namespace stend::io {
+
+bool RosbagOptions::IsValid(std::string* error) const {
+  return gravity_or_unknown(gravity_mps2) ? true : invalid(error, "gravity_mps2 must be >= 0 (0: unknown)");
+}
+
+}  // namespace stend::io

@@ -137,6 +137,53 @@ TEST(ImportOptions, FlagsAndYamlShareKeysAndYamlErrorsNameTheLine) {
   EXPECT_THROW(half.set("accel_unit", "furlongs"), std::invalid_argument);
 }
 
+// Each key is declared once: a default-constructed ImportOptions holds the table's defaults and has
+// stated nothing; the help a flag shows is made from the same row.
+TEST(ImportOptions, DefaultsAndHelpComeFromTheKeyTable) {
+  const ImportOptions o;
+  EXPECT_TRUE(o.stated.empty());
+  EXPECT_EQ(o.delimiter, ',');
+  EXPECT_EQ(o.comment, "#");
+  EXPECT_TRUE(o.column_names);
+  EXPECT_EQ(o.time_scale_s, 1.0);
+  EXPECT_EQ(o.accel_value.unit, 1.0);
+  EXPECT_EQ(o.gyro_value.unit, 1.0);
+  EXPECT_EQ(o.temperature_scale, 1.0);
+  EXPECT_EQ(o.rate_hz, 0.0);  // no default: absent until given
+  EXPECT_EQ(o.instance, -1);
+  for (const ImportKey& k : import_keys()) {
+    ImportOptions x;
+    if (!k.fallback.empty()) {
+      EXPECT_NO_THROW(x.set(k.key, k.fallback)) << k.key;
+      EXPECT_NE(k.description().find("[" + k.fallback + "]"), std::string::npos) << k.description();
+    }
+    if (!k.unit.empty()) {
+      EXPECT_NE(k.description().find(k.unit), std::string::npos) << k.description();
+    }
+    EXPECT_NE(std::string(k.type_name()), "") << k.key;
+  }
+  EXPECT_EQ(import_flag("temperature_offset_c"), "--temperature-offset-c");
+}
+
+// The options each importer takes are checked where it starts.
+TEST(ImportOptions, EachImportersOptionsAreCheckedWhereItStarts) {
+  ImucalOptions imucal;
+  imucal.rate_hz = 0.0;
+  std::string why;
+  EXPECT_FALSE(imucal.IsValid(&why));
+  EXPECT_NE(why.find("rate_hz"), std::string::npos) << why;
+  EXPECT_THROW(import_imucal_session("/nonexistent.csv", imucal), std::invalid_argument);
+  MatOptions mat;
+  mat.time_scale_s = -1.0;
+  EXPECT_FALSE(mat.IsValid());
+  CsvMapping csv;
+  csv.accel_scale = 0.0;
+  EXPECT_FALSE(csv.IsValid(&why));
+  EXPECT_NE(why.find("scales"), std::string::npos) << why;
+  EXPECT_TRUE(ImuTkOptions{}.IsValid());
+  EXPECT_TRUE(Mpu6050MultiposOptions{}.IsValid());
+}
+
 // IMU-TK text files named .mat (as IMU-TK ships them) go to the IMU-TK reader; real MAT headers
 // to matio; a file nothing reads gets an error listing the formats.
 TEST(Formats, DetectionIsByContentNotName) {

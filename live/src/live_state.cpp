@@ -97,9 +97,9 @@ nlohmann::json LiveState::to_json() const {
   j["message"] = message_;
   j["step"] = p.step;
   j["step_count"] = p.step_count;
-  j["step_kind"] = p.step_kind;
+  j["step_kind"] = p.step_kind_name();
   j["step_label"] = p.step_label;
-  j["phase"] = p.phase;
+  j["phase"] = to_string(p.phase);
   j["item"] = p.item;
   j["item_count"] = p.item_count;
   j["run_time_s"] = p.run_time_s;

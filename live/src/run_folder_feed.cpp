@@ -147,7 +147,7 @@ RunStatus RunFolderFeed::refresh(LiveState& state) {
   if (current >= 0) {
     const Step& st = procedure_[static_cast<std::size_t>(current)];
     p.step = current + 1;
-    p.step_kind = step_kind_name(st.kind);
+    p.step_kind = st.kind;
     p.step_label = st.label;
     p.item_count = is_item_step(st) ? item_count(st) : 0;
     p.item = rec.header.status == RunStatus::kRunning ? std::min(items_done + 1, p.item_count) : items_done;
@@ -160,7 +160,7 @@ RunStatus RunFolderFeed::refresh(LiveState& state) {
     }
   }
   const RunStatus status = rec.header.status;
-  p.phase = status == RunStatus::kComplete ? "done" : status == RunStatus::kRunning ? "running" : to_string(status);
+  p.phase = run_phase_of(status);
   if (status != RunStatus::kRunning) eta.finished();
   p.remaining_s = procedure_.empty() ? kUnknown : eta.remaining_s(p.run_time_s, p.air_c);
   state.replace(p, std::move(channels), std::move(temperatures), std::move(means), status, "");

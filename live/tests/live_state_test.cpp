@@ -22,7 +22,7 @@ stend::RunProgress progress_at(double t) {
   stend::RunProgress p;
   p.step = 1;
   p.step_count = 2;
-  p.phase = "recording";
+  p.phase = stend::RunPhase::kRecording;
   p.run_time_s = t;
   p.remaining_s = 100.0 - t;
   p.latest_t_s = t;

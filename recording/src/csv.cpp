@@ -150,7 +150,7 @@ std::vector<std::string> split_record(std::string_view record) {
           cur.clear();
           st = kStart;
         } else if (c == '"') {
-          throw std::runtime_error("a double quote inside an unquoted field");
+          throw InputError("a double quote inside an unquoted field");
         } else {
           cur.push_back(c);
         }
@@ -173,12 +173,12 @@ std::vector<std::string> split_record(std::string_view record) {
         } else if (c == '\r' && i + 1 == record.size()) {
           // CRLF line ending after a closing quote
         } else {
-          throw std::runtime_error("text after a closing double quote");
+          throw InputError("text after a closing double quote");
         }
         break;
     }
   }
-  if (st == kQuoted) throw std::runtime_error("unterminated double quote");
+  if (st == kQuoted) throw InputError("unterminated double quote");
   if (st == kUnquoted && !cur.empty() && cur.back() == '\r') cur.pop_back();
   fields.push_back(std::move(cur));
   return fields;
@@ -190,7 +190,7 @@ Reader::Reader(const std::filesystem::path& file, std::size_t chunk_bytes)
     : path_(file), buf_(chunk_bytes < 4096 ? 4096 : chunk_bytes) {
   fd_ = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd_ < 0) {
-    throw std::runtime_error(file.string() + ": cannot open: " + std::strerror(errno));
+    throw InputError(file.string() + ": cannot open: " + std::strerror(errno));
   }
   struct stat st {};
   if (::fstat(fd_, &st) == 0) file_size_ = static_cast<std::uint64_t>(st.st_size);
@@ -306,7 +306,7 @@ bool Reader::next_record(std::vector<std::string>& fields) {
       try {
         fields = split_record(rec);
       } catch (const std::exception& e) {
-        throw std::runtime_error(path_.string() + ":" + std::to_string(line_) + ": " + e.what());
+        throw InputError(path_.string() + ":" + std::to_string(line_) + ": " + e.what());
       }
       return true;
     }
@@ -314,9 +314,9 @@ bool Reader::next_record(std::vector<std::string>& fields) {
       // A quote still open at the end: an interrupted write when the file stops mid-line, else
       // a quote that was never closed.
       if (st == kQuoted && end_ > 0 && buf_[end_ - 1] == '\n') {
-        throw std::runtime_error(path_.string() + ":" + std::to_string(quote_line) +
-                                 ": unterminated double quote (the quoted field runs to the end of "
-                                 "the file)");
+        throw InputError(path_.string() + ":" + std::to_string(quote_line) +
+                         ": unterminated double quote (the quoted field runs to the end of "
+                         "the file)");
       }
       if (end_ > pos_) {
         ++partial_;

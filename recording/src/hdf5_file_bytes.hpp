@@ -1,5 +1,5 @@
 // Reading an HDF5 file's own bytes, for the checks Stend makes before libhdf5 reads a file
-// (hdf5_global_heap.hpp, hdf5_metadata.hpp). Internal to stend_core.
+// (hdf5_global_heap.hpp, hdf5_metadata.hpp). Internal to stend_recording.
 //
 // HDF5 file format specification 3.0, "Superblock": the signature is looked for at byte 0, then
 // 512, 1024, 2048, …; versions 0 and 1 hold the sizes of offsets and lengths at bytes 13 and 14;

@@ -5,7 +5,7 @@
 // stays inside the collection (H5HG__cache_heap_deserialize): a free-space object of size 0 makes
 // it loop for ever, a size past the end reads past its buffer. Stend therefore walks every
 // collection of such a file itself, with bounds checks, before it reads a variable-length value.
-// Internal to stend_core (recording_hdf5.cpp); layout in docs/recording-format.md.
+// Internal to stend_recording (hdf5_reader.cpp); layout in docs/recording-format.md.
 #pragma once
 
 #include <cstdint>

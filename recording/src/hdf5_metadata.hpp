@@ -16,7 +16,7 @@
 //     take a header whose "OHDR" signature is damaged for an unchecked version 1 header, and it
 //     allocates a chunk's declared size before it checks it against the end of the file.
 // Format 1's global heap (variable-length strings, no checksum) is walked separately
-// (hdf5_global_heap.hpp). Internal to stend_core (recording_hdf5.cpp).
+// (hdf5_global_heap.hpp). Internal to stend_recording (hdf5_reader.cpp).
 #pragma once
 
 #include <cstdint>

@@ -1,5 +1,5 @@
 // The HDF5 run store (run.h5): writer and SampleSource reader. Layout and rules:
-// docs/recording-format.md. Internal to stend_core; RecordingWriter and Recording::open use it.
+// docs/recording-format.md. Internal to stend_recording; RecordingWriter and Recording::open use it.
 #pragma once
 
 #include "stend/recording/recording.hpp"
@@ -63,7 +63,7 @@ struct Hdf5Run {
   std::int64_t gap_count = -1;        // from the summary (final, or as of the last flush)
   std::int64_t irregular_count = -1;  // likewise; −1 when the file does not say
 };
-// Throws std::runtime_error naming the file and what is unreadable when the file cannot be used.
+// Throws InputError naming the file and what is unreadable when the file cannot be used.
 // The truth rows are read (kLoad), left behind truth_store (kStream) or counted (kSkip).
 Hdf5Run open_hdf5_run(const std::filesystem::path& file, TruthLoading truth = TruthLoading::kLoad);
 

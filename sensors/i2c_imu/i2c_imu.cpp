@@ -12,22 +12,27 @@ using transport::i2c_hex;
 
 std::string ChipDriver::id_hint(std::uint8_t /*actual*/) const { return ""; }
 
-I2cImuSensor::I2cImuSensor(std::unique_ptr<ChipDriver> chip, I2cImuConfig c) : chip_(std::move(chip)), c_(std::move(c)) {
-  const std::string name = chip_->plugin();
-  auto require = [&](bool ok, const std::string& what) {
-    if (!ok) throw std::invalid_argument(name + ": " + what);
-  };
+bool I2cImuConfig::IsValid(std::string* error) const {
+  if (address != -1 && !(address >= 0x03 && address <= 0x77))
+    return invalid(error, "address must be a 7-bit I2C address 0x03..0x77 (got " + std::to_string(address) + ")");
+  const std::string& b = route.bus;
+  if (b != "i2c-dev" && b != "mcp2221a" && b != "cp2112" && b != "bench_mcu")
+    return invalid(error, "bus must be i2c-dev, mcp2221a, cp2112 or bench_mcu (got '" + b + "')");
+  if ((b == "i2c-dev" || b == "bench_mcu") && route.device.empty())
+    return invalid(error, "bus " + b + " needs 'device' (" +
+                              (b == "i2c-dev" ? "/dev/i2c-N" : "the serial port, e.g. /dev/ttyUSB0") + ")");
+  if (mode != "poll" && mode != "fifo") return invalid(error, "mode must be fifo or poll (got '" + mode + "')");
+  if (!(retries >= 0 && route.timeout_ms >= 1)) return invalid(error, "retries must be >= 0 and timeout_ms >= 1");
+  if (!(output_rate_hz > 0.0)) return invalid(error, "output_rate_hz must be > 0");
+  return true;
+}
+
+I2cImuSensor::I2cImuSensor(std::unique_ptr<ChipDriver> chip, I2cImuConfig c)
+    : chip_(std::move(chip)), c_(require_valid(c, chip_->plugin())) {
   if (c_.address < 0) c_.address = chip_->default_address();
-  require(c_.address >= 0x03 && c_.address <= 0x77, "address must be a 7-bit I2C address 0x03..0x77 (got " + std::to_string(c_.address) + ")");
-  const std::string& b = c_.route.bus;
-  require(b == "i2c-dev" || b == "mcp2221a" || b == "cp2112" || b == "bench_mcu",
-          "bus must be i2c-dev, mcp2221a, cp2112 or bench_mcu (got '" + b + "')");
-  require(!(b == "i2c-dev" || b == "bench_mcu") || !c_.route.device.empty(),
-          "bus " + b + " needs 'device' (" + (b == "i2c-dev" ? "/dev/i2c-N" : "the serial port, e.g. /dev/ttyUSB0") + ")");
-  require(c_.mode == "poll" || c_.mode == "fifo", "mode must be fifo or poll (got '" + c_.mode + "')");
-  require(c_.mode == "poll" || chip_->supports_fifo(), std::string("mode fifo is not implemented for the ") + chip_->model() + "; use mode: poll");
-  require(c_.retries >= 0 && c_.route.timeout_ms >= 1, "retries must be >= 0 and timeout_ms >= 1");
-  require(c_.output_rate_hz > 0.0, "output_rate_hz must be > 0");
+  if (c_.mode == "fifo" && !chip_->supports_fifo())
+    throw std::invalid_argument(std::string(chip_->plugin()) + ": mode fifo is not implemented for the " + chip_->model() +
+                                "; use mode: poll");
   chip_->validate(c_);
   period_s_ = 1.0 / chip_->info().output_rate_hz;
 }
@@ -58,7 +63,7 @@ void I2cImuSensor::start(double t0_s) {
       dev_ = std::make_unique<transport::I2cDevice>(transport::open_i2c_bus(c_.route), static_cast<std::uint8_t>(c_.address),
                                                     transport::I2cRetryPolicy{c_.retries, 1});
     } catch (const std::exception& e) {
-      throw std::runtime_error(std::string(chip_->plugin()) + ": cannot open the I2C route: " + e.what());
+      throw IoError(std::string(chip_->plugin()) + ": cannot open the I2C route: " + e.what());
     }
   }
   const std::string expected = i2c_hex(chip_->expected_id()) + " (" + chip_->model() + ")";
@@ -68,22 +73,22 @@ void I2cImuSensor::start(double t0_s) {
     id = dev_->read_reg(chip_->id_register());
   } catch (const I2cError& e) {
     if (e.kind() == I2cError::Kind::kNack) {
-      throw std::runtime_error(where() + ": no device answers: no ACK reading " + reg + ", expected " + expected +
-                               ", actual: nothing (address NACKed); check wiring, power and the address pin. " + e.what());
+      throw IoError(where() + ": no device answers: no ACK reading " + reg + ", expected " + expected +
+                    ", actual: nothing (address NACKed); check wiring, power and the address pin. " + e.what());
     }
-    throw std::runtime_error(where() + ": reading " + reg + " failed: " + e.what());
+    throw IoError(where() + ": reading " + reg + " failed: " + e.what());
   }
   who_am_i_ = i2c_hex(id);
   if (id != chip_->expected_id()) {
     const std::string hint = chip_->id_hint(id);
-    throw std::runtime_error(where() + ": wrong device: " + reg + " reads " + who_am_i_ + ", expected " + expected +
-                             (hint.empty() ? "" : "; " + hint));
+    throw IoError(where() + ": wrong device: " + reg + " reads " + who_am_i_ + ", expected " + expected +
+                  (hint.empty() ? "" : "; " + hint));
   }
   try {
     chip_->configure(*dev_);
     if (c_.mode == "fifo") chip_->fifo_start(*dev_);
   } catch (const I2cError& e) {
-    throw std::runtime_error(where() + ": configuration failed: " + e.what());
+    throw IoError(where() + ": configuration failed: " + e.what());
   }
   t0_ = t0_s;
   last_poll_t_ = t0_s;
@@ -168,7 +173,7 @@ void I2cImuSensor::read_fifo(double t_s) {
 }
 
 void I2cImuSensor::acquire(double t_s, const TruthSource& /*truth*/, std::vector<ImuSample>& out) {
-  if (!dev_) throw std::runtime_error(where() + ": acquire() before start()");
+  if (!dev_) throw std::logic_error(where() + ": acquire() before start()");
   auto flush = [&] {
     while (!pending_.empty() && pending_.front().t_s <= t_s) {
       out.push_back(pending_.front());
@@ -203,7 +208,7 @@ void I2cImuSensor::acquire(double t_s, const TruthSource& /*truth*/, std::vector
   } catch (const std::exception& e) {
     note_faults();
     report_.events.push_back(e.what());
-    throw std::runtime_error(where() + ": " + e.what() + "; samples up to here were kept, the next acquire() resumes");
+    throw IoError(where() + ": " + e.what() + "; samples up to here were kept, the next acquire() resumes");
   }
   note_faults();
 }

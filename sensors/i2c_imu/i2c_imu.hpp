@@ -28,6 +28,11 @@ struct I2cImuConfig {
   int dlpf_hz = 0;                  // MPU-6050 only
   std::string mode = "poll";        // "fifo" or "poll" (the plugins default to fifo)
   int retries = 3;                  // I2C-level retries after a NACK, time-out or bus error
+
+  // A 7-bit address (or −1), a known bus with the device it needs, a known mode, no negative
+  // retries, a time-out of at least 1 ms, a positive rate. What one chip accepts (ranges, rates,
+  // FIFO) its ChipDriver checks.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 // Counts of one sample as the chip delivers them.

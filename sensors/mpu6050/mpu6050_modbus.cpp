@@ -21,10 +21,6 @@ std::string hex2(unsigned v) {
   return b;
 }
 
-void require(bool ok, const std::string& what) {
-  if (!ok) throw std::invalid_argument("mpu6050_modbus: " + what);
-}
-
 }  // namespace
 
 const stend::fields::Table<Mpu6050ModbusConfig>& Mpu6050ModbusConfig::fields() {
@@ -53,28 +49,37 @@ const stend::fields::Table<Mpu6050ModbusConfig>& Mpu6050ModbusConfig::fields() {
 
 Mpu6050Modbus::Mpu6050Modbus(const Params& p) : Mpu6050Modbus(Mpu6050ModbusConfig::from(p)) {}
 
-Mpu6050Modbus::Mpu6050Modbus(Mpu6050ModbusConfig c) : c_(std::move(c)) {
-  require(!c_.device.empty(), "'device' is empty; give the serial port of the USB converter, e.g. /dev/ttyUSB0");
-  require(c_.slave_id >= 1 && c_.slave_id <= 247, "slave_id must be 1..247");
-  require(c_.accel_range_g == 2 || c_.accel_range_g == 4 || c_.accel_range_g == 8 || c_.accel_range_g == 16,
-          "accel_range_g must be 2, 4, 8 or 16 (got " + std::to_string(c_.accel_range_g) + ")");
-  require(c_.gyro_range_dps == 250 || c_.gyro_range_dps == 500 || c_.gyro_range_dps == 1000 || c_.gyro_range_dps == 2000,
-          "gyro_range_dps must be 250, 500, 1000 or 2000 (got " + std::to_string(c_.gyro_range_dps) + ")");
+int Mpu6050ModbusConfig::dlpf_cfg() const {
   static constexpr int kDlpf[7] = {0, 184, 94, 44, 21, 10, 5};
-  dlpf_cfg_ = -1;
-  for (int i = 0; i < 7; ++i) {
-    if (kDlpf[i] == c_.dlpf_hz) dlpf_cfg_ = i;
-  }
-  require(dlpf_cfg_ >= 0, "dlpf_hz must be one of 0 (off), 184, 94, 44, 21, 10, 5 (got " + std::to_string(c_.dlpf_hz) + ")");
-  const double base = dlpf_cfg_ == 0 ? 8000.0 : 1000.0;
-  const double div = std::round(base / c_.output_rate_hz - 1.0);
-  require(div >= 0.0 && div <= 255.0 && std::abs(base / (1.0 + div) - c_.output_rate_hz) <= 1e-6 * c_.output_rate_hz,
-          "output_rate_hz " + std::to_string(c_.output_rate_hz) + " is not " + std::to_string(static_cast<int>(base)) +
-              "/(1 + SMPLRT_DIV) for an integer SMPLRT_DIV 0..255 with dlpf_hz " + std::to_string(c_.dlpf_hz) +
-              "; e.g. " + std::to_string(base / (1.0 + std::clamp(div, 0.0, 255.0))) + " Hz");
-  smplrt_div_ = static_cast<int>(div);
-  period_s_ = (1.0 + div) / base;
-  require(c_.timeout_ms >= 1 && c_.retries >= 0, "timeout_ms must be >= 1 and retries >= 0");
+  for (int i = 0; i < 7; ++i)
+    if (kDlpf[i] == dlpf_hz) return i;
+  return -1;
+}
+
+bool Mpu6050ModbusConfig::IsValid(std::string* error) const {
+  if (device.empty()) return invalid(error, "'device' is empty; give the serial port of the USB converter, e.g. /dev/ttyUSB0");
+  if (!(slave_id >= 1 && slave_id <= 247)) return invalid(error, "slave_id must be 1..247");
+  if (accel_range_g != 2 && accel_range_g != 4 && accel_range_g != 8 && accel_range_g != 16)
+    return invalid(error, "accel_range_g must be 2, 4, 8 or 16 (got " + std::to_string(accel_range_g) + ")");
+  if (gyro_range_dps != 250 && gyro_range_dps != 500 && gyro_range_dps != 1000 && gyro_range_dps != 2000)
+    return invalid(error, "gyro_range_dps must be 250, 500, 1000 or 2000 (got " + std::to_string(gyro_range_dps) + ")");
+  if (dlpf_cfg() < 0)
+    return invalid(error, "dlpf_hz must be one of 0 (off), 184, 94, 44, 21, 10, 5 (got " + std::to_string(dlpf_hz) + ")");
+  const double base = rate_base_hz(), div = smplrt_div();
+  if (!(div >= 0.0 && div <= 255.0 && std::abs(base / (1.0 + div) - output_rate_hz) <= 1e-6 * output_rate_hz))
+    return invalid(error, "output_rate_hz " + std::to_string(output_rate_hz) + " is not " +
+                              std::to_string(static_cast<int>(base)) +
+                              "/(1 + SMPLRT_DIV) for an integer SMPLRT_DIV 0..255 with dlpf_hz " +
+                              std::to_string(dlpf_hz) + "; e.g. " +
+                              std::to_string(base / (1.0 + std::clamp(div, 0.0, 255.0))) + " Hz");
+  if (!(timeout_ms >= 1 && retries >= 0)) return invalid(error, "timeout_ms must be >= 1 and retries >= 0");
+  return true;
+}
+
+Mpu6050Modbus::Mpu6050Modbus(Mpu6050ModbusConfig c) : c_(require_valid(c, "mpu6050_modbus")) {
+  dlpf_cfg_ = c_.dlpf_cfg();
+  smplrt_div_ = static_cast<int>(c_.smplrt_div());
+  period_s_ = (1.0 + c_.smplrt_div()) / c_.rate_base_hz();
 }
 
 Mpu6050Modbus::~Mpu6050Modbus() {
@@ -119,10 +124,10 @@ void Mpu6050Modbus::start(double t0_s) {
   boot_count_ = in[map::kInBootCount];
   who_am_i_ = hex2(who);
   if (who != kExpectedWhoAmI) {
-    throw std::runtime_error("mpu6050_modbus: " + where() + ": WHO_AM_I (0x75) reads " + who_am_i_ +
-                             ", expected " + hex2(kExpectedWhoAmI) +
-                             " (MPU-6050); check which sensor the bench microcontroller carries "
-                             "(0x70/0x71 is an MPU-6500/9250) and the slave id");
+    throw IoError("mpu6050_modbus: " + where() + ": WHO_AM_I (0x75) reads " + who_am_i_ +
+                  ", expected " + hex2(kExpectedWhoAmI) +
+                  " (MPU-6050); check which sensor the bench microcontroller carries "
+                  "(0x70/0x71 is an MPU-6500/9250) and the slave id");
   }
   bus_->write_register(map::kHoldCtrl, 0);  // stop before reconfiguring
   bus_->write_register(map::kHoldSmplrtDiv, static_cast<std::uint16_t>(smplrt_div_));
@@ -159,8 +164,8 @@ bool Mpu6050Modbus::read_window(int max_samples) {
   const int remaining = w[1];
   const std::uint32_t first = (static_cast<std::uint32_t>(w[2]) << 16) | w[3];
   if (n > k) {
-    throw std::runtime_error("mpu6050_modbus: " + where() + ": FIFO window at input register " + std::to_string(address) + " claims " + std::to_string(n) +
-                             " samples, asked for " + std::to_string(k) + " (firmware mismatch?)");
+    throw IoError("mpu6050_modbus: " + where() + ": FIFO window at input register " + std::to_string(address) + " claims " + std::to_string(n) +
+                  " samples, asked for " + std::to_string(k) + " (firmware mismatch?)");
   }
   const auto ahead = static_cast<std::int32_t>(first - next_seq_);
   int skip = 0;  // samples at the window's start that were already received
@@ -213,11 +218,11 @@ bool Mpu6050Modbus::read_window(int max_samples) {
 void Mpu6050Modbus::resynchronise(std::uint32_t first, std::uint32_t overlap) {
   const std::uint16_t boot = bus_->read_input_registers(map::kInBootCount, 1)[0];
   if (boot != boot_count_) {
-    throw std::runtime_error("mpu6050_modbus: " + where() + ": bench MCU restarted (BOOT_COUNT " +
-                             std::to_string(boot_count_) + " -> " + std::to_string(boot) +
-                             "): its FIFO window starts at sequence " + std::to_string(first) + ", before the expected " +
-                             std::to_string(next_seq_) + "; samples from sequence " + std::to_string(next_seq_) +
-                             " on are lost");
+    throw IoError("mpu6050_modbus: " + where() + ": bench MCU restarted (BOOT_COUNT " +
+                  std::to_string(boot_count_) + " -> " + std::to_string(boot) +
+                  "): its FIFO window starts at sequence " + std::to_string(first) + ", before the expected " +
+                  std::to_string(next_seq_) + "; samples from sequence " + std::to_string(next_seq_) +
+                  " on are lost");
   }
   report_.events.push_back("resynchronised: FIFO window started at sequence " + std::to_string(first) + ", " +
                            std::to_string(overlap) + " sample(s) before the expected " + std::to_string(next_seq_) +
@@ -226,7 +231,7 @@ void Mpu6050Modbus::resynchronise(std::uint32_t first, std::uint32_t overlap) {
 }
 
 void Mpu6050Modbus::acquire(double t_s, const TruthSource& /*truth*/, std::vector<ImuSample>& out) {
-  if (!bus_) throw std::runtime_error("mpu6050_modbus: " + where() + ": acquire() before start()");
+  if (!bus_) throw std::logic_error("mpu6050_modbus: " + where() + ": acquire() before start()");
   auto flush = [&] {
     while (!pending_.empty() && pending_.front().t_s <= t_s) {
       out.push_back(pending_.front());
@@ -261,7 +266,7 @@ void Mpu6050Modbus::acquire(double t_s, const TruthSource& /*truth*/, std::vecto
   } catch (const std::exception& e) {
     note_faults();
     report_.events.push_back(e.what());
-    throw std::runtime_error(std::string(e.what()) + "; samples up to here were kept, the next acquire() resumes");
+    throw IoError(std::string(e.what()) + "; samples up to here were kept, the next acquire() resumes");
   }
   note_faults();
 }

@@ -7,6 +7,7 @@
 #include <stend/devices/modbus_rtu.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <deque>
 #include <memory>
@@ -29,6 +30,15 @@ struct Mpu6050ModbusConfig {
   // Every parameter of the mpu6050_modbus plugin: its schema and the reader of its Params.
   static const stend::fields::Table<Mpu6050ModbusConfig>& fields();
   static Mpu6050ModbusConfig from(const Params& p) { return fields().read(p); }  // throws std::invalid_argument
+  // CONFIG.DLPF_CFG of dlpf_hz (0..6), −1 when the chip has no such filter.
+  int dlpf_cfg() const;
+  // The sample-rate base [Hz] (8000 with the filter off, else 1000) and SMPLRT_DIV for
+  // output_rate_hz: base / (1 + SMPLRT_DIV), rounded (IsValid checks it is exact and 0..255).
+  double rate_base_hz() const { return dlpf_cfg() == 0 ? 8000.0 : 1000.0; }
+  double smplrt_div() const { return std::round(rate_base_hz() / output_rate_hz - 1.0); }
+  // A device, a slave address 1..247, ranges, filter and rate the MPU-6050 has, a positive
+  // time-out and no negative retries.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 // Link health since start(), for reports and tests.

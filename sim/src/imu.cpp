@@ -9,10 +9,6 @@ namespace stend::sim {
 
 namespace {
 
-void require(bool ok, const std::string& what) {
-  if (!ok) throw std::invalid_argument("sim_imu: " + what);
-}
-
 bool all_zero(const double* p, int n) {
   for (int i = 0; i < n; ++i)
     if (p[i] != 0.0) return false;
@@ -174,27 +170,32 @@ const fields::Table<SimImuConfig>& SimImuConfig::fields() {
 
 SimImu::SimImu(const Params& p) : SimImu(SimImuConfig::from(p)) {}
 
-SimImu::SimImu(const SimImuConfig& c) : c_(c) {
-  require(c.output_rate_hz > 0.0 && std::isfinite(c.output_rate_hz), "output_rate_hz must be > 0");
-  require(c.output_bits >= 2 && c.output_bits <= 32, "output_bits must be 2..32");
-  require(c.accel_range_g > 0.0 && c.gyro_range_dps > 0.0, "ranges must be > 0");
-  require(c.accel_lsb_mps2 >= 0.0 && c.gyro_lsb_radps >= 0.0, "LSBs must be >= 0 (0 = derived)");
-  require(c.lowpass_hz >= 0.0 && c.lowpass_hz < 0.5 * c.output_rate_hz,
-          "lowpass_hz must be 0 (off) or below half the output rate (" + std::to_string(0.5 * c.output_rate_hz) +
-              " Hz)");
-  require(c.temperature_counts_per_c > 0.0, "temperature_counts_per_c must be > 0");
-  require(c.seed >= 0, "seed must be >= 0");
-  for (const auto* e : {&c.accel, &c.gyro})
+bool SimImuConfig::IsValid(std::string* error) const {
+  if (!(output_rate_hz > 0.0 && std::isfinite(output_rate_hz))) return invalid(error, "output_rate_hz must be > 0");
+  if (!(output_bits >= 2 && output_bits <= 32)) return invalid(error, "output_bits must be 2..32");
+  if (!(accel_range_g > 0.0 && gyro_range_dps > 0.0)) return invalid(error, "ranges must be > 0");
+  if (!(accel_lsb_mps2 >= 0.0 && gyro_lsb_radps >= 0.0)) return invalid(error, "LSBs must be >= 0 (0 = derived)");
+  if (!(lowpass_hz >= 0.0 && lowpass_hz < 0.5 * output_rate_hz))
+    return invalid(error, "lowpass_hz must be 0 (off) or below half the output rate (" +
+                              std::to_string(0.5 * output_rate_hz) + " Hz)");
+  if (!(temperature_counts_per_c > 0.0)) return invalid(error, "temperature_counts_per_c must be > 0");
+  if (!(seed >= 0)) return invalid(error, "seed must be >= 0");
+  for (const auto* e : {&accel, &gyro})
     for (const auto* m : {&e->bias_tc, &e->scale_tc}) {
-      require(m->size() == 3, "temperature coefficient matrices need 3 rows");
-      for (const auto& row : *m) require(row.size() == (*m)[0].size(), "temperature coefficient rows differ in length");
+      if (m->size() != 3) return invalid(error, "temperature coefficient matrices need 3 rows");
+      for (const auto& row : *m)
+        if (row.size() != (*m)[0].size()) return invalid(error, "temperature coefficient rows differ in length");
     }
-  for (const auto& [e, name] : {std::pair{&c.accel, "accel"}, std::pair{&c.gyro, "gyro"}})
+  for (const auto& [e, name] : {std::pair{&accel, "accel"}, std::pair{&gyro, "gyro"}})
     for (int i = 0; i < 3; ++i)
-      require(e->cross_axis(i, i) == 0.0, std::string(name) + "_cross_axis must have a zero diagonal (the diagonal is " +
-                                              name + "_scale); row " + std::to_string(i + 1) + " has " +
-                                              std::to_string(e->cross_axis(i, i)));
+      if (e->cross_axis(i, i) != 0.0)
+        return invalid(error, std::string(name) + "_cross_axis must have a zero diagonal (the diagonal is " + name +
+                                  "_scale); row " + std::to_string(i + 1) + " has " +
+                                  std::to_string(e->cross_axis(i, i)));
+  return true;
+}
 
+SimImu::SimImu(const SimImuConfig& c) : c_(require_valid(c, "sim_imu")) {
   dt_ = 1.0 / c.output_rate_hz;
   seed_ = c.seed == 0 ? kFallbackSeed : static_cast<std::uint64_t>(c.seed);
   accel_model_ = build_model(model::Instrument::kAccelerometer, c.accel, c.temperature_reference_c, accel_theta_);

@@ -76,14 +76,16 @@ AxisConfig OneAxisTableConfig::axis() const {
 
 SimOneAxisTable::SimOneAxisTable(const Params& p) : SimOneAxisTable(OneAxisTableConfig::from(p)) {}
 
-SimOneAxisTable::SimOneAxisTable(const OneAxisTableConfig& c) : c_(c) {
-  try {
-    axis_ = SimAxis(c.axis(), c.seed == 0 ? kFallbackSeed : static_cast<std::uint64_t>(c.seed));
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string("sim_one_axis_table: ") + e.what());
-  }
-  if (!(std::abs(c.axis_tilt_deg) <= 90.0))
-    throw std::invalid_argument("sim_one_axis_table: axis_tilt_deg must be within ±90 deg");
+bool OneAxisTableConfig::IsValid(std::string* error) const {
+  const AxisConfig a = axis();
+  std::string why;
+  if (!a.IsValid(&why)) return invalid(error, "axis '" + a.name + "': " + why);
+  if (!(std::abs(axis_tilt_deg) <= 90.0)) return invalid(error, "axis_tilt_deg must be within ±90 deg");
+  return true;
+}
+
+SimOneAxisTable::SimOneAxisTable(const OneAxisTableConfig& c) : c_(require_valid(c, "sim_one_axis_table")) {
+  axis_ = SimAxis(c.axis(), c.seed == 0 ? kFallbackSeed : static_cast<std::uint64_t>(c.seed));
   chain_ = physics::PaperTable<double>(c.axis_tilt_deg * kDegToRad);
   Rh_ = physics::Rx(c.axis_tilt_deg * kDegToRad);
   misaligned_ = c.axis_misalignment_x_deg != 0.0 || c.axis_misalignment_z_deg != 0.0;

@@ -67,25 +67,31 @@ const fields::Table<ThermochamberConfig>& ThermochamberConfig::fields() {
 
 SimThermochamber::SimThermochamber(const Params& p) : SimThermochamber(ThermochamberConfig::from(p)) {}
 
+double ThermochamberConfig::coldest_c() const { return plant_equilibrium_c(*this, 0, 255); }
+double ThermochamberConfig::hottest_c() const { return plant_equilibrium_c(*this, 15, 0); }
+double ThermochamberConfig::lowest_setpoint_c() const { return std::max(min_c, coldest_c() + kRangeMargin_c); }
+double ThermochamberConfig::highest_setpoint_c() const { return std::min(max_c, hottest_c() - kRangeMargin_c); }
+
+bool ThermochamberConfig::IsValid(std::string* error) const {
+  if (!(control_period_s > 0.0)) return invalid(error, "control_period_s must be > 0");
+  if (!(heat_capacity_j_per_c > 0.0 && conductance_w_per_c > 0.0))
+    return invalid(error, "heat_capacity_j_per_c and conductance_w_per_c must be > 0");
+  if (!(heater_power_w >= 0.0 && peltier_cooling_w >= 0.0 && internal_load_w >= 0.0))
+    return invalid(error, "heater, Peltier and internal powers must be >= 0");
+  if (!(die_lag_s >= 0.0)) return invalid(error, "die_lag_s must be >= 0");
+  if (!(sensor_noise_c >= 0.0)) return invalid(error, "sensor_noise_c must be >= 0");
+  if (!(min_c < max_c)) return invalid(error, "min_c must be < max_c");
+  if (!(settle_tolerance_c > 0.0 && settle_time_s >= 0.0)) return invalid(error, "settle tolerance must be > 0, time >= 0");
+  if (!(max_step_s > 0.0 && max_step_s <= 0.1)) return invalid(error, "max_step_s must be in (0, 0.1] s");
+  if (!(lowest_setpoint_c() < highest_setpoint_c()))
+    return invalid(error, "the plant cannot hold any setpoint within [min_c, max_c]: it holds " + fmt(coldest_c()) +
+                              " … " + fmt(hottest_c()) +
+                              " degC (change peltier_cooling_w, heater_power_w, internal_load_w or ambient_c)");
+  return true;
+}
+
 SimThermochamber::SimThermochamber(const ThermochamberConfig& c)
-    : c_(c), rng_(c.seed == 0 ? kFallbackSeed : static_cast<std::uint64_t>(c.seed)) {
-  auto require = [](bool ok, const std::string& what) {
-    if (!ok) throw std::invalid_argument("sim_thermochamber: " + what);
-  };
-  require(c.control_period_s > 0.0, "control_period_s must be > 0");
-  require(c.heat_capacity_j_per_c > 0.0 && c.conductance_w_per_c > 0.0,
-          "heat_capacity_j_per_c and conductance_w_per_c must be > 0");
-  require(c.heater_power_w >= 0.0 && c.peltier_cooling_w >= 0.0 && c.internal_load_w >= 0.0,
-          "heater, Peltier and internal powers must be >= 0");
-  require(c.die_lag_s >= 0.0, "die_lag_s must be >= 0");
-  require(c.sensor_noise_c >= 0.0, "sensor_noise_c must be >= 0");
-  require(c.min_c < c.max_c, "min_c must be < max_c");
-  require(c.settle_tolerance_c > 0.0 && c.settle_time_s >= 0.0, "settle tolerance must be > 0, time >= 0");
-  require(c.max_step_s > 0.0 && c.max_step_s <= 0.1, "max_step_s must be in (0, 0.1] s");
-  const AxisSpec a = axes()[0];
-  require(a.min < a.max, "the plant cannot hold any setpoint within [min_c, max_c]: it holds " +
-                             fmt(coldest_c()) + " … " + fmt(hottest_c()) +
-                             " degC (change peltier_cooling_w, heater_power_w, internal_load_w or ambient_c)");
+    : c_(require_valid(c, "sim_thermochamber")), rng_(c.seed == 0 ? kFallbackSeed : static_cast<std::uint64_t>(c.seed)) {
   air_ = c.initial_c;
   die_ = c.initial_c + c.self_heating_c;
   measured_ = std::round(air_ * 16.0) / 16.0;
@@ -102,8 +108,8 @@ std::vector<AxisSpec> SimThermochamber::axes() const {
   a.name = "temperature";
   a.unit = "degC";
   // The configured limits, narrowed to what this plant can actually hold.
-  a.min = std::max(c_.min_c, coldest_c() + kRangeMargin_c);
-  a.max = std::min(c_.max_c, hottest_c() - kRangeMargin_c);
+  a.min = c_.lowest_setpoint_c();
+  a.max = c_.highest_setpoint_c();
   a.supports_rate = false;
   return {a};
 }

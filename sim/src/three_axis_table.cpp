@@ -47,28 +47,35 @@ const fields::Table<ThreeAxisTableConfig>& ThreeAxisTableConfig::fields() {
 
 SimThreeAxisTable::SimThreeAxisTable(const Params& p) : SimThreeAxisTable(ThreeAxisTableConfig::from(p)) {}
 
-SimThreeAxisTable::SimThreeAxisTable(const ThreeAxisTableConfig& c) : c_(c) {
-  const std::uint64_t seed = c.seed == 0 ? kFallbackSeed : static_cast<std::uint64_t>(c.seed);
+AxisConfig ThreeAxisTableConfig::axis(int i) const {
+  AxisConfig a;
+  a.name = kNames[i];
+  a.unit = "deg";
+  a.min = min_deg[i];
+  a.max = max_deg[i];
+  a.max_rate = max_rate_dps[i];
+  a.max_accel = max_accel_dps2[i];
+  a.initial = initial_deg[i];
+  a.settle_tolerance = settle_tolerance_deg;
+  a.settle_rate_tolerance = settle_rate_tolerance_dps;
+  a.settle_time_s = settle_time_s;
+  a.encoder_resolution = encoder_resolution_deg;
+  a.encoder_noise = encoder_noise_deg;
+  return a;
+}
+
+bool ThreeAxisTableConfig::IsValid(std::string* error) const {
   for (int i = 0; i < 3; ++i) {
-    AxisConfig a;
-    a.name = kNames[i];
-    a.unit = "deg";
-    a.min = c.min_deg[i];
-    a.max = c.max_deg[i];
-    a.max_rate = c.max_rate_dps[i];
-    a.max_accel = c.max_accel_dps2[i];
-    a.initial = c.initial_deg[i];
-    a.settle_tolerance = c.settle_tolerance_deg;
-    a.settle_rate_tolerance = c.settle_rate_tolerance_dps;
-    a.settle_time_s = c.settle_time_s;
-    a.encoder_resolution = c.encoder_resolution_deg;
-    a.encoder_noise = c.encoder_noise_deg;
-    try {
-      axes_[static_cast<std::size_t>(i)] = SimAxis(a, seed + static_cast<std::uint64_t>(i));
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(std::string("sim_three_axis_table: ") + e.what());
-    }
+    const AxisConfig a = axis(i);
+    std::string why;
+    if (!a.IsValid(&why)) return invalid(error, "axis '" + a.name + "': " + why);
   }
+  return true;
+}
+
+SimThreeAxisTable::SimThreeAxisTable(const ThreeAxisTableConfig& c) : c_(require_valid(c, "sim_three_axis_table")) {
+  const std::uint64_t seed = c.seed == 0 ? kFallbackSeed : static_cast<std::uint64_t>(c.seed);
+  for (int i = 0; i < 3; ++i) axes_[static_cast<std::size_t>(i)] = SimAxis(c.axis(i), seed + static_cast<std::uint64_t>(i));
 }
 
 std::vector<AxisSpec> SimThreeAxisTable::axes() const {

@@ -40,16 +40,17 @@ const fields::Table<VibrationConfig>& VibrationConfig::fields() {
 
 SimVibration::SimVibration(const Params& p) : SimVibration(VibrationConfig::from(p)) {}
 
-SimVibration::SimVibration(const VibrationConfig& c) : c_(c) {
-  auto require = [](bool ok, const std::string& what) {
-    if (!ok) throw std::invalid_argument("sim_vibration: " + what);
-  };
-  require(c.direction.allFinite() && c.direction.norm() > 1e-12, "direction must be a non-zero vector");
-  require(c.max_amplitude_g > 0.0, "max_amplitude_g must be > 0");
-  require(c.min_frequency_hz > 0.0 && c.min_frequency_hz < c.max_frequency_hz,
-          "need 0 < min_frequency_hz < max_frequency_hz");
-  require(c.initial_frequency_hz >= c.min_frequency_hz && c.initial_frequency_hz <= c.max_frequency_hz,
-          "initial_frequency_hz outside [min_frequency_hz, max_frequency_hz]");
+bool VibrationConfig::IsValid(std::string* error) const {
+  if (!(direction.allFinite() && direction.norm() > 1e-12)) return invalid(error, "direction must be a non-zero vector");
+  if (!(max_amplitude_g > 0.0)) return invalid(error, "max_amplitude_g must be > 0");
+  if (!(min_frequency_hz > 0.0 && min_frequency_hz < max_frequency_hz))
+    return invalid(error, "need 0 < min_frequency_hz < max_frequency_hz");
+  if (!(initial_frequency_hz >= min_frequency_hz && initial_frequency_hz <= max_frequency_hz))
+    return invalid(error, "initial_frequency_hz outside [min_frequency_hz, max_frequency_hz]");
+  return true;
+}
+
+SimVibration::SimVibration(const VibrationConfig& c) : c_(require_valid(c, "sim_vibration")) {
   dir_ = c.direction.normalized();
   cur_.frequency_hz = c.initial_frequency_hz;
   prev_ = cur_;

@@ -1,5 +1,7 @@
 #include "stend/emulators/pty_modbus_slave.hpp"
 
+#include <stend/errors.hpp>
+
 #include <pty.h>
 #include <termios.h>
 #include <unistd.h>
@@ -17,7 +19,7 @@ namespace stend::emu {
 PtyModbusRtu::PtyModbusRtu(const char* who, int baud, int slave_id, int indication_timeout_us) {
   char name[256] = {};
   if (openpty(&master_fd_, &slave_fd_, name, nullptr, nullptr) != 0)
-    throw std::runtime_error(std::string(who) + ": openpty failed: " + std::strerror(errno));
+    throw IoError(std::string(who) + ": openpty failed: " + std::strerror(errno));
   device_path_ = name;
   termios t{};
   tcgetattr(slave_fd_, &t);
@@ -28,7 +30,7 @@ PtyModbusRtu::PtyModbusRtu(const char* who, int baud, int slave_id, int indicati
   if (ctx_ == nullptr) {
     ::close(master_fd_);
     ::close(slave_fd_);
-    throw std::runtime_error(std::string(who) + ": libmodbus allocation failed");
+    throw IoError(std::string(who) + ": libmodbus allocation failed");
   }
   modbus_set_slave(ctx_, slave_id);
   modbus_set_socket(ctx_, master_fd_);

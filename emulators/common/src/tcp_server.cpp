@@ -1,5 +1,7 @@
 #include "stend/emulators/tcp_server.hpp"
 
+#include <stend/errors.hpp>
+
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <poll.h>
@@ -17,10 +19,18 @@
 
 namespace stend::emu {
 
-LoopbackTcpServer::LoopbackTcpServer(const char* who, LoopbackTcpOptions options) : o_(options), port_(options.port) {
+bool LoopbackTcpOptions::IsValid(std::string* error) const {
+  if (!(port >= 0 && port <= 65535)) return invalid(error, "port must be 0..65535 (0: any free port)");
+  if (!(poll_ms > 0)) return invalid(error, "poll_ms must be > 0");
+  if (!(down_sleep_ms >= 0 && relisten_sleep_ms >= 0)) return invalid(error, "down_sleep_ms and relisten_sleep_ms must be >= 0");
+  return true;
+}
+
+LoopbackTcpServer::LoopbackTcpServer(const char* who, LoopbackTcpOptions options)
+    : o_(require_valid(options, who)), port_(options.port) {
   if (!listen_now())
-    throw std::runtime_error(std::string(who) + ": cannot listen on 127.0.0.1:" + std::to_string(options.port) + ": " +
-                             std::strerror(errno));
+    throw IoError(std::string(who) + ": cannot listen on 127.0.0.1:" + std::to_string(options.port) + ": " +
+                  std::strerror(errno));
 }
 
 LoopbackTcpServer::~LoopbackTcpServer() { close_all(); }

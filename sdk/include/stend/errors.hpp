@@ -70,6 +70,23 @@ class __attribute__((visibility("default"))) ExperimentError : public InputError
   std::string key_, message_, hint_;
 };
 
+// In an IsValid: `why` into *error (when asked for) and false.
+inline bool invalid(std::string* error, std::string why) {
+  if (error) *error = std::move(why);
+  return false;
+}
+
+// The one check of an Options or Config struct where it is read or used. Such a struct states its
+// defaults in its member initializers and says what it accepts in
+//   bool IsValid(std::string* error = nullptr) const;   // false with the first problem in *error
+// (Ceres style). Returns `options`, or throws std::invalid_argument "WHO: WHY".
+template <class Options>
+const Options& require_valid(const Options& options, std::string_view who) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument(std::string(who) + ": " + why);
+  return options;
+}
+
 // Longest piece of input text an error message quotes [bytes].
 inline constexpr std::size_t kMaxQuotedBytes = 120;
 

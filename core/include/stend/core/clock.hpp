@@ -3,11 +3,30 @@
 #pragma once
 
 #include <chrono>
+#include <iosfwd>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <thread>
+#include <vector>
 
 namespace stend {
+
+// Which clock a run uses: kAuto is the experiment's default (simulated when every plugin of the
+// bench is simulated, else the wall clock).
+enum class ClockKind { kAuto, kSimulated, kWall };
+// "auto" | "simulated" | "wall".
+const char* to_string(ClockKind k);
+// The kind of that name, or nullopt.
+std::optional<ClockKind> clock_kind_from_string(std::string_view name);
+// Every kind's name, in the enum's order (for messages).
+const std::vector<std::string>& clock_kind_names();
+std::ostream& operator<<(std::ostream& os, ClockKind k);
+
+// A clock of that kind (kAuto: the wall clock; resolve it against the bench first).
+class Clock;
+std::unique_ptr<Clock> make_clock(ClockKind kind);
 
 class Clock {
  public:

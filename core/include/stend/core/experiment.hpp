@@ -4,6 +4,7 @@
 // file it came from so later checks (against the limits plugins declare) can point at it.
 #pragma once
 
+#include <stend/core/clock.hpp>
 #include <stend/errors.hpp>
 #include <stend/sdk.hpp>
 
@@ -115,7 +116,7 @@ struct Experiment {
   std::string name;         // [A-Za-z0-9_.-]+
   std::string description;
   std::uint64_t seed = 1;   // seeds every simulated noise source
-  std::string clock = "auto";  // "auto" | "simulated" | "wall"
+  ClockKind clock = ClockKind::kAuto;
   std::vector<std::string> plugin_paths;  // resolved relative to the experiment file
 
   GravitySpec gravity;

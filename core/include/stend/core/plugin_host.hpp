@@ -65,7 +65,7 @@ class PluginHost : public PluginCatalogue {
   // Every directory scan() was given, in order (for `stend plugins`).
   const std::vector<SearchDir>& search_path() const { return searched_; }
 
-  // Create an object; throws std::runtime_error naming the plugin and its reason on failure,
+  // Create an object; throws InputError naming the plugin and its reason on failure,
   // or when the plugin is of another kind.
   PluginPtr<Sensor> create_sensor(const std::string& name, const Params& params) const;
   PluginPtr<Fixture> create_fixture(const std::string& name, const Params& params) const;

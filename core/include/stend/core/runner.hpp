@@ -13,19 +13,36 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <iosfwd>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace stend {
+
+// What the runner is doing within a step (RunProgress::phase): moving a table to its target,
+// dwelling once it settled, recording, settling a chamber's temperature, waiting, done. A run
+// followed through its folder (the live view) knows only that it is running or how it ended
+// (kRunning, kDone, kInterrupted, kFailed: run_phase_of). kNone: nothing reported yet.
+enum class RunPhase { kNone, kMoving, kDwell, kRecording, kSettling, kWaiting, kDone, kRunning, kInterrupted, kFailed };
+// "" | "moving" | "dwell" | "recording" | "settling" | "waiting" | "done" | "running" | "interrupted" | "failed".
+const char* to_string(RunPhase p);
+// The phase of that name, or nullopt.
+std::optional<RunPhase> run_phase_from_string(std::string_view name);
+std::ostream& operator<<(std::ostream& os, RunPhase p);
+// The phase a run in this state is in, as far as its status says: running, done (complete),
+// interrupted, failed.
+RunPhase run_phase_of(RunStatus status);
 
 // What the runner reports while it runs (RunOptions::on_progress): where in the procedure it is,
 // the time left (stend/core/eta.hpp: the plan with the settle behaviour seen so far), and what the bench
 // reads now — for the progress line and the live view.
 struct RunProgress {
   int step = 0, step_count = 0;   // 1-based step being executed
-  std::string step_kind;          // "orientations", "set_temperature", …
+  std::optional<Step::Kind> step_kind;  // of that step; none before the first
   std::string step_label;         // the step's label
-  std::string phase;              // "moving", "settling", "dwell", "recording", "done"
+  RunPhase phase = RunPhase::kNone;
   int item = 0, item_count = 0;   // orientation / rate k of K (1-based), 0 when n/a
   double run_time_s = 0.0;
   double remaining_s = 0.0;       // run time left (ProcedureEta), 0 once done
@@ -48,10 +65,12 @@ struct RunProgress {
   std::string closed_label;
   std::array<double, 6> closed_mean{NAN, NAN, NAN, NAN, NAN, NAN};
   double time_left_s() const { return remaining_s; }
+  // The step's kind as the experiment file names it ("orientations", …), "" before the first.
+  const char* step_kind_name() const { return step_kind ? stend::step_kind_name(*step_kind) : ""; }
   // Share of the run done, 0…1, from the run time so far and the time left.
   double fraction_done() const {
     const double total = run_time_s + remaining_s;
-    return phase == "done" ? 1.0 : total > 0.0 ? run_time_s / total : 0.0;
+    return phase == RunPhase::kDone ? 1.0 : total > 0.0 ? run_time_s / total : 0.0;
   }
 };
 
@@ -65,11 +84,14 @@ struct RunOptions {
   double progress_period_s = 0.2;    // wall seconds between progress callbacks
   std::function<void(const RunProgress&)> on_progress;
   const std::atomic<bool>* stop = nullptr;  // set (e.g. by SIGINT) to stop cleanly
-  std::string clock;                 // override the experiment's clock ("simulated" | "wall")
+  std::optional<ClockKind> clock;    // overrides the experiment's clock
   // A fixture whose link fails (FixtureLinkFault) is retried every period for this long (run
   // time) before the run fails; the gap is reported in events.csv and marks segments unsettled.
   double fixture_outage_s = 30.0;
   RecordingWriterOptions store;      // how the run folder stores its data (HDF5 by default)
+
+  // Positive periods and time-outs, at least one sensor attempt, no negative outage, a valid store.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 struct RunResult {

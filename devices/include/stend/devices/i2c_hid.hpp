@@ -30,6 +30,10 @@ inline constexpr std::uint16_t kCp2112Vid = 0x10C4, kCp2112Pid = 0xEA90;
 struct HidBridgeConfig {
   int speed_hz = 400000;   // SCL clock
   int timeout_ms = 100;    // per report exchange
+
+  bool IsValid(std::string* error = nullptr) const {  // both > 0
+    return speed_hz > 0 && timeout_ms > 0 ? true : invalid(error, "speed_hz and timeout_ms must be > 0");
+  }
 };
 
 class Mcp2221Bus final : public I2cBus {

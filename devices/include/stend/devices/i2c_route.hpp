@@ -23,6 +23,10 @@ struct I2cRouteConfig {
   // Seams (null = the real system): tests put emulated peers here.
   std::shared_ptr<I2cDevFile> i2c_dev_file;
   std::shared_ptr<HidBackend> hid_backend;
+
+  // A known bus, with `device` where the bus needs one; a positive clock, rate and time-out, no
+  // negative retries.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 // Throws I2cError (kOpen) naming the route, or std::invalid_argument for an unknown `bus`.

@@ -28,6 +28,10 @@ struct ModbusRtuConfig {
   int response_timeout_ms = 100;
   int retries = 3;             // extra attempts after the first
   int backoff_initial_ms = 5;  // wait before the first retry; doubles each retry
+
+  // A line libmodbus can open (baud > 0, parity N/E/O, 5..8 data bits, 1 or 2 stop bits), a slave
+  // address 0..247, a positive time-out, no negative retries or back-off.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 class ModbusError : public IoError {

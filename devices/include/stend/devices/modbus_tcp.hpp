@@ -21,6 +21,9 @@ struct ModbusTcpConfig {
   int backoff_initial_ms = 20;  // wait before the first retry; doubles each retry
   bool connect_now = true;      // false: the first transaction connects (a peer not up yet is a
                                 // transient fault, not a constructor error)
+
+  // A host, a port 1..65535, a unit id 0..255, a positive time-out, no negative retries or back-off.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 class ModbusTcpClient final : public ModbusClient {

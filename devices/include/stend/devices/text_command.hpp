@@ -26,6 +26,10 @@ struct TextCommandConfig {
   int retries = 2;           // extra attempts after a time-out or a broken link
   int backoff_initial_ms = 20;  // wait before the first retry; doubles each retry
   bool connect_now = true;   // false: the first command connects
+
+  // A terminator; a TCP host (port 1..65535) or a serial device (baud > 0); a positive time-out,
+  // no negative retries or back-off.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 class TextCommandError : public IoError {

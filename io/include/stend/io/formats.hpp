@@ -46,7 +46,7 @@ const Format& find_format(const std::string& name);
 
 // The format of `inputs` by content: the first format that detects inputs[0] (and, for two
 // inputs, inputs[1] as well); the generic csv format when `options` map columns. Throws
-// std::runtime_error listing every format with its description when nothing matches.
+// InputError listing every format with its description when nothing matches.
 const Format& detect_format(const Inputs& inputs, const ImportOptions& options = {});
 
 // The dataset: `format` ("auto" or empty: detect_format) opened with `options`. Checks the input

@@ -1,30 +1,8 @@
-// How to read a log whose layout or units the file does not state: one set of keys, read from
-// `stend import|fit` flags (--KEY with '_' written '-') and from a YAML mapping file
-// (`--mapping FILE`, the same keys). Every key is declared once, in import_keys().
-//
-//   delimiter: ","          one character; "space" = runs of spaces/tabs, "tab"
-//   skip_lines: 0           lines before the column-name line (or the data)
-//   column_names: true      the first line after skip_lines names the columns
-//   comment: "#"            data lines starting with it are ignored ("" = none)
-//   time: t                 time column, by name or 0-based index (absent: t = i / rate_hz)
-//   time_unit: s            s | ms | us | ns
-//   rate_hz: 0              the sample rate; without a time column it is required; with one, the
-//                           rate repeated or jittering timestamps are rebuilt from (0 = fitted)
-//   accel: [ax, ay, az]     accelerometer x y z columns (flag: --accel ax,ay,az)
-//   gyro: [gx, gy, gz]      gyroscope x y z columns (absent: no gyroscope)
-//   temperature: temp       temperature column (degC = value * temperature_scale + temperature_offset_c)
-//   accel_unit: m/s^2       m/s^2 | g            (values in physical units)
-//   gyro_unit: rad/s        rad/s | deg/s
-//   accel_lsb: 1/16384 g    the values are counts of this size: NUMBER[/NUMBER] UNIT
-//   accel_offset: 0         counts; SI = (count - offset) * lsb (e.g. 32768 for unsigned 16-bit)
-//   gyro_lsb: 1/131 deg/s
-//   gyro_offset: 0
-//   temperature_scale: 1
-//   temperature_offset_c: 0
-//   gravity_mps2: 0         local gravity, 0 = unknown (standard gravity where one is needed)
-//   topic: /imu/data        ROS bags: the Imu topic (absent: the bag's only one)
-//   temperature_topic: ""   ROS bags: a Temperature topic
-//   instance: 0             ULog / DataFlash: the IMU instance (absent: the one with most samples)
+// How to read a log whose layout or units the file does not state: one set of keys, given as
+// `stend import|fit|gap` flags (--KEY with '_' written '-') or in a YAML mapping file (`--mapping
+// FILE`, the same keys; flags override it). Every key — its name, the type of its value, its unit,
+// its default, its check and its help — is declared once, in import_keys(); the flags are
+// registered and the mapping file read from that table (`stend import --help` lists them).
 //
 // The LSB and offset keys apply to every format that holds counts (csv, imutk, imucal,
 // mpu6050_multipos): they replace the format's nominal LSB.
@@ -32,8 +10,7 @@
 
 #include <stend/io/importers.hpp>
 
-#include <functional>
-#include <optional>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -48,40 +25,69 @@ struct ValueScale {
   bool counts() const { return lsb > 0.0; }
 };
 
+// The import options, as the keys of import_keys() set them. A default-constructed ImportOptions
+// holds every key's default (ImportKey::fallback); a key without one is absent until given (an
+// empty column, rate_hz 0, instance −1, no LSB).
 struct ImportOptions {
-  char delimiter = ',';
-  std::size_t skip_lines = 0;
-  bool column_names = true;
-  std::string comment = "#";
+  ImportOptions();
+
+  char delimiter{};
+  std::size_t skip_lines{};
+  bool column_names{};
+  std::string comment;
   CsvColumn time;
-  double time_scale_s = 1.0;  // seconds per time unit
-  double rate_hz = 0.0;
+  double time_scale_s{};  // seconds per time unit
+  double rate_hz{};       // 0: not given
   std::array<CsvColumn, 3> accel, gyro;
   CsvColumn temperature;
   ValueScale accel_value, gyro_value;
-  double temperature_scale = 1.0;
-  double temperature_offset_c = 0.0;
-  double gravity_mps2 = 0.0;
+  double temperature_scale{};
+  double temperature_offset_c{};
+  double gravity_mps2{};          // 0: unknown
   std::string topic;              // ROS bags
   std::string temperature_topic;  // ROS bags
-  int instance = -1;              // ULog / DataFlash; −1 = the instance with the most samples
+  int instance = -1;              // ULog / DataFlash; −1 (not given) = the instance with the most samples
   // Every key set, as "key: value" in the order given (the import's provenance states them).
   std::vector<std::string> stated;
 
-  // Sets `key` from its text (a flag's value or a YAML scalar; lists as "a,b,c"). Throws
-  // std::invalid_argument naming the key and what was expected.
+  // Sets `key` from its text (a flag's value or a YAML scalar; lists as "a,b,c"), parsed and
+  // checked as its ImportKey says. Throws std::invalid_argument naming the key and what was expected.
   void set(const std::string& key, const std::string& value);
   bool was_stated(const std::string& key) const;
-  // Ceres style: false with the first problem in *message.
-  bool IsValid(std::string* message = nullptr) const;
+  // What one key cannot say alone: gyro columns all or none, columns mapped with the
+  // accelerometer's, a rate without a time column, offsets only with an LSB. Ceres style: false
+  // with the first problem in *error.
+  bool IsValid(std::string* error = nullptr) const;
   // Whether columns are mapped (the generic csv format then applies).
   bool maps_columns() const { return !accel[0].empty(); }
   CsvMapping csv_mapping() const;
 };
 
+// What kind of text an import key takes.
+enum class ImportKeyType {
+  kText,       // any text
+  kCharacter,  // one character, "space" or "tab"
+  kCount,      // a whole number >= 0
+  kBoolean,    // true | false (yes | no, 1 | 0)
+  kNumber,     // a finite number
+  kColumn,     // a column: its name, or its 0-based index
+  kColumns,    // three columns x,y,z (names or 0-based indices)
+  kUnit,       // one of the units the help lists
+  kLsb,        // the size of one count: NUMBER[/NUMBER] UNIT
+};
+
+// One import key, declared once.
 struct ImportKey {
-  std::string key;   // YAML key; the flag is --key with '_' as '-'
-  std::string help;  // one line, with the accepted values
+  std::string key;       // YAML key; the flag is --key with '_' as '-' (import_flag)
+  ImportKeyType type;
+  std::string unit;      // of a number ("Hz", "m/s^2", "counts", …); "" for none
+  std::string fallback;  // the default, as the key's text; "" = none (absent until given)
+  std::string help;      // what it means and the values it accepts
+
+  // The value's placeholder in a usage line: "NUMBER", "COLUMN", "X,Y,Z", …
+  const char* type_name() const;
+  // One line for --help: the help, the unit and the default ("…, in Hz [0]").
+  std::string description() const;
 };
 const std::vector<ImportKey>& import_keys();
 

@@ -110,6 +110,10 @@ struct CsvMapping {
   double accel_range_mps2 = 0.0;  // header.info, 0 = unknown
   double gyro_range_radps = 0.0;
   double gravity_mps2 = 0.0;      // 0 = unknown
+
+  // A positive time scale, a rate >= 0, finite non-zero scales, finite offsets, gravity and
+  // ranges >= 0. (Which columns the file has is checked against it when it is read.)
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 Recording import_csv(const std::filesystem::path& file, const CsvMapping& mapping);
@@ -137,6 +141,8 @@ struct ImucalOptions {
   double accel_offset_counts = 0.0;  // SI = (count − offset) · LSB
   double gyro_offset_counts = 0.0;
   double gravity_mps2 = 9.81;  // the value imucal's Ferraris calibration assumes (expected_g)
+
+  bool IsValid(std::string* error = nullptr) const;  // rate, LSBs and gravity > 0; finite offsets
 };
 Recording import_imucal_session(const std::filesystem::path& csv, const ImucalOptions& options = {});
 // The same, streaming: a first pass checks every line and finds the runs of increasing sample
@@ -157,6 +163,8 @@ struct Mpu6050MultiposOptions {
   double accel_offset_counts = 0.0;  // SI = (count − offset) · LSB
   double gyro_offset_counts = 0.0;
   double gravity_mps2 = 0.0;  // header.gravity_mps2 (0 = unknown: the file does not state it)
+
+  bool IsValid(std::string* error = nullptr) const;  // LSBs > 0, finite offsets, gravity >= 0
 };
 Recording import_mpu6050_multipos(const std::filesystem::path& csv,
                                   const Mpu6050MultiposOptions& options = {});
@@ -182,6 +190,9 @@ struct ImuTkOptions {
   double time_tolerance_s = -1.0;  // < 0: 1 % of the median interval
   SensorIdentity identity;
   double gravity_mps2 = 0.0;
+
+  // A positive time scale, finite non-zero scales, finite offsets, rate and gravity >= 0.
+  bool IsValid(std::string* error = nullptr) const;
 };
 // gyro_file may be empty (accelerometer only).
 Recording import_imutk(const std::filesystem::path& acc_file,
@@ -220,6 +231,8 @@ struct MatOptions {
   double gyro_scale = 1.0;
   SensorIdentity identity;
   double gravity_mps2 = 0.0;
+
+  bool IsValid(std::string* error = nullptr) const;  // a positive time scale, finite non-zero scales, gravity >= 0
 };
 Recording import_mat(const std::filesystem::path& file, const MatOptions& options = {});
 // The same, streaming: the samples go to `out` a block at a time (a compressed v5 variable is
@@ -243,7 +256,12 @@ inline constexpr double kStaticTableRate_hz = 10.0;
 inline constexpr double kStaticTableHold_s = 20.0;
 Recording import_static_table(const std::filesystem::path& file, double gravity_mps2 = 0.0);
 
-// False when stend_core was built without matio (import_mat / export_mat then throw).
+// Whether MATLAB files can be read and written (always: matio is required).
 bool mat_supported();
+
+// The checks the options of every importer share: a factor that is finite and not 0, a gravity
+// that is 0 (unknown) or positive [m/s²].
+bool finite_nonzero(double v);
+bool gravity_or_unknown(double g_mps2);
 
 }  // namespace stend::io

@@ -34,6 +34,8 @@ enum class UlogSource {
 struct UlogOptions {
   UlogSource source = UlogSource::kAuto;
   int instance = -1;  // multi-instance id of the topic(s); −1 = the instance with the most samples
+
+  bool IsValid(std::string* error = nullptr) const;  // a known source, an instance >= −1
 };
 
 bool looks_like_ulog(const std::filesystem::path& file);
@@ -50,6 +52,8 @@ void import_ulog(const std::filesystem::path& file, const UlogOptions& options, 
 // the gyro may be logged in rad/s or deg/s, the rest must be m/s/s and degC.
 struct DataflashOptions {
   int instance = -1;  // IMU instance (the I field); −1 = the instance with the most samples
+
+  bool IsValid(std::string* error = nullptr) const;  // an instance −1 … 255
 };
 
 bool looks_like_dataflash(const std::filesystem::path& file);
@@ -66,6 +70,8 @@ void import_dataflash(const std::filesystem::path& file, const DataflashOptions&
 // holding mav0/imu0/data.csv (or imu0/data.csv, or data.csv).
 struct EurocOptions {
   SensorIdentity identity;  // the file does not name the sensor
+
+  bool IsValid(std::string* /*error*/ = nullptr) const { return true; }  // any identity
 };
 
 bool looks_like_euroc(const std::filesystem::path& path);

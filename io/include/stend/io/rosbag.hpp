@@ -38,6 +38,8 @@ struct RosbagOptions {
   std::string temperature_topic;
   SensorIdentity identity;     // empty fields are filled from the bag (see above)
   double gravity_mps2 = 0.0;   // 0 = unknown (a bag does not state it)
+
+  bool IsValid(std::string* error = nullptr) const;  // gravity >= 0
 };
 
 // True when `path` is a file starting with the ROS 1 bag v2.0 magic.

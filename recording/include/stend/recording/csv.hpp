@@ -43,13 +43,13 @@ bool parse_uint(std::string_view text, std::uint64_t& out) noexcept;
 bool parse_bool(std::string_view text, bool& out) noexcept;
 
 // Splits one record (without its terminating line feed) into fields, undoing RFC 4180 quoting.
-// Throws std::runtime_error on malformed quoting.
+// Throws InputError on malformed quoting.
 std::vector<std::string> split_record(std::string_view record);
 
 // Reads a CSV file in large chunks through read(2).
 class Reader {
  public:
-  // Throws std::runtime_error naming the file when it cannot be opened.
+  // Throws InputError naming the file when it cannot be opened.
   explicit Reader(const std::filesystem::path& file, std::size_t chunk_bytes = 4u << 20);
   // Reads `text` held in memory (copied); `name` stands for the file in errors.
   Reader(std::filesystem::path name, std::string_view text);
@@ -62,7 +62,7 @@ class Reader {
   // counted in partial().
   bool next_line(std::string_view& line);
   // Next complete record with RFC 4180 quoting (quoted fields may hold line breaks).
-  // Throws std::runtime_error naming file and line on malformed quoting: a double quote inside an
+  // Throws InputError naming file and line on malformed quoting: a double quote inside an
   // unquoted field, text after a closing quote, or a quote left open at the end of the file (named
   // at the line where it opened).
   bool next_record(std::vector<std::string>& fields);

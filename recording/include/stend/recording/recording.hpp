@@ -134,6 +134,8 @@ std::size_t max_bytes_per_truth_value(RecordingFormat f);
 
 struct RecordingWriterOptions {
   RecordingFormat format = RecordingFormat::kHdf5;
+
+  bool IsValid(std::string* error = nullptr) const;  // a known format
 };
 
 class RecordingWriter {
@@ -227,7 +229,7 @@ struct Recording {
   mutable std::shared_ptr<const MemorySamples> memory_view_;  // sample_source() over `samples`
 };
 
-// Throws std::runtime_error when `rec` is damaged: the run folder, what is damaged and how many
+// Throws InputError when `rec` is damaged: the run folder, what is damaged and how many
 // samples are still readable. Analyses call it unless the user accepted the readable part.
 void require_whole(const Recording& rec);
 

@@ -43,7 +43,7 @@ class SampleSource {
   // Readable samples (a damaged tail is not counted).
   virtual std::uint64_t size() const = 0;
   // Samples [first, first + count) into out[0 .. count). Requires first + count ≤ size().
-  // Throws std::runtime_error naming the file and what is damaged when the data cannot be read.
+  // Throws InputError naming the file and what is damaged when the data cannot be read.
   virtual void read(std::uint64_t first, std::size_t count, ImuSample* out) const = 0;
   // One channel of samples [first, first + count) into out[0 .. count). The default reads whole
   // samples; a columnar store overrides it to read only that column.
@@ -107,7 +107,7 @@ class RecordedTruth {
   virtual std::size_t columns() const = 0;  // values per row
   // Rows [first, first + count): times into t[0 .. count), values row after row into
   // values[0 .. count · columns()); whole[i] false for a row that has fewer values (its values
-  // then read NaN). Requires first + count ≤ rows(). Throws std::runtime_error naming the file
+  // then read NaN). Requires first + count ≤ rows(). Throws InputError naming the file
   // when the rows cannot be read.
   virtual void read(std::uint64_t first, std::size_t count, double* t, double* values, bool* whole) const = 0;
   // The first row at or after t_s (rows() when none), and the first after it.

@@ -69,6 +69,9 @@ struct SimImuConfig {
   // Every parameter of the sim_imu plugin: its schema and the reader of its Params.
   static const stend::fields::Table<SimImuConfig>& fields();
   static SimImuConfig from(const Params& p) { return fields().read(p); }  // throws std::invalid_argument
+  // Rate, bits, ranges, LSBs, low-pass below Nyquist, temperature scale, seed, the shapes of the
+  // temperature coefficients and zero cross-axis diagonals.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 class SimImu final : public Sensor {

@@ -166,19 +166,24 @@ struct AxisConfig {
   double encoder_resolution = 1e-4;     // reading quantum (0 = none)
   double encoder_noise = 0.0;           // standard deviation of the reading noise
   double full_turn = 360.0;             // an axis whose range spans a full turn is continuous
+
+  // Travel, initial position within it, limits, settling and encoder.
+  bool IsValid(std::string* error = nullptr) const {
+    if (!(min < max)) return invalid(error, "min must be < max");
+    if (!(initial >= min && initial <= max)) return invalid(error, "initial position outside [min, max]");
+    if (!(max_rate > 0.0 && max_accel > 0.0)) return invalid(error, "max rate and acceleration must be > 0");
+    if (!(settle_tolerance > 0.0 && settle_rate_tolerance > 0.0 && settle_time_s >= 0.0))
+      return invalid(error, "settle tolerances must be > 0 and the settle time >= 0");
+    if (!(encoder_resolution >= 0.0 && encoder_noise >= 0.0))
+      return invalid(error, "encoder resolution/noise must be >= 0");
+    return true;
+  }
 };
 
 class SimAxis {
  public:
   SimAxis() = default;
-  SimAxis(const AxisConfig& c, std::uint64_t seed) : c_(c), rng_(seed) {
-    auto bad = [&](const std::string& why) { throw std::invalid_argument("axis '" + c.name + "': " + why); };
-    if (!(c.min < c.max)) bad("min must be < max");
-    if (!(c.initial >= c.min && c.initial <= c.max)) bad("initial position outside [min, max]");
-    if (!(c.max_rate > 0.0 && c.max_accel > 0.0)) bad("max rate and acceleration must be > 0");
-    if (!(c.settle_tolerance > 0.0 && c.settle_rate_tolerance > 0.0 && c.settle_time_s >= 0.0))
-      bad("settle tolerances must be > 0 and the settle time >= 0");
-    if (!(c.encoder_resolution >= 0.0 && c.encoder_noise >= 0.0)) bad("encoder resolution/noise must be >= 0");
+  SimAxis(const AxisConfig& c, std::uint64_t seed) : c_(require_valid(c, "axis '" + c.name + "'")), rng_(seed) {
     continuous_ = c.max - c.min >= c.full_turn;
     plan_ = prev_ = MotionPlan::hold(0.0, c.initial);
     commanded_ = c.initial;

@@ -44,6 +44,8 @@ struct OneAxisTableConfig {
   // The motion of the one axis "angle" (deg): limits, profile, settling, encoder — as
   // SimOneAxisTable moves it and as emulators/bench_world serves it.
   AxisConfig axis() const;
+  // The axis (AxisConfig::IsValid) and the tilt h within ±90 deg.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 class SimOneAxisTable final : public Fixture {

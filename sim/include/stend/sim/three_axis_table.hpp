@@ -38,6 +38,10 @@ struct ThreeAxisTableConfig {
   // Every parameter of the sim_three_axis_table plugin: its schema and the reader of its Params.
   static const stend::fields::Table<ThreeAxisTableConfig>& fields();
   static ThreeAxisTableConfig from(const Params& p) { return fields().read(p); }  // throws std::invalid_argument
+  // Axis i (0 azimuth, 1 tilt, 2 rotation) as the table moves it.
+  AxisConfig axis(int i) const;
+  // Every axis (AxisConfig::IsValid).
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 class SimThreeAxisTable final : public Fixture {

@@ -20,7 +20,7 @@ class PtyModbusRtu {
  public:
   // `who` starts every error message ("bench MCU emulator: openpty failed: …"). `baud` [bit/s]
   // only sets libmodbus' frame timing (the pty has no line rate); `indication_timeout_us` [µs] is
-  // how long receive() waits for a request before it returns 0. Throws std::runtime_error.
+  // how long receive() waits for a request before it returns 0. Throws IoError.
   PtyModbusRtu(const char* who, int baud, int slave_id, int indication_timeout_us = 20000);
   ~PtyModbusRtu();
   PtyModbusRtu(const PtyModbusRtu&) = delete;

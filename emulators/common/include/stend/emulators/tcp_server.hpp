@@ -23,11 +23,14 @@ struct LoopbackTcpOptions {
   int poll_ms = 20;            // [ms] how long one wait() polls for activity
   int down_sleep_ms = 10;      // [ms] one wait() during a disconnection period
   int relisten_sleep_ms = 20;  // [ms] one wait() after a failed attempt to listen again
+
+  // A port 0..65535, a positive poll, no negative sleeps.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 class LoopbackTcpServer {
  public:
-  // Listens now; throws std::runtime_error "<who>: cannot listen on 127.0.0.1:<port>: <errno text>".
+  // Listens now; throws IoError "<who>: cannot listen on 127.0.0.1:<port>: <errno text>".
   LoopbackTcpServer(const char* who, LoopbackTcpOptions options);
   ~LoopbackTcpServer();
   LoopbackTcpServer(const LoopbackTcpServer&) = delete;
