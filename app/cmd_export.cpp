@@ -6,6 +6,7 @@
 #include "commands.hpp"
 
 #include "stend/errors.hpp"
+#include "stend/estimators/builtin.hpp"
 #include "stend/recording/files.hpp"
 #include "stend/reporting/exports.hpp"
 #include "stend/reporting/results_store.hpp"
@@ -75,8 +76,17 @@ void add_export_command(CLI::App& app, std::vector<Command>& out) {
       ->check(at_least(0));
   sub->add_option("--from", opt.from,
                   "Calibration source: auto (Ceres when it is a full 3-axis calibration, else fit.json, then "
-                  "temp_poly.json) | ceres | batch_lsq | temp_poly")
-      ->check(CLI::IsMember({"auto", "ceres", "batch_lsq", "temp_poly"}));
+                  "temp_poly.json) | ceres | batch_lsq | temp_poly (an estimator's name)")
+      ->check(CLI::Validator(
+          [](std::string& from) -> std::string {
+            try {
+              stend::reporting::calibration_source(stend::estimators::builtin(), from);
+              return {};
+            } catch (const InputError& e) {
+              return e.what();
+            }
+          },
+          "auto|ESTIMATOR"));
   sub->add_option("--px4-instance", opt.px4_instance, "PX4: calibration slot n of TC_An / TC_Gn (default 0)")
       ->check(within(0, 3));
   sub->add_flag("--accept-damaged", opt.accept_damaged,
@@ -87,7 +97,8 @@ void add_export_command(CLI::App& app, std::vector<Command>& out) {
                    if (db.empty() && !procedure.empty())
                      throw InputError("stend export --procedure: give the results store with --db LOCATION");
                    if (db.empty() && run.empty()) throw InputError("stend export: give the run folder");
-                   const auto r = db.empty() ? stend::reporting::export_run(run, format, output, opt)
+                   const auto r = db.empty() ? stend::reporting::export_run(run, format, output,
+                                                                            stend::estimators::builtin(), opt)
                                              : export_from_store(run, procedure, db, format, output);
                    nlohmann::json files = nlohmann::json::array();
                    for (const auto& f : r.files) {

@@ -1,105 +1,38 @@
-// Internal: an error model rebuilt from a "stend.fit/1" document (terms, parameter values by
-// index, covariance from standard errors and correlations), evaluated only through the vocabulary
-// (ErrorModel::measure / regressor) — no term formula is written here.
+// Internal: the error model of one "stend.fit/1" document as the run report's temperature plots
+// use it — the typed model (estimation::read_fit_model; the evaluation, with its standard error,
+// is estimation::InstrumentModel::contribution, through the vocabulary) and the document's interval
+// quantile. The exports read typed results through the registry instead (export_sources.hpp).
 #pragma once
 
-#include "stend/model/terms.hpp"
+#include "stend/estimation/result_io.hpp"
 
 #include <nlohmann/json.hpp>
 
-#include <Eigen/Dense>
-
-#include <algorithm>
-#include <cmath>
-#include <string>
 #include <utility>
-#include <vector>
 
 namespace stend::reporting::detail {
 
-inline double jnum(const nlohmann::json& j, const char* key) {
-  if (!j.is_object() || !j.contains(key) || !j[key].is_number()) return NAN;
-  return j[key].get<double>();
-}
-inline double jat(const nlohmann::json& a, std::size_t i) {
-  if (!a.is_array() || i >= a.size() || !a[i].is_number()) return NAN;
-  return a[i].get<double>();
-}
-inline std::string jstr(const nlohmann::json& j, const char* key) {
-  if (!j.is_object() || !j.contains(key) || !j[key].is_string()) return {};
-  return j[key].get<std::string>();
-}
-
 struct FittedModel {
-  model::ErrorModel m;
-  std::vector<double> theta;
-  std::vector<int> index;       // per listed parameter: index into theta
-  Eigen::MatrixXd cov;          // over listed parameters (identifiable ones; 0 elsewhere)
-  double quantile = 1.96;
-  bool ok = false;
-  std::vector<std::string> not_identified;  // parameter names left at 0 in theta
+  estimation::InstrumentModel model;
+  double quantile = 1.96;  // of the document's intervals (solution.quantile)
+  bool ok = false;         // the document has a model of the vocabulary's terms
 };
 
 inline FittedModel fitted_model(const nlohmann::json& fit) {
   FittedModel f;
-  const nlohmann::json mj = fit.value("model", nlohmann::json::object());
-  f.m.instrument = jstr(mj, "instrument") == "gyroscope" ? model::Instrument::kGyroscope : model::Instrument::kAccelerometer;
-  for (const auto& t : mj.value("terms", nlohmann::json::array())) {
-    const auto k = model::term_from_name(jstr(t, "kind"));
-    if (!k) return f;
-    model::TermSpec s;
-    s.kind = *k;
-    if (t.contains("order")) s.order = t["order"].get<int>();
-    if (t.contains("reference_c")) s.reference_c = t["reference_c"].get<double>();
-    f.m.terms.push_back(s);
+  if (auto m = estimation::read_fit_model(fit)) {
+    f.ok = m->ok();
+    f.model = std::move(*m);
   }
-  f.theta.assign(static_cast<std::size_t>(f.m.size()), 0.0);
-  const nlohmann::json ps = fit.value("parameters", nlohmann::json::array());
-  const auto n = ps.size();
-  f.cov = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
-  const nlohmann::json corr = fit.value("correlation", nlohmann::json::array());
-  for (std::size_t i = 0; i < n; ++i) {
-    const int idx = ps[i].value("index", -1);
-    f.index.push_back(idx);
-    const double v = jnum(ps[i], "value");
-    if (idx >= 0 && idx < f.m.size() && std::isfinite(v)) f.theta[static_cast<std::size_t>(idx)] = v;
-    else f.not_identified.push_back(jstr(ps[i], "name"));
-    for (std::size_t j = 0; j < n; ++j) {
-      const double c = corr.is_array() && i < corr.size() ? jat(corr[i], j) : (i == j ? 1.0 : 0.0);
-      const double v2 = (std::isfinite(c) ? c : 0.0) * jnum(ps[i], "std_error") * jnum(ps[j], "std_error");
-      f.cov(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = std::isfinite(v2) ? v2 : 0.0;
-    }
-  }
-  const double q = jnum(fit.value("solution", nlohmann::json::object()), "quantile");
-  if (std::isfinite(q)) f.quantile = q;
-  f.ok = true;
+  const nlohmann::json solution = fit.value("solution", nlohmann::json::object());
+  if (solution.contains("quantile") && solution["quantile"].is_number()) f.quantile = solution["quantile"].get<double>();
   return f;
 }
 
-// Output axis `k` of the model's contribution at (input u, temperature T), and its standard error
-// from the parameter covariance (gradient = the regressor row).
+// Output axis k of the model's contribution at (input u, temperature T) and its standard error.
 inline std::pair<double, double> contribution(const FittedModel& f, int k, const model::Vec3<double>& u, double T,
-                                       const model::Vec3<double>* minus_u = nullptr) {
-  auto stim = [&](const model::Vec3<double>& in) {
-    model::Stimulus<double> s;
-    s.input = in;
-    s.specific_force = f.m.instrument == model::Instrument::kAccelerometer ? in : model::Vec3<double>::Zero();
-    s.temperature_c = T;
-    return s;
-  };
-  const auto s = stim(u);
-  double y = f.m.measure<double>(f.theta.data(), s)[k] - u[k];
-  Eigen::RowVectorXd row = f.m.regressor(s).row(k);
-  if (minus_u) {
-    const auto s0 = stim(*minus_u);
-    y -= f.m.measure<double>(f.theta.data(), s0)[k] - (*minus_u)[k];
-    row -= f.m.regressor(s0).row(k);
-  }
-  Eigen::VectorXd gvec(static_cast<Eigen::Index>(f.index.size()));
-  for (std::size_t i = 0; i < f.index.size(); ++i)
-    gvec[static_cast<Eigen::Index>(i)] = f.index[i] >= 0 && f.index[i] < row.size() ? row[f.index[i]] : 0.0;
-  const double var = gvec.dot(f.cov * gvec);
-  return {y, std::sqrt(std::max(0.0, var))};
+                                              const model::Vec3<double>* minus_u = nullptr) {
+  return f.model.contribution(k, u, T, minus_u);
 }
 
 }  // namespace stend::reporting::detail

@@ -3,9 +3,26 @@
 
 #include "stend/ceres_nonlinear/model_file.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <stdexcept>
 
 namespace stend::ceres_nonlinear {
+
+namespace {
+
+// The typed fit: ceres.json written, then read back by read_results, so a fit and its results
+// file give the same typed result.
+estimation::FitResult fit_typed(const EstimatorRequest& req) {
+  if (req.recording == nullptr) throw std::invalid_argument("ceres_nonlinear: no recording given");
+  const ModelFileFit f = fit_model_file(*req.recording, load_model_file(req.model_file));
+  estimation::FitResult r = read_results(nlohmann::json::parse(f.json));
+  r.document_text = f.json;
+  r.text = f.text;
+  return r;
+}
+
+}  // namespace
 
 CeresNonlinearEstimator::CeresNonlinearEstimator(const Params& p) : config_(fields().read(p)) {}
 
@@ -16,9 +33,8 @@ const stend::fields::Table<estimation::EstimatorConfig>& CeresNonlinearEstimator
 }
 
 EstimatorResult CeresNonlinearEstimator::fit(const EstimatorRequest& req) {
-  if (req.recording == nullptr) throw std::invalid_argument("ceres_nonlinear: no recording given");
-  const ModelFileFit f = fit_model_file(*req.recording, load_model_file(req.model_file));
-  return {f.ok, f.message, f.json, f.text, config_.results_file};
+  const estimation::FitResult r = fit_typed(req);
+  return {r.ok(), r.summary.message, r.document_text, r.text, config_.results_file};
 }
 
 estimation::EstimatorEntry estimator_entry() {
@@ -29,6 +45,8 @@ estimation::EstimatorEntry estimator_entry() {
   e.results_file = kResultsFile;
   e.claims = [](const YAML::Node& root) { return root.IsMap() && root["ceres_nonlinear"]; };
   e.create = [] { return PluginPtr<Estimator>(new CeresNonlinearEstimator(), [](Estimator* p) { delete p; }); };
+  e.fit = fit_typed;
+  e.read = read_results;
   return e;
 }
 
