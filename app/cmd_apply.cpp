@@ -23,10 +23,9 @@ namespace {
 namespace fs = std::filesystem;
 
 // The results file CAL names: the file itself, or the one estimator results file in a run folder.
-fs::path results_file(const fs::path& cal) {
+fs::path results_file(const fs::path& cal, const estimation::Registry& registry) {
   if (!fs::is_directory(cal)) return cal;
   std::vector<fs::path> found;
-  const estimation::Registry registry = estimators::builtin();
   for (const auto& e : registry.entries())
     if (!e.results_file.empty() && fs::is_regular_file(cal / e.results_file)) found.push_back(cal / e.results_file);
   if (found.size() == 1) return found.front();
@@ -46,7 +45,8 @@ struct ApplyArgs {
 };
 
 ExitCode run_apply(const ApplyArgs& a) {
-  const calibration::Calibration cal = calibration::load_calibration(results_file(a.cal));
+  const estimation::Registry registry = estimators::builtin();
+  const calibration::Calibration cal = calibration::load_calibration(results_file(a.cal, registry), registry);
   const bool validating = a.validate || !a.rotations.empty() || a.options.rebias_from_start_s > 0.0;
   if (a.output.empty() && !validating) {
     fmt::print(stderr, "stend apply: nothing to do: give -o CALIBRATED to write the calibrated recording, and/or --validate\n");

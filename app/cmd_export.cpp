@@ -76,8 +76,17 @@ void add_export_command(CLI::App& app, std::vector<Command>& out) {
       ->check(at_least(0));
   sub->add_option("--from", opt.from,
                   "Calibration source: auto (Ceres when it is a full 3-axis calibration, else fit.json, then "
-                  "temp_poly.json) | ceres | batch_lsq | temp_poly")
-      ->check(CLI::IsMember({"auto", "ceres", "batch_lsq", "temp_poly"}));
+                  "temp_poly.json) | ceres | batch_lsq | temp_poly (an estimator's name)")
+      ->check(CLI::Validator(
+          [](std::string& from) -> std::string {
+            try {
+              stend::reporting::calibration_source(stend::estimators::builtin(), from);
+              return {};
+            } catch (const InputError& e) {
+              return e.what();
+            }
+          },
+          "auto|ESTIMATOR"));
   sub->add_option("--px4-instance", opt.px4_instance, "PX4: calibration slot n of TC_An / TC_Gn (default 0)")
       ->check(within(0, 3));
   sub->add_flag("--accept-damaged", opt.accept_damaged,

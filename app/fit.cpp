@@ -2,8 +2,8 @@
 #include "commands.hpp"
 #include "progress.hpp"
 
+#include "stend/errors.hpp"
 #include "stend/estimation/registry.hpp"
-#include "stend/estimation/summary.hpp"
 #include "stend/estimators/builtin.hpp"
 #include "stend/recording/files.hpp"
 #include "stend/core/plugin_host.hpp"
@@ -110,19 +110,9 @@ const estimation::EstimatorEntry& resolve_estimator(const estimation::Registry& 
   with_plugins = registry;
   add_plugin_estimators(with_plugins, host);
   if (const auto* e = with_plugins.find(name)) return *e;
-  throw std::runtime_error("no estimator '" + name + "': not built in (" + registry.names() +
+  throw InputError("no estimator '" + name + "': not built in (" + registry.names() +
                            ") and no estimator plugin of that name on the search path "
                            "(`stend plugins` lists what is found; STEND_PLUGIN_PATH adds a folder)");
-}
-
-// The results document of a failed fit whose estimator gave none: its status and why, no numbers.
-std::string failure_document(const estimation::EstimatorEntry& entry, const std::string& message) {
-  estimation::FitSummary s;
-  s.estimator = entry.name;
-  s.version = entry.version;
-  s.status = estimation::FitStatus::kFailed;
-  s.message = message;
-  return estimation::to_json(s).dump(2);
 }
 
 }  // namespace
@@ -238,20 +228,20 @@ FitOutcome fit_recording(const stend::Recording& rec, const std::string& model_f
   request.input = rec.dir.string();
   request.model_file = model_file;
   request.output_dir = out_dir.string();
-  const EstimatorResult r = entry.create()->fit(request);
+  const estimation::FitResult r = estimation::fit(entry, request);
   progress.stop();
   std::string text = r.text;
-  if (!r.ok && !r.message.empty() && text.find(r.message) == std::string::npos)
-    text += entry.name + ": FAILED — " + r.message + "\n";
+  const std::string& why = r.summary.message;
+  if (!r.ok() && !why.empty() && text.find(why) == std::string::npos) text += entry.name + ": FAILED — " + why + "\n";
   std::filesystem::path json = json_out;
   if (json.empty() && !out_dir.empty())
-    json = out_dir / estimation::results_file_for(r.json_name.empty() ? entry.results_file : r.json_name,
-                                                  estimation::model_instrument(yaml::load_file(model_file, "model file")));
+    json = out_dir / estimation::results_file_for(r.results_file, estimation::model_instrument(
+                                                                      yaml::load_file(model_file, "model file")));
   human_stream() << text;
-  const std::string document = r.ok || !r.json.empty() ? r.json : failure_document(entry, r.message);
-  write_results(json, document, text, !r.ok);
+  const std::string document = r.written_document();
+  write_results(json, document, text, !r.ok());
   FitOutcome out;
-  out.ok = r.ok;
+  out.ok = r.ok();
   out.results_file = json;
   out.estimator = entry.name;
   out.document = nlohmann::json::parse(document, nullptr, false);

@@ -1,15 +1,15 @@
 // A fitted calibration read back and applied. See stend/calibration/calibration.hpp.
 #include "stend/calibration/calibration.hpp"
 
+#include "stend/errors.hpp"
+#include "stend/estimation/model_spec.hpp"
+
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <ostream>
-#include <set>
-#include <stdexcept>
 
 namespace stend::calibration {
 
@@ -17,113 +17,24 @@ using nlohmann::json;
 
 namespace {
 
-// A part of a results document: which instrument, its parameters as fitted (names without the
-// document's prefix), the temperature polynomials' reference.
-struct Part {
-  model::Instrument instrument = model::Instrument::kAccelerometer;
-  std::vector<estimation::ParameterEstimate> parameters;
-  double reference_c = 25.0;
-};
+[[noreturn]] void refuse(const std::string& source, const std::string& why) { throw InputError(source + ": " + why); }
 
-[[noreturn]] void refuse(const std::string& source, const std::string& why) {
-  throw std::runtime_error(source + ": " + why);
-}
+const char* name_of(model::Instrument i) { return estimation::instrument_name(i); }
 
-model::Instrument instrument_named(const std::string& name, const std::string& source) {
-  if (name == "accelerometer") return model::Instrument::kAccelerometer;
-  if (name == "gyroscope") return model::Instrument::kGyroscope;
-  refuse(source, "unknown instrument '" + name + "' (expected accelerometer or gyroscope)");
-}
-
-// The reference temperature of the document's temperature polynomials (stend.fit/1 `model.terms`).
-double fit_reference_c(const json& fit) {
-  for (const auto& t : fit.value("model", json::object()).value("terms", json::array()))
-    if (t.contains("reference_c") && t["reference_c"].is_number()) return t["reference_c"].get<double>();
-  return 25.0;
-}
-
-// A "stend.fit/1" document (batch_lsq, one axis of temp_poly).
-Part fit_part(const json& fit, const std::string& source) {
-  Part p;
-  p.instrument = instrument_named(fit.value("model", json::object()).value("instrument", ""), source);
-  p.parameters = estimation::summary_from_json(fit).parameters;
-  p.reference_c = fit_reference_c(fit);
-  return p;
-}
-
-// A Ceres part (`accelerometer` / `gyroscope`): its parameters, fixed ones included (held at 0).
-Part ceres_part(const json& part, model::Instrument inst) {
-  Part p;
-  p.instrument = inst;
-  json doc = part;
-  doc["status"] = part.value("ok", false) ? "ok" : "failed";
-  p.parameters = estimation::summary_from_json(doc).parameters;
-  return p;
-}
-
-// The Ceres accelerometer part's gyro bias (gyroscope: bias_only), renamed to the vocabulary's bias_*.
-Part ceres_gyro_bias(const json& accel) {
-  Part p;
-  p.instrument = model::Instrument::kGyroscope;
-  for (const auto& prm : accel.value("gyro_parameters", json::array())) {
-    json one = {{"status", "ok"}, {"parameters", json::array({prm})}};
-    auto e = estimation::summary_from_json(one).parameters.at(0);
-    if (e.name.rfind("gyro_", 0) == 0) e.name = e.name.substr(5);
-    p.parameters.push_back(e);
-  }
-  return p;
-}
-
-// θ for the part: each parameter of the model named like a fitted one takes its value; the ones
-// the fit did not identify are 0 and noted.
-InstrumentCalibration build(const Part& part, std::vector<std::string>& notes) {
+// The correction of one instrument model: its θ as applied (what the fit did not identify as 0,
+// named in `notes`).
+InstrumentCalibration build(const estimation::InstrumentModel& m, std::vector<std::string>& notes) {
   InstrumentCalibration ic;
-  std::vector<std::string> names;
-  for (const auto& e : part.parameters) names.push_back(e.name);
-  ic.model = model_from_names(part.instrument, names, part.reference_c);
-  ic.parameters = part.parameters;
-  const auto info = ic.model.params();
-  ic.theta.assign(info.size(), 0.0);
-  std::vector<std::string> zero;
-  for (std::size_t i = 0; i < info.size(); ++i) {
-    const auto* e = ic.find(info[i].name);
-    if (e && e->identifiable && std::isfinite(e->value)) ic.theta[i] = e->value;
-    else if (e && e->reason.rfind("held at 0", 0) != 0) zero.push_back(info[i].name);
-  }
-  if (!zero.empty()) {
+  ic.model = m.model;
+  ic.theta = m.applied_theta();
+  ic.parameters = m.parameters;
+  if (const auto zero = m.not_identified(); !zero.empty()) {
     std::string list;
     for (const auto& z : zero) list += (list.empty() ? "" : ", ") + z;
-    notes.push_back(fmt::format("{}: not identified by the fit, applied as 0: {}",
-                                estimation::instrument_name(part.instrument), list));
+    notes.push_back(fmt::format("{}: not identified by the fit, applied as 0: {}", name_of(m.instrument()), list));
   }
   return ic;
 }
-
-// temp_poly: every axis's fit merged into one part (the axes' parameters are disjoint).
-Part temp_poly_part(const json& doc, const std::string& source, std::vector<std::string>& notes) {
-  Part p;
-  bool any = false;
-  for (const auto& ax : doc.value("axes", json::array())) {
-    if (!ax.value("ok", false) || !ax.contains("fit") || !ax["fit"].is_object()) {
-      notes.push_back("axis " + ax.value("axis", std::string("?")) + ": the fit failed, left uncalibrated");
-      continue;
-    }
-    const Part a = fit_part(ax["fit"], source);
-    p.instrument = a.instrument;
-    p.parameters.insert(p.parameters.end(), a.parameters.begin(), a.parameters.end());
-    any = true;
-  }
-  if (!any) refuse(source, "no axis of this temp_poly fit succeeded: nothing to apply");
-  if (doc.contains("reference_c") && doc["reference_c"].is_number()) p.reference_c = doc["reference_c"].get<double>();
-  return p;
-}
-
-void set_part(Calibration& c, const Part& part) {
-  InstrumentCalibration ic = build(part, c.notes);
-  (part.instrument == model::Instrument::kAccelerometer ? c.accel : c.gyro) = std::move(ic);
-}
-
-double number_or_nan(const json& j) { return j.is_number() ? j.get<double>() : std::nan(""); }
 
 }  // namespace
 
@@ -158,93 +69,49 @@ void Calibration::print(std::ostream& os) const {
   for (const auto& n : notes) os << "note: " << n << "\n";
 }
 
-model::ErrorModel model_from_names(model::Instrument instrument, const std::vector<std::string>& names,
-                                   double reference_c) {
-  const std::set<std::string> have(names.begin(), names.end());
-  model::ErrorModel m;
-  m.instrument = instrument;
-  for (model::TermKind k : model::kAllTermKinds) {
-    if (k == model::TermKind::kGSensitivity && instrument != model::Instrument::kGyroscope) continue;
-    // The highest order whose own parameters (those order − 1 lacks) are named.
-    model::TermSpec t{k, 1, reference_c};
-    const int max_order = model::is_temperature_polynomial(k) ? 6 : 1;
-    int order = 0;
-    std::set<std::string> lower;
-    for (int o = 1; o <= max_order; ++o) {
-      t.order = o;
-      std::set<std::string> these;
-      for (const auto& info : model::param_info(t, instrument)) {
-        these.insert(info.name);
-        if (!lower.count(info.name) && have.count(info.name)) order = o;
-      }
-      lower = std::move(these);
-    }
-    if (order == 0) continue;
-    t.order = order;
-    m.terms.push_back(t);
-  }
-  return m;
-}
-
-Calibration calibration_from_json(const json& doc, const std::string& source) {
-  if (!doc.is_object()) refuse(source, "not a results document (expected a JSON object)");
+Calibration calibration_from(const estimation::FitResult& result, const std::string& source) {
   Calibration c;
   c.source = source;
-  const json est = doc.value("estimator", json());
-  c.estimator = est.is_object() ? est.value("name", "") : est.is_string() ? est.get<std::string>() : "";
-  if (doc.contains("accelerometer") || doc.contains("gyroscope")) {  // ceres_nonlinear
-    bool any = false;
-    if (doc.contains("accelerometer")) {
-      const json& a = doc["accelerometer"];
-      if (a.value("ok", false)) {
-        set_part(c, ceres_part(a, model::Instrument::kAccelerometer));
-        c.gravity_mps2 = number_or_nan(a.value("gravity_mps2", json()));
-        any = true;
-        if (!doc.contains("gyroscope") && !a.value("gyro_parameters", json::array()).empty())
-          set_part(c, ceres_gyro_bias(a));
-      } else {
-        c.notes.push_back("accelerometer: the fit failed (" + a.value("message", std::string()) + "), not applied");
-      }
+  c.estimator = result.summary.estimator;
+  bool any_model = false, any_applied = false;
+  for (const auto* m : {result.accelerometer ? &*result.accelerometer : nullptr,
+                        result.gyroscope ? &*result.gyroscope : nullptr}) {
+    if (m == nullptr) continue;
+    any_model = true;
+    if (!m->ok()) {
+      c.notes.push_back(fmt::format("{}: the fit failed ({}), not applied", name_of(m->instrument()), m->message));
+      continue;
     }
-    if (doc.contains("gyroscope")) {
-      const json& g = doc["gyroscope"];
-      if (g.value("ok", false)) {
-        set_part(c, ceres_part(g, model::Instrument::kGyroscope));
-        any = true;
-      } else {
-        c.notes.push_back("gyroscope: the fit failed (" + g.value("message", std::string()) + "), not applied");
-      }
+    for (const auto& f : m->failed_axes)
+      c.notes.push_back(fmt::format("axis {}: the fit failed, left uncalibrated", estimation::axis_name(f.axis)));
+    (m->instrument() == model::Instrument::kAccelerometer ? c.accel : c.gyro) = build(*m, c.notes);
+    if (std::isfinite(m->gravity_mps2) && m->instrument() == model::Instrument::kAccelerometer)
+      c.gravity_mps2 = m->gravity_mps2;
+    if (m->states_temperature_range()) {
+      c.valid_min_c = m->min_temperature_c;
+      c.valid_max_c = m->max_temperature_c;
     }
-    if (!any) refuse(source, "every part of this fit failed: nothing to apply (" + doc.value("message", std::string()) + ")");
-  } else if (doc.contains("axes") && doc["axes"].is_array()) {  // temp_poly
-    set_part(c, temp_poly_part(doc, source, c.notes));
-    const json range = doc.value("valid_range_c", json::array());
-    if (range.is_array() && range.size() == 2) {
-      c.valid_min_c = number_or_nan(range[0]);
-      c.valid_max_c = number_or_nan(range[1]);
-    }
-  } else if (doc.contains("model") && doc.contains("parameters")) {  // batch_lsq, stend.fit/1
-    if (estimation::status_of(doc) != estimation::FitStatus::kOk)
-      refuse(source, "this fit failed (" + doc.value("message", std::string()) + "): nothing to apply");
-    set_part(c, fit_part(doc, source));
-  } else {
-    refuse(source, "not a calibration: expected the results of batch_lsq (model, parameters), temp_poly (axes) or "
-                   "ceres_nonlinear (accelerometer, gyroscope)");
+    any_applied = true;
   }
-  if (!std::isfinite(c.gravity_mps2)) c.gravity_mps2 = 0.0;
+  if (!any_model)
+    refuse(source, "not a calibration: the results of " + (c.estimator.empty() ? std::string("this fit") : c.estimator) +
+                       " hold no accelerometer or gyroscope model");
+  if (!any_applied)
+    refuse(source, "this fit failed (" + result.summary.message + "): nothing to apply");
   return c;
 }
 
-Calibration load_calibration(const std::filesystem::path& file) {
+Calibration load_calibration(const std::filesystem::path& file, const estimation::Registry& registry) {
   std::ifstream in(file);
-  if (!in) throw std::runtime_error(file.string() + ": cannot open the calibration (a results JSON file)");
+  if (!in) throw InputError(file.string() + ": cannot open the calibration (a results JSON file)");
   json doc;
   try {
     doc = json::parse(in);
   } catch (const json::parse_error& e) {
-    throw std::runtime_error(file.string() + ": not JSON at byte " + std::to_string(e.byte) + ": " + e.what());
+    throw InputError(file.string() + ": not JSON at byte " + std::to_string(e.byte) + ": " + e.what());
   }
-  return calibration_from_json(doc, file.string());
+  if (!doc.is_object()) refuse(file.string(), "not a results document (expected a JSON object)");
+  return calibration_from(registry.read(doc, file.filename().string()), file.string());
 }
 
 namespace {
@@ -252,7 +119,7 @@ namespace {
 // Throws when sample i of recording `name` has no temperature (which temperature terms need).
 void require_temperature(const std::string& name, std::uint64_t i, const ImuSample& s) {
   if (!std::isfinite(s.temperature_c))
-    throw std::runtime_error(fmt::format("{}: sample {} (t = {} s) has no temperature, which the calibration's "
+    throw InputError(fmt::format("{}: sample {} (t = {} s) has no temperature, which the calibration's "
                                          "temperature terms need",
                                          name, i, s.t_s));
 }
@@ -301,7 +168,7 @@ Recording apply_calibration(const Recording& raw, const Calibration& cal) {
 
 void write_calibrated(const Recording& calibrated, const Calibration& cal, const std::filesystem::path& out_dir) {
   if (std::filesystem::exists(out_dir))
-    throw std::runtime_error(out_dir.string() + ": already exists; name a new folder for the calibrated recording");
+    throw InputError(out_dir.string() + ": already exists; name a new folder for the calibrated recording");
   RecordingHeader h = calibrated.header;
   h.status = RunStatus::kRunning;
   RecordingWriter w(out_dir, h, calibrated.experiment_yaml);

@@ -3,6 +3,7 @@
 #include <stend/calibration/calibration.hpp>
 #include <stend/calibration/validation.hpp>
 #include <stend/ceres_nonlinear/model_file.hpp>
+#include <stend/estimators/builtin.hpp>
 
 #include "synthetic_record.hpp"
 
@@ -20,6 +21,11 @@ namespace {
 using namespace stend;
 using namespace stend::calibration;
 namespace synthetic = stend::ceres_nonlinear::synthetic;
+
+// A results document read back through the built-in registry, as `stend apply` reads a file.
+Calibration calibration_from_json(const nlohmann::json& doc, const std::string& source) {
+  return calibration_from(estimators::builtin().read(doc, source), source);
+}
 
 // A sensor turn about one of its axes by `deg` degrees.
 struct Turn {
@@ -89,7 +95,7 @@ nlohmann::json trained(const synthetic::Spec& spec, const std::string& gyroscope
   o.accel.processing.detector.trim_s = 0.5;
   o.accel.processing.detector.max_gyro_radps = 0.05;
   const auto fit = ceres_nonlinear::fit_model_file(rec.recording, o);
-  EXPECT_TRUE(fit.ok) << fit.message;
+  EXPECT_TRUE(fit.ok()) << fit.message;
   return nlohmann::json::parse(fit.json);
 }
 

@@ -75,6 +75,30 @@ const char* weighting_name(Weighting w) {
 
 char axis_name(int axis) { return "xyz"[axis]; }
 
+bool ModelSpec::IsValid(std::string* error) const {
+  auto fail = [&](const std::string& why) {
+    if (error) *error = why;
+    return false;
+  };
+  if (model.terms.empty()) return fail("no error-model terms");
+  for (std::size_t i = 0; i < model.terms.size(); ++i) {
+    const model::TermSpec& t = model.terms[i];
+    if (model.find(t.kind) != static_cast<int>(i)) return fail(std::string("term '") + model::term_name(t.kind) + "' given twice");
+    if (t.kind == model::TermKind::kGSensitivity && model.instrument != model::Instrument::kGyroscope)
+      return fail("g_sensitivity is a gyroscope term");
+    if (model::is_temperature_polynomial(t.kind) && (t.order < 1 || t.order > 6))
+      return fail(std::string("term '") + model::term_name(t.kind) + "': order must be 1..6");
+  }
+  if (axes.empty()) return fail("no axes to fit");
+  for (std::size_t i = 0; i < axes.size(); ++i) {
+    if (axes[i] < 0 || axes[i] > 2) return fail("axis index " + std::to_string(axes[i]) + " is not 0 (x), 1 (y) or 2 (z)");
+    if (std::find(axes.begin(), axes.begin() + static_cast<std::ptrdiff_t>(i), axes[i]) != axes.begin() + static_cast<std::ptrdiff_t>(i))
+      return fail(std::string("axis '") + axis_name(axes[i]) + "' given twice");
+  }
+  if (!(confidence > 0.0 && confidence < 1.0)) return fail("confidence must lie strictly between 0 and 1");
+  return tolerances.IsValid(error) && processing.IsValid(error);
+}
+
 ModelSpec parse_model_spec(const std::string& yaml_text, const std::string& source_name) {
   YAML::Node root;
   try {
@@ -154,6 +178,7 @@ ModelSpec parse_model_spec(const std::string& yaml_text, const std::string& sour
     top.fail_value("confidence", "the interval level must lie strictly between 0 and 1",
                    "e.g. 0.95");
   read_tolerances(top, spec.tolerances);
+  if (std::string why; !spec.IsValid(&why)) throw ExperimentError(top.location(), "", why);
   return spec;
 }
 

@@ -1,6 +1,9 @@
 // The estimator registry (see stend/estimation/registry.hpp).
 #include "stend/estimation/registry.hpp"
 
+#include "stend/errors.hpp"
+#include "stend/estimation/result_io.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
@@ -51,13 +54,13 @@ const EstimatorEntry& Registry::for_model(const YAML::Node& root, const std::str
     if (e.fallback) fallback = &e;
     if (!e.claims || !e.claims(root)) continue;
     if (claimed != nullptr)
-      throw std::runtime_error(model_file + ": both '" + claimed->name + "' and '" + e.name +
+      throw InputError(model_file + ": both '" + claimed->name + "' and '" + e.name +
                                "' read this model file; name one with --estimator");
     claimed = &e;
   }
   if (claimed != nullptr) return *claimed;
   if (fallback != nullptr) return *fallback;
-  throw std::runtime_error(model_file + ": no estimator reads this model file (estimators: " + names() +
+  throw InputError(model_file + ": no estimator reads this model file (estimators: " + names() +
                            "); name one with --estimator");
 }
 
@@ -72,22 +75,53 @@ const EstimatorEntry* Registry::for_results(const nlohmann::json& doc, const std
   return nullptr;
 }
 
-FitSummary Registry::summarize(const nlohmann::json& doc, const std::string& file_name) const {
-  const EstimatorEntry* e = for_results(doc, file_name);
-  FitSummary s = e != nullptr && e->summarize ? e->summarize(doc) : summary_from_json(doc);
-  if (e != nullptr) {
-    if (s.estimator.empty()) s.estimator = e->name;
-    if (s.version.empty()) s.version = e->version;
-  }
-  return s;
+namespace {
+
+// The estimator's name, version and default results file where the result does not state them.
+void fill_in(const EstimatorEntry& e, FitResult& r) {
+  if (r.summary.estimator.empty()) r.summary.estimator = e.name;
+  if (r.summary.version.empty()) r.summary.version = e.version;
+  if (r.results_file.empty()) r.results_file = e.results_file;
 }
 
+}  // namespace
+
 FitResult Registry::read(const nlohmann::json& doc, const std::string& file_name) const {
-  FitResult r;
-  r.summary = summarize(doc, file_name);
   const EstimatorEntry* e = for_results(doc, file_name);
-  r.results_file = e != nullptr ? e->results_file : file_name;
+  FitResult r = e != nullptr && e->read ? e->read(doc) : read_fit_document(doc);
   r.document = doc;
+  if (e != nullptr) fill_in(*e, r);
+  if (r.results_file.empty()) r.results_file = file_name;
+  return r;
+}
+
+FitSummary Registry::summarize(const nlohmann::json& doc, const std::string& file_name) const {
+  return read(doc, file_name).summary;
+}
+
+FitResult fit(const EstimatorEntry& entry, const EstimatorRequest& request) {
+  if (entry.fit) {
+    FitResult r = entry.fit(request);
+    fill_in(entry, r);
+    return r;
+  }
+  const EstimatorResult out = entry.create()->fit(request);
+  FitResult r;
+  if (out.json.empty() && !out.ok) {
+    r = failed_fit(entry.name, entry.version, out.message);
+  } else {
+    const nlohmann::json doc = nlohmann::json::parse(out.json, nullptr, false);
+    const nlohmann::json readable = doc.is_discarded() ? nlohmann::json::object() : doc;
+    r = entry.read ? entry.read(readable) : read_fit_document(readable);
+    r.document = readable;
+    r.document_text = out.json;  // written as the plugin gave it
+    // The plugin's own word on its success.
+    r.summary.status = out.ok ? FitStatus::kOk : FitStatus::kFailed;
+    if (!out.message.empty()) r.summary.message = out.message;
+  }
+  r.text = out.text;
+  r.results_file = out.json_name;
+  fill_in(entry, r);
   return r;
 }
 

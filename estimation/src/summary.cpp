@@ -25,11 +25,6 @@ std::string string_or_empty(const json& j, const char* key) {
 }
 json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
-bool close(double a, double b, double rel_tol, double abs_tol) {
-  if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
-  return std::abs(a - b) <= abs_tol + rel_tol * std::max(std::abs(a), std::abs(b));
-}
-
 double confidence_of(const json& doc) {
   const double c = number_or_nan(doc.value("solution", json::object()), "confidence");
   return std::isfinite(c) ? c : number_or_nan(doc, "confidence");
@@ -60,6 +55,11 @@ ParameterEstimate parameter_from_json(const json& p) {
 }
 
 }  // namespace
+
+bool nearly_equal(double a, double b, double rel_tol, double abs_tol) {
+  if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
+  return std::abs(a - b) <= abs_tol + rel_tol * std::max(std::abs(a), std::abs(b));
+}
 
 std::string number_text(double v, int digits, bool fixed) {
   if (std::isnan(v)) return "n/a";
@@ -94,9 +94,9 @@ void print_parameter_header(std::ostream& os, double confidence) {
 }
 
 bool ParameterEstimate::equals(const ParameterEstimate& o, double rel_tol, double abs_tol) const {
-  return name == o.name && unit == o.unit && identifiable == o.identifiable && judged() == o.judged() &&
-         close(value, o.value, rel_tol, abs_tol) && close(std_error, o.std_error, rel_tol, abs_tol) &&
-         close(lower, o.lower, rel_tol, abs_tol) && close(upper, o.upper, rel_tol, abs_tol);
+  return name == o.name && unit == o.unit && identifiable == o.identifiable && held == o.held && judged() == o.judged() &&
+         nearly_equal(value, o.value, rel_tol, abs_tol) && nearly_equal(std_error, o.std_error, rel_tol, abs_tol) &&
+         nearly_equal(lower, o.lower, rel_tol, abs_tol) && nearly_equal(upper, o.upper, rel_tol, abs_tol);
 }
 
 const ParameterEstimate* FitSummary::find(const std::string& name) const {
@@ -132,7 +132,7 @@ void FitSummary::print(std::ostream& os) const {
 
 bool FitSummary::equals(const FitSummary& o, double rel_tol, double abs_tol) const {
   if (estimator != o.estimator || version != o.version || status != o.status || message != o.message ||
-      !close(confidence, o.confidence, rel_tol, abs_tol) || parameters.size() != o.parameters.size() ||
+      !nearly_equal(confidence, o.confidence, rel_tol, abs_tol) || parameters.size() != o.parameters.size() ||
       notes != o.notes)
     return false;
   for (std::size_t i = 0; i < parameters.size(); ++i)

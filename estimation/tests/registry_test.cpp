@@ -69,11 +69,11 @@ TEST(Registry, NamesAreUnique) {
 TEST(Registry, ResultsAreReadByTheEstimatorThatWroteThem) {
   se::Registry r = three();
   se::EstimatorEntry custom = entry("custom", "custom");
-  custom.summarize = [](const nlohmann::json& doc) {
-    se::FitSummary s;
-    s.status = se::FitStatus::kOk;
-    s.parameters.push_back({"k", "1", true, "", doc.at("k").get<double>(), 0.1, 0.8, 1.2});
-    return s;
+  custom.read = [](const nlohmann::json& doc) {
+    se::FitResult res;
+    res.summary.status = se::FitStatus::kOk;
+    res.summary.parameters.push_back({"k", "1", true, "", doc.at("k").get<double>(), 0.1, 0.8, 1.2});
+    return res;
   };
   r.add(custom);
   // By the document's estimator name, else by the results file's name.
@@ -151,4 +151,95 @@ TEST(ResultsFiles, OnePerInstrumentAndEstimator) {
   r.add(e);
   ASSERT_NE(r.for_results(nlohmann::json::object(), "temp_poly-gyroscope.json"), nullptr);
   EXPECT_EQ(r.for_results(nlohmann::json::object(), "temp_poly-gyroscope.json")->name, "temp_poly");
+}
+
+// Through its entry, a read-back result carries the document and the entry's defaults.
+TEST(Registry, ReadFillsInTheEntrysNameVersionAndResultsFile) {
+  const se::Registry r = three();
+  const se::FitResult res = r.read(nlohmann::json::parse(R"({"status": "ok", "parameters": []})"), "noise.json");
+  EXPECT_EQ(res.summary.estimator, "noise");
+  EXPECT_EQ(res.summary.version, "1.0");
+  EXPECT_EQ(res.results_file, "noise.json");
+  EXPECT_TRUE(res.ok());
+  EXPECT_EQ(res.document.value("status", ""), "ok");
+  // A document no entry claims: the generic reader, the file's own name.
+  const se::FitResult other = r.read(nlohmann::json::parse(R"({"status": "failed", "message": "why"})"), "x.json");
+  EXPECT_FALSE(other.ok());
+  EXPECT_EQ(other.results_file, "x.json");
+  EXPECT_EQ(r.summarize(nlohmann::json::parse(R"({"status": "failed", "message": "why"})"), "x.json").message, "why");
+}
+
+namespace {
+
+// A plugin-style estimator: its JSON document, ok and message as it states them.
+class Document final : public stend::Estimator {
+ public:
+  Document(bool ok, std::string json) : ok_(ok), json_(std::move(json)) {}
+  stend::EstimatorResult fit(const stend::EstimatorRequest&) override {
+    return {ok_, ok_ ? "" : "too few points", json_, "table\n", ""};
+  }
+
+ private:
+  bool ok_;
+  std::string json_;
+};
+
+se::EstimatorEntry plugin(bool ok, const std::string& json) {
+  se::EstimatorEntry e;
+  e.name = "plug";
+  e.version = "2.0";
+  e.results_file = "plug.json";
+  e.create = [ok, json] { return stend::PluginPtr<stend::Estimator>(new Document(ok, json), [](stend::Estimator* p) { delete p; }); };
+  return e;
+}
+
+}  // namespace
+
+// A plugin's JSON is read back by the generic reader: its summary fields and a stend.fit/1-shaped
+// model section; its own word on success stands; the document is written as it gave it.
+TEST(Registry, PluginResultsAreReadByTheGenericReader) {
+  const std::string doc =
+      R"({"status": "ok", "parameters": [{"name": "bias_z", "unit": "m/s^2", "identifiable": true, "value": 0.1,)"
+      R"( "std_error": 0.01, "interval": [0.08, 0.12]}],)"
+      R"( "model": {"instrument": "accelerometer", "axes": ["z"], "terms": [{"kind": "bias"}]}})";
+  const se::FitResult r = se::fit(plugin(true, doc), {});
+  EXPECT_TRUE(r.ok());
+  EXPECT_EQ(r.summary.estimator, "plug");
+  EXPECT_EQ(r.results_file, "plug.json");
+  EXPECT_EQ(r.text, "table\n");
+  EXPECT_EQ(r.written_document(), doc);
+  ASSERT_TRUE(r.accelerometer.has_value());
+  EXPECT_FALSE(r.gyroscope.has_value());
+  const se::InstrumentModel& m = *r.accelerometer;
+  EXPECT_EQ(m.coverage, se::Coverage::kAxes);
+  EXPECT_EQ(m.axes, std::vector<int>{2});
+  ASSERT_EQ(m.theta.size(), 3u);
+  EXPECT_EQ(m.theta[2], 0.1);
+  EXPECT_EQ(m.theta[0], 0.0);  // bias_x: not in this fit, held at 0
+  EXPECT_TRUE(m.parameters[0].held);
+  EXPECT_FALSE(m.parameters[2].held);
+  EXPECT_DOUBLE_EQ(m.covariance(2, 2), 1e-4);
+  // A plugin's failure without a document: the summary fields, the plugin's message.
+  const se::FitResult failed = se::fit(plugin(false, ""), {});
+  EXPECT_FALSE(failed.ok());
+  EXPECT_EQ(failed.summary.message, "too few points");
+  EXPECT_EQ(failed.document.value("status", ""), "failed");
+  // A document without "status" from a plugin that says ok is ok.
+  EXPECT_TRUE(se::fit(plugin(true, R"({"samples": 3})"), {}).ok());
+}
+
+// A typed entry's fit is called as it is; the entry fills in what the result leaves out.
+TEST(Registry, TypedFitGoesThroughTheEntry) {
+  se::EstimatorEntry e = entry("typed", nullptr);
+  e.fit = [](const stend::EstimatorRequest&) {
+    se::FitResult r;
+    r.summary.status = se::FitStatus::kOk;
+    r.text = "typed\n";
+    return r;
+  };
+  const se::FitResult r = se::fit(e, {});
+  EXPECT_TRUE(r.ok());
+  EXPECT_EQ(r.text, "typed\n");
+  EXPECT_EQ(r.summary.estimator, "typed");
+  EXPECT_EQ(r.results_file, "typed.json");
 }

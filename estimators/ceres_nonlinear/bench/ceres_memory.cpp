@@ -43,7 +43,7 @@ int main(int argc, char** argv) {
   const double peak = vm_hwm_mib();
   std::printf("samples %zu positions %d intervals %zu: accel %s, gyro %s; %.3f s; VmHWM start %.1f MiB, with record "
               "%.1f MiB, after fit %.1f MiB (fit adds %.1f MiB)\n",
-              r.recording.samples.size(), spec.positions, a.intervals.size(), a.ok ? "ok" : a.message.c_str(),
-              g.ok ? "ok" : g.message.c_str(), secs, base, with_record, peak, peak - with_record);
-  return a.ok && g.ok ? 0 : 1;
+              r.recording.samples.size(), spec.positions, a.intervals.size(), a.ok() ? "ok" : a.message.c_str(),
+              g.ok() ? "ok" : g.message.c_str(), secs, base, with_record, peak, peak - with_record);
+  return a.ok() && g.ok() ? 0 : 1;
 }

@@ -35,7 +35,7 @@ void BM_WholeProcess(benchmark::State& state) {
     const CalibrationResult a = calibrate_accelerometer_unknown_orientations(r.recording, accel_options());
     const CalibrationResult g = calibrate_gyro_integration(r.recording, a);
     intervals = a.intervals.size();
-    ok = ok && a.ok && g.ok;
+    ok = ok && a.ok() && g.ok();
     benchmark::DoNotOptimize(g.theta.data());
   }
   state.counters["intervals"] = static_cast<double>(intervals);
@@ -49,8 +49,8 @@ BENCHMARK(BM_WholeProcess)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-std::vector<StaticInterval> intervals_of(const synthetic::Record& r) {
-  std::vector<StaticInterval> ivs;
+std::vector<processing::StaticPoint> intervals_of(const synthetic::Record& r) {
+  std::vector<processing::StaticPoint> ivs;
   for (const auto& [a, b] : r.statics) ivs.push_back(make_interval(r.recording, a, b));
   return ivs;
 }
@@ -70,7 +70,7 @@ void BM_AccelFit(benchmark::State& state) {
   bool ok = true;
   for (auto _ : state) {
     const CalibrationResult a = calibrate_accelerometer_unknown_orientations(ivs, physics::kStandardGravity, o);
-    ok = ok && a.ok;
+    ok = ok && a.ok();
     benchmark::DoNotOptimize(a.theta.data());
   }
   state.counters["ok"] = ok ? 1.0 : 0.0;
@@ -80,10 +80,10 @@ BENCHMARK(BM_AccelFit)->Arg(10)->Arg(20)->Arg(38)->Arg(76)->Arg(150)->Unit(bench
 void BM_GyroIntegrationFit(benchmark::State& state) {
   const synthetic::Record r = synthetic::make(positions_spec(static_cast<int>(state.range(0))));
   const CalibrationResult a = calibrate_accelerometer_unknown_orientations(intervals_of(r), physics::kStandardGravity, accel_options());
-  bool ok = a.ok;
+  bool ok = a.ok();
   for (auto _ : state) {
     const CalibrationResult g = calibrate_gyro_integration(r.recording, a);
-    ok = ok && g.ok;
+    ok = ok && g.ok();
     benchmark::DoNotOptimize(g.theta.data());
   }
   state.counters["ok"] = ok ? 1.0 : 0.0;

@@ -24,7 +24,7 @@
 
 namespace {
 
-using stend::ceres_nonlinear::StaticInterval;
+using stend::processing::StaticPoint;
 
 // IMU-TK's calibration file: misalignment T (3×3), scale K (3×3), bias b (3), row-major.
 struct ImuTkTriad {

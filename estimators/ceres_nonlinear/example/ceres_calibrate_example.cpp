@@ -23,7 +23,7 @@ int main(int argc, char** argv) {
     if (kind == "imucal") {
       const Recording rec = io::import_imucal_session(argv[2]);
       const double g = rec.header.gravity_mps2;  // imucal's expected_g, as the importer states it
-      std::vector<StaticInterval> ivs;
+      std::vector<processing::StaticPoint> ivs;
       std::vector<Eigen::Vector3d> truth;
       processing::ProcessingOptions segments = default_interval_options();
       segments.intervals = processing::IntervalSource::kSegments;
@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
       for (const auto& iv : static_intervals(rec, segments)) {
         // x_p: x axis up → the accelerometer reads +g on x; x_a: down → −g.
         Eigen::Vector3d f = Eigen::Vector3d::Zero();
-        f[iv.label[0] - 'x'] = (iv.label[2] == 'p' ? 1.0 : -1.0) * g;
+        f[iv.segment.label[0] - 'x'] = (iv.segment.label[2] == 'p' ? 1.0 : -1.0) * g;
         ivs.push_back(iv);
         truth.push_back(f);
       }
@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
       return 2;
     }
     std::cout << (json ? r.to_json() : r.report()) << "\n";
-    return r.ok ? 0 : 1;
+    return r.ok() ? 0 : 1;
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 1;

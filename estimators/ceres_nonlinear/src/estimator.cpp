@@ -4,9 +4,26 @@
 
 #include "stend/ceres_nonlinear/model_file.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <stdexcept>
 
 namespace stend::ceres_nonlinear {
+
+namespace {
+
+// The typed fit: ceres.json written, then read back by read_results, so a fit and its results
+// file give the same typed result.
+estimation::FitResult fit_typed(const EstimatorRequest& req) {
+  if (req.recording == nullptr) throw std::invalid_argument("ceres_nonlinear: no recording given");
+  const ModelFileFit f = fit_model_file(*req.recording, load_model_file(req.model_file));
+  estimation::FitResult r = read_results(nlohmann::json::parse(f.json));
+  r.document_text = f.json;
+  r.text = f.text;
+  return r;
+}
+
+}  // namespace
 
 CeresNonlinearEstimator::CeresNonlinearEstimator(const Params& p) : config_(fields().read(p)) {}
 
@@ -17,9 +34,8 @@ const stend::fields::Table<estimation::EstimatorConfig>& CeresNonlinearEstimator
 }
 
 EstimatorResult CeresNonlinearEstimator::fit(const EstimatorRequest& req) {
-  if (req.recording == nullptr) throw std::invalid_argument("ceres_nonlinear: no recording given");
-  const ModelFileFit f = fit_model_file(*req.recording, load_model_file(req.model_file));
-  return {f.ok, f.message, f.json, f.text, config_.results_file};
+  const estimation::FitResult r = fit_typed(req);
+  return {r.ok(), r.summary.message, r.document_text, r.text, config_.results_file};
 }
 
 estimation::EstimatorEntry estimator_entry() {
@@ -31,6 +47,8 @@ estimation::EstimatorEntry estimator_entry() {
   e.claims = [](const YAML::Node& root) { return root.IsMap() && root["ceres_nonlinear"]; };
   e.create = [] { return PluginPtr<Estimator>(new CeresNonlinearEstimator(), [](Estimator* p) { delete p; }); };
   e.report = report_section;
+  e.fit = fit_typed;
+  e.read = read_results;
   return e;
 }
 

@@ -115,6 +115,8 @@ ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& fi
   a.table_fixture = m.string("table_fixture", a.table_fixture);
   o.gyro.estimate_g_sensitivity = m.boolean("gyro_g_sensitivity", false);
   a.estimate_gyro_bias = o.gyroscope == "bias_only";
+  if (std::string why; !o.IsValid(&why))
+    throw ExperimentError(top.value_location("ceres_nonlinear"), "ceres_nonlinear", why);
   return o;
 }
 
@@ -201,57 +203,32 @@ std::string options_json(const ModelFileOptions& o) {
 }
 
 ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& options) {
+  if (std::string why; !options.IsValid(&why)) throw InputError("ceres_nonlinear options: " + why);
   ModelFileOptions o = options;
   o.accel.processing = processing::resolve(o.accel.processing, rec);
   o.gyro.processing = processing::resolve(o.gyro.processing, rec);
   ModelFileFit f;
-  f.ok = true;
   std::string text = describe_options(o);
-  nlohmann::json j;
-  j["schema"] = kResultsSchema;
-  j["estimator"] = {{"name", kEstimatorName}, {"version", kEstimatorVersion}};
-  j["options"] = nlohmann::json::parse(options_json(o));
   std::vector<std::string> failures;
   if (o.accelerometer != "none") {
     f.accel = o.accelerometer == "known_orientations" ? calibrate_accelerometer_known_orientations(rec, o.accel)
                                                       : calibrate_accelerometer_unknown_orientations(rec, o.accel);
     f.has_accel = true;
     text += "\n" + f.accel.report();
-    j["accelerometer"] = nlohmann::json::parse(f.accel.to_json());
-    if (!f.accel.ok) failures.push_back("accelerometer: " + f.accel.message);
+    if (!f.accel.ok()) failures.push_back("accelerometer: " + f.accel.message);
   }
   if (o.gyroscope == "integration" || o.gyroscope == "rate_table") {
     f.gyro = o.gyroscope == "rate_table" ? calibrate_gyro_rate_table(rec, o.gyro)
                                          : calibrate_gyro_integration(rec, f.accel, o.gyro);
     f.has_gyro = true;
     text += "\n" + f.gyro.report();
-    j["gyroscope"] = nlohmann::json::parse(f.gyro.to_json());
-    if (!f.gyro.ok) failures.push_back("gyroscope: " + f.gyro.message);
+    if (!f.gyro.ok()) failures.push_back("gyroscope: " + f.gyro.message);
   }
-  // Flat parameter list in the shape report tools read (`stend.fit/1`-like): accel_* / gyro_*.
-  auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
-  j["confidence"] = o.accel.confidence;
-  j["parameters"] = nlohmann::json::array();
-  auto add = [&](const std::string& prefix, const Parameter& p) {
-    const std::string name = p.name.rfind("table_offset", 0) == 0 || p.name.rfind("gyro_", 0) == 0 ? p.name : prefix + p.name;
-    j["parameters"].push_back({{"name", name}, {"unit", p.unit}, {"value", num(p.value)}, {"std_error", num(p.std_error)},
-                               {"interval", {num(p.lower), num(p.upper)}}, {"identifiable", p.identifiable},
-                               {"verdict", estimation::to_string(p.judged())}, {"tolerance", num(p.tolerance)},
-                               {"fixed", p.fixed}, {"reason", p.reason}});
-  };
-  if (f.has_accel) {
-    for (const auto& p : f.accel.parameters) add("accel_", p);
-    for (const auto& p : f.accel.gyro_parameters) add("", p);
-  }
-  if (f.has_gyro)
-    for (const auto& p : f.gyro.parameters) add("gyro_", p);
-  f.ok = failures.empty();
+  f.status = failures.empty() ? estimation::FitStatus::kOk : estimation::FitStatus::kFailed;
   for (const auto& s : failures) f.message += (f.message.empty() ? "" : "; ") + s;
-  j["status"] = f.ok ? "ok" : "failed";
-  j["message"] = f.message;
-  text += f.ok ? "\nceres_nonlinear: ok\n" : "\nceres_nonlinear: FAILED — " + f.message + "\n";
+  text += f.ok() ? "\nceres_nonlinear: ok\n" : "\nceres_nonlinear: FAILED — " + f.message + "\n";
   f.text = text;
-  f.json = j.dump(2);
+  f.json = results_document(o, f);
   return f;
 }
 

@@ -74,7 +74,7 @@ void score(const sim::StressLog& log, const CalibrationResult& r, Tally& t) {
   for (const auto& iv : r.intervals)
     t.longest_false_s = std::max(t.longest_false_s, static_cast<double>(outside(log, iv.first, iv.last)) / log.rate_hz);
   ++t.fits;
-  if (!r.ok) {
+  if (!r.ok()) {
     if (r.message.find("identif") != std::string::npos) ++t.withheld;
     return;
   }
@@ -82,8 +82,8 @@ void score(const sim::StressLog& log, const CalibrationResult& r, Tally& t) {
   // Each estimated parameter against its own 95 % interval, and all of them jointly.
   Eigen::VectorXd d(static_cast<Eigen::Index>(r.free_index.size()));
   Eigen::Index k = 0;
-  for (const Parameter& p : r.parameters) {
-    if (p.fixed) continue;
+  for (const estimation::ParameterEstimate& p : r.parameters) {
+    if (p.held) continue;
     const double truth = log.accel_truth.at(p.name);
     d[k++] = p.value - truth;
     ++t.params;

@@ -11,6 +11,24 @@
 
 namespace stend::temp_poly {
 
+namespace {
+
+// The typed fit: the document written, then read back by read_results, so a fit and its results
+// file give the same typed result.
+estimation::FitResult fit_typed(const EstimatorRequest& req) {
+  if (req.recording == nullptr) throw std::invalid_argument("temp_poly: no recording given");
+  const TempPolyResult r = fit_temperature_model(*req.recording, load_options(req.model_file));
+  const std::string document = to_json(r);
+  estimation::FitResult out = read_results(nlohmann::json::parse(document));
+  out.document_text = document;
+  std::ostringstream text;
+  print_report(text, r);
+  out.text = text.str();
+  return out;
+}
+
+}  // namespace
+
 TempPolyEstimator::TempPolyEstimator(const Params& p) : config_(fields().read(p)) {}
 
 const stend::fields::Table<estimation::EstimatorConfig>& TempPolyEstimator::fields() {
@@ -20,31 +38,9 @@ const stend::fields::Table<estimation::EstimatorConfig>& TempPolyEstimator::fiel
 }
 
 EstimatorResult TempPolyEstimator::fit(const EstimatorRequest& req) {
-  if (req.recording == nullptr) throw std::invalid_argument("temp_poly: no recording given");
-  const TempPolyResult r = fit_temperature_model(*req.recording, load_options(req.model_file));
-  std::ostringstream text;
-  print_report(text, r);
-  return {r.ok, r.message, to_json(r), text.str(), config_.results_file};
+  const estimation::FitResult r = fit_typed(req);
+  return {r.ok(), r.summary.message, r.document_text, r.text, config_.results_file};
 }
-
-namespace {
-
-// Each fitted axis carries a stend.fit/1 document: the summary is their parameters together.
-estimation::FitSummary summarize(const nlohmann::json& doc) {
-  estimation::FitSummary s = estimation::summary_from_json(doc);
-  s.parameters.clear();
-  if (!s.ok()) return s;
-  for (const auto& axis : doc.value("axes", nlohmann::json::array())) {
-    if (!axis.contains("fit") || !axis["fit"].is_object()) continue;
-    const estimation::FitSummary a = estimation::summary_from_json(axis["fit"]);
-    if (!a.ok()) continue;
-    if (!std::isfinite(s.confidence)) s.confidence = a.confidence;
-    s.parameters.insert(s.parameters.end(), a.parameters.begin(), a.parameters.end());
-  }
-  return s;
-}
-
-}  // namespace
 
 estimation::EstimatorEntry estimator_entry() {
   estimation::EstimatorEntry e;
@@ -54,8 +50,9 @@ estimation::EstimatorEntry estimator_entry() {
   e.results_file = kResultsFile;
   e.claims = [](const YAML::Node& root) { return root.IsMap() && (root["selection"] || root["max_order"]); };
   e.create = [] { return PluginPtr<Estimator>(new TempPolyEstimator(), [](Estimator* p) { delete p; }); };
-  e.summarize = summarize;
   e.report = report_section;
+  e.fit = fit_typed;
+  e.read = read_results;
   return e;
 }
 

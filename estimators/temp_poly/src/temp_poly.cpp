@@ -46,20 +46,7 @@ double predict(const batch_lsq::FitResult& f, const processing::StaticPoint& pt,
 
 // Why the options or the points cannot be fitted at all; "" when they can.
 std::string refusal(const TempPolyOptions& o, const std::vector<processing::StaticPoint>& points) {
-  if (o.selection != "bic" && o.selection != "cv" && o.selection != "fixed")
-    return "unknown selection '" + o.selection + "': use bic, cv or fixed";
-  if (o.selection == "fixed" && (o.order < 0 || o.order > 6))
-    return "order " + std::to_string(o.order) + " is outside 0..6";
-  if (o.selection != "fixed" && (o.max_order < 1 || o.max_order > 6))
-    return "max_order " + std::to_string(o.max_order) + " is outside 1..6";
-  if (o.axes.empty()) return "no axes to fit";
-  for (int a : o.axes)
-    if (a < 0 || a > 2) return "axis index " + std::to_string(a) + " is not 0 (x), 1 (y) or 2 (z)";
-  if (!o.bias_temperature && !o.scale_temperature)
-    return "neither bias_temperature nor scale_temperature is enabled: nothing depends on "
-           "temperature";
-  if (!(o.level_tolerance_c > 0.0) || !(o.min_span_c >= 0.0) || !std::isfinite(o.reference_c))
-    return "level_tolerance_c must be > 0, min_span_c ≥ 0 and reference_c finite";
+  if (std::string why; !o.IsValid(&why)) return why;
   if (points.empty()) return "no static points: nothing to fit";
   for (const auto& p : points)
     if (!std::isfinite(p.stimulus.temperature_c))

@@ -242,10 +242,25 @@ struct EstimatorRequest {
   std::string output_dir;                // where the host writes the results (run folder or cwd)
 };
 
+// What an estimator plugin gives back: its results document as JSON, which the host writes as it
+// is and reads back as the typed result (stend/estimation/result.hpp) with the generic reader
+// (stend/estimation/result_io.hpp). So that the reports, the results database, `stend compare`,
+// `stend apply` and `stend export` can use it, the document carries
+//   - the summary fields (stend/estimation/summary.hpp): "estimator": {"name", "version"},
+//     "status": "ok" | "failed", "message", "confidence", "parameters": [{"name", "unit", "value",
+//     "std_error", "interval", "identifiable", "verdict", "reason"}, …];
+//   - for a fitted error model, a `stend.fit/1`-shaped "model" section (estimators/batch_lsq/
+//     README.md): {"instrument": "accelerometer" | "gyroscope", "axes": ["x", …], "terms":
+//     [{"kind": "bias"}, …]}, its parameters named as the vocabulary names them (bias_x, scale_z,
+//     …; stend/model/terms.hpp) and optionally "correlation" over them — then `stend apply` applies
+//     it and the exports write it.
+// `ok` and `message` are the plugin's word on its success whatever the document says; a failed fit
+// may leave `json` empty (the host then writes the summary fields). Built-in estimators return
+// their typed result through their registry entry instead (stend/estimation/registry.hpp).
 struct EstimatorResult {
   bool ok = false;           // false: the fit failed; `message` says why and no numbers are given
   std::string message;
-  std::string json;          // results with a versioned "schema" field
+  std::string json;          // results with a versioned "schema" field (see above)
   std::string text;          // the report table (parameter, value, unit, std error, interval, …)
   std::string json_name;     // default results file name, e.g. "ceres.json"
 };

@@ -50,6 +50,11 @@ struct ModelSpec {
   double confidence = 0.95;
   PrecisionTolerances tolerances;  // of each parameter's verdict
   std::string source;  // file the spec came from ("" when built in code)
+
+  // At least one term, each once (g-sensitivity only for a gyroscope), temperature orders 1..6;
+  // axes 0..2, each once, at least one; confidence in (0, 1); the tolerances and processing
+  // options valid.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 ModelSpec parse_model_spec(const std::string& yaml_text, const std::string& source_name = "<model>");

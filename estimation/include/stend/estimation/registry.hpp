@@ -9,6 +9,13 @@
 //
 // A model file is matched to its estimator by the entries' `claims` (e.g. a top-level `allan:`
 // mapping), or named with `--estimator NAME`.
+//
+// Results are typed (result.hpp). A built-in entry fits with `fit` and reads its own results
+// document back with `read` (its reader beside its one writer, in its folder). An estimator plugin
+// (the SDK's Estimator interface, a separate .so) returns its results document as JSON
+// (EstimatorResult); estimation::fit adapts it, and Registry::read reads it with the generic
+// reader (result_io.hpp: the summary fields, and a `stend.fit/1`-shaped `model` section where the
+// document has one) — the contract written in sdk.hpp.
 #pragma once
 
 #include <stend/estimation/model_spec.hpp>
@@ -53,14 +60,18 @@ struct EstimatorEntry {
   // name only. `fallback`: claims what no other entry claims (batch_lsq's plain model files).
   std::function<bool(const YAML::Node& model_root)> claims;
   bool fallback = false;
-  // A new estimator object (the same class its plugin exports).
+  // A new estimator object behind the SDK's interface (the same class its plugin exports; for a
+  // plugin entry, the plugin's).
   std::function<PluginPtr<Estimator>()> create;
+  // The typed fit: the results, the report text and the document it writes. Null: the fit goes
+  // through `create` and the estimator's JSON is read back (estimation::fit).
+  std::function<FitResult(const EstimatorRequest& request)> fit;
+  // Reads this estimator's results document back as the typed result (reports, database, compare,
+  // `stend apply`, the exports). Null: the generic reader (estimation::read_fit_document).
+  std::function<FitResult(const nlohmann::json& doc)> read;
   // Whether its fit reads the bench truth; false lets `stend fit` open a run without it (a noise
   // analysis of a day-long run need not hold the day's truth in memory).
   bool reads_truth = true;
-  // Reads this estimator's results document back as the typed summary (reports, database,
-  // compare). Null: the document has the summary fields (estimation::summary_from_json).
-  std::function<FitSummary(const nlohmann::json& doc)> summarize;
   // For an estimator whose model file is a linear error model (model_spec.hpp): the file read as
   // that model — what `stend gap` fits, replays and extends. Null: no linear model to diagnose.
   std::function<ModelSpec(const std::string& model_file)> linear_model;
@@ -77,16 +88,17 @@ class Registry {
 
   const EstimatorEntry* find(const std::string& name) const;  // nullptr when absent
   // The entry a model file is for: the one claiming it, else the fallback. Throws
-  // std::runtime_error naming the file when none or several claim it.
+  // stend::InputError naming the file when none or several claim it.
   const EstimatorEntry& for_model(const YAML::Node& model_root, const std::string& model_file) const;
   // The entry whose results a document is: its "estimator" name, else the one whose results
   // file is `file_name`. nullptr when neither matches.
   const EstimatorEntry* for_results(const nlohmann::json& doc, const std::string& file_name) const;
-  // The summary of a results document through its entry (summary_from_json without one).
-  FitSummary summarize(const nlohmann::json& doc, const std::string& file_name) const;
   // A results document read back as the typed result, through the entry that wrote it (its
-  // summary, the document itself and the default results file name).
+  // reader, else the generic one; the estimator's name, version and default results file filled
+  // in from the entry where the document does not state them).
   FitResult read(const nlohmann::json& doc, const std::string& file_name) const;
+  // read(doc, file_name).summary.
+  FitSummary summarize(const nlohmann::json& doc, const std::string& file_name) const;
 
   const std::vector<EstimatorEntry>& entries() const { return entries_; }
   std::string names() const;  // "batch_lsq, temp_poly, …" for messages
@@ -94,5 +106,11 @@ class Registry {
  private:
   std::vector<EstimatorEntry> entries_;
 };
+
+// Fits through an entry: its typed `fit`, else its SDK estimator (`create`) with the JSON it
+// returns read back by the entry's reader or the generic one; a plugin's ok and message are
+// taken as it states them, and a failed fit without a document gets the summary fields
+// (failed_fit). Throws what the estimator throws (a bad model file, unreadable input).
+FitResult fit(const EstimatorEntry& entry, const EstimatorRequest& request);
 
 }  // namespace stend::estimation

@@ -43,6 +43,10 @@ struct ParameterEstimate {
   // or kImprecise when std_error exceeds `tolerance` (set by estimation::judge).
   Verdict verdict = Verdict::kDetermined;
   double tolerance = NAN;  // precision tolerance (1 σ) in `unit`; NaN when none applies
+  // Not estimated but held at `value` (0) by the estimator's convention — a frame convention, a
+  // temperature order the selection did not choose, an axis outside the fit; `reason` says which.
+  // A held parameter is not identifiable (it carries no information from the data).
+  bool held = false;
   // The verdict as reported: kNotIdentifiable when not identifiable, else `verdict`.
   Verdict judged() const { return identifiable ? verdict : Verdict::kNotIdentifiable; }
 
@@ -56,6 +60,10 @@ struct ParameterEstimate {
 std::ostream& operator<<(std::ostream& os, const ParameterEstimate& p);  // = print
 // The header of print()'s table, for an interval at `confidence`.
 void print_parameter_header(std::ostream& os, double confidence);
+
+// Whether two numbers agree within abs_tol + rel_tol·max(|a|, |b|); NaN matches NaN. The
+// comparison of every result type's equals().
+bool nearly_equal(double a, double b, double rel_tol, double abs_tol);
 
 // A number in a text report: printf's %.<digits>g, or %.<digits>f when fixed; "n/a" for NaN.
 std::string number_text(double v, int digits = 6, bool fixed = false);

@@ -9,12 +9,16 @@
 //   px4     PX4 parameters (QGroundControl .params file): thermal calibration TC_A0_* / TC_G0_*
 //           where the run has a temperature model, else the static CAL_ACC0_* / CAL_GYRO0_*
 //   json    the results JSON, schema stend.results/1 (docs/reports.md)
-// The calibration (bias, scale, cross-axis, g-sensitivity) comes from ceres.json, fit.json
-// (batch_lsq) or temp_poly*.json by the rule of ExportOptions::from; which was used is in
-// ExportResult::notes. A source that is absent or failed is refused (std::runtime_error naming it).
-// Values the fit could not identify, and what the target format cannot hold, are listed in
-// ExportResult::warnings — never silently.
+// The run's results files are read back through the estimator registry as typed results
+// (stend/estimation/result.hpp): the calibration (bias, scale, cross-axis, g-sensitivity) comes
+// from their instrument models by the rule of ExportOptions::from (with the built-in estimators:
+// ceres.json, fit.json of batch_lsq, temp_poly*.json), the noise from their noise analysis
+// (allan.json); which was used is in ExportResult::notes. A source that is absent or failed is
+// refused (stend::InputError naming it). Values the fit could not identify, and what the target
+// format cannot hold, are listed in ExportResult::warnings — never silently.
 #pragma once
+
+#include <stend/estimation/registry.hpp>
 
 #include <filesystem>
 #include <string>
@@ -30,13 +34,20 @@ struct ExportOptions {
   std::string rostopic = "/imu0";  // Kalibr
   int px4_instance = 0;            // TC_A<n> / TC_G<n>
   int px4_device_id = 0;           // TC_A0_ID / CAL_ACC0_ID: the sensor's PX4 device id (0: fill in on the vehicle)
-  // Calibration source: "auto" (Ceres when it estimated the instrument's scale factors, else
-  // fit.json then temp_poly.json axis by axis, else a Ceres bias-only result) | "ceres" |
-  // "batch_lsq" | "temp_poly". Temperature models always come from temp_poly*.json (one per
-  // instrument), noise from allan.json.
+  // Calibration source, per instrument: "auto" — one model of the three axes that estimated the
+  // scale factors (a full calibration: Ceres), else the axis-wise models (batch_lsq's fit.json),
+  // then the temperature models at their reference temperature, axis by axis (temp_poly), else a
+  // model of the three axes without scale factors (a Ceres bias-only gyro result); or the name of
+  // an estimator (or the one name it begins: "ceres" for ceres_nonlinear): that estimator's models
+  // only. Temperature models always come from the first temperature model of the instrument (one
+  // per instrument: temp_poly.json, temp_poly-gyroscope.json), noise from the noise analysis.
   std::string from = "auto";
   // csv: copy the readable part of a damaged run (else a damaged run is refused).
   bool accept_damaged = false;
+
+  // A ROS topic named, px4_instance 0..3, px4_device_id ≥ 0, a source named (export_run resolves the
+  // name against the registry: calibration_source).
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 struct ExportResult {
@@ -45,12 +56,18 @@ struct ExportResult {
   std::vector<std::string> notes;     // which result each value came from, and format conventions
 };
 
+// The estimator ExportOptions::from names: nullptr for "auto", else the registry's entry of that
+// name or the only one whose name begins with it ("ceres" → ceres_nonlinear). Throws
+// stend::InputError naming the estimators for anything else.
+const estimation::EstimatorEntry* calibration_source(const estimation::Registry& registry, const std::string& from);
+
 // Formats known to export_run.
 const std::vector<std::string>& export_formats();
 
-// Writes `format` for the run folder. `out`: a file (json, kalibr, matlab, px4) or a path prefix
+// Writes `format` for the run folder, its results read through `registry` (the program passes
+// stend::estimators::builtin()). `out`: a file (json, kalibr, matlab, px4) or a path prefix
 // (imutk: <out>_acc.calib, <out>_gyro.calib); empty → RUN/export/<default name>. Throws
-// std::runtime_error saying what is missing (e.g. "no allan.json: run stend fit … first").
+// stend::InputError saying what is missing (e.g. "no allan.json: run stend fit … first").
 ExportResult export_run(const std::filesystem::path& run_dir, const std::string& format, std::filesystem::path out,
                         const estimation::Registry& registry, const ExportOptions& options = {});
 

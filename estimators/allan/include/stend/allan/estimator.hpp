@@ -5,6 +5,8 @@
 #include <stend/estimation/registry.hpp>
 #include <stend/sdk.hpp>
 
+#include <nlohmann/json_fwd.hpp>
+
 namespace stend::allan {
 
 inline constexpr const char* kResultsFile = "allan.json";
@@ -23,9 +25,14 @@ class AllanEstimator final : public Estimator {
   estimation::EstimatorConfig config_;
 };
 
-// Registry entry: claims model files with a top-level `allan:` mapping; its summary lists N, K
-// and B of every channel whose noise model was fitted (N_ax, K_gz, …); a channel whose model
-// failed is named in the message.
+// allan.json read back: the summary lists N, K and B (and G, Tc where fitted) of every channel
+// whose noise model was fitted (N_ax, K_gz, …), a channel whose model failed named in the
+// message; the typed noise holds N, K, B per accelerometer and gyroscope channel and, per sensor,
+// the Kalibr block's stand-in for a density no axis identified.
+estimation::FitResult read_results(const nlohmann::json& doc);
+
+// Registry entry: claims model files with a top-level `allan:` mapping; fits and reads through
+// the typed result (fit_typed writes allan.json and reads it back).
 estimation::EstimatorEntry estimator_entry();
 
 }  // namespace stend::allan

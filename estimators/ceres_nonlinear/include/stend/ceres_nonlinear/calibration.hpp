@@ -19,7 +19,7 @@
 // fit fail naming the unidentified combination ("bias_z + 0.98*scale_z"). A converged fit on a
 // non-singular Jacobian is always reported; each parameter carries its standard error and a
 // verdict against its precision tolerance (`tolerances`). A failed fit (too few intervals, no
-// convergence, singular, ceres::Covariance failure) has ok = false, a message, and NaN values:
+// convergence, singular, ceres::Covariance failure) has status kFailed, a message, and NaN values:
 // never an identity calibration.
 #pragma once
 
@@ -39,24 +39,13 @@
 namespace stend::ceres_nonlinear {
 
 // ---------------------------------------------------------------------------------------------
-// Static intervals — from the processing stage (stend/processing/static_points.hpp)
+// Static intervals — the processing stage's points (stend/processing/static_points.hpp), both
+// instruments extracted: the accelerometer fits use `accel.mean` (and `accel.sample_std`,
+// `samples_used`), the gyro fits `gyro.mean`, the integration the samples `first`..`last`.
 
-struct StaticInterval {
-  std::size_t first = 0, last = 0;  // sample indices, inclusive
-  double t_start_s = 0.0, t_end_s = 0.0;
-  std::size_t count = 0;
-  Eigen::Vector3d accel_mean = Eigen::Vector3d::Zero();  // m/s^2 (the recording's SI values)
-  Eigen::Vector3d accel_std = Eigen::Vector3d::Zero();   // per-sample standard deviation
-  Eigen::Vector3d gyro_mean = Eigen::Vector3d::Zero();   // rad/s
-  Eigen::Vector3d gyro_std = Eigen::Vector3d::Zero();    // per-sample standard deviation
-  std::string label;
-};
-
-// Mean and spread of samples first..last (inclusive).
-StaticInterval make_interval(const Recording& rec, std::size_t first, std::size_t last,
-                             std::string label = {});
-// A processing point (both instruments extracted) in this estimator's form.
-StaticInterval to_interval(const processing::StaticPoint& point);
+// Mean and spread of samples first..last (inclusive), both instruments; label as given.
+processing::StaticPoint make_interval(const Recording& rec, std::size_t first, std::size_t last,
+                                      std::string label = {});
 
 // How the accelerometer fits find their static intervals unless told otherwise: detected in the
 // samples (processing::StaticDetectorOptions), each the plain mean of its samples — no low-pass,
@@ -68,13 +57,18 @@ processing::ProcessingOptions default_interval_options();
 processing::ProcessingOptions rate_table_interval_options();
 
 // The static intervals of a recording as the processing stage finds them (skipped ones left out).
-std::vector<StaticInterval> static_intervals(const Recording& rec,
-                                             const processing::ProcessingOptions& options = default_interval_options());
+std::vector<processing::StaticPoint> static_intervals(const Recording& rec,
+                                                      const processing::ProcessingOptions& options = default_interval_options());
 
 // ---------------------------------------------------------------------------------------------
 // Calibration
 
 enum class Loss { kNone, kHuber, kCauchy };
+
+// The four procedures, one per file (src/accelerometer_unknown.cpp, accelerometer_known.cpp,
+// gyro_rate_table.cpp, gyro_integration.cpp).
+enum class Method { kUnknownOrientations, kKnownOrientations, kRateTable, kIntegration };
+const char* method_name(Method m);  // "unknown_orientations" | "known_orientations" | "rate_table" | "integration"
 
 struct CalibrationOptions {
   processing::ProcessingOptions processing = default_interval_options();  // the static intervals
@@ -104,12 +98,10 @@ struct CalibrationOptions {
   // `<table_fixture>.tilt.meas_deg`, `<table_fixture>.rotation.meas_deg` and the header's mounting.
   std::vector<std::string> table_offsets;
   std::string table_fixture = "table";
-};
 
-// A fitted parameter (name, unit, value, standard error, interval, verdict; NaN when not
-// identifiable), or one held at zero by construction.
-struct Parameter : estimation::ParameterEstimate {
-  bool fixed = false;              // held at zero by construction (not estimated)
+  // Every number in range (confidence in (0, 1), iterations ≥ 1, tolerances > 0, scales > 0,
+  // known cross-axis and table-offset names, the processing options valid).
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 // One move between static intervals (gyro integration): the angle between the gravity direction
@@ -121,35 +113,54 @@ struct MoveMismatch {
   double after_rad = std::numeric_limits<double>::quiet_NaN();
 };
 
+// An RMS over the intervals (or moves) of a fit, raw (θ = 0) and calibrated; 0 until the
+// procedure computes it (it does not, or it failed before), the calibrated one NaN when it failed.
+struct Rms {
+  double before = 0.0, after = 0.0;
+};
+// The same per output axis x, y, z; NaN where not computed.
+struct AxisRms {
+  Eigen::Vector3d before = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  Eigen::Vector3d after = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+};
+
+// The result of one procedure. Every field has one meaning whatever the procedure; those a
+// procedure does not compute stay empty or NaN.
 struct CalibrationResult {
-  bool ok = false;
+  estimation::FitStatus status = estimation::FitStatus::kFailed;
   std::string message;             // why it failed; empty on success
-  std::string method;              // "unknown_orientations" | "known_orientations" | "rate_table" | "integration"
+  Method method = Method::kUnknownOrientations;
   model::ErrorModel model;         // bias, scale, cross_axis (accelerometer); gyro: [+ g_sensitivity]
   std::vector<double> theta;       // model.size() values (NaN when the fit failed)
-  std::vector<Parameter> parameters;       // all model parameters (fixed ones marked), then
-                                           // table_offset_<axis> [deg] when estimated
-  std::vector<Parameter> gyro_parameters;  // gyro_bias_x/y/z when estimated
+  // Every model parameter (those held at 0 by the frame convention marked `held`), then
+  // table_offset_<axis> [deg] when estimated (known orientations).
+  std::vector<estimation::ParameterEstimate> parameters;
+  // Accelerometer fits with estimate_gyro_bias: the gyro bias gyro_bias_x/y/z [rad/s], the mean
+  // over the static intervals.
+  std::vector<estimation::ParameterEstimate> gyro_bias;
   std::vector<std::string> not_identifiable;  // parameter names
-  std::vector<StaticInterval> intervals;
+  std::vector<processing::StaticPoint> intervals;
   // How the intervals were detected, with the rejected candidates by reason (when detected).
   std::optional<processing::DetectionSummary> detection;
+  // The gravity magnitude [m/s^2]: the one an accelerometer fit used (the integration: its
+  // accelerometer's); the rate table: the mean |f| of its truth.
   double gravity_mps2 = 0.0;
   int observations = 0, estimated = 0, dof = 0, iterations = 0;
-  double sigma = 0.0;              // residual standard deviation [m/s^2] (whitened: 1 = as expected)
-  bool whitened = false;           // known orientations with orientation_sigma_deg > 0
-  double quantile = 0.0;
-  // RMS over the intervals of |ȳ| − g (raw) and |correct(ȳ)| − g (calibrated) [m/s^2].
-  // Gyro: RMS of the residual raw (θ = 0) and calibrated [rad/s for rate_table, rad (gravity
-  // direction mismatch) for integration].
-  double rms_norm_before = 0.0, rms_norm_after = 0.0;
-  // Per-axis RMS over the intervals, raw and calibrated, in the instrument unit (m/s^2, rad/s).
-  // Known orientations / rate table: correct(ȳ) − truth. Unknown orientations: the part of the
-  // calibrated mean along its own direction that is not g, (|c| − g)·ĉ, split on the axes.
-  // Integration: the gravity-direction mismatch per axis [rad] (NaN "before" when not computed).
-  Eigen::Vector3d rms_axis_before = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-  Eigen::Vector3d rms_axis_after = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-  std::vector<MoveMismatch> moves;  // gyro integration: per move (empty otherwise)
+  // Residual standard deviation of the solve, in sigma_unit(); `whitened`: known orientations with
+  // orientation_sigma_deg > 0 (1 = as expected).
+  double sigma = 0.0;
+  bool whitened = false;
+  double quantile = 0.0;           // of the parameters' intervals (Student t)
+
+  // The checks of the fit (see Rms, AxisRms):
+  Rms norm_error_mps2;              // accelerometer fits: |ȳ| − g over the intervals [m/s^2]
+  AxisRms norm_error_axis_mps2;     // unknown orientations: (|c| − g)·ĉ of each mean c, per axis [m/s^2]
+  AxisRms truth_error_axis;         // known orientations [m/s^2], rate table [rad/s]: ȳ, correct(ȳ) − truth
+  Rms rate_error_radps;             // rate table: |ȳ, correct(ȳ) − ω| [rad/s]
+  Rms direction_error_rad;          // integration: |v − ĝ| of the carried gravity direction v after each move
+  AxisRms direction_error_axis_rad; // integration: v − ĝ per axis [rad]
+  std::vector<MoveMismatch> moves;  // integration: per move
+
   // Covariance of the estimated parameters (scaled by σ², order of free_index = their positions
   // in `parameters`); empty when the fit failed.
   Eigen::MatrixXd covariance;
@@ -157,11 +168,14 @@ struct CalibrationResult {
   double condition_number = 0.0;   // of the scaled Jacobian at the solution (σ_max/σ_min)
   std::string solver_report;
 
-  const Parameter& parameter(const std::string& name) const;  // throws when absent
-  // Calibrated specific force for a reading (throws std::logic_error when !ok).
+  bool ok() const { return status == estimation::FitStatus::kOk; }
+  bool is_gyroscope() const { return model.instrument == model::Instrument::kGyroscope; }
+  const char* sigma_unit() const;  // "m/s^2", "rad/s", "rad" or "(whitened residuals; 1 = as expected)"
+  const estimation::ParameterEstimate& parameter(const std::string& name) const;  // throws when absent
+  // Calibrated specific force for a reading (throws std::logic_error when !ok()).
   Eigen::Vector3d correct(const Eigen::Vector3d& y) const;
-  std::string report() const;
-  std::string to_json() const;
+  std::string report() const;   // src/report.cpp
+  std::string to_json() const;  // src/result_writer.cpp
 };
 
 // The model these functions fit: bias, scale, cross_axis for an accelerometer (12 parameters).
@@ -170,7 +184,7 @@ model::ErrorModel accelerometer_model();
 CalibrationResult calibrate_accelerometer_unknown_orientations(const Recording& rec,
                                                                const CalibrationOptions& options = {});
 CalibrationResult calibrate_accelerometer_unknown_orientations(
-    const std::vector<StaticInterval>& intervals, double gravity_mps2,
+    const std::vector<processing::StaticPoint>& intervals, double gravity_mps2,
     const CalibrationOptions& options = {});
 
 // Truth from the columns f_x_mps2, f_y_mps2, f_z_mps2 (processing's truth mean over each
@@ -179,7 +193,7 @@ CalibrationResult calibrate_accelerometer_known_orientations(const Recording& re
                                                              const CalibrationOptions& options = {});
 // truth_f[k]: the true specific force of interval k in the sensor frame [m/s^2].
 CalibrationResult calibrate_accelerometer_known_orientations(
-    const std::vector<StaticInterval>& intervals, const std::vector<Eigen::Vector3d>& truth_f,
+    const std::vector<processing::StaticPoint>& intervals, const std::vector<Eigen::Vector3d>& truth_f,
     const CalibrationOptions& options = {});
 
 // ---------------------------------------------------------------------------------------------
@@ -216,6 +230,8 @@ struct GyroOptions {
   estimation::PrecisionTolerances tolerances;  // of each parameter's verdict
   bool estimate_g_sensitivity = false;
   processing::ProcessingOptions processing = rate_table_interval_options();  // rate table intervals
+
+  bool IsValid(std::string* error = nullptr) const;  // as CalibrationOptions::IsValid
 };
 
 model::ErrorModel gyroscope_model(bool g_sensitivity);
@@ -224,7 +240,7 @@ model::ErrorModel gyroscope_model(bool g_sensitivity);
 // with the truth columns w_x_radps.. and f_x_mps2..; fails when the recording has none.
 CalibrationResult calibrate_gyro_rate_table(const Recording& rec, const GyroOptions& options = {});
 // truth_w[k], truth_f[k]: true rate [rad/s] and specific force [m/s^2] of interval k (sensor frame).
-CalibrationResult calibrate_gyro_rate_table(const std::vector<StaticInterval>& intervals,
+CalibrationResult calibrate_gyro_rate_table(const std::vector<processing::StaticPoint>& intervals,
                                             const std::vector<Eigen::Vector3d>& truth_w,
                                             const std::vector<Eigen::Vector3d>& truth_f,
                                             const GyroOptions& options = {});

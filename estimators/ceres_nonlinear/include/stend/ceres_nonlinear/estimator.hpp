@@ -5,6 +5,8 @@
 #include <stend/estimation/registry.hpp>
 #include <stend/sdk.hpp>
 
+#include <nlohmann/json_fwd.hpp>
+
 namespace stend::ceres_nonlinear {
 
 inline constexpr const char* kResultsFile = "ceres.json";
@@ -24,7 +26,15 @@ class CeresNonlinearEstimator final : public Estimator {
   estimation::EstimatorConfig config_;
 };
 
-// Registry entry: claims model files with a top-level `ceres_nonlinear:` mapping.
+// ceres.json read back (src/result_reader.cpp): the summary of the flat parameter list
+// (accel_*, gyro_*); one model of the three axes per instrument part (each with its own status;
+// the parameters the frame convention holds at 0 marked held and named in a note), the
+// accelerometer's with the gravity it used; with `gyroscope: bias_only` the accelerometer fit's
+// gyro bias as a bias-only gyroscope model.
+estimation::FitResult read_results(const nlohmann::json& doc);
+
+// Registry entry: claims model files with a top-level `ceres_nonlinear:` mapping; fits and reads
+// through the typed result.
 estimation::EstimatorEntry estimator_entry();
 
 }  // namespace stend::ceres_nonlinear

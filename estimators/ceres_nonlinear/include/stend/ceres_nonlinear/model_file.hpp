@@ -36,6 +36,10 @@ struct ModelFileOptions {
   // What the file asks for that no longer acts, said in the report (e.g. `max_std_error`,
   // superseded by the per-parameter verdicts and `tolerances`).
   std::vector<std::string> warnings;
+
+  // Known methods (and a gyroscope method the accelerometer method allows), and both parts'
+  // options valid (CalibrationOptions::IsValid, GyroOptions::IsValid).
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 // Reads the `ceres_nonlinear:` mapping of `root` (loaded from `file`).
@@ -47,16 +51,23 @@ std::string describe_options(const ModelFileOptions& o);
 std::string options_json(const ModelFileOptions& o);
 
 struct ModelFileFit {
-  bool ok = false;
-  std::string message;
+  estimation::FitStatus status = estimation::FitStatus::kFailed;  // kOk when every requested part succeeded
+  std::string message;  // the failed parts and why
   CalibrationResult accel, gyro;
   bool has_accel = false, has_gyro = false;
   std::string text;  // options echo + both reports
-  std::string json;  // versioned: {"schema": kResultsSchema, ...}
+  std::string json;  // the results document (results_document)
+
+  bool ok() const { return status == estimation::FitStatus::kOk; }
 };
 
+// The results document of a model-file fit (schema kResultsSchema, README.md): the options used,
+// each part's result, a flat parameter list (accel_*, gyro_*, table_offset_*) and the summary
+// fields (src/result_writer.cpp; read back by read_results, estimator.hpp).
+std::string results_document(const ModelFileOptions& options, const ModelFileFit& fit);
+
 // Runs what the options ask for: accelerometer first (the integration method needs it), then the
-// gyroscope. ok only when every requested part succeeded. Processing keys the model file does not
+// gyroscope. status kOk only when every requested part succeeded. Processing keys the model file does not
 // state come from the recording's experiment `processing:` section (processing::resolve); the
 // echoed options are the ones used.
 ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& options);

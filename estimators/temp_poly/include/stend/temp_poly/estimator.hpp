@@ -5,6 +5,8 @@
 #include <stend/estimation/registry.hpp>
 #include <stend/sdk.hpp>
 
+#include <nlohmann/json_fwd.hpp>
+
 namespace stend::temp_poly {
 
 inline constexpr const char* kResultsFile = "temp_poly.json";
@@ -23,8 +25,14 @@ class TempPolyEstimator final : public Estimator {
   estimation::EstimatorConfig config_;
 };
 
+// temp_poly.json read back (src/result_io.cpp, beside its writer to_json): the summary lists every
+// fitted axis's parameters; the instrument model merges the axes' fits (Coverage::kAxes, the
+// axes that succeeded; the failed ones named), with the reference temperature and the temperature
+// range the fit saw.
+estimation::FitResult read_results(const nlohmann::json& doc);
+
 // Registry entry: claims model files with temperature-model options (`selection:`, `max_order:`);
-// its summary lists every fitted axis' parameters.
+// fits and reads through the typed result.
 estimation::EstimatorEntry estimator_entry();
 
 }  // namespace stend::temp_poly

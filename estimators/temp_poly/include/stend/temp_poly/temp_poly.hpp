@@ -48,6 +48,11 @@ struct TempPolyOptions {
   estimation::PrecisionTolerances tolerances;  // of each parameter's verdict (model file `tolerances:`)
   // Static intervals and extraction (the processing stage's keys and defaults).
   processing::ProcessingOptions processing;
+
+  // A known selection, orders in range (max_order 1..6, order 0..6), axes 0..2, something that
+  // depends on temperature, level_tolerance_c > 0, min_span_c ≥ 0, reference_c finite, confidence
+  // in (0, 1), the tolerances and the processing options valid.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 // One temperature level: the points whose die temperatures cluster together.

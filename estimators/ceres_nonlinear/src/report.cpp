@@ -1,0 +1,113 @@
+// The text report of a ceres_nonlinear result, and what the report and the results document
+// read of it. See stend/ceres_nonlinear/calibration.hpp.
+#include "report.hpp"
+
+#include <stend/physics/units.hpp>
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace stend::ceres_nonlinear {
+
+using namespace detail;
+
+const char* method_name(Method m) {
+  switch (m) {
+    case Method::kUnknownOrientations: return "unknown_orientations";
+    case Method::kKnownOrientations: return "known_orientations";
+    case Method::kRateTable: return "rate_table";
+    case Method::kIntegration: return "integration";
+  }
+  return "?";
+}
+
+namespace detail {
+
+const Rms& reported_rms(const CalibrationResult& r) {
+  if (r.method == Method::kRateTable) return r.rate_error_radps;
+  if (r.method == Method::kIntegration) return r.direction_error_rad;
+  return r.norm_error_mps2;
+}
+
+const AxisRms& reported_axis_rms(const CalibrationResult& r) {
+  switch (r.method) {
+    case Method::kUnknownOrientations: return r.norm_error_axis_mps2;
+    case Method::kIntegration: return r.direction_error_axis_rad;
+    case Method::kKnownOrientations:
+    case Method::kRateTable: break;
+  }
+  return r.truth_error_axis;
+}
+
+std::string fmt_num(double v) { return std::isfinite(v) ? fmt::format("{:.6g}", v) : "—"; }
+
+}  // namespace detail
+
+const char* CalibrationResult::sigma_unit() const {
+  if (whitened) return "(whitened residuals; 1 = as expected)";
+  if (method == Method::kIntegration) return "rad (gravity direction)";
+  return is_gyroscope() ? "rad/s" : "m/s^2";
+}
+
+const estimation::ParameterEstimate& CalibrationResult::parameter(const std::string& name) const {
+  for (const auto& p : parameters)
+    if (p.name == name) return p;
+  for (const auto& p : gyro_bias)
+    if (p.name == name) return p;
+  throw std::out_of_range("no parameter '" + name + "'");
+}
+
+Eigen::Vector3d CalibrationResult::correct(const Eigen::Vector3d& y) const {
+  if (!ok()) throw std::logic_error("CalibrationResult::correct: the calibration failed: " + message);
+  return model.correct(theta.data(), y, model::Stimulus<double>{});
+}
+
+std::string CalibrationResult::report() const {
+  const bool gyro = model.instrument == model::Instrument::kGyroscope;
+  std::string s = fmt::format("Ceres {} calibration ({})\n", gyro ? "gyroscope" : "accelerometer", method_name(method));
+  s += fmt::format("status: {}\n", ok() ? "ok" : "FAILED — " + message);
+  s += fmt::format("{} intervals: {}, residuals: {}, estimated parameters: {}, dof: {}, condition number {}{}\n",
+                   method == Method::kRateTable ? "rate and static" : "static", intervals.size(), observations, estimated,
+                   dof, fmt_num(condition_number),
+                   gyro ? std::string() : fmt::format(", g = {} m/s^2", gravity_mps2));
+  s += fmt::format("residual sigma: {} {}, solver: {}\n", fmt_num(sigma), sigma_unit(), solver_report);
+  const AxisRms& axis = reported_axis_rms(*this);
+  const Eigen::Vector3d& after = axis.after;
+  const Eigen::Vector3d& before = axis.before;
+  if (detection) s += detection->print() + "\n";
+  if (!gyro) {
+    s += fmt::format("RMS of |a| - g over the intervals: raw {} m/s^2, calibrated {} m/s^2\n",
+                     fmt_num(norm_error_mps2.before), fmt_num(norm_error_mps2.after));
+    s += fmt::format("residual RMS per axis (x y z), calibrated: {} {} {} m/s^2 = {} {} {} mg; raw: {} {} {} mg\n",
+                     fmt_num(after[0]), fmt_num(after[1]), fmt_num(after[2]),
+                     fmt_num(after[0] / physics::kMilliG), fmt_num(after[1] / physics::kMilliG),
+                     fmt_num(after[2] / physics::kMilliG), fmt_num(before[0] / physics::kMilliG),
+                     fmt_num(before[1] / physics::kMilliG), fmt_num(before[2] / physics::kMilliG));
+  } else if (method == Method::kIntegration) {
+    s += fmt::format("gravity-direction mismatch after each move (RMS): raw {} rad, calibrated {} rad; per axis "
+                     "calibrated {} {} {} rad\n",
+                     fmt_num(direction_error_rad.before), fmt_num(direction_error_rad.after), fmt_num(after[0]),
+                     fmt_num(after[1]), fmt_num(after[2]));
+  } else {
+    const double dps = 1.0 / physics::kDegPerSecond;
+    s += fmt::format("residual RMS per axis (x y z), calibrated: {} {} {} rad/s = {} {} {} deg/s; raw: {} {} {} deg/s\n",
+                     fmt_num(after[0]), fmt_num(after[1]), fmt_num(after[2]),
+                     fmt_num(after[0] * dps), fmt_num(after[1] * dps),
+                     fmt_num(after[2] * dps), fmt_num(before[0] * dps),
+                     fmt_num(before[1] * dps), fmt_num(before[2] * dps));
+  }
+  s += fmt::format("{:<22} {:>14} {:<14} {:>12} {:>14} {:>14}  {:<12} {}\n", "parameter", "value", "unit",
+                   "std error", "95% lower", "95% upper", "verdict", "note");
+  auto row = [&](const estimation::ParameterEstimate& p) {
+    s += fmt::format("{:<22} {:>14} {:<14} {:>12} {:>14} {:>14}  {:<12} {}\n", p.name, fmt_num(p.value), p.unit,
+                     fmt_num(p.std_error), fmt_num(p.lower), fmt_num(p.upper),
+                     p.held ? "fixed" : estimation::to_string(p.judged()), p.reason);
+  };
+  for (const auto& p : parameters) row(p);
+  for (const auto& p : gyro_bias) row(p);
+  return s;
+}
+
+}  // namespace stend::ceres_nonlinear

@@ -1,0 +1,21 @@
+// Internal to ceres_nonlinear: what the text report and the results document read of a result
+// (report.cpp).
+#pragma once
+
+#include <stend/ceres_nonlinear/calibration.hpp>
+
+#include <string>
+
+namespace stend::ceres_nonlinear::detail {
+
+// The overall check a procedure reports: |ȳ| − g (accelerometer), the rate error (rate table), the
+// gravity-direction mismatch (integration).
+const Rms& reported_rms(const CalibrationResult& r);
+// The per-axis check a procedure reports: (|c| − g)·ĉ (unknown orientations), against the truth
+// (known orientations, rate table), the gravity-direction mismatch (integration).
+const AxisRms& reported_axis_rms(const CalibrationResult& r);
+
+// A number in the report: %.6g, "—" for NaN.
+std::string fmt_num(double v);
+
+}  // namespace stend::ceres_nonlinear::detail

@@ -1,0 +1,64 @@
+// Internal to ceres_nonlinear: what the four procedures share — the parameter vector, the robust
+// loss, the solve with its identifiability check and covariance (stend/estimation/
+// identifiability.hpp), and the bookkeeping of a failed fit. See stend/ceres_nonlinear/calibration.hpp.
+#pragma once
+
+#include <stend/ceres_nonlinear/calibration.hpp>
+
+#include <ceres/ceres.h>
+
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace stend::ceres_nonlinear::detail {
+
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+inline constexpr int kFull = 12;  // bias 3, scale 3, cross 6
+
+// `full` (kFull entries) from the free parameters: free_index[k] is the position of free parameter
+// k in the full vector; the others are 0.
+template <typename T>
+void expand(const T* free_params, const std::vector<int>& free_index, T* full) {
+  for (int i = 0; i < kFull; ++i) full[i] = T(0);
+  for (std::size_t k = 0; k < free_index.size(); ++k) full[free_index[k]] = free_params[k];
+}
+
+// Huber or Cauchy at the options' scale; nullptr (squared loss) for Loss::kNone.
+ceres::LossFunction* make_loss(const CalibrationOptions& o);
+
+// The solver settings of the gyro fits as the shared solve reads them, with `loss_scale` the scale
+// of their residual (rad/s on the rate table, rad in the integration).
+CalibrationOptions as_calibration_options(const GyroOptions& g, double loss_scale);
+
+// r.parameters for the model's parameters; those not in `free_index` held at 0 by the frame
+// convention.
+void init_parameters(CalibrationResult& r, const std::vector<int>& free_index);
+
+// Marks the fit failed: the message, θ NaN, every estimated parameter without a number.
+void fail_all(CalibrationResult& r, const std::string& message);
+
+// Solve, check identifiability, fill the covariance. `free_index` lists the estimated parameters;
+// x holds their start and, on return, their solution.
+void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<int>& free_index, int residual_count,
+           const CalibrationOptions& o, CalibrationResult& r);
+
+// Whether every interval's accelerometer and gyro means are finite.
+bool finite_intervals(const std::vector<processing::StaticPoint>& intervals);
+
+// Per-axis RMS of reading − truth, raw and calibrated with r's θ (f: the specific force of each
+// interval for the model's g-sensitivity; truth when empty) into r.truth_error_axis.
+void axis_rms_against(CalibrationResult& r, const std::vector<Eigen::Vector3d>& truth,
+                      const std::vector<Eigen::Vector3d>& reading, const std::vector<Eigen::Vector3d>& f);
+
+// The intervals of a recording through the processing stage, with the truth means of the
+// requested columns per interval and how they were detected.
+struct Extracted {
+  std::vector<processing::StaticPoint> intervals;
+  std::vector<std::vector<double>> truth;  // per interval, the means of the requested columns
+  std::optional<processing::DetectionSummary> detection;
+};
+Extracted extract_intervals(const Recording& rec, const processing::ProcessingOptions& o,
+                            std::vector<std::string> truth_columns = {});
+
+}  // namespace stend::ceres_nonlinear::detail
