@@ -3,6 +3,7 @@
 
 #include <stend/estimation/linear_lsq.hpp>
 #include <stend/physics/units.hpp>
+#include <stend/sdk.hpp>
 #include <stend/processing/static_points.hpp>
 
 #include <fmt/format.h>
@@ -18,7 +19,6 @@ namespace stend::calibration {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // A still interval must not turn faster than this (calibrated, so the gyro bias is gone): a
 // constant-rate turn about the vertical leaves the accelerometer still.
 constexpr double kStillMaxRateDps = 3.0;

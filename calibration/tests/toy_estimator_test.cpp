@@ -1,6 +1,6 @@
 // The proof that results are typed end to end: an estimator defined here, in the test — nothing
 // of it in app/, reporting/, calibration/ or io/ — joins a copy of the built-in registry, fits a
-// recording, is read back from its own results document, exported and applied.
+// recording, is read back from its own results document, exported, applied and reported.
 //
 // The toy estimator, "mean_bias": the accelerometer bias of a recording held still with z up, the
 // mean reading minus gravity along z, each axis with its standard error; its results document has
@@ -9,6 +9,7 @@
 #include <stend/estimation/registry.hpp>
 #include <stend/estimators/builtin.hpp>
 #include <stend/reporting/exports.hpp>
+#include <stend/reporting/run_report.hpp>
 #include <stend/recording/recording.hpp>
 #include <stend/recording/samples.hpp>
 #include <stend/testing/files.hpp>
@@ -197,6 +198,23 @@ TEST(ToyEstimator, FitsIsReadBackExportedAndAppliedThroughTheRegistryAlone) {
   mean /= static_cast<double>(calibrated.sample_count());
   EXPECT_LT((mean - Eigen::Vector3d(0.0, 0.0, kGravity)).norm(), 1e-9);
 
-  // The run report: rendered through the entry's `report` hook — added by the integrator once the
-  // hook lands (the toy entry then gets a section; the generic one shows its parameter table).
+  // The run report: without a `report` hook the entry gets the generic section (its parameter
+  // table, read back through its reader); with one, its own section, placed by its topic.
+  const std::string generic = reporting::run_report_html(run, registry);
+  EXPECT_NE(generic.find("mean_bias"), std::string::npos);
+  EXPECT_NE(generic.find("bias_x"), std::string::npos);
+  EXPECT_NE(generic.find("bias_z"), std::string::npos);
+  estimation::Registry with_section = estimators::builtin();
+  estimation::EstimatorEntry hooked = toy_entry();
+  hooked.report = [](const estimation::FitResult& r) {
+    estimation::ReportSection s;
+    s.heading = "Mean bias — the toy estimator";
+    s.add_text("z bias " + estimation::report_number(r.accelerometer->theta[2] / 9.80665e-3, 3) + " mg from " +
+               std::to_string(r.document.at("samples").get<int>()) + " samples");
+    return s;
+  };
+  with_section.add(hooked);
+  const std::string own = reporting::run_report_html(run, with_section);
+  EXPECT_NE(own.find("Mean bias — the toy estimator"), std::string::npos);
+  EXPECT_NE(own.find("from 10000 samples"), std::string::npos);
 }

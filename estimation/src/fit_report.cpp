@@ -245,7 +245,8 @@ std::vector<Figure> static_point_figures(const json& fit, const std::string& wha
   return out;
 }
 
-TemperatureCurves temperature_curves(const FittedModel& fm, int k, double t_lo_c, double t_hi_c, double ds) {
+TemperatureCurves temperature_curves(const InstrumentModel& m, double quantile, int k, double t_lo_c, double t_hi_c,
+                                     double ds) {
   const auto uk = static_cast<std::size_t>(k);
   TemperatureCurves c{{"interval", Style::kBand, {}, {}, {}, {}, figure::palette(uk), false, 0.25},
                       {"fitted zero offset", Style::kLine, {}, {}, {}, {}, figure::palette(uk), false, 1.0},
@@ -256,18 +257,18 @@ TemperatureCurves temperature_curves(const FittedModel& fm, int k, double t_lo_c
   unit_in[k] = 1.0;
   for (int i = 0; i <= 80; ++i) {
     const double T = t_lo_c + (t_hi_c - t_lo_c) * i / 80.0;
-    const auto [b, bse] = contribution(fm, k, zero, T);
+    const auto [b, bse] = m.contribution(k, zero, T);
     c.offset.x.push_back(T);
     c.offset.y.push_back(b * ds);
     c.offset_band.x.push_back(T);
-    c.offset_band.y_lo.push_back((b - fm.quantile * bse) * ds);
-    c.offset_band.y_hi.push_back((b + fm.quantile * bse) * ds);
-    const auto [sc, sse] = contribution(fm, k, unit_in, T, &zero);
+    c.offset_band.y_lo.push_back((b - quantile * bse) * ds);
+    c.offset_band.y_hi.push_back((b + quantile * bse) * ds);
+    const auto [sc, sse] = m.contribution(k, unit_in, T, &zero);
     c.scale.x.push_back(T);
     c.scale.y.push_back(sc * 1e6);
     c.scale_band.x.push_back(T);
-    c.scale_band.y_lo.push_back((sc - fm.quantile * sse) * 1e6);
-    c.scale_band.y_hi.push_back((sc + fm.quantile * sse) * 1e6);
+    c.scale_band.y_lo.push_back((sc - quantile * sse) * 1e6);
+    c.scale_band.y_hi.push_back((sc + quantile * sse) * 1e6);
   }
   return c;
 }

@@ -2,6 +2,7 @@
 #include "stend/estimation/identifiability.hpp"
 
 #include "stend/estimation/summary.hpp"
+#include "stend/sdk.hpp"
 
 #include <stend/physics/units.hpp>
 #include <stend/yaml/reader.hpp>
@@ -15,7 +16,6 @@ namespace stend::estimation {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // A unit split into its base quantity and the power of degC it is divided by:
 // "m/s^2/degC^2" → {"m/s^2", 2}, "1/degC" → {"1", 1}, "rad/s" → {"rad/s", 0}.

@@ -14,6 +14,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "stend/errors.hpp"
 #include "stend/sdk.hpp"
 #include "stend/stats/distributions.hpp"
 
@@ -101,6 +102,18 @@ LsqResult failed(LsqResult& r, const std::string& message) {
   return r;
 }
 
+}  // namespace
+
+bool LsqOptions::IsValid(std::string* error) const {
+  if (!(confidence > 0.0 && confidence < 1.0)) return invalid(error, "confidence level must lie in (0, 1)");
+  if (!(rank_tolerance > 0.0 && rank_tolerance < 1.0)) return invalid(error, "rank_tolerance must lie in (0, 1)");
+  if (!(condition_warning > 0.0) || !(observations_per_parameter_warning >= 0.0))
+    return invalid(error, "condition_warning must be > 0 and observations_per_parameter_warning >= 0");
+  return tolerances.IsValid(error);
+}
+
+namespace {
+
 // Why the problem cannot be solved as posed (sizes, confidence, k ≥ p, finite input, positive
 // weights); "" when it can.
 std::string problem_error(const LsqProblem& pr, const LsqOptions& opt,
@@ -112,7 +125,7 @@ std::string problem_error(const LsqProblem& pr, const LsqOptions& opt,
   if ((!pr.names.empty() && pr.names.size() != static_cast<std::size_t>(p)) ||
       (!pr.units.empty() && pr.units.size() != static_cast<std::size_t>(p)))
     return "parameter names/units do not match the design's column count";
-  if (!(opt.confidence > 0.0 && opt.confidence < 1.0)) return "confidence level must lie in (0, 1)";
+  if (std::string why; !opt.IsValid(&why)) return why;
   if (p == 0) return "no parameters to estimate";
   if (k < p) {
     std::vector<std::string> names;

@@ -1,8 +1,9 @@
 // The linear fit of a ModelSpec on static points. See stend/estimation/static_fit.hpp.
 #include "stend/estimation/static_fit.hpp"
 
+#include "stend/estimation/summary.hpp"
+
 #include <cmath>
-#include <cstdio>
 #include <stend/errors.hpp>
 
 #include "stend/physics/units.hpp"
@@ -10,12 +11,6 @@
 namespace stend::estimation {
 
 namespace {
-
-std::string num(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
 
 std::string join(const std::vector<std::string>& items) {
   std::string out;
@@ -81,7 +76,7 @@ bool build_problem(const std::vector<processing::StaticPoint>& points, const Mod
         const double se = reading.std_error[a];
         if (!(se > 0.0) || !std::isfinite(se)) {
           fit.message = "weighting: segment_noise needs a positive standard error for every point; "
-                        "point '" + processing::label(pt.segment) + "' axis " + axis_name(a) + " has " + num(se) +
+                        "point '" + processing::label(pt.segment) + "' axis " + axis_name(a) + " has " + number_text(se) +
                         ". Use weighting: none.";
           return false;
         }

@@ -1,6 +1,7 @@
 // Recording store: round trip, tolerance of interrupted writes, durability under SIGKILL, scale.
 #include <stend/errors.hpp>
 #include <stend/recording/recording.hpp>
+#include <stend/sdk.hpp>
 #include <stend/testing/files.hpp>
 #include <stend/testing/paths.hpp>
 #include <stend/testing/program.hpp>
@@ -26,6 +27,7 @@
 #include "../src/hdf5_file_bytes.hpp"  // lookup3, to make a checksum right after an edit
 
 namespace fs = std::filesystem;
+using stend::kNaN;
 using stend::Event;
 using stend::ImuSample;
 using stend::Recording;
@@ -40,7 +42,6 @@ namespace {
 
 // These tests are about the CSV run folder (its files' text and its reader).
 const stend::RecordingWriterOptions kCsv{stend::RecordingFormat::kCsv};
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Bit-exact equality, with every NaN equal to every NaN (the CSV keeps no NaN payload).

@@ -1,5 +1,6 @@
 // A plot drawn as SVG for the reports (see svg_plot.hpp).
 #include "stend/reporting/svg_plot.hpp"
+#include "stend/sdk.hpp"
 
 #include <fmt/format.h>
 
@@ -17,7 +18,6 @@ using estimation::figure::Plot;
 using estimation::figure::Series;
 using estimation::figure::Style;
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 struct Axis {
   double lo = 0.0, hi = 1.0;

@@ -1,21 +1,12 @@
 // The paper's batch least-squares procedure on a recording. See stend/batch_lsq/batch_lsq.hpp.
 #include "stend/batch_lsq/batch_lsq.hpp"
 
-#include <cstdio>
+#include "stend/estimation/summary.hpp"
+
 #include <exception>
 #include <utility>
 
 namespace stend::batch_lsq {
-
-namespace {
-
-std::string num(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
-}  // namespace
 
 Eigen::VectorXd FitResult::theta_full() const {
   Eigen::VectorXd t = Eigen::VectorXd::Constant(spec.model.size(), kNaN);
@@ -59,8 +50,8 @@ FitResult fit_recording(const Recording& rec, const ModelSpec& spec) {
                        "', not 'complete': it may be truncated");
   const processing::StaticExtractionSettings& x = fr.spec.processing.extraction;
   if (x.filter == processing::Filter::kButterworth && x.settle_s < 1.0 / x.cutoff_hz)
-    fr.notes.push_back("settle_s = " + num(x.settle_s) +
-                       " s is shorter than 1/cutoff_hz = " + num(1.0 / x.cutoff_hz) +
+    fr.notes.push_back("settle_s = " + estimation::number_text(x.settle_s) +
+                       " s is shorter than 1/cutoff_hz = " + estimation::number_text(1.0 / x.cutoff_hz) +
                        " s: the filter's edge transients may reach the averaged window");
   return fr;
 }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <stend/ceres_nonlinear/calibration.hpp>
+#include <stend/sdk.hpp>
 
 #include <ceres/ceres.h>
 
@@ -13,7 +14,6 @@
 
 namespace stend::ceres_nonlinear::detail {
 
-inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 inline constexpr int kFull = 12;  // bias 3, scale 3, cross 6
 
 // `full` (kFull entries) from the free parameters: free_index[k] is the position of free parameter

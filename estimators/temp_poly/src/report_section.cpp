@@ -5,12 +5,14 @@
 
 #include "stend/estimation/fit_report.hpp"
 #include "stend/estimation/json_fields.hpp"
+#include "stend/estimation/result_io.hpp"
 #include "stend/physics/units.hpp"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace stend::temp_poly {
 
@@ -18,7 +20,7 @@ namespace {
 
 using estimation::Cell;
 using estimation::Emphasis;
-using estimation::FittedModel;
+using estimation::InstrumentModel;
 using estimation::Paragraph;
 using estimation::ReportSection;
 using estimation::Row;
@@ -67,13 +69,13 @@ void for_each_residual(const json& fit, const std::string& a, F&& f) {
 
 // Partial residuals of axis a (index k): each static orientation's residual added to the fitted
 // offset at its temperature [display unit], against temperature [°C].
-Series partial_residuals(const FittedModel& fm, const json& fit, const std::string& a, int k, double ds) {
+Series partial_residuals(const InstrumentModel& fm, const json& fit, const std::string& a, int k, double ds) {
   const model::Vec3<double> zero = model::Vec3<double>::Zero();
   Series pts{"observations (partial residuals)", Style::kPoints, {}, {}, {}, {}, "#222", false, 0.7};
   for_each_residual(fit, a, [&](const json& point, double residual) {
     const double T = num(point, "temperature_c");
     pts.x.push_back(T);
-    pts.y.push_back((estimation::contribution(fm, k, zero, T).first + residual) * ds);
+    pts.y.push_back((fm.contribution(k, zero, T).first + residual) * ds);
   });
   return pts;
 }
@@ -82,7 +84,7 @@ Series partial_residuals(const FittedModel& fm, const json& fit, const std::stri
 // with a large input on that axis (over half the largest, and at least min_input) contributes its
 // residual over that input, added to the fitted scale error at its temperature, against
 // temperature [°C].
-Series scale_partial_residuals(const FittedModel& fm, const json& fit, const std::string& a, int k, double min_input) {
+Series scale_partial_residuals(const InstrumentModel& fm, const json& fit, const std::string& a, int k, double min_input) {
   const auto uk = static_cast<std::size_t>(k);
   const model::Vec3<double> zero = model::Vec3<double>::Zero();
   model::Vec3<double> unit_in = zero;
@@ -96,14 +98,14 @@ Series scale_partial_residuals(const FittedModel& fm, const json& fit, const std
     if (!(std::abs(u) > 0.5 * largest) || !(std::abs(u) >= min_input)) return;
     const double T = num(point, "temperature_c");
     pts.x.push_back(T);
-    pts.y.push_back((estimation::contribution(fm, k, unit_in, T, &zero).first + residual / u) * 1e6);
+    pts.y.push_back((fm.contribution(k, unit_in, T, &zero).first + residual / u) * 1e6);
   });
   return pts;
 }
 
 // Zero-offset and scale-factor plots of axis a (index k) over the valid range and the points'
 // temperatures [°C]; false (nothing added) when that range is empty.
-bool add_temperature_plots(ReportSection& s, const json& ax, const FittedModel& fm, const std::string& a, int k,
+bool add_temperature_plots(ReportSection& s, const json& ax, const InstrumentModel& fm, const std::string& a, int k,
                            double vmin, double vmax, const TempDisplay& d) {
   const json& fit = ax["fit"];
   double tlo = vmin, thi = vmax;
@@ -112,7 +114,9 @@ bool add_temperature_plots(ReportSection& s, const json& ax, const FittedModel& 
     thi = std::max(thi, num(p, "temperature_c"));
   }
   if (!std::isfinite(tlo) || !std::isfinite(thi) || !(thi > tlo)) return false;
-  const estimation::TemperatureCurves c = estimation::temperature_curves(fm, k, tlo, thi, d.scale);
+  const double quantile = num(fit.value("solution", json::object()), "quantile");
+  const estimation::TemperatureCurves c =
+      estimation::temperature_curves(fm, std::isfinite(quantile) ? quantile : 1.96, k, tlo, thi, d.scale);
   Plot p;
   p.title = "zero offset against temperature, axis " + a;
   p.x_label = "die temperature [°C]";
@@ -164,9 +168,9 @@ void add_axis(ReportSection& s, const json& ax, double vmin, double vmax, const 
   add_orders(s, ax);
   s.add(estimation::parameter_table(estimation::summary_from_json(fit)));
   s.append(estimation::fit_notes(fit));
-  const FittedModel fm = estimation::fitted_model(fit);
-  if (!fm.ok || k < 0) return;
-  if (!add_temperature_plots(s, ax, fm, a, k, vmin, vmax, d)) return;
+  const std::optional<InstrumentModel> fm = estimation::read_fit_model(fit);
+  if (!fm || !fm->ok() || k < 0) return;
+  if (!add_temperature_plots(s, ax, *fm, a, k, vmin, vmax, d)) return;
   const json hy = ax.value("hysteresis", json::array());
   if (!hy.empty()) s.add(hysteresis_table(hy));
 }

@@ -1,6 +1,7 @@
 // Bias and scale versus temperature on the batch least-squares estimator. See
 // stend/temp_poly/temp_poly.hpp.
 #include "stend/temp_poly/temp_poly.hpp"
+#include "stend/sdk.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +13,6 @@ namespace stend::temp_poly {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Formats are literals at every call site (printf-style helper).
 #pragma GCC diagnostic push

@@ -4,11 +4,11 @@
 //   fit_notes              the aliased groups and warnings of a linear fit (stend.fit/1)
 //   static_point_figures   the residual plots of a linear fit on static points (stend.fit/1)
 //   temperature_curves     a fitted error model's zero offset and scale-factor error against
-//                          temperature, through model::ErrorModel (fitted_model.hpp)
+//                          temperature, through model::ErrorModel (InstrumentModel::contribution)
 //   generic_report_section the section of an estimator that writes none of its own
 #pragma once
 
-#include <stend/estimation/fitted_model.hpp>
+#include <stend/estimation/instrument_model.hpp>
 #include <stend/estimation/report_section.hpp>
 #include <stend/estimation/result.hpp>
 #include <stend/estimation/summary.hpp>
@@ -42,8 +42,8 @@ std::vector<Figure> static_point_figures(const nlohmann::json& fit, const std::s
 struct TemperatureCurves {
   figure::Series offset_band, offset, scale_band, scale;
 };
-TemperatureCurves temperature_curves(const FittedModel& model, int k, double t_lo_c, double t_hi_c,
-                                     double display_scale);
+TemperatureCurves temperature_curves(const InstrumentModel& model, double quantile, int k, double t_lo_c,
+                                     double t_hi_c, double display_scale);
 
 // The section of a results file whose estimator writes none of its own: its name and version, the
 // failure when it failed (no numbers), else the parameter table and the summary's notes.

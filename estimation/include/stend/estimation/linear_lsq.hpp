@@ -53,6 +53,10 @@ struct LsqOptions {
   PrecisionTolerances tolerances;
   // Warn when the number of observations k is below this multiple of the parameter count p.
   double observations_per_parameter_warning = 3.0;
+
+  // Confidence in (0, 1), rank tolerance in (0, 1), positive condition and observation warnings,
+  // valid tolerances.
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 struct LsqProblem {
