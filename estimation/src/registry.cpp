@@ -16,6 +16,13 @@ std::vector<fields::Field<EstimatorConfig>> estimator_fields() {
                                          "default name of the results file")};
 }
 
+bool EstimatorConfig::IsValid(std::string* error) const {
+  const std::filesystem::path p(results_file);
+  if (results_file.empty() || p.filename() != p || p == "." || p == "..")
+    return invalid(error, "results_file '" + results_file + "' must be a file name in the run folder, with no folder part");
+  return true;
+}
+
 namespace {
 constexpr const char* kGyroscope = "gyroscope";
 }  // namespace

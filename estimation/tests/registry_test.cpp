@@ -153,6 +153,23 @@ TEST(ResultsFiles, OnePerInstrumentAndEstimator) {
   EXPECT_EQ(r.for_results(nlohmann::json::object(), "temp_poly-gyroscope.json")->name, "temp_poly");
 }
 
+// An estimator plugin's results file is a name in the run folder: a path that would leave it is
+// refused before anything is fitted.
+TEST(ResultsFiles, PluginResultsFileStaysInTheRunFolder) {
+  const auto valid = [](const std::string& name) {
+    std::string why;
+    const bool ok = stend::estimation::EstimatorConfig{name}.IsValid(&why);
+    EXPECT_EQ(ok, why.empty()) << name;
+    return ok;
+  };
+  EXPECT_TRUE(valid("allan.json"));
+  EXPECT_FALSE(valid(""));
+  EXPECT_FALSE(valid("../allan.json"));
+  EXPECT_FALSE(valid("/tmp/allan.json"));
+  EXPECT_FALSE(valid("results/allan.json"));
+  EXPECT_FALSE(valid(".."));
+}
+
 // Through its entry, a read-back result carries the document and the entry's defaults.
 TEST(Registry, ReadFillsInTheEntrysNameVersionAndResultsFile) {
   const se::Registry r = three();

@@ -19,7 +19,7 @@
 
 namespace stend::allan {
 
-AllanEstimator::AllanEstimator(const Params& p) : config_(fields().read(p)) {}
+AllanEstimator::AllanEstimator(const Params& p) : config_(require_valid(fields().read(p), kEstimatorName)) {}
 
 const stend::fields::Table<estimation::EstimatorConfig>& AllanEstimator::fields() {
   static const stend::fields::Table<estimation::EstimatorConfig> table(

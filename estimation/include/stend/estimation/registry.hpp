@@ -38,6 +38,10 @@ namespace stend::estimation {
 // What every estimator plugin is configured with (its field table: estimator_fields()).
 struct EstimatorConfig {
   std::string results_file;  // default name of the results file in the run folder
+
+  // results_file is a bare file name ("allan.json"): no folder part, so results stay in the run
+  // folder.
+  bool IsValid(std::string* error = nullptr) const;
 };
 std::vector<fields::Field<EstimatorConfig>> estimator_fields();
 
