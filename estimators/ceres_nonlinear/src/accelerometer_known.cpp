@@ -26,7 +26,7 @@ struct KnownCost {
   Eigen::Vector3d y, f;
   Eigen::Matrix3d W;
   template <typename T>
-  bool operator()(const T* const p, T* residual) const {
+  STEND_CERES_COST_INLINE bool operator()(const T* const p, T* residual) const {
     T theta[kFull];
     expand(p, free_index, theta);
     model::Stimulus<T> s;

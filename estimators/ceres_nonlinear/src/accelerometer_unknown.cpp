@@ -26,7 +26,7 @@ struct NormCost {
   Eigen::Vector3d y;
   double g;
   template <typename T>
-  bool operator()(const T* const p, T* residual) const {
+  STEND_CERES_COST_INLINE bool operator()(const T* const p, T* residual) const {
     T theta[kFull];
     expand(p, free_index, theta);
     const model::Vec3<T> u = invert_affine<T>(*m, theta, y);

@@ -27,7 +27,7 @@ struct RateCost {
   const model::ErrorModel* m;
   Eigen::Vector3d y, w, f;
   template <typename T>
-  bool operator()(const T* const p, T* residual) const {
+  STEND_CERES_COST_INLINE bool operator()(const T* const p, T* residual) const {
     model::Stimulus<T> s;
     s.input = w.cast<T>();
     s.specific_force = f.cast<T>();
