@@ -151,7 +151,7 @@ TEST(Import, PaperTable2FitsLikeAnyRun) {
     ASSERT_EQ(o.code, 0) << o.text;
     const auto p = parameters(json);
     const auto& fit = r.cases[c.reproduction].fit;
-    ASSERT_TRUE(fit.ok);
+    ASSERT_TRUE(fit.ok());
     for (const char* name : {"bias_z", "scale_z", "cross_zx"}) {
       ASSERT_TRUE(p.at(name).identifiable) << name;
       const double expected = fit.lsq.estimate[fit.lsq.index(name)];

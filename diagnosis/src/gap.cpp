@@ -175,7 +175,7 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
   GapReport rep = report_header(in);
   // 1. Fit the model as given and replay every segment through the twin.
   rep.fit = fit_model(in);
-  if (!rep.fit.ok) {
+  if (!rep.fit.ok()) {
     rep.message = "the model could not be fitted: " + rep.fit.message;
     return rep;
   }

@@ -81,8 +81,8 @@ estimation::StaticFit fit_magnitude_rows(const GapInput& in) {
   o.observations_per_parameter_warning = 0.0;
   o.confidence = in.spec.confidence;
   fr.lsq = estimation::solve_lsq(pr, o);
-  fr.ok = fr.lsq.ok();
-  if (!fr.ok) {
+  fr.status = fr.lsq.ok() ? estimation::FitStatus::kOk : estimation::FitStatus::kFailed;
+  if (!fr.ok()) {
     fr.message = "magnitude-form fit: " + fr.lsq.message;
     return fr;
   }
@@ -106,7 +106,7 @@ GapInput magnitude_form(GapInput in, double g) {
   double moved = 0.0;
   for (int outer = 0; outer < 8; ++outer) {
     const estimation::StaticFit fr = fit_magnitude_rows(in);
-    if (!fr.ok) throw InputError(fr.message);
+    if (!fr.ok()) throw InputError(fr.message);
     moved = 0.0;
     for (auto& s : in.segments) {
       const Eigen::Vector3d before = s.point.stimulus.specific_force;

@@ -161,7 +161,7 @@ StaticFit fit_static_points(const std::vector<processing::StaticPoint>& points, 
     fit.residuals.clear();
     return fit;
   }
-  fit.ok = true;
+  fit.status = FitStatus::kOk;
   fill_residuals(spec, display_factor, fit);
   return fit;
 }

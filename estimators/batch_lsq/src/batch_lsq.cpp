@@ -10,7 +10,7 @@ namespace stend::batch_lsq {
 
 Eigen::VectorXd FitResult::theta_full() const {
   Eigen::VectorXd t = Eigen::VectorXd::Constant(spec.model.size(), kNaN);
-  if (!ok) return t;
+  if (!ok()) return t;
   for (std::size_t j = 0; j < param_index.size(); ++j)
     t[param_index[j]] = lsq.estimate[static_cast<Eigen::Index>(j)];
   return t;
@@ -37,7 +37,7 @@ FitResult fit_recording(const Recording& rec, const ModelSpec& spec) {
     ModelSpec used = spec;
     used.processing = ex.options;
     fr = fit_points(ex.points, used);
-    if (!fr.ok && ex.points.empty())
+    if (!fr.ok() && ex.points.empty())
       fr.message = "no usable static segment in the recording (" + ex.tally() + "); " + fr.message;
     fr.notes.insert(fr.notes.begin(), ex.notes.begin(), ex.notes.end());
   }

@@ -123,7 +123,7 @@ Table2Reproduction reproduce_table2(const std::vector<Table2Row>& rows) {
     c.g_mps2 = s.g;
     c.tilt_h_deg = s.h;
     c.fit = fit_points(table2_points(rows, s.g, s.h), spec);
-    if (c.fit.ok) {
+    if (c.fit.ok()) {
       const auto& l = c.fit.lsq;
       Eigen::VectorXd a = Eigen::VectorXd::Zero(l.parameter_count);
       // g·cos h: the specific force on z at δ = 0.
@@ -169,7 +169,7 @@ Table2Reproduction reproduce_table2(const std::vector<Table2Row>& rows) {
   out.paper_rms_normal_g = rms_for(g_local, sign);
   out.paper_best_g = best_g_for(sign);
   out.paper_rms_best_g = rms_for(out.paper_best_g, sign);
-  if (!out.cases.empty() && out.cases[0].fit.ok) {
+  if (!out.cases.empty() && out.cases[0].fit.ok()) {
     out.g_implied_by_paper_scale = out.cases[0].g_one_plus_scale.value / (1.0 + pp.scale);
     const auto& l = out.cases[0].fit.lsq;
     out.bias_scale_correlation = l.correlation()(l.index("bias_z"), l.index("scale_z"));
@@ -186,13 +186,13 @@ void print_table2_report(std::ostream& os, const Table2Reproduction& r) {
     os << "=== " << c.label << ": g = " << number_text(c.g_mps2, 7, true) << " m/s^2, h = "
        << number_text(c.tilt_h_deg) << " deg\n";
     print_table(os, c.fit);
-    if (c.fit.ok) {
+    if (c.fit.ok()) {
       os << "g-free: " << c.g_one_plus_scale << " m/s^2\n";
       os << "g-free: " << c.g_cross_zx << " m/s^2\n";
     }
     os << "\n";
   }
-  if (r.cases.size() >= 2 && r.cases[0].fit.ok && r.cases[1].fit.ok) {
+  if (r.cases.size() >= 2 && r.cases[0].fit.ok() && r.cases[1].fit.ok()) {
     const auto& a = r.cases[0].fit.lsq;
     const auto& b = r.cases[1].fit.lsq;
     char line[512];
@@ -230,7 +230,7 @@ void print_table2_report(std::ostream& os, const Table2Reproduction& r) {
     os << "g implied by the paper's dM = " << number_text(r.paper.scale) << " and our g*(1+scale_z): "
        << number_text(r.g_implied_by_paper_scale, 5, true) << " m/s^2 (no place on Earth has it)\n";
   }
-  if (!r.cases.empty() && r.cases[0].fit.ok) {
+  if (!r.cases.empty() && r.cases[0].fit.ok()) {
     os << "\nresiduals (g at 47.2 N, h = 0):\n";
     for (const auto& res : r.cases[0].fit.residuals) {
       char line[128];

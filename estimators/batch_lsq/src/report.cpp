@@ -207,7 +207,7 @@ void print_table(std::ostream& os, const FitResult& fr) {
     os << "recording: " << fr.recording_dir << " (experiment '" << fr.experiment_name
        << "', status " << fr.recording_status << ")\n";
   os << extraction_text(fr) << "\n";
-  if (!fr.ok) {
+  if (!fr.ok()) {
     os << "FIT FAILED: " << fr.message << "\n";
     for (const auto& n : fr.notes) os << "note: " << n << "\n";
     return;
@@ -239,7 +239,7 @@ std::string to_json(const FitResult& fr, int indent) {
   json j;
   j["schema"] = kFitSchema;
   j["estimator"] = {{"name", kEstimatorName}, {"version", kEstimatorVersion}};
-  j["status"] = fr.ok ? "ok" : "failed";
+  j["status"] = fr.ok() ? "ok" : "failed";
   j["message"] = fr.message;
   j["recording"] = {{"dir", fr.recording_dir}, {"experiment", fr.experiment_name}, {"status", fr.recording_status}};
   j["model"] = model_json(fr.spec);
@@ -249,7 +249,7 @@ std::string to_json(const FitResult& fr, int indent) {
   j["notes"] = fr.notes;
   j["excluded_parameters"] = fr.excluded;
   j["points"] = points_json(fr.points, fr.spec.model.instrument);
-  if (!fr.ok) return j.dump(indent);
+  if (!fr.ok()) return j.dump(indent);
   j["solution"] = solution_json(fr.lsq);
   j["parameters"] = parameters_json(fr);
   j["correlation"] = correlation_json(fr.lsq);

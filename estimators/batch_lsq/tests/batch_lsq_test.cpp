@@ -204,12 +204,12 @@ TEST(BatchLsq, TheExperimentsProcessingSectionFillsWhatTheModelDoesNotState) {
   rec.experiment_yaml = "name: synthetic\nprocessing:\n  extraction: {settle_s: 3, cutoff_hz: 0.25}\n";
   // kSpec states cutoff_hz 0.5 and settle_s 2: both win.
   FitResult fr = fit_recording(rec, estimation::parse_model_spec(kSpec));
-  ASSERT_TRUE(fr.ok) << fr.message;
+  ASSERT_TRUE(fr.ok()) << fr.message;
   EXPECT_EQ(fr.spec.processing.extraction.settle_s, 2.0);
   EXPECT_EQ(fr.spec.processing.extraction.cutoff_hz, 0.5);
   // A spec that states neither: the experiment's settle_s (3 s at each end of a 12 s dwell).
   fr = fit_recording(rec, estimation::parse_model_spec("instrument: accelerometer\nterms: [bias, scale, cross_axis]\n"));
-  ASSERT_TRUE(fr.ok) << fr.message;
+  ASSERT_TRUE(fr.ok()) << fr.message;
   EXPECT_EQ(fr.spec.processing.extraction.settle_s, 3.0);
   EXPECT_EQ(fr.spec.processing.extraction.cutoff_hz, 0.25);
   EXPECT_NEAR(fr.points[0].t_end_s - fr.points[0].t_start_s, 12.0 - 6.0, 0.02);
@@ -217,7 +217,7 @@ TEST(BatchLsq, TheExperimentsProcessingSectionFillsWhatTheModelDoesNotState) {
   // A bad key there fails the fit, naming the run's experiment.yaml.
   rec.experiment_yaml = "processing:\n  extraction: {settle: 3}\n";
   fr = fit_recording(rec, estimation::parse_model_spec(kSpec));
-  EXPECT_FALSE(fr.ok);
+  EXPECT_FALSE(fr.ok());
   EXPECT_NE(fr.message.find("experiment.yaml:2:"), std::string::npos) << fr.message;
 }
 
@@ -233,7 +233,7 @@ TEST(BatchLsq, FitsAnInMemoryRecording) {
   rec.segments.push_back(bad);
   const ModelSpec spec = estimation::parse_model_spec(kSpec, "spec.yaml");
   const FitResult fr = fit_recording(rec, spec);
-  ASSERT_TRUE(fr.ok) << fr.message;
+  ASSERT_TRUE(fr.ok()) << fr.message;
   EXPECT_EQ(fr.points.size(), 12u);
   EXPECT_EQ(fr.lsq.observations, 36);
   EXPECT_EQ(fr.lsq.rank, 12);
@@ -273,7 +273,7 @@ TEST(BatchLsq, RecordingWithoutTruthColumnsFailsLoudly) {
   Recording rec = synth_recording(bsc_model(), theta_bsc(), table_forces(9.81), rng);
   rec.header.truth_columns[1] = "force_y";
   const FitResult fr = fit_recording(rec, estimation::parse_model_spec(kSpec));
-  EXPECT_FALSE(fr.ok);
+  EXPECT_FALSE(fr.ok());
   EXPECT_NE(fr.message.find("f_y_mps2"), std::string::npos) << fr.message;
   EXPECT_NE(fr.message.find("force_y"), std::string::npos) << fr.message;
   std::ostringstream os;
@@ -300,7 +300,7 @@ TEST(BatchLsq, RotationAboutOneAxisLeavesCrossZyUnidentifiable) {
   }
   ModelSpec spec = estimation::parse_model_spec("instrument: accelerometer\naxes: [z]\nterms: [bias, scale, cross_axis]\n");
   const FitResult fr = fit_points(pts, spec);
-  ASSERT_TRUE(fr.ok) << fr.message;
+  ASSERT_TRUE(fr.ok()) << fr.message;
   ASSERT_EQ(fr.params.size(), 4u);  // bias_z scale_z cross_zx cross_zy; x/y-row parameters excluded
   EXPECT_EQ(fr.excluded.size(), 8u);
   const auto& zy = fr.lsq.parameter("cross_zy");
@@ -342,7 +342,7 @@ TEST(BatchLsq, BiasAndBiasTemperatureAtOneTemperatureAreAliased) {
       "instrument: accelerometer\naxes: [z]\nterms: [bias, scale, cross_axis, "
       "{bias_temperature: {order: 1, reference_c: 25}}]\nextraction: {cutoff_hz: 0.5, settle_s: 2}\n");
   const FitResult fr = fit_recording(rec, spec);
-  ASSERT_TRUE(fr.ok) << fr.message;
+  ASSERT_TRUE(fr.ok()) << fr.message;
   ASSERT_EQ(fr.lsq.aliases.size(), 1u);
   const auto& g = fr.lsq.aliases[0];
   ASSERT_EQ(g.identified.size(), 1u);
@@ -363,7 +363,7 @@ TEST(BatchLsq, SegmentNoiseWeighting) {
   const FitResult plain = fit_recording(rec, spec);
   spec.weighting = estimation::Weighting::kSegmentNoise;
   const FitResult weighted = fit_recording(rec, spec);
-  ASSERT_TRUE(plain.ok && weighted.ok) << weighted.message;
+  ASSERT_TRUE(plain.ok() && weighted.ok()) << weighted.message;
   // Equal noise everywhere: the weights are nearly uniform, so the estimates barely move.
   for (int j = 0; j < 12; ++j)
     EXPECT_NEAR(weighted.lsq.estimate[j], plain.lsq.estimate[j], 0.2 * plain.lsq.parameters[static_cast<std::size_t>(j)].std_error);
@@ -372,7 +372,7 @@ TEST(BatchLsq, SegmentNoiseWeighting) {
   std::vector<processing::StaticPoint> pts = weighted.points;
   pts[3].accel.std_error[1] = std::numeric_limits<double>::quiet_NaN();
   const FitResult bad = fit_points(pts, spec);
-  EXPECT_FALSE(bad.ok);
+  EXPECT_FALSE(bad.ok());
   EXPECT_NE(bad.message.find("segment_noise"), std::string::npos) << bad.message;
   std::ostringstream os;
   os << bad;
@@ -384,7 +384,7 @@ TEST(BatchLsq, RefusesTooFewOrientations) {
   const std::vector<Eigen::Vector3d> two = {Eigen::Vector3d(0, 0, 9.81), Eigen::Vector3d(0, 0, -9.81)};
   const Recording rec = synth_recording(bsc_model(), theta_bsc(), two, rng);
   const FitResult fr = fit_recording(rec, estimation::parse_model_spec(kSpec));  // k = 6 < p = 12
-  EXPECT_FALSE(fr.ok);
+  EXPECT_FALSE(fr.ok());
   EXPECT_NE(fr.message.find("underdetermined"), std::string::npos) << fr.message;
   std::ostringstream os;
   print_table(os, fr);
@@ -409,7 +409,7 @@ TEST(BatchLsq, IntervalCoverageThroughTheProcedure) {
     Eigen::VectorXd th(12);
     for (int i = 0; i < 12; ++i) th[i] = (i < 3 ? 0.1 : 0.005) * n(rng);
     const FitResult fr = fit_recording(synth_recording(m, th, forces, rng, o), spec);
-    ASSERT_TRUE(fr.ok) << fr.message;
+    ASSERT_TRUE(fr.ok()) << fr.message;
     for (int i = 0; i < 12; ++i) {
       const auto& e = fr.lsq.parameters[static_cast<std::size_t>(i)];
       if (th[i] >= e.lower && th[i] <= e.upper) ++inside[static_cast<std::size_t>(i)];
@@ -441,7 +441,7 @@ TEST(BatchLsq, FitsARecordingReadFromDisk) {
   const ModelSpec spec = estimation::parse_model_spec(kSpec);
   const FitResult a = fit_recording(mem, spec);
   const FitResult b = fit_recording(rec, spec);
-  ASSERT_TRUE(b.ok) << b.message;
+  ASSERT_TRUE(b.ok()) << b.message;
   EXPECT_EQ(b.points.size(), 12u);
   // The files carry the same numbers (to their text precision).
   EXPECT_TRUE(estimation::approx_equal(a.lsq, b.lsq, 1e-4, 1e-7));

@@ -100,7 +100,7 @@ TEST(PaperTable2, MatchesIndependentLongDoubleSolve) {
   ASSERT_EQ(rep.cases.size(), 3u);
   for (int c = 0; c < 2; ++c) {
     const auto& cs = rep.cases[static_cast<std::size_t>(c)];
-    ASSERT_TRUE(cs.fit.ok) << cs.fit.message;
+    ASSERT_TRUE(cs.fit.ok()) << cs.fit.message;
     const Reference ref = reference_fit(rows, static_cast<LD>(cs.g_mps2));
     const auto& l = cs.fit.lsq;
     const char* names[3] = {"bias_z", "scale_z", "cross_zx"};
@@ -171,7 +171,7 @@ TEST(PaperTable2, WhatDependsOnTheAssumedGravity) {
 TEST(PaperTable2, ConstantTiltAliasesMu34WithTheBias) {
   const auto rep = paper::reproduce_table2(table());
   const auto& c = rep.cases[2];  // h = 1 deg
-  ASSERT_TRUE(c.fit.ok) << c.fit.message;
+  ASSERT_TRUE(c.fit.ok()) << c.fit.message;
   ASSERT_EQ(c.fit.lsq.aliases.size(), 1u);
   const auto& g = c.fit.lsq.aliases[0];
   ASSERT_EQ(g.identified.size(), 1u);

@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
     std::cout << "table: " << csv.string() << "\n";
     paper::print_table2_report(std::cout, rep);
     if (!json_out.empty()) write_json(json_out, rep.cases.at(0).fit);
-    return rep.cases.at(0).fit.ok ? 0 : 1;
+    return rep.cases.at(0).fit.ok() ? 0 : 1;
   } catch (const std::exception& e) {
     std::cerr << "stend_paper_table2: " << e.what() << "\n";
     return 2;

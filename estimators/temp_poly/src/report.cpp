@@ -32,7 +32,7 @@ void print_report(std::ostream& os, const TempPolyResult& r) {
   os << "; terms: bias, scale" << (o.cross_axis ? ", cross_axis" : "")
      << (o.bias_temperature ? ", bias_temperature" : "") << (o.scale_temperature ? ", scale_temperature" : "")
      << "; reference T0 = " << o.reference_c << " degC; min_span_c = " << o.min_span_c << " degC\n";
-  if (!r.ok && r.axes.empty()) {
+  if (!r.ok() && r.axes.empty()) {
     os << "TEMPERATURE FIT REFUSED: " << r.message << "\n";
     for (const auto& nt : r.notes) os << "note: " << nt << "\n";
     return;
@@ -51,7 +51,7 @@ void print_report(std::ostream& os, const TempPolyResult& r) {
       os << (s.order == ax.chosen_order ? "* " : "  ") << fmt("%5.0f", s.order) << fmt("%5.0f", s.observations)
          << fmt("%6.0f", s.parameters) << "  " << fmt("%-13.6g", s.rss) << "  " << fmt("%-11.6g", s.bic) << "  "
          << (s.cv_ok ? fmt("%-12.6g", s.cv_mse) : std::string("-           ")) << "  " << s.note << "\n";
-    if (!ax.ok) {
+    if (!ax.ok()) {
       os << "  AXIS FAILED: " << ax.message << "\n";
       continue;
     }
@@ -71,7 +71,7 @@ void print_report(std::ostream& os, const TempPolyResult& r) {
            << (h.significant ? "  SIGNIFICANT" : "") << "\n";
     }
   }
-  if (!r.ok) os << "\nTEMPERATURE FIT FAILED: " << r.message << "\n";
+  if (!r.ok()) os << "\nTEMPERATURE FIT FAILED: " << r.message << "\n";
   for (const auto& nt : r.notes) os << "note: " << nt << "\n";
 }
 

@@ -95,13 +95,13 @@ json hysteresis_json(const std::vector<Hysteresis>& hysteresis) {
 json axis_json(const AxisResult& ax) {
   json a;
   a["axis"] = std::string(1, estimation::axis_name(ax.axis));
-  a["ok"] = ax.ok;
+  a["ok"] = ax.ok();
   a["message"] = ax.message;
   a["chosen_order"] = ax.chosen_order;
   a["scores"] = scores_json(ax.scores);
   a["hysteresis"] = hysteresis_json(ax.hysteresis);
   a["max_abs_hysteresis"] = num_or_null(ax.max_abs_hysteresis);
-  a["fit"] = ax.ok ? json::parse(batch_lsq::to_json(ax.fit, -1)) : json();
+  a["fit"] = ax.ok() ? json::parse(batch_lsq::to_json(ax.fit, -1)) : json();
   return a;
 }
 
@@ -111,7 +111,7 @@ std::string to_json(const TempPolyResult& r, int indent) {
   json j;
   j["schema"] = kSchema;
   j["estimator"] = {{"name", kEstimatorName}, {"version", kEstimatorVersion}};
-  j["status"] = r.ok ? "ok" : "failed";
+  j["status"] = r.ok() ? "ok" : "failed";
   j["message"] = r.message;
   j["recording"] = {{"dir", r.recording_dir}, {"experiment", r.experiment_name}};
   j["options"] = options_json(r.options);

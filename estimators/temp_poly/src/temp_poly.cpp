@@ -25,7 +25,7 @@ std::string num(double v, const char* fmt = "%.6g") {
 #pragma GCC diagnostic pop
 
 bool all_identifiable(const batch_lsq::FitResult& f) {
-  if (!f.ok) return false;
+  if (!f.ok()) return false;
   for (const auto& p : f.lsq.parameters)
     if (!p.identifiable) return false;
   return true;
@@ -173,7 +173,7 @@ OrderScore score_fit(const batch_lsq::FitResult& f, int order) {
   OrderScore s;
   s.order = order;
   s.observations = f.lsq.observations;
-  if (!f.ok) {
+  if (!f.ok()) {
     s.note = "fit failed: " + f.message;
     return s;
   }
@@ -201,7 +201,7 @@ void cross_validate(const std::vector<processing::StaticPoint>& points, const Te
     const batch_lsq::FitResult tf = batch_lsq::fit_points(train, spec);
     if (!all_identifiable(tf)) {
       why = "without level " + num(r.levels[lv].temperature_c, "%.1f") + " degC the fit is " +
-            (tf.ok ? "not identifiable" : "refused: " + tf.message);
+            (tf.ok() ? "not identifiable" : "refused: " + tf.message);
       break;
     }
     for (std::size_t i : test) {
@@ -297,9 +297,9 @@ AxisResult fit_axis(const std::vector<processing::StaticPoint>& points, const Te
   }
   ax.fit = fits[static_cast<std::size_t>(best)];
   ax.chosen_order = ax.scores[static_cast<std::size_t>(best)].order;
-  ax.ok = ax.fit.ok;
-  if (!ax.fit.ok) ax.message = "axis " + std::string(1, estimation::axis_name(a)) + ": " + ax.fit.message;
-  if (ax.ok) add_hysteresis(r, ax);
+  ax.status = ax.fit.status;
+  if (!ax.fit.ok()) ax.message = "axis " + std::string(1, estimation::axis_name(a)) + ": " + ax.fit.message;
+  if (ax.ok()) add_hysteresis(r, ax);
   return ax;
 }
 
@@ -360,11 +360,11 @@ TempPolyResult fit_temperature_points(const std::vector<processing::StaticPoint>
   bool all_ok = true;
   for (int a : o.axes) {
     AxisResult ax = fit_axis(points, o, r, first, top, a);
-    all_ok = all_ok && ax.ok;
-    if (!ax.ok && r.message.empty()) r.message = ax.message;
+    all_ok = all_ok && ax.ok();
+    if (!ax.ok() && r.message.empty()) r.message = ax.message;
     r.axes.push_back(std::move(ax));
   }
-  r.ok = all_ok;
+  r.status = all_ok ? estimation::FitStatus::kOk : estimation::FitStatus::kFailed;
   return r;
 }
 
@@ -384,7 +384,7 @@ TempPolyResult fit_temperature_model(const Recording& rec, const TempPolyOptions
   TempPolyOptions used = o;
   used.processing = ex.options;
   r = fit_temperature_points(ex.points, used);
-  if (!r.ok && ex.points.empty()) r.message = "no usable static segment in the recording; " + r.message;
+  if (!r.ok() && ex.points.empty()) r.message = "no usable static segment in the recording; " + r.message;
   r.notes.insert(r.notes.begin(), ex.notes.begin(), ex.notes.end());
   if (!rec.complete())
     r.notes.push_back("the recording's status is '" + std::string(to_string(rec.header.status)) + "', not 'complete'");

@@ -72,7 +72,7 @@ TEST(TempPolySweep, RecoversPlantedCoefficientsOnSimulatedBench) {
   o.max_order = 3;
   o.processing.extraction.settle_s = 1.0;
   const auto r = stend::temp_poly::fit_temperature_model(rec, o);
-  ASSERT_TRUE(r.ok) << r.message << "\n" << r;
+  ASSERT_TRUE(r.ok()) << r.message << "\n" << r;
   ASSERT_EQ(r.levels.size(), 4u) << r;
   EXPECT_EQ(r.points.size(), 36u);
   EXPECT_NEAR(r.valid_min_c, -10.0, 2.0);
@@ -91,7 +91,7 @@ TEST(TempPolySweep, RecoversPlantedCoefficientsOnSimulatedBench) {
   // the synthetic test and README), so the order-3 alternative is not excluded here.
   for (int a = 0; a < 3; ++a) {
     const auto& res = r.axis(a);
-    ASSERT_TRUE(res.ok) << res.message;
+    ASSERT_TRUE(res.ok()) << res.message;
     ASSERT_EQ(res.scores.size(), 4u);
     const auto& sc = res.scores;
     if (a != 1) {
@@ -111,7 +111,7 @@ TEST(TempPolySweep, RecoversPlantedCoefficientsOnSimulatedBench) {
   o.selection = "fixed";
   o.order = 2;
   const auto f = stend::temp_poly::fit_temperature_model(rec, o);
-  ASSERT_TRUE(f.ok) << f.message;
+  ASSERT_TRUE(f.ok()) << f.message;
   int inside = 0, total = 0;
   for (int a = 0; a < 3; ++a) {
     const auto& lsq = f.axis(a).fit.lsq;

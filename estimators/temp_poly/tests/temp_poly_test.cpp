@@ -81,7 +81,7 @@ TEST(TempPoly, BicChoosesQuadraticOverLinearAndCubic) {
     o.selection = "bic";
     o.max_order = 3;
     const auto r = temp_poly::fit_temperature_points(pts, o);
-    ASSERT_TRUE(r.ok) << r.message;
+    ASSERT_TRUE(r.ok()) << r.message;
     ASSERT_EQ(r.axes.size(), 3u);
     for (const auto& ax : r.axes) {
       ASSERT_EQ(ax.scores.size(), 4u);  // orders 0..3
@@ -104,7 +104,7 @@ TEST(TempPoly, CrossValidationChoosesQuadratic) {
   o.selection = "cv";
   o.max_order = 3;
   const auto r = temp_poly::fit_temperature_points(pts, o);
-  ASSERT_TRUE(r.ok) << r.message;
+  ASSERT_TRUE(r.ok()) << r.message;
   for (const auto& ax : r.axes) {
     EXPECT_EQ(ax.chosen_order, 2) << "axis " << ax.axis << "\n" << r;
     for (const auto& s : ax.scores) EXPECT_TRUE(s.cv_ok) << s.note;
@@ -121,7 +121,7 @@ TEST(TempPoly, IntervalCoverageOverSeeds) {
     o.selection = "fixed";
     o.order = 2;
     const auto r = temp_poly::fit_temperature_points(pts, o);
-    ASSERT_TRUE(r.ok) << r.message;
+    ASSERT_TRUE(r.ok()) << r.message;
     for (const auto& ax : r.axes) {
       for (const auto& p : ax.fit.lsq.parameters) {
         ASSERT_TRUE(p.identifiable) << p.name;
@@ -145,7 +145,7 @@ TEST(TempPoly, RefusesTooSmallSpan) {
   temp_poly::TempPolyOptions o;
   o.min_span_c = 20.0;
   const auto r = temp_poly::fit_temperature_points(pts, o);
-  EXPECT_FALSE(r.ok);
+  EXPECT_FALSE(r.ok());
   EXPECT_NE(r.message.find("span"), std::string::npos) << r.message;
   EXPECT_NE(r.message.find("min_span_c"), std::string::npos) << r.message;
   EXPECT_TRUE(r.axes.empty()) << "a refused fit reports no numbers";
@@ -161,21 +161,21 @@ TEST(TempPoly, RefusesTooFewLevelsForOrder) {
   o.selection = "fixed";
   o.order = 3;
   const auto r = temp_poly::fit_temperature_points(pts, o);
-  EXPECT_FALSE(r.ok);
+  EXPECT_FALSE(r.ok());
   EXPECT_NE(r.message.find("at least 4 distinct temperature levels"), std::string::npos) << r.message;
   EXPECT_NE(r.message.find("3 distinct"), std::string::npos) << r.message;
   EXPECT_TRUE(r.axes.empty());
   // Selection caps the candidate orders instead, and says so.
   o.selection = "bic";
   const auto b = temp_poly::fit_temperature_points(pts, o);
-  ASSERT_TRUE(b.ok) << b.message;
+  ASSERT_TRUE(b.ok()) << b.message;
   EXPECT_EQ(b.axes[0].scores.back().order, 2);
   bool noted = false;
   for (const auto& n : b.notes) noted = noted || n.find("not tried") != std::string::npos;
   EXPECT_TRUE(noted);
   // One level: even order 1 is refused.
   const auto one = temp_poly::fit_temperature_points(make_points(truth, {25, 25}, 0.002, 5u), o);
-  EXPECT_FALSE(one.ok);
+  EXPECT_FALSE(one.ok());
 }
 
 TEST(TempPoly, UsesHeatingAndCoolingLegsAndReportsHysteresis) {
@@ -188,7 +188,7 @@ TEST(TempPoly, UsesHeatingAndCoolingLegsAndReportsHysteresis) {
   o.selection = "fixed";
   o.order = 2;
   const auto r = temp_poly::fit_temperature_points(pts, o);
-  ASSERT_TRUE(r.ok) << r.message;
+  ASSERT_TRUE(r.ok()) << r.message;
   int heating = 0, cooling = 0, unknown = 0;
   for (auto l : r.legs) {
     heating += l == temp_poly::Leg::kHeating;
@@ -219,7 +219,7 @@ TEST(TempPoly, UsesHeatingAndCoolingLegsAndReportsHysteresis) {
 
   // Without a planted offset the hysteresis is consistent with zero.
   const auto clean = temp_poly::fit_temperature_points(make_points(truth, visits, 0.002, 12u), o);
-  ASSERT_TRUE(clean.ok);
+  ASSERT_TRUE(clean.ok());
   for (const auto& ax : clean.axes) EXPECT_LT(std::abs(ax.hysteresis[0].value), 4 * ax.hysteresis[0].std_error);
 }
 
@@ -229,7 +229,7 @@ TEST(TempPoly, RecordsReferenceAndValidRange) {
   temp_poly::TempPolyOptions o;
   o.reference_c = 25.0;
   const auto r = temp_poly::fit_temperature_points(pts, o);
-  ASSERT_TRUE(r.ok);
+  ASSERT_TRUE(r.ok());
   EXPECT_DOUBLE_EQ(r.reference_c, 25.0);
   EXPECT_NEAR(r.valid_min_c, -20.0, 0.3);
   EXPECT_NEAR(r.valid_max_c, 60.0, 0.3);

@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
     const auto r = stend::temp_poly::fit_temperature_model(rec, o);
     std::cout << r;
     if (!json.empty()) std::ofstream(json) << stend::temp_poly::to_json(r) << "\n";
-    return r.ok ? 0 : 1;
+    return r.ok() ? 0 : 1;
   } catch (const std::exception& e) {
     std::cerr << "stend_temp_poly_fit: " << e.what() << "\n";
     return 2;

@@ -20,6 +20,7 @@
 
 #include "stend/estimation/linear_lsq.hpp"
 #include "stend/estimation/model_spec.hpp"
+#include "stend/estimation/summary.hpp"
 #include "stend/model/terms.hpp"
 #include "stend/processing/static_points.hpp"
 #include "stend/recording/recording.hpp"
@@ -49,8 +50,9 @@ struct Residual {
 };
 
 struct StaticFit {
-  bool ok = false;
+  FitStatus status = FitStatus::kFailed;
   std::string message;  // why the fit failed (empty on success)
+  bool ok() const { return status == FitStatus::kOk; }
 
   std::vector<model::ParamInfo> params;  // the fitted parameters (LSQ columns)
   std::vector<int> param_index;          // their index in the model's flat parameter vector

@@ -91,8 +91,9 @@ struct Hysteresis {
 
 struct AxisResult {
   int axis = 0;
-  bool ok = false;
+  estimation::FitStatus status = estimation::FitStatus::kFailed;
   std::string message;
+  bool ok() const { return status == estimation::FitStatus::kOk; }
   int chosen_order = -1;
   std::vector<OrderScore> scores;  // candidate orders 0..max (or just the fixed one)
   batch_lsq::FitResult fit;        // the chosen order's fit (values, std errors, intervals,
@@ -102,8 +103,9 @@ struct AxisResult {
 };
 
 struct TempPolyResult {
-  bool ok = false;
+  estimation::FitStatus status = estimation::FitStatus::kFailed;
   std::string message;  // why it was refused / failed (empty on success)
+  bool ok() const { return status == estimation::FitStatus::kOk; }
   TempPolyOptions options;
   std::string recording_dir, experiment_name;
   std::vector<std::string> notes;
