@@ -20,7 +20,18 @@ inline constexpr int kFull = 12;  // bias 3, scale 3, cross 6
 // form on Jets, Eigen's Jet arrays) is inlined into it. Left to its heuristics GCC 12 kept Eigen's
 // Jet array constructor out of line once the procedures had a file each: the same 1,500 cost
 // evaluations of a 150-position fit took 7.5 % more instructions (callgrind), the fit 5–9 % more time.
+// Not under the sanitizers (STEND_SANITIZE, the fuzz build): flattening their instrumented Jet code
+// takes a compiler over ten minutes and 3 GB per file.
+#if defined(__SANITIZE_ADDRESS__)
+#define STEND_CERES_COST_INLINE
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define STEND_CERES_COST_INLINE
+#endif
+#endif
+#ifndef STEND_CERES_COST_INLINE
 #define STEND_CERES_COST_INLINE [[gnu::flatten]]
+#endif
 
 // `full` (kFull entries) from the free parameters: free_index[k] is the position of free parameter
 // k in the full vector; the others are 0.
