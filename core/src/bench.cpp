@@ -28,6 +28,7 @@ Params seeded(const Params& p, std::uint64_t experiment_seed, std::uint64_t salt
 }  // namespace
 
 Bench::Bench(const Experiment& exp, const PluginHost& host) : exp_(exp) {
+  require_runnable(exp);
   sensor_ = host.create_sensor(exp.sensor.plugin, seeded(exp.sensor.params, exp.seed, 1));
   simulated_ = exp.sensor.plugin.rfind("sim_", 0) == 0;
   std::vector<const Fixture*> raw;

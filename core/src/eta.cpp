@@ -78,7 +78,11 @@ double ProcedureEta::step_s(const Step& s, double from_c) const {
     case Step::Kind::kRates: return static_cast<double>(s.rates.size()) * item_s(s);
     case Step::Kind::kRecord: return s.record_s;
     case Step::Kind::kWait: return s.dwell_s;
-    case Step::Kind::kSetVibration: return 0.0;
+    case Step::Kind::kSetVibration:
+    case Step::Kind::kFaces:  // observed steps never run (require_runnable)
+    case Step::Kind::kTurns:
+    case Step::Kind::kRateLegs:
+    case Step::Kind::kStill: return 0.0;
   }
   return 0.0;
 }
@@ -104,7 +108,11 @@ double ProcedureEta::current_step_left_s(double t_s, double temperature_c) const
     }
     case Step::Kind::kRecord:
     case Step::Kind::kWait:
-    case Step::Kind::kSetVibration: return std::max(step_s(s, NAN) - elapsed, 0.0);
+    case Step::Kind::kSetVibration:
+    case Step::Kind::kFaces:
+    case Step::Kind::kTurns:
+    case Step::Kind::kRateLegs:
+    case Step::Kind::kStill: return std::max(step_s(s, NAN) - elapsed, 0.0);
   }
   return 0.0;
 }

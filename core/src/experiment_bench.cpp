@@ -48,8 +48,7 @@ class BenchReader {
                       top.key_location("bench"));
     gravity(m);
     exp_.base_heading_deg = m.number("base_heading_deg", exp_.base_heading_deg, "in degrees");
-    m.require("sensor", "the sensor under test: plugin and config");
-    {
+    if (m.has("sensor")) {  // absent: the file describes a procedure only (require_runnable)
       const MapReader s(m.get("sensor"), file_, "bench.sensor", "the sensor", {"plugin", "config"},
                         {}, m.key_location("sensor"));
       exp_.sensor = instance(s, STEND_KIND_SENSOR);
@@ -63,6 +62,7 @@ class BenchReader {
   // resolved_mps2, as Stend writes it back, must agree.
   void gravity(const MapReader& bench) {
     GravitySpec& g = exp_.gravity;
+    g.stated = bench.has("gravity");
     const MapReader m(bench.get("gravity"), file_, "bench.gravity", "'gravity'",
                       {"latitude_deg", "height_m", "value_mps2"}, {"resolved_mps2"},
                       bench.key_location("gravity"));

@@ -2,6 +2,7 @@
 // in, repeats, sweeps and grids expanded (a run folder's experiment.yaml).
 #include "experiment_parse.hpp"
 
+#include <cmath>
 #include <stdexcept>
 #include <utility>
 
@@ -11,8 +12,27 @@ using yaml::format_number;
 
 namespace {
 
+// A sensor direction as the vector [x, y, z] (reads back as the same direction).
+void emit_direction(YAML::Emitter& out, const char* key, const Eigen::Vector3d& d) {
+  out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (int i = 0; i < 3; ++i) out << format_number(d[i]);
+  out << YAML::EndSeq;
+}
+
+// The time hint of an observed step, when it has one.
+void emit_within(YAML::Emitter& out, const Step& s) {
+  if (!std::isfinite(s.within_from_s) && !std::isfinite(s.within_to_s)) return;
+  out << YAML::Key << "within_s" << YAML::Value << YAML::Flow << YAML::BeginSeq << format_number(s.within_from_s)
+      << format_number(s.within_to_s) << YAML::EndSeq;
+}
+
 void emit_step(YAML::Emitter& out, const Step& s) {
   const auto num = [&](const char* key, double v) { out << YAML::Key << key << YAML::Value << format_number(v); };
+  const auto rates = [&] {
+    out << YAML::Key << "rates_dps" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (double r : s.rates) out << format_number(r);
+    out << YAML::EndSeq;
+  };
   const auto fixture = [&] {
     out << YAML::Key << "fixture" << YAML::Value;
     yaml::emit_string(out, s.fixture);
@@ -44,9 +64,7 @@ void emit_step(YAML::Emitter& out, const Step& s) {
       fixture();
       out << YAML::Key << "axis" << YAML::Value;
       yaml::emit_string(out, s.axis);
-      out << YAML::Key << "rates_dps" << YAML::Value << YAML::Flow << YAML::BeginSeq;
-      for (double r : s.rates) out << format_number(r);
-      out << YAML::EndSeq;
+      rates();
       num("dwell_s", s.dwell_s);
       num("record_s", s.record_s);
       break;
@@ -60,6 +78,37 @@ void emit_step(YAML::Emitter& out, const Step& s) {
       break;
     case Step::Kind::kWait:
       num("duration_s", s.dwell_s);
+      break;
+    case Step::Kind::kFaces:
+      out << YAML::Key << "list" << YAML::Value << YAML::BeginSeq;
+      for (const auto& u : s.faces_up) {
+        out << YAML::Flow << YAML::BeginSeq;
+        for (int i = 0; i < 3; ++i) out << format_number(u[i]);
+        out << YAML::EndSeq;
+      }
+      out << YAML::EndSeq;
+      num("record_s", s.record_s);
+      emit_within(out, s);
+      break;
+    case Step::Kind::kTurns:
+      emit_direction(out, "axis", s.sensor_axis);
+      num("angle_deg", s.angle_deg);
+      out << YAML::Key << "direction" << YAML::Value
+          << (s.direction > 0 ? "positive" : s.direction < 0 ? "negative" : "either");
+      out << YAML::Key << "count" << YAML::Value << s.count;
+      emit_within(out, s);
+      break;
+    case Step::Kind::kRateLegs:
+      emit_direction(out, "axis", s.sensor_axis);
+      rates();
+      if (s.up) emit_direction(out, "up", *s.up);
+      num("record_s", s.record_s);
+      emit_within(out, s);
+      break;
+    case Step::Kind::kStill:
+      out << YAML::Key << "count" << YAML::Value << s.count;
+      num("record_s", s.record_s);
+      emit_within(out, s);
       break;
   }
   out << YAML::Key << "label" << YAML::Value;
@@ -135,9 +184,11 @@ void emit_bench_section(YAML::Emitter& out, const Experiment& e, const PluginCat
   out << YAML::Key << "bench" << YAML::Value << YAML::BeginMap;
   emit_gravity(out, e.gravity);
   out << YAML::Key << "base_heading_deg" << YAML::Value << format_number(e.base_heading_deg);
-  out << YAML::Key << "sensor" << YAML::Value << YAML::BeginMap;
-  emit_instance(out, e.sensor, cat);
-  out << YAML::EndMap;
+  if (!e.sensor.plugin.empty()) {  // none: a procedure for a recording made elsewhere
+    out << YAML::Key << "sensor" << YAML::Value << YAML::BeginMap;
+    emit_instance(out, e.sensor, cat);
+    out << YAML::EndMap;
+  }
   emit_fixtures(out, e, cat);
   emit_mounting(out, e);
   out << YAML::EndMap;

@@ -32,6 +32,10 @@ const std::vector<StepKindSpec> kStepKindSpecs = {
     {Step::Kind::kSetVibration, "set_vibration", {"fixture", "amplitude_g", "frequency_hz", "label"}},
     {Step::Kind::kRecord, "record", {"duration_s", "label"}},
     {Step::Kind::kWait, "wait", {"duration_s", "label"}},
+    {Step::Kind::kFaces, "faces", {"list", "record_s", "within_s", "label"}},
+    {Step::Kind::kTurns, "turns", {"axis", "angle_deg", "direction", "count", "within_s", "label"}},
+    {Step::Kind::kRateLegs, "rate_legs", {"axis", "rates_dps", "up", "record_s", "within_s", "label"}},
+    {Step::Kind::kStill, "still", {"count", "record_s", "within_s", "label"}},
 };
 
 // Every step kind name of the file, `repeat` last.
@@ -176,6 +180,10 @@ class ProcedureReader {
         m.require("duration_s", "seconds to wait without recording");
         s.dwell_s = positive(m, "duration_s", s.dwell_s, "in seconds", "s");
         break;
+      case Step::Kind::kFaces: faces_settings(m, s); break;
+      case Step::Kind::kTurns: turns_settings(m, s); break;
+      case Step::Kind::kRateLegs: rate_legs_settings(m, s); break;
+      case Step::Kind::kStill: still_settings(m, s); break;
     }
   }
 
@@ -470,6 +478,22 @@ std::vector<Step> read_procedure(const MapReader& top, const Experiment& exp) {
 }
 
 }  // namespace detail
+
+bool step_is_commanded(Step::Kind kind) {
+  switch (kind) {
+    case Step::Kind::kFaces:
+    case Step::Kind::kTurns:
+    case Step::Kind::kRateLegs:
+    case Step::Kind::kStill: return false;
+    case Step::Kind::kSetTemperature:
+    case Step::Kind::kOrientations:
+    case Step::Kind::kRates:
+    case Step::Kind::kRecord:
+    case Step::Kind::kWait:
+    case Step::Kind::kSetVibration: return true;
+  }
+  return true;
+}
 
 const char* step_kind_name(Step::Kind kind) {
   for (const auto& k : detail::kStepKindSpecs)

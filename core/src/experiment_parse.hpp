@@ -49,6 +49,12 @@ std::vector<std::string> fixture_ids(const Experiment& exp);
 // are bounded by exp.limits; step fixtures must be among exp.fixtures.
 std::vector<Step> read_procedure(const yaml::MapReader& top, const Experiment& exp);
 
+// The settings of the observed steps (experiment_observed_steps.cpp), read from their body.
+void faces_settings(const yaml::MapReader& m, Step& s);
+void turns_settings(const yaml::MapReader& m, Step& s);
+void rate_legs_settings(const yaml::MapReader& m, Step& s);
+void still_settings(const yaml::MapReader& m, Step& s);
+
 // --- the resolved experiment (experiment_emit.cpp) --------------------------------------------
 
 // The whole experiment as YAML, defaults filled in, repeats and sweeps expanded: what a run

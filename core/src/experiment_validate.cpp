@@ -183,6 +183,21 @@ void check_vibration(const Step& s, const StepFixture& fx) {
 
 }  // namespace
 
+void require_runnable(const Experiment& exp) {
+  const std::string how = "it describes what was done to a sensor elsewhere: record that and give the log with "
+                          "`stend import LOG --experiment " + exp.file + " -o RUN`";
+  if (exp.sensor.plugin.empty())
+    fail(SourceLocation{exp.file, 0, 0}, "bench.sensor", "the experiment names no sensor, so it cannot run on a bench",
+         "add bench.sensor (plugin and config) to run it; as it is, " + how);
+  for (std::size_t i = 0; i < exp.procedure.size(); ++i) {
+    const Step& s = exp.procedure[i];
+    if (!step_is_commanded(s.kind))
+      fail(s.where, "procedure[" + std::to_string(i) + "]",
+           std::string("a '") + step_kind_name(s.kind) + "' step is observed, not commanded: no fixture of a bench runs it",
+           "use orientations or rates on a table (or the manual fixture) to run it; as it is, " + how);
+  }
+}
+
 void validate_against_bench(const Experiment& exp, const std::vector<const Fixture*>& fixtures) {
   check_fixture_objects(exp, fixtures);
   BenchDeclared bench;
@@ -200,7 +215,11 @@ void validate_against_bench(const Experiment& exp, const std::vector<const Fixtu
       case Step::Kind::kSetTemperature: check_temperature(s, fx); break;
       case Step::Kind::kSetVibration: check_vibration(s, fx); break;
       case Step::Kind::kRecord:
-      case Step::Kind::kWait: break;
+      case Step::Kind::kWait:
+      case Step::Kind::kFaces:
+      case Step::Kind::kTurns:
+      case Step::Kind::kRateLegs:
+      case Step::Kind::kStill: break;
     }
   }
 }

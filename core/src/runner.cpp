@@ -110,6 +110,11 @@ class Run {
                            fmt::format("vibration {} g at {} Hz", s.amplitude_g, s.frequency_hz)});
         break;
       }
+      case Step::Kind::kFaces:  // observed steps: refused before the run (require_runnable)
+      case Step::Kind::kTurns:
+      case Step::Kind::kRateLegs:
+      case Step::Kind::kStill:
+        throw std::logic_error(std::string("runner: an observed step (") + step_kind_name(s.kind) + ") cannot run");
     }
   }
 

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -57,6 +58,9 @@ struct GravitySpec {
   double latitude_deg = 0.0;
   double height_m = 0.0;
   double resolved_mps2 = 0.0;  // value_mps2 or normal gravity at latitude/height
+  bool stated = false;         // the file has bench.gravity (else the defaults above)
+  // The latitude is known: stated, and not replaced by a measured value_mps2.
+  bool latitude_known() const { return stated && !value_mps2; }
 };
 
 struct AxisTarget {
@@ -70,7 +74,10 @@ struct Orientation {
 };
 
 struct Step {
-  enum class Kind { kSetTemperature, kOrientations, kRates, kRecord, kWait, kSetVibration };
+  // The first six are commanded by the bench; the observed kinds (faces, turns, rate legs, still)
+  // describe what somebody else did to the sensor: Stend finds them in a recording (stend import
+  // --experiment, stend/alignment/align.hpp) and never commands them.
+  enum class Kind { kSetTemperature, kOrientations, kRates, kRecord, kWait, kSetVibration, kFaces, kTurns, kRateLegs, kStill };
   Kind kind = Kind::kRecord;
   SourceLocation where;
   std::string label;     // optional `label:`; default the kind name
@@ -90,7 +97,23 @@ struct Step {
   double record_s = 0.0;  // recording time per orientation / rate; the duration_s of record and wait
   // set_vibration
   double amplitude_g = 0.0, frequency_hz = 0.0;  // direction is the shaker's own config
+
+  // Observed steps. Directions are unit vectors in the sensor frame.
+  std::vector<Eigen::Vector3d> faces_up;  // faces: the sensor direction pointing up, one per face
+  Eigen::Vector3d sensor_axis = Eigen::Vector3d::Zero();  // turns, rate_legs: the rotation axis
+  std::optional<Eigen::Vector3d> up;  // rate_legs: the sensor direction up during the legs, if stated
+  double angle_deg = 0.0;  // turns: the angle of each turn, a magnitude [deg]
+  int direction = 0;       // turns: +1 positive about sensor_axis, −1 negative, 0 either (from the data)
+  int count = 1;           // turns, still: how many
+  // faces, rate_legs, still: record_s above is the least time each face, leg or still is held [s]
+  // (0: the alignment's own minimum). Any observed step: the window of the recording's clock its
+  // stretches are looked for in [s], from `within_s: [from, to]`; the whole recording by default.
+  double within_from_s = -std::numeric_limits<double>::infinity();
+  double within_to_s = std::numeric_limits<double>::infinity();
 };
+
+// Whether the bench commands steps of this kind (false: an observed step).
+bool step_is_commanded(Step::Kind kind);
 
 // The kind's name in the experiment file: "set_temperature", "orientations", "rates", …
 const char* step_kind_name(Step::Kind kind);
@@ -121,7 +144,7 @@ struct Experiment {
 
   GravitySpec gravity;
   double base_heading_deg = 0.0;  // azimuth of the bench base x axis from east, for Earth rate
-  PluginInstance sensor;
+  PluginInstance sensor;  // plugin "" when the file only describes a procedure (no bench to run)
   std::vector<FixtureDecl> fixtures;  // in stacking order: each stands on an earlier one or base
   std::string mounted_on;  // fixture id carrying the sensor, or "base"; default the last fixture declared
   Eigen::Matrix3d R_sensor_from_mount = Eigen::Matrix3d::Identity();  // mounting rotation
@@ -153,5 +176,8 @@ std::vector<std::string> experiment_plugin_paths(const std::string& path);
 // chamber's range, step fixture ids exist and have the right role). `fixtures[i]` belongs to
 // exp.fixtures[i].
 void validate_against_bench(const Experiment& exp, const std::vector<const Fixture*>& fixtures);
+// Before any plugin is created: the experiment can run on a bench — it names a sensor and has no
+// observed step (those are aligned to an imported recording instead). Throws ExperimentError.
+void require_runnable(const Experiment& exp);
 
 }  // namespace stend
