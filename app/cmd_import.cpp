@@ -2,6 +2,7 @@
 // (info, fit, gap, report, export, compare) works on it. The dataset is read whole through the io/
 // format registry first; the folder is created only then, and removed again if writing fails.
 #include "commands.hpp"
+#include "procedure.hpp"
 #include "progress.hpp"
 
 #include "stend/io/formats.hpp"
@@ -11,6 +12,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <optional>
 
 namespace stend::cli {
 
@@ -40,19 +42,34 @@ struct ImportArgs {
   std::string output, name;
 };
 
-// experiment.yaml of an imported run: there was no experiment; it records what was imported and how.
-std::string import_yaml(const ImportArgs& a, const std::string& format, const io::ImportOptions& options) {
-  YAML::Emitter out;
-  out << YAML::Comment("made by `stend import` from another tool's log: there was no experiment");
-  out << YAML::BeginMap << YAML::Key << "name" << YAML::Value;
-  yaml::emit_string(out, a.name.empty() ? "import:" + format : a.name);
+// What was imported and how: format, absolute sources, the options stated.
+void emit_import_block(YAML::Emitter& out, const ImportArgs& a, const std::string& format, const io::ImportOptions& options) {
   out << YAML::Key << "import" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "format" << YAML::Value << format;
   out << YAML::Key << "sources" << YAML::Value << YAML::BeginSeq;
   for (const auto& p : a.data.paths()) yaml::emit_string(out, std::filesystem::absolute(p).lexically_normal().string());
   out << YAML::EndSeq << YAML::Key << "options" << YAML::Value << YAML::BeginSeq;
   for (const auto& s : options.stated) yaml::emit_string(out, s);
-  out << YAML::EndSeq << YAML::EndMap << YAML::EndMap;
+  out << YAML::EndSeq << YAML::EndMap;
+}
+
+// experiment.yaml of an imported run: with --experiment the procedure (resolved) and the import;
+// else there was no experiment, and it records what was imported and how.
+std::string import_yaml(const ImportArgs& a, const std::string& format, const io::ImportOptions& options,
+                        const Experiment* procedure) {
+  YAML::Emitter out;
+  if (procedure) {
+    out << YAML::Comment("made by `stend import --experiment`: the procedure the log was recorded with, aligned to it");
+    out << YAML::BeginMap;
+    const YAML::Node resolved = YAML::Load(procedure->resolved_yaml);
+    for (auto it = resolved.begin(); it != resolved.end(); ++it) out << YAML::Key << it->first << YAML::Value << it->second;
+  } else {
+    out << YAML::Comment("made by `stend import` from another tool's log: there was no experiment");
+    out << YAML::BeginMap << YAML::Key << "name" << YAML::Value;
+    yaml::emit_string(out, a.name.empty() ? "import:" + format : a.name);
+  }
+  emit_import_block(out, a, format, options);
+  out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }
 
@@ -111,7 +128,9 @@ ExitCode run_import(const ImportArgs& a) {
   // experiment.yaml names the format, written with the first samples: the format is chosen first.
   const bool detect = a.data.format.empty() || a.data.format == "auto";
   const std::string format = (detect ? io::detect_format(inputs, options) : io::find_format(a.data.format)).name;
-  const std::string yaml_text = import_yaml(a, format, options);
+  const std::optional<Experiment> procedure =
+      a.data.experiment.empty() ? std::nullopt : std::optional<Experiment>(load_procedure(a.data.experiment));
+  const std::string yaml_text = import_yaml(a, format, options, procedure ? &*procedure : nullptr);
   if (std::filesystem::exists(dir)) {
     if (!already_imported(dir, yaml_text, inputs, format)) {
       fmt::print(stderr, "stend import: '{}' exists; give a new folder with -o (nothing was written)\n", dir.string());
@@ -124,11 +143,14 @@ ExitCode run_import(const ImportArgs& a) {
     return ExitCode::kOk;
   }
   Recording rec;
-  io::RunSink sink(rec, dir, yaml_text, a.name);
+  io::RunSink sink(rec, dir, yaml_text, a.name.empty() && procedure ? procedure->name : a.name);
   try {
-    ProgressSink shown(sink, inputs);
+    std::optional<AligningSink> aligning;
+    if (procedure) aligning.emplace(rec, sink, *procedure);
+    ProgressSink shown(aligning ? static_cast<io::SampleSink&>(*aligning) : sink, inputs);
     io::import_dataset(inputs, a.data.format, rec, shown, options);
     shown.clear();
+    if (aligning) aligning->finish();
     io::add_provenance(rec, inputs, format);
     rec.header.status = RunStatus::kComplete;
     sink.finish();

@@ -56,6 +56,7 @@ struct DatasetArgs {
   std::string mapping;
   std::map<std::string, std::string> flags;  // import key → value as given
   bool accept_damaged = false;  // analyse the readable part of a damaged run (else it is refused)
+  std::string experiment;       // --experiment: the procedure a dataset file was recorded with
 
   // Adds the INPUT positional (one file or folder; two for IMU-TK's accelerometer and gyro files),
   // --format, --mapping and the import flags to `sub`; the input is required unless `required`

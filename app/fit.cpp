@@ -1,5 +1,6 @@
 // Shared analysis helpers of the `stend` program: open a recording or dataset, fit a model file.
 #include "commands.hpp"
+#include "procedure.hpp"
 #include "progress.hpp"
 
 #include "stend/errors.hpp"
@@ -29,6 +30,9 @@ void DatasetArgs::add_to(CLI::App* sub, bool required) {
       ->expected(1, 2);
   sub->add_option("--format", format, "auto (by content) | " + io::format_names());
   sub->add_option("--mapping", mapping, "YAML file of import keys (the flags below, '_' for '-')");
+  sub->add_option("--experiment", experiment,
+                  "Experiment file of the procedure the log was recorded with (faces, turns, rate_legs, still): "
+                  "aligned to the log, it gives the segments and truth (docs/procedures.md)");
   for (const auto& k : io::import_keys()) {
     // The value is parsed as the import reads it, so that a bad one is refused as a usage error.
     const CLI::Validator parses(
@@ -64,8 +68,11 @@ io::ImportOptions DatasetArgs::options() const {
 io::Inputs DatasetArgs::paths() const { return io::Inputs(inputs.begin(), inputs.end()); }
 
 stend::Recording DatasetArgs::open() const {
+  if (!experiment.empty() && is_run())
+    throw InputError("--experiment is for a dataset file: the run folder '" + inputs[0] + "' has its procedure already");
   stend::Recording rec = io::open_dataset(paths(), format, options());
   checked(rec);
+  if (!experiment.empty()) align_recording(rec, load_procedure(experiment));
   return rec;
 }
 

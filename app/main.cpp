@@ -95,10 +95,25 @@ ExitCode cmd_plugins(const std::vector<std::string>& paths) {
   return ExitCode::kOk;
 }
 
+// A file with no sensor: the procedure of a recording made elsewhere (stend import --experiment).
+ExitCode validated_procedure(const stend::Experiment& exp) {
+  fmt::print(human(), "{}: ok — procedure '{}' for a recording made elsewhere, {} step(s), g = {:.6f} m/s^2; "
+                      "give it to `stend import LOG --experiment {} -o RUN`\n",
+             exp.file, exp.name, exp.procedure.size(), exp.gravity.resolved_mps2, exp.file);
+  stend::cli::print_json({{"file", exp.file},
+                          {"ok", true},
+                          {"experiment", exp.name},
+                          {"procedure_only", true},
+                          {"steps", exp.procedure.size()},
+                          {"gravity_mps2", exp.gravity.resolved_mps2}});
+  return ExitCode::kOk;
+}
+
 ExitCode cmd_validate(const std::string& file, bool allow_plugins) {
   stend::PluginHost host;
   scan_plugins(host, stend::experiment_plugin_paths(file), allow_plugins);
   const stend::Experiment exp = stend::load_experiment(file, host);
+  if (exp.sensor.plugin.empty()) return validated_procedure(exp);
   stend::Bench bench(exp, host);  // stage 2: procedure against the fixtures' declared limits
   const stend::RunEstimate estimate = stend::estimate_run(exp, bench, {});
   stend::check_run_limits(exp, estimate, exp.outputs.directory);

@@ -138,11 +138,11 @@ std::vector<Stretch> raw_stretches(const std::vector<Block>& blocks, const Limit
   return out;
 }
 
-// Stills and steady rates shorter than min_still_s become motion; neighbouring motion joins.
+// Stills and steady rates shorter than min_stretch_s become motion; neighbouring motion joins.
 std::vector<Stretch> stretches(const std::vector<Block>& blocks, const Limits& l, const AlignOptions& o) {
   std::vector<Stretch> out;
   for (Stretch s : raw_stretches(blocks, l, o)) {
-    if (s.motion != Motion::kMoving && s.duration_s() < o.min_still_s) s.motion = Motion::kMoving;
+    if (s.motion != Motion::kMoving && s.duration_s() < o.min_stretch_s) s.motion = Motion::kMoving;
     if (!out.empty() && out.back().motion == Motion::kMoving && s.motion == Motion::kMoving) {
       Stretch& m = out.back();
       m.last = s.last;
@@ -176,6 +176,7 @@ class Builder {
         for (std::size_t k = 0; k < s.faces_up.size(); ++k) face(index, s, static_cast<int>(k));
         break;
       case Step::Kind::kStill:
+        if (s.count == 0) every_still(index, s);
         for (int k = 0; k < s.count; ++k) still(index, s, k);
         break;
       case Step::Kind::kTurns:
@@ -228,19 +229,29 @@ class Builder {
          "check the order of the faces and the sensor axes' signs, or give the step a time window (within_s: [from, to])");
   }
 
-  // still: the next still, any direction.
-  void still(int index, const Step& s, int k) {
+  // still: the next still, any direction (of `count`; 0: all, numbered as found).
+  bool still(int index, const Step& s, int k, bool required = true) {
     for (std::size_t i = cursor_; i < stretches_.size(); ++i) {
       if (!candidate(i, s, Motion::kStill)) continue;
       Segment seg = segment(index, s, SegmentKind::kOrientation, i, k, s.count);
       seg.targets = "still, orientation not stated";
       hold(seg, nan3(), nan3(), nan3());
       take(i, seg);
-      return;
+      return true;
     }
+    if (!required) return false;
     fail(index, s, "still " + std::to_string(k + 1) + " of " + std::to_string(s.count) + ": no still stretch of at least " +
                        format_number(std::max(o_.min_still_s, 0.5 * s.record_s)) + " s after " + format_number(after_s()) + " s",
          "shorten record_s, or check that the sensor was left still");
+  }
+
+  // still with `count: all`: every still left in the window, at least one.
+  void every_still(int index, const Step& s) {
+    const std::size_t first = segments_.size();
+    int k = 0;
+    while (still(index, s, k, k == 0)) ++k;
+    for (std::size_t i = first; i < segments_.size(); ++i) segments_[i].orientation_count = k;
+    note(s, std::to_string(k) + " still(s) found");
   }
 
   // turns: the next motion between two stills that turns by the stated angle about the axis.

@@ -8,7 +8,8 @@ namespace stend::alignment {
 bool AlignOptions::IsValid(std::string* error) const {
   const auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   if (!positive(block_s)) return invalid(error, "block_s must be > 0");
-  if (!(positive(min_still_s) && min_still_s >= 2.0 * block_s)) return invalid(error, "min_still_s must be at least two blocks");
+  if (!(positive(min_stretch_s) && min_stretch_s >= 2.0 * block_s)) return invalid(error, "min_stretch_s must be at least two blocks");
+  if (!(min_still_s >= min_stretch_s)) return invalid(error, "min_still_s must be at least min_stretch_s");
   if (!positive(max_still_rate_dps)) return invalid(error, "max_still_rate_dps must be > 0");
   if (!(positive(noise_factor) && noise_factor >= 1.0)) return invalid(error, "noise_factor must be >= 1");
   if (!(positive(min_accel_std_mps2) && positive(min_gyro_std_radps))) return invalid(error, "the minimum stds must be > 0");

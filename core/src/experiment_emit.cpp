@@ -106,7 +106,9 @@ void emit_step(YAML::Emitter& out, const Step& s) {
       emit_within(out, s);
       break;
     case Step::Kind::kStill:
-      out << YAML::Key << "count" << YAML::Value << s.count;
+      out << YAML::Key << "count" << YAML::Value;
+      if (s.count == 0) out << "all";
+      else out << s.count;
       num("record_s", s.record_s);
       emit_within(out, s);
       break;

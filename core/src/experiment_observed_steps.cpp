@@ -126,9 +126,10 @@ void rate_legs_settings(const MapReader& m, Step& s) {
   within(m, s);
 }
 
-// still: `count` stills at orientations nobody stated.
+// still: `count` stills at orientations nobody stated; `count: all` every still left (at least one).
 void still_settings(const MapReader& m, Step& s) {
-  s.count = count(m, "stills");
+  const YAML::Node n = m.get("count");
+  s.count = n.IsScalar() && n.Scalar() == "all" ? 0 : count(m, "stills");
   least_time(m, s);
   within(m, s);
 }

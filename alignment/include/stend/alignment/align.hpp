@@ -33,7 +33,8 @@ namespace stend::alignment {
 // How blocks are classified and stretches matched; each default written once, here.
 struct AlignOptions {
   double block_s = 0.1;             // length of one summary block [s]
-  double min_still_s = 1.0;         // shortest still or steady-rate stretch [s]
+  double min_stretch_s = 0.3;       // shorter stills and steady rates count as motion [s]
+  double min_still_s = 1.0;         // shortest face, still or rate leg matched, unless record_s asks more [s]
   double max_still_rate_dps = 3.0;  // a still block turns slower than this, after the gyro bias [deg/s]
   double noise_factor = 4.0;        // still: block std within this factor of the quietest blocks' std
   double min_accel_std_mps2 = 0.003;   // … or below this accelerometer std [m/s²] (quantised data)

@@ -104,7 +104,7 @@ struct Step {
   std::optional<Eigen::Vector3d> up;  // rate_legs: the sensor direction up during the legs, if stated
   double angle_deg = 0.0;  // turns: the angle of each turn, a magnitude [deg]
   int direction = 0;       // turns: +1 positive about sensor_axis, −1 negative, 0 either (from the data)
-  int count = 1;           // turns, still: how many
+  int count = 1;           // turns, still: how many (still: 0 = every still left, `count: all`)
   // faces, rate_legs, still: record_s above is the least time each face, leg or still is held [s]
   // (0: the alignment's own minimum). Any observed step: the window of the recording's clock its
   // stretches are looked for in [s], from `within_s: [from, to]`; the whole recording by default.
