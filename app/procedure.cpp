@@ -4,6 +4,7 @@
 #include "procedure.hpp"
 
 #include "stend/core/plugin_host.hpp"
+#include "stend/core/procedure_geometry.hpp"
 
 #include <fmt/format.h>
 
@@ -12,7 +13,7 @@ namespace stend::cli {
 Experiment load_procedure(const std::string& file) {
   PluginHost host;  // the fixtures a procedure may declare; its own plugin_paths are not loaded
   host.scan(PluginHost::default_search_path());
-  return load_experiment(file, host);
+  return as_observed_procedure(load_experiment(file, host), host);
 }
 
 namespace {

@@ -9,7 +9,8 @@
 
 namespace stend::cli {
 
-// The experiment file read as a procedure (no sensor needed; its observed steps are aligned).
+// The experiment file read as a procedure (no sensor needed): its table steps turned into what the
+// sensor saw (as_observed_procedure), so that every step can be aligned.
 Experiment load_procedure(const std::string& file);
 
 // Passes an import's samples on to `inner` and summarises them for the alignment: the aligned

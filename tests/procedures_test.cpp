@@ -133,6 +133,42 @@ TEST(Procedures, AProcedureTheLogDoesNotFollowIsRefusedNamingTheStep) {
   EXPECT_FALSE(fs::exists(run)) << "a refused import wrote its folder";
 }
 
+// A bench experiment as the procedure of a log of its run written by another logger: the table's
+// orientations become faces through the declared (simulated) table's own geometry, found where
+// the bench held them, with the bench's specific force as truth.
+TEST(Procedures, ABenchExperimentAlignsALogOfItsRun) {
+  const TempDir dir("procedures");
+  const std::string experiment = src + "/configs/six_position.yaml";
+  const auto ran = run_stend("run " + shell_quote(experiment) + " -o " + shell_quote(dir.path().string()) +
+                             " --name bench --store csv --quiet");
+  ASSERT_EQ(ran.code, 0) << ran.text;
+  const fs::path bench = dir.path() / "bench", aligned = dir.path() / "aligned";
+  const auto r = run_stend("import " + shell_quote((bench / "imu.csv").string()) +
+                           " --format csv --time t_s --accel ax_mps2,ay_mps2,az_mps2 --gyro gx_radps,gy_radps,gz_radps"
+                           " --experiment " + shell_quote(experiment) + " -o " + shell_quote(aligned.string()));
+  ASSERT_EQ(r.code, 0) << r.text;
+  const auto held = segments_of(bench, stend::SegmentKind::kOrientation);
+  const auto found = segments_of(aligned, stend::SegmentKind::kOrientation);
+  ASSERT_EQ(held.size(), 6u);
+  ASSERT_EQ(found.size(), 6u) << r.text;
+  const stend::Recording b = stend::Recording::open(bench), a = stend::Recording::open(aligned);
+  const int fb = b.truth_column("f_x_mps2"), fa = a.truth_column("f_x_mps2");
+  ASSERT_GE(fb, 0);
+  ASSERT_GE(fa, 0);
+  const auto f_at = [](const stend::Recording& rec, int column, double t) {
+    for (std::size_t i = 0; i < rec.truth_t.size(); ++i)
+      if (rec.truth_t[i] >= t) return std::vector<double>(rec.truth[i].begin() + column, rec.truth[i].begin() + column + 3);
+    return std::vector<double>{};
+  };
+  for (std::size_t k = 0; k < 6; ++k) {
+    EXPECT_LE(found[k].t_start_s, held[k].t_start_s + 0.2) << k;  // the still the bench recorded lies inside
+    EXPECT_GE(found[k].t_end_s, held[k].t_end_s - 0.2) << k;
+    const auto want = f_at(b, fb, held[k].t_start_s + 1.0), got = f_at(a, fa, found[k].t_start_s);
+    ASSERT_EQ(got.size(), 3u);
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(got[static_cast<std::size_t>(i)], want[static_cast<std::size_t>(i)], 1e-6) << k;
+  }
+}
+
 TEST(Procedures, ABenchRefusesToRunAProcedureFile) {
   const auto v = run_stend("validate " + shell_quote(ferraris));
   EXPECT_EQ(v.code, 0) << v.text;

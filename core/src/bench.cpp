@@ -31,6 +31,15 @@ Bench::Bench(const Experiment& exp, const PluginHost& host) : exp_(exp) {
   require_runnable(exp);
   sensor_ = host.create_sensor(exp.sensor.plugin, seeded(exp.sensor.params, exp.seed, 1));
   simulated_ = exp.sensor.plugin.rfind("sim_", 0) == 0;
+  create_fixtures(host);
+}
+
+Bench::Bench(const Experiment& exp, const PluginHost& host, FixturesOnly) : exp_(exp) { create_fixtures(host); }
+
+// The fixtures in declaration order, checked against the procedure (stage 2), the chain from the
+// base to the sensor's mount, and the Earth rate at the site.
+void Bench::create_fixtures(const PluginHost& host) {
+  const Experiment& exp = exp_;
   std::vector<const Fixture*> raw;
   for (std::size_t i = 0; i < exp.fixtures.size(); ++i) {
     const FixtureDecl& d = exp.fixtures[i];

@@ -101,8 +101,10 @@ class AlignmentError : public ExperimentError {
 // the first sample is written).
 std::vector<std::string> aligned_truth_columns();
 
-// Aligns the observed steps of `exp` (every step must be observed: commanded steps ran on a
-// bench) to the blocks. Throws AlignmentError.
+// Aligns the steps of `exp` to the blocks: the observed ones; a record step as a still at an
+// unstated orientation; set_temperature, wait and set_vibration are not looked for (noted).
+// Table steps (orientations, rates) must have been turned into faces and rate legs first
+// (stend/core/procedure_geometry.hpp). Throws AlignmentError.
 Alignment align(const Experiment& exp, const std::vector<Block>& blocks, const AlignOptions& options);
 
 }  // namespace stend::alignment

@@ -17,6 +17,10 @@ class Bench final : public TruthSource {
   // Creates every plugin object (seeding simulated ones whose `seed` is 0 from the experiment
   // seed) and checks the procedure against the fixtures' declared limits (stage-2 validation).
   Bench(const Experiment& exp, const PluginHost& host);
+  // The fixtures alone, no sensor (sensor() must not be called): the geometry of the bench's
+  // table steps, for a procedure whose recording was made elsewhere (procedure_geometry.hpp).
+  struct FixturesOnly {};
+  Bench(const Experiment& exp, const PluginHost& host, FixturesOnly);
   ~Bench() override;
 
   Sensor& sensor() { return *sensor_; }
@@ -67,6 +71,7 @@ class Bench final : public TruthSource {
     bool valid = false;
   };
   void compose(Kinematics& k) const;
+  void create_fixtures(const PluginHost& host);
   mutable Kinematics last_;
 };
 
