@@ -118,56 +118,75 @@ std::string vertical_sigmas_text(const Eigen::Vector3d& noise_radps) {
                      dps[0], dps[1], dps[2]);
 }
 
+// The result before the solve: the usable stills, the free parameters (bias and scale of the
+// excited axes) and why the others are held, the counts.
+CalibrationResult earth_rate_setup(const VerticalStills& v, const std::vector<Eigen::Vector3d>& truth_f,
+                                   std::vector<int>& free_index) {
+  CalibrationResult r;
+  r.method = Method::kEarthRate;
+  r.model = gyroscope_model(false);
+  r.whitened = true;
+  r.intervals = v.stills;
+  if (v.left_out > 0)
+    r.notes.push_back(fmt::format("{} still(s) left out: no finite specific force or rate truth (orientation or "
+                                  "latitude unknown)", v.left_out));
+  const std::array<bool, 3> excited = excited_axes(v.up);
+  free_index = excited_parameters(r.model, excited);
+  init_parameters(r, free_index);
+  explain_held(r, excited);
+  r.observations = static_cast<int>(v.stills.size());
+  r.estimated = static_cast<int>(free_index.size());
+  r.dof = r.observations - r.estimated;
+  for (const auto& f : truth_f)
+    if (f.allFinite()) r.gravity_mps2 = std::max(r.gravity_mps2, f.norm());
+  return r;
+}
+
+// Why the fit cannot run on these stills ("" when it can).
+std::string earth_rate_refusal(const VerticalStills& v, const CalibrationResult& r, const Eigen::Vector3d& noise) {
+  if (r.estimated == 0) return "no axis is ever near the vertical (or no still has a known orientation and rate)";
+  if (!finite_intervals(v.stills)) return "non-finite (NaN) readings in a still";
+  if (r.observations < r.estimated)
+    return fmt::format("too few stills: {} with a known orientation and rate for {} parameters (bias and scale of "
+                       "each near-vertical axis: an up and a down position each)",
+                       r.observations, r.estimated);
+  if (!(noise.minCoeff() > 0.0))
+    return "the stills show no gyro noise and the quantization step is unknown: the a-priori sigmas need one";
+  return {};
+}
+
 }  // namespace
 
 CalibrationResult calibrate_gyro_earth_rate(const std::vector<processing::StaticPoint>& stills,
                                             const std::vector<Eigen::Vector3d>& truth_f,
                                             const std::vector<Eigen::Vector3d>& truth_w, const GyroOptions& go,
                                             double quantization_radps) {
-  CalibrationResult r;
-  r.method = Method::kEarthRate;
-  r.model = gyroscope_model(false);
-  r.whitened = true;
-  auto done = [&](const std::string& why) {
-    if (r.parameters.empty()) init_gyro_parameters(r);
+  auto refused = [](const std::string& why) {
+    CalibrationResult r;
+    r.method = Method::kEarthRate;
+    r.model = gyroscope_model(false);
+    init_gyro_parameters(r);
     fail_all(r, why);
     return r;
   };
   if (go.estimate_g_sensitivity)
-    return done("earth_rate cannot estimate g-sensitivity: the vertical Earth rate and gravity flip together "
-                "between up and down, so G_ii is the same combination as scale_i");
+    return refused("earth_rate cannot estimate g-sensitivity: the vertical Earth rate and gravity flip together "
+                   "between up and down, so G_ii is the same combination as scale_i");
   if (truth_f.size() != stills.size() || truth_w.size() != stills.size())
-    return done("earth_rate: one truth specific force and rate per still is needed");
+    return refused("earth_rate: one truth specific force and rate per still is needed");
   const VerticalStills v = vertical_stills(stills, truth_f, truth_w);
-  r.intervals = v.stills;
-  if (v.left_out > 0)
-    r.notes.push_back(fmt::format("{} still(s) left out: no finite specific force or rate truth (orientation or "
-                                  "latitude unknown)", v.left_out));
-  const std::array<bool, 3> excited = excited_axes(v.up);
-  const std::vector<int> free_index = excited_parameters(r.model, excited);
-  init_parameters(r, free_index);
-  explain_held(r, excited);
-  const int p = static_cast<int>(free_index.size());
-  const int n = static_cast<int>(v.stills.size());
-  r.observations = n;
-  r.estimated = p;
-  r.dof = n - p;
-  for (const auto& f : truth_f)
-    if (f.allFinite()) r.gravity_mps2 = std::max(r.gravity_mps2, f.norm());
-  if (p == 0) return done("no axis is ever near the vertical (or no still has a known orientation and rate)");
-  if (!finite_intervals(v.stills)) return done("non-finite (NaN) readings in a still");
-  if (n < p)
-    return done(fmt::format("too few stills: {} with a known orientation and rate for {} parameters (bias and scale "
-                            "of each near-vertical axis: an up and a down position each)",
-                            n, p));
+  std::vector<int> free_index;
+  CalibrationResult r = earth_rate_setup(v, truth_f, free_index);
   const Eigen::Vector3d noise = pooled_gyro_noise(v.stills, quantization_radps);
-  if (!(noise.minCoeff() > 0.0))
-    return done("the stills show no gyro noise and the quantization step is unknown: the a-priori sigmas need one");
+  if (const std::string why = earth_rate_refusal(v, r, noise); !why.empty()) {
+    fail_all(r, why);
+    return r;
+  }
   std::vector<GyroObservation> obs;
   for (std::size_t k = 0; k < v.stills.size(); ++k)
     obs.push_back(vertical_observation(v.stills[k], v.up[k], v.omega_v_radps[k], noise));
   r.uncertainty = vertical_sigmas_text(noise);
-  std::vector<double> x(static_cast<std::size_t>(p), 0.0);
+  std::vector<double> x(free_index.size(), 0.0);
   ceres::Problem problem;
   const CalibrationOptions o = as_calibration_options(go, go.loss_scale_radps);
   const int residuals = add_gyro_observations(obs, r.model, free_index, o, problem, x);

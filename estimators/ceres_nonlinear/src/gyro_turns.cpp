@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 namespace stend::ceres_nonlinear {
 
@@ -112,11 +113,9 @@ double mean_still_gravity(const std::vector<processing::StaticPoint>& stills) {
   return stills.empty() ? 0.0 : g / static_cast<double>(stills.size());
 }
 
-}  // namespace
-
-CalibrationResult calibrate_gyro_turns(const std::vector<processing::StaticPoint>& stills,
-                                       const std::vector<KnownTurn>& turns, const GyroOptions& go,
-                                       double quantization_radps) {
+// The result before the solve: every gyro parameter free, the counts.
+CalibrationResult turns_setup(const std::vector<processing::StaticPoint>& stills, const std::vector<KnownTurn>& turns,
+                              const GyroOptions& go) {
   CalibrationResult r;
   r.method = Method::kTurns;
   r.model = gyroscope_model(go.estimate_g_sensitivity);
@@ -124,35 +123,49 @@ CalibrationResult calibrate_gyro_turns(const std::vector<processing::StaticPoint
   r.whitened = true;
   r.gravity_mps2 = mean_still_gravity(stills);
   init_gyro_parameters(r);
-  const int p = r.model.size();
   r.observations = 3 * static_cast<int>(stills.size() + turns.size());
-  r.estimated = p;
-  r.dof = r.observations - p;
-  auto done = [&](const std::string& why) {
-    fail_all(r, why);
-    turn_checks(turns, r);
-    return r;
-  };
-  if (stills.empty()) return done("no still segments (kinds orientation or detected): the bias needs them");
+  r.estimated = r.model.size();
+  r.dof = r.observations - r.estimated;
+  return r;
+}
+
+// Why the fit cannot run on these stills and turns ("" when it can).
+std::string turns_refusal(const std::vector<processing::StaticPoint>& stills, const std::vector<KnownTurn>& turns,
+                          const Eigen::Vector3d& noise) {
+  if (stills.empty()) return "no still segments (kinds orientation or detected): the bias needs them";
   if (turns.empty())
-    return done("no known turns: the recording needs kRotation segments with the truth columns turn_x_deg, "
-                "turn_y_deg, turn_z_deg");
-  if (!finite_intervals(stills)) return done("non-finite (NaN) readings in a still");
+    return "no known turns: the recording needs kRotation segments with the truth columns turn_x_deg, turn_y_deg, "
+           "turn_z_deg";
+  if (!finite_intervals(stills)) return "non-finite (NaN) readings in a still";
   for (const KnownTurn& t : turns)
     if (!t.window.gyro.mean.allFinite() || !t.window.accel.mean.allFinite() || !t.rotation_rad.allFinite() ||
         !(turn_duration_s(t.window) > 0.0))
-      return done("non-finite readings or truth, or no duration, in turn '" + t.window.segment.label + "'");
-  const Eigen::Vector3d noise = pooled_gyro_noise(stills, quantization_radps);
+      return "non-finite readings or truth, or no duration, in turn '" + t.window.segment.label + "'";
   if (!(noise.minCoeff() > 0.0))
-    return done("the stills show no gyro noise and the quantization step is unknown: the a-priori sigmas need one");
+    return "the stills show no gyro noise and the quantization step is unknown: the a-priori sigmas need one";
+  return {};
+}
+
+}  // namespace
+
+CalibrationResult calibrate_gyro_turns(const std::vector<processing::StaticPoint>& stills,
+                                       const std::vector<KnownTurn>& turns, const GyroOptions& go,
+                                       double quantization_radps) {
+  CalibrationResult r = turns_setup(stills, turns, go);
+  const Eigen::Vector3d noise = pooled_gyro_noise(stills, quantization_radps);
+  if (const std::string why = turns_refusal(stills, turns, noise); !why.empty()) {
+    fail_all(r, why);
+    turn_checks(turns, r);
+    return r;
+  }
   const double sigma_angle_rad = go.turn_angle_sigma_deg * physics::kDegToRad;
   std::vector<GyroObservation> obs;
   for (const auto& s : stills) obs.push_back(still_observation(s, noise));
   for (const KnownTurn& t : turns) obs.push_back(turn_observation(t, noise, sigma_angle_rad));
   r.uncertainty = turn_sigmas_text(noise, go.turn_angle_sigma_deg);
-  std::vector<int> free_index(static_cast<std::size_t>(p));
-  for (int i = 0; i < p; ++i) free_index[static_cast<std::size_t>(i)] = i;
-  std::vector<double> x(static_cast<std::size_t>(p), 0.0);
+  std::vector<int> free_index(static_cast<std::size_t>(r.estimated));
+  std::iota(free_index.begin(), free_index.end(), 0);
+  std::vector<double> x(free_index.size(), 0.0);
   ceres::Problem problem;
   const CalibrationOptions o = as_calibration_options(go, go.loss_scale_radps);
   const int residuals = add_gyro_observations(obs, r.model, free_index, o, problem, x);

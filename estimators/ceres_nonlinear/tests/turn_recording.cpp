@@ -155,6 +155,13 @@ std::vector<Step> ferraris_steps(bool turn_x) {
   return s;
 }
 
+std::vector<Step> six_face_steps(double seconds) {
+  return {still(seconds), move(0, 180.0), still(seconds),   // z up, z down
+          move(0, 90.0),  still(seconds), move(0, 180.0),   // y down
+          still(seconds), move(2, 90.0),  still(seconds),   // y up, x up
+          move(1, 180.0), still(seconds)};                  // x down
+}
+
 std::vector<Step> up_down_steps(int axis, double seconds) {
   std::vector<Step> s;
   if (axis == 0) s.push_back(move(1, -90.0));  // x up

@@ -43,6 +43,8 @@ struct Step {
 // +360 about z, −360 about y, +360 about x (without the x turn when `turn_x` is false); the still
 // after the z turn is a detected one.
 std::vector<Step> ferraris_steps(bool turn_x = true);
+// The six faces (z, y, x up and down), `seconds` each, joined by moves; no turn.
+std::vector<Step> six_face_steps(double seconds);
 // Still with `axis` up, a 180° move, still with it down; `seconds` each.
 std::vector<Step> up_down_steps(int axis, double seconds);
 
