@@ -188,6 +188,21 @@ processing::Extraction turn_stills(const Recording& rec, const GyroOptions& go) 
   return ex;
 }
 
+// The still segments the processing stage skipped, one note per reason: how many, and the first
+// one's note (an aligned log holds many short unnamed stills that the trim leaves empty).
+std::vector<std::string> skipped_still_notes(const processing::Extraction& stills) {
+  std::vector<std::string> notes;
+  for (processing::SkipReason reason : processing::kAllSkipReasons) {
+    const std::size_t n = stills.count(reason);
+    if (n == 0) continue;
+    const auto first = std::find_if(stills.skipped.begin(), stills.skipped.end(),
+                                    [&](const processing::Skip& s) { return s.reason == reason; });
+    notes.push_back(fmt::format("{} still segment(s) left out ({}), e.g. {}", n, processing::skip_reason_name(reason),
+                                first->note));
+  }
+  return notes;
+}
+
 // The recording's known turns: kRotation segments with a finite turn truth and no lost sample;
 // `notes` gets the ones left out.
 std::vector<KnownTurn> known_turns(const Recording& rec, const std::array<int, 3>& columns,
@@ -221,7 +236,7 @@ CalibrationResult calibrate_gyro_turns(const Recording& rec, const GyroOptions& 
   std::vector<KnownTurn> turns;
   if (columns) turns = known_turns(rec, *columns, notes);
   const processing::Extraction stills = turn_stills(rec, go);
-  for (const auto& s : stills.skipped) notes.push_back("still " + s.note);
+  for (const std::string& n : skipped_still_notes(stills)) notes.push_back(n);
   CalibrationResult r = calibrate_gyro_turns(stills.points, turns, go, rec.header.info.gyro_lsb_radps);
   r.notes.insert(r.notes.begin(), notes.begin(), notes.end());
   if (!columns)

@@ -107,7 +107,7 @@ TEST(CeresTurnsCli, EarthRateExampleOnAnMpu6050GradeGyroIsImprecise) {
   spec.rate_hz = 10.0;
   spec.gyro_noise_radps = 0.005 * physics::kDegToRad * std::sqrt(spec.rate_hz);  // 0.005 deg/s/√Hz
   spec.latitude_deg = 47.0;
-  const fs::path run = write_run(dir, "updown", tr::make(spec, tr::six_face_steps(300.0)));
+  const fs::path run = write_run(dir, "updown", tr::make(spec, tr::six_face_steps(300.0)));  // three axes up/down
   const ProgramOutput o = fit(run, "earth_rate.yaml");
   ASSERT_EQ(o.code, 0) << o.text;
   const json doc = read_json(run / "ceres.json");
