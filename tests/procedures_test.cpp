@@ -3,7 +3,8 @@
 // finds the six faces where imucal's own annotations put them and the three turns inside the
 // annotated turns; the known-orientation fit on the aligned run agrees with the fit on the
 // annotations; a procedure the log does not follow is refused naming the step and writes nothing;
-// runs imported with one procedure file compare; a bench refuses to run a procedure file.
+// the turns it finds give the gyro's scale imucal finds (the ferraris model); runs imported with one
+// procedure file compare; a bench refuses to run a procedure file.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -13,6 +14,8 @@
 #include "stend/testing/paths.hpp"
 #include "stend/testing/program.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -113,6 +116,35 @@ TEST(Procedures, ImucalsFerrarisSessionIsFoundWhereItsAnnotationsPutIt) {
                              shell_quote((dir.path() / "db.sqlite").string()));
   EXPECT_EQ(cmp.code, 0) << cmp.text;
   EXPECT_NE(cmp.text.find("2 run(s)"), std::string::npos) << cmp.text;
+}
+
+// The turns the alignment finds give the gyro (estimators/ceres_nonlinear/examples/ferraris.yaml:
+// bias and g-sensitivity from the faces, scale and cross-axis from the turns): its scale factors
+// agree with imucal's own Ferraris calibration (example_cal.json, K_g in counts per deg/s over the
+// importer's 16.4 LSB/(deg/s); its R_g diagonal is negative: its turns ran the negative way).
+TEST(Procedures, ImucalsTurnsGiveTheGyroScaleImucalFinds) {
+  const fs::path csv = stend::testing::shared_data("imucal/annotated_session.csv");
+  const fs::path cal = stend::testing::shared_data("imucal/example_cal.json");
+  STEND_SKIP_IF_ABSENT(csv);
+  STEND_SKIP_IF_ABSENT(cal);
+  const TempDir dir("procedures");
+  const fs::path run = dir.path() / "ferraris";
+  ASSERT_EQ(run_stend(import_args(csv, ferraris, run)).code, 0);
+  const auto fit = run_stend("fit " + shell_quote(run.string()) + " --model " +
+                             shell_quote(src + "/estimators/ceres_nonlinear/examples/ferraris.yaml"));
+  ASSERT_EQ(fit.code, 0) << fit.text;
+  EXPECT_NE(fit.text.find("Ceres gyroscope calibration (turns)"), std::string::npos) << fit.text;
+  const auto ours = parameters(run / "ceres.json");
+  const auto ref = nlohmann::json::parse(stend::testing::read_text(cal));
+  for (int i = 0; i < 3; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const double imucal = std::abs(ref["R_g"][k][k].get<double>() * ref["K_g"][k][k].get<double>()) / 16.4 - 1.0;
+    const std::string name = std::string("gyro_scale_") + static_cast<char>('x' + i);
+    ASSERT_TRUE(ours.count(name)) << name;
+    // Within our uncertainty (the turns known to 1 deg: about 0.2 %) and a few per mille: the
+    // alignment integrates from still to still, imucal over its whole annotated part.
+    EXPECT_NEAR(ours.at(name).value, imucal, std::min(2.0 * ours.at(name).std_error, 2e-3)) << name;
+  }
 }
 
 TEST(Procedures, AProcedureTheLogDoesNotFollowIsRefusedNamingTheStep) {

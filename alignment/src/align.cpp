@@ -451,10 +451,7 @@ class Builder {
 }  // namespace
 
 std::vector<std::string> aligned_truth_columns() {
-  std::vector<std::string> c;
-  for (const auto* group : {&kSpecificForceColumns, &kRateColumns, &kTurnColumns})
-    for (const char* name : *group) c.emplace_back(name);
-  return c;
+  return truth_column_names({kSpecificForceColumns, kRateColumns, kTurnColumns});
 }
 
 std::string Alignment::summary() const {

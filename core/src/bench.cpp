@@ -1,6 +1,7 @@
 #include "stend/core/bench.hpp"
 
 #include "stend/physics/geometry.hpp"
+#include "stend/recording/truth_columns.hpp"
 
 #include <cstring>
 #include <stdexcept>
@@ -134,8 +135,8 @@ BenchTruth Bench::at(double t_s) const {
 }
 
 std::vector<std::string> Bench::truth_columns() const {
-  std::vector<std::string> cols = {"f_x_mps2", "f_y_mps2", "f_z_mps2", "w_x_radps", "w_y_radps",
-                                   "w_z_radps", "air_c", "die_c"};
+  std::vector<std::string> cols = truth_column_names({kSpecificForceColumns, kRateColumns});
+  cols.insert(cols.end(), {"air_c", "die_c"});
   for (std::size_t i = 0; i < fixtures_.size(); ++i) {
     const std::string& id = exp_.fixtures[i].id;
     for (const AxisSpec& a : fixtures_[i]->axes()) {

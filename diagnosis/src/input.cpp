@@ -21,6 +21,7 @@
 #include "stend/physics/gravity.hpp"
 #include "stend/physics/table_chain.hpp"
 #include "stend/processing/truth.hpp"
+#include "stend/recording/truth_columns.hpp"
 #include "stend/sim/imu.hpp"  // the twin's noise: sim_imu's defaults
 
 namespace stend::diagnosis {
@@ -98,8 +99,10 @@ struct TruthColumns {
   double g = 0.0;  // [m/s²]
 };
 TruthColumns truth_columns(const Recording& rec) {
-  TruthColumns c{{column(rec, "f_x_mps2"), column(rec, "f_y_mps2"), column(rec, "f_z_mps2")},
-                 {column(rec, "w_x_radps"), column(rec, "w_y_radps"), column(rec, "w_z_radps")},
+  const auto& f = kSpecificForceColumns;
+  const auto& w = kRateColumns;
+  TruthColumns c{{column(rec, f[0]), column(rec, f[1]), column(rec, f[2])},
+                 {column(rec, w[0]), column(rec, w[1]), column(rec, w[2])},
                  {column_ending(rec, ".azimuth.meas_deg"), column_ending(rec, ".tilt.meas_deg"),
                   column_ending(rec, ".rotation.meas_deg")}};
   c.three_axis = c.table[0] >= 0 && c.table[1] >= 0 && c.table[2] >= 0;
@@ -295,7 +298,8 @@ GapInput build_input(const Recording& recording_in, const estimation::ModelSpec&
   const bool accel = spec.model.instrument == model::Instrument::kAccelerometer;
   // Truth columns: the bench's, or those an importer built from the dataset's annotations.
   // Without them the orientations are unknown, only |g|: the magnitude form.
-  if (column(recording_in, accel ? "f_x_mps2" : "w_x_radps") < 0) return build_magnitude_input(recording_in, spec);
+  if (column(recording_in, accel ? kSpecificForceColumns[0] : kRateColumns[0]) < 0)
+    return build_magnitude_input(recording_in, spec);
   const Recording* rec = &recording_in;
   in.truth_source = "truth columns";
   const std::vector<processing::StaticPoint> points = static_points(*rec, spec, in);

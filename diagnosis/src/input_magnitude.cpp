@@ -13,6 +13,7 @@
 #include "stend/estimation/linear_lsq.hpp"
 #include "stend/processing/static_detector.hpp"
 #include "stend/physics/units.hpp"
+#include "stend/recording/truth_columns.hpp"
 
 namespace stend::diagnosis {
 
@@ -150,7 +151,7 @@ GapInput build_magnitude_input(const Recording& rec, const estimation::ModelSpec
   aug.truth_t.clear();
   aug.truth.clear();
   aug.truth_store.reset();  // the provisional rows below replace the recording's truth
-  aug.header.truth_columns = {"f_x_mps2", "f_y_mps2", "f_z_mps2", "w_x_radps", "w_y_radps", "w_z_radps"};
+  aug.header.truth_columns = truth_column_names({kSpecificForceColumns, kRateColumns});
   int id = 0;
   for (const auto& iv : ivs) {
     Segment s;

@@ -7,6 +7,7 @@
 #include <stend/errors.hpp>
 
 #include "stend/physics/units.hpp"
+#include "stend/recording/truth_columns.hpp"
 
 namespace stend::estimation {
 
@@ -17,9 +18,6 @@ std::string join(const std::vector<std::string>& items) {
   for (const auto& s : items) out += (out.empty() ? "" : ", ") + s;
   return out;
 }
-
-constexpr const char* kForceColumns[3] = {"f_x_mps2", "f_y_mps2", "f_z_mps2"};
-constexpr const char* kRateColumns[3] = {"w_x_radps", "w_y_radps", "w_z_radps"};
 
 // A stimulus at which every term's regressor entry is generically nonzero: used to decide which
 // parameters can affect which output axes, from the vocabulary itself.
@@ -116,15 +114,15 @@ processing::Request static_request(const Recording& rec, const ModelSpec& spec) 
   request.gyro = !accel;
   std::vector<std::string> missing;
   for (int a = 0; a < 3; ++a) {
-    const char* input = accel ? kForceColumns[a] : kRateColumns[a];
+    const char* input = accel ? kSpecificForceColumns[a] : kRateColumns[a];
     request.stimulus.input[static_cast<std::size_t>(a)] = input;
     if (rec.truth_column(input) < 0) missing.push_back(input);
-    if (accel || rec.truth_column(kForceColumns[a]) >= 0)
-      request.stimulus.specific_force[static_cast<std::size_t>(a)] = kForceColumns[a];
+    if (accel || rec.truth_column(kSpecificForceColumns[a]) >= 0)
+      request.stimulus.specific_force[static_cast<std::size_t>(a)] = kSpecificForceColumns[a];
   }
   if (!accel && spec.model.find(model::TermKind::kGSensitivity) >= 0)
     for (int a = 0; a < 3; ++a)
-      if (request.stimulus.specific_force[static_cast<std::size_t>(a)].empty()) missing.push_back(kForceColumns[a]);
+      if (request.stimulus.specific_force[static_cast<std::size_t>(a)].empty()) missing.push_back(kSpecificForceColumns[a]);
   if (!missing.empty()) {
     const std::string have = join(rec.header.truth_columns);
     throw InputError("recording '" + rec.dir.string() + "' lacks the truth column(s) " + join(missing) +

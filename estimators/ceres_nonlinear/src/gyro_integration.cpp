@@ -289,6 +289,7 @@ void merge_stages(const IntegrationData& d, const CalibrationResult& r1, const C
   r.dof = 2 * pairs - 9;
   r.sigma = r2.sigma;
   r.quantile = r2.quantile;
+  r.uncertainty = "stage 2: " + r2.uncertainty + ", plus the stage-1 bias and the accelerometer passed on (delta method)";
   r.iterations = r1.iterations + r2.iterations;
   r.condition_number = r2.condition_number;
   r.not_identifiable = r2.not_identifiable;

@@ -3,6 +3,8 @@
 // f_k). See stend/ceres_nonlinear/calibration.hpp.
 #include "gyro.hpp"
 
+#include <stend/recording/truth_columns.hpp>
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -37,6 +39,25 @@ struct RateCost {
   }
 };
 
+// Mean magnitude of the finite vectors (0 when none).
+double mean_finite_norm(const std::vector<Eigen::Vector3d>& v) {
+  double sum = 0.0;
+  int n = 0;
+  for (const auto& f : v)
+    if (f.allFinite()) {
+      sum += f.norm();
+      ++n;
+    }
+  return n > 0 ? sum / n : 0.0;
+}
+
+// Each vector, or 0 where it is not finite.
+std::vector<Eigen::Vector3d> finite_or_zero(const std::vector<Eigen::Vector3d>& v) {
+  std::vector<Eigen::Vector3d> out;
+  for (const auto& f : v) out.push_back(f.allFinite() ? f : Eigen::Vector3d::Zero());
+  return out;
+}
+
 }  // namespace
 
 namespace detail {
@@ -56,9 +77,7 @@ CalibrationResult calibrate_gyro_rate_table(const std::vector<processing::Static
   r.method = Method::kRateTable;
   r.model = gyroscope_model(go.estimate_g_sensitivity);
   r.intervals = intervals;
-  double g = 0.0;
-  for (const auto& f : truth_f) g += f.norm();
-  r.gravity_mps2 = truth_f.empty() ? 0.0 : g / static_cast<double>(truth_f.size());
+  r.gravity_mps2 = mean_finite_norm(truth_f);
   init_gyro_parameters(r);
   const int p = r.model.size();
   const int n = static_cast<int>(intervals.size());
@@ -72,8 +91,14 @@ CalibrationResult calibrate_gyro_rate_table(const std::vector<processing::Static
   if (truth_w.size() != intervals.size() || truth_f.size() != intervals.size())
     return done("rate table: one truth rate and specific force per interval is needed");
   if (!finite_intervals(intervals)) return done("non-finite (NaN) readings in an interval");
-  for (std::size_t k = 0; k < truth_w.size(); ++k)
-    if (!truth_w[k].allFinite() || !truth_f[k].allFinite()) return done("non-finite truth in an interval");
+  for (std::size_t k = 0; k < truth_w.size(); ++k) {
+    if (!truth_w[k].allFinite()) return done("non-finite rate truth (w_*_radps) in an interval");
+    if (go.estimate_g_sensitivity && !truth_f[k].allFinite())
+      return done("non-finite specific-force truth (f_*_mps2) in an interval: the g-sensitivity needs the specific "
+                  "force of every interval (set gyro_g_sensitivity: false, or give the orientations)");
+  }
+  // Without g-sensitivity the specific force is unused: an unknown one (NaN) is read as 0.
+  const std::vector<Eigen::Vector3d> f_used = go.estimate_g_sensitivity ? truth_f : finite_or_zero(truth_f);
   if (3 * n < p + 1)
     return done(fmt::format("too few intervals: {} rate or static intervals, need at least {} (3 equations each) "
                             "for {} gyro parameters plus noise",
@@ -85,10 +110,10 @@ CalibrationResult calibrate_gyro_rate_table(const std::vector<processing::Static
     ceres::CostFunction* cf;
     if (p == 12)
       cf = new ceres::AutoDiffCostFunction<RateCost<12>, 3, 12>(
-          new RateCost<12>{&r.model, intervals[k].gyro.mean, truth_w[k], truth_f[k]});
+          new RateCost<12>{&r.model, intervals[k].gyro.mean, truth_w[k], f_used[k]});
     else
       cf = new ceres::AutoDiffCostFunction<RateCost<21>, 3, 21>(
-          new RateCost<21>{&r.model, intervals[k].gyro.mean, truth_w[k], truth_f[k]});
+          new RateCost<21>{&r.model, intervals[k].gyro.mean, truth_w[k], f_used[k]});
     problem.AddResidualBlock(cf, make_loss(o), x.data());
   }
   std::vector<int> free_index(static_cast<std::size_t>(p));
@@ -101,18 +126,18 @@ CalibrationResult calibrate_gyro_rate_table(const std::vector<processing::Static
     before += (intervals[k].gyro.mean - truth_w[k]).squaredNorm();
     if (r.ok()) {
       model::Stimulus<double> st;
-      st.specific_force = truth_f[k];
+      st.specific_force = f_used[k];
       after += (r.model.correct(r.theta.data(), intervals[k].gyro.mean, st) - truth_w[k]).squaredNorm();
     }
   }
   r.rate_error_radps.before = std::sqrt(before / std::max(1, n));
   r.rate_error_radps.after = r.ok() ? std::sqrt(after / std::max(1, n)) : kNaN;
-  axis_rms_against(r, truth_w, reading, truth_f);
+  axis_rms_against(r, truth_w, reading, f_used);
   return r;
 }
 
 CalibrationResult calibrate_gyro_rate_table(const Recording& rec, const GyroOptions& go) {
-  const std::vector<std::string> columns = {"w_x_radps", "w_y_radps", "w_z_radps", "f_x_mps2", "f_y_mps2", "f_z_mps2"};
+  const std::vector<std::string> columns = truth_column_names({kRateColumns, kSpecificForceColumns});
   const bool have = std::all_of(columns.begin(), columns.end(),
                                 [&](const std::string& c) { return rec.truth_column(c) >= 0; });
   std::vector<processing::StaticPoint> kept;

@@ -43,6 +43,15 @@ double positive(const yaml::MapReader& m, const std::string& key, double fallbac
   return v;
 }
 
+// The gyroscope procedure the options name (not none or bias_only); the integration runs on the
+// accelerometer's result.
+CalibrationResult fit_gyroscope(const Recording& rec, const ModelFileOptions& o, const CalibrationResult& accel) {
+  if (o.gyroscope == "rate_table") return calibrate_gyro_rate_table(rec, o.gyro);
+  if (o.gyroscope == "turns") return calibrate_gyro_turns(rec, o.gyro);
+  if (o.gyroscope == "earth_rate") return calibrate_gyro_earth_rate(rec, o.gyro);
+  return calibrate_gyro_integration(rec, accel, o.gyro);
+}
+
 }  // namespace
 
 ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& file) {
@@ -52,12 +61,13 @@ ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& fi
   std::vector<std::string> keys = {"accelerometer", "gyroscope", "segment_trim_s", "gravity_mps2", "loss",
                                    "loss_scale_mps2", "gyro_loss_scale_radps", "gyro_loss_scale_rad", "confidence",
                                    "max_iterations", "rank_tolerance", "max_std_error", estimation::kTolerancesKey, "fixed_cross_axis",
-                                   "orientation_sigma_deg", "table_offsets", "table_fixture", "gyro_g_sensitivity"};
+                                   "orientation_sigma_deg", "table_offsets", "table_fixture", "gyro_g_sensitivity",
+                                   "turn_angle_sigma_deg"};
   keys.insert(keys.end(), processing::kOptionKeys.begin(), processing::kOptionKeys.end());
   const yaml::MapReader m(top.get("ceres_nonlinear"), file, "ceres_nonlinear", "ceres_nonlinear options", keys, {},
                           top.value_location("ceres_nonlinear"));
   o.accelerometer = choice(m, "accelerometer", o.accelerometer, {"unknown_orientations", "known_orientations", "none"});
-  o.gyroscope = choice(m, "gyroscope", o.gyroscope, {"integration", "rate_table", "bias_only", "none"});
+  o.gyroscope = choice(m, "gyroscope", o.gyroscope, kGyroscopeMethods);
   if (o.accelerometer == "none" && (o.gyroscope == "integration" || o.gyroscope == "bias_only"))
     m.fail_value("gyroscope", "'" + o.gyroscope + "' needs the accelerometer calibration first (accelerometer: none)",
                  "use gyroscope: rate_table, or an accelerometer method");
@@ -114,6 +124,14 @@ ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& fi
   }
   a.table_fixture = m.string("table_fixture", a.table_fixture);
   o.gyro.estimate_g_sensitivity = m.boolean("gyro_g_sensitivity", false);
+  if (o.gyro.estimate_g_sensitivity && o.gyroscope == "earth_rate")
+    m.fail_value("gyro_g_sensitivity", "earth_rate cannot estimate g-sensitivity: the vertical Earth rate and gravity "
+                                       "flip together between up and down, so G_ii is the same combination as scale_i",
+                 "set gyro_g_sensitivity: false (or use gyroscope: turns or rate_table)");
+  if (m.has("turn_angle_sigma_deg")) {
+    o.gyro.turn_angle_sigma_deg = positive(m, "turn_angle_sigma_deg", o.gyro.turn_angle_sigma_deg, "in degrees");
+    if (o.gyroscope != "turns") m.fail_key("turn_angle_sigma_deg", "turn_angle_sigma_deg applies only with gyroscope: turns");
+  }
   a.estimate_gyro_bias = o.gyroscope == "bias_only";
   if (std::string why; !o.IsValid(&why))
     throw ExperimentError(top.value_location("ceres_nonlinear"), "ceres_nonlinear", why);
@@ -157,8 +175,15 @@ std::string describe_options(const ModelFileOptions& o) {
   if (o.accelerometer == "known_orientations")
     s += fmt::format("  orientation sigma {} deg, table offsets: {} (fixture '{}')\n", a.orientation_sigma_deg,
                      a.table_offsets.empty() ? std::string("none") : yaml::join(a.table_offsets), a.table_fixture);
-  if (o.gyroscope == "integration" || o.gyroscope == "rate_table")
+  if (o.gyroscope == "integration" || o.gyroscope == "rate_table" || o.gyroscope == "turns")
     s += fmt::format("  gyro g-sensitivity: {}\n", o.gyro.estimate_g_sensitivity ? "estimated" : "not modelled");
+  if (o.gyroscope == "turns" || o.gyroscope == "earth_rate")
+    s += fmt::format("  gyro stills: segments of kinds orientation and detected, trimmed by {} s at each end\n",
+                     o.gyro.processing.extraction.settle_s);
+  if (o.gyroscope == "turns")
+    s += fmt::format("  turns: the recording's rotation segments with turn_*_deg truth, known to {} deg (1 sigma) in "
+                     "angle and axis\n",
+                     o.gyro.turn_angle_sigma_deg);
   return s;
 }
 
@@ -198,7 +223,8 @@ std::string options_json(const ModelFileOptions& o) {
       {"orientation_sigma_deg", a.orientation_sigma_deg},
       {"table_offsets", a.table_offsets},
       {"table_fixture", a.table_fixture},
-      {"gyro_g_sensitivity", o.gyro.estimate_g_sensitivity}};
+      {"gyro_g_sensitivity", o.gyro.estimate_g_sensitivity},
+      {"turn_angle_sigma_deg", o.gyro.turn_angle_sigma_deg}};
   return j.dump();
 }
 
@@ -217,9 +243,8 @@ ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& option
     text += "\n" + f.accel.report();
     if (!f.accel.ok()) failures.push_back("accelerometer: " + f.accel.message);
   }
-  if (o.gyroscope == "integration" || o.gyroscope == "rate_table") {
-    f.gyro = o.gyroscope == "rate_table" ? calibrate_gyro_rate_table(rec, o.gyro)
-                                         : calibrate_gyro_integration(rec, f.accel, o.gyro);
+  if (o.gyroscope != "none" && o.gyroscope != "bias_only") {
+    f.gyro = fit_gyroscope(rec, o, f.accel);
     f.has_gyro = true;
     text += "\n" + f.gyro.report();
     if (!f.gyro.ok()) failures.push_back("gyroscope: " + f.gyro.message);

@@ -65,6 +65,8 @@ bool CalibrationOptions::IsValid(std::string* error) const {
 bool GyroOptions::IsValid(std::string* error) const {
   if (!(loss_scale_radps > 0.0)) return fail(error, "gyro_loss_scale_radps must be > 0 rad/s");
   if (!(loss_scale_rad > 0.0)) return fail(error, "gyro_loss_scale_rad must be > 0 rad");
+  if (!(turn_angle_sigma_deg > 0.0 && std::isfinite(turn_angle_sigma_deg)))
+    return fail(error, "turn_angle_sigma_deg must be > 0 deg");
   if (!solver_settings_valid(confidence, max_iterations, rank_tolerance, tolerances, error)) return false;
   return processing.IsValid(error);
 }
@@ -72,8 +74,11 @@ bool GyroOptions::IsValid(std::string* error) const {
 bool ModelFileOptions::IsValid(std::string* error) const {
   if (!one_of(accelerometer, {"unknown_orientations", "known_orientations", "none"}))
     return fail(error, "accelerometer: expected unknown_orientations, known_orientations or none, got '" + accelerometer + "'");
-  if (!one_of(gyroscope, {"integration", "rate_table", "bias_only", "none"}))
-    return fail(error, "gyroscope: expected integration, rate_table, bias_only or none, got '" + gyroscope + "'");
+  if (std::find(kGyroscopeMethods.begin(), kGyroscopeMethods.end(), gyroscope) == kGyroscopeMethods.end())
+    return fail(error, "gyroscope: expected integration, rate_table, turns, earth_rate, bias_only or none, got '" +
+                           gyroscope + "'");
+  if (gyroscope == "earth_rate" && gyro.estimate_g_sensitivity)
+    return fail(error, "gyroscope: earth_rate cannot estimate g-sensitivity (G_ii and scale_i flip together)");
   if (accelerometer == "none" && (gyroscope == "integration" || gyroscope == "bias_only"))
     return fail(error, "gyroscope: '" + gyroscope + "' needs the accelerometer calibration first (accelerometer: none)");
   if (accelerometer == "none" && gyroscope == "none") return fail(error, "nothing to fit: accelerometer and gyroscope are none");

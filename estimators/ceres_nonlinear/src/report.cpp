@@ -19,6 +19,8 @@ const char* method_name(Method m) {
     case Method::kKnownOrientations: return "known_orientations";
     case Method::kRateTable: return "rate_table";
     case Method::kIntegration: return "integration";
+    case Method::kTurns: return "turns";
+    case Method::kEarthRate: return "earth_rate";
   }
   return "?";
 }
@@ -26,8 +28,14 @@ const char* method_name(Method m) {
 namespace detail {
 
 const Rms& reported_rms(const CalibrationResult& r) {
-  if (r.method == Method::kRateTable) return r.rate_error_radps;
-  if (r.method == Method::kIntegration) return r.direction_error_rad;
+  switch (r.method) {
+    case Method::kRateTable:
+    case Method::kEarthRate: return r.rate_error_radps;
+    case Method::kIntegration: return r.direction_error_rad;
+    case Method::kTurns: return r.turn_error_rad;
+    case Method::kUnknownOrientations:
+    case Method::kKnownOrientations: break;
+  }
   return r.norm_error_mps2;
 }
 
@@ -35,19 +43,60 @@ const AxisRms& reported_axis_rms(const CalibrationResult& r) {
   switch (r.method) {
     case Method::kUnknownOrientations: return r.norm_error_axis_mps2;
     case Method::kIntegration: return r.direction_error_axis_rad;
+    case Method::kTurns: return r.turn_error_axis_rad;
     case Method::kKnownOrientations:
-    case Method::kRateTable: break;
+    case Method::kRateTable:
+    case Method::kEarthRate: break;
   }
   return r.truth_error_axis;
 }
 
 std::string fmt_num(double v) { return std::isfinite(v) ? fmt::format("{:.6g}", v) : "—"; }
 
+const char* interval_kind(Method m) {
+  switch (m) {
+    case Method::kRateTable: return "rate and static";
+    case Method::kTurns: return "still";
+    case Method::kEarthRate: return "still (known orientation and rate)";
+    case Method::kUnknownOrientations:
+    case Method::kKnownOrientations:
+    case Method::kIntegration: break;
+  }
+  return "static";
+}
+
+const char* check_unit(Method m) {
+  switch (m) {
+    case Method::kIntegration:
+    case Method::kTurns: return "rad";
+    case Method::kRateTable:
+    case Method::kEarthRate: return "radps";
+    case Method::kUnknownOrientations:
+    case Method::kKnownOrientations: break;
+  }
+  return "mps2";
+}
+
+// Each turn's integrated reading against the stated turn, raw and calibrated [deg].
+std::string turns_report(const CalibrationResult& r) {
+  const double deg = physics::kRadToDeg;
+  std::string s = fmt::format("integrated turn − stated turn (RMS of |v − θ|): raw {} deg, calibrated {} deg\n",
+                              fmt_num(r.turn_error_rad.before * deg), fmt_num(r.turn_error_rad.after * deg));
+  for (const TurnCheck& t : r.turns) {
+    const Eigen::Vector3d st = t.stated_rad * deg, b = t.before_rad * deg, a = t.after_rad * deg;
+    s += fmt::format("  turn {:<12} {:.2f}–{:.2f} s: stated ({} {} {}) deg, integrated raw ({} {} {}), calibrated "
+                     "({} {} {})\n",
+                     t.label, t.t_start_s, t.t_end_s, fmt_num(st[0]), fmt_num(st[1]), fmt_num(st[2]), fmt_num(b[0]),
+                     fmt_num(b[1]), fmt_num(b[2]), fmt_num(a[0]), fmt_num(a[1]), fmt_num(a[2]));
+  }
+  return s;
+}
+
 }  // namespace detail
 
 const char* CalibrationResult::sigma_unit() const {
   if (whitened) return "(whitened residuals; 1 = as expected)";
-  if (method == Method::kIntegration) return "rad (gravity direction)";
+  if (method == Method::kIntegration) return "rad (gravity direction)";  // never whitened
   return is_gyroscope() ? "rad/s" : "m/s^2";
 }
 
@@ -68,9 +117,10 @@ std::string CalibrationResult::report() const {
   const bool gyro = model.instrument == model::Instrument::kGyroscope;
   std::string s = fmt::format("Ceres {} calibration ({})\n", gyro ? "gyroscope" : "accelerometer", method_name(method));
   s += fmt::format("status: {}\n", ok() ? "ok" : "FAILED — " + message);
-  s += fmt::format("{} intervals: {}, residuals: {}, estimated parameters: {}, dof: {}, condition number {}{}\n",
-                   method == Method::kRateTable ? "rate and static" : "static", intervals.size(), observations, estimated,
-                   dof, fmt_num(condition_number),
+  s += fmt::format("{} intervals: {}{}, residuals: {}, estimated parameters: {}, dof: {}, condition number {}{}\n",
+                   interval_kind(method), intervals.size(),
+                   method == Method::kTurns ? fmt::format(", turns: {}", turns.size()) : std::string(), observations,
+                   estimated, dof, fmt_num(condition_number),
                    gyro ? std::string() : fmt::format(", g = {} m/s^2", gravity_mps2));
   s += fmt::format("residual sigma: {} {}, solver: {}\n", fmt_num(sigma), sigma_unit(), solver_report);
   const AxisRms& axis = reported_axis_rms(*this);
@@ -85,6 +135,12 @@ std::string CalibrationResult::report() const {
                      fmt_num(after[0] / physics::kMilliG), fmt_num(after[1] / physics::kMilliG),
                      fmt_num(after[2] / physics::kMilliG), fmt_num(before[0] / physics::kMilliG),
                      fmt_num(before[1] / physics::kMilliG), fmt_num(before[2] / physics::kMilliG));
+  } else if (method == Method::kTurns) {
+    s += turns_report(*this);
+  } else if (method == Method::kEarthRate) {
+    const double dps = 1.0 / physics::kDegPerSecond;
+    s += fmt::format("u·ȳ − Ω_v over the stills (RMS): raw {} deg/s, calibrated {} deg/s\n",
+                     fmt_num(rate_error_radps.before * dps), fmt_num(rate_error_radps.after * dps));
   } else if (method == Method::kIntegration) {
     s += fmt::format("gravity-direction mismatch after each move (RMS): raw {} rad, calibrated {} rad; per axis "
                      "calibrated {} {} {} rad\n",
@@ -107,6 +163,8 @@ std::string CalibrationResult::report() const {
   };
   for (const auto& p : parameters) row(p);
   for (const auto& p : gyro_bias) row(p);
+  if (!uncertainty.empty()) s += "uncertainty: " + uncertainty + "\n";
+  for (const auto& n : notes) s += "note: " + n + "\n";
   return s;
 }
 

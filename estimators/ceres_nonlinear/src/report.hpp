@@ -18,4 +18,11 @@ const AxisRms& reported_axis_rms(const CalibrationResult& r);
 // A number in the report: %.6g, "—" for NaN.
 std::string fmt_num(double v);
 
+// What a procedure's intervals are, in the report ("static", "rate and static", "still", …).
+const char* interval_kind(Method m);
+// The unit suffix of a procedure's checks in the results document: "mps2", "radps" or "rad".
+const char* check_unit(Method m);
+// The turns method's per-turn lines: integrated reading against the stated turn [deg].
+std::string turns_report(const CalibrationResult& r);
+
 }  // namespace stend::ceres_nonlinear::detail

@@ -80,6 +80,38 @@ std::vector<Figure> move_figure(const json& gy) {
               "measured in the static interval after it, with the raw and the calibrated rate."}};
 }
 
+// Gyroscope (turns): each turn's integrated reading minus the stated turn, |v − θ| [deg], raw and
+// calibrated; none without turns.
+std::vector<Figure> turn_figure(const json& gy) {
+  const json turns = gy.value("turns", json::array());
+  if (turns.empty()) return {};
+  Plot p;
+  p.title = "gyroscope: integrated turn minus the stated turn, before and after calibration";
+  p.x_label = "turn";
+  p.y_label = "|v − θ| [deg]";
+  p.width = 760;
+  p.y_include_zero = true;
+  Series before{"raw rate", Style::kPoints, {}, {}, {}, {}, palette(1), false, 0.9};
+  Series after{"calibrated rate", Style::kPoints, {}, {}, {}, {}, palette(0), false, 0.9};
+  auto miss_deg = [](const json& t, const char* key) {
+    const json stated = t.value("stated_deg", json::array()), v = t.value(key, json::array());
+    double sq = 0.0;
+    for (std::size_t a = 0; a < 3; ++a) sq += std::pow(estimation::number_at(v, a) - estimation::number_at(stated, a), 2);
+    return std::sqrt(sq);
+  };
+  for (const auto& t : turns) {
+    const auto x = static_cast<double>(p.x_categories.size());
+    before.x.push_back(x);
+    before.y.push_back(miss_deg(t, "integrated_before_deg"));
+    after.x.push_back(x);
+    after.y.push_back(miss_deg(t, "integrated_after_deg"));
+    p.x_categories.push_back(estimation::text_field(t, "label"));
+  }
+  p.series = {before, after};
+  return {{p, "How far the gyro reading integrated over each known turn lies from the turn the recording states, with "
+              "the raw and the calibrated rate."}};
+}
+
 // Each estimated parameter with its interval, one plot per display unit (values against names);
 // fixed and unidentified parameters left out.
 std::vector<Figure> parameter_interval_figures(const json& fit) {
@@ -125,7 +157,11 @@ estimation::ReportSection report_section(const estimation::FitResult& result) {
   }
   section.add(estimation::parameter_table(s));
   if (fit.contains("accelerometer")) section.append(norm_figure(fit["accelerometer"]));
-  if (fit.contains("gyroscope")) section.append(move_figure(fit["gyroscope"]));
+  for (const auto& n : s.notes) section.add_text("note: " + n);
+  if (fit.contains("gyroscope")) {
+    section.append(move_figure(fit["gyroscope"]));
+    section.append(turn_figure(fit["gyroscope"]));
+  }
   section.append(parameter_interval_figures(fit));
   return section;
 }

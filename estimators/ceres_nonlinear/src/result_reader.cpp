@@ -34,6 +34,27 @@ std::vector<estimation::ParameterEstimate> part_parameters(const json& list) {
   return out;
 }
 
+using HeldGroups = std::vector<std::pair<std::string, std::vector<std::string>>>;
+
+// `name` under its reason, the groups in the order their reasons first come.
+void add_held(HeldGroups& groups, const std::string& reason, const std::string& name) {
+  for (auto& [r, names] : groups)
+    if (r == reason) {
+      names.push_back(name);
+      return;
+    }
+  groups.push_back({reason, {name}});
+}
+
+// The note for the parameters held for one reason: the frame convention of the unknown-orientation
+// fit (its fixed_cross_axis), or the reason the procedure gave (e.g. earth_rate's axes never
+// vertical).
+std::string held_note(const std::string& reason, const std::vector<std::string>& names) {
+  if (reason.empty() || reason.find("frame convention") != std::string::npos)
+    return fmt::format("held at 0 by the Ceres fit's frame convention (its fixed_cross_axis): {}", fmt::join(names, ", "));
+  return fmt::format("held by the Ceres fit: {} — {}", fmt::join(names, ", "), reason);
+}
+
 // One instrument's model of the three axes: θ from the part's parameters by name (held ones 0,
 // unidentified NaN), the covariance from their standard errors (the document keeps no
 // correlations), the frame convention's held parameters named in a note. `prefix` is the
@@ -52,7 +73,7 @@ estimation::InstrumentModel part_model(model::ErrorModel m, bool ok, const std::
   const auto info = im.model.params();
   const auto n = static_cast<Eigen::Index>(info.size());
   im.covariance = Eigen::MatrixXd::Zero(n, n);
-  std::vector<std::string> held;
+  std::vector<std::pair<std::string, std::vector<std::string>>> held;  // by reason, in order
   for (std::size_t i = 0; i < info.size(); ++i) {
     estimation::ParameterEstimate p;
     p.name = info[i].name;
@@ -62,12 +83,11 @@ estimation::InstrumentModel part_model(model::ErrorModel m, bool ok, const std::
     im.theta.push_back(p.held ? 0.0 : p.identifiable ? p.value : kNaN);
     if (p.identifiable && std::isfinite(p.std_error))
       im.covariance(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i)) = p.std_error * p.std_error;
-    if (p.held) held.push_back(prefix + p.name);
+    if (p.held) add_held(held, p.reason, prefix + p.name);
     im.parameters.push_back(std::move(p));
   }
-  if (ok && !held.empty())
-    im.notes.push_back(fmt::format("held at 0 by the Ceres fit's frame convention (its fixed_cross_axis): {}",
-                                   fmt::join(held, ", ")));
+  if (ok)
+    for (const auto& [reason, names] : held) im.notes.push_back(held_note(reason, names));
   return im;
 }
 
@@ -110,6 +130,9 @@ estimation::FitResult read_results(const json& doc) {
     const auto ps = part_parameters(g.value("parameters", json::array()));
     r.gyroscope = part_model(gyroscope_model(names_g_sensitivity(ps)), g.value("ok", false), g.value("message", ""), ps,
                              "gyro_", confidence);
+    const std::string method = g.value("method", "");
+    if (r.gyroscope->ok() && (method == method_name(Method::kTurns) || method == method_name(Method::kEarthRate)) && !g.value("uncertainty", "").empty())
+      r.gyroscope->notes.push_back("uncertainty (" + method + "): " + g.value("uncertainty", ""));
   }
   r.document = doc;
   r.results_file = kResultsFile;

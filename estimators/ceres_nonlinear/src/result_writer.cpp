@@ -19,6 +19,9 @@ namespace {
 using nlohmann::json;
 
 json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+json vec_deg(const Eigen::Vector3d& rad) {
+  return {num(rad[0] * physics::kRadToDeg), num(rad[1] * physics::kRadToDeg), num(rad[2] * physics::kRadToDeg)};
+}
 
 nlohmann::json detection_json(const processing::DetectionSummary& d) {
   json scan = json::array();
@@ -67,17 +70,15 @@ std::string CalibrationResult::to_json() const {
   j["instrument"] = gyro ? "gyroscope" : "accelerometer";
   const Rms& rms = reported_rms(*this);
   const AxisRms& axis = reported_axis_rms(*this);
-  const bool integration = method == Method::kIntegration;
-  if (!gyro) {
-    j["rms_norm_before_mps2"] = num(rms.before);
-    j["rms_norm_after_mps2"] = num(rms.after);
-  } else {
-    j[integration ? "rms_direction_before_rad" : "rms_before_radps"] = num(rms.before);
-    j[integration ? "rms_direction_after_rad" : "rms_after_radps"] = num(rms.after);
-  }
+  const std::string au = check_unit(method);
+  const std::string rms_what = !gyro                          ? "rms_norm_"
+                               : method == Method::kIntegration ? "rms_direction_"
+                               : method == Method::kTurns       ? "rms_turn_"
+                                                                : "rms_";
+  j[rms_what + "before_" + au] = num(rms.before);
+  j[rms_what + "after_" + au] = num(rms.after);
   const Eigen::Vector3d& rms_axis_before = axis.before;
   const Eigen::Vector3d& rms_axis_after = axis.after;
-  const std::string au = integration ? "rad" : gyro ? "radps" : "mps2";
   j["rms_axis_before_" + au] = {num(rms_axis_before[0]), num(rms_axis_before[1]), num(rms_axis_before[2])};
   j["rms_axis_after_" + au] = {num(rms_axis_after[0]), num(rms_axis_after[1]), num(rms_axis_after[2])};
   if (!gyro) {
@@ -86,6 +87,8 @@ std::string CalibrationResult::to_json() const {
     j["rms_axis_after_mg"] = {num(rms_axis_after[0] / physics::kMilliG), num(rms_axis_after[1] / physics::kMilliG),
                               num(rms_axis_after[2] / physics::kMilliG)};
   }
+  j["uncertainty"] = uncertainty;
+  j["notes"] = notes;
   j["condition_number"] = num(condition_number);
   j["confidence_quantile"] = num(quantile);
   j["solver"] = solver_report;
@@ -111,6 +114,14 @@ std::string CalibrationResult::to_json() const {
     for (const auto& m : moves)
       j["moves"].push_back({{"t_end_s", m.t_end_s}, {"mismatch_before_rad", num(m.before_rad)},
                             {"mismatch_after_rad", num(m.after_rad)}});
+  }
+  // Turns: each turn's stated rotation and the reading integrated over it, raw and calibrated [deg].
+  if (!turns.empty()) {
+    j["turns"] = json::array();
+    for (const TurnCheck& t : turns)
+      j["turns"].push_back({{"label", t.label}, {"t_start_s", t.t_start_s}, {"t_end_s", t.t_end_s},
+                            {"stated_deg", vec_deg(t.stated_rad)}, {"integrated_before_deg", vec_deg(t.before_rad)},
+                            {"integrated_after_deg", vec_deg(t.after_rad)}});
   }
   return j.dump(2);
 }
@@ -141,6 +152,13 @@ std::string results_document(const ModelFileOptions& o, const ModelFileFit& f) {
     for (const auto& p : f.gyro.parameters) add("gyro_", p);
   j["status"] = estimation::to_string(f.status);
   j["message"] = f.message;
+  j["notes"] = json::array();
+  if (f.has_gyro) {
+    const bool a_priori = f.gyro.method == Method::kTurns || f.gyro.method == Method::kEarthRate;
+    if (a_priori && f.gyro.ok())  // the intervals' source is not the usual σ² = RSS/(n − p): say so
+      j["notes"].push_back("gyroscope (" + std::string(method_name(f.gyro.method)) + "): " + f.gyro.uncertainty);
+    for (const auto& n : f.gyro.notes) j["notes"].push_back("gyroscope: " + n);
+  }
   return j.dump(2);
 }
 

@@ -138,10 +138,10 @@ void fail_not_identifiable(CalibrationResult& r, const WeakParameters& weak) {
       prm.reason = "not identifiable: " + weak.why;
 }
 
-// Covariance σ²·(JᵀJ)⁻¹ of the free parameters, their values, standard errors and confidence
-// bounds; fails the fit when Ceres cannot invert JᵀJ.
+// Covariance variance_factor·(JᵀJ)⁻¹ of the free parameters, their values, standard errors and
+// confidence bounds (r.quantile); fails the fit when Ceres cannot invert JᵀJ.
 void fill_parameters(ceres::Problem& problem, std::vector<double>& x, const std::vector<int>& free_index,
-                     const CalibrationOptions& o, CalibrationResult& r) {
+                     const CalibrationOptions& o, double variance_factor, CalibrationResult& r) {
   const int p = static_cast<int>(free_index.size());
   ceres::Covariance::Options co;
   co.algorithm_type = ceres::DENSE_SVD;
@@ -155,10 +155,9 @@ void fill_parameters(ceres::Problem& problem, std::vector<double>& x, const std:
     return;
   }
   // Ceres fills the block row-major; C is symmetric so the storage order does not matter.
-  C *= r.sigma * r.sigma;
+  C *= variance_factor;
   r.covariance = C;
   r.free_index = free_index;
-  r.quantile = estimation::student_t_quantile(0.5 + 0.5 * o.confidence, r.dof);
   r.theta.assign(static_cast<std::size_t>(r.model.size()), 0.0);
   for (int k = 0; k < p; ++k) {
     const auto idx = static_cast<std::size_t>(free_index[static_cast<std::size_t>(k)]);
@@ -172,6 +171,18 @@ void fill_parameters(ceres::Problem& problem, std::vector<double>& x, const std:
     estimation::judge(prm, o.tolerances);
   }
   r.status = estimation::FitStatus::kOk;
+}
+
+// Where the covariance's scale comes from, in words, with the degrees of freedom.
+std::string covariance_source(Weighting weighting, double variance_factor, int dof) {
+  if (weighting == Weighting::kRelative)
+    return fmt::format("covariance (JᵀJ)⁻¹ scaled by σ² = RSS/(n − p), {} dof; Student t intervals", dof);
+  if (dof > 0)
+    return fmt::format("covariance from the a-priori sigmas scaled by the reduced χ² = {:.4g} ({} dof); Student t "
+                       "intervals",
+                       variance_factor, dof);
+  return "covariance from the a-priori sigmas alone: 0 dof (as many equations as parameters), so no residual to "
+         "scale it by; normal-quantile intervals";
 }
 
 }  // namespace
@@ -207,7 +218,7 @@ void init_parameters(CalibrationResult& r, const std::vector<int>& free_index) {
 
 // Solve, check identifiability, fill the covariance. `free_index` lists the estimated parameters.
 void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<int>& free_index,
-           int residual_count, const CalibrationOptions& o, CalibrationResult& r) {
+           int residual_count, const CalibrationOptions& o, CalibrationResult& r, Weighting weighting) {
   const int p = static_cast<int>(free_index.size());
   const ceres::Solver::Summary summary = run_solver(problem, residual_count, p, o, r);
 
@@ -247,12 +258,16 @@ void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<in
                     " (raise max_iterations, check the static intervals and gravity)");
     return;
   }
-  if (r.dof <= 0) {
+  if (r.dof <= 0 && weighting == Weighting::kRelative) {
     fail_all(r, fmt::format("no degree of freedom left for the noise ({} residuals, {} parameters): "
                             "add static intervals", residual_count, p));
     return;
   }
-  fill_parameters(problem, x, free_index, o, r);
+  const double variance_factor = r.dof > 0 ? rss / r.dof : 1.0;
+  r.quantile = r.dof > 0 ? estimation::student_t_quantile(0.5 + 0.5 * o.confidence, r.dof)
+                         : estimation::normal_quantile(0.5 + 0.5 * o.confidence);
+  r.uncertainty += (r.uncertainty.empty() ? "" : "; ") + covariance_source(weighting, variance_factor, r.dof);
+  fill_parameters(problem, x, free_index, o, variance_factor, r);
 }
 
 bool finite_intervals(const std::vector<processing::StaticPoint>& ivs) {

@@ -55,10 +55,20 @@ void init_parameters(CalibrationResult& r, const std::vector<int>& free_index);
 // Marks the fit failed: the message, θ NaN, every estimated parameter without a number.
 void fail_all(CalibrationResult& r, const std::string& message);
 
+// How a procedure weights its residuals, and so where the scale of its covariance comes from.
+enum class Weighting {
+  // Unit (or relative) weights: covariance (JᵀJ)⁻¹ scaled by σ² = RSS/(n − p); needs n > p.
+  kRelative,
+  // Residuals whitened by a-priori sigmas: covariance (JᵀJ)⁻¹ scaled by the reduced χ² = RSS/(n − p)
+  // when n > p (Student t intervals), else the a-priori covariance as it is (normal quantile).
+  kAPriori,
+};
+
 // Solve, check identifiability, fill the covariance. `free_index` lists the estimated parameters;
-// x holds their start and, on return, their solution.
+// x holds their start and, on return, their solution. r.uncertainty gets the covariance's source
+// appended (after what the procedure wrote there: its sigmas).
 void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<int>& free_index, int residual_count,
-           const CalibrationOptions& o, CalibrationResult& r);
+           const CalibrationOptions& o, CalibrationResult& r, Weighting weighting = Weighting::kRelative);
 
 // Whether every interval's accelerometer and gyro means are finite.
 bool finite_intervals(const std::vector<processing::StaticPoint>& intervals);

@@ -20,6 +20,7 @@
 #include <stend/errors.hpp>
 #include <stend/io/sample_sink.hpp>
 #include <stend/recording/recording.hpp>
+#include <stend/recording/truth_columns.hpp>
 
 #include <array>
 #include <cmath>
@@ -60,9 +61,9 @@ class ImportError : public InputError {
 };
 
 // The truth columns importers write where the dataset knows its stimulus: specific force [m/s²]
-// and rate [rad/s] in the sensor frame.
-inline const std::vector<std::string> kTruthColumns = {"f_x_mps2", "f_y_mps2", "f_z_mps2",
-                                                       "w_x_radps", "w_y_radps", "w_z_radps"};
+// and rate [rad/s] in the sensor frame (the names: stend/recording/truth_columns.hpp).
+inline const std::vector<std::string> kTruthColumns =
+    truth_column_names({kSpecificForceColumns, kRateColumns});
 
 // ---------------------------------------------------------------------------------------------
 // (a) Generic delimited text with a column mapping.

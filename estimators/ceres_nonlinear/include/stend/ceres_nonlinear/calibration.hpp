@@ -65,10 +65,11 @@ std::vector<processing::StaticPoint> static_intervals(const Recording& rec,
 
 enum class Loss { kNone, kHuber, kCauchy };
 
-// The four procedures, one per file (src/accelerometer_unknown.cpp, accelerometer_known.cpp,
-// gyro_rate_table.cpp, gyro_integration.cpp).
-enum class Method { kUnknownOrientations, kKnownOrientations, kRateTable, kIntegration };
-const char* method_name(Method m);  // "unknown_orientations" | "known_orientations" | "rate_table" | "integration"
+// The procedures, one per file (src/accelerometer_unknown.cpp, accelerometer_known.cpp,
+// gyro_rate_table.cpp, gyro_integration.cpp, gyro_turns.cpp, gyro_earth_rate.cpp).
+enum class Method { kUnknownOrientations, kKnownOrientations, kRateTable, kIntegration, kTurns, kEarthRate };
+// "unknown_orientations" | "known_orientations" | "rate_table" | "integration" | "turns" | "earth_rate"
+const char* method_name(Method m);
 
 struct CalibrationOptions {
   processing::ProcessingOptions processing = default_interval_options();  // the static intervals
@@ -113,6 +114,16 @@ struct MoveMismatch {
   double after_rad = std::numeric_limits<double>::quiet_NaN();
 };
 
+// One known turn (gyroscope: turns): the rotation vector the truth states and the reading
+// integrated over the turn's segment, raw and calibrated [rad, sensor frame]; NaN where not computed.
+struct TurnCheck {
+  std::string label;
+  double t_start_s = 0.0, t_end_s = 0.0;
+  Eigen::Vector3d stated_rad = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  Eigen::Vector3d before_rad = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  Eigen::Vector3d after_rad = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+};
+
 // An RMS over the intervals (or moves) of a fit, raw (θ = 0) and calibrated; 0 until the
 // procedure computes it (it does not, or it failed before), the calibrated one NaN when it failed.
 struct Rms {
@@ -147,16 +158,25 @@ struct CalibrationResult {
   double gravity_mps2 = 0.0;
   int observations = 0, estimated = 0, dof = 0, iterations = 0;
   // Residual standard deviation of the solve, in sigma_unit(); `whitened`: known orientations with
-  // orientation_sigma_deg > 0 (1 = as expected).
+  // orientation_sigma_deg > 0, turns, earth_rate (1 = as expected; NaN with 0 dof).
   double sigma = 0.0;
   bool whitened = false;
-  double quantile = 0.0;           // of the parameters' intervals (Student t)
+  double quantile = 0.0;           // of the parameters' intervals (Student t; normal with 0 dof)
+  // Where the covariance comes from: the a-priori sigmas (turns, earth_rate) and how it is scaled,
+  // with the degrees of freedom (e.g. "… 0 dof …: the a-priori covariance").
+  std::string uncertainty;
+  // Remarks of the procedure, one sentence each: what it left out (a turn with a lost sample, a
+  // still without truth) and what it holds and why.
+  std::vector<std::string> notes;
 
   // The checks of the fit (see Rms, AxisRms):
   Rms norm_error_mps2;              // accelerometer fits: |ȳ| − g over the intervals [m/s^2]
   AxisRms norm_error_axis_mps2;     // unknown orientations: (|c| − g)·ĉ of each mean c, per axis [m/s^2]
   AxisRms truth_error_axis;         // known orientations [m/s^2], rate table [rad/s]: ȳ, correct(ȳ) − truth
-  Rms rate_error_radps;             // rate table: |ȳ, correct(ȳ) − ω| [rad/s]
+  Rms rate_error_radps;             // rate table: |ȳ, correct(ȳ) − ω|; earth_rate: u·ȳ, u·correct(ȳ) − Ω_v [rad/s]
+  Rms turn_error_rad;               // turns: |v − θ| of the integrated reading v against the stated turn θ [rad]
+  AxisRms turn_error_axis_rad;      // turns: v − θ per axis [rad]
+  std::vector<TurnCheck> turns;     // turns: per turn
   Rms direction_error_rad;          // integration: |v − ĝ| of the carried gravity direction v after each move
   AxisRms direction_error_axis_rad; // integration: v − ĝ per axis [rad]
   std::vector<MoveMismatch> moves;  // integration: per move
@@ -229,7 +249,12 @@ struct GyroOptions {
   double rank_tolerance = 1e-8;
   estimation::PrecisionTolerances tolerances;  // of each parameter's verdict
   bool estimate_g_sensitivity = false;
-  processing::ProcessingOptions processing = rate_table_interval_options();  // rate table intervals
+  // Rate table intervals; turns and earth_rate take their still segments with these settings (the
+  // kinds orientation and detected; settle_s = segment_trim_s) and their turns untrimmed.
+  processing::ProcessingOptions processing = rate_table_interval_options();
+  // Turns: how well a known turn is known [deg, 1σ], in angle and in axis direction: the integrated
+  // turn v_k gets the a-priori variance σ² along the turn's axis and (|θ_k|·σ)² across it [rad²].
+  double turn_angle_sigma_deg = 1.0;
 
   bool IsValid(std::string* error = nullptr) const;  // as CalibrationOptions::IsValid
 };
@@ -248,6 +273,44 @@ CalibrationResult calibrate_gyro_rate_table(const std::vector<processing::Static
 // intervals index rec.samples). Fails when `accel` failed or fewer than 7 intervals remain.
 CalibrationResult calibrate_gyro_integration(const Recording& rec, const CalibrationResult& accel,
                                              const GyroOptions& options = {});
+
+// (c) Turns by known angles (Ferraris): bias (and G) from the still segments (kinds orientation and
+//     detected, trimmed), scale and cross-axis from the recording's kRotation segments with the
+//     truth columns turn_<axis>_deg (stend/recording/truth_columns.hpp): the reading integrated
+//     over turn k, v_k = Σ ω_i Δt, against T_k·measure(θ, θ_k/T_k, F_k/T_k) = A(θ)·θ_k + b·T_k
+//     (+ G·F_k, F_k = Σ f_i Δt of the measured specific force). One weighted least-squares fit of
+//     the still means and the turn integrals, whitened by a-priori sigmas: still mean σ_n/√N (σ_n
+//     the per-sample gyro noise pooled over the stills, at least the quantization step/√12); turn
+//     integral σ_n·Δt·√N, plus turn_angle_sigma_deg along the turn's axis and |θ_k|·that across
+//     it. Covariance (JᵀJ)⁻¹ of the whitened problem, scaled by the reduced χ² when dof > 0
+//     (CalibrationResult::uncertainty says which). Turns about fewer than three independent axes:
+//     the fit fails naming the combination it cannot see.
+CalibrationResult calibrate_gyro_turns(const Recording& rec, const GyroOptions& options = {});
+// A turn given directly: its window (mean gyro and specific-force readings, samples_used, first
+// and last sample times) and the rotation it made [rad, sensor frame].
+struct KnownTurn {
+  processing::StaticPoint window;
+  Eigen::Vector3d rotation_rad = Eigen::Vector3d::Zero();
+};
+// `stills[k].stimulus.input`: the applied rate of still k (Earth rate, or 0) [rad/s];
+// quantization_radps: one count of the gyro (0: unknown).
+CalibrationResult calibrate_gyro_turns(const std::vector<processing::StaticPoint>& stills,
+                                       const std::vector<KnownTurn>& turns, const GyroOptions& options = {},
+                                       double quantization_radps = 0.0);
+
+// (d) Earth rate in up/down positions at a known latitude: for every still with finite truth f_k
+//     and w_k, u_k = f_k/|f_k|, Ω_v,k = u_k·w_k; observation z_k = u_k·ȳ_k against
+//     u_k·measure(θ, Ω_v,k·u_k) = u_k·b + u_k·A(θ)·(Ω_v,k u_k). Bias and scale of each axis that is
+//     near vertical (|u_k,i| ≥ cos 45°) in some still; the others, and every cross-axis term (seen only
+//     as m_ij + m_ji, and only in tilted positions), are held at 0 and said so. Whitened by the
+//     a-priori σ of z_k (the pooled still noise projected on u_k, /√N); covariance as for turns.
+//     The Earth rate is small (≤ 7.3e-5 rad/s): on a consumer gyro the scale comes out imprecise.
+CalibrationResult calibrate_gyro_earth_rate(const Recording& rec, const GyroOptions& options = {});
+// truth_f[k], truth_w[k]: the still's specific force [m/s^2] and applied rate [rad/s] (sensor frame).
+CalibrationResult calibrate_gyro_earth_rate(const std::vector<processing::StaticPoint>& stills,
+                                            const std::vector<Eigen::Vector3d>& truth_f,
+                                            const std::vector<Eigen::Vector3d>& truth_w,
+                                            const GyroOptions& options = {}, double quantization_radps = 0.0);
 
 const char* loss_name(Loss l);
 Loss loss_from_name(const std::string& name);  // "none" | "huber" | "cauchy"; throws otherwise

@@ -12,7 +12,7 @@ namespace stend::ceres_nonlinear {
 inline constexpr const char* kResultsFile = "ceres.json";
 inline constexpr const char* kDescription =
     "Ceres multi-position accelerometer and gyro calibration (known/unknown orientations, rate table, "
-    "integration)";
+    "integration, known turns, Earth rate)";
 
 class CeresNonlinearEstimator final : public Estimator {
  public:

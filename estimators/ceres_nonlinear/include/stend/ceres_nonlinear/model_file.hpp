@@ -2,7 +2,7 @@
 //
 //   ceres_nonlinear:
 //     accelerometer: unknown_orientations   # unknown_orientations | known_orientations | none
-//     gyroscope: integration                # integration | rate_table | bias_only | none
+//     gyroscope: integration                # integration | rate_table | turns | earth_rate | bias_only | none
 //     intervals: detect                     # detect | segments | auto (processing's keys: intervals,
 //                                           #   segments, extraction, detector)
 //     ...                                   # options: see README.md, "Model file"
@@ -27,6 +27,11 @@ inline constexpr const char* kEstimatorVersion = "0.2.0";
 // gravity_mps2: recording_or_standard — the recording's g where it states one (a stend run: from
 // the experiment's site), else standard gravity (an imported log states none).
 inline constexpr const char* kRecordingOrStandardGravity = "recording_or_standard";
+
+// The `gyroscope:` methods: integration, rate_table, turns, earth_rate, bias_only (the
+// accelerometer fit's still means), none.
+inline const std::vector<std::string> kGyroscopeMethods = {"integration", "rate_table", "turns", "earth_rate",
+                                                           "bias_only", "none"};
 
 struct ModelFileOptions {
   std::string accelerometer = "unknown_orientations";

@@ -1,0 +1,220 @@
+// Gyroscope calibration from the Earth rate in up/down positions at a known latitude: the vertical
+// projection of each still's mean reading against the vertical Earth rate. See
+// stend/ceres_nonlinear/calibration.hpp, (d).
+#include "gyro.hpp"
+
+#include <stend/physics/units.hpp>
+#include <stend/recording/truth_columns.hpp>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+
+namespace stend::ceres_nonlinear {
+
+using namespace detail;
+
+namespace {
+
+// An axis within 45° of the vertical in a still is excited by it: u·ȳ sees its bias and scale.
+constexpr double kNearVertical = std::numbers::sqrt2 / 2.0;
+constexpr std::array<char, 3> kAxisNames = {'x', 'y', 'z'};
+
+// The stills usable here: finite f and w truth, |f| > 0.
+struct VerticalStills {
+  std::vector<processing::StaticPoint> stills;
+  std::vector<Eigen::Vector3d> up;     // u_k = f_k/|f_k|
+  std::vector<double> omega_v_radps;   // Ω_v,k = u_k·w_k
+  std::size_t left_out = 0;
+};
+
+VerticalStills vertical_stills(const std::vector<processing::StaticPoint>& stills,
+                               const std::vector<Eigen::Vector3d>& truth_f, const std::vector<Eigen::Vector3d>& truth_w) {
+  VerticalStills v;
+  for (std::size_t k = 0; k < stills.size(); ++k) {
+    if (!truth_f[k].allFinite() || !truth_w[k].allFinite() || !(truth_f[k].norm() > 0.0)) {
+      ++v.left_out;
+      continue;
+    }
+    v.stills.push_back(stills[k]);
+    v.up.push_back(truth_f[k].normalized());
+    v.omega_v_radps.push_back(v.up.back().dot(truth_w[k]));
+  }
+  return v;
+}
+
+std::array<bool, 3> excited_axes(const std::vector<Eigen::Vector3d>& up) {
+  std::array<bool, 3> excited{};
+  for (const auto& u : up)
+    for (std::size_t a = 0; a < 3; ++a) excited[a] = excited[a] || std::abs(u[static_cast<Eigen::Index>(a)]) >= kNearVertical;
+  return excited;
+}
+
+// The places of bias_<axis> and scale_<axis> of each excited axis in the model's vector.
+std::vector<int> excited_parameters(const model::ErrorModel& m, const std::array<bool, 3>& excited) {
+  const auto info = m.params();
+  std::vector<int> free_index;
+  for (std::size_t i = 0; i < info.size(); ++i)
+    for (std::size_t a = 0; a < 3; ++a)
+      if (excited[a] && (info[i].name == fmt::format("bias_{}", kAxisNames[a]) ||
+                         info[i].name == fmt::format("scale_{}", kAxisNames[a])))
+        free_index.push_back(static_cast<int>(i));
+  return free_index;
+}
+
+// Why each held parameter is held (init_parameters marks them; the reasons are this method's).
+void explain_held(CalibrationResult& r, const std::array<bool, 3>& excited) {
+  for (auto& p : r.parameters) {
+    if (!p.held) continue;
+    if (p.name.rfind("cross", 0) == 0) {
+      p.reason = "held at 0: not estimated by earth_rate (the vertical projection sees a cross-axis term only as "
+                 "m_ij + m_ji, and only in tilted positions)";
+      continue;
+    }
+    p.reason = fmt::format("held at 0: axis {} is never within 45 deg of the vertical in these positions, so u·ȳ does "
+                           "not see its bias or scale (not identifiable, not invented)",
+                           p.name.back());
+  }
+  std::string held;
+  for (std::size_t a = 0; a < 3; ++a)
+    if (!excited[a]) held += (held.empty() ? "" : ", ") + std::string(1, kAxisNames[a]);
+  if (!held.empty())
+    r.notes.push_back("axes never near the vertical (bias and scale held at 0, not identifiable): " + held);
+  r.notes.push_back("cross-axis terms held at 0: the vertical Earth rate does not separate them");
+}
+
+// Still k as an observation: z_k = u_k·ȳ_k against u_k·measure(θ, Ω_v,k·u_k), whitened by the
+// a-priori σ of z_k: the per-sample noise projected on u_k, over √N.
+GyroObservation vertical_observation(const processing::StaticPoint& s, const Eigen::Vector3d& up, double omega_v_radps,
+                                     const Eigen::Vector3d& noise_radps) {
+  GyroObservation obs;
+  obs.stimulus.input = omega_v_radps * up;
+  obs.reading = s.gyro.mean;
+  const double sigma_z = std::sqrt(up.cwiseAbs2().dot(noise_radps.cwiseAbs2()) / static_cast<double>(s.samples_used));
+  obs.whitening = up.transpose() / sigma_z;
+  return obs;
+}
+
+// RMS of u·ȳ − Ω_v (raw) and u·correct(ȳ) − Ω_v (calibrated) over the stills [rad/s].
+void vertical_checks(const VerticalStills& v, CalibrationResult& r) {
+  double before = 0.0, after = 0.0;
+  for (std::size_t k = 0; k < v.stills.size(); ++k) {
+    before += std::pow(v.up[k].dot(v.stills[k].gyro.mean) - v.omega_v_radps[k], 2);
+    if (r.ok())
+      after += std::pow(v.up[k].dot(r.correct(v.stills[k].gyro.mean)) - v.omega_v_radps[k], 2);
+  }
+  const double n = static_cast<double>(std::max<std::size_t>(1, v.stills.size()));
+  r.rate_error_radps.before = std::sqrt(before / n);
+  r.rate_error_radps.after = r.ok() ? std::sqrt(after / n) : kNaN;
+}
+
+std::string vertical_sigmas_text(const Eigen::Vector3d& noise_radps) {
+  const Eigen::Vector3d dps = noise_radps / physics::kDegPerSecond;
+  return fmt::format("a-priori sigmas: gyro noise {:.3g} {:.3g} {:.3g} deg/s per sample (pooled over the stills), "
+                     "projected on the vertical u_k, over √N",
+                     dps[0], dps[1], dps[2]);
+}
+
+// The result before the solve: the usable stills, the free parameters (bias and scale of the
+// excited axes) and why the others are held, the counts.
+CalibrationResult earth_rate_setup(const VerticalStills& v, const std::vector<Eigen::Vector3d>& truth_f,
+                                   std::vector<int>& free_index) {
+  CalibrationResult r;
+  r.method = Method::kEarthRate;
+  r.model = gyroscope_model(false);
+  r.whitened = true;
+  r.intervals = v.stills;
+  if (v.left_out > 0)
+    r.notes.push_back(fmt::format("{} still(s) left out: no finite specific force or rate truth (orientation or "
+                                  "latitude unknown)", v.left_out));
+  const std::array<bool, 3> excited = excited_axes(v.up);
+  free_index = excited_parameters(r.model, excited);
+  init_parameters(r, free_index);
+  explain_held(r, excited);
+  r.observations = static_cast<int>(v.stills.size());
+  r.estimated = static_cast<int>(free_index.size());
+  r.dof = r.observations - r.estimated;
+  for (const auto& f : truth_f)
+    if (f.allFinite()) r.gravity_mps2 = std::max(r.gravity_mps2, f.norm());
+  return r;
+}
+
+// Why the fit cannot run on these stills ("" when it can).
+std::string earth_rate_refusal(const VerticalStills& v, const CalibrationResult& r, const Eigen::Vector3d& noise) {
+  if (r.estimated == 0) return "no axis is ever near the vertical (or no still has a known orientation and rate)";
+  if (!finite_intervals(v.stills)) return "non-finite (NaN) readings in a still";
+  if (r.observations < r.estimated)
+    return fmt::format("too few stills: {} with a known orientation and rate for {} parameters (bias and scale of "
+                       "each near-vertical axis: an up and a down position each)",
+                       r.observations, r.estimated);
+  if (!(noise.minCoeff() > 0.0))
+    return "the stills show no gyro noise and the quantization step is unknown: the a-priori sigmas need one";
+  return {};
+}
+
+}  // namespace
+
+CalibrationResult calibrate_gyro_earth_rate(const std::vector<processing::StaticPoint>& stills,
+                                            const std::vector<Eigen::Vector3d>& truth_f,
+                                            const std::vector<Eigen::Vector3d>& truth_w, const GyroOptions& go,
+                                            double quantization_radps) {
+  auto refused = [](const std::string& why) {
+    CalibrationResult r;
+    r.method = Method::kEarthRate;
+    r.model = gyroscope_model(false);
+    init_gyro_parameters(r);
+    fail_all(r, why);
+    return r;
+  };
+  if (go.estimate_g_sensitivity)
+    return refused("earth_rate cannot estimate g-sensitivity: the vertical Earth rate and gravity flip together "
+                   "between up and down, so G_ii is the same combination as scale_i");
+  if (truth_f.size() != stills.size() || truth_w.size() != stills.size())
+    return refused("earth_rate: one truth specific force and rate per still is needed");
+  const VerticalStills v = vertical_stills(stills, truth_f, truth_w);
+  std::vector<int> free_index;
+  CalibrationResult r = earth_rate_setup(v, truth_f, free_index);
+  const Eigen::Vector3d noise = pooled_gyro_noise(v.stills, quantization_radps);
+  if (const std::string why = earth_rate_refusal(v, r, noise); !why.empty()) {
+    fail_all(r, why);
+    return r;
+  }
+  std::vector<GyroObservation> obs;
+  for (std::size_t k = 0; k < v.stills.size(); ++k)
+    obs.push_back(vertical_observation(v.stills[k], v.up[k], v.omega_v_radps[k], noise));
+  r.uncertainty = vertical_sigmas_text(noise);
+  std::vector<double> x(free_index.size(), 0.0);
+  ceres::Problem problem;
+  const CalibrationOptions o = as_calibration_options(go, go.loss_scale_radps);
+  const int residuals = add_gyro_observations(obs, r.model, free_index, o, problem, x);
+  solve(problem, x, free_index, residuals, o, r, Weighting::kAPriori);
+  vertical_checks(v, r);
+  return r;
+}
+
+CalibrationResult calibrate_gyro_earth_rate(const Recording& rec, const GyroOptions& go) {
+  const bool have = truth_columns(rec, kSpecificForceColumns) && truth_columns(rec, kRateColumns);
+  std::vector<processing::StaticPoint> stills;
+  std::vector<Eigen::Vector3d> f, w;
+  std::vector<std::string> notes;
+  if (have) {
+    const Extracted ex = extract_intervals(rec, still_segment_options(go),
+                                           truth_column_names({kSpecificForceColumns, kRateColumns}));
+    for (std::size_t k = 0; k < ex.intervals.size(); ++k) {
+      const std::vector<double>& t = ex.truth[k];
+      f.emplace_back(t[0], t[1], t[2]);
+      w.emplace_back(t[3], t[4], t[5]);
+    }
+    stills = ex.intervals;
+  }
+  CalibrationResult r = calibrate_gyro_earth_rate(stills, f, w, go, rec.header.info.gyro_lsb_radps);
+  if (!have)
+    fail_all(r, "the earth_rate gyro calibration needs the truth columns f_x_mps2.. and w_x_radps.. (the "
+                "orientation and the Earth rate of each still); this recording has none");
+  return r;
+}
+
+}  // namespace stend::ceres_nonlinear
