@@ -27,13 +27,15 @@ double turn_duration_s(const processing::StaticPoint& w) {
 }
 
 // Still k as an observation: ȳ_k against measure(θ, ω_k, f̄_k) (ω_k the applied rate, f̄_k the
-// measured specific force), whitened by the noise of a mean of N samples.
-GyroObservation still_observation(const processing::StaticPoint& s, const Eigen::Vector3d& noise_radps) {
+// measured specific force); `c` gets the noise of its mean of N samples (the Earth rate the truth
+// does not state is added jointly: stills_earth_rate_covariance).
+GyroObservation still_observation(const processing::StaticPoint& s, const Eigen::Vector3d& noise_radps, Eigen::Matrix3d& c) {
   GyroObservation obs;
   obs.stimulus.input = s.stimulus.input.allFinite() ? s.stimulus.input : Eigen::Vector3d::Zero();
   obs.stimulus.specific_force = s.accel.mean;
   obs.reading = s.gyro.mean;
-  obs.whitening = mean_whitening(noise_radps, s.samples_used);
+  const Eigen::Vector3d var = noise_radps.cwiseAbs2() / static_cast<double>(std::max<std::size_t>(1, s.samples_used));
+  c = var.asDiagonal();
   return obs;
 }
 
@@ -54,16 +56,15 @@ Eigen::Matrix3d turn_covariance(const KnownTurn& t, const Eigen::Vector3d& noise
 }
 
 // Turn k as an observation in mean form: v_k/T = ȳ against measure(θ, θ_k/T, f̄) — the same as
-// v_k against A(θ)·θ_k + b·T + G·F_k — whitened by its covariance over T².
-GyroObservation turn_observation(const KnownTurn& t, const Eigen::Vector3d& noise_radps, double sigma_angle_rad) {
+// v_k against A(θ)·θ_k + b·T + G·F_k — with its covariance over T² in `c`.
+GyroObservation turn_observation(const KnownTurn& t, const Eigen::Vector3d& noise_radps, double sigma_angle_rad,
+                                 Eigen::Matrix3d& c) {
   const double T = turn_duration_s(t.window);
   GyroObservation obs;
   obs.stimulus.input = t.rotation_rad / T;
   obs.stimulus.specific_force = t.window.accel.mean;
   obs.reading = t.window.gyro.mean;
-  const Eigen::Matrix3d cov = turn_covariance(t, noise_radps, sigma_angle_rad) / (T * T);
-  const Eigen::Matrix3d L = cov.llt().matrixL();
-  obs.whitening = L.inverse();
+  c = turn_covariance(t, noise_radps, sigma_angle_rad) / (T * T);
   return obs;
 }
 
@@ -102,8 +103,9 @@ void turn_checks(const std::vector<KnownTurn>& turns, CalibrationResult& r) {
 std::string turn_sigmas_text(const Eigen::Vector3d& noise_radps, double sigma_angle_deg) {
   const Eigen::Vector3d dps = noise_radps / physics::kDegPerSecond;
   return fmt::format("a-priori sigmas: gyro noise {:.3g} {:.3g} {:.3g} deg/s per sample (pooled over the stills); "
-                     "still mean noise/√N; turn integral noise·Δt·√N, plus {} deg along the turn's axis and "
-                     "|θ|·{} deg across it",
+                     "still mean noise/√N, plus the Earth rate the truth does not state (its horizontal part: the "
+                     "heading is unknown; one value for the stills at one orientation); turn integral noise·Δt·√N, "
+                     "plus {} deg along the turn's axis and |θ|·{} deg across it",
                      dps[0], dps[1], dps[2], sigma_angle_deg, sigma_angle_deg);
 }
 
@@ -160,16 +162,28 @@ CalibrationResult calibrate_gyro_turns(const std::vector<processing::StaticPoint
   }
   const double sigma_angle_rad = go.turn_angle_sigma_deg * physics::kDegToRad;
   std::vector<GyroObservation> obs;
-  for (const auto& s : stills) obs.push_back(still_observation(s, noise));
-  for (const KnownTurn& t : turns) obs.push_back(turn_observation(t, noise, sigma_angle_rad));
+  const auto n = static_cast<Eigen::Index>(stills.size() + turns.size());
+  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  c.topLeftCorner(3 * static_cast<Eigen::Index>(stills.size()), 3 * static_cast<Eigen::Index>(stills.size())) =
+      stills_earth_rate_covariance(stills);
+  Eigen::Matrix3d ck;
+  for (const auto& s : stills) {
+    obs.push_back(still_observation(s, noise, ck));
+    c.block(3 * static_cast<Eigen::Index>(obs.size() - 1), 3 * static_cast<Eigen::Index>(obs.size() - 1), 3, 3) += ck;
+  }
+  for (const KnownTurn& t : turns) {
+    obs.push_back(turn_observation(t, noise, sigma_angle_rad, ck));
+    c.block(3 * static_cast<Eigen::Index>(obs.size() - 1), 3 * static_cast<Eigen::Index>(obs.size() - 1), 3, 3) += ck;
+  }
   r.uncertainty = turn_sigmas_text(noise, go.turn_angle_sigma_deg);
   std::vector<int> free_index(static_cast<std::size_t>(r.estimated));
   std::iota(free_index.begin(), free_index.end(), 0);
   std::vector<double> x(free_index.size(), 0.0);
   ceres::Problem problem;
   const CalibrationOptions o = as_calibration_options(go, go.loss_scale_radps);
-  const int residuals = add_gyro_observations(obs, r.model, free_index, o, problem, x);
-  solve(problem, x, free_index, residuals, o, r, Weighting::kAPriori);
+  if (const std::string note = joint_loss_note(o); !note.empty()) r.notes.push_back(note);
+  const int residuals = add_joint_gyro_observations(obs, c, r.model, free_index, o, problem, x);
+  solve(problem, x, free_index, residuals, o, r, Weighting::kAPrioriAtLeast);
   turn_checks(turns, r);
   return r;
 }
@@ -230,13 +244,18 @@ std::vector<KnownTurn> known_turns(const Recording& rec, const std::array<int, 3
 
 }  // namespace
 
-CalibrationResult calibrate_gyro_turns(const Recording& rec, const GyroOptions& go) {
+CalibrationResult calibrate_gyro_turns(const Recording& rec, const GyroOptions& go, const CalibrationResult* accel) {
   const std::optional<std::array<int, 3>> columns = truth_columns(rec, kTurnColumns);
   std::vector<std::string> notes;
   std::vector<KnownTurn> turns;
   if (columns) turns = known_turns(rec, *columns, notes);
-  const processing::Extraction stills = turn_stills(rec, go);
+  processing::Extraction stills = turn_stills(rec, go);
   for (const std::string& n : skipped_still_notes(stills)) notes.push_back(n);
+  if (accel != nullptr && accel->ok()) {  // the g-sensitivity sees the calibrated specific force
+    for (auto& s : stills.points) s.accel.mean = accel->correct(s.accel.mean);
+    for (auto& t : turns) t.window.accel.mean = accel->correct(t.window.accel.mean);
+    notes.push_back("the specific force of the stills and turns calibrated with the accelerometer fit");
+  }
   CalibrationResult r = calibrate_gyro_turns(stills.points, turns, go, rec.header.info.gyro_lsb_radps);
   r.notes.insert(r.notes.begin(), notes.begin(), notes.end());
   if (!columns)

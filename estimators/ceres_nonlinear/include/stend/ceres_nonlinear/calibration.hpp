@@ -255,6 +255,25 @@ struct GyroOptions {
   // Turns: how well a known turn is known [deg, 1σ], in angle and in axis direction: the integrated
   // turn v_k gets the a-priori variance σ² along the turn's axis and (|θ_k|·σ)² across it [rad²].
   double turn_angle_sigma_deg = 1.0;
+  // Rate table: how well each interval's rate axis is known in the sensor frame (the sensor placed on
+  // the table) [deg, 1σ about each perpendicular]; 0: exactly (a bench run's truth: the relative
+  // weighting). > 0: each interval mean is whitened by its a-priori sigmas — the noise of the mean,
+  // |ω|·σ across the rate, |ω|·σ² along it (the cosine loss, half of it taken off the stated rate),
+  // and the Earth rate the truth leaves out (its horizontal part turns with the table: Ω_e² on each
+  // horizontal axis at most) — and the covariance is scaled by the reduced χ² only when it exceeds 1.
+  double rate_axis_sigma_deg = 0.0;
+  // Earth rate: the placement of the up and down positions [deg, 1σ of each tilt component]: the
+  // projection on the stated vertical then also sees the horizontal readings (the other axes'
+  // biases) by the tilt, σ·|ȳ_⊥| per still. The model file's orientation_sigma_deg.
+  double orientation_sigma_deg = 0.0;
+  // The gyro's g-sensitivity where it is not estimated, as an a-priori spread of each G_ij
+  // [(deg/s)/g, 1σ]; 0: none (a navigation-grade gyro). Earth rate: up and down flip it with the
+  // Earth rate, so a scale_i reads as scale_i + G_ii·g/Ω_v: the stills' projections get the joint
+  // covariance g_k·g_l·σ_G²·(u_k·u_l)², which widens the scales by g·σ_G/Ω_v (≈ 33 for an
+  // MPU-6050's 0.1). Rate table with rate_axis_sigma_deg > 0 and no g-sensitivity estimated: the
+  // intervals get σ_G²·(f_k·f_l) on each axis jointly (legs with one axis up share G·f with the
+  // bias: with the axes up only, never down, the bias is known no better than G·g).
+  double g_sensitivity_sigma_dps_per_g = 0.0;
 
   bool IsValid(std::string* error = nullptr) const;  // as CalibrationOptions::IsValid
 };
@@ -285,7 +304,11 @@ CalibrationResult calibrate_gyro_integration(const Recording& rec, const Calibra
 //     it. Covariance (JᵀJ)⁻¹ of the whitened problem, scaled by the reduced χ² when dof > 0
 //     (CalibrationResult::uncertainty says which). Turns about fewer than three independent axes:
 //     the fit fails naming the combination it cannot see.
-CalibrationResult calibrate_gyro_turns(const Recording& rec, const GyroOptions& options = {});
+// `accel`, when given (a successful accelerometer fit of the same recording, as the model file's
+// accelerometer part runs first), calibrates the specific force the g-sensitivity sees (else the raw
+// accelerometer reading, whose bias would pass into the gyro bias as G·b).
+CalibrationResult calibrate_gyro_turns(const Recording& rec, const GyroOptions& options = {},
+                                       const CalibrationResult* accel = nullptr);
 // A turn given directly: its window (mean gyro and specific-force readings, samples_used, first
 // and last sample times) and the rotation it made [rad, sensor frame].
 struct KnownTurn {
