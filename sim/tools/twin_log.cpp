@@ -1,7 +1,8 @@
 // stend_twin_log — a twin log of a procedure: the experiment file's observed steps played by a
 // simulated person on a simulated sensor with planted errors (stend/sim/procedure_player.hpp),
 // written as a CSV with a real log's quirks (stend/sim/twin_log.hpp). Prints the `stend import`
-// flags that read it back; --truth writes the planted errors (the names of ceres.json's list).
+// flags that read it back; --truth writes the planted errors (the names of ceres.json's list; also
+// in the frame convention of a fit with unknown orientations) and the steps as they were played.
 //
 //   stend_twin_log PROCEDURE.yaml LOG.csv [--seed N] [--quirks no_time,low_rate,bursty,counts,short]
 //                  [--rate-hz HZ] [--truth TRUTH.json]
@@ -11,7 +12,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -66,16 +69,26 @@ Args parse(int argc, char** argv) {
   return a;
 }
 
-void write_truth(const std::string& file, const stend::sim::Played& played) {
-  std::ofstream out(file);
-  out << "{\n  \"parameters\": {";
+// "name": value pairs of a parameter map, one a line.
+void write_map(std::ofstream& out, const std::map<std::string, double>& values) {
   bool first = true;
-  for (const auto& [name, value] : played.truth.parameters) {
+  for (const auto& [name, value] : values) {
     char buf[160];
     std::snprintf(buf, sizeof buf, "%s\n    \"%s\": %.17g", first ? "" : ",", name.c_str(), value);
     out << buf;
     first = false;
   }
+}
+
+// The planted truth (and the same sensor in the frame convention a fit with unknown orientations
+// reports), the noise densities and the steps as played.
+void write_truth(const std::string& file, const stend::sim::Played& played) {
+  std::ofstream out(file);
+  out << "{\n  \"parameters\": {";
+  write_map(out, played.truth.parameters);
+  out << "\n  },\n  \"in_accel_frame_convention\": {";
+  write_map(out, played.truth.in_accel_frame_convention().parameters);
+  bool first = true;
   char buf[400];
   std::snprintf(buf, sizeof buf, "\n  },\n  \"accel_noise_density\": %.17g,\n  \"gyro_noise_density\": %.17g,\n  \"steps\": [",
                 played.truth.accel_noise_density, played.truth.gyro_noise_density);
@@ -102,6 +115,7 @@ int main(int argc, char** argv) {
     stend::sim::TwinSetup setup = stend::sim::twin_setup(a.quirks, a.seed);
     if (a.rate_hz > 0.0) setup.player.rate_hz = a.rate_hz;
     const stend::Experiment exp = stend::load_observed_procedure(a.procedure);
+    if (const auto dir = std::filesystem::path(a.log).parent_path(); !dir.empty()) std::filesystem::create_directories(dir);
     const stend::sim::Played played = stend::sim::play_procedure(exp, setup.sensor, setup.player);
     const auto keys = stend::sim::write_twin_csv(a.log, played, setup.csv);
     if (!a.truth.empty()) write_truth(a.truth, played);
