@@ -1,6 +1,6 @@
 // Internal to ceres_nonlinear: what the gyroscope procedures share — the parameters
-// (gyro_rate_table.cpp), and the whitened observations of the turns and earth_rate methods
-// (gyro_observations.cpp).
+// (gyro_rate_table.cpp), and the jointly whitened observations of the turns and the rate table
+// with stated sigmas, their a-priori covariances (gyro_observations.cpp).
 #pragma once
 
 #include "solver.hpp"
@@ -12,26 +12,19 @@ namespace stend::ceres_nonlinear::detail {
 // r.parameters for every parameter of the gyro model, all estimated.
 void init_gyro_parameters(CalibrationResult& r);
 
-// One observation of the gyro model, whitened by its a-priori sigma: the residual is
-// W·(measure(θ, stimulus) − ȳ) with W a k × 3 matrix [s/rad] (k = 3: a still mean or a turn in mean
-// form; k = 1: a projection on the vertical), so that its covariance is the identity.
+// One observation of the gyro model: a mean reading ȳ against measure(θ, stimulus) (a still mean,
+// a turn in mean form, a rate-table interval).
 struct GyroObservation {
   model::Stimulus<double> stimulus;                   // input: the true mean rate [rad/s]; specific force [m/s^2]
   Eigen::Vector3d reading = Eigen::Vector3d::Zero();  // the mean reading ȳ [rad/s]
-  Eigen::MatrixXd whitening;                          // k × 3 [s/rad]
 };
 
-// One residual block per observation on the free parameters x (free_index: their places in the
-// model's parameter vector; the others 0). Returns the number of residuals.
-int add_gyro_observations(const std::vector<GyroObservation>& observations, const model::ErrorModel& m,
-                          const std::vector<int>& free_index, const CalibrationOptions& o, ceres::Problem& problem,
-                          std::vector<double>& x);
-
-// All observations in one residual block, whitened jointly by their 3n × 3n covariance (the
-// observations' own 3 × 3 blocks on the diagonal, and what they share off it): W·d stacked, W = L⁻¹
-// (C = L·Lᵀ), d_k = measure(θ, stimulus_k) − ȳ_k. The observations' `whitening` is not used; no
-// robust loss is applied (it would act on the block's sum: joint_loss_note says so). Returns the
-// number of residuals (3n).
+// All observations in one residual block on the free parameters x (free_index: their places in the
+// model's parameter vector; the others 0), whitened jointly by their 3n × 3n a-priori covariance
+// (the observations' own 3 × 3 blocks on the diagonal, and what they share off it): W·d stacked,
+// W = L⁻¹ (C = L·Lᵀ), d_k = measure(θ, stimulus_k) − ȳ_k, so that its covariance is the identity.
+// No robust loss is applied (it would act on the block's sum: joint_loss_note says so). Returns
+// the number of residuals (3n).
 int add_joint_gyro_observations(const std::vector<GyroObservation>& observations, const Eigen::MatrixXd& covariance,
                                 const model::ErrorModel& m, const std::vector<int>& free_index,
                                 const CalibrationOptions& o, ceres::Problem& problem, std::vector<double>& x);
@@ -48,13 +41,6 @@ Eigen::MatrixXd g_sensitivity_covariance(const std::vector<Eigen::Vector3d>& f, 
 // unknown), times the stills' noise_correlation_factor (a low-pass filtered sensor's means scatter
 // more than its sample spread says).
 Eigen::Vector3d pooled_gyro_noise(const std::vector<processing::StaticPoint>& stills, double quantization_radps);
-
-// The whitening of a mean of `samples` readings with per-sample noise `noise_radps` per axis:
-// diag(√samples / noise) [s/rad].
-Eigen::Matrix3d mean_whitening(const Eigen::Vector3d& noise_radps, std::size_t samples);
-
-// The whitening W of a covariance C (WᵀW = C⁻¹: W = L⁻¹, C = L·Lᵀ).
-Eigen::Matrix3d whitening_of(const Eigen::Matrix3d& covariance);
 
 // The covariance of the Earth rate a still's truth leaves out [(rad/s)²]: `applied` is its stated
 // rate (the w columns), `f` its specific force. A stated rate of magnitude Ω_v > 0 is the Earth

@@ -1,5 +1,6 @@
-// The whitened gyro observations the turns and earth_rate methods fit (see gyro.hpp): the cost
-// through the vocabulary's ErrorModel::measure, the pooled still noise, the segment settings.
+// The jointly whitened gyro observations the turns and the rate table with stated sigmas fit (see
+// gyro.hpp): the cost through the vocabulary's ErrorModel::measure, the a-priori covariances (the
+// Earth rate, the g-sensitivity), the pooled still noise, the segment settings.
 #include "gyro.hpp"
 
 #include <stend/physics/gravity.hpp>
@@ -12,27 +13,6 @@
 namespace stend::ceres_nonlinear::detail {
 
 namespace {
-
-// W·(measure(θ, s) − ȳ) with θ the model's full vector built from the free parameters.
-struct WhitenedGyroCost {
-  const model::ErrorModel* m;
-  std::vector<int> free_index;
-  GyroObservation obs;
-  template <typename T>
-  bool operator()(T const* const* p, T* residual) const {
-    std::vector<T> theta(static_cast<std::size_t>(m->size()), T(0));
-    for (std::size_t k = 0; k < free_index.size(); ++k) theta[static_cast<std::size_t>(free_index[k])] = p[0][k];
-    model::Stimulus<T> s;
-    s.input = obs.stimulus.input.cast<T>();
-    s.specific_force = obs.stimulus.specific_force.cast<T>();
-    const model::Vec3<T> d = m->measure<T>(theta.data(), s) - obs.reading.cast<T>();
-    for (Eigen::Index row = 0; row < obs.whitening.rows(); ++row) {
-      residual[row] = T(0);
-      for (int j = 0; j < 3; ++j) residual[row] += obs.whitening(row, j) * d[j];
-    }
-    return true;
-  }
-};
 
 // All observations stacked: W·(measure(θ, s_k) − ȳ_k), W the joint whitening (3n × 3n).
 struct JointGyroCost {
@@ -94,20 +74,6 @@ Eigen::MatrixXd g_sensitivity_covariance(const std::vector<Eigen::Vector3d>& f, 
   return c;
 }
 
-int add_gyro_observations(const std::vector<GyroObservation>& observations, const model::ErrorModel& m,
-                          const std::vector<int>& free_index, const CalibrationOptions& o, ceres::Problem& problem,
-                          std::vector<double>& x) {
-  int residuals = 0;
-  for (const GyroObservation& obs : observations) {
-    auto* cost = new ceres::DynamicAutoDiffCostFunction<WhitenedGyroCost, 8>(new WhitenedGyroCost{&m, free_index, obs});
-    cost->AddParameterBlock(static_cast<int>(free_index.size()));
-    cost->SetNumResiduals(static_cast<int>(obs.whitening.rows()));
-    problem.AddResidualBlock(cost, make_loss(o), x.data());
-    residuals += static_cast<int>(obs.whitening.rows());
-  }
-  return residuals;
-}
-
 Eigen::Vector3d pooled_gyro_noise(const std::vector<processing::StaticPoint>& stills, double quantization_radps) {
   Eigen::Vector3d sum_sq = Eigen::Vector3d::Zero();
   int n = 0;
@@ -118,16 +84,6 @@ Eigen::Vector3d pooled_gyro_noise(const std::vector<processing::StaticPoint>& st
     }
   const Eigen::Vector3d pooled = n > 0 ? Eigen::Vector3d((sum_sq / n).cwiseSqrt()) : Eigen::Vector3d::Zero();
   return pooled.cwiseMax(quantization_radps / std::sqrt(12.0)) * noise_correlation_factor(stills, true);
-}
-
-Eigen::Matrix3d mean_whitening(const Eigen::Vector3d& noise_radps, std::size_t samples) {
-  const double root_n = std::sqrt(static_cast<double>(samples));
-  return Eigen::Vector3d(root_n / noise_radps[0], root_n / noise_radps[1], root_n / noise_radps[2]).asDiagonal();
-}
-
-Eigen::Matrix3d whitening_of(const Eigen::Matrix3d& covariance) {
-  const Eigen::Matrix3d L = covariance.llt().matrixL();
-  return L.inverse();
 }
 
 Eigen::Matrix3d earth_rate_factor(const Eigen::Vector3d& applied, const Eigen::Vector3d& f) {

@@ -298,12 +298,14 @@ CalibrationResult calibrate_gyro_integration(const Recording& rec, const Calibra
 //     truth columns turn_<axis>_deg (stend/recording/truth_columns.hpp): the reading integrated
 //     over turn k, v_k = Σ ω_i Δt, against T_k·measure(θ, θ_k/T_k, F_k/T_k) = A(θ)·θ_k + b·T_k
 //     (+ G·F_k, F_k = Σ f_i Δt of the measured specific force). One weighted least-squares fit of
-//     the still means and the turn integrals, whitened by a-priori sigmas: still mean σ_n/√N (σ_n
-//     the per-sample gyro noise pooled over the stills, at least the quantization step/√12); turn
-//     integral σ_n·Δt·√N, plus turn_angle_sigma_deg along the turn's axis and |θ_k|·that across
-//     it. Covariance (JᵀJ)⁻¹ of the whitened problem, scaled by the reduced χ² when dof > 0
-//     (CalibrationResult::uncertainty says which). Turns about fewer than three independent axes:
-//     the fit fails naming the combination it cannot see.
+//     the still means and the turn integrals, whitened jointly by a-priori sigmas: still mean σ_n/√N
+//     (σ_n the per-sample gyro noise pooled over the stills, at least the quantization step/√12,
+//     times their correlation factor) plus the Earth rate the truth leaves out (its horizontal part,
+//     one value for the stills at one orientation); turn integral σ_n·Δt·√N, plus
+//     turn_angle_sigma_deg along the turn's axis and |θ_k|·that across it. Covariance (JᵀJ)⁻¹ of the
+//     whitened problem, scaled by the reduced χ² only when it exceeds 1 (the turns' sigma is a stated
+//     bound; CalibrationResult::uncertainty says which). Turns about fewer than three independent
+//     axes: the fit fails naming the combination it cannot see.
 // `accel`, when given (a successful accelerometer fit of the same recording, as the model file's
 // accelerometer part runs first), calibrates the specific force the g-sensitivity sees (else the raw
 // accelerometer reading, whose bias would pass into the gyro bias as G·b).
@@ -325,8 +327,11 @@ CalibrationResult calibrate_gyro_turns(const std::vector<processing::StaticPoint
 //     and w_k, u_k = f_k/|f_k|, Ω_v,k = u_k·w_k; observation z_k = u_k·ȳ_k against
 //     u_k·measure(θ, Ω_v,k·u_k) = u_k·b + u_k·A(θ)·(Ω_v,k u_k). Bias and scale of each axis that is
 //     near vertical (|u_k,i| ≥ cos 45°) in some still; the others, and every cross-axis term (seen only
-//     as m_ij + m_ji, and only in tilted positions), are held at 0 and said so. Whitened by the
-//     a-priori σ of z_k (the pooled still noise projected on u_k, /√N); covariance as for turns.
+//     as m_ij + m_ji, and only in tilted positions), are held at 0 and said so. Whitened jointly by
+//     the a-priori covariance of the z_k: the pooled still noise projected on u_k, /√N; the tilt of
+//     each position (orientation_sigma_deg) times its horizontal reading; the unmodelled
+//     g-sensitivity (g_sensitivity_sigma_dps_per_g), shared as g_k·g_l·σ_G²·(u_k·u_l)². Covariance
+//     scaled by the reduced χ² when dof > 0.
 //     The Earth rate is small (≤ 7.3e-5 rad/s): on a consumer gyro the scale comes out imprecise.
 CalibrationResult calibrate_gyro_earth_rate(const Recording& rec, const GyroOptions& options = {});
 // truth_f[k], truth_w[k]: the still's specific force [m/s^2] and applied rate [rad/s] (sensor frame).
