@@ -21,11 +21,11 @@ struct GyroObservation {
   Eigen::MatrixXd whitening;                          // k × 3 [s/rad]
 };
 
-// One residual block per observation on the free parameters x (free_index: their places in the
-// model's parameter vector; the others 0). Returns the number of residuals.
-int add_gyro_observations(const std::vector<GyroObservation>& observations, const model::ErrorModel& m,
-                          const std::vector<int>& free_index, const CalibrationOptions& o, ceres::Problem& problem,
-                          std::vector<double>& x);
+// Fits the gyro model to the whitened observations, a-priori weighted, on the free parameters
+// (free_index: their places in the model's parameter vector; the others 0): r's values,
+// covariance and verdicts.
+void solve_gyro_observations(const std::vector<GyroObservation>& observations, const std::vector<int>& free_index,
+                             const GyroOptions& options, CalibrationResult& r);
 
 // The per-sample white noise of each gyro axis [rad/s]: the RMS of the stills' sample standard
 // deviations, at least one quantization step / √12 (quantization_radps: 0 when unknown).

@@ -186,11 +186,7 @@ CalibrationResult calibrate_gyro_earth_rate(const std::vector<processing::Static
   for (std::size_t k = 0; k < v.stills.size(); ++k)
     obs.push_back(vertical_observation(v.stills[k], v.up[k], v.omega_v_radps[k], noise));
   r.uncertainty = vertical_sigmas_text(noise);
-  std::vector<double> x(free_index.size(), 0.0);
-  ceres::Problem problem;
-  const CalibrationOptions o = as_calibration_options(go, go.loss_scale_radps);
-  const int residuals = add_gyro_observations(obs, r.model, free_index, o, problem, x);
-  solve(problem, x, free_index, residuals, o, r, Weighting::kAPriori);
+  solve_gyro_observations(obs, free_index, go, r);
   vertical_checks(v, r);
   return r;
 }

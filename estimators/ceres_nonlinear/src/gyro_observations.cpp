@@ -33,18 +33,20 @@ struct WhitenedGyroCost {
 
 }  // namespace
 
-int add_gyro_observations(const std::vector<GyroObservation>& observations, const model::ErrorModel& m,
-                          const std::vector<int>& free_index, const CalibrationOptions& o, ceres::Problem& problem,
-                          std::vector<double>& x) {
+void solve_gyro_observations(const std::vector<GyroObservation>& observations, const std::vector<int>& free_index,
+                             const GyroOptions& options, CalibrationResult& r) {
+  std::vector<double> x(free_index.size(), 0.0);
+  ceres::Problem problem;
+  const CalibrationOptions o = as_calibration_options(options, options.loss_scale_radps);
   int residuals = 0;
   for (const GyroObservation& obs : observations) {
-    auto* cost = new ceres::DynamicAutoDiffCostFunction<WhitenedGyroCost, 8>(new WhitenedGyroCost{&m, free_index, obs});
+    auto* cost = new ceres::DynamicAutoDiffCostFunction<WhitenedGyroCost, 8>(new WhitenedGyroCost{&r.model, free_index, obs});
     cost->AddParameterBlock(static_cast<int>(free_index.size()));
     cost->SetNumResiduals(static_cast<int>(obs.whitening.rows()));
     problem.AddResidualBlock(cost, make_loss(o), x.data());
     residuals += static_cast<int>(obs.whitening.rows());
   }
-  return residuals;
+  solve(problem, x, free_index, residuals, o, r, Weighting::kAPriori);
 }
 
 Eigen::Vector3d pooled_gyro_noise(const std::vector<processing::StaticPoint>& stills, double quantization_radps) {

@@ -165,11 +165,7 @@ CalibrationResult calibrate_gyro_turns(const std::vector<processing::StaticPoint
   r.uncertainty = turn_sigmas_text(noise, go.turn_angle_sigma_deg);
   std::vector<int> free_index(static_cast<std::size_t>(r.estimated));
   std::iota(free_index.begin(), free_index.end(), 0);
-  std::vector<double> x(free_index.size(), 0.0);
-  ceres::Problem problem;
-  const CalibrationOptions o = as_calibration_options(go, go.loss_scale_radps);
-  const int residuals = add_gyro_observations(obs, r.model, free_index, o, problem, x);
-  solve(problem, x, free_index, residuals, o, r, Weighting::kAPriori);
+  solve_gyro_observations(obs, free_index, go, r);
   turn_checks(turns, r);
   return r;
 }
