@@ -66,13 +66,17 @@ struct DatasetArgs {
   void add_accept_damaged(CLI::App* sub);
   io::ImportOptions options() const;
   io::Inputs paths() const;
-  // The input, refused when it is a damaged run unless --accept-damaged.
+  // The input, refused when it is a damaged run unless --accept-damaged; a dataset file's import
+  // warnings (repaired or bursty timestamps, gaps) printed (print_warnings).
   stend::Recording open() const;
   // `rec` (opened from the input), refused when damaged unless --accept-damaged.
   const stend::Recording& checked(const stend::Recording& rec) const;
   // The single input is a run folder (results may be written into it).
   bool is_run() const;
 };
+
+// Prints each warning event of `rec` as "warning:    …" (human()) and returns their messages.
+std::vector<std::string> print_warnings(const stend::Recording& rec);
 
 // Writes the results document to `json` and the printed text beside it (.txt), each through
 // write_file_atomic (a failed write throws IoError: no "results:" line is printed); with no path

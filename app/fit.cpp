@@ -71,9 +71,20 @@ stend::Recording DatasetArgs::open() const {
   if (!experiment.empty() && is_run())
     throw InputError("--experiment is for a dataset file: the run folder '" + inputs[0] + "' has its procedure already");
   stend::Recording rec = io::open_dataset(paths(), format, options());
+  if (!is_run()) print_warnings(rec);
   checked(rec);
   if (!experiment.empty()) align_recording(rec, load_procedure(experiment));
   return rec;
+}
+
+std::vector<std::string> print_warnings(const stend::Recording& rec) {
+  std::vector<std::string> warnings;
+  for (const auto& e : rec.events)
+    if (e.level == "warning") {
+      fmt::print(human(), "warning:    {}\n", e.message);
+      warnings.push_back(e.message);
+    }
+  return warnings;
 }
 
 const stend::Recording& DatasetArgs::checked(const stend::Recording& rec) const {
