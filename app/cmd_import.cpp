@@ -78,12 +78,7 @@ void print_imported(const std::filesystem::path& dir, const std::string& format,
                     const Recording& rec) {
   fmt::print(human(), "run folder: {}\nformat:     {}\nrecorded:   {} samples, {} segments, {} truth rows, {} events\n",
              dir.string(), format, samples, rec.segments.size(), rec.truth_t.size(), rec.events.size());
-  std::vector<std::string> warnings;
-  for (const auto& e : rec.events)
-    if (e.level == "warning") {
-      fmt::print(human(), "warning:    {}\n", e.message);
-      warnings.push_back(e.message);
-    }
+  const std::vector<std::string> warnings = print_warnings(rec);
   print_json({{"run_dir", dir.string()},
               {"format", format},
               {"samples", samples},

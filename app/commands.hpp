@@ -3,6 +3,7 @@
 #pragma once
 
 #include "exit_codes.hpp"
+#include "stend/estimation/summary.hpp"
 #include "stend/io/formats.hpp"
 #include "stend/recording/recording.hpp"
 
@@ -66,7 +67,8 @@ struct DatasetArgs {
   void add_accept_damaged(CLI::App* sub);
   io::ImportOptions options() const;
   io::Inputs paths() const;
-  // The input, refused when it is a damaged run unless --accept-damaged.
+  // The input, refused when it is a damaged run unless --accept-damaged; a dataset file's import
+  // warnings (repaired or bursty timestamps, gaps) printed (print_warnings).
   stend::Recording open() const;
   // `rec` (opened from the input), refused when damaged unless --accept-damaged.
   const stend::Recording& checked(const stend::Recording& rec) const;
@@ -74,13 +76,29 @@ struct DatasetArgs {
   bool is_run() const;
 };
 
+// Prints each warning event of `rec` as "warning:    …" (human()) and returns their messages.
+std::vector<std::string> print_warnings(const stend::Recording& rec);
+
+// Where results were written: `file` (and its .txt beside it); `kept`: the good results file that
+// a failed fit left in place (empty when none). Both empty when nothing was written.
+struct WrittenResults {
+  std::filesystem::path file, kept;
+};
+
+// Where a failed fit's results go when `json` holds a good result: beside it, "failed-<name>"
+// (RUN/ceres.json → RUN/failed-ceres.json: no estimator's results file starts so, so the reports,
+// exports and results database never read it as a result).
+std::filesystem::path failed_results_path(const std::filesystem::path& json);
+
 // Writes the results document to `json` and the printed text beside it (.txt), each through
 // write_file_atomic (a failed write throws IoError: no "results:" line is printed); with no path
 // (the input is a dataset file, not a run folder, and no --out was given) writes nothing and says
-// so. `failed`: the document states a failed fit; it is written (so that no earlier results stand
-// for this fit) and said to hold no results.
-void write_results(std::filesystem::path json, const std::string& document, const std::string& text,
-                   bool failed = false);
+// so. `failed`: the document states a failed fit and is said to hold no results; it replaces an
+// earlier failed or unreadable document at `json`, but never a good one (status "ok"): that one is
+// kept byte for byte, the failure written to failed_results_path(json), and stderr says so, naming
+// both files.
+WrittenResults write_results(std::filesystem::path json, const std::string& document, const std::string& text,
+                             bool failed = false);
 
 // Whether the estimator `stend fit` would use for this model file reads the bench truth.
 bool fit_reads_truth(const std::string& model_file, const std::string& estimator = "auto");
@@ -89,10 +107,15 @@ bool fit_reads_truth(const std::string& model_file, const std::string& estimator
 // estimator and its results document (the failure document when it failed: status and why).
 struct FitOutcome {
   bool ok = false;
+  estimation::FitStatus status = estimation::FitStatus::kFailed;  // not applicable: nothing written
   std::filesystem::path results_file;
+  std::filesystem::path kept_results_file;  // a good results file this failed fit did not replace
   std::string estimator;
   nlohmann::json document;
   nlohmann::json to_json() const;  // docs/schemas/fit.schema.json
+  // kOk; kInvalidInput when nothing in the model applies to the recording (not applicable: an
+  // instrument it lacks); kFitFailed otherwise.
+  ExitCode exit_code() const;
 };
 
 // Fits `model_file` to `rec` with the estimator named `estimator` ("auto": the one the model file

@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -71,9 +72,20 @@ stend::Recording DatasetArgs::open() const {
   if (!experiment.empty() && is_run())
     throw InputError("--experiment is for a dataset file: the run folder '" + inputs[0] + "' has its procedure already");
   stend::Recording rec = io::open_dataset(paths(), format, options());
+  if (!is_run()) print_warnings(rec);
   checked(rec);
   if (!experiment.empty()) align_recording(rec, load_procedure(experiment));
   return rec;
+}
+
+std::vector<std::string> print_warnings(const stend::Recording& rec) {
+  std::vector<std::string> warnings;
+  for (const auto& e : rec.events)
+    if (e.level == "warning") {
+      fmt::print(human(), "warning:    {}\n", e.message);
+      warnings.push_back(e.message);
+    }
+  return warnings;
 }
 
 const stend::Recording& DatasetArgs::checked(const stend::Recording& rec) const {
@@ -124,20 +136,55 @@ const estimation::EstimatorEntry& resolve_estimator(const estimation::Registry& 
 
 }  // namespace
 
-void write_results(std::filesystem::path json, const std::string& document, const std::string& text,
-                   bool failed) {
+namespace {
+
+// The text copy beside a results document: the same name, ".txt".
+std::filesystem::path text_beside(std::filesystem::path json) { return json.replace_extension(".txt"); }
+
+// Whether `json` is the results document of a fit that succeeded (its status "ok"): one that a
+// failed fit must not replace. An unreadable file is not one.
+bool holds_good_result(const std::filesystem::path& json) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(json, ec)) return false;
+  std::ifstream in(json);
+  const nlohmann::json doc = nlohmann::json::parse(in, nullptr, false);
+  return !doc.is_discarded() && estimation::status_of(doc) == estimation::FitStatus::kOk;
+}
+
+// Says on stderr that a good results file was kept and where the failed result went instead.
+void say_kept(const WrittenResults& w) {
+  fmt::print(stderr,
+             "warning: the fit failed; {} (and {}) holds an earlier good result and is kept unchanged; this failed "
+             "result is written beside it, to {} (and {})\n",
+             w.kept.string(), text_beside(w.kept).filename().string(), w.file.string(),
+             text_beside(w.file).filename().string());
+}
+
+}  // namespace
+
+std::filesystem::path failed_results_path(const std::filesystem::path& json) {
+  return json.parent_path() / ("failed-" + json.filename().string());
+}
+
+WrittenResults write_results(std::filesystem::path json, const std::string& document, const std::string& text,
+                             bool failed) {
   if (json.empty()) {
     fmt::print(human(), "results:    not written (the input is not a run folder; --out FILE writes them)\n");
-    return;
+    return {};
   }
-  write_file_atomic(json, document + "\n");
-  std::filesystem::path txt = json;
-  write_file_atomic(txt.replace_extension(".txt"), text);
-  if (failed) {
-    fmt::print(human(), "results:    none — the fit failed ({} says why)\n", json.string());
-  } else {
-    fmt::print(human(), "results:    {}\n", json.string());
-  }
+  WrittenResults w{json, {}};
+  if (failed && holds_good_result(json)) w = {failed_results_path(json), json};
+  write_file_atomic(w.file, document + "\n");
+  write_file_atomic(text_beside(w.file), text);
+  if (!w.kept.empty()) say_kept(w);
+  if (!failed)
+    fmt::print(human(), "results:    {}\n", w.file.string());
+  else if (w.kept.empty())
+    fmt::print(human(), "results:    none — the fit failed ({} says why)\n", w.file.string());
+  else
+    fmt::print(human(), "results:    none — the fit failed ({} says why; {}, an earlier good result, is kept)\n",
+               w.file.string(), w.kept.string());
+  return w;
 }
 
 namespace {
@@ -198,11 +245,24 @@ bool results_in_run(const std::filesystem::path& run_dir, const std::filesystem:
   return std::filesystem::equivalent(std::filesystem::absolute(results_file).parent_path(), run_dir, ec) && !ec;
 }
 
+namespace {
+nlohmann::json path_or_null(const std::filesystem::path& p) {
+  return p.empty() ? nlohmann::json(nullptr) : nlohmann::json(p.string());
+}
+}  // namespace
+
 nlohmann::json FitOutcome::to_json() const {
   return {{"ok", ok},
+          {"status", estimation::to_string(status)},
           {"estimator", estimator},
-          {"results_file", results_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(results_file.string())},
+          {"results_file", path_or_null(results_file)},
+          {"kept_results_file", path_or_null(kept_results_file)},
           {"document", document}};
+}
+
+ExitCode FitOutcome::exit_code() const {
+  if (ok) return ExitCode::kOk;
+  return status == estimation::FitStatus::kNotApplicable ? ExitCode::kInvalidInput : ExitCode::kFitFailed;
 }
 
 FitOutcome fit_recording(const stend::Recording& rec, const std::string& model_file, const std::filesystem::path& out_dir,
@@ -246,12 +306,18 @@ FitOutcome fit_recording(const stend::Recording& rec, const std::string& model_f
                                                                       yaml::load_file(model_file, "model file")));
   human_stream() << text;
   const std::string document = r.written_document();
-  write_results(json, document, text, !r.ok());
   FitOutcome out;
   out.ok = r.ok();
-  out.results_file = json;
+  out.status = r.status();
   out.estimator = entry.name;
   out.document = nlohmann::json::parse(document, nullptr, false);
+  if (r.status() == estimation::FitStatus::kNotApplicable) {
+    fmt::print(human(), "results:    none — not applicable: {}; nothing written\n", r.summary.message);
+    return out;
+  }
+  const WrittenResults written = write_results(json, document, text, !r.ok());
+  out.results_file = written.file;
+  out.kept_results_file = written.kept;
   return out;
 }
 

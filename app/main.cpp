@@ -206,7 +206,7 @@ ExitCode cmd_run(const std::string& file, const std::string& output, const std::
         fit_recording(stend::Recording::open(r.dir, stend::SampleLoading::kStream, stend::TruthLoading::kStream),
                       model.string(), r.dir, "");
     summary["fit"] = fit.to_json();
-    if (!fit.ok) return finish(ExitCode::kFitFailed);
+    if (!fit.ok) return finish(fit.exit_code());
   }
   const std::filesystem::path report = stend::cli::write_run_report(r.dir, db);
   fmt::print(human(), "report:     {}\n", report.string());
@@ -227,9 +227,13 @@ ExitCode cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, 
   doc["report"] = nullptr;
   if (run_dir.empty()) {
     fmt::print(human(), "report:     none (the input is not a run folder; `stend import` makes one)\n");
+  } else if (fit.results_file.empty()) {
+    fmt::print(human(), "report:     {} not updated (no results written)\n", (run_dir / "report.html").string());
   } else if (stend::cli::results_in_run(run_dir, fit.results_file)) {
-    // A failed fit too: its results file now says so, and the report drops its earlier numbers.
-    // The run is recorded in the results store (--db, else the default) as it now stands.
+    // A failed fit too: its results file now says so and the report drops its earlier numbers —
+    // unless it was written beside a good results file that it kept (write_results): the report
+    // shows that one. The run is recorded in the results store (--db, else the default) as it now
+    // stands.
     const std::filesystem::path report = stend::cli::write_run_report(run_dir, db);
     fmt::print(human(), "report:     {} (updated)\n", report.string());
     doc["report"] = report.string();
@@ -238,7 +242,7 @@ ExitCode cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, 
                (run_dir / "report.html").string());
   }
   stend::cli::print_json(doc);
-  return fit.ok ? ExitCode::kOk : ExitCode::kFitFailed;
+  return fit.exit_code();
 }
 
 // docs/schemas/info.schema.json

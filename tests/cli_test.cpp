@@ -98,21 +98,58 @@ TEST(Cli, FitImportsTheMpu6050StaticDataset) {
 
 // A fit that fails (a constant signal: nothing to fit) exits non-zero, says so, and its results
 // file states the failure with no numbers — replacing, not keeping, an earlier file's results.
+// A model of only an instrument the recording lacks (a gyroscope model, a CSV without gyro columns)
+// is not applicable: said so, not a fit failure, exit 2 (the inputs do not go together), nothing
+// written.
+TEST(Cli, ModelOfAnAbsentInstrumentIsNotApplicableAndWritesNothing) {
+  const TempDir dir("cli-not-applicable");
+  std::string csv = "t,ax,ay,az\n";
+  for (int i = 0; i < 2000; ++i) csv += std::to_string(i * 0.01) + ",0.01,-0.02,9.81\n";
+  stend::testing::write_text(dir / "accel.csv", csv);
+  stend::testing::write_text(dir / "gyro.yaml", "instrument: gyroscope\nterms: [bias]\n");
+  const fs::path json = dir / "fit-gyroscope.json";
+  const ProgramOutput o = run_stend("fit " + (dir / "accel.csv").string() + " --time t --accel ax,ay,az --model " +
+                                    (dir / "gyro.yaml").string() + " --out " + json.string());
+  EXPECT_EQ(o.code, 2) << o.text;
+  EXPECT_NE(o.text.find(": not applicable — the recording has no gyroscope"), std::string::npos) << o.text;
+  EXPECT_NE(o.text.find("results:    none — not applicable"), std::string::npos) << o.text;
+  EXPECT_EQ(o.text.find("FAILED"), std::string::npos) << o.text;
+  EXPECT_FALSE(fs::exists(json));
+}
+
+// A failed fit writes its failure document: over an earlier failed one, which holds no result; beside
+// an earlier good one (status ok), which it never replaces (failed-allan.json).
 TEST(Cli, FailedFitWritesAFailureDocumentAndClaimsNoResults) {
   const TempDir dir("cli-failed-fit");
   std::string csv = "Fs,100\nLogging Type,1\nInitialization time,-1\nWaiting time,-1\nax,ay,az,gx,gy,gz\n";
   for (int i = 0; i < 5000; ++i) csv += "2508,-604,14684,-429,140,-53\n";
   stend::testing::write_text(dir / "constant.csv", csv);
-  const fs::path json = dir / "allan.json";
-  stend::testing::write_text(json, "{\"status\": \"ok\", \"stale\": 1}\n");
-  const ProgramOutput o = run_stend("fit " + (dir / "constant.csv").string() + " --format mpu6050_multipos --model " + src +
-                                    "/estimators/allan/example/allan.yaml --out " + json.string());
-  EXPECT_NE(o.code, 0) << o.text;
+  const fs::path json = dir / "allan.json", beside = dir / "failed-allan.json";
+  const auto fit = [&] {
+    return run_stend("fit " + (dir / "constant.csv").string() + " --format mpu6050_multipos --model " + src +
+                     "/estimators/allan/example/allan.yaml --out " + json.string());
+  };
+  const auto expect_failure_document = [](const fs::path& file) {
+    const std::string doc = stend::testing::read_text(file);
+    EXPECT_NE(doc.find("\"status\": \"failed\""), std::string::npos) << doc;
+    EXPECT_NE(doc.find("constant"), std::string::npos) << doc;
+    EXPECT_EQ(doc.find("stale"), std::string::npos) << doc;
+    EXPECT_EQ(doc.find("\"channels\""), std::string::npos) << doc;
+  };
+  stend::testing::write_text(json, "{\"status\": \"failed\", \"stale\": 1}\n");
+  const ProgramOutput o = fit();
+  EXPECT_EQ(o.code, 3) << o.text;
   EXPECT_NE(o.text.find("FAILED"), std::string::npos) << o.text;
   EXPECT_NE(o.text.find("results:    none"), std::string::npos) << o.text;
-  const std::string doc = stend::testing::read_text(json);
-  EXPECT_NE(doc.find("\"status\": \"failed\""), std::string::npos) << doc;
-  EXPECT_NE(doc.find("constant"), std::string::npos) << doc;
-  EXPECT_EQ(doc.find("stale"), std::string::npos) << doc;
-  EXPECT_EQ(doc.find("\"channels\""), std::string::npos) << doc;
+  expect_failure_document(json);
+  EXPECT_FALSE(fs::exists(beside));
+
+  const std::string good = "{\"status\": \"ok\", \"stale\": 1}\n";
+  stend::testing::write_text(json, good);
+  const ProgramOutput kept = fit();
+  EXPECT_EQ(kept.code, 3) << kept.text;
+  EXPECT_EQ(stend::testing::read_text(json), good);
+  expect_failure_document(beside);
+  EXPECT_NE(kept.text.find("warning: the fit failed; " + json.string()), std::string::npos) << kept.text;
+  EXPECT_NE(kept.text.find("written beside it, to " + beside.string()), std::string::npos) << kept.text;
 }

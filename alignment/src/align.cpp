@@ -275,15 +275,9 @@ class Builder {
       const double sign = s.direction != 0 ? s.direction : (about < 0 ? -1.0 : 1.0);
       const double off_axis = (v - about * s.sensor_axis).norm();
       if (std::abs(sign * about - s.angle_deg) <= o_.turn_tolerance * s.angle_deg && off_axis <= o_.turn_tolerance * s.angle_deg) {
-        Segment seg{};
-        seg.step = index;
-        seg.kind = SegmentKind::kRotation;
-        seg.label = s.label;
-        seg.repeat = s.repeat_index;
-        seg.orientation = k;
-        seg.orientation_count = s.count;
-        seg.t_start_s = first > 0 ? stretches_[first - 1].t1_s : stretches_[first].t0_s;
-        seg.t_end_s = j + 1 < stretches_.size() ? stretches_[j + 1].t0_s : stretches_[j].t1_s;
+        Segment seg = segment(index, s, SegmentKind::kRotation, k, s.count,
+                              first > 0 ? stretches_[first - 1].t1_s : stretches_[first].t0_s,
+                              j + 1 < stretches_.size() ? stretches_[j + 1].t0_s : stretches_[j].t1_s);
         seg.targets = format_number(sign * s.angle_deg) + " deg turn about " + direction_text(s.sensor_axis);
         hold_inside(seg, sign * s.angle_deg * s.sensor_axis);
         note(s, "turn " + std::to_string(k + 1) + ": " + time_text(seg.t_start_s, seg.t_end_s) + ", " +
@@ -354,7 +348,8 @@ class Builder {
     return (sum.gyro_dt - b * sum.dt_sum) / physics::kDegToRad;
   }
 
-  Segment segment(int index, const Step& s, SegmentKind kind, std::size_t i, int k, int count) const {
+  // The segment of item k of `count` of step s over [t0, t1] [s].
+  static Segment segment(int index, const Step& s, SegmentKind kind, int k, int count, double t0_s, double t1_s) {
     Segment seg{};
     seg.step = index;
     seg.kind = kind;
@@ -362,9 +357,13 @@ class Builder {
     seg.repeat = s.repeat_index;
     seg.orientation = k;
     seg.orientation_count = count;
-    seg.t_start_s = stretches_[i].t0_s;
-    seg.t_end_s = stretches_[i].t1_s;
+    seg.t_start_s = t0_s;
+    seg.t_end_s = t1_s;
     return seg;
+  }
+  // … over stretch i.
+  Segment segment(int index, const Step& s, SegmentKind kind, std::size_t i, int k, int count) const {
+    return segment(index, s, kind, k, count, stretches_[i].t0_s, stretches_[i].t1_s);
   }
 
   void take(std::size_t i, const Segment& seg) {

@@ -79,7 +79,9 @@ Calibration calibration_from(const estimation::FitResult& result, const std::str
     if (m == nullptr) continue;
     any_model = true;
     if (!m->ok()) {
-      c.notes.push_back(fmt::format("{}: the fit failed ({}), not applied", name_of(m->instrument()), m->message));
+      c.notes.push_back(fmt::format("{}: {} ({}), not applied", name_of(m->instrument()),
+                                    m->status == estimation::FitStatus::kNotApplicable ? estimation::status_text(m->status) : "the fit failed",
+                                    m->message));
       continue;
     }
     for (const auto& f : m->failed_axes)

@@ -63,13 +63,26 @@ void InstrumentModel::print(std::ostream& os) const {
   model.print(os);
   os << " (axes";
   for (int a : axes) os << " " << axis_name(a);
-  os << (coverage == Coverage::kTriad ? " as one triad" : " each on its own") << "; " << to_string(status)
+  os << (coverage == Coverage::kTriad ? " as one triad" : " each on its own") << "; " << status_text(status)
      << (message.empty() ? "" : ": " + message) << ")\n";
   for (const auto& f : failed_axes) os << "axis " << axis_name(f.axis) << " failed: " << f.message << "\n";
   if (!ok()) return;
   print_parameter_header(os, confidence);
   for (const auto& p : parameters) os << p << "\n";
   for (const auto& n : notes) os << "note: " << n << "\n";
+}
+
+std::string why_absent(const SensorInfo& info, model::Instrument instrument) {
+  if (instrument != model::Instrument::kGyroscope || info.has_gyro) return {};
+  return "the recording has no gyroscope (its source holds no gyroscope data)";
+}
+
+InstrumentModel not_applicable(model::ErrorModel model, const std::string& why) {
+  InstrumentModel m;
+  m.status = FitStatus::kNotApplicable;
+  m.message = why;
+  m.model = std::move(model);
+  return m;
 }
 
 std::ostream& operator<<(std::ostream& os, const InstrumentModel& m) {

@@ -69,6 +69,12 @@ const char* instrument_name(model::Instrument inst) {
   return inst == model::Instrument::kAccelerometer ? "accelerometer" : "gyroscope";
 }
 
+std::optional<model::Instrument> instrument_from_name(const std::string& name) {
+  for (const auto inst : {model::Instrument::kAccelerometer, model::Instrument::kGyroscope})
+    if (name == instrument_name(inst)) return inst;
+  return std::nullopt;
+}
+
 const char* weighting_name(Weighting w) {
   return w == Weighting::kNone ? "none" : "segment_noise";
 }

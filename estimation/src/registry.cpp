@@ -3,10 +3,12 @@
 
 #include "stend/errors.hpp"
 #include "stend/estimation/result_io.hpp"
+#include "stend/yaml/reader.hpp"
 
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 
 namespace stend::estimation {
@@ -106,7 +108,40 @@ FitSummary Registry::summarize(const nlohmann::json& doc, const std::string& fil
   return read(doc, file_name).summary;
 }
 
+namespace {
+
+// The instrument a YAML model file's `instrument:` names; nullopt when it names none, or the file
+// is not YAML (the estimator reads it and says what is wrong).
+std::optional<model::Instrument> instrument_of(const std::string& model_file) {
+  try {
+    return instrument_from_name(model_instrument(yaml::load_file(model_file, "model file")));
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+// The model of a model file whose `instrument:` the recording lacks (why_absent), not applicable;
+// nullopt when the file names no instrument or the recording has it.
+std::optional<InstrumentModel> absent_instrument(const EstimatorRequest& request) {
+  if (request.recording == nullptr || request.model_file.empty()) return std::nullopt;
+  const auto inst = instrument_of(request.model_file);
+  if (!inst) return std::nullopt;
+  const std::string why = why_absent(request.recording->header.info, *inst);
+  if (why.empty()) return std::nullopt;
+  model::ErrorModel m;
+  m.instrument = *inst;
+  return not_applicable(m, why);
+}
+
+}  // namespace
+
 FitResult fit(const EstimatorEntry& entry, const EstimatorRequest& request) {
+  if (auto absent = absent_instrument(request)) {
+    FitResult r = not_applicable_fit(entry.name, entry.version, std::move(*absent));
+    r.text = r.summary.FullReport();
+    fill_in(entry, r);
+    return r;
+  }
   if (entry.fit) {
     FitResult r = entry.fit(request);
     fill_in(entry, r);

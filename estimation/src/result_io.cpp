@@ -20,12 +20,6 @@ std::string string_of(const json& j, const char* key) {
   return j.is_object() && j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : std::string();
 }
 
-std::optional<model::Instrument> instrument_named(const std::string& name) {
-  if (name == instrument_name(model::Instrument::kAccelerometer)) return model::Instrument::kAccelerometer;
-  if (name == instrument_name(model::Instrument::kGyroscope)) return model::Instrument::kGyroscope;
-  return std::nullopt;
-}
-
 // The terms of a `model` section; the unknown kind's name when one is not the vocabulary's.
 std::string read_terms(const json& section, model::ErrorModel& m) {
   for (const auto& t : section.value("terms", json::array())) {
@@ -112,7 +106,7 @@ void fail_estimates(InstrumentModel& im) {
 std::optional<InstrumentModel> read_fit_model(const json& doc) {
   if (!doc.is_object() || !doc.contains("model") || !doc["model"].is_object()) return std::nullopt;
   const json& section = doc["model"];
-  const auto instrument = instrument_named(string_of(section, "instrument"));
+  const auto instrument = instrument_from_name(string_of(section, "instrument"));
   if (!instrument) return std::nullopt;
   InstrumentModel im;
   im.model.instrument = *instrument;
@@ -145,6 +139,14 @@ FitResult read_fit_document(const json& doc) {
   r.summary = summary_from_json(doc);
   if (auto m = read_fit_model(doc)) set_instrument(r, std::move(*m));
   r.document = doc;
+  return r;
+}
+
+FitResult not_applicable_fit(const std::string& estimator, const std::string& version, InstrumentModel model) {
+  FitResult r = failed_fit(estimator, version, model.message);
+  r.summary.status = FitStatus::kNotApplicable;
+  r.document = to_json(r.summary);
+  set_instrument(r, std::move(model));
   return r;
 }
 

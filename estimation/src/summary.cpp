@@ -71,9 +71,41 @@ std::string number_text(double v, int digits, bool fixed) {
   return buf;
 }
 
-const char* to_string(FitStatus s) { return s == FitStatus::kOk ? "ok" : "failed"; }
+namespace {
 
-FitStatus fit_status_from_string(const std::string& s) { return s == "ok" ? FitStatus::kOk : FitStatus::kFailed; }
+// The one name table of FitStatus: its name in documents, and how a report says it.
+struct StatusNames {
+  FitStatus status;
+  const char* name;
+  const char* text;
+};
+constexpr StatusNames kStatusNames[] = {{FitStatus::kOk, "ok", "ok"},
+                                        {FitStatus::kFailed, "failed", "FAILED"},
+                                        {FitStatus::kNotApplicable, "not_applicable", "not applicable"}};
+
+const StatusNames& names_of(FitStatus s) {
+  for (const auto& n : kStatusNames)
+    if (n.status == s) return n;
+  return kStatusNames[1];
+}
+
+}  // namespace
+
+const char* to_string(FitStatus s) { return names_of(s).name; }
+
+const char* status_text(FitStatus s) { return names_of(s).text; }
+
+FitStatus fit_status_from_string(const std::string& s) {
+  for (const auto& n : kStatusNames)
+    if (s == n.name) return n.status;
+  return FitStatus::kFailed;
+}
+
+FitStatus combined_status(const std::vector<FitStatus>& parts) {
+  const auto any = [&parts](FitStatus s) { return std::find(parts.begin(), parts.end(), s) != parts.end(); };
+  if (any(FitStatus::kFailed)) return FitStatus::kFailed;
+  return any(FitStatus::kOk) ? FitStatus::kOk : FitStatus::kNotApplicable;
+}
 
 void ParameterEstimate::print(std::ostream& os) const {
   if (identifiable)
@@ -107,7 +139,7 @@ const ParameterEstimate* FitSummary::find(const std::string& name) const {
 
 std::string FitSummary::BriefReport() const {
   const std::string who = version.empty() ? estimator : estimator + " " + version;
-  if (!ok()) return fmt::format("{}: FAILED — {}", who, message.empty() ? "no reason given" : message);
+  if (!ok()) return fmt::format("{}: {} — {}", who, status_text(status), message.empty() ? "no reason given" : message);
   const auto identified = std::count_if(parameters.begin(), parameters.end(),
                                         [](const ParameterEstimate& p) { return p.identifiable; });
   const auto imprecise = std::count_if(parameters.begin(), parameters.end(),

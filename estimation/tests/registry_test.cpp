@@ -3,6 +3,8 @@
 
 #include <stend/estimation/registry.hpp>
 #include <stend/estimation/summary.hpp>
+#include <stend/recording/recording.hpp>
+#include <stend/testing/files.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -259,4 +261,55 @@ TEST(Registry, TypedFitGoesThroughTheEntry) {
   EXPECT_EQ(r.text, "typed\n");
   EXPECT_EQ(r.summary.estimator, "typed");
   EXPECT_EQ(r.results_file, "typed.json");
+}
+
+// "not_applicable" is a status of its own: named, read back, neither ok nor failed, and it never
+// makes a fit of several parts fail.
+TEST(Summary, NotApplicableIsAStatusOfItsOwn) {
+  for (const auto s : {se::FitStatus::kOk, se::FitStatus::kFailed, se::FitStatus::kNotApplicable})
+    EXPECT_EQ(se::fit_status_from_string(se::to_string(s)), s);
+  EXPECT_STREQ(se::to_string(se::FitStatus::kNotApplicable), "not_applicable");
+  EXPECT_EQ(se::fit_status_from_string("anything else"), se::FitStatus::kFailed);
+  const se::FitSummary s = se::summary_from_json(nlohmann::json::parse(
+      R"({"estimator": {"name": "x", "version": "2"}, "status": "not_applicable", "message": "no gyroscope"})"));
+  EXPECT_EQ(s.status, se::FitStatus::kNotApplicable);
+  EXPECT_FALSE(s.ok());
+  EXPECT_EQ(s.BriefReport(), "x 2: not applicable — no gyroscope");
+  using S = se::FitStatus;
+  EXPECT_EQ(se::combined_status({S::kOk, S::kNotApplicable}), S::kOk);
+  EXPECT_EQ(se::combined_status({S::kFailed, S::kNotApplicable}), S::kFailed);
+  EXPECT_EQ(se::combined_status({S::kOk, S::kFailed}), S::kFailed);
+  EXPECT_EQ(se::combined_status({S::kNotApplicable, S::kNotApplicable}), S::kNotApplicable);
+}
+
+// A model file of an instrument the recording lacks is not fitted: the estimator is not called and
+// the result is not applicable, with the instrument's model saying why.
+TEST(Registry, ModelOfAnAbsentInstrumentIsNotApplicable) {
+  const stend::testing::TempDir dir("registry-absent");
+  stend::testing::write_text(dir / "gyro.yaml", "instrument: gyroscope\nterms: [bias]\n");
+  stend::testing::write_text(dir / "accel.yaml", "instrument: accelerometer\nterms: [bias]\n");
+  stend::Recording accel_only;
+  accel_only.header.info.has_gyro = false;
+  bool called = false;
+  se::EstimatorEntry e = entry("typed", nullptr);
+  e.fit = [&called](const stend::EstimatorRequest&) {
+    called = true;
+    se::FitResult r;
+    r.summary.status = se::FitStatus::kOk;
+    return r;
+  };
+  stend::EstimatorRequest req;
+  req.recording = &accel_only;
+  req.model_file = (dir / "gyro.yaml").string();
+  const se::FitResult r = se::fit(e, req);
+  EXPECT_FALSE(called);
+  EXPECT_EQ(r.status(), se::FitStatus::kNotApplicable);
+  EXPECT_NE(r.summary.message.find("no gyroscope"), std::string::npos) << r.summary.message;
+  ASSERT_TRUE(r.gyroscope.has_value());
+  EXPECT_EQ(r.gyroscope->status, se::FitStatus::kNotApplicable);
+  EXPECT_TRUE(r.gyroscope->parameters.empty());
+  EXPECT_EQ(se::status_of(r.document), se::FitStatus::kNotApplicable);
+  req.model_file = (dir / "accel.yaml").string();
+  EXPECT_TRUE(se::fit(e, req).ok());
+  EXPECT_TRUE(called);
 }

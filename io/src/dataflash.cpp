@@ -411,7 +411,7 @@ void import_dataflash(const fs::path& file, const DataflashOptions& opt, Recordi
   rec.header.identity.vendor = "ArduPilot";
   rec.header.identity.model = log.firmware;
   rec.header.identity.who_am_i = "IMU instance " + std::to_string(instance);
-  LogTimestampStream times(out, &info);
+  LogTimestampStream times(rec, out);
   std::vector<ImuSample> chunk;
   chunk.reserve(kDefaultChunkSamples);
   std::uint64_t t0_us = 0;

@@ -71,7 +71,7 @@ void import_euroc(const fs::path& path, const EurocOptions& opt, Recording& rec,
   rec.header.info.has_gyro = true;
   rec.header.info.has_temperature = false;
   rec.header.identity = opt.identity;
-  LogTimestampStream times(out, &rec.header.info);
+  LogTimestampStream times(rec, out);
   std::vector<ImuSample> chunk;
   chunk.reserve(kDefaultChunkSamples);
   std::int64_t t0_ns = 0;

@@ -239,59 +239,49 @@ double median_interval(const std::vector<ImuSample>& s) {
   return dt[dt.size() / 2];
 }
 
-std::size_t flag_time_gaps(std::vector<ImuSample>& s, double rate_hz) {
-  if (!(rate_hz > 0.0)) return 0;
-  std::size_t gaps = 0;
-  for (std::size_t i = 1; i < s.size(); ++i) {
-    if (s[i].t_s - s[i - 1].t_s > 1.5 / rate_hz) {
-      s[i].flags |= kGapBefore;
-      ++gaps;
-    }
-  }
-  return gaps;
+void LogTimestampStream::fix_rate(const std::vector<ImuSample>& s) {
+  sum_.bursts = find_bursts(s);
+  const double dt = sum_.bursts ? sum_.bursts->mean_interval_s : median_interval(s);
+  sum_.rate_hz = dt > 0.0 ? 1.0 / dt : 0.0;
+  sum_.gap_s = sum_.bursts ? sum_.bursts->gap_s : gap_threshold(dt, 0.0);
+  rec_->header.info.output_rate_hz = sum_.rate_hz;
 }
 
-TimestampSummary check_log_timestamps(std::vector<ImuSample>& s) {
-  TimestampSummary sum;
-  const double dt = median_interval(s);
-  sum.rate_hz = dt > 0.0 ? 1.0 / dt : 0.0;
-  sum.gaps = flag_time_gaps(s, sum.rate_hz);
-  for (std::size_t i = 1; i < s.size(); ++i) {
-    if (s[i].t_s == s[i - 1].t_s) ++sum.repeated;
-    if (s[i].t_s < s[i - 1].t_s) ++sum.decreasing;
-  }
-  return sum;
+// Sample s after the time prev_t [s] (NaN: none): a gap, a repeat or a step back, counted.
+void LogTimestampStream::count(const ImuSample& s, double prev_t) {
+  if (s.t_s == prev_t) ++sum_.repeated;
+  if (s.t_s < prev_t) ++sum_.decreasing;
 }
 
 void LogTimestampStream::process(std::vector<ImuSample>& s, bool first, double prev_t) {
-  if (first) {
-    const double dt = median_interval(s);
-    sum_.rate_hz = dt > 0.0 ? 1.0 / dt : 0.0;
-    if (rate_into_) rate_into_->output_rate_hz = sum_.rate_hz;
-  }
-  if (s.empty()) return;
-  if (sum_.rate_hz > 0.0 && s[0].t_s - prev_t > 1.5 / sum_.rate_hz) {
-    s[0].flags |= kGapBefore;
-    ++sum_.gaps;
-  }
-  sum_.gaps += flag_time_gaps(s, sum_.rate_hz);
-  if (s[0].t_s == prev_t) ++sum_.repeated;
-  if (s[0].t_s < prev_t) ++sum_.decreasing;
-  for (std::size_t i = 1; i < s.size(); ++i) {
-    if (s[i].t_s == s[i - 1].t_s) ++sum_.repeated;
-    if (s[i].t_s < s[i - 1].t_s) ++sum_.decreasing;
+  if (first) fix_rate(s);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const double before = i == 0 ? prev_t : s[i - 1].t_s;
+    if (sum_.rate_hz > 0.0 && s[i].t_s - before > sum_.gap_s) {
+      s[i].flags |= kGapBefore;
+      ++sum_.gaps;
+    }
+    count(s[i], before);
   }
 }
 
 TimestampSummary LogTimestampStream::finish() {
   pass_rest();
+  if (sum_.bursts)
+    add_import_event(*rec_, sum_.bursts->describe() + ": " + sum_.bursts->rate_text() + "; the samples' own times are kept",
+                     "warning");
   return sum_;
 }
 
+std::string TimestampSummary::rate_and_gaps() const {
+  return "rate " + fmt_g(rate_hz) + " Hz " +
+         (bursts ? "the mean rate (the timestamps come in bursts)" : "from the median interval") + "; " +
+         std::to_string(gaps) + " gap(s) flagged where the time jumps by more than " + fmt_g(gap_s * 1e3) + " ms";
+}
+
 std::string TimestampSummary::describe() const {
-  return "rate " + fmt_g(rate_hz) + " Hz from the median interval; " + std::to_string(gaps) +
-         " gap(s) flagged where the time jumps by more than 1.5 median intervals; " + std::to_string(repeated) +
-         " repeated and " + std::to_string(decreasing) + " decreasing timestamp(s), kept in file order";
+  return rate_and_gaps() + "; " + std::to_string(repeated) + " repeated and " + std::to_string(decreasing) +
+         " decreasing timestamp(s), kept in file order";
 }
 
 }  // namespace detail

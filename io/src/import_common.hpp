@@ -166,36 +166,40 @@ inline double seconds_since_us(std::uint64_t t0_us, std::uint64_t t_us) {
 }
 
 double median_interval(const std::vector<ImuSample>& s);
-// Flags samples that follow an interval longer than 1.5 periods; returns how many.
-std::size_t flag_time_gaps(std::vector<ImuSample>& s, double rate_hz);
 
 // The timestamps of a log taken as they come (in file order): output rate from the median
-// interval, gaps flagged where the time jumps by more than 1.5 median intervals, repeated and
-// decreasing timestamps counted (they do not stop an import).
+// interval, gaps flagged where the time jumps by more than gap_threshold(median interval, 0),
+// repeated and decreasing timestamps counted (they do not stop an import). A bursty log
+// (find_bursts, stend/io/timestamps.hpp): the rate is its mean rate and a gap longer than
+// Bursts::gap_s.
 struct TimestampSummary {
   double rate_hz = 0.0;
+  double gap_s = 0.0;          // intervals longer than this are gaps [s]
+  std::optional<Bursts> bursts;
   std::size_t gaps = 0;        // samples flagged kGapBefore by the timestamps
   std::size_t repeated = 0;    // t equal to the previous sample's
   std::size_t decreasing = 0;  // t before the previous sample's
-  std::string describe() const;  // for the info event
+  // "rate 100 Hz from the median interval; 2 gap(s) flagged where …" (for the info event)
+  std::string rate_and_gaps() const;
+  std::string describe() const;  // rate_and_gaps, the repeated and decreasing ones
 };
-TimestampSummary check_log_timestamps(std::vector<ImuSample>& s);
 
-// check_log_timestamps on a stream, with memory bounded by kTimestampWindow: the first window fixes
-// the rate (its median interval); every window is flagged at its gaps and counted (its first
+// The summary above on a stream, with memory bounded by kTimestampWindow: the first window fixes
+// the rate and the gap threshold; every window is flagged at its gaps and counted (its first
 // sample against the last of the window before), then passed on to `out`. A log of at most one
-// window is checked exactly as a whole. The rate goes into rate_into->output_rate_hz (when given)
-// before the first samples reach `out`.
+// window is checked exactly as a whole. The rate goes into rec.header.info.output_rate_hz before
+// the first samples reach `out`; finish() adds a warning event to `rec` when the log is bursty.
 class LogTimestampStream final : public WindowSink {
  public:
-  explicit LogTimestampStream(SampleSink& out, SensorInfo* rate_into = nullptr)
-      : WindowSink(out), rate_into_(rate_into) {}
+  LogTimestampStream(Recording& rec, SampleSink& out) : WindowSink(out), rec_(&rec) {}
   // Passes the rest on.
   TimestampSummary finish();
 
  private:
   void process(std::vector<ImuSample>& s, bool first, double prev_t) override;
-  SensorInfo* rate_into_;
+  void fix_rate(const std::vector<ImuSample>& first_window);
+  void count(const ImuSample& s, double prev_t);
+  Recording* rec_;
   TimestampSummary sum_;
 };
 

@@ -198,7 +198,7 @@ void stream_recording(const fs::path& file, const BagReader& bag, const RosbagOp
   h.info.has_temperature = scan.temperature > 0;
   h.gravity_mps2 = options.gravity_mps2;
 
-  LogTimestampStream times(out, &h.info);
+  LogTimestampStream times(rec, out);
   SampleChunker chunks(times);
   double t_last_s = 0.0;  // the first sample's time is 0
   const auto imu = bag.imu();
@@ -222,8 +222,7 @@ void stream_recording(const fs::path& file, const BagReader& bag, const RosbagOp
                    std::to_string(scan.zero_stamps) + " header stamps are zero (assumed: the recorder received each "
                    "message when it was measured)"
              : "; t_s from header.stamp relative to the first message";
-  msg += "; rate " + fmt_g(sum.rate_hz) + " Hz from the median interval; " + std::to_string(sum.gaps) +
-         " gaps (> 1.5 intervals) flagged; " + std::to_string(sum.repeated + sum.decreasing) +
+  msg += "; " + sum.rate_and_gaps() + "; " + std::to_string(sum.repeated + sum.decreasing) +
          " timestamps do not increase (kept as recorded)";
   msg += scan.temperature == 0 ? "; no temperature topic"
                                : "; temperature from " + options.temperature_topic + " (" +

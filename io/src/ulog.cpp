@@ -568,7 +568,7 @@ void import_ulog(const fs::path& file, const UlogOptions& opt, Recording& rec, S
   SensorInfo& info = rec.header.info;
   info.has_gyro = true;
   rec.header.identity = ulog_identity(log, choice);
-  LogTimestampStream times(out, &info);
+  LogTimestampStream times(rec, out);
   const MergeSummary merge = merge_series(f, log, choice, rec, times);
   const TimestampSummary ts = times.finish();
   add_import_event(

@@ -327,7 +327,7 @@ void expect_written_content(const Recording& r, bool temperature) {
   EXPECT_EQ(r.header.identity.serial, "imu_link");
   const std::string& m = info_event(r).message;
   EXPECT_NE(m.find("1 timestamps do not increase"), std::string::npos) << m;
-  EXPECT_NE(m.find("2 gaps"), std::string::npos) << m;
+  EXPECT_NE(m.find("2 gap(s)"), std::string::npos) << m;
 }
 
 TEST_F(Rosbag2, McapEveryStorageLayout) {

@@ -56,8 +56,9 @@ std::vector<ParameterResult> parameters_of(const json& doc, const std::string& f
   u.message = summary.message;
   std::vector<ParameterResult> out;
   if (use) *use = u;
-  // A failed fit is marked (its status and why) and its numbers excluded: none is a result.
-  if (summary.status == estimation::FitStatus::kFailed) return out;
+  // A failed (or not applicable) fit is marked (its status and why) and its numbers excluded: none
+  // is a result.
+  if (!summary.ok()) return out;
   // A gyroscope model's results (temp_poly-gyroscope.json) are told apart from the accelerometer's.
   const std::string instrument_suffix = "-gyroscope";
   const bool gyro_file = file_stem.size() > instrument_suffix.size() &&

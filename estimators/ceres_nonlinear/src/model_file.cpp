@@ -1,4 +1,5 @@
 #include <stend/ceres_nonlinear/model_file.hpp>
+#include "parts.hpp"
 #include <stend/physics/units.hpp>
 #include <stend/yaml/reader.hpp>
 
@@ -258,6 +259,8 @@ ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& option
   o.accel.processing = processing::resolve(o.accel.processing, rec);
   o.gyro.processing = processing::resolve(o.gyro.processing, rec);
   ModelFileFit f;
+  const std::string no_gyro = estimation::why_absent(rec.header.info, model::Instrument::kGyroscope);
+  if (!no_gyro.empty()) o.accel.estimate_gyro_bias = false;  // bias_only: no gyroscope to average
   std::string text = describe_options(o);
   std::vector<std::string> failures;
   if (o.accelerometer != "none") {
@@ -267,15 +270,19 @@ ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& option
     text += "\n" + f.accel.report();
     if (!f.accel.ok()) failures.push_back("accelerometer: " + f.accel.message);
   }
-  if (o.gyroscope != "none" && o.gyroscope != "bias_only") {
+  if (o.gyroscope != "none" && !no_gyro.empty()) {
+    f.gyro = detail::not_applicable_part(gyroscope_model(o.gyro.estimate_g_sensitivity), no_gyro);
+    f.has_gyro = true;
+    text += "\n" + f.gyro.report();
+  } else if (o.gyroscope != "none" && o.gyroscope != "bias_only") {
     f.gyro = fit_gyroscope(rec, o, f.accel);
     f.has_gyro = true;
     text += "\n" + f.gyro.report();
     if (!f.gyro.ok()) failures.push_back("gyroscope: " + f.gyro.message);
   }
-  f.status = failures.empty() ? estimation::FitStatus::kOk : estimation::FitStatus::kFailed;
   for (const auto& s : failures) f.message += (f.message.empty() ? "" : "; ") + s;
-  text += f.ok() ? "\nceres_nonlinear: ok\n" : "\nceres_nonlinear: FAILED — " + f.message + "\n";
+  detail::conclude(f);
+  text += "\n" + detail::status_line(f);
   f.text = text;
   f.json = results_document(o, f);
   return f;

@@ -115,6 +115,9 @@ Eigen::Vector3d CalibrationResult::correct(const Eigen::Vector3d& y) const {
 
 std::string CalibrationResult::report() const {
   const bool gyro = model.instrument == model::Instrument::kGyroscope;
+  if (status == estimation::FitStatus::kNotApplicable)  // nothing was fitted, no method ran
+    return fmt::format("Ceres {} calibration\nstatus: {} — {}\n", gyro ? "gyroscope" : "accelerometer",
+                       estimation::status_text(status), message);
   std::string s = fmt::format("Ceres {} calibration ({})\n", gyro ? "gyroscope" : "accelerometer", method_name(method));
   s += fmt::format("status: {}\n", ok() ? "ok" : "FAILED — " + message);
   s += fmt::format("{} intervals: {}{}, residuals: {}, estimated parameters: {}, dof: {}, condition number {}{}\n",

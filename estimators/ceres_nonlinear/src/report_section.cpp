@@ -156,6 +156,7 @@ estimation::ReportSection report_section(const estimation::FitResult& result) {
     return section;
   }
   section.add(estimation::parameter_table(s));
+  for (const auto& n : s.notes) section.add_text("note: " + n);
   if (fit.contains("accelerometer")) section.append(norm_figure(fit["accelerometer"]));
   for (const auto& n : s.notes) section.add_text("note: " + n);
   if (fit.contains("gyroscope")) {

@@ -110,6 +110,18 @@ estimation::InstrumentModel gyro_bias_model(const json& accel, double confidence
 
 double number_or_nan(const json& j) { return j.is_number() ? j.get<double>() : kNaN; }
 
+// A part of the document ("accelerometer", "gyroscope") as its instrument's model `m`: not
+// applicable when it says so (its instrument absent from the recording), else fitted or failed as
+// its status (or, in older documents, its "ok") says.
+estimation::InstrumentModel part_of(const json& part, model::ErrorModel m,
+                                    const std::vector<estimation::ParameterEstimate>& fitted,
+                                    const std::string& prefix, double confidence) {
+  const estimation::FitStatus status = estimation::status_of(part);
+  const std::string message = part.value("message", "");
+  if (status == estimation::FitStatus::kNotApplicable) return estimation::not_applicable(std::move(m), message);
+  return part_model(std::move(m), status == estimation::FitStatus::kOk, message, fitted, prefix, confidence);
+}
+
 }  // namespace
 
 estimation::FitResult read_results(const json& doc) {
@@ -118,8 +130,8 @@ estimation::FitResult read_results(const json& doc) {
   const double confidence = r.summary.confidence;
   if (doc.contains("accelerometer") && doc["accelerometer"].is_object()) {
     const json& a = doc["accelerometer"];
-    estimation::InstrumentModel m = part_model(accelerometer_model(), a.value("ok", false), a.value("message", ""),
-                                               part_parameters(a.value("parameters", json::array())), "accel_", confidence);
+    estimation::InstrumentModel m =
+        part_of(a, accelerometer_model(), part_parameters(a.value("parameters", json::array())), "accel_", confidence);
     m.gravity_mps2 = number_or_nan(a.value("gravity_mps2", json()));
     const bool bias_only = m.ok() && !doc.contains("gyroscope") && !a.value("gyro_parameters", json::array()).empty();
     r.accelerometer = std::move(m);
@@ -128,8 +140,7 @@ estimation::FitResult read_results(const json& doc) {
   if (doc.contains("gyroscope") && doc["gyroscope"].is_object()) {
     const json& g = doc["gyroscope"];
     const auto ps = part_parameters(g.value("parameters", json::array()));
-    r.gyroscope = part_model(gyroscope_model(names_g_sensitivity(ps)), g.value("ok", false), g.value("message", ""), ps,
-                             "gyro_", confidence);
+    r.gyroscope = part_of(g, gyroscope_model(names_g_sensitivity(ps)), ps, "gyro_", confidence);
     const std::string method = g.value("method", "");
     if (r.gyroscope->ok() && (method == method_name(Method::kTurns) || method == method_name(Method::kEarthRate)) && !g.value("uncertainty", "").empty())
       r.gyroscope->notes.push_back("uncertainty (" + method + "): " + g.value("uncertainty", ""));

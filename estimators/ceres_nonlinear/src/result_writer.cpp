@@ -59,15 +59,17 @@ std::string CalibrationResult::to_json() const {
   };
   json j;
   j["ok"] = ok();
+  j["status"] = estimation::to_string(status);
   j["message"] = message;
+  const bool gyro = model.instrument == model::Instrument::kGyroscope;
+  j["instrument"] = gyro ? "gyroscope" : "accelerometer";
+  if (status == estimation::FitStatus::kNotApplicable) return j.dump(2);  // nothing was fitted
   j["method"] = method_name(method);
   j["gravity_mps2"] = gravity_mps2;
   j["observations"] = observations;
   j["estimated"] = estimated;
   j["dof"] = dof;
   j[whitened ? "sigma_whitened" : "sigma_mps2"] = num(sigma);
-  const bool gyro = model.instrument == model::Instrument::kGyroscope;
-  j["instrument"] = gyro ? "gyroscope" : "accelerometer";
   const Rms& rms = reported_rms(*this);
   const AxisRms& axis = reported_axis_rms(*this);
   const std::string au = check_unit(method);
@@ -152,7 +154,7 @@ std::string results_document(const ModelFileOptions& o, const ModelFileFit& f) {
     for (const auto& p : f.gyro.parameters) add("gyro_", p);
   j["status"] = estimation::to_string(f.status);
   j["message"] = f.message;
-  j["notes"] = json::array();
+  j["notes"] = f.notes;  // the parts not applicable, then what the gyroscope's procedure says
   if (f.has_gyro) {
     const bool a_priori = f.gyro.method == Method::kTurns || f.gyro.method == Method::kEarthRate;
     if (a_priori && f.gyro.ok())  // the intervals' source is not the usual σ² = RSS/(n − p): say so

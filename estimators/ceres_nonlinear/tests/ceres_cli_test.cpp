@@ -156,6 +156,103 @@ TEST(CeresCli, TooFewPositionsFailsWithExitThreeAndNoNumbers) {
     }
 }
 
+// The run's samples as a CSV with the accelerometer only (no gyro columns mapped: the recording
+// has no gyroscope), fitted with the shipped unknown_orientations.yaml, which covers both
+// instruments: the accelerometer's numbers, the gyroscope not applicable, exit 0.
+TEST(CeresCli, AccelerometerOnlyDataGivesTheAccelerometerAndAGyroscopeNotApplicable) {
+  const TempDir dir("ceres-accel-only");
+  const ProgramOutput exported = run_stend("export " + run_dir().string() + " --to csv -o " + (dir / "csv").string());
+  ASSERT_EQ(exported.code, 0) << exported.text;
+  const fs::path out = dir / "ceres.json";
+  const ProgramOutput o = run_stend("fit " + (dir / "csv" / "imu.csv").string() +
+                                    " --format csv --time t_s --accel ax_mps2,ay_mps2,az_mps2 --model " + src +
+                                    "/estimators/ceres_nonlinear/examples/unknown_orientations.yaml --out " + out.string());
+  EXPECT_EQ(o.code, 0) << o.text;
+  for (const char* s : {"Ceres gyroscope calibration\nstatus: not applicable — the recording has no gyroscope",
+                        "ceres_nonlinear: ok\nnote: gyroscope: not applicable", "results:    " })
+    EXPECT_NE(o.text.find(s), std::string::npos) << s << "\n" << o.text;
+  EXPECT_EQ(o.text.find("FAILED"), std::string::npos) << o.text;
+  const json j = read_json(out);
+  EXPECT_EQ(j["status"], "ok") << j["message"];
+  EXPECT_EQ(j["accelerometer"]["status"], "ok");
+  EXPECT_EQ(j["gyroscope"]["status"], "not_applicable");
+  EXPECT_FALSE(j["gyroscope"].contains("parameters"));
+  ASSERT_EQ(j["notes"].size(), 1u);
+  const auto acc = by_name(j["accelerometer"]["parameters"]);
+  for (const char* name : {"scale_x", "scale_y", "scale_z"}) {
+    const double v = acc.at(name)["value"].get<double>(), se = acc.at(name)["std_error"].get<double>();
+    EXPECT_NEAR(v, kAccelTruth.at(name), 4.0 * se + 3e-4) << name;
+  }
+  for (const auto& p : j["parameters"]) EXPECT_EQ(p["name"].get<std::string>().rfind("gyro_", 0), std::string::npos) << p;
+}
+
+// The same samples logged in bursts (4 samples 2 ms apart every 40 ms; the sensor sampled every
+// 10 ms): the import takes the mean rate and keeps the samples' times, and the gyro integration over
+// those times gives the calibration of the evenly timed log within two of its standard errors
+// (seen: 1.4 at most; taken at the rate inside a burst, every scale would be off by a factor 5).
+TEST(CeresCli, BurstyTimesGiveTheSameGyroCalibration) {
+  const TempDir dir("ceres-bursty");
+  const ProgramOutput exported = run_stend("export " + run_dir().string() + " --to csv -o " + (dir / "csv").string());
+  ASSERT_EQ(exported.code, 0) << exported.text;
+  std::ifstream in(dir / "csv" / "imu.csv");
+  std::ofstream out(dir / "bursty.csv");
+  std::string line;
+  std::getline(in, line);
+  out << line << "\n";  // t_s first
+  for (std::size_t i = 0; std::getline(in, line); ++i)
+    out << std::to_string(0.01 + static_cast<double>(i / 4) * 0.04 + static_cast<double>(i % 4) * 0.002)
+        << line.substr(line.find(',')) << "\n";
+  out.close();
+  const auto fit = [&](const fs::path& csv, const fs::path& results) {
+    return run_stend("fit " + csv.string() + " --format csv --time t_s --accel ax_mps2,ay_mps2,az_mps2 --gyro " +
+                     "gx_radps,gy_radps,gz_radps --model " + src +
+                     "/estimators/ceres_nonlinear/examples/unknown_orientations.yaml --out " + results.string());
+  };
+  const ProgramOutput even = fit(dir / "csv" / "imu.csv", dir / "even.json");
+  ASSERT_EQ(even.code, 0) << even.text;
+  const ProgramOutput bursty = fit(dir / "bursty.csv", dir / "bursty.json");
+  ASSERT_EQ(bursty.code, 0) << bursty.text;
+  EXPECT_NE(bursty.text.find("timestamps come in bursts of ~4 samples every 40 ms"), std::string::npos) << bursty.text;
+  const auto a = by_name(read_json(dir / "even.json")["gyroscope"]["parameters"]);
+  const auto b = by_name(read_json(dir / "bursty.json")["gyroscope"]["parameters"]);
+  for (const char* name : {"scale_x", "scale_y", "scale_z", "cross_xy", "cross_xz", "cross_yx", "cross_yz", "cross_zx",
+                           "cross_zy"}) {
+    const double se = a.at(name)["std_error"].get<double>();
+    EXPECT_NEAR(b.at(name)["value"].get<double>(), a.at(name)["value"].get<double>(), 2.0 * se) << name;
+  }
+}
+
+// A failed fit never silently replaces a good results file: the good one stays byte for byte, the
+// failure goes beside it (failed-ceres.json), and the message names both.
+TEST(CeresCli, AFailedFitKeepsAGoodResultsFileAndSaysWhereTheFailureWent) {
+  const TempDir dir("ceres-keep-good");
+  const fs::path good = dir / "ceres.json", failed = dir / "failed-ceres.json";
+  const ProgramOutput first = run_stend("fit " + run_dir().string() + " --model " + src +
+                                        "/estimators/ceres_nonlinear/examples/unknown_orientations.yaml --out " + good.string());
+  ASSERT_EQ(first.code, 0) << first.text;
+  const std::string good_bytes = stend::testing::read_text(good), good_text = stend::testing::read_text(dir / "ceres.txt");
+  std::ofstream(dir / "strict.yaml") << "ceres_nonlinear:\n  accelerometer: unknown_orientations\n  gyroscope: none\n"
+                                        "  detector: {min_duration_s: 100}\n";
+  const ProgramOutput o = run_stend("fit " + run_dir().string() + " --model " + (dir / "strict.yaml").string() +
+                                    " --out " + good.string());
+  EXPECT_EQ(o.code, 3) << o.text;
+  EXPECT_EQ(stend::testing::read_text(good), good_bytes);
+  EXPECT_EQ(stend::testing::read_text(dir / "ceres.txt"), good_text);
+  ASSERT_TRUE(fs::exists(failed)) << o.text;
+  EXPECT_EQ(read_json(failed)["status"], "failed");
+  EXPECT_TRUE(fs::exists(dir / "failed-ceres.txt"));
+  EXPECT_NE(o.text.find("warning: the fit failed; " + good.string() + " (and ceres.txt) holds an earlier good result "
+                        "and is kept unchanged; this failed result is written beside it, to " + failed.string()),
+            std::string::npos)
+      << o.text;
+  EXPECT_NE(o.text.find("results:    none — the fit failed (" + failed.string()), std::string::npos) << o.text;
+  // A second failure replaces the first failure's file, never the good one.
+  const ProgramOutput again = run_stend("fit " + run_dir().string() + " --model " + (dir / "strict.yaml").string() +
+                                        " --out " + good.string());
+  EXPECT_EQ(again.code, 3) << again.text;
+  EXPECT_EQ(stend::testing::read_text(good), good_bytes);
+}
+
 TEST(CeresCli, PluginsListTheFourEstimators) {
   const ProgramOutput o = run_stend("plugins");
   EXPECT_EQ(o.code, 0) << o.text;

@@ -2,6 +2,7 @@
 // failure modes (too few intervals, degenerate design), static detection, and the two public
 // sessions compared against their projects' own calibrations.
 #include <stend/ceres_nonlinear/calibration.hpp>
+#include <stend/ceres_nonlinear/estimator.hpp>  // read_results
 #include <stend/ceres_nonlinear/model_file.hpp>
 #include <stend/io/importers.hpp>
 #include <stend/testing/paths.hpp>
@@ -302,8 +303,8 @@ TEST(CeresNonlinear, RobustLossResistsAnOutlierInterval) {
   EXPECT_LT(std::abs(robust.parameter("scale_x").value - theta[3]), 3e-3);
 }
 
-TEST(CeresNonlinear, DetectsStaticIntervalsInASimulatedRecording) {
-  // 12 still poses of 4 s separated by 2 s of motion at 100 Hz.
+// 12 still poses of 4 s separated by 2 s of motion at 100 Hz, accelerometer only (truth_theta(false)).
+Recording still_poses_recording() {
   Recording rec;
   std::mt19937_64 rng(9);
   std::normal_distribution<double> n(0.0, 0.02);
@@ -333,6 +334,12 @@ TEST(CeresNonlinear, DetectsStaticIntervalsInASimulatedRecording) {
     prev = d;
   }
   rec.header.gravity_mps2 = kG;
+  return rec;
+}
+
+TEST(CeresNonlinear, DetectsStaticIntervalsInASimulatedRecording) {
+  const Recording rec = still_poses_recording();
+  const auto theta = truth_theta(false);
   processing::StaticDetectorOptions d;
   d.window_s = 0.5;
   d.min_duration_s = 2.0;
@@ -344,6 +351,38 @@ TEST(CeresNonlinear, DetectsStaticIntervalsInASimulatedRecording) {
   ASSERT_TRUE(r.ok()) << r.report();
   EXPECT_EQ(r.intervals.size(), 12u);
   EXPECT_NEAR(r.parameter("scale_y").value, theta[4], 4 * r.parameter("scale_y").std_error + 1e-4);
+}
+
+// A model of both instruments on a recording without a gyroscope (SensorInfo::has_gyro false): the
+// accelerometer is fitted, the gyroscope is not applicable — never a failure, no numbers, no gyro
+// bias either (bias_only) — and the results document reads back the same.
+TEST(CeresNonlinear, AbsentGyroscopeIsNotApplicableAndTheAccelerometerStands) {
+  Recording rec = still_poses_recording();
+  rec.header.info.has_gyro = false;
+  for (const char* gyroscope : {"integration", "rate_table", "bias_only"}) {
+    SCOPED_TRACE(gyroscope);
+    ModelFileOptions o;
+    o.accelerometer = "unknown_orientations";
+    o.gyroscope = gyroscope;
+    o.accel.processing.detector.window_s = 0.5;
+    o.accel.processing.detector.min_duration_s = 2.0;
+    o.accel.estimate_gyro_bias = o.gyroscope == "bias_only";
+    const ModelFileFit f = fit_model_file(rec, o);
+    EXPECT_TRUE(f.ok()) << f.text;
+    EXPECT_TRUE(f.accel.ok()) << f.accel.report();
+    EXPECT_TRUE(f.accel.gyro_bias.empty());
+    EXPECT_EQ(f.gyro.status, estimation::FitStatus::kNotApplicable);
+    ASSERT_EQ(f.notes.size(), 1u);
+    EXPECT_NE(f.notes[0].find("gyroscope: not applicable — the recording has no gyroscope"), std::string::npos);
+    EXPECT_NE(f.text.find("ceres_nonlinear: ok\nnote: gyroscope: not applicable"), std::string::npos) << f.text;
+    const estimation::FitResult r = read_results(nlohmann::json::parse(f.json));
+    EXPECT_TRUE(r.ok());
+    ASSERT_TRUE(r.accelerometer && r.gyroscope);
+    EXPECT_TRUE(r.accelerometer->ok());
+    EXPECT_EQ(r.gyroscope->status, estimation::FitStatus::kNotApplicable);
+    EXPECT_TRUE(r.gyroscope->parameters.empty());
+    EXPECT_EQ(r.summary.notes, f.notes);
+  }
 }
 
 // ------------------------------------------------------------------------------------------------

@@ -12,6 +12,7 @@
 
 #include <stend/estimation/summary.hpp>
 #include <stend/model/terms.hpp>
+#include <stend/sdk.hpp>  // SensorInfo
 
 #include <Eigen/Core>
 
@@ -83,6 +84,15 @@ struct InstrumentModel {
   // (NaN matches NaN).
   bool equals(const InstrumentModel& other, double rel_tol = 1e-9, double abs_tol = 0.0) const;
 };
+// Why `instrument` cannot be fitted on a recording whose sensor `info` describes: "" when the
+// recording has it. Only a gyroscope can be absent (SensorInfo::has_gyro, false when the source held
+// no gyroscope data: e.g. a CSV without gyro columns); every sensor and importer gives an
+// accelerometer.
+std::string why_absent(const SensorInfo& info, model::Instrument instrument);
+// The model of an instrument absent from the recording: kNotApplicable, `why` its message, no
+// parameters (nothing was fitted).
+InstrumentModel not_applicable(model::ErrorModel model, const std::string& why);
+
 std::ostream& operator<<(std::ostream& os, const InstrumentModel& m);  // = print
 
 }  // namespace stend::estimation

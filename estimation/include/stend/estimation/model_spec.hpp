@@ -27,6 +27,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -64,6 +65,8 @@ ModelSpec load_model_spec(const std::filesystem::path& file);
 std::string to_yaml(const ModelSpec& spec);
 
 const char* instrument_name(model::Instrument inst);  // "accelerometer" | "gyroscope"
+// The instrument instrument_name() names; nullopt for any other name.
+std::optional<model::Instrument> instrument_from_name(const std::string& name);
 const char* weighting_name(Weighting w);               // "none" | "segment_noise"
 char axis_name(int axis);                              // 'x' 'y' 'z'
 

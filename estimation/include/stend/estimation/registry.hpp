@@ -114,7 +114,9 @@ class Registry {
 // Fits through an entry: its typed `fit`, else its SDK estimator (`create`) with the JSON it
 // returns read back by the entry's reader or the generic one; a plugin's ok and message are
 // taken as it states them, and a failed fit without a document gets the summary fields
-// (failed_fit). Throws what the estimator throws (a bad model file, unreadable input).
+// (failed_fit). A model file whose `instrument:` the recording does not have (why_absent) is not
+// fitted: its result is not applicable (not_applicable_fit). Throws what the estimator throws (a
+// bad model file, unreadable input).
 FitResult fit(const EstimatorEntry& entry, const EstimatorRequest& request);
 
 }  // namespace stend::estimation

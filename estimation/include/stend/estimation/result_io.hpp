@@ -34,6 +34,11 @@ std::optional<InstrumentModel> read_fit_model(const nlohmann::json& doc);
 // why, no numbers; its document holds the summary fields.
 FitResult failed_fit(const std::string& estimator, const std::string& version, const std::string& message);
 
+// The typed result of a fit whose only instrument is absent from the recording (why_absent): status
+// kNotApplicable with the model's message, the model in its slot, no numbers; its document holds
+// the summary fields.
+FitResult not_applicable_fit(const std::string& estimator, const std::string& version, InstrumentModel model);
+
 // The model slot of `r` for `m`'s instrument (accelerometer or gyroscope), filled with m.
 void set_instrument(FitResult& r, InstrumentModel m);
 

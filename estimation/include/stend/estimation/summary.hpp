@@ -4,7 +4,7 @@
 // results database and `stend compare` read, whichever estimator wrote it.
 //
 // JSON (the fields every results document carries, read back by summary_from_json):
-//   "status": "ok" | "failed", "message": "…",
+//   "status": "ok" | "failed" | "not_applicable", "message": "…",
 //   "parameters": [{"name", "unit", "value", "std_error", "interval": [lo, hi],
 //                   "identifiable", "verdict", "tolerance", "reason"}, …],   non-finite numbers are null
 //   ("verdict": "determined" | "imprecise" | "not identifiable", stend/estimation/identifiability.hpp;
@@ -26,9 +26,17 @@ namespace stend::estimation {
 enum class FitStatus {
   kOk,      // the fit ran and its numbers are results
   kFailed,  // the fit failed: `message` says why, and no number is a result
+  // Nothing to fit: the instrument is absent from the recording (`message` says which and why).
+  // Not a failure and not a result: no numbers, and it never makes a fit of several parts fail.
+  kNotApplicable,
 };
-const char* to_string(FitStatus s);             // "ok" | "failed"
-FitStatus fit_status_from_string(const std::string& s);  // anything but "ok" is kFailed
+const char* to_string(FitStatus s);             // "ok" | "failed" | "not_applicable"
+FitStatus fit_status_from_string(const std::string& s);  // those three; anything else is kFailed
+// The status of a fit of several parts (its instruments): kFailed when a part failed, else kOk
+// when a part gave a result, else kNotApplicable (every part, or no part).
+FitStatus combined_status(const std::vector<FitStatus>& parts);
+// How a status reads in a report: "ok", "FAILED", "not applicable".
+const char* status_text(FitStatus s);
 
 // One parameter of a fit (the linear solver's, every estimator's summary, the reports').
 struct ParameterEstimate {
@@ -80,7 +88,8 @@ struct FitSummary {
   bool ok() const { return status == FitStatus::kOk; }
   const ParameterEstimate* find(const std::string& name) const;
 
-  // One line: "batch_lsq 0.1.0: ok — 9 parameters, 7 identified" or "…: FAILED — why".
+  // One line: "batch_lsq 0.1.0: ok — 9 parameters, 7 identified", "…: FAILED — why" or
+  // "…: not applicable — why".
   std::string BriefReport() const;
   // BriefReport, then the parameter table and the notes.
   std::string FullReport() const;

@@ -56,8 +56,13 @@ std::string describe_options(const ModelFileOptions& o);
 std::string options_json(const ModelFileOptions& o);
 
 struct ModelFileFit {
-  estimation::FitStatus status = estimation::FitStatus::kFailed;  // kOk when every requested part succeeded
-  std::string message;  // the failed parts and why
+  // kOk when every requested part succeeded or was not applicable and one gave a result
+  // (estimation::combined_status); kNotApplicable when none applied.
+  estimation::FitStatus status = estimation::FitStatus::kFailed;
+  std::string message;  // the failed parts and why (none applied: why not)
+  // A part whose instrument the recording lacks (estimation::why_absent): "gyroscope: not
+  // applicable — why". Such a part has no numbers and never makes the fit fail.
+  std::vector<std::string> notes;
   CalibrationResult accel, gyro;
   bool has_accel = false, has_gyro = false;
   std::string text;  // options echo + both reports
@@ -72,7 +77,9 @@ struct ModelFileFit {
 std::string results_document(const ModelFileOptions& options, const ModelFileFit& fit);
 
 // Runs what the options ask for: accelerometer first (the integration method needs it), then the
-// gyroscope. status kOk only when every requested part succeeded. Processing keys the model file does not
+// gyroscope — not applicable, with no gyro bias estimated either, when the recording has no
+// gyroscope (SensorInfo::has_gyro false). status kOk only when no requested part failed and one
+// gave a result. Processing keys the model file does not
 // state come from the recording's experiment `processing:` section (processing::resolve); the
 // echoed options are the ones used.
 ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& options);
