@@ -8,8 +8,11 @@
 // (docs/real-data.md, "Shipped procedures on the twin: interval coverage") and the parameters
 // below 90 %.
 //
-//   procedure_coverage [--seeds N] [--first SEED] [--procedure NAME] [--detail] [--bias-instability]
+//   procedure_coverage [--seeds N] [--first SEED] [--procedure NAME] [--quirks LIST] [--detail]
+//                      [--bias-instability]
 //
+// --quirks gives every twin the quirks listed (comma-separated names of stend/sim/twin_log.hpp, e.g.
+// "bursty" or "bursty,counts") instead of its own;
 // --detail lists every parameter's coverage (else those below 90 %), with the mean and spread of
 // (fitted − planted)/standard error; --bias-instability gives the twin's sensor the simulator's own
 // bias instability and random walk (off in the twin: docs/real-data.md).
@@ -45,7 +48,19 @@ struct Args {
   std::string only;
   bool detail = false;
   bool bias_instability = false;
+  std::vector<sim::Quirk> quirks;  // empty: each twin's own
 };
+
+std::vector<sim::Quirk> quirks_from_list(const std::string& list) {
+  std::vector<sim::Quirk> out;
+  std::size_t from = 0;
+  while (from <= list.size()) {
+    const std::size_t comma = std::min(list.find(',', from), list.size());
+    out.push_back(sim::quirk_from_name(list.substr(from, comma - from)));
+    from = comma + 1;
+  }
+  return out;
+}
 
 Args parse(int argc, char** argv) {
   Args a;
@@ -60,8 +75,10 @@ Args parse(int argc, char** argv) {
     else if (arg == "--procedure") a.only = value();
     else if (arg == "--detail") a.detail = true;
     else if (arg == "--bias-instability") a.bias_instability = true;
+    else if (arg == "--quirks") a.quirks = quirks_from_list(value());
     else throw std::invalid_argument("unknown argument " + arg +
-                                     " (--seeds N, --first SEED, --procedure NAME, --detail, --bias-instability)");
+                                     " (--seeds N, --first SEED, --procedure NAME, --quirks LIST, --detail, "
+                                     "--bias-instability)");
   }
   return a;
 }
@@ -76,6 +93,7 @@ struct Tally {
 // One procedure over the seeds.
 struct Run {
   const sim::ShippedTwin* twin = nullptr;
+  std::vector<sim::Quirk> quirks;  // the log's
   std::vector<std::string> order;  // parameter names in the document's order
   std::map<std::string, Tally> params;
   int played = 0, aligned = 0, fitted = 0;
@@ -90,7 +108,7 @@ void note(Run& run, std::uint64_t seed, const std::string& what) {
 // One seed: play, write, import, align, fit, check.
 void one_seed(Run& run, const Experiment& exp, const ceres_nonlinear::ModelFileOptions& model, std::uint64_t seed,
               const fs::path& dir, bool bias_instability) {
-  sim::TwinSetup setup = sim::twin_setup(run.twin->quirks, seed);
+  sim::TwinSetup setup = sim::twin_setup(run.quirks, seed);
   if (bias_instability) {  // the simulator's own bias instability and random walk (procedure_player.hpp)
     const sim::SimImuConfig defaults;
     setup.sensor.accel_bias_instability_mps2 = defaults.accel_bias_instability_mps2;
@@ -130,6 +148,7 @@ void one_seed(Run& run, const Experiment& exp, const ceres_nonlinear::ModelFileO
 Run run_procedure(const sim::ShippedTwin& twin, const Args& args, const fs::path& dir) {
   Run run;
   run.twin = &twin;
+  run.quirks = args.quirks.empty() ? twin.quirks : args.quirks;
   const auto start = std::chrono::steady_clock::now();
   const Experiment exp = load_observed_procedure((fs::path(STEND_SOURCE_DIR) / twin.procedure).string());
   const ceres_nonlinear::ModelFileOptions model =
@@ -168,7 +187,7 @@ void print_table(const std::vector<Run>& runs, const Args& args) {
     for (const auto& [name, t] : r.params) held += t.held > 0 && t.estimated == 0 ? 1 : 0;
     const double median = c.empty() ? std::nan("") : (c[(c.size() - 1) / 2] + c[c.size() / 2]) / 2.0;
     std::printf("| %s | %s | %s | %zu / %d | %s | %s | %d / %d of %d | %.0f s |\n", r.twin->name.c_str(),
-                fs::path(r.twin->model).filename().c_str(), sim::quirk_list(r.twin->quirks).c_str(), c.size(), held,
+                fs::path(r.twin->model).filename().c_str(), sim::quirk_list(r.quirks).c_str(), c.size(), held,
                 percent(c.empty() ? std::nan("") : c.front()).c_str(), percent(median).c_str(), r.aligned, r.fitted,
                 args.seeds, r.seconds);
   }

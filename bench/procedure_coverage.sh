@@ -5,7 +5,8 @@
 # docs/real-data.md ("Shipped procedures on the twin: interval coverage"): per procedure the share of
 # seeds whose 95 % interval holds the planted value, minimum and median over the parameters it
 # identifies, and the parameters below 90 %. Prints the machine and the command first. Extra
-# arguments go to the program (--procedure NAME, --detail, --bias-instability, --first SEED).
+# arguments go to the program (--procedure NAME, --quirks LIST, --detail, --bias-instability,
+# --first SEED).
 #
 #   bench/procedure_coverage.sh [SEEDS] [ARGS...]    (default: 100 seeds)
 set -euo pipefail

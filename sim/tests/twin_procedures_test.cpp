@@ -190,20 +190,14 @@ TEST(TwinProcedures, SixFacesWithBurstyTimestamps) {
   expect_covered(run_twin("six_faces", 1, {Quirk::kBursty}), kAccel12 + kGyroBias);
 }
 
-// … but a turn's integral and the detector's intervals do. Today the import takes the burst spacing
-// (1 ms) for the rate, flags a gap before every burst and the turns (ferraris) and the detected
-// stills (unknown_orientations) are left out: the fit fails. Enable these once the import takes a
-// bursty log's mean rate.
+// … but a turn's integral and the detector's intervals do: the import takes the bursty log's mean
+// rate and keeps its times (io::find_bursts), so the turns integrate over the real time base and the
+// detector sees no gap before each burst.
 TEST(TwinProcedures, FerrarisWithBurstyTimestamps) {
-  GTEST_SKIP() << "bursty timestamps: the import rebuilds them at the 1 ms burst spacing and flags a gap before "
-                  "each burst, so every turn is left out (\"lost samples inside it\"); enable when the import "
-                  "takes a bursty log's mean rate";
   expect_covered(run_twin("ferraris", 1, {Quirk::kBursty}), kAccel12 + kGyro21);
 }
 
 TEST(TwinProcedures, UnknownOrientationsWithBurstyTimestamps) {
-  GTEST_SKIP() << "bursty timestamps: the import flags a gap before each burst, the detector splits every still "
-                  "there and finds no static interval; enable when the import takes a bursty log's mean rate";
   std::set<std::string> accel = names("accel_", {"bias", "scale"});
   accel.insert({"accel_cross_yx", "accel_cross_zx", "accel_cross_zy"});
   expect_covered(run_twin("unknown_orientations", 1, {Quirk::kBursty}), accel + kGyro21);

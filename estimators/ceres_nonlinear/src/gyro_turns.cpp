@@ -20,10 +20,15 @@ using namespace detail;
 
 namespace {
 
+// The period each sample of the turn stands for [s] (KnownTurn::sample_period_s).
+double turn_sample_period_s(const KnownTurn& t) {
+  return t.sample_period_s > 0.0 ? t.sample_period_s : sample_period_s(t.window);
+}
+
 // A turn's effective duration T = N·Δt [s]: each of its N samples stands for one sample period, so
 // that Σ ω_i Δt = ȳ·T exactly (ȳ the mean reading).
-double turn_duration_s(const processing::StaticPoint& w) {
-  return static_cast<double>(w.samples_used) * sample_period_s(w);
+double turn_duration_s(const KnownTurn& t) {
+  return static_cast<double>(t.window.samples_used) * turn_sample_period_s(t);
 }
 
 // Still k as an observation: ȳ_k against measure(θ, ω_k, f̄_k) (ω_k the applied rate, f̄_k the
@@ -43,7 +48,7 @@ GyroObservation still_observation(const processing::StaticPoint& s, const Eigen:
 // samples, (σ_n·Δt)²·N per axis, plus the turn's own uncertainty σ_a along its axis and |θ|·σ_a
 // across it (the axis direction known to σ_a).
 Eigen::Matrix3d turn_covariance(const KnownTurn& t, const Eigen::Vector3d& noise_radps, double sigma_angle_rad) {
-  const double dt = sample_period_s(t.window);
+  const double dt = turn_sample_period_s(t);
   const double n = static_cast<double>(t.window.samples_used);
   Eigen::Matrix3d c = (noise_radps * dt).cwiseAbs2().asDiagonal();
   c *= n;
@@ -59,7 +64,7 @@ Eigen::Matrix3d turn_covariance(const KnownTurn& t, const Eigen::Vector3d& noise
 // v_k against A(θ)·θ_k + b·T + G·F_k — with its covariance over T² in `c`.
 GyroObservation turn_observation(const KnownTurn& t, const Eigen::Vector3d& noise_radps, double sigma_angle_rad,
                                  Eigen::Matrix3d& c) {
-  const double T = turn_duration_s(t.window);
+  const double T = turn_duration_s(t);
   GyroObservation obs;
   obs.stimulus.input = t.rotation_rad / T;
   obs.stimulus.specific_force = t.window.accel.mean;
@@ -72,7 +77,7 @@ GyroObservation turn_observation(const KnownTurn& t, const Eigen::Vector3d& nois
 void turn_checks(const std::vector<KnownTurn>& turns, CalibrationResult& r) {
   Eigen::Vector3d before_sq = Eigen::Vector3d::Zero(), after_sq = Eigen::Vector3d::Zero();
   for (const KnownTurn& t : turns) {
-    const double T = turn_duration_s(t.window);
+    const double T = turn_duration_s(t);
     TurnCheck c;
     c.label = t.window.segment.label;
     c.t_start_s = t.window.t_start_s;
@@ -141,7 +146,7 @@ std::string turns_refusal(const std::vector<processing::StaticPoint>& stills, co
   if (!finite_intervals(stills)) return "non-finite (NaN) readings in a still";
   for (const KnownTurn& t : turns)
     if (!t.window.gyro.mean.allFinite() || !t.window.accel.mean.allFinite() || !t.rotation_rad.allFinite() ||
-        !(turn_duration_s(t.window) > 0.0))
+        !(turn_duration_s(t) > 0.0))
       return "non-finite readings or truth, or no duration, in turn '" + t.window.segment.label + "'";
   if (!(noise.minCoeff() > 0.0))
     return "the stills show no gyro noise and the quantization step is unknown: the a-priori sigmas need one";
@@ -236,7 +241,8 @@ std::vector<KnownTurn> known_turns(const Recording& rec, const std::array<int, 3
       notes.push_back(fmt::format("turn '{}' left out: no finite turn_*_deg truth over it", name));
       continue;
     }
-    turns.push_back({w, turn_deg * physics::kDegToRad});
+    const double rate_hz = rec.header.info.output_rate_hz;
+    turns.push_back({w, turn_deg * physics::kDegToRad, rate_hz > 0.0 ? 1.0 / rate_hz : 0.0});
     turns.back().window.segment.label = name;
   }
   return turns;

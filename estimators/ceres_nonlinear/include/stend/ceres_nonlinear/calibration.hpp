@@ -312,10 +312,14 @@ CalibrationResult calibrate_gyro_integration(const Recording& rec, const Calibra
 CalibrationResult calibrate_gyro_turns(const Recording& rec, const GyroOptions& options = {},
                                        const CalibrationResult* accel = nullptr);
 // A turn given directly: its window (mean gyro and specific-force readings, samples_used, first
-// and last sample times) and the rotation it made [rad, sensor frame].
+// and last sample times) and the rotation it made [rad, sensor frame]. Each of its samples stands
+// for sample_period_s: the recording's sample period (1 / its rate: a bursty log's mean rate, whose
+// stamps inside a turn say when the samples arrived, not when they were taken); 0: the window's
+// own, its duration over its sample intervals.
 struct KnownTurn {
   processing::StaticPoint window;
   Eigen::Vector3d rotation_rad = Eigen::Vector3d::Zero();
+  double sample_period_s = 0.0;
 };
 // `stills[k].stimulus.input`: the applied rate of still k (Earth rate, or 0) [rad/s];
 // quantization_radps: one count of the gyro (0: unknown).
