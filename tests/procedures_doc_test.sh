@@ -9,15 +9,8 @@
 # Usage: procedures_doc_test.sh SOURCE_DIR BUILD_DIR SHARED_DATA_DIR
 set -uo pipefail
 src=$1 build=$2 data=$3
-scratch=$(mktemp -d)
-trap 'rm -rf "$scratch"' EXIT
-mkdir -p "$scratch/repo" "$scratch/shared"
-[ -d "$data" ] && ln -s "$(cd "$data" && pwd)" "$scratch/shared/data"
-for entry in "$src"/*; do
-  name=$(basename "$entry")
-  [ "$name" = build ] || [ "$name" = runs ] || ln -s "$entry" "$scratch/repo/$name"
-done
-ln -s "$build" "$scratch/repo/build"
+. "$(dirname "$0")/doc_commands.sh"
+doc_scratch "$src" "$build" "$data"
 commands=$(awk '/^## / {inside = ($0 == "## Worked examples")}
                 inside && /^    / {
                   line = substr($0, 5)
@@ -30,7 +23,7 @@ if [ "$count" -lt 14 ]; then
   echo "FAIL: found only $count stend commands among the worked examples of docs/procedures.md"
   exit 1
 fi
-failed=0 skipped=0 ran=0 unmade=""
+skipped=0 ran=0 unmade=""
 cd "$scratch/repo"
 while IFS= read -r cmd; do
   [ -n "$cmd" ] || continue
@@ -45,25 +38,10 @@ while IFS= read -r cmd; do
     continue
   fi
   ran=$((ran + 1))
-  if out=$(bash -c "$cmd" 2>&1); then
-    if [[ "$cmd" == "build/bin/stend fit "* ]] && grep -qE 'fit failed|not applicable|results: none' <<< "$out"; then
-      echo "FAIL  $cmd (exit 0, but a part did not fit)"
-      printf '%s\n' "$out" | grep -E 'fit failed|not applicable|results: none' | head -5 | sed 's/^/      /'
-      failed=$((failed + 1))
-    else
-      echo "ok    $cmd"
-    fi
-  else
-    rc=$?
-    echo "FAIL  $cmd (exit $rc)"
-    printf '%s\n' "$out" | tail -15 | sed 's/^/      /'
-    failed=$((failed + 1))
-  fi
+  forbidden=""
+  [[ "$cmd" == "build/bin/stend fit "* ]] && forbidden='fit failed|not applicable|results: none'
+  doc_run "$cmd" "$forbidden"
 done <<< "$commands"
-extra=$(find "$scratch/repo" -mindepth 1 -maxdepth 1 ! -type l ! -name runs)
-if [ -n "$extra" ]; then
-  echo "FAIL: the commands wrote outside runs/: $extra"
-  failed=$((failed + 1))
-fi
+doc_check_only_runs
 echo "$((ran - failed)) of $ran worked-example commands succeeded ($skipped skipped)"
 [ "$failed" -eq 0 ]

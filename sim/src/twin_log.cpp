@@ -3,7 +3,8 @@
 
 #include <stend/physics/units.hpp>
 
-#include <cstdio>
+#include <fmt/format.h>
+
 #include <fstream>
 #include <stdexcept>
 
@@ -19,14 +20,9 @@ bool has(const std::vector<Quirk>& quirks, Quirk q) {
   return false;
 }
 
-// A number as printf's %.<digits>g, or %.<digits>f with fixed.
+// A number with `digits` significant digits, or `digits` decimals with fixed.
 std::string number(double v, int digits, bool fixed = false) {
-  char buf[64];
-  if (fixed)
-    std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  else
-    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-  return buf;
+  return fixed ? fmt::format("{:.{}f}", v, digits) : fmt::format("{:.{}g}", v, digits);
 }
 
 // The logged time of sample k: its true time, or with bursts the time its burst arrived plus its
