@@ -4,6 +4,7 @@
 
 #include <stend/physics/gravity.hpp>
 #include <stend/physics/units.hpp>
+#include <stend/recording/samples.hpp>
 #include <stend/recording/truth_columns.hpp>
 #include <stend/yaml/reader.hpp>
 
@@ -240,7 +241,7 @@ class Builder {
       if (!candidate(i, s, Motion::kStill)) continue;
       Segment seg = segment(index, s, SegmentKind::kOrientation, i, k, s.count);
       seg.targets = "still, orientation not stated";
-      hold(seg, nan3(), nan3(), nan3());
+      hold(seg, nan3(), earth_rate_along(stretches_[i].sum.accel_mean().normalized()), nan3());
       take(i, seg);
       return true;
     }
@@ -312,7 +313,8 @@ class Builder {
         seg.rate = rate_dps;
         seg.targets = "rate=" + format_number(rate_dps) + " deg/s about " + direction_text(s.sensor_axis);
         const Eigen::Vector3d f = s.up ? Eigen::Vector3d(exp_.gravity.resolved_mps2 * *s.up) : nan3();
-        hold(seg, f, rate_dps * physics::kDegToRad * s.sensor_axis, nan3());
+        const Eigen::Vector3d earth = s.up ? earth_rate_along(*s.up) : Eigen::Vector3d::Zero();
+        hold(seg, f, rate_dps * physics::kDegToRad * s.sensor_axis + earth, nan3());
         note(s, "leg " + std::to_string(k + 1) + " (" + format_number(rate_dps) + " deg/s): " + time_text(seg.t_start_s, seg.t_end_s) +
                     ", " + format_number(std::round(about * 100) / 100) + " deg/s measured");
         take(i, seg);
@@ -383,8 +385,10 @@ class Builder {
     rows_.emplace(t, std::vector<double>{f[0], f[1], f[2], w[0], w[1], w[2], turn[0], turn[1], turn[2]});
   }
 
-  // The Earth rate's vertical component along the sensor direction `up` [rad/s], when the site's
-  // latitude is known; else 0 (an MEMS gyro does not resolve it; said in the notes).
+  // The Earth rate's vertical component along the sensor direction `up` (stated, or measured for a
+  // still at an unstated orientation) [rad/s], when the site's latitude is known; else 0 (an MEMS
+  // gyro hardly resolves it; said in the notes). The horizontal part depends on the heading, which
+  // no step states.
   Eigen::Vector3d earth_rate_along(const Eigen::Vector3d& up) const {
     if (!exp_.gravity.latitude_known()) return Eigen::Vector3d::Zero();
     return physics::earth_rate_local(exp_.gravity.latitude_deg).z() * up;
@@ -403,7 +407,7 @@ class Builder {
       seg.t_start_s = x.t0_s;
       seg.t_end_s = x.t1_s;
       seg.targets = "gravity along " + vec_text(x.sum.accel_mean().normalized());
-      hold(seg, nan3(), nan3(), nan3());
+      hold(seg, nan3(), earth_rate_along(x.sum.accel_mean().normalized()), nan3());
       segments_.push_back(seg);
       ++kept;
     }
@@ -469,6 +473,36 @@ Alignment align(const Experiment& exp, const std::vector<Block>& blocks, const A
                          "add bench: {gravity: {latitude_deg: 49.6, height_m: 300}} (or value_mps2: measured g)");
   if (blocks.empty()) throw InputError("the recording has no samples to align the procedure to");
   return Builder(exp, blocks, options).run();
+}
+
+void align_header(RecordingHeader& h, const Experiment& exp) {
+  h.truth_columns = aligned_truth_columns();
+  h.gravity_mps2 = exp.gravity.resolved_mps2;
+  if (exp.gravity.latitude_known()) h.latitude_deg = exp.gravity.latitude_deg;
+}
+
+void apply_alignment(Recording& rec, const Experiment& exp, Alignment a) {
+  const std::string summary = a.summary();
+  rec.header.truth_columns = a.truth_columns;
+  rec.truth_store.reset();
+  rec.truth_t = std::move(a.truth_t);
+  rec.truth = std::move(a.truth);
+  rec.truth_rows = rec.truth_t.size();
+  rec.segments = std::move(a.segments);
+  rec.events.push_back({0.0, "info", "import",
+                        "procedure from " + exp.file + " (experiment '" + exp.name + "'): " + summary});
+  for (const auto& n : a.notes) rec.events.push_back({0.0, "info", "import", "alignment: " + n});
+}
+
+void align_recording(Recording& rec, const Experiment& exp, const AlignOptions& options) {
+  Observer observer(options);
+  for_each_chunk(rec.sample_source(), 0, rec.sample_count(),
+                 [&](const ImuSample* chunk, std::size_t n, std::uint64_t) { observer.add(chunk, n); });
+  const bool had_own = !rec.segments.empty() || rec.truth_rows > 0;
+  align_header(rec.header, exp);
+  apply_alignment(rec, exp, align(exp, observer.finish(), observer.options()));
+  rec.experiment_yaml = exp.resolved_yaml;
+  if (had_own) rec.events.push_back({0.0, "info", "import", "the log's own segments and truth were replaced by the procedure's"});
 }
 
 }  // namespace stend::alignment

@@ -158,8 +158,15 @@ TEST(Alignment, FindsFacesAndTurnsWhereTheyWereDone) {
     for (int i = 0; i < 3; ++i) EXPECT_EQ(r[static_cast<std::size_t>(6 + i)], expect[k][i]) << "turn " << k;
     EXPECT_TRUE(std::isnan(r[0]));
   }
-  // The still before the turns (+z up again) and those between them are kept as detected stills.
-  EXPECT_EQ(of_kind(a, SegmentKind::kDetected).size(), 4u) << a.summary();
+  // The still before the turns (+z up again) and those between them are kept as detected stills,
+  // with the Earth rate's vertical part along their measured gravity and no specific force.
+  const auto detected = of_kind(a, SegmentKind::kDetected);
+  EXPECT_EQ(detected.size(), 4u) << a.summary();
+  for (const Segment* d : detected) {
+    const std::vector<double> r = truth_at(a, d->t_start_s);
+    EXPECT_TRUE(std::isnan(r[0]));
+    EXPECT_NEAR(Eigen::Vector3d(r[3], r[4], r[5]).norm(), 7.2921150e-5 * std::sin(49.6 * physics::kDegToRad), 1e-9);
+  }
   for (std::size_t i = 0; i + 1 < a.segments.size(); ++i) {
     EXPECT_EQ(a.segments[i].id, static_cast<int>(i));
     EXPECT_LE(a.segments[i].t_end_s, a.segments[i + 1].t_start_s + 1e-9);
@@ -203,7 +210,8 @@ TEST(Alignment, RateLegsCarryTheirRateAndTheStatedUp) {
     EXPECT_EQ(legs[k]->rate, rates[k]);
     EXPECT_GT(legs[k]->t_end_s - legs[k]->t_start_s, 4.5);
     const std::vector<double> r = truth_at(a, legs[k]->t_start_s);
-    EXPECT_NEAR(r[5], rates[k] * physics::kDegToRad, 1e-12);
+    // the table's rate about the axis, plus the Earth rate's vertical part (the axis is up)
+    EXPECT_NEAR(r[5], rates[k] * physics::kDegToRad + 7.2921150e-5 * std::sin(49.6 * physics::kDegToRad), 1e-12);
     EXPECT_NEAR(r[2], exp.gravity.resolved_mps2, 1e-9);
   }
 }

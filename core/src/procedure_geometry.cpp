@@ -131,4 +131,10 @@ Experiment as_observed_procedure(const Experiment& exp, const PluginHost& host) 
   return out;
 }
 
+Experiment load_observed_procedure(const std::string& file) {
+  PluginHost host;  // the fixtures a procedure may declare; its own plugin_paths are not loaded
+  host.scan(PluginHost::default_search_path());
+  return as_observed_procedure(load_experiment(file, host), host);
+}
+
 }  // namespace stend

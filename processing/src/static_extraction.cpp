@@ -12,6 +12,30 @@
 namespace stend::processing {
 
 namespace {
+
+// Index of the first time >= t.
+std::size_t lower_index(std::span<const double> t, double at) {
+  return static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), at) - t.begin());
+}
+
+// The standard error of the mean of x (its mean given) from the sample autocovariances summed to lag
+// L = min(⌈2·n^(1/3)⌉, (n − 1)/4), untapered, over 1 − (2L + 1)/n: each γ_k about its own sample
+// mean falls short by the mean's variance, so the sum does by (2L + 1) of them
+// (StaticValue::correlated_std_error).
+double correlated_std_error(std::span<const double> x, double mean) {
+  const std::size_t n = x.size();
+  if (n < 2) return 0.0;
+  const auto lags = std::min<std::size_t>((n - 1) / 4, static_cast<std::size_t>(std::ceil(2.0 * std::cbrt(static_cast<double>(n)))));
+  double v = 0.0;
+  for (std::size_t k = 0; k <= lags; ++k) {
+    double g = 0.0;
+    for (std::size_t i = k; i < n; ++i) g += (x[i] - mean) * (x[i - k] - mean);
+    v += (k == 0 ? 1.0 : 2.0) * g / static_cast<double>(n);
+  }
+  v /= 1.0 - static_cast<double>(2 * lags + 1) / static_cast<double>(n);
+  return std::sqrt(std::max(0.0, v) / static_cast<double>(n));
+}
+
 std::string num(double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.6g", v);
@@ -97,6 +121,7 @@ StaticValue extract_static(std::span<const double> t, std::span<const double> x,
   out.filtered_std = std::sqrt(ss / static_cast<double>(n - 1));
   out.raw_std = std::sqrt(raw_ss / static_cast<double>(n - 1));
   out.white_std_error = out.raw_std / std::sqrt(static_cast<double>(n));
+  out.correlated_std_error = correlated_std_error(xs.subspan(lower_index(ts, keep_lo), n), out.raw_mean);
   return out;
 }
 

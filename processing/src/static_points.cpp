@@ -149,6 +149,7 @@ class PointBuilder {
       v.mean[a] = s.mean;
       v.sample_std[a] = s.raw_std;
       v.std_error[a] = s.white_std_error;
+      v.correlated_std_error[a] = s.correlated_std_error;
       p.t_start_s = s.t_first_s;
       p.t_end_s = s.t_last_s;
       p.samples_used = s.n_used;

@@ -19,16 +19,26 @@ using namespace detail;
 namespace {
 
 // Residual rows: `W` (3×3) maps ȳ − measure(θ, f) to whitened residuals (identity when the
-// orientations are exact; otherwise along-gravity / across-gravity split, see the options).
+// orientations are exact). With a tilt (`tilted`: orientation_sigma_deg > 0) the reading is
+// calibrated instead, c = A⁻¹(ȳ − b) (the model's affine form), and compared with the stated f in
+// the parts a tilt does not move and moves: its magnitude |c| − |f| (a tilted face still reads g:
+// no cosine loss), and its components across f, W's rows 1 and 2 (row 0 scales the magnitude).
 struct KnownCost {
   const model::ErrorModel* m;
   std::vector<int> free_index;
   Eigen::Vector3d y, f;
   Eigen::Matrix3d W;
+  bool tilted = false;
   template <typename T>
   STEND_CERES_COST_INLINE bool operator()(const T* const p, T* residual) const {
     T theta[kFull];
     expand(p, free_index, theta);
+    if (tilted) {
+      const model::Vec3<T> c = m->affine<T>(theta).correct(y.cast<T>());
+      residual[0] = (c.norm() - T(f.norm())) * T(W.row(0).norm());
+      for (int i = 1; i < 3; ++i) residual[i] = W.row(i).cast<T>().dot(c);
+      return true;
+    }
     model::Stimulus<T> s;
     s.input = f.cast<T>();
     s.specific_force = s.input;
@@ -108,15 +118,17 @@ double known_gravity(const std::vector<Eigen::Vector3d>& truth_f, const Calibrat
 }
 
 // Residual weighting of interval k: identity, or with orientation_sigma_deg > 0 the tilt of the
-// true orientation ~ N(0, σ_tilt²): the residual across gravity gets the extra variance
-// (g·σ_tilt)² [m/s²]², the one along gravity only the noise of the mean.
+// true orientation, each of its two components ~ N(0, σ²): across gravity the residual gets the extra
+// variance (g·σ)² [m/s²]², along gravity (the magnitude, which no tilt changes) only the noise of
+// the mean.
 Eigen::Matrix3d residual_weight(const processing::StaticPoint& iv, const Eigen::Vector3d& truth_f, double g,
-                                const CalibrationOptions& o) {
+                                const CalibrationOptions& o, double correlation) {
   Eigen::Matrix3d W = Eigen::Matrix3d::Identity();
   if (!(o.orientation_sigma_deg > 0.0 && truth_f.norm() > 0.0)) return W;
   const Eigen::Vector3d e0 = truth_f.normalized();
   const Eigen::Vector3d e1 = e0.unitOrthogonal(), e2 = e0.cross(e1);
-  const double n_sd = std::max(1e-6, iv.accel.sample_std.mean() / std::sqrt(static_cast<double>(std::max<std::size_t>(1, iv.samples_used))));
+  const double n_sd = std::max(1e-6, correlation * iv.accel.sample_std.mean() /
+                                         std::sqrt(static_cast<double>(std::max<std::size_t>(1, iv.samples_used))));
   const double t_sd = std::hypot(n_sd, g * o.orientation_sigma_deg * physics::kDegToRad);
   W.row(0) = e0.transpose() / n_sd;
   W.row(1) = e1.transpose() / t_sd;
@@ -130,10 +142,11 @@ void add_known_residuals(const std::vector<processing::StaticPoint>& intervals, 
                          const TableOffsets& off, const std::vector<int>& free_index, const CalibrationOptions& o,
                          const CalibrationResult& r, ceres::Problem& problem, std::vector<double>& x) {
   const int p = static_cast<int>(free_index.size());
+  const double correlation = noise_correlation_factor(intervals, false);
   for (std::size_t k = 0; k < intervals.size(); ++k) {
-    const Eigen::Matrix3d W = residual_weight(intervals[k], truth_f[k], r.gravity_mps2, o);
+    const Eigen::Matrix3d W = residual_weight(intervals[k], truth_f[k], r.gravity_mps2, o, correlation);
     if (off.count() == 0) {
-      auto* f = new KnownCost{&r.model, free_index, intervals[k].accel.mean, truth_f[k], W};
+      auto* f = new KnownCost{&r.model, free_index, intervals[k].accel.mean, truth_f[k], W, o.orientation_sigma_deg > 0.0};
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<KnownCost, 3, kFull>(f), make_loss(o), x.data());
     } else {
       auto* c = new ceres::DynamicAutoDiffCostFunction<KnownOffsetCost, 4>(new KnownOffsetCost{
@@ -204,7 +217,14 @@ CalibrationResult known_impl(const std::vector<processing::StaticPoint>& interva
   std::vector<double> x(static_cast<std::size_t>(p), 0.0);
   ceres::Problem problem;
   add_known_residuals(intervals, truth_f, angles, M, off, free_index, o, r, problem, x);
-  solve(problem, x, free_index, 3 * n, o, r);
+  // With a stated placement sigma the residuals are whitened by a-priori sigmas, the placement's a
+  // bound: the reduced χ² may widen the intervals, never narrow them.
+  if (r.whitened)
+    r.uncertainty = fmt::format("a-priori sigmas: the noise of each interval mean (sample std/√N × {:.3g}, the "
+                                "samples' correlation) on the calibrated magnitude (no tilt changes it) and across "
+                                "gravity, there plus g·{} deg (the placement)",
+                                noise_correlation_factor(intervals, false), o.orientation_sigma_deg);
+  solve(problem, x, free_index, 3 * n, o, r, r.whitened ? Weighting::kAPrioriAtLeast : Weighting::kRelative);
   norm_rms(r);
   known_axis_rms(intervals, truth_f, angles, M, off, x, r);
   return r;

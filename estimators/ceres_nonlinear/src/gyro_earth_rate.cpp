@@ -4,6 +4,8 @@
 #include "gyro.hpp"
 
 #include <stend/physics/units.hpp>
+
+#include <Eigen/Cholesky>
 #include <stend/recording/truth_columns.hpp>
 
 #include <fmt/format.h>
@@ -86,16 +88,56 @@ void explain_held(CalibrationResult& r, const std::array<bool, 3>& excited) {
   r.notes.push_back("cross-axis terms held at 0: the vertical Earth rate does not separate them");
 }
 
-// Still k as an observation: z_k = u_k·ȳ_k against u_k·measure(θ, Ω_v,k·u_k), whitened by the
-// a-priori σ of z_k: the per-sample noise projected on u_k, over √N.
-GyroObservation vertical_observation(const processing::StaticPoint& s, const Eigen::Vector3d& up, double omega_v_radps,
-                                     const Eigen::Vector3d& noise_radps) {
-  GyroObservation obs;
-  obs.stimulus.input = omega_v_radps * up;
-  obs.reading = s.gyro.mean;
-  const double sigma_z = std::sqrt(up.cwiseAbs2().dot(noise_radps.cwiseAbs2()) / static_cast<double>(s.samples_used));
-  obs.whitening = up.transpose() / sigma_z;
-  return obs;
+// The stills' projections z_k = u_k·ȳ_k against u_k·measure(θ, Ω_v,k·u_k), in one residual block
+// whitened by their joint a-priori covariance (vertical_covariance).
+struct JointVerticalCost {
+  const model::ErrorModel* m;
+  std::vector<int> free_index;
+  std::vector<Eigen::Vector3d> up, reading;
+  std::vector<double> omega_v;
+  Eigen::MatrixXd W;  // n × n
+  template <typename T>
+  bool operator()(T const* const* p, T* residual) const {
+    std::vector<T> theta(static_cast<std::size_t>(m->size()), T(0));
+    for (std::size_t k = 0; k < free_index.size(); ++k) theta[static_cast<std::size_t>(free_index[k])] = p[0][k];
+    const auto n = static_cast<Eigen::Index>(up.size());
+    std::vector<T> d(up.size());
+    for (std::size_t k = 0; k < up.size(); ++k) {
+      model::Stimulus<T> s;
+      s.input = (omega_v[k] * up[k]).cast<T>();
+      d[k] = up[k].cast<T>().dot(m->measure<T>(theta.data(), s) - reading[k].cast<T>());
+    }
+    for (Eigen::Index row = 0; row < n; ++row) {
+      residual[row] = T(0);
+      for (Eigen::Index k = 0; k < n; ++k) residual[row] += W(row, k) * d[static_cast<std::size_t>(k)];
+    }
+    return true;
+  }
+};
+
+// The a-priori covariance of the projections z_k [(rad/s)²]: the per-sample noise projected on u_k
+// over N; the tilt of each placement (σ_tilt, 1σ per component), which lets the horizontal reading
+// ȳ_⊥ (the other axes' biases) into the projection, σ_tilt²·|ȳ_⊥|² (placements independent); the
+// g-sensitivity the method cannot estimate, g·uᵀGu with each G_ij ~ N(0, σ_G²): g_k·g_l·σ_G²·(u_k·u_l)²
+// between any two stills (it flips with the Earth rate between up and down: it widens the scales).
+Eigen::MatrixXd vertical_covariance(const VerticalStills& v, const std::vector<double>& g_mps2,
+                                    const Eigen::Vector3d& noise_radps, const GyroOptions& go) {
+  const auto n = static_cast<Eigen::Index>(v.stills.size());
+  const double tilt = go.orientation_sigma_deg * physics::kDegToRad;
+  const double sigma_g = go.g_sensitivity_sigma_dps_per_g * physics::kDegPerSecond / physics::kStandardGravity;
+  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(n, n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    const Eigen::Vector3d& u = v.up[i];
+    const Eigen::Vector3d y = v.stills[i].gyro.mean;
+    c(k, k) = u.cwiseAbs2().dot(noise_radps.cwiseAbs2()) / static_cast<double>(v.stills[i].samples_used) +
+              tilt * tilt * (y - u.dot(y) * u).squaredNorm();
+    for (Eigen::Index l = 0; l < n; ++l) {
+      const auto j = static_cast<std::size_t>(l);
+      c(k, l) += g_mps2[i] * g_mps2[j] * sigma_g * sigma_g * std::pow(u.dot(v.up[j]), 2);
+    }
+  }
+  return c;
 }
 
 // RMS of u·ȳ − Ω_v (raw) and u·correct(ȳ) − Ω_v (calibrated) over the stills [rad/s].
@@ -111,11 +153,13 @@ void vertical_checks(const VerticalStills& v, CalibrationResult& r) {
   r.rate_error_radps.after = r.ok() ? std::sqrt(after / n) : kNaN;
 }
 
-std::string vertical_sigmas_text(const Eigen::Vector3d& noise_radps) {
+std::string vertical_sigmas_text(const Eigen::Vector3d& noise_radps, const GyroOptions& go) {
   const Eigen::Vector3d dps = noise_radps / physics::kDegPerSecond;
   return fmt::format("a-priori sigmas: gyro noise {:.3g} {:.3g} {:.3g} deg/s per sample (pooled over the stills), "
-                     "projected on the vertical u_k, over √N",
-                     dps[0], dps[1], dps[2]);
+                     "projected on the vertical u_k, over √N; each position placed to {} deg (the horizontal reading "
+                     "seen through its tilt); an unmodelled g-sensitivity of {} (deg/s)/g per term (it flips with the "
+                     "Earth rate: it widens the scales by g·σ/Ω_v)",
+                     dps[0], dps[1], dps[2], go.orientation_sigma_deg, go.g_sensitivity_sigma_dps_per_g);
 }
 
 // The result before the solve: the usable stills, the free parameters (bias and scale of the
@@ -182,11 +226,23 @@ CalibrationResult calibrate_gyro_earth_rate(const std::vector<processing::Static
     fail_all(r, why);
     return r;
   }
-  std::vector<GyroObservation> obs;
-  for (std::size_t k = 0; k < v.stills.size(); ++k)
-    obs.push_back(vertical_observation(v.stills[k], v.up[k], v.omega_v_radps[k], noise));
-  r.uncertainty = vertical_sigmas_text(noise);
-  solve_gyro_observations(obs, free_index, go, r);
+  std::vector<double> g_mps2;
+  for (const auto& f : truth_f)
+    if (f.allFinite() && f.norm() > 0.0) g_mps2.push_back(f.norm());
+  const Eigen::MatrixXd c = vertical_covariance(v, g_mps2, noise, go);
+  auto* cost = new JointVerticalCost{&r.model, free_index, v.up, {}, v.omega_v_radps, {}};
+  for (const auto& st : v.stills) cost->reading.push_back(st.gyro.mean);
+  const Eigen::MatrixXd L = c.llt().matrixL();
+  cost->W = L.inverse();
+  r.uncertainty = vertical_sigmas_text(noise, go);
+  std::vector<double> x(free_index.size(), 0.0);
+  ceres::Problem problem;
+  const CalibrationOptions o = as_calibration_options(go, go.loss_scale_radps);
+  auto* fn = new ceres::DynamicAutoDiffCostFunction<JointVerticalCost, 8>(cost);
+  fn->AddParameterBlock(static_cast<int>(free_index.size()));
+  fn->SetNumResiduals(static_cast<int>(v.stills.size()));
+  problem.AddResidualBlock(fn, make_loss(o), x.data());
+  solve(problem, x, free_index, static_cast<int>(v.stills.size()), o, r, Weighting::kAPriori);
   vertical_checks(v, r);
   return r;
 }

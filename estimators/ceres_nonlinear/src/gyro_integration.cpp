@@ -5,6 +5,9 @@
 // stend/ceres_nonlinear/calibration.hpp.
 #include "gyro.hpp"
 
+#include <stend/physics/gravity.hpp>
+#include <stend/physics/units.hpp>
+
 #include <fmt/format.h>
 
 #include <Eigen/Geometry>
@@ -18,18 +21,20 @@ using namespace detail;
 
 namespace {
 
-// Static-interval residual for stage 1 of the integration method: ȳ − measure(θ, 0, f) with only
-// bias (and G) free; `base` holds the full vector (scale and cross at 0).
+// Static-interval residual for stage 1 of the integration method: ȳ − measure(θ, w, f) with only
+// bias (and G) free (scale and cross at 0); w the Earth rate's vertical part along the interval's
+// gravity direction (0 when the recording states no latitude).
 struct StaticGyroCost {
   const model::ErrorModel* m;
   std::vector<int> free_index;
   int full;
-  Eigen::Vector3d y, f;
+  Eigen::Vector3d y, f, w;
   template <typename T>
   bool operator()(T const* const* p, T* residual) const {
     std::vector<T> theta(static_cast<std::size_t>(full), T(0));
     for (std::size_t k = 0; k < free_index.size(); ++k) theta[static_cast<std::size_t>(free_index[k])] = p[0][k];
     model::Stimulus<T> s;
+    s.input = w.cast<T>();
     s.specific_force = f.cast<T>();
     const model::Vec3<T> d = m->measure<T>(theta.data(), s) - y.cast<T>();
     for (int i = 0; i < 3; ++i) residual[i] = d[i];
@@ -223,9 +228,12 @@ CalibrationResult solve_static_stage(const IntegrationData& d, const Calibration
   const int p1 = static_cast<int>(d.s1_index.size());
   x1.assign(static_cast<std::size_t>(p1), 0.0);
   ceres::Problem prob1;
+  // The Earth rate's vertical part (the site's latitude from the recording, 0 when it states none):
+  // else it aliases into the G diagonal (Ω_e·sin φ / g ≈ 5e-6 (rad/s)/(m/s²) at 47°).
+  const double omega_v = physics::kEarthRateRadps * std::sin(d.rec.header.latitude_deg * physics::kDegToRad);
   for (std::size_t k = 0; k < d.ivs.size(); ++k) {
-    auto* c = new ceres::DynamicAutoDiffCostFunction<StaticGyroCost, 4>(
-        new StaticGyroCost{&r.model, d.s1_index, r.model.size(), d.ivs[k].gyro.mean, d.fk[k]});
+    auto* c = new ceres::DynamicAutoDiffCostFunction<StaticGyroCost, 4>(new StaticGyroCost{
+        &r.model, d.s1_index, r.model.size(), d.ivs[k].gyro.mean, d.fk[k], omega_v * d.gdir[k]});
     c->AddParameterBlock(p1);
     c->SetNumResiduals(3);
     prob1.AddResidualBlock(c, make_loss(o1), x1.data());

@@ -3,11 +3,14 @@
 // f_k). See stend/ceres_nonlinear/calibration.hpp.
 #include "gyro.hpp"
 
+#include <stend/physics/gravity.hpp>
+#include <stend/physics/units.hpp>
 #include <stend/recording/truth_columns.hpp>
 
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace stend::ceres_nonlinear {
 
@@ -58,6 +61,71 @@ std::vector<Eigen::Vector3d> finite_or_zero(const std::vector<Eigen::Vector3d>& 
   return out;
 }
 
+// Interval k of a rate table whose axes are known to σ [rad] (rate_axis_sigma_deg > 0): ȳ_k
+// against measure(θ, (1 − σ²/2)·ω_k, f_k), whitened by the noise of the mean (the interval's own
+// sample std, per axis), the axis's uncertainty (|ω|·σ across the rate, |ω|·σ² along it: the cosine
+// loss, half of it taken off) and the Earth rate the truth leaves out (a rate leg: its horizontal
+// part turns with the table, at most Ω_e on each horizontal axis; a still: earth_rate_covariance).
+GyroObservation rate_observation(const processing::StaticPoint& iv, const Eigen::Vector3d& w, const Eigen::Vector3d& f,
+                                 double sigma_rad, double correlation, Eigen::Matrix3d& c) {
+  GyroObservation obs;
+  obs.stimulus.input = (1.0 - 0.5 * sigma_rad * sigma_rad) * w;
+  obs.stimulus.specific_force = f;
+  obs.reading = iv.gyro.mean;
+  const double n = static_cast<double>(std::max<std::size_t>(1, iv.samples_used));
+  c = Eigen::Vector3d(iv.gyro.sample_std.cwiseAbs2() * (correlation * correlation) / n).cwiseMax(1e-20).asDiagonal();
+  const double rate = w.norm();
+  if (rate > 0.0) {
+    const Eigen::Vector3d a = w / rate;
+    const Eigen::Matrix3d along = a * a.transpose();
+    c += std::pow(rate * sigma_rad, 2) * (Eigen::Matrix3d::Identity() - along) +
+         std::pow(rate * sigma_rad * sigma_rad, 2) * along;
+  }
+  if (iv.segment.kind == SegmentKind::kRate) {
+    const double earth_sq = physics::kEarthRateRadps * physics::kEarthRateRadps;
+    const Eigen::Vector3d up = f.allFinite() && f.norm() > 0.0 ? Eigen::Vector3d(f.normalized()) : Eigen::Vector3d::Zero();
+    c += earth_sq * (Eigen::Matrix3d::Identity() - up * up.transpose());
+  } else {
+    c += earth_rate_covariance(w, f);
+  }
+  return obs;
+}
+
+// The whitened rate-table fit (rate_axis_sigma_deg > 0) on the free parameters x: each interval's
+// own covariance (rate_observation) and, without the g-sensitivity in the model, the one it adds
+// unmodelled (g_sensitivity_sigma_dps_per_g: shared by the intervals at one orientation).
+int add_whitened_rate_residuals(const std::vector<processing::StaticPoint>& intervals,
+                                const std::vector<Eigen::Vector3d>& truth_w, const std::vector<Eigen::Vector3d>& f_used,
+                                const GyroOptions& go, const CalibrationOptions& o, CalibrationResult& r,
+                                ceres::Problem& problem, std::vector<double>& x) {
+  const double sigma = go.rate_axis_sigma_deg * physics::kDegToRad;
+  const double sigma_g = go.estimate_g_sensitivity ? 0.0
+                                                   : go.g_sensitivity_sigma_dps_per_g * physics::kDegPerSecond /
+                                                         physics::kStandardGravity;
+  std::vector<GyroObservation> obs;
+  const double correlation = noise_correlation_factor(intervals, true);
+  Eigen::MatrixXd c = g_sensitivity_covariance(f_used, sigma_g);
+  for (std::size_t k = 0; k < intervals.size(); ++k) {
+    Eigen::Matrix3d ck;
+    obs.push_back(rate_observation(intervals[k], truth_w[k], f_used[k], sigma, correlation, ck));
+    c.block(3 * static_cast<Eigen::Index>(k), 3 * static_cast<Eigen::Index>(k), 3, 3) += ck;
+  }
+  std::vector<int> free_index(x.size());
+  for (std::size_t i = 0; i < free_index.size(); ++i) free_index[i] = static_cast<int>(i);
+  r.whitened = true;
+  r.uncertainty = fmt::format("a-priori sigmas: the noise of each interval mean (its sample std/√N × {2:.3g}, the "
+                              "samples' correlation); the rate axis known to {0} deg: |ω|·{0} deg across the rate, |ω|·({0} deg)² along it (the cosine "
+                              "loss, half of it taken off the stated rate); the Earth rate the truth leaves out{1}",
+                              go.rate_axis_sigma_deg,
+                              sigma_g > 0.0 ? fmt::format("; an unmodelled g-sensitivity of {} (deg/s)/g per term, "
+                                                          "shared by the intervals at one orientation",
+                                                          go.g_sensitivity_sigma_dps_per_g)
+                                            : std::string(),
+                              correlation);
+  if (const std::string note = joint_loss_note(o); !note.empty()) r.notes.push_back(note);
+  return add_joint_gyro_observations(obs, c, r.model, free_index, o, problem, x);
+}
+
 }  // namespace
 
 namespace detail {
@@ -106,19 +174,26 @@ CalibrationResult calibrate_gyro_rate_table(const std::vector<processing::Static
   std::vector<double> x(static_cast<std::size_t>(p), 0.0);
   ceres::Problem problem;
   const CalibrationOptions o = as_calibration_options(go, go.loss_scale_radps);
-  for (std::size_t k = 0; k < intervals.size(); ++k) {
-    ceres::CostFunction* cf;
-    if (p == 12)
-      cf = new ceres::AutoDiffCostFunction<RateCost<12>, 3, 12>(
-          new RateCost<12>{&r.model, intervals[k].gyro.mean, truth_w[k], f_used[k]});
-    else
-      cf = new ceres::AutoDiffCostFunction<RateCost<21>, 3, 21>(
-          new RateCost<21>{&r.model, intervals[k].gyro.mean, truth_w[k], f_used[k]});
-    problem.AddResidualBlock(cf, make_loss(o), x.data());
+  const bool whitened = go.rate_axis_sigma_deg > 0.0;
+  if (whitened) {
+    add_whitened_rate_residuals(intervals, truth_w, f_used, go, o, r, problem, x);
+  } else {
+    for (std::size_t k = 0; k < intervals.size(); ++k) {
+      ceres::CostFunction* cf;
+      if (p == 12)
+        cf = new ceres::AutoDiffCostFunction<RateCost<12>, 3, 12>(
+            new RateCost<12>{&r.model, intervals[k].gyro.mean, truth_w[k], f_used[k]});
+      else
+        cf = new ceres::AutoDiffCostFunction<RateCost<21>, 3, 21>(
+            new RateCost<21>{&r.model, intervals[k].gyro.mean, truth_w[k], f_used[k]});
+      problem.AddResidualBlock(cf, make_loss(o), x.data());
+    }
   }
   std::vector<int> free_index(static_cast<std::size_t>(p));
   for (int i = 0; i < p; ++i) free_index[static_cast<std::size_t>(i)] = i;
-  solve(problem, x, free_index, 3 * n, o, r);
+  // With the axes known only to a stated sigma the weights are a-priori and the sigma a bound: the
+  // reduced χ² may widen the intervals, never narrow them.
+  solve(problem, x, free_index, 3 * n, o, r, whitened ? Weighting::kAPrioriAtLeast : Weighting::kRelative);
   std::vector<Eigen::Vector3d> reading;
   double before = 0.0, after = 0.0;
   for (std::size_t k = 0; k < intervals.size(); ++k) {

@@ -20,20 +20,27 @@ using namespace detail;
 
 namespace {
 
+// The period each sample of the turn stands for [s] (KnownTurn::sample_period_s).
+double turn_sample_period_s(const KnownTurn& t) {
+  return t.sample_period_s > 0.0 ? t.sample_period_s : sample_period_s(t.window);
+}
+
 // A turn's effective duration T = N·Δt [s]: each of its N samples stands for one sample period, so
 // that Σ ω_i Δt = ȳ·T exactly (ȳ the mean reading).
-double turn_duration_s(const processing::StaticPoint& w) {
-  return static_cast<double>(w.samples_used) * sample_period_s(w);
+double turn_duration_s(const KnownTurn& t) {
+  return static_cast<double>(t.window.samples_used) * turn_sample_period_s(t);
 }
 
 // Still k as an observation: ȳ_k against measure(θ, ω_k, f̄_k) (ω_k the applied rate, f̄_k the
-// measured specific force), whitened by the noise of a mean of N samples.
-GyroObservation still_observation(const processing::StaticPoint& s, const Eigen::Vector3d& noise_radps) {
+// measured specific force); `c` gets the noise of its mean of N samples (the Earth rate the truth
+// does not state is added jointly: stills_earth_rate_covariance).
+GyroObservation still_observation(const processing::StaticPoint& s, const Eigen::Vector3d& noise_radps, Eigen::Matrix3d& c) {
   GyroObservation obs;
   obs.stimulus.input = s.stimulus.input.allFinite() ? s.stimulus.input : Eigen::Vector3d::Zero();
   obs.stimulus.specific_force = s.accel.mean;
   obs.reading = s.gyro.mean;
-  obs.whitening = mean_whitening(noise_radps, s.samples_used);
+  const Eigen::Vector3d var = noise_radps.cwiseAbs2() / static_cast<double>(std::max<std::size_t>(1, s.samples_used));
+  c = var.asDiagonal();
   return obs;
 }
 
@@ -41,7 +48,7 @@ GyroObservation still_observation(const processing::StaticPoint& s, const Eigen:
 // samples, (σ_n·Δt)²·N per axis, plus the turn's own uncertainty σ_a along its axis and |θ|·σ_a
 // across it (the axis direction known to σ_a).
 Eigen::Matrix3d turn_covariance(const KnownTurn& t, const Eigen::Vector3d& noise_radps, double sigma_angle_rad) {
-  const double dt = sample_period_s(t.window);
+  const double dt = turn_sample_period_s(t);
   const double n = static_cast<double>(t.window.samples_used);
   Eigen::Matrix3d c = (noise_radps * dt).cwiseAbs2().asDiagonal();
   c *= n;
@@ -54,16 +61,15 @@ Eigen::Matrix3d turn_covariance(const KnownTurn& t, const Eigen::Vector3d& noise
 }
 
 // Turn k as an observation in mean form: v_k/T = ȳ against measure(θ, θ_k/T, f̄) — the same as
-// v_k against A(θ)·θ_k + b·T + G·F_k — whitened by its covariance over T².
-GyroObservation turn_observation(const KnownTurn& t, const Eigen::Vector3d& noise_radps, double sigma_angle_rad) {
-  const double T = turn_duration_s(t.window);
+// v_k against A(θ)·θ_k + b·T + G·F_k — with its covariance over T² in `c`.
+GyroObservation turn_observation(const KnownTurn& t, const Eigen::Vector3d& noise_radps, double sigma_angle_rad,
+                                 Eigen::Matrix3d& c) {
+  const double T = turn_duration_s(t);
   GyroObservation obs;
   obs.stimulus.input = t.rotation_rad / T;
   obs.stimulus.specific_force = t.window.accel.mean;
   obs.reading = t.window.gyro.mean;
-  const Eigen::Matrix3d cov = turn_covariance(t, noise_radps, sigma_angle_rad) / (T * T);
-  const Eigen::Matrix3d L = cov.llt().matrixL();
-  obs.whitening = L.inverse();
+  c = turn_covariance(t, noise_radps, sigma_angle_rad) / (T * T);
   return obs;
 }
 
@@ -71,7 +77,7 @@ GyroObservation turn_observation(const KnownTurn& t, const Eigen::Vector3d& nois
 void turn_checks(const std::vector<KnownTurn>& turns, CalibrationResult& r) {
   Eigen::Vector3d before_sq = Eigen::Vector3d::Zero(), after_sq = Eigen::Vector3d::Zero();
   for (const KnownTurn& t : turns) {
-    const double T = turn_duration_s(t.window);
+    const double T = turn_duration_s(t);
     TurnCheck c;
     c.label = t.window.segment.label;
     c.t_start_s = t.window.t_start_s;
@@ -102,8 +108,9 @@ void turn_checks(const std::vector<KnownTurn>& turns, CalibrationResult& r) {
 std::string turn_sigmas_text(const Eigen::Vector3d& noise_radps, double sigma_angle_deg) {
   const Eigen::Vector3d dps = noise_radps / physics::kDegPerSecond;
   return fmt::format("a-priori sigmas: gyro noise {:.3g} {:.3g} {:.3g} deg/s per sample (pooled over the stills); "
-                     "still mean noise/√N; turn integral noise·Δt·√N, plus {} deg along the turn's axis and "
-                     "|θ|·{} deg across it",
+                     "still mean noise/√N, plus the Earth rate the truth does not state (its horizontal part: the "
+                     "heading is unknown; one value for the stills at one orientation); turn integral noise·Δt·√N, "
+                     "plus {} deg along the turn's axis and |θ|·{} deg across it",
                      dps[0], dps[1], dps[2], sigma_angle_deg, sigma_angle_deg);
 }
 
@@ -139,7 +146,7 @@ std::string turns_refusal(const std::vector<processing::StaticPoint>& stills, co
   if (!finite_intervals(stills)) return "non-finite (NaN) readings in a still";
   for (const KnownTurn& t : turns)
     if (!t.window.gyro.mean.allFinite() || !t.window.accel.mean.allFinite() || !t.rotation_rad.allFinite() ||
-        !(turn_duration_s(t.window) > 0.0))
+        !(turn_duration_s(t) > 0.0))
       return "non-finite readings or truth, or no duration, in turn '" + t.window.segment.label + "'";
   if (!(noise.minCoeff() > 0.0))
     return "the stills show no gyro noise and the quantization step is unknown: the a-priori sigmas need one";
@@ -160,12 +167,28 @@ CalibrationResult calibrate_gyro_turns(const std::vector<processing::StaticPoint
   }
   const double sigma_angle_rad = go.turn_angle_sigma_deg * physics::kDegToRad;
   std::vector<GyroObservation> obs;
-  for (const auto& s : stills) obs.push_back(still_observation(s, noise));
-  for (const KnownTurn& t : turns) obs.push_back(turn_observation(t, noise, sigma_angle_rad));
+  const auto n = static_cast<Eigen::Index>(stills.size() + turns.size());
+  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  c.topLeftCorner(3 * static_cast<Eigen::Index>(stills.size()), 3 * static_cast<Eigen::Index>(stills.size())) =
+      stills_earth_rate_covariance(stills);
+  Eigen::Matrix3d ck;
+  for (const auto& s : stills) {
+    obs.push_back(still_observation(s, noise, ck));
+    c.block(3 * static_cast<Eigen::Index>(obs.size() - 1), 3 * static_cast<Eigen::Index>(obs.size() - 1), 3, 3) += ck;
+  }
+  for (const KnownTurn& t : turns) {
+    obs.push_back(turn_observation(t, noise, sigma_angle_rad, ck));
+    c.block(3 * static_cast<Eigen::Index>(obs.size() - 1), 3 * static_cast<Eigen::Index>(obs.size() - 1), 3, 3) += ck;
+  }
   r.uncertainty = turn_sigmas_text(noise, go.turn_angle_sigma_deg);
   std::vector<int> free_index(static_cast<std::size_t>(r.estimated));
   std::iota(free_index.begin(), free_index.end(), 0);
-  solve_gyro_observations(obs, free_index, go, r);
+  std::vector<double> x(free_index.size(), 0.0);
+  ceres::Problem problem;
+  const CalibrationOptions o = as_calibration_options(go, go.loss_scale_radps);
+  if (const std::string note = joint_loss_note(o); !note.empty()) r.notes.push_back(note);
+  const int residuals = add_joint_gyro_observations(obs, c, r.model, free_index, o, problem, x);
+  solve(problem, x, free_index, residuals, o, r, Weighting::kAPrioriAtLeast);
   turn_checks(turns, r);
   return r;
 }
@@ -218,7 +241,8 @@ std::vector<KnownTurn> known_turns(const Recording& rec, const std::array<int, 3
       notes.push_back(fmt::format("turn '{}' left out: no finite turn_*_deg truth over it", name));
       continue;
     }
-    turns.push_back({w, turn_deg * physics::kDegToRad});
+    const double rate_hz = rec.header.info.output_rate_hz;
+    turns.push_back({w, turn_deg * physics::kDegToRad, rate_hz > 0.0 ? 1.0 / rate_hz : 0.0});
     turns.back().window.segment.label = name;
   }
   return turns;
@@ -226,13 +250,18 @@ std::vector<KnownTurn> known_turns(const Recording& rec, const std::array<int, 3
 
 }  // namespace
 
-CalibrationResult calibrate_gyro_turns(const Recording& rec, const GyroOptions& go) {
+CalibrationResult calibrate_gyro_turns(const Recording& rec, const GyroOptions& go, const CalibrationResult* accel) {
   const std::optional<std::array<int, 3>> columns = truth_columns(rec, kTurnColumns);
   std::vector<std::string> notes;
   std::vector<KnownTurn> turns;
   if (columns) turns = known_turns(rec, *columns, notes);
-  const processing::Extraction stills = turn_stills(rec, go);
+  processing::Extraction stills = turn_stills(rec, go);
   for (const std::string& n : skipped_still_notes(stills)) notes.push_back(n);
+  if (accel != nullptr && accel->ok()) {  // the g-sensitivity sees the calibrated specific force
+    for (auto& s : stills.points) s.accel.mean = accel->correct(s.accel.mean);
+    for (auto& t : turns) t.window.accel.mean = accel->correct(t.window.accel.mean);
+    notes.push_back("the specific force of the stills and turns calibrated with the accelerometer fit");
+  }
   CalibrationResult r = calibrate_gyro_turns(stills.points, turns, go, rec.header.info.gyro_lsb_radps);
   r.notes.insert(r.notes.begin(), notes.begin(), notes.end());
   if (!columns)

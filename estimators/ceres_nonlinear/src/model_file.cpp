@@ -48,7 +48,7 @@ double positive(const yaml::MapReader& m, const std::string& key, double fallbac
 // accelerometer's result.
 CalibrationResult fit_gyroscope(const Recording& rec, const ModelFileOptions& o, const CalibrationResult& accel) {
   if (o.gyroscope == "rate_table") return calibrate_gyro_rate_table(rec, o.gyro);
-  if (o.gyroscope == "turns") return calibrate_gyro_turns(rec, o.gyro);
+  if (o.gyroscope == "turns") return calibrate_gyro_turns(rec, o.gyro, o.accelerometer != "none" && accel.ok() ? &accel : nullptr);
   if (o.gyroscope == "earth_rate") return calibrate_gyro_earth_rate(rec, o.gyro);
   return calibrate_gyro_integration(rec, accel, o.gyro);
 }
@@ -63,7 +63,7 @@ ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& fi
                                    "loss_scale_mps2", "gyro_loss_scale_radps", "gyro_loss_scale_rad", "confidence",
                                    "max_iterations", "rank_tolerance", "max_std_error", estimation::kTolerancesKey, "fixed_cross_axis",
                                    "orientation_sigma_deg", "table_offsets", "table_fixture", "gyro_g_sensitivity",
-                                   "turn_angle_sigma_deg"};
+                                   "turn_angle_sigma_deg", "rate_axis_sigma_deg", "g_sensitivity_sigma_dps_per_g"};
   keys.insert(keys.end(), processing::kOptionKeys.begin(), processing::kOptionKeys.end());
   const yaml::MapReader m(top.get("ceres_nonlinear"), file, "ceres_nonlinear", "ceres_nonlinear options", keys, {},
                           top.value_location("ceres_nonlinear"));
@@ -117,7 +117,7 @@ ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& fi
   if (m.has("fixed_cross_axis"))
     a.fixed_cross_axis = string_list(m, "fixed_cross_axis",
                                      {"cross_xy", "cross_xz", "cross_yx", "cross_yz", "cross_zx", "cross_zy"});
-  a.orientation_sigma_deg = positive(m, "orientation_sigma_deg", 0.0, "in degrees", true);
+  a.orientation_sigma_deg = o.gyro.orientation_sigma_deg = positive(m, "orientation_sigma_deg", 0.0, "in degrees", true);
   if (m.has("table_offsets")) {
     a.table_offsets = string_list(m, "table_offsets", {"tilt", "rotation"});
     if (o.accelerometer != "known_orientations")
@@ -132,6 +132,19 @@ ModelFileOptions options_from_yaml(const YAML::Node& root, const std::string& fi
   if (m.has("turn_angle_sigma_deg")) {
     o.gyro.turn_angle_sigma_deg = positive(m, "turn_angle_sigma_deg", o.gyro.turn_angle_sigma_deg, "in degrees");
     if (o.gyroscope != "turns") m.fail_key("turn_angle_sigma_deg", "turn_angle_sigma_deg applies only with gyroscope: turns");
+  }
+  if (m.has("rate_axis_sigma_deg")) {
+    o.gyro.rate_axis_sigma_deg = positive(m, "rate_axis_sigma_deg", 0.0, "in degrees", true);
+    if (o.gyroscope != "rate_table") m.fail_key("rate_axis_sigma_deg", "rate_axis_sigma_deg applies only with gyroscope: rate_table");
+  }
+  if (m.has("g_sensitivity_sigma_dps_per_g")) {
+    o.gyro.g_sensitivity_sigma_dps_per_g = positive(m, "g_sensitivity_sigma_dps_per_g", 0.0, "in (deg/s)/g", true);
+    if (o.gyroscope != "earth_rate" && !(o.gyroscope == "rate_table" && o.gyro.rate_axis_sigma_deg > 0.0 &&
+                                         !o.gyro.estimate_g_sensitivity))
+      m.fail_key("g_sensitivity_sigma_dps_per_g",
+                 "g_sensitivity_sigma_dps_per_g applies only with gyroscope: earth_rate, or rate_table with "
+                 "rate_axis_sigma_deg > 0 and gyro_g_sensitivity: false (else the g-sensitivity is estimated, or "
+                 "the weighting relative)");
   }
   a.estimate_gyro_bias = o.gyroscope == "bias_only";
   if (std::string why; !o.IsValid(&why))
@@ -185,6 +198,15 @@ std::string describe_options(const ModelFileOptions& o) {
     s += fmt::format("  turns: the recording's rotation segments with turn_*_deg truth, known to {} deg (1 sigma) in "
                      "angle and axis\n",
                      o.gyro.turn_angle_sigma_deg);
+  if (o.gyroscope == "rate_table")
+    s += o.gyro.rate_axis_sigma_deg > 0.0
+             ? fmt::format("  rate axes known to {} deg (1 sigma): a-priori sigmas, the Earth rate's horizontal part "
+                           "included; unmodelled g-sensitivity {} (deg/s)/g (1 sigma)\n",
+                           o.gyro.rate_axis_sigma_deg, o.gyro.g_sensitivity_sigma_dps_per_g)
+             : std::string("  rate axes exact (the truth's): relative weighting\n");
+  if (o.gyroscope == "earth_rate")
+    s += fmt::format("  positions placed to {} deg (1 sigma); unmodelled g-sensitivity {} (deg/s)/g (1 sigma)\n",
+                     o.gyro.orientation_sigma_deg, o.gyro.g_sensitivity_sigma_dps_per_g);
   return s;
 }
 
@@ -225,7 +247,9 @@ std::string options_json(const ModelFileOptions& o) {
       {"table_offsets", a.table_offsets},
       {"table_fixture", a.table_fixture},
       {"gyro_g_sensitivity", o.gyro.estimate_g_sensitivity},
-      {"turn_angle_sigma_deg", o.gyro.turn_angle_sigma_deg}};
+      {"turn_angle_sigma_deg", o.gyro.turn_angle_sigma_deg},
+      {"rate_axis_sigma_deg", o.gyro.rate_axis_sigma_deg},
+      {"g_sensitivity_sigma_dps_per_g", o.gyro.g_sensitivity_sigma_dps_per_g}};
   return j.dump();
 }
 

@@ -67,6 +67,12 @@ bool GyroOptions::IsValid(std::string* error) const {
   if (!(loss_scale_rad > 0.0)) return fail(error, "gyro_loss_scale_rad must be > 0 rad");
   if (!(turn_angle_sigma_deg > 0.0 && std::isfinite(turn_angle_sigma_deg)))
     return fail(error, "turn_angle_sigma_deg must be > 0 deg");
+  if (!(rate_axis_sigma_deg >= 0.0 && std::isfinite(rate_axis_sigma_deg)))
+    return fail(error, "rate_axis_sigma_deg must be >= 0 deg");
+  if (!(orientation_sigma_deg >= 0.0 && std::isfinite(orientation_sigma_deg)))
+    return fail(error, "orientation_sigma_deg must be >= 0 deg");
+  if (!(g_sensitivity_sigma_dps_per_g >= 0.0 && std::isfinite(g_sensitivity_sigma_dps_per_g)))
+    return fail(error, "g_sensitivity_sigma_dps_per_g must be >= 0 (deg/s)/g");
   if (!solver_settings_valid(confidence, max_iterations, rank_tolerance, tolerances, error)) return false;
   return processing.IsValid(error);
 }

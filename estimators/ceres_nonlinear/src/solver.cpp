@@ -177,6 +177,10 @@ void fill_parameters(ceres::Problem& problem, std::vector<double>& x, const std:
 std::string covariance_source(Weighting weighting, double variance_factor, int dof) {
   if (weighting == Weighting::kRelative)
     return fmt::format("covariance (JᵀJ)⁻¹ scaled by σ² = RSS/(n − p), {} dof; Student t intervals", dof);
+  if (weighting == Weighting::kAPrioriAtLeast && dof > 0 && variance_factor <= 1.0)
+    return fmt::format("covariance from the a-priori sigmas (the reduced χ² = {:.4g}, {} dof, is at most 1: the "
+                       "stated sigmas are not narrowed); normal-quantile intervals",
+                       variance_factor, dof);
   if (dof > 0)
     return fmt::format("covariance from the a-priori sigmas scaled by the reduced χ² = {:.4g} ({} dof); Student t "
                        "intervals",
@@ -263,11 +267,24 @@ void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<in
                             "add static intervals", residual_count, p));
     return;
   }
-  const double variance_factor = r.dof > 0 ? rss / r.dof : 1.0;
-  r.quantile = r.dof > 0 ? estimation::student_t_quantile(0.5 + 0.5 * o.confidence, r.dof)
-                         : estimation::normal_quantile(0.5 + 0.5 * o.confidence);
-  r.uncertainty += (r.uncertainty.empty() ? "" : "; ") + covariance_source(weighting, variance_factor, r.dof);
+  const double chi2 = r.dof > 0 ? rss / r.dof : 1.0;
+  const bool scaled = r.dof > 0 && (weighting != Weighting::kAPrioriAtLeast || chi2 > 1.0);
+  const double variance_factor = scaled ? chi2 : 1.0;
+  r.quantile = scaled ? estimation::student_t_quantile(0.5 + 0.5 * o.confidence, r.dof)
+                      : estimation::normal_quantile(0.5 + 0.5 * o.confidence);
+  r.uncertainty += (r.uncertainty.empty() ? "" : "; ") + covariance_source(weighting, chi2, r.dof);
   fill_parameters(problem, x, free_index, o, variance_factor, r);
+}
+
+double noise_correlation_factor(const std::vector<processing::StaticPoint>& points, bool gyro) {
+  double white = 0.0, correlated = 0.0;
+  for (const auto& p : points) {
+    const processing::AxesValue& v = gyro ? p.gyro : p.accel;
+    if (!v.std_error.allFinite() || !v.correlated_std_error.allFinite()) continue;
+    white += v.std_error.squaredNorm();
+    correlated += v.correlated_std_error.squaredNorm();
+  }
+  return white > 0.0 ? std::max(1.0, std::sqrt(correlated / white)) : 1.0;
 }
 
 bool finite_intervals(const std::vector<processing::StaticPoint>& ivs) {

@@ -62,6 +62,12 @@ enum class Weighting {
   // Residuals whitened by a-priori sigmas: covariance (JᵀJ)⁻¹ scaled by the reduced χ² = RSS/(n − p)
   // when n > p (Student t intervals), else the a-priori covariance as it is (normal quantile).
   kAPriori,
+  // Residuals whitened by a-priori sigmas some of which are stated bounds (a placement "within about
+  // a degree"): covariance (JᵀJ)⁻¹ scaled by the reduced χ² only when it exceeds 1 (Student t
+  // intervals), else the a-priori covariance (normal quantile). A placement better than stated makes
+  // the χ² small, but that says nothing about the noise of the means beside it: it never narrows the
+  // intervals.
+  kAPrioriAtLeast,
 };
 
 // Solve, check identifiability, fill the covariance. `free_index` lists the estimated parameters;
@@ -69,6 +75,12 @@ enum class Weighting {
 // appended (after what the procedure wrote there: its sigmas).
 void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<int>& free_index, int residual_count,
            const CalibrationOptions& o, CalibrationResult& r, Weighting weighting = Weighting::kRelative);
+
+// How much more the intervals' means scatter than white noise of their sample spread says: the
+// pooled ratio √(Σ correlated_std_error² / Σ std_error²) over the intervals and axes of one
+// instrument (processing's Newey–West error of a mean: a sensor's low-pass filter correlates nearby
+// samples), at least 1 (1 when nothing is known). The a-priori noise of a mean is σ/√N times this.
+double noise_correlation_factor(const std::vector<processing::StaticPoint>& points, bool gyro);
 
 // Whether every interval's accelerometer and gyro means are finite.
 bool finite_intervals(const std::vector<processing::StaticPoint>& intervals);

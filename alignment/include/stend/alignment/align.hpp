@@ -9,13 +9,15 @@
 //   faces      the next still stretch whose measured gravity direction is within
 //              face_tolerance_deg of the stated one, for each face: truth f = g·up, ω = the Earth
 //              rate's vertical component when the site's latitude is known;
-//   still      the next still stretch(es), any direction: f unknown (NaN);
+//   still      the next still stretch(es), any direction: f unknown (NaN), ω the Earth rate's
+//              vertical component along the measured gravity direction;
 //   turns      the next motion between two stills whose angle integrated about the axis (bias
 //              from the stills beside it) is the stated angle within turn_tolerance: truth the
 //              turn's rotation vector, its sign taken from the data unless stated;
 //   rate_legs  the next steady-rate stretch whose rate about the axis is the stated rate within
-//              rate_tolerance: truth ω = rate·axis, f = g·up when `up` is stated.
-// Stills no step names stay as `detected` segments (bias, noise). A step that finds no match is an
+//              rate_tolerance: truth ω = rate·axis, f = g·up and the Earth rate's vertical
+//              component added to ω when `up` is stated.
+// Stills no step names stay as `detected` segments (bias, noise), with ω as for a still. A step that finds no match is an
 // AlignmentError naming the step (file:line:col), what it expected and what the recording holds.
 #pragma once
 
@@ -106,5 +108,19 @@ std::vector<std::string> aligned_truth_columns();
 // Table steps (orientations, rates) must have been turned into faces and rate legs first
 // (stend/core/procedure_geometry.hpp). Throws AlignmentError.
 Alignment align(const Experiment& exp, const std::vector<Block>& blocks, const AlignOptions& options);
+
+// What an aligned recording states before its first sample: the aligned truth columns, the site's g
+// and its latitude when known (what a streaming import writes into the header before the samples).
+void align_header(RecordingHeader& header, const Experiment& exp);
+
+// The alignment's segments, truth and notes in place of whatever the importer made (the notes and a
+// summary as import events).
+void apply_alignment(Recording& rec, const Experiment& exp, Alignment a);
+
+// A recording read whole (or through its sample source) aligned to the procedure: the blocks
+// observed, aligned, the header, segments, truth and the experiment (its processing: section, the
+// procedure fingerprint) replaced — what `stend fit LOG --experiment FILE` fits. Throws
+// AlignmentError.
+void align_recording(Recording& rec, const Experiment& exp, const AlignOptions& options = {});
 
 }  // namespace stend::alignment

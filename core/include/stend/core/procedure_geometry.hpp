@@ -20,4 +20,10 @@ namespace stend {
 // turned into what the sensor saw.
 Experiment as_observed_procedure(const Experiment& exp, const PluginHost& host);
 
+// An experiment file read as the procedure of a log made elsewhere (no sensor needed): loaded with
+// the plugins of the default search path (the fixtures it may declare; its own plugin_paths are not
+// loaded) and turned into observed steps (as_observed_procedure) — what `stend import --experiment`
+// aligns a log to.
+Experiment load_observed_procedure(const std::string& file);
+
 }  // namespace stend

@@ -39,6 +39,13 @@ struct StaticValue {
   // raw_std / sqrt(n_used): the standard error of the mean IF the noise is white. Coloured noise
   // (flicker, bias instability, random walk) makes the true error larger.
   double white_std_error = 0.0;
+  // The standard error of the raw mean allowing for correlation between nearby samples (a sensor's
+  // own low-pass filter): √(Σ_{|k|≤L} γ_k / (n − 2L − 1)), the sample autocovariances γ_k summed to
+  // lag L = min(⌈2·n^(1/3)⌉, (n − 1)/4) (untapered: a taper undercounts a filter's correlation;
+  // n − 2L − 1: each γ_k about the sample mean falls short by the mean's variance). About
+  // white_std_error for white noise (a noisier estimate of it, pooled by its users); slower wander
+  // (bias instability) it still misses.
+  double correlated_std_error = 0.0;
   std::size_t n_segment = 0;  // samples inside [t_start, t_end]
   std::size_t n_used = 0;     // samples inside the kept window
   double t_first_s = 0.0;     // first and last kept sample times

@@ -60,6 +60,9 @@ struct AxesValue {
   // sample_std / √n: the standard error of the mean if the noise is white (coloured noise makes
   // the true error larger).
   Eigen::Vector3d std_error = Eigen::Vector3d::Constant(kNaN);
+  // The standard error of the raw mean allowing for correlation between nearby samples
+  // (StaticValue::correlated_std_error).
+  Eigen::Vector3d correlated_std_error = Eigen::Vector3d::Constant(kNaN);
 };
 
 enum class TemperatureSource { kDie, kSensor };

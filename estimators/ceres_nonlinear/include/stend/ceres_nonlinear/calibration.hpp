@@ -255,6 +255,25 @@ struct GyroOptions {
   // Turns: how well a known turn is known [deg, 1σ], in angle and in axis direction: the integrated
   // turn v_k gets the a-priori variance σ² along the turn's axis and (|θ_k|·σ)² across it [rad²].
   double turn_angle_sigma_deg = 1.0;
+  // Rate table: how well each interval's rate axis is known in the sensor frame (the sensor placed on
+  // the table) [deg, 1σ about each perpendicular]; 0: exactly (a bench run's truth: the relative
+  // weighting). > 0: each interval mean is whitened by its a-priori sigmas — the noise of the mean,
+  // |ω|·σ across the rate, |ω|·σ² along it (the cosine loss, half of it taken off the stated rate),
+  // and the Earth rate the truth leaves out (its horizontal part turns with the table: Ω_e² on each
+  // horizontal axis at most) — and the covariance is scaled by the reduced χ² only when it exceeds 1.
+  double rate_axis_sigma_deg = 0.0;
+  // Earth rate: the placement of the up and down positions [deg, 1σ of each tilt component]: the
+  // projection on the stated vertical then also sees the horizontal readings (the other axes'
+  // biases) by the tilt, σ·|ȳ_⊥| per still. The model file's orientation_sigma_deg.
+  double orientation_sigma_deg = 0.0;
+  // The gyro's g-sensitivity where it is not estimated, as an a-priori spread of each G_ij
+  // [(deg/s)/g, 1σ]; 0: none (a navigation-grade gyro). Earth rate: up and down flip it with the
+  // Earth rate, so a scale_i reads as scale_i + G_ii·g/Ω_v: the stills' projections get the joint
+  // covariance g_k·g_l·σ_G²·(u_k·u_l)², which widens the scales by g·σ_G/Ω_v (≈ 33 for an
+  // MPU-6050's 0.1). Rate table with rate_axis_sigma_deg > 0 and no g-sensitivity estimated: the
+  // intervals get σ_G²·(f_k·f_l) on each axis jointly (legs with one axis up share G·f with the
+  // bias: with the axes up only, never down, the bias is known no better than G·g).
+  double g_sensitivity_sigma_dps_per_g = 0.0;
 
   bool IsValid(std::string* error = nullptr) const;  // as CalibrationOptions::IsValid
 };
@@ -279,18 +298,28 @@ CalibrationResult calibrate_gyro_integration(const Recording& rec, const Calibra
 //     truth columns turn_<axis>_deg (stend/recording/truth_columns.hpp): the reading integrated
 //     over turn k, v_k = Σ ω_i Δt, against T_k·measure(θ, θ_k/T_k, F_k/T_k) = A(θ)·θ_k + b·T_k
 //     (+ G·F_k, F_k = Σ f_i Δt of the measured specific force). One weighted least-squares fit of
-//     the still means and the turn integrals, whitened by a-priori sigmas: still mean σ_n/√N (σ_n
-//     the per-sample gyro noise pooled over the stills, at least the quantization step/√12); turn
-//     integral σ_n·Δt·√N, plus turn_angle_sigma_deg along the turn's axis and |θ_k|·that across
-//     it. Covariance (JᵀJ)⁻¹ of the whitened problem, scaled by the reduced χ² when dof > 0
-//     (CalibrationResult::uncertainty says which). Turns about fewer than three independent axes:
-//     the fit fails naming the combination it cannot see.
-CalibrationResult calibrate_gyro_turns(const Recording& rec, const GyroOptions& options = {});
+//     the still means and the turn integrals, whitened jointly by a-priori sigmas: still mean σ_n/√N
+//     (σ_n the per-sample gyro noise pooled over the stills, at least the quantization step/√12,
+//     times their correlation factor) plus the Earth rate the truth leaves out (its horizontal part,
+//     one value for the stills at one orientation); turn integral σ_n·Δt·√N, plus
+//     turn_angle_sigma_deg along the turn's axis and |θ_k|·that across it. Covariance (JᵀJ)⁻¹ of the
+//     whitened problem, scaled by the reduced χ² only when it exceeds 1 (the turns' sigma is a stated
+//     bound; CalibrationResult::uncertainty says which). Turns about fewer than three independent
+//     axes: the fit fails naming the combination it cannot see.
+// `accel`, when given (a successful accelerometer fit of the same recording, as the model file's
+// accelerometer part runs first), calibrates the specific force the g-sensitivity sees (else the raw
+// accelerometer reading, whose bias would pass into the gyro bias as G·b).
+CalibrationResult calibrate_gyro_turns(const Recording& rec, const GyroOptions& options = {},
+                                       const CalibrationResult* accel = nullptr);
 // A turn given directly: its window (mean gyro and specific-force readings, samples_used, first
-// and last sample times) and the rotation it made [rad, sensor frame].
+// and last sample times) and the rotation it made [rad, sensor frame]. Each of its samples stands
+// for sample_period_s: the recording's sample period (1 / its rate: a bursty log's mean rate, whose
+// stamps inside a turn say when the samples arrived, not when they were taken); 0: the window's
+// own, its duration over its sample intervals.
 struct KnownTurn {
   processing::StaticPoint window;
   Eigen::Vector3d rotation_rad = Eigen::Vector3d::Zero();
+  double sample_period_s = 0.0;
 };
 // `stills[k].stimulus.input`: the applied rate of still k (Earth rate, or 0) [rad/s];
 // quantization_radps: one count of the gyro (0: unknown).
@@ -302,8 +331,11 @@ CalibrationResult calibrate_gyro_turns(const std::vector<processing::StaticPoint
 //     and w_k, u_k = f_k/|f_k|, Ω_v,k = u_k·w_k; observation z_k = u_k·ȳ_k against
 //     u_k·measure(θ, Ω_v,k·u_k) = u_k·b + u_k·A(θ)·(Ω_v,k u_k). Bias and scale of each axis that is
 //     near vertical (|u_k,i| ≥ cos 45°) in some still; the others, and every cross-axis term (seen only
-//     as m_ij + m_ji, and only in tilted positions), are held at 0 and said so. Whitened by the
-//     a-priori σ of z_k (the pooled still noise projected on u_k, /√N); covariance as for turns.
+//     as m_ij + m_ji, and only in tilted positions), are held at 0 and said so. Whitened jointly by
+//     the a-priori covariance of the z_k: the pooled still noise projected on u_k, /√N; the tilt of
+//     each position (orientation_sigma_deg) times its horizontal reading; the unmodelled
+//     g-sensitivity (g_sensitivity_sigma_dps_per_g), shared as g_k·g_l·σ_G²·(u_k·u_l)². Covariance
+//     scaled by the reduced χ² when dof > 0.
 //     The Earth rate is small (≤ 7.3e-5 rad/s): on a consumer gyro the scale comes out imprecise.
 CalibrationResult calibrate_gyro_earth_rate(const Recording& rec, const GyroOptions& options = {});
 // truth_f[k], truth_w[k]: the still's specific force [m/s^2] and applied rate [rad/s] (sensor frame).
