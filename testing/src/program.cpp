@@ -10,8 +10,10 @@
 
 #include <array>
 #include <cerrno>
+#include <chrono>
 #include <regex>
 #include <system_error>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -42,6 +44,31 @@ std::string shell_quote(const std::string& s) {
   return out + "'";
 }
 
+namespace {
+
+// Whether process `pid` ended within `timeout_s` (reaped when it did).
+bool ended_within(pid_t pid, double timeout_s) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  int status = 0;
+  while (::waitpid(pid, &status, WNOHANG) == 0) {
+    if (std::chrono::steady_clock::now() > until) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return true;
+}
+
+// SIGINT to the process group of `pid` (the command and what it started); once `pid` has ended, or
+// after 5 s, SIGKILL to what is left of the group (a shell's background children ignore SIGINT).
+void stop_group(pid_t pid) {
+  ::kill(-pid, SIGINT);
+  const bool ended = ended_within(pid, 5.0);
+  ::kill(-pid, SIGKILL);
+  int status = 0;
+  if (!ended) ::waitpid(pid, &status, 0);
+}
+
+}  // namespace
+
 StartedCommand::StartedCommand(const std::string& command, const Environment& env) {
   int fds[2];
   if (::pipe2(fds, O_CLOEXEC) != 0) throw std::system_error(errno, std::generic_category(), "pipe");
@@ -55,7 +82,13 @@ StartedCommand::StartedCommand(const std::string& command, const Environment& en
   envp.push_back(nullptr);
   std::string sh = "sh", dash_c = "-c", line = command;
   std::array<char*, 4> argv = {sh.data(), dash_c.data(), line.data(), nullptr};
-  const int rc = ::posix_spawn(&pid_, "/bin/sh", &actions, nullptr, argv.data(), envp.data());
+  // Its own process group, so that an abandoned command is stopped whole (~StartedCommand).
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
+  posix_spawnattr_setpgroup(&attributes, 0);
+  const int rc = ::posix_spawn(&pid_, "/bin/sh", &actions, &attributes, argv.data(), envp.data());
+  posix_spawnattr_destroy(&attributes);
   posix_spawn_file_actions_destroy(&actions);
   ::close(fds[1]);
   if (rc != 0) {
@@ -69,10 +102,11 @@ StartedCommand::StartedCommand(const std::string& command, const Environment& en
 StartedCommand::StartedCommand(StartedCommand&& other) noexcept
     : pid_(std::exchange(other.pid_, -1)), out_(std::exchange(other.out_, nullptr)) {}
 
+// A command nobody finished (a test that failed before it stopped its server) is interrupted, then
+// killed, with everything it started: a failed assertion never hangs the test on a server left running.
 StartedCommand::~StartedCommand() {
+  if (pid_ > 0) stop_group(pid_);
   if (out_ != nullptr) std::fclose(out_);
-  int status = 0;
-  if (pid_ > 0) ::waitpid(pid_, &status, 0);
 }
 
 std::string StartedCommand::wait_for(const std::string& pattern) {

@@ -9,8 +9,11 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <string>
+#include <thread>
 
 namespace fs = std::filesystem;
 namespace st = stend::testing;
@@ -41,6 +44,31 @@ TEST(TestingProgram, StartedCommandIsReadLineByLineWhileItRuns) {
   EXPECT_EQ(rest.text, "after\n");
   st::StartedCommand quiet("echo nothing to see");
   EXPECT_EQ(quiet.wait_for("port ([0-9]+)"), "");
+}
+
+// Whether process `pid` runs (exists and is not a zombie left for its new parent to reap).
+bool running(const std::string& pid) {
+  std::ifstream stat("/proc/" + pid + "/stat");
+  std::string line;
+  if (!std::getline(stat, line)) return false;
+  const auto close = line.rfind(')');
+  return close != std::string::npos && close + 2 < line.size() && line[close + 2] != 'Z';
+}
+
+// A test that fails before it stops its server leaves the command unfinished: the destructor stops
+// it and what it started (here a shell running a child that ignores nothing and would sleep 300 s)
+// instead of waiting for it to end.
+TEST(TestingProgram, AnUnfinishedCommandIsStoppedWithWhatItStarted) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string child;
+  {
+    st::StartedCommand c("sleep 300 & echo child $!; wait");
+    child = c.wait_for("child ([0-9]+)");
+    ASSERT_FALSE(child.empty());
+  }
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(30));
+  for (int k = 0; k < 100 && running(child); ++k) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_FALSE(running(child)) << "sleep " << child << " still runs";
 }
 
 TEST(TestingProgram, RunStendRunsThisBuildsProgram) {
