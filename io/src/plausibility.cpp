@@ -83,18 +83,15 @@ std::optional<Stillness::Still> Stillness::stillest() const {
 
 std::string implausible_because(const Stillness::Still& still, const ImportOptions& options) {
   const double g = physics::kStandardGravity;
-  const double a_g = still.accel_mps2 / g;
+  const double a_g = still.accel_mps2 / g;  // the still |a| in g, as imported
+  const auto plausible = [](double in_g) { return in_g >= kMinStillG && in_g <= kMaxStillG; };
   const std::string seen = "|a| ≈ " + rough(still.accel_mps2) + " m/s^2 (" + rough(a_g) + " g) in the stillest stretch";
-  const bool given_in_g = options.accel_value.unit == g && !options.accel_value.counts();
-  if (a_g > kMaxStillG) {
-    if (given_in_g && a_g < 2.0 * g) return seen + ": these look like m/s^2 read as g — drop --accel-unit g";
-    if (!options.accel_value.counts() && a_g > 50.0)
-      return seen + ": these look like raw counts — give --accel-lsb (e.g. 1/16384g)";
-    return seen + ", not about 1 g: check --accel-lsb / --accel-unit";
-  }
-  if (a_g < kMinStillG) {
-    if (!options.accel_value.counts() && !given_in_g && std::abs(still.accel_mps2 - 1.0) < 0.5)
-      return seen + ": these look like g — give --accel-unit g";
+  const bool counts = options.accel_value.counts();
+  const bool given_in_g = !counts && options.accel_value.unit == g;
+  if (!plausible(a_g)) {
+    if (!counts && a_g > kMinCountsPerG) return seen + ": these look like raw counts — give --accel-lsb (e.g. 1/16384g)";
+    if (given_in_g && plausible(a_g / g)) return seen + ": these look like m/s^2 read as g — drop --accel-unit g";
+    if (!counts && !given_in_g && plausible(still.accel_mps2)) return seen + ": these look like g — give --accel-unit g";
     return seen + ", not about 1 g: check --accel-lsb / --accel-unit";
   }
   if (still.rate_radps > kMaxStillRate_dps * physics::kDegPerSecond)

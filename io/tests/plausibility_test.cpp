@@ -4,6 +4,7 @@
 #include <stend/io/formats.hpp>
 #include <stend/io/plausibility.hpp>
 #include <stend/testing/files.hpp>
+#include <stend/testing/paths.hpp>
 
 #include <gtest/gtest.h>
 
@@ -202,5 +203,18 @@ TEST(Plausibility, AbsentTemperatureIsNaNAndRoundTrips) {
     const Recording back = Recording::open(run);
     ASSERT_EQ(back.samples.size(), rec.samples.size());
     for (const auto& s : back.samples) ASSERT_TRUE(std::isnan(s.temperature_c)) << run;
+  }
+}
+
+// The real logs in ../shared/data are plausible as they are: none is refused (a log moving
+// throughout is not judged).
+TEST(Plausibility, TheSharedRealLogsPass) {
+  for (const char* rel : {"logs/ulog/sample_log_small.ulg", "logs/dataflash/ardusub_small.BIN",
+                          "logs/rosbag1/sparkfun_razor.bag", "logs/rosbag1/robot_localization_test2.bag",
+                          "imucal/annotated_session.csv", "mpu6050_multipos/calibration_session.csv",
+                          "mpu6050_multipos/static_449s.csv"}) {
+    const fs::path file = stend::testing::shared_data(rel);
+    STEND_SKIP_IF_ABSENT(file);
+    EXPECT_NO_THROW(open_dataset({file}, "auto")) << rel;
   }
 }

@@ -37,6 +37,8 @@ inline constexpr std::size_t kStillBlocksKept = 5;
 inline constexpr double kMinStillG = 0.5;
 inline constexpr double kMaxStillG = 2.0;
 inline constexpr double kMaxStillRate_dps = 2000.0;
+// A still |a| above this many g is counts (no MEMS accelerometer has fewer counts per g).
+inline constexpr double kMinCountsPerG = 100.0;
 
 // What is wrong with sample `s` (empty: nothing): a time that is not finite, an accelerometer or
 // gyroscope value that is not finite, a temperature that is infinite (NaN is an absent reading).
