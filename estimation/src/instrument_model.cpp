@@ -77,6 +77,14 @@ std::string why_absent(const SensorInfo& info, model::Instrument instrument) {
   return "the recording has no gyroscope (its source holds no gyroscope data)";
 }
 
+std::string why_no_temperature(const SensorInfo& info, const std::vector<std::string>& temperature_terms) {
+  if (info.has_temperature || temperature_terms.empty()) return {};
+  std::string names;
+  for (const auto& t : temperature_terms) names += (names.empty() ? "" : ", ") + t;
+  return "the recording has no temperature (its source holds none), which the model's temperature term(s) " + names +
+         " need; remove them to fit the rest";
+}
+
 InstrumentModel not_applicable(model::ErrorModel model, const std::string& why) {
   InstrumentModel m;
   m.status = FitStatus::kNotApplicable;

@@ -44,7 +44,7 @@ struct Candidate {
 
 // All vocabulary terms (except those the model has) as candidates for this instrument; the
 // temperature polynomials are offered at the next orders above what the model has, up to 3.
-std::vector<Candidate> default_candidates(const model::ErrorModel& model);
+std::vector<Candidate> default_candidates(const model::ErrorModel& model, bool temperature_spread = true);
 
 // How the held-out folds are formed: by the segments' orientation, temperature level or ramp
 // direction; auto = temperature with ≥ 3 levels, else orientation.

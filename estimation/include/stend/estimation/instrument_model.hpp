@@ -89,6 +89,11 @@ struct InstrumentModel {
 // no gyroscope data: e.g. a CSV without gyro columns); every sensor and importer gives an
 // accelerometer.
 std::string why_absent(const SensorInfo& info, model::Instrument instrument);
+// Why a model with `temperature_terms` (the terms that read the temperature, by name) cannot be
+// fitted on a recording whose sensor `info` describes: "" when it has none or the recording has a
+// temperature (SensorInfo::has_temperature). No coefficient is ever fitted against a temperature
+// that was not measured.
+std::string why_no_temperature(const SensorInfo& info, const std::vector<std::string>& temperature_terms);
 // The model of an instrument absent from the recording: kNotApplicable, `why` its message, no
 // parameters (nothing was fitted).
 InstrumentModel not_applicable(model::ErrorModel model, const std::string& why);
