@@ -65,10 +65,24 @@ double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b)) * physics::kRadToDeg;
 }
 
+// The calibration's own variance of |a| at a still pose [(m/s^2)^2]: its parameters' standard
+// errors through the regressor at the calibrated reading `a`, projected on the reading's
+// direction (the results keep no correlations, so none are used).
+double calibration_variance(const InstrumentCalibration& ic, const Eigen::Vector3d& a, double temperature_c) {
+  model::Stimulus<double> s;
+  s.input = s.specific_force = a;
+  s.temperature_c = temperature_c;
+  const Eigen::RowVectorXd along = a.normalized().transpose() * ic.model.regressor(s);
+  double v = 0.0;
+  for (std::size_t j = 0; j < ic.parameters.size(); ++j)
+    v += std::pow(along[static_cast<Eigen::Index>(j)] * ic.std_error(ic.parameters[j].name), 2);
+  return v;
+}
+
 // |a| − g before and after over the static points, the noise floor, the gravity direction's
 // stability inside each; the calibrated RMS against kStaticLimitNoiseFloors × the floor.
-StaticCheck static_check(const Recording& raw, const Recording& cal, const std::vector<processing::StaticPoint>& pts,
-                         double g) {
+StaticCheck static_check(const Recording& raw, const Recording& cal, const InstrumentCalibration& accel,
+                         const std::vector<processing::StaticPoint>& pts, double g) {
   StaticCheck c;
   if (pts.empty()) {
     c.not_checked = "no static interval detected";
@@ -81,8 +95,10 @@ StaticCheck static_check(const Recording& raw, const Recording& cal, const std::
     const Eigen::Vector3d a = accel_mean(cal, p.first, p.last);
     before.push_back(accel_mean(raw, p.first, p.last).norm() - g);
     after.push_back(a.norm() - g);
-    // Standard error of |mean a|: the per-axis standard errors projected on the mean's direction.
-    floor2.push_back(p.accel.std_error.cwiseAbs2().dot(a.normalized().cwiseAbs2()));
+    // Standard error of |mean a|: the per-axis standard errors projected on the mean's direction,
+    // and the calibration's own.
+    floor2.push_back(p.accel.std_error.cwiseAbs2().dot(a.normalized().cwiseAbs2()) +
+                     calibration_variance(accel, a, p.stimulus.temperature_c));
     const std::size_t mid = p.first + (p.last - p.first) / 2;
     if (mid > p.first && mid + 1 <= p.last)
       dir.push_back(angle_deg(accel_mean(cal, p.first, mid), accel_mean(cal, mid + 1, p.last)));
@@ -300,7 +316,7 @@ ValidationReport validate(const Recording& raw, const Recording& calibrated, con
   const auto& pts = ex.points;
   r.notes.insert(r.notes.end(), ex.notes.begin(), ex.notes.end());
   r.statics.not_checked = static_check_unavailable(cal);
-  if (r.statics.not_checked.empty()) r.statics = static_check(raw, calibrated, pts, gravity_for(raw, cal, o));
+  if (r.statics.not_checked.empty()) r.statics = static_check(raw, calibrated, cal.accel, pts, gravity_for(raw, cal, o));
   if (o.rebias_from_start_s > 0.0) rebias(calibrated, pts, o.rebias_from_start_s, r);
   const double z = estimation::normal_quantile(0.5 * (1.0 + o.confidence));
   for (const auto& e : o.rotations) {

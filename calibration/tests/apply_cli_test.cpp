@@ -24,14 +24,14 @@ using stend::testing::run_stend;
 using stend::testing::shell_quote;
 using stend::testing::write_text;
 
-// Bias and scale per axis, and a linear bias temperature term: at one temperature each bias and
-// its coefficient alias.
+// Bias and scale per axis, and a linear bias temperature term about 0 degC: at one temperature
+// (the room's 25 degC) each bias and its coefficient alias.
 const char* kAliasedModel = R"(instrument: accelerometer
 axes: [x, y, z]
 terms:
   - bias
   - scale
-  - bias_temperature: {order: 1, reference_c: 25}
+  - bias_temperature: {order: 1, reference_c: 0}
 extraction: {filter_order: 6, cutoff_hz: 0.5, settle_s: 2.0}
 segments: [orientation]
 )";

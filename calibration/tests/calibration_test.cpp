@@ -213,7 +213,10 @@ TEST(Calibration, AccelerometerOnlyCalibrationRefusesARotationCheck) {
     EXPECT_NE(std::string(e.what()).find("accel_only.json"), std::string::npos) << e.what();
   }
   // The static check alone is fine.
-  EXPECT_TRUE(validate(raw, calibrated, cal, {}).ok);
+  const ValidationReport r = validate(raw, calibrated, cal, {});
+  std::ostringstream text;
+  r.print(text);
+  EXPECT_TRUE(r.ok) << text.str();
 }
 
 // The fit with unknown orientations holds cross_xy, cross_xz, cross_yz at 0 as its frame

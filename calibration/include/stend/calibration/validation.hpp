@@ -4,7 +4,8 @@
 //   static:    the static intervals the processing stage detects in the calibrated recording;
 //              for each, |mean a| − g before and after calibration (mean, RMS, max over the
 //              intervals [m/s^2]) beside the noise floor (RMS over the intervals of the standard
-//              error of |mean a|, white noise); and the gravity direction's stability inside each
+//              error of |mean a|: white noise, and the calibration's own from its parameters'
+//              standard errors); and the gravity direction's stability inside each
 //              interval: the angle between the mean directions of its two halves (RMS, max [deg]).
 //              PASS when the calibrated RMS is at most kStaticLimitNoiseFloors × the noise floor;
 //              NOT CHECKED without an accelerometer calibration of the three axes (|a| needs them)
@@ -73,7 +74,7 @@ struct StaticCheck {
   // |mean a| − g over the intervals [m/s^2]: raw and calibrated.
   double mean_before = NAN, rms_before = NAN, max_before = NAN;
   double mean_after = NAN, rms_after = NAN, max_after = NAN;
-  double noise_floor = NAN;  // RMS over the intervals of the standard error of |mean a| [m/s^2]
+  double noise_floor = NAN;  // RMS over the intervals of the standard error of |mean a| (noise, calibration) [m/s^2]
   double direction_rms_deg = NAN, direction_max_deg = NAN;  // half-to-half gravity direction change
   double limit_mps2 = NAN;  // kStaticLimitNoiseFloors × noise_floor
   CheckVerdict verdict = CheckVerdict::kNotChecked;
