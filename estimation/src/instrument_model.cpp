@@ -22,10 +22,15 @@ double InstrumentModel::std_error(const std::string& name) const {
   return p != nullptr && std::isfinite(p->std_error) ? p->std_error : 0.0;
 }
 
+bool InstrumentModel::determined(std::size_t i) const {
+  if (i >= parameters.size() || i >= theta.size()) return false;
+  return parameters[i].held ? parameters[i].zero_is_exact : std::isfinite(theta[i]);
+}
+
 std::vector<std::string> InstrumentModel::not_identified() const {
   std::vector<std::string> out;
   for (std::size_t i = 0; i < theta.size() && i < parameters.size(); ++i)
-    if (!std::isfinite(theta[i]) && !parameters[i].held) out.push_back(parameters[i].name);
+    if (!determined(i)) out.push_back(parameters[i].name);
   return out;
 }
 

@@ -386,11 +386,18 @@ TEST_F(Cli, Px4ExportIsAParamFileWithTheFittedPolynomial) {
   const json tp = json::parse(read_text(dir / "sweep/temp_poly.json"));
   const char* ax = "xyz";
   for (int k = 0; k < 3; ++k) {
-    double bias = NAN, tc1 = NAN;
+    double bias = NAN, tc1 = NAN, scale = NAN;
     for (const auto& p : tp["axes"][static_cast<std::size_t>(k)]["fit"]["parameters"]) {
       if (p["name"] == std::string("bias_") + ax[k]) bias = p["value"].get<double>();
       if (p["name"] == std::string("bias_tc1_") + ax[k]) tc1 = p["value"].get<double>();
+      if (p["name"] == std::string("scale_") + ax[k]) scale = p["value"].get<double>();
     }
+    // The constant scale factor beside the thermal offsets (PX4 corrects (raw − TC offset − OFF)·SCALE):
+    // the offsets are all in TC_*, the scale (planted 2000, −1000, 1500 ppm) in CAL_ACC0_*SCALE.
+    const std::string cal = std::string("CAL_ACC0_") + static_cast<char>('X' + k);
+    EXPECT_EQ(std::stod(params.at(cal + "OFF").first), 0.0);
+    EXPECT_NEAR(std::stod(params.at(cal + "SCALE").first), 1.0 / (1.0 + scale), 1e-6);
+    EXPECT_GT(std::abs(std::stod(params.at(cal + "SCALE").first) - 1.0), 5e-4) << cal;
     // REAL32 parameters: 1e-6 relative.
     EXPECT_NEAR(std::stod(params.at("TC_A0_X0_" + std::to_string(k)).first), bias, 1e-6 * std::abs(bias) + 1e-12);
     EXPECT_NEAR(std::stod(params.at("TC_A0_X1_" + std::to_string(k)).first), tc1, 1e-6 * std::abs(tc1) + 1e-12);

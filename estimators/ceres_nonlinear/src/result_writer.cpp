@@ -55,7 +55,8 @@ std::string CalibrationResult::to_json() const {
     return json{{"name", p.name}, {"unit", p.unit}, {"value", num(p.value)},
                 {"std_error", num(p.std_error)}, {"ci95", {num(p.lower), num(p.upper)}},
                 {"identifiable", p.identifiable}, {"verdict", estimation::to_string(p.judged())},
-                {"tolerance", num(p.tolerance)}, {"fixed", p.held}, {"reason", p.reason}};
+                {"tolerance", num(p.tolerance)}, {"fixed", p.held}, {"zero_is_exact", p.zero_is_exact},
+                {"reason", p.reason}};
   };
   json j;
   j["ok"] = ok();
@@ -144,7 +145,7 @@ std::string results_document(const ModelFileOptions& o, const ModelFileFit& f) {
     j["parameters"].push_back({{"name", name}, {"unit", p.unit}, {"value", num(p.value)}, {"std_error", num(p.std_error)},
                                {"interval", {num(p.lower), num(p.upper)}}, {"identifiable", p.identifiable},
                                {"verdict", estimation::to_string(p.judged())}, {"tolerance", num(p.tolerance)},
-                               {"fixed", p.held}, {"reason", p.reason}});
+                               {"fixed", p.held}, {"zero_is_exact", p.zero_is_exact}, {"reason", p.reason}});
   };
   if (f.has_accel) {
     for (const auto& p : f.accel.parameters) add("accel_", p);

@@ -215,6 +215,7 @@ void init_parameters(CalibrationResult& r, const std::vector<int>& free_index) {
       p.value = p.std_error = p.lower = p.upper = 0.0;
       p.identifiable = false;
       p.reason = "held at 0 (frame convention: a rotation is unobservable with unknown orientations)";
+      p.zero_is_exact = true;  // the calibrated output is the same in any frame of the convention
     }
     r.parameters.push_back(p);
   }

@@ -29,6 +29,7 @@ json options_json(const TempPolyOptions& o) {
           {"reference_c", o.reference_c},
           {"min_span_c", o.min_span_c},
           {"level_tolerance_c", o.level_tolerance_c},
+          {"scale", o.scale},
           {"bias_temperature", o.bias_temperature},
           {"scale_temperature", o.scale_temperature},
           {"cross_axis", o.cross_axis},
@@ -172,6 +173,7 @@ void merge_axes(const std::vector<estimation::InstrumentModel>& fits, estimation
     p.name = info[i].name;
     p.unit = info[i].unit;
     p.held = true;
+    p.zero_is_exact = true;  // the selection's order, or an axis left uncalibrated
     p.value = p.std_error = p.lower = p.upper = 0.0;
     p.reason = "not in the model its axis chose (a lower temperature order, or the axis not fitted)";
     for (const auto& f : fits)

@@ -65,7 +65,11 @@ struct InstrumentModel {
   const ParameterEstimate* find(const std::string& name) const;  // nullptr when absent
   // Standard error of a parameter [its unit]; 0 when the fit did not estimate it.
   double std_error(const std::string& name) const;
-  // Names of the θ entries the fit did not identify (NaN; held ones excluded), in θ order.
+  // Whether the fit determined θ entry i: identified, or held at 0 where 0 is exact
+  // (ParameterEstimate::zero_is_exact). Not: not identified (NaN: not identifiable, aliased), or
+  // held at 0 where 0 is a guess. What `stend apply` refuses and the exports warn about.
+  bool determined(std::size_t i) const;
+  // Names of the θ entries the fit did not determine, in θ order.
   std::vector<std::string> not_identified() const;
   // θ with what the fit did not identify as 0: the values `stend apply` and the exports use
   // (each names the parameters it sets to 0).

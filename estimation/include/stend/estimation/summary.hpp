@@ -55,6 +55,11 @@ struct ParameterEstimate {
   // temperature order the selection did not choose, an axis outside the fit; `reason` says which.
   // A held parameter is not identifiable (it carries no information from the data).
   bool held = false;
+  // Held where applying 0 is right, not a guess: a frame convention (the calibrated output does not
+  // depend on it), a term the model selection left out, a parameter of an axis outside the fit
+  // (left uncalibrated). False where 0 stands for what the data could not see: `stend apply`
+  // refuses such a parameter unless the user states its value (calibration.hpp).
+  bool zero_is_exact = false;
   // The verdict as reported: kNotIdentifiable when not identifiable, else `verdict`.
   Verdict judged() const { return identifiable ? verdict : Verdict::kNotIdentifiable; }
 
