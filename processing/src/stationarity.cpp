@@ -266,6 +266,7 @@ Stationarity check_stationarity(const SampleSource& src, IndexRange range, doubl
   const std::size_t per_block = std::max(kMinStationarityBlockSamples,
                                          static_cast<std::size_t>(std::llround(kStationarityBlockS * rate_hz)));
   const std::vector<Block> blocks = summarise_blocks(src, range, per_block);
+  s.blocks = blocks.size();
   if (blocks.size() < kMinStationarityIncrements + 1) return s;
   s.judged = true;
   std::vector<char> accel = moving_blocks(blocks, 0, per_block);

@@ -372,11 +372,15 @@ std::vector<ChannelResult> analyze_channels(const SampleSource& src, IndexRange 
   return out;
 }
 
-// Why the range is no noise record (stend/processing/stationarity.hpp), with what to do instead;
-// empty when it is still.
-std::string not_still(const SampleSource& src, IndexRange range, double rate_hz, bool has_gyro) {
+// The stationarity check of the range (stend/processing/stationarity.hpp): why it is no noise
+// record, with what to do instead, into report.not_still; a warning when it is too short to judge.
+void check_still(const SampleSource& src, IndexRange range, double rate_hz, bool has_gyro, AllanReport& report) {
   const processing::Stationarity s = processing::check_stationarity(src, range, rate_hz, has_gyro);
-  if (s.still()) return {};
+  if (!s.judged)
+    report.warnings.push_back(fmt::format(
+        "the record is too short to check that it is still ({} blocks of {} s; the check needs {})", s.blocks,
+        processing::kStationarityBlockS, processing::kMinStationarityIncrements + 1));
+  if (s.still()) return;
   const bool moves = std::any_of(s.stretches.begin(), s.stretches.end(),
                                  [](const auto& m) { return m.mover != processing::Mover::kTemperature; });
   const std::string window =
@@ -386,8 +390,8 @@ std::string not_still(const SampleSource& src, IndexRange range, double rate_hz,
                         s.still_start_s, s.still_end_s)
           : std::string("give a log at a steady temperature, or a window of it (allan: t_begin_s, t_end_s) where "
                         "the temperature holds");
-  return fmt::format("the record is not still: {}: the Allan deviation needs a still record — {}", s.describe(),
-                     window);
+  report.not_still = fmt::format("the record is not still: {}: the Allan deviation needs a still record — {}",
+                                 s.describe(), window);
 }
 
 }  // namespace
@@ -409,7 +413,7 @@ AllanReport analyze_recording(const Recording& rec, const AllanOptions& options)
   report.t_end_s = sampling.t_end_s;
   report.rate_hz = sampling.rate_hz;
   add_sampling_warnings(sampling, report);
-  report.not_still = not_still(src, range, sampling.rate_hz, rec.header.info.has_gyro);
+  check_still(src, range, sampling.rate_hz, rec.header.info.has_gyro, report);
   if (!report.not_still.empty()) return report;
   const int channels = rec.header.info.has_gyro ? 6 : 3;
   AllanOptions opt = options;

@@ -48,7 +48,8 @@ struct Stationarity {
   std::vector<MovingStretch> stretches;  // in time order per mover: accelerometer, gyroscope, temperature
   // The longest stretch where neither instrument moves [s] (NaN when none was judged).
   double still_start_s = kNaN, still_end_s = kNaN;
-  bool judged = false;  // false: too short to judge (fewer than kMinStationarityIncrements + 1 blocks)
+  std::size_t blocks = 0;  // blocks summarised
+  bool judged = false;     // false: too short to judge (fewer than kMinStationarityIncrements + 1 blocks)
 
   bool still() const { return stretches.empty(); }
   // "the accelerometer moves at 36.1–40.0 s (a changes by 1023 mg) and in 9 more stretches up to
