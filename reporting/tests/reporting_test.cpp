@@ -231,6 +231,36 @@ TEST(Compare, VendorStatisticsAndRefusal) {
   }
 }
 
+// Three runs of one serial are one unit measured three times, not three units: counted by serial
+// in the statistics, the text, the HTML and the JSON; a run without a serial is a unit of its own.
+TEST(Compare, CountsDistinctUnitsBySerialAndSaysWhenRunsRepeatOne) {
+  std::vector<rp::RunResults> runs;
+  for (int i = 0; i < 3; ++i) {
+    runs.push_back(unit("Acme", "7", "fp1", 0.010 + 0.001 * i, 0.001));
+    runs.back().run_name += "-run" + std::to_string(i);
+    runs.back().dir += "-run" + std::to_string(i);
+  }
+  rp::Comparison c = rp::compare_runs(runs);
+  const auto* p = c.find("temp_poly", "bias_z");
+  ASSERT_NE(p, nullptr);
+  ASSERT_EQ(p->vendors.size(), 1u);
+  EXPECT_EQ(p->vendors[0].runs, 3);
+  EXPECT_EQ(p->vendors[0].units, 1);
+  EXPECT_EQ(p->vendors[0].count_text(), "1 unit (3 runs)");
+  const std::string text = rp::comparison_text(c);
+  EXPECT_NE(text.find("1 unit (3 runs)"), std::string::npos) << text;
+  EXPECT_EQ(text.find("3/3 units"), std::string::npos) << text;
+  EXPECT_NE(rp::comparison_html(c).find("<td>1 unit (3 runs)</td>"), std::string::npos);
+  const nlohmann::json j = rp::comparison_json(c);
+  EXPECT_EQ(j["parameters"][0]["vendors"][0]["units"], 1);
+  EXPECT_EQ(j["parameters"][0]["vendors"][0]["runs"], 3);
+
+  runs.push_back(unit("Acme", "8", "fp1", 0.013, 0.001));
+  runs.push_back(unit("Acme", "", "fp1", 0.011, 0.001));
+  c = rp::compare_runs(runs);
+  EXPECT_EQ(c.find("temp_poly", "bias_z")->vendors[0].count_text(), "3 units (5 runs)");
+}
+
 TEST(Results, JsonRoundTrip) {
   const rp::RunResults r = unit("Acme", "5", "abcd", 0.5, 0.01);
   const auto j = rp::to_json(r);
