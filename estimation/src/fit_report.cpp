@@ -87,7 +87,7 @@ std::vector<Paragraph> fit_notes(const json& fit) {
 
 namespace {
 
-// Display scale of residuals: mg for accelerometers, deg/h for gyroscopes.
+// Display scale of residuals: the fit's own (display_unit: mg for accelerometers, deg/s for gyroscopes).
 double display_scale(const json& fit) {
   const json res = fit.value("residuals", json::object());
   const json rms = res.value("rms", json::object()), disp = res.value("rms_display", json::object());
