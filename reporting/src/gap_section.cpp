@@ -71,10 +71,12 @@ void add_where(ReportSection& s, const json& where, bool temperature_recorded) {
       dimensions.push_back(str(w, "dimension"));
   for (const std::string& dimension : dimensions) {
     if (dimension == "temperature" && !temperature_recorded) continue;
+    std::string words = dimension;  // "time_since_change" → "time since change"
+    std::replace(words.begin(), words.end(), '_', ' ');
     Plot p;
-    p.title = "where the gap lies: by " + dimension;
+    p.title = "where the gap lies: by " + words;
     p.y_label = "share of the residual energy";
-    p.x_label = dimension;
+    p.x_label = words;
     p.width = 760;
     Series bars{"", Style::kBars, {}, {}, {}, {}, palette(3), false, 0.85};
     for (const auto& w : where) {
@@ -85,7 +87,7 @@ void add_where(ReportSection& s, const json& where, bool temperature_recorded) {
     }
     p.series = {bars};
     p.y_include_zero = true;
-    s.add(p, "Localization by " + dimension + ": the share of the residual each " + dimension +
+    s.add(p, "Localization by " + words + ": the share of the residual each " + words +
                  " holds (the shares of one dimension add up to 1).");
   }
 }

@@ -201,7 +201,7 @@ TEST_F(Cli, GapChartsFromGapJsonAndChromiumRendersThem) {
   EXPECT_EQ(html.find("aria-label=\"where the gap lies\""), std::string::npos);
   // Above the floor: "Unexplained"; at the floor (the paper run's case, 0.886 × floor): "No gap",
   // never "Unexplained" beside "no gap to explain".
-  EXPECT_NE(html.find("<b>Unexplained:</b> the held-out residual is above the noise floor (held-out RMS 1.1 mg = 2.75 × floor)"),
+  EXPECT_NE(html.find("<b>Unexplained:</b> the held-out residual is above the noise floor (held-out RMS 0.112 mg = 2.75 × floor)"),
             std::string::npos);
   std::string at_floor = kGapFixture;
   const std::string un = at_floor.substr(at_floor.find("\"unexplained\""));
@@ -216,7 +216,7 @@ TEST_F(Cli, GapChartsFromGapJsonAndChromiumRendersThem) {
   ASSERT_EQ(sh("'" + kStend.string() + "' report '" + run.string() + "' --no-db", dir / "gap.log"), 0)
       << read_text(dir / "gap.log");
   const std::string floor_html = read_text(run / "report.html");
-  EXPECT_NE(floor_html.find("<b>No gap:</b> the held-out residual is within the noise floor (held-out RMS 1.12 mg = "
+  EXPECT_NE(floor_html.find("<b>No gap:</b> the held-out residual is within the noise floor (held-out RMS 0.114 mg = "
                             "0.886 × floor)"),
             std::string::npos);
   // The one-step shrink chart draws its noise floor (a line of one point, as a marker) or does not
@@ -585,7 +585,9 @@ TEST_F(Cli, EveryPlotOfEveryReportKindKeepsItsLegendOffTheDataAndItsPointsInside
     EXPECT_EQ(stend::testing::plot_layout_violations(html), "") << kind << " (" << file << ")";
     std::size_t verdicts = 0;
     EXPECT_EQ(stend::testing::verdict_violations(html, &verdicts), "") << kind << " (" << file << ")";
-    if (kind.rfind("gap", 0) == 0) EXPECT_EQ(verdicts, 1u) << kind << ": the gap verdict";
+    if (kind.rfind("gap", 0) == 0) {
+      EXPECT_EQ(verdicts, 1u) << kind << ": the gap verdict";
+    }
     std::size_t points = 0, entries = 0;
     for (const auto& p : plots) {
       points += p.points;
