@@ -236,8 +236,8 @@ const char* verb(Mover m) {
 // "(a changes by 40.2 mg)", "(up to 35.1 deg/s)", "(by 12.3 °C)".
 std::string change_text(const MovingStretch& s) {
   switch (s.mover) {
-    case Mover::kAccelerometer: return fmt::format("a changes by {:.3g} mg", s.change / physics::kMilliG);
-    case Mover::kGyroscope: return fmt::format("by up to {:.3g} deg/s", s.change / physics::kDegPerSecond);
+    case Mover::kAccelerometer: return fmt::format("a changes by {:.4g} mg", s.change / physics::kMilliG);
+    case Mover::kGyroscope: return fmt::format("by up to {:.4g} deg/s", s.change / physics::kDegPerSecond);
     case Mover::kTemperature: return fmt::format("by {:.3g} °C", s.change);
   }
   return "";

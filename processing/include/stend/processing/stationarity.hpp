@@ -52,9 +52,9 @@ struct Stationarity {
   bool judged = false;     // false: too short to judge (fewer than kMinStationarityIncrements + 1 blocks)
 
   bool still() const { return stretches.empty(); }
-  // "the accelerometer moves at 36.1–40.0 s (a changes by 1023 mg) and in 9 more stretches up to
-  // 98.2 s; the temperature drifts by 12.3 °C (from 20.1 °C at 0.0–1.0 s to 32.4 °C at …)" — empty
-  // when still.
+  // "the accelerometer moves at 36.0–42.0 s (a changes by 2040 mg) and in 8 more stretches up to
+  // 96.0 s; the gyroscope turns at … (by up to 117.3 deg/s); the temperature drifts at 0.0–300.0 s
+  // (by 19.9 °C)" — empty when still.
   std::string describe() const;
 };
 
