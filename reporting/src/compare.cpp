@@ -164,8 +164,8 @@ std::string comparison_html(const Comparison& c) {
                      escape(r.vendor), escape(r.model), escape(r.serial), escape(e));
   }
   b += "</table>\n<h2>Summary</h2>\n<table><tr><th>estimator</th><th>parameter</th><th>vendor</th><th>identified / "
-       "runs</th><th>units</th><th>mean</th><th>SD (unit-to-unit, or run-to-run where runs repeat a unit)</th><th>95 % interval of the mean</th><th>median unit SE</th>"
-       "<th>unit</th></tr>\n";
+       "runs</th><th>units</th><th>mean</th><th>SD (unit-to-unit, or run-to-run where runs repeat a unit)</th>"
+       "<th>95 % interval of the mean</th><th>median unit SE</th><th>unit</th></tr>\n";
   // Shown in the display units (estimation::display_unit: mg, deg/s, ppm), as the plots below are.
   for (const auto& p : c.parameters) {
     const estimation::DisplayUnit du = estimation::display_unit(p.unit);
