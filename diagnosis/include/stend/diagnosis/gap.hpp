@@ -118,7 +118,7 @@ struct GapReport {
   std::string message;
   bool magnitude = false;          // one row per segment (|f|): see GapInput::magnitude
   std::string model_name, source, unit, display_unit;
-  double display_per_unit = 1.0;   // mg per m/s² (or deg/h per rad/s)
+  double display_per_unit = 1.0;   // mg per m/s² (or deg/s per rad/s): estimation::display_unit
   estimation::StaticFit fit;       // the model as given
   std::string floor_source;
   Eigen::Vector3d floor = Eigen::Vector3d::Constant(kNaN);         // RMS mean std error
