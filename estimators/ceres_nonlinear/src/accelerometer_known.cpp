@@ -173,16 +173,33 @@ void known_axis_rms(const std::vector<processing::StaticPoint>& intervals, const
   axis_rms_against(r, truth, reading, truth);
 }
 
+// The options with a placement sigma only when the intervals' noise is known: whitening by the
+// noise of a mean needs a spread of the samples, and a table of means has none (its standard errors
+// would come out of the 1e-6 m/s^2 floor). Without one the residuals are unweighted and the
+// covariance comes from their scatter (σ² = RSS/(n − p), Student t), said in r.notes.
+CalibrationOptions without_unknown_noise(const CalibrationOptions& o, const std::vector<processing::StaticPoint>& intervals,
+                                         CalibrationResult& r) {
+  if (!(o.orientation_sigma_deg > 0.0) || !without_spread(intervals, false)) return o;
+  CalibrationOptions unweighted = o;
+  unweighted.orientation_sigma_deg = 0.0;
+  r.notes.push_back(fmt::format("orientation_sigma_deg {} not used: the intervals' samples do not spread at all (a "
+                                "table of means), so the noise of a mean is unknown; the residuals are unweighted and "
+                                "the standard errors come from their scatter",
+                                o.orientation_sigma_deg));
+  return unweighted;
+}
+
 // Known orientations, shared by the truth-vector and the encoder-angle (offset) variants.
 // `angles` (tilt, rotation deg per interval) and M are used only when offsets are estimated.
 CalibrationResult known_impl(const std::vector<processing::StaticPoint>& intervals, const std::vector<Eigen::Vector3d>& truth_f,
                              const std::vector<std::array<double, 2>>& angles, const Eigen::Matrix3d& M,
-                             const CalibrationOptions& o) {
+                             const CalibrationOptions& options) {
   CalibrationResult r;
   r.method = Method::kKnownOrientations;
   r.model = accelerometer_model();
   r.intervals = intervals;
-  r.gravity_mps2 = known_gravity(truth_f, o);
+  r.gravity_mps2 = known_gravity(truth_f, options);
+  const CalibrationOptions o = without_unknown_noise(options, intervals, r);
   r.whitened = o.orientation_sigma_deg > 0.0;
   const TableOffsets off = table_offsets(o.table_offsets);
   const int p = kFull + off.count();
