@@ -59,6 +59,23 @@ void estimate_gyro_bias(CalibrationResult& r, const CalibrationOptions& o) {
   }
 }
 
+HeldOutNormError held_out(const std::vector<processing::StaticPoint>& intervals, const std::vector<double>& g_mps2,
+                          const std::function<CalibrationResult(std::size_t k)>& fit_without) {
+  HeldOutNormError h;
+  double ss = 0.0;
+  for (std::size_t k = 0; k < intervals.size(); ++k) {
+    const CalibrationResult r = fit_without(k);
+    const double e = r.ok() ? r.correct(intervals[k].accel.mean).norm() - g_mps2[k] : kNaN;
+    h.error_mps2.push_back(e);
+    if (std::isfinite(e)) {
+      ss += e * e;
+      ++h.predicted;
+    }
+  }
+  if (h.predicted > 0) h.rms_mps2 = std::sqrt(ss / h.predicted);
+  return h;
+}
+
 void norm_rms(CalibrationResult& r) {
   double b = 0.0, a = 0.0;
   for (const auto& iv : r.intervals) {

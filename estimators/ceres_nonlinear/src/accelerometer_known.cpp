@@ -257,6 +257,21 @@ CalibrationResult calibrate_accelerometer_known_orientations(const std::vector<p
   return known_impl(intervals, truth_f, {}, Eigen::Matrix3d::Identity(), o);
 }
 
+HeldOutNormError held_out_norm_error(const std::vector<processing::StaticPoint>& intervals,
+                                     const std::vector<Eigen::Vector3d>& truth_f, const CalibrationOptions& options) {
+  CalibrationOptions o = options;
+  o.estimate_gyro_bias = false;
+  std::vector<double> g;
+  for (const auto& f : truth_f) g.push_back(f.norm());
+  return held_out(intervals, g, [&](std::size_t k) {
+    auto others = intervals;
+    auto others_f = truth_f;
+    others.erase(others.begin() + static_cast<std::ptrdiff_t>(k));
+    others_f.erase(others_f.begin() + static_cast<std::ptrdiff_t>(k));
+    return calibrate_accelerometer_known_orientations(others, others_f, o);
+  });
+}
+
 CalibrationResult calibrate_accelerometer_known_orientations(const Recording& rec, const CalibrationOptions& o) {
   CalibrationOptions o2 = o;
   if (!(o2.gravity_mps2 > 0.0)) o2.gravity_mps2 = rec.header.gravity_mps2;

@@ -6,7 +6,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cstddef>
 
 namespace stend::ceres_nonlinear {
@@ -122,21 +121,11 @@ HeldOutNormError held_out_norm_error(const std::vector<processing::StaticPoint>&
                                      const CalibrationOptions& options) {
   CalibrationOptions o = options;
   o.estimate_gyro_bias = false;
-  HeldOutNormError h;
-  double ss = 0.0;
-  for (std::size_t k = 0; k < intervals.size(); ++k) {
+  return held_out(intervals, std::vector<double>(intervals.size(), gravity_mps2), [&](std::size_t k) {
     std::vector<processing::StaticPoint> others = intervals;
     others.erase(others.begin() + static_cast<std::ptrdiff_t>(k));
-    const CalibrationResult r = fit_unknown(others, gravity_mps2, o, Purpose::kPrediction);
-    const double e = r.ok() ? r.correct(intervals[k].accel.mean).norm() - gravity_mps2 : kNaN;
-    h.error_mps2.push_back(e);
-    if (std::isfinite(e)) {
-      ss += e * e;
-      ++h.predicted;
-    }
-  }
-  if (h.predicted > 0) h.rms_mps2 = std::sqrt(ss / h.predicted);
-  return h;
+    return fit_unknown(others, gravity_mps2, o, Purpose::kPrediction);
+  });
 }
 
 CalibrationResult calibrate_accelerometer_unknown_orientations(const Recording& rec,

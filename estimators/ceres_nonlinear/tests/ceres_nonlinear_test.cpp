@@ -502,9 +502,20 @@ TEST(CeresNonlinearRealData, ImucalSessionAgainstReferenceCalibration) {
   });
   const auto ours = norm_rms(rec, ivs, g, [&](const ImuSample& s) { return r.correct(s.accel_mps2); });
   std::cout << "[imucal] RMS |a|-g per sample: ours " << ours.first << " m/s^2, reference " << ref.first
-            << " m/s^2; over interval means: ours " << ours.second << ", reference " << ref.second << "\n";
+            << " m/s^2; over interval means: ours " << ours.second << " (zero by construction), reference "
+            << ref.second << "\n";
+  // Per sample both are the sensor's noise (32 mm/s^2, against a calibration error of 1 mm/s^2).
   EXPECT_LE(ours.first, ref.first * 1.001);
-  EXPECT_LE(ours.second, ref.second * 1.001);
+  // Over the means ours is no figure: six magnitudes fit the six biases and scales, and the report
+  // says so. Held out, a face's axis is seen from one side only, its bias through the other faces'
+  // placement (1°, 0.17 m/s^2) alone: the fair figure is far worse than either in-sample one.
+  EXPECT_LT(ours.second, 1e-5);
+  EXPECT_NE(r.report().find("zero by construction (6 magnitudes for 6 parameters fitted to them)"), std::string::npos);
+  const HeldOutNormError held = held_out_norm_error(ivs, f, o);
+  std::cout << "[imucal] each face held out: RMS |a|-g " << held.rms_mps2 << " m/s^2 (" << held.predicted
+            << " predicted)\n";
+  EXPECT_EQ(held.predicted, 6);
+  EXPECT_GT(held.rms_mps2, 10.0 * ref.second);
 }
 
 TEST(CeresNonlinearRealData, Mpu6050SessionAgainstReferenceCalibration) {
@@ -543,11 +554,14 @@ TEST(CeresNonlinearRealData, Mpu6050SessionAgainstReferenceCalibration) {
             << " m/s^2, means " << ref_minus.second << "; with (raw + b): per sample " << ref_plus.first
             << " m/s^2, means " << ref_plus.second << "\n";
   const auto ours = norm_rms(rec, r.intervals, g, [&](const ImuSample& s) { return r.correct(s.accel_mps2); });
+  // Over the interval means ours is fitted with 1 degree of freedom left: the fair figure holds each
+  // interval out (held_out_norm_error).
+  const HeldOutNormError held = held_out_norm_error(r.intervals, g, o);
   std::cout << "[mpu6050] " << r.intervals.size() << " static intervals; RMS |a|-g per sample: ours "
             << ours.first << " m/s^2, reference " << ref.first << " m/s^2; over interval means: ours "
-            << ours.second << ", reference " << ref.second << "\n";
+            << ours.second << " (in-sample, 1 dof), " << held.rms_mps2 << " held out; reference " << ref.second << "\n";
   EXPECT_LE(ours.first, ref.first * 1.001);
-  EXPECT_LE(ours.second, ref.second * 1.001);
+  EXPECT_LE(held.rms_mps2, ref.second);
 }
 
 // The shipped model file, no edits, on the MPU-6050 session (a log that states no gravity, no
@@ -608,9 +622,20 @@ TEST(CeresNonlinearRealData, Mpu6050SessionWithTheShippedModelAsWritten) {
   };
   const double ref_means = std::min(reference(g).second, reference(9.81).second);
   const auto ours = norm_rms(rec, fit.intervals, g, [&](const ImuSample& s) { return fit.correct(s.accel_mps2); });
+  // 10 magnitudes for 9 parameters: the in-sample |a| − g rests on 1 degree of freedom and is no
+  // measure of accuracy (the report says so); each interval held out and predicted by the fit on
+  // the other nine is the fair figure beside the project's (fitted on all ten).
+  const HeldOutNormError held = held_out_norm_error(fit.intervals, g, model.accel);
   std::cout << "[mpu6050] shipped model: " << fit.intervals.size() << " intervals; RMS |a|-g over interval means: ours "
-            << ours.second / physics::kMilliG << " mg, reference " << ref_means / physics::kMilliG << " mg\n";
-  EXPECT_LE(ours.second, ref_means);
+            << ours.second / physics::kMilliG << " mg in-sample (1 dof), " << held.rms_mps2 / physics::kMilliG
+            << " mg held out (" << held.predicted << " predicted); reference " << ref_means / physics::kMilliG
+            << " mg\n";
+  EXPECT_EQ(fit.dof, 1);
+  EXPECT_NE(fit.report().find("1 degree of freedom left: no measure of accuracy"), std::string::npos);
+  EXPECT_EQ(fit.parameter("scale_x").judged(), estimation::Verdict::kImprecise);
+  EXPECT_EQ(held.predicted, static_cast<int>(fit.intervals.size()));
+  EXPECT_GT(held.rms_mps2, 10.0 * ours.second);  // the in-sample figure flatters by an order of magnitude
+  EXPECT_LT(held.rms_mps2, ref_means);           // held out, still below the project's own in-sample figure
 }
 
 // A table of means (one row per orientation, each row's mean held with no spread) fitted with the

@@ -218,6 +218,10 @@ struct HeldOutNormError {
 };
 HeldOutNormError held_out_norm_error(const std::vector<processing::StaticPoint>& intervals, double gravity_mps2,
                                      const CalibrationOptions& options = {});
+// The same for the known-orientation fit (truth_f[k]: interval k's true specific force [m/s^2];
+// |correct(ȳ_k)| − |truth_f[k]| on the one left out).
+HeldOutNormError held_out_norm_error(const std::vector<processing::StaticPoint>& intervals,
+                                     const std::vector<Eigen::Vector3d>& truth_f, const CalibrationOptions& options = {});
 
 // Truth from the columns f_x_mps2, f_y_mps2, f_z_mps2 (processing's truth mean over each
 // interval; intervals without truth are dropped).
