@@ -103,10 +103,8 @@ double interval_quantile(double confidence, double dof) {
 
 namespace {
 
-// The tolerance's half-width at the basis' confidence: z · tolerance (SI).
-double tolerance_half_width(double tolerance, const IntervalBasis& b) {
-  return stats::normal_quantile(0.5 * (1.0 + b.confidence)) * tolerance;
-}
+// z, the normal quantile at the basis' confidence: a tolerance (1 σ) as a half-width is z · tolerance.
+double tolerance_quantile(const IntervalBasis& b) { return interval_quantile(b.confidence, kAPrioriDof); }
 
 }  // namespace
 
@@ -114,7 +112,7 @@ Verdict precision_verdict(double std_error, const IntervalBasis& b, const std::s
                           const PrecisionTolerances& t) {
   const double tol = tolerance_for(unit, t);
   if (std::isnan(tol)) return Verdict::kDetermined;
-  return b.quantile * std_error <= tolerance_half_width(tol, b) ? Verdict::kDetermined : Verdict::kImprecise;
+  return b.quantile * std_error <= tolerance_quantile(b) * tol ? Verdict::kDetermined : Verdict::kImprecise;
 }
 
 void judge(ParameterEstimate& e, const PrecisionTolerances& t, const IntervalBasis& b) {
@@ -125,7 +123,7 @@ void judge(ParameterEstimate& e, const PrecisionTolerances& t, const IntervalBas
     e.reason = fmt::format("the {:g} % interval's half-width {:.3g} {} ({:.3g} × the standard error {:.3g}) exceeds "
                            "{:.3g} × the tolerance {}",
                            100.0 * b.confidence, b.quantile * e.std_error, e.unit, b.quantile, e.std_error,
-                           stats::normal_quantile(0.5 * (1.0 + b.confidence)), tolerance_text(e.unit, t));
+                           tolerance_quantile(b), tolerance_text(e.unit, t));
 }
 
 std::string direction_text(const Eigen::VectorXd& v, const std::vector<std::string>& names) {
