@@ -52,7 +52,9 @@ Table parameter_table(const FitSummary& summary) {
   t.kind = Table::Kind::kParameters;
   const double conf = summary.confidence;
   t.header = {"parameter", "value", "unit", "std error",
-              fmt::format("{} interval", std::isfinite(conf) ? fmt::format("{:.0f} %", 100 * conf) : ""), "verdict"};
+              fmt::format("{} interval{}", std::isfinite(conf) ? fmt::format("{:.0f} %", 100 * conf) : "",
+                          summary.dof ? fmt::format(" ({} dof)", *summary.dof) : ""),
+              "verdict"};
   for (const auto& p : summary.parameters) {
     const DisplayUnit du = display_unit(p.unit);  // the unit family of the plots
     const bool interval = std::isfinite(p.lower) || std::isfinite(p.upper);

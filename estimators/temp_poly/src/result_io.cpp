@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <optional>
+
 #include <cmath>
 
 namespace stend::temp_poly {
@@ -135,13 +137,16 @@ estimation::FitSummary summary_of(const json& doc) {
   estimation::FitSummary s = estimation::summary_from_json(doc);
   s.parameters.clear();
   if (!s.ok()) return s;
+  std::optional<int> dof;  // the fewest of the axes' fits
   for (const auto& axis : doc.value("axes", json::array())) {
     if (!axis.contains("fit") || !axis["fit"].is_object()) continue;
     const estimation::FitSummary a = estimation::summary_from_json(axis["fit"]);
     if (!a.ok()) continue;
     if (!std::isfinite(s.confidence)) s.confidence = a.confidence;
     s.parameters.insert(s.parameters.end(), a.parameters.begin(), a.parameters.end());
+    if (a.dof && (!dof || *a.dof < *dof)) dof = a.dof;
   }
+  estimation::state_degrees_of_freedom(s, dof);
   return s;
 }
 
