@@ -1,6 +1,8 @@
-// `stend apply CAL INPUT [-o CALIBRATED] [--validate] [--expect-rotation x:90] [--rebias-from-start S]`
-// — a fitted calibration applied to a recording (run folder or dataset file), written as a new run
-// folder of calibrated samples, and validated on it when asked (stend/calibration/*.hpp).
+// `stend apply CAL INPUT [-o CALIBRATED] [--assume NAME=VALUE,…] [--validate] [--expect-rotation x:90]
+// [--rebias-from-start S]` — a fitted calibration applied to a recording (run folder or dataset
+// file), written as a new run folder of calibrated samples, and validated on it when asked
+// (stend/calibration/*.hpp). A calibration with parameters the fit did not determine is refused
+// (exit 2) unless --assume states their values.
 #include "commands.hpp"
 
 #include "stend/calibration/calibration.hpp"
@@ -41,12 +43,16 @@ struct ApplyArgs {
   DatasetArgs data;  // the recording to calibrate
   bool validate = false;
   std::vector<std::string> rotations;
+  std::vector<std::string> assumptions;  // NAME=VALUE[,NAME=VALUE…], repeatable
   calibration::ValidationOptions options;
 };
 
 ExitCode run_apply(const ApplyArgs& a) {
   const estimation::Registry registry = estimators::builtin();
-  const calibration::Calibration cal = calibration::load_calibration(results_file(a.cal, registry), registry);
+  std::vector<calibration::Assumption> assumed;
+  for (const auto& text : a.assumptions)
+    for (auto& v : calibration::parse_assumptions(text)) assumed.push_back(std::move(v));
+  const calibration::Calibration cal = calibration::load_calibration(results_file(a.cal, registry), registry, assumed);
   const bool validating = a.validate || !a.rotations.empty() || a.options.rebias_from_start_s > 0.0;
   if (a.output.empty() && !validating) {
     fmt::print(stderr, "stend apply: nothing to do: give -o CALIBRATED to write the calibrated recording, and/or --validate\n");
@@ -71,7 +77,7 @@ ExitCode run_apply(const ApplyArgs& a) {
   }
   const Recording calibrated = calibration::apply_calibration(raw, cal);
   // docs/schemas/apply.schema.json
-  nlohmann::json doc = {{"calibrated", nullptr}, {"validation", nullptr}};
+  nlohmann::json doc = {{"calibrated", nullptr}, {"assumed", cal.assumed}, {"validation", nullptr}};
   if (!a.output.empty()) {
     calibration::write_calibrated(calibrated, cal, a.output);
     fmt::print(human(), "calibrated: {} ({} samples)\n", a.output, calibrated.sample_count());
@@ -90,6 +96,7 @@ ExitCode run_apply(const ApplyArgs& a) {
   const std::string document = report.to_json();
   write_results(json, document, text.str());
   doc["validation"] = {{"ok", report.ok},
+                       {"verdict", calibration::to_string(report.verdict())},
                        {"results_file", json.empty() ? nlohmann::json(nullptr) : nlohmann::json(json.string())},
                        {"document", nlohmann::json::parse(document, nullptr, false)}};
   print_json(doc);
@@ -108,7 +115,13 @@ void add_apply_command(CLI::App& app, std::vector<Command>& out) {
   a.data.add_to(sub);  // the recording to calibrate: run folder or dataset file, as for `stend fit`
   a.data.add_accept_damaged(sub);
   sub->add_option("-o,--output", a.output, "New run folder for the calibrated recording");
-  sub->add_flag("--validate", a.validate, "Validate on the input (a recording the calibration was not fitted to)");
+  sub->add_option("--assume", a.assumptions,
+                  "NAME=VALUE[,NAME=VALUE...]: the value to use for a parameter the fit did not determine (e.g. "
+                  "bias_x=0; accel_bias_x / gyro_bias_x where both instruments have it), in its unit as the results "
+                  "list it; recorded in the calibrated run (repeatable)");
+  sub->add_flag("--validate", a.validate,
+                "Validate on the input (a recording the calibration was not fitted to): each check PASS, FAIL or NOT "
+                "CHECKED against its limit; exit 3 unless it passes");
   sub->add_option("--expect-rotation", a.rotations,
                   "AXIS:DEGREES, e.g. x:90: turns between still intervals to integrate and compare (repeatable)");
   sub->add_option("--rebias-from-start", a.options.rebias_from_start_s,

@@ -46,7 +46,10 @@ void DatasetArgs::add_to(CLI::App* sub, bool required) {
           }
         },
         "");
-    sub->add_option(io::import_flag(k.key), flags[k.key], k.description())->type_name(k.type_name())->check(parses);
+    if (k.type == io::ImportKeyType::kSwitch)
+      sub->add_flag(io::import_flag(k.key), flags[k.key], k.description())->check(parses);
+    else
+      sub->add_option(io::import_flag(k.key), flags[k.key], k.description())->type_name(k.type_name())->check(parses);
   }
 }
 

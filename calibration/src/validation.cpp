@@ -7,6 +7,7 @@
 #include <stend/processing/static_points.hpp>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include <Eigen/Geometry>
@@ -64,11 +65,29 @@ double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b)) * physics::kRadToDeg;
 }
 
+// The calibration's own variance of |a| at a still pose [(m/s^2)^2]: its parameters' standard
+// errors through the regressor at the calibrated reading `a`, projected on the reading's
+// direction (the results keep no correlations, so none are used).
+double calibration_variance(const InstrumentCalibration& ic, const Eigen::Vector3d& a, double temperature_c) {
+  model::Stimulus<double> s;
+  s.input = s.specific_force = a;
+  s.temperature_c = temperature_c;
+  const Eigen::RowVectorXd along = a.normalized().transpose() * ic.model.regressor(s);
+  double v = 0.0;
+  for (std::size_t j = 0; j < ic.parameters.size(); ++j)
+    v += std::pow(along[static_cast<Eigen::Index>(j)] * ic.std_error(ic.parameters[j].name), 2);
+  return v;
+}
+
 // |a| − g before and after over the static points, the noise floor, the gravity direction's
-// stability inside each.
-StaticCheck static_check(const Recording& raw, const Recording& cal, const std::vector<processing::StaticPoint>& pts,
-                         double g) {
+// stability inside each; the calibrated RMS against kStaticLimitNoiseFloors × the floor.
+StaticCheck static_check(const Recording& raw, const Recording& cal, const InstrumentCalibration& accel,
+                         const std::vector<processing::StaticPoint>& pts, double g) {
   StaticCheck c;
+  if (pts.empty()) {
+    c.not_checked = "no static interval detected";
+    return c;
+  }
   c.intervals = static_cast<int>(pts.size());
   c.gravity_mps2 = g;
   std::vector<double> before, after, floor2, dir;
@@ -76,8 +95,10 @@ StaticCheck static_check(const Recording& raw, const Recording& cal, const std::
     const Eigen::Vector3d a = accel_mean(cal, p.first, p.last);
     before.push_back(accel_mean(raw, p.first, p.last).norm() - g);
     after.push_back(a.norm() - g);
-    // Standard error of |mean a|: the per-axis standard errors projected on the mean's direction.
-    floor2.push_back(p.accel.std_error.cwiseAbs2().dot(a.normalized().cwiseAbs2()));
+    // Standard error of |mean a|: the per-axis standard errors projected on the mean's direction,
+    // and the calibration's own.
+    floor2.push_back(p.accel.std_error.cwiseAbs2().dot(a.normalized().cwiseAbs2()) +
+                     calibration_variance(accel, a, p.stimulus.temperature_c));
     const std::size_t mid = p.first + (p.last - p.first) / 2;
     if (mid > p.first && mid + 1 <= p.last)
       dir.push_back(angle_deg(accel_mean(cal, p.first, mid), accel_mean(cal, mid + 1, p.last)));
@@ -90,7 +111,22 @@ StaticCheck static_check(const Recording& raw, const Recording& cal, const std::
   c.noise_floor = floor2.empty() ? kNaN : std::sqrt(f / static_cast<double>(floor2.size()));
   c.direction_rms_deg = d.rms;
   c.direction_max_deg = d.max;
+  c.limit_mps2 = kStaticLimitNoiseFloors * c.noise_floor;
+  c.verdict = c.rms_after <= c.limit_mps2 ? CheckVerdict::kPass : CheckVerdict::kFail;
   return c;
+}
+
+// Why the static check cannot be made with this calibration ("" when it can): |a| needs the
+// accelerometer's three axes calibrated.
+std::string static_check_unavailable(const Calibration& cal) {
+  if (!cal.accel.present()) return "no accelerometer calibration";
+  if (cal.accel.axes.size() < 3) {
+    std::string axes;
+    for (int a : cal.accel.axes) axes += std::string(axes.empty() ? "" : " ") + "xyz"[a];
+    return "the accelerometer calibration covers axes " + (axes.empty() ? std::string("none") : axes) +
+           " only: |a| - g needs the three";
+  }
+  return {};
 }
 
 // The gyro's white noise per sample on each axis [rad/s]: the pooled sample spread of the static points.
@@ -144,10 +180,18 @@ Eigen::Vector3d integrated_rotation(const Recording& cal, std::size_t a, std::si
   return aa.axis() * aa.angle();
 }
 
+// The window of the turn between static points `before` and `after` [first, last sample]: the
+// motion between them and kTurnMarginS of each still.
+std::pair<std::size_t, std::size_t> turn_window(const SampleSource& src, const processing::StaticPoint& before,
+                                                const processing::StaticPoint& after) {
+  const double t_end = sample_at(src, before.last).t_s, t_start = sample_at(src, after.first).t_s;
+  const auto a = static_cast<std::size_t>(lower_bound_time(src, t_end - kTurnMarginS));
+  const auto b = static_cast<std::size_t>(lower_bound_time(src, t_start + kTurnMarginS));
+  return {std::max(a, before.first), std::min(b, after.last)};
+}
+
 // Every motion between consecutive static points that turns by more than half the stated angle,
-// checked against it. The rates are integrated from the middle of one static point to the middle
-// of the next: a slow start or end of the turn that the detector counts as still is inside that
-// span, and the still parts add only noise and bias, which the bound carries.
+// checked against it over its window (turn_window).
 std::vector<TurnCheck> turn_checks(const Recording& cal, const Calibration& c,
                                    const std::vector<processing::StaticPoint>& pts, const ExpectedRotation& e,
                                    const ValidationReport& r, double z) {
@@ -158,7 +202,7 @@ std::vector<TurnCheck> turn_checks(const Recording& cal, const Calibration& c,
   const double scale_se = c.gyro.std_error(std::string("scale_") + ax[e.axis]);
   std::vector<TurnCheck> out;
   for (std::size_t k = 0; k + 1 < pts.size(); ++k) {
-    const std::size_t a = (pts[k].first + pts[k].last) / 2, b = (pts[k + 1].first + pts[k + 1].last) / 2;
+    const auto [a, b] = turn_window(cal.sample_source(), pts[k], pts[k + 1]);
     if (b <= a) continue;
     const Eigen::Vector3d rv = integrated_rotation(cal, a, b, bias);
     if (std::abs(rv[e.axis]) * physics::kRadToDeg < 0.5 * std::abs(e.angle_deg)) continue;
@@ -175,13 +219,37 @@ std::vector<TurnCheck> turn_checks(const Recording& cal, const Calibration& c,
     t.sigma_deg = std::sqrt(t.sigma_noise_deg * t.sigma_noise_deg + t.sigma_bias_deg * t.sigma_bias_deg +
                             t.sigma_scale_deg * t.sigma_scale_deg);
     t.bound_deg = z * t.sigma_deg;
-    t.holds = std::abs(t.error_deg) <= t.bound_deg;
+    t.verdict = std::abs(t.error_deg) <= t.bound_deg ? CheckVerdict::kPass : CheckVerdict::kFail;
     out.push_back(t);
   }
   return out;
 }
 
 std::string num(double v, int digits = 4) { return estimation::number_text(v, digits); }
+
+std::string turn_name(const TurnCheck& t) {
+  return fmt::format("turn {}:{}", "xyz"[t.expected.axis], num(t.expected.angle_deg));
+}
+
+// Why the validation does not pass ("" when it does): the checks that FAIL; else a stated turn no
+// motion matches; else that nothing could be checked.
+std::string verdict_message(const ValidationReport& r) {
+  std::vector<std::string> failed, unmatched;
+  if (r.statics.verdict == CheckVerdict::kFail) failed.push_back("static |a| - g");
+  bool checked = r.statics.verdict != CheckVerdict::kNotChecked;
+  for (const auto& t : r.turns) {
+    if (t.verdict == CheckVerdict::kFail)
+      failed.push_back(fmt::format("{} at {}-{} s", turn_name(t), num(t.t_start_s, 6), num(t.t_end_s, 6)));
+    if (t.verdict == CheckVerdict::kNotChecked) unmatched.push_back(turn_name(t));
+    checked = checked || t.verdict != CheckVerdict::kNotChecked;
+  }
+  if (!failed.empty()) return fmt::format("outside the limit: {}", fmt::join(failed, "; "));
+  if (!unmatched.empty())
+    return fmt::format("no motion between static intervals turns by more than half the stated angle: {}",
+                       fmt::join(unmatched, "; "));
+  if (!checked) return "nothing could be checked: " + r.statics.not_checked;
+  return {};
+}
 
 }  // namespace
 
@@ -247,30 +315,41 @@ ValidationReport validate(const Recording& raw, const Recording& calibrated, con
   const processing::Extraction ex = processing::extract(calibrated, o.intervals, request);
   const auto& pts = ex.points;
   r.notes.insert(r.notes.end(), ex.notes.begin(), ex.notes.end());
-  if (cal.accel.present()) r.statics = static_check(raw, calibrated, pts, gravity_for(raw, cal, o));
-  else r.notes.push_back("no accelerometer calibration: the static |a| - g check is not made");
+  r.statics.not_checked = static_check_unavailable(cal);
+  if (r.statics.not_checked.empty()) r.statics = static_check(raw, calibrated, cal.accel, pts, gravity_for(raw, cal, o));
   if (o.rebias_from_start_s > 0.0) rebias(calibrated, pts, o.rebias_from_start_s, r);
   const double z = estimation::normal_quantile(0.5 * (1.0 + o.confidence));
   for (const auto& e : o.rotations) {
     auto turns = turn_checks(calibrated, cal, pts, e, r, z);
-    if (turns.empty())
-      r.notes.push_back(fmt::format("no motion between static intervals turns by more than half of {}:{} deg",
-                                    "xyz"[e.axis], e.angle_deg));
+    if (turns.empty()) turns.push_back({.expected = e});  // not checked
     r.turns.insert(r.turns.end(), turns.begin(), turns.end());
   }
-  if (pts.empty()) r.message = "no static interval detected: nothing to validate against";
-  else if (!o.rotations.empty() && r.turns.empty()) r.message = "no turn of the stated size found";
-  else if (std::any_of(r.turns.begin(), r.turns.end(), [](const TurnCheck& t) { return !t.holds; }))
-    r.message = "an integrated turn lies outside its stated uncertainty";
+  r.message = verdict_message(r);
   r.ok = r.message.empty();
   return r;
 }
 
+const char* to_string(CheckVerdict v) {
+  switch (v) {
+    case CheckVerdict::kPass: return "PASS";
+    case CheckVerdict::kFail: return "FAIL";
+    case CheckVerdict::kNotChecked: break;
+  }
+  return "NOT CHECKED";
+}
+
+CheckVerdict ValidationReport::verdict() const {
+  if (ok) return CheckVerdict::kPass;
+  const bool failed = statics.verdict == CheckVerdict::kFail ||
+                      std::any_of(turns.begin(), turns.end(), [](const TurnCheck& t) { return t.verdict == CheckVerdict::kFail; });
+  return failed ? CheckVerdict::kFail : CheckVerdict::kNotChecked;
+}
+
 void ValidationReport::print(std::ostream& os) const {
-  os << "validation of " << calibration << ": " << (ok ? "ok" : "FAILED — " + message) << "\n";
+  os << "validation of " << calibration << ": " << to_string(verdict()) << (ok ? "" : " — " + message) << "\n";
   const auto& s = statics;
-  if (s.intervals > 0 && std::isfinite(s.rms_after)) {
-    const double mg = physics::kMilliG;
+  const double mg = physics::kMilliG;
+  if (s.verdict != CheckVerdict::kNotChecked) {
     os << fmt::format("static |a| - g over {} detected still intervals (g = {} m/s^2), mg:\n", s.intervals,
                       num(s.gravity_mps2, 8));
     os << fmt::format("  raw         mean {:>9}  RMS {:>9}  max {:>9}\n", num(s.mean_before / mg),
@@ -285,13 +364,25 @@ void ValidationReport::print(std::ostream& os) const {
                       num(rebias_radps[0] / physics::kDegPerSecond), num(rebias_radps[1] / physics::kDegPerSecond),
                       num(rebias_radps[2] / physics::kDegPerSecond), num(rebias_se_radps[0] / physics::kDegPerSecond),
                       num(rebias_se_radps[1] / physics::kDegPerSecond), num(rebias_se_radps[2] / physics::kDegPerSecond));
-  for (const auto& t : turns)
-    os << fmt::format("turn {}:{} deg at {}-{} s: integrated {} deg, error {} deg, {:.3g}% bound +/-{} deg "
-                      "(1 sigma {}: noise {}, bias {}, scale {}) {}\n",
-                      "xyz"[t.expected.axis], t.expected.angle_deg, num(t.t_start_s, 6), num(t.t_end_s, 6),
-                      num(t.measured_deg, 7), num(t.error_deg), 100 * confidence, num(t.bound_deg), num(t.sigma_deg),
-                      num(t.sigma_noise_deg), num(t.sigma_bias_deg), num(t.sigma_scale_deg),
-                      t.holds ? "holds" : "DOES NOT HOLD");
+  os << "checks:\n";
+  if (s.verdict == CheckVerdict::kNotChecked)
+    os << fmt::format("  {:<11}  static |a| - g: {}\n", to_string(s.verdict), s.not_checked);
+  else
+    os << fmt::format("  {:<11}  static |a| - g: calibrated RMS {} mg, limit {} mg ({} x the noise floor {} mg)\n",
+                      to_string(s.verdict), num(s.rms_after / mg), num(s.limit_mps2 / mg), num(kStaticLimitNoiseFloors),
+                      num(s.noise_floor / mg));
+  for (const auto& t : turns) {
+    if (t.verdict == CheckVerdict::kNotChecked) {
+      os << fmt::format("  {:<11}  {} deg: no motion between static intervals turns by more than half of it\n",
+                        to_string(t.verdict), turn_name(t));
+      continue;
+    }
+    os << fmt::format("  {:<11}  {} deg at {}-{} s: integrated {} deg, error {} deg, limit +/-{} deg ({:.3g}% bound; "
+                      "1 sigma {}: noise {}, bias {}, scale {})\n",
+                      to_string(t.verdict), turn_name(t), num(t.t_start_s, 6), num(t.t_end_s, 6), num(t.measured_deg, 7),
+                      num(t.error_deg), num(t.bound_deg), 100 * confidence, num(t.sigma_deg), num(t.sigma_noise_deg),
+                      num(t.sigma_bias_deg), num(t.sigma_scale_deg));
+  }
   for (const auto& n : notes) os << "note: " << n << "\n";
 }
 
@@ -299,7 +390,7 @@ std::string ValidationReport::to_json() const {
   using nlohmann::json;
   auto n = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
   const auto& s = statics;
-  json j = {{"status", ok ? "ok" : "failed"},
+  json j = {{"status", to_string(verdict())},
             {"message", message},
             {"calibration", calibration},
             {"confidence", confidence},
@@ -309,6 +400,9 @@ std::string ValidationReport::to_json() const {
               {"norm_minus_g_before_mps2", {{"mean", n(s.mean_before)}, {"rms", n(s.rms_before)}, {"max", n(s.max_before)}}},
               {"norm_minus_g_after_mps2", {{"mean", n(s.mean_after)}, {"rms", n(s.rms_after)}, {"max", n(s.max_after)}}},
               {"noise_floor_mps2", n(s.noise_floor)},
+              {"limit_mps2", n(s.limit_mps2)},
+              {"verdict", to_string(s.verdict)},
+              {"not_checked", s.not_checked},
               {"direction_change_deg", {{"rms", n(s.direction_rms_deg)}, {"max", n(s.direction_max_deg)}}}}},
             {"notes", notes}};
   if (rebiased)
@@ -325,7 +419,7 @@ std::string ValidationReport::to_json() const {
                           {"sigma_deg", {{"total", n(t.sigma_deg)}, {"noise", n(t.sigma_noise_deg)},
                                          {"bias", n(t.sigma_bias_deg)}, {"scale", n(t.sigma_scale_deg)}}},
                           {"bound_deg", n(t.bound_deg)},
-                          {"holds", t.holds}});
+                          {"verdict", to_string(t.verdict)}});
   return j.dump(2);
 }
 

@@ -23,8 +23,9 @@ using namespace stend::calibration;
 namespace synthetic = stend::ceres_nonlinear::synthetic;
 
 // A results document read back through the built-in registry, as `stend apply` reads a file.
-Calibration calibration_from_json(const nlohmann::json& doc, const std::string& source) {
-  return calibration_from(estimators::builtin().read(doc, source), source);
+Calibration calibration_from_json(const nlohmann::json& doc, const std::string& source,
+                                  const std::vector<Assumption>& assumed = {}) {
+  return calibration_from(estimators::builtin().read(doc, source), source, assumed);
 }
 
 // A sensor turn about one of its axes by `deg` degrees.
@@ -131,6 +132,10 @@ TEST_F(HeldOut, StaticNormAfterApplyingIsWithinTheNoiseFloor) {
   r.print(text);
   ASSERT_TRUE(r.ok) << text.str();
   std::cout << text.str();
+  EXPECT_EQ(r.verdict(), CheckVerdict::kPass);
+  EXPECT_EQ(r.statics.verdict, CheckVerdict::kPass);
+  EXPECT_EQ(r.statics.limit_mps2, kStaticLimitNoiseFloors * r.statics.noise_floor);
+  EXPECT_NE(text.str().find("PASS         static |a| - g: calibrated RMS"), std::string::npos) << text.str();
   EXPECT_EQ(r.statics.intervals, 6) << text.str();  // the still start and five poses
   // Calibrated: within the noise of the interval means (the fit's own uncertainty is smaller).
   EXPECT_LT(r.statics.rms_after, 3.0 * r.statics.noise_floor) << text.str();
@@ -152,7 +157,7 @@ TEST_F(HeldOut, PlantedTurnsIntegrateToTheirAngleWithinTheStatedUncertainty) {
   std::cout << text.str();
   ASSERT_EQ(r.turns.size(), 3u) << text.str();  // the three turns about x, not those about y and z
   for (const auto& t : r.turns) {
-    EXPECT_TRUE(t.holds) << text.str();
+    EXPECT_EQ(t.verdict, CheckVerdict::kPass) << text.str();
     EXPECT_NEAR(std::abs(t.measured_deg), 90.0, t.bound_deg) << text.str();
     EXPECT_GT(t.sigma_noise_deg, 0.0);
     EXPECT_GT(t.sigma_scale_deg, 0.0);
@@ -160,7 +165,8 @@ TEST_F(HeldOut, PlantedTurnsIntegrateToTheirAngleWithinTheStatedUncertainty) {
   }
   // The raw rates miss by the scale error (1 % of 90°) and the bias × the turn's duration.
   const ValidationReport before = validate(raw, raw, cal, o);
-  for (const auto& t : before.turns) EXPECT_FALSE(t.holds);
+  for (const auto& t : before.turns) EXPECT_EQ(t.verdict, CheckVerdict::kFail);
+  EXPECT_EQ(before.verdict(), CheckVerdict::kFail);
   // Re-biasing from the still start: the bias left is below its noise, and the turns still hold.
   o.rebias_from_start_s = 15.0;
   const ValidationReport rb = validate(raw, calibrated, cal, o);
@@ -207,7 +213,188 @@ TEST(Calibration, AccelerometerOnlyCalibrationRefusesARotationCheck) {
     EXPECT_NE(std::string(e.what()).find("accel_only.json"), std::string::npos) << e.what();
   }
   // The static check alone is fine.
-  EXPECT_TRUE(validate(raw, calibrated, cal, {}).ok);
+  const ValidationReport r = validate(raw, calibrated, cal, {});
+  std::ostringstream text;
+  r.print(text);
+  EXPECT_TRUE(r.ok) << text.str();
+}
+
+// The fit with unknown orientations holds cross_xy, cross_xz, cross_yz at 0 as its frame
+// convention: 0 is exact there, so the calibration applies without an assumption.
+TEST_F(HeldOut, FrameConventionHeldTermsApplyWithoutAnAssumption) {
+  const Calibration cal = calibration_from_json(*doc_, "ceres.json");
+  int held = 0;
+  for (const auto& p : cal.accel.parameters) {
+    if (!p.held) continue;
+    ++held;
+    EXPECT_TRUE(p.zero_is_exact) << p.name << ": " << p.reason;
+  }
+  EXPECT_EQ(held, 3);
+  EXPECT_TRUE(cal.assumed.empty());
+}
+
+// A wrong calibration (another sensor's: other biases and scale factors) FAILs the static check
+// and the turns; the same sensor's PASSes them.
+TEST_F(HeldOut, AnotherSensorsCalibrationFails) {
+  const Calibration cal = calibration_from_json(*doc_, "ceres.json");
+  synthetic::Spec other = *spec_;
+  other.accel_theta[0] += 0.05;  // 5 mg more bias on x [m/s^2]
+  other.accel_theta[4] -= 0.004;  // scale_y
+  other.gyro_theta[3] += 0.01;    // gyro scale_x: 0.9 deg in 90
+  const Recording raw = held_out(other, kTurns, 80);
+  const Recording calibrated = apply_calibration(raw, cal);
+  ValidationOptions o;
+  o.rotations = {parse_expected_rotation("x:90")};
+  const ValidationReport r = validate(raw, calibrated, cal, o);
+  std::ostringstream text;
+  r.print(text);
+  EXPECT_FALSE(r.ok) << text.str();
+  EXPECT_EQ(r.verdict(), CheckVerdict::kFail) << text.str();
+  EXPECT_EQ(r.statics.verdict, CheckVerdict::kFail) << text.str();
+  EXPECT_GT(r.statics.rms_after, r.statics.limit_mps2);
+  for (const auto& t : r.turns) EXPECT_EQ(t.verdict, CheckVerdict::kFail) << text.str();
+  EXPECT_NE(text.str().find("validation of ceres.json: FAIL — outside the limit: static |a| - g; turn x:90"),
+            std::string::npos)
+      << text.str();
+  EXPECT_NE(nlohmann::json::parse(r.to_json())["static"]["verdict"], "PASS");
+}
+
+// The turn's window is the detected turn and a second of still on each side, not the long stills
+// around it: its bias share of the bound stays small, and re-biasing from a long still start passes.
+TEST_F(HeldOut, TurnWindowIsTheDetectedTurn) {
+  const Calibration cal = calibration_from_json(*doc_, "ceres.json");
+  const double still_s = 40.0, turn_s = 3.0, pose_s = 30.0;
+  const Recording raw = held_out(*spec_, kTurns, 81, still_s, turn_s, pose_s);
+  const Recording calibrated = apply_calibration(raw, cal);
+  ValidationOptions o;
+  o.rotations = {parse_expected_rotation("x:90")};
+  o.rebias_from_start_s = 30.0;
+  const ValidationReport r = validate(raw, calibrated, cal, o);
+  std::ostringstream text;
+  r.print(text);
+  ASSERT_TRUE(r.ok) << text.str();
+  ASSERT_EQ(r.turns.size(), 3u) << text.str();
+  // The first turn runs from 40 to 43 s: its window holds it, with at most the margin and the
+  // detector's trim beyond.
+  EXPECT_LE(r.turns[0].t_start_s, still_s) << text.str();
+  EXPECT_GE(r.turns[0].t_start_s, still_s - kTurnMarginS - 1.0) << text.str();
+  EXPECT_GE(r.turns[0].t_end_s, still_s + turn_s) << text.str();
+  EXPECT_LE(r.turns[0].t_end_s, still_s + turn_s + kTurnMarginS + 1.0) << text.str();
+  for (const auto& t : r.turns) {
+    EXPECT_EQ(t.verdict, CheckVerdict::kPass) << text.str();
+    EXPECT_LT(t.t_end_s - t.t_start_s, turn_s + 2 * kTurnMarginS + 2.0) << text.str();
+    EXPECT_LT(t.sigma_bias_deg, t.sigma_noise_deg + t.sigma_scale_deg) << text.str();
+  }
+}
+
+// A stated turn that no motion makes is NOT CHECKED, and the validation does not pass.
+TEST_F(HeldOut, AStatedTurnNotFoundIsNotChecked) {
+  const Calibration cal = calibration_from_json(*doc_, "ceres.json");
+  const Recording raw = held_out(*spec_, kTurns, 82);
+  ValidationOptions o;
+  o.rotations = {parse_expected_rotation("z:360")};  // the record turns about z by 90 only
+  const ValidationReport r = validate(raw, apply_calibration(raw, cal), cal, o);
+  std::ostringstream text;
+  r.print(text);
+  EXPECT_FALSE(r.ok);
+  EXPECT_EQ(r.verdict(), CheckVerdict::kNotChecked) << text.str();
+  ASSERT_EQ(r.turns.size(), 1u);
+  EXPECT_EQ(r.turns[0].verdict, CheckVerdict::kNotChecked);
+  EXPECT_NE(text.str().find("NOT CHECKED  turn z:360 deg: no motion"), std::string::npos) << text.str();
+}
+
+// A result whose parameters the fit did not determine (aliased, not identifiable, held where 0 is a
+// guess) is refused, each named with why; stated values apply and are recorded.
+TEST(Calibration, RefusesUndeterminedParametersUnlessAssumed) {
+  using nlohmann::json;
+  auto prm = [](const std::string& name, const std::string& unit, double v) {
+    return json{{"name", name}, {"unit", unit}, {"identifiable", true}, {"value", v}, {"std_error", 1e-5},
+                {"interval", {v - 2e-5, v + 2e-5}}};
+  };
+  auto aliased = [](const std::string& name, const std::string& unit) {
+    return json{{"name", name}, {"unit", unit}, {"identifiable", false}, {"reason", "aliased with bias_tc1_z"}};
+  };
+  // One temperature: bias_z and bias_tc1_z alias.
+  const json doc = {{"schema", "stend.fit/1"},
+                    {"estimator", {{"name", "batch_lsq"}}},
+                    {"status", "ok"},
+                    {"model",
+                     {{"instrument", "accelerometer"},
+                      {"axes", json::array({"z"})},
+                      {"terms", json::array({{{"kind", "bias"}}, {{"kind", "scale"}},
+                                             {{"kind", "bias_temperature"}, {"order", 1}, {"reference_c", 25.0}}})}}},
+                    {"parameters", {aliased("bias_z", "m/s^2"), prm("scale_z", "1", 0.002),
+                                    aliased("bias_tc1_z", "m/s^2/degC")}}};
+  try {
+    calibration_from_json(doc, "fit.json");
+    FAIL() << "an aliased bias must not be applied as 0";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("fit.json: cannot apply"), std::string::npos) << m;
+    EXPECT_NE(m.find("accelerometer bias_z [m/s^2]: aliased with bias_tc1_z"), std::string::npos) << m;
+    EXPECT_NE(m.find("--assume bias_z=0,bias_tc1_z=0"), std::string::npos) << m;
+    EXPECT_EQ(m.find("scale_z"), std::string::npos) << m;  // determined: not named
+    // x and y are outside this fit (not in the document): left uncalibrated, not refused.
+    EXPECT_EQ(m.find("bias_x"), std::string::npos) << m;
+  }
+  // One value stated, one missing: still refused, naming the missing one only.
+  try {
+    calibration_from_json(doc, "fit.json", {{"bias_z", 0.027}});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).find("bias_z [m/s^2]"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("bias_tc1_z [m/s^2/degC]"), std::string::npos) << e.what();
+  }
+  // A name the fit determined, or no such parameter: refused, naming it.
+  EXPECT_THROW(calibration_from_json(doc, "fit.json", {{"scale_z", 0.0}, {"bias_z", 0}, {"bias_tc1_z", 0}}), InputError);
+  const Calibration cal = calibration_from_json(doc, "fit.json", parse_assumptions("bias_z=0.027,accel_bias_tc1_z=0"));
+  ASSERT_EQ(cal.assumed.size(), 2u);
+  EXPECT_EQ(cal.assumed[0], "accelerometer bias_z = 0.027 m/s^2 (aliased with bias_tc1_z)");
+  const auto info = cal.accel.model.params();
+  for (std::size_t i = 0; i < info.size(); ++i) {
+    if (info[i].name == "bias_z") {
+      EXPECT_EQ(cal.accel.theta[i], 0.027);
+    }
+  }
+  std::ostringstream text;
+  cal.print(text);
+  EXPECT_NE(text.str().find("assumed: accelerometer bias_z = 0.027 m/s^2"), std::string::npos) << text.str();
+}
+
+// A held parameter whose 0 is a guess (earth_rate's cross-axis terms) is refused like an aliased one.
+TEST(Calibration, HeldWhereZeroIsAGuessIsRefused) {
+  using nlohmann::json;
+  json gyro_params = json::array();
+  for (const char* n : {"bias_x", "bias_y", "bias_z"})
+    gyro_params.push_back({{"name", n}, {"unit", "rad/s"}, {"identifiable", true}, {"value", 0.01}, {"std_error", 1e-5}});
+  for (const char* n : {"scale_x", "scale_y", "scale_z"})
+    gyro_params.push_back({{"name", n}, {"unit", "1"}, {"identifiable", true}, {"value", 0.001}, {"std_error", 1e-5}});
+  for (const char* n : {"cross_xy", "cross_xz", "cross_yx", "cross_yz", "cross_zx", "cross_zy"})
+    gyro_params.push_back({{"name", n}, {"unit", "1"}, {"identifiable", false}, {"fixed", true}, {"zero_is_exact", false},
+                           {"reason", "held at 0: not estimated by earth_rate"}});
+  const json doc = {{"estimator", {{"name", "ceres_nonlinear"}, {"version", "1"}}},
+                    {"status", "ok"},
+                    {"gyroscope", {{"status", "ok"}, {"method", "earth_rate"}, {"parameters", gyro_params}}}};
+  try {
+    calibration_from_json(doc, "ceres.json");
+    FAIL() << "earth_rate's held cross-axis terms are not a convention";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("gyroscope cross_xy [1]: held at 0: not estimated by earth_rate"),
+              std::string::npos)
+        << e.what();
+  }
+  const Calibration cal = calibration_from_json(
+      doc, "ceres.json", parse_assumptions("cross_xy=0,cross_xz=0,cross_yx=0,cross_yz=0,cross_zx=0,cross_zy=0"));
+  EXPECT_EQ(cal.assumed.size(), 6u);
+}
+
+TEST(Calibration, AssumptionText) {
+  const auto a = parse_assumptions("bias_x=0,gyro_bias_z=-1.5e-3");
+  ASSERT_EQ(a.size(), 2u);
+  EXPECT_EQ(a[1].name, "gyro_bias_z");
+  EXPECT_EQ(a[1].value, -1.5e-3);
+  for (const char* bad : {"bias_x", "=1", "bias_x=", "bias_x=abc", "bias_x=1,", "bias_x=nan", "bias_x=1mg"})
+    EXPECT_THROW(parse_assumptions(bad), std::invalid_argument) << bad;
 }
 
 TEST(Calibration, ExpectedRotationText) {

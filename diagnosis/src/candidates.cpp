@@ -10,7 +10,7 @@ namespace stend::diagnosis {
 using model::TermKind;
 using model::TermSpec;
 
-std::vector<Candidate> default_candidates(const model::ErrorModel& m) {
+std::vector<Candidate> default_candidates(const model::ErrorModel& m, bool temperature_spread) {
   std::vector<Candidate> out;
   const bool gyro = m.instrument == model::Instrument::kGyroscope;
   std::vector<TermKind> kinds(model::kAllTermKinds.begin(), model::kAllTermKinds.end());
@@ -18,6 +18,7 @@ std::vector<Candidate> default_candidates(const model::ErrorModel& m) {
   for (TermKind k : kinds) {
     if (k == TermKind::kBias) continue;  // every model has it (a model without bias is checked too)
     if (k == TermKind::kGSensitivity && !gyro) continue;
+    if (model::reads_temperature(k) && !temperature_spread) continue;  // assessed only with a temperature spread
     if ((k == TermKind::kGravityError || k == TermKind::kTableAngleOffset || k == TermKind::kTableAxisTilt ||
          k == TermKind::kLeverArm) && gyro)
       continue;

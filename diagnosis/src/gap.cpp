@@ -8,6 +8,7 @@
 
 #include "magnitude.hpp"
 #include "steps.hpp"
+#include "stend/estimation/report_section.hpp"
 #include "stend/estimation/static_fit.hpp"
 #include "stend/physics/units.hpp"
 
@@ -20,8 +21,9 @@ GapReport report_header(const GapInput& in) {
   GapReport rep;
   const bool accel = in.spec.model.instrument == model::Instrument::kAccelerometer;
   rep.unit = accel ? "m/s^2" : "rad/s";
-  rep.display_unit = accel ? "mg" : "deg/h";
-  rep.display_per_unit = accel ? 1.0 / physics::kMilliG : 1.0 / physics::kDegPerHour;
+  const estimation::DisplayUnit display = estimation::display_unit(rep.unit);  // the one table of display units
+  rep.display_unit = display.unit;
+  rep.display_per_unit = display.scale;
   rep.magnitude = in.magnitude;
   rep.model_name = in.spec.source.empty() ? "<model>" : in.spec.source;
   rep.source = in.source;

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -16,6 +17,7 @@
 #include "noise_stage.hpp"
 #include "samples.hpp"
 #include "stend/diagnosis/input.hpp"
+#include "stend/estimation/instrument_model.hpp"
 #include "stend/estimation/static_fit.hpp"
 #include "stend/model/output_stage.hpp"
 #include "stend/physics/gravity.hpp"
@@ -261,14 +263,22 @@ int orientation_group(std::map<std::string, int>& groups, const std::string& nam
 }
 
 int temperature_group(std::vector<double>& levels_c, double t_c) {
+  if (!std::isfinite(t_c)) return -1;
   int k = -1;
   for (std::size_t i = 0; i < levels_c.size(); ++i)
-    if (std::abs(levels_c[i] - t_c) <= 2.0) k = static_cast<int>(i);
+    if (std::abs(levels_c[i] - t_c) <= kTemperatureLevel_c) k = static_cast<int>(i);
   if (k < 0) {
     levels_c.push_back(t_c);
     k = static_cast<int>(levels_c.size()) - 1;
   }
   return k;
+}
+
+bool has_temperature_spread(const std::vector<SegmentData>& segments) {
+  std::set<int> levels;
+  for (const auto& d : segments)
+    if (d.temperature_group >= 0) levels.insert(d.temperature_group);
+  return levels.size() >= 2;
 }
 
 Eigen::Vector3d table_stimulus(model::Stimulus<double>& st, double az, double h, double dl,
@@ -292,6 +302,11 @@ Eigen::Vector3d table_stimulus(model::Stimulus<double>& st, double az, double h,
 }
 
 GapInput build_input(const Recording& recording_in, const estimation::ModelSpec& spec) {
+  std::vector<std::string> thermal;
+  for (const auto& t : spec.model.terms)
+    if (model::reads_temperature(t.kind)) thermal.push_back(model::term_name(t.kind));
+  if (const std::string why = estimation::why_no_temperature(recording_in.header.info, thermal); !why.empty())
+    throw InputError("'" + recording_in.dir.string() + "': not applicable — " + why);
   GapInput in;
   in.spec = spec;
   in.source = recording_in.dir.string();

@@ -123,7 +123,7 @@ void print_where(std::ostream& os, const GapReport& r) {
            << " " << r.display_unit << ")";
         ++n;
       }
-    os << "\n";
+    os << (n == 0 ? "  none recorded\n" : "\n");  // a recording without temperature
   }
 }
 

@@ -179,7 +179,8 @@ std::string statement(const GapReport& rep, bool at_floor_as_given) {
 }  // namespace
 
 void explain_gap(const GapInput& in, const Rows& rows, const GapOptions& opt, GapReport& rep) {
-  const std::vector<Candidate> candidates = opt.candidates.empty() ? default_candidates(in.spec.model) : opt.candidates;
+  const std::vector<Candidate> candidates =
+      opt.candidates.empty() ? default_candidates(in.spec.model, has_temperature_spread(in.segments)) : opt.candidates;
   CurrentModel as_given;
   as_given.terms = in.spec.model.terms;
   as_given.columns = MatrixXd(rows.y.size(), 0);

@@ -45,7 +45,9 @@ void locate_gap(const GapInput& in, const Rows& rows, GapReport& rep) {
     return in.magnitude ? std::string("|f|") : std::string(1, "xyz"[a]);
   }, rep);
   add_places("orientation", rows, total, [&](std::size_t s, int) { return in.segments[s].orientation_name; }, rep);
-  add_places("temperature", rows, total, [&](std::size_t s, int) {
+  const bool temperature_recorded = std::any_of(in.segments.begin(), in.segments.end(),
+                                                [](const SegmentData& d) { return d.temperature_group >= 0; });
+  if (temperature_recorded) add_places("temperature", rows, total, [&](std::size_t s, int) {
     const auto& d = in.segments[s];
     const double t = std::isfinite(d.setpoint_c) ? d.setpoint_c : d.point.stimulus.temperature_c;
     std::string dir = d.ramp_direction > 0 ? " (heating)" : d.ramp_direction < 0 ? " (cooling)" : "";

@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -11,6 +12,7 @@
 
 #include "stend/core/experiment.hpp"
 #include "stend/diagnosis/gap.hpp"
+#include "stend/diagnosis/input.hpp"
 #include "stend/diagnosis/validate.hpp"
 #include "stend/io/importers.hpp"
 #include "stend/core/plugin_host.hpp"
@@ -217,6 +219,34 @@ TEST(GapRealData, ImucalWithoutCrossAxisNamesCrossAxisFirst) {
 // Magnitude form (orientations unknown, only |g|): the same generator, the truth directions thrown
 // away. A planted cross-axis is named; only its symmetric half (3 of 6 parameters) is visible, the
 // rotation half being what an unknown orientation absorbs; null data name nothing.
+// Absent is absent: points without a temperature (NaN) form no temperature level, spread nothing,
+// and the diagnosis then offers no term that reads the temperature and no "temperature" place.
+TEST(Gap, NoTemperatureRecordedOffersNoTemperatureCandidate) {
+  std::vector<double> levels;
+  EXPECT_EQ(temperature_group(levels, kNaN), -1);
+  EXPECT_TRUE(levels.empty());
+  const auto reads_temperature = [](const std::vector<Candidate>& cs) {
+    return std::any_of(cs.begin(), cs.end(), [](const Candidate& c) { return model::reads_temperature(c.term.kind); });
+  };
+  EXPECT_TRUE(reads_temperature(default_candidates(validation_model().model, true)));
+  EXPECT_FALSE(reads_temperature(default_candidates(validation_model().model, false)));
+
+  const ValidationDesign d = default_design();
+  GapInput in = generate(d, validation_model(), with_term({model::TermKind::kCrossAxis, 1, 25}, Eigen::VectorXd::Zero(6)), 3);
+  ASSERT_TRUE(has_temperature_spread(in.segments));  // the design's sweep
+  for (auto& s : in.segments) {
+    s.point.stimulus.temperature_c = kNaN;
+    s.setpoint_c = kNaN;
+    s.temperature_group = -1;
+  }
+  EXPECT_FALSE(has_temperature_spread(in.segments));
+  const GapReport r = diagnose(in);
+  ASSERT_TRUE(r.ok) << r.message;
+  ASSERT_FALSE(r.candidates.empty());
+  for (const auto& c : r.candidates) EXPECT_FALSE(model::reads_temperature(c.spec.kind)) << c.term;
+  for (const auto& p : r.where) EXPECT_NE(p.dimension, "temperature") << p.place;
+}
+
 TEST(GapMagnitude, PlantedCrossAxisIsNamedAndOnlyItsSymmetricPartIsSeen) {
   const ValidationDesign d = many_positions_design(40);
   Eigen::VectorXd cross(6);

@@ -52,7 +52,9 @@ Table parameter_table(const FitSummary& summary) {
   t.kind = Table::Kind::kParameters;
   const double conf = summary.confidence;
   t.header = {"parameter", "value", "unit", "std error",
-              fmt::format("{} interval", std::isfinite(conf) ? fmt::format("{:.0f} %", 100 * conf) : ""), "verdict"};
+              fmt::format("{} interval{}", std::isfinite(conf) ? fmt::format("{:.0f} %", 100 * conf) : "",
+                          summary.dof ? fmt::format(" ({} dof)", *summary.dof) : ""),
+              "verdict"};
   for (const auto& p : summary.parameters) {
     const DisplayUnit du = display_unit(p.unit);  // the unit family of the plots
     const bool interval = std::isfinite(p.lower) || std::isfinite(p.upper);
@@ -87,7 +89,7 @@ std::vector<Paragraph> fit_notes(const json& fit) {
 
 namespace {
 
-// Display scale of residuals: mg for accelerometers, deg/h for gyroscopes.
+// Display scale of residuals: the fit's own (display_unit: mg for accelerometers, deg/s for gyroscopes).
 double display_scale(const json& fit) {
   const json res = fit.value("residuals", json::object());
   const json rms = res.value("rms", json::object()), disp = res.value("rms_display", json::object());
@@ -126,18 +128,22 @@ PointAxis point_axis(const json& points, const std::string& unit) {
     else if (std::max(std::abs(lo[k]), std::abs(hi[k])) <= 1e-3 * mag) still_zero.push_back(k);
   }
   const bool tilt = unit == "m/s^2" && varying.size() == 2 && still_zero.size() == 1 && still_zero[0] != 2;
+  // The tilt toward the side the sensor was tilted to (the horizontal axis's sign over the points),
+  // so the angles run as the experiment states them (0 … 44°, not −44 … 0°).
+  const std::size_t h = tilt && still_zero[0] == 0 ? 1 : 0;  // the horizontal axis in the tilt plane
+  double side = 0.0;
+  for (const auto& pt : points) side += at(pt.value("true_input", json::array()), h);
+  const double sign = side < 0.0 ? -1.0 : 1.0;
   for (const auto& pt : points) {
     const json u = pt.value("true_input", json::array());
     if (tilt) {
-      const std::size_t h = still_zero[0] == 0 ? 1 : 0;  // the horizontal axis in the tilt plane
-      a.x.push_back(std::atan2(at(u, h), at(u, 2)) * physics::kRadToDeg);
+      a.x.push_back(std::atan2(sign * at(u, h), at(u, 2)) * physics::kRadToDeg);
     } else if (varying.size() == 1) {
       a.x.push_back(at(u, varying[0]));
     }
   }
   if (tilt) {
-    const std::size_t h = still_zero[0] == 0 ? 1 : 0;
-    a.label = fmt::format("tilt: gravity direction from +z toward +{} [deg]", kAxes[h]);
+    a.label = fmt::format("tilt: gravity direction from +z toward {}{} [deg]", sign < 0 ? '-' : '+', kAxes[h]);
   } else if (varying.size() == 1) {
     a.label = fmt::format("true input, axis {} [{}]", kAxes[varying[0]], unit);
   } else {

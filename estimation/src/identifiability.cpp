@@ -3,6 +3,7 @@
 
 #include "stend/estimation/summary.hpp"
 #include "stend/sdk.hpp"
+#include "stend/stats/distributions.hpp"
 
 #include <stend/physics/units.hpp>
 #include <stend/yaml/reader.hpp>
@@ -94,18 +95,35 @@ std::string tolerance_text(const std::string& unit, const PrecisionTolerances& t
   return fmt::format("{:g} {} over {:g} degC", b.shown, b.unit, t.temperature_span_c);
 }
 
-Verdict precision_verdict(double std_error, const std::string& unit, const PrecisionTolerances& t) {
-  const double tol = tolerance_for(unit, t);
-  return std::isnan(tol) || !(std_error > tol) ? Verdict::kDetermined : Verdict::kImprecise;
+double interval_quantile(double confidence, double dof) {
+  if (!(dof > 0.0)) return kNaN;
+  const double p = 0.5 * (1.0 + confidence);
+  return std::isinf(dof) ? stats::normal_quantile(p) : stats::student_t_quantile(p, dof);
 }
 
-void judge(ParameterEstimate& e, const PrecisionTolerances& t) {
+namespace {
+
+// z, the normal quantile at the basis' confidence: a tolerance (1 σ) as a half-width is z · tolerance.
+double tolerance_quantile(const IntervalBasis& b) { return interval_quantile(b.confidence, kAPrioriDof); }
+
+}  // namespace
+
+Verdict precision_verdict(double std_error, const IntervalBasis& b, const std::string& unit,
+                          const PrecisionTolerances& t) {
+  const double tol = tolerance_for(unit, t);
+  if (std::isnan(tol)) return Verdict::kDetermined;
+  return b.quantile * std_error <= tolerance_quantile(b) * tol ? Verdict::kDetermined : Verdict::kImprecise;
+}
+
+void judge(ParameterEstimate& e, const PrecisionTolerances& t, const IntervalBasis& b) {
   e.tolerance = tolerance_for(e.unit, t);
   if (!e.identifiable) return;
-  e.verdict = precision_verdict(e.std_error, e.unit, t);
+  e.verdict = precision_verdict(e.std_error, b, e.unit, t);
   if (e.verdict == Verdict::kImprecise)
-    e.reason = fmt::format("standard error {:.3g} {} exceeds the tolerance {}", e.std_error, e.unit,
-                           tolerance_text(e.unit, t));
+    e.reason = fmt::format("the {:g} % interval's half-width {:.3g} {} ({:.3g} × the standard error {:.3g}) exceeds "
+                           "{:.3g} × the tolerance {}",
+                           100.0 * b.confidence, b.quantile * e.std_error, e.unit, b.quantile, e.std_error,
+                           tolerance_quantile(b), tolerance_text(e.unit, t));
 }
 
 std::string direction_text(const Eigen::VectorXd& v, const std::vector<std::string>& names) {

@@ -22,10 +22,15 @@ double InstrumentModel::std_error(const std::string& name) const {
   return p != nullptr && std::isfinite(p->std_error) ? p->std_error : 0.0;
 }
 
+bool InstrumentModel::determined(std::size_t i) const {
+  if (i >= parameters.size() || i >= theta.size()) return false;
+  return parameters[i].held ? parameters[i].zero_is_exact : std::isfinite(theta[i]);
+}
+
 std::vector<std::string> InstrumentModel::not_identified() const {
   std::vector<std::string> out;
   for (std::size_t i = 0; i < theta.size() && i < parameters.size(); ++i)
-    if (!std::isfinite(theta[i]) && !parameters[i].held) out.push_back(parameters[i].name);
+    if (!determined(i)) out.push_back(parameters[i].name);
   return out;
 }
 
@@ -75,6 +80,14 @@ void InstrumentModel::print(std::ostream& os) const {
 std::string why_absent(const SensorInfo& info, model::Instrument instrument) {
   if (instrument != model::Instrument::kGyroscope || info.has_gyro) return {};
   return "the recording has no gyroscope (its source holds no gyroscope data)";
+}
+
+std::string why_no_temperature(const SensorInfo& info, const std::vector<std::string>& temperature_terms) {
+  if (info.has_temperature || temperature_terms.empty()) return {};
+  std::string names;
+  for (const auto& t : temperature_terms) names += (names.empty() ? "" : ", ") + t;
+  return "the recording has no temperature (its source holds none), which the model's temperature term(s) " + names +
+         " need; remove them to fit the rest";
 }
 
 InstrumentModel not_applicable(model::ErrorModel model, const std::string& why) {

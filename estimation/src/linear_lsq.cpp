@@ -227,15 +227,13 @@ ScaledSolution solve_scaled(const Design& d, const Svd& svd, int rank, LsqMethod
 }
 
 // Residuals y − Aθ̂, weighted RSS, σ² (1 when the variance is known) and the interval quantile
-// (normal when the variance is known or no dof is left, else Student t with k − rank dof).
+// (interval_quantile: normal when the variance is known, else Student t with k − rank dof).
 void residual_statistics(LsqResult& r, const LsqProblem& pr, const Design& d,
                          const Eigen::VectorXd& x, const LsqOptions& opt) {
   r.residuals = pr.observations - pr.design * x;
   r.rss = (d.yw - d.Aw * x).squaredNorm();
   r.sigma2 = opt.known_variance ? 1.0 : r.rss / r.dof;
-  r.quantile = (opt.known_variance || r.dof <= 0)
-                   ? normal_quantile(0.5 * (1.0 + opt.confidence))
-                   : student_t_quantile(0.5 * (1.0 + opt.confidence), r.dof);
+  r.quantile = interval_quantile(opt.confidence, opt.known_variance ? kAPrioriDof : r.dof);
 }
 
 // Orthonormal basis of the null space in unscaled parameter coordinates, from the scaled one.
@@ -279,7 +277,7 @@ void fill_identified(LsqResult& r, const Eigen::VectorXd& x, const std::vector<b
     e.lower = e.value - r.quantile * e.std_error;
     e.upper = e.value + r.quantile * e.std_error;
   }
-  for (auto& e : r.parameters) judge(e, tolerances);
+  for (auto& e : r.parameters) judge(e, tolerances, {r.confidence, r.quantile});
 }
 
 // Groups of non-identifiable parameters connected through the null space (projector entries

@@ -45,6 +45,24 @@ std::string model_instrument(const YAML::Node& model_root) {
   return n && n.IsScalar() ? n.as<std::string>() : std::string();
 }
 
+std::vector<std::string> model_temperature_terms(const YAML::Node& model_root) {
+  std::vector<std::string> out;
+  if (!model_root.IsMap()) return out;
+  const auto add = [&out](const std::string& name) {
+    const auto kind = model::term_from_name(name);
+    if (kind && model::reads_temperature(*kind)) out.push_back(name);
+  };
+  if (const YAML::Node terms = model_root["terms"]; terms && terms.IsSequence())
+    for (const YAML::Node& t : terms) {
+      if (t.IsScalar()) add(t.as<std::string>());
+      if (t.IsMap())
+        for (const auto& kv : t) add(kv.first.as<std::string>());
+    }
+  for (const char* key : {"bias_temperature", "scale_temperature"})
+    if (const YAML::Node n = model_root[key]; n && n.IsScalar() && n.as<std::string>() == "true") out.push_back(key);
+  return out;
+}
+
 void Registry::add(EstimatorEntry entry) {
   if (find(entry.name) != nullptr) throw std::logic_error("estimator '" + entry.name + "' registered twice");
   entries_.push_back(std::move(entry));
@@ -110,23 +128,27 @@ FitSummary Registry::summarize(const nlohmann::json& doc, const std::string& fil
 
 namespace {
 
-// The instrument a YAML model file's `instrument:` names; nullopt when it names none, or the file
-// is not YAML (the estimator reads it and says what is wrong).
-std::optional<model::Instrument> instrument_of(const std::string& model_file) {
+// A YAML model file's root; nullopt when the file is not YAML (the estimator reads it and says
+// what is wrong).
+std::optional<YAML::Node> model_root_of(const std::string& model_file) {
   try {
-    return instrument_from_name(model_instrument(yaml::load_file(model_file, "model file")));
+    return yaml::load_file(model_file, "model file");
   } catch (const std::exception&) {
     return std::nullopt;
   }
 }
 
-// The model of a model file whose `instrument:` the recording lacks (why_absent), not applicable;
-// nullopt when the file names no instrument or the recording has it.
+// The model of a model file whose `instrument:` the recording lacks (why_absent), or whose
+// temperature terms it cannot feed (why_no_temperature), not applicable; nullopt when the file names
+// no instrument or the recording has what it needs.
 std::optional<InstrumentModel> absent_instrument(const EstimatorRequest& request) {
   if (request.recording == nullptr || request.model_file.empty()) return std::nullopt;
-  const auto inst = instrument_of(request.model_file);
+  const auto root = model_root_of(request.model_file);
+  if (!root) return std::nullopt;
+  const auto inst = instrument_from_name(model_instrument(*root));
   if (!inst) return std::nullopt;
-  const std::string why = why_absent(request.recording->header.info, *inst);
+  std::string why = why_absent(request.recording->header.info, *inst);
+  if (why.empty()) why = why_no_temperature(request.recording->header.info, model_temperature_terms(*root));
   if (why.empty()) return std::nullopt;
   model::ErrorModel m;
   m.instrument = *inst;

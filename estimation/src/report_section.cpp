@@ -94,9 +94,12 @@ DisplayUnit display_unit(const std::string& unit) {
     DisplayUnit base = display_unit(unit.substr(0, per));
     return {base.scale, base.unit + unit.substr(per)};
   }
+  // One choice per quantity (issue 36): acceleration in mg, angular rate in deg/s, a dimensionless
+  // factor (scale, cross-axis) in ppm, g-sensitivity in (deg/s)/g.
   if (unit == "m/s^2" || unit == "m/s²") return {1.0 / physics::kMilliG, "mg"};
-  if (unit == "rad/s") return {1.0 / physics::kDegPerHour, "deg/h"};
+  if (unit == "rad/s") return {1.0 / physics::kDegPerSecond, "deg/s"};
   if (unit.empty() || unit == "1" || unit == "-") return {1e6, "ppm"};
+  if (unit == "rad/s/(m/s^2)") return {physics::kStandardGravity / physics::kDegPerSecond, "(deg/s)/g"};
   return {1.0, unit};
 }
 

@@ -60,6 +60,7 @@ void read_estimates(const json& doc, InstrumentModel& im) {
       held.name = info[i].name;
       held.unit = info[i].unit;
       held.held = true;
+      held.zero_is_exact = true;  // it affects no fitted axis: those it does are left uncalibrated
       held.value = held.std_error = held.lower = held.upper = 0.0;
       held.reason = "not in this fit";
       im.parameters.push_back(held);

@@ -1,5 +1,6 @@
 // The linear fit of a ModelSpec on static points. See stend/estimation/static_fit.hpp.
 #include "stend/estimation/static_fit.hpp"
+#include "stend/estimation/report_section.hpp"
 
 #include "stend/estimation/summary.hpp"
 
@@ -140,8 +141,9 @@ StaticFit fit_static_points(const std::vector<processing::StaticPoint>& points, 
   StaticFit fit;
   const bool accel = spec.model.instrument == model::Instrument::kAccelerometer;
   fit.unit = accel ? "m/s^2" : "rad/s";
-  fit.display_unit = accel ? "mg" : "deg/h";
-  const double display_factor = accel ? 1.0 / physics::kMilliG : 1.0 / physics::kDegPerHour;
+  const DisplayUnit display = display_unit(fit.unit);
+  fit.display_unit = display.unit;
+  const double display_factor = display.scale;
 
   if (spec.axes.empty() || spec.model.terms.empty()) {
     fit.message = "the model specification has no axes or no terms";

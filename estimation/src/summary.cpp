@@ -30,6 +30,12 @@ double confidence_of(const json& doc) {
   return std::isfinite(c) ? c : number_or_nan(doc, "confidence");
 }
 
+std::optional<int> dof_of(const json& doc) {
+  for (const json& j : {doc.value("solution", json::object()), doc})
+    if (j.is_object() && j.contains("dof") && j["dof"].is_number_integer()) return j["dof"].get<int>();
+  return std::nullopt;
+}
+
 ParameterEstimate parameter_from_json(const json& p) {
   ParameterEstimate e;
   e.name = string_or_empty(p, "name");
@@ -144,8 +150,9 @@ std::string FitSummary::BriefReport() const {
                                         [](const ParameterEstimate& p) { return p.identifiable; });
   const auto imprecise = std::count_if(parameters.begin(), parameters.end(),
                                        [](const ParameterEstimate& p) { return p.judged() == Verdict::kImprecise; });
-  return fmt::format("{}: ok — {} parameters, {} identified{}", who, parameters.size(), identified,
-                     imprecise > 0 ? fmt::format(" ({} imprecise)", imprecise) : "");
+  return fmt::format("{}: ok — {} parameters, {} identified{}{}", who, parameters.size(), identified,
+                     imprecise > 0 ? fmt::format(" ({} imprecise)", imprecise) : "",
+                     dof ? fmt::format(", {} dof", *dof) : "");
 }
 
 std::string FitSummary::FullReport() const {
@@ -165,11 +172,31 @@ void FitSummary::print(std::ostream& os) const {
 bool FitSummary::equals(const FitSummary& o, double rel_tol, double abs_tol) const {
   if (estimator != o.estimator || version != o.version || status != o.status || message != o.message ||
       !nearly_equal(confidence, o.confidence, rel_tol, abs_tol) || parameters.size() != o.parameters.size() ||
-      notes != o.notes)
+      notes != o.notes || dof != o.dof)
     return false;
   for (std::size_t i = 0; i < parameters.size(); ++i)
     if (!parameters[i].equals(o.parameters[i], rel_tol, abs_tol)) return false;
   return true;
+}
+
+std::string degrees_of_freedom_note(int dof) {
+  if (dof <= 0)
+    return fmt::format("{} degrees of freedom: no more observations than estimated parameters, so the residual is "
+                       "zero by construction and is no check of the fit; the intervals rest on the a-priori sigmas "
+                       "alone",
+                       dof);
+  if (dof < kFewDegreesOfFreedom)
+    return fmt::format("few degrees of freedom: {} (fewer than {}): the residual scatter rests on {} number{}, so the "
+                       "intervals are wide (Student t) and the residual is no measure of accuracy",
+                       dof, kFewDegreesOfFreedom, dof, dof == 1 ? "" : "s");
+  return {};
+}
+
+void state_degrees_of_freedom(FitSummary& s, std::optional<int> dof) {
+  s.dof = dof;
+  if (!dof) return;
+  const std::string note = degrees_of_freedom_note(*dof);
+  if (!note.empty() && std::find(s.notes.begin(), s.notes.end(), note) == s.notes.end()) s.notes.push_back(note);
 }
 
 FitStatus status_of(const json& doc) {
@@ -195,6 +222,7 @@ json to_json(const FitSummary& s) {
                                {"interval", {finite_or_null(p.lower), finite_or_null(p.upper)}},
                                {"reason", p.reason}});
   j["notes"] = s.notes;
+  j["dof"] = s.dof ? json(*s.dof) : json(nullptr);
   return j;
 }
 
@@ -211,6 +239,7 @@ FitSummary summary_from_json(const json& doc) {
   for (const auto& n : doc.value("notes", json::array()))
     if (n.is_string()) s.notes.push_back(n);
   if (!s.ok()) return s;
+  state_degrees_of_freedom(s, dof_of(doc));
   for (const auto& p : doc.value("parameters", json::array())) s.parameters.push_back(parameter_from_json(p));
   return s;
 }

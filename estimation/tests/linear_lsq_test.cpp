@@ -364,11 +364,12 @@ TEST(LinearLsq, VerdictsJudgeTheStandardErrorAgainstAUnitAwareTolerance) {
     EXPECT_TRUE(e.identifiable);
     EXPECT_TRUE(std::isfinite(e.value));
     EXPECT_EQ(e.judged(), Verdict::kImprecise) << e.name;
-    EXPECT_NE(e.reason.find("exceeds the tolerance"), std::string::npos) << e.reason;
+    EXPECT_NE(e.reason.find("interval's half-width"), std::string::npos) << e.reason;
+    EXPECT_NE(e.reason.find("exceeds 1.96 × the tolerance"), std::string::npos) << e.reason;
   }
   std::ostringstream os;
   os << t;
-  EXPECT_NE(os.str().find("imprecise: standard error"), std::string::npos) << os.str();
+  EXPECT_NE(os.str().find("imprecise: the 95 % interval"), std::string::npos) << os.str();
   // Units the tolerances do not cover are judged by identifiability alone.
   EXPECT_TRUE(std::isnan(tolerance_for("m", PrecisionTolerances{})));
   EXPECT_DOUBLE_EQ(tolerance_for("m/s^2/degC^2", PrecisionTolerances{}), 1e-3 * 9.80665 / 100.0);
@@ -458,4 +459,57 @@ TEST(LinearLsq, ApproxEqualHonoursTolerance) {
   os << a;
   EXPECT_NE(os.str().find("bias_x"), std::string::npos);
   EXPECT_NE(os.str().find("95% interval"), std::string::npos);
+}
+
+// ------------------------------------------------------------------------------------------------
+// The verdict from the interval (identifiability.hpp): the same standard error, 1 or 100 degrees of
+// freedom.
+
+TEST(Verdict, TheSameStandardErrorIsImpreciseWithOneDegreeOfFreedomAndDeterminedWithAHundred) {
+  const PrecisionTolerances t;
+  const double tol = tolerance_for("1", t);  // 1000 ppm
+  const double se = 0.8 * tol;               // within the tolerance at 1 σ
+  const IntervalBasis one{0.95, interval_quantile(0.95, 1)};
+  const IntervalBasis hundred{0.95, interval_quantile(0.95, 100)};
+  const IntervalBasis a_priori{0.95, interval_quantile(0.95, kAPrioriDof)};
+  EXPECT_NEAR(one.quantile, 12.706, 1e-3);
+  EXPECT_NEAR(hundred.quantile, 1.984, 1e-3);
+  EXPECT_NEAR(a_priori.quantile, 1.95996, 1e-5);
+  EXPECT_TRUE(std::isnan(interval_quantile(0.95, 0)));  // no residual: no t
+  EXPECT_EQ(precision_verdict(se, one, "1", t), Verdict::kImprecise);
+  EXPECT_EQ(precision_verdict(se, hundred, "1", t), Verdict::kDetermined);
+  EXPECT_EQ(precision_verdict(se, a_priori, "1", t), Verdict::kDetermined);
+  // A standard error just inside the tolerance stays determined with many dof, and is imprecise
+  // once t · se passes z · tolerance.
+  EXPECT_EQ(precision_verdict(0.98 * tol, hundred, "1", t), Verdict::kDetermined);
+  EXPECT_EQ(precision_verdict(1.01 * tol, hundred, "1", t), Verdict::kImprecise);
+  EXPECT_EQ(precision_verdict(std::nan(""), hundred, "1", t), Verdict::kImprecise);
+  EXPECT_EQ(precision_verdict(1.0, one, "deg", t), Verdict::kDetermined);  // no tolerance applies
+}
+
+// A bias fitted from k readings of a constant, their scatter giving a standard error of 0.8 mg:
+// with two readings (1 dof) it is imprecise, the reason naming the interval; with 101 it is
+// determined.
+TEST(Verdict, ABiasFromTwoReadingsIsImpreciseAndFromManyDetermined) {
+  auto fit = [](int k) {
+    LsqProblem pr;
+    pr.design = Eigen::MatrixXd::Ones(k, 1);
+    pr.observations.resize(k);
+    // Alternating ±d about 0 (k even) or with one 0 (k odd): standard error 0.8 mg for both sizes.
+    const double se = 0.8e-3 * 9.80665;
+    const double d = k == 2 ? se : se * std::sqrt(static_cast<double>(k));
+    for (int i = 0; i < k; ++i) pr.observations[i] = (i == k - 1 && k % 2 == 1) ? 0.0 : (i % 2 ? d : -d);
+    pr.names = {"bias_z"};
+    pr.units = {"m/s^2"};
+    return solve_lsq(pr);
+  };
+  const LsqResult two = fit(2), many = fit(101);
+  ASSERT_TRUE(two.ok() && many.ok());
+  EXPECT_EQ(two.dof, 1);
+  EXPECT_EQ(many.dof, 100);
+  EXPECT_NEAR(two.parameters[0].std_error, 0.8e-3 * 9.80665, 1e-9);
+  EXPECT_NEAR(many.parameters[0].std_error, 0.8e-3 * 9.80665, 1e-4 * 9.80665);
+  EXPECT_EQ(two.parameters[0].judged(), Verdict::kImprecise);
+  EXPECT_NE(two.parameters[0].reason.find("half-width"), std::string::npos) << two.parameters[0].reason;
+  EXPECT_EQ(many.parameters[0].judged(), Verdict::kDetermined);
 }

@@ -127,7 +127,11 @@ TEST(ReportNumber, SixSignificantDigitsAndADashForNoNumber) {
 TEST(DisplayUnit, ReportUnitsOfSiUnits) {
   EXPECT_EQ(se::display_unit("m/s^2").unit, "mg");
   EXPECT_NEAR(se::display_unit("m/s^2").scale * 9.80665e-3, 1.0, 1e-12);
-  EXPECT_EQ(se::display_unit("rad/s").unit, "deg/h");
+  EXPECT_EQ(se::display_unit("rad/s").unit, "deg/s");
+  EXPECT_NEAR(se::display_unit("rad/s").scale * M_PI / 180.0, 1.0, 1e-12);
+  // g-sensitivity as the docs state it: 1 (deg/s)/g = (π/180 rad/s) / 9.80665 m/s².
+  EXPECT_EQ(se::display_unit("rad/s/(m/s^2)").unit, "(deg/s)/g");
+  EXPECT_NEAR(se::display_unit("rad/s/(m/s^2)").scale * (M_PI / 180.0) / 9.80665, 1.0, 1e-12);
   EXPECT_EQ(se::display_unit("1").unit, "ppm");
   EXPECT_EQ(se::display_unit("m/s^2/degC").unit, "mg/degC");
   EXPECT_EQ(se::display_unit("1/degC^2").unit, "ppm/degC^2");

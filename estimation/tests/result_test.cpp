@@ -125,3 +125,33 @@ TEST(FitResult, AFitThatFailedBeforeWritingHasTheSummaryFields) {
   EXPECT_EQ(r.BriefReport(), "x 2: FAILED — no samples");
   EXPECT_EQ(se::summary_from_json(json::parse(r.written_document())).message, "no samples");
 }
+
+// The fit's degrees of freedom are read from a results document ("dof", or stend.fit/1's
+// "solution") and written back; few of them are a note, stated once; BriefReport says them.
+TEST(FitSummary, StatesItsDegreesOfFreedomAndNotesWhenTheyAreFew) {
+  json doc = {{"status", "ok"},
+              {"confidence", 0.95},
+              {"solution", {{"dof", 1}}},
+              {"parameters", json::array({{{"name", "bias_z"}, {"unit", "m/s^2"}, {"identifiable", true},
+                                           {"value", 0.1}, {"std_error", 0.001}, {"interval", {0.08, 0.12}}}})}};
+  const se::FitSummary s = se::summary_from_json(doc);
+  ASSERT_TRUE(s.dof.has_value());
+  EXPECT_EQ(*s.dof, 1);
+  ASSERT_EQ(s.notes.size(), 1u);
+  EXPECT_EQ(s.notes[0], se::degrees_of_freedom_note(1));
+  EXPECT_NE(s.notes[0].find("few degrees of freedom: 1"), std::string::npos) << s.notes[0];
+  EXPECT_NE(s.BriefReport().find(", 1 dof"), std::string::npos) << s.BriefReport();
+  EXPECT_NE(s.FullReport().find("note: few degrees of freedom"), std::string::npos);
+  // Written and read back: the same summary, the note not doubled.
+  const json written = se::to_json(s);
+  EXPECT_EQ(written["dof"], 1);
+  EXPECT_TRUE(se::summary_from_json(written).equals(s));
+  // Enough degrees of freedom: no note; none at all (a noise fit): null, no note.
+  doc["solution"]["dof"] = se::kFewDegreesOfFreedom;
+  EXPECT_TRUE(se::summary_from_json(doc).notes.empty());
+  doc.erase("solution");
+  const se::FitSummary none = se::summary_from_json(doc);
+  EXPECT_FALSE(none.dof.has_value());
+  EXPECT_TRUE(se::to_json(none)["dof"].is_null());
+  EXPECT_NE(se::degrees_of_freedom_note(0).find("zero by construction"), std::string::npos);
+}

@@ -3,6 +3,7 @@
 // from a column or from the rate.
 #include "import_common.hpp"
 
+#include <stend/io/plausibility.hpp>
 #include <stend/io/timestamps.hpp>
 
 #include <algorithm>
@@ -121,10 +122,20 @@ ImuSample csv_sample(const LineReader& r, const std::vector<std::string_view>& f
   return s;
 }
 
+// What is wrong with the sample of a data line (empty: nothing): sample_problem, or a time that
+// goes back from prev_t [s] (repeats are repaired afterwards).
+std::string line_problem(const ImuSample& s, const CsvColumns& c, std::size_t count, double prev_t) {
+  if (std::string why = sample_problem(s); !why.empty()) return why;
+  if (c.time >= 0 && count > 0 && s.t_s < prev_t)
+    return "time " + fmt_g(s.t_s) + " s goes back (previous " + fmt_g(prev_t) + " s)";
+  return {};
+}
+
 // Every data line as a sample (blank and comment lines skipped), passed to `out` in chunks; each
-// line has as many fields as the column-name line (without one: as the first data line), and a time
-// column must not go back (repeats are repaired afterwards). Returns the number of samples.
-std::size_t read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColumns& c, SampleSink& out) {
+// line has as many fields as the column-name line (without one: as the first data line); a bad line
+// (line_problem) goes to `bad`. Returns the number of samples.
+std::size_t read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColumns& c, SampleSink& out,
+                             BadSamples& bad) {
   const int needed = c.needed();
   std::size_t fields = c.names.size();
   std::string fields_from = "the column-name line (line " + std::to_string(c.names_line) + ")";
@@ -151,8 +162,9 @@ std::size_t read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColu
              std::to_string(f.size()));
     }
     const ImuSample s = csv_sample(r, f, map, c, count);
-    if (c.time >= 0 && count > 0 && s.t_s < prev_t) {
-      r.fail("time " + fmt_g(s.t_s) + " s goes back (previous " + fmt_g(prev_t) + " s)");
+    if (const std::string why = line_problem(s, c, count, prev_t); !why.empty()) {
+      bad.report(ImportError(r.file(), r.line(), why));
+      continue;
     }
     prev_t = s.t_s;
     ++count;
@@ -205,15 +217,17 @@ void import_csv(const fs::path& file, const CsvMapping& map, Recording& rec, Sam
   rec = new_recording(file, "csv");
   set_csv_sensor_info(map, c, rec);
   std::size_t count = 0, gaps = 0;
+  BadSamples bad(map.drop_bad_samples);
   if (c.time >= 0) {
     TimestampRepairStream repair(rec, out, map.rate_hz);
-    count = read_csv_samples(r, map, c, repair);
+    count = read_csv_samples(r, map, c, repair, bad);
     if (count == 0) throw ImportError(file, 0, "no data lines");
     gaps = repair.finish().gaps;
   } else {
-    count = read_csv_samples(r, map, c, out);
+    count = read_csv_samples(r, map, c, out, bad);
     if (count == 0) throw ImportError(file, 0, "no data lines");
   }
+  if (bad.dropped() > 0) add_import_event(rec, bad.describe(), "warning");
   add_import_event(rec, "imported " + std::to_string(count) + " samples from " +
                             file.string() + " (generic CSV; " +
                             (map.counts ? "counts" : "physical units") + ", accel scale " +

@@ -4,6 +4,7 @@
 #include <stend/io/rosbag.hpp>
 
 #include <stend/io/importers.hpp>
+#include <stend/io/plausibility.hpp>
 #include <stend/physics/units.hpp>
 #include <stend/recording/version.hpp>
 
@@ -305,6 +306,11 @@ const Format& choose_format(const Inputs& inputs, const std::string& format, con
   return f;
 }
 
+// Whether the samples of format `f` are a log's, checked on the way in (plausibility.hpp): not a run
+// folder's (checked when it was made), nor a table of means' (its rows, held, are no stretch of a
+// log, and an axis it does not measure reads NaN).
+bool is_log(const Format& f) { return f.name != "run" && f.name != "static_table"; }
+
 // The event stating the format and the import options.
 void add_format_event(Recording& rec, const Format& f, const std::string& format, const ImportOptions& options) {
   std::string stated;
@@ -321,6 +327,7 @@ Recording open_dataset(const Inputs& inputs, const std::string& format, const Im
   Recording rec = f.open(inputs, options);
   if (used) *used = f.name;
   if (f.name == "run") return rec;
+  if (is_log(f)) check_samples(rec, inputs[0], options);
   add_format_event(rec, f, format, options);
   return rec;
 }
@@ -329,14 +336,17 @@ void import_dataset(const Inputs& inputs, const std::string& format, Recording& 
                     const ImportOptions& options, std::string* used) {
   const Format& f = choose_format(inputs, format, options);
   if (used) *used = f.name;
+  SampleCheck checked(rec, out, inputs[0], options);
+  SampleSink& to = is_log(f) ? static_cast<SampleSink&>(checked) : out;
   if (f.stream) {
-    f.stream(inputs, options, rec, out);
+    f.stream(inputs, options, rec, to);
   } else {
     rec = f.open(inputs, options);
-    for_each_chunk(rec.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t) { out.add_samples(c, n); });
+    for_each_chunk(rec.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t) { to.add_samples(c, n); });
     rec.samples = {};
     rec.source.reset();
   }
+  if (is_log(f)) checked.finish(rec);
   if (f.name != "run") add_format_event(rec, f, format, options);
 }
 

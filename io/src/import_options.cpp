@@ -82,7 +82,7 @@ double lsb_si(const std::string& key, const std::string& text, bool accel) {
   const auto slash = value.find('/');
   const double v = slash == std::string::npos ? number(key, value)
                                               : number(key, value.substr(0, slash)) / number(key, value.substr(slash + 1));
-  if (!(v > 0.0)) bad(key, text, "a positive count size");
+  if (!(v > 0.0) || !std::isfinite(v)) bad(key, text, "a positive, finite count size");
   return v * unit_si(key, s.substr(unit_at), accel);
 }
 
@@ -178,6 +178,14 @@ const std::vector<KeyDef>& key_table() {
          if (n < 0 || n != std::floor(n) || n > 255) bad(k, v, "an instance number 0 … 255");
          o.instance = static_cast<int>(n);
        }},
+      {{"drop_bad_samples", T::kSwitch, "", "false",
+        "drop samples whose time or values are not finite numbers (or whose time goes back), and count them, "
+        "instead of refusing the log"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.drop_bad_samples = boolean(k, v); }},
+      {{"accept_implausible", T::kSwitch, "", "false",
+        "import a log whose stillest stretch reads |a| far from 1 g or a rate beyond any MEMS gyroscope "
+        "(a centrifuge) as it is, instead of refusing it as wrong units"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.accept_implausible = boolean(k, v); }},
   };
   return table;
 }
@@ -197,6 +205,7 @@ const char* ImportKey::type_name() const {
     case ImportKeyType::kCharacter: return "CHAR";
     case ImportKeyType::kCount: return "COUNT";
     case ImportKeyType::kBoolean: return "BOOL";
+    case ImportKeyType::kSwitch: return "BOOL";
     case ImportKeyType::kNumber: return "NUMBER";
     case ImportKeyType::kColumn: return "COLUMN";
     case ImportKeyType::kColumns: return "X,Y,Z";
@@ -275,6 +284,7 @@ CsvMapping ImportOptions::csv_mapping() const {
   m.temperature_scale = temperature_scale;
   m.temperature_offset_c = temperature_offset_c;
   m.gravity_mps2 = gravity_mps2;
+  m.drop_bad_samples = drop_bad_samples;
   return m;
 }
 

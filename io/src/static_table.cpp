@@ -98,6 +98,7 @@ Recording import_static_table(const fs::path& file, double gravity_mps2) {
   for (auto& seg : rec.segments) seg.orientation_count = static_cast<int>(rec.segments.size());
   rec.header.info.output_rate_hz = kStaticTableRate_hz;
   rec.header.info.has_gyro = false;
+  rec.header.info.has_temperature = false;
   add_import_event(rec, "imported " + std::to_string(rec.segments.size()) + " static means from " + file.string() +
                             " (table of static means; each row held as an orientation segment of " +
                             fmt_g(kStaticTableHold_s) + " s at " + fmt_g(kStaticTableRate_hz) +

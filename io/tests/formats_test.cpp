@@ -241,7 +241,17 @@ TEST(Formats, LsbAndOffsetOverrideACountsFormat) {
   std::string text = "part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n";
   for (int i = 0; i < 20; ++i) text += "x_p," + std::to_string(i) + ",4196,100,100,100,100,100\n";
   write_text(dir / "s.csv", text);
-  const Recording nominal = open_dataset({dir / "s.csv"}, "auto");
+  // The nominal LSB (2048 counts per g) reads 2 g at rest: refused as implausible, imported as
+  // asked with --accept-implausible.
+  try {
+    open_dataset({dir / "s.csv"}, "auto");
+    ADD_FAILURE() << "2 g at rest was imported";
+  } catch (const ImportError& e) {
+    EXPECT_NE(std::string(e.what()).find("not about 1 g: check --accel-lsb"), std::string::npos) << e.what();
+  }
+  ImportOptions odd;
+  odd.set("accept_implausible", "true");
+  const Recording nominal = open_dataset({dir / "s.csv"}, "auto", odd);
   EXPECT_NEAR(nominal.samples[0].accel_mps2[0], 4196 * physics::kStandardGravity / 2048, 1e-12);
   ImportOptions o;
   o.set("accel_lsb", "1/4096 g");

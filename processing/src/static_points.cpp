@@ -203,7 +203,7 @@ class PointBuilder {
       st.temperature_rate_cps = truth_slope(rec_, die_, p.t_start_s, p.t_end_s);
       p.temperature_source = TemperatureSource::kDie;
     } else {
-      st.temperature_c = sensor_temperature_c;
+      st.temperature_c = rec_.header.info.has_temperature ? sensor_temperature_c : kNaN;  // absent is absent
     }
     st.time_s = 0.5 * (p.t_start_s + p.t_end_s);
     return true;
@@ -287,8 +287,10 @@ Extraction extract(const Recording& rec, const ProcessingOptions& options, const
     throw std::invalid_argument("processing: nothing requested (neither accelerometer nor gyroscope)");
   PointBuilder builder(rec, out.options, request, out);
   if (rec.truth_column(kDieTemperatureColumn) < 0)
-    out.notes.push_back("no 'die_c' truth column: the temperature of each point is the sensor's own "
-                        "temperature reading");
+    out.notes.push_back(rec.header.info.has_temperature
+                            ? "no 'die_c' truth column: the temperature of each point is the sensor's own "
+                              "temperature reading"
+                            : "no temperature recorded: the points have none (NaN)");
   require_increasing_times(rec);
   for (const Segment& seg : intervals(rec, out.options, out)) builder.add(seg);
   return out;

@@ -553,6 +553,21 @@ TEST(StaticPoints, DetectsWhenTheRecordingHasNoSegmentsAndTakesTheSensorTemperat
   EXPECT_NE(none.notes.back().find("no segment of kind orientation (kinds present: none)"), std::string::npos);
 }
 
+// A recording without temperature (its samples reading 0, as run folders made before issue 36
+// stored it): the points carry NaN, never 0 °C, and the note says so.
+TEST(StaticPoints, NoTemperatureRecordedGivesNaNTemperature) {
+  Recording rec = poses(kSix);
+  rec.header.truth_columns = {"f_x_mps2", "f_y_mps2", "f_z_mps2"};
+  for (auto& row : rec.truth) row.pop_back();
+  rec.header.info.has_temperature = false;
+  for (auto& s : rec.samples) s.temperature_c = 0.0;
+  const Extraction ex = extract(rec, ProcessingOptions{}, accel_with_force());
+  ASSERT_EQ(ex.points.size(), 6u);
+  for (const auto& p : ex.points) EXPECT_TRUE(std::isnan(p.stimulus.temperature_c)) << p.stimulus.temperature_c;
+  ASSERT_FALSE(ex.notes.empty());
+  EXPECT_NE(ex.notes[0].find("no temperature recorded"), std::string::npos) << ex.notes[0];
+}
+
 TEST(StaticPoints, RefusesWhatItCannotProcess) {
   Recording rec = poses(kSix);
   Request r = accel_with_force();

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 
 namespace stend::reporting {
 
@@ -20,6 +21,11 @@ std::string g(double v) { return std::isfinite(v) ? fmt::format("{:.5g}", v) : "
 std::string vendor_key(const RunResults& r) { return r.model.empty() ? r.vendor : r.vendor + " " + r.model; }
 
 }  // namespace
+
+std::string VendorStats::count_text() const {
+  const std::string u = fmt::format("{} unit{}", units, units == 1 ? "" : "s");
+  return runs == units ? u : fmt::format("{} ({} runs)", u, runs);
+}
 
 const ParameterComparison* Comparison::find(const std::string& estimator, const std::string& name) const {
   for (const auto& p : parameters)
@@ -56,14 +62,16 @@ std::vector<std::pair<std::string, std::string>> parameter_keys(const std::vecto
   return keys;
 }
 
-// One vendor's units: mean of the identified values, unit-to-unit SD with the 95 % t interval of
-// the mean (two or more values), and the median standard error.
+// One vendor's runs: how many, of how many distinct units, the mean of the identified values, their
+// SD with the 95 % t interval of the mean (two or more values), and the median standard error.
 VendorStats vendor_stats(const std::string& vendor, const std::vector<const UnitValue*>& units) {
   VendorStats s;
   s.vendor = vendor;
   std::vector<double> vals, ses;
+  std::set<std::string> serials;
   for (const UnitValue* u : units) {
-    ++s.units;
+    ++s.runs;
+    serials.insert(u->serial.empty() ? "run " + u->run_name : "serial " + u->serial);
     if (!u->p.identifiable || !std::isfinite(u->p.value)) continue;
     ++s.identified;
     vals.push_back(u->p.value);
@@ -88,6 +96,7 @@ VendorStats vendor_stats(const std::string& vendor, const std::vector<const Unit
     const std::size_t m = ses.size() / 2;
     s.median_std_error = ses.size() % 2 ? ses[m] : 0.5 * (ses[m - 1] + ses[m]);
   }
+  s.units = static_cast<int>(serials.size());
   return s;
 }
 
@@ -129,12 +138,12 @@ Comparison compare_runs(const std::vector<RunResults>& runs) {
 
 std::string comparison_text(const Comparison& c) {
   std::string o = fmt::format("procedure fingerprint {} — {} run(s)\n", c.fingerprint, c.runs.size());
-  o += fmt::format("{:<11} {:<18} {:<22} {:>5} {:>13} {:>11} {:>29} {:>11}  {}\n", "estimator", "parameter", "vendor",
-                   "units", "mean", "unit SD", "95% interval of the mean", "median SE", "unit");
+  o += fmt::format("{:<11} {:<18} {:<22} {:<18} {:>10} {:>13} {:>11} {:>29} {:>11}  {}\n", "estimator", "parameter",
+                   "vendor", "units", "identified", "mean", "SD", "95% interval of the mean", "median SE", "unit");
   for (const auto& p : c.parameters)
     for (const auto& v : p.vendors)
-      o += fmt::format("{:<11} {:<18} {:<22} {:>2}/{:<2} {:>13} {:>11} {:>29} {:>11}  {}\n", p.estimator, p.name, v.vendor,
-                       v.identified, v.units, g(v.mean), g(v.spread_sd),
+      o += fmt::format("{:<11} {:<18} {:<22} {:<18} {:>4}/{:<5} {:>13} {:>11} {:>29} {:>11}  {}\n", p.estimator, p.name,
+                       v.vendor, v.count_text(), v.identified, v.runs, g(v.mean), g(v.spread_sd),
                        std::isfinite(v.mean_lo) ? fmt::format("[{}, {}]", g(v.mean_lo), g(v.mean_hi)) : "—",
                        g(v.median_std_error), p.unit);
   return o;
@@ -155,15 +164,16 @@ std::string comparison_html(const Comparison& c) {
                      escape(r.vendor), escape(r.model), escape(r.serial), escape(e));
   }
   b += "</table>\n<h2>Summary</h2>\n<table><tr><th>estimator</th><th>parameter</th><th>vendor</th><th>identified / "
-       "units</th><th>mean</th><th>unit-to-unit SD</th><th>95 % interval of the mean</th><th>median unit SE</th>"
-       "<th>unit</th></tr>\n";
-  // Shown in the reports' display units (mg, deg/h, ppm), as the plots below are.
+       "runs</th><th>units</th><th>mean</th><th>SD (unit-to-unit, or run-to-run where runs repeat a unit)</th>"
+       "<th>95 % interval of the mean</th><th>median unit SE</th><th>unit</th></tr>\n";
+  // Shown in the display units (estimation::display_unit: mg, deg/s, ppm), as the plots below are.
   for (const auto& p : c.parameters) {
     const estimation::DisplayUnit du = estimation::display_unit(p.unit);
     for (const auto& v : p.vendors)
       b += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}/{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>"
-                       "<td>{}</td></tr>\n",
-                       escape(p.estimator), escape(p.name), escape(v.vendor), v.identified, v.units, g(v.mean * du.scale),
+                       "<td>{}</td><td>{}</td></tr>\n",
+                       escape(p.estimator), escape(p.name), escape(v.vendor), v.identified, v.runs, escape(v.count_text()),
+                       g(v.mean * du.scale),
                        g(v.spread_sd * du.scale),
                        std::isfinite(v.mean_lo)
                            ? fmt::format("[{}, {}]", g(v.mean_lo * du.scale), g(v.mean_hi * du.scale))
@@ -232,6 +242,7 @@ nlohmann::json comparison_json(const Comparison& c) {
     json q = {{"estimator", p.estimator}, {"name", p.name}, {"unit", p.unit}, {"vendors", json::array()}, {"units", json::array()}};
     for (const auto& v : p.vendors)
       q["vendors"].push_back({{"vendor", v.vendor},
+                              {"runs", v.runs},
                               {"units", v.units},
                               {"identified", v.identified},
                               {"mean", num(v.mean)},

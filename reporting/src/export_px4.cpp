@@ -1,6 +1,6 @@
-// `stend export --to px4`: PX4 parameters (QGroundControl .params) — the thermal calibration
-// TC_* where the run has a temperature model, else the static CAL_* (see exports.hpp and
-// docs/reports.md).
+// `stend export --to px4`: PX4 parameters (QGroundControl .params) — the static calibration CAL_*,
+// and the thermal calibration TC_* where the run has a temperature model (the offsets then in TC_*,
+// the accelerometer scale factors still in CAL_*) (see exports.hpp and docs/reports.md).
 #include "export_formats.hpp"
 
 #include "stend/errors.hpp"
@@ -52,8 +52,8 @@ void px4_thermal(std::ostringstream& body, const InstrumentModels& im, const cha
         if (t.kind == model::TermKind::kScaleTemperature) {
           res.warnings.push_back(fmt::format(
               "{} axis {}: the scale-factor temperature polynomial is not exported (PX4's thermal compensation "
-              "corrects offsets only)",
-              inst, kAxisNames[k]));
+              "corrects offsets only; the scale factor at TREF is{})",
+              inst, kAxisNames[k], inst[0] == 'a' ? " CAL_ACC*_*SCALE" : " not exported either: PX4 has no gyro scale"));
           break;
         }
     }
@@ -71,10 +71,12 @@ void px4_thermal(std::ostringstream& body, const InstrumentModels& im, const cha
 }
 
 // CAL_ACC<n>_* / CAL_GYRO<n>_*: PX4's static calibration. PX4 corrects an accelerometer as
-// (raw − XOFF)·XSCALE per axis and a gyroscope as raw − XOFF (src/lib/sensor_calibration): XOFF = b,
-// accelerometer XSCALE = 1/A_kk; what PX4 cannot apply is named in a warning.
+// (raw − TC offset(T) − XOFF)·XSCALE per axis and a gyroscope as raw − TC offset(T) − XOFF
+// (src/lib/sensor_calibration; the TC offset 0 without thermal compensation): XOFF = b, or 0 when
+// the TC_* polynomial (`thermal`) carries the offsets; accelerometer XSCALE = 1/A_kk at the
+// reference temperature either way; what PX4 cannot apply is named in a warning.
 void px4_static(std::ostringstream& body, const InstrumentModels& im, const char* inst, const ExportOptions& o,
-                ExportResult& res) {
+                bool thermal, ExportResult& res) {
   const bool accel = inst[0] == 'a';
   const std::string p = fmt::format("CAL_{}{}", accel ? "ACC" : "GYRO", o.px4_instance);
   const Triad t = triad_at(im, reference_of(im));
@@ -90,13 +92,11 @@ void px4_static(std::ostringstream& body, const InstrumentModels& im, const char
   if (o.px4_device_id == 0)
     res.warnings.push_back(p + "_ID = 0: set it to the sensor's PX4 device id on the vehicle, or PX4 ignores the calibration");
   auto real = [&](const std::string& name, double v) { body << fmt::format("1\t1\t{}\t{:.9g}\t9\n", name, v); };
-  for (int k = 0; k < 3; ++k) real(fmt::format("{}_{}OFF", p, static_cast<char>('X' + k)), t.b[k]);
+  for (int k = 0; k < 3; ++k) real(fmt::format("{}_{}OFF", p, static_cast<char>('X' + k)), thermal ? 0.0 : t.b[k]);
   if (accel)
     for (int k = 0; k < 3; ++k) real(fmt::format("{}_{}SCALE", p, static_cast<char>('X' + k)), 1.0 / t.A(k, k));
 }
 
-// Per instrument: the thermal calibration where the run has a temperature model, else the static
-// calibration.
 }  // namespace
 
 ExportResult export_px4(const RunData& run, const fs::path& out, const ExportOptions& o) {
@@ -106,16 +106,16 @@ ExportResult export_px4(const RunData& run, const fs::path& out, const ExportOpt
   for (int i = 0; i < 2; ++i) {
     const char* inst = i == 0 ? "accelerometer" : "gyroscope";
     const InstrumentModels& im = ims[static_cast<std::size_t>(i)];
+    // Per instrument: the thermal offsets where the run has a temperature model, and the static
+    // calibration (its offsets 0 beside thermal ones).
     if (im.has_temp()) {
       px4_thermal(body, im, inst, o, res);
-      for (const auto& source : im.calib_source)
-        if (!source.empty() && source.rfind("temp_poly", 0) != 0) {
-          res.notes.push_back(fmt::format("{}: thermal parameters (TC_*) written; the static calibration from {} is not "
-                                          "(PX4 would add its offsets to the thermal ones)", inst, source));
-          break;
-        }
+      px4_static(body, im, inst, o, true, res);
+      res.notes.push_back(fmt::format("{}: offsets from the temperature model as TC_*; CAL_*_*OFF written as 0 (PX4 "
+                                      "adds them to the thermal ones){}", inst,
+                                      inst[0] == 'a' ? "; CAL_ACC*_*SCALE at TREF from the calibration" : ""));
     } else if (im.has_calib()) {
-      px4_static(body, im, inst, o, res);
+      px4_static(body, im, inst, o, false, res);
     } else {
       res.warnings.push_back(fmt::format("{}: no calibration or temperature model in the run: no PX4 parameters for it", inst));
     }
@@ -128,7 +128,8 @@ ExportResult export_px4(const RunData& run, const fs::path& out, const ExportOpt
   f << fmt::format("# PX4 calibration written by Stend from {} (sensor {} {} serial '{}')\n", run.dir.filename().string(),
                    run.identity.vendor, run.identity.model, run.identity.serial);
   f << "# TC_*: offset(T) = X0 + X1*dT + X2*dT^2 + X3*dT^3, dT = T - TREF (degC, clamped to TMIN..TMAX)\n";
-  f << "# CAL_*: accel corrected = (raw - OFF) * SCALE, gyro corrected = raw - OFF; SI units (m/s^2, rad/s)\n#\n";
+  f << "# CAL_*: accel corrected = (raw - TC offset - OFF) * SCALE, gyro corrected = raw - TC offset - OFF; SI units "
+       "(m/s^2, rad/s)\n#\n";
   f << "# Vehicle-Id Component-Id Name Value Type\n";
   f << body.str();
   write_file_atomic(out, f.str());

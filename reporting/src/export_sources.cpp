@@ -126,7 +126,7 @@ void report_use(const InstrumentModels& im, const char* instrument, const Export
     const auto* c = im.calib[static_cast<std::size_t>(k)];
     if (c == nullptr) continue;
     if (const auto zero = c->not_identified(); !zero.empty()) {
-      res.warnings.push_back(fmt::format("{} axis {}: not identified, exported as 0: {}", instrument, kAxisNames[k],
+      res.warnings.push_back(fmt::format("{} axis {}: not determined by the fit, exported as 0: {}", instrument, kAxisNames[k],
                                          fmt::join(zero, ", ")));
       if (c->coverage == estimation::Coverage::kTriad) break;  // one model for the three axes
     }

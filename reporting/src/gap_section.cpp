@@ -60,26 +60,36 @@ void add_summary(ReportSection& s, const json& gp, const GapAxes& axes) {
                          str(floor, "source")));
 }
 
-// Where: bar chart of the share of the residual energy each (dimension, place) holds; without a
-// recorded temperature, the temperature places (all at the importer's placeholder) are left out.
-void add_where(ReportSection& s, const json& where_all, bool temperature_recorded) {
-  json where = json::array();
-  for (const auto& w : where_all)
-    if (temperature_recorded || str(w, "dimension") != "temperature") where.push_back(w);
-  Plot p;
-  p.title = "where the gap lies";
-  p.y_label = "share of the residual energy";
-  p.x_label = "dimension : place";
-  p.width = 760;
-  p.height = 520;  // room for the slanted (dimension : place) labels
-  Series bars{"", Style::kBars, {}, {}, {}, {}, palette(3), false, 0.85};
-  for (std::size_t i = 0; i < where.size(); ++i) {
-    p.x_categories.push_back(str(where[i], "dimension") + ":" + str(where[i], "place"));
-    bars.x.push_back(static_cast<double>(i));
-    bars.y.push_back(num(where[i], "share"));
+// Where: one bar chart per dimension (axis, orientation, temperature, time — in the diagnosis'
+// order) of the share of the residual energy each of its places holds; a dimension's shares add up
+// to 1, so the dimensions are not drawn against each other. Without a recorded temperature, the
+// temperature places (all at the importer's placeholder) are left out.
+void add_where(ReportSection& s, const json& where, bool temperature_recorded) {
+  std::vector<std::string> dimensions;
+  for (const auto& w : where)
+    if (std::find(dimensions.begin(), dimensions.end(), str(w, "dimension")) == dimensions.end())
+      dimensions.push_back(str(w, "dimension"));
+  for (const std::string& dimension : dimensions) {
+    if (dimension == "temperature" && !temperature_recorded) continue;
+    std::string words = dimension;  // "time_since_change" → "time since change"
+    std::replace(words.begin(), words.end(), '_', ' ');
+    Plot p;
+    p.title = "where the gap lies: by " + words;
+    p.y_label = "share of the residual energy";
+    p.x_label = words;
+    p.width = 760;
+    Series bars{"", Style::kBars, {}, {}, {}, {}, palette(3), false, 0.85};
+    for (const auto& w : where) {
+      if (str(w, "dimension") != dimension) continue;
+      bars.x.push_back(static_cast<double>(p.x_categories.size()));
+      p.x_categories.push_back(str(w, "place"));
+      bars.y.push_back(num(w, "share"));
+    }
+    p.series = {bars};
+    p.y_include_zero = true;
+    s.add(p, "Localization by " + words + ": the share of the residual each " + words +
+                 " holds (the shares of one dimension add up to 1).");
   }
-  p.series = {bars};
-  s.add(p, "Localization: the share of the residual each (dimension, place) holds.");
 }
 
 // The span of the segments' values of `key` (temperature [°C], time since the last change [s]);
@@ -226,6 +236,22 @@ Table candidates_table(const json& cands) {
   return t;
 }
 
+// The verdict under its heading, both from the numbers the diagnosis judged (at_noise_floor, its
+// held-out χ² test against the floor, and over_floor): "No gap:" when the model as given is at the
+// noise floor, "Explained:" when the terms it added brought it there, else "Unexplained:" — then
+// the diagnosis' own statement.
+Paragraph verdict_paragraph(const json& un, bool terms_added) {
+  const bool at_floor = un.value("at_noise_floor", false);
+  const std::string numbers = fmt::format("held-out RMS {} mg = {} × floor", g3(num(un, "heldout_rms_mps2") / physics::kMilliG),
+                                          g3(num(un, "over_floor")));
+  const char* heading = !at_floor ? "Unexplained:" : terms_added ? "Explained:" : "No gap:";
+  const std::string verdict = !at_floor     ? "the held-out residual is above the noise floor"
+                              : terms_added ? "with the added terms the held-out residual is within the noise floor"
+                                            : "the held-out residual is within the noise floor";
+  return Paragraph{{Span{heading, Span::Kind::kStrong},
+                    Span{fmt::format(" {} ({}). {}", verdict, numbers, str(un, "statement"))}}};
+}
+
 }  // namespace
 
 ReportSection gap_section(const json& gp, bool temperature_recorded) {
@@ -244,10 +270,7 @@ ReportSection gap_section(const json& gp, bool temperature_recorded) {
   const json cands = gp.value("candidates", json::array());
   if (!cands.empty()) s.add(candidates_table(cands));
   const json un = gp.value("unexplained", json::object());
-  if (!un.empty())
-    s.add(Paragraph{{Span{"Unexplained:", Span::Kind::kStrong},
-                     Span{fmt::format(" held-out RMS {} mg = {} × floor. {}", g3(num(un, "heldout_rms_mps2") / physics::kMilliG),
-                                      g3(num(un, "over_floor")), str(un, "statement"))}}});
+  if (!un.empty()) s.add(verdict_paragraph(un, steps.size() > 1));
   return s;
 }
 

@@ -210,10 +210,24 @@ constexpr double kLegendRow = 15.0;                  // px per legend entry
 constexpr double kMinLabelSpacing = 14.0;            // px between slanted category labels
 constexpr double kLegendRightMax = 0.30;             // a wider legend goes below the plot (× plot width)
 
+// Whether a series draws at least one mark (a band needs both its edges at a point; a line of one
+// point is drawn as a marker): only such a series has a legend entry.
+bool draws_a_mark(const Plot& p, const Series& s) {
+  for (std::size_t i = 0; i < s.x.size(); ++i) {
+    if (!usable(s.x[i], p.x_log)) continue;
+    if (s.style == Style::kBand ? i < s.y_lo.size() && i < s.y_hi.size() && usable(s.y_lo[i], p.y_log) &&
+                                      usable(s.y_hi[i], p.y_log)
+                                : i < s.y.size() && usable(s.y[i], p.y_log))
+      return true;
+  }
+  return false;
+}
+
+// The series in the legend: named, and drawn (a legend entry without a mark names nothing).
 std::vector<std::size_t> named_series(const Plot& p) {
   std::vector<std::size_t> named;
   for (std::size_t k = 0; k < p.series.size(); ++k)
-    if (!p.series[k].name.empty()) named.push_back(k);
+    if (!p.series[k].name.empty() && draws_a_mark(p, p.series[k])) named.push_back(k);
   return named;
 }
 
@@ -389,7 +403,7 @@ std::string clip_open(const Frame& f) {
 }
 
 // A kBand series: the polygon between y_lo and y_hi.
-std::string band(const Plot& p, const Frame& f, const Series& s, const std::string& color) {
+std::string band(const Plot& p, const Frame& f, const Series& s, std::size_t k, const std::string& color) {
   std::string up, down;
   for (std::size_t i = 0; i < s.x.size() && i < s.y_lo.size() && i < s.y_hi.size(); ++i) {
     if (!usable(s.x[i], p.x_log) || !usable(s.y_lo[i], p.y_log) || !usable(s.y_hi[i], p.y_log)) continue;
@@ -397,61 +411,74 @@ std::string band(const Plot& p, const Frame& f, const Series& s, const std::stri
     down = fmt::format("{},{} ", num(f.ax.map(s.x[i])), num(f.ay.map(s.y_lo[i]))) + down;
   }
   if (up.empty()) return {};
-  return fmt::format("<polygon class=\"d\" points=\"{}{}\" fill=\"{}\" fill-opacity=\"{}\" stroke=\"none\"/>\n", up, down, color,
-                     s.opacity < 1.0 ? s.opacity : 0.25);
+  return fmt::format("<polygon class=\"d\" data-series=\"{}\" points=\"{}{}\" fill=\"{}\" fill-opacity=\"{}\" "
+                     "stroke=\"none\"/>\n",
+                     k, up, down, color, s.opacity < 1.0 ? s.opacity : 0.25);
 }
 
 // A kBars series: bars from the base (0, or the floor of a log axis) to y.
-std::string bars(const Plot& p, const Frame& f, const Series& s, const std::string& color) {
+std::string bars(const Plot& p, const Frame& f, const Series& s, std::size_t k, const std::string& color) {
   std::string o;
   const double ybase = p.y_log ? f.data.ylo : std::clamp(0.0, f.data.ylo, f.data.yhi);
   const double w = std::max(2.0, 0.7 * (f.px1 - f.px0) / std::max<double>(1.0, static_cast<double>(s.x.size()) + 1.0));
   for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
     if (!usable(s.x[i], p.x_log) || !usable(s.y[i], p.y_log)) continue;
     const double X = f.ax.map(s.x[i]), Y = f.ay.map(s.y[i]), Y0 = f.ay.map(ybase);
-    o += fmt::format("<rect class=\"d\" x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"{}\" fill-opacity=\"{}\"/>\n",
-                     num(X - w / 2), num(std::min(Y, Y0)), num(w), num(std::abs(Y0 - Y)), color, s.opacity);
+    o += fmt::format("<rect class=\"d\" data-series=\"{}\" x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"{}\" "
+                     "fill-opacity=\"{}\"/>\n",
+                     k, num(X - w / 2), num(std::min(Y, Y0)), num(w), num(std::abs(Y0 - Y)), color, s.opacity);
   }
   return o;
 }
 
-// The line of a kLine/kLinePoints series, broken where a point cannot be drawn.
-std::string polyline(const Plot& p, const Frame& f, const Series& s, const std::string& color) {
+// The line of a kLine/kLinePoints series, broken where a point cannot be drawn; a piece of one
+// point (a line of one step, a point between gaps) is drawn as a small marker, so it shows.
+std::string polyline(const Plot& p, const Frame& f, const Series& s, std::size_t k, const std::string& color) {
   std::string o, pts;
+  int count = 0;
+  double last_x = 0.0, last_y = 0.0;
   const char* dash = s.dashed ? " stroke-dasharray=\"6 4\"" : "";
   auto flush = [&] {
-    if (!pts.empty())
-      o += fmt::format("<polyline class=\"d\" points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.6\"{}/>\n", pts, color,
-                       dash);
+    if (count == 1 && s.style == Style::kLine)
+      o += fmt::format("<circle class=\"d\" data-series=\"{}\" cx=\"{}\" cy=\"{}\" r=\"2.5\" fill=\"{}\"/>\n", k,
+                       num(last_x), num(last_y), color);
+    else if (count >= 2)
+      o += fmt::format("<polyline class=\"d\" data-series=\"{}\" points=\"{}\" fill=\"none\" stroke=\"{}\" "
+                       "stroke-width=\"1.6\"{}/>\n",
+                       k, pts, color, dash);
     pts.clear();
+    count = 0;
   };
   for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
     if (!usable(s.x[i], p.x_log) || !usable(s.y[i], p.y_log)) {
       flush();
       continue;
     }
-    pts += fmt::format("{},{} ", num(f.ax.map(s.x[i])), num(f.ay.map(s.y[i])));
+    last_x = f.ax.map(s.x[i]);
+    last_y = f.ay.map(s.y[i]);
+    pts += fmt::format("{},{} ", num(last_x), num(last_y));
+    ++count;
   }
   flush();
   return o;
 }
 
 // The markers of a kPoints/kLinePoints series, with error bars where y_lo and y_hi are given.
-std::string markers(const Plot& p, const Frame& f, const Series& s, const std::string& color) {
+std::string markers(const Plot& p, const Frame& f, const Series& s, std::size_t k, const std::string& color) {
   std::string o;
   for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
     if (!usable(s.x[i], p.x_log)) continue;
     const double X = f.ax.map(s.x[i]);
     if (i < s.y_lo.size() && i < s.y_hi.size() && usable(s.y_lo[i], p.y_log) && usable(s.y_hi[i], p.y_log)) {
       const double a = f.ay.map(s.y_lo[i]), b = f.ay.map(s.y_hi[i]);
-      o += fmt::format("<path class=\"d\" d=\"M{0},{1}L{0},{2}\" stroke=\"{3}\" stroke-width=\"1.2\"/>", num(X), num(a),
-                       num(b), color);
+      o += fmt::format("<path class=\"d\" data-series=\"{4}\" d=\"M{0},{1}L{0},{2}\" stroke=\"{3}\" stroke-width=\"1.2\"/>",
+                       num(X), num(a), num(b), color, k);
       o += fmt::format("<path d=\"M{0},{1}H{2}M{0},{3}H{2}\" stroke=\"{4}\" stroke-width=\"1.2\" fill=\"none\"/>",
                        num(X - 3), num(a), num(X + 3), num(b), color);
     }
     if (!usable(s.y[i], p.y_log)) continue;
-    o += fmt::format("<circle class=\"d\" cx=\"{}\" cy=\"{}\" r=\"3\" fill=\"{}\" fill-opacity=\"{}\"/>\n", num(X),
-                     num(f.ay.map(s.y[i])), color, s.opacity);
+    o += fmt::format("<circle class=\"d\" data-series=\"{}\" cx=\"{}\" cy=\"{}\" r=\"3\" fill=\"{}\" fill-opacity=\"{}\"/>\n",
+                     k, num(X), num(f.ay.map(s.y[i])), color, s.opacity);
   }
   return o;
 }
@@ -467,10 +494,10 @@ std::string series_layers(const Plot& p, const Frame& f) {
       const std::string c = series_color(s, k);
       const bool line = s.style == Style::kLine || s.style == Style::kLinePoints;
       const bool points = s.style == Style::kPoints || s.style == Style::kLinePoints;
-      if (pass == 0 && s.style == Style::kBand) o += band(p, f, s, c);
-      if (pass == 1 && s.style == Style::kBars) o += bars(p, f, s, c);
-      if (pass == 2 && line) o += polyline(p, f, s, c);
-      if (pass == 2 && points) o += markers(p, f, s, c);
+      if (pass == 0 && s.style == Style::kBand) o += band(p, f, s, k, c);
+      if (pass == 1 && s.style == Style::kBars) o += bars(p, f, s, k, c);
+      if (pass == 2 && line) o += polyline(p, f, s, k, c);
+      if (pass == 2 && points) o += markers(p, f, s, k, c);
     }
   }
   return o;
@@ -518,7 +545,8 @@ std::string legend(const Plot& p, const Frame& f) {
     else
       o += fmt::format("<line x1=\"{0}\" y1=\"{2}\" x2=\"{1}\" y2=\"{2}\" stroke=\"{3}\" stroke-width=\"2\"{4}/>",
                        num(lx + 5), num(lx + 21), num(Y - 4), c, s.dashed ? " stroke-dasharray=\"4 3\"" : "");
-    o += fmt::format("<text x=\"{}\" y=\"{}\">{}</text>\n", num(lx + 26), num(Y), escape(s.name));
+    o += fmt::format("<text class=\"legend-entry\" data-series=\"{}\" x=\"{}\" y=\"{}\">{}</text>\n", named[j], num(lx + 26),
+                     num(Y), escape(s.name));
   }
   return o;
 }

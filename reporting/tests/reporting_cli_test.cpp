@@ -195,6 +195,36 @@ TEST_F(Cli, GapChartsFromGapJsonAndChromiumRendersThem) {
   EXPECT_NE(html.find("+nonlinear_k2_z"), std::string::npos);
   EXPECT_NE(html.find("UNIQUE-UNEXPLAINED-STATEMENT"), std::string::npos);
   EXPECT_GE(count(html, "<svg"), 6u);
+  // One "where" chart per dimension: the shares of one dimension add up to 1, not those of all.
+  for (const char* dimension : {"axis", "orientation", "temperature"})
+    EXPECT_EQ(count(html, std::string("aria-label=\"where the gap lies: by ") + dimension + "\""), 1u) << dimension;
+  EXPECT_EQ(html.find("aria-label=\"where the gap lies\""), std::string::npos);
+  // Above the floor: "Unexplained"; at the floor (the paper run's case, 0.886 × floor): "No gap",
+  // never "Unexplained" beside "no gap to explain".
+  EXPECT_NE(html.find("<b>Unexplained:</b> the held-out residual is above the noise floor (held-out RMS 0.112 mg = 2.75 × floor)"),
+            std::string::npos);
+  std::string at_floor = kGapFixture;
+  const std::string un = at_floor.substr(at_floor.find("\"unexplained\""));
+  at_floor.replace(at_floor.find(un), un.size(),
+                   R"("unexplained":{"heldout_rms_mps2":0.00112,"over_floor":0.886,"at_noise_floor":true,)"
+                   R"("statement":"The model as given is at the noise floor: no gap to explain."}})");
+  const std::string steps = at_floor.substr(at_floor.find("\"steps\""), at_floor.find("\"unexplained\"") - at_floor.find("\"steps\""));
+  at_floor.replace(at_floor.find(steps), steps.size(),
+                   R"("steps":[{"step":0,"added":"","heldout_rms_mps2":0.00112,"in_sample_rms_mps2":0.001,"noise_floor_mps2":0.00126}],)"
+                   "\n ");
+  write_text(run / "gap.json", at_floor);
+  ASSERT_EQ(sh("'" + kStend.string() + "' report '" + run.string() + "' --no-db", dir / "gap.log"), 0)
+      << read_text(dir / "gap.log");
+  const std::string floor_html = read_text(run / "report.html");
+  EXPECT_NE(floor_html.find("<b>No gap:</b> the held-out residual is within the noise floor (held-out RMS 0.114 mg = "
+                            "0.886 × floor)"),
+            std::string::npos);
+  // The one-step shrink chart draws its noise floor (a line of one point, as a marker) or does not
+  // name it: every legend entry has a drawn mark.
+  EXPECT_EQ(stend::testing::plot_layout_violations(floor_html), "");
+  EXPECT_EQ(floor_html.find("<b>Unexplained:</b>"), std::string::npos);
+  EXPECT_EQ(stend::testing::verdict_violations(floor_html), "");
+  write_text(run / "gap.json", kGapFixture);
 
   const std::string chromium = find_chromium();
   if (chromium.empty()) GTEST_SKIP() << "chromium is not installed (Debian package 'chromium'): browser check skipped";
@@ -386,11 +416,18 @@ TEST_F(Cli, Px4ExportIsAParamFileWithTheFittedPolynomial) {
   const json tp = json::parse(read_text(dir / "sweep/temp_poly.json"));
   const char* ax = "xyz";
   for (int k = 0; k < 3; ++k) {
-    double bias = NAN, tc1 = NAN;
+    double bias = NAN, tc1 = NAN, scale = NAN;
     for (const auto& p : tp["axes"][static_cast<std::size_t>(k)]["fit"]["parameters"]) {
       if (p["name"] == std::string("bias_") + ax[k]) bias = p["value"].get<double>();
       if (p["name"] == std::string("bias_tc1_") + ax[k]) tc1 = p["value"].get<double>();
+      if (p["name"] == std::string("scale_") + ax[k]) scale = p["value"].get<double>();
     }
+    // The constant scale factor beside the thermal offsets (PX4 corrects (raw − TC offset − OFF)·SCALE):
+    // the offsets are all in TC_*, the scale (planted 2000, −1000, 1500 ppm) in CAL_ACC0_*SCALE.
+    const std::string cal = std::string("CAL_ACC0_") + static_cast<char>('X' + k);
+    EXPECT_EQ(std::stod(params.at(cal + "OFF").first), 0.0);
+    EXPECT_NEAR(std::stod(params.at(cal + "SCALE").first), 1.0 / (1.0 + scale), 1e-6);
+    EXPECT_GT(std::abs(std::stod(params.at(cal + "SCALE").first) - 1.0), 5e-4) << cal;
     // REAL32 parameters: 1e-6 relative.
     EXPECT_NEAR(std::stod(params.at("TC_A0_X0_" + std::to_string(k)).first), bias, 1e-6 * std::abs(bias) + 1e-12);
     EXPECT_NEAR(std::stod(params.at("TC_A0_X1_" + std::to_string(k)).first), tc1, 1e-6 * std::abs(tc1) + 1e-12);
@@ -526,6 +563,9 @@ TEST_F(Cli, EveryPlotOfEveryReportKindKeepsItsLegendOffTheDataAndItsPointsInside
             0)
       << read_text(dir / "layout_compare.log");
   reports["compare"] = dir / "layout_compare.html";
+  // The copy has the paper run's serial: one unit run twice, not two units.
+  EXPECT_NE(read_text(dir / "layout_compare.log").find("1 unit (2 runs)"), std::string::npos)
+      << read_text(dir / "layout_compare.log");
   // An imported dataset without temperature (imucal: accelerometer and gyro counts only).
   const fs::path csv = stend::testing::shared_data("imucal/annotated_session.csv");
   if (fs::exists(csv)) {
@@ -550,13 +590,28 @@ TEST_F(Cli, EveryPlotOfEveryReportKindKeepsItsLegendOffTheDataAndItsPointsInside
     const auto plots = stend::testing::check_plot_layout(html);
     EXPECT_GE(plots.size(), 2u) << kind;
     EXPECT_EQ(stend::testing::plot_layout_violations(html), "") << kind << " (" << file << ")";
-    std::size_t points = 0;
-    for (const auto& p : plots) points += p.points;
-    std::printf("%-12s %2zu plots, %6zu data coordinates checked\n", kind.c_str(), plots.size(), points);
+    std::size_t verdicts = 0;
+    EXPECT_EQ(stend::testing::verdict_violations(html, &verdicts), "") << kind << " (" << file << ")";
+    if (kind.rfind("gap", 0) == 0) {
+      EXPECT_EQ(verdicts, 1u) << kind << ": the gap verdict";
+    }
+    std::size_t points = 0, entries = 0;
+    for (const auto& p : plots) {
+      points += p.points;
+      entries += p.legend_entries;
+    }
+    std::printf("%-12s %2zu plots, %6zu data coordinates, %3zu legend entries, %zu verdicts checked\n", kind.c_str(),
+                plots.size(), points, entries, verdicts);
   }
   // The story each kind tells.
   const std::string paper = read_text(reports["paper"]);
   EXPECT_NE(paper.find("tilt: gravity direction from +z toward"), std::string::npos) << "residual x axis not the tilt";
+  {  // The tilt runs as the experiment states it, 0 … 44°: positive ticks only.
+    const auto at = paper.find("residual against orientation");
+    const std::string svg = paper.substr(at, paper.find("</svg>", at) - at);
+    EXPECT_NE(svg.find(">40</text>"), std::string::npos);
+    EXPECT_EQ(svg.find(">-40</text>"), std::string::npos);
+  }
   EXPECT_NE(paper.find("Recording overview"), std::string::npos);
   EXPECT_NE(paper.find("segment (shaded)"), std::string::npos);
   const std::string temp = read_text(reports["temperature"]);

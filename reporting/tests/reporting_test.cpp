@@ -45,6 +45,31 @@ TEST(Svg, LogTicksAreDecades) {
   EXPECT_EQ(narrow, (std::vector<double>{1, 2, 5, 10, 20}));
 }
 
+// Every legend entry has a drawn mark: a line of one point (the gap's noise floor after one step) is
+// drawn as a marker, a named series with nothing drawable gets no entry; and the check sees a legend
+// entry whose mark is gone.
+TEST(Svg, EveryLegendEntryHasADrawnMark) {
+  figure::Plot p;
+  p.title = "legend";
+  p.series = {{"held-out RMS", figure::Style::kLinePoints, {0}, {0.11}, {}, {}, "", false, 1.0},
+              {"noise floor", figure::Style::kLine, {0}, {0.13}, {}, {}, "", true, 1.0},
+              {"nothing to draw", figure::Style::kLine, {0, 1}, {NAN, NAN}, {}, {}, "", false, 1.0}};
+  const std::string svg = rp::svg::render(p);
+  const auto plots = stend::testing::check_plot_layout(svg);
+  ASSERT_EQ(plots.size(), 1u);
+  EXPECT_EQ(plots[0].legend_entries, 2u);
+  EXPECT_EQ(stend::testing::plot_layout_violations(svg), "");
+  EXPECT_NE(svg.find(">noise floor</text>"), std::string::npos);
+  EXPECT_EQ(svg.find("nothing to draw"), std::string::npos);
+  // The noise floor's marker removed: its legend entry names nothing drawn.
+  const auto marker = svg.find("<circle class=\"d\" data-series=\"1\"");
+  ASSERT_NE(marker, std::string::npos);
+  const std::string without = svg.substr(0, marker) + svg.substr(svg.find('\n', marker) + 1);
+  EXPECT_NE(stend::testing::plot_layout_violations(without).find("legend entry 'noise floor' has no drawn mark"),
+            std::string::npos)
+      << stend::testing::plot_layout_violations(without);
+}
+
 // The layout rule by construction: points where the old in-plot legend sat (top right), a legend
 // too wide for the right side (then below), forced ranges narrower than the data, and long tick,
 // axis and category labels — every point inside the axes and none under the legend.
@@ -229,6 +254,36 @@ TEST(Compare, VendorStatisticsAndRefusal) {
     EXPECT_NE(m.find("Corvid-9"), std::string::npos) << m;
     EXPECT_NE(m.find("Acme-0"), std::string::npos) << m;
   }
+}
+
+// Three runs of one serial are one unit measured three times, not three units: counted by serial
+// in the statistics, the text, the HTML and the JSON; a run without a serial is a unit of its own.
+TEST(Compare, CountsDistinctUnitsBySerialAndSaysWhenRunsRepeatOne) {
+  std::vector<rp::RunResults> runs;
+  for (int i = 0; i < 3; ++i) {
+    runs.push_back(unit("Acme", "7", "fp1", 0.010 + 0.001 * i, 0.001));
+    runs.back().run_name += "-run" + std::to_string(i);
+    runs.back().dir += "-run" + std::to_string(i);
+  }
+  rp::Comparison c = rp::compare_runs(runs);
+  const auto* p = c.find("temp_poly", "bias_z");
+  ASSERT_NE(p, nullptr);
+  ASSERT_EQ(p->vendors.size(), 1u);
+  EXPECT_EQ(p->vendors[0].runs, 3);
+  EXPECT_EQ(p->vendors[0].units, 1);
+  EXPECT_EQ(p->vendors[0].count_text(), "1 unit (3 runs)");
+  const std::string text = rp::comparison_text(c);
+  EXPECT_NE(text.find("1 unit (3 runs)"), std::string::npos) << text;
+  EXPECT_EQ(text.find("3/3 units"), std::string::npos) << text;
+  EXPECT_NE(rp::comparison_html(c).find("<td>1 unit (3 runs)</td>"), std::string::npos);
+  const nlohmann::json j = rp::comparison_json(c);
+  EXPECT_EQ(j["parameters"][0]["vendors"][0]["units"], 1);
+  EXPECT_EQ(j["parameters"][0]["vendors"][0]["runs"], 3);
+
+  runs.push_back(unit("Acme", "8", "fp1", 0.013, 0.001));
+  runs.push_back(unit("Acme", "", "fp1", 0.011, 0.001));
+  c = rp::compare_runs(runs);
+  EXPECT_EQ(c.find("temp_poly", "bias_z")->vendors[0].count_text(), "3 units (5 runs)");
 }
 
 TEST(Results, JsonRoundTrip) {

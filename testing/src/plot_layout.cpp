@@ -3,6 +3,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <set>
 #include <sstream>
 
 namespace stend::testing {
@@ -105,6 +106,19 @@ void check_texts(PlotLayout& p, const std::string& svg) {
   }
 }
 
+// Every legend entry (<text class="legend-entry" data-series="K">) names a series with a drawn mark.
+void check_legend_entries(PlotLayout& p, const std::string& svg, const std::set<std::string>& drawn) {
+  const std::string open = "<text class=\"legend-entry\"";
+  for (auto at = svg.find(open); at != std::string::npos; at = svg.find(open, at + 1)) {
+    const auto end = svg.find('>', at), close = svg.find("</text>", at);
+    if (end == std::string::npos || close == std::string::npos) break;
+    ++p.legend_entries;
+    const std::string series = attribute(svg.substr(at, end + 1 - at), "data-series");
+    if (series.empty() || !drawn.count(series))
+      p.violations.push_back("legend entry '" + svg.substr(end + 1, close - end - 1) + "' has no drawn mark");
+  }
+}
+
 PlotLayout check_svg(const std::string& svg) {
   PlotLayout p;
   const std::string open = svg.substr(0, svg.find('>'));
@@ -122,18 +136,25 @@ PlotLayout check_svg(const std::string& svg) {
     if (p.legend[2] > p.width || p.legend[3] > p.height) p.violations.push_back("the legend box leaves the picture");
   }
   // Data elements: <circle|rect|polyline|polygon|path class="d" …> (scanned, not matched with
-  // std::regex, whose recursion overflows the stack on a long polyline under ASan).
+  // std::regex, whose recursion overflows the stack on a long polyline under ASan). A mark is
+  // drawn when it has a point (a line, two): the series it belongs to (data-series) shows.
+  std::set<std::string> drawn;
   for (auto at = svg.find('<'); at != std::string::npos; at = svg.find('<', at + 1)) {
     const auto end = svg.find('>', at);
     if (end == std::string::npos) break;
     const std::string tag = svg.substr(at, end + 1 - at);
     for (const char* name : {"circle", "rect", "polyline", "polygon", "path"}) {
       if (tag.rfind("<" + std::string(name) + " class=\"d\"", 0) == 0) {
-        for (const auto& [x, y] : coordinates(tag)) check_point(p, x, y);
+        const auto xy = coordinates(tag);
+        for (const auto& [x, y] : xy) check_point(p, x, y);
+        const bool line = tag.rfind("<polyline", 0) == 0 || tag.rfind("<path", 0) == 0;
+        if (xy.size() >= (line ? 2u : 1u)) drawn.insert(attribute(tag, "data-series"));
         break;
       }
     }
   }
+  check_legend_entries(p, svg, drawn);
+  if (p.has_legend && p.legend_entries == 0) p.violations.push_back("a legend box without legend entries");
   check_texts(p, svg);
   return p;
 }
@@ -160,6 +181,31 @@ std::string plot_layout_violations(const std::string& html) {
       if (++shown <= 5) o << p.title << ": " << v << "\n";
     if (p.violations.size() > 5) o << p.title << ": … " << p.violations.size() - 5 << " more\n";
   }
+  return o.str();
+}
+
+std::string verdict_violations(const std::string& html, std::size_t* count) {
+  std::ostringstream o;
+  std::size_t n = 0;
+  for (const char* heading : {"Unexplained:", "No gap:", "Explained:"}) {
+    const std::string open = std::string("<p><b>") + heading + "</b>";
+    for (auto at = html.find(open); at != std::string::npos; at = html.find(open, at + 1)) {
+      const auto end = html.find("</p>", at);
+      const std::string text = html.substr(at, end == std::string::npos ? std::string::npos : end - at);
+      ++n;
+      const auto times = text.find(" × floor");
+      const auto start = times == std::string::npos ? std::string::npos : text.rfind(' ', times - 1);
+      const double ratio = start == std::string::npos ? -1.0 : std::atof(text.c_str() + start + 1);
+      const bool unexplained = std::string(heading) == "Unexplained:";
+      const bool says_none = text.find("no gap to explain") != std::string::npos ||
+                             text.find("What remains is at the noise floor") != std::string::npos;
+      const bool says_unexplained = text.find("UNEXPLAINED") != std::string::npos;
+      if (ratio < 0) o << heading << " no 'R × floor' in: " << text << "\n";
+      else if (unexplained && (ratio <= 1.0 || says_none)) o << "an 'Unexplained' verdict at the floor: " << text << "\n";
+      else if (!unexplained && (ratio > 2.0 || says_unexplained)) o << "a '" << heading << "' verdict above the floor: " << text << "\n";
+    }
+  }
+  if (count) *count = n;
   return o.str();
 }
 

@@ -2,6 +2,7 @@
 #include <stend/allan/deviation_report.hpp>
 #include <stend/errors.hpp>
 #include <stend/physics/units.hpp>
+#include <stend/processing/stationarity.hpp>
 
 #include <Eigen/Dense>
 #include <fmt/format.h>
@@ -371,6 +372,28 @@ std::vector<ChannelResult> analyze_channels(const SampleSource& src, IndexRange 
   return out;
 }
 
+// The stationarity check of the range (stend/processing/stationarity.hpp): why it is no noise
+// record, with what to do instead, into report.not_still; a warning when it is too short to judge.
+void check_still(const SampleSource& src, IndexRange range, double rate_hz, bool has_gyro, AllanReport& report) {
+  const processing::Stationarity s = processing::check_stationarity(src, range, rate_hz, has_gyro);
+  if (!s.judged)
+    report.warnings.push_back(fmt::format(
+        "the record is too short to check that it is still ({} blocks of {} s; the check needs {})", s.blocks,
+        processing::kStationarityBlockS, processing::kMinStationarityIncrements + 1));
+  if (s.still()) return;
+  const bool moves = std::any_of(s.stretches.begin(), s.stretches.end(),
+                                 [](const auto& m) { return m.mover != processing::Mover::kTemperature; });
+  const std::string window =
+      moves && std::isfinite(s.still_start_s)
+          ? fmt::format("give a still stretch as the model's window (allan: t_begin_s: {:.1f}, t_end_s: {:.1f} is "
+                        "the longest one) or a still log",
+                        s.still_start_s, s.still_end_s)
+          : std::string("give a log at a steady temperature, or a window of it (allan: t_begin_s, t_end_s) where "
+                        "the temperature holds");
+  report.not_still = fmt::format("the record is not still: {}: the Allan deviation needs a still record — {}",
+                                 s.describe(), window);
+}
+
 }  // namespace
 
 AllanReport analyze_recording(const Recording& rec, const AllanOptions& options) {
@@ -390,6 +413,8 @@ AllanReport analyze_recording(const Recording& rec, const AllanOptions& options)
   report.t_end_s = sampling.t_end_s;
   report.rate_hz = sampling.rate_hz;
   add_sampling_warnings(sampling, report);
+  check_still(src, range, sampling.rate_hz, rec.header.info.has_gyro, report);
+  if (!report.not_still.empty()) return report;
   const int channels = rec.header.info.has_gyro ? 6 : 3;
   AllanOptions opt = options;
   if (std::isnan(opt.lowpass_hz)) opt.lowpass_hz = stated_lowpass_hz(rec);
@@ -487,6 +512,7 @@ std::ostream& operator<<(std::ostream& os, const AllanReport& r) {
   os << fmt::format("Allan analysis of {}: {} samples at {:.6g} Hz, t = {:.6g} … {:.6g} s\n",
                     r.source, r.samples, r.rate_hz, r.t_begin_s, r.t_end_s);
   for (const auto& w : r.warnings) os << "WARNING: " << w << "\n";
+  if (!r.not_still.empty()) return os << "FAILED — " << r.not_still << "\n";
   for (const auto& c : r.channels) os << "\n" << c;
   os << "\n";
   write_summary_table(os, r);
@@ -617,6 +643,7 @@ void write_json(std::ostream& os, const AllanReport& r, int indent) {
             {"warnings", r.warnings},
             {"channels", ch},
             {"kalibr", to_json(r.kalibr)}};
+  if (!r.not_still.empty()) j["message"] = r.not_still;
   os << j.dump(indent) << "\n";
 }
 

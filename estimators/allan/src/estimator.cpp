@@ -150,6 +150,8 @@ estimation::FitResult fit_typed(const EstimatorRequest& req) {
   const AllanOptions options = options_from_yaml(root["allan"], req.model_file);
   const DeviationRequest deviations = deviations_from_yaml(root["allan"], req.model_file);
   const AllanReport report = analyze_recording(*req.recording, options);
+  if (!report.not_still.empty())
+    return estimation::failed_fit(kEstimatorName, kEstimatorVersion, "allan: " + report.not_still);
   if (report_failed(report)) {  // says which channel failed and why; no numbers
     std::string why;
     for (const auto& c : report.channels)

@@ -20,6 +20,11 @@ namespace detail {
 void estimate_gyro_bias(CalibrationResult& r, const CalibrationOptions& o) {
   r.gyro_bias.clear();
   if (!o.estimate_gyro_bias) return;
+  if (without_spread(r.intervals, true)) {  // no gyro readings: no gyro bias at all
+    r.notes.push_back("gyroscope bias not estimated: the intervals' gyro samples do not spread at all (no "
+                      "gyroscope readings, or a table of means), so there is nothing to average");
+    return;
+  }
   const std::size_t n = r.intervals.size();
   const char* ax = "xyz";
   for (int i = 0; i < 3; ++i) {
@@ -41,17 +46,34 @@ void estimate_gyro_bias(CalibrationResult& r, const CalibrationOptions& o) {
     double ss = 0.0;
     for (const auto& iv : r.intervals) ss += (iv.gyro.mean[i] - mean) * (iv.gyro.mean[i] - mean);
     const double se = std::sqrt(ss / (w - 1.0) / w);
-    const double q = estimation::student_t_quantile(0.5 + 0.5 * o.confidence, w - 1.0);
+    const double q = estimation::interval_quantile(o.confidence, w - 1.0);
     p.value = mean;
     p.std_error = se;
     p.lower = mean - q * se;
     p.upper = mean + q * se;
     p.identifiable = true;
-    estimation::judge(p, o.tolerances);
+    estimation::judge(p, o.tolerances, {o.confidence, q});
     if (p.verdict == estimation::Verdict::kDetermined)
       p.reason = "mean over static intervals (includes Earth rotation projected on the axis)";
     r.gyro_bias.push_back(p);
   }
+}
+
+HeldOutNormError held_out(const std::vector<processing::StaticPoint>& intervals, const std::vector<double>& g_mps2,
+                          const std::function<CalibrationResult(std::size_t k)>& fit_without) {
+  HeldOutNormError h;
+  double ss = 0.0;
+  for (std::size_t k = 0; k < intervals.size(); ++k) {
+    const CalibrationResult r = fit_without(k);
+    const double e = r.ok() ? r.correct(intervals[k].accel.mean).norm() - g_mps2[k] : kNaN;
+    h.error_mps2.push_back(e);
+    if (std::isfinite(e)) {
+      ss += e * e;
+      ++h.predicted;
+    }
+  }
+  if (h.predicted > 0) h.rms_mps2 = std::sqrt(ss / h.predicted);
+  return h;
 }
 
 void norm_rms(CalibrationResult& r) {

@@ -173,16 +173,33 @@ void known_axis_rms(const std::vector<processing::StaticPoint>& intervals, const
   axis_rms_against(r, truth, reading, truth);
 }
 
+// The options with a placement sigma only when the intervals' noise is known: whitening by the
+// noise of a mean needs a spread of the samples, and a table of means has none (its standard errors
+// would come out of the 1e-6 m/s^2 floor). Without one the residuals are unweighted and the
+// covariance comes from their scatter (σ² = RSS/(n − p), Student t), said in r.notes.
+CalibrationOptions without_unknown_noise(const CalibrationOptions& o, const std::vector<processing::StaticPoint>& intervals,
+                                         CalibrationResult& r) {
+  if (!(o.orientation_sigma_deg > 0.0) || !without_spread(intervals, false)) return o;
+  CalibrationOptions unweighted = o;
+  unweighted.orientation_sigma_deg = 0.0;
+  r.notes.push_back(fmt::format("orientation_sigma_deg {} not used: the intervals' samples do not spread at all (a "
+                                "table of means), so the noise of a mean is unknown; the residuals are unweighted and "
+                                "the standard errors come from their scatter",
+                                o.orientation_sigma_deg));
+  return unweighted;
+}
+
 // Known orientations, shared by the truth-vector and the encoder-angle (offset) variants.
 // `angles` (tilt, rotation deg per interval) and M are used only when offsets are estimated.
 CalibrationResult known_impl(const std::vector<processing::StaticPoint>& intervals, const std::vector<Eigen::Vector3d>& truth_f,
                              const std::vector<std::array<double, 2>>& angles, const Eigen::Matrix3d& M,
-                             const CalibrationOptions& o) {
+                             const CalibrationOptions& options) {
   CalibrationResult r;
   r.method = Method::kKnownOrientations;
   r.model = accelerometer_model();
   r.intervals = intervals;
-  r.gravity_mps2 = known_gravity(truth_f, o);
+  r.gravity_mps2 = known_gravity(truth_f, options);
+  const CalibrationOptions o = without_unknown_noise(options, intervals, r);
   r.whitened = o.orientation_sigma_deg > 0.0;
   const TableOffsets off = table_offsets(o.table_offsets);
   const int p = kFull + off.count();
@@ -238,6 +255,21 @@ CalibrationResult calibrate_accelerometer_known_orientations(const std::vector<p
   if (!o.table_offsets.empty())
     throw std::invalid_argument("table_offsets need the encoder angles: use the recording overload");
   return known_impl(intervals, truth_f, {}, Eigen::Matrix3d::Identity(), o);
+}
+
+HeldOutNormError held_out_norm_error(const std::vector<processing::StaticPoint>& intervals,
+                                     const std::vector<Eigen::Vector3d>& truth_f, const CalibrationOptions& options) {
+  CalibrationOptions o = options;
+  o.estimate_gyro_bias = false;
+  std::vector<double> g;
+  for (const auto& f : truth_f) g.push_back(f.norm());
+  return held_out(intervals, g, [&](std::size_t k) {
+    auto others = intervals;
+    auto others_f = truth_f;
+    others.erase(others.begin() + static_cast<std::ptrdiff_t>(k));
+    others_f.erase(others_f.begin() + static_cast<std::ptrdiff_t>(k));
+    return calibrate_accelerometer_known_orientations(others, others_f, o);
+  });
 }
 
 CalibrationResult calibrate_accelerometer_known_orientations(const Recording& rec, const CalibrationOptions& o) {

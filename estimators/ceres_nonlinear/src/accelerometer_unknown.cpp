@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cstddef>
 
 namespace stend::ceres_nonlinear {
 
@@ -45,11 +46,13 @@ struct DynamicNormCost {
   }
 };
 
-}  // namespace
+// What a fit is for: a calibration (its residual sets its uncertainty, so it needs a degree of
+// freedom left over) or a prediction of a held-out interval (its point estimate only: as many
+// intervals as parameters will do, solved with unit a-priori sigmas whose covariance nobody reads).
+enum class Purpose { kCalibration, kPrediction };
 
-CalibrationResult calibrate_accelerometer_unknown_orientations(const std::vector<processing::StaticPoint>& intervals,
-                                                               double gravity_mps2,
-                                                               const CalibrationOptions& o) {
+CalibrationResult fit_unknown(const std::vector<processing::StaticPoint>& intervals, double gravity_mps2,
+                              const CalibrationOptions& o, Purpose purpose) {
   CalibrationResult r;
   r.method = Method::kUnknownOrientations;
   r.model = accelerometer_model();
@@ -78,7 +81,8 @@ CalibrationResult calibrate_accelerometer_unknown_orientations(const std::vector
     norm_rms(r);
     return r;
   }
-  if (n < p + 1) {
+  const int spare = purpose == Purpose::kCalibration ? 1 : 0;  // intervals beyond the parameters
+  if (n < p + spare) {
     fail_all(r, fmt::format("too few static intervals: {} found, need at least {} for {} accelerometer "
                             "parameters plus one degree of freedom for the noise ({} minimum to "
                             "determine them at all); record more orientations",
@@ -101,9 +105,27 @@ CalibrationResult calibrate_accelerometer_unknown_orientations(const std::vector
     }
     problem.AddResidualBlock(cf, make_loss(o), x.data());
   }
-  solve(problem, x, free_index, n, o, r);
+  solve(problem, x, free_index, n, o, r, purpose == Purpose::kCalibration ? Weighting::kRelative : Weighting::kAPriori);
   norm_rms(r);
   return r;
+}
+
+}  // namespace
+
+CalibrationResult calibrate_accelerometer_unknown_orientations(const std::vector<processing::StaticPoint>& intervals,
+                                                               double gravity_mps2, const CalibrationOptions& o) {
+  return fit_unknown(intervals, gravity_mps2, o, Purpose::kCalibration);
+}
+
+HeldOutNormError held_out_norm_error(const std::vector<processing::StaticPoint>& intervals, double gravity_mps2,
+                                     const CalibrationOptions& options) {
+  CalibrationOptions o = options;
+  o.estimate_gyro_bias = false;
+  return held_out(intervals, std::vector<double>(intervals.size(), gravity_mps2), [&](std::size_t k) {
+    std::vector<processing::StaticPoint> others = intervals;
+    others.erase(others.begin() + static_cast<std::ptrdiff_t>(k));
+    return fit_unknown(others, gravity_mps2, o, Purpose::kPrediction);
+  });
 }
 
 CalibrationResult calibrate_accelerometer_unknown_orientations(const Recording& rec,

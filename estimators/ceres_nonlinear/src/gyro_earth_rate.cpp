@@ -71,6 +71,7 @@ std::vector<int> excited_parameters(const model::ErrorModel& m, const std::array
 void explain_held(CalibrationResult& r, const std::array<bool, 3>& excited) {
   for (auto& p : r.parameters) {
     if (!p.held) continue;
+    p.zero_is_exact = false;  // not a convention: 0 stands for what the Earth rate does not show
     if (p.name.rfind("cross", 0) == 0) {
       p.reason = "held at 0: not estimated by earth_rate (the vertical projection sees a cross-axis term only as "
                  "m_ij + m_ji, and only in tilted positions)";

@@ -366,7 +366,7 @@ bool upstream_covariance(const IntegrationData& d, const CalibrationResult& r1, 
 // S = −(J2ᵀJ2)⁻¹·J2ᵀ·Rz; fills the stage-2 standard errors and bounds in r.
 void add_upstream_uncertainty(const IntegrationData& d, const CalibrationResult& r1, const CalibrationResult& r2,
                               const std::vector<double>& x1, const std::vector<double>& x2,
-                              const estimation::PrecisionTolerances& tolerances, CalibrationResult& r) {
+                              const GyroOptions& go, CalibrationResult& r) {
   Eigen::MatrixXd Cz;
   if (!upstream_covariance(d, r1, Cz)) return;
   const std::size_t na = d.accel.free_index.size();
@@ -397,7 +397,7 @@ void add_upstream_uncertainty(const IntegrationData& d, const CalibrationResult&
     prm.std_error = std::sqrt(std::max(0.0, C(k, k)));
     prm.lower = prm.value - r.quantile * prm.std_error;
     prm.upper = prm.value + r.quantile * prm.std_error;
-    estimation::judge(prm, tolerances);
+    estimation::judge(prm, go.tolerances, {go.confidence, r.quantile});
   }
 }
 
@@ -481,7 +481,7 @@ CalibrationResult calibrate_gyro_integration(const Recording& rec, const Calibra
   r.status = estimation::FitStatus::kOk;
   r.theta = r1.theta;
   for (int i : kScaleCrossIndex) r.theta[static_cast<std::size_t>(i)] = r2.theta[static_cast<std::size_t>(i)];
-  add_upstream_uncertainty(d, r1, r2, x1, x2, go.tolerances, r);
+  add_upstream_uncertainty(d, r1, r2, x1, x2, go, r);
   std::tie(r.direction_error_rad.before, r.direction_error_axis_rad.before) = gravity_mismatch(
       d, r.model, std::vector<double>(static_cast<std::size_t>(r.model.size()), 0.0), true, &r.moves, false);
   std::tie(r.direction_error_rad.after, r.direction_error_axis_rad.after) =

@@ -1,5 +1,6 @@
 // A model-file fit as its parts (see parts.hpp).
 #include "parts.hpp"
+#include "report.hpp"
 
 #include <utility>
 #include <vector>
@@ -34,6 +35,9 @@ void conclude(ModelFileFit& f) {
       f.notes.push_back(std::string(p->is_gyroscope() ? "gyroscope" : "accelerometer") + ": " +
                         estimation::status_text(p->status) + " — " + p->message);
   }
+  if (f.has_accel && f.accel.ok())
+    if (const std::string caveat = norm_check_caveat(f.accel); !caveat.empty())
+      f.notes.push_back("accelerometer: the calibrated RMS of |a| - g over the intervals is " + caveat);
   f.status = estimation::combined_status(statuses);
   if (f.status == estimation::FitStatus::kNotApplicable && f.message.empty())
     for (const auto& n : f.notes) f.message += (f.message.empty() ? "" : "; ") + n;

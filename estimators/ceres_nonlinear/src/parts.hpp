@@ -15,7 +15,9 @@ namespace stend::ceres_nonlinear::detail {
 CalibrationResult not_applicable_part(model::ErrorModel model, const std::string& why);
 
 // f.status from its parts', each not applicable part named in f.notes ("gyroscope: not applicable
-// — why"), and f.message from them when no part applies (a failure's message is the caller's).
+// — why"), then the accelerometer's |a| − g check when it is no measure of accuracy
+// (norm_check_caveat), and f.message from them when no part applies (a failure's message is the
+// caller's).
 void conclude(ModelFileFit& f);
 
 // The report's last line: "ceres_nonlinear: ok", "…: FAILED — why" or "…: not applicable — why",

@@ -51,6 +51,31 @@ const AxisRms& reported_axis_rms(const CalibrationResult& r) {
   return r.truth_error_axis;
 }
 
+int norm_check_dof(const CalibrationResult& r) {
+  const int magnitudes = static_cast<int>(r.intervals.size());
+  if (r.method == Method::kKnownOrientations && r.whitened) {
+    int bias_scale = 0;
+    for (const auto& p : r.parameters)
+      bias_scale += !p.held && (p.name.rfind("bias_", 0) == 0 || p.name.rfind("scale_", 0) == 0);
+    return magnitudes - bias_scale;
+  }
+  return r.dof;
+}
+
+std::string norm_check_caveat(const CalibrationResult& r) {
+  const int dof = norm_check_dof(r);
+  const int fitted = static_cast<int>(r.intervals.size()) - dof;
+  if (dof <= 0)
+    return fmt::format("zero by construction ({} magnitudes for {} parameters fitted to them): no check of the "
+                       "calibration",
+                       r.intervals.size(), fitted);
+  if (dof < estimation::kFewDegreesOfFreedom)
+    return fmt::format("fitted to these {} magnitudes by {} parameters, {} degree{} of freedom left: no measure of "
+                       "accuracy",
+                       r.intervals.size(), fitted, dof, dof == 1 ? "" : "s");
+  return {};
+}
+
 std::string fmt_num(double v) { return std::isfinite(v) ? fmt::format("{:.6g}", v) : "—"; }
 
 const char* interval_kind(Method m) {
@@ -131,8 +156,10 @@ std::string CalibrationResult::report() const {
   const Eigen::Vector3d& before = axis.before;
   if (detection) s += detection->print() + "\n";
   if (!gyro) {
-    s += fmt::format("RMS of |a| - g over the intervals: raw {} m/s^2, calibrated {} m/s^2\n",
-                     fmt_num(norm_error_mps2.before), fmt_num(norm_error_mps2.after));
+    const std::string caveat = ok() ? norm_check_caveat(*this) : std::string();
+    s += fmt::format("RMS of |a| - g over the intervals: raw {} m/s^2, calibrated {} m/s^2{}\n",
+                     fmt_num(norm_error_mps2.before), fmt_num(norm_error_mps2.after),
+                     caveat.empty() ? "" : " — " + caveat);
     s += fmt::format("residual RMS per axis (x y z), calibrated: {} {} {} m/s^2 = {} {} {} mg; raw: {} {} {} mg\n",
                      fmt_num(after[0]), fmt_num(after[1]), fmt_num(after[2]),
                      fmt_num(after[0] / physics::kMilliG), fmt_num(after[1] / physics::kMilliG),

@@ -15,6 +15,15 @@ const Rms& reported_rms(const CalibrationResult& r);
 // (known orientations, rate table), the gravity-direction mismatch (integration).
 const AxisRms& reported_axis_rms(const CalibrationResult& r);
 
+// The degrees of freedom of an accelerometer fit's |a| − g check: the intervals' magnitudes less the
+// parameters fitted to them — all of an unknown-orientations fit's; with a placement sigma a
+// known-orientation fit fits the magnitudes apart from the directions, by its biases and scales (6);
+// without one it fits whole vectors, and the check has the fit's own dof.
+int norm_check_dof(const CalibrationResult& r);
+// Why an accelerometer fit's calibrated |a| − g is no measure of its accuracy: zero by construction
+// (norm_check_dof ≤ 0) or resting on fewer than estimation::kFewDegreesOfFreedom; "" otherwise.
+std::string norm_check_caveat(const CalibrationResult& r);
+
 // A number in the report: %.6g, "—" for NaN.
 std::string fmt_num(double v);
 

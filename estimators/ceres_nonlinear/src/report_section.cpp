@@ -158,7 +158,6 @@ estimation::ReportSection report_section(const estimation::FitResult& result) {
   section.add(estimation::parameter_table(s));
   for (const auto& n : s.notes) section.add_text("note: " + n);
   if (fit.contains("accelerometer")) section.append(norm_figure(fit["accelerometer"]));
-  for (const auto& n : s.notes) section.add_text("note: " + n);
   if (fit.contains("gyroscope")) {
     section.append(move_figure(fit["gyroscope"]));
     section.append(turn_figure(fit["gyroscope"]));

@@ -17,6 +17,13 @@ namespace {
 
 using nlohmann::json;
 
+// Whether a held parameter's 0 is exact ("zero_is_exact"; documents written before that key: the
+// frame convention's reason).
+bool zero_is_exact(const json& p) {
+  if (p.contains("zero_is_exact")) return p.value("zero_is_exact", false);
+  return p.value("reason", "").find("frame convention") != std::string::npos;
+}
+
 // The parameters of a part's list ("parameters" or "gyro_parameters"): the summary fields (the
 // interval under "ci95"), a parameter held at 0 by construction ("fixed") marked held.
 std::vector<estimation::ParameterEstimate> part_parameters(const json& list) {
@@ -29,6 +36,7 @@ std::vector<estimation::ParameterEstimate> part_parameters(const json& list) {
   for (std::size_t i = 0; i < out.size(); ++i)
     if (list[i].value("fixed", false)) {
       out[i].held = true;
+      out[i].zero_is_exact = zero_is_exact(list[i]);
       out[i].value = out[i].std_error = out[i].lower = out[i].upper = 0.0;
     }
   return out;

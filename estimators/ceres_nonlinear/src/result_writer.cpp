@@ -48,6 +48,14 @@ nlohmann::json detection_json(const processing::DetectionSummary& d) {
           {"rejected", rejected}};
 }
 
+// The fit's degrees of freedom in the summary: the fewest of its fitted parts'; null when none was fitted.
+json fewest_dof(const ModelFileFit& f) {
+  json fewest = nullptr;
+  for (const CalibrationResult* p : {f.has_accel ? &f.accel : nullptr, f.has_gyro ? &f.gyro : nullptr})
+    if (p != nullptr && p->ok() && (fewest.is_null() || p->dof < fewest.get<int>())) fewest = p->dof;
+  return fewest;
+}
+
 }  // namespace
 
 std::string CalibrationResult::to_json() const {
@@ -55,7 +63,8 @@ std::string CalibrationResult::to_json() const {
     return json{{"name", p.name}, {"unit", p.unit}, {"value", num(p.value)},
                 {"std_error", num(p.std_error)}, {"ci95", {num(p.lower), num(p.upper)}},
                 {"identifiable", p.identifiable}, {"verdict", estimation::to_string(p.judged())},
-                {"tolerance", num(p.tolerance)}, {"fixed", p.held}, {"reason", p.reason}};
+                {"tolerance", num(p.tolerance)}, {"fixed", p.held}, {"zero_is_exact", p.zero_is_exact},
+                {"reason", p.reason}};
   };
   json j;
   j["ok"] = ok();
@@ -144,7 +153,7 @@ std::string results_document(const ModelFileOptions& o, const ModelFileFit& f) {
     j["parameters"].push_back({{"name", name}, {"unit", p.unit}, {"value", num(p.value)}, {"std_error", num(p.std_error)},
                                {"interval", {num(p.lower), num(p.upper)}}, {"identifiable", p.identifiable},
                                {"verdict", estimation::to_string(p.judged())}, {"tolerance", num(p.tolerance)},
-                               {"fixed", p.held}, {"reason", p.reason}});
+                               {"fixed", p.held}, {"zero_is_exact", p.zero_is_exact}, {"reason", p.reason}});
   };
   if (f.has_accel) {
     for (const auto& p : f.accel.parameters) add("accel_", p);
@@ -154,7 +163,10 @@ std::string results_document(const ModelFileOptions& o, const ModelFileFit& f) {
     for (const auto& p : f.gyro.parameters) add("gyro_", p);
   j["status"] = estimation::to_string(f.status);
   j["message"] = f.message;
-  j["notes"] = f.notes;  // the parts not applicable, then what the gyroscope's procedure says
+  j["dof"] = fewest_dof(f);
+  j["notes"] = f.notes;  // the parts not applicable, the accelerometer's check and remarks, the gyroscope's
+  if (f.has_accel)
+    for (const auto& n : f.accel.notes) j["notes"].push_back("accelerometer: " + n);
   if (f.has_gyro) {
     const bool a_priori = f.gyro.method == Method::kTurns || f.gyro.method == Method::kEarthRate;
     if (a_priori && f.gyro.ok())  // the intervals' source is not the usual σ² = RSS/(n − p): say so

@@ -168,7 +168,7 @@ void fill_parameters(ceres::Problem& problem, std::vector<double>& x, const std:
     prm.lower = prm.value - r.quantile * prm.std_error;
     prm.upper = prm.value + r.quantile * prm.std_error;
     prm.identifiable = true;
-    estimation::judge(prm, o.tolerances);
+    estimation::judge(prm, o.tolerances, {o.confidence, r.quantile});
   }
   r.status = estimation::FitStatus::kOk;
 }
@@ -215,6 +215,7 @@ void init_parameters(CalibrationResult& r, const std::vector<int>& free_index) {
       p.value = p.std_error = p.lower = p.upper = 0.0;
       p.identifiable = false;
       p.reason = "held at 0 (frame convention: a rotation is unobservable with unknown orientations)";
+      p.zero_is_exact = true;  // the calibrated output is the same in any frame of the convention
     }
     r.parameters.push_back(p);
   }
@@ -270,8 +271,7 @@ void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<in
   const double chi2 = r.dof > 0 ? rss / r.dof : 1.0;
   const bool scaled = r.dof > 0 && (weighting != Weighting::kAPrioriAtLeast || chi2 > 1.0);
   const double variance_factor = scaled ? chi2 : 1.0;
-  r.quantile = scaled ? estimation::student_t_quantile(0.5 + 0.5 * o.confidence, r.dof)
-                      : estimation::normal_quantile(0.5 + 0.5 * o.confidence);
+  r.quantile = estimation::interval_quantile(o.confidence, scaled ? r.dof : estimation::kAPrioriDof);
   r.uncertainty += (r.uncertainty.empty() ? "" : "; ") + covariance_source(weighting, chi2, r.dof);
   fill_parameters(problem, x, free_index, o, variance_factor, r);
 }
@@ -285,6 +285,14 @@ double noise_correlation_factor(const std::vector<processing::StaticPoint>& poin
     correlated += v.correlated_std_error.squaredNorm();
   }
   return white > 0.0 ? std::max(1.0, std::sqrt(correlated / white)) : 1.0;
+}
+
+bool without_spread(const std::vector<processing::StaticPoint>& ivs, bool gyro) {
+  for (const auto& iv : ivs) {
+    const processing::AxesValue& v = gyro ? iv.gyro : iv.accel;
+    if (!v.sample_std.allFinite() || (v.sample_std.array() > 1e-12 * v.mean.array().abs()).any()) return false;
+  }
+  return !ivs.empty();
 }
 
 bool finite_intervals(const std::vector<processing::StaticPoint>& ivs) {

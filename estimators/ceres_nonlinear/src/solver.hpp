@@ -85,6 +85,13 @@ double noise_correlation_factor(const std::vector<processing::StaticPoint>& poin
 // Whether every interval's accelerometer and gyro means are finite.
 bool finite_intervals(const std::vector<processing::StaticPoint>& intervals);
 
+// Whether the intervals' samples of the instrument (gyro or accelerometer) do not spread at all
+// (every sample std known and zero, but for rounding: below 1e-12 of the mean): as in a table of
+// means (each row's mean held, stend::io::import_static_table), or for an instrument the recording
+// holds no samples of. Without a spread the noise of a mean is unknown: standard errors then come
+// from the residual scatter, never from a spread of zero. False for no intervals.
+bool without_spread(const std::vector<processing::StaticPoint>& intervals, bool gyro);
+
 // Per-axis RMS of reading − truth, raw and calibrated with r's θ (f: the specific force of each
 // interval for the model's g-sensitivity; truth when empty) into r.truth_error_axis.
 void axis_rms_against(CalibrationResult& r, const std::vector<Eigen::Vector3d>& truth,

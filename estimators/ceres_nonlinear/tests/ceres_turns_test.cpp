@@ -233,7 +233,7 @@ TEST(CeresEarthRate, Mpu6050GradeGyroGivesAnImpreciseScale) {
   EXPECT_EQ(s.judged(), estimation::Verdict::kImprecise) << r.report();
   EXPECT_GT(s.std_error, 0.01);  // more than 1 %: the Earth rate is below the noise of the means
   EXPECT_GT(s.upper - s.lower, 0.04);
-  EXPECT_NE(s.reason.find("exceeds the tolerance"), std::string::npos) << s.reason;
+  EXPECT_NE(s.reason.find("exceeds 1.96 × the tolerance"), std::string::npos) << s.reason;
 }
 
 TEST(CeresEarthRate, OnlyUpPositionsOrNoLatitudeFail) {

@@ -39,7 +39,7 @@ TempPolyOptions parse_options(const std::string& yaml_text, const std::string& f
   }
   TempPolyOptions o;
   std::vector<std::string> keys = {"instrument", "axes", "selection", "max_order", "order", "reference_c",
-                                   "min_span_c", "level_tolerance_c", "bias_temperature", "scale_temperature",
+                                   "min_span_c", "level_tolerance_c", "scale", "bias_temperature", "scale_temperature",
                                    "cross_axis", "confidence", estimation::kTolerancesKey};
   keys.insert(keys.end(), processing::kOptionKeys.begin(), processing::kOptionKeys.end());
   yaml::MapReader top(root, f, "", "temp_poly options", keys);
@@ -71,6 +71,7 @@ TempPolyOptions parse_options(const std::string& yaml_text, const std::string& f
   if (o.min_span_c < 0) top.fail_value("min_span_c", "min_span_c must be ≥ 0");
   o.level_tolerance_c = top.number("level_tolerance_c", o.level_tolerance_c, "in degrees Celsius");
   if (!(o.level_tolerance_c > 0)) top.fail_value("level_tolerance_c", "level_tolerance_c must be > 0");
+  o.scale = top.boolean("scale", o.scale);
   o.bias_temperature = top.boolean("bias_temperature", o.bias_temperature);
   o.scale_temperature = top.boolean("scale_temperature", o.scale_temperature);
   if (!o.bias_temperature && !o.scale_temperature)

@@ -29,7 +29,7 @@ void print_report(std::ostream& os, const TempPolyResult& r) {
   os << "selection: " << o.selection;
   if (o.selection == "fixed") os << ", order " << o.order;
   else os << ", orders 0.." << o.max_order;
-  os << "; terms: bias, scale" << (o.cross_axis ? ", cross_axis" : "")
+  os << "; terms: bias" << (o.scale ? ", scale" : "") << (o.cross_axis ? ", cross_axis" : "")
      << (o.bias_temperature ? ", bias_temperature" : "") << (o.scale_temperature ? ", scale_temperature" : "")
      << "; reference T0 = " << o.reference_c << " degC; min_span_c = " << o.min_span_c << " degC\n";
   if (!r.ok() && r.axes.empty()) {

@@ -37,7 +37,8 @@ std::string str(const json& j, const char* key) { return estimation::text_field(
 std::string g(double v) { return estimation::report_number(v); }
 int axis_index(const std::string& a) { return a == "x" ? 0 : a == "y" ? 1 : a == "z" ? 2 : -1; }
 
-// Display scale and unit of a temp_poly result: mg for an accelerometer, deg/h for a gyroscope.
+// Display scale and unit of a temp_poly result (estimation::display_unit: mg for an accelerometer,
+// deg/s for a gyroscope).
 struct TempDisplay {
   double scale;
   std::string unit;
@@ -194,8 +195,8 @@ ReportSection report_section(const estimation::FitResult& result) {
   const bool accel = str(tp, "unit") != "rad/s";
   // The scale factor is observed by inputs of ≥ 0.1 g (accelerometer) or ≥ 1 deg/s (gyroscope): an
   // Earth-rate or noise-sized input would divide the residual by almost nothing.
-  const TempDisplay d{accel ? 1.0 / physics::kMilliG : 1.0 / physics::kDegPerHour, accel ? "mg" : "deg/h",
-                      accel ? 0.1 * physics::kStandardGravity : physics::kDegPerSecond};
+  const estimation::DisplayUnit du = estimation::display_unit(accel ? "m/s^2" : "rad/s");
+  const TempDisplay d{du.scale, du.unit, accel ? 0.1 * physics::kStandardGravity : physics::kDegPerSecond};
   for (const auto& ax : tp.value("axes", json::array())) add_axis(s, ax, vmin, vmax, d);
   return s;
 }

@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <optional>
+
 #include <cmath>
 
 namespace stend::temp_poly {
@@ -29,6 +31,7 @@ json options_json(const TempPolyOptions& o) {
           {"reference_c", o.reference_c},
           {"min_span_c", o.min_span_c},
           {"level_tolerance_c", o.level_tolerance_c},
+          {"scale", o.scale},
           {"bias_temperature", o.bias_temperature},
           {"scale_temperature", o.scale_temperature},
           {"cross_axis", o.cross_axis},
@@ -134,13 +137,16 @@ estimation::FitSummary summary_of(const json& doc) {
   estimation::FitSummary s = estimation::summary_from_json(doc);
   s.parameters.clear();
   if (!s.ok()) return s;
+  std::optional<int> dof;  // the fewest of the axes' fits
   for (const auto& axis : doc.value("axes", json::array())) {
     if (!axis.contains("fit") || !axis["fit"].is_object()) continue;
     const estimation::FitSummary a = estimation::summary_from_json(axis["fit"]);
     if (!a.ok()) continue;
     if (!std::isfinite(s.confidence)) s.confidence = a.confidence;
     s.parameters.insert(s.parameters.end(), a.parameters.begin(), a.parameters.end());
+    if (a.dof && (!dof || *a.dof < *dof)) dof = a.dof;
   }
+  estimation::state_degrees_of_freedom(s, dof);
   return s;
 }
 
@@ -172,6 +178,7 @@ void merge_axes(const std::vector<estimation::InstrumentModel>& fits, estimation
     p.name = info[i].name;
     p.unit = info[i].unit;
     p.held = true;
+    p.zero_is_exact = true;  // the selection's order, or an axis left uncalibrated
     p.value = p.std_error = p.lower = p.upper = 0.0;
     p.reason = "not in the model its axis chose (a lower temperature order, or the axis not fitted)";
     for (const auto& f : fits)

@@ -325,7 +325,7 @@ estimation::ModelSpec candidate_spec(const TempPolyOptions& o, int order, int ax
   estimation::ModelSpec spec;
   spec.model.instrument = o.instrument;
   spec.model.terms.push_back({model::TermKind::kBias, 1, o.reference_c});
-  spec.model.terms.push_back({model::TermKind::kScale, 1, o.reference_c});
+  if (o.scale) spec.model.terms.push_back({model::TermKind::kScale, 1, o.reference_c});
   if (o.cross_axis) spec.model.terms.push_back({model::TermKind::kCrossAxis, 1, o.reference_c});
   if (order > 0) {
     if (o.bias_temperature)

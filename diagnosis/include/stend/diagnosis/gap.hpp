@@ -44,7 +44,7 @@ struct Candidate {
 
 // All vocabulary terms (except those the model has) as candidates for this instrument; the
 // temperature polynomials are offered at the next orders above what the model has, up to 3.
-std::vector<Candidate> default_candidates(const model::ErrorModel& model);
+std::vector<Candidate> default_candidates(const model::ErrorModel& model, bool temperature_spread = true);
 
 // How the held-out folds are formed: by the segments' orientation, temperature level or ramp
 // direction; auto = temperature with ≥ 3 levels, else orientation.
@@ -118,7 +118,7 @@ struct GapReport {
   std::string message;
   bool magnitude = false;          // one row per segment (|f|): see GapInput::magnitude
   std::string model_name, source, unit, display_unit;
-  double display_per_unit = 1.0;   // mg per m/s² (or deg/h per rad/s)
+  double display_per_unit = 1.0;   // mg per m/s² (or deg/s per rad/s): estimation::display_unit
   estimation::StaticFit fit;       // the model as given
   std::string floor_source;
   Eigen::Vector3d floor = Eigen::Vector3d::Constant(kNaN);         // RMS mean std error

@@ -32,7 +32,7 @@ struct SegmentData {
   int orientation = -1;          // index of the distinct orientation (gravity direction) group
   std::string orientation_name;  // "+z up", "-x up", "f=(0.71,0,0.71)g"
   double setpoint_c = kNaN;      // chamber setpoint, NaN when none
-  int temperature_group = -1;    // index of the distinct temperature level (setpoint or die, 2 °C)
+  int temperature_group = -1;    // index of the distinct temperature level (setpoint or die, 2 °C); −1: none
   int ramp_direction = 0;        // +1 approached by heating, −1 by cooling, 0 unknown / first
   double time_since_change_s = kNaN;  // since the last orientation or temperature change
   double averaging_s = 0.0;           // kept window length
@@ -119,10 +119,18 @@ GapInput magnitude_form(GapInput input, double gravity);
 // interval is found or the instrument is a gyroscope (no rate truth to compare with).
 GapInput build_magnitude_input(const Recording& recording, const estimation::ModelSpec& spec);
 
+// Die temperatures closer than this are one temperature level [°C]; static points that do not
+// span two levels have no temperature spread, and no term that reads the temperature is assessed
+// on them (no temperature candidate, no fold by temperature).
+inline constexpr double kTemperatureLevel_c = 2.0;
+
 // The groups of the held-out folds, shared by the recording input and the validation generators:
 // the index of the orientation group named `name` (a new group when unseen), and of the
-// temperature level within 2 °C of t_c [°C] (the last such; a new level when none).
+// temperature level within kTemperatureLevel_c of t_c [°C] (the last such; a new level when none;
+// −1 when t_c is NaN: no temperature recorded).
 int orientation_group(std::map<std::string, int>& groups, const std::string& name);
 int temperature_group(std::vector<double>& levels_c, double t_c);
+// Whether the segments span two temperature levels or more (see kTemperatureLevel_c).
+bool has_temperature_spread(const std::vector<SegmentData>& segments);
 
 }  // namespace stend::diagnosis

@@ -6,9 +6,14 @@
 //   - the design is singular (a singular value of the column-scaled design or Jacobian below
 //     rank_tolerance · σ_max): the combination of parameters the data cannot see is named from the
 //     singular vector ("bias_z + 0.98*scale_z") and the parameters it moves are withheld;
-//   - otherwise every parameter is reported with its standard error and a verdict: kDetermined when
-//     the standard error is within the parameter's precision tolerance, kImprecise when it is
-//     larger (still reported, flagged).
+//   - otherwise every parameter is reported with its standard error and a verdict from its interval:
+//     kDetermined when the interval's half-width at the fit's confidence (quantile × standard error,
+//     the quantile Student t for the fit's degrees of freedom when the variance was estimated from
+//     the residuals, normal when the sigmas are a priori: interval_quantile) is within the tolerance
+//     scaled the same way (z × tolerance, z the normal quantile at that confidence), kImprecise when
+//     it is wider (still reported, flagged). With many degrees of freedom t ≈ z and the rule is the
+//     standard error against the tolerance; with 1 degree of freedom t = 12.7 at 95 %, and a
+//     standard error within the tolerance is still imprecise.
 //
 // The tolerances are stated once, in the units people read (mg, °/s, ppm), and converted to each
 // parameter's SI unit by the parameter's unit string (stend/model/terms.hpp). A model file may
@@ -16,6 +21,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -28,8 +35,8 @@ namespace stend::estimation {
 struct ParameterEstimate;
 
 enum class Verdict {
-  kDetermined,       // standard error within the tolerance (or no tolerance applies)
-  kImprecise,        // reported, but the standard error exceeds the tolerance
+  kDetermined,       // interval within the tolerance's interval (or no tolerance applies)
+  kImprecise,        // reported, but the interval is wider than the tolerance's
   kNotIdentifiable,  // in a singular direction of the design: withheld
 };
 const char* to_string(Verdict v);  // "determined" | "imprecise" | "not identifiable"
@@ -55,11 +62,31 @@ double tolerance_for(const std::string& unit, const PrecisionTolerances& t);
 // The tolerance in display units, e.g. "1 mg", "0.05 deg/s", "1000 ppm"; "" when none applies.
 std::string tolerance_text(const std::string& unit, const PrecisionTolerances& t);
 
-// The verdict of an identified parameter from its standard error (SI, 1 σ).
-Verdict precision_verdict(double std_error, const std::string& unit, const PrecisionTolerances& t);
+// The degrees of freedom of a fit whose sigmas are a priori (its intervals use the normal quantile).
+inline constexpr double kAPrioriDof = std::numeric_limits<double>::infinity();
+// The two-sided quantile of a fit's intervals at `confidence`: Student t with `dof` degrees of
+// freedom when the variance was estimated from the residuals, the normal quantile for kAPrioriDof.
+// NaN for dof ≤ 0 (no residual to estimate a variance from). The one choice of every fit.
+double interval_quantile(double confidence, double dof);
+
+// How a fit formed its intervals: their confidence and the quantile (interval_quantile).
+struct IntervalBasis {
+  double confidence = 0.95;
+  double quantile = NAN;
+};
+
+// The verdict of an identified parameter from its interval: kDetermined when the half-width
+// b.quantile · std_error (SI) is within z · tolerance (z the normal quantile at b.confidence), or
+// when no tolerance applies; else kImprecise (also for a half-width that is not a number).
+Verdict precision_verdict(double std_error, const IntervalBasis& b, const std::string& unit,
+                          const PrecisionTolerances& t);
 // Sets e.tolerance, and for an identified parameter e.verdict and (for kImprecise) e.reason from
-// e.std_error.
-void judge(ParameterEstimate& e, const PrecisionTolerances& t);
+// e.std_error and the fit's interval basis.
+void judge(ParameterEstimate& e, const PrecisionTolerances& t, const IntervalBasis& b);
+
+// Fewer residual degrees of freedom than this are stated as a note in the fit's summary: the
+// residual scatter and the intervals rest on only a few numbers.
+inline constexpr int kFewDegreesOfFreedom = 5;
 
 // A direction in parameter space as text, largest coefficient 1, coefficients below 5 % of it
 // dropped: "bias_z + 0.98*scale_z". `v` in the parameters' own (unscaled) units.

@@ -65,7 +65,11 @@ struct InstrumentModel {
   const ParameterEstimate* find(const std::string& name) const;  // nullptr when absent
   // Standard error of a parameter [its unit]; 0 when the fit did not estimate it.
   double std_error(const std::string& name) const;
-  // Names of the θ entries the fit did not identify (NaN; held ones excluded), in θ order.
+  // Whether the fit determined θ entry i: identified, or held at 0 where 0 is exact
+  // (ParameterEstimate::zero_is_exact). Not: not identified (NaN: not identifiable, aliased), or
+  // held at 0 where 0 is a guess. What `stend apply` refuses and the exports warn about.
+  bool determined(std::size_t i) const;
+  // Names of the θ entries the fit did not determine, in θ order.
   std::vector<std::string> not_identified() const;
   // θ with what the fit did not identify as 0: the values `stend apply` and the exports use
   // (each names the parameters it sets to 0).
@@ -89,6 +93,11 @@ struct InstrumentModel {
 // no gyroscope data: e.g. a CSV without gyro columns); every sensor and importer gives an
 // accelerometer.
 std::string why_absent(const SensorInfo& info, model::Instrument instrument);
+// Why a model with `temperature_terms` (the terms that read the temperature, by name) cannot be
+// fitted on a recording whose sensor `info` describes: "" when it has none or the recording has a
+// temperature (SensorInfo::has_temperature). No coefficient is ever fitted against a temperature
+// that was not measured.
+std::string why_no_temperature(const SensorInfo& info, const std::vector<std::string>& temperature_terms);
 // The model of an instrument absent from the recording: kNotApplicable, `why` its message, no
 // parameters (nothing was fitted).
 InstrumentModel not_applicable(model::ErrorModel model, const std::string& why);

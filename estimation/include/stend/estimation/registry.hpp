@@ -54,6 +54,9 @@ std::string results_file_for(const std::string& results_file, const std::string&
 std::vector<std::string> results_files_of(const std::string& results_file);
 // The instrument a model file's root names ("" when it names none).
 std::string model_instrument(const YAML::Node& model_root);
+// The terms a model file's root names that read the temperature (model::reads_temperature): in its
+// `terms:` list, or temp_poly's switches `bias_temperature: true` / `scale_temperature: true`.
+std::vector<std::string> model_temperature_terms(const YAML::Node& model_root);
 
 struct EstimatorEntry {
   std::string name;          // as in `stend fit --estimator NAME` and the results' "estimator"

@@ -119,9 +119,11 @@ std::ostream& operator<<(std::ostream& os, const ReportSection& s);  // = print
 // A number in a report's text and tables: %.<significant>g, "—" when not finite.
 std::string report_number(double v, int significant = 6);
 
-// The unit a value is shown in by the reports (the run report and the comparison): m/s² as mg,
-// rad/s as deg/h, a dimensionless factor as ppm, a temperature coefficient as its base unit's
-// display per degC^k, any other unit as it is stored (SI inside, readable out).
+// The unit a value is shown in (the one table of display units: the run report, the comparison,
+// the fits' and the gap's text): m/s² as mg, rad/s as deg/s, a dimensionless factor (scale,
+// cross-axis) as ppm, g-sensitivity rad/s/(m/s²) as (deg/s)/g, a temperature coefficient as its
+// base unit's display per degC^k, any other unit as it is stored (SI inside, readable out; JSON
+// stays SI with its unit string).
 struct DisplayUnit {
   double scale = 1.0;  // display value = stored value × scale
   std::string unit;

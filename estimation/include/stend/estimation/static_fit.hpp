@@ -65,7 +65,7 @@ struct StaticFit {
   Eigen::Vector3d residual_rms = Eigen::Vector3d::Constant(kNaN);
   Eigen::Vector3d residual_rms_display = Eigen::Vector3d::Constant(kNaN);
   std::string unit;          // "m/s^2" | "rad/s"
-  std::string display_unit;  // "mg" | "deg/h"
+  std::string display_unit;  // "mg" | "deg/s" (estimation::display_unit)
 };
 
 // Steps 2–4 on given points (extracted, synthetic, or typed from a paper's table): each point's

@@ -10,6 +10,8 @@
 //   ("verdict": "determined" | "imprecise" | "not identifiable", stend/estimation/identifiability.hpp;
 //    "tolerance": the precision tolerance in the parameter's unit, null when none applies)
 //   "confidence": 0.95   (or "solution": {"confidence": …})
+//   "dof": 7   the fit's residual degrees of freedom (or "solution": {"dof": …}); null or absent where
+//              none applies (a noise fit)
 #pragma once
 
 #include <stend/estimation/identifiability.hpp>
@@ -18,6 +20,7 @@
 
 #include <cmath>
 #include <iosfwd>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -55,6 +58,11 @@ struct ParameterEstimate {
   // temperature order the selection did not choose, an axis outside the fit; `reason` says which.
   // A held parameter is not identifiable (it carries no information from the data).
   bool held = false;
+  // Held where applying 0 is right, not a guess: a frame convention (the calibrated output does not
+  // depend on it), a term the model selection left out, a parameter of an axis outside the fit
+  // (left uncalibrated). False where 0 stands for what the data could not see: `stend apply`
+  // refuses such a parameter unless the user states its value (calibration.hpp).
+  bool zero_is_exact = false;
   // The verdict as reported: kNotIdentifiable when not identifiable, else `verdict`.
   Verdict judged() const { return identifiable ? verdict : Verdict::kNotIdentifiable; }
 
@@ -84,11 +92,14 @@ struct FitSummary {
   double confidence = NAN;   // of the intervals
   std::vector<ParameterEstimate> parameters;  // empty when failed
   std::vector<std::string> notes;             // e.g. per-channel failures of an otherwise ok fit
+  // The fit's residual degrees of freedom (observations − estimated parameters; of a fit of
+  // several parts, the fewest of its parts'); nullopt where none applies (a noise fit).
+  std::optional<int> dof;
 
   bool ok() const { return status == FitStatus::kOk; }
   const ParameterEstimate* find(const std::string& name) const;
 
-  // One line: "batch_lsq 0.1.0: ok — 9 parameters, 7 identified", "…: FAILED — why" or
+  // One line: "batch_lsq 0.1.0: ok — 9 parameters, 7 identified, 12 dof", "…: FAILED — why" or
   // "…: not applicable — why".
   std::string BriefReport() const;
   // BriefReport, then the parameter table and the notes.
@@ -96,6 +107,12 @@ struct FitSummary {
   void print(std::ostream& os) const;  // = FullReport
   bool equals(const FitSummary& other, double rel_tol = 1e-9, double abs_tol = 0.0) const;
 };
+
+// What a fit's degrees of freedom say about it, as a note; "" when they are enough (at least
+// kFewDegreesOfFreedom, identifiability.hpp). dof ≤ 0: its residual is zero by construction.
+std::string degrees_of_freedom_note(int dof);
+// Sets s.dof and, when they are few, adds degrees_of_freedom_note to s.notes (once).
+void state_degrees_of_freedom(FitSummary& s, std::optional<int> dof);
 
 // The summary fields of a results document (see the top of this file), written and read in this
 // one place. A failed fit's parameters are not read: it has no numbers. summary_from_json also

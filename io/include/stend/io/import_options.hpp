@@ -47,6 +47,8 @@ struct ImportOptions {
   std::string topic;              // ROS bags
   std::string temperature_topic;  // ROS bags
   int instance = -1;              // ULog / DataFlash; −1 (not given) = the instance with the most samples
+  bool drop_bad_samples{};        // bad samples dropped and counted instead of refused (plausibility.hpp)
+  bool accept_implausible{};      // a still |a| far from 1 g (or |w| beyond any MEMS gyro) imported as it is
   // Every key set, as "key: value" in the order given (the import's provenance states them).
   std::vector<std::string> stated;
 
@@ -69,6 +71,7 @@ enum class ImportKeyType {
   kCharacter,  // one character, "space" or "tab"
   kCount,      // a whole number >= 0
   kBoolean,    // true | false (yes | no, 1 | 0)
+  kSwitch,     // a flag given alone (--KEY: true); in a mapping file true | false
   kNumber,     // a finite number
   kColumn,     // a column: its name, or its 0-based index
   kColumns,    // three columns x,y,z (names or 0-based indices)

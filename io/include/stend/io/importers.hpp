@@ -111,6 +111,7 @@ struct CsvMapping {
   double accel_range_mps2 = 0.0;  // header.info, 0 = unknown
   double gyro_range_radps = 0.0;
   double gravity_mps2 = 0.0;      // 0 = unknown
+  bool drop_bad_samples = false;  // a bad line (stend/io/plausibility.hpp) dropped and counted, not refused
 
   // A positive time scale, a rate >= 0, finite non-zero scales, finite offsets, gravity and
   // ranges >= 0. (Which columns the file has is checked against it when it is read.)

@@ -78,7 +78,8 @@ struct StaticPoint {
   AxesValue accel;       // m/s^2; NaN unless requested
   AxesValue gyro;        // rad/s; NaN unless requested
   // The truth over the kept window as the error model reads it: input and specific_force from
-  // Request::stimulus (0 where not requested), temperature_c [°C] (see temperature_source) and
+  // Request::stimulus (0 where not requested), temperature_c [°C] (see temperature_source; NaN
+  // when the recording has no temperature, header.info.has_temperature false) and
   // temperature_rate_cps [°C/s] (the slope of the die truth over the window, 0 otherwise),
   // time_s the window's mid-time [s]. The other fields are the caller's (the gap diagnosis').
   model::Stimulus<double> stimulus;

@@ -32,10 +32,12 @@ struct UnitValue {
 
 struct VendorStats {
   std::string vendor;  // "vendor model"
-  int units = 0;              // runs with this parameter
-  int identified = 0;         // … where it was identifiable
-  double mean = NAN;          // over identified units
-  double spread_sd = NAN;     // unit-to-unit sample SD (NaN with < 2 units)
+  int runs = 0;               // runs with this parameter
+  int units = 0;              // … of distinct units (by serial; a run without a serial is a unit of its own)
+  int identified = 0;         // runs where it was identifiable
+  double mean = NAN;          // over identified runs
+  double spread_sd = NAN;     // run-to-run sample SD (NaN with < 2 runs): unit-to-unit when each unit ran once
+  std::string count_text() const;  // "3 units", "1 unit (3 runs)"
   double mean_lo = NAN, mean_hi = NAN;  // 95 % interval of the vendor mean
   double median_std_error = NAN;        // typical within-unit 1-σ
 };

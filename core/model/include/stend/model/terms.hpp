@@ -105,6 +105,12 @@ inline bool is_temperature_polynomial(TermKind k) {
   return k == TermKind::kBiasTemperature || k == TermKind::kScaleTemperature;
 }
 
+// The terms that read the die temperature (its value, its rate or the direction it was approached
+// from): none of them can be assessed on a recording without temperature.
+inline bool reads_temperature(TermKind k) {
+  return is_temperature_polynomial(k) || k == TermKind::kThermalLag || k == TermKind::kThermalHysteresis;
+}
+
 struct ParamInfo {
   std::string name;  // "bias_x", "cross_xz", "bias_tc1_y" …
   std::string unit;  // "m/s^2", "1", "rad/s/degC" …

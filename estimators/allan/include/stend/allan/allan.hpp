@@ -115,14 +115,19 @@ struct AllanReport {
   std::vector<ChannelResult> channels;  // ax ay az gx gy gz (gyro only when present)
   KalibrParameters kalibr;
   std::vector<std::string> warnings;    // gaps, irregular sampling, …
+  // Why the selected part of the record is no noise record (it moves, or its temperature drifts:
+  // stend/processing/stationarity.hpp), naming the stretches and the longest still one; then no
+  // channel is analysed. Empty when still.
+  std::string not_still;
 };
 
 // All accelerometer and gyroscope axes of a recording (SI values), within options.t_begin_s …
-// t_end_s. The rate is the header's output rate, or the median sample interval when it is 0.
+// t_end_s, once that part is found still (else `not_still` says where it moves and no channel is
+// analysed). The rate is the header's output rate, or the median sample interval when it is 0.
 AllanReport analyze_recording(const Recording& recording, const AllanOptions& options = {});
 KalibrParameters kalibr_parameters(const std::vector<ChannelResult>& channels, double rate_hz);
-// True when the report has no channel or any channel's model fit failed (a constant or too short
-// signal): JSON status "failed", and the estimator's fit fails (non-zero exit of `stend fit`).
+// True when the report has no channel (a record that is not still) or any channel's model fit
+// failed (a constant or too short signal): JSON status "failed", and the estimator's fit fails (non-zero exit of `stend fit`).
 bool report_failed(const AllanReport& report);
 
 // Text and JSON (the curve, model and channel print themselves: stend/noise/noise_model.hpp).

@@ -207,6 +207,22 @@ CalibrationResult calibrate_accelerometer_unknown_orientations(
     const std::vector<processing::StaticPoint>& intervals, double gravity_mps2,
     const CalibrationOptions& options = {});
 
+// The unknown-orientations fit judged on intervals it was not fitted to (leave one out): each
+// interval left out in turn, the parameters fitted on the others (as few intervals as parameters
+// will do: a prediction needs no residual), and |correct(ȳ_k)| − g of the one left out [m/s^2].
+// The fair figure of a fit whose own |a| − g is (nearly) zero by construction.
+struct HeldOutNormError {
+  std::vector<double> error_mps2;  // per interval; NaN where the fit without it failed
+  double rms_mps2 = std::numeric_limits<double>::quiet_NaN();  // over the finite ones
+  int predicted = 0;                                            // how many are finite
+};
+HeldOutNormError held_out_norm_error(const std::vector<processing::StaticPoint>& intervals, double gravity_mps2,
+                                     const CalibrationOptions& options = {});
+// The same for the known-orientation fit (truth_f[k]: interval k's true specific force [m/s^2];
+// |correct(ȳ_k)| − |truth_f[k]| on the one left out).
+HeldOutNormError held_out_norm_error(const std::vector<processing::StaticPoint>& intervals,
+                                     const std::vector<Eigen::Vector3d>& truth_f, const CalibrationOptions& options = {});
+
 // Truth from the columns f_x_mps2, f_y_mps2, f_z_mps2 (processing's truth mean over each
 // interval; intervals without truth are dropped).
 CalibrationResult calibrate_accelerometer_known_orientations(const Recording& rec,

@@ -41,6 +41,9 @@ struct TempPolyOptions {
   double reference_c = 25.0;      // T0 of the temperature terms [degC]
   double min_span_c = 20.0;       // refuse a temperature span below this [degC]
   double level_tolerance_c = 2.0; // points closer than this (sorted) share a temperature level
+  // Fit the constant scale factor. False for a gyroscope on static positions: its only input there,
+  // the Earth rate, is too small to determine a scale factor (examples/temp_poly_gyroscope.yaml).
+  bool scale = true;
   bool bias_temperature = true;   // fit bias_temperature (k_t of the zero offset)
   bool scale_temperature = true;  // fit scale_temperature (the paper's k_t, k_tt on A_i)
   bool cross_axis = false;        // add the temperature-independent cross_axis term

@@ -1,0 +1,65 @@
+// Whether a record is still enough for a noise analysis (the Allan deviation and its noise-model
+// fit): the one stationarity rule, with its thresholds, used by every command that analyses noise.
+//
+// The samples are summarised in blocks of kStationarityBlockS (at least kMinStationarityBlockSamples
+// samples): per channel the block mean and the spread of the samples inside the block. A record
+// moves where the mean jumps — a turn (the gyroscope far above its noise), a step or a ramp of the
+// accelerometer — and that is told from the slow wanderings the noise model itself contains
+// (random walk, bias instability, rate ramp) by looking at increments: at the scales of 1, 2, 4, …
+// blocks, the difference of adjacent means of that many blocks. Those of a noise process (white,
+// flicker, random walk, a steady ramp) are alike all along the record, so their robust spread
+// (1.4826 × the median absolute increment; never less than the white spread of a block's samples)
+// states what the noise does at that scale; an increment more than kMaxIncrementSigmas times that
+// spread is an event the noise model does not contain. A stretch is named at the finest scale that
+// sees it. Scales are tried while they give at least kMinStationarityIncrements increments.
+//
+// Temperature, where the record has one (NaN = not measured: no check), must stay within
+// kMaxTemperatureDriftC over the record (block means): a sweep changes the sensor's bias, and the
+// Allan deviation would read that drift as noise.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "stend/recording/samples.hpp"
+
+namespace stend::processing {
+
+inline constexpr double kStationarityBlockS = 1.0;             // [s]
+inline constexpr std::size_t kMinStationarityBlockSamples = 16;
+inline constexpr std::size_t kMinStationarityIncrements = 16;  // per scale, for a robust spread
+inline constexpr double kMaxIncrementSigmas = 10.0;            // an increment beyond: the record moves
+inline constexpr double kMaxTemperatureDriftC = 2.0;           // [°C] range of the block means
+
+// What moves: the accelerometer (steps, tilts), the gyroscope (turns) or the temperature (drift).
+enum class Mover { kAccelerometer, kGyroscope, kTemperature };
+
+// One stretch of the record that moves, [t_start_s, t_end_s] in run time [s]; `change` is how far
+// the mean goes from where it stood before the stretch (for the instruments the norm over the
+// three axes: m/s², rad/s), or for the temperature the range of its block means [°C].
+struct MovingStretch {
+  Mover mover = Mover::kAccelerometer;
+  double t_start_s = 0.0, t_end_s = 0.0;
+  double change = 0.0;
+};
+
+struct Stationarity {
+  std::vector<MovingStretch> stretches;  // in time order per mover: accelerometer, gyroscope, temperature
+  // The longest stretch where neither instrument moves [s] (NaN when none was judged).
+  double still_start_s = kNaN, still_end_s = kNaN;
+  std::size_t blocks = 0;  // blocks summarised
+  bool judged = false;     // false: too short to judge (fewer than kMinStationarityIncrements + 1 blocks)
+
+  bool still() const { return stretches.empty(); }
+  // "the accelerometer moves at 36.0–42.0 s (a changes by 2040 mg) and in 8 more stretches up to
+  // 96.0 s; the gyroscope turns at … (by up to 117.3 deg/s); the temperature drifts at 0.0–300.0 s
+  // (by 19.9 °C)" — empty when still.
+  std::string describe() const;
+};
+
+// The rule above over samples [range.first, range.last) of src at rate_hz [Hz]; the gyroscope
+// channels are read only with has_gyro.
+Stationarity check_stationarity(const SampleSource& src, IndexRange range, double rate_hz, bool has_gyro);
+
+}  // namespace stend::processing
