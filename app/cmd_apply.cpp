@@ -115,10 +115,7 @@ void add_apply_command(CLI::App& app, std::vector<Command>& out) {
   a.data.add_to(sub);  // the recording to calibrate: run folder or dataset file, as for `stend fit`
   a.data.add_accept_damaged(sub);
   sub->add_option("-o,--output", a.output, "New run folder for the calibrated recording");
-  sub->add_option("--assume", a.assumptions,
-                  "NAME=VALUE[,NAME=VALUE...]: the value to use for a parameter the fit did not determine (e.g. "
-                  "bias_x=0; accel_bias_x / gyro_bias_x where both instruments have it), in its unit as the results "
-                  "list it; recorded in the calibrated run (repeatable)");
+  sub->add_option("--assume", a.assumptions, kAssumeHelp);
   sub->add_flag("--validate", a.validate,
                 "Validate on the input (a recording the calibration was not fitted to): each check PASS, FAIL or NOT "
                 "CHECKED against its limit; exit 3 unless it passes");

@@ -92,8 +92,12 @@ void add_export_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_flag("--accept-damaged", opt.accept_damaged,
                 "csv: copy the readable part of a damaged run (a truncated file, rows missing against run.json) "
                 "instead of refusing it");
+  static std::vector<std::string> assumptions;
+  sub->add_option("--assume", assumptions, kAssumeHelp);
   add_json_flag(sub, "the files written");
   out.push_back({sub, [] {
+                   for (const auto& text : assumptions)
+                     for (auto& v : estimation::parse_assumptions(text)) opt.assumed.push_back(std::move(v));
                    if (db.empty() && !procedure.empty())
                      throw InputError("stend export --procedure: give the results store with --db LOCATION");
                    if (db.empty() && run.empty()) throw InputError("stend export: give the run folder");

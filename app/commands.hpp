@@ -145,6 +145,12 @@ void add_watch_command(CLI::App& app, std::vector<Command>& out);    // cmd_watc
 // run is said on stderr (the report stands).
 std::filesystem::path write_run_report(const std::filesystem::path& run_dir, const std::string& db = "");
 
+// Help of --assume (stend apply, stend export): a value for a parameter the fit did not determine.
+inline constexpr const char* kAssumeHelp =
+    "NAME=VALUE[,NAME=VALUE...]: the value to use for a parameter the fit did not determine (e.g. bias_x=0; "
+    "accel_bias_x / gyro_bias_x where both instruments have it), in the unit the refusal lists (the results "
+    "file's SI unit: m/s^2, rad/s, 1); recorded (repeatable)";
+
 // ---- the results store (cmd_report.cpp, cmd_db.cpp) -------------------------------------------
 // The help of every command's --db option, written once.
 inline constexpr const char* kDbOptionHelp =

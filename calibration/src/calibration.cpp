@@ -2,6 +2,7 @@
 #include "stend/calibration/calibration.hpp"
 
 #include "stend/errors.hpp"
+#include "stend/estimation/assumption.hpp"
 #include "stend/estimation/model_spec.hpp"
 
 #include <fmt/format.h>
@@ -23,75 +24,13 @@ namespace {
 
 const char* name_of(model::Instrument i) { return estimation::instrument_name(i); }
 
-// A parameter the fit did not determine: its instrument, θ index and estimate (name, unit, why).
-struct Undetermined {
-  model::Instrument instrument;
-  std::size_t index;
-  const estimation::ParameterEstimate* parameter;
-};
-
-// The instrument's prefix in an assumption's name ("accel_bias_x").
-std::string prefix_of(model::Instrument i) { return i == model::Instrument::kAccelerometer ? "accel_" : "gyro_"; }
-
-// Whether assumption `name` names parameter `u` (bare, or with its instrument's prefix).
-bool names(const std::string& name, const Undetermined& u) {
-  return name == u.parameter->name || name == prefix_of(u.instrument) + u.parameter->name;
-}
-
-// The parameters that need a value, one line each, and the --assume that would give them all 0.
-std::string refusal(const std::vector<Undetermined>& open, bool both_instruments) {
-  std::string lines, assume;
-  for (const auto& u : open) {
-    const std::string name = (both_instruments ? prefix_of(u.instrument) : std::string()) + u.parameter->name;
-    lines += fmt::format("\n  {} {} [{}]: {}", name_of(u.instrument), u.parameter->name, u.parameter->unit,
-                         u.parameter->reason.empty() ? "not identifiable" : u.parameter->reason);
-    assume += (assume.empty() ? "" : ",") + name + "=0";
-  }
-  return fmt::format("cannot apply: the fit did not determine {} parameter(s), and applying them as 0 would be a "
-                     "guess:{}\nfit on data that determine them, or state the values to use (each in its unit as "
-                     "listed), e.g. --assume {}",
-                     open.size(), lines, assume);
-}
-
-// θ of the undetermined parameters from the assumptions (each recorded in `cal.assumed`); throws
-// when an assumption names none of them, names two, or one is left without a value.
-void assume(Calibration& c, const std::vector<Undetermined>& open, const std::vector<Assumption>& assumed) {
-  const bool both = c.accel.present() && c.gyro.present();
-  std::vector<bool> given(open.size(), false);
-  for (const auto& a : assumed) {
-    std::vector<std::size_t> hits;
-    for (std::size_t k = 0; k < open.size(); ++k)
-      if (names(a.name, open[k])) hits.push_back(k);
-    if (hits.empty())
-      refuse(c.source, fmt::format("--assume {}: not a parameter the fit left undetermined{}", a.name,
-                                   open.empty() ? " (this calibration has none)" : "; " + refusal(open, both)));
-    if (hits.size() > 1)
-      refuse(c.source, fmt::format("--assume {}: both instruments have it: write {}{} or {}{}", a.name,
-                                   prefix_of(model::Instrument::kAccelerometer), a.name,
-                                   prefix_of(model::Instrument::kGyroscope), a.name));
-    const Undetermined& u = open[hits.front()];
-    given[hits.front()] = true;
-    (u.instrument == model::Instrument::kAccelerometer ? c.accel : c.gyro).theta[u.index] = a.value;
-    c.assumed.push_back(fmt::format("{} {} = {} {} ({})", name_of(u.instrument), u.parameter->name,
-                                    estimation::number_text(a.value, 9), u.parameter->unit,
-                                    u.parameter->reason.empty() ? "not identifiable" : u.parameter->reason));
-  }
-  std::vector<Undetermined> left;
-  for (std::size_t k = 0; k < open.size(); ++k)
-    if (!given[k]) left.push_back(open[k]);
-  if (!left.empty()) refuse(c.source, refusal(left, both));
-}
-
-// The correction of one instrument model: its θ as applied (what the fit did not determine as 0
-// until assumed); the parameters it did not determine appended to `open`.
-InstrumentCalibration build(const estimation::InstrumentModel& m, std::vector<Undetermined>& open) {
+// The correction of one instrument model (its undetermined parameters settled): θ as applied.
+InstrumentCalibration build(const estimation::InstrumentModel& m) {
   InstrumentCalibration ic;
   ic.model = m.model;
   ic.theta = m.applied_theta();
   ic.parameters = m.parameters;
   ic.axes = m.axes;
-  for (std::size_t i = 0; i < m.parameters.size() && i < m.theta.size(); ++i)
-    if (!m.determined(i)) open.push_back({m.instrument(), i, &m.parameters[i]});
   return ic;
 }
 
@@ -129,42 +68,13 @@ void Calibration::print(std::ostream& os) const {
   for (const auto& a : assumed) os << "assumed: " << a << "\n";
 }
 
-std::vector<Assumption> parse_assumptions(const std::string& text) {
-  std::vector<Assumption> out;
-  std::size_t start = 0;
-  while (start <= text.size()) {
-    const std::size_t comma = std::min(text.find(',', start), text.size());
-    const std::string item = text.substr(start, comma - start);
-    const std::size_t eq = item.find('=');
-    Assumption a;
-    bool ok = eq != std::string::npos && eq > 0;
-    if (ok) {
-      a.name = item.substr(0, eq);
-      try {
-        std::size_t used = 0;
-        a.value = std::stod(item.substr(eq + 1), &used);
-        ok = used == item.size() - eq - 1 && std::isfinite(a.value);
-      } catch (const std::exception&) {
-        ok = false;
-      }
-    }
-    if (!ok)
-      throw std::invalid_argument("--assume '" + item +
-                                  "': expected NAME=VALUE (comma-separated), the value a finite number in the "
-                                  "parameter's unit as the results list it, e.g. bias_x=0 or gyro_bias_z=0.001");
-    out.push_back(a);
-    start = comma + 1;
-  }
-  return out;
-}
-
 Calibration calibration_from(const estimation::FitResult& result, const std::string& source,
                              const std::vector<Assumption>& assumed) {
   Calibration c;
   c.source = source;
   c.estimator = result.summary.estimator;
   bool any_model = false, any_applied = false;
-  std::vector<Undetermined> open;
+  std::vector<estimation::InstrumentModel> applied;  // the models applied, settled below
   for (const auto* m : {result.accelerometer ? &*result.accelerometer : nullptr,
                         result.gyroscope ? &*result.gyroscope : nullptr}) {
     if (m == nullptr) continue;
@@ -177,7 +87,7 @@ Calibration calibration_from(const estimation::FitResult& result, const std::str
     }
     for (const auto& f : m->failed_axes)
       c.notes.push_back(fmt::format("axis {}: the fit failed, left uncalibrated", estimation::axis_name(f.axis)));
-    (m->instrument() == model::Instrument::kAccelerometer ? c.accel : c.gyro) = build(*m, open);
+    applied.push_back(*m);
     if (std::isfinite(m->gravity_mps2) && m->instrument() == model::Instrument::kAccelerometer)
       c.gravity_mps2 = m->gravity_mps2;
     if (m->states_temperature_range()) {
@@ -191,7 +101,10 @@ Calibration calibration_from(const estimation::FitResult& result, const std::str
                        " hold no accelerometer or gyroscope model");
   if (!any_applied)
     refuse(source, "this fit failed (" + result.summary.message + "): nothing to apply");
-  assume(c, open, assumed);
+  std::vector<estimation::InstrumentModel*> settle;
+  for (auto& m : applied) settle.push_back(&m);
+  c.assumed = estimation::settle_undetermined(settle, assumed, source, "apply");
+  for (const auto& m : applied) (m.instrument() == model::Instrument::kAccelerometer ? c.accel : c.gyro) = build(m);
   return c;
 }
 

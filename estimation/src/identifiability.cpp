@@ -1,6 +1,7 @@
 // The identifiability rule. See stend/estimation/identifiability.hpp.
 #include "stend/estimation/identifiability.hpp"
 
+#include "stend/estimation/report_section.hpp"
 #include "stend/estimation/summary.hpp"
 #include "stend/sdk.hpp"
 #include "stend/stats/distributions.hpp"
@@ -119,11 +120,12 @@ void judge(ParameterEstimate& e, const PrecisionTolerances& t, const IntervalBas
   e.tolerance = tolerance_for(e.unit, t);
   if (!e.identifiable) return;
   e.verdict = precision_verdict(e.std_error, b, e.unit, t);
-  if (e.verdict == Verdict::kImprecise)
-    e.reason = fmt::format("the {:g} % interval's half-width {:.3g} {} ({:.3g} × the standard error {:.3g}) exceeds "
-                           "{:.3g} × the tolerance {}",
-                           100.0 * b.confidence, b.quantile * e.std_error, e.unit, b.quantile, e.std_error,
-                           tolerance_quantile(b), tolerance_text(e.unit, t));
+  if (e.verdict != Verdict::kImprecise) return;
+  const DisplayUnit du = display_unit(e.unit);  // the row's unit, as the tables show it
+  e.reason = fmt::format("the {:g} % interval's half-width {:.3g} {} ({:.3g} × the standard error {:.3g}) exceeds "
+                         "{:.3g} × the tolerance {}",
+                         100.0 * b.confidence, b.quantile * e.std_error * du.scale, du.unit, b.quantile,
+                         e.std_error * du.scale, tolerance_quantile(b), tolerance_text(e.unit, t));
 }
 
 std::string direction_text(const Eigen::VectorXd& v, const std::vector<std::string>& names) {

@@ -1,6 +1,8 @@
 // The typed estimator result (see stend/estimation/summary.hpp).
 #include "stend/estimation/summary.hpp"
 
+#include "stend/estimation/report_section.hpp"
+
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
@@ -113,12 +115,16 @@ FitStatus combined_status(const std::vector<FitStatus>& parts) {
   return any(FitStatus::kOk) ? FitStatus::kOk : FitStatus::kNotApplicable;
 }
 
+// One row in the parameter's display unit (display_unit: mg, deg/s, ppm, …), as the report's table;
+// the JSON document keeps SI with its unit string.
 void ParameterEstimate::print(std::ostream& os) const {
+  const DisplayUnit du = display_unit(unit);
   if (identifiable)
-    os << fmt::format("{:<18} {:>14.7g} {:<14} {:>11.3g}  [{:.7g}, {:.7g}]  {}{}", name, value, unit, std_error, lower,
-                      upper, to_string(judged()), judged() == Verdict::kImprecise ? ": " + reason : "");
+    os << fmt::format("{:<18} {:>14.7g} {:<14} {:>11.3g}  [{:.7g}, {:.7g}]  {}{}", name, value * du.scale, du.unit,
+                      std_error * du.scale, lower * du.scale, upper * du.scale, to_string(judged()),
+                      judged() == Verdict::kImprecise ? ": " + reason : "");
   else
-    os << fmt::format("{:<18} {:>14} {:<14} {:>11}  {:<26}  NO: {}", name, "not estimated", unit, "-", "-", reason);
+    os << fmt::format("{:<18} {:>14} {:<14} {:>11}  {:<26}  NO: {}", name, "not estimated", du.unit, "-", "-", reason);
 }
 
 std::ostream& operator<<(std::ostream& os, const ParameterEstimate& p) {

@@ -137,3 +137,26 @@ TEST(DisplayUnit, ReportUnitsOfSiUnits) {
   EXPECT_EQ(se::display_unit("1/degC^2").unit, "ppm/degC^2");
   EXPECT_EQ(se::display_unit("s").unit, "s");
 }
+
+// The command line's parameter rows and a verdict's numbers are in the row's display unit (mg,
+// ppm), as the report's table: the results file keeps SI.
+TEST(DisplayUnit, ParameterRowsAndVerdictReasonsUseTheDisplayUnit) {
+  se::ParameterEstimate bias;
+  bias.name = "bias_x";
+  bias.unit = "m/s^2";
+  bias.identifiable = true;
+  bias.value = 2.0 * 9.80665e-3;  // 2 mg
+  bias.std_error = 9.80665e-3;    // 1 mg: a 95 % half-width of 1.96 mg > 1.96 × the 0.5 mg tolerance
+  bias.lower = 0.0;
+  bias.upper = 4.0 * 9.80665e-3;
+  se::PrecisionTolerances tol;
+  tol.accel_bias_mg = 0.5;
+  se::judge(bias, tol, se::IntervalBasis{0.95, 1.959963984540054});
+  ASSERT_EQ(bias.judged(), se::Verdict::kImprecise);
+  EXPECT_NE(bias.reason.find("half-width 1.96 mg (1.96 × the standard error 1)"), std::string::npos) << bias.reason;
+  std::ostringstream row;
+  row << bias;
+  EXPECT_NE(row.str().find(" 2 mg"), std::string::npos) << row.str();
+  EXPECT_NE(row.str().find("[0, 4]"), std::string::npos) << row.str();
+  EXPECT_EQ(row.str().find("m/s^2"), std::string::npos) << row.str();
+}

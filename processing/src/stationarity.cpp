@@ -23,46 +23,6 @@ struct Block {
   std::array<double, kChannels> mean{}, sd{};
 };
 
-double channel_value(const ImuSample& x, int c) {
-  return c < 3 ? x.accel_mps2[c] : c < 6 ? x.gyro_radps[c - 3] : x.temperature_c;
-}
-
-// Blocks of `per_block` consecutive samples of the range (a shorter tail is left out), one pass a
-// chunk at a time. The sums are taken about each block's first sample, against cancellation.
-std::vector<Block> summarise_blocks(const SampleSource& src, IndexRange range, std::size_t per_block) {
-  std::vector<Block> blocks;
-  Block b;
-  std::array<double, kChannels> origin{}, sum{}, sum2{};
-  std::size_t in_block = 0;
-  for_each_chunk(src, range.first, range.last, [&](const ImuSample* chunk, std::size_t n, std::uint64_t) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const ImuSample& x = chunk[i];
-      if (in_block == 0) {
-        b.t_start_s = x.t_s;
-        for (int c = 0; c < kChannels; ++c) origin[c] = channel_value(x, c);
-        sum.fill(0.0);
-        sum2.fill(0.0);
-      }
-      for (int c = 0; c < kChannels; ++c) {
-        const double d = channel_value(x, c) - origin[c];
-        sum[c] += d;
-        sum2[c] += d * d;
-      }
-      if (++in_block < per_block) continue;
-      b.t_end_s = x.t_s;
-      const auto k = static_cast<double>(per_block);
-      for (int c = 0; c < kChannels; ++c) {
-        const double m = sum[c] / k;
-        b.mean[c] = origin[c] + m;
-        b.sd[c] = std::sqrt(std::max(0.0, (sum2[c] - k * m * m) / (k - 1.0)));
-      }
-      blocks.push_back(b);
-      in_block = 0;
-    }
-  });
-  return blocks;
-}
-
 double median(std::vector<double> v) {
   if (v.empty()) return kNaN;
   const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
@@ -261,23 +221,81 @@ std::string Stationarity::describe() const {
   return out;
 }
 
-Stationarity check_stationarity(const SampleSource& src, IndexRange range, double rate_hz, bool has_gyro) {
+BlockSummary::BlockSummary(std::uint64_t samples, double rate_hz)
+    : per_block_(std::max(kMinStationarityBlockSamples, static_cast<std::size_t>(std::llround(kStationarityBlockS * rate_hz)))),
+      blocks_(static_cast<std::size_t>(samples / per_block_)) {}
+
+void BlockSummary::add(Channel c, std::uint64_t offset, const double* x, std::size_t n) {
+  Column& col = columns_[static_cast<std::size_t>(c)];
+  if (!col.added) {
+    for (auto* v : {&col.mean, &col.sd, &col.first, &col.last}) v->assign(blocks_, kNaN);
+    col.added = true;
+  }
+  const auto k = static_cast<double>(per_block_);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint64_t at = offset + i;
+    const auto block = static_cast<std::size_t>(at / per_block_);
+    if (block >= blocks_) return;  // the tail shorter than a block
+    const std::size_t in_block = static_cast<std::size_t>(at % per_block_);
+    if (in_block == 0) {
+      col.origin = col.first[block] = x[i];
+      col.sum = col.sum2 = 0.0;
+    }
+    const double d = x[i] - col.origin;  // about the block's first sample, against cancellation
+    col.sum += d;
+    col.sum2 += d * d;
+    if (in_block + 1 < per_block_) continue;
+    const double m = col.sum / k;
+    col.mean[block] = col.origin + m;
+    col.sd[block] = std::sqrt(std::max(0.0, (col.sum2 - k * m * m) / (k - 1.0)));
+    col.last[block] = x[i];
+  }
+}
+
+void BlockSummary::add_column(const SampleSource& src, IndexRange range, Channel c) {
+  std::vector<double> buf(std::min<std::uint64_t>(kDefaultChunkSamples, std::max<std::uint64_t>(range.size(), 1)));
+  for (std::uint64_t i = range.first; i < range.last;) {
+    const auto take = static_cast<std::size_t>(std::min<std::uint64_t>(buf.size(), range.last - i));
+    src.read_column(c, i, take, buf.data());
+    add(c, i - range.first, buf.data(), take);
+    i += take;
+  }
+}
+
+Stationarity BlockSummary::judge(bool has_gyro) const {
   Stationarity s;
-  const std::size_t per_block = std::max(kMinStationarityBlockSamples,
-                                         static_cast<std::size_t>(std::llround(kStationarityBlockS * rate_hz)));
-  const std::vector<Block> blocks = summarise_blocks(src, range, per_block);
-  s.blocks = blocks.size();
-  if (blocks.size() < kMinStationarityIncrements + 1) return s;
+  s.blocks = blocks_;
+  if (blocks_ < kMinStationarityIncrements + 1) return s;
   s.judged = true;
-  std::vector<char> accel = moving_blocks(blocks, 0, per_block);
-  std::vector<char> gyro = has_gyro ? moving_blocks(blocks, 3, per_block) : std::vector<char>(blocks.size(), 0);
-  add_stretches(blocks, accel, Mover::kAccelerometer, 0, per_block, s.stretches);
-  if (has_gyro) add_stretches(blocks, gyro, Mover::kGyroscope, 3, per_block, s.stretches);
+  std::vector<Block> blocks(blocks_);
+  const auto& time = columns_[static_cast<std::size_t>(Channel::kTime)];
+  for (std::size_t b = 0; b < blocks_; ++b) {
+    blocks[b].t_start_s = time.first[b];
+    blocks[b].t_end_s = time.last[b];
+    for (int c = 0; c < kChannels; ++c) {
+      const Column& col = columns_[static_cast<std::size_t>(c) + 1];  // kAx … kTemperature follow kTime
+      blocks[b].mean[c] = col.added ? col.mean[b] : kNaN;
+      blocks[b].sd[c] = col.added ? col.sd[b] : kNaN;
+    }
+  }
+  std::vector<char> accel = moving_blocks(blocks, 0, per_block_);
+  std::vector<char> gyro = has_gyro ? moving_blocks(blocks, 3, per_block_) : std::vector<char>(blocks.size(), 0);
+  add_stretches(blocks, accel, Mover::kAccelerometer, 0, per_block_, s.stretches);
+  if (has_gyro) add_stretches(blocks, gyro, Mover::kGyroscope, 3, per_block_, s.stretches);
   add_temperature_drift(blocks, s.stretches);
   std::vector<char> either(blocks.size());
   for (std::size_t i = 0; i < blocks.size(); ++i) either[i] = static_cast<char>(accel[i] || gyro[i]);
   longest_still(blocks, either, s);
   return s;
+}
+
+Stationarity check_stationarity(const SampleSource& src, IndexRange range, double rate_hz, bool has_gyro) {
+  BlockSummary summary(range.size(), rate_hz);
+  for (Channel c : {Channel::kTime, Channel::kAx, Channel::kAy, Channel::kAz, Channel::kTemperature})
+    summary.add_column(src, range, c);
+  if (has_gyro)
+    for (Channel c : {Channel::kGx, Channel::kGy, Channel::kGz}) summary.add_column(src, range, c);
+  return summary.judge(has_gyro);
 }
 
 }  // namespace stend::processing

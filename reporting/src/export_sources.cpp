@@ -1,6 +1,8 @@
 // What the exports write from (see export_sources.hpp).
 #include "export_sources.hpp"
 
+#include "stend/estimation/assumption.hpp"
+
 #include "stend/errors.hpp"
 #include "stend/estimation/model_spec.hpp"
 
@@ -111,7 +113,7 @@ void take(InstrumentModels& im, const estimation::InstrumentModel* m, int k, con
   im.calib_source[static_cast<std::size_t>(k)] = source;
 }
 
-// What was used (one note), and what is exported as 0 (a warning per axis; one for a triad).
+// What was used (one note).
 void report_use(const InstrumentModels& im, const char* instrument, const ExportOptions& o, ExportResult& res) {
   if (im.has_calib()) {
     std::string used;
@@ -122,14 +124,30 @@ void report_use(const InstrumentModels& im, const char* instrument, const Export
       used = "from " + im.calib_source[0];
     res.notes.push_back(fmt::format("{} calibration {} (--from {})", instrument, used, o.from));
   }
-  for (int k = 0; k < 3; ++k) {
-    const auto* c = im.calib[static_cast<std::size_t>(k)];
-    if (c == nullptr) continue;
-    if (const auto zero = c->not_identified(); !zero.empty()) {
-      res.warnings.push_back(fmt::format("{} axis {}: not determined by the fit, exported as 0: {}", instrument, kAxisNames[k],
-                                         fmt::join(zero, ", ")));
-      if (c->coverage == estimation::Coverage::kTriad) break;  // one model for the three axes
-    }
+}
+
+// The models both instruments' exports write, replaced by copies whose undetermined parameters
+// hold the user's --assume values (refused without one: a 0 written for them would be a guess);
+// each value used goes to res.notes.
+void settle(std::array<InstrumentModels, 2>& ims, const ExportOptions& o, const std::string& source, ExportResult& res) {
+  std::vector<const estimation::InstrumentModel*> used;
+  for (auto& im : ims)
+    for (auto* slots : {&im.calib, &im.temp})
+      for (const auto* m : *slots)
+        if (m && std::find(used.begin(), used.end(), m) == used.end()) used.push_back(m);
+  std::vector<std::shared_ptr<estimation::InstrumentModel>> copies;
+  std::vector<estimation::InstrumentModel*> editable;
+  for (const auto* m : used) {
+    copies.push_back(std::make_shared<estimation::InstrumentModel>(*m));
+    editable.push_back(copies.back().get());
+  }
+  for (const auto& line : estimation::settle_undetermined(editable, o.assumed, source, "export"))
+    res.notes.push_back("assumed by the user: " + line);
+  for (auto& im : ims) {
+    for (auto* slots : {&im.calib, &im.temp})
+      for (auto& m : *slots)
+        if (m) m = copies[static_cast<std::size_t>(std::find(used.begin(), used.end(), m) - used.begin())].get();
+    im.settled.assign(copies.begin(), copies.end());
   }
 }
 
@@ -191,7 +209,10 @@ std::array<InstrumentModels, 2> calibrations(const RunData& run, const ExportOpt
   const estimation::EstimatorEntry* named = calibration_source(*run.registry, o.from);
   const Rule rule{run, o, named ? named->name : std::string()};
   std::array<InstrumentModels, 2> ims = {models_for(rule, "accelerometer", res), models_for(rule, "gyroscope", res)};
-  if (ims[0].has_calib() || ims[1].has_calib()) return ims;
+  if (ims[0].has_calib() || ims[1].has_calib()) {
+    settle(ims, o, run.dir.string(), res);
+    return ims;
+  }
   if (named) {
     const std::string& f = named->results_file;
     const RunResult* r = result_named(run, f);

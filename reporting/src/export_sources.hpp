@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <memory>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -53,14 +54,18 @@ struct InstrumentModels {
   std::array<std::string, 3> calib_source, temp_source;
   double reference_c = 25.0;
   double tmin = NAN, tmax = NAN;
+  // Copies of the models above with what the fit did not determine set from the user's --assume
+  // (calib and temp point into them once calibrations() has settled them).
+  std::vector<std::shared_ptr<const estimation::InstrumentModel>> settled;
   bool has_calib() const;
   bool has_temp() const;
 };
 
 // The calibrations of both instruments [accelerometer, gyroscope] by the rule of
-// ExportOptions::from (exports.hpp); what was used goes to res.notes, what is exported as 0 to
-// res.warnings. Refuses (InputError) an unknown source, a source named by --from that has none, or
-// (auto) a failed calibration when nothing else calibrates.
+// ExportOptions::from (exports.hpp); what was used and what the user assumed go to res.notes.
+// Refuses (InputError) an unknown source, a source named by --from that has none, (auto) a failed
+// calibration when nothing else calibrates, or a parameter the fit did not determine that
+// ExportOptions::assumed gives no value (estimation::settle_undetermined).
 std::array<InstrumentModels, 2> calibrations(const RunData& run, const ExportOptions& o, ExportResult& res);
 
 // One instrument's affine calibration at T [°C]: y = A·u + b + G·f (SI: m/s², rad/s). An axis no

@@ -34,6 +34,20 @@ double at(const json& a, std::size_t i) { return estimation::number_at(a, i); }
 std::string str(const json& j, const char* key) { return estimation::text_field(j, key); }
 std::string g3(double v) { return estimation::report_number(v, 3); }
 
+// The unit the gap is shown in: the diagnosis' own choice (its "units": display, display_per_unit —
+// mg for an accelerometer gap, deg/s for a gyroscope gap), mg for a document without one.
+struct GapDisplay {
+  double per_unit = 1.0 / physics::kMilliG;  // display value = stored value × per_unit
+  std::string unit = "mg";
+};
+GapDisplay gap_display(const json& gp) {
+  GapDisplay d;
+  const json units = gp.value("units", json::object());
+  if (const double k = num(units, "display_per_unit"); std::isfinite(k) && k > 0.0 && !str(units, "display").empty())
+    d = {k, str(units, "display")};
+  return d;
+}
+
 // Residual layout of a gap result: per axis (x y z), or the magnitude form (orientations unknown)
 // with one |f| row per segment in slot 0 of every vector.
 struct GapAxes {
@@ -42,8 +56,8 @@ struct GapAxes {
   std::string label(int k) const { return magnitude ? std::string("|f|") : std::string(1, kAxes[k]); }
 };
 
-// The magnitude-form note, and the static residual RMS [mg] per axis and over the noise floor.
-void add_summary(ReportSection& s, const json& gp, const GapAxes& axes) {
+// The magnitude-form note, and the static residual RMS [display unit] per axis and over the noise floor.
+void add_summary(ReportSection& s, const json& gp, const GapAxes& axes, const GapDisplay& d) {
   const json gap = gp.value("gap", json::object());
   const json floor = gp.value("noise_floor", json::object());
   if (axes.magnitude)
@@ -52,12 +66,12 @@ void add_summary(ReportSection& s, const json& gp, const GapAxes& axes) {
   std::string rms, ratio;
   for (int k = 0; k < axes.count; ++k) {
     rms += fmt::format("{}{} {}", k ? ", " : "", axes.label(k),
-                       g3(at(gap.value("static_rms_mps2", json::array()), static_cast<std::size_t>(k)) / physics::kMilliG));
+                       g3(at(gap.value("static_rms_mps2", json::array()), static_cast<std::size_t>(k)) * d.per_unit));
     ratio += fmt::format("{}{} {}", k ? ", " : "", axes.label(k),
                          g3(at(gap.value("static_rms_over_floor", json::array()), static_cast<std::size_t>(k))));
   }
-  s.add_text(fmt::format("Static residual RMS [mg]: {}; over the noise floor: {} (floor source: {}).", rms, ratio,
-                         str(floor, "source")));
+  s.add_text(fmt::format("Static residual RMS [{}]: {}; over the noise floor: {} (floor source: {}).", d.unit, rms,
+                         ratio, str(floor, "source")));
 }
 
 // Where: one bar chart per dimension (axis, orientation, temperature, time — in the diagnosis'
@@ -108,19 +122,19 @@ double segment_span(const json& segs, const char* key) {
 // A residual against a range narrower than this is a vertical stripe: not plotted [°C, s].
 constexpr double kMinPlottedSpanC = 2.0, kMinPlottedSpanS = 1.0;
 
-// One plot of the segment residual per axis [mg] against `key` of each segment.
-Plot segment_residual_plot(const json& segs, const GapAxes& axes, const char* key, const std::string& title,
-                           const std::string& x_label) {
+// One plot of the segment residual per axis [display unit] against `key` of each segment.
+Plot segment_residual_plot(const json& segs, const GapAxes& axes, const GapDisplay& d, const char* key,
+                           const std::string& title, const std::string& x_label) {
   Plot p;
   p.title = title;
   p.x_label = x_label;
-  p.y_label = "residual [mg]";
+  p.y_label = "residual [" + d.unit + "]";
   for (int k = 0; k < axes.count; ++k) {
     Series s{fmt::format("axis {}", axes.label(k)), Style::kPoints, {}, {}, {}, {},
              palette(static_cast<std::size_t>(k)), false, 0.8};
     for (const auto& sg : segs) {
       s.x.push_back(num(sg, key));
-      s.y.push_back(at(sg.value("axis_residual_mps2", json::array()), static_cast<std::size_t>(k)) / physics::kMilliG);
+      s.y.push_back(at(sg.value("axis_residual_mps2", json::array()), static_cast<std::size_t>(k)) * d.per_unit);
     }
     p.series.push_back(s);
   }
@@ -128,9 +142,10 @@ Plot segment_residual_plot(const json& segs, const GapAxes& axes, const char* ke
   return p;
 }
 
-// Segment residual per axis [mg] against temperature [°C] (when the segments span a range of
-// temperatures) and against time since the last change [s] (when they began at different times).
-void add_segments(ReportSection& s, const json& segs, const GapAxes& axes, bool temperature_recorded) {
+// Segment residual per axis [display unit] against temperature [°C] (when the segments span a range
+// of temperatures) and against time since the last change [s] (when they began at different times).
+void add_segments(ReportSection& s, const json& segs, const GapAxes& axes, const GapDisplay& d,
+                  bool temperature_recorded) {
   const double span = temperature_recorded ? segment_span(segs, "temperature_c") : kNaN;
   const double span_s = segment_span(segs, "time_since_change_s");
   if (!std::isfinite(span))
@@ -144,19 +159,20 @@ void add_segments(ReportSection& s, const json& segs, const GapAxes& axes, bool 
                            std::isfinite(span_s) ? "within " + g3(span_s) + " s of each other" : "at an unknown time"));
   const std::string caption = "Twin-minus-recording residual of each static segment, per axis.";
   if (span >= kMinPlottedSpanC)
-    s.add(segment_residual_plot(segs, axes, "temperature_c", "segment residual against temperature", "temperature [°C]"),
+    s.add(segment_residual_plot(segs, axes, d, "temperature_c", "segment residual against temperature", "temperature [°C]"),
           caption);
   if (span_s >= kMinPlottedSpanS)
-    s.add(segment_residual_plot(segs, axes, "time_since_change_s", "segment residual against time since change",
+    s.add(segment_residual_plot(segs, axes, d, "time_since_change_s", "segment residual against time since change",
                                 "time since the last change [s]"),
           caption);
 }
 
-// Shrink: held-out and in-sample RMS [mg] after each forward-selection step, against the noise floor.
-void add_shrink(ReportSection& s, const json& steps) {
+// Shrink: held-out and in-sample RMS [display unit] after each forward-selection step, against the
+// noise floor.
+void add_shrink(ReportSection& s, const json& steps, const GapDisplay& d) {
   Plot p;
   p.title = "how far the gap shrinks";
-  p.y_label = "RMS [mg]";
+  p.y_label = "RMS [" + d.unit + "]";
   p.x_label = "model after step";
   p.width = 760;
   Series held{"held-out RMS", Style::kLinePoints, {}, {}, {}, {}, palette(0), false, 1.0};
@@ -166,11 +182,11 @@ void add_shrink(ReportSection& s, const json& steps) {
     const std::string added = str(steps[i], "added");
     p.x_categories.push_back(added.empty() ? fmt::format("step {}", i) : "+" + added);
     held.x.push_back(static_cast<double>(i));
-    held.y.push_back(num(steps[i], "heldout_rms_mps2") / physics::kMilliG);
+    held.y.push_back(num(steps[i], "heldout_rms_mps2") * d.per_unit);
     ins.x.push_back(static_cast<double>(i));
-    ins.y.push_back(num(steps[i], "in_sample_rms_mps2") / physics::kMilliG);
+    ins.y.push_back(num(steps[i], "in_sample_rms_mps2") * d.per_unit);
     fl.x.push_back(static_cast<double>(i));
-    fl.y.push_back(num(steps[i], "noise_floor_mps2") / physics::kMilliG);
+    fl.y.push_back(num(steps[i], "noise_floor_mps2") * d.per_unit);
   }
   p.series = {held, ins, fl};
   p.y_include_zero = true;
@@ -240,10 +256,10 @@ Table candidates_table(const json& cands) {
 // held-out χ² test against the floor, and over_floor): "No gap:" when the model as given is at the
 // noise floor, "Explained:" when the terms it added brought it there, else "Unexplained:" — then
 // the diagnosis' own statement.
-Paragraph verdict_paragraph(const json& un, bool terms_added) {
+Paragraph verdict_paragraph(const json& un, bool terms_added, const GapDisplay& d) {
   const bool at_floor = un.value("at_noise_floor", false);
-  const std::string numbers = fmt::format("held-out RMS {} mg = {} × floor", g3(num(un, "heldout_rms_mps2") / physics::kMilliG),
-                                          g3(num(un, "over_floor")));
+  const std::string numbers = fmt::format("held-out RMS {} {} = {} × floor", g3(num(un, "heldout_rms_mps2") * d.per_unit),
+                                          d.unit, g3(num(un, "over_floor")));
   const char* heading = !at_floor ? "Unexplained:" : terms_added ? "Explained:" : "No gap:";
   const std::string verdict = !at_floor     ? "the held-out residual is above the noise floor"
                               : terms_added ? "with the added terms the held-out residual is within the noise floor"
@@ -260,17 +276,18 @@ ReportSection gap_section(const json& gp, bool temperature_recorded) {
   GapAxes axes;
   axes.magnitude = str(gp, "form") == "magnitude";
   axes.count = axes.magnitude ? 1 : 3;
-  add_summary(s, gp, axes);
+  const GapDisplay d = gap_display(gp);
+  add_summary(s, gp, axes, d);
   const json where = gp.value("where", json::array());
   if (!where.empty()) add_where(s, where, temperature_recorded);
   const json segs = gp.value("segments", json::array());
-  if (!segs.empty()) add_segments(s, segs, axes, temperature_recorded);
+  if (!segs.empty()) add_segments(s, segs, axes, d, temperature_recorded);
   const json steps = gp.value("steps", json::array());
-  if (!steps.empty()) add_shrink(s, steps);
+  if (!steps.empty()) add_shrink(s, steps, d);
   const json cands = gp.value("candidates", json::array());
   if (!cands.empty()) s.add(candidates_table(cands));
   const json un = gp.value("unexplained", json::object());
-  if (!un.empty()) s.add(verdict_paragraph(un, steps.size() > 1));
+  if (!un.empty()) s.add(verdict_paragraph(un, steps.size() > 1, d));
   return s;
 }
 

@@ -10,6 +10,7 @@
 #include "stend/reporting/run_report.hpp"
 #include "stend/reporting/svg_plot.hpp"
 #include "stend/testing/files.hpp"
+#include "../src/gap_section.hpp"
 
 #include "stend/testing/plot_layout.hpp"
 
@@ -403,4 +404,35 @@ TEST(RunReport, EveryResultsFileIsDrawnByItsRegistryEntry) {
   EXPECT_NE(html.find("<table class=\"params\"><tr><th>parameter</th>"), std::string::npos);
   EXPECT_NE(html.find("<tr><td>bias_z</td><td>10.0034</td><td>mg</td>"), std::string::npos);
   EXPECT_NE(html.find("toy_bias 1.0 (toy_bias.json, ok)"), std::string::npos) << "listed among the run's estimators";
+}
+
+// A gyroscope gap is shown in the diagnosis' own display unit (deg/s), never as mg: the summary,
+// the verdict's numbers and every plot's axis.
+TEST(GapSection, AGyroscopeGapIsShownInItsOwnUnit) {
+  const double dps = 180.0 / M_PI;  // deg/s per rad/s
+  const nlohmann::json gap = {
+      {"model", "gyro bias"},
+      {"form", "axes"},
+      {"units", {{"gap", "rad/s"}, {"display", "deg/s"}, {"display_per_unit", dps}}},
+      {"noise_floor", {{"static_mean_mps2", {0.001, 0.001, 0.001}}, {"source", "segment scatter"}}},
+      {"gap", {{"static_rms_mps2", {0.01, 0.02, 0.03}}, {"static_rms_over_floor", {10, 20, 30}}}},
+      {"steps", {{{"step", 0}, {"added", nullptr}, {"heldout_rms_mps2", 0.02}, {"in_sample_rms_mps2", 0.018},
+                  {"noise_floor_mps2", 0.001}},
+                 {{"step", 1}, {"added", "scale_x"}, {"heldout_rms_mps2", 0.0011}, {"in_sample_rms_mps2", 0.001},
+                  {"noise_floor_mps2", 0.001}}}},
+      {"unexplained", {{"heldout_rms_mps2", 0.0011}, {"over_floor", 1.1}, {"at_noise_floor", true}, {"statement", "ok"}}}};
+  const stend::estimation::ReportSection s = stend::reporting::detail::gap_section(gap, false);
+  std::ostringstream text;
+  s.print(text);
+  EXPECT_NE(text.str().find("Static residual RMS [deg/s]: x 0.573, y 1.15, z 1.72"), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("held-out RMS 0.063 deg/s = 1.1 × floor"), std::string::npos) << text.str();
+  EXPECT_EQ(text.str().find("mg"), std::string::npos) << text.str();
+  std::size_t figures = 0;
+  for (const auto& b : s.blocks) {
+    if (const auto* f = std::get_if<stend::estimation::Figure>(&b)) {
+      EXPECT_EQ(f->plot.y_label, "RMS [deg/s]");
+      ++figures;
+    }
+  }
+  EXPECT_EQ(figures, 1u);  // the shrink plot
 }

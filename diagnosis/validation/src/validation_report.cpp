@@ -8,18 +8,18 @@
 
 #include "noise_validation.hpp"
 #include "stend/diagnosis/validate.hpp"
+#include "stend/estimation/report_section.hpp"
 
 namespace stend::diagnosis {
 
 namespace {
 
-// The floor of a segment mean in the experiment's display unit (mg or deg/h) and its own unit.
+// The floor of a segment mean in the display unit of its quantity (estimation::display_unit: mg,
+// deg/s) and in its own unit.
 std::string floor_text(const ExperimentValidation& e) {
+  const estimation::DisplayUnit du = estimation::display_unit(e.unit);
   char b[128];
-  if (e.unit == "rad/s")
-    std::snprintf(b, sizeof b, "%.3g deg/h (%.3g rad/s)", e.floor / physics::kDegPerHour, e.floor);
-  else
-    std::snprintf(b, sizeof b, "%.3g mg (%.3g m/s^2)", e.floor / physics::kMilliG, e.floor);
+  std::snprintf(b, sizeof b, "%.3g %s (%.3g %s)", e.floor * du.scale, du.unit.c_str(), e.floor, e.unit.c_str());
   return std::string(b);
 }
 

@@ -329,9 +329,10 @@ double stated_lowpass_hz(const Recording& rec) {
 }
 
 // Allan curve and noise model of channel ch (0..2 accelerometer [m/s²], 3..5 gyroscope [rad/s])
-// over samples `range`, read a column chunk at a time through stream s (reset first).
+// over samples `range`, read a column chunk at a time through stream s (reset first); the same
+// chunks go to the stationarity check's block summary.
 ChannelResult analyze_channel(const SampleSource& src, IndexRange range, int ch, double rate,
-                              const AllanOptions& options, OverlappingAllanStream& s) {
+                              const AllanOptions& options, OverlappingAllanStream& s, processing::BlockSummary& blocks) {
   static const char* names[6] = {"ax", "ay", "az", "gx", "gy", "gz"};
   static constexpr Channel columns[6] = {Channel::kAx, Channel::kAy, Channel::kAz,
                                          Channel::kGx, Channel::kGy, Channel::kGz};
@@ -341,6 +342,7 @@ ChannelResult analyze_channel(const SampleSource& src, IndexRange range, int ch,
     const auto take = static_cast<std::size_t>(std::min<std::uint64_t>(buf.size(), range.last - i));
     src.read_column(columns[ch], i, take, buf.data());
     s.add(buf.data(), take);
+    blocks.add(columns[ch], i - range.first, buf.data(), take);
     i += take;
   }
   ChannelInfo info;
@@ -350,16 +352,20 @@ ChannelResult analyze_channel(const SampleSource& src, IndexRange range, int ch,
 }
 
 // Channels 0 … channels−1 on two threads (channel c on thread c mod 2), each thread with one
-// stream for all its channels, so that memory stays at two streams' state.
-std::vector<ChannelResult> analyze_channels(const SampleSource& src, IndexRange range, int channels,
-                                            double rate, const AllanOptions& options) {
+// stream for all its channels, so that memory stays at two streams' state; the block summary of
+// the stationarity check gathers every channel read, the time (thread 0) and the temperature
+// (thread 1, when recorded).
+std::vector<ChannelResult> analyze_channels(const SampleSource& src, IndexRange range, int channels, bool temperature,
+                                            double rate, const AllanOptions& options, processing::BlockSummary& blocks) {
   std::vector<ChannelResult> out(static_cast<std::size_t>(channels));
   std::exception_ptr error[2];
   auto work = [&](int parity) {
     try {
+      if (parity == 0) blocks.add_column(src, range, Channel::kTime);
+      if (parity == 1 && temperature) blocks.add_column(src, range, Channel::kTemperature);
       OverlappingAllanStream s(options.max_m, range.size());
       for (int ch = parity; ch < channels; ch += 2) {
-        out[static_cast<std::size_t>(ch)] = analyze_channel(src, range, ch, rate, options, s);
+        out[static_cast<std::size_t>(ch)] = analyze_channel(src, range, ch, rate, options, s, blocks);
       }
     } catch (...) {
       error[parity] = std::current_exception();
@@ -372,10 +378,11 @@ std::vector<ChannelResult> analyze_channels(const SampleSource& src, IndexRange 
   return out;
 }
 
-// The stationarity check of the range (stend/processing/stationarity.hpp): why it is no noise
-// record, with what to do instead, into report.not_still; a warning when it is too short to judge.
-void check_still(const SampleSource& src, IndexRange range, double rate_hz, bool has_gyro, AllanReport& report) {
-  const processing::Stationarity s = processing::check_stationarity(src, range, rate_hz, has_gyro);
+// The stationarity check of the range (stend/processing/stationarity.hpp) on the block summary the
+// analysis gathered: why it is no noise record, with what to do instead, into report.not_still; a
+// warning when it is too short to judge.
+void check_still(const processing::BlockSummary& blocks, bool has_gyro, AllanReport& report) {
+  const processing::Stationarity s = blocks.judge(has_gyro);
   if (!s.judged)
     report.warnings.push_back(fmt::format(
         "the record is too short to check that it is still ({} blocks of {} s; the check needs {})", s.blocks,
@@ -413,12 +420,15 @@ AllanReport analyze_recording(const Recording& rec, const AllanOptions& options)
   report.t_end_s = sampling.t_end_s;
   report.rate_hz = sampling.rate_hz;
   add_sampling_warnings(sampling, report);
-  check_still(src, range, sampling.rate_hz, rec.header.info.has_gyro, report);
-  if (!report.not_still.empty()) return report;
   const int channels = rec.header.info.has_gyro ? 6 : 3;
   AllanOptions opt = options;
   if (std::isnan(opt.lowpass_hz)) opt.lowpass_hz = stated_lowpass_hz(rec);
-  report.channels = analyze_channels(src, range, channels, sampling.rate_hz, opt);
+  processing::BlockSummary blocks(range.size(), sampling.rate_hz);
+  std::vector<ChannelResult> analysed =
+      analyze_channels(src, range, channels, rec.header.info.has_temperature, sampling.rate_hz, opt, blocks);
+  check_still(blocks, rec.header.info.has_gyro, report);  // a record that moves has no noise result
+  if (!report.not_still.empty()) return report;
+  report.channels = std::move(analysed);
   report.kalibr = kalibr_parameters(report.channels, sampling.rate_hz);
   return report;
 }

@@ -2,6 +2,8 @@
 // read of it. See stend/ceres_nonlinear/calibration.hpp.
 #include "report.hpp"
 
+#include "stend/estimation/report_section.hpp"
+
 #include <stend/physics/units.hpp>
 
 #include <fmt/format.h>
@@ -186,10 +188,11 @@ std::string CalibrationResult::report() const {
   }
   s += fmt::format("{:<22} {:>14} {:<14} {:>12} {:>14} {:>14}  {:<12} {}\n", "parameter", "value", "unit",
                    "std error", "95% lower", "95% upper", "verdict", "note");
-  auto row = [&](const estimation::ParameterEstimate& p) {
-    s += fmt::format("{:<22} {:>14} {:<14} {:>12} {:>14} {:>14}  {:<12} {}\n", p.name, fmt_num(p.value), p.unit,
-                     fmt_num(p.std_error), fmt_num(p.lower), fmt_num(p.upper),
-                     p.held ? "fixed" : estimation::to_string(p.judged()), p.reason);
+  auto row = [&](const estimation::ParameterEstimate& p) {  // in the row's display unit (mg, deg/s, ppm, …)
+    const estimation::DisplayUnit du = estimation::display_unit(p.unit);
+    s += fmt::format("{:<22} {:>14} {:<14} {:>12} {:>14} {:>14}  {:<12} {}\n", p.name, fmt_num(p.value * du.scale),
+                     du.unit, fmt_num(p.std_error * du.scale), fmt_num(p.lower * du.scale),
+                     fmt_num(p.upper * du.scale), p.held ? "fixed" : estimation::to_string(p.judged()), p.reason);
   };
   for (const auto& p : parameters) row(p);
   for (const auto& p : gyro_bias) row(p);

@@ -18,6 +18,7 @@
 // the SI columns are calibrated.
 #pragma once
 
+#include <stend/estimation/assumption.hpp>
 #include <stend/estimation/registry.hpp>
 #include <stend/estimation/result.hpp>
 #include <stend/model/terms.hpp>
@@ -44,14 +45,9 @@ struct InstrumentCalibration {
 };
 
 // A value the user states for a parameter the fit did not determine (`stend apply --assume
-// bias_x=0`), in the parameter's unit as the results print it (ParameterEstimate::unit).
-struct Assumption {
-  std::string name;  // "bias_x", or with its instrument "accel_bias_x" / "gyro_bias_x"
-  double value = 0.0;
-};
-// "bias_x=0,accel_scale_y=0.001" → the assumptions; throws std::invalid_argument saying what was
-// expected.
-std::vector<Assumption> parse_assumptions(const std::string& text);
+// bias_x=0`): the one definition, shared with the exports (stend/estimation/assumption.hpp).
+using estimation::Assumption;
+using estimation::parse_assumptions;
 
 struct Calibration {
   std::string source;     // the results file

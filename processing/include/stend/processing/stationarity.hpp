@@ -18,7 +18,9 @@
 // Allan deviation would read that drift as noise.
 #pragma once
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -58,8 +60,35 @@ struct Stationarity {
   std::string describe() const;
 };
 
-// The rule above over samples [range.first, range.last) of src at rate_hz [Hz]; the gyroscope
-// channels are read only with has_gyro.
+// The block summaries the rule judges, gathered column by column as a caller reads them anyway
+// (the Allan analysis reads each channel once: it feeds the same chunks here, so the check costs no
+// second pass over the store). Each channel's chunks come in order from the range's first sample;
+// different channels may be fed from different threads at once.
+class BlockSummary {
+ public:
+  // For `samples` samples at rate_hz [Hz]: blocks of kStationarityBlockS (at least
+  // kMinStationarityBlockSamples samples); a shorter tail is left out.
+  BlockSummary(std::uint64_t samples, double rate_hz);
+  // Samples [offset, offset + n) of the range of channel c (kTime, kAx … kGz, kTemperature).
+  void add(Channel c, std::uint64_t offset, const double* x, std::size_t n);
+  // Reads channel c of samples [range.first, range.last) of src and adds it, a chunk at a time.
+  void add_column(const SampleSource& src, IndexRange range, Channel c);
+  // The rule over what was added: kTime, kAx … kAz, and with has_gyro kGx … kGz, are required;
+  // kTemperature is checked when it was added (and finite).
+  Stationarity judge(bool has_gyro) const;
+
+ private:
+  struct Column {
+    std::vector<double> mean, sd, first, last;  // per block; first/last: values of its end samples
+    double origin = 0.0, sum = 0.0, sum2 = 0.0;  // the block being summed, about its first sample
+    bool added = false;
+  };
+  std::size_t per_block_ = 0, blocks_ = 0;
+  std::array<Column, 9> columns_;  // indexed by Channel
+};
+
+// The rule above over samples [range.first, range.last) of src at rate_hz [Hz], reading the
+// columns it needs; the gyroscope channels are read only with has_gyro.
 Stationarity check_stationarity(const SampleSource& src, IndexRange range, double rate_hz, bool has_gyro);
 
 }  // namespace stend::processing

@@ -18,6 +18,7 @@
 // format cannot hold, are listed in ExportResult::warnings — never silently.
 #pragma once
 
+#include <stend/estimation/assumption.hpp>
 #include <stend/estimation/registry.hpp>
 
 #include <filesystem>
@@ -44,6 +45,9 @@ struct ExportOptions {
   std::string from = "auto";
   // csv: copy the readable part of a damaged run (else a damaged run is refused).
   bool accept_damaged = false;
+  // Values for the parameters the fit did not determine (`--assume bias_x=0`): without one, a
+  // calibration with such a parameter is refused, as `stend apply` refuses it.
+  std::vector<estimation::Assumption> assumed = {};
 
   // A ROS topic named, px4_instance 0..3, px4_device_id ≥ 0, a source named (export_run resolves the
   // name against the registry: calibration_source).
