@@ -112,7 +112,10 @@ std::string BadSamples::describe() const {
 }
 
 void SampleCheck::add_samples(const ImuSample* samples, std::size_t count) {
-  kept_.clear();
+  // Checked copies pass on kCheckBatch at a time, so that the gate holds a few hundred KiB whatever
+  // the size of the chunks it is given.
+  constexpr std::size_t kCheckBatch = 4096;
+  kept_.reserve(kCheckBatch);
   const bool no_temperature = !rec_->header.info.has_temperature;
   for (std::size_t i = 0; i < count; ++i) {
     ImuSample s = samples[i];
@@ -124,8 +127,14 @@ void SampleCheck::add_samples(const ImuSample* samples, std::size_t count) {
     }
     stillness_.add(s);
     kept_.push_back(s);
+    if (kept_.size() == kCheckBatch) pass_kept();
   }
-  out_->add_samples(kept_.data(), kept_.size());
+  pass_kept();
+}
+
+void SampleCheck::pass_kept() {
+  if (!kept_.empty()) out_->add_samples(kept_.data(), kept_.size());
+  kept_.clear();
 }
 
 void SampleCheck::finish(Recording& rec) {

@@ -101,6 +101,8 @@ class SampleCheck final : public SampleSink {
   void finish(Recording& rec);
 
  private:
+  void pass_kept();  // the checked samples kept so far, on to `out`
+
   const Recording* rec_;
   SampleSink* out_;
   std::filesystem::path file_;
