@@ -19,6 +19,7 @@ packages=(
   libcpp-httplib-dev  # live/: the live view's loopback HTTP server (its charts, uPlot, from npm: vendor-web-deps.sh)
   gcc-avr avr-libc binutils-avr  # firmware/bench_mcu: the bench microcontroller's firmware (ATmega328P)
   simavr libsimavr-dev libelf-dev  # emulators/firmware: that firmware in the loop under simavr (libsimavr needs libelf)
+  valgrind  # the perf test: instruction counts of the key paths under callgrind (bench/perf_budget.sh)
   python3-jsonschema  # tests: `--json` outputs checked against docs/schemas (tests/check_json_schema.py)
   dpkg-dev  # cpack -G DEB: dpkg-shlibdeps computes the package's dependencies (scripts/deb-test.sh)
   debootstrap  # scripts/deb-chroot-test.sh: the .deb on a clean Debian 12 chroot

@@ -82,7 +82,7 @@ class Hdf5Samples final : public SampleSource {
     for (std::size_t i = 0; i < count; ++i) out[i].flags = f[i];
     for (int ch = 0; ch < kChannels; ++ch) {
       const Codec& k = codec_[static_cast<std::size_t>(ch)];
-      read_into(counts_[static_cast<std::size_t>(ch)].get(), H5T_NATIVE_INT32, first, count, c.data(), kCountsNames[ch]);
+      read_counts(ch, first, count, c.data());
       if (k.si_stored) {
         read_into(si_[static_cast<std::size_t>(ch)].get(), H5T_NATIVE_DOUBLE, first, count, d.data(), kSiNames[ch]);
         for (std::size_t i = 0; i < count; ++i) set_channel(out[i], ch, c[i], d[i]);
@@ -101,9 +101,15 @@ class Hdf5Samples final : public SampleSource {
     if (count == 0) return;
     check_range(first, count);
     Hdf5Lock lock;
-    if (ch == Channel::kTime || ch == Channel::kFlags) {
-      const bool time = ch == Channel::kTime;
-      read_into((time ? t_ : flags_).get(), H5T_NATIVE_DOUBLE, first, count, out, time ? "t_s" : "flags");
+    if (ch == Channel::kTime) {
+      read_into(t_.get(), H5T_NATIVE_DOUBLE, first, count, out, "t_s");
+      return;
+    }
+    if (ch == Channel::kFlags) {
+      thread_local std::vector<std::uint32_t> f;
+      f.resize(count);
+      read_into(flags_.get(), H5T_NATIVE_UINT32, first, count, f.data(), "flags");
+      std::copy(f.begin(), f.end(), out);
       return;
     }
     const int k = static_cast<int>(ch) - static_cast<int>(Channel::kAx);
@@ -138,6 +144,21 @@ class Hdf5Samples final : public SampleSource {
       throw std::out_of_range(fmt::format("{}: samples [{}, {}) requested, {} readable",
                                           path_.string(), first, first + count, size_));
     }
+  }
+  // Channel ch's counts of samples [first, first + count), read in their stored width and widened
+  // here. Every read in this class asks for the type as stored: a read that converts makes libhdf5
+  // zero a whole type-conversion buffer (1 MiB) per call, which small reads (a pose, one sample of a
+  // time search) then spend their time on.
+  void read_counts(int ch, std::uint64_t first, std::size_t count, std::int32_t* out) const {
+    const auto k = static_cast<std::size_t>(ch);
+    if (!codec_[k].int16 || codec_[k].si_stored) {
+      read_into(counts_[k].get(), H5T_NATIVE_INT32, first, count, out, kCountsNames[ch]);
+      return;
+    }
+    thread_local std::vector<std::int16_t> narrow;
+    narrow.resize(count);
+    read_into(counts_[k].get(), H5T_NATIVE_INT16, first, count, narrow.data(), kCountsNames[ch]);
+    std::copy(narrow.begin(), narrow.end(), out);
   }
   void read_into(hid_t ds, hid_t mem_type, std::uint64_t first, std::size_t count, void* out,
                  const char* name) const {
