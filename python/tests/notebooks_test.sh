@@ -11,7 +11,9 @@ if [ ! -d "$data" ]; then
 fi
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-export STEND_SOURCE_DIR=$src STEND_SHARED_DATA_DIR=$data MPLCONFIGDIR=$tmp/matplotlib JUPYTER_RUNTIME_DIR=$tmp/runtime
+# The notebooks' run folders (tempfile) go under $tmp too.
+export STEND_SOURCE_DIR=$src STEND_SHARED_DATA_DIR=$data TMPDIR=$tmp MPLCONFIGDIR=$tmp/matplotlib \
+  JUPYTER_RUNTIME_DIR=$tmp/runtime PYDEVD_DISABLE_FILE_VALIDATION=1
 for nb in "$src"/docs/notebooks/*.ipynb; do
   echo "executing $(basename "$nb")"
   jupyter nbconvert --to notebook --execute --ExecutePreprocessor.timeout=300 --output-dir "$tmp" "$nb"
