@@ -3,6 +3,7 @@
 #pragma once
 
 #include "exit_codes.hpp"
+#include "stend/allan/deviation_report.hpp"
 #include "stend/calibration/calibration.hpp"
 #include "stend/calibration/validation.hpp"
 #include "stend/core/plugin_host.hpp"
@@ -12,6 +13,7 @@
 #include "stend/estimation/summary.hpp"
 #include "stend/reporting/exports.hpp"
 #include "stend/io/formats.hpp"
+#include "stend/io/series.hpp"
 #include "stend/recording/recording.hpp"
 
 #include <CLI/CLI.hpp>
@@ -206,6 +208,22 @@ struct ExportArgs {
   reporting::ExportOptions options;
 };
 Outcome run_export(const ExportArgs& a);
+
+// `stend deviations` (cmd_deviations.cpp): every deviation kind of a plain series with its
+// intervals; deviations_of the values read already (the file's name and column as given in `a`).
+struct DeviationsArgs {
+  std::string file;
+  io::SeriesColumn column;
+  bool phase = false;
+  double tau0_s = 0.0, rate_hz = 0.0;
+  std::vector<std::string> kinds;
+  std::string tau = allan::to_string(allan::TauSpacing::kOctave);
+  std::uint64_t max_m = allan::OverlappingAllanStream::kDefaultMaxM;
+  double confidence = stats::kOneSigma;
+  std::string unit;
+};
+Outcome run_deviations(const DeviationsArgs& a);
+Outcome deviations_of(const io::SeriesValues& series, const DeviationsArgs& a);
 
 // `stend info` (cmd_info.cpp): the recording's summary, docs/schemas/info.schema.json.
 Outcome run_info(const std::string& dir);

@@ -406,6 +406,30 @@ py::tuple export_run(const std::string& run, const std::string& to, const std::s
   });
 }
 
+// `stend deviations`: of a file's column as the program reads it, or of `values` (frequency or
+// phase, one per tau0) given as an array.
+py::tuple deviations(const std::string& file, const std::optional<std::vector<double>>& values, bool phase,
+                     double tau0_s, double rate_hz, const std::string& column, std::size_t skip_lines,
+                     const std::vector<std::string>& kinds, const std::string& tau, std::uint64_t max_m,
+                     double confidence, const std::string& unit) {
+  return guarded([&] {
+    const Quiet quiet;
+    cli::DeviationsArgs a;
+    a.file = file;
+    a.column = {column, skip_lines};
+    a.phase = phase;
+    a.tau0_s = tau0_s;
+    a.rate_hz = rate_hz;
+    a.kinds = kinds;
+    if (!tau.empty()) a.tau = tau;
+    if (max_m > 0) a.max_m = max_m;
+    if (confidence > 0) a.confidence = confidence;
+    a.unit = unit;
+    if (!values) return outcome(cli::run_deviations(a));
+    return outcome(cli::deviations_of({*values, 1, ""}, a));
+  });
+}
+
 }  // namespace
 
 }  // namespace stend::python
@@ -434,4 +458,5 @@ PYBIND11_MODULE(_stend, m) {
   m.def("apply_samples", &sp::apply_samples);
   m.def("gap", &sp::gap);
   m.def("export_run", &sp::export_run);
+  m.def("deviations", &sp::deviations);
 }

@@ -22,7 +22,7 @@ from .recording import SAMPLE_DTYPE, Recording
 from .results import FitResult, InstrumentModel, Parameter
 
 __version__ = _stend.version()
-__all__ = ["open", "import_", "fit", "run", "apply", "gap", "export", "Recording", "FitResult", "Parameter",
+__all__ = ["open", "import_", "fit", "run", "apply", "gap", "export", "deviations", "Recording", "FitResult", "Parameter",
            "InstrumentModel", "SAMPLE_DTYPE", "Error", "UsageError", "InputError", "FitFailed", "IoFailure",
            "Stopped", "__version__"]
 
@@ -194,3 +194,28 @@ def export(run_dir, to, output=None, *, db="", procedure="", from_="", rostopic=
 
 
 
+
+
+_DEVIATION_KINDS = ("adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "totdev")
+
+
+def deviations(series, *, tau0_s=0.0, rate_hz=0.0, phase=False, column="1", skip_lines=0, kinds=(), tau="octave",
+               max_m=0, confidence=0.0, unit=""):
+    """Every frequency-stability deviation (ADEV … TOTDEV) with its interval, EDF and noise type —
+    `stend deviations FILE --tau0 S [--phase] [--column C] --json`. ``series``: a text file (one value
+    per line or a column, as Stable32 and allantools take them) or a 1-D array of values, one per
+    tau0_s [s] (or rate_hz [Hz]). Returns the --json document (``ok``; ``deviations`` per kind and
+    point: tau_s, m, terms, value, edf, lo, hi, alpha) with ``exit_code`` (3: unusable, ``reason``)."""
+    kinds = [kinds] if isinstance(kinds, str) else list(kinds)
+    unknown = [k for k in kinds if k not in _DEVIATION_KINDS]
+    if unknown:
+        raise UsageError(f"--kinds: {unknown[0]} not in {{{', '.join(_DEVIATION_KINDS)}}}", 1)
+    if isinstance(series, (str, os.PathLike)):
+        file, values = os.fspath(series), None
+    else:
+        file, values = "(array)", np.asarray(series, dtype=float).ravel().tolist()
+    code, doc = _stend.deviations(file, values, phase, tau0_s, rate_hz, str(column), skip_lines, kinds, tau, max_m,
+                                  confidence, unit)
+    result = json.loads(doc)
+    result["exit_code"] = code
+    return result

@@ -231,3 +231,18 @@ def test_export_matches_the_program(cli, scratch, paper_run):
     assert json.load(open(scratch / "export-py.json")) == json.load(open(scratch / "export-cli.json"))
     expect_same_error(cli("export", paper_run, "--to", "kalibr", "-o", scratch / "k.yaml", check=False),
                       lambda: stend.export(paper_run, "kalibr", scratch / "k.yaml"))
+
+
+def test_deviations_match_the_program(cli, scratch):
+    values = np.random.default_rng(3).normal(0, 1e-3, 4096)  # white frequency noise
+    series = scratch / "series.txt"
+    series.write_text("\n".join(f"{v:.17g}" for v in values) + "\n")
+    code, doc, _ = cli.json("deviations", series, "--tau0", "0.01")
+    from_file = stend.deviations(series, tau0_s=0.01)
+    from_array = stend.deviations(values, tau0_s=0.01)
+    assert from_file["exit_code"] == from_array["exit_code"] == code == 0
+    assert from_file["deviations"] == doc["deviations"]
+    assert from_array["deviations"] == doc["deviations"]
+    expect_same_error(cli("deviations", series, check=False), lambda: stend.deviations(series))
+    p = cli("deviations", scratch / "constant.txt", "--tau0", "1", check=False)  # absent file: the program's error
+    expect_same_error(p, lambda: stend.deviations(scratch / "constant.txt", tau0_s=1))
