@@ -211,7 +211,10 @@ PyRecording open_run(const std::string& path, bool accept_damaged) {
     cli::DatasetArgs d;
     d.inputs = {path};
     d.accept_damaged = accept_damaged;
-    if (!d.is_run()) return PyRecording(d.open());
+    if (!d.is_run()) {
+      const Quiet quiet;  // the import's warnings are the recording's events
+      return PyRecording(d.open());
+    }
     Recording rec = Recording::open(path, SampleLoading::kStream, TruthLoading::kStream);
     d.checked(rec);
     return PyRecording(std::move(rec));

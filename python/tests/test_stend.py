@@ -246,3 +246,21 @@ def test_deviations_match_the_program(cli, scratch):
     expect_same_error(cli("deviations", series, check=False), lambda: stend.deviations(series))
     p = cli("deviations", scratch / "constant.txt", "--tau0", "1", check=False)  # absent file: the program's error
     expect_same_error(p, lambda: stend.deviations(scratch / "constant.txt", tau0_s=1))
+
+
+def test_import_with_experiment_matches_the_program(cli, scratch, shared, source):
+    log = shared / "imucal/annotated_session.csv"
+    procedure = source / "configs/procedures/ferraris.yaml"
+    code, doc, _ = cli.json("import", log, "--experiment", procedure, "-o", scratch / "ferraris-cli")
+    py_run = stend.import_(log, scratch / "ferraris-py", experiment=procedure)
+    cli_run = stend.open(doc["run_dir"])
+    assert code == 0 and len(py_run) == doc["samples"]
+    assert np.array_equal(py_run.segments, cli_run.segments)
+    assert same_samples(py_run.truth, cli_run.truth)
+    model = source / "estimators/ceres_nonlinear/examples/ferraris.yaml"
+    code, fit_doc, _ = cli.json("fit", cli_run.path, "--model", model, "--out", scratch / "ferraris-cli.json")
+    r = stend.fit(py_run, model, out=scratch / "ferraris-py.json")
+    assert r.exit_code == code and parameters(fit_doc["document"]["parameters"]) == parameters(r.to_dict()["parameters"])
+    # the same log in memory, aligned to the same procedure (as `stend fit LOG --experiment` reads it)
+    in_memory = stend.import_(log, experiment=procedure)
+    assert np.array_equal(in_memory.segments, cli_run.segments)
