@@ -63,6 +63,12 @@ struct Quiet {
 
 // ---- arguments ----------------------------------------------------------------------------------
 
+// An option given from Python (None: the program's own default, written once in its Args struct).
+template <class T, class U>
+void set_given(T& field, const std::optional<U>& given) {
+  if (given) field = *given;
+}
+
 // An import option's value as the command line gives it: True → "true", a list → "a,b,c".
 std::string option_text(const py::handle& value) {
   if (py::isinstance<py::bool_>(value)) return value.cast<bool>() ? "true" : "";
@@ -97,12 +103,12 @@ std::map<std::string, std::string> import_flags(const py::dict& options) {
 
 // What a command reads, as DatasetArgs (app/commands.hpp): inputs, --format, --mapping,
 // --experiment, --accept-damaged and the import flags.
-cli::DatasetArgs dataset_args(const std::vector<std::string>& inputs, const std::string& format,
+cli::DatasetArgs dataset_args(const std::vector<std::string>& inputs, const std::optional<std::string>& format,
                               const std::string& mapping, const std::string& experiment, bool accept_damaged,
                               const py::dict& options) {
   cli::DatasetArgs d;
   d.inputs = inputs;
-  d.format = format;
+  set_given(d.format, format);
   d.mapping = mapping;
   d.experiment = experiment;
   d.accept_damaged = accept_damaged;
@@ -221,7 +227,7 @@ PyRecording open_run(const std::string& path, bool accept_damaged) {
   });
 }
 
-PyRecording open_dataset(const std::vector<std::string>& inputs, const std::string& format, const std::string& mapping,
+PyRecording open_dataset(const std::vector<std::string>& inputs, const std::optional<std::string>& format, const std::string& mapping,
                          const std::string& experiment, bool accept_damaged, const py::dict& options) {
   return guarded([&] {
     const Quiet quiet;
@@ -235,7 +241,7 @@ PyRecording open_dataset(const std::vector<std::string>& inputs, const std::stri
 py::tuple outcome(const cli::Outcome& o) { return py::make_tuple(cli::to_int(o.code), o.doc.dump()); }
 
 py::tuple import_run(const std::vector<std::string>& inputs, const std::string& output, const std::string& name,
-                     const std::string& format, const std::string& mapping, const std::string& experiment,
+                     const std::optional<std::string>& format, const std::string& mapping, const std::string& experiment,
                      const py::dict& options) {
   return guarded([&] {
     const Quiet quiet;
@@ -259,16 +265,16 @@ py::dict instrument_dict(const estimation::InstrumentModel& m) {
   return d;
 }
 
-py::dict fit(const std::vector<std::string>& inputs, const std::string& model, const std::string& format,
+py::dict fit(const std::vector<std::string>& inputs, const std::string& model, const std::optional<std::string>& format,
              const std::string& mapping, const std::string& experiment, bool accept_damaged, const py::dict& options,
-             const std::string& out, const std::string& estimator, const std::string& db) {
+             const std::string& out, const std::optional<std::string>& estimator, const std::string& db) {
   return guarded([&] {
     const Quiet quiet;
     cli::FitArgs a;
     a.data = dataset_args(inputs, format, mapping, experiment, accept_damaged, options);
     a.model = model;
     a.out = out;
-    a.estimator = estimator;
+    set_given(a.estimator, estimator);
     a.db = db;
     const cli::FitCommandOutcome o = cli::run_fit(a);
     const estimation::FitResult& r = o.fit.result;
@@ -307,13 +313,13 @@ py::dict progress_dict(const RunProgress& p) {
 // `stend run`: the progress callback called every period_s of wall time; Ctrl-C (KeyboardInterrupt)
 // or an exception in the callback stops the run cleanly, as Ctrl-C does in the program.
 py::tuple run(const std::string& file, const std::string& output, const std::string& name, const std::string& clock,
-              const std::string& store, const std::string& db, bool allow_plugins, const py::object& progress,
-              double period_s) {
+              const std::optional<std::string>& store, const std::string& db, bool allow_plugins,
+              const py::object& progress, const std::optional<double>& period_s) {
   std::atomic<bool> stop{false};
   std::optional<py::error_already_set> raised;
   cli::RunHooks hooks;
   hooks.stop = &stop;
-  hooks.period_s = period_s;
+  set_given(hooks.period_s, period_s);
   hooks.on_progress = [&](const RunProgress& p) {
     if (raised) return;
     try {
@@ -324,7 +330,14 @@ py::tuple run(const std::string& file, const std::string& output, const std::str
       stop.store(true);
     }
   };
-  cli::RunArgs a{file, output, name, clock, store, db, allow_plugins};
+  cli::RunArgs a;
+  a.file = file;
+  a.output = output;
+  a.name = name;
+  a.clock = clock;
+  set_given(a.store, store);
+  a.db = db;
+  a.allow_plugins = allow_plugins;
   const py::tuple o = guarded([&] {
     const Quiet quiet;
     return outcome(cli::run_run(a, hooks));
@@ -335,8 +348,9 @@ py::tuple run(const std::string& file, const std::string& output, const std::str
 
 py::tuple apply(const std::string& cal, const std::vector<std::string>& inputs, const std::string& output,
                 const std::vector<std::string>& assumptions, bool validate, const std::vector<std::string>& rotations,
-                double rebias_from_start_s, double gravity_mps2, double confidence, const std::string& validation_out,
-                const std::string& format, const std::string& mapping, const std::string& experiment,
+                const std::optional<double>& rebias_from_start_s, const std::optional<double>& gravity_mps2,
+                const std::optional<double>& confidence, const std::string& validation_out,
+                const std::optional<std::string>& format, const std::string& mapping, const std::string& experiment,
                 bool accept_damaged, const py::dict& options) {
   return guarded([&] {
     const Quiet quiet;
@@ -348,9 +362,9 @@ py::tuple apply(const std::string& cal, const std::vector<std::string>& inputs, 
     a.validate = validate;
     a.rotations = rotations;
     a.assumptions = assumptions;
-    a.options.rebias_from_start_s = rebias_from_start_s;
-    if (gravity_mps2 > 0) a.options.gravity_mps2 = gravity_mps2;
-    if (confidence > 0) a.options.confidence = confidence;
+    set_given(a.options.rebias_from_start_s, rebias_from_start_s);
+    set_given(a.options.gravity_mps2, gravity_mps2);
+    set_given(a.options.confidence, confidence);
     return outcome(cli::run_apply(a));
   });
 }
@@ -371,8 +385,9 @@ py::array_t<std::uint8_t> apply_samples(const std::string& cal_path, const std::
 }
 
 py::tuple gap(const std::vector<std::string>& inputs, const std::string& model, const std::string& out,
-              const std::string& fold_by, int max_steps, int max_folds, double alpha, const std::string& db,
-              const std::string& format, const std::string& mapping, const std::string& experiment,
+              const std::optional<std::string>& fold_by, const std::optional<int>& max_steps,
+              const std::optional<int>& max_folds, const std::optional<double>& alpha, const std::string& db,
+              const std::optional<std::string>& format, const std::string& mapping, const std::string& experiment,
               bool accept_damaged, const py::dict& options) {
   return guarded([&] {
     const Quiet quiet;
@@ -380,18 +395,19 @@ py::tuple gap(const std::vector<std::string>& inputs, const std::string& model, 
     a.data = dataset_args(inputs, format, mapping, experiment, accept_damaged, options);
     a.model = model;
     a.json = out;
-    a.fold_by = fold_by;
-    a.max_steps = max_steps;
-    a.max_folds = max_folds;
-    a.alpha = alpha;
+    set_given(a.fold_by, fold_by);
+    set_given(a.max_steps, max_steps);
+    set_given(a.max_folds, max_folds);
+    set_given(a.alpha, alpha);
     a.db = db;
     return outcome(cli::run_gap(a));
   });
 }
 
 py::tuple export_run(const std::string& run, const std::string& to, const std::string& output, const std::string& db,
-                     const std::string& procedure, const std::string& from, const std::string& rostopic,
-                     int px4_id, int px4_instance, bool accept_damaged) {
+                     const std::string& procedure, const std::optional<std::string>& from,
+                     const std::optional<std::string>& rostopic, const std::optional<int>& px4_id,
+                     const std::optional<int>& px4_instance, bool accept_damaged) {
   return guarded([&] {
     const Quiet quiet;
     cli::ExportArgs a;
@@ -400,10 +416,10 @@ py::tuple export_run(const std::string& run, const std::string& to, const std::s
     a.output = output;
     a.db = db;
     a.procedure = procedure;
-    if (!from.empty()) a.options.from = from;
-    if (!rostopic.empty()) a.options.rostopic = rostopic;
-    a.options.px4_device_id = px4_id;
-    a.options.px4_instance = px4_instance;
+    set_given(a.options.from, from);
+    set_given(a.options.rostopic, rostopic);
+    set_given(a.options.px4_device_id, px4_id);
+    set_given(a.options.px4_instance, px4_instance);
     a.options.accept_damaged = accept_damaged;
     return outcome(cli::run_export(a));
   });
@@ -412,21 +428,24 @@ py::tuple export_run(const std::string& run, const std::string& to, const std::s
 // `stend deviations`: of a file's column as the program reads it, or of `values` (frequency or
 // phase, one per tau0) given as an array.
 py::tuple deviations(const std::string& file, const std::optional<std::vector<double>>& values, bool phase,
-                     double tau0_s, double rate_hz, const std::string& column, std::size_t skip_lines,
-                     const std::vector<std::string>& kinds, const std::string& tau, std::uint64_t max_m,
-                     double confidence, const std::string& unit) {
+                     const std::optional<double>& tau0_s, const std::optional<double>& rate_hz,
+                     const std::optional<std::string>& column, const std::optional<std::size_t>& skip_lines,
+                     const std::vector<std::string>& kinds, const std::optional<std::string>& tau,
+                     const std::optional<std::uint64_t>& max_m, const std::optional<double>& confidence,
+                     const std::string& unit) {
   return guarded([&] {
     const Quiet quiet;
     cli::DeviationsArgs a;
     a.file = file;
-    a.column = {column, skip_lines};
+    set_given(a.column.column, column);
+    set_given(a.column.skip_lines, skip_lines);
     a.phase = phase;
-    a.tau0_s = tau0_s;
-    a.rate_hz = rate_hz;
+    set_given(a.tau0_s, tau0_s);
+    set_given(a.rate_hz, rate_hz);
     a.kinds = kinds;
-    if (!tau.empty()) a.tau = tau;
-    if (max_m > 0) a.max_m = max_m;
-    if (confidence > 0) a.confidence = confidence;
+    set_given(a.tau, tau);
+    set_given(a.max_m, max_m);
+    set_given(a.confidence, confidence);
     a.unit = unit;
     if (!values) return outcome(cli::run_deviations(a));
     return outcome(cli::deviations_of({*values, 1, ""}, a));

@@ -6,15 +6,20 @@
     print(result)                                       # parameters, std errors, verdicts
 
 Every function calls the same library code as the command of the same name (app/commands.hpp),
-with its options as keyword arguments; what the program reports as an error is raised as
-stend.Error (its message and exit code). docs/python.md.
+with its options as keyword arguments (None: the program's own default); what the program reports
+as an error is raised as stend.Error (its message and exit code). docs/python.md.
 """
 import builtins
 import json
 import os
 import tempfile
 
-import numpy as np
+try:
+    import numpy as np
+except ImportError as missing:  # say which interpreter lacks it, and the fix
+    import sys
+    raise ImportError(f"stend needs NumPy, which {sys.executable} lacks: use Debian's python3 (/usr/bin/python3, "
+                      "apt-get install python3-numpy), the one the module is built for (docs/python.md)") from missing
 
 from . import _stend
 from .errors import Error, FitFailed, InputError, IoFailure, Stopped, UsageError, raise_outcome
@@ -34,12 +39,12 @@ def _inputs(files):
     return [os.fspath(f) for f in files]
 
 
-def _source(data, format="auto", mapping=None, experiment=None, accept_damaged=False, options=None):
+def _source(data, format=None, mapping=None, experiment=None, accept_damaged=False, options=None):
     """What a command reads: a Recording (as it was opened) or paths with the import options."""
     if isinstance(data, Recording):
         s = dict(data.source)
         if data.path:
-            s = {"inputs": [data.path], "format": "auto", "mapping": "", "experiment": "", "options": {}}
+            s = {"inputs": [data.path], "format": None, "mapping": "", "experiment": "", "options": {}}
         s["accept_damaged"] = accept_damaged or s.get("accept_damaged", False)
         return s
     return {"inputs": _inputs(data), "format": format, "mapping": os.fspath(mapping) if mapping else "",
@@ -60,7 +65,7 @@ def open(path, *, accept_damaged=False):
     return Recording(_stend.open_dataset(s["inputs"], *_args(s)), s)
 
 
-def import_(files, output=None, *, format="auto", mapping=None, experiment=None, name="", **options):
+def import_(files, output=None, *, format=None, mapping=None, experiment=None, name="", **options):
     """Another tool's log as a Recording — `stend import FILES [-o OUTPUT] --experiment … --KEY VALUE`.
 
     With ``output`` the log is streamed into a new run folder (as `stend import -o`; bounded memory)
@@ -97,7 +102,7 @@ class _ModelFile:
             self.tmp.cleanup()
 
 
-def fit(data, model, *, out=None, estimator="auto", db="", format="auto", mapping=None, experiment=None,
+def fit(data, model, *, out=None, estimator=None, db="", format=None, mapping=None, experiment=None,
         accept_damaged=False, **options):
     """Fits a model — `stend fit DATA --model MODEL [-o OUT]`: the results go where `stend fit` writes
     them (a run folder's results file and report; a dataset file's only with ``out``).
@@ -109,8 +114,8 @@ def fit(data, model, *, out=None, estimator="auto", db="", format="auto", mappin
         return FitResult(_stend.fit(s["inputs"], path, *_args(s), os.fspath(out) if out else "", estimator, db))
 
 
-def run(experiment, *, progress=None, output="", name="", clock="", store="hdf5", db="", allow_plugins=False,
-        progress_period_s=0.2):
+def run(experiment, *, progress=None, output="", name="", clock="", store=None, db="", allow_plugins=False,
+        progress_period_s=None):
     """Runs an experiment — `stend run EXPERIMENT`: records a run folder, fits the model the
     experiment names, writes the report. ``progress(dict)`` is called every progress_period_s [s] of
     wall time (step, step_count, step_label, phase, run_time_s, remaining_s, samples, …); Ctrl-C or an
@@ -141,8 +146,8 @@ def _sample_array(data):
     return out
 
 
-def apply(calibration, data, output=None, *, assume=(), validate=False, expect_rotation=(), rebias_from_start_s=0.0,
-          gravity_mps2=0.0, confidence=0.0, validation_out=None, format="auto", mapping=None, experiment=None,
+def apply(calibration, data, output=None, *, assume=(), validate=False, expect_rotation=(), rebias_from_start_s=None,
+          gravity_mps2=None, confidence=None, validation_out=None, format=None, mapping=None, experiment=None,
           accept_damaged=False, **options):
     """Applies a fitted calibration (a results file, or the run folder holding one).
 
@@ -166,7 +171,7 @@ def apply(calibration, data, output=None, *, assume=(), validate=False, expect_r
     return result
 
 
-def gap(data, model, *, out=None, fold_by="auto", max_steps=4, max_folds=12, alpha=0.05, db="", format="auto",
+def gap(data, model, *, out=None, fold_by=None, max_steps=None, max_folds=None, alpha=None, db="", format=None,
         mapping=None, experiment=None, accept_damaged=False, **options):
     """Sim-to-real gap diagnosis — `stend gap DATA --model MODEL`: where the twin disagrees, which
     unmodelled effect explains it, how far it shrinks held out. Returns `stend gap --json`'s document
@@ -180,7 +185,7 @@ def gap(data, model, *, out=None, fold_by="auto", max_steps=4, max_folds=12, alp
     return result
 
 
-def export(run_dir, to, output=None, *, db="", procedure="", from_="", rostopic="", px4_id=0, px4_instance=0,
+def export(run_dir, to, output=None, *, db="", procedure="", from_=None, rostopic=None, px4_id=None, px4_instance=None,
            accept_damaged=False):
     """A run's results in another tool's format — `stend export RUN --to FORMAT [-o OUTPUT]`:
     kalibr | matlab | imutk | px4 | json | csv. Returns the files written, notes and warnings."""
@@ -199,8 +204,8 @@ def export(run_dir, to, output=None, *, db="", procedure="", from_="", rostopic=
 _DEVIATION_KINDS = ("adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "totdev")
 
 
-def deviations(series, *, tau0_s=0.0, rate_hz=0.0, phase=False, column="1", skip_lines=0, kinds=(), tau="octave",
-               max_m=0, confidence=0.0, unit=""):
+def deviations(series, *, tau0_s=None, rate_hz=None, phase=False, column=None, skip_lines=None, kinds=(), tau=None,
+               max_m=None, confidence=None, unit=""):
     """Every frequency-stability deviation (ADEV … TOTDEV) with its interval, EDF and noise type —
     `stend deviations FILE --tau0 S [--phase] [--column C] --json`. ``series``: a text file (one value
     per line or a column, as Stable32 and allantools take them) or a 1-D array of values, one per
@@ -214,7 +219,8 @@ def deviations(series, *, tau0_s=0.0, rate_hz=0.0, phase=False, column="1", skip
         file, values = os.fspath(series), None
     else:
         file, values = "(array)", np.asarray(series, dtype=float).ravel().tolist()
-    code, doc = _stend.deviations(file, values, phase, tau0_s, rate_hz, str(column), skip_lines, kinds, tau, max_m,
+    code, doc = _stend.deviations(file, values, phase, tau0_s, rate_hz, None if column is None else str(column),
+                                  skip_lines, kinds, tau, max_m,
                                   confidence, unit)
     result = json.loads(doc)
     result["exit_code"] = code
