@@ -216,6 +216,16 @@ def test_apply_matches_the_program(cli, scratch, paper_run):
     expect_same_error(p, lambda: stend.apply(cal, paper_run, assume=assume))
 
 
+def test_apply_validation_matches_the_program(cli, scratch, paper_run):
+    cal, assume = paper_run / "fit.json", "cross_zy=0"
+    code, doc, _ = cli.json("apply", cal, paper_run, "--validate", "--assume", assume, "--validation-out",
+                            scratch / "validation-cli.json", check=False)
+    r = stend.apply(cal, paper_run, validate=True, assume=assume, validation_out=scratch / "validation-py.json")
+    assert r["exit_code"] == code
+    assert r["validation"]["verdict"] == doc["validation"]["verdict"]
+    assert r["validation"]["document"] == doc["validation"]["document"]
+
+
 def test_gap_matches_the_program(cli, scratch, six_run, source):
     model = source / "diagnosis/examples/bias_scale.yaml"
     code, doc, _ = cli.json("gap", six_run, "--model", model, "--out", scratch / "gap-cli.json", check=False)
