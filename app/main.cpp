@@ -79,7 +79,11 @@ ExitCode cmd_run(const stend::cli::RunArgs& args, bool quiet, const stend::cli::
   const bool show = !quiet && status.enabled();
   stend::cli::RunHooks hooks;
   hooks.stop = &g_stop;
-  hooks.on_loaded = [&](const stend::Experiment& exp) { live.emplace(live_args, exp.name); };
+  hooks.on_loaded = [&](const stend::Experiment& exp) {
+    live.emplace(live_args, exp.name);
+    std::signal(SIGINT, on_sigint);  // from here Ctrl-C stops the run cleanly
+    std::signal(SIGTERM, on_sigint);
+  };
   if (show || live_args.live)
     hooks.on_progress = [&](const stend::RunProgress& p) {
       if (show) status.show(stend::cli::run_progress_line(p, stend::cli::terminal_columns()));
@@ -91,8 +95,6 @@ ExitCode cmd_run(const stend::cli::RunArgs& args, bool quiet, const stend::cli::
     status.keep();  // the final line stays: "100% | done | …"
     if (live) live->finish(r.status, r.message);
   };
-  std::signal(SIGINT, on_sigint);
-  std::signal(SIGTERM, on_sigint);
   const stend::cli::Outcome o = stend::cli::run_run(args, hooks);
   stend::cli::print_json(o.doc);
   return o.code;
