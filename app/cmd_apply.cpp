@@ -20,12 +20,9 @@
 
 namespace stend::cli {
 
-namespace {
-
 namespace fs = std::filesystem;
 
-// The results file CAL names: the file itself, or the one estimator results file in a run folder.
-fs::path results_file(const fs::path& cal, const estimation::Registry& registry) {
+fs::path calibration_results_file(const fs::path& cal, const estimation::Registry& registry) {
   if (!fs::is_directory(cal)) return cal;
   std::vector<fs::path> found;
   for (const auto& e : registry.entries())
@@ -38,43 +35,45 @@ fs::path results_file(const fs::path& cal, const estimation::Registry& registry)
                                                                   "); name the one to apply"));
 }
 
-struct ApplyArgs {
-  std::string cal, output, json;
-  DatasetArgs data;  // the recording to calibrate
-  bool validate = false;
-  std::vector<std::string> rotations;
-  std::vector<std::string> assumptions;  // NAME=VALUE[,NAME=VALUE…], repeatable
-  calibration::ValidationOptions options;
-};
-
-ExitCode run_apply(const ApplyArgs& a) {
+calibration::Calibration load_stated_calibration(const std::string& cal, const std::vector<std::string>& assumptions) {
   const estimation::Registry registry = estimators::builtin();
   std::vector<calibration::Assumption> assumed;
-  for (const auto& text : a.assumptions)
+  for (const auto& text : assumptions)
     for (auto& v : calibration::parse_assumptions(text)) assumed.push_back(std::move(v));
-  const calibration::Calibration cal = calibration::load_calibration(results_file(a.cal, registry), registry, assumed);
+  return calibration::load_calibration(calibration_results_file(cal, registry), registry, assumed);
+}
+
+namespace {
+
+// Warns on stderr when the recording's temperatures leave the range the calibration was fitted over.
+void warn_outside_temperatures(const Recording& raw, const calibration::Calibration& cal) {
+  if (!cal.needs_temperature() || !std::isfinite(cal.valid_min_c) || raw.sample_count() == 0) return;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;  // [degC]
+  for_each_chunk(raw.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t) {
+    for (std::size_t k = 0; k < n; ++k) {
+      lo = std::min(lo, c[k].temperature_c);
+      hi = std::max(hi, c[k].temperature_c);
+    }
+  });
+  if (lo < cal.valid_min_c || hi > cal.valid_max_c)
+    fmt::print(stderr, "warning: the recording spans {:.1f}..{:.1f} degC, outside the fit's {:.1f}..{:.1f} degC\n",
+               lo, hi, cal.valid_min_c, cal.valid_max_c);
+}
+
+}  // namespace
+
+Outcome run_apply(const ApplyArgs& a) {
+  const calibration::Calibration cal = load_stated_calibration(a.cal, a.assumptions);
   const bool validating = a.validate || !a.rotations.empty() || a.options.rebias_from_start_s > 0.0;
-  if (a.output.empty() && !validating) {
-    fmt::print(stderr, "stend apply: nothing to do: give -o CALIBRATED to write the calibrated recording, and/or --validate\n");
-    return ExitCode::kUsage;
-  }
+  if (a.output.empty() && !validating)
+    throw Refusal(ExitCode::kUsage,
+                  "stend apply: nothing to do: give -o CALIBRATED to write the calibrated recording, and/or --validate");
   calibration::ValidationOptions options = a.options;
   for (const auto& r : a.rotations) options.rotations.push_back(calibration::parse_expected_rotation(r));
   calibration::check_applicable(cal, options);  // before reading the recording or writing anything
   cal.print(human_stream());
   const Recording raw = a.data.open();
-  if (cal.needs_temperature() && std::isfinite(cal.valid_min_c) && raw.sample_count() > 0) {
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;  // [degC]
-    for_each_chunk(raw.sample_source(), [&](const ImuSample* c, std::size_t n, std::uint64_t) {
-      for (std::size_t k = 0; k < n; ++k) {
-        lo = std::min(lo, c[k].temperature_c);
-        hi = std::max(hi, c[k].temperature_c);
-      }
-    });
-    if (lo < cal.valid_min_c || hi > cal.valid_max_c)
-      fmt::print(stderr, "warning: the recording spans {:.1f}..{:.1f} degC, outside the fit's {:.1f}..{:.1f} degC\n",
-                 lo, hi, cal.valid_min_c, cal.valid_max_c);
-  }
+  warn_outside_temperatures(raw, cal);
   const Recording calibrated = calibration::apply_calibration(raw, cal);
   // docs/schemas/apply.schema.json
   nlohmann::json doc = {{"calibrated", nullptr}, {"assumed", cal.assumed}, {"validation", nullptr}};
@@ -83,10 +82,7 @@ ExitCode run_apply(const ApplyArgs& a) {
     fmt::print(human(), "calibrated: {} ({} samples)\n", a.output, calibrated.sample_count());
     doc["calibrated"] = a.output;
   }
-  if (!validating) {
-    print_json(doc);
-    return ExitCode::kOk;
-  }
+  if (!validating) return {ExitCode::kOk, doc};
   const calibration::ValidationReport report = calibration::validate(raw, calibrated, cal, options);
   std::ostringstream text;
   report.print(text);
@@ -99,11 +95,8 @@ ExitCode run_apply(const ApplyArgs& a) {
                        {"verdict", calibration::to_string(report.verdict())},
                        {"results_file", json.empty() ? nlohmann::json(nullptr) : nlohmann::json(json.string())},
                        {"document", nlohmann::json::parse(document, nullptr, false)}};
-  print_json(doc);
-  return report.ok ? ExitCode::kOk : ExitCode::kFitFailed;
+  return {report.ok ? ExitCode::kOk : ExitCode::kFitFailed, doc};
 }
-
-}  // namespace
 
 void add_apply_command(CLI::App& app, std::vector<Command>& out) {
   auto* sub = app.add_subcommand("apply", "Apply a fitted calibration to a recording (run folder or dataset file) and "
@@ -131,7 +124,11 @@ void add_apply_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_option("--validation-out", a.json,
                   "Where to write the validation results (default CALIBRATED/validation.json; with no -o, only here)");
   add_json_flag(sub, "what was written and the validation's outcome");
-  out.push_back({sub, [] { return run_apply(a); }});
+  out.push_back({sub, [] {
+                   const Outcome o = run_apply(a);
+                   print_json(o.doc);
+                   return o.code;
+                 }});
 }
 
 }  // namespace stend::cli

@@ -17,17 +17,7 @@ namespace stend::cli {
 
 namespace {
 
-struct DeviationsArgs {
-  std::string file;
-  io::SeriesColumn column;
-  bool phase = false;
-  double tau0_s = 0.0, rate_hz = 0.0;
-  std::vector<std::string> kinds;
-  std::string tau = allan::to_string(allan::TauSpacing::kOctave);
-  std::uint64_t max_m = allan::OverlappingAllanStream::kDefaultMaxM;
-  double confidence = stats::kOneSigma;
-  std::string unit;
-};
+
 
 std::vector<std::string> kind_names() {
   std::vector<std::string> names;
@@ -79,8 +69,11 @@ void print_points(std::FILE* out, const allan::ChannelDeviations& d) {
   }
 }
 
-ExitCode run_deviations(const DeviationsArgs& a) {
-  const io::SeriesValues series = io::read_series(a.file, a.column);
+}  // namespace
+
+Outcome deviations_of(const io::SeriesValues& series, const DeviationsArgs& a) {
+  if (a.tau0_s <= 0 && a.rate_hz <= 0)
+    throw Refusal(ExitCode::kUsage, "error: deviations: give --tau0 S or --rate-hz HZ (the spacing of the values)");
   const double rate_hz = a.rate_hz > 0 ? a.rate_hz : 1.0 / a.tau0_s;
   allan::AllanOptions options;
   options.max_m = a.max_m;
@@ -101,18 +94,19 @@ ExitCode run_deviations(const DeviationsArgs& a) {
     fmt::print(stderr, "deviations failed: {}\n", why);
     doc["ok"] = false;
     doc["reason"] = why;
-    print_json(doc);
-    return ExitCode::kFitFailed;
+    return {ExitCode::kFitFailed, doc};
   }
   allan::write_deviation_table(human_stream(), {d});
   print_points(human(), d);
   doc["ok"] = true;
   allan::add_deviations_json(doc, {d}, request.tau);
-  print_json(doc);
-  return ExitCode::kOk;
+  return {ExitCode::kOk, doc};
 }
 
-}  // namespace
+Outcome run_deviations(const DeviationsArgs& a) {
+  if (a.tau0_s <= 0 && a.rate_hz <= 0) return deviations_of({}, a);  // refused before reading
+  return deviations_of(io::read_series(a.file, a.column), a);
+}
 
 void add_deviations_command(CLI::App& app, std::vector<Command>& out) {
   auto* sub = app.add_subcommand(
@@ -144,11 +138,9 @@ void add_deviations_command(CLI::App& app, std::vector<Command>& out) {
                                     "(default 1: fractional frequency, as from phase in seconds)");
   add_json_flag(sub, "the deviations with tau, m, terms, EDF, interval and noise type per point");
   out.push_back({sub, [] {
-                   if (a.tau0_s <= 0 && a.rate_hz <= 0) {
-                     fmt::print(stderr, "error: deviations: give --tau0 S or --rate-hz HZ (the spacing of the values)\n");
-                     return ExitCode::kUsage;
-                   }
-                   return run_deviations(a);
+                   const Outcome o = run_deviations(a);
+                   print_json(o.doc);
+                   return o.code;
                  }});
 }
 

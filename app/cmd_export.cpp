@@ -56,20 +56,40 @@ rp::ExportResult export_from_store(const std::string& run, const std::string& pr
 
 }  // namespace
 
+Outcome run_export(const ExportArgs& a) {
+  if (a.db.empty() && !a.procedure.empty())
+    throw InputError("stend export --procedure: give the results store with --db LOCATION");
+  if (a.db.empty() && a.run.empty()) throw InputError("stend export: give the run folder");
+  rp::ExportOptions options = a.options;
+  for (const auto& text : a.assumptions)
+    for (auto& v : estimation::parse_assumptions(text)) options.assumed.push_back(std::move(v));
+  const auto r = a.db.empty() ? rp::export_run(a.run, a.format, a.output, estimators::builtin(), options)
+                              : export_from_store(a.run, a.procedure, a.db, a.format, a.output);
+  nlohmann::json files = nlohmann::json::array();
+  for (const auto& f : r.files) {
+    fmt::print(human(), "wrote {}\n", f.string());
+    files.push_back(f.string());
+  }
+  for (const auto& n : r.notes) fmt::print(human(), "note: {}\n", n);
+  for (const auto& w : r.warnings) fmt::print(stderr, "warning: {}\n", w);
+  // docs/schemas/export.schema.json
+  return {ExitCode::kOk, {{"files", files}, {"notes", r.notes}, {"warnings", r.warnings}}};
+}
+
 void add_export_command(CLI::App& app, std::vector<Command>& out) {
   auto* sub = app.add_subcommand("export", "Export a run's results: Kalibr imu.yaml, MATLAB .mat (accelparams / "
                                            "gyroparams), IMU-TK calib files, PX4 thermal parameters, results JSON; "
                                            "or the recording itself as a CSV run folder");
-  static std::string run, format, output, db, procedure;
-  static stend::reporting::ExportOptions opt;
-  sub->add_option("run", run, "Run folder (with --db: a run folder or name in the store)");
-  sub->add_option("--to", format, "kalibr | matlab | imutk | px4 | json | csv")
+  static ExportArgs a;
+  auto& opt = a.options;
+  sub->add_option("run", a.run, "Run folder (with --db: a run folder or name in the store)");
+  sub->add_option("--to", a.format, "kalibr | matlab | imutk | px4 | json | csv")
       ->required()
       ->check(CLI::IsMember(stend::reporting::export_formats()));
-  sub->add_option("-o,--output", output, "Output file (imutk: path prefix for _acc.calib / _gyro.calib; csv: a new "
+  sub->add_option("-o,--output", a.output, "Output file (imutk: path prefix for _acc.calib / _gyro.calib; csv: a new "
                                          "folder); default RUN/export/");
-  sub->add_option("--db", db, std::string(kDbOptionHelp) + "; given, --to json reads the results from the store");
-  sub->add_option("--procedure", procedure, "With --db: every run of this procedure fingerprint (or a prefix of at "
+  sub->add_option("--db", a.db, std::string(kDbOptionHelp) + "; given, --to json reads the results from the store");
+  sub->add_option("--procedure", a.procedure, "With --db: every run of this procedure fingerprint (or a prefix of at "
                                             "least 8 hex digits) into one stend.results_set/1 file");
   sub->add_option("--rostopic", opt.rostopic, "Kalibr: the IMU's ROS topic (default /imu0)");
   sub->add_option("--px4-id", opt.px4_device_id, "PX4: the sensor's device id for TC_A0_ID / CAL_ACC0_ID … (default 0)")
@@ -92,27 +112,12 @@ void add_export_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_flag("--accept-damaged", opt.accept_damaged,
                 "csv: copy the readable part of a damaged run (a truncated file, rows missing against run.json) "
                 "instead of refusing it");
-  static std::vector<std::string> assumptions;
-  sub->add_option("--assume", assumptions, kAssumeHelp);
+  sub->add_option("--assume", a.assumptions, kAssumeHelp);
   add_json_flag(sub, "the files written");
   out.push_back({sub, [] {
-                   for (const auto& text : assumptions)
-                     for (auto& v : estimation::parse_assumptions(text)) opt.assumed.push_back(std::move(v));
-                   if (db.empty() && !procedure.empty())
-                     throw InputError("stend export --procedure: give the results store with --db LOCATION");
-                   if (db.empty() && run.empty()) throw InputError("stend export: give the run folder");
-                   const auto r = db.empty() ? stend::reporting::export_run(run, format, output, estimators::builtin(), opt)
-                                             : export_from_store(run, procedure, db, format, output);
-                   nlohmann::json files = nlohmann::json::array();
-                   for (const auto& f : r.files) {
-                     fmt::print(human(), "wrote {}\n", f.string());
-                     files.push_back(f.string());
-                   }
-                   for (const auto& n : r.notes) fmt::print(human(), "note: {}\n", n);
-                   for (const auto& w : r.warnings) fmt::print(stderr, "warning: {}\n", w);
-                   // docs/schemas/export.schema.json
-                   print_json({{"files", files}, {"notes", r.notes}, {"warnings", r.warnings}});
-                   return ExitCode::kOk;
+                   const Outcome o = run_export(a);
+                   print_json(o.doc);
+                   return o.code;
                  }});
 }
 

@@ -23,20 +23,6 @@ namespace stend::cli {
 
 namespace {
 
-struct GapArgs {
-  DatasetArgs data;
-  std::string model, json, fold_by = "auto", db;
-  int max_steps = 4, max_folds = 12;
-  double alpha = 0.05;
-  // validate
-  int seeds = 20, null_runs = 40, oov_runs = 20, positions = 0;
-  std::vector<double> sizes = {1, 2, 5, 10};
-  std::vector<std::string> only;
-  std::string vjson;
-  std::uint64_t seed = 1;
-  int noise_seeds = 10, noise_null_runs = 40;  // noise-stage experiments (sample level)
-};
-
 // The --fold-by values: the keys of diagnosis::kFoldByNames.
 std::vector<std::string> fold_by_keys() {
   std::vector<std::string> keys;
@@ -70,11 +56,11 @@ void record_gap(const GapArgs& a, const std::filesystem::path& in_run, const std
   record_in_store(in_run.parent_path(), a.db);
 }
 
-ExitCode run_gap(const GapArgs& a) {
-  if (a.data.inputs.empty() || a.model.empty()) {
-    fmt::print(stderr, "stend gap: give RUN_OR_DATASET and --model MODEL.yaml (or `stend gap validate`)\n");
-    return ExitCode::kUsage;
-  }
+}  // namespace
+
+Outcome run_gap(const GapArgs& a) {
+  if (a.data.inputs.empty() || a.model.empty())
+    throw Refusal(ExitCode::kUsage, "stend gap: give RUN_OR_DATASET and --model MODEL.yaml (or `stend gap validate`)");
   const stend::Recording rec = a.data.open();
   const estimation::ModelSpec spec = linear_model(a.model);
   const diagnosis::GapInput in = diagnosis::build_input(rec, spec);
@@ -96,11 +82,13 @@ ExitCode run_gap(const GapArgs& a) {
   write_results(json, document, text.str());
   record_gap(a, in_run, json);
   // docs/schemas/gap.schema.json
-  print_json({{"ok", rep.ok},
-              {"results_file", json.empty() ? nlohmann::json(nullptr) : nlohmann::json(json.string())},
-              {"document", nlohmann::json::parse(document, nullptr, false)}});
-  return rep.ok ? ExitCode::kOk : ExitCode::kFitFailed;
+  return {rep.ok ? ExitCode::kOk : ExitCode::kFitFailed,
+          {{"ok", rep.ok},
+           {"results_file", json.empty() ? nlohmann::json(nullptr) : nlohmann::json(json.string())},
+           {"document", nlohmann::json::parse(document, nullptr, false)}}};
 }
+
+namespace {
 
 ExitCode run_validate(const GapArgs& a) {
   diagnosis::ValidateOptions o;
@@ -174,7 +162,12 @@ void add_gap_command(CLI::App& app, std::vector<Command>& out) {
       ->check(at_least(0));
   val->add_option("--noise-null", args->noise_null_runs, "Noise-stage null runs (default 40)")->check(at_least(0));
 
-  out.push_back({sub, [args, val] { return *val ? run_validate(*args) : run_gap(*args); }});
+  out.push_back({sub, [args, val] {
+                   if (*val) return run_validate(*args);
+                   const Outcome o = run_gap(*args);
+                   print_json(o.doc);
+                   return o.code;
+                 }});
 }
 
 }  // namespace stend::cli

@@ -37,11 +37,6 @@ class ProgressSink final : public io::SampleSink {
   std::uint64_t samples_ = 0;
 };
 
-struct ImportArgs {
-  DatasetArgs data;
-  std::string output, name;
-};
-
 // What was imported and how: format, absolute sources, the options stated.
 void emit_import_block(YAML::Emitter& out, const ImportArgs& a, const std::string& format, const io::ImportOptions& options) {
   out << YAML::Key << "import" << YAML::Value << YAML::BeginMap;
@@ -73,19 +68,19 @@ std::string import_yaml(const ImportArgs& a, const std::string& format, const io
   return std::string(out.c_str()) + "\n";
 }
 
-// What an import made, on stdout (human lines) and as JSON (docs/schemas/import.schema.json).
-void print_imported(const std::filesystem::path& dir, const std::string& format, std::uint64_t samples,
-                    const Recording& rec) {
+// What an import made, on stdout (human lines); returns it as JSON (docs/schemas/import.schema.json).
+nlohmann::json print_imported(const std::filesystem::path& dir, const std::string& format, std::uint64_t samples,
+                              const Recording& rec) {
   fmt::print(human(), "run folder: {}\nformat:     {}\nrecorded:   {} samples, {} segments, {} truth rows, {} events\n",
              dir.string(), format, samples, rec.segments.size(), rec.truth_t.size(), rec.events.size());
   const std::vector<std::string> warnings = print_warnings(rec);
-  print_json({{"run_dir", dir.string()},
-              {"format", format},
-              {"samples", samples},
-              {"segments", rec.segments.size()},
-              {"truth_rows", rec.truth_t.size()},
-              {"events", rec.events.size()},
-              {"warnings", warnings}});
+  return {{"run_dir", dir.string()},
+          {"format", format},
+          {"samples", samples},
+          {"segments", rec.segments.size()},
+          {"truth_rows", rec.truth_t.size()},
+          {"events", rec.events.size()},
+          {"warnings", warnings}};
 }
 
 // Whether `dir` is a complete run folder that this very import made already: the same
@@ -112,14 +107,14 @@ bool already_imported(const std::filesystem::path& dir, const std::string& yaml_
   }
 }
 
-ExitCode run_import(const ImportArgs& a) {
+}  // namespace
+
+Outcome run_import(const ImportArgs& a) {
   const std::filesystem::path dir = a.output;
   const io::ImportOptions options = a.data.options();
   const io::Inputs inputs = a.data.paths();
-  if (a.data.is_run()) {
-    fmt::print(stderr, "stend import: '{}' is a run folder already\n", inputs[0].string());
-    return ExitCode::kInvalidInput;
-  }
+  if (a.data.is_run())
+    throw Refusal(ExitCode::kInvalidInput, fmt::format("stend import: '{}' is a run folder already", inputs[0].string()));
   // experiment.yaml names the format, written with the first samples: the format is chosen first.
   const bool detect = a.data.format.empty() || a.data.format == "auto";
   const std::string format = (detect ? io::detect_format(inputs, options) : io::find_format(a.data.format)).name;
@@ -127,15 +122,13 @@ ExitCode run_import(const ImportArgs& a) {
       a.data.experiment.empty() ? std::nullopt : std::optional<Experiment>(load_procedure(a.data.experiment));
   const std::string yaml_text = import_yaml(a, format, options, procedure ? &*procedure : nullptr);
   if (std::filesystem::exists(dir)) {
-    if (!already_imported(dir, yaml_text, inputs, format)) {
-      fmt::print(stderr, "stend import: '{}' exists; give a new folder with -o (nothing was written)\n", dir.string());
-      return ExitCode::kInvalidInput;
-    }
+    if (!already_imported(dir, yaml_text, inputs, format))
+      throw Refusal(ExitCode::kInvalidInput,
+                    fmt::format("stend import: '{}' exists; give a new folder with -o (nothing was written)", dir.string()));
     fmt::print(human(), "already imported: {} holds these sources (same sha256), format and options; nothing to do\n",
                dir.string());
     const Recording done = Recording::open(dir, SampleLoading::kStream);
-    print_imported(dir, format, done.sample_count(), done);
-    return ExitCode::kOk;
+    return {ExitCode::kOk, print_imported(dir, format, done.sample_count(), done)};
   }
   Recording rec;
   io::RunSink sink(rec, dir, yaml_text, a.name.empty() && procedure ? procedure->name : a.name);
@@ -154,11 +147,8 @@ ExitCode run_import(const ImportArgs& a) {
     std::filesystem::remove_all(dir, ec);  // the folder did not exist before: nothing else is lost
     throw;
   }
-  print_imported(dir, format, sink.sample_count(), rec);
-  return ExitCode::kOk;
+  return {ExitCode::kOk, print_imported(dir, format, sink.sample_count(), rec)};
 }
-
-}  // namespace
 
 void add_import_command(CLI::App& app, std::vector<Command>& out) {
   auto args = std::make_shared<ImportArgs>();
@@ -168,7 +158,11 @@ void add_import_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_option("-o,--output", args->output, "The run folder to create (must not exist, unless it is this same import already: then nothing is done)")->required();
   sub->add_option("--name", args->name, "The recording's name (default import:<format>)");
   add_json_flag(sub, "the run folder made and what it holds");
-  out.push_back({sub, [args] { return run_import(*args); }});
+  out.push_back({sub, [args] {
+                   const Outcome o = run_import(*args);
+                   print_json(o.doc);
+                   return o.code;
+                 }});
 }
 
 }  // namespace stend::cli

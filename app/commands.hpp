@@ -3,11 +3,21 @@
 #pragma once
 
 #include "exit_codes.hpp"
+#include "stend/allan/deviation_report.hpp"
+#include "stend/calibration/calibration.hpp"
+#include "stend/calibration/validation.hpp"
+#include "stend/core/plugin_host.hpp"
+#include "stend/core/runner.hpp"
+#include "stend/estimation/registry.hpp"
+#include "stend/estimation/result.hpp"
 #include "stend/estimation/summary.hpp"
+#include "stend/reporting/exports.hpp"
 #include "stend/io/formats.hpp"
+#include "stend/io/series.hpp"
 #include "stend/recording/recording.hpp"
 
 #include <CLI/CLI.hpp>
+#include <atomic>
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
@@ -45,6 +55,14 @@ bool json_output();                 // whether --json was given
 std::FILE* human();                 // where human-readable lines go: stdout, or stderr under --json
 std::ostream& human_stream();       // the same as a stream
 void print_json(const nlohmann::json& doc);  // the document on stdout (under --json only)
+// Quiet: the human-readable lines are dropped (a caller that reads the results, python/).
+void set_quiet(bool quiet);
+
+// What a command gave: its exit code and its --json document (the caller prints it).
+struct Outcome {
+  ExitCode code = ExitCode::kOk;
+  nlohmann::json doc;
+};
 
 // ---- shared analysis helpers (app/fit.cpp) -----------------------------------------------------
 
@@ -112,6 +130,7 @@ struct FitOutcome {
   std::filesystem::path kept_results_file;  // a good results file this failed fit did not replace
   std::string estimator;
   nlohmann::json document;
+  estimation::FitResult result;  // the typed result (summary, instrument models with covariance, noise)
   nlohmann::json to_json() const;  // docs/schemas/fit.schema.json
   // kOk; kInvalidInput when nothing in the model applies to the recording (not applicable: an
   // instrument it lacks); kFitFailed otherwise.
@@ -128,6 +147,108 @@ FitOutcome fit_recording(const stend::Recording& rec, const std::string& model_f
 
 // Whether `results_file` lies in the run folder `run_dir` (then the run's report shows it).
 bool results_in_run(const std::filesystem::path& run_dir, const std::filesystem::path& results_file);
+
+// ---- the commands as functions: the program's subcommands and the Python module (python/) --------
+// Each takes the options its subcommand parses, prints its human-readable lines (human()) and
+// returns its exit code and --json document; refusals and errors are thrown (exit_codes.hpp).
+
+// `stend fit` (main.cpp's options): the fit, its results written as fit_recording says, the
+// run's report refreshed when they went into the run folder.
+struct FitArgs {
+  DatasetArgs data;
+  std::string model, out, estimator = "auto", db;
+};
+struct FitCommandOutcome {
+  FitOutcome fit;
+  nlohmann::json doc;  // docs/schemas/fit.schema.json
+};
+FitCommandOutcome run_fit(const FitArgs& a);
+
+// `stend import` (cmd_import.cpp).
+struct ImportArgs {
+  DatasetArgs data;
+  std::string output, name;
+};
+Outcome run_import(const ImportArgs& a);
+
+// `stend apply` (cmd_apply.cpp).
+struct ApplyArgs {
+  std::string cal, output, json;
+  DatasetArgs data;  // the recording to calibrate
+  bool validate = false;
+  std::vector<std::string> rotations;
+  std::vector<std::string> assumptions;  // NAME=VALUE[,NAME=VALUE…], repeatable
+  calibration::ValidationOptions options;
+};
+Outcome run_apply(const ApplyArgs& a);
+// The results file CAL names: the file itself, or the one estimator results file in a run folder.
+std::filesystem::path calibration_results_file(const std::filesystem::path& cal, const estimation::Registry& registry);
+// The calibration CAL names (a results file or a run folder holding one) with the --assume values.
+calibration::Calibration load_stated_calibration(const std::string& cal, const std::vector<std::string>& assumptions);
+
+// `stend gap` (cmd_gap.cpp); the validate fields are `stend gap validate`'s.
+struct GapArgs {
+  DatasetArgs data;
+  std::string model, json, fold_by = "auto", db;
+  int max_steps = 4, max_folds = 12;
+  double alpha = 0.05;
+  // validate
+  int seeds = 20, null_runs = 40, oov_runs = 20, positions = 0;
+  std::vector<double> sizes = {1, 2, 5, 10};
+  std::vector<std::string> only;
+  std::string vjson;
+  std::uint64_t seed = 1;
+  int noise_seeds = 10, noise_null_runs = 40;  // noise-stage experiments (sample level)
+};
+Outcome run_gap(const GapArgs& a);
+
+// `stend export` (cmd_export.cpp).
+struct ExportArgs {
+  std::string run, format, output, db, procedure;
+  reporting::ExportOptions options;
+  std::vector<std::string> assumptions;  // --assume NAME=VALUE[,NAME=VALUE…], repeatable
+};
+Outcome run_export(const ExportArgs& a);
+
+// `stend deviations` (cmd_deviations.cpp): every deviation kind of a plain series with its
+// intervals; deviations_of the values read already (the file's name and column as given in `a`).
+struct DeviationsArgs {
+  std::string file;
+  io::SeriesColumn column;
+  bool phase = false;
+  double tau0_s = 0.0, rate_hz = 0.0;
+  std::vector<std::string> kinds;
+  std::string tau = allan::to_string(allan::TauSpacing::kOctave);
+  std::uint64_t max_m = allan::OverlappingAllanStream::kDefaultMaxM;
+  double confidence = stats::kOneSigma;
+  std::string unit;
+};
+Outcome run_deviations(const DeviationsArgs& a);
+Outcome deviations_of(const io::SeriesValues& series, const DeviationsArgs& a);
+
+// `stend info` (cmd_info.cpp): the recording's summary, docs/schemas/info.schema.json.
+Outcome run_info(const std::string& dir);
+// The summary `stend info --json` prints, of any recording (a run folder or a dataset opened).
+nlohmann::json recording_summary(const Recording& rec);
+
+// `stend run` (cmd_run.cpp).
+struct RunArgs {
+  std::string file, output, name, clock, store = "hdf5", db;
+  bool allow_plugins = false;
+};
+// What the caller sees while the run goes: progress every period_s of wall time, a flag that stops
+// the run cleanly, and the run's result as soon as the bench is done (before the fit and report).
+struct RunHooks {
+  std::function<void(const RunProgress&)> on_progress;
+  double period_s = 0.2;  // [s] wall time between progress calls
+  const std::atomic<bool>* stop = nullptr;
+  std::function<void(const Experiment&)> on_loaded;  // the experiment, read and validated
+  std::function<void(const RunResult&)> on_finished;
+};
+Outcome run_run(const RunArgs& a, const RunHooks& hooks);
+// Loads plugins from the default search path; the experiment's own plugin_paths only when allowed
+// (--allow-plugins or STEND_ALLOW_PLUGINS=1, docs/plugins.md).
+void scan_plugins(PluginHost& host, const std::vector<std::string>& extra, bool allow_extra);
 
 // ---- subcommands in their own files ------------------------------------------------------------
 void add_gap_command(CLI::App& app, std::vector<Command>& out);      // cmd_gap.cpp

@@ -20,17 +20,22 @@ namespace stend::cli {
 
 namespace {
 
-ExitCode say(ExitCode code, const char* prefix, const char* what) {
-  fmt::print(stderr, "{}{}\n", prefix, what);
-  return code;
-}
+Failure say(ExitCode code, const char* prefix, const char* what) { return {code, std::string(prefix) + what}; }
 
 }  // namespace
 
 ExitCode exit_code_of_current_exception() {
+  const Failure f = failure_of_current_exception();
+  fmt::print(stderr, "{}\n", f.text);
+  return f.code;
+}
+
+Failure failure_of_current_exception() {
   constexpr ExitCode kInput = ExitCode::kInvalidInput, kIo = ExitCode::kIoFailure;
   try {
     throw;
+  } catch (const Refusal& e) {  // the command's own words and exit code
+    return say(e.code(), "", e.what());
   } catch (const ExperimentError& e) {  // its text reads "FILE:LINE:COL: error: …" already
     return say(kInput, "", e.what());
   } catch (const InputError& e) {

@@ -3,6 +3,9 @@
 // command is mapped to one in one place (exit_code_of_current_exception).
 #pragma once
 
+#include <stdexcept>
+#include <string>
+
 namespace stend::cli {
 
 enum class ExitCode : int {
@@ -22,5 +25,24 @@ constexpr int to_int(ExitCode code) { return static_cast<int>(code); }
 // (IoError, filesystem and stream errors, MODBUS / text-command / I2C / fixture link faults),
 // kUsage for anything else (an error of the program itself, said as "internal error").
 ExitCode exit_code_of_current_exception();
+
+// The same mapping without printing: the exit code and the line the program prints for it
+// (e.g. "error: …"), for callers that report it themselves (the Python module, python/).
+struct Failure {
+  ExitCode code = ExitCode::kUsage;
+  std::string text;
+};
+Failure failure_of_current_exception();
+
+// A command's refusal with its own exit code (the folder exists, nothing to do, …): its message is
+// printed as is, without "error: ".
+class Refusal : public std::runtime_error {
+ public:
+  Refusal(ExitCode code, const std::string& message) : std::runtime_error(message), code_(code) {}
+  ExitCode code() const { return code_; }
+
+ private:
+  ExitCode code_;
+};
 
 }  // namespace stend::cli

@@ -314,6 +314,7 @@ FitOutcome fit_recording(const stend::Recording& rec, const std::string& model_f
   out.status = r.status();
   out.estimator = entry.name;
   out.document = nlohmann::json::parse(document, nullptr, false);
+  out.result = r;
   if (r.status() == estimation::FitStatus::kNotApplicable) {
     fmt::print(human(), "results:    none — not applicable: {}; nothing written\n", r.summary.message);
     return out;
@@ -322,6 +323,35 @@ FitOutcome fit_recording(const stend::Recording& rec, const std::string& model_f
   out.results_file = written.file;
   out.kept_results_file = written.kept;
   return out;
+}
+
+FitCommandOutcome run_fit(const FitArgs& a) {
+  const DatasetArgs& data = a.data;
+  // A run opened for an estimator that needs no bench truth (allan) leaves the truth in the store.
+  const stend::Recording rec = data.is_run() && !fit_reads_truth(a.model, a.estimator)
+                                   ? stend::Recording::open(data.inputs[0], SampleLoading::kStream, TruthLoading::kSkip)
+                                   : data.open();
+  const std::filesystem::path run_dir = data.is_run() ? std::filesystem::path(data.inputs[0]) : std::filesystem::path();
+  FitCommandOutcome o{fit_recording(data.checked(rec), a.model, run_dir, a.out, a.estimator), {}};
+  o.doc = o.fit.to_json();
+  o.doc["report"] = nullptr;
+  if (run_dir.empty()) {
+    fmt::print(human(), "report:     none (the input is not a run folder; `stend import` makes one)\n");
+  } else if (o.fit.results_file.empty()) {
+    fmt::print(human(), "report:     {} not updated (no results written)\n", (run_dir / "report.html").string());
+  } else if (results_in_run(run_dir, o.fit.results_file)) {
+    // A failed fit too: its results file now says so and the report drops its earlier numbers —
+    // unless it was written beside a good results file that it kept (write_results): the report
+    // shows that one. The run is recorded in the results store (--db, else the default) as it now
+    // stands.
+    const std::filesystem::path report = write_run_report(run_dir, a.db);
+    fmt::print(human(), "report:     {} (updated)\n", report.string());
+    o.doc["report"] = report.string();
+  } else {
+    fmt::print(human(), "report:     {} not updated (--out put the results outside the run folder)\n",
+               (run_dir / "report.html").string());
+  }
+  return o;
 }
 
 }  // namespace stend::cli

@@ -53,5 +53,7 @@ set(CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS OFF)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS_PRIVATE_DIRS ${CMAKE_BINARY_DIR}/lib)
 # The SDK's headers include these (a plugin built against the installed Stend needs them).
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS "libeigen3-dev, cmake, g++")
+# The Python module (python/, /usr/lib/python3/dist-packages/stend) needs Debian's Python and NumPy.
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "python3, python3-numpy")
 set(CPACK_GENERATOR DEB)
 include(CPack)

@@ -30,6 +30,11 @@ dpkg -x "$deb" "$root"
 "$root/usr/bin/stend" --version
 if "$root/usr/bin/stend" --version | grep -q "build tree"; then fail "the packaged stend searches the build tree"; fi
 "$root/usr/bin/stend" plugins --json > "$tmp/plugins.json"
+# The Python module from the package's dist-packages (python/, docs/python.md).
+package=$(find "$root/usr/lib" -path '*/dist-packages/stend/__init__.py' | head -1)
+[ -n "$package" ] || fail "the package holds no Python module stend"
+PYTHONPATH=$(dirname "$(dirname "$package")") /usr/bin/python3 -c "import stend; print('python:   stend', stend.__version__)" \
+  || fail "import stend from the package"
 (cd "$root/usr/share/stend" && "$root/usr/bin/stend" run configs/paper_mpu6050_z.yaml --quiet --output "$tmp/runs" \
    --name paper --json > "$tmp/run.json") || { cat "$tmp/run.json"; fail "stend run from the package"; }
 python3 - "$tmp/run.json" "$tmp/plugins.json" "$root" <<'PY'

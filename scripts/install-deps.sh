@@ -20,6 +20,8 @@ packages=(
   gcc-avr avr-libc binutils-avr  # firmware/bench_mcu: the bench microcontroller's firmware (ATmega328P)
   simavr libsimavr-dev libelf-dev  # emulators/firmware: that firmware in the loop under simavr (libsimavr needs libelf)
   valgrind  # the perf test: instruction counts of the key paths under callgrind (bench/perf_budget.sh)
+  python3-pybind11 python3-pytest  # python/: the module `stend` (pybind11) and its tests against the program (pytest)
+  python3-matplotlib jupyter-nbconvert python3-nbclient python3-ipykernel  # docs/notebooks, executed by the suite
   python3-jsonschema  # tests: `--json` outputs checked against docs/schemas (tests/check_json_schema.py)
   dpkg-dev  # cpack -G DEB: dpkg-shlibdeps computes the package's dependencies (scripts/deb-test.sh)
   debootstrap  # scripts/deb-chroot-test.sh: the .deb on a clean Debian 12 chroot

@@ -41,6 +41,15 @@ assert len(loaded) >= 5, doc
 assert not outside, f"plugins loaded from outside the prefix: {outside}"
 PY
 
+# The Python module in the prefix's dist-packages (docs/python.md), when the build made it.
+if [ -f "$build/python/stend/__init__.py" ]; then
+  package=$(find "$prefix" -path '*/dist-packages/stend/__init__.py' | head -1)
+  [ -n "$package" ] || fail "the Python module stend is not installed"
+  python=$(sed -n 's/^PYTHON_EXECUTABLE:FILEPATH=//p' "$build/CMakeCache.txt")
+  PYTHONPATH=$(dirname "$(dirname "$package")") "${python:-python3}" -c "import stend; print('python: stend', stend.__version__)" \
+    || fail "import stend from the prefix"
+fi
+
 # The paper's experiment from the installed configs, from an empty current directory.
 mkdir "$tmp/cwd"
 (cd "$tmp/cwd" && "$prefix/bin/stend" run "$prefix/share/stend/configs/paper_mpu6050_z.yaml" --quiet \
