@@ -14,12 +14,27 @@ import json
 import os
 import tempfile
 
-try:
-    import numpy as np
-except ImportError as missing:  # say which interpreter lacks it, and the fix
-    import sys
-    raise ImportError(f"stend needs NumPy, which {sys.executable} lacks: use Debian's python3 (/usr/bin/python3, "
-                      "apt-get install python3-numpy), the one the module is built for (docs/python.md)") from missing
+def _import_numpy():
+    """NumPy; an interpreter of the same Python version without one of its own (e.g. a pyenv build
+    first on PATH) uses Debian's python3-numpy, which the module is built against."""
+    try:
+        import numpy
+        return numpy
+    except ImportError as missing:
+        import sys
+        debian = "/usr/lib/python3/dist-packages"
+        if debian not in sys.path and os.path.isdir(os.path.join(debian, "numpy")):
+            sys.path.append(debian)
+            try:
+                import numpy
+                return numpy
+            except ImportError:
+                pass
+        raise ImportError(f"stend needs NumPy, which {sys.executable} lacks: use Debian's python3 (/usr/bin/python3, "
+                          "apt-get install python3-numpy), the one the module is built for (docs/python.md)") from missing
+
+
+np = _import_numpy()
 
 from . import _stend
 from .errors import Error, FitFailed, InputError, IoFailure, Stopped, UsageError, raise_outcome
