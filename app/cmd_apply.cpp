@@ -62,6 +62,7 @@ ExitCode run_apply(const ApplyArgs& a) {
   for (const auto& r : a.rotations) options.rotations.push_back(calibration::parse_expected_rotation(r));
   calibration::check_applicable(cal, options);  // before reading the recording or writing anything
   cal.print(human_stream());
+  const RunFolderLock lock = lock_run(a.data.is_run() ? a.data.inputs[0] : std::string());
   const Recording raw = a.data.open();
   if (cal.needs_temperature() && std::isfinite(cal.valid_min_c) && raw.sample_count() > 0) {
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;  // [degC]

@@ -97,6 +97,7 @@ void add_export_command(CLI::App& app, std::vector<Command>& out) {
                    if (db.empty() && !procedure.empty())
                      throw InputError("stend export --procedure: give the results store with --db LOCATION");
                    if (db.empty() && run.empty()) throw InputError("stend export: give the run folder");
+                   const RunFolderLock lock = lock_run(db.empty() ? run : std::string());
                    const auto r = db.empty() ? stend::reporting::export_run(run, format, output, estimators::builtin(), opt)
                                              : export_from_store(run, procedure, db, format, output);
                    nlohmann::json files = nlohmann::json::array();

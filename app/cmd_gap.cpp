@@ -75,6 +75,7 @@ ExitCode run_gap(const GapArgs& a) {
     fmt::print(stderr, "stend gap: give RUN_OR_DATASET and --model MODEL.yaml (or `stend gap validate`)\n");
     return ExitCode::kUsage;
   }
+  const RunFolderLock lock = lock_run(a.data.is_run() ? a.data.inputs[0] : std::string());
   const stend::Recording rec = a.data.open();
   const estimation::ModelSpec spec = linear_model(a.model);
   const diagnosis::GapInput in = diagnosis::build_input(rec, spec);

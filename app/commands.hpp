@@ -5,6 +5,7 @@
 #include "exit_codes.hpp"
 #include "stend/estimation/summary.hpp"
 #include "stend/io/formats.hpp"
+#include "stend/recording/files.hpp"
 #include "stend/recording/recording.hpp"
 
 #include <CLI/CLI.hpp>
@@ -128,6 +129,17 @@ FitOutcome fit_recording(const stend::Recording& rec, const std::string& model_f
 
 // Whether `results_file` lies in the run folder `run_dir` (then the run's report shows it).
 bool results_in_run(const std::filesystem::path& run_dir, const std::filesystem::path& results_file);
+
+// The lock of a run folder a command reads and rewrites (fit, report, gap, apply, export): a
+// second command on the same run waits its turn, saying so on stderr (RunFolderLock). A path that
+// is not a run folder (a dataset file) is not locked.
+RunFolderLock lock_run(const std::filesystem::path& run_dir);
+
+// The checks the run's fit will make, made before the bench moves (`stend validate`, `stend run`):
+// the experiment's processing: section read as the fit reads it, and the model file that
+// estimation: model: names present and read by the estimator it is written for. Throws
+// ExperimentError at file:line:col (analysis_check.cpp).
+void check_analysis(const std::string& experiment_file);
 
 // ---- subcommands in their own files ------------------------------------------------------------
 void add_gap_command(CLI::App& app, std::vector<Command>& out);      // cmd_gap.cpp

@@ -113,6 +113,7 @@ ExitCode cmd_validate(const std::string& file, bool allow_plugins) {
   stend::PluginHost host;
   scan_plugins(host, stend::experiment_plugin_paths(file), allow_plugins);
   const stend::Experiment exp = stend::load_experiment(file, host);
+  stend::cli::check_analysis(file);
   if (exp.sensor.plugin.empty()) return validated_procedure(exp);
   stend::Bench bench(exp, host);  // stage 2: procedure against the fixtures' declared limits
   const stend::RunEstimate estimate = stend::estimate_run(exp, bench, {});
@@ -145,6 +146,7 @@ ExitCode cmd_run(const std::string& file, const std::string& output, const std::
   stend::PluginHost host;
   scan_plugins(host, stend::experiment_plugin_paths(file), allow_plugins);
   const stend::Experiment exp = stend::load_experiment(file, host);
+  stend::cli::check_analysis(file);
 
   stend::RunOptions opt;
   opt.output_dir = output;
@@ -197,6 +199,7 @@ ExitCode cmd_run(const std::string& file, const std::string& output, const std::
   if (!r.unsafe.empty()) return finish(ExitCode::kIoFailure);
   if (r.status != stend::RunStatus::kComplete)
     return finish(r.status == stend::RunStatus::kInterrupted ? ExitCode::kStopped : ExitCode::kIoFailure);
+  const stend::RunFolderLock lock = stend::cli::lock_run(r.dir);
   if (exp.estimation && exp.estimation["model"]) {
     // The experiment names its model: fit it now, relative paths from the experiment's folder.
     std::filesystem::path model = exp.estimation["model"].as<std::string>();
@@ -216,6 +219,7 @@ ExitCode cmd_run(const std::string& file, const std::string& output, const std::
 
 ExitCode cmd_fit(const stend::cli::DatasetArgs& data, const std::string& model, const std::string& out,
             const std::string& estimator, const std::string& db) {
+  const stend::RunFolderLock lock = stend::cli::lock_run(data.is_run() ? data.inputs[0] : std::string());
   // A run opened for an estimator that needs no bench truth (allan) leaves the truth in the store.
   const stend::Recording rec =
       data.is_run() && !stend::cli::fit_reads_truth(model, estimator)

@@ -1,6 +1,7 @@
 // Machine-readable output of the `stend` program (--json): see commands.hpp.
 #include "commands.hpp"
 
+#include <cstdio>
 #include <iostream>
 
 namespace stend::cli {
@@ -20,6 +21,14 @@ bool json_output() { return g_json; }
 std::FILE* human() { return g_json ? stderr : stdout; }
 
 std::ostream& human_stream() { return g_json ? std::cerr : std::cout; }
+
+RunFolderLock lock_run(const std::filesystem::path& run_dir) {
+  return RunFolderLock(run_dir, [&run_dir] {
+    std::fprintf(stderr, "waiting: another stend command is writing into %s; this one goes on when it ends\n",
+                 run_dir.string().c_str());
+    std::fflush(stderr);
+  });
+}
 
 void print_json(const nlohmann::json& doc) {
   if (!g_json) return;
