@@ -216,6 +216,27 @@ TEST_F(Hardening, ValidateRefusesWhatTheRunsFitWouldRefuse) {
   EXPECT_FALSE(fs::exists(*tmp / "never"));
 }
 
+TEST_F(Hardening, ARunMissingAnEventsFileOfNoRowsIsNotDamaged) {
+  const fs::path d = copy_of_run("no_events");
+  ASSERT_NE(read_text(run() / "run.json").find("\"event_count\": 0"), std::string::npos);
+  fs::remove(d / "events.csv");
+  const ProgramOutput o = run_stend("info " + d.string());
+  EXPECT_EQ(o.code, 0) << o.text;
+  EXPECT_FALSE(has(o, "damaged")) << o.text;
+  fs::remove(d / "segments.csv");  // 7 segments recorded: that one is missed
+  EXPECT_TRUE(has(run_stend("info " + d.string()), "damaged")) << "a file with rows that is missing is damage";
+}
+
+TEST_F(Hardening, AModelFileThatIsADataFileIsQuotedCut) {
+  std::string csv = "t,ax,ay,az\n";
+  for (int i = 0; i < 2000; ++i) csv += std::to_string(i) + ",0.1,0.2,9.8\n";
+  write_text(*tmp / "data.csv", csv);
+  const ProgramOutput o = run_stend("fit " + run().string() + " --model " + (*tmp / "data.csv").string());
+  EXPECT_EQ(o.code, 2) << o.text.substr(0, 2000);
+  EXPECT_TRUE(has(o, " bytes)'")) << o.text.substr(0, 2000);  // stend::excerpt: "…(N bytes)"
+  EXPECT_LT(o.text.size(), 600u) << o.text.substr(0, 2000);
+}
+
 TEST_F(Hardening, InfoCountsTheTruthRowsOfACsvRun) {
   const ProgramOutput o = run_command(shell_quote(stend::testing::stend_program().string()) + " info --json " +
                                       shell_quote(run().string()) + " 2>/dev/null");
