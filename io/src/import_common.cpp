@@ -171,13 +171,17 @@ void BinaryReader::need(std::size_t offset, std::size_t count, const std::string
 }
 
 std::optional<std::size_t> BinaryReader::find(std::size_t from, const std::uint8_t* pattern, std::size_t count) const {
-  // Windows overlapping by count − 1 bytes, so that a match across a window boundary is found.
-  for (std::size_t pos = from; pos + count <= size_; pos += kBinaryWindow - (count - 1)) {
-    const std::size_t n = std::min(kBinaryWindow, size_ - pos);
-    need(pos, n, "a search for a sync marker");
+  // The bytes already buffered are searched first: a log that resyncs at every few bytes reads
+  // each byte once (a window loaded per search made it quadratic). Windows overlap by count − 1
+  // bytes, so that a match across a window boundary is found.
+  for (std::size_t pos = from; pos + count <= size_;) {
+    const bool buffered = pos >= start_ && pos + count <= start_ + buffer_.size();
+    if (!buffered) need(pos, std::min(kBinaryWindow, size_ - pos), "a search for a sync marker");
+    const std::size_t n = start_ + buffer_.size() - pos;  // bytes buffered from pos on (≥ count)
     const std::uint8_t* begin = at(pos);
     const auto* hit = std::search(begin, begin + n, pattern, pattern + count);
     if (hit != begin + n) return pos + static_cast<std::size_t>(hit - begin);
+    pos += n - (count - 1);
   }
   return std::nullopt;
 }
