@@ -237,6 +237,23 @@ TEST_F(Hardening, AModelFileThatIsADataFileIsQuotedCut) {
   EXPECT_LT(o.text.size(), 600u) << o.text.substr(0, 2000);
 }
 
+TEST(Plugins, AWorldWritablePluginIsLoadedWithAWarning) {
+  const TempDir dir("writable-plugin");
+  const fs::path plugin = dir / "stend_good_copy.so";
+  fs::copy_file(fs::path(STEND_BINARY_DIR) / "lib/stend/test-plugins/stend_good_sensor.so", plugin);
+  const ProgramOutput safe = run_stend("plugins --path " + dir.str());
+  EXPECT_EQ(safe.code, 0) << safe.text;
+  EXPECT_FALSE(has(safe, "world-writable")) << safe.text;
+  fs::permissions(plugin, fs::perms::others_write, fs::perm_options::add);
+  const ProgramOutput file = run_stend("plugins --path " + dir.str());
+  EXPECT_EQ(file.code, 0) << file.text;
+  EXPECT_TRUE(has(file, "warning: " + plugin.string() + ": the plugin file is world-writable")) << file.text;
+  fs::permissions(plugin, fs::perms::others_write, fs::perm_options::remove);
+  fs::permissions(dir.path(), fs::perms::others_all | fs::perms::sticky_bit, fs::perm_options::add);
+  const ProgramOutput folder = run_stend("plugins --path " + dir.str());
+  EXPECT_TRUE(has(folder, "its folder " + dir.str() + " is world-writable")) << folder.text;
+}
+
 TEST_F(Hardening, InfoCountsTheTruthRowsOfACsvRun) {
   const ProgramOutput o = run_command(shell_quote(stend::testing::stend_program().string()) + " info --json " +
                                       shell_quote(run().string()) + " 2>/dev/null");
