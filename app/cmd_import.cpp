@@ -112,6 +112,15 @@ bool already_imported(const std::filesystem::path& dir, const std::string& yaml_
   }
 }
 
+// unfinished_import() of the run folder `dir`; "" when it is none (or not a readable run).
+std::string unfinished_import_in(const std::filesystem::path& dir) {
+  try {
+    return unfinished_import(Recording::open(dir, SampleLoading::kStream, TruthLoading::kSkip));
+  } catch (const std::exception&) {
+    return {};
+  }
+}
+
 ExitCode run_import(const ImportArgs& a) {
   const std::filesystem::path dir = a.output;
   const io::ImportOptions options = a.data.options();
@@ -128,7 +137,11 @@ ExitCode run_import(const ImportArgs& a) {
   const std::string yaml_text = import_yaml(a, format, options, procedure ? &*procedure : nullptr);
   if (std::filesystem::exists(dir)) {
     if (!already_imported(dir, yaml_text, inputs, format)) {
-      fmt::print(stderr, "stend import: '{}' exists; give a new folder with -o (nothing was written)\n", dir.string());
+      const std::string unfinished = unfinished_import_in(dir);
+      if (!unfinished.empty())
+        fmt::print(stderr, "stend import: {}; remove the folder and import again (nothing was written)\n", unfinished);
+      else
+        fmt::print(stderr, "stend import: '{}' exists; give a new folder with -o (nothing was written)\n", dir.string());
       return ExitCode::kInvalidInput;
     }
     fmt::print(human(), "already imported: {} holds these sources (same sha256), format and options; nothing to do\n",

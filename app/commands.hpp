@@ -130,6 +130,12 @@ FitOutcome fit_recording(const stend::Recording& rec, const std::string& model_f
 // Whether `results_file` lies in the run folder `run_dir` (then the run's report shows it).
 bool results_in_run(const std::filesystem::path& run_dir, const std::filesystem::path& results_file);
 
+// What is wrong with a run folder `stend import` began and did not finish (its experiment.yaml has
+// the import: block, its status is not complete: stopped or killed while it wrote): the message,
+// or "" for any other run. The analyses refuse such a run (DatasetArgs::checked) and a new import
+// into its folder says what it is.
+std::string unfinished_import(const stend::Recording& rec);
+
 // The lock of a run folder a command reads and rewrites (fit, report, gap, apply, export): a
 // second command on the same run waits its turn, saying so on stderr (RunFolderLock). A path that
 // is not a run folder (a dataset file) is not locked.

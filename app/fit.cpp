@@ -91,8 +91,23 @@ std::vector<std::string> print_warnings(const stend::Recording& rec) {
   return warnings;
 }
 
+std::string unfinished_import(const stend::Recording& rec) {
+  if (rec.header.status == RunStatus::kComplete || rec.experiment_yaml.empty()) return {};
+  try {
+    const YAML::Node root = YAML::Load(rec.experiment_yaml);
+    if (!root.IsMap() || !root["import"]) return {};
+  } catch (const YAML::Exception&) {
+    return {};
+  }
+  return fmt::format("{}: the import into this run folder did not finish (status {}: stopped or killed while it "
+                     "wrote; {} samples of the log are in it)",
+                     rec.dir.string(), to_string(rec.header.status), rec.sample_count());
+}
+
 const stend::Recording& DatasetArgs::checked(const stend::Recording& rec) const {
   if (accept_damaged) return rec;
+  if (const std::string why = unfinished_import(rec); !why.empty())
+    throw InputError(why + " — import the log again into a new folder, or --accept-damaged analyses the part imported");
   try {
     require_whole(rec);
   } catch (const std::runtime_error& e) {

@@ -254,6 +254,32 @@ TEST(Plugins, AWorldWritablePluginIsLoadedWithAWarning) {
   EXPECT_TRUE(has(folder, "its folder " + dir.str() + " is world-writable")) << folder.text;
 }
 
+// An import stopped while it wrote: its run folder (as a CSV run, status still "running").
+TEST(UnfinishedImport, IsRefusedByTheAnalysesAndNamedByANewImport) {
+  const TempDir dir("unfinished-import");
+  std::string log = "t,ax,ay,az,gx,gy,gz\n";
+  for (int i = 0; i < 500; ++i) log += std::to_string(0.01 * i) + ",0.01,0.02,9.81,0.001,0.002,0.003\n";
+  write_text(dir / "log.csv", log);
+  const std::string import = "import " + (dir / "log.csv").string() + " --format csv --time t --accel ax,ay,az " +
+                             "--gyro gx,gy,gz -o ";
+  ASSERT_EQ(run_stend(import + (dir / "whole").string()).code, 0);
+  ASSERT_EQ(run_stend("export " + (dir / "whole").string() + " --to csv -o " + (dir / "cut").string()).code, 0);
+  const fs::path run_json = dir / "cut" / "run.json";
+  std::string header = read_text(run_json);
+  const auto at = header.find("\"status\": \"complete\"");
+  ASSERT_NE(at, std::string::npos) << header;
+  header.replace(at, std::string("\"status\": \"complete\"").size(), "\"status\": \"running\"");
+  write_text(run_json, header);
+  const std::string allan = src + "/estimators/allan/example/allan.yaml";
+  const ProgramOutput fit = run_stend("fit " + (dir / "cut").string() + " -m " + allan);
+  EXPECT_EQ(fit.code, 2) << fit.text;
+  EXPECT_TRUE(has(fit, "the import into this run folder did not finish (status running")) << fit.text;
+  const ProgramOutput again = run_stend(import + (dir / "cut").string());
+  EXPECT_EQ(again.code, 2) << again.text;
+  EXPECT_TRUE(has(again, "did not finish")) << again.text;
+  EXPECT_TRUE(has(again, "remove the folder and import again")) << again.text;
+}
+
 TEST_F(Hardening, InfoCountsTheTruthRowsOfACsvRun) {
   const ProgramOutput o = run_command(shell_quote(stend::testing::stend_program().string()) + " info --json " +
                                       shell_quote(run().string()) + " 2>/dev/null");
