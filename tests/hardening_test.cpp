@@ -22,6 +22,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -123,6 +124,39 @@ TEST_F(Hardening, ConcurrentFitsAndReportsOnOneRunAllSucceedAndLeaveWholeResults
     }
   }
   EXPECT_NE(read_text(d / "report.html").find("</html>"), std::string::npos);
+}
+
+// ---- the live view: Ctrl-C ends `stend watch` at once, whatever its viewers do ---------------------
+
+namespace {
+
+// A viewer that connects to 127.0.0.1:`port` and then sends `text` (maybe nothing) and never more.
+int idle_viewer(int port, const std::string& text) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(static_cast<std::uint16_t>(port));
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 && !text.empty())
+    (void)::send(fd, text.data(), text.size(), MSG_NOSIGNAL);
+  return fd;
+}
+
+}  // namespace
+
+TEST_F(Hardening, WatchEndsAtOnceOnCtrlCWithIdleAndSlowViewersConnected) {
+  stend::testing::StartedCommand watch = stend::testing::start_stend("watch " + run().string() + " --port 0");
+  const std::string port = watch.wait_for("live view: http://127\\.0\\.0\\.1:([0-9]+)/");
+  ASSERT_FALSE(port.empty());
+  std::vector<int> viewers;
+  for (int i = 0; i < 16; ++i) viewers.push_back(idle_viewer(std::stoi(port), i % 2 ? "GET / HTTP/1.1\r\n" : ""));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const auto start = std::chrono::steady_clock::now();
+  watch.interrupt();
+  const ProgramOutput o = watch.finish();
+  EXPECT_LT(seconds_since(start), 1.5) << o.text;  // the watch loop's tick (50 ms) and a prompt stop
+  EXPECT_EQ(o.code, 0) << o.text;
+  for (const int fd : viewers) ::close(fd);
 }
 
 // ---- PostgreSQL timeouts --------------------------------------------------------------------------
