@@ -314,6 +314,26 @@ TEST(UnfinishedImport, IsRefusedByTheAnalysesAndNamedByANewImport) {
   EXPECT_TRUE(has(again, "remove the folder and import again")) << again.text;
 }
 
+// The disk fills (a file-size limit) while an import writes run.h5: exit 4 with the system's
+// reason, the folder removed, and no crash in libhdf5's exit handler.
+TEST(FullDisk, AnImportThatCannotWriteItsRunFailsCleanly) {
+  const TempDir dir("full-disk");
+  std::string log = "t,ax,ay,az,gx,gy,gz\n";
+  for (int i = 0; i < 200000; ++i)
+    log += std::to_string(0.01 * i) + "," + std::to_string(0.01 + 1e-6 * (i % 977)) + ",0.02,9.81,0.001,0.002," +
+           std::to_string(1e-5 * (i % 613)) + "\n";
+  write_text(dir / "log.csv", log);
+  const fs::path out = dir / "imported";
+  const ProgramOutput o = run_command("trap '' XFSZ; ulimit -f 20; exec " + shell_quote(stend::testing::stend_program().string()) +
+                                      " import " + shell_quote((dir / "log.csv").string()) +
+                                      " --format csv --time t --accel ax,ay,az --gyro gx,gy,gz -o " + shell_quote(out.string()));
+  EXPECT_EQ(o.code, 4) << o.text.substr(0, 2000);
+  EXPECT_TRUE(has(o, "run.h5: cannot ")) << o.text.substr(0, 2000);  // a dataset, the SWMR start, …
+  EXPECT_TRUE(has(o, "File too large")) << o.text.substr(0, 2000);
+  EXPECT_FALSE(has(o, "errno =")) << "libhdf5's raw text: " << o.text.substr(0, 2000);
+  EXPECT_FALSE(fs::exists(out));
+}
+
 TEST_F(Hardening, InfoCountsTheTruthRowsOfACsvRun) {
   const ProgramOutput o = run_command(shell_quote(stend::testing::stend_program().string()) + " info --json " +
                                       shell_quote(run().string()) + " 2>/dev/null");
