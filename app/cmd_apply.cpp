@@ -72,6 +72,7 @@ Outcome run_apply(const ApplyArgs& a) {
   for (const auto& r : a.rotations) options.rotations.push_back(calibration::parse_expected_rotation(r));
   calibration::check_applicable(cal, options);  // before reading the recording or writing anything
   cal.print(human_stream());
+  const RunFolderLock lock = lock_run(a.data.is_run() ? a.data.inputs[0] : std::string());
   const Recording raw = a.data.open();
   warn_outside_temperatures(raw, cal);
   const Recording calibrated = calibration::apply_calibration(raw, cal);

@@ -330,6 +330,15 @@ ExitCode report(const std::vector<Task>& tasks, const BatchArgs& a, double wall_
   return ok == tasks.size() ? ExitCode::kOk : ExitCode::kFitFailed;
 }
 
+// What is wrong with the command line itself ("" when nothing is): exit 1, as for CLI11's errors.
+std::string usage_problem(const BatchArgs& a) {
+  if ((a.verb == "fit" || a.verb == "gap") && a.model.empty())
+    return fmt::format("stend batch {}: give the model with -m MODEL.yaml", a.verb);
+  if (a.runs.empty() && a.procedure.empty()) return "stend batch: no run given: name run folders or --procedure FINGERPRINT";
+  if (a.slurm && a.out.empty()) return "stend batch --slurm: give --out DIR, a folder on storage the nodes share";
+  return {};
+}
+
 }  // namespace
 
 void add_batch_command(CLI::App& app, std::vector<Command>& out) {
@@ -356,8 +365,10 @@ void add_batch_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_option("--out", a.out, "Slurm: folder on shared storage for the job script, task list, logs and statuses");
   add_json_flag(sub, "every task's outcome and the totals");
   out.push_back({sub, [] {
-                   if ((a.verb == "fit" || a.verb == "gap") && a.model.empty())
-                     throw InputError(fmt::format("stend batch {}: give the model with -m MODEL.yaml", a.verb));
+                   if (const std::string why = usage_problem(a); !why.empty()) {
+                     fmt::print(stderr, "error: {}\n", why);  // a command line that is wrong: docs/errors.md
+                     return ExitCode::kUsage;
+                   }
                    std::vector<Task> tasks = plan(a);
                    const auto t0 = std::chrono::steady_clock::now();
                    if (a.slurm) run_slurm(tasks, a);

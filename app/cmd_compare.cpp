@@ -10,6 +10,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include <cstdlib>
 #include <iostream>
 #include <optional>
@@ -24,8 +26,13 @@ namespace rp = stend::reporting;
 
 // The store to read: --db (recorded into), else $STEND_RESULTS_DB, else the SQLite file beside
 // the first run folder (results_store_location); "" when that is an SQLite file that does not
-// exist and none was named (nothing is created unasked).
+// exist and none was named (nothing is created unasked); an SQLite --db that does not exist is
+// created only to record the run folders given, else refused (reading creates no store).
 std::string store_of(const std::vector<std::string>& runs, const std::string& db) {
+  const bool records = std::any_of(runs.begin(), runs.end(), [](const std::string& r) { return fs::is_directory(r); });
+  if (!db.empty() && !rp::is_postgres_location(db) && !fs::exists(db) && !records)
+    throw InputError("stend compare: no results store at " + db + " (reading creates none; `stend db migrate --db " +
+                     db + "` creates one, and run folders given to compare are recorded into it)");
   const bool beside_run = !runs.empty() && fs::is_directory(runs.front());
   const std::string location = rp::results_store_location(db, beside_run ? fs::path(runs.front()) : fs::path());
   if (!db.empty() || rp::is_postgres_location(location) || fs::exists(location)) return location;

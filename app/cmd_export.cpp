@@ -60,6 +60,7 @@ Outcome run_export(const ExportArgs& a) {
   if (a.db.empty() && !a.procedure.empty())
     throw InputError("stend export --procedure: give the results store with --db LOCATION");
   if (a.db.empty() && a.run.empty()) throw InputError("stend export: give the run folder");
+  const RunFolderLock lock = lock_run(a.db.empty() ? a.run : std::string());  // one command at a time on a run
   rp::ExportOptions options = a.options;
   for (const auto& text : a.assumptions)
     for (auto& v : estimation::parse_assumptions(text)) options.assumed.push_back(std::move(v));

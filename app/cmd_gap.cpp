@@ -61,6 +61,7 @@ void record_gap(const GapArgs& a, const std::filesystem::path& in_run, const std
 Outcome run_gap(const GapArgs& a) {
   if (a.data.inputs.empty() || a.model.empty())
     throw Refusal(ExitCode::kUsage, "stend gap: give RUN_OR_DATASET and --model MODEL.yaml (or `stend gap validate`)");
+  const RunFolderLock lock = lock_run(a.data.is_run() ? a.data.inputs[0] : std::string());
   const stend::Recording rec = a.data.open();
   const estimation::ModelSpec spec = linear_model(a.model);
   const diagnosis::GapInput in = diagnosis::build_input(rec, spec);

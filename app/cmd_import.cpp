@@ -107,6 +107,15 @@ bool already_imported(const std::filesystem::path& dir, const std::string& yaml_
   }
 }
 
+// unfinished_import() of the run folder `dir`; "" when it is none (or not a readable run).
+std::string unfinished_import_in(const std::filesystem::path& dir) {
+  try {
+    return unfinished_import(Recording::open(dir, SampleLoading::kStream, TruthLoading::kSkip));
+  } catch (const std::exception&) {
+    return {};
+  }
+}
+
 }  // namespace
 
 Outcome run_import(const ImportArgs& a) {
@@ -122,9 +131,13 @@ Outcome run_import(const ImportArgs& a) {
       a.data.experiment.empty() ? std::nullopt : std::optional<Experiment>(load_procedure(a.data.experiment));
   const std::string yaml_text = import_yaml(a, format, options, procedure ? &*procedure : nullptr);
   if (std::filesystem::exists(dir)) {
-    if (!already_imported(dir, yaml_text, inputs, format))
+    if (!already_imported(dir, yaml_text, inputs, format)) {
+      const std::string unfinished = unfinished_import_in(dir);
       throw Refusal(ExitCode::kInvalidInput,
-                    fmt::format("stend import: '{}' exists; give a new folder with -o (nothing was written)", dir.string()));
+                    unfinished.empty()
+                        ? fmt::format("stend import: '{}' exists; give a new folder with -o (nothing was written)", dir.string())
+                        : fmt::format("stend import: {}; remove the folder and import again (nothing was written)", unfinished));
+    }
     fmt::print(human(), "already imported: {} holds these sources (same sha256), format and options; nothing to do\n",
                dir.string());
     const Recording done = Recording::open(dir, SampleLoading::kStream);

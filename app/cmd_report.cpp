@@ -31,6 +31,8 @@ void add_report_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_flag("--no-db", no_db, "Do not record the run in the results database");
   add_json_flag(sub, "the report and database written");
   out.push_back({sub, [] {
+                   const RunFolderLock lock = lock_run(run);
+                   stend::reporting::require_whole_results(run, estimators::builtin());
                    const auto path = stend::reporting::write_run_report(run, estimators::builtin());
                    fmt::print(human(), "report:     {}\n", path.string());
                    const std::string where = no_db ? std::string() : record_in_store(run, db);

@@ -10,6 +10,8 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdlib>
+#include <filesystem>
+#include <sys/stat.h>
 
 namespace stend::cli {
 
@@ -19,14 +21,44 @@ using nlohmann::json;
 // validation so that its plugins are known while validating it) are loaded only when the user
 // allows it (--allow-plugins or STEND_ALLOW_PLUGINS=1, docs/plugins.md); otherwise their files
 // are listed as not loaded and no code of theirs runs.
+namespace {
+
+// What makes a loaded plugin's code replaceable by any user of the machine: the file or its
+// folder world-writable (a sticky folder such as /tmp still lets anyone add a plugin beside it).
+// Empty when neither is.
+std::string writable_by_others(const std::string& file) {
+  struct stat st {};
+  if (::stat(file.c_str(), &st) == 0 && (st.st_mode & S_IWOTH) != 0)
+    return fmt::format("{}: the plugin file is world-writable: anyone on this machine can replace the code stend "
+                       "runs (chmod o-w {})", file, file);
+  const std::string dir = std::filesystem::path(file).parent_path().string();
+  if (::stat(dir.empty() ? "." : dir.c_str(), &st) == 0 && (st.st_mode & S_IWOTH) != 0)
+    return fmt::format("{}: its folder {} is world-writable: anyone on this machine can put code there that stend "
+                       "loads (chmod o-w {}, or keep plugins in a folder only you can write)", file, dir, dir);
+  return {};
+}
+
+// Says on stderr, for every plugin loaded, when anyone could have replaced it (docs/plugins.md).
+void warn_of_writable_plugins(const stend::PluginHost& host) {
+  for (const auto& r : host.records())
+    if (r.info != nullptr)
+      if (const std::string why = writable_by_others(r.file); !why.empty()) fmt::print(stderr, "warning: {}\n", why);
+}
+
+}  // namespace
+
 void scan_plugins(PluginHost& host, const std::vector<std::string>& extra, bool allow_extra) {
   if (const char* env = std::getenv("STEND_ALLOW_PLUGINS")) allow_extra = allow_extra || std::string(env) == "1";
-  if (allow_extra) return host.scan(stend::PluginHost::default_search_path(extra));
+  if (allow_extra) {
+    host.scan(stend::PluginHost::default_search_path(extra));
+    return warn_of_writable_plugins(host);
+  }
   host.scan(stend::PluginHost::default_search_path());
   std::vector<stend::SearchDir> unvetted;
   for (const auto& dir : extra) unvetted.push_back({dir, "experiment"});
   host.list_unloaded(unvetted, "not loaded: plugin folders named by an experiment file are loaded only with "
                                "--allow-plugins (or STEND_ALLOW_PLUGINS=1)");
+  warn_of_writable_plugins(host);
 }
 
 Outcome run_run(const RunArgs& a, const RunHooks& hooks) {
@@ -34,6 +66,7 @@ Outcome run_run(const RunArgs& a, const RunHooks& hooks) {
   stend::PluginHost host;
   scan_plugins(host, stend::experiment_plugin_paths(file), a.allow_plugins);
   const stend::Experiment exp = stend::load_experiment(file, host);
+  check_analysis(file);  // the fit's checks, before the bench moves
   if (hooks.on_loaded) hooks.on_loaded(exp);
 
   stend::RunOptions opt;
@@ -75,6 +108,7 @@ Outcome run_run(const RunArgs& a, const RunHooks& hooks) {
   if (!r.unsafe.empty()) return finish(ExitCode::kIoFailure);
   if (r.status != stend::RunStatus::kComplete)
     return finish(r.status == stend::RunStatus::kInterrupted ? ExitCode::kStopped : ExitCode::kIoFailure);
+  const RunFolderLock lock = lock_run(r.dir);  // the fit and the report take their turn on the new run
   if (exp.estimation && exp.estimation["model"]) {
     // The experiment names its model: fit it now, relative paths from the experiment's folder.
     std::filesystem::path model = exp.estimation["model"].as<std::string>();

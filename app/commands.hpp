@@ -14,6 +14,7 @@
 #include "stend/reporting/exports.hpp"
 #include "stend/io/formats.hpp"
 #include "stend/io/series.hpp"
+#include "stend/recording/files.hpp"
 #include "stend/recording/recording.hpp"
 
 #include <CLI/CLI.hpp>
@@ -147,6 +148,23 @@ FitOutcome fit_recording(const stend::Recording& rec, const std::string& model_f
 
 // Whether `results_file` lies in the run folder `run_dir` (then the run's report shows it).
 bool results_in_run(const std::filesystem::path& run_dir, const std::filesystem::path& results_file);
+
+// What is wrong with a run folder `stend import` began and did not finish (its experiment.yaml has
+// the import: block, its status is not complete: stopped or killed while it wrote): the message,
+// or "" for any other run. The analyses refuse such a run (DatasetArgs::checked) and a new import
+// into its folder says what it is.
+std::string unfinished_import(const stend::Recording& rec);
+
+// The lock of a run folder a command reads and rewrites (fit, report, gap, apply, export): a
+// second command on the same run waits its turn, saying so on stderr (RunFolderLock). A path that
+// is not a run folder (a dataset file) is not locked.
+RunFolderLock lock_run(const std::filesystem::path& run_dir);
+
+// The checks the run's fit will make, made before the bench moves (`stend validate`, `stend run`):
+// the experiment's processing: section read as the fit reads it, and the model file that
+// estimation: model: names present and read by the estimator it is written for. Throws
+// ExperimentError at file:line:col (analysis_check.cpp).
+void check_analysis(const std::string& experiment_file);
 
 // ---- the commands as functions: the program's subcommands and the Python module (python/) --------
 // Each takes the options its subcommand parses, prints its human-readable lines (human()) and

@@ -91,8 +91,23 @@ std::vector<std::string> print_warnings(const stend::Recording& rec) {
   return warnings;
 }
 
+std::string unfinished_import(const stend::Recording& rec) {
+  if (rec.header.status == RunStatus::kComplete || rec.experiment_yaml.empty()) return {};
+  try {
+    const YAML::Node root = YAML::Load(rec.experiment_yaml);
+    if (!root.IsMap() || !root["import"]) return {};
+  } catch (const YAML::Exception&) {
+    return {};
+  }
+  return fmt::format("{}: the import into this run folder did not finish (status {}: stopped or killed while it "
+                     "wrote; {} samples of the log are in it)",
+                     rec.dir.string(), to_string(rec.header.status), rec.sample_count());
+}
+
 const stend::Recording& DatasetArgs::checked(const stend::Recording& rec) const {
   if (accept_damaged) return rec;
+  if (const std::string why = unfinished_import(rec); !why.empty())
+    throw InputError(why + " — import the log again into a new folder, or --accept-damaged analyses the part imported");
   try {
     require_whole(rec);
   } catch (const std::runtime_error& e) {
@@ -327,6 +342,7 @@ FitOutcome fit_recording(const stend::Recording& rec, const std::string& model_f
 
 FitCommandOutcome run_fit(const FitArgs& a) {
   const DatasetArgs& data = a.data;
+  const RunFolderLock lock = lock_run(data.is_run() ? data.inputs[0] : std::string());  // one command at a time on a run
   // A run opened for an estimator that needs no bench truth (allan) leaves the truth in the store.
   const stend::Recording rec = data.is_run() && !fit_reads_truth(a.model, a.estimator)
                                    ? stend::Recording::open(data.inputs[0], SampleLoading::kStream, TruthLoading::kSkip)

@@ -126,6 +126,7 @@ ExitCode cmd_validate(const std::string& file, bool allow_plugins) {
   stend::PluginHost host;
   scan_plugins(host, stend::experiment_plugin_paths(file), allow_plugins);
   const stend::Experiment exp = stend::load_experiment(file, host);
+  stend::cli::check_analysis(file);
   if (exp.sensor.plugin.empty()) return validated_procedure(exp);
   stend::Bench bench(exp, host);  // stage 2: procedure against the fixtures' declared limits
   const stend::RunEstimate estimate = stend::estimate_run(exp, bench, {});

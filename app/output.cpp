@@ -41,6 +41,14 @@ std::ostream& human_stream() {
   return g_json ? std::cerr : std::cout;
 }
 
+RunFolderLock lock_run(const std::filesystem::path& run_dir) {
+  return RunFolderLock(run_dir, [&run_dir] {
+    std::fprintf(stderr, "waiting: another stend command is writing into %s; this one goes on when it ends\n",
+                 run_dir.string().c_str());
+    std::fflush(stderr);
+  });
+}
+
 void print_json(const nlohmann::json& doc) {
   if (!g_json) return;
   std::cout << doc.dump(2) << "\n";

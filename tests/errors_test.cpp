@@ -246,13 +246,20 @@ TEST_F(Errors, AHugeFieldIsQuotedShortWithItsLength) {
   const fs::path csv = *tmp / "huge.csv";
   std::string text = "t,ax,ay,az\n";
   for (int i = 0; i < 50; ++i) text += std::to_string(i * 0.01) + ",0.1,0.2,9.8\n";
-  text += "0.5," + std::string(5'000'000, '9') + ",0.2,9.8\n";
+  const std::string rows = text;
+  text += "0.5," + std::string(500'000, '9') + ",0.2,9.8\n";
   write_text(csv, text);
   const ProgramOutput o = run_stend("fit " + csv.string() + " --format csv --time t --accel ax,ay,az -m " + kAllan);
   EXPECT_EQ(o.code, 2) << o.text.substr(0, 2000);
   EXPECT_LT(o.text.size(), 2000u) << o.text.substr(0, 2000);
-  EXPECT_TRUE(has(o, "…(5000000 bytes)")) << o.text.substr(0, 2000);
+  EXPECT_TRUE(has(o, "…(500000 bytes)")) << o.text.substr(0, 2000);
   EXPECT_TRUE(has(o, csv.string() + ":52:")) << o.text.substr(0, 2000);
+  // Past the line limit (1 MiB) the line is refused whole, before its fields are looked at.
+  write_text(csv, rows + "0.5," + std::string(5'000'000, '9') + ",0.2,9.8\n");
+  const ProgramOutput l = run_stend("fit " + csv.string() + " --format csv --time t --accel ax,ay,az -m " + kAllan);
+  EXPECT_EQ(l.code, 2) << l.text.substr(0, 2000);
+  EXPECT_LT(l.text.size(), 2000u) << l.text.substr(0, 2000);
+  EXPECT_TRUE(has(l, csv.string() + ":52: the line is longer than 1048576 bytes")) << l.text.substr(0, 2000);
 
   const fs::path d = damaged("huge-row", [](const fs::path& p) {
     std::string t = read_text(p / "imu.csv");

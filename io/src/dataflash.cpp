@@ -105,6 +105,20 @@ struct DfFormats {
   std::map<std::uint8_t, const DfFormat*> by_type;  // the latest FMT of each type
 };
 
+// Where a log cut short (a power loss, a crash: the common end of a vehicle's log) ends inside a
+// message: every whole message before it is read, and the cut is said.
+struct DfCut {
+  std::size_t offset = 0;  // of the message the file ends in
+  std::size_t bytes = 0;   // of it that are in the file
+  std::string what;        // "a 'IMU' message", "a message header", "an FMT message"
+  bool found() const { return !what.empty(); }
+  std::string describe(std::size_t file_size) const {
+    return "the log is cut short at byte " + std::to_string(file_size) + ", inside " + what + " that starts at byte " +
+           std::to_string(offset) + ": its " + std::to_string(bytes) +
+           " byte(s) are dropped; every whole message before it is read (a log cut by a power loss or a crash)";
+  }
+};
+
 struct DfMessage {
   const DfFormat* fmt;  // nullptr for an FMT message (its definition is formats.all.back())
   std::size_t offset;   // of the message header
@@ -115,12 +129,20 @@ struct DfMessage {
 // defined type is skipped up to the next header (as DFReader does) and counted in `resyncs` and
 // `skipped_bytes`.
 bool next_message(const BinaryReader& f, std::size_t& pos, DfFormats& formats, std::size_t& resyncs,
-                  std::size_t& skipped_bytes, DfMessage& m) {
+                  std::size_t& skipped_bytes, DfMessage& m, DfCut& cut) {
   constexpr std::uint8_t kHead[2] = {kHead1, kHead2};
+  const auto ends_inside = [&](std::size_t length, const std::string& what) {
+    if (pos + length <= f.size()) return false;
+    cut = DfCut{pos, f.size() - pos, what};
+    pos = f.size();
+    return true;
+  };
   while (pos < f.size()) {
+    if (ends_inside(kHeaderBytes, "a message header")) return false;
     f.need(pos, kHeaderBytes, "a message header (A3 95 <type>)");
     const std::uint8_t type = *f.at(pos + 2);
     const bool header_ok = *f.at(pos) == kHead1 && *f.at(pos + 1) == kHead2;
+    if (header_ok && type == kFmtType && ends_inside(kFmtLength, "an FMT message")) return false;
     if (header_ok && type == kFmtType) {
       formats.all.push_back(read_fmt(f, pos));
       formats.all.back().index = formats.all.size() - 1;
@@ -143,6 +165,7 @@ bool next_message(const BinaryReader& f, std::size_t& pos, DfFormats& formats, s
     }
     const DfFormat& fmt = *it->second;
     if (fmt.length < kHeaderBytes) f.fail(fmt.defined_at, "FMT for '" + fmt.name + "' gives a length below 3");
+    if (ends_inside(fmt.length, "a '" + fmt.name + "' message")) return false;
     f.need(pos, fmt.length, "a '" + fmt.name + "' message");
     m = DfMessage{&fmt, pos};
     pos += fmt.length;
@@ -321,6 +344,7 @@ struct DfLog {
   DfUnits units;
   std::string firmware;
   std::size_t resyncs = 0, skipped_bytes = 0;
+  DfCut cut;  // where the file ends inside a message, if it does
 };
 
 // The first pass: every message's header; FMT, UNIT, MULT, FMTU and MSG read, IMU messages counted
@@ -333,7 +357,7 @@ DfLog read_dataflash(const BinaryReader& f) {
   DfLog log;
   std::size_t pos = 0;
   DfMessage m{};
-  while (next_message(f, pos, log.formats, log.resyncs, log.skipped_bytes, m)) {
+  while (next_message(f, pos, log.formats, log.resyncs, log.skipped_bytes, m, log.cut)) {
     if (!m.fmt || !wanted(m.fmt->name)) continue;
     const DfFormat& fmt = *m.fmt;
     if (!fmt.problem.empty()) f.fail(fmt.defined_at, "FMT for '" + fmt.name + "': " + fmt.problem);
@@ -419,7 +443,8 @@ void import_dataflash(const fs::path& file, const DataflashOptions& opt, Recordi
   DfFormats formats;
   std::size_t pos = 0, resyncs = 0, skipped_bytes = 0;
   DfMessage m{};
-  while (next_message(f, pos, formats, resyncs, skipped_bytes, m)) {
+  DfCut cut;  // the first pass's, again
+  while (next_message(f, pos, formats, resyncs, skipped_bytes, m, cut)) {
     if (!m.fmt || !is_imu(m.fmt->name) || instance_of(f, *m.fmt, m.offset) != instance) continue;
     const DfFormat& fmt = *m.fmt;
     const ImuColumns& c = columns.at(fmt.index);
@@ -456,6 +481,7 @@ void import_dataflash(const fs::path& file, const DataflashOptions& opt, Recordi
                             "; t = TimeUS [us] relative to the first sample; " + ts.describe() + "; " +
                             std::to_string(log.resyncs) + " resync(s) (" + std::to_string(log.skipped_bytes) +
                             " bytes skipped) flagged " + std::to_string(lost_gaps) + " gap(s))");
+  if (log.cut.found()) add_import_event(rec, file.string() + ": " + log.cut.describe(f.size()), "warning");
 }
 
 Recording import_dataflash(const fs::path& file, const DataflashOptions& opt) {

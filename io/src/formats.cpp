@@ -10,6 +10,7 @@
 
 #include <openssl/evp.h>
 
+#include "import_common.hpp"
 #include "import_event.hpp"
 
 #include <algorithm>
@@ -41,8 +42,9 @@ std::vector<std::string> data_lines(const fs::path& p, std::size_t n) {
   if (!fs::is_regular_file(p)) return out;
   std::ifstream in(p, std::ios::binary);
   std::string line;
-  while (out.size() < n && std::getline(in, line)) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
+  std::vector<char> buf(detail::kMaxLineBytes + 1);
+  bool cut = false;  // a longer line is looked at by its beginning only
+  while (out.size() < n && detail::read_bounded_line(in, buf, line, cut)) {
     const auto a = line.find_first_not_of(" \t");
     if (a == std::string::npos || line[a] == '#' || line[a] == '%') continue;
     if (line.find('\0') != std::string::npos) return {};  // binary

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cerrno>
 #include <charconv>
+#include <limits>
 #include <cstdio>
 #include <system_error>
 #include <utility>
@@ -40,10 +41,31 @@ LineReader::LineReader(const fs::path& file) : file_(file), in_(file, std::ios::
   }
 }
 
-bool LineReader::next(std::string& line) {
-  if (!std::getline(in_, line)) return false;
-  ++line_;
+bool read_bounded_line(std::istream& in, std::vector<char>& buf, std::string& line, bool& cut) {
+  cut = false;
+  in.getline(buf.data(), static_cast<std::streamsize>(buf.size()));
+  const auto got = static_cast<std::size_t>(in.gcount());
+  if (got == 0 && in.eof()) return false;
+  const bool delimited = !in.fail() && !in.eof();  // the '\n' was read (and counted in gcount)
+  cut = in.fail() && !in.eof();                    // buf filled before any '\n'
+  line.assign(buf.data(), delimited ? got - 1 : got);
+  if (cut) {
+    in.clear();
+    in.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
+  }
   if (!line.empty() && line.back() == '\r') line.pop_back();
+  return true;
+}
+
+bool LineReader::next(std::string& line) {
+  bool cut = false;
+  if (!read_bounded_line(in_, buf_, line, cut)) return false;
+  ++line_;
+  if (cut) {
+    line.clear();
+    fail("the line is longer than " + std::to_string(kMaxLineBytes) + " bytes: not a line of a text log (a column-name "
+         "line or a field this long is refused, not read whole)");
+  }
   if (line_ == 1 && line.size() >= 3 && static_cast<unsigned char>(line[0]) == 0xEF &&
       static_cast<unsigned char>(line[1]) == 0xBB && static_cast<unsigned char>(line[2]) == 0xBF) {
     line.erase(0, 3);  // UTF-8 byte-order mark
@@ -171,13 +193,17 @@ void BinaryReader::need(std::size_t offset, std::size_t count, const std::string
 }
 
 std::optional<std::size_t> BinaryReader::find(std::size_t from, const std::uint8_t* pattern, std::size_t count) const {
-  // Windows overlapping by count − 1 bytes, so that a match across a window boundary is found.
-  for (std::size_t pos = from; pos + count <= size_; pos += kBinaryWindow - (count - 1)) {
-    const std::size_t n = std::min(kBinaryWindow, size_ - pos);
-    need(pos, n, "a search for a sync marker");
+  // The bytes already buffered are searched first: a log that resyncs at every few bytes reads
+  // each byte once (a window loaded per search made it quadratic). Windows overlap by count − 1
+  // bytes, so that a match across a window boundary is found.
+  for (std::size_t pos = from; pos + count <= size_;) {
+    const bool buffered = pos >= start_ && pos + count <= start_ + buffer_.size();
+    if (!buffered) need(pos, std::min(kBinaryWindow, size_ - pos), "a search for a sync marker");
+    const std::size_t n = start_ + buffer_.size() - pos;  // bytes buffered from pos on (≥ count)
     const std::uint8_t* begin = at(pos);
     const auto* hit = std::search(begin, begin + n, pattern, pattern + count);
     if (hit != begin + n) return pos + static_cast<std::size_t>(hit - begin);
+    pos += n - (count - 1);
   }
   return std::nullopt;
 }

@@ -26,7 +26,17 @@ namespace stend::io::detail {
 // ---------------------------------------------------------------------------------------------
 // Text
 
-// Lines of a text file with their 1-based numbers (CR and a UTF-8 byte-order mark removed).
+// The longest line a text log may have [bytes]: an IMU log's line is under a kilobyte; a longer
+// one (a column-name line or a field of megabytes) is refused, never held whole.
+inline constexpr std::size_t kMaxLineBytes = std::size_t{1} << 20;  // 1 MiB
+
+// One line of `in` into `line` ('\n' and a '\r' before it removed) through `buf` (its size − 1:
+// the most kept of a line): true when a line was read; `cut` when it was longer (its rest skipped,
+// not stored).
+bool read_bounded_line(std::istream& in, std::vector<char>& buf, std::string& line, bool& cut);
+
+// Lines of a text file with their 1-based numbers (CR and a UTF-8 byte-order mark removed); a line
+// longer than kMaxLineBytes fails naming its number.
 class LineReader {
  public:
   explicit LineReader(const std::filesystem::path& file);
@@ -46,6 +56,7 @@ class LineReader {
   std::filesystem::path file_;
   std::ifstream in_;
   std::size_t line_ = 0;
+  std::vector<char> buf_ = std::vector<char>(kMaxLineBytes + 1);
 };
 
 std::string_view trim(std::string_view s);

@@ -582,6 +582,7 @@ void import_ulog(const fs::path& file, const UlogOptions& opt, Recording& rec, S
                " dropout(s) (" + std::to_string(log.dropout_ms) + " ms) and " + std::to_string(log.losses.resyncs) +
                " resync(s) (" + std::to_string(log.losses.skipped_bytes) + " bytes skipped) flagged " +
                std::to_string(merge.lost_gaps) + " gap(s); " + std::to_string(log.parameters) + " parameters not imported)");
+  if (!log.losses.cut_what.empty()) add_import_event(rec, file.string() + ": " + log.losses.describe_cut(f.size()), "warning");
 }
 
 Recording import_ulog(const fs::path& file, const UlogOptions& opt) {

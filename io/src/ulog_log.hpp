@@ -64,6 +64,15 @@ struct Subscription {
 struct Losses {
   std::size_t lost = 0;  // dropouts + resyncs + cut messages
   std::size_t resyncs = 0, skipped_bytes = 0;
+  // Where the file ends inside a message (a log cut by a power loss or a crash): every whole
+  // message before it is read; empty `cut_what` when the file ends on a message boundary.
+  std::size_t cut_at = 0, cut_bytes = 0;
+  std::string cut_what;
+  std::string describe_cut(std::size_t file_size) const {
+    return "the log is cut short at byte " + std::to_string(file_size) + ", inside " + cut_what +
+           " that starts at byte " + std::to_string(cut_at) + ": its " + std::to_string(cut_bytes) +
+           " byte(s) are dropped; every whole message before it is read (a log cut by a power loss or a crash)";
+  }
 };
 
 struct UlogLog {

@@ -263,6 +263,29 @@ TEST(ImportCsv, MappingReproducesTheMpu6050Importer) {
   EXPECT_EQ(a.header.info.accel_lsb_mps2, m.accel_scale);
 }
 
+// A column-name line or a field of megabytes is refused at its line, never held whole; the lines
+// around it read as before, and detection looks at its beginning only.
+TEST(ImportCsv, ALineLongerThanTheLimitIsRefusedAtItsNumber) {
+  constexpr std::size_t kLimit = std::size_t{1} << 20;  // kMaxLineBytes, io/src/import_common.hpp [bytes]
+  const TempDir dir("importers");
+  const auto f = dir / "long.csv";
+  CsvMapping s;
+  s.time = "t";
+  s.accel = {"ax", "ay", "az"};
+  write_text(f, "t,ax,ay,az\n0,1,2,3\n0.01,1,2," + std::string(kLimit + 10, '7') + "\n0.02,1,2,3\n");
+  const std::string e = error_of([&] { import_csv(f, s); });
+  EXPECT_NE(e.find("long.csv:3: the line is longer than 1048576 bytes"), std::string::npos) << e.substr(0, 500);
+  EXPECT_LT(e.size(), 1000u);
+  write_text(f, "t,ax,ay,az," + std::string(3 * kLimit, 'c') + "\n0,1,2,3\n");
+  const std::string h = error_of([&] { import_csv(f, s); });
+  EXPECT_NE(h.find("long.csv:1: the line is longer than"), std::string::npos) << h.substr(0, 500);
+  // A line of exactly the limit, and one without its final newline, read whole.
+  write_text(f, "t,ax,ay,az\n0,1,2,3" + std::string(kLimit - 7, ' ') + "\n0.01,1,2,4");
+  const Recording r = import_csv(f, s);
+  ASSERT_EQ(r.samples.size(), 2u);
+  EXPECT_DOUBLE_EQ(r.samples[1].accel_mps2.z(), 4.0);
+}
+
 TEST(ImportCsv, TimeColumnUnitsDelimiterAndErrors) {
   const TempDir dir("importers");
   const auto f = dir / "log.txt";

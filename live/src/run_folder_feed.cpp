@@ -4,6 +4,8 @@
 #include "stend/recording/recording.hpp"
 #include "stend/recording/samples.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -163,7 +165,11 @@ RunStatus RunFolderFeed::refresh(LiveState& state) {
   p.phase = run_phase_of(status);
   if (status != RunStatus::kRunning) eta.finished();
   p.remaining_s = procedure_.empty() ? kUnknown : eta.remaining_s(p.run_time_s, p.air_c);
-  state.replace(p, std::move(channels), std::move(temperatures), std::move(means), status, "");
+  // A damaged run (truncated, rows missing against run.json) says so beside its status.
+  const std::string message =
+      rec.damage.empty() ? std::string()
+                         : fmt::format("damaged: {} of {} samples are readable: {}", rec.sample_count(), rec.written_samples, rec.damage);
+  state.replace(p, std::move(channels), std::move(temperatures), std::move(means), status, message);
   return status;
 }
 

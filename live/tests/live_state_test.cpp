@@ -11,8 +11,19 @@
 #include <gtest/gtest.h>
 #include <httplib.h>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <map>
+#include <memory>
+#include <thread>
+#include <vector>
 
 namespace {
 
@@ -170,7 +181,147 @@ TEST_P(Feed, RunFolderGivesTheMeansTheRunReported) {
   }
   // Tilted 30° about x: gravity leaves z for y (the run's own mean, read back from the folder).
   EXPECT_NEAR(j["means"][2]["mean"][2].get<double>(), 9.81 * std::cos(30 * M_PI / 180), 0.2);
+  EXPECT_EQ(j["message"], "");
+  if (GetParam() == stend::RecordingFormat::kCsv) {  // cut mid-way: rows missing against run.json
+    const std::string imu = stend::testing::read_text(r.dir / "imu.csv");
+    stend::testing::write_text(r.dir / "imu.csv", imu.substr(0, imu.size() / 2));
+    feed.refresh(state);
+    const std::string message = state.to_json()["message"].get<std::string>();
+    EXPECT_NE(message.find("damaged: "), std::string::npos) << message;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Stores, Feed, ::testing::Values(stend::RecordingFormat::kHdf5, stend::RecordingFormat::kCsv),
                          [](const auto& p) { return std::string(stend::to_string(p.param)); });
+
+// ---- the server's limits (docs/live-view.md, "Limits") -------------------------------------------
+
+namespace {
+
+// A raw TCP connection to the live view on 127.0.0.1, for clients no library would be: idle, slow,
+// sending a body it never finishes or a Host of another name.
+class RawClient {
+ public:
+  explicit RawClient(int port) : fd_(::socket(AF_INET, SOCK_STREAM, 0)) {
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<std::uint16_t>(port));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    connected_ = ::connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+  }
+  ~RawClient() { ::close(fd_); }
+  RawClient(const RawClient&) = delete;
+  RawClient& operator=(const RawClient&) = delete;
+  bool connected() const { return connected_; }
+  bool send(const std::string& text) { return ::send(fd_, text.data(), text.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(text.size()); }
+  // What the server says within `wait` (until it closes the connection, or the time is up).
+  std::string answer(std::chrono::milliseconds wait) {
+    std::string got;
+    const auto until = std::chrono::steady_clock::now() + wait;
+    for (;;) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(until - std::chrono::steady_clock::now());
+      if (left.count() <= 0) return got;
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) return got;
+      char buf[4096];
+      const ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
+      if (n <= 0) return got;
+      got.append(buf, static_cast<std::size_t>(n));
+    }
+  }
+
+ private:
+  int fd_;
+  bool connected_ = false;
+};
+
+std::string get_request(const std::string& path, const std::string& host) {
+  return "GET " + path + " HTTP/1.1\r\nHost: " + host + "\r\nConnection: close\r\n\r\n";
+}
+
+struct Served {
+  stend::live::LiveState state{"limits"};
+  std::unique_ptr<stend::live::LiveServer> server;
+  Served() {
+    state.update(progress_at(3.0));
+    stend::live::LiveServerOptions o;
+    o.port = 0;
+    server = std::make_unique<stend::live::LiveServer>(state, o);
+  }
+  int port() const { return server->port(); }
+  std::string host() const { return "127.0.0.1:" + std::to_string(port()); }
+};
+
+bool starts_with(const std::string& s, const std::string& head) { return s.rfind(head, 0) == 0; }
+
+}  // namespace
+
+TEST(LiveServerLimits, AHugePostIsRefusedBeforeItsBodyIsRead) {
+  Served s;
+  RawClient c(s.port());
+  ASSERT_TRUE(c.connected());
+  // A gigabyte announced, a few kilobytes sent: the answer comes at once, the body is never read.
+  ASSERT_TRUE(c.send("POST /api/state HTTP/1.1\r\nHost: " + s.host() + "\r\nContent-Length: 1000000000\r\n\r\n" +
+                     std::string(4096, 'x')));
+  const std::string a = c.answer(std::chrono::milliseconds(1500));
+  EXPECT_TRUE(starts_with(a, "HTTP/1.1 405")) << a;
+  // A GET with a body too.
+  RawClient g(s.port());
+  ASSERT_TRUE(g.send("GET /api/state HTTP/1.1\r\nHost: " + s.host() + "\r\nContent-Length: 400000000\r\n\r\n"));
+  const std::string b = g.answer(std::chrono::milliseconds(1500));
+  EXPECT_TRUE(starts_with(b, "HTTP/1.1 413")) << b;
+  // Headers beyond the request budget end the connection without an answer of 200.
+  RawClient h(s.port());
+  h.send("GET / HTTP/1.1\r\nHost: " + s.host() + "\r\n");
+  for (int i = 0; i < 100 && h.send("X-Filler: " + std::string(1000, 'y') + "\r\n"); ++i) {}
+  EXPECT_FALSE(starts_with(h.answer(std::chrono::milliseconds(1500)), "HTTP/1.1 200"));
+}
+
+TEST(LiveServerLimits, AHostOfAnotherNameIsRefused) {
+  Served s;
+  for (const std::string& host : std::vector<std::string>{"evil.example:" + std::to_string(s.port()), "evil.example", ""}) {
+    RawClient c(s.port());
+    ASSERT_TRUE(c.send(get_request("/api/state", host)));
+    const std::string a = c.answer(std::chrono::milliseconds(1500));
+    EXPECT_TRUE(starts_with(a, "HTTP/1.1 403")) << host << ": " << a;
+    EXPECT_EQ(a.find("\"run\""), std::string::npos) << "the state leaked to " << host;
+  }
+  for (const std::string& host : std::vector<std::string>{s.host(), "localhost:" + std::to_string(s.port()), "[::1]:80"}) {
+    RawClient c(s.port());
+    ASSERT_TRUE(c.send(get_request("/api/state", host)));
+    EXPECT_TRUE(starts_with(c.answer(std::chrono::milliseconds(1500)), "HTTP/1.1 200")) << host;
+  }
+}
+
+TEST(LiveServerLimits, IdleClientsDoNotDelayANewOne) {
+  Served s;
+  std::vector<std::unique_ptr<RawClient>> idle;
+  for (int i = 0; i < 48; ++i) {  // more than the server serves at once
+    idle.push_back(std::make_unique<RawClient>(s.port()));
+    if (i % 2 == 1) idle.back()->send("GET / HTTP/1.1\r\n");  // half of them slow: a request begun
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  const auto start = std::chrono::steady_clock::now();
+  RawClient c(s.port());
+  ASSERT_TRUE(c.send(get_request("/api/state", s.host())));
+  const std::string a = c.answer(std::chrono::milliseconds(3000));
+  const auto took = std::chrono::steady_clock::now() - start;
+  EXPECT_TRUE(starts_with(a, "HTTP/1.1 200")) << a;
+  EXPECT_LT(took, std::chrono::milliseconds(1000));
+  const auto stopping = std::chrono::steady_clock::now();
+  s.server.reset();
+  EXPECT_LT(std::chrono::steady_clock::now() - stopping, std::chrono::milliseconds(500));
+}
+
+TEST(LiveServerLimits, StopsAtOnceWithIdleAndSlowClientsConnected) {
+  auto s = std::make_unique<Served>();
+  std::vector<std::unique_ptr<RawClient>> idle;
+  for (int i = 0; i < 12; ++i) {
+    idle.push_back(std::make_unique<RawClient>(s->port()));
+    if (i % 3 == 0) idle.back()->send("GET / HTTP/1.1\r\nHost: 127.0.0.1\r\n");  // never finished
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  const auto start = std::chrono::steady_clock::now();
+  s.reset();
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::milliseconds(500));
+}

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <fstream>
 #include <limits>
 #include <system_error>
 #include <utility>
@@ -198,6 +199,29 @@ FileRead read_truth(const fs::path& file, Recording& r) {
   return file_read(rd, r.truth_t.size(), r);
 }
 
+// The data rows of a CSV file counted without parsing them (`stend info` skips the truth): the
+// complete, non-empty lines after the column-name line.
+std::uint64_t count_data_rows(const fs::path& file) {
+  constexpr std::size_t kChunkBytes = 65536;  // read at a time [bytes]
+  std::ifstream in(file, std::ios::binary);
+  std::vector<char> buf(kChunkBytes);
+  std::uint64_t rows = 0;
+  bool past_header = false, has_text = false;
+  while (in.read(buf.data(), static_cast<std::streamsize>(buf.size())) || in.gcount() > 0) {
+    for (std::streamsize i = 0; i < in.gcount(); ++i) {
+      const char c = buf[static_cast<std::size_t>(i)];
+      if (c == '\n') {
+        if (past_header && has_text) ++rows;
+        past_header = true;
+        has_text = false;
+      } else if (c != '\r') {
+        has_text = true;
+      }
+    }
+  }
+  return rows;
+}
+
 }  // namespace
 
 void open_csv(const fs::path& run_dir, const nlohmann::json& run_json, Recording& r, SampleLoading loading,
@@ -212,7 +236,7 @@ void open_csv(const fs::path& run_dir, const nlohmann::json& run_json, Recording
   const fs::path truth_csv = run_dir / "truth.csv";
   const bool read_truth_rows = truth != TruthLoading::kSkip && fs::exists(truth_csv, ec);  // kStream too: CSV has no index
   files.push_back(read_truth_rows ? read_truth(truth_csv, r) : file_not_read(truth_csv));
-  r.truth_rows = r.truth_t.size();
+  r.truth_rows = read_truth_rows || !fs::exists(truth_csv, ec) ? r.truth_t.size() : count_data_rows(truth_csv);
   for (const auto& [name, read] : {std::pair{"segments.csv", &read_segments}, std::pair{"events.csv", &read_events}}) {
     if (!fs::exists(run_dir / name, ec)) {
       files.push_back(file_not_read(run_dir / name));

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <cstring>
+#include <string_view>
 #include <vector>
 
 namespace stend::detail {
@@ -17,6 +18,23 @@ namespace {
 std::mutex& hdf5_mutex() {
   static std::mutex m;
   return m;
+}
+
+// libhdf5 closes the files still open when the process exits (H5_term_library, at exit); a file
+// whose writes failed (a full disk, a file-size limit) makes it crash there, after Stend has said
+// what failed. Stend closes every file it opens itself, so that pass is not registered: this runs
+// when the library is loaded, before any other libhdf5 call.
+[[maybe_unused]] const herr_t kNoHdf5Atexit = H5dont_atexit();
+
+// The system's reason inside libhdf5's text of a failed write ("…, errno = 27, error message =
+// 'File too large', …"), or "" when it has none.
+std::string system_reason(const std::string& hdf5_text) {
+  constexpr std::string_view kKey = "error message = '";
+  const auto at = hdf5_text.find(kKey);
+  if (at == std::string::npos) return {};
+  const auto from = at + kKey.size();
+  const auto to = hdf5_text.find('\'', from);
+  return to == std::string::npos ? std::string() : hdf5_text.substr(from, to - from);
 }
 
 }  // namespace
@@ -50,7 +68,10 @@ void fail(const fs::path& file, const std::string& what) {
 }
 
 void fail_write(const fs::path& file, const std::string& what) {
-  throw IoError(fmt::format("{}: {} ({})", file.string(), what, hdf5_error()));
+  const std::string text = hdf5_error();
+  const std::string reason = system_reason(text);
+  if (!reason.empty()) throw IoError(fmt::format("{}: {}: {}", file.string(), what, reason));
+  throw IoError(fmt::format("{}: {} ({})", file.string(), what, text));
 }
 
 Handle check(hid_t id, herr_t (*close)(hid_t), const fs::path& file, const std::string& what) {

@@ -48,6 +48,7 @@ ExportResult export_run(const fs::path& run_dir, const std::string& format, fs::
     if (!rec.damage.empty()) r.warnings.push_back(fmt::format("{} of {} samples exported: {}", rec.sample_count(), rec.written_samples, rec.damage));
     return r;
   }
+  require_whole_results(run_dir, registry);
   RunResults identity = load_run_results(run_dir, registry);
   const fs::path run = identity.dir;
   if (out.empty()) {

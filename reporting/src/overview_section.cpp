@@ -114,7 +114,7 @@ Plot overview_plot(const Overview& ov, const Recording& rec, std::size_t c0, std
 // Whether the recording has a temperature: some finite temperature sample.
 bool has_temperature(const Overview& ov) {
   constexpr std::size_t t = kTemperatureChannel;
-  for (std::size_t b = 0; b < kOverviewBins; ++b)
+  for (std::size_t b = 0; b < ov.count.size(); ++b)  // no bins: no samples
     if (ov.count[b] > 0 && std::isfinite(ov.lo[t][b]) && std::isfinite(ov.hi[t][b])) return true;
   return false;
 }
@@ -128,11 +128,12 @@ estimation::ReportSection overview_section(const std::filesystem::path& dir, boo
   try {
     const Recording rec = Recording::open(dir, SampleLoading::kStream, TruthLoading::kSkip);
     const Overview ov = overview_of(rec);
-    temperature_recorded = rec.header.info.has_temperature && has_temperature(ov);
     if (ov.count.empty()) {
+      temperature_recorded = false;
       s.add_text("The recording has no samples.", estimation::Emphasis::kWarning);
       return s;
     }
+    temperature_recorded = rec.header.info.has_temperature && has_temperature(ov);
     const std::string cap = fmt::format("Raw samples over the whole recording ({} samples, {} s): each channel's "
                                         "minimum–maximum per time bin (band) and mean (line); grey: the segments.",
                                         rec.sample_count(), estimation::report_number(ov.t1 - ov.t0, 3));

@@ -9,9 +9,13 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace stend::reporting {
 
@@ -96,6 +100,53 @@ void add_gap_document(RunResults& r) {
 }
 
 }  // namespace
+
+namespace {
+
+// Line and column (from 1) of byte `offset` of `text`.
+std::pair<std::size_t, std::size_t> line_col(const std::string& text, std::size_t offset) {
+  offset = std::min(offset, text.size());
+  std::size_t line = 1, col = 1;
+  for (std::size_t i = 0; i < offset; ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      col = 1;
+    } else {
+      ++col;
+    }
+  }
+  return {line, col};
+}
+
+// Refuses `file` when its text is not one whole JSON document.
+void require_whole_json(const fs::path& file) {
+  const std::string text = read_text(file);
+  try {
+    [[maybe_unused]] const json doc = json::parse(text);
+  } catch (const json::parse_error& e) {
+    const std::size_t at = e.byte > 0 ? e.byte - 1 : 0;  // nlohmann counts from 1
+    const auto [line, col] = line_col(text, at);
+    const bool cut = at >= text.size();
+    const std::string what = e.what();
+    const auto colon = what.find(": ", what.find("column"));
+    throw InputError(fmt::format("{}:{}:{}: {} — run the command that wrote it again (`stend fit`, `stend gap`), or "
+                                 "remove it",
+                                 file.string(), line, col,
+                                 cut ? std::string("the results file is cut off (a write that did not finish): it "
+                                                   "ends inside its JSON document")
+                                     : "not a JSON document: " + excerpt(what.substr(colon == std::string::npos ? 0 : colon + 2))));
+  }
+}
+
+}  // namespace
+
+void require_whole_results(const fs::path& run_dir, const estimation::Registry& registry) {
+  std::vector<std::string> names = {kGapResultsFile};
+  for (const auto& entry : registry.entries())
+    for (const auto& name : estimation::results_files_of(entry.results_file)) names.push_back(name);
+  for (const auto& name : names)
+    if (fs::is_regular_file(run_dir / name)) require_whole_json(run_dir / name);
+}
 
 RunResults load_run_results(const fs::path& run_dir, const estimation::Registry& registry) {
   RunResults r;

@@ -10,6 +10,8 @@
 #include <libpq-fe.h>
 
 #include <cstdlib>
+#include <vector>
+#include <string_view>
 
 namespace stend::reporting::sql {
 
@@ -18,20 +20,72 @@ namespace {
 // PostgreSQL type OIDs of the columns the store reads (catalog/pg_type.h).
 constexpr Oid kOidBool = 16, kOidInt8 = 20, kOidInt2 = 21, kOidInt4 = 23, kOidFloat4 = 700, kOidFloat8 = 701,
               kOidNumeric = 1700;
+// Timeouts added to a URL that does not state its own (docs/lab-scale.md, "Timeouts"): a server
+// that accepts and then stalls fails the command instead of hanging it.
+constexpr int kConnectTimeout_s = 10;           // libpq connect_timeout: the whole connection set-up [s]
+constexpr int kStatementTimeout_ms = 300000;    // server statement_timeout: one statement [ms] (5 min)
+
+// The value libpq would use for `keyword` from `url` alone, or "" when the URL does not state it
+// (or cannot be parsed: PQconnectdbParams then says why).
+std::string url_value(const std::string& url, std::string_view keyword) {
+  char* err = nullptr;
+  PQconninfoOption* opts = PQconninfoParse(url.c_str(), &err);
+  PQfreemem(err);
+  std::string value;
+  for (PQconninfoOption* o = opts; o != nullptr && o->keyword != nullptr; ++o)
+    if (keyword == o->keyword && o->val != nullptr) value = o->val;
+  PQconninfoFree(opts);
+  return value;
+}
+
+bool env_set(const char* name) {
+  const char* v = std::getenv(name);
+  return v != nullptr && *v != '\0';
+}
+
+// Whether the URL (or PGCONNECT_TIMEOUT) states a connect timeout.
+bool states_connect_timeout(const std::string& url) {
+  return !url_value(url, "connect_timeout").empty() || env_set("PGCONNECT_TIMEOUT");
+}
+
+// Whether the URL's options (or PGOPTIONS) set statement_timeout.
+bool states_statement_timeout(const std::string& url) {
+  const char* env = std::getenv("PGOPTIONS");
+  return url_value(url, "options").find("statement_timeout") != std::string::npos ||
+         (env != nullptr && std::string_view(env).find("statement_timeout") != std::string_view::npos);
+}
+
+// Connects with the URL's own parameters, and connect_timeout when it states none.
+PGconn* connect_with_timeout(const std::string& url) {
+  const std::string timeout = std::to_string(kConnectTimeout_s);
+  std::vector<const char*> keys, values;
+  if (!states_connect_timeout(url)) {
+    keys.push_back("connect_timeout");
+    values.push_back(timeout.c_str());
+  }
+  keys.push_back("dbname");  // expanded: every parameter of the URL, after (so over) the defaults above
+  values.push_back(url.c_str());
+  keys.push_back(nullptr);
+  values.push_back(nullptr);
+  return PQconnectdbParams(keys.data(), values.data(), 1);
+}
+
 // Any two concurrent `stend db migrate` / store opens serialize their schema changes on this key.
 constexpr long long kSchemaLockKey = 0x5374656e64L;  // "Stend"
 
 class PostgresConnection final : public Connection {
  public:
   explicit PostgresConnection(const std::string& url) : where_(redact_url(url)) {
-    conn_ = PQconnectdb(url.c_str());
+    conn_ = connect_with_timeout(url);
     if (!conn_ || PQstatus(conn_) != CONNECTION_OK) {
       const std::string msg = conn_ ? PQerrorMessage(conn_) : "out of memory";
       PQfinish(conn_);
       throw IoError(where_ + ": cannot connect to the results store: " + trimmed(msg) +
-                    " (check the server runs and the URL; the password comes from PGPASSWORD or ~/.pgpass)");
+                    " (check the server runs and the URL; the password comes from PGPASSWORD or ~/.pgpass; " +
+                    timeout_note(url) + ")");
     }
     PQsetNoticeProcessor(conn_, [](void*, const char*) {}, nullptr);  // "relation exists, skipping"
+    if (!states_statement_timeout(url)) set_statement_timeout();
   }
   ~PostgresConnection() override { PQfinish(conn_); }
   PostgresConnection(const PostgresConnection&) = delete;
@@ -73,6 +127,19 @@ class PostgresConnection final : public Connection {
   }
 
  private:
+  void set_statement_timeout() {
+    try {
+      exec(fmt::format("SET statement_timeout = {}", kStatementTimeout_ms));
+    } catch (...) {
+      PQfinish(conn_);
+      throw;
+    }
+  }
+  static std::string timeout_note(const std::string& url) {
+    return states_connect_timeout(url)
+               ? std::string("connect_timeout as the URL or PGCONNECT_TIMEOUT states it")
+               : fmt::format("connect_timeout {} s by default; ?connect_timeout=N in the URL changes it", kConnectTimeout_s);
+  }
   static std::string trimmed(std::string s) {
     while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
     return s;

@@ -195,8 +195,9 @@ std::string describe(const YAML::Node& node) {
   if (!node.IsDefined() || node.IsNull()) return "nothing";
   if (node.IsMap()) return "a mapping";
   if (node.IsSequence()) return "a list";
-  if (is_quoted_or_string_tagged(node)) return "the quoted text \"" + node.Scalar() + "\"";
-  return "'" + node.Scalar() + "'";
+  // A scalar is quoted cut (stend::excerpt): a data file read as YAML is one scalar of megabytes.
+  if (is_quoted_or_string_tagged(node)) return "the quoted text \"" + excerpt(node.Scalar()) + "\"";
+  return "'" + excerpt(node.Scalar()) + "'";
 }
 
 std::string format_number(double value) {

@@ -72,6 +72,11 @@ struct RunResults {
 // gap.json; a results file that does not parse becomes a note.
 RunResults load_run_results(const std::filesystem::path& run_dir, const estimation::Registry& registry);
 
+// Refuses a run whose results files (every estimator's in `registry`, and gap.json) are not each
+// one whole JSON document: InputError at FILE:LINE:COL, saying when the file is cut off (a write
+// that did not finish) and how to make it again. `stend report` and `stend export` call it first.
+void require_whole_results(const std::filesystem::path& run_dir, const estimation::Registry& registry);
+
 // Parameters of one results document, read through the registry entry that wrote it (its
 // summary): the estimator name comes from the document, else from the file name. Exposed for tests.
 std::vector<ParameterResult> parameters_of(const nlohmann::json& doc, const std::string& file_stem,
