@@ -141,12 +141,12 @@ Eigen::Vector3d gyro_noise(const std::vector<processing::StaticPoint>& pts) {
 void rebias(const Recording& cal, const std::vector<processing::StaticPoint>& pts, double seconds, ValidationReport& r) {
   const SampleSource& src = cal.sample_source();
   if (src.size() == 0) throw std::invalid_argument("--rebias-from-start: the recording has no samples");
-  const double t0 = sample_at(src, 0).t_s;
+  const double t0 = time_at(src, 0);
   // The last sample within `seconds` of the first (a binary search, not a scan).
   const std::uint64_t past = lower_bound_time(src, std::nextafter(t0 + seconds, INFINITY));
   const std::size_t last = past > 0 ? static_cast<std::size_t>(past - 1) : 0;
   const bool still = std::any_of(pts.begin(), pts.end(), [&](const processing::StaticPoint& p) {
-    return sample_at(src, p.first).t_s - t0 <= 0.5 * seconds && p.last >= last;
+    return time_at(src, p.first) - t0 <= 0.5 * seconds && p.last >= last;
   });
   if (!still || last < 8)
     throw std::invalid_argument(fmt::format(
@@ -184,7 +184,7 @@ Eigen::Vector3d integrated_rotation(const Recording& cal, std::size_t a, std::si
 // motion between them and kTurnMarginS of each still.
 std::pair<std::size_t, std::size_t> turn_window(const SampleSource& src, const processing::StaticPoint& before,
                                                 const processing::StaticPoint& after) {
-  const double t_end = sample_at(src, before.last).t_s, t_start = sample_at(src, after.first).t_s;
+  const double t_end = time_at(src, before.last), t_start = time_at(src, after.first);
   const auto a = static_cast<std::size_t>(lower_bound_time(src, t_end - kTurnMarginS));
   const auto b = static_cast<std::size_t>(lower_bound_time(src, t_start + kTurnMarginS));
   return {std::max(a, before.first), std::min(b, after.last)};
@@ -208,8 +208,8 @@ std::vector<TurnCheck> turn_checks(const Recording& cal, const Calibration& c,
     if (std::abs(rv[e.axis]) * physics::kRadToDeg < 0.5 * std::abs(e.angle_deg)) continue;
     TurnCheck t;
     t.expected = e;
-    t.t_start_s = sample_at(cal.sample_source(), a).t_s;
-    t.t_end_s = sample_at(cal.sample_source(), b).t_s;
+    t.t_start_s = time_at(cal.sample_source(), a);
+    t.t_end_s = time_at(cal.sample_source(), b);
     t.measured_deg = rv[e.axis] * physics::kRadToDeg;
     t.error_deg = std::abs(t.measured_deg) - std::abs(e.angle_deg);
     const double T = t.t_end_s - t.t_start_s, n = static_cast<double>(b - a);

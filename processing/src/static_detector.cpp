@@ -204,7 +204,7 @@ double init_duration(const Recording& rec, double t0_s, const StaticDetectorOpti
 std::size_t samples_within(const Stream& in, double duration) {
   const std::uint64_t n = in.size();
   std::vector<ImuSample> buf(std::min<std::uint64_t>(in.chunk, n));
-  const double t0 = sample_at(in.src, 0).t_s;
+  const double t0 = time_at(in.src, 0);
   for (std::uint64_t at = 0; at < n; at += buf.size()) {
     const auto count = static_cast<std::size_t>(std::min<std::uint64_t>(buf.size(), n - at));
     in.src.read(at, count, buf.data());
@@ -225,8 +225,8 @@ struct Prepared {
 
 Prepared prepare(const Recording& rec, const Stream& in, const StaticDetectorOptions& o, DetectionSummary& s) {
   const std::uint64_t n = in.size();
-  const double t0 = sample_at(in.src, 0).t_s;
-  const double dt = (sample_at(in.src, n - 1).t_s - t0) / static_cast<double>(n - 1);
+  const double t0 = time_at(in.src, 0);
+  const double dt = (time_at(in.src, n - 1) - t0) / static_cast<double>(n - 1);
   if (!(dt > 0.0)) throw std::invalid_argument("detect_static_intervals: sample times do not increase");
   s.rate_hz = 1.0 / dt;
   s.window_s = o.window_s > 0.0 ? o.window_s : std::max(kAutoWindowS, kMinWindowSamples * dt);
@@ -334,7 +334,7 @@ class PieceJudge {
   PieceJudge(const Stream& in, std::size_t trim, double min_duration_s) : in_(in), trim_(trim), min_s_(min_duration_s) {}
   void take(std::size_t i, std::size_t j, Pass& out) {
     const std::size_t a = i + trim_, b = j >= trim_ ? j - trim_ : 0;
-    if (b < a || sample_at(in_.src, b).t_s - sample_at(in_.src, a).t_s < min_s_) return out.reject(Rejection::kTooShort);
+    if (b < a || time_at(in_.src, b) - time_at(in_.src, a) < min_s_) return out.reject(Rejection::kTooShort);
     auto it = seen_.find({a, b});
     if (it == seen_.end()) it = seen_.emplace(std::make_pair(a, b), interval_means(in_, a, b)).first;
     if (it->second.saturated) return out.reject(Rejection::kSaturated);

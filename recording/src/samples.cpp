@@ -100,13 +100,17 @@ ImuSample sample_at(const SampleSource& src, std::uint64_t i) {
   return s;
 }
 
+double time_at(const SampleSource& src, std::uint64_t i) {
+  double t = 0.0;
+  src.read_column(Channel::kTime, i, 1, &t);
+  return t;
+}
+
 std::uint64_t lower_bound_time(const SampleSource& src, double t_s) {
   std::uint64_t lo = 0, hi = src.size();
-  ImuSample s;
   while (lo < hi) {
     const std::uint64_t mid = lo + (hi - lo) / 2;
-    src.read(mid, 1, &s);
-    if (s.t_s < t_s) lo = mid + 1;
+    if (time_at(src, mid) < t_s) lo = mid + 1;
     else hi = mid;
   }
   return lo;

@@ -39,8 +39,8 @@ Overview overview_of(const Recording& rec) {
   Overview ov;
   const SampleSource& src = rec.sample_source();
   if (src.size() == 0) return ov;
-  ov.t0 = sample_at(src, 0).t_s;
-  ov.t1 = sample_at(src, src.size() - 1).t_s;
+  ov.t0 = time_at(src, 0);
+  ov.t1 = time_at(src, src.size() - 1);
   for (std::size_t c = 0; c < kOverviewChannels.size(); ++c) {
     ov.lo[c].assign(kOverviewBins, INFINITY);
     ov.hi[c].assign(kOverviewBins, -INFINITY);

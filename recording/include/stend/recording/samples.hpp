@@ -79,6 +79,8 @@ void for_each_chunk(const SampleSource& src, const ChunkFn& fn,
 
 // Sample i (one read: for the ends of an interval, not for loops).
 ImuSample sample_at(const SampleSource& src, std::uint64_t i);
+// The time of sample i [s]: one value of the time column (a columnar store reads nothing else).
+double time_at(const SampleSource& src, std::uint64_t i);
 
 // Index of the first sample with t_s ≥ t (size() when none): binary search by single reads.
 std::uint64_t lower_bound_time(const SampleSource& src, double t_s);
