@@ -132,7 +132,7 @@ TEST(ImportOptions, FlagsAndYamlShareKeysAndYamlErrorsNameTheLine) {
   ImportOptions half;
   half.set("accel", "a,b,c");
   std::string why;
-  EXPECT_FALSE(half.IsValid(&why) == false) << why;  // a container's N×4 array may hold the time
+  EXPECT_TRUE(half.IsValid(&why)) << why;  // a container's N×4 array may hold the time
   write_text(dir / "abc.csv", "a,b,c\n0,0,9.8\n");
   try {
     open_dataset({dir / "abc.csv"}, "auto", half);
