@@ -227,6 +227,8 @@ void window_evidence(const Recording& rec, const processing::StaticPoint& p, boo
   if (n >= 16)
     for (int a = 0; a < 3; ++a) mean_noise(axes[static_cast<std::size_t>(a)], n, a, d);
   if (!d.mean_std_error.allFinite()) d.mean_std_error = (accel ? p.accel : p.gyro).std_error;
+  // A table's row states its noise (sigma/√n); its held samples, repeating the mean, have none.
+  if (accel && p.held && p.held->absolute()) d.mean_std_error = p.accel.std_error;
   evidence.fill(d);
 }
 

@@ -138,6 +138,23 @@ void stream_imutk(const Inputs& in, const ImportOptions& o, Recording& rec, Samp
 
 Recording open_table(const Inputs& in, const ImportOptions& o) { return import_static_table(in[0], o.gravity_mps2); }
 
+MeansTableOptions means_options(const ImportOptions& o) {
+  MeansTableOptions m;
+  if (o.was_stated("delimiter")) m.delimiter = o.delimiter;
+  m.counts = o.accel_value.counts();
+  m.accel_scale = m.counts ? o.accel_value.lsb : o.accel_value.unit;
+  m.accel_offset_counts = o.accel_value.offset;
+  m.unit_stated = o.was_stated("accel_unit") || o.was_stated("accel_lsb");
+  m.gravity_mps2 = o.gravity_mps2;
+  return m;
+}
+// A table of means is checked for its units here: its rows, held, are no log (is_log).
+Recording open_means(const Inputs& in, const ImportOptions& o) {
+  Recording rec = import_means_table(in[0], means_options(o));
+  check_held_means(rec, in[0], o);
+  return rec;
+}
+
 Recording open_csv(const Inputs& in, const ImportOptions& o) { return import_csv(in[0], o.csv_mapping()); }
 void stream_csv(const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
   import_csv(in[0], o.csv_mapping(), rec, out);
@@ -258,6 +275,9 @@ const std::vector<Format>& formats() {
        open_mpu6050, 1, stream_mpu6050},
       {"static_table", "table of static means against known inputs (angle_deg or f_*_mps2, a_*_mps2)",
        looks_like_static_table, open_table},
+      {"means_table", "table of means without inputs: one row per orientation, ax ay az (named or the only three "
+                      "columns), optional n and sigma; units by --accel-unit or --accel-lsb",
+       looks_like_means_table, open_means},
       {"imutk", "IMU-TK text 't x y z' (ACC [GYRO]; any extension, .mat included)", looks_like_imutk, open_imutk, 2,
        stream_imutk},
       {"ulog", "PX4 ULog: sensor_accel + sensor_gyro (with temperature), else sensor_combined", looks_like_ulog,
@@ -342,8 +362,8 @@ const Format& choose_format(const Inputs& inputs, const std::string& format, con
 
 // Whether the samples of format `f` are a log's, checked on the way in (plausibility.hpp): not a run
 // folder's (checked when it was made), nor a table of means' (its rows, held, are no stretch of a
-// log, and an axis it does not measure reads NaN).
-bool is_log(const Format& f) { return f.name != "run" && f.name != "static_table"; }
+// log, and an axis a static table does not measure reads NaN; a means table checks its rows itself).
+bool is_log(const Format& f) { return f.name != "run" && f.name != "static_table" && f.name != "means_table"; }
 
 // The event stating the format and the import options.
 void add_format_event(Recording& rec, const Format& f, const std::string& format, const ImportOptions& options) {

@@ -140,10 +140,14 @@ std::int32_t to_counts(const LineReader& r, double v, const std::string& what) {
 
 void add_held_truth(Recording& rec, double t0, double t1, const std::array<double, 3>& f) {
   rec.header.truth_columns = kTruthColumns;
+  add_held_truth(rec, t0, t1, std::vector<double>{f[0], f[1], f[2], 0.0, 0.0, 0.0});
+}
+
+void add_held_truth(Recording& rec, double t0, double t1, const std::vector<double>& row) {
   for (const double t : {t0, 0.5 * (t0 + t1), t1}) {
     if (!rec.truth_t.empty() && !(t > rec.truth_t.back())) continue;
     rec.truth_t.push_back(t);
-    rec.truth.push_back({f[0], f[1], f[2], 0.0, 0.0, 0.0});
+    rec.truth.push_back(row);
   }
 }
 

@@ -78,6 +78,9 @@ std::int32_t to_counts(const LineReader& r, double v, const std::string& what);
 // Truth snapshots (kTruthColumns) holding specific force f [m/s²] and zero rate over t0 … t1 [s]:
 // at its start, middle and end (snapshots in time order; a time already passed is not repeated).
 void add_held_truth(Recording& rec, double t0, double t1, const std::array<double, 3>& f);
+// The same for any truth layout: snapshots holding `row` (one value per header truth column, which
+// the caller set) over t0 … t1 [s].
+void add_held_truth(Recording& rec, double t0, double t1, const std::vector<double>& row);
 // Sensor description of a 16-bit accelerometer + gyroscope without temperature: rate [Hz], LSB
 // sizes [m/s², rad/s per count] and the ±32768-count ranges.
 void set_int16_sensor_info(double rate_hz, double acc_lsb, double gyr_lsb, Recording& rec);

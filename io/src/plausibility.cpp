@@ -81,11 +81,11 @@ std::optional<Stillness::Still> Stillness::stillest() const {
   return Still{median(a), median(w), copy.kept_.size()};
 }
 
-std::string implausible_because(const Stillness::Still& still, const ImportOptions& options) {
+std::string implausible_because(const Stillness::Still& still, const ImportOptions& options, const std::string& where) {
   const double g = physics::kStandardGravity;
   const double a_g = still.accel_mps2 / g;  // the still |a| in g, as imported
   const auto plausible = [](double in_g) { return in_g >= kMinStillG && in_g <= kMaxStillG; };
-  const std::string seen = "|a| ≈ " + rough(still.accel_mps2) + " m/s^2 (" + rough(a_g) + " g) in the stillest stretch";
+  const std::string seen = "|a| ≈ " + rough(still.accel_mps2) + " m/s^2 (" + rough(a_g) + " g) " + where;
   const bool counts = options.accel_value.counts();
   const bool given_in_g = !counts && options.accel_value.unit == g;
   if (!plausible(a_g)) {
@@ -144,6 +144,21 @@ void SampleCheck::finish(Recording& rec) {
   if (!still) return;
   if (const std::string why = implausible_because(*still, *options_); !why.empty())
     throw ImportError(file_, 0, why + " (--accept-implausible imports it as it is)");
+}
+
+void check_held_means(const Recording& rec, const std::filesystem::path& file, const ImportOptions& options) {
+  if (options.accept_implausible || rec.samples.empty()) return;
+  std::vector<double> norms;  // every row holds the same number of samples: the samples' median is the rows'
+  norms.reserve(rec.samples.size());
+  for (const ImuSample& s : rec.samples)
+    if (s.accel_mps2.allFinite()) norms.push_back(s.accel_mps2.norm());
+  if (norms.empty()) return;
+  std::nth_element(norms.begin(), norms.begin() + static_cast<std::ptrdiff_t>(norms.size() / 2), norms.end());
+  Stillness::Still still;
+  still.accel_mps2 = norms[norms.size() / 2];
+  still.blocks = rec.segments.size();
+  if (const std::string why = implausible_because(still, options, "over the table's rows (median)"); !why.empty())
+    throw ImportError(file, 0, why + " (--accept-implausible imports it as it is)");
 }
 
 void check_samples(Recording& rec, const std::filesystem::path& file, const ImportOptions& options) {

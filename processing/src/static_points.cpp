@@ -11,6 +11,7 @@
 
 #include "stend/processing/static_detector.hpp"
 #include "stend/processing/truth.hpp"
+#include "stend/recording/truth_columns.hpp"
 
 namespace stend::processing {
 
@@ -80,6 +81,11 @@ std::vector<Segment> intervals(const Recording& rec, const ProcessingOptions& o,
   IntervalSource source = o.intervals;
   if (source == IntervalSource::kAuto)
     source = rec.segments.empty() ? IntervalSource::kDetect : IntervalSource::kSegments;
+  if (source == IntervalSource::kDetect && holds_means(rec)) {
+    out.notes.push_back("a table of means: its rows (segments) are the static points, not detected (held values do "
+                        "not vary)");
+    source = IntervalSource::kSegments;
+  }
   if (source == IntervalSource::kSegments) return segments_of_kinds(rec, o, out.notes);
   std::vector<Segment> found = detected_segments(rec, o.detector, out.detection);
   if (o.intervals == IntervalSource::kAuto)
@@ -101,7 +107,14 @@ class PointBuilder {
     }
     requests_truth_ = !columns_.empty();
     die_ = rec.truth_column(kDieTemperatureColumn);
-    if (die_ >= 0) columns_.push_back(die_);
+    if (die_ >= 0) {
+      die_at_ = static_cast<int>(columns_.size());
+      columns_.push_back(die_);
+    }
+    if (holds_means(rec)) {
+      held_at_ = static_cast<int>(columns_.size());
+      for (const auto& name : held_column_names()) columns_.push_back(rec.truth_column(name));
+    }
     saturation_ = (req.accel ? kAccelSaturated : 0u) | (req.gyro ? kGyroSaturated : 0u);
   }
 
@@ -198,8 +211,9 @@ class PointBuilder {
       if (input_at_[a] >= 0) st.input[i] = truth.values[static_cast<std::size_t>(input_at_[a])];
       if (force_at_[a] >= 0) st.specific_force[i] = truth.values[static_cast<std::size_t>(force_at_[a])];
     }
+    if (held_at_ >= 0 && truth.found) add_held(p, truth.values);
     if (die_ >= 0 && truth.found) {
-      st.temperature_c = truth.values.back();
+      st.temperature_c = truth.values[static_cast<std::size_t>(die_at_)];
       st.temperature_rate_cps = truth_slope(rec_, die_, p.t_start_s, p.t_end_s);
       p.temperature_source = TemperatureSource::kDie;
     } else {
@@ -207,6 +221,19 @@ class PointBuilder {
     }
     st.time_s = 0.5 * (p.t_start_s + p.t_end_s);
     return true;
+  }
+
+  // A held mean's stated noise (held_at_: n, then sigma x, y, z) as its accelerometer's (HeldMean).
+  void add_held(StaticPoint& p, const std::vector<double>& values) const {
+    HeldMean h;
+    const auto at = static_cast<std::size_t>(held_at_);
+    h.n = values[at];
+    for (int a = 0; a < 3; ++a) h.sigma[a] = values[at + 1 + static_cast<std::size_t>(a)];
+    p.held = h;
+    if (!req_.accel) return;
+    p.accel.sample_std = h.sigma;
+    p.accel.std_error = p.accel.correlated_std_error =
+        h.absolute() ? h.std_error() : Eigen::Vector3d(Eigen::Vector3d::Constant(kNaN));
   }
 
   void skip(const Segment& seg, SkipReason reason, const std::string& what_why) {
@@ -222,6 +249,8 @@ class PointBuilder {
   bool requests_truth_ = false;
   std::array<int, 3> input_at_{-1, -1, -1}, force_at_{-1, -1, -1};  // places in columns_, −1 none
   int die_ = -1;
+  int die_at_ = -1;   // place of die_c in columns_
+  int held_at_ = -1;  // place of the held-mean columns in columns_ (a table of means), −1 none
   std::uint32_t saturation_ = 0;
 };
 
@@ -255,6 +284,11 @@ std::string Extraction::tally() const {
   if (!reasons.empty()) out += "; skipped: " + join(reasons);
   if (detection) out += "; " + detection->rejections();
   return out;
+}
+
+bool holds_means(const Recording& rec) {
+  const auto names = held_column_names();
+  return std::all_of(names.begin(), names.end(), [&](const std::string& c) { return rec.truth_column(c) >= 0; });
 }
 
 const AxesValue& StaticPoint::axes(model::Instrument instrument) const {

@@ -20,7 +20,7 @@ namespace detail {
 void estimate_gyro_bias(CalibrationResult& r, const CalibrationOptions& o) {
   r.gyro_bias.clear();
   if (!o.estimate_gyro_bias) return;
-  if (without_spread(r.intervals, true)) {  // no gyro readings: no gyro bias at all
+  if (mean_noise_unknown(r.intervals, true)) {  // no gyro readings: no gyro bias at all
     r.notes.push_back("gyroscope bias not estimated: the intervals' gyro samples do not spread at all (no "
                       "gyroscope readings, or a table of means), so there is nothing to average");
     return;

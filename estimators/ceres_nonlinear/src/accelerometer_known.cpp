@@ -117,18 +117,21 @@ double known_gravity(const std::vector<Eigen::Vector3d>& truth_f, const Calibrat
   return g / static_cast<double>(std::max<std::size_t>(1, truth_f.size()));
 }
 
-// Residual weighting of interval k: identity, or with orientation_sigma_deg > 0 the tilt of the
-// true orientation, each of its two components ~ N(0, σ²): across gravity the residual gets the extra
-// variance (g·σ)² [m/s²]², along gravity (the magnitude, which no tilt changes) only the noise of
-// the mean.
+// Residual weighting of interval k: identity; the stated noise of a table's row (`held_se`, its
+// standard error per axis, absolute or relative: held_weights) as 1/se per axis; or with
+// orientation_sigma_deg > 0 the tilt of the true orientation, each of its two components ~ N(0, σ²):
+// across gravity the residual gets the extra variance (g·σ)² [m/s²]², along gravity (the magnitude,
+// which no tilt changes) only the noise of the mean.
 Eigen::Matrix3d residual_weight(const processing::StaticPoint& iv, const Eigen::Vector3d& truth_f, double g,
-                                const CalibrationOptions& o, double correlation) {
+                                const CalibrationOptions& o, double correlation, const Eigen::Vector3d* held_se) {
   Eigen::Matrix3d W = Eigen::Matrix3d::Identity();
-  if (!(o.orientation_sigma_deg > 0.0 && truth_f.norm() > 0.0)) return W;
+  if (!(o.orientation_sigma_deg > 0.0 && truth_f.norm() > 0.0)) {
+    if (held_se) W = held_se->cwiseInverse().asDiagonal();
+    return W;
+  }
   const Eigen::Vector3d e0 = truth_f.normalized();
   const Eigen::Vector3d e1 = e0.unitOrthogonal(), e2 = e0.cross(e1);
-  const double n_sd = std::max(1e-6, correlation * iv.accel.sample_std.mean() /
-                                         std::sqrt(static_cast<double>(std::max<std::size_t>(1, iv.samples_used))));
+  const double n_sd = std::max(1e-6, correlation * iv.accel.std_error.mean());
   const double t_sd = std::hypot(n_sd, g * o.orientation_sigma_deg * physics::kDegToRad);
   W.row(0) = e0.transpose() / n_sd;
   W.row(1) = e1.transpose() / t_sd;
@@ -140,11 +143,13 @@ Eigen::Matrix3d residual_weight(const processing::StaticPoint& iv, const Eigen::
 void add_known_residuals(const std::vector<processing::StaticPoint>& intervals, const std::vector<Eigen::Vector3d>& truth_f,
                          const std::vector<std::array<double, 2>>& angles, const Eigen::Matrix3d& M,
                          const TableOffsets& off, const std::vector<int>& free_index, const CalibrationOptions& o,
-                         const CalibrationResult& r, ceres::Problem& problem, std::vector<double>& x) {
+                         const HeldWeights& held, const CalibrationResult& r, ceres::Problem& problem,
+                         std::vector<double>& x) {
   const int p = static_cast<int>(free_index.size());
   const double correlation = noise_correlation_factor(intervals, false);
   for (std::size_t k = 0; k < intervals.size(); ++k) {
-    const Eigen::Matrix3d W = residual_weight(intervals[k], truth_f[k], r.gravity_mps2, o, correlation);
+    const Eigen::Vector3d* held_se = held.kind == HeldWeighting::kNone ? nullptr : &held.std_error[k];
+    const Eigen::Matrix3d W = residual_weight(intervals[k], truth_f[k], r.gravity_mps2, o, correlation, held_se);
     if (off.count() == 0) {
       auto* f = new KnownCost{&r.model, free_index, intervals[k].accel.mean, truth_f[k], W, o.orientation_sigma_deg > 0.0};
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<KnownCost, 3, kFull>(f), make_loss(o), x.data());
@@ -174,17 +179,17 @@ void known_axis_rms(const std::vector<processing::StaticPoint>& intervals, const
 }
 
 // The options with a placement sigma only when the intervals' noise is known: whitening by the
-// noise of a mean needs a spread of the samples, and a table of means has none (its standard errors
-// would come out of the 1e-6 m/s^2 floor). Without one the residuals are unweighted and the
+// noise of a mean needs a spread of the samples, and a table of means has none unless it states n
+// and sigma (its standard errors would come out of the 1e-6 m/s^2 floor). Without one the residuals are unweighted and the
 // covariance comes from their scatter (σ² = RSS/(n − p), Student t), said in r.notes.
 CalibrationOptions without_unknown_noise(const CalibrationOptions& o, const std::vector<processing::StaticPoint>& intervals,
                                          CalibrationResult& r) {
-  if (!(o.orientation_sigma_deg > 0.0) || !without_spread(intervals, false)) return o;
+  if (!(o.orientation_sigma_deg > 0.0) || !mean_noise_unknown(intervals, false)) return o;
   CalibrationOptions unweighted = o;
   unweighted.orientation_sigma_deg = 0.0;
-  r.notes.push_back(fmt::format("orientation_sigma_deg {} not used: the intervals' samples do not spread at all (a "
-                                "table of means), so the noise of a mean is unknown; the residuals are unweighted and "
-                                "the standard errors come from their scatter",
+  r.notes.push_back(fmt::format("orientation_sigma_deg {} not used: the noise of the intervals' means is unknown (a table "
+                                "of means that does not state both n and sigma: its held rows do not spread); the "
+                                "residuals are not whitened and the standard errors come from their scatter",
                                 o.orientation_sigma_deg));
   return unweighted;
 }
@@ -200,7 +205,9 @@ CalibrationResult known_impl(const std::vector<processing::StaticPoint>& interva
   r.intervals = intervals;
   r.gravity_mps2 = known_gravity(truth_f, options);
   const CalibrationOptions o = without_unknown_noise(options, intervals, r);
-  r.whitened = o.orientation_sigma_deg > 0.0;
+  // A table's stated noise weights the rows when no placement sigma whitens them (held_weights).
+  const HeldWeights held = o.orientation_sigma_deg > 0.0 ? HeldWeights{} : held_weights(intervals);
+  r.whitened = o.orientation_sigma_deg > 0.0 || held.kind == HeldWeighting::kAbsolute;
   const TableOffsets off = table_offsets(o.table_offsets);
   const int p = kFull + off.count();
   std::vector<int> free_index(static_cast<std::size_t>(p));
@@ -233,13 +240,16 @@ CalibrationResult known_impl(const std::vector<processing::StaticPoint>& interva
                             n, (p + 1 + 2) / 3, p));
   std::vector<double> x(static_cast<std::size_t>(p), 0.0);
   ceres::Problem problem;
-  add_known_residuals(intervals, truth_f, angles, M, off, free_index, o, r, problem, x);
+  add_known_residuals(intervals, truth_f, angles, M, off, free_index, o, held, r, problem, x);
   // With a stated placement sigma the residuals are whitened by a-priori sigmas, the placement's a
-  // bound: the reduced χ² may widen the intervals, never narrow them.
-  if (r.whitened)
-    r.uncertainty = fmt::format("a-priori sigmas: the noise of each interval mean (sample std/√N × {:.3g}, the "
-                                "samples' correlation) on the calibrated magnitude (no tilt changes it) and across "
-                                "gravity, there plus g·{} deg (the placement)",
+  // bound: the reduced χ² may widen the intervals, never narrow them. A table's stated sigma/√n
+  // likewise (it leaves out what drifts between rows).
+  if (held.kind != HeldWeighting::kNone)
+    r.uncertainty = held.text();
+  else if (r.whitened)
+    r.uncertainty = fmt::format("a-priori sigmas: the noise of each interval mean (sample std/√N or a table's "
+                                "sigma/√n, × {:.3g}, the samples' correlation) on the calibrated magnitude (no tilt "
+                                "changes it) and across gravity, there plus g·{} deg (the placement)",
                                 noise_correlation_factor(intervals, false), o.orientation_sigma_deg);
   solve(problem, x, free_index, 3 * n, o, r, r.whitened ? Weighting::kAPrioriAtLeast : Weighting::kRelative);
   norm_rms(r);

@@ -287,12 +287,43 @@ double noise_correlation_factor(const std::vector<processing::StaticPoint>& poin
   return white > 0.0 ? std::max(1.0, std::sqrt(correlated / white)) : 1.0;
 }
 
-bool without_spread(const std::vector<processing::StaticPoint>& ivs, bool gyro) {
+bool mean_noise_unknown(const std::vector<processing::StaticPoint>& ivs, bool gyro) {
   for (const auto& iv : ivs) {
     const processing::AxesValue& v = gyro ? iv.gyro : iv.accel;
-    if (!v.sample_std.allFinite() || (v.sample_std.array() > 1e-12 * v.mean.array().abs()).any()) return false;
+    if (v.std_error.allFinite() && (v.std_error.array() > 1e-12 * v.mean.array().abs()).any()) return false;
   }
   return !ivs.empty();
+}
+
+HeldWeights held_weights(const std::vector<processing::StaticPoint>& ivs) {
+  HeldWeights w;
+  const bool weighted = !ivs.empty() && std::all_of(ivs.begin(), ivs.end(), [](const processing::StaticPoint& p) {
+    return p.held && p.held->weighted();
+  });
+  if (!weighted) return w;
+  const bool absolute = std::all_of(ivs.begin(), ivs.end(), [](const processing::StaticPoint& p) { return p.held->absolute(); });
+  w.kind = absolute ? HeldWeighting::kAbsolute : HeldWeighting::kRelative;
+  double ss = 0.0;
+  for (const auto& p : ivs) {
+    w.std_error.push_back(p.held->std_error());
+    ss += w.std_error.back().squaredNorm();
+  }
+  if (!absolute)
+    for (auto& se : w.std_error) se /= std::sqrt(ss / (3.0 * static_cast<double>(ivs.size())));
+  return w;
+}
+
+std::string HeldWeights::text() const {
+  switch (kind) {
+    case HeldWeighting::kAbsolute:
+      return "a-priori sigmas: each row's stated standard error sigma/√n (a table of means), scaled by the reduced "
+             "χ² only when it exceeds 1";
+    case HeldWeighting::kRelative:
+      return "relative weights: each row's stated n or sigma alone (a table of means; sigma/√n with the factor "
+             "not stated taken as 1), their scale from the residuals";
+    case HeldWeighting::kNone: break;
+  }
+  return {};
 }
 
 bool finite_intervals(const std::vector<processing::StaticPoint>& ivs) {

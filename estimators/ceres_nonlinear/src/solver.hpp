@@ -85,12 +85,27 @@ double noise_correlation_factor(const std::vector<processing::StaticPoint>& poin
 // Whether every interval's accelerometer and gyro means are finite.
 bool finite_intervals(const std::vector<processing::StaticPoint>& intervals);
 
-// Whether the intervals' samples of the instrument (gyro or accelerometer) do not spread at all
-// (every sample std known and zero, but for rounding: below 1e-12 of the mean): as in a table of
-// means (each row's mean held, stend::io::import_static_table), or for an instrument the recording
-// holds no samples of. Without a spread the noise of a mean is unknown: standard errors then come
-// from the residual scatter, never from a spread of zero. False for no intervals.
-bool without_spread(const std::vector<processing::StaticPoint>& intervals, bool gyro);
+// Whether the noise of the intervals' means of the instrument (gyro or accelerometer) is unknown:
+// no interval's standard error is a number above rounding (1e-12 of the mean) — a table of means
+// that does not state both n and sigma (each row's mean held: processing::HeldMean), or an
+// instrument the recording holds no samples of. Then standard errors come from the residual
+// scatter, never from a spread of zero. False for no intervals.
+bool mean_noise_unknown(const std::vector<processing::StaticPoint>& intervals, bool gyro);
+
+// How the rows of a table of means weight a fit (processing::HeldMean, whose std_error() is the one
+// rule): kNone — not every interval is a held row stating n or sigma (then the intervals weigh the
+// same and the spread comes from the residuals); kRelative — n or sigma alone (the weights are
+// relative, their scale from the residuals); kAbsolute — both (sigma/√n: a-priori sigmas).
+enum class HeldWeighting { kNone, kRelative, kAbsolute };
+struct HeldWeights {
+  HeldWeighting kind = HeldWeighting::kNone;
+  // Per interval, the standard error of its accelerometer mean [m/s²]; kRelative: scaled to an RMS
+  // of 1 over the table (so a residual scale reads in m/s² for a row of typical weight).
+  std::vector<Eigen::Vector3d> std_error;
+  // "the rows' stated sigma/√n (a table of means)", … for the uncertainty line.
+  std::string text() const;
+};
+HeldWeights held_weights(const std::vector<processing::StaticPoint>& intervals);
 
 // Per-axis RMS of reading − truth, raw and calibrated with r's θ (f: the specific force of each
 // interval for the model's g-sensitivity; truth when empty) into r.truth_error_axis.

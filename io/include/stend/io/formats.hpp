@@ -61,7 +61,7 @@ Recording open_dataset(const Inputs& inputs, const std::string& format, const Im
                        std::string* used = nullptr);
 
 // open_dataset into `rec` with the samples passed to `out` a chunk at a time (through the format's
-// stream when it has one — every format but static_table —, else read whole first) and not
+// stream when it has one — every format but the tables of means —, else read whole first) and not
 // kept in `rec`.
 void import_dataset(const Inputs& inputs, const std::string& format, Recording& rec, SampleSink& out,
                     const ImportOptions& options = {}, std::string* used = nullptr);
@@ -77,5 +77,9 @@ bool looks_like_imucal(const std::filesystem::path& p);
 bool looks_like_mpu6050_multipos(const std::filesystem::path& p);
 bool looks_like_imutk(const std::filesystem::path& p);  // text: each data line 't x y z'
 bool looks_like_static_table(const std::filesystem::path& p);
+// A table of means without inputs: named ax, ay, az columns (and only n / sigma beside them, no
+// time), or three numbers a line; and its first rows turn by more than 2° from one to the next
+// (a log's consecutive samples do not).
+bool looks_like_means_table(const std::filesystem::path& p);
 
 }  // namespace stend::io

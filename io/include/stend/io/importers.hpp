@@ -260,6 +260,27 @@ inline constexpr double kStaticTableRate_hz = 10.0;
 inline constexpr double kStaticTableHold_s = 20.0;
 Recording import_static_table(const std::filesystem::path& file, double gravity_mps2 = 0.0);
 
+// (g) A table of means without known inputs (Magneto's input, many lab spreadsheets): one row per
+// orientation, the accelerometer's three means, no time; optionally per row the count n of samples
+// averaged and their standard deviation sigma (one for all axes, or one per axis; in the means'
+// unit). Columns named by a first line (ax, ay, az or acc_x, a_x, x, …; n, count; sigma, std,
+// sigma_x, …: held_rows.hpp and means_table.cpp say which) or, without one, three columns ax ay az.
+// Delimiter: comma, semicolon, tab or blanks, from the first line unless given. Each row held as in
+// (f), without truth but the held-mean columns (stend/recording/truth_columns.hpp), and an event
+// stating the layout found. For the unknown-orientation fit (|g| only).
+struct MeansTableOptions {
+  char delimiter = 0;              // 0: from the first line
+  bool counts = false;             // the means are counts: SI = (value − offset) · accel_scale
+  double accel_scale = 1.0;        // SI per file unit (m/s² per g, per count, or 1)
+  double accel_offset_counts = 0.0;
+  bool unit_stated = false;        // accel_scale was given (--accel-unit / --accel-lsb), not the default
+  double gravity_mps2 = 0.0;       // 0 = unknown
+
+  // A finite non-zero scale, a finite offset, gravity >= 0.
+  bool IsValid(std::string* error = nullptr) const;
+};
+Recording import_means_table(const std::filesystem::path& file, const MeansTableOptions& options = {});
+
 // Whether MATLAB files can be read and written (always: matio is required).
 bool mat_supported();
 

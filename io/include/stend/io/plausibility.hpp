@@ -72,7 +72,14 @@ class Stillness {
 
 // Why a still stretch reading `still` is implausible for data imported with `options` (empty:
 // plausible): "… these look like raw counts — give --accel-lsb (e.g. 1/16384g)".
-std::string implausible_because(const Stillness::Still& still, const ImportOptions& options);
+// `where` says where `still` was read.
+std::string implausible_because(const Stillness::Still& still, const ImportOptions& options,
+                                const std::string& where = "in the stillest stretch");
+
+// The same rule on a table of means (its rows, held, are no log to find a still stretch in; every
+// row is still): the median |a| of its rows must be about 1 g, else it is refused (ImportError)
+// saying what the values look like, unless accept_implausible.
+void check_held_means(const Recording& rec, const std::filesystem::path& file, const ImportOptions& options);
 
 // What becomes of bad samples: refused (the error thrown as it is) or, with drop, counted.
 class BadSamples {

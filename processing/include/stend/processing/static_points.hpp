@@ -18,6 +18,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -67,6 +68,26 @@ struct AxesValue {
 
 enum class TemperatureSource { kDie, kSensor };
 
+// A held mean: a row of a table of means, held as a segment (the held-mean truth columns of
+// stend/recording/truth_columns.hpp mark the recording). Its samples repeat the mean, so their
+// spread is zero by construction; what the table states of the mean's noise instead:
+struct HeldMean {
+  double n = kNaN;                                          // samples averaged; NaN: not stated
+  Eigen::Vector3d sigma = Eigen::Vector3d::Constant(kNaN);  // their standard deviation per axis (SI); NaN: not stated
+
+  // n and sigma both stated: the standard error of the mean is known, sigma/√n.
+  bool absolute() const { return std::isfinite(n) && sigma.allFinite(); }
+  // Either stated: the rows' weights are known relative to each other.
+  bool weighted() const { return std::isfinite(n) || sigma.allFinite(); }
+  // sigma/√n per axis with a factor not stated taken as 1: the standard error when absolute(),
+  // else proportional to it (by a factor common to the table, which a fit's residuals set). The
+  // one place this rule is written.
+  Eigen::Vector3d std_error() const {
+    const Eigen::Vector3d s = sigma.allFinite() ? sigma : Eigen::Vector3d(Eigen::Vector3d::Ones());
+    return s / std::sqrt(std::isfinite(n) ? n : 1.0);
+  }
+};
+
 struct StaticPoint {
   // The interval: a segment of the recording, or a detected interval (kind SegmentKind::kDetected, id =
   // its index among the detected ones, label "static_<id>").
@@ -85,6 +106,10 @@ struct StaticPoint {
   model::Stimulus<double> stimulus;
   TemperatureSource temperature_source = TemperatureSource::kSensor;
   std::vector<double> truth;  // means of Request::truth_columns
+  // Set for a held mean (a table of means' row). Its accelerometer's noise is then the table's:
+  // accel.sample_std = sigma (NaN: not stated), accel.std_error and correlated_std_error = sigma/√n
+  // when both are stated, else NaN (unknown: never the zero spread of the held samples).
+  std::optional<HeldMean> held;
 
   // The instrument's axes: accel for an accelerometer, else gyro.
   const AxesValue& axes(model::Instrument instrument) const;
@@ -112,6 +137,11 @@ struct Extraction {
   // run(s): 3 too_short, 1 gap" (or "0 interval(s): no segment of kind orientation").
   std::string tally() const;
 };
+
+// Whether `rec` is a table of means (its rows held as orientation segments: the held-mean truth
+// columns). Its static points are its segments whatever ProcessingOptions::intervals says: held
+// values do not vary, so there is nothing to detect stillness in.
+bool holds_means(const Recording& rec);
 
 // The stage. `options` are resolved against the recording's experiment (resolve()). Throws
 // std::invalid_argument when the resolved options are invalid, nothing is requested, or a

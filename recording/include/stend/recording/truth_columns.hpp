@@ -23,10 +23,27 @@ inline constexpr std::array<const char*, 3> kRateColumns = {"w_x_radps", "w_y_ra
 // rotation segment; NaN outside known turns.
 inline constexpr std::array<const char*, 3> kTurnColumns = {"turn_x_deg", "turn_y_deg", "turn_z_deg"};
 
+// A held mean: a row of a table of means held as an orientation segment (io's importers of tables:
+// the samples repeat the row's mean, so their spread is zero by construction and says nothing about
+// noise). What the table states of the noise of that mean, held over the segment like the truth:
+// the number of samples averaged, and their standard deviation per axis [m/s²]; NaN where the table
+// does not state it. Their presence marks the recording as a table of means (processing: the
+// segments are the static points, and this spread, not the samples', is their noise).
+inline constexpr const char* kHeldCountColumn = "held_n";
+inline constexpr std::array<const char*, 3> kHeldSigmaColumns = {"held_sigma_x_mps2", "held_sigma_y_mps2",
+                                                                  "held_sigma_z_mps2"};
+
 // The names of `groups`, in order, as a list: truth_column_names({kSpecificForceColumns, kRateColumns}).
 inline std::vector<std::string> truth_column_names(std::initializer_list<std::array<const char*, 3>> groups) {
   std::vector<std::string> out;
   for (const auto& g : groups) out.insert(out.end(), g.begin(), g.end());
+  return out;
+}
+
+// The held-mean columns in order: kHeldCountColumn, then kHeldSigmaColumns.
+inline std::vector<std::string> held_column_names() {
+  std::vector<std::string> out = {kHeldCountColumn};
+  out.insert(out.end(), kHeldSigmaColumns.begin(), kHeldSigmaColumns.end());
   return out;
 }
 
