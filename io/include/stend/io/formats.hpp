@@ -72,5 +72,6 @@ bool looks_like_imucal(const std::filesystem::path& p);
 bool looks_like_mpu6050_multipos(const std::filesystem::path& p);
 bool looks_like_imutk(const std::filesystem::path& p);  // text: each data line 't x y z'
 bool looks_like_static_table(const std::filesystem::path& p);
+bool looks_like_npy(const std::filesystem::path& p);  // the .npy magic, or a zip whose first member is a *.npy
 
 }  // namespace stend::io
