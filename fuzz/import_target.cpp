@@ -13,9 +13,16 @@
 
 namespace {
 
-// The generic csv format needs its columns mapped; the seeds use these names.
+// The generic csv format needs its columns mapped; the seeds use these names. With
+// STEND_FUZZ_NAMED, a container's arrays are named (the seeds hold A: N×4 [t x y z], W: N×3, T).
 stend::io::ImportOptions options() {
   stend::io::ImportOptions o;
+#ifdef STEND_FUZZ_NAMED
+  o.set("accel", "A");
+  o.set("gyro", "W");
+  o.set("temperature", "T");
+  o.set("rate_hz", "100");
+#endif
   if (std::string(STEND_FUZZ_FORMAT) == "csv") {
     o.set("time", "t");
     o.set("accel", "ax,ay,az");

@@ -77,6 +77,10 @@ CsvColumns resolve_csv_columns(const LineReader& r, const CsvMapping& map, std::
   c.names = std::move(names);
   const std::size_t names_line = c.names_line = r.line();
   const char* axes[3] = {"x", "y", "z"};
+  for (const auto* triad : {&map.accel, &map.gyro})
+    if (!(*triad)[0].empty() && (*triad)[1].empty())
+      throw ImportError(r.file(), 0, "'" + (*triad)[0].name + "' alone names an array (N x 3), which .mat, .npy/.npz and "
+                                     "records have; in text, name the three columns x,y,z");
   for (int k = 0; k < 3; ++k) {
     if (map.accel[k].empty()) {
       throw ImportError(r.file(), 0, std::string("the mapping has no accelerometer ") + axes[k] + " column");
@@ -106,17 +110,17 @@ ImuSample csv_sample(const LineReader& r, const std::vector<std::string_view>& f
   s.t_s = c.time >= 0 ? field(c.time) * map.time_scale_s : static_cast<double>(index) / map.rate_hz;
   for (int k = 0; k < 3; ++k) {
     const double a = field(c.acc[k]);
-    if (map.counts) s.accel_counts[k] = to_counts(r, a, c.name(c.acc[k]));
+    if (map.accel_counts) s.accel_counts[k] = to_counts(r, a, c.name(c.acc[k]));
     s.accel_mps2[k] = (a - map.accel_offset_counts) * map.accel_scale;
     if (c.has_gyro) {
       const double g = field(c.gyr[k]);
-      if (map.counts) s.gyro_counts[k] = to_counts(r, g, c.name(c.gyr[k]));
+      if (map.gyro_counts) s.gyro_counts[k] = to_counts(r, g, c.name(c.gyr[k]));
       s.gyro_radps[k] = (g - map.gyro_offset_counts) * map.gyro_scale;
     }
   }
   if (c.temperature >= 0) {
     const double v = field(c.temperature);
-    if (map.counts && map.temperature_counts) s.temperature_counts = to_counts(r, v, c.name(c.temperature));
+    if (map.accel_counts && map.temperature_counts) s.temperature_counts = to_counts(r, v, c.name(c.temperature));
     s.temperature_c = v * map.temperature_scale + map.temperature_offset_c;
   }
   return s;
@@ -187,11 +191,11 @@ void set_csv_sensor_info(const CsvMapping& map, const CsvColumns& c, Recording& 
   info.has_temperature = c.temperature >= 0;
   info.accel_range_mps2 = map.accel_range_mps2;
   info.gyro_range_radps = map.gyro_range_radps;
-  if (map.counts) {
+  if (map.accel_counts) {
     info.accel_lsb_mps2 = map.accel_scale;
-    info.gyro_lsb_radps = c.has_gyro ? map.gyro_scale : 0.0;
     info.temperature_lsb_c = c.temperature >= 0 && map.temperature_counts ? map.temperature_scale : 0.0;
   }
+  if (map.gyro_counts) info.gyro_lsb_radps = c.has_gyro ? map.gyro_scale : 0.0;
   rec.header.identity = map.identity;
   rec.header.gravity_mps2 = map.gravity_mps2;
 }
@@ -230,7 +234,8 @@ void import_csv(const fs::path& file, const CsvMapping& map, Recording& rec, Sam
   if (bad.dropped() > 0) add_import_event(rec, bad.describe(), "warning");
   add_import_event(rec, "imported " + std::to_string(count) + " samples from " +
                             file.string() + " (generic CSV; " +
-                            (map.counts ? "counts" : "physical units") + ", accel scale " +
+                            "accel " + (map.accel_counts ? "counts" : "physical units") + ", gyro " +
+                            (map.gyro_counts ? "counts" : "physical units") + "; accel scale " +
                             fmt_g(map.accel_scale) + " offset " + fmt_g(map.accel_offset_counts) + ", gyro scale " +
                             fmt_g(map.gyro_scale) + " offset " + fmt_g(map.gyro_offset_counts) +
                             (c.time >= 0 ? ", time column" : ", fixed rate " + fmt_g(map.rate_hz) + " Hz") +

@@ -10,6 +10,7 @@
 
 #include <openssl/evp.h>
 
+#include "arrays.hpp"
 #include "import_common.hpp"
 #include "import_event.hpp"
 
@@ -72,9 +73,17 @@ MatOptions mat_options(const ImportOptions& o) {
   m.gravity_mps2 = o.gravity_mps2;
   return m;
 }
-Recording open_mat(const Inputs& in, const ImportOptions& o) { return import_mat(in[0], mat_options(o)); }
+// Named variables (the options map columns, or several files: one per sensor) go through the
+// named-array import; otherwise the variables are found under their usual names (import_mat).
 void stream_mat(const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
-  import_mat(in[0], mat_options(o), rec, out);
+  if (!o.maps_columns() && in.size() == 1) return import_mat(in[0], mat_options(o), rec, out);
+  std::vector<std::unique_ptr<detail::ArrayFile>> files;
+  std::vector<const detail::ArrayFile*> view;
+  for (const auto& p : in) view.push_back(files.emplace_back(detail::open_mat_arrays(p)).get());
+  detail::import_arrays(view, o, "mat", rec, out);
+}
+Recording open_mat(const Inputs& in, const ImportOptions& o) {
+  return detail::import_in_memory([&](Recording& rec, SampleSink& out) { stream_mat(in, o, rec, out); });
 }
 
 ImucalOptions imucal_options(const ImportOptions& o) {
@@ -218,8 +227,9 @@ RosbagOptions rosbag_options(const ImportOptions& o) {
 const std::vector<Format>& formats() {
   static const std::vector<Format> table = {
       {"run", "a Stend run folder (run.json, imu.csv, ...)", looks_like_run, open_run},
-      {"mat", "MATLAB .mat (v5; v7.3 through HDF5): t|fs, acc, gyro, temp, counts, segments",
-       looks_like_mat, open_mat, 1, stream_mat},
+      {"mat", "MATLAB .mat (v4, v5, 7.3): t|fs, acc, gyro, temp, counts, segments; or the variables --accel, --gyro, "
+              "--time, --temperature name (one file per sensor too)",
+       looks_like_mat, open_mat, 4, stream_mat, true},
       {"imucal", "imucal annotated session (part,samples,acc_*,gyr_* counts)", looks_like_imucal, open_imucal, 1,
        stream_imucal},
       {"mpu6050_multipos", "MPU-6050 multi-position session (Fs,… header, ax..gz counts)", looks_like_mpu6050_multipos,
@@ -282,11 +292,11 @@ void require_inputs_exist(const Inputs& inputs) {
 const Format& detect_format(const Inputs& inputs, const ImportOptions& options) {
   if (inputs.empty()) throw std::invalid_argument("no input file");
   require_inputs_exist(inputs);
-  if (options.maps_columns()) return find_format("csv");
   for (const auto& f : formats()) {
-    if (!f.detect || inputs.size() > f.max_inputs) continue;
+    if (!f.detect || inputs.size() > f.max_inputs || (options.maps_columns() && !f.takes_names)) continue;
     if (std::all_of(inputs.begin(), inputs.end(), [&](const fs::path& p) { return f.detect(p); })) return f;
   }
+  if (options.maps_columns()) return find_format("csv");
   std::string list;
   for (const auto& f : formats()) list += "\n  " + f.name + ": " + f.description;
   throw InputError((inputs.size() > 1 ? "these " + std::to_string(inputs.size()) + " inputs" : inputs[0].string()) +

@@ -133,7 +133,7 @@ double number(const LineReader& r, std::string_view field, const std::string& wh
 std::int32_t to_counts(const LineReader& r, double v, const std::string& what) {
   if (!std::isfinite(v) || std::abs(v - std::round(v)) > 1e-6 || std::abs(v) > 2147483647.0) {
     r.fail("column '" + what + "': " + std::to_string(v) +
-           " is not an integer count (set counts = false for values in physical units)");
+           " is not an integer count (values in physical units take --accel-unit / --gyro-unit, not an LSB)");
   }
   return static_cast<std::int32_t>(std::lround(v));
 }

@@ -58,8 +58,10 @@ std::array<CsvColumn, 3> three_columns(const std::string& key, const std::string
       parts.push_back(trimmed(text.substr(start, i - start)));
       start = i + 1;
     }
-  if (parts.size() != 3 || std::any_of(parts.begin(), parts.end(), [](const std::string& p) { return p.empty(); }))
-    bad(key, text, "three columns x,y,z (names or 0-based indices)");
+  if ((parts.size() != 3 && parts.size() != 1) ||
+      std::any_of(parts.begin(), parts.end(), [](const std::string& p) { return p.empty(); }))
+    bad(key, text, "three columns x,y,z (names or 0-based indices), or one array's name (N x 3, or N x 4 [t x y z])");
+  if (parts.size() == 1) return {column(parts[0]), CsvColumn(), CsvColumn()};
   return {column(parts[0]), column(parts[1]), column(parts[2])};
 }
 
@@ -186,9 +188,11 @@ const std::vector<KeyDef>& key_table() {
          o.rate_hz = number(k, v);
          if (!(o.rate_hz > 0.0)) bad(k, v, "a positive rate");
        }},
-      {{"accel", T::kColumns, "", "", "accelerometer columns x,y,z (names or 0-based indices)"},
+      {{"accel", T::kColumns, "", "",
+        "accelerometer columns x,y,z (names or 0-based indices; in .mat/.npz/records: variables, 'struct.field', "
+        "'array:K'), or one N x 3 / N x 4 [t x y z] array's name"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.accel = three_columns(k, v); }},
-      {{"gyro", T::kColumns, "", "", "gyroscope columns x,y,z (absent: no gyroscope)"},
+      {{"gyro", T::kColumns, "", "", "gyroscope columns x,y,z, or one array's name, as for accel (absent: no gyroscope)"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.gyro = three_columns(k, v); }},
       {{"temperature", T::kColumn, "", "", "temperature column: name or 0-based index"},
        [](ImportOptions& o, const std::string&, const std::string& v) { o.temperature = column(v); }},
@@ -312,8 +316,8 @@ bool ImportOptions::was_stated(const std::string& key) const {
 bool ImportOptions::IsValid(std::string* error) const {
   const auto fail = [error](const std::string& why) { return invalid(error, why); };
   const bool some_gyro = !gyro[0].empty() || !gyro[1].empty() || !gyro[2].empty();
-  if (some_gyro && (gyro[0].empty() || gyro[1].empty() || gyro[2].empty()))
-    return fail("gyro: give x, y and z columns, or none");
+  if (some_gyro && (gyro[0].empty() || gyro[1].empty() != gyro[2].empty()))
+    return fail("gyro: give x, y and z columns, one array's name, or none");
   if (!maps_columns() && (some_gyro || !time.empty() || !temperature.empty()))
     return fail("accel: columns are mapped (time, gyro or temperature given) but not the accelerometer's");
   if (maps_columns() && time.empty() && !(rate_hz > 0.0))
@@ -338,8 +342,9 @@ CsvMapping ImportOptions::csv_mapping() const {
   m.accel = accel;
   m.gyro = gyro;
   m.temperature = temperature;
-  m.counts = accel_value.counts();
-  m.accel_scale = m.counts ? accel_value.lsb : accel_value.unit;
+  m.accel_counts = accel_value.counts();
+  m.gyro_counts = gyro_value.counts();
+  m.accel_scale = m.accel_counts ? accel_value.lsb : accel_value.unit;
   m.accel_offset_counts = accel_value.offset;
   m.gyro_scale = gyro_value.counts() ? gyro_value.lsb : gyro_value.unit;
   m.gyro_offset_counts = gyro_value.offset;

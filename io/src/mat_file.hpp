@@ -7,6 +7,8 @@
 
 #include <stend/io/importers.hpp>
 
+#include "arrays.hpp"
+
 #include <matio.h>
 #include <zlib.h>
 
@@ -107,23 +109,13 @@ Mat5Layout check_mat5_elements(const std::filesystem::path& file);
 
 // --- variables (mat_variables.cpp) ------------------------------------------------------------
 
-// The rows of a numeric variable — N×1, 1×N, N×3 or 3×N, taken as samples × components — read
+// The rows of a numeric variable — N×1, 1×N, N×K or K×N, taken as samples × components — read
 // forward a block at a time, so that no variable is held whole.
-class MatSeries {
- public:
-  MatSeries(std::string which, std::size_t n_rows, std::size_t n_cols) : name(std::move(which)), rows(n_rows), cols(n_cols) {}
-  virtual ~MatSeries() = default;
-  // The next n rows into out (n × cols values, row after row).
-  virtual void read(std::size_t n, double* out) = 0;
-  // Every value (a scalar, or a short vector).
-  std::vector<double> all() {
-    std::vector<double> v(rows * cols);
-    read(rows, v.data());
-    return v;
-  }
-  std::string name;
-  std::size_t rows, cols;
-};
+using MatSeries = ArraySeries;
+
+// Which variables a MatSource reads without a struct name: the top level, or (kAuto) the fields of
+// the only struct when the top level holds no accelerometer under its usual names.
+enum class MatRoot { kAuto, kTopLevel };
 
 // The variables of the file (top level or one struct's fields), by name: their headers, and
 // their values through a MatSeries as they are needed.
@@ -132,7 +124,9 @@ class MatSource {
   // Opens `file` after check_mat5_elements; with `struct_name`, the variables are that struct's
   // fields; without, the top-level variables, or the fields of the only struct when there is no
   // accelerometer at the top level.
-  MatSource(const std::filesystem::path& file, const std::string& struct_name);
+  MatSource(const std::filesystem::path& file, const std::string& struct_name, MatRoot root = MatRoot::kAuto);
+  // The variables read (the top level's, or the struct's fields), by name, in name order.
+  std::vector<std::pair<std::string, matvar_t*>> variables() const;
   // The header of the first of `names` present (a struct field's, with a struct root).
   matvar_t* get(std::initializer_list<const char*> names) const;
   // The values of `v` (a header from get(), a real numeric matrix with one of its dimensions 1
@@ -142,6 +136,7 @@ class MatSource {
   // is read whole as well (matio reads a struct's fields together).
   const matvar_t* segments();
   bool segments_in_root() const { return segments_in_root_; }
+  mat_t* mat() const { return mat_.get(); }
   const std::filesystem::path& file() const { return file_; }
 
  private:

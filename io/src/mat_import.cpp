@@ -66,10 +66,15 @@ MatData read_mat_data(const MatSource& src) {
 }
 
 // An accelerometer (SI or counts with LSB), every series as long as it, and a time or a rate.
-void check_mat_data(const fs::path& file, const MatData& m) {
+void check_mat_data(const MatSource& src, const MatData& m) {
+  const fs::path& file = src.file();
   if (!m.acc && !(m.acc_counts && m.have_acc_lsb)) {
-    throw ImportError(file, 0, "no accelerometer: expected a variable/field 'acc' (N x 3, m/s^2), or "
-                               "'acc_counts' with 'acc_lsb'");
+    std::string present;
+    for (const auto& [name, v] : src.variables()) present += (present.empty() ? "" : ", ") + name;
+    throw ImportError(file, 0, "no accelerometer under the usual names ('acc' N x 3 in m/s^2, or 'acc_counts' with "
+                               "'acc_lsb'); the file holds: " + (present.empty() ? "no variables" : present) +
+                               ". Name them: --accel NAME [--gyro NAME --time NAME | --rate-hz HZ] "
+                               "(docs/log-importers.md, containers read by name)");
   }
   const std::size_t n = m.rows();
   for (const MatSeries* s : {m.acc_counts.get(), m.gyr.get(), m.gyr_counts.get(), m.temp.get(), m.t.get()}) {
@@ -204,7 +209,7 @@ void import_mat(const fs::path& file, const MatOptions& opt, Recording& rec, Sam
   require_valid(opt, "MAT options");
   MatSource src(file, opt.struct_name);
   MatData m = read_mat_data(src);
-  check_mat_data(file, m);
+  check_mat_data(src, m);
   rec = new_recording(file, "mat");
   add_mat_segments(src, file, rec);
   set_mat_sensor_info(m, opt, rec);

@@ -209,7 +209,7 @@ matvar_t* struct_field(const fs::path& file, matvar_t* s, const char* name, std:
   return index < struct_elements(file, s) ? Mat_VarGetStructFieldByName(s, name, index) : nullptr;
 }
 
-MatSource::MatSource(const fs::path& file, const std::string& struct_name) : file_(file) {
+MatSource::MatSource(const fs::path& file, const std::string& struct_name, MatRoot root) : file_(file) {
   layout_ = check_mat5_elements(file);
   silence_hdf5_error_printing();  // a MAT 7.3 file is HDF5: its errors are this importer's to report
   mat_.reset(Mat_Open(file.c_str(), MAT_ACC_RDONLY));
@@ -231,6 +231,7 @@ MatSource::MatSource(const fs::path& file, const std::string& struct_name) : fil
     if (!v) continue;
     top_[nm] = std::move(v);
   }
+  if (root == MatRoot::kTopLevel) return;
   bool has_acc = top_.count("acc") || top_.count("accel") || top_.count("accelerometer") ||
                  top_.count("acc_counts");
   if (!has_acc) {
@@ -256,6 +257,19 @@ void MatSource::check_declared_size(const std::string& name) const {
                                     " bytes of data, more than a file of " + std::to_string(fs::file_size(file_)) +
                                     " bytes can hold (damaged header?)");
   }
+}
+
+std::vector<std::pair<std::string, matvar_t*>> MatSource::variables() const {
+  std::vector<std::pair<std::string, matvar_t*>> out;
+  if (!root_) {
+    for (const auto& [name, v] : top_) out.emplace_back(name, v.get());
+    return out;
+  }
+  const unsigned n = Mat_VarGetNumberOfFields(root_.get());
+  char* const* names = Mat_VarGetStructFieldnames(root_.get());
+  for (unsigned i = 0; names && i < n; ++i)
+    if (names[i]) out.emplace_back(names[i], struct_field(file_, root_.get(), names[i], 0));
+  return out;
 }
 
 matvar_t* MatSource::get(std::initializer_list<const char*> names) const {

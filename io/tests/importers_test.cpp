@@ -247,7 +247,7 @@ TEST(ImportCsv, MappingReproducesTheMpu6050Importer) {
   m.rate_hz = 100.0;
   m.accel = {"ax", "ay", "az"};
   m.gyro = {"gx", "gy", "gz"};
-  m.counts = true;
+  m.accel_counts = m.gyro_counts = true;
   m.accel_scale = kG / 16384.0;
   m.gyro_scale = std::numbers::pi / 180.0 / 131.0;
   const Recording a = import_csv(file, m);

@@ -33,6 +33,10 @@ struct Format {
   // inputs → `rec` without its samples, which go to `out` a chunk at a time (memory bounded
   // independently of the log's length); nullptr: `open`, then its samples to the sink.
   void (*stream)(const Inputs& inputs, const ImportOptions& options, Recording& rec, SampleSink& out) = nullptr;
+  // Whether the import options' column keys (--accel, --gyro, --time, --temperature) name what is
+  // inside (variables, arrays, fields): such a format is still detected by content when they are
+  // given; otherwise given columns mean the generic csv format.
+  bool takes_names = false;
 };
 
 // Every format, in detection order (the first whose detect() accepts the input wins).
@@ -44,8 +48,9 @@ std::string format_names();
 // The format named `name`; throws std::invalid_argument listing the formats when unknown.
 const Format& find_format(const std::string& name);
 
-// The format of `inputs` by content: the first format that detects inputs[0] (and, for two
-// inputs, inputs[1] as well); the generic csv format when `options` map columns. Throws
+// The format of `inputs` by content: the first format that detects every input (when `options` map
+// columns, among the formats that take names); else the generic csv format when `options` map
+// columns. Throws
 // InputError listing every format with its description when nothing matches.
 const Format& detect_format(const Inputs& inputs, const ImportOptions& options = {});
 

@@ -102,10 +102,12 @@ struct CsvMapping {
   double gyro_offset_counts = 0.0;
   double temperature_scale = 1.0;
   double temperature_offset_c = 0.0;
-  // The file holds raw integer counts: they are stored as counts too, and the scales are the
-  // LSBs (header.info.accel_lsb_mps2 / gyro_lsb_radps / temperature_lsb_c).
-  bool counts = false;
-  bool temperature_counts = true;  // with counts: the temperature column holds integer counts too
+  // A sensor's columns hold raw integer counts: they are stored as counts too, and its scale is the
+  // LSB (header.info.accel_lsb_mps2 / gyro_lsb_radps / temperature_lsb_c). Chosen per sensor: an
+  // accelerometer in counts beside a gyroscope in rad/s is common.
+  bool accel_counts = false;
+  bool gyro_counts = false;
+  bool temperature_counts = true;  // with accelerometer counts: the temperature column holds integer counts too
 
   SensorIdentity identity;
   double accel_range_mps2 = 0.0;  // header.info, 0 = unknown
