@@ -35,6 +35,9 @@ namespace {
 constexpr std::size_t kMaxComponentCursors = 64;
 // Values converted per step of a read: bounds the buffer of raw bytes (8 bytes each at most).
 constexpr std::size_t kBlockValues = 8192;
+// The most components (columns, once samples run along the rows) of an array read: an IMU log's
+// widest arrays hold tens; a reader of its rows holds a few thousand rows of it at once.
+constexpr std::uint64_t kMaxColumns = 1024;
 
 // One array: what arrays() lists, and where and how its values lie.
 struct NpyArray {
@@ -73,22 +76,25 @@ class NpySeries final : public ArraySeries {
     if (n > rows - next_)
       throw std::logic_error("'" + name + "': " + std::to_string(n) + " rows asked for after " + std::to_string(next_) +
                              " of " + std::to_string(rows));
-    const std::size_t size = type_.bytes, step = sequential_ ? std::max<std::size_t>(1, kBlockValues / cols) : kBlockValues;
-    for (std::size_t done = 0; done < n;) {
-      const std::size_t k = std::min(step, n - done);
-      double* to = out + done * cols;
-      if (sequential_) {
-        raw_.resize(k * cols * size);
+    const std::size_t size = type_.bytes;
+    if (sequential_) {  // the values in the order `out` takes them
+      for (std::size_t done = 0, all = n * cols; done < all;) {
+        const std::size_t k = std::min(kBlockValues, all - done);
+        raw_.resize(k * size);
         if (!cursors_[0]->read(raw_.data(), raw_.size())) cut(0);
-        to_doubles(type_, raw_.data(), k * cols, size, to, 1);
-      } else {
+        to_doubles(type_, raw_.data(), k, size, out + done, 1);
+        done += k;
+      }
+    } else {  // each component's next n values, into every cols-th place
+      for (std::size_t done = 0; done < n;) {
+        const std::size_t k = std::min(kBlockValues, n - done);
         raw_.resize(k * size);
         for (std::size_t c = 0; c < cols; ++c) {
           if (!cursors_[c]->read(raw_.data(), raw_.size())) cut(c);
-          to_doubles(type_, raw_.data(), k, size, to + c, cols);
+          to_doubles(type_, raw_.data(), k, size, out + done * cols + c, cols);
         }
+        done += k;
       }
-      done += k;
     }
     next_ += n;
   }
@@ -117,19 +123,21 @@ class NpyFile final : public ArrayFile {
       return;
     }
     const BinaryReader zip(file);
-    bool stored = false, deflated = false;
+    bool any = false, stored = false, deflated = false;
     for (const ZipMember& m : zip_members(zip)) {
       if (m.name.ends_with("/")) continue;  // a folder
       if (!m.name.ends_with(".npy")) {
         skipped_.push_back("'" + m.name + "' (not a .npy)");
         continue;
       }
+      any = true;
+      stored = stored || m.method == 0;
+      deflated = deflated || m.deflated();
       add(m, m.name.substr(0, m.name.size() - 4));
-      (m.deflated() ? deflated : stored) = true;
     }
-    if (!stored && !deflated) throw ImportError(file, 0, "a zip archive without a .npy member: not a NumPy .npz");
-    layout_ = "NumPy .npz (" + std::string(stored && deflated ? "stored and deflated" : stored ? "stored" : "deflated") +
-              "), " + std::to_string(arrays_.size()) + (arrays_.size() == 1 ? " array" : " arrays");
+    if (!any) throw ImportError(file, 0, "a zip archive without a .npy member: not a NumPy .npz");
+    const char* how = stored && deflated ? " (stored and deflated)" : stored ? " (stored)" : deflated ? " (deflated)" : "";
+    layout_ = "NumPy .npz" + std::string(how) + ", " + std::to_string(arrays_.size()) + (arrays_.size() == 1 ? " array" : " arrays");
   }
 
   const fs::path& file() const override { return file_; }
@@ -170,7 +178,10 @@ class NpyFile final : public ArrayFile {
     for (const NpyArray& a : arrays_)
       if (a.info.name == name) throw ImportError(file_, ByteOffset{m.header}, "a second member named '" + m.name + "' (damaged)");
     ZipMemberReader in(file_, m);
-    NpyArray a{{name}, m, read_npy_header(in)};
+    NpyArray a;
+    a.info.name = name;
+    a.bytes = m;
+    a.header = read_npy_header(in);
     const NpyHeader& h = a.header;
     version_ = h.major;
     if (!h.unsupported.empty()) {
@@ -182,6 +193,11 @@ class NpyFile final : public ArrayFile {
     if ((o.cols != 0 && o.rows > std::numeric_limits<std::uint64_t>::max() / o.cols) || o.rows * o.cols > room)
       in.fail(h.data, "'" + name + "' declares shape " + shape_text(h.shape) + " of " + h.descr + " where " +
                           std::to_string(m.size - h.data) + " bytes of values follow its header (damaged, or cut short)");
+    if (o.cols > kMaxColumns) {
+      skipped_.push_back("'" + name + "' (" + shape_text(h.shape) + ": more than " + std::to_string(kMaxColumns) +
+                         " components per sample)");
+      return;
+    }
     a.info.rows = static_cast<std::size_t>(o.rows);
     a.info.cols = static_cast<std::size_t>(o.cols);
     a.info.type = type_name(h.type);
