@@ -4,6 +4,7 @@
 #include "progress.hpp"
 
 #include "stend/errors.hpp"
+#include "stend/io/sample_sink.hpp"
 #include "stend/estimation/registry.hpp"
 #include "stend/estimators/builtin.hpp"
 #include "stend/recording/files.hpp"
@@ -13,6 +14,8 @@
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
+
+#include <stdlib.h>
 
 #include <algorithm>
 #include <atomic>
@@ -71,10 +74,62 @@ io::ImportOptions DatasetArgs::options() const {
 
 io::Inputs DatasetArgs::paths() const { return io::Inputs(inputs.begin(), inputs.end()); }
 
+namespace {
+
+// Dataset files larger than this in total [bytes] are read through a scratch run store rather than
+// into memory: a sample in memory (ImuSample, ~100 B) takes more than its text line, so a 10⁷-row
+// CSV would need gigabytes; through the store, analyses read it a chunk at a time.
+constexpr std::uintmax_t kInMemoryMaxBytes = std::uintmax_t{32} << 20;
+
+std::uintmax_t total_bytes(const io::Inputs& inputs) {
+  std::uintmax_t n = 0;
+  std::error_code ec;
+  for (const auto& p : inputs)
+    if (std::filesystem::is_regular_file(p, ec)) n += std::filesystem::file_size(p, ec);
+  return n;
+}
+
+// The scratch run folders of this process (under the system's temp folder), removed when it exits.
+class ScratchRuns {
+ public:
+  ~ScratchRuns() {
+    std::error_code ec;
+    for (const auto& d : dirs_) std::filesystem::remove_all(d, ec);
+  }
+  // A new, empty folder's path (the folder itself not yet made: RunSink makes it).
+  std::filesystem::path make() {
+    std::string pattern = (std::filesystem::temp_directory_path() / "stend-scratch-XXXXXX").string();
+    if (!mkdtemp(pattern.data())) throw std::runtime_error("cannot make a scratch folder under " + pattern);
+    dirs_.emplace_back(pattern);
+    return dirs_.back() / "run";
+  }
+
+ private:
+  std::vector<std::filesystem::path> dirs_;
+};
+
+// The dataset imported into a scratch run store and opened from it, its samples streamed.
+stend::Recording open_through_store(const io::Inputs& inputs, const std::string& format, const io::ImportOptions& o) {
+  static ScratchRuns scratch;
+  const std::filesystem::path dir = scratch.make();
+  stend::Recording rec;
+  io::RunSink sink(rec, dir, "name: " + inputs[0].stem().string() + "\n");
+  io::import_dataset(inputs, format, rec, sink, o);
+  rec.header.status = RunStatus::kComplete;
+  sink.finish();
+  stend::Recording opened = stend::Recording::open(dir, SampleLoading::kStream, TruthLoading::kLoad);
+  opened.dir = inputs[0];  // results name the file, as for a dataset read into memory
+  return opened;
+}
+
+}  // namespace
+
 stend::Recording DatasetArgs::open() const {
   if (!experiment.empty() && is_run())
     throw InputError("--experiment is for a dataset file: the run folder '" + inputs[0] + "' has its procedure already");
-  stend::Recording rec = io::open_dataset(paths(), format, options());
+  stend::Recording rec = !is_run() && total_bytes(paths()) > kInMemoryMaxBytes
+                             ? open_through_store(paths(), format, options())
+                             : io::open_dataset(paths(), format, options());
   if (!is_run()) print_warnings(rec);
   checked(rec);
   if (!experiment.empty()) align_recording(rec, load_procedure(experiment));

@@ -17,7 +17,9 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <cctype>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <stdexcept>
@@ -187,12 +189,32 @@ std::string sha256_hex(const fs::path& p) {
 
 bool looks_like_run(const fs::path& p) { return fs::is_directory(p) && fs::exists(p / "run.json"); }
 
+namespace {
+
+// A little-endian MAT v4 file (no text header): its first matrix header — type MOPT (M = 0
+// little-endian IEEE, O = 0, P = 0…5 the value type, T = 0…2 full/text/sparse), rows, columns,
+// imagf 0|1, name length with the name's terminating NUL — and a name of identifier characters.
+bool looks_like_mat4(const std::string& h) {
+  if (h.size() < 22) return false;
+  std::int32_t f[5];
+  std::memcpy(f, h.data(), sizeof f);
+  const std::int32_t type = f[0], rows = f[1], cols = f[2], imagf = f[3], namlen = f[4];
+  if (type < 0 || type / 1000 != 0 || (type / 100) % 10 != 0 || (type / 10) % 10 > 5 || type % 10 > 2) return false;
+  if (rows < 0 || cols < 0 || (imagf != 0 && imagf != 1) || namlen < 2 || namlen > 64) return false;
+  if (h.size() < 20 + static_cast<std::size_t>(namlen) || h[19 + static_cast<std::size_t>(namlen)] != '\0') return false;
+  const std::string name = h.substr(20, static_cast<std::size_t>(namlen) - 1);
+  return std::all_of(name.begin(), name.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+}
+
+}  // namespace
+
 bool looks_like_mat(const fs::path& p) {
   // MAT v5 (and v7): a 128-byte text header starting "MATLAB 5.0 MAT-file"; v7.3 is HDF5 with its
-  // signature at offset 512 (after the same kind of text header).
+  // signature at offset 512 (after the same kind of text header); v4 has no header (looks_like_mat4).
   static const std::string kHdf5("\x89HDF\r\n\x1a\n", 8);
   const std::string h = head(p, 520);
-  return starts_with(h, "MATLAB 5.0 MAT-file") || (h.size() >= 520 && h.compare(512, 8, kHdf5) == 0);
+  return starts_with(h, "MATLAB 5.0 MAT-file") || (h.size() >= 520 && h.compare(512, 8, kHdf5) == 0) ||
+         looks_like_mat4(h);
 }
 
 bool looks_like_imucal(const fs::path& p) {

@@ -320,8 +320,6 @@ bool ImportOptions::IsValid(std::string* error) const {
     return fail("gyro: give x, y and z columns, one array's name, or none");
   if (!maps_columns() && (some_gyro || !time.empty() || !temperature.empty()))
     return fail("accel: columns are mapped (time, gyro or temperature given) but not the accelerometer's");
-  if (maps_columns() && time.empty() && !(rate_hz > 0.0))
-    return fail("rate_hz: without a time column the rate is required");
   if (!(time_scale_s > 0.0)) return fail("time_unit: must be positive");
   if (accel_value.offset != 0.0 && !accel_value.counts()) return fail("accel_offset: needs accel_lsb (the values are counts)");
   if (gyro_value.offset != 0.0 && !gyro_value.counts()) return fail("gyro_offset: needs gyro_lsb (the values are counts)");

@@ -235,7 +235,7 @@ TEST(Containers, StendImportStatesTheLayoutFound) {
     for (int c = 0; c < 3; ++c) acc[static_cast<std::size_t>(c) + 1][i] = accel_g(i, c);
   }
   ASSERT_NO_FATAL_FAILURE(write_mat73(dir / "acc.mat", "accelBuffer", acc));
-  const auto out = stend::testing::run_stend("import " + (dir / "acc.mat").string() + " --accel accelBuffer --accel-unit g --out " +
+  const auto out = stend::testing::run_stend("import " + (dir / "acc.mat").string() + " --accel accelBuffer --accel-unit g -o " +
                                              (dir / "run").string());
   ASSERT_EQ(out.code, 0) << out.text;
   EXPECT_NE(out.text.find("read:       imported 400 samples (acc.mat: MAT 7.3 (HDF5), 1 numeric array(s)): accel "

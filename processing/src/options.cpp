@@ -211,15 +211,30 @@ void emit_options(YAML::Emitter& out, const ProcessingOptions& o) {
   out << YAML::EndMap;
 }
 
-ProcessingOptions resolve(const ProcessingOptions& options, const Recording& rec) {
-  if (rec.experiment_yaml.empty()) return options;
-  const std::string file = (rec.dir / "experiment.yaml").string();
-  YAML::Node root;
+namespace {
+
+// The experiment's YAML parsed: an analysis resolves its options several times on one recording,
+// and the parse is most of the cost, so the last text parsed (per thread) is kept with its tree.
+YAML::Node parsed_experiment(const std::string& text, const std::string& file) {
+  thread_local std::string last_text;
+  thread_local YAML::Node last_root;
+  if (text == last_text && last_root) return last_root;
   try {
-    root = YAML::Load(rec.experiment_yaml);
+    last_root = YAML::Load(text);
   } catch (const YAML::ParserException& e) {
     throw ExperimentError({file, e.mark.line + 1, e.mark.column + 1}, "", "YAML syntax error: " + e.msg);
   }
+  last_text = text;
+  return last_root;
+}
+
+}  // namespace
+
+ProcessingOptions resolve(const ProcessingOptions& options, const Recording& rec) {
+  // Without the word, the experiment has no processing section: nothing to parse.
+  if (rec.experiment_yaml.find("processing") == std::string::npos) return options;
+  const std::string file = (rec.dir / "experiment.yaml").string();
+  const YAML::Node root = parsed_experiment(rec.experiment_yaml, file);
   if (!root.IsMap() || !root["processing"] || root["processing"].IsNull()) return options;
   const yaml::MapReader section(root["processing"], file, "processing", "'processing'", kOptionKeys);
   ProcessingOptions out = options;

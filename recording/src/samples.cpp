@@ -198,11 +198,14 @@ TruthRows truth_rows_in(const RecordedTruth& truth, double t0_s, double t1_s) {
 
 void for_each_truth_row(const RecordedTruth& truth, std::uint64_t first, std::uint64_t last, const TruthRowFn& fn) {
   last = std::min(last, truth.rows());
+  if (first >= last) return;
   const std::size_t cols = truth.columns();
-  std::vector<double> t(kTruthChunkRows), values(kTruthChunkRows * cols);
-  std::unique_ptr<bool[]> whole(new bool[kTruthChunkRows]);
+  // Buffers of the rows asked for, up to a chunk (a short window's rows, not a chunk's, are cleared).
+  const std::size_t rows = static_cast<std::size_t>(std::min<std::uint64_t>(kTruthChunkRows, last - first));
+  std::vector<double> t(rows), values(rows * cols);
+  std::unique_ptr<bool[]> whole(new bool[rows]);
   for (std::uint64_t at = first; at < last;) {
-    const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(kTruthChunkRows, last - at));
+    const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(rows, last - at));
     truth.read(at, n, t.data(), values.data(), whole.get());
     for (std::size_t i = 0; i < n; ++i) fn(t[i], values.data() + i * cols, whole[i]);
     at += n;

@@ -74,7 +74,7 @@ void add_provenance(Recording& rec, const Inputs& inputs, const std::string& for
 
 // Content checks the formats use, exposed for tests.
 bool looks_like_run(const std::filesystem::path& p);
-bool looks_like_mat(const std::filesystem::path& p);  // MAT v5 header or HDF5 (v7.3) signature
+bool looks_like_mat(const std::filesystem::path& p);  // MAT v5 header, HDF5 (v7.3) signature, or a v4 matrix header
 bool looks_like_imucal(const std::filesystem::path& p);
 bool looks_like_mpu6050_multipos(const std::filesystem::path& p);
 bool looks_like_imutk(const std::filesystem::path& p);  // text: each data line 't x y z'
