@@ -75,17 +75,39 @@ MatOptions mat_options(const ImportOptions& o) {
   m.gravity_mps2 = o.gravity_mps2;
   return m;
 }
+// Containers of named arrays: every input opened by `open` (one file per sensor), and the arrays
+// the options name made a recording (import_arrays).
+template <class Open>
+void import_array_files(const Inputs& in, const ImportOptions& o, const std::string& format, const Open& open,
+                        Recording& rec, SampleSink& out) {
+  std::vector<std::unique_ptr<detail::ArrayFile>> files;
+  std::vector<const detail::ArrayFile*> view;
+  for (const auto& p : in) view.push_back(files.emplace_back(open(p)).get());
+  detail::import_arrays(view, o, format, rec, out);
+}
+
 // Named variables (the options map columns, or several files: one per sensor) go through the
 // named-array import; otherwise the variables are found under their usual names (import_mat).
 void stream_mat(const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
   if (!o.maps_columns() && in.size() == 1) return import_mat(in[0], mat_options(o), rec, out);
-  std::vector<std::unique_ptr<detail::ArrayFile>> files;
-  std::vector<const detail::ArrayFile*> view;
-  for (const auto& p : in) view.push_back(files.emplace_back(detail::open_mat_arrays(p)).get());
-  detail::import_arrays(view, o, "mat", rec, out);
+  import_array_files(in, o, "mat", detail::open_mat_arrays, rec, out);
 }
 Recording open_mat(const Inputs& in, const ImportOptions& o) {
   return detail::import_in_memory([&](Recording& rec, SampleSink& out) { stream_mat(in, o, rec, out); });
+}
+
+void stream_npy(const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
+  import_array_files(in, o, "npy", detail::open_npy, rec, out);
+}
+Recording open_npy(const Inputs& in, const ImportOptions& o) {
+  return detail::import_in_memory([&](Recording& rec, SampleSink& out) { stream_npy(in, o, rec, out); });
+}
+
+void stream_records(const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
+  import_array_files(in, o, "records", [&o](const fs::path& p) { return detail::open_records(p, o); }, rec, out);
+}
+Recording open_records(const Inputs& in, const ImportOptions& o) {
+  return detail::import_in_memory([&](Recording& rec, SampleSink& out) { stream_records(in, o, rec, out); });
 }
 
 ImucalOptions imucal_options(const ImportOptions& o) {
@@ -269,6 +291,9 @@ const std::vector<Format>& formats() {
       {"mat", "MATLAB .mat (v4, v5, 7.3): t|fs, acc, gyro, temp, counts, segments; or the variables --accel, --gyro, "
               "--time, --temperature name (one file per sensor too)",
        looks_like_mat, open_mat, 4, stream_mat, true},
+      {"npy", "NumPy .npy / .npz (np.save, np.savez, np.savez_compressed): the arrays --accel, --gyro, --time, "
+              "--temperature name (one file per sensor too)",
+       looks_like_npy, open_npy, 4, stream_npy, true},
       {"imucal", "imucal annotated session (part,samples,acc_*,gyr_* counts)", looks_like_imucal, open_imucal, 1,
        stream_imucal},
       {"mpu6050_multipos", "MPU-6050 multi-position session (Fs,… header, ax..gz counts)", looks_like_mpu6050_multipos,
@@ -303,6 +328,9 @@ const std::vector<Format>& formats() {
        [](const Inputs& in, const ImportOptions& o, Recording& rec, SampleSink& out) {
          import_rosbag2(in[0], rosbag_options(o), rec, out);
        }},
+      {"records", "raw binary records of a stated layout (--record-layout t:f64,ax:i16,…; --byte-order, --header-bytes): "
+                  "each field an array to name (one file per sensor too)",
+       nullptr, open_records, 4, stream_records, true},
       {"csv", "generic delimited text with mapped columns (--accel/--mapping ...)", nullptr, open_csv, 1, stream_csv},
   };
   return table;
@@ -334,6 +362,7 @@ void require_inputs_exist(const Inputs& inputs) {
 const Format& detect_format(const Inputs& inputs, const ImportOptions& options) {
   if (inputs.empty()) throw std::invalid_argument("no input file");
   require_inputs_exist(inputs);
+  if (!options.record_layout.empty()) return find_format("records");  // raw records say nothing of themselves
   for (const auto& f : formats()) {
     if (!f.detect || inputs.size() > f.max_inputs || (options.maps_columns() && !f.takes_names)) continue;
     if (std::all_of(inputs.begin(), inputs.end(), [&](const fs::path& p) { return f.detect(p); })) return f;

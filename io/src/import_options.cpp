@@ -104,6 +104,59 @@ char delimiter(const std::string& key, const std::string& text) {
   bad(key, text, "one character, space or tab");
 }
 
+// A count of something (lines, bytes): a whole number >= 0.
+std::size_t count(const std::string& key, const std::string& text, const std::string& of) {
+  const double n = number(key, text);
+  if (n < 0 || n != std::floor(n) || n > 9.0e15) bad(key, text, "a count of " + of);
+  return static_cast<std::size_t>(n);
+}
+
+// One record field's type: i8 u8 i16 u16 i32 u32 i64 u64 (bits), f32 f64.
+RecordField field_type(const std::string& key, const std::string& name, const std::string& type) {
+  RecordField f{name};
+  const std::string bits = type.size() > 1 ? type.substr(1) : "";
+  f.kind = type.empty() ? '?' : type[0];
+  f.bytes = bits == "8" ? 1 : bits == "16" ? 2 : bits == "32" ? 4 : bits == "64" ? 8 : 0;
+  const bool known = f.bytes > 0 && (f.kind == 'i' || f.kind == 'u' || (f.kind == 'f' && f.bytes >= 4));
+  if (!known)
+    throw std::invalid_argument(key + ": field '" + name + "' has type '" + excerpt(type) +
+                                "', not one of i8 u8 i16 u16 i32 u32 i64 u64 f32 f64");
+  return f;
+}
+
+// A field name: a letter or '_' first, then letters, digits and '_' (no ',' ':' '.', never all
+// digits, which would be read as a column index).
+bool field_name(const std::string& s) {
+  const auto word = [](char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_'; };
+  return !s.empty() && word(s[0]) && std::all_of(s.begin(), s.end(), [&](char c) { return word(c) || (c >= '0' && c <= '9'); });
+}
+
+// "t:f64,ax:i16,_:u8" → the record's fields in order; "_" is padding (and may repeat), every other
+// name is given once; at least one field is not padding.
+std::vector<RecordField> record_layout(const std::string& key, const std::string& text) {
+  constexpr std::size_t kMaxFields = 1024;
+  std::vector<RecordField> fields;
+  std::size_t start = 0;
+  for (std::size_t i = 0; i <= text.size(); ++i) {
+    if (i < text.size() && text[i] != ',') continue;
+    const std::string part = trimmed(text.substr(start, i - start));
+    start = i + 1;
+    const auto colon = part.find(':');
+    if (colon == std::string::npos) bad(key, text, "NAME:TYPE fields separated by commas (e.g. t:f64,ax:i16,_:u8)");
+    const std::string name = trimmed(part.substr(0, colon));
+    if (!field_name(name))
+      throw std::invalid_argument(key + ": '" + excerpt(name) +
+                                  "' is not a field name (a letter or '_', then letters, digits or '_')");
+    if (name != "_" && std::any_of(fields.begin(), fields.end(), [&](const RecordField& f) { return f.name == name; }))
+      throw std::invalid_argument(key + ": field '" + name + "' is named twice");
+    fields.push_back(field_type(key, name, trimmed(part.substr(colon + 1))));
+    if (fields.size() > kMaxFields) bad(key, text, "a record of at most " + std::to_string(kMaxFields) + " fields");
+  }
+  if (std::all_of(fields.begin(), fields.end(), [](const RecordField& f) { return f.padding(); }))
+    bad(key, text, "a record with a field that is not padding ('_')");
+  return fields;
+}
+
 using Setter = void (*)(ImportOptions&, const std::string& key, const std::string& value);
 
 // A key: its description, and how its text (parsed and checked as its type says) sets the options.
@@ -120,11 +173,7 @@ const std::vector<KeyDef>& key_table() {
       {{"delimiter", T::kCharacter, "", ",", "column delimiter: one character, space (runs of blanks) or tab"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.delimiter = delimiter(k, v); }},
       {{"skip_lines", T::kCount, "lines", "0", "lines before the column-name line or the data"},
-       [](ImportOptions& o, const std::string& k, const std::string& v) {
-         const double n = number(k, v);
-         if (n < 0 || n != std::floor(n)) bad(k, v, "a count of lines");
-         o.skip_lines = static_cast<std::size_t>(n);
-       }},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.skip_lines = count(k, v, "lines"); }},
       {{"column_names", T::kBoolean, "", "true", "the first line names the columns: true | false"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.column_names = boolean(k, v); }},
       {{"comment", T::kText, "", "#", "data lines starting with this are ignored (\"\": none)"},
@@ -182,6 +231,18 @@ const std::vector<KeyDef>& key_table() {
          if (n < 0 || n != std::floor(n) || n > 255) bad(k, v, "an instance number 0 … 255");
          o.instance = static_cast<int>(n);
        }},
+      {{"record_layout", T::kText, "", "",
+        "raw binary records: their fields in order, NAME:TYPE separated by commas (e.g. t:f64,ax:i16,ay:i16,az:i16,_:u16); "
+        "types i8 u8 i16 u16 i32 u32 i64 u64 f32 f64, '_' a padding field; each field is an array named by its name"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.record_layout = record_layout(k, v); }},
+      {{"byte_order", T::kText, "", "little", "raw records' byte order: little | big"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) {
+         const std::string s = trimmed(v);
+         if (s != "little" && s != "big") bad(k, v, "little or big");
+         o.big_endian = s == "big";
+       }},
+      {{"header_bytes", T::kCount, "bytes", "0", "raw records: bytes before the first record"},
+       [](ImportOptions& o, const std::string& k, const std::string& v) { o.header_bytes = count(k, v, "bytes"); }},
       {{"drop_bad_samples", T::kSwitch, "", "false",
         "drop samples whose time or values are not finite numbers (or whose time goes back), and count them, "
         "instead of refusing the log"},
@@ -262,6 +323,8 @@ bool ImportOptions::IsValid(std::string* error) const {
   if (!(time_scale_s > 0.0)) return fail("time_unit: must be positive");
   if (accel_value.offset != 0.0 && !accel_value.counts()) return fail("accel_offset: needs accel_lsb (the values are counts)");
   if (gyro_value.offset != 0.0 && !gyro_value.counts()) return fail("gyro_offset: needs gyro_lsb (the values are counts)");
+  for (const char* key : {"byte_order", "header_bytes"})
+    if (record_layout.empty() && was_stated(key)) return fail(std::string(key) + ": needs record_layout (raw records)");
   return true;
 }
 

@@ -2,7 +2,8 @@
 //   name         what --format takes
 //   description  one line for the help and for "cannot tell the format" errors
 //   detect       whether an input is of this kind, by its content (never by its name);
-//                nullptr: only chosen by --format (or, for csv, by mapped columns)
+//                nullptr: only chosen by --format (or, for csv, by mapped columns; for records,
+//                by a stated record_layout)
 //   open         inputs → Recording, with the import options (LSB, offsets, columns, rate, g)
 //   max_inputs   how many files one dataset may take (IMU-TK: the accelerometer and gyro files)
 //   stream       (optional) the same as open with the samples passed to a SampleSink in chunks
@@ -48,7 +49,8 @@ std::string format_names();
 // The format named `name`; throws std::invalid_argument listing the formats when unknown.
 const Format& find_format(const std::string& name);
 
-// The format of `inputs` by content: the first format that detects every input (when `options` map
+// The format of `inputs` by content: raw records when `options` state a record_layout; else the
+// first format that detects every input (when `options` map
 // columns, among the formats that take names); else the generic csv format when `options` map
 // columns. Throws
 // InputError listing every format with its description when nothing matches.
@@ -81,5 +83,6 @@ bool looks_like_static_table(const std::filesystem::path& p);
 // time), or three numbers a line; and its first rows turn by more than 2° from one to the next
 // (a log's consecutive samples do not).
 bool looks_like_means_table(const std::filesystem::path& p);
+bool looks_like_npy(const std::filesystem::path& p);  // the .npy magic, or a zip whose first member is a *.npy
 
 }  // namespace stend::io

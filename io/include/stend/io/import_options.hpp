@@ -25,6 +25,14 @@ struct ValueScale {
   bool counts() const { return lsb > 0.0; }
 };
 
+// One field of a raw binary record (record_layout "t:f64,ax:i16,_:u8"): an array of its own.
+struct RecordField {
+  std::string name;       // "_": padding, skipped
+  char kind = 'f';        // 'i' signed integer, 'u' unsigned integer, 'f' IEEE float
+  std::size_t bytes = 8;  // 1, 2, 4 or 8 (i8 … u64); floats 4 (f32) or 8 (f64)
+  bool padding() const { return name == "_"; }
+};
+
 // The import options, as the keys of import_keys() set them. A default-constructed ImportOptions
 // holds every key's default (ImportKey::fallback); a key without one is absent until given (an
 // empty column, rate_hz 0, instance −1, no LSB).
@@ -49,6 +57,9 @@ struct ImportOptions {
   int instance = -1;              // ULog / DataFlash; −1 (not given) = the instance with the most samples
   bool drop_bad_samples{};        // bad samples dropped and counted instead of refused (plausibility.hpp)
   bool accept_implausible{};      // a still |a| far from 1 g (or |w| beyond any MEMS gyro) imported as it is
+  std::vector<RecordField> record_layout;  // raw binary records; empty: not given
+  bool big_endian{};                       // raw records' byte order
+  std::size_t header_bytes{};              // raw records: bytes before the first record
   // Every key set, as "key: value" in the order given (the import's provenance states them).
   std::vector<std::string> stated;
 
@@ -57,7 +68,8 @@ struct ImportOptions {
   void set(const std::string& key, const std::string& value);
   bool was_stated(const std::string& key) const;
   // What one key cannot say alone: gyro columns all or none, columns mapped with the
-  // accelerometer's, a rate without a time column, offsets only with an LSB. Ceres style: false
+  // accelerometer's, a rate without a time column, offsets only with an LSB, a byte order or
+  // header only with a record layout. Ceres style: false
   // with the first problem in *error.
   bool IsValid(std::string* error = nullptr) const;
   // Whether columns are mapped (the generic csv format then applies).
