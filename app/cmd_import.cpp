@@ -73,11 +73,7 @@ nlohmann::json print_imported(const std::filesystem::path& dir, const std::strin
                               const Recording& rec) {
   fmt::print(human(), "run folder: {}\nformat:     {}\nrecorded:   {} samples, {} segments, {} truth rows, {} events\n",
              dir.string(), format, samples, rec.segments.size(), rec.truth_t.size(), rec.events.size());
-  // What the importer found and did (the layout, the names read, how sensors were joined).
-  std::string read;
-  for (const Event& e : rec.events)
-    if (e.source == "import" && e.message.rfind("imported ", 0) == 0) read = e.message;
-  if (!read.empty()) fmt::print(human(), "read:       {}\n", read);
+  const std::string read = print_read(rec);  // the layout, the names read, how sensors were joined
   const std::vector<std::string> warnings = print_warnings(rec);
   return {{"run_dir", dir.string()},
           {"format", format},

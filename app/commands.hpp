@@ -87,7 +87,7 @@ struct DatasetArgs {
   io::ImportOptions options() const;
   io::Inputs paths() const;
   // The input, refused when it is a damaged run unless --accept-damaged; a dataset file's import
-  // warnings (repaired or bursty timestamps, gaps) printed (print_warnings).
+  // warnings (repaired or bursty timestamps, gaps) and what was read printed (print_warnings, print_read).
   stend::Recording open() const;
   // `rec` (opened from the input), refused when damaged unless --accept-damaged.
   const stend::Recording& checked(const stend::Recording& rec) const;
@@ -97,6 +97,9 @@ struct DatasetArgs {
 
 // Prints each warning event of `rec` as "warning:    …" (human()) and returns their messages.
 std::vector<std::string> print_warnings(const stend::Recording& rec);
+// Prints what the importer found and did (its format and "imported …" events) as `read:` lines;
+// returns the "imported …" message ("" when there is none: a run folder).
+std::string print_read(const stend::Recording& rec);
 
 // Where results were written: `file` (and its .txt beside it); `kept`: the good results file that
 // a failed fit left in place (empty when none). Both empty when nothing was written.

@@ -130,10 +130,25 @@ stend::Recording DatasetArgs::open() const {
   stend::Recording rec = !is_run() && total_bytes(paths()) > kInMemoryMaxBytes
                              ? open_through_store(paths(), format, options())
                              : io::open_dataset(paths(), format, options());
-  if (!is_run()) print_warnings(rec);
+  if (!is_run()) {
+    print_read(rec);
+    print_warnings(rec);
+  }
   checked(rec);
   if (!experiment.empty()) align_recording(rec, load_procedure(experiment));
   return rec;
+}
+
+std::string print_read(const stend::Recording& rec) {
+  std::string imported;
+  for (const auto& e : rec.events) {
+    if (e.source != "import" || e.level != "info") continue;
+    const bool is_imported = e.message.rfind("imported ", 0) == 0;
+    if (!is_imported && e.message.rfind("format ", 0) != 0) continue;
+    fmt::print(human(), "read:       {}\n", e.message);
+    if (is_imported) imported = e.message;
+  }
+  return imported;
 }
 
 std::vector<std::string> print_warnings(const stend::Recording& rec) {

@@ -4,6 +4,7 @@
 
 #include <stend/estimation/linear_lsq.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace stend::ceres_nonlinear {
@@ -17,10 +18,26 @@ model::ErrorModel accelerometer_model() {
 
 namespace detail {
 
+namespace {
+
+// Whether the intervals hold no gyroscope readings: rows of a table of means (held values), or gyro
+// samples that do not spread at all (a recording without a gyroscope). Intervals whose spread is
+// simply not known (NaN) hold readings.
+bool no_gyro_readings(const std::vector<processing::StaticPoint>& ivs) {
+  if (ivs.empty()) return false;
+  return std::all_of(ivs.begin(), ivs.end(), [](const processing::StaticPoint& p) {
+    const processing::AxesValue& g = p.gyro;
+    return p.held.has_value() ||
+           (g.sample_std.allFinite() && (g.sample_std.array() <= 1e-12 * g.mean.array().abs()).all());
+  });
+}
+
+}  // namespace
+
 void estimate_gyro_bias(CalibrationResult& r, const CalibrationOptions& o) {
   r.gyro_bias.clear();
   if (!o.estimate_gyro_bias) return;
-  if (mean_noise_unknown(r.intervals, true)) {  // no gyro readings: no gyro bias at all
+  if (no_gyro_readings(r.intervals)) {
     r.notes.push_back("gyroscope bias not estimated: the intervals' gyro samples do not spread at all (no "
                       "gyroscope readings, or a table of means), so there is nothing to average");
     return;
