@@ -2,6 +2,7 @@
 // the samples (docs/schemas/info.schema.json).
 #include "commands.hpp"
 
+#include "stend/recording/instruments.hpp"
 #include "stend/recording/recording.hpp"
 
 #include <fmt/format.h>
@@ -30,7 +31,10 @@ json info_json(const stend::Recording& rec, std::uint64_t n, const stend::ImuSam
                         {"model", h.identity.model},
                         {"serial", h.identity.serial},
                         {"who_am_i", h.identity.who_am_i},
-                        {"output_rate_hz", h.info.output_rate_hz}}},
+                        {"output_rate_hz", h.info.output_rate_hz},
+                        {"has_accel", h.info.has_accel},
+                        {"has_gyro", h.info.has_gyro},
+                        {"has_temperature", h.info.has_temperature}}},
             {"gravity_mps2", h.gravity_mps2},
             {"clock", h.clock},
             {"seed", h.seed},
@@ -80,6 +84,7 @@ Outcome run_info(const std::string& dir) {
              rec.complete() ? "" : " (incomplete)");
   fmt::print(out, "sensor:     {} {} serial '{}' WHO_AM_I {} at {} Hz\n", h.identity.vendor, h.identity.model,
              h.identity.serial, h.identity.who_am_i, h.info.output_rate_hz);
+  fmt::print(out, "measures:   {}\n", stend::instruments_text(h.info));
   fmt::print(out, "gravity:    {:.6f} m/s^2; clock {}; seed {}\n", h.gravity_mps2, h.clock, h.seed);
   const auto& src = rec.sample_source();
   const std::uint64_t n = src.size();

@@ -4,6 +4,7 @@
 #include "stend/errors.hpp"
 #include "stend/estimation/assumption.hpp"
 #include "stend/estimation/model_spec.hpp"
+#include "stend/recording/instruments.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -132,6 +133,17 @@ void require_temperature(const std::string& name, std::uint64_t i, const ImuSamp
                                          name, i, s.t_s));
 }
 
+// Throws when the gyroscope's calibration reads the specific force (its g-sensitivity) and the
+// recording `raw` has no accelerometer to give it. A calibrated instrument the recording lacks
+// is left as it is (its values NaN).
+void require_inputs_of(const Recording& raw, const Calibration& cal) {
+  if (!cal.gyro.present() || has_instrument(raw.header.info, model::Instrument::kAccelerometer)) return;
+  const auto& terms = cal.gyro.model.terms;
+  if (std::any_of(terms.begin(), terms.end(), [](const auto& t) { return t.kind == model::TermKind::kGSensitivity; }))
+    throw InputError(fmt::format("{}: the gyroscope calibration's g_sensitivity needs the specific force, and {}",
+                                 raw.dir.string(), absent_text(model::Instrument::kAccelerometer)));
+}
+
 }  // namespace
 
 CalibratedSamples::CalibratedSamples(std::shared_ptr<const SampleSource> raw, const Calibration& cal, std::string name)
@@ -164,6 +176,7 @@ Recording apply_calibration(const Recording& raw, const Calibration& cal) {
   out.segments = raw.segments;
   out.events = raw.events;
   out.dropped_partial_lines = raw.dropped_partial_lines;
+  require_inputs_of(raw, cal);
   std::shared_ptr<const SampleSource> samples = raw.source;
   if (!samples) samples = std::make_shared<MemorySamples>(raw.samples);  // a view of raw's
   if (cal.needs_temperature())  // before anything is written

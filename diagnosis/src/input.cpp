@@ -307,8 +307,9 @@ GapInput build_input(const Recording& recording_in, const estimation::ModelSpec&
   std::vector<std::string> thermal;
   for (const auto& t : spec.model.terms)
     if (model::reads_temperature(t.kind)) thermal.push_back(model::term_name(t.kind));
-  if (const std::string why = estimation::why_no_temperature(recording_in.header.info, thermal); !why.empty())
-    throw InputError("'" + recording_in.dir.string() + "': not applicable — " + why);
+  for (const std::string& why : {estimation::why_absent(recording_in.header.info, spec.model.instrument),
+                                  estimation::why_no_temperature(recording_in.header.info, thermal)})
+    if (!why.empty()) throw InputError("'" + recording_in.dir.string() + "': not applicable — " + why);
   GapInput in;
   in.spec = spec;
   in.source = recording_in.dir.string();

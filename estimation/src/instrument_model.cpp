@@ -2,6 +2,7 @@
 #include "stend/estimation/instrument_model.hpp"
 
 #include "stend/estimation/model_spec.hpp"
+#include "stend/recording/instruments.hpp"
 #include "stend/sdk.hpp"  // kNaN
 
 #include <algorithm>
@@ -78,8 +79,7 @@ void InstrumentModel::print(std::ostream& os) const {
 }
 
 std::string why_absent(const SensorInfo& info, model::Instrument instrument) {
-  if (instrument != model::Instrument::kGyroscope || info.has_gyro) return {};
-  return "the recording has no gyroscope (its source holds no gyroscope data)";
+  return has_instrument(info, instrument) ? std::string() : absent_text(instrument);
 }
 
 std::string why_no_temperature(const SensorInfo& info, const std::vector<std::string>& temperature_terms) {

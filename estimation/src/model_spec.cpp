@@ -1,5 +1,6 @@
 // YAML model specification of a linear error-model fit. See stend/estimation/model_spec.hpp.
 #include "stend/estimation/model_spec.hpp"
+#include "stend/recording/instruments.hpp"
 
 #include <algorithm>
 #include <stend/errors.hpp>
@@ -65,9 +66,7 @@ model::TermSpec parse_term(const YAML::Node& node, const std::string& file, cons
 
 }  // namespace
 
-const char* instrument_name(model::Instrument inst) {
-  return inst == model::Instrument::kAccelerometer ? "accelerometer" : "gyroscope";
-}
+const char* instrument_name(model::Instrument inst) { return stend::instrument_name(inst); }
 
 std::optional<model::Instrument> instrument_from_name(const std::string& name) {
   for (const auto inst : {model::Instrument::kAccelerometer, model::Instrument::kGyroscope})

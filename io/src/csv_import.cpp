@@ -4,6 +4,7 @@
 #include "import_common.hpp"
 
 #include <stend/io/plausibility.hpp>
+#include <stend/recording/instruments.hpp>
 #include <stend/io/timestamps.hpp>
 
 #include <algorithm>
@@ -23,7 +24,7 @@ struct CsvColumns {
   std::vector<std::string> names;  // from the column-name line (empty without one)
   std::size_t names_line = 0;      // its line
   std::array<int, 3> acc{}, gyr{};
-  bool has_gyro = false;
+  bool has_accel = false, has_gyro = false;
   int time = -1, temperature = -1;
 
   // Name of column idx for messages: its header name, else "#idx".
@@ -70,28 +71,34 @@ int resolve_column(const LineReader& r, const CsvMapping& map, const std::vector
                                               "); the columns are: " + have);
 }
 
-// The mapping's columns resolved against the header: all three accelerometer axes, all three
-// gyroscope axes or none, and a time column or a fixed rate.
+// One instrument's x, y, z columns resolved: all three, or none (the log lacks the instrument:
+// `present` false).
+void resolve_triad(const LineReader& r, const CsvMapping& map, CsvColumns& c, const std::array<CsvColumn, 3>& mapped,
+                   const std::string& role, std::array<int, 3>& out, bool& present) {
+  const char* axes[3] = {"x", "y", "z"};
+  for (int k = 0; k < 3; ++k) {
+    out[k] = resolve_column(r, map, c.names, c.names_line, mapped[k], role + " " + axes[k]);
+    present = present || out[k] >= 0;
+  }
+  if (present && (out[0] < 0 || out[1] < 0 || out[2] < 0))
+    throw ImportError(r.file(), 0, "the mapping names only some " + role + " columns (give x, y and z or none)");
+}
+
+// The mapping's columns resolved against the header: the accelerometer's three axes, the
+// gyroscope's three axes, or both (a log of one instrument holds the other's columns not at all),
+// and a time column or a fixed rate.
 CsvColumns resolve_csv_columns(const LineReader& r, const CsvMapping& map, std::vector<std::string> names) {
   CsvColumns c;
   c.names = std::move(names);
   const std::size_t names_line = c.names_line = r.line();
-  const char* axes[3] = {"x", "y", "z"};
   for (const auto* triad : {&map.accel, &map.gyro})
     if (!(*triad)[0].empty() && (*triad)[1].empty())
       throw ImportError(r.file(), 0, "'" + (*triad)[0].name + "' alone names an array (N x 3), which .mat, .npy/.npz and "
                                      "records have; in text, name the three columns x,y,z");
-  for (int k = 0; k < 3; ++k) {
-    if (map.accel[k].empty()) {
-      throw ImportError(r.file(), 0, std::string("the mapping has no accelerometer ") + axes[k] + " column");
-    }
-    c.acc[k] = resolve_column(r, map, c.names, names_line, map.accel[k], std::string("accel ") + axes[k]);
-    c.gyr[k] = resolve_column(r, map, c.names, names_line, map.gyro[k], std::string("gyro ") + axes[k]);
-    c.has_gyro = c.has_gyro || c.gyr[k] >= 0;
-  }
-  if (c.has_gyro && (c.gyr[0] < 0 || c.gyr[1] < 0 || c.gyr[2] < 0)) {
-    throw ImportError(r.file(), 0, "the mapping names only some gyroscope columns (give x, y and z or none)");
-  }
+  resolve_triad(r, map, c, map.accel, "accel", c.acc, c.has_accel);
+  resolve_triad(r, map, c, map.gyro, "gyro", c.gyr, c.has_gyro);
+  if (!c.has_accel && !c.has_gyro)
+    throw ImportError(r.file(), 0, "the mapping has neither accelerometer nor gyroscope columns (give accel, gyro or both)");
   c.time = resolve_column(r, map, c.names, names_line, map.time, "time");
   c.temperature = resolve_column(r, map, c.names, names_line, map.temperature, "temperature");
   if (c.time < 0 && !(map.rate_hz > 0.0)) {
@@ -109,9 +116,11 @@ ImuSample csv_sample(const LineReader& r, const std::vector<std::string_view>& f
   ImuSample s;
   s.t_s = c.time >= 0 ? field(c.time) * map.time_scale_s : static_cast<double>(index) / map.rate_hz;
   for (int k = 0; k < 3; ++k) {
-    const double a = field(c.acc[k]);
-    if (map.accel_counts) s.accel_counts[k] = to_counts(r, a, c.name(c.acc[k]));
-    s.accel_mps2[k] = (a - map.accel_offset_counts) * map.accel_scale;
+    if (c.has_accel) {
+      const double a = field(c.acc[k]);
+      if (map.accel_counts) s.accel_counts[k] = to_counts(r, a, c.name(c.acc[k]));
+      s.accel_mps2[k] = (a - map.accel_offset_counts) * map.accel_scale;
+    }
     if (c.has_gyro) {
       const double g = field(c.gyr[k]);
       if (map.gyro_counts) s.gyro_counts[k] = to_counts(r, g, c.name(c.gyr[k]));
@@ -128,8 +137,9 @@ ImuSample csv_sample(const LineReader& r, const std::vector<std::string_view>& f
 
 // What is wrong with the sample of a data line (empty: nothing): sample_problem, or a time that
 // goes back from prev_t [s] (repeats are repaired afterwards).
-std::string line_problem(const ImuSample& s, const CsvColumns& c, std::size_t count, double prev_t) {
-  if (std::string why = sample_problem(s); !why.empty()) return why;
+std::string line_problem(const ImuSample& s, const SensorInfo& info, const CsvColumns& c, std::size_t count,
+                         double prev_t) {
+  if (std::string why = sample_problem(s, info); !why.empty()) return why;
   if (c.time >= 0 && count > 0 && s.t_s < prev_t)
     return "time " + fmt_g(s.t_s) + " s goes back (previous " + fmt_g(prev_t) + " s)";
   return {};
@@ -137,9 +147,10 @@ std::string line_problem(const ImuSample& s, const CsvColumns& c, std::size_t co
 
 // Every data line as a sample (blank and comment lines skipped), passed to `out` in chunks; each
 // line has as many fields as the column-name line (without one: as the first data line); a bad line
-// (line_problem) goes to `bad`. Returns the number of samples.
-std::size_t read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColumns& c, SampleSink& out,
-                             BadSamples& bad) {
+// (line_problem, judged on the instruments `info` says the log has) goes to `bad`. Returns the
+// number of samples.
+std::size_t read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColumns& c, const SensorInfo& info,
+                             SampleSink& out, BadSamples& bad) {
   const int needed = c.needed();
   std::size_t fields = c.names.size();
   std::string fields_from = "the column-name line (line " + std::to_string(c.names_line) + ")";
@@ -165,8 +176,9 @@ std::size_t read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColu
       r.fail("expected " + std::to_string(fields) + " fields as on " + fields_from + ", found " +
              std::to_string(f.size()));
     }
-    const ImuSample s = csv_sample(r, f, map, c, count);
-    if (const std::string why = line_problem(s, c, count, prev_t); !why.empty()) {
+    ImuSample s = csv_sample(r, f, map, c, count);
+    blank_absent(info, s);  // what the log lacks is NaN from the start
+    if (const std::string why = line_problem(s, info, c, count, prev_t); !why.empty()) {
       bad.report(ImportError(r.file(), r.line(), why));
       continue;
     }
@@ -187,12 +199,13 @@ std::size_t read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColu
 void set_csv_sensor_info(const CsvMapping& map, const CsvColumns& c, Recording& rec) {
   SensorInfo& info = rec.header.info;
   info.output_rate_hz = map.rate_hz;  // 0: set by the timestamp repair
+  info.has_accel = c.has_accel;
   info.has_gyro = c.has_gyro;
   info.has_temperature = c.temperature >= 0;
   info.accel_range_mps2 = map.accel_range_mps2;
   info.gyro_range_radps = map.gyro_range_radps;
   if (map.accel_counts) {
-    info.accel_lsb_mps2 = map.accel_scale;
+    info.accel_lsb_mps2 = c.has_accel ? map.accel_scale : 0.0;
     info.temperature_lsb_c = c.temperature >= 0 && map.temperature_counts ? map.temperature_scale : 0.0;
   }
   if (map.gyro_counts) info.gyro_lsb_radps = c.has_gyro ? map.gyro_scale : 0.0;
@@ -224,20 +237,24 @@ void import_csv(const fs::path& file, const CsvMapping& map, Recording& rec, Sam
   BadSamples bad(map.drop_bad_samples);
   if (c.time >= 0) {
     TimestampRepairStream repair(rec, out, map.rate_hz);
-    count = read_csv_samples(r, map, c, repair, bad);
+    count = read_csv_samples(r, map, c, rec.header.info, repair, bad);
     if (count == 0) throw ImportError(file, 0, "no data lines");
     gaps = repair.finish().gaps;
   } else {
-    count = read_csv_samples(r, map, c, out, bad);
+    count = read_csv_samples(r, map, c, rec.header.info, out, bad);
     if (count == 0) throw ImportError(file, 0, "no data lines");
   }
   if (bad.dropped() > 0) add_import_event(rec, bad.describe(), "warning");
   add_import_event(rec, "imported " + std::to_string(count) + " samples from " +
                             file.string() + " (generic CSV; " +
-                            "accel " + (map.accel_counts ? "counts" : "physical units") + ", gyro " +
-                            (map.gyro_counts ? "counts" : "physical units") + "; accel scale " +
-                            fmt_g(map.accel_scale) + " offset " + fmt_g(map.accel_offset_counts) + ", gyro scale " +
-                            fmt_g(map.gyro_scale) + " offset " + fmt_g(map.gyro_offset_counts) +
+                            (c.has_accel ? "accel " + std::string(map.accel_counts ? "counts" : "physical units") +
+                                               ", scale " + fmt_g(map.accel_scale) + " offset " +
+                                               fmt_g(map.accel_offset_counts)
+                                         : "no accelerometer") +
+                            (c.has_gyro ? "; gyro " + std::string(map.gyro_counts ? "counts" : "physical units") +
+                                              ", scale " + fmt_g(map.gyro_scale) + " offset " +
+                                              fmt_g(map.gyro_offset_counts)
+                                        : "; no gyroscope") +
                             (c.time >= 0 ? ", time column" : ", fixed rate " + fmt_g(map.rate_hz) + " Hz") +
                             (gaps ? ", " + std::to_string(gaps) + " gap(s) flagged" : "") + ")");
 }

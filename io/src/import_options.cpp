@@ -190,7 +190,7 @@ const std::vector<KeyDef>& key_table() {
        }},
       {{"accel", T::kColumns, "", "",
         "accelerometer columns x,y,z (names or 0-based indices; in .mat/.npz/records: variables, 'struct.field', "
-        "'array:K'), or one N x 3 / N x 4 [t x y z] array's name"},
+        "'array:K'), or one N x 3 / N x 4 [t x y z] array's name (absent: no accelerometer, a gyro-only log)"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.accel = three_columns(k, v); }},
       {{"gyro", T::kColumns, "", "", "gyroscope columns x,y,z, or one array's name, as for accel (absent: no gyroscope)"},
        [](ImportOptions& o, const std::string& k, const std::string& v) { o.gyro = three_columns(k, v); }},
@@ -313,13 +313,30 @@ bool ImportOptions::was_stated(const std::string& key) const {
   return std::any_of(stated.begin(), stated.end(), [&](const std::string& s) { return s.rfind(key + ": ", 0) == 0; });
 }
 
+namespace {
+
+// How many of a triad's x, y, z columns are given.
+int mapped(const std::array<CsvColumn, 3>& triad) {
+  return static_cast<int>(std::count_if(triad.begin(), triad.end(), [](const CsvColumn& c) { return !c.empty(); }));
+}
+
+// A triad is given whole (x, y, z), as one array's name (x alone), or not at all.
+bool triad_given(const std::array<CsvColumn, 3>& triad) {
+  const int n = mapped(triad);
+  return n == 0 || n == 3 || (n == 1 && !triad[0].empty());
+}
+
+}  // namespace
+
+bool ImportOptions::maps_columns() const { return mapped(accel) > 0 || mapped(gyro) > 0; }
+
 bool ImportOptions::IsValid(std::string* error) const {
   const auto fail = [error](const std::string& why) { return invalid(error, why); };
-  const bool some_gyro = !gyro[0].empty() || !gyro[1].empty() || !gyro[2].empty();
-  if (some_gyro && (gyro[0].empty() || gyro[1].empty() != gyro[2].empty()))
-    return fail("gyro: give x, y and z columns, one array's name, or none");
-  if (!maps_columns() && (some_gyro || !time.empty() || !temperature.empty()))
-    return fail("accel: columns are mapped (time, gyro or temperature given) but not the accelerometer's");
+  if (!triad_given(accel)) return fail("accel: give x, y and z columns, one array's name, or none");
+  if (!triad_given(gyro)) return fail("gyro: give x, y and z columns, one array's name, or none");
+  if (!maps_columns() && (!time.empty() || !temperature.empty()))
+    return fail("accel, gyro: columns are mapped (time or temperature given) but no instrument's: give --accel x,y,z, "
+                "--gyro x,y,z or both");
   if (!(time_scale_s > 0.0)) return fail("time_unit: must be positive");
   if (accel_value.offset != 0.0 && !accel_value.counts()) return fail("accel_offset: needs accel_lsb (the values are counts)");
   if (gyro_value.offset != 0.0 && !gyro_value.counts()) return fail("gyro_offset: needs gyro_lsb (the values are counts)");

@@ -3,6 +3,8 @@
 #include "mat_file.hpp"
 
 #include <stend/errors.hpp>
+#include <stend/model/terms.hpp>
+#include <stend/recording/instruments.hpp>
 
 #include <cstdint>
 #include <utility>
@@ -125,10 +127,12 @@ void export_mat(const Recording& rec, const fs::path& file, const std::string& s
   MatWriter w(mat.get(), file, struct_name);
   w.write(make_double("t", n, 1, c.t.data()), "t");
   w.write(make_double("fs", 1, 1, &fs_hz), "fs");
-  w.write(make_double("acc", n, 3, c.acc.data()), "acc");
-  w.write(make_int32("acc_counts", n, 3, c.acc_c.data()), "acc_counts");
-  w.write(make_double("acc_lsb", 1, 1, &acc_lsb), "acc_lsb");
-  if (rec.header.info.has_gyro) {
+  if (has_instrument(rec.header.info, model::Instrument::kAccelerometer)) {  // an absent one is left out
+    w.write(make_double("acc", n, 3, c.acc.data()), "acc");
+    w.write(make_int32("acc_counts", n, 3, c.acc_c.data()), "acc_counts");
+    w.write(make_double("acc_lsb", 1, 1, &acc_lsb), "acc_lsb");
+  }
+  if (has_instrument(rec.header.info, model::Instrument::kGyroscope)) {
     w.write(make_double("gyro", n, 3, c.gyr.data()), "gyro");
     w.write(make_int32("gyro_counts", n, 3, c.gyr_c.data()), "gyro_counts");
     w.write(make_double("gyro_lsb", 1, 1, &gyr_lsb), "gyro_lsb");

@@ -1,7 +1,9 @@
 // Plausibility on the way in. See stend/io/plausibility.hpp.
 #include <stend/io/plausibility.hpp>
 
+#include <stend/model/terms.hpp>
 #include <stend/physics/units.hpp>
+#include <stend/recording/instruments.hpp>
 
 #include "import_common.hpp"
 
@@ -24,42 +26,65 @@ std::string rough(double v) {
 
 bool finite3(const Eigen::Vector3d& v) { return v.allFinite(); }
 
+// Why the still rate is implausible (a gyroscope read in counts), "" when it is not or there is
+// no gyroscope (NaN).
+std::string implausible_rate(const Stillness::Still& still) {
+  if (!(still.rate_radps > kMaxStillRate_dps * physics::kDegPerSecond)) return {};
+  return "|w| ≈ " + rough(still.rate_radps) + " rad/s (" + rough(still.rate_radps / physics::kDegPerSecond) +
+         " deg/s) in the stillest stretch, more than any MEMS gyroscope reads: these look like raw counts — give "
+         "--gyro-lsb (e.g. 1/131deg/s)";
+}
+
 }  // namespace
 
-std::string sample_problem(const ImuSample& s) {
+std::string sample_problem(const ImuSample& s, const SensorInfo& info) {
   if (!std::isfinite(s.t_s)) return "time " + fmt_g(s.t_s) + " is not a finite number";
-  if (!finite3(s.accel_mps2)) return "an accelerometer value is not a finite number (" + fmt_g(s.accel_mps2.x()) + ", " +
+  const bool accel = has_instrument(info, model::Instrument::kAccelerometer);
+  const bool gyro = has_instrument(info, model::Instrument::kGyroscope);
+  if (accel && !finite3(s.accel_mps2)) return "an accelerometer value is not a finite number (" + fmt_g(s.accel_mps2.x()) + ", " +
                                      fmt_g(s.accel_mps2.y()) + ", " + fmt_g(s.accel_mps2.z()) + ")";
-  if (!finite3(s.gyro_radps)) return "a gyroscope value is not a finite number (" + fmt_g(s.gyro_radps.x()) + ", " +
+  if (gyro && !finite3(s.gyro_radps)) return "a gyroscope value is not a finite number (" + fmt_g(s.gyro_radps.x()) + ", " +
                                      fmt_g(s.gyro_radps.y()) + ", " + fmt_g(s.gyro_radps.z()) + ")";
   if (std::isinf(s.temperature_c)) return "the temperature " + fmt_g(s.temperature_c) + " is not a finite number";
   return {};
 }
 
+Stillness::Stillness(const SensorInfo& info)
+    : accel_(has_instrument(info, model::Instrument::kAccelerometer)),
+      gyro_(has_instrument(info, model::Instrument::kGyroscope)) {}
+
 void Stillness::add(const ImuSample& s) {
   if (n_ > 0 && s.t_s - t0_s_ >= kStillBlock_s) close_block();
   if (n_ == 0) t0_s_ = s.t_s;
   ++n_;
-  sum_a_ += s.accel_mps2;
-  sum_w_ += s.gyro_radps;
-  sum_aa_ += s.accel_mps2.squaredNorm();
+  if (accel_) {
+    sum_a_ += s.accel_mps2;
+    sum_aa_ += s.accel_mps2.squaredNorm();
+  }
+  if (gyro_) {
+    sum_w_ += s.gyro_radps;
+    sum_ww_ += s.gyro_radps.squaredNorm();
+  }
 }
 
-// The block gathered so far, kept when it is still and among the stillest.
+// The block gathered so far, kept when it is still and among the stillest: by the accelerometer's
+// scatter relative to |a|, or without an accelerometer by the gyroscope's scatter alone.
 void Stillness::close_block() {
   const double n = static_cast<double>(n_);
-  const Eigen::Vector3d mean_a = sum_a_ / n;
+  const Eigen::Vector3d mean_a = sum_a_ / n, mean_w = sum_w_ / n;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
   Block b;
-  b.scatter = std::sqrt(std::max(0.0, sum_aa_ / n - mean_a.squaredNorm()));
-  b.accel_mps2 = mean_a.norm();
-  b.rate_radps = (sum_w_ / n).norm();
-  const bool still = n_ >= kStillMinSamples && b.accel_mps2 > 0.0 && b.scatter < kStillScatter * b.accel_mps2;
+  b.accel_mps2 = accel_ ? mean_a.norm() : nan;
+  b.rate_radps = gyro_ ? mean_w.norm() : nan;
+  b.scatter = accel_ ? std::sqrt(std::max(0.0, sum_aa_ / n - mean_a.squaredNorm())) / b.accel_mps2
+                     : std::sqrt(std::max(0.0, sum_ww_ / n - mean_w.squaredNorm()));
+  const bool still = n_ >= kStillMinSamples && (accel_ ? b.accel_mps2 > 0.0 && b.scatter < kStillScatter : gyro_);
   n_ = 0;
   sum_a_.setZero();
   sum_w_.setZero();
-  sum_aa_ = 0.0;
+  sum_aa_ = sum_ww_ = 0.0;
   if (!still) return;
-  const auto by_scatter = [](const Block& x, const Block& y) { return x.scatter / x.accel_mps2 < y.scatter / y.accel_mps2; };
+  const auto by_scatter = [](const Block& x, const Block& y) { return x.scatter < y.scatter; };
   kept_.push_back(b);
   std::sort(kept_.begin(), kept_.end(), by_scatter);
   if (kept_.size() > kStillBlocksKept) kept_.pop_back();
@@ -82,6 +107,7 @@ std::optional<Stillness::Still> Stillness::stillest() const {
 }
 
 std::string implausible_because(const Stillness::Still& still, const ImportOptions& options, const std::string& where) {
+  if (std::isnan(still.accel_mps2)) return implausible_rate(still);  // a gyro-only log: its rate alone
   const double g = physics::kStandardGravity;
   const double a_g = still.accel_mps2 / g;  // the still |a| in g, as imported
   const auto plausible = [](double in_g) { return in_g >= kMinStillG && in_g <= kMaxStillG; };
@@ -94,11 +120,7 @@ std::string implausible_because(const Stillness::Still& still, const ImportOptio
     if (!counts && !given_in_g && plausible(still.accel_mps2)) return seen + ": these look like g — give --accel-unit g";
     return seen + ", not about 1 g: check --accel-lsb / --accel-unit";
   }
-  if (still.rate_radps > kMaxStillRate_dps * physics::kDegPerSecond)
-    return "|w| ≈ " + rough(still.rate_radps) + " rad/s (" + rough(still.rate_radps / physics::kDegPerSecond) +
-           " deg/s) in the stillest stretch, more than any MEMS gyroscope reads: these look like raw counts — give "
-           "--gyro-lsb (e.g. 1/131deg/s)";
-  return {};
+  return implausible_rate(still);
 }
 
 void BadSamples::report(const ImportError& refusal) {
@@ -116,16 +138,17 @@ void SampleCheck::add_samples(const ImuSample* samples, std::size_t count) {
   // the size of the chunks it is given.
   constexpr std::size_t kCheckBatch = 4096;
   kept_.reserve(kCheckBatch);
-  const bool no_temperature = !rec_->header.info.has_temperature;
+  const SensorInfo& info = rec_->header.info;
+  if (!stillness_) stillness_.emplace(info);
   for (std::size_t i = 0; i < count; ++i) {
     ImuSample s = samples[i];
     ++seen_;
-    if (no_temperature) s.temperature_c = std::numeric_limits<double>::quiet_NaN();
-    if (const std::string why = sample_problem(s); !why.empty()) {
+    blank_absent(info, s);
+    if (const std::string why = sample_problem(s, info); !why.empty()) {
       bad_.report(ImportError(file_, "sample " + std::to_string(seen_), why));
       continue;
     }
-    stillness_.add(s);
+    stillness_->add(s);
     kept_.push_back(s);
     if (kept_.size() == kCheckBatch) pass_kept();
   }
@@ -140,7 +163,7 @@ void SampleCheck::pass_kept() {
 void SampleCheck::finish(Recording& rec) {
   if (bad_.dropped() > 0) add_import_event(rec, bad_.describe(), "warning");
   if (options_->accept_implausible) return;
-  const auto still = stillness_.stillest();
+  const auto still = stillness_ ? stillness_->stillest() : std::nullopt;
   if (!still) return;
   if (const std::string why = implausible_because(*still, *options_); !why.empty())
     throw ImportError(file_, 0, why + " (--accept-implausible imports it as it is)");

@@ -341,6 +341,46 @@ TEST(ImportCsv, TimeColumnUnitsDelimiterAndErrors) {
   EXPECT_NE(error_of([&] { import_csv(f, no_time); }).find("rate_hz"), std::string::npos);
 }
 
+// A log of one instrument: the other's columns are not mapped, the header says it is absent and
+// its values are NaN (never 0 read as data); a triad is mapped whole or not at all.
+TEST(ImportCsv, OneInstrumentLogs) {
+  const TempDir dir("importers");
+  const auto f = dir / "one.csv";
+  write_text(f, "t,gx,gy,gz,temp\n0,0.01,0.02,0.03,25\n0.01,0.01,0.02,0.03,25\n0.02,0.01,0.02,0.03,25\n");
+  CsvMapping gyro_only;
+  gyro_only.time = "t";
+  gyro_only.gyro = {"gx", "gy", "gz"};
+  gyro_only.temperature = "temp";
+  const Recording g = import_csv(f, gyro_only);
+  EXPECT_FALSE(g.header.info.has_accel);
+  EXPECT_TRUE(g.header.info.has_gyro);
+  EXPECT_TRUE(g.header.info.has_temperature);
+  EXPECT_EQ(g.header.info.accel_lsb_mps2, 0.0);
+  ASSERT_EQ(g.samples.size(), 3u);
+  for (const auto& s : g.samples) {
+    EXPECT_TRUE(s.accel_mps2.array().isNaN().all());
+    EXPECT_EQ(s.accel_counts[0], 0);
+    EXPECT_DOUBLE_EQ(s.gyro_radps.z(), 0.03);
+    EXPECT_DOUBLE_EQ(s.temperature_c, 25.0);
+  }
+  write_text(f, "t,ax,ay,az\n0,0,0,9.8\n0.01,0,0,9.8\n");
+  CsvMapping accel_only;
+  accel_only.time = "t";
+  accel_only.accel = {"ax", "ay", "az"};
+  const Recording a = import_csv(f, accel_only);
+  EXPECT_TRUE(a.header.info.has_accel);
+  EXPECT_FALSE(a.header.info.has_gyro);
+  EXPECT_TRUE(a.samples[1].gyro_radps.array().isNaN().all());
+  EXPECT_TRUE(std::isnan(a.samples[1].temperature_c));
+  CsvMapping none;
+  none.time = "t";
+  EXPECT_NE(error_of([&] { import_csv(f, none); }).find("neither accelerometer nor gyroscope columns"), std::string::npos);
+  CsvMapping partial;
+  partial.time = "t";
+  partial.accel = {"ax", "ay", CsvColumn{}};
+  EXPECT_NE(error_of([&] { import_csv(f, partial); }).find("only some accel columns"), std::string::npos);
+}
+
 // ---------------------------------------------------------------------------------------------
 // (d) IMU-TK
 

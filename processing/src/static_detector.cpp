@@ -1,6 +1,9 @@
 // Sliding-variance static-interval detector. See stend/processing/static_detector.hpp.
 #include "stend/processing/static_detector.hpp"
 
+#include "stend/model/terms.hpp"
+#include "stend/recording/instruments.hpp"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <bit>
@@ -64,14 +67,22 @@ Means interval_means(const Stream& in, std::size_t first, std::size_t last) {
   return m;
 }
 
+// The triad whose window variance tells still from moving: the accelerometer's, or the gyroscope's
+// when the recording has no accelerometer.
+using Triad = Eigen::Vector3d ImuSample::*;
+Triad still_triad(const SensorInfo& info) {
+  return has_instrument(info, model::Instrument::kAccelerometer) ? &ImuSample::accel_mps2 : &ImuSample::gyro_radps;
+}
+
 // Calls fn(i, sample_i, var_i, rate_i) for the samples i < end in order: var_i is the sum of the
-// three accelerometer variances over the centred window of 2·half + 1 samples (cut at the ends of
-// the recording), from prefix sums of the values centred on `mean`; rate_i [rad/s] is the norm of
-// the window-mean gyro reading less `*bias` (0 when bias is null). The prefix sums of the last
-// 2·half + 2 indices and the last half + 1 samples are kept, so memory is the window's.
+// three variances of `triad` (the accelerometer's, or the gyroscope's) over the centred window of
+// 2·half + 1 samples (cut at the ends of the recording), from prefix sums of the values centred on
+// `mean`; rate_i [rad/s] is the norm of the window-mean gyro reading less `*bias` (0 when bias is
+// null). The prefix sums of the last 2·half + 2 indices and the last half + 1 samples are kept, so
+// memory is the window's.
 using WindowFn = std::function<void(std::uint64_t i, const ImuSample& s, double var, double rate)>;
-void for_each_window(const Stream& in, std::size_t half, const Eigen::Vector3d& mean, const Eigen::Vector3d* bias,
-                     std::uint64_t end, const WindowFn& fn) {
+void for_each_window(const Stream& in, std::size_t half, Triad triad, const Eigen::Vector3d& mean,
+                     const Eigen::Vector3d* bias, std::uint64_t end, const WindowFn& fn) {
   const std::uint64_t n = in.size();
   end = std::min(end, n);
   const std::size_t R = 2 * half + 2, H = half + 1;
@@ -90,7 +101,7 @@ void for_each_window(const Stream& in, std::size_t half, const Eigen::Vector3d& 
   for_each_chunk(in.src, 0, read_end, [&](const ImuSample* c, std::size_t count, std::uint64_t at) {
     for (std::size_t k = 0; k < count; ++k) {
       const std::uint64_t j = at + k;
-      const Eigen::Vector3d d = c[k].accel_mps2 - mean;
+      const Eigen::Vector3d d = c[k].*triad - mean;
       s1[(j + 1) % R] = s1[j % R] + d;
       s2[(j + 1) % R] = s2[j % R] + d.cwiseAbs2();
       if (bias) g1[(j + 1) % R] = g1[j % R] + (c[k].gyro_radps - *bias);
@@ -220,7 +231,8 @@ struct Prepared {
   std::size_t window = 0;  // samples
   std::size_t init = 0;    // samples of the still start (0: none usable)
   double trim_s = 0.0;
-  Eigen::Vector3d accel_mean = Eigen::Vector3d::Zero();  // over the recording [m/s²]
+  Triad triad = &ImuSample::accel_mps2;                  // whose variance: still_triad
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();        // of that triad over the recording [m/s², rad/s]
 };
 
 Prepared prepare(const Recording& rec, const Stream& in, const StaticDetectorOptions& o, DetectionSummary& s) {
@@ -234,10 +246,12 @@ Prepared prepare(const Recording& rec, const Stream& in, const StaticDetectorOpt
   p.half = static_cast<std::size_t>(std::max(1.0, std::round(0.5 * s.window_s / dt)));
   s.min_duration_s = o.min_duration_s > 0.0 ? o.min_duration_s : std::max(kAutoMinDurationS, 2.0 * s.window_s);
   p.window = 2 * p.half + 1;
+  p.triad = still_triad(rec.header.info);
+  s.by_gyroscope = p.triad == &ImuSample::gyro_radps;
   for_each_chunk(in.src, [&](const ImuSample* c, std::size_t count, std::uint64_t) {
-    for (std::size_t k = 0; k < count; ++k) p.accel_mean += c[k].accel_mps2;
+    for (std::size_t k = 0; k < count; ++k) p.mean += c[k].*p.triad;
   }, in.chunk);
-  p.accel_mean /= static_cast<double>(n);
+  p.mean /= static_cast<double>(n);
   p.trim_s = o.trim_s;
   const double init_s = init_duration(rec, t0, o);
   const std::size_t init_n = init_s > 0.0 ? samples_within(in, init_s) : 0;
@@ -254,7 +268,7 @@ void choose_noise(const Stream& in, const Prepared& p, DetectionSummary& s) {
   std::vector<StreamSelect> sel{StreamSelect(init ? 0.5 : kNoisePercentile)};
   const std::uint64_t from = init ? p.half : 0, to = init ? p.init - p.half : in.size();
   select_all(sel, [&] {
-    for_each_window(in, p.half, p.accel_mean, nullptr, to, [&](std::uint64_t i, const ImuSample&, double var, double) {
+    for_each_window(in, p.half, p.triad, p.mean, nullptr, to, [&](std::uint64_t i, const ImuSample&, double var, double) {
       if (i >= from) sel[0].add(var);
     });
   });
@@ -273,7 +287,7 @@ void choose_gyro_bias(const Stream& in, const Prepared& p, double still_threshol
   }
   std::vector<StreamSelect> axis(3, StreamSelect(0.5));
   select_all(axis, [&] {
-    for_each_window(in, p.half, p.accel_mean, nullptr, in.size(), [&](std::uint64_t, const ImuSample& x, double var, double) {
+    for_each_window(in, p.half, p.triad, p.mean, nullptr, in.size(), [&](std::uint64_t, const ImuSample& x, double var, double) {
       if (var <= still_threshold)
         for (int a = 0; a < 3; ++a) axis[static_cast<std::size_t>(a)].add(x.gyro_radps[a]);
     });
@@ -354,7 +368,7 @@ std::vector<Pass> detect_at(const Stream& in, const Prepared& p, const std::vect
   std::vector<Runs> runs(thresholds.size());
   for (std::size_t t = 0; t < thresholds.size(); ++t) runs[t].threshold = thresholds[t];
   const bool gate = s.max_gyro_radps > 0.0;
-  for_each_window(in, p.half, p.accel_mean, gate ? &s.gyro_bias_radps : nullptr, in.size(),
+  for_each_window(in, p.half, p.triad, p.mean, gate ? &s.gyro_bias_radps : nullptr, in.size(),
                   [&](std::uint64_t i, const ImuSample& x, double var, double rate) {
                     const bool turning = gate && rate > s.max_gyro_radps;
                     for (Runs& r : runs) r.feed(i, var, x.flags & kGapBefore, turning);
@@ -460,10 +474,12 @@ std::string DetectionSummary::rejections() const {
 }
 
 std::string DetectionSummary::print() const {
+  const std::string unit = by_gyroscope ? " (rad/s)^2" : " (m/s^2)^2";
   std::string out = "static detection: " + std::to_string(found) + " intervals; window " + num(window_s) +
                     " s at " + num(rate_hz) + " Hz, min duration " + num(min_duration_s) + " s\n";
-  out += "  noise variance " + num(noise_variance) + " (m/s^2)^2 (" + noise_source + ")\n";
-  out += "  threshold " + num(threshold) + " (m/s^2)^2" +
+  if (by_gyroscope) out += "  still from the gyroscope alone (the recording has no accelerometer)\n";
+  out += "  noise variance " + num(noise_variance) + unit + " (" + noise_source + ")\n";
+  out += "  threshold " + num(threshold) + unit +
          (multiplier > 0.0 ? " = " + num(multiplier) + " x noise (" + multiplier_choice + ")" : " (given)") + "\n";
   if (!scan.empty()) {
     out += "  scan (multiplier: intervals, poses, quadric RMS m/s^2):";
@@ -489,7 +505,7 @@ bool DetectionSummary::equals(const DetectionSummary& o, double tol) const {
          (gyro_bias_radps - o.gyro_bias_radps).norm() <= tol && near(max_gyro_radps, o.max_gyro_radps) &&
          rejected == o.rejected && found == o.found && scan.size() == o.scan.size() &&
          noise_source == o.noise_source && multiplier_choice == o.multiplier_choice &&
-         gyro_bias_source == o.gyro_bias_source;
+         gyro_bias_source == o.gyro_bias_source && by_gyroscope == o.by_gyroscope;
 }
 
 Detection detect_static(const Recording& rec, const StaticDetectorOptions& o, std::size_t chunk_samples) {
@@ -498,7 +514,8 @@ Detection detect_static(const Recording& rec, const StaticDetectorOptions& o, st
   const Stream in{rec.sample_source(), chunk_samples};
   if (in.size() < 3) return out;
   const Prepared p = prepare(rec, in, o, s);
-  s.max_gyro_radps = o.max_gyro_radps;
+  const bool gyro = has_instrument(rec.header.info, model::Instrument::kGyroscope);
+  s.max_gyro_radps = gyro ? o.max_gyro_radps : 0.0;  // no gyroscope: no gate
   const bool given = o.variance_threshold > 0.0;
   if (given) {
     s.threshold = o.variance_threshold;
@@ -506,7 +523,11 @@ Detection detect_static(const Recording& rec, const StaticDetectorOptions& o, st
   } else {
     choose_noise(in, p, s);
   }
-  choose_gyro_bias(in, p, given ? s.threshold : kScanMultipliers.front() * s.noise_variance, s);
+  if (gyro) {
+    choose_gyro_bias(in, p, given ? s.threshold : kScanMultipliers.front() * s.noise_variance, s);
+  } else {
+    s.gyro_bias_source = "none (the recording has no gyroscope)";
+  }
   std::vector<Pass> scanned;
   if (!given && o.threshold_multiplier > 0.0) {
     s.multiplier = o.threshold_multiplier;

@@ -12,6 +12,7 @@
 #include "stend/processing/static_detector.hpp"
 #include "stend/processing/truth.hpp"
 #include "stend/recording/truth_columns.hpp"
+#include "stend/recording/instruments.hpp"
 
 namespace stend::processing {
 
@@ -304,6 +305,21 @@ std::string label(const Segment& s) {
   return describe(s);
 }
 
+namespace {
+
+// The request less what the recording lacks (an absent instrument's values are never read: its
+// axes stay NaN); InputError when nothing requested is present.
+Request present_only(const Recording& rec, const Request& request) {
+  Request r = request;
+  r.accel = r.accel && has_instrument(rec.header.info, model::Instrument::kAccelerometer);
+  r.gyro = r.gyro && has_instrument(rec.header.info, model::Instrument::kGyroscope);
+  if (r.accel || r.gyro) return r;
+  throw InputError(rec.dir.string() + ": " +
+                   absent_text(request.accel ? model::Instrument::kAccelerometer : model::Instrument::kGyroscope));
+}
+
+}  // namespace
+
 std::string describe(const Segment& s) {
   std::string out = "segment " + std::to_string(s.id) + " (" + to_string(s.kind);
   if (!s.label.empty()) out += " '" + s.label + "'";
@@ -319,7 +335,8 @@ Extraction extract(const Recording& rec, const ProcessingOptions& options, const
   if (!out.options.IsValid(&why)) throw std::invalid_argument("processing options: " + why);
   if (!request.accel && !request.gyro)
     throw std::invalid_argument("processing: nothing requested (neither accelerometer nor gyroscope)");
-  PointBuilder builder(rec, out.options, request, out);
+  const Request present = present_only(rec, request);
+  PointBuilder builder(rec, out.options, present, out);
   if (rec.truth_column(kDieTemperatureColumn) < 0)
     out.notes.push_back(rec.header.info.has_temperature
                             ? "no 'die_c' truth column: the temperature of each point is the sensor's own "

@@ -1,7 +1,9 @@
 // The stationarity rule of a noise analysis (see stationarity.hpp).
 #include "stend/processing/stationarity.hpp"
 
+#include "stend/model/terms.hpp"
 #include "stend/physics/units.hpp"
+#include "stend/recording/instruments.hpp"
 
 #include <fmt/format.h>
 
@@ -262,9 +264,13 @@ void BlockSummary::add_column(const SampleSource& src, IndexRange range, Channel
   }
 }
 
-Stationarity BlockSummary::judge(bool has_gyro) const {
+Stationarity BlockSummary::judge(const SensorInfo& info) const {
+  const bool has_accel = has_instrument(info, model::Instrument::kAccelerometer);
+  const bool has_gyro = has_instrument(info, model::Instrument::kGyroscope);
   Stationarity s;
   s.blocks = blocks_;
+  if (!has_accel) s.basis = "still stretches from the gyroscope alone (the recording has no accelerometer)";
+  if (!has_gyro) s.basis = "still stretches from the accelerometer alone (the recording has no gyroscope)";
   if (blocks_ < kMinStationarityIncrements + 1) return s;
   s.judged = true;
   std::vector<Block> blocks(blocks_);
@@ -278,9 +284,9 @@ Stationarity BlockSummary::judge(bool has_gyro) const {
       blocks[b].sd[c] = col.added ? col.sd[b] : kNaN;
     }
   }
-  std::vector<char> accel = moving_blocks(blocks, 0, per_block_);
+  std::vector<char> accel = has_accel ? moving_blocks(blocks, 0, per_block_) : std::vector<char>(blocks.size(), 0);
   std::vector<char> gyro = has_gyro ? moving_blocks(blocks, 3, per_block_) : std::vector<char>(blocks.size(), 0);
-  add_stretches(blocks, accel, Mover::kAccelerometer, 0, per_block_, s.stretches);
+  if (has_accel) add_stretches(blocks, accel, Mover::kAccelerometer, 0, per_block_, s.stretches);
   if (has_gyro) add_stretches(blocks, gyro, Mover::kGyroscope, 3, per_block_, s.stretches);
   add_temperature_drift(blocks, s.stretches);
   std::vector<char> either(blocks.size());
@@ -289,13 +295,11 @@ Stationarity BlockSummary::judge(bool has_gyro) const {
   return s;
 }
 
-Stationarity check_stationarity(const SampleSource& src, IndexRange range, double rate_hz, bool has_gyro) {
+Stationarity check_stationarity(const SampleSource& src, IndexRange range, double rate_hz, const SensorInfo& info) {
   BlockSummary summary(range.size(), rate_hz);
-  for (Channel c : {Channel::kTime, Channel::kAx, Channel::kAy, Channel::kAz, Channel::kTemperature})
-    summary.add_column(src, range, c);
-  if (has_gyro)
-    for (Channel c : {Channel::kGx, Channel::kGy, Channel::kGz}) summary.add_column(src, range, c);
-  return summary.judge(has_gyro);
+  summary.add_column(src, range, Channel::kTime);
+  for (Channel c : present_channels(info)) summary.add_column(src, range, c);
+  return summary.judge(info);
 }
 
 }  // namespace stend::processing

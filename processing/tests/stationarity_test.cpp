@@ -6,6 +6,7 @@
 #include "stend/processing/stationarity.hpp"
 
 #include "stend/physics/units.hpp"
+#include "stend/recording/instruments.hpp"
 
 #include <gtest/gtest.h>
 
@@ -62,7 +63,7 @@ std::vector<ImuSample> record(double seconds, const Motion& m, unsigned seed = 1
 
 Stationarity check(const std::vector<ImuSample>& samples) {
   const MemorySamples src(samples);
-  return check_stationarity(src, {0, src.size()}, kRateHz, true);
+  return check_stationarity(src, {0, src.size()}, kRateHz, stend::SensorInfo{});
 }
 
 TEST(Stationarity, StillRecordsWithTheModelsSlowNoisesPass) {
@@ -163,3 +164,36 @@ TEST(Stationarity, ARecordTooShortToJudgeIsNotRefused) {
 }
 
 }  // namespace
+
+// A gyro-only record (SensorInfo::has_accel false, its accelerometer values NaN): still stretches
+// from the gyroscope alone, and the rule says so; a turn is still named. An accelerometer-only one
+// is judged on its accelerometer without reading the gyroscope.
+TEST(Stationarity, OneInstrumentIsJudgedOnItsOwn) {
+  Motion turn;  // 5 s at 18 deg/s about x from 200 s
+  turn.add = [](double t, Eigen::Vector3d&, Eigen::Vector3d& w) {
+    if (t >= 200.0 && t < 205.0) w.x() += 18.0 * physics::kDegPerSecond;
+  };
+  stend::SensorInfo gyro_only;
+  gyro_only.has_accel = false;
+  gyro_only.has_temperature = false;
+  std::vector<ImuSample> samples = record(400, turn);
+  for (auto& x : samples) stend::blank_absent(gyro_only, x);
+  const MemorySamples src(samples);
+  Stationarity s = check_stationarity(src, {0, src.size()}, kRateHz, gyro_only);
+  ASSERT_EQ(s.stretches.size(), 1u) << s.describe();
+  EXPECT_EQ(s.stretches[0].mover, Mover::kGyroscope);
+  EXPECT_NE(s.basis.find("from the gyroscope alone (the recording has no accelerometer)"), std::string::npos) << s.basis;
+  std::vector<ImuSample> still = record(400, {});
+  for (auto& x : still) stend::blank_absent(gyro_only, x);
+  const MemorySamples still_src(still);
+  EXPECT_TRUE(check_stationarity(still_src, {0, still_src.size()}, kRateHz, gyro_only).still());
+
+  stend::SensorInfo accel_only;  // the turn's gyroscope is not read: NaN there would say nothing
+  accel_only.has_gyro = false;
+  std::vector<ImuSample> turned = record(400, turn);
+  for (auto& x : turned) stend::blank_absent(accel_only, x);
+  const MemorySamples accel_src(turned);
+  s = check_stationarity(accel_src, {0, accel_src.size()}, kRateHz, accel_only);
+  EXPECT_TRUE(s.still()) << s.describe();
+  EXPECT_NE(s.basis.find("from the accelerometer alone"), std::string::npos) << s.basis;
+}

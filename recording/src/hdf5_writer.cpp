@@ -5,6 +5,7 @@
 #include "hdf5_store.hpp"
 
 #include "stend/recording/hdf5.hpp"
+#include "stend/recording/instruments.hpp"
 
 #include <fmt/format.h>
 
@@ -28,7 +29,8 @@ std::array<Codec, kChannels> choose_codecs(const SensorInfo& info, const ImuSamp
     Codec& c = out[static_cast<std::size_t>(ch)];
     const double lsb = ch < 3 ? info.accel_lsb_mps2 : ch < 6 ? info.gyro_lsb_radps : info.temperature_lsb_c;
     const double range = ch < 3 ? info.accel_range_mps2 : ch < 6 ? info.gyro_range_radps : 0.0;
-    if (!(lsb > 0.0) || !std::isfinite(lsb) || n == 0) {
+    const bool absent = !has_channel(info, ch < 3 ? Channel::kAx : ch < 6 ? Channel::kGx : Channel::kTemperature);
+    if (absent || !(lsb > 0.0) || !std::isfinite(lsb) || n == 0) {  // an absent instrument's NaN
       c.si_stored = true;
       continue;
     }

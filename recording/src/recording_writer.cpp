@@ -11,6 +11,7 @@
 
 #include "stend/errors.hpp"
 #include "stend/recording/files.hpp"
+#include "stend/recording/instruments.hpp"
 
 #include <sys/stat.h>
 
@@ -104,6 +105,16 @@ struct RecordingWriter::Impl {
   std::chrono::steady_clock::time_point last_flush_wall = std::chrono::steady_clock::now();
   bool finished = false;
   std::string scratch;
+  std::vector<ImuSample> blanked;  // a chunk with the absent instruments' values blanked
+
+  // The samples as stored: what the header says is absent blanked (NaN, counts 0).
+  const ImuSample* stored(const ImuSample* given, std::size_t count) {
+    const SensorInfo& info = header.info;
+    if (info.has_accel && info.has_gyro && info.has_temperature) return given;
+    blanked.assign(given, given + count);
+    for (ImuSample& s : blanked) blank_absent(info, s);
+    return blanked.data();
+  }
 
   void check_open(const char* what) const {
     if (finished) {
@@ -196,6 +207,7 @@ void RecordingWriter::add_samples(const ImuSample* samples, std::size_t count) {
   I.check_open("add_samples");
   if (count == 0) return;
   const double t_last = samples[count - 1].t_s;
+  samples = I.stored(samples, count);
   if (I.h5) {
     I.h5->add_samples(samples, count);
     I.samples += count;

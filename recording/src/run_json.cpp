@@ -46,6 +46,7 @@ ojson header_json(const RecordingHeader& h) {
   info["temperature_lsb_c"] = h.info.temperature_lsb_c;
   info["has_gyro"] = h.info.has_gyro;
   info["has_temperature"] = h.info.has_temperature;
+  info["has_accel"] = h.info.has_accel;
   j["sensor"] = {{"identity", identity}, {"info", info}};
   ojson plugins = ojson::array();
   for (const auto& p : h.plugins) {
@@ -195,6 +196,7 @@ void read_sensor(const nlohmann::json& j, const JsonFields& f, RecordingHeader& 
     f.num(*info, "temperature_lsb_c", "sensor.info.temperature_lsb_c", h.info.temperature_lsb_c);
     f.boolean(*info, "has_gyro", "sensor.info.has_gyro", h.info.has_gyro);
     f.boolean(*info, "has_temperature", "sensor.info.has_temperature", h.info.has_temperature);
+    f.boolean(*info, "has_accel", "sensor.info.has_accel", h.info.has_accel);  // absent before it: true
   }
 }
 

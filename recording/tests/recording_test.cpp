@@ -1,5 +1,7 @@
 // Recording store: round trip, tolerance of interrupted writes, durability under SIGKILL, scale.
 #include <stend/errors.hpp>
+#include <stend/model/terms.hpp>
+#include <stend/recording/instruments.hpp>
 #include <stend/recording/recording.hpp>
 #include <stend/sdk.hpp>
 #include <stend/testing/files.hpp>
@@ -71,7 +73,7 @@ RecordingHeader make_header() {
   h.info.gyro_lsb_radps = M_PI / 180.0 / 131.0;
   h.info.temperature_lsb_c = 1.0 / 340.0;
   h.info.has_gyro = true;
-  h.info.has_temperature = false;
+  h.info.has_temperature = true;  // an absent instrument's round trip: AbsentInstrumentsAreNaNBothWays
   h.gravity_mps2 = 9.8153872;
   h.latitude_deg = 55.7558;
   h.height_m = 151.3;
@@ -253,7 +255,8 @@ TEST_F(RecordingTest, RoundTripIsExact) {
   EXPECT_TRUE(same(h.info.gyro_lsb_radps, w.header.info.gyro_lsb_radps));
   EXPECT_TRUE(same(h.info.temperature_lsb_c, w.header.info.temperature_lsb_c));
   EXPECT_TRUE(h.info.has_gyro);
-  EXPECT_FALSE(h.info.has_temperature);
+  EXPECT_TRUE(h.info.has_temperature);
+  EXPECT_TRUE(h.info.has_accel);
   EXPECT_TRUE(same(h.gravity_mps2, w.header.gravity_mps2));
   EXPECT_TRUE(same(h.latitude_deg, w.header.latitude_deg));
   EXPECT_TRUE(same(h.height_m, w.header.height_m));
@@ -1590,4 +1593,74 @@ TEST_F(RecordingTest, Hdf5DamagedGlobalHeapIsAnErrorNeverAHang) {
       EXPECT_NE(what.find("run.json is missing"), std::string::npos) << what;
     }
   }
+}
+
+// Which instruments a recording holds round-trips through both stores (run.json, and run.h5's
+// header), and the values of an absent one are NaN (counts 0) whatever the writer was given.
+TEST_F(RecordingTest, AbsentInstrumentsAreNaNBothWays) {
+  for (const auto format : {stend::RecordingFormat::kHdf5, stend::RecordingFormat::kCsv}) {
+    for (const bool accel : {false, true}) {
+      const fs::path dir = root_ / (std::string(stend::to_string(format)) + (accel ? "_accel_only" : "_gyro_only"));
+      RecordingHeader h = make_header();
+      h.info.has_accel = accel;
+      h.info.has_gyro = !accel;
+      h.info.has_temperature = false;
+      std::vector<ImuSample> s;
+      for (std::uint64_t k = 1; k <= 3000; ++k) s.push_back(make_sample(k));
+      {
+        RecordingWriter w(dir, h, "name: one instrument\n", stend::RecordingWriterOptions{format});
+        w.add_samples(s.data(), s.size());
+        w.finish(stend::RunStatus::kComplete);
+      }
+      const auto run_json = nlohmann::json::parse(read_text(dir / "run.json"));
+      EXPECT_EQ(run_json.at("sensor").at("info").at("has_accel").get<bool>(), accel) << dir;
+      for (auto loading : {stend::SampleLoading::kInMemory, stend::SampleLoading::kStream}) {
+        const Recording r = Recording::open(dir, loading);
+        EXPECT_EQ(r.header.info.has_accel, accel) << dir;
+        EXPECT_EQ(r.header.info.has_gyro, !accel) << dir;
+        EXPECT_FALSE(r.header.info.has_temperature) << dir;
+        ASSERT_EQ(r.sample_count(), s.size());
+        std::vector<ImuSample> got(s.size());
+        r.sample_source().read(0, got.size(), got.data());
+        for (std::size_t i = 0; i < got.size(); ++i) {
+          ImuSample want = s[i];
+          stend::blank_absent(h.info, want);
+          expect_same_sample(got[i], want, i);
+          if (HasFatalFailure()) return;
+        }
+        const ImuSample& x = got[7];
+        EXPECT_EQ(x.accel_mps2.allFinite(), accel) << dir;
+        EXPECT_EQ(x.gyro_radps.allFinite(), !accel) << dir;
+        EXPECT_TRUE(std::isnan(x.temperature_c)) << dir;
+      }
+    }
+  }
+}
+
+// A run folder written before has_accel existed (run.json without the key) holds an accelerometer.
+TEST_F(RecordingTest, RunsWrittenBeforeHasAccelHoldAnAccelerometer) {
+  const fs::path dir = root_ / "run";
+  write_small(dir);
+  auto j = nlohmann::json::parse(read_text(dir / "run.json"));
+  ASSERT_TRUE(j["sensor"]["info"].contains("has_accel"));
+  j["sensor"]["info"].erase("has_accel");
+  write_text(dir / "run.json", j.dump(2) + "\n");
+  const Recording r = Recording::open(dir);
+  EXPECT_TRUE(r.header.info.has_accel);
+  EXPECT_TRUE(stend::has_instrument(r.header.info, stend::model::Instrument::kAccelerometer));
+}
+
+TEST(Instruments, OneRuleSaysWhatARecordingHolds) {
+  stend::SensorInfo info;
+  EXPECT_EQ(stend::instruments_text(info), "accelerometer, gyroscope, temperature");
+  info.has_accel = false;
+  info.has_temperature = false;
+  EXPECT_EQ(stend::instruments_text(info), "gyroscope (no accelerometer, no temperature)");
+  EXPECT_FALSE(stend::has_channel(info, stend::Channel::kAy));
+  EXPECT_TRUE(stend::has_channel(info, stend::Channel::kGy));
+  EXPECT_TRUE(stend::has_channel(info, stend::Channel::kTime));
+  EXPECT_EQ(stend::present_channels(info),
+            (std::vector<stend::Channel>{stend::Channel::kGx, stend::Channel::kGy, stend::Channel::kGz}));
+  EXPECT_EQ(stend::absent_text(stend::model::Instrument::kAccelerometer),
+            "the recording has no accelerometer (its source holds no accelerometer data)");
 }

@@ -34,6 +34,10 @@ ExportResult export_imutk(const RunData& run, const fs::path& prefix, const Expo
   const auto ims = calibrations(run, o, res);
   for (int i = 0; i < 2; ++i) {
     const char* inst = i == 0 ? "accelerometer" : "gyroscope";
+    if (const std::string why = run.absent(instrument_of(inst)); !why.empty()) {
+      res.notes.push_back(fmt::format("{}: {}: no IMU-TK file written for it", inst, why));
+      continue;
+    }
     if (!ims[static_cast<std::size_t>(i)].has_calib()) {
       res.warnings.push_back(fmt::format("{}: no calibration in the run: no IMU-TK file written for it", inst));
       continue;

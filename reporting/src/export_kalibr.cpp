@@ -106,6 +106,12 @@ ExportResult export_kalibr(const RunData& run, const fs::path& out, const Export
         "no allan.json in " + run.dir.string() +
         ": the Kalibr noise model comes from the Allan analysis; run `stend fit RUN -m estimators/allan/example/allan.yaml` "
         "on a long static recording first");
+  for (const auto inst : {model::Instrument::kAccelerometer, model::Instrument::kGyroscope})
+    if (const std::string why = run.absent(inst); !why.empty())
+      throw InputError(run.dir.string() + ": " + why +
+                       ": Kalibr's imu.yaml needs the noise of both the accelerometer and the gyroscope; nothing "
+                       "written (the noise of the one present is in allan.json; `stend export RUN --to matlab` "
+                       "writes it alone)");
   const auto an = kalibr_value(*noise, "accelerometer", 'N', "accelerometer_noise_density", res);
   const auto ar = kalibr_value(*noise, "accelerometer", 'K', "accelerometer_random_walk", res);
   const auto gn = kalibr_value(*noise, "gyroscope", 'N', "gyroscope_noise_density", res);

@@ -152,8 +152,14 @@ ExportResult export_matlab(const RunData& run, const fs::path& out, const Export
     mat_t* mat = Mat_CreateVer(tmp.c_str(), nullptr, MAT_FT_MAT5);
     if (!mat) throw IoError("cannot write " + out.string() + ": matio could not create the .mat file");
     try {
-      write_matlab_params(mat, noise, info, ims[0], "accelerometer", res, not_estimated);
-      write_matlab_params(mat, noise, info, ims[1], "gyroscope", res, not_estimated);
+      for (const char* inst : {"accelerometer", "gyroscope"}) {
+        if (const std::string why = run.absent(instrument_of(inst)); !why.empty()) {
+          res.notes.push_back(fmt::format("{}: {}: no {} written", inst, why,
+                                          inst[0] == 'a' ? "accelparams" : "gyroparams"));
+          continue;
+        }
+        write_matlab_params(mat, noise, info, ims[inst[0] == 'a' ? 0 : 1], inst, res, not_estimated);
+      }
       write_matlab_info(mat, run.identity, not_estimated);
     } catch (...) {
       Mat_Close(mat);

@@ -106,6 +106,10 @@ ExportResult export_px4(const RunData& run, const fs::path& out, const ExportOpt
   for (int i = 0; i < 2; ++i) {
     const char* inst = i == 0 ? "accelerometer" : "gyroscope";
     const InstrumentModels& im = ims[static_cast<std::size_t>(i)];
+    if (const std::string why = run.absent(instrument_of(inst)); !why.empty()) {
+      res.notes.push_back(fmt::format("{}: {}: no PX4 parameters for it", inst, why));
+      continue;
+    }
     // Per instrument: the thermal offsets where the run has a temperature model, and the static
     // calibration (its offsets 0 beside thermal ones).
     if (im.has_temp()) {

@@ -5,6 +5,8 @@
 
 #include "stend/errors.hpp"
 #include "stend/estimation/model_spec.hpp"
+#include "stend/recording/instruments.hpp"
+#include "stend/recording/recording.hpp"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -24,6 +26,10 @@ const RunResult* RunData::noise() const {
   for (const auto& r : results)
     if (r.fit.ok() && r.fit.noise) return &r;
   return nullptr;
+}
+
+std::string RunData::absent(model::Instrument instrument) const {
+  return has_instrument(sensor, instrument) ? std::string() : absent_text(instrument);
 }
 
 namespace {
@@ -66,6 +72,11 @@ RunData read_run(RunResults identity, const estimation::Registry& registry) {
   d.registry = &registry;
   for (const auto& name : results_files(d.dir, registry))
     d.results.push_back({name, registry.read(parse_file(d.dir / name), name)});
+  try {
+    d.sensor = Recording::open(d.dir, SampleLoading::kStream, TruthLoading::kSkip).header.info;
+  } catch (const InputError&) {
+    // A folder of results without its samples: what the results hold is all there is to export.
+  }
   return d;
 }
 

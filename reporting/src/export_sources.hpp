@@ -36,14 +36,18 @@ struct RunData {
   RunResults identity;              // vendor, model, serial, fingerprint (results.hpp)
   std::vector<RunResult> results;   // in file-name order
   const estimation::Registry* registry = nullptr;
+  SensorInfo sensor;                // the recording's header: which instruments it holds
 
   // The first successful result with a noise analysis, nullptr when none.
   const RunResult* noise() const;
+  // Why the run has nothing of `instrument` to export: "" when the recording has it, else "the
+  // recording has no accelerometer (…)" (stend/recording/instruments.hpp).
+  std::string absent(model::Instrument instrument) const;
 };
 
 // Reads the results files of the run `identity` describes (load_run_results): each registered
 // estimator's (estimation::results_files_of) and any other "<its stem>*.json" in the folder, by
-// name. Throws InputError naming a file that is not JSON.
+// name, and the recording's header. Throws InputError naming a file that is not JSON.
 RunData read_run(RunResults identity, const estimation::Registry& registry);
 
 // Per output axis of one instrument: the calibration (bias, scale, cross-axis at the reference

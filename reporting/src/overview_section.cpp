@@ -1,7 +1,9 @@
 // The run report's overview of the recording (see overview_section.hpp).
 #include "overview_section.hpp"
 
+#include "stend/model/terms.hpp"
 #include "stend/physics/units.hpp"
+#include "stend/recording/instruments.hpp"
 #include "stend/recording/recording.hpp"
 #include "stend/recording/samples.hpp"
 
@@ -137,9 +139,12 @@ estimation::ReportSection overview_section(const std::filesystem::path& dir, boo
     const std::string cap = fmt::format("Raw samples over the whole recording ({} samples, {} s): each channel's "
                                         "minimum–maximum per time bin (band) and mean (line); grey: the segments.",
                                         rec.sample_count(), estimation::report_number(ov.t1 - ov.t0, 3));
-    s.add(overview_plot(ov, rec, 0, 3, 1.0, "accelerometer, raw", "specific force [m/s²]", {"ax", "ay", "az"}), cap);
-    if (rec.header.info.has_gyro)
+    const SensorInfo& info = rec.header.info;
+    if (has_instrument(info, model::Instrument::kAccelerometer))
+      s.add(overview_plot(ov, rec, 0, 3, 1.0, "accelerometer, raw", "specific force [m/s²]", {"ax", "ay", "az"}), cap);
+    if (has_instrument(info, model::Instrument::kGyroscope))
       s.add(overview_plot(ov, rec, 3, 3, physics::kRadToDeg, "gyroscope, raw", "rate [deg/s]", {"gx", "gy", "gz"}), cap);
+    if (info.has_accel != info.has_gyro) s.add_text("The recording holds " + instruments_text(info) + ".");
     if (temperature_recorded)
       s.add(overview_plot(ov, rec, kTemperatureChannel, 1, 1.0, "sensor temperature", "temperature [°C]",
                           {"temperature"}),

@@ -2,7 +2,9 @@
 #include <stend/allan/deviation_report.hpp>
 #include <stend/errors.hpp>
 #include <stend/physics/units.hpp>
+#include <stend/model/terms.hpp>
 #include <stend/processing/stationarity.hpp>
+#include <stend/recording/instruments.hpp>
 
 #include <Eigen/Dense>
 #include <fmt/format.h>
@@ -177,6 +179,12 @@ KalibrDensity kalibr_density(const std::vector<const NoiseModel*>& axes, bool ra
 
 }  // namespace
 
+std::vector<Channel> noise_channels(const SensorInfo& info) {
+  std::vector<Channel> out = present_channels(info);
+  std::erase(out, Channel::kTemperature);
+  return out;
+}
+
 KalibrParameters kalibr_parameters(const std::vector<ChannelResult>& channels, double rate_hz) {
   KalibrParameters k;
   k.update_rate = rate_hz;
@@ -185,6 +193,8 @@ KalibrParameters kalibr_parameters(const std::vector<ChannelResult>& channels, d
     if (c.curve.channel.instrument == Instrument::kAccelerometer) accel.push_back(&c.model);
     if (c.curve.channel.instrument == Instrument::kGyroscope) gyro.push_back(&c.model);
   }
+  k.accelerometer_present = !accel.empty();
+  k.gyroscope_present = !gyro.empty();
   if (!accel.empty()) {
     const KalibrDensity n = kalibr_density(accel, false), w = kalibr_density(accel, true);
     k.accelerometer_noise_density = n.value;
@@ -328,36 +338,36 @@ double stated_lowpass_hz(const Recording& rec) {
   }
 }
 
-// Allan curve and noise model of channel ch (0..2 accelerometer [m/s²], 3..5 gyroscope [rad/s])
-// over samples `range`, read a column chunk at a time through stream s (reset first); the same
-// chunks go to the stationarity check's block summary.
-ChannelResult analyze_channel(const SampleSource& src, IndexRange range, int ch, double rate,
+// Allan curve and noise model of channel `column` (ax ay az [m/s²], gx gy gz [rad/s]) over samples
+// `range`, read a column chunk at a time through stream s (reset first); the same chunks go to the
+// stationarity check's block summary.
+ChannelResult analyze_channel(const SampleSource& src, IndexRange range, Channel column, double rate,
                               const AllanOptions& options, OverlappingAllanStream& s, processing::BlockSummary& blocks) {
-  static const char* names[6] = {"ax", "ay", "az", "gx", "gy", "gz"};
-  static constexpr Channel columns[6] = {Channel::kAx, Channel::kAy, Channel::kAz,
-                                         Channel::kGx, Channel::kGy, Channel::kGz};
   std::vector<double> buf(kDefaultChunkSamples);
   s.reset();
   for (std::uint64_t i = range.first; i < range.last;) {
     const auto take = static_cast<std::size_t>(std::min<std::uint64_t>(buf.size(), range.last - i));
-    src.read_column(columns[ch], i, take, buf.data());
+    src.read_column(column, i, take, buf.data());
     s.add(buf.data(), take);
-    blocks.add(columns[ch], i - range.first, buf.data(), take);
+    blocks.add(column, i - range.first, buf.data(), take);
     i += take;
   }
   ChannelInfo info;
-  info.name = names[ch];
-  info.instrument = ch < 3 ? Instrument::kAccelerometer : Instrument::kGyroscope;
+  info.name = to_string(column);
+  info.instrument =
+      instrument_of(column) == model::Instrument::kAccelerometer ? Instrument::kAccelerometer : Instrument::kGyroscope;
   return analyze(s, rate, info, options);
 }
 
-// Channels 0 … channels−1 on two threads (channel c on thread c mod 2), each thread with one
+// The channels (noise_channels) on two threads (the c-th on thread c mod 2), each thread with one
 // stream for all its channels, so that memory stays at two streams' state; the block summary of
 // the stationarity check gathers every channel read, the time (thread 0) and the temperature
 // (thread 1, when recorded).
-std::vector<ChannelResult> analyze_channels(const SampleSource& src, IndexRange range, int channels, bool temperature,
-                                            double rate, const AllanOptions& options, processing::BlockSummary& blocks) {
-  std::vector<ChannelResult> out(static_cast<std::size_t>(channels));
+std::vector<ChannelResult> analyze_channels(const SampleSource& src, IndexRange range,
+                                            const std::vector<Channel>& columns, bool temperature, double rate,
+                                            const AllanOptions& options, processing::BlockSummary& blocks) {
+  const int channels = static_cast<int>(columns.size());
+  std::vector<ChannelResult> out(columns.size());
   std::exception_ptr error[2];
   auto work = [&](int parity) {
     try {
@@ -365,7 +375,8 @@ std::vector<ChannelResult> analyze_channels(const SampleSource& src, IndexRange 
       if (parity == 1 && temperature) blocks.add_column(src, range, Channel::kTemperature);
       OverlappingAllanStream s(options.max_m, range.size());
       for (int ch = parity; ch < channels; ch += 2) {
-        out[static_cast<std::size_t>(ch)] = analyze_channel(src, range, ch, rate, options, s, blocks);
+        const auto at = static_cast<std::size_t>(ch);
+        out[at] = analyze_channel(src, range, columns[at], rate, options, s, blocks);
       }
     } catch (...) {
       error[parity] = std::current_exception();
@@ -381,8 +392,9 @@ std::vector<ChannelResult> analyze_channels(const SampleSource& src, IndexRange 
 // The stationarity check of the range (stend/processing/stationarity.hpp) on the block summary the
 // analysis gathered: why it is no noise record, with what to do instead, into report.not_still; a
 // warning when it is too short to judge.
-void check_still(const processing::BlockSummary& blocks, bool has_gyro, AllanReport& report) {
-  const processing::Stationarity s = blocks.judge(has_gyro);
+void check_still(const processing::BlockSummary& blocks, const SensorInfo& info, AllanReport& report) {
+  const processing::Stationarity s = blocks.judge(info);
+  if (!s.basis.empty()) report.notes.push_back(s.basis);
   if (!s.judged)
     report.warnings.push_back(fmt::format(
         "the record is too short to check that it is still ({} blocks of {} s; the check needs {})", s.blocks,
@@ -420,13 +432,14 @@ AllanReport analyze_recording(const Recording& rec, const AllanOptions& options)
   report.t_end_s = sampling.t_end_s;
   report.rate_hz = sampling.rate_hz;
   add_sampling_warnings(sampling, report);
-  const int channels = rec.header.info.has_gyro ? 6 : 3;
+  const std::vector<Channel> columns = noise_channels(rec.header.info);
+  if (columns.empty()) throw InputError(fmt::format("Allan: {} has neither an accelerometer nor a gyroscope", report.source));
   AllanOptions opt = options;
   if (std::isnan(opt.lowpass_hz)) opt.lowpass_hz = stated_lowpass_hz(rec);
   processing::BlockSummary blocks(range.size(), sampling.rate_hz);
   std::vector<ChannelResult> analysed =
-      analyze_channels(src, range, channels, rec.header.info.has_temperature, sampling.rate_hz, opt, blocks);
-  check_still(blocks, rec.header.info.has_gyro, report);  // a record that moves has no noise result
+      analyze_channels(src, range, columns, rec.header.info.has_temperature, sampling.rate_hz, opt, blocks);
+  check_still(blocks, rec.header.info, report);  // a record that moves has no noise result
   if (!report.not_still.empty()) return report;
   report.channels = std::move(analysed);
   report.kalibr = kalibr_parameters(report.channels, sampling.rate_hz);
@@ -456,17 +469,25 @@ std::string kalibr_line(const char* key, double v, const char* unit, bool identi
 void write_kalibr_yaml(std::ostream& os, const KalibrParameters& k) {
   os << "# IMU noise parameters (Kalibr imu.yaml) from the Allan deviation. Kalibr takes one density\n"
         "# per sensor: the largest axis is written, every axis is in the comment.\n";
-  os << kalibr_line("accelerometer_noise_density", k.accelerometer_noise_density, "m/s^2/sqrt(Hz)",
-                    k.accelerometer_noise_identified, false, k.accelerometer_noise_density_axes,
-                    k.accelerometer_noise_verdict);
-  os << kalibr_line("accelerometer_random_walk", k.accelerometer_random_walk, "m/s^3/sqrt(Hz)",
-                    k.accelerometer_random_walk_identified, k.accelerometer_random_walk_is_upper_bound,
-                    k.accelerometer_random_walk_axes, k.accelerometer_random_walk_verdict);
-  os << kalibr_line("gyroscope_noise_density", k.gyroscope_noise_density, "rad/s/sqrt(Hz)",
-                    k.gyroscope_noise_identified, false, k.gyroscope_noise_density_axes, k.gyroscope_noise_verdict);
-  os << kalibr_line("gyroscope_random_walk", k.gyroscope_random_walk, "rad/s^2/sqrt(Hz)",
-                    k.gyroscope_random_walk_identified, k.gyroscope_random_walk_is_upper_bound,
-                    k.gyroscope_random_walk_axes, k.gyroscope_random_walk_verdict);
+  if (k.accelerometer_present) {
+    os << kalibr_line("accelerometer_noise_density", k.accelerometer_noise_density, "m/s^2/sqrt(Hz)",
+                      k.accelerometer_noise_identified, false, k.accelerometer_noise_density_axes,
+                      k.accelerometer_noise_verdict);
+    os << kalibr_line("accelerometer_random_walk", k.accelerometer_random_walk, "m/s^3/sqrt(Hz)",
+                      k.accelerometer_random_walk_identified, k.accelerometer_random_walk_is_upper_bound,
+                      k.accelerometer_random_walk_axes, k.accelerometer_random_walk_verdict);
+  } else {
+    os << "# accelerometer_*: left out — the recording has no accelerometer\n";
+  }
+  if (k.gyroscope_present) {
+    os << kalibr_line("gyroscope_noise_density", k.gyroscope_noise_density, "rad/s/sqrt(Hz)",
+                      k.gyroscope_noise_identified, false, k.gyroscope_noise_density_axes, k.gyroscope_noise_verdict);
+    os << kalibr_line("gyroscope_random_walk", k.gyroscope_random_walk, "rad/s^2/sqrt(Hz)",
+                      k.gyroscope_random_walk_identified, k.gyroscope_random_walk_is_upper_bound,
+                      k.gyroscope_random_walk_axes, k.gyroscope_random_walk_verdict);
+  } else {
+    os << "# gyroscope_*: left out — the recording has no gyroscope\n";
+  }
   os << fmt::format("update_rate: {:.6g}  # [Hz]\n", k.update_rate);
 }
 
@@ -522,6 +543,7 @@ std::ostream& operator<<(std::ostream& os, const AllanReport& r) {
   os << fmt::format("Allan analysis of {}: {} samples at {:.6g} Hz, t = {:.6g} … {:.6g} s\n",
                     r.source, r.samples, r.rate_hz, r.t_begin_s, r.t_end_s);
   for (const auto& w : r.warnings) os << "WARNING: " << w << "\n";
+  for (const auto& n : r.notes) os << "note: " << n << "\n";
   if (!r.not_still.empty()) return os << "FAILED — " << r.not_still << "\n";
   for (const auto& c : r.channels) os << "\n" << c;
   os << "\n";
@@ -651,6 +673,7 @@ void write_json(std::ostream& os, const AllanReport& r, int indent) {
             {"samples", r.samples},
             {"t_range_s", json::array({num(r.t_begin_s), num(r.t_end_s)})},
             {"warnings", r.warnings},
+            {"notes", r.notes},
             {"channels", ch},
             {"kalibr", to_json(r.kalibr)}};
   if (!r.not_still.empty()) j["message"] = r.not_still;

@@ -139,14 +139,13 @@ ChannelDeviations phase_deviations(const double* x, std::size_t n, double rate_h
 std::vector<ChannelDeviations> recording_deviations(const Recording& recording, const AllanReport& report,
                                                     const DeviationRequest& request,
                                                     const AllanOptions& options) {
-  static constexpr Channel columns[6] = {Channel::kAx, Channel::kAy, Channel::kAz,
-                                         Channel::kGx, Channel::kGy, Channel::kGz};
+  const std::vector<Channel> columns = noise_channels(recording.header.info);  // as the report's channels
   std::vector<ChannelDeviations> out;
   if (request.empty()) return out;
   const SampleSource& src = recording.sample_source();
   const std::uint64_t first = lower_bound_time(src, report.t_begin_s);
   std::vector<double> buf(kDefaultChunkSamples);
-  for (std::size_t ch = 0; ch < report.channels.size() && ch < 6; ++ch) {
+  for (std::size_t ch = 0; ch < report.channels.size() && ch < columns.size(); ++ch) {
     auto stream = make_stream(request, report.samples, report.rate_hz, options);
     for (std::uint64_t i = first; stream && i < first + report.samples;) {
       const auto take = static_cast<std::size_t>(std::min<std::uint64_t>(buf.size(), first + report.samples - i));

@@ -160,6 +160,7 @@ estimation::FitResult fit_typed(const EstimatorRequest& req) {
                                    "allan: noise-model fit failed — " + (why.empty() ? std::string("no channel") : why));
   }
   std::ostringstream text, json;
+  for (const auto& n : report.notes) text << "note: " << n << "\n";
   write_summary_table(text, report);
   write_json(json, report);
   nlohmann::json doc = nlohmann::json::parse(json.str());

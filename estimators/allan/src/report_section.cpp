@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace stend::allan {
@@ -141,16 +142,35 @@ void add_instrument(ReportSection& s, const json& al, const std::string& inst) {
   s.add(std::move(table));
 }
 
-// The Kalibr noise parameters (with identification and upper-bound flags).
-estimation::Paragraph kalibr_paragraph(const json& kb) {
-  const std::string text = fmt::format(
-      "Kalibr: accelerometer_noise_density {}{}, accelerometer_random_walk {}{}, gyroscope_noise_density {}{}, "
-      "gyroscope_random_walk {}{}, update_rate {} Hz (",
-      g3(num(kb, "accelerometer_noise_density")), kb.value("accelerometer_noise_identified", false) ? "" : " (not identified)",
-      g3(num(kb, "accelerometer_random_walk")), kb.value("accelerometer_random_walk_is_upper_bound", false) ? " (UPPER BOUND)" : "",
-      g3(num(kb, "gyroscope_noise_density")), kb.value("gyroscope_noise_identified", false) ? "" : " (not identified)",
-      g3(num(kb, "gyroscope_random_walk")), kb.value("gyroscope_random_walk_is_upper_bound", false) ? " (UPPER BOUND)" : "",
-      g(num(kb, "update_rate")));
+// Whether the results hold a channel of `inst` ("accelerometer" | "gyroscope"): a gyro-only or an
+// accelerometer-only recording has the other's none.
+bool has_channels(const json& al, const std::string& inst) {
+  const json channels = al.value("channels", json::array());
+  return std::any_of(channels.begin(), channels.end(), [&](const json& ch) { return str(ch, "instrument") == inst; });
+}
+
+// The Kalibr noise parameters (with identification and upper-bound flags) of the instruments the
+// results hold; an absent instrument is named as absent, never given numbers.
+estimation::Paragraph kalibr_paragraph(const json& al) {
+  const json& kb = al["kalibr"];
+  std::string text = "Kalibr:";
+  if (has_channels(al, "accelerometer"))
+    text += fmt::format(" accelerometer_noise_density {}{}, accelerometer_random_walk {}{},",
+                        g3(num(kb, "accelerometer_noise_density")),
+                        kb.value("accelerometer_noise_identified", false) ? "" : " (not identified)",
+                        g3(num(kb, "accelerometer_random_walk")),
+                        kb.value("accelerometer_random_walk_is_upper_bound", false) ? " (UPPER BOUND)" : "");
+  else
+    text += " no accelerometer in the recording,";
+  if (has_channels(al, "gyroscope"))
+    text += fmt::format(" gyroscope_noise_density {}{}, gyroscope_random_walk {}{},",
+                        g3(num(kb, "gyroscope_noise_density")),
+                        kb.value("gyroscope_noise_identified", false) ? "" : " (not identified)",
+                        g3(num(kb, "gyroscope_random_walk")),
+                        kb.value("gyroscope_random_walk_is_upper_bound", false) ? " (UPPER BOUND)" : "");
+  else
+    text += " no gyroscope in the recording,";
+  text += fmt::format(" update_rate {} Hz (", g(num(kb, "update_rate")));
   return {{Span{text}, Span{"stend export RUN --to kalibr", Span::Kind::kCode}, Span{")."}}};
 }
 
@@ -165,8 +185,10 @@ ReportSection report_section(const estimation::FitResult& result) {
   s.add_text(g(num(al, "samples")) + " samples at " + g(num(al, "rate_hz")) + " Hz (" + str(al, "source") + ").");
   for (const auto& w : al.value("warnings", json::array()))
     if (w.is_string()) s.add_text("warning: " + w.get<std::string>(), Emphasis::kWarning);
+  for (const auto& n : al.value("notes", json::array()))
+    if (n.is_string()) s.add_text("note: " + n.get<std::string>());
   for (const char* inst : {"accelerometer", "gyroscope"}) add_instrument(s, al, inst);
-  if (al.contains("kalibr")) s.add(kalibr_paragraph(al["kalibr"]));
+  if (al.contains("kalibr")) s.add(kalibr_paragraph(al));
   return s;
 }
 

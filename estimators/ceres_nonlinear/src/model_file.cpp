@@ -44,6 +44,15 @@ double positive(const yaml::MapReader& m, const std::string& key, double fallbac
   return v;
 }
 
+// Why the gyroscope procedure `method` cannot run on a recording without an accelerometer (`no_accel`
+// the recording's absence, "" when it has one): every procedure but the rate table's reads the
+// accelerometer (the gravity direction at each pose, the specific force of the g-sensitivity).
+std::string gyro_needs_accel(const std::string& method, const std::string& no_accel) {
+  if (no_accel.empty() || method == "rate_table" || method == "none") return {};
+  return "'" + method + "' needs the accelerometer (the gravity direction at each pose), and " + no_accel +
+         "; use gyroscope: rate_table with the table's truth";
+}
+
 // The gyroscope procedure the options name (not none or bias_only); the integration runs on the
 // accelerometer's result.
 CalibrationResult fit_gyroscope(const Recording& rec, const ModelFileOptions& o, const CalibrationResult& accel) {
@@ -260,18 +269,24 @@ ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& option
   o.gyro.processing = processing::resolve(o.gyro.processing, rec);
   ModelFileFit f;
   const std::string no_gyro = estimation::why_absent(rec.header.info, model::Instrument::kGyroscope);
+  const std::string no_accel = estimation::why_absent(rec.header.info, model::Instrument::kAccelerometer);
   if (!no_gyro.empty()) o.accel.estimate_gyro_bias = false;  // bias_only: no gyroscope to average
   std::string text = describe_options(o);
   std::vector<std::string> failures;
-  if (o.accelerometer != "none") {
+  if (o.accelerometer != "none" && !no_accel.empty()) {
+    f.accel = detail::not_applicable_part(accelerometer_model(), no_accel);
+    f.has_accel = true;
+    text += "\n" + f.accel.report();
+  } else if (o.accelerometer != "none") {
     f.accel = o.accelerometer == "known_orientations" ? calibrate_accelerometer_known_orientations(rec, o.accel)
                                                       : calibrate_accelerometer_unknown_orientations(rec, o.accel);
     f.has_accel = true;
     text += "\n" + f.accel.report();
     if (!f.accel.ok()) failures.push_back("accelerometer: " + f.accel.message);
   }
-  if (o.gyroscope != "none" && !no_gyro.empty()) {
-    f.gyro = detail::not_applicable_part(gyroscope_model(o.gyro.estimate_g_sensitivity), no_gyro);
+  const std::string gyro_absent = !no_gyro.empty() ? no_gyro : gyro_needs_accel(o.gyroscope, no_accel);
+  if (o.gyroscope != "none" && !gyro_absent.empty()) {
+    f.gyro = detail::not_applicable_part(gyroscope_model(o.gyro.estimate_g_sensitivity), gyro_absent);
     f.has_gyro = true;
     text += "\n" + f.gyro.report();
   } else if (o.gyroscope != "none" && o.gyroscope != "bias_only") {

@@ -19,7 +19,7 @@ extern "C" {
 #endif
 
 /* 2: Fixture::observe() and stend::FixtureLinkFault added to sdk.hpp */
-#define STEND_PLUGIN_ABI_VERSION 3u
+#define STEND_PLUGIN_ABI_VERSION 4u
 #define STEND_PLUGIN_ENTRY_SYMBOL "stend_plugin_entry"
 
 typedef enum stend_plugin_kind {

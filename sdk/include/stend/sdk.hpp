@@ -130,8 +130,11 @@ struct SensorInfo {
   double accel_lsb_mps2 = 0.0;     // one count
   double gyro_lsb_radps = 0.0;     // one count
   double temperature_lsb_c = 0.0;  // one count
+  // Which instruments the sensor has. An absent one's SI values are NaN and its counts 0 in every
+  // sample; nothing reads them as data (stend/recording/instruments.hpp says which are present).
   bool has_gyro = true;
   bool has_temperature = true;
+  bool has_accel = true;
 };
 
 enum SampleFlags : std::uint32_t {

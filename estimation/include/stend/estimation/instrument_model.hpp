@@ -89,9 +89,10 @@ struct InstrumentModel {
   bool equals(const InstrumentModel& other, double rel_tol = 1e-9, double abs_tol = 0.0) const;
 };
 // Why `instrument` cannot be fitted on a recording whose sensor `info` describes: "" when the
-// recording has it. Only a gyroscope can be absent (SensorInfo::has_gyro, false when the source held
-// no gyroscope data: e.g. a CSV without gyro columns); every sensor and importer gives an
-// accelerometer.
+// recording has it (stend/recording/instruments.hpp: has_instrument). Either can be absent: the
+// gyroscope of an accelerometer-only log (SensorInfo::has_gyro false: a CSV without gyro columns),
+// the accelerometer of a gyro-only one (has_accel false): "the recording has no accelerometer (its
+// source holds no accelerometer data)".
 std::string why_absent(const SensorInfo& info, model::Instrument instrument);
 // Why a model with `temperature_terms` (the terms that read the temperature, by name) cannot be
 // fitted on a recording whose sensor `info` describes: "" when it has none or the recording has a

@@ -67,13 +67,14 @@ struct ImportOptions {
   // checked as its ImportKey says. Throws std::invalid_argument naming the key and what was expected.
   void set(const std::string& key, const std::string& value);
   bool was_stated(const std::string& key) const;
-  // What one key cannot say alone: gyro columns all or none, columns mapped with the
-  // accelerometer's, a rate without a time column, offsets only with an LSB, a byte order or
-  // header only with a record layout. Ceres style: false
-  // with the first problem in *error.
+  // What one key cannot say alone: accel and gyro columns each x, y and z, one array's name, or
+  // none; a time or temperature column only with an instrument's (one of the two is enough: a
+  // gyro-only or an accelerometer-only log); offsets only with an LSB; a byte order or header only
+  // with a record layout. Ceres style: false with the first problem in *error.
   bool IsValid(std::string* error = nullptr) const;
-  // Whether columns are mapped (the generic csv format then applies).
-  bool maps_columns() const { return !accel[0].empty(); }
+  // Whether columns are mapped (the accelerometer's, the gyroscope's or both; the generic csv
+  // format then applies).
+  bool maps_columns() const;
   CsvMapping csv_mapping() const;
 };
 

@@ -90,8 +90,8 @@ struct CsvMapping {
   double rate_hz = 0.0;         // required without a time column; else 0 = from the timestamps
                                 // (repaired from this rate when they repeat or jitter)
 
-  std::array<CsvColumn, 3> accel;   // x y z (required)
-  std::array<CsvColumn, 3> gyro;    // x y z (all empty = no gyroscope)
+  std::array<CsvColumn, 3> accel;   // x y z (all empty = no accelerometer: a gyro-only log)
+  std::array<CsvColumn, 3> gyro;    // x y z (all empty = no gyroscope); one of the two is required
   CsvColumn temperature;            // optional
 
   // File value → SI: (value − offset) · scale (m/s² resp. rad/s per file unit or count; the

@@ -6,8 +6,10 @@
 //   * the stillest stretch of the log must read |a| near 1 g, and a rate no MEMS gyroscope
 //     reads, else the units are wrong (counts without an LSB, g read as m/s², m/s² read as g) and
 //     the import is refused saying what the data look like, unless accept_implausible.
-// Absent temperature is stated once here too: a sample of a recording without temperature carries
-// NaN, never 0 °C.
+// What the recording lacks is stated here for every importer: the samples of a recording without an
+// accelerometer, a gyroscope or a temperature carry NaN in its values (blank_absent,
+// stend/recording/instruments.hpp), never 0 read as data, and only the instruments present are
+// judged (a gyro-only log: its still stretches and its rate from the gyroscope alone).
 #pragma once
 
 #include <stend/io/import_options.hpp>
@@ -27,7 +29,8 @@ namespace stend::io {
 // its accelerometer vector scatters by less than kStillScatter of its mean |a| (and it holds at
 // least kStillMinSamples samples); the verdict is taken on the kStillBlocksKept stillest blocks
 // (their median |a| and |ω|). A log with no still block (moving throughout, or |a| ≈ 0) is not
-// judged: the rule needs one still stretch of kStillBlock_s.
+// judged: the rule needs one still stretch of kStillBlock_s. A log without an accelerometer is
+// judged on its rate alone, in the blocks where the gyroscope scatters least.
 inline constexpr double kStillBlock_s = 0.5;
 inline constexpr std::size_t kStillMinSamples = 8;
 inline constexpr double kStillScatter = 0.05;
@@ -40,15 +43,19 @@ inline constexpr double kMaxStillRate_dps = 2000.0;
 // A still |a| above this many g is counts (no MEMS accelerometer has fewer counts per g).
 inline constexpr double kMinCountsPerG = 100.0;
 
-// What is wrong with sample `s` (empty: nothing): a time that is not finite, an accelerometer or
-// gyroscope value that is not finite, a temperature that is infinite (NaN is an absent reading).
-std::string sample_problem(const ImuSample& s);
+// What is wrong with sample `s` of a recording whose sensor `info` describes (empty: nothing): a
+// time that is not finite, a value of an instrument it has that is not finite, a temperature that
+// is infinite (NaN is an absent reading). An absent instrument's values are not looked at.
+std::string sample_problem(const ImuSample& s, const SensorInfo& info);
 
 // The stillest stretches of a log, in O(1) memory: samples in time order.
 class Stillness {
  public:
+  // The samples carry the instruments `info` says.
+  explicit Stillness(const SensorInfo& info = {});
   void add(const ImuSample& s);
-  // The median |a| [m/s²] and |ω| [rad/s] of the stillest blocks; nullopt without a still block.
+  // The median |a| [m/s²] and |ω| [rad/s] of the stillest blocks (NaN for an absent instrument);
+  // nullopt without a still block.
   struct Still {
     double accel_mps2 = 0.0;
     double rate_radps = 0.0;
@@ -58,16 +65,19 @@ class Stillness {
 
  private:
   struct Block {
-    double scatter = 0.0;  // RMS distance of the accelerometer vectors from their mean [m/s²]
+    // RMS distance of the accelerometer vectors from their mean, over |a| [1]; without an
+    // accelerometer, of the gyroscope vectors [rad/s]
+    double scatter = 0.0;
     double accel_mps2 = 0.0;
     double rate_radps = 0.0;
   };
   void close_block();
+  bool accel_ = true, gyro_ = true;  // the instruments the samples carry
   std::vector<Block> kept_;  // at most kStillBlocksKept, the stillest
   double t0_s_ = 0.0;
   std::size_t n_ = 0;
   Eigen::Vector3d sum_a_ = Eigen::Vector3d::Zero(), sum_w_ = Eigen::Vector3d::Zero();
-  double sum_aa_ = 0.0;
+  double sum_aa_ = 0.0, sum_ww_ = 0.0;
 };
 
 // Why a still stretch reading `still` is implausible for data imported with `options` (empty:
@@ -97,13 +107,18 @@ class BadSamples {
   std::string first_;
 };
 
-// The gate every imported sample passes on its way to `out`: bad samples refused (ImportError at
-// FILE: sample N) or dropped and counted, absent temperature set to NaN, the stillness gathered.
+// The gate every imported sample passes on its way to `out`: what the recording lacks set to NaN
+// (blank_absent), bad samples refused (ImportError at FILE: sample N) or dropped and counted, the
+// stillness gathered.
 // finish() adds the import event of the dropped samples and refuses an implausible log.
 class SampleCheck final : public SampleSink {
  public:
   SampleCheck(const Recording& rec, SampleSink& out, std::filesystem::path file, const ImportOptions& options)
-      : rec_(&rec), out_(&out), file_(std::move(file)), options_(&options), bad_(options.drop_bad_samples) {}
+      : rec_(&rec),
+        out_(&out),
+        file_(std::move(file)),
+        options_(&options),
+        bad_(options.drop_bad_samples) {}
   void add_samples(const ImuSample* samples, std::size_t count) override;
   void finish(Recording& rec);
 
@@ -117,7 +132,8 @@ class SampleCheck final : public SampleSink {
   std::vector<ImuSample> kept_;
   std::uint64_t seen_ = 0;
   BadSamples bad_;
-  Stillness stillness_;
+  // Made at the first samples, when the importer has said which instruments the log holds.
+  std::optional<Stillness> stillness_;
 };
 
 // The same gate on a recording read whole (its samples filtered in place).

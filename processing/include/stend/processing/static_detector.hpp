@@ -1,7 +1,9 @@
 // Static intervals found in the samples themselves, for recordings whose segments do not say
 // where the sensor stood still (hand-held sessions, imported logs): a centred sliding-window
 // variance of the accelerometer, thresholded, then gated on the gyro rate with its zero-rate
-// offset removed.
+// offset removed. A recording without an accelerometer (SensorInfo::has_accel false) is judged on
+// the gyroscope alone: the window variance is the gyroscope's (the summary says so:
+// by_gyroscope); one without a gyroscope has no gate.
 //
 // Every setting whose value is 0 is chosen from the data (each rule written once, here):
 //   window_s        max(kAutoWindowS, kMinWindowSamples samples at the recording's rate)
@@ -89,11 +91,12 @@ struct DetectionSummary {
   double rate_hz = 0.0;            // mean sample rate of the recording
   double window_s = 0.0, min_duration_s = 0.0;
   double init_duration_s = 0.0;    // the still start used (0: none)
-  double noise_variance = 0.0;     // [(m/s^2)^2], the base the multiplier scales
+  bool by_gyroscope = false;       // the variances are the gyroscope's [(rad/s)^2]: no accelerometer
+  double noise_variance = 0.0;     // [(m/s^2)^2] (by_gyroscope: [(rad/s)^2]), the base the multiplier scales
   std::string noise_source;        // "median over the first 36.5 s" | "10th percentile over the recording" | "given"
   double multiplier = 0.0;         // chosen (0 when the threshold was given)
   std::string multiplier_choice;   // how: "given" | "scanned …" | "fallback …"
-  double threshold = 0.0;          // [(m/s^2)^2]
+  double threshold = 0.0;          // [(m/s^2)^2] (by_gyroscope: [(rad/s)^2])
   struct ScanStep {
     double multiplier = 0.0;
     std::size_t intervals = 0;

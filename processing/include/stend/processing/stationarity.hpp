@@ -16,6 +16,10 @@
 // Temperature, where the record has one (NaN = not measured: no check), must stay within
 // kMaxTemperatureDriftC over the record (block means): a sweep changes the sensor's bias, and the
 // Allan deviation would read that drift as noise.
+//
+// Only the instruments the recording has are judged (stend/recording/instruments.hpp): a gyro-only
+// record is still where its gyroscope is, an accelerometer-only one where its accelerometer is
+// (Stationarity::basis says so).
 #pragma once
 
 #include <array>
@@ -52,6 +56,9 @@ struct Stationarity {
   double still_start_s = kNaN, still_end_s = kNaN;
   std::size_t blocks = 0;  // blocks summarised
   bool judged = false;     // false: too short to judge (fewer than kMinStationarityIncrements + 1 blocks)
+  // "" when both instruments were judged, else "still stretches from the gyroscope alone (the
+  // recording has no accelerometer)" or the accelerometer's counterpart.
+  std::string basis;
 
   bool still() const { return stretches.empty(); }
   // "the accelerometer moves at 36.0–42.0 s (a changes by 2040 mg) and in 8 more stretches up to
@@ -73,9 +80,10 @@ class BlockSummary {
   void add(Channel c, std::uint64_t offset, const double* x, std::size_t n);
   // Reads channel c of samples [range.first, range.last) of src and adds it, a chunk at a time.
   void add_column(const SampleSource& src, IndexRange range, Channel c);
-  // The rule over what was added: kTime, kAx … kAz, and with has_gyro kGx … kGz, are required;
-  // kTemperature is checked when it was added (and finite).
-  Stationarity judge(bool has_gyro) const;
+  // The rule over what was added: kTime and the channels of the instruments `info` says the
+  // recording has (kAx … kAz, kGx … kGz) are required; kTemperature is checked when it was added
+  // (and finite).
+  Stationarity judge(const SensorInfo& info) const;
 
  private:
   struct Column {
@@ -88,7 +96,7 @@ class BlockSummary {
 };
 
 // The rule above over samples [range.first, range.last) of src at rate_hz [Hz], reading the
-// columns it needs; the gyroscope channels are read only with has_gyro.
-Stationarity check_stationarity(const SampleSource& src, IndexRange range, double rate_hz, bool has_gyro);
+// columns of what `info` says the recording has (present_channels).
+Stationarity check_stationarity(const SampleSource& src, IndexRange range, double rate_hz, const SensorInfo& info);
 
 }  // namespace stend::processing

@@ -105,6 +105,9 @@ struct KalibrParameters {
   std::array<Verdict, 3> accelerometer_random_walk_verdict{Verdict::kFailed, Verdict::kFailed, Verdict::kFailed};
   std::array<Verdict, 3> gyroscope_noise_verdict{Verdict::kFailed, Verdict::kFailed, Verdict::kFailed};
   std::array<Verdict, 3> gyroscope_random_walk_verdict{Verdict::kFailed, Verdict::kFailed, Verdict::kFailed};
+  // Whether the recording had the instrument (a gyro-only or an accelerometer-only log has one):
+  // an absent one's lines are left out of the imu.yaml block, never written as numbers.
+  bool accelerometer_present = true, gyroscope_present = true;
 };
 
 struct AllanReport {
@@ -112,14 +115,19 @@ struct AllanReport {
   double rate_hz = 0.0;
   std::uint64_t samples = 0;
   double t_begin_s = kNaN, t_end_s = kNaN;
-  std::vector<ChannelResult> channels;  // ax ay az gx gy gz (gyro only when present)
+  std::vector<ChannelResult> channels;  // ax ay az gx gy gz: those of the instruments present (noise_channels)
   KalibrParameters kalibr;
   std::vector<std::string> warnings;    // gaps, irregular sampling, …
+  std::vector<std::string> notes;       // how the record was judged (e.g. still from the gyroscope alone)
   // Why the selected part of the record is no noise record (it moves, or its temperature drifts:
   // stend/processing/stationarity.hpp), naming the stretches and the longest still one; then no
   // channel is analysed. Empty when still.
   std::string not_still;
 };
+
+// The channels a noise analysis reads: the axes of the instruments the recording has (ax ay az,
+// gx gy gz; stend/recording/instruments.hpp), never an absent instrument's.
+std::vector<Channel> noise_channels(const SensorInfo& info);
 
 // All accelerometer and gyroscope axes of a recording (SI values), within options.t_begin_s …
 // t_end_s, once that part is found still (else `not_still` says where it moves and no channel is
