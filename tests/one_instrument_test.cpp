@@ -10,12 +10,14 @@
 #include "stend/testing/files.hpp"
 #include "stend/testing/program.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <random>
 #include <set>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -208,4 +210,51 @@ TEST(OneInstrument, GyroOnlyCountsAreJudgedOnTheirRate) {
   const json header = json::parse(read_text(dir / "ok" / "run.json"));
   EXPECT_FALSE(header.at("sensor").at("info").at("has_accel").get<bool>());
   EXPECT_NEAR(header.at("sensor").at("info").at("gyro_lsb_radps").get<double>(), M_PI / 180.0 / 131.0, 1e-15);
+}
+
+// A gyro-only recording in a container (raw binary records t, gx, gy, gz as little-endian
+// float64): the gyroscope leads the samples, its values arrive unchanged, the header says there is
+// no accelerometer.
+TEST(OneInstrument, GyroOnlyRecordsImport) {
+  const TempDir dir("gyro_records");
+  const fs::path log = dir / "gyro.bin", run = dir / "run";
+  std::string bytes;
+  const auto put = [&bytes](double v) { bytes.append(reinterpret_cast<const char*>(&v), sizeof v); };
+  constexpr int kRecords = 2000;
+  for (int i = 0; i < kRecords; ++i) {
+    put(i / kRateHz);
+    for (int a = 0; a < 3; ++a) put(kGyroBias[a] + 1e-4 * std::sin(0.01 * i + a));
+  }
+  write_text(log, bytes);
+  const ProgramOutput imp = run_stend("import " + log.string() +
+                                      " --record-layout t:f64,gx:f64,gy:f64,gz:f64 --time t --gyro gx,gy,gz -o " +
+                                      run.string());
+  ASSERT_EQ(imp.code, 0) << imp.text;
+  EXPECT_NE(imp.text.find("no accelerometer"), std::string::npos) << imp.text;
+  const json header = json::parse(read_text(run / "run.json"));
+  EXPECT_FALSE(header.at("sensor").at("info").at("has_accel").get<bool>());
+  EXPECT_TRUE(header.at("sensor").at("info").at("has_gyro").get<bool>());
+  const fs::path csv = dir / "csv";
+  const ProgramOutput exp = run_stend("export " + run.string() + " --to csv --out " + csv.string());
+  ASSERT_EQ(exp.code, 0) << exp.text;
+  std::istringstream lines(read_text(csv / "imu.csv"));
+  std::string line;
+  std::getline(lines, line);
+  std::vector<std::string> names;
+  for (std::istringstream h(line); std::getline(h, line, ',');) names.push_back(line);
+  const auto column = [&names](const std::string& n) {
+    return static_cast<std::size_t>(std::find(names.begin(), names.end(), n) - names.begin());
+  };
+  const std::size_t gx = column("gx_radps"), ax = column("ax_mps2");
+  ASSERT_LT(gx, names.size());
+  int rows = 0;
+  while (std::getline(lines, line)) {
+    std::vector<std::string> f;
+    for (std::istringstream l(line); std::getline(l, line, ',');) f.push_back(line);
+    ASSERT_GT(f.size(), gx);
+    EXPECT_NEAR(std::stod(f[gx]), kGyroBias[0] + 1e-4 * std::sin(0.01 * rows), 1e-12) << "record " << rows;
+    if (ax < f.size()) EXPECT_TRUE(f[ax].empty() || std::isnan(std::stod(f[ax]))) << "an absent accelerometer read as " << f[ax];
+    ++rows;
+  }
+  EXPECT_EQ(rows, kRecords) << "every record is a sample";
 }

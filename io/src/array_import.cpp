@@ -347,9 +347,9 @@ Plan make_plan(const std::vector<const ArrayFile*>& files, const ImportOptions& 
   p.gyro = triad(files, o.gyro, "gyro");
   p.temperature = single(files, o.temperature, "temperature");
   p.time = single(files, o.time, "time");
-  if (!p.accel)
-    throw ImportError(file, 0, "no accelerometer named (--accel: an N x 3 array or three columns x,y,z); the inputs "
-                               "hold " + inventory(files));
+  if (!p.accel && !p.gyro)
+    throw ImportError(file, 0, "no accelerometer or gyroscope named (--accel, --gyro: an N x 3 array or three columns "
+                               "x,y,z); the inputs hold " + inventory(files));
   p.rows = p.lead().rows;
   if (p.time && p.time->rows != p.rows)
     throw ImportError(file, 0, "time " + p.time->describe() + " has " + std::to_string(p.time->rows) + " rows, the " +
@@ -361,7 +361,7 @@ Plan make_plan(const std::vector<const ArrayFile*>& files, const ImportOptions& 
   p.what = p.time ? "time " + p.time->describe()
                   : p.lead_time_own ? "time from the " + p.lead().role + "'s own column"
                                     : "time i / " + fmt_g(o.rate_hz) + " Hz";
-  if (p.gyro) p.gyro_join = choose_join(file, p, *p.gyro, lead_has_time);
+  if (p.accel && p.gyro) p.gyro_join = choose_join(file, p, *p.gyro, lead_has_time);
   if (p.temperature) p.temperature_join = choose_join(file, p, *p.temperature, lead_has_time);
   return p;
 }
@@ -387,7 +387,7 @@ std::size_t stream_samples(const Plan& p, const ImportOptions& o, const fs::path
   std::optional<SensorReader> time, gyro_rows, temp_rows;
   std::optional<TimedSensor> gyro_t, temp_t;
   if (p.time) time.emplace(*p.time);
-  if (p.gyro) {
+  if (p.accel && p.gyro) {  // a gyroscope without an accelerometer is the lead
     if (p.gyro_join == Join::kByRow) gyro_rows.emplace(*p.gyro);
     else gyro_t.emplace(*p.gyro, o.time_scale_s, file);
   }
@@ -395,7 +395,7 @@ std::size_t stream_samples(const Plan& p, const ImportOptions& o, const fs::path
     if (p.temperature_join == Join::kByRow) temp_rows.emplace(*p.temperature);
     else temp_t.emplace(*p.temperature, o.time_scale_s, file);
   }
-  const std::size_t lw = lead.width(), gw = p.gyro ? (timed(*p.gyro) ? 4 : 3) : 0;
+  const std::size_t lw = lead.width(), gw = gyro_rows ? (timed(*p.gyro) ? 4 : 3) : 0;
   const std::size_t tw = p.temperature ? (timed(*p.temperature) ? 2 : 1) : 0;
   std::vector<ImuSample> block;
   std::size_t n_out = 0;
@@ -412,7 +412,11 @@ std::size_t stream_samples(const Plan& p, const ImportOptions& o, const fs::path
       const double* row = a.data() + j * lw;
       s.t_s = tv ? (*tv)[j] * o.time_scale_s
                  : p.lead_time_own ? row[0] * o.time_scale_s : static_cast<double>(first + j) / o.rate_hz;
-      set_triad(row + (lw - 3), o.accel_value, s.accel_counts, s.accel_mps2);
+      if (!p.accel) {
+        set_triad(row + (lw - 3), o.gyro_value, s.gyro_counts, s.gyro_radps);
+      } else {
+        set_triad(row + (lw - 3), o.accel_value, s.accel_counts, s.accel_mps2);
+      }
       if (gv) {
         set_triad(gv->data() + j * gw + (gw - 3), o.gyro_value, s.gyro_counts, s.gyro_radps);
       } else if (gyro_t) {
@@ -449,9 +453,10 @@ std::string scale_text(const ValueScale& v, bool accel) {
 void set_sensor_info(const Plan& p, const ImportOptions& o, Recording& rec) {
   SensorInfo& info = rec.header.info;
   info.output_rate_hz = o.rate_hz;  // 0: set by the timestamp repair
+  info.has_accel = p.accel.has_value();
   info.has_gyro = p.gyro.has_value();
   info.has_temperature = p.temperature.has_value();
-  info.accel_lsb_mps2 = o.accel_value.counts() ? o.accel_value.lsb : 0.0;
+  info.accel_lsb_mps2 = p.accel && o.accel_value.counts() ? o.accel_value.lsb : 0.0;
   info.gyro_lsb_radps = p.gyro && o.gyro_value.counts() ? o.gyro_value.lsb : 0.0;
   rec.header.gravity_mps2 = o.gravity_mps2;
 }
@@ -482,8 +487,9 @@ void import_arrays(const std::vector<const ArrayFile*>& files, const ImportOptio
     layouts += (layouts.empty() ? "" : "; ") + f->file().filename().string() + ": " + f->layout();
     if (const std::string d = f->damage(); !d.empty()) add_import_event(rec, f->file().filename().string() + ": " + d, "warning");
   }
-  add_import_event(rec, "imported " + std::to_string(n) + " samples (" + layouts + "): accel " + p.accel->describe() +
-                            " in " + scale_text(o.accel_value, true) +
+  add_import_event(rec, "imported " + std::to_string(n) + " samples (" + layouts + "): " +
+                            (p.accel ? "accel " + p.accel->describe() + " in " + scale_text(o.accel_value, true)
+                                     : std::string("no accelerometer")) +
                             (p.gyro ? ", gyro " + p.gyro->describe() + " in " + scale_text(o.gyro_value, false) : ", no gyro") +
                             (p.temperature ? ", temperature " + p.temperature->describe() : "") + "; " + p.what +
                             (outside ? "; " + std::to_string(outside) + " sample(s) outside the joined sensors' times dropped" : "") +

@@ -8,7 +8,9 @@ void RunSink::open() {
   if (writer_) return;
   RecordingHeader header = rec_->header;
   if (!name_.empty()) header.experiment_name = name_;
-  writer_ = std::make_unique<RecordingWriter>(dir_, std::move(header), yaml_, options_);
+  RecordingWriterOptions options = options_;
+  if (options.flush_every_samples == 0) options.flush_every_samples = kImportFlushSamples;
+  writer_ = std::make_unique<RecordingWriter>(dir_, std::move(header), yaml_, options);
 }
 
 void RunSink::add_samples(const ImuSample* samples, std::size_t count) {

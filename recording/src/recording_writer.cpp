@@ -103,6 +103,7 @@ struct RecordingWriter::Impl {
   std::uint64_t samples = 0, truth_rows = 0, segment_rows = 0, event_rows = 0;
   double last_flush_run_s = -std::numeric_limits<double>::infinity();
   std::chrono::steady_clock::time_point last_flush_wall = std::chrono::steady_clock::now();
+  std::uint64_t flush_every_samples = 0, last_flush_samples = 0;  // RecordingWriterOptions
   bool finished = false;
   std::string scratch;
   std::vector<ImuSample> blanked;  // a chunk with the absent instruments' values blanked
@@ -125,8 +126,10 @@ struct RecordingWriter::Impl {
   // Writes run.json and experiment.yaml and opens the store with its column-name records.
   void create_files(const fs::path& run_dir, RecordingHeader h,
                     const std::string& resolved_experiment_yaml, RecordingFormat format);
-  // Flush rule: ≥ 1 s of wall time since the last flush, or (CSV) ≥ 1 s of run time.
+  // Flush rule: every flush_every_samples samples when set; otherwise ≥ 1 s of wall time since the
+  // last flush, or (CSV) ≥ 1 s of run time.
   bool flush_due(double run_time_s) const {
+    if (flush_every_samples > 0) return samples - last_flush_samples >= flush_every_samples;
     return (!h5 && run_time_s - last_flush_run_s >= kFlushInterval_s) ||
            std::chrono::steady_clock::now() - last_flush_wall >= std::chrono::seconds(1);
   }
@@ -137,6 +140,7 @@ struct RecordingWriter::Impl {
       csv->flush();
     }
     last_flush_wall = std::chrono::steady_clock::now();
+    last_flush_samples = samples;
   }
   void add_segment_record(std::string_view record) {
     if (h5) {
@@ -178,6 +182,7 @@ RecordingWriter::RecordingWriter(const fs::path& run_dir, RecordingHeader header
                                  const RecordingWriterOptions& options)
     : impl_(std::make_unique<Impl>()), dir_(run_dir) {
   require_valid(options, "recording writer options");
+  impl_->flush_every_samples = options.flush_every_samples;
   check_header(header, resolved_experiment_yaml);
   if (header.start_time_utc.empty()) header.start_time_utc = detail::utc_now_iso();
   header.status = RunStatus::kRunning;
@@ -210,14 +215,12 @@ void RecordingWriter::add_samples(const ImuSample* samples, std::size_t count) {
   samples = I.stored(samples, count);
   if (I.h5) {
     I.h5->add_samples(samples, count);
-    I.samples += count;
-    if (I.flush_due(t_last)) I.flush_all();
-    return;
+  } else {
+    I.csv->add_samples(samples, count);
   }
-  I.csv->add_samples(samples, count);
   I.samples += count;
-  // Also bounded by sample time, so durability holds even between sparse tick() calls.
-  if (t_last - I.last_flush_run_s >= kFlushInterval_s) {
+  // Also bounded by sample time (CSV), so durability holds even between sparse tick() calls.
+  if (I.flush_due(t_last)) {
     I.flush_all();
     I.last_flush_run_s = t_last;
   }

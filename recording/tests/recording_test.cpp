@@ -633,6 +633,25 @@ TEST_F(RecordingTest, TickFlushesAfterOneSecondOfRunTime) {
   EXPECT_GT(fs::file_size(dir / "imu.csv"), before);
 }
 
+// An import's writer flushes every N samples, never by the clock or by run time: the work is the
+// same at any load.
+TEST_F(RecordingTest, FlushEverySamplesIgnoresTheClock) {
+  const fs::path dir = root_ / "run";
+  RecordingWriterOptions options = kCsv;
+  options.flush_every_samples = 1000;
+  RecordingWriter w(dir, make_header(), "", options);
+  std::vector<ImuSample> s;
+  for (std::uint64_t k = 1; k <= 3000; ++k) s.push_back(make_sample(k));
+  w.add_samples(s.data(), 100);  // t up to 0.1
+  const auto buffered = fs::file_size(dir / "imu.csv");
+  std::this_thread::sleep_for(std::chrono::milliseconds(1050));
+  w.add_samples(s.data() + 100, 50);  // > 1 s of wall time, < 1000 samples: still buffered
+  w.tick(1.5);                        // and > 1 s of run time
+  EXPECT_EQ(fs::file_size(dir / "imu.csv"), buffered);
+  w.add_samples(s.data() + 150, 1850);  // 2000 samples: a flush due
+  EXPECT_EQ(Recording::open(dir).samples.size(), 2000u);
+}
+
 // ---------------------------------------------------------------------------------------------
 // SIGKILL: the child records at a simulated 1 kHz; after each tick(t) it publishes t (and the
 // wall time) in shared memory. The parent kills it without warning and reads what is on disk.

@@ -6,6 +6,7 @@
 #include <stend/recording/recording.hpp>
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -32,6 +33,10 @@ class VectorSink final : public SampleSink {
  private:
   std::vector<ImuSample>* out_;
 };
+
+// An import flushes its run store every kImportFlushSamples samples and at finish, never by the
+// clock: the same work on any machine at any load (RecordingWriterOptions::flush_every_samples).
+inline constexpr std::uint64_t kImportFlushSamples = std::uint64_t{1} << 20;
 
 // Writes a new run folder: the writer is created at the first samples with the header of
 // `recording` as it is then (so a log without samples creates no folder), `experiment_yaml` and,

@@ -134,6 +134,11 @@ std::size_t max_bytes_per_truth_value(RecordingFormat f);
 
 struct RecordingWriterOptions {
   RecordingFormat format = RecordingFormat::kHdf5;
+  // When the store is flushed. 0: at least every second of wall time (and, for the CSV store, of
+  // run time), the durability a live bench needs. N > 0: every N samples and at finish, whatever
+  // the clock — an import, whose source stays on disk, does the same work on any machine at any
+  // load.
+  std::uint64_t flush_every_samples = 0;
 
   bool IsValid(std::string* error = nullptr) const;  // a known format
 };
