@@ -101,6 +101,7 @@ ExitCode run_validate(const GapArgs& a) {
   o.seed = a.seed;
   o.noise_seeds = a.noise_seeds;
   o.noise_null_runs = a.noise_null_runs;
+  o.design_runs = a.design_runs;
   o.gap.alpha = a.alpha;
   if (a.positions > 0) o.design = diagnosis::many_positions_design(a.positions);
   if (std::string why; !o.IsValid(&why)) throw InputError("stend gap validate: " + why);
@@ -137,7 +138,9 @@ void add_gap_command(CLI::App& app, std::vector<Command>& out) {
   add_json_flag(sub, "the diagnosis's outcome and results document");
   sub->add_option("--db", args->db, std::string(kDbOptionHelp) +
                                         "; given (or $STEND_RESULTS_DB), the run is recorded there with its gap.json");
-  sub->add_option("--fold-by", args->fold_by, "Held-out groups: auto | orientation | temperature | ramp")
+  sub->add_option("--fold-by", args->fold_by,
+                  "Held-out folds: auto (the first scheme that fits the design) | orientation | temperature | ramp | "
+                  "segment | time")
       ->check(CLI::IsMember(fold_by_keys()));
   sub->add_option("--max-steps", args->max_steps, "Forward-selection steps (default 4)")->check(at_least(1));
   sub->add_option("--max-folds", args->max_folds, "Held-out folds, groups dealt round-robin beyond (default 12; 0 = one per group)")
@@ -162,6 +165,9 @@ void add_gap_command(CLI::App& app, std::vector<Command>& out) {
                   "Noise-stage experiments (quantization, saturation, coloured noise): runs per size (default 10; 0 = skip)")
       ->check(at_least(0));
   val->add_option("--noise-null", args->noise_null_runs, "Noise-stage null runs (default 40)")->check(at_least(0));
+  val->add_option("--design-runs", args->design_runs,
+                  "Design cases (folds, aliases, placement): runs per case (default 20; 0 = skip)")
+      ->check(at_least(0));
 
   out.push_back({sub, [args, val] {
                    if (*val) return run_validate(*args);

@@ -217,6 +217,7 @@ struct GapArgs {
   std::string vjson;
   std::uint64_t seed = 1;
   int noise_seeds = 10, noise_null_runs = 40;  // noise-stage experiments (sample level)
+  int design_runs = 20;  // design cases (folds, aliases, placement): runs per case
 };
 Outcome run_gap(const GapArgs& a);
 

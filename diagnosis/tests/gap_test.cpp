@@ -334,3 +334,110 @@ TEST(GapSimBench, TemperatureSweepNamesTheTemperaturePolynomials) {
       break;
     }
 }
+
+// Issue 40 — folds that fit the design. A hand-held six-face session (faces near the axes, each
+// placed 5 times; magnitude form; model bias + scale): holding out a whole face leaves bias and
+// scale of its axis to the opposite face alone, so the orientation folds cannot determine the
+// held-out rows; the diagnosis re-folds (leave-one-segment-out), says why, names nothing on null
+// data and keeps the held-out gap near the floor. Forced orientation folds say how many rows
+// they could not predict.
+TEST(GapFolds, HandHeldFacesAreReFoldedAndTheReasonIsGiven) {
+  const estimation::ModelSpec bs = validation_model();
+  Planted truth;
+  truth.model = bs.model;
+  truth.theta = Eigen::VectorXd(6);
+  truth.theta << 0.05, -0.03, 0.02, 0.002, -0.001, 0.0007;
+  const GapInput in = magnitude_form(generate_hand_faces(5, 3.0, bs, truth, 11), physics::kStandardGravity);
+  const GapReport r = diagnose(in);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_NE(r.fold_by, FoldBy::kOrientation);
+  EXPECT_NE(r.fold_reason.find("orientation"), std::string::npos) << r.fold_reason;
+  EXPECT_TRUE(r.selected.empty()) << r.statement;
+  ASSERT_FALSE(r.steps.empty());
+  EXPECT_LT(r.steps[0].heldout_rms, 2.0 * r.steps[0].floor_rms);
+  GapOptions forced;
+  forced.fold_by = FoldBy::kOrientation;
+  const GapReport f = diagnose(in, forced);
+  EXPECT_EQ(f.fold_by, FoldBy::kOrientation);
+  EXPECT_GT(f.heldout_dropped, 0);
+  // One segment per face and a model that needs them all: no scheme can test it — refused, with
+  // the experiment that would make it testable.
+  const GapInput once = magnitude_form(generate_hand_faces(1, 3.0, bs, truth, 12), physics::kStandardGravity);
+  const GapReport n = diagnose(once);
+  EXPECT_FALSE(n.ok);
+  EXPECT_NE(n.message.find("repeat each orientation"), std::string::npos) << n.message;
+}
+
+// Issue 40 — aliases resolved by what the experiment excites, and the false discovery rate over
+// the candidate family: the design cases of `stend gap validate` (fold, alias, placement) at a
+// reduced, deterministic seed count; each planted case passes in >= 90 % of its runs and each
+// null case fails in <= 5 %.
+TEST(GapDesignCases, FoldAliasAndPlacementCasesMeetTheirTargets) {
+  const std::vector<DesignCase> cases = run_design_cases(6, 3);
+  ASSERT_EQ(cases.size(), 6u);
+  for (const auto& c : cases) {
+    std::string named;
+    for (const auto& [n, k] : c.named) named += n + " " + std::to_string(k) + "; ";
+    EXPECT_TRUE(design_case_met(c)) << c.name << ": " << c.passed << "/" << c.runs << " — " << named;
+  }
+}
+
+// Issue 40 on real data: imucal's hand-placed six faces with bias + scale. The sensor terms leave
+// a gap of ~80x the floor; a rotation per face (placement) accounts for it, and the verdict says
+// so instead of "unexplained". Scale withheld (bias only): scale is named first — or, where an
+// alias is favoured, scale with the alias listed.
+TEST(GapRealData, ImucalHandPlacedFacesNamePlacementAndScaleWhenWithheld) {
+  const fs::path csv = stend::testing::shared_data("imucal/annotated_session.csv");
+  STEND_SKIP_IF_ABSENT(csv) << "; real-data check skipped";
+  const Recording rec = io::import_imucal_session(csv);
+  estimation::ModelSpec spec =
+      estimation::load_model_spec(stend::testing::source_path("diagnosis/examples/imucal_bias_scale.yaml"));
+  const GapReport r = diagnose(build_input(rec, spec));
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_TRUE(r.placement.assessed) << r.placement.reason;
+  EXPECT_TRUE(r.placement.significant || r.placement.consistent) << r.placement.reason;
+  EXPECT_NE(r.statement.find("PLACEMENT"), std::string::npos) << r.statement;
+  EXPECT_LT(r.placement.max_deg, 5.0);
+  spec.model.terms = {model::TermSpec{model::TermKind::kBias, 1, 25.0}};
+  const GapReport b = diagnose(build_input(rec, spec));
+  ASSERT_TRUE(b.ok) << b.message;
+  ASSERT_FALSE(b.selected.empty()) << b.statement;
+  EXPECT_EQ(b.selected.front(), "scale") << b.statement;
+}
+
+// Issue 40 on real data: the hand-held MPU-6050 session (magnitude form). Scale withheld → scale
+// named first; cross-axis withheld (bias + scale) → cross_axis named, or the report says it
+// cannot be tested held out on ten segments. In every case a held-out gap over 3x the in-sample
+// one comes with its reason in the notes.
+TEST(GapRealData, Mpu6050HeldOutGapIsExplainedWhenFarAboveInSample) {
+  const fs::path csv = stend::testing::shared_data("mpu6050_multipos/calibration_session.csv");
+  STEND_SKIP_IF_ABSENT(csv);
+  const Recording rec = io::import_mpu6050_multipos(csv);
+  estimation::ModelSpec spec =
+      estimation::load_model_spec(stend::testing::source_path("diagnosis/examples/mpu6050_multipos_bias.yaml"));
+  const auto ratio_explained = [](const GapReport& r) {
+    for (const auto& s : r.steps)
+      if (s.heldout_rms > 3.0 * s.in_sample_rms) {
+        bool noted = false;
+        for (const auto& n : r.notes) noted = noted || n.find("x the in-sample gap") != std::string::npos;
+        if (!noted) return false;
+      }
+    return true;
+  };
+  const GapReport b = diagnose(build_input(rec, spec));
+  ASSERT_TRUE(b.ok) << b.message;
+  ASSERT_FALSE(b.selected.empty()) << b.statement;
+  EXPECT_EQ(b.selected.front(), "scale");
+  EXPECT_TRUE(ratio_explained(b));
+  spec.model.terms.push_back(model::TermSpec{model::TermKind::kScale, 1, 25.0});
+  const GapReport s = diagnose(build_input(rec, spec));
+  if (!s.ok) {
+    EXPECT_NE(s.message.find("no fold scheme"), std::string::npos) << s.message;
+    return;
+  }
+  EXPECT_TRUE(ratio_explained(s));
+  bool cross_named = !s.selected.empty() && s.selected.front() == "cross_axis", cross_untestable = false;
+  for (const auto& c : s.candidates)
+    if (c.term == "cross_axis") cross_untestable = c.reason.find("cannot be tested held out") != std::string::npos;
+  EXPECT_TRUE(cross_named || cross_untestable || s.at_floor) << s.statement;
+}
