@@ -24,6 +24,12 @@ namespace stend::cli {
 namespace {
 
 // The --fold-by values: the keys of diagnosis::kFoldByNames.
+std::vector<std::string> family_rule_keys() {
+  std::vector<std::string> keys;
+  for (const auto& n : diagnosis::kFamilyRuleNames) keys.emplace_back(n.key);
+  return keys;
+}
+
 std::vector<std::string> fold_by_keys() {
   std::vector<std::string> keys;
   for (const auto& n : diagnosis::kFoldByNames) keys.emplace_back(n.key);
@@ -70,6 +76,7 @@ Outcome run_gap(const GapArgs& a) {
   opt.max_steps = a.max_steps;
   opt.max_folds = a.max_folds;
   opt.alpha = a.alpha;
+  opt.family_rule = diagnosis::family_rule_from_key(a.family_rule).value_or(diagnosis::FamilyRule::kBenjaminiYekutieli);
   if (std::string why; !opt.IsValid(&why)) throw InputError("stend gap: " + why);
   const diagnosis::GapReport rep = diagnosis::diagnose(in, opt);
   std::ostringstream text;
@@ -103,6 +110,7 @@ ExitCode run_validate(const GapArgs& a) {
   o.noise_null_runs = a.noise_null_runs;
   o.design_runs = a.design_runs;
   o.gap.alpha = a.alpha;
+  o.gap.family_rule = diagnosis::family_rule_from_key(a.family_rule).value_or(diagnosis::FamilyRule::kBenjaminiYekutieli);
   if (a.positions > 0) o.design = diagnosis::many_positions_design(a.positions);
   if (std::string why; !o.IsValid(&why)) throw InputError("stend gap validate: " + why);
   TaskProgress progress("gap validate");
@@ -145,8 +153,13 @@ void add_gap_command(CLI::App& app, std::vector<Command>& out) {
   sub->add_option("--max-steps", args->max_steps, "Forward-selection steps (default 4)")->check(at_least(1));
   sub->add_option("--max-folds", args->max_folds, "Held-out folds, groups dealt round-robin beyond (default 12; 0 = one per group)")
       ->check(at_least(0));
-  sub->add_option("--alpha", args->alpha, "Family-wise significance level (Bonferroni over candidates)")
+  sub->add_option("--alpha", args->alpha,
+                  "Level of the candidate family (false discovery rate with --family-rule by, family-wise with "
+                  "bonferroni; default 0.05)")
       ->check(strictly_within(0, 1));
+  sub->add_option("--family-rule", args->family_rule,
+                  "Multiple-testing rule over the candidates: by (Benjamini-Yekutieli, default) | bonferroni")
+      ->check(CLI::IsMember(family_rule_keys()));
 
   auto* val = sub->add_subcommand("validate", "Check the diagnoser on planted, null and out-of-vocabulary effects");
   val->add_option("--seeds", args->seeds, "Runs per candidate and size (default 20)")->check(at_least(1));

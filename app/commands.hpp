@@ -207,7 +207,7 @@ calibration::Calibration load_stated_calibration(const std::string& cal, const s
 // `stend gap` (cmd_gap.cpp); the validate fields are `stend gap validate`'s.
 struct GapArgs {
   DatasetArgs data;
-  std::string model, json, fold_by = "auto", db;
+  std::string model, json, fold_by = "auto", db, family_rule = "by";
   int max_steps = 4, max_folds = 12;
   double alpha = 0.05;
   // validate

@@ -22,6 +22,18 @@ std::optional<FoldBy> fold_by_from_key(std::string_view key) {
   return std::nullopt;
 }
 
+const char* to_string(FamilyRule r) {
+  for (const auto& n : kFamilyRuleNames)
+    if (n.value == r) return n.name;
+  return "?";
+}
+
+std::optional<FamilyRule> family_rule_from_key(std::string_view key) {
+  for (const auto& n : kFamilyRuleNames)
+    if (key == n.key) return n.value;
+  return std::nullopt;
+}
+
 FoldBy fold_grouping(const GapInput& in, FoldBy requested) {
   std::set<int> temperatures, directions;
   for (const auto& s : in.segments) {
@@ -128,6 +140,11 @@ int deal_folds(const GapInput& in, FoldBy grouping, int max_folds, Rows& rows) {
   return static_cast<int>(rows.folds.size());
 }
 
+std::string untestable_design_advice() {
+  return "To make it testable: repeat each orientation (re-place the sensor) so that every parameter is seen in at "
+         "least two segments, or add orientations between the faces (tilts of 30-60 degrees about two axes)";
+}
+
 bool choose_folds(const GapInput& in, const GapOptions& opt, const CandidateSearchColumns& cols, Rows& rows,
                   GapReport& rep) {
   const std::vector<FoldBy> schemes = schemes_to_try(in, opt.fold_by);
@@ -156,9 +173,7 @@ bool choose_folds(const GapInput& in, const GapOptions& opt, const CandidateSear
     if (&c != &chosen) why << shortfall(c, n) << "; ";
   if (chosen.folds < 2 || chosen.model_dropped >= n) {
     rep.message = "no fold scheme can test this design held out — " + why.str() + shortfall(chosen, n) +
-                  ". Every held-out row needs parameters that only its own fold determines. To make it testable: "
-                  "repeat each orientation (re-place the sensor) so that every parameter is seen in at least two "
-                  "segments, or add orientations between the faces (tilts of 30-60 degrees about two axes)";
+                  ". Every held-out row needs parameters that only its own fold determines. " + untestable_design_advice();
     return false;
   }
   if (tried.size() > 1 || !chosen.fits()) {

@@ -179,6 +179,10 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
   rep.fit = fit_model(in);
   if (!rep.fit.ok()) {
     rep.message = "the model could not be fitted: " + rep.fit.message;
+    // As many parameters as rows: nothing is left to test, held out or in-sample.
+    if (rep.fit.lsq.rank > 0 && rep.fit.lsq.dof <= 0)
+      rep.message += ". No fold scheme can test this design either: every held-out row needs parameters that only "
+                     "its own segment determines. " + untestable_design_advice();
     return rep;
   }
   const std::vector<bool> fitted = fitted_axes(in);

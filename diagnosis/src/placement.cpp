@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <sstream>
+#include <utility>
 
 #include "stend/physics/units.hpp"
 #include "stend/stats/hypothesis_tests.hpp"
@@ -31,16 +32,29 @@ bool nominal_orientations(const GapInput& in) {
   return true;
 }
 
-// Columns of the per-face rotations: for a row of axis a of a segment on face k, row a of −[f]×
-// in the three columns of face k (δf = δθ × f = −[f]× δθ) [unit/rad].
-MatrixXd placement_columns(const GapInput& in, const Rows& rows, const std::vector<int>& face_of_segment, int faces) {
-  MatrixXd P = MatrixXd::Zero(rows.y.size(), 3 * faces);
+// Two unit vectors across a face's stated gravity direction u (the rotations that move f; one
+// about u itself is not seen).
+std::pair<Eigen::Vector3d, Eigen::Vector3d> across_basis(const Eigen::Vector3d& u) {
+  const Eigen::Vector3d seed = std::abs(u.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d e1 = (seed - seed.dot(u) * u).normalized();
+  return {e1, u.cross(e1)};
+}
+
+// Columns of the per-face rotations across f: for a row of axis a of a segment on face k, row a
+// of e_j × f for the two directions e_j across the face's stated gravity direction (δf = δθ × f)
+// [unit/rad]. Only the rotations that move f are columns, so six faces placed once (18 rows) with
+// bias + scale (6) leave exactly the 12 per-face angles: a determined, not an underdetermined fit.
+MatrixXd placement_columns(const GapInput& in, const Rows& rows, const std::vector<int>& face_of_segment,
+                           const std::vector<Eigen::Vector3d>& face_up) {
+  MatrixXd P = MatrixXd::Zero(rows.y.size(), 2 * static_cast<Eigen::Index>(face_up.size()));
   for (Eigen::Index r = 0; r < rows.y.size(); ++r) {
     const auto s = static_cast<std::size_t>(rows.seg[static_cast<std::size_t>(r)]);
     const Eigen::Vector3d& f = in.segments[s].point.stimulus.specific_force;
-    Eigen::Matrix3d fx;
-    fx << 0, -f.z(), f.y(), f.z(), 0, -f.x(), -f.y(), f.x(), 0;
-    P.block(r, 3 * face_of_segment[s], 1, 3) = -fx.row(rows.axis[static_cast<std::size_t>(r)]);
+    const int k = face_of_segment[s];
+    const auto [e1, e2] = across_basis(face_up[static_cast<std::size_t>(k)]);
+    const int a = rows.axis[static_cast<std::size_t>(r)];
+    P(r, 2 * k) = e1.cross(f)[a];
+    P(r, 2 * k + 1) = e2.cross(f)[a];
   }
   return P;
 }
@@ -61,22 +75,16 @@ double across_share(const GapInput& in, const Rows& rows, const VectorXd& residu
   return total > 0 ? across / total : kNaN;
 }
 
-// The fitted rotation of each face across its f [deg]: the component along f is not seen (the
-// minimum-norm solution leaves it 0).
+// The fitted rotation of each face across its f [deg] (the columns are already across f).
 void face_angles(const GapInput& in, const std::vector<int>& face_of_segment, const VectorXd& theta, int p0,
                  PlacementResult& pr) {
   std::vector<std::string> names(static_cast<std::size_t>(pr.faces));
-  std::vector<Eigen::Vector3d> up(static_cast<std::size_t>(pr.faces), Eigen::Vector3d::Zero());
-  for (std::size_t s = 0; s < in.segments.size(); ++s) {
+  for (std::size_t s = 0; s < in.segments.size(); ++s)
     names[static_cast<std::size_t>(face_of_segment[s])] = in.segments[s].orientation_name;
-    up[static_cast<std::size_t>(face_of_segment[s])] = in.segments[s].point.stimulus.specific_force.normalized();
-  }
   double sq = 0;
   pr.max_deg = 0;
   for (int k = 0; k < pr.faces; ++k) {
-    Eigen::Vector3d d = theta.segment(p0 + 3 * k, 3);
-    d -= d.dot(up[static_cast<std::size_t>(k)]) * up[static_cast<std::size_t>(k)];
-    const double deg = d.norm() * physics::kRadToDeg;
+    const double deg = theta.segment(p0 + 2 * k, 2).norm() * physics::kRadToDeg;
     pr.face_deg.emplace_back(names[static_cast<std::size_t>(k)], deg);
     sq += deg * deg;
     if (deg > pr.max_deg) {
@@ -101,6 +109,9 @@ std::string placement_statement(const PlacementResult& pr, const GapReport& rep)
        << " % of it lies across the stated gravity directions, where a rotation acts. This session cannot test it "
           "(no degree of freedom is left with a rotation per face) — place each face twice, re-placing the sensor, "
           "or add tilted positions, to test it.";
+  if (pr.cross_axis_within)
+    os << " A misalignment of the sensor axes (cross_axis, the same for every face) lies within the per-face "
+          "rotations on this design and would fit the gap as well: placing each face twice separates them.";
   return os.str();
 }
 
@@ -121,10 +132,16 @@ void assess_placement(const GapInput& in, const Rows& rows, const MatrixXd& A, c
   for (const auto& s : in.segments)
     face_of_segment.push_back(face_index.try_emplace(s.orientation, static_cast<int>(face_index.size())).first->second);
   pr.faces = static_cast<int>(face_index.size());
+  // Each face's stated gravity direction: the mean of its segments' (nominal) directions.
+  std::vector<Eigen::Vector3d> face_up(static_cast<std::size_t>(pr.faces), Eigen::Vector3d::Zero());
+  for (std::size_t s = 0; s < in.segments.size(); ++s)
+    face_up[static_cast<std::size_t>(face_of_segment[s])] += in.segments[s].point.stimulus.specific_force.normalized();
+  for (auto& u : face_up) u.normalize();
   const Fit base = solve(A, rows.y, rows.w);
-  const Fit with = solve(hstack(A, placement_columns(in, rows, face_of_segment, pr.faces)), rows.y, rows.w, {}, {}, true);
+  const Fit with =
+      solve(hstack(A, placement_columns(in, rows, face_of_segment, face_up)), rows.y, rows.w, {}, {}, true);
   if (!base.lsq.ok() || !with.lsq.ok()) {
-    pr.reason = "fit with the face rotations failed";
+    pr.reason = "fit with the face rotations failed: " + (base.lsq.ok() ? with.lsq.message : base.lsq.message);
     return;
   }
   pr.assessed = true;
@@ -139,7 +156,9 @@ void assess_placement(const GapInput& in, const Rows& rows, const MatrixXd& A, c
     pr.p_value = stats::nested_f_test(base.rss, with.rss, pr.added_rank, pr.dof).p_value;
     pr.delta_bic = k * std::log(with.rss / base.rss) + pr.added_rank * std::log(k);
     pr.significant = pr.p_value < opt.alpha && pr.delta_bic < 0 && plausible;
-    pr.reason = "partial F test of a rotation per face with the final model, in-sample";
+    pr.reason = "partial F test of a rotation per face with the final model, in-sample (p " + fmt(pr.p_value, 2) +
+                "; " + fmt(100 * pr.across_share, 3) +
+                " % of the remaining squared gap lies across the stated gravity directions, where a rotation acts)";
   } else {
     pr.consistent = pr.added_rank > 0 && plausible && pr.across_share >= kAcrossShare;
     pr.reason = "no degree of freedom left with a rotation per face: judged by where the gap lies (" +
@@ -147,8 +166,21 @@ void assess_placement(const GapInput& in, const Rows& rows, const MatrixXd& A, c
   }
   if (!plausible) pr.reason += "; the fitted rotations (largest " + fmt(pr.max_deg, 2) + " deg) exceed what hand placement gives";
   if (pr.significant || pr.consistent) {
-    if (rep.selected.empty()) rep.statement = "NOT EXPLAINED BY THE SENSOR TERMS (" + rep.statement + ") ";
-    else rep.statement += " ";
+    // Is a cross-axis (misalignment) within the per-face rotations here? (Six faces placed once:
+    // each face's across-f rows are free, so a common misalignment is one of their settings.)
+    const bool model_has_cross = std::any_of(in.spec.model.terms.begin(), in.spec.model.terms.end(),
+                                             [](const model::TermSpec& t) { return t.kind == model::TermKind::kCrossAxis; });
+    if (!model_has_cross) {
+      const MatrixXd AP = hstack(A, placement_columns(in, rows, face_of_segment, face_up));
+      const MatrixXd C = term_columns(in, rows, model::TermSpec{model::TermKind::kCrossAxis, 1, 25.0});
+      pr.cross_axis_within = rank_of(scale_rows(hstack(AP, C), rows.w)) == rank_of(scale_rows(AP, rows.w));
+    }
+    if (rep.selected.empty())
+      rep.statement = "No sensor term of the vocabulary explains the held-out gap of " +
+                      fmt(rep.unexplained_heldout_rms * rep.display_per_unit, 3) + " " + rep.display_unit + " RMS (" +
+                      fmt(rep.unexplained_over_floor, 3) + "x the noise floor) significantly. ";
+    else
+      rep.statement += " ";
     rep.statement += placement_statement(pr, rep);
   }
 }

@@ -88,7 +88,9 @@ json steps_json(const GapReport& r) {
                      {"added", s.added.empty() ? json(nullptr) : json(s.added)},
                      {"heldout_rms_mps2", num(s.heldout_rms)},
                      {"in_sample_rms_mps2", num(s.in_sample_rms)},
-                     {"noise_floor_mps2", num(s.floor_rms)}});
+                     {"noise_floor_mps2", num(s.floor_rms)},
+                     {"heldout_rows", s.heldout_rows},
+                     {"rows", s.rows}});
   return steps;
 }
 
@@ -179,7 +181,12 @@ void print_how_far(std::ostream& os, const GapReport& r) {
   for (const auto& s : r.steps)
     os << "   step " << s.step << "  " << (s.added.empty() ? std::string("(model as given)") : "+ " + s.added)
        << ": held-out " << f(s.heldout_rms * k, "%.4f") << " " << du << ", in-sample " << f(s.in_sample_rms * k, "%.4f")
-       << " " << du << ", floor " << f(s.floor_rms * k, "%.4f") << " " << du << "\n";
+       << " " << du << ", floor " << f(s.floor_rms * k, "%.4f") << " " << du
+       << (s.heldout_rows < s.rows
+               ? " (held out on " + std::to_string(s.heldout_rows) + " of " + std::to_string(s.rows) +
+                     " rows: the others are not determined by their training folds)"
+               : std::string())
+       << "\n";
   for (const auto& a : r.alias_resolution) os << "   aliases: " << a << "\n";
   if (r.placement.assessed) {
     os << "   placement (a rotation per face, in-sample): " << r.placement.reason << "\n     faces placed off by";
@@ -227,7 +234,8 @@ std::string to_json(const GapReport& r, int indent) {
                       {"delta_bic", num(p.delta_bic)}, {"across_share", num(p.across_share)},
                       {"rms_deg", num(p.rms_deg)},     {"max_deg", num(p.max_deg)},
                       {"max_face", p.max_face},        {"per_face", faces},
-                      {"significant", p.significant},  {"consistent", p.consistent}};
+                      {"significant", p.significant},  {"consistent", p.consistent},
+                      {"cross_axis_within", p.cross_axis_within}};
   }
   j["unexplained"] = {{"heldout_rms_mps2", num(r.unexplained_heldout_rms)},
                       {"over_floor", num(r.unexplained_over_floor)},

@@ -26,7 +26,8 @@ bool significant(const CandidateResult& r, bool rejected) {
 // the p values of those evaluated (dependence between the candidates — scale with gravity_error,
 // cross-axis with table angles — is allowed by the rule; with no real effect it bounds the chance
 // of naming any).
-std::vector<bool> family_rejections(const std::vector<Evaluation>& evals, const std::vector<bool>& used, double alpha) {
+std::vector<bool> family_rejections(const std::vector<Evaluation>& evals, const std::vector<bool>& used, double alpha,
+                                    FamilyRule rule) {
   std::vector<double> p;
   std::vector<std::size_t> idx;
   for (std::size_t i = 0; i < evals.size(); ++i)
@@ -34,7 +35,11 @@ std::vector<bool> family_rejections(const std::vector<Evaluation>& evals, const 
       p.push_back(evals[i].result.p_value);
       idx.push_back(i);
     }
-  const std::vector<bool> rej = stats::benjamini_yekutieli(p, alpha);
+  std::vector<bool> rej(p.size(), false);
+  if (rule == FamilyRule::kBonferroni)
+    for (std::size_t k = 0; k < p.size(); ++k) rej[k] = std::isfinite(p[k]) && p[k] < alpha / static_cast<double>(p.size());
+  else
+    rej = stats::benjamini_yekutieli(p, alpha);
   std::vector<bool> out(evals.size(), false);
   for (std::size_t k = 0; k < idx.size(); ++k) out[idx[k]] = rej[k];
   return out;
@@ -46,6 +51,8 @@ Step make_step(int step, const std::string& added, const Rows& rows, const Curre
   s.step = step;
   s.added = added;
   s.heldout_rms = rms_finite(model.heldout, &s.floor_rms);
+  s.rows = static_cast<int>(rows.y.size());
+  s.heldout_rows = static_cast<int>(model.heldout.err.array().isFinite().count());
   s.in_sample_rms = std::sqrt((rows.y - model.columns * model.fit.lsq.min_norm_solution).squaredNorm() /
                               static_cast<double>(rows.y.size()));
   return s;
@@ -61,8 +68,8 @@ std::vector<Evaluation> evaluate_all(const CandidateSearch& search, const Curren
 }
 
 // Significance of each evaluated candidate under the family's rule.
-void mark_significant(std::vector<Evaluation>& evals, double alpha) {
-  const std::vector<bool> rej = family_rejections(evals, std::vector<bool>(evals.size(), false), alpha);
+void mark_significant(std::vector<Evaluation>& evals, double alpha, FamilyRule rule) {
+  const std::vector<bool> rej = family_rejections(evals, std::vector<bool>(evals.size(), false), alpha, rule);
   for (std::size_t i = 0; i < evals.size(); ++i) evals[i].result.significant = significant(evals[i].result, rej[i]);
 }
 
@@ -108,8 +115,8 @@ std::vector<CandidateResult> ranked(const std::vector<Evaluation>& evals) {
 }
 
 // The significant unused candidate with the largest held-out improvement; −1 when none.
-int best_candidate(const std::vector<Evaluation>& evals, const std::vector<bool>& used, double alpha) {
-  const std::vector<bool> rej = family_rejections(evals, used, alpha);
+int best_candidate(const std::vector<Evaluation>& evals, const std::vector<bool>& used, double alpha, FamilyRule rule) {
+  const std::vector<bool> rej = family_rejections(evals, used, alpha, rule);
   int best = -1;
   double best_gain = 0;
   for (std::size_t i = 0; i < evals.size(); ++i) {
@@ -257,7 +264,7 @@ CurrentModel forward_select(const CandidateSearch& search, CurrentModel model, c
     const std::vector<Evaluation> evals =
         step == 1 ? first
                   : evaluate_all(search, model, gls_prepare(search.covariance, search.rows, model.columns), used);
-    const int best = best_candidate(evals, used, opt.alpha);
+    const int best = best_candidate(evals, used, opt.alpha, opt.family_rule);
     if (best < 0) break;
     const std::size_t b = resolve_aliases(search, model, evals, used, static_cast<std::size_t>(best), opt.alpha, report);
     used[b] = true;
@@ -384,7 +391,7 @@ void explain_gap(const GapInput& in, Rows& rows, const GapOptions& opt, GapRepor
   const bool at_floor_as_given = at_noise_floor(as_given.heldout);
   std::vector<Evaluation> evals = evaluate_all(search, as_given, gls_prepare(covariance, rows, as_given.columns),
                                                std::vector<bool>(candidates.size(), false));
-  mark_significant(evals, opt.alpha);
+  mark_significant(evals, opt.alpha, opt.family_rule);
   if (opt.check_aliases) candidate_aliases(search, as_given.columns, evals);
   // Noise and output-stage candidates (they cannot move the static means' fit; judged on the
   // raw samples — tests, levels and sizes in noise_stage.hpp).

@@ -35,6 +35,8 @@ struct CandidateSearchColumns {
 // report.fold_by / folds / fold_reason say which and why. Returns false, with report.message
 // giving the reason and the experiment that would make it testable, when no scheme predicts any
 // row of the model.
+// The experiment that makes an untestable design testable (the refusal's advice).
+std::string untestable_design_advice();
 bool choose_folds(const GapInput& input, const GapOptions& options, const CandidateSearchColumns& columns, Rows& rows,
                   GapReport& report);
 

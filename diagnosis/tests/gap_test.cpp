@@ -384,8 +384,12 @@ TEST(GapDesignCases, FoldAliasAndPlacementCasesMeetTheirTargets) {
 
 // Issue 40 on real data: imucal's hand-placed six faces with bias + scale. The sensor terms leave
 // a gap of ~80x the floor; a rotation per face (placement) accounts for it, and the verdict says
-// so instead of "unexplained". Scale withheld (bias only): scale is named first — or, where an
-// alias is favoured, scale with the alias listed.
+// so instead of "unexplained" (untestable here: 18 rows, 18 parameters; cross_axis lies within
+// the per-face rotations and the statement says so). Scale withheld (bias only): imucal's own
+// calibration (example_cal.json) has a 2.8 % z scale error *and* misalignments of 1-2 %; on six
+// segments neither scale nor cross_axis alone leaves a residual small enough to be significant
+// (the other stays in it), so nothing is named — but never a third term, and the placement
+// family, which acts across f only, is not significant: the gap left lies along f (the scale).
 TEST(GapRealData, ImucalHandPlacedFacesNamePlacementAndScaleWhenWithheld) {
   const fs::path csv = stend::testing::shared_data("imucal/annotated_session.csv");
   STEND_SKIP_IF_ABSENT(csv) << "; real-data check skipped";
@@ -398,17 +402,23 @@ TEST(GapRealData, ImucalHandPlacedFacesNamePlacementAndScaleWhenWithheld) {
   EXPECT_TRUE(r.placement.significant || r.placement.consistent) << r.placement.reason;
   EXPECT_NE(r.statement.find("PLACEMENT"), std::string::npos) << r.statement;
   EXPECT_LT(r.placement.max_deg, 5.0);
+  EXPECT_TRUE(r.placement.cross_axis_within);
+  EXPECT_EQ(r.statement.find("UNEXPLAINED"), std::string::npos) << r.statement;
   spec.model.terms = {model::TermSpec{model::TermKind::kBias, 1, 25.0}};
   const GapReport b = diagnose(build_input(rec, spec));
   ASSERT_TRUE(b.ok) << b.message;
-  ASSERT_FALSE(b.selected.empty()) << b.statement;
-  EXPECT_EQ(b.selected.front(), "scale") << b.statement;
+  EXPECT_TRUE(b.selected.empty() || b.selected.front() == "scale" || b.selected.front() == "cross_axis")
+      << b.statement;
+  EXPECT_TRUE(b.placement.assessed) << b.placement.reason;
+  EXPECT_FALSE(b.placement.significant) << b.placement.reason;
 }
 
 // Issue 40 on real data: the hand-held MPU-6050 session (magnitude form). Scale withheld → scale
-// named first; cross-axis withheld (bias + scale) → cross_axis named, or the report says it
-// cannot be tested held out on ten segments. In every case a held-out gap over 3x the in-sample
-// one comes with its reason in the notes.
+// named first (its near-collinear aliases listed), the held-out gap after it near the floor;
+// cross-axis withheld (bias + scale) → cross_axis named, or not testable on these ten segments
+// (not assessable, or no row determined held out) — that project's own misalignments are
+// ~1e-5 rad, far below the floor, so nothing else may be named either. In every case a held-out
+// gap over 3x the in-sample one comes with its reason in the notes.
 TEST(GapRealData, Mpu6050HeldOutGapIsExplainedWhenFarAboveInSample) {
   const fs::path csv = stend::testing::shared_data("mpu6050_multipos/calibration_session.csv");
   STEND_SKIP_IF_ABSENT(csv);
@@ -428,6 +438,9 @@ TEST(GapRealData, Mpu6050HeldOutGapIsExplainedWhenFarAboveInSample) {
   ASSERT_TRUE(b.ok) << b.message;
   ASSERT_FALSE(b.selected.empty()) << b.statement;
   EXPECT_EQ(b.selected.front(), "scale");
+  EXPECT_FALSE(b.alias_resolution.empty());
+  ASSERT_GE(b.steps.size(), 2u);
+  EXPECT_LT(b.steps[1].heldout_rms, 2.5 * b.steps[1].floor_rms);
   EXPECT_TRUE(ratio_explained(b));
   spec.model.terms.push_back(model::TermSpec{model::TermKind::kScale, 1, 25.0});
   const GapReport s = diagnose(build_input(rec, spec));
@@ -438,6 +451,8 @@ TEST(GapRealData, Mpu6050HeldOutGapIsExplainedWhenFarAboveInSample) {
   EXPECT_TRUE(ratio_explained(s));
   bool cross_named = !s.selected.empty() && s.selected.front() == "cross_axis", cross_untestable = false;
   for (const auto& c : s.candidates)
-    if (c.term == "cross_axis") cross_untestable = c.reason.find("cannot be tested held out") != std::string::npos;
+    if (c.term == "cross_axis")
+      cross_untestable = !c.evaluated || c.reason.find("cannot be tested held out") != std::string::npos;
   EXPECT_TRUE(cross_named || cross_untestable || s.at_floor) << s.statement;
+  EXPECT_TRUE(s.selected.empty() || cross_named) << s.statement;
 }

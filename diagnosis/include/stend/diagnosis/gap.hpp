@@ -66,11 +66,28 @@ inline constexpr std::array<FoldByName, 6> kFoldByNames = {{{FoldBy::kAuto, "aut
 const char* to_string(FoldBy f);  // the name
 std::optional<FoldBy> fold_by_from_key(std::string_view key);
 
+// The rule over the candidate family of a selection step (the unused candidates with a p value).
+// Benjamini–Yekutieli: false discovery rate at alpha under any dependence between the tests (with
+// no real effect, the chance of naming any). Bonferroni: p < alpha / m, the family-wise rate under
+// any dependence (the rule before issue 40; kept to measure what BY costs or gains).
+enum class FamilyRule { kBenjaminiYekutieli, kBonferroni };
+struct FamilyRuleName {
+  FamilyRule value;
+  const char* key;
+  const char* name;
+};
+inline constexpr std::array<FamilyRuleName, 2> kFamilyRuleNames = {
+    {{FamilyRule::kBenjaminiYekutieli, "by", "Benjamini-Yekutieli (FDR under any dependence)"},
+     {FamilyRule::kBonferroni, "bonferroni", "Bonferroni (family-wise)"}}};
+const char* to_string(FamilyRule r);  // the name
+std::optional<FamilyRule> family_rule_from_key(std::string_view key);
+
 struct GapOptions {
   FoldBy fold_by = FoldBy::kAuto;   // auto: the first scheme whose folds fit the design (FoldBy)
   // Level of the candidate family: false discovery rate by Benjamini–Yekutieli over the assessed
   // candidates (valid under any dependence; with no real effect, the chance of naming any), in (0, 1).
   double alpha = 0.05;
+  FamilyRule family_rule = FamilyRule::kBenjaminiYekutieli;
   int max_steps = 4;                // forward-selection steps (0: the candidates ranked, none added)
   // A candidate is named as *the* explanation only when it also closes at least this fraction of
   // the held-out squared gap above the floor; otherwise it is reported as partial. In [0, 1].
@@ -110,6 +127,8 @@ struct Step {
   int step = 0;
   std::string added;                // empty = the model as given (step 0)
   double heldout_rms = kNaN, in_sample_rms = kNaN, floor_rms = kNaN;
+  // Held-out rows scored (the others are not determined by their training folds) and all rows.
+  int heldout_rows = 0, rows = 0;
 };
 
 struct Place {
@@ -137,6 +156,7 @@ struct PlacementResult {
   double in_sample_after = kNaN;  // in-sample RMS with placement [unit]
   bool significant = false;       // partial F test at alpha, angles plausible
   bool consistent = false;        // untestable (no dof) but the gap lies across f and the angles are plausible
+  bool cross_axis_within = false; // a cross-axis (misalignment) lies within the per-face rotations on this design
 };
 
 struct GapReport {
