@@ -109,15 +109,24 @@ std::string placement_statement(const PlacementResult& pr, const GapReport& rep)
        << " % of it lies across the stated gravity directions, where a rotation acts. This session cannot test it "
           "(no degree of freedom is left with a rotation per face) — place each face twice, re-placing the sensor, "
           "or add tilted positions, to test it.";
-  if (pr.cross_axis_within)
-    os << " A misalignment of the sensor axes (cross_axis, the same for every face) lies within the per-face "
-          "rotations on this design and would fit the gap as well: placing each face twice separates them.";
+  if (!pr.aliases.empty()) {
+    os << " On this design ";
+    for (std::size_t i = 0; i < pr.aliases.size(); ++i)
+      os << (i ? (i + 1 == pr.aliases.size() ? " and " : ", ") : "") << pr.aliases[i];
+    os << (pr.aliases.size() > 1 ? " lie" : " lies")
+       << " within the per-face rotations (a misalignment of the sensor axes is one setting of them): the data "
+          "cannot tell "
+       << (pr.aliases.size() > 1 ? "them" : "it")
+       << " from a placement error. Place the faces again with fresh placements, or add tilted positions, to "
+          "separate them.";
+  }
   return os.str();
 }
 
 }  // namespace
 
-void assess_placement(const GapInput& in, const Rows& rows, const MatrixXd& A, const GapOptions& opt, GapReport& rep) {
+void assess_placement(const GapInput& in, const Rows& rows, const std::vector<model::TermSpec>& terms, const MatrixXd& A,
+                      const GapOptions& opt, GapReport& rep) {
   PlacementResult& pr = rep.placement;
   if (!nominal_orientations(in)) {
     pr.reason = "not nominal-orientation data (a table's angles, the magnitude form or a gyroscope)";
@@ -166,15 +175,24 @@ void assess_placement(const GapInput& in, const Rows& rows, const MatrixXd& A, c
   }
   if (!plausible) pr.reason += "; the fitted rotations (largest " + fmt(pr.max_deg, 2) + " deg) exceed what hand placement gives";
   if (pr.significant || pr.consistent) {
-    // Is a cross-axis (misalignment) within the per-face rotations here? (Six faces placed once:
-    // each face's across-f rows are free, so a common misalignment is one of their settings.)
-    const bool model_has_cross = std::any_of(in.spec.model.terms.begin(), in.spec.model.terms.end(),
-                                             [](const model::TermSpec& t) { return t.kind == model::TermKind::kCrossAxis; });
-    if (!model_has_cross) {
-      const MatrixXd AP = hstack(A, placement_columns(in, rows, face_of_segment, face_up));
-      const MatrixXd C = term_columns(in, rows, model::TermSpec{model::TermKind::kCrossAxis, 1, 25.0});
-      pr.cross_axis_within = rank_of(scale_rows(hstack(AP, C), rows.w)) == rank_of(scale_rows(AP, rows.w));
+    // Which sensor terms lie within the per-face rotations here (with the model as given)? Six
+    // faces placed once: each face's across-f rows are free, so a misalignment is one of their
+    // settings; a named term there may be a placement error as well.
+    const std::size_t given = in.spec.model.terms.size();
+    MatrixXd AP = MatrixXd(rows.y.size(), 0);
+    for (std::size_t k = 0; k < given && k < terms.size(); ++k) AP = hstack(AP, term_columns(in, rows, terms[k]));
+    AP = hstack(AP, placement_columns(in, rows, face_of_segment, face_up));
+    const int rank_ap = rank_of(scale_rows(AP, rows.w));
+    const auto within = [&](const model::TermSpec& t) {
+      const MatrixXd C = term_columns(in, rows, t);
+      return C.norm() > 0 && rank_of(scale_rows(hstack(AP, C), rows.w)) == rank_ap;
+    };
+    bool has_cross = false;
+    for (std::size_t k = 0; k < terms.size(); ++k) {
+      has_cross = has_cross || terms[k].kind == model::TermKind::kCrossAxis;
+      if (k >= given && k - given < rep.selected.size() && within(terms[k])) pr.aliases.push_back(rep.selected[k - given]);
     }
+    if (!has_cross && within(model::TermSpec{model::TermKind::kCrossAxis, 1, 25.0})) pr.aliases.push_back("cross_axis");
     if (rep.selected.empty())
       rep.statement = "No sensor term of the vocabulary explains the held-out gap of " +
                       fmt(rep.unexplained_heldout_rms * rep.display_per_unit, 3) + " " + rep.display_unit + " RMS (" +

@@ -235,7 +235,7 @@ std::string to_json(const GapReport& r, int indent) {
                       {"rms_deg", num(p.rms_deg)},     {"max_deg", num(p.max_deg)},
                       {"max_face", p.max_face},        {"per_face", faces},
                       {"significant", p.significant},  {"consistent", p.consistent},
-                      {"cross_axis_within", p.cross_axis_within}};
+                      {"aliases", p.aliases}};
   }
   j["unexplained"] = {{"heldout_rms_mps2", num(r.unexplained_heldout_rms)},
                       {"over_floor", num(r.unexplained_over_floor)},

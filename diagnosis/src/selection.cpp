@@ -404,7 +404,7 @@ void explain_gap(const GapInput& in, Rows& rows, const GapOptions& opt, GapRepor
   rep.unexplained_over_floor = floor_rms > 0 ? rep.unexplained_heldout_rms / floor_rms : kNaN;
   rep.explanation = explanation(rep, opt.explain_fraction);
   rep.statement = statement(rep, at_floor_as_given);
-  if (!at_floor_as_given) assess_placement(in, rows, last.columns, opt, rep);
+  if (!at_floor_as_given) assess_placement(in, rows, last.terms, last.columns, opt, rep);
   // The first named term leads the ranking (it may be an alias's base term, not the top gain).
   if (!rep.selected.empty()) {
     const auto it = std::find_if(rep.candidates.begin(), rep.candidates.end(),

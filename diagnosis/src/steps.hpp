@@ -49,7 +49,7 @@ void explain_gap(const GapInput& input, Rows& rows, const GapOptions& options, G
 // angles) whose held-out gap is above the floor after the selection, each face's rotation fitted
 // with the final model's columns; fills report.placement and, when it is significant or the only
 // consistent account, adds it to the statement.
-void assess_placement(const GapInput& input, const Rows& rows, const MatrixXd& final_columns, const GapOptions& options,
-                      GapReport& report);
+void assess_placement(const GapInput& input, const Rows& rows, const std::vector<model::TermSpec>& final_terms,
+                      const MatrixXd& final_columns, const GapOptions& options, GapReport& report);
 
 }  // namespace stend::diagnosis

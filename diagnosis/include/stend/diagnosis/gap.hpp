@@ -156,7 +156,10 @@ struct PlacementResult {
   double in_sample_after = kNaN;  // in-sample RMS with placement [unit]
   bool significant = false;       // partial F test at alpha, angles plausible
   bool consistent = false;        // untestable (no dof) but the gap lies across f and the angles are plausible
-  bool cross_axis_within = false; // a cross-axis (misalignment) lies within the per-face rotations on this design
+  // Sensor terms that lie within the per-face rotations on this design (with the model as given):
+  // the named ones, and cross_axis (a misalignment is one setting of the per-face rotations when
+  // no face is seen at two orientations). The data cannot tell them from a placement error.
+  std::vector<std::string> aliases;
 };
 
 struct GapReport {
