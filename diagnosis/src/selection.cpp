@@ -178,24 +178,47 @@ std::string missing_excitation(const GapInput& in, model::TermKind k) {
   return {};
 }
 
-// p value of candidate b beyond the current model plus candidate a (partial F test of nested fits
-// on the segment means): can the data tell b from a? 1 when b adds no rank beyond them.
-double p_beyond(const CandidateSearch& sr, const CurrentModel& model, std::size_t a, std::size_t b) {
-  const MatrixXd Aa = hstack(model.columns, sr.columns[a]);
-  const MatrixXd Ab = hstack(Aa, sr.columns[b]);
-  const Fit fa = solve(Aa, sr.rows.y, sr.rows.w), fb = solve(Ab, sr.rows.y, sr.rows.w);
-  if (!fa.lsq.ok() || !fb.lsq.ok()) return 1.0;
-  const int added = fb.rank - fa.rank, dof = static_cast<int>(sr.rows.y.size()) - fb.rank;
-  if (added <= 0 || dof <= 0 || !(fb.rss > 0)) return 1.0;
-  return stats::nested_f_test(fa.rss, fb.rss, added, dof).p_value;
+// Is candidate b significant beyond the current model plus candidate a — can the data tell b from
+// a? Judged as any candidate is (candidate_tests.hpp): the largest p of the partial F test (shrunk
+// by the residuals' lag-1 correlation), Newey–West and the GLS test under the segments' time
+// covariance, below alpha, with BIC favouring b and a held-out gain beyond a. A bare F test on
+// independent segment means would take a slow bias wander that follows the temperature for a
+// temperature term. p is 1 when b adds no rank beyond them.
+struct Beyond {
+  double p = 1.0;
+  bool significant = false;
+};
+Beyond significant_beyond(const CandidateSearch& sr, const CurrentModel& model, const std::vector<Evaluation>& evals,
+                          std::size_t a, std::size_t b, double alpha) {
+  CurrentModel with_a;
+  with_a.terms = model.terms;
+  with_a.terms.push_back(sr.candidates[a].term);
+  with_a.columns = hstack(model.columns, sr.columns[a]);
+  with_a.fit = solve(with_a.columns, sr.rows.y, sr.rows.w);
+  if (!with_a.fit.lsq.ok()) return {};
+  with_a.heldout = evals[a].heldout;
+  const Evaluation e = evaluate(sr, with_a, gls_prepare(sr.covariance, sr.rows, with_a.columns), b);
+  const CandidateResult& r = e.result;
+  if (!r.evaluated || !std::isfinite(r.p_value)) return {};
+  return {r.p_value, r.p_value < alpha && r.delta_bic < 0 && r.heldout_improvement > 0};
+}
+
+// More basic: earlier in the vocabulary's order (model::TermKind: scale before its temperature
+// polynomial, cross-axis before the table angles, a wrong g last), and of one kind the lower order
+// (a temperature polynomial of order 1 before order 2, which nests it).
+bool more_basic(const model::TermSpec& a, const model::TermSpec& b) {
+  if (a.kind != b.kind) return static_cast<int>(a.kind) < static_cast<int>(b.kind);
+  return a.order < b.order;
 }
 
 // Among the candidates near-collinear with the best one on this design, the one the data can
-// support: the best itself when it is the most basic of them (the order of model::TermKind —
-// scale before its temperature polynomial, cross-axis before the table angles, a wrong g last), or
-// when the recording excites what tells it from the most basic one and it is significant beyond
-// it; otherwise that base term. The others are listed as its aliases, with why and what
-// experiment would separate them (report.alias_resolution, the named candidate's aliases).
+// support, stepping down from the most basic: a member the data favour (held-out gain > 0, BIC < 0)
+// and the recording excites is named unless the best one is excited and significant beyond it
+// (significant_beyond), in which case the next more basic member is tried; the best itself when
+// it is significant beyond every more basic member. So an order-1 temperature effect is named at
+// order 1 unless the order-2 part is significant, and scale unless its temperature polynomial is.
+// The others are listed as its aliases, with why and what experiment would separate them
+// (report.alias_resolution, the named candidate's aliases).
 std::size_t resolve_aliases(const CandidateSearch& sr, const CurrentModel& model, const std::vector<Evaluation>& evals,
                             const std::vector<bool>& used, std::size_t best, double alpha, GapReport& rep) {
   const MatrixXd Ub = projected_basis(sr, model.columns, best);
@@ -205,32 +228,36 @@ std::size_t resolve_aliases(const CandidateSearch& sr, const CurrentModel& model
     if (near_collinear(Ub, projected_basis(sr, model.columns, j))) group.push_back(j);
   }
   if (group.empty()) return best;
-  // The base: the most basic member the data favour (held-out gain > 0, BIC < 0) and excited.
-  std::size_t base = best;
-  for (std::size_t j : group) {
-    const auto& r = evals[j].result;
-    if (!(r.heldout_improvement > 0 && r.delta_bic < 0) || !missing_excitation(sr.input, sr.candidates[j].term.kind).empty())
-      continue;
-    if (static_cast<int>(sr.candidates[j].term.kind) < static_cast<int>(sr.candidates[base].term.kind)) base = j;
-  }
-  std::string why;
+  std::vector<std::size_t> order = group;
+  order.push_back(best);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return more_basic(sr.candidates[a].term, sr.candidates[b].term);
+  });
+  const std::string missing = missing_excitation(sr.input, sr.candidates[best].term.kind);
+  std::string why, beyond;
   std::size_t named = best;
-  if (base != best) {
-    const std::string missing = missing_excitation(sr.input, sr.candidates[best].term.kind);
-    const double p = missing.empty() ? p_beyond(sr, model, base, best) : 1.0;
-    if (missing.empty() && p < alpha) {
-      why = sr.candidates[best].name + " is significant beyond " + sr.candidates[base].name + " (p " + fmt(p, 2) + ")";
-    } else {
-      named = base;
-      why = sr.candidates[best].name + " (the largest held-out gain) is not named: " +
-            (missing.empty() ? "the data cannot tell it from " + sr.candidates[base].name + " (p " + fmt(p, 2) +
-                                   " beyond it)"
-                             : missing) +
-            "; the base term " + sr.candidates[base].name + " is named";
+  for (std::size_t m : order) {
+    if (m == best) break;
+    const auto& r = evals[m].result;
+    if (!(r.heldout_improvement > 0 && r.delta_bic < 0) || !missing_excitation(sr.input, sr.candidates[m].term.kind).empty())
+      continue;
+    const Beyond bt = missing.empty() ? significant_beyond(sr, model, evals, m, best, alpha) : Beyond{};
+    const double p = bt.p;
+    if (bt.significant) {
+      beyond += (beyond.empty() ? "" : ", ") + sr.candidates[m].name + " (p " + fmt(p, 2) + ")";
+      continue;
     }
-  } else {
-    why = sr.candidates[best].name + " is the base term of the group";
+    named = m;
+    why = sr.candidates[best].name + " (the largest held-out gain) is not named: " +
+          (missing.empty() ? "the data cannot tell it from " + sr.candidates[m].name + " (p " + fmt(p, 2) + " beyond it)"
+                           : missing) +
+          (beyond.empty() ? "" : " (it is significant beyond " + beyond + ")") + "; the more basic term " +
+          sr.candidates[m].name + " is named";
+    break;
   }
+  if (named == best)
+    why = beyond.empty() ? sr.candidates[best].name + " is the base term of the group"
+                         : sr.candidates[best].name + " is significant beyond " + beyond;
   std::ostringstream os;
   os << sr.candidates[named].name << " stands for its near-collinear aliases on this design (";
   std::vector<std::size_t> others = group;
