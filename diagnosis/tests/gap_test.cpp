@@ -372,8 +372,12 @@ TEST(GapFolds, HandHeldFacesAreReFoldedAndTheReasonIsGiven) {
 // the candidate family: the design cases of `stend gap validate` (fold, alias, placement) at a
 // reduced, deterministic seed count; each planted case passes in >= 90 % of its runs and each
 // null case fails in <= 5 %.
+// The 100 runs a case (~10 s): a null case may fail 5 times (<= 5 %), a planted one 10
+// (>= 90 %). With a handful of runs a null case would have to be perfect, which a 5 % rule does not
+// promise: the fold null case, "a term marked significant" counted as a failure, fails in 1.25 %
+// of 400 runs, 3 of them among the first 40 of this seed.
 TEST(GapDesignCases, FoldAliasAndPlacementCasesMeetTheirTargets) {
-  const std::vector<DesignCase> cases = run_design_cases(6, 3);
+  const std::vector<DesignCase> cases = run_design_cases(100, 3);
   ASSERT_EQ(cases.size(), 6u);
   for (const auto& c : cases) {
     std::string named;

@@ -86,14 +86,14 @@ void print_totals(std::ostream& os, const ValidationReport& r) {
                 "\ntop-1 (identifiable, >= 5x floor): %.3f   [target >= 0.9]\n"
                 "explainable held-out gap closed (>= 5x): %.3f   [target >= 0.8]\n"
                 "95%% interval coverage of the recovered size (>= 5x): %.3f\n"
-                "null runs: %d, false positives %d (rate %.3f)   [target <= 0.05]\n"
+                "null runs: %d, false positives (a term named or marked significant) %d (rate %.3f)   [target <= 0.05]\n"
                 "out of vocabulary: %d runs, %d said unexplained, %d named a term\n"
                 "time: %.1f s\n",
                 r.top1_at5, r.closed_at5, r.coverage, r.null_runs, r.null_false_positives, r.false_positive_rate,
                 r.oov_runs, r.oov_unexplained, r.oov_wrong_name, r.seconds);
   os << line;
   if (!r.null_named.empty()) {
-    os << "false positives named:";
+    os << "false positives:";
     for (const auto& [n, k] : r.null_named) os << " " << n << ":" << k;
     os << "\n";
   }
@@ -111,6 +111,13 @@ void print_design_cases(std::ostream& os, const ValidationReport& r) {
 }
 
 }  // namespace
+
+bool claims_an_effect(const GapReport& r) {
+  if (!r.selected.empty() || r.placement.significant) return true;
+  for (const auto& c : r.candidates)
+    if (!c.noise_stage && c.significant) return true;
+  return false;
+}
 
 bool design_case_met(const DesignCase& c) {
   // Planted: the expected thing in >= 90 % of runs; null: a false positive in <= 5 %.
