@@ -24,6 +24,12 @@ namespace stend::cli {
 namespace {
 
 // The --fold-by values: the keys of diagnosis::kFoldByNames.
+std::vector<std::string> family_rule_keys() {
+  std::vector<std::string> keys;
+  for (const auto& n : diagnosis::kFamilyRuleNames) keys.emplace_back(n.key);
+  return keys;
+}
+
 std::vector<std::string> fold_by_keys() {
   std::vector<std::string> keys;
   for (const auto& n : diagnosis::kFoldByNames) keys.emplace_back(n.key);
@@ -70,6 +76,7 @@ Outcome run_gap(const GapArgs& a) {
   opt.max_steps = a.max_steps;
   opt.max_folds = a.max_folds;
   opt.alpha = a.alpha;
+  opt.family_rule = diagnosis::family_rule_from_key(a.family_rule).value_or(diagnosis::FamilyRule::kBenjaminiYekutieli);
   if (std::string why; !opt.IsValid(&why)) throw InputError("stend gap: " + why);
   const diagnosis::GapReport rep = diagnosis::diagnose(in, opt);
   std::ostringstream text;
@@ -101,7 +108,9 @@ ExitCode run_validate(const GapArgs& a) {
   o.seed = a.seed;
   o.noise_seeds = a.noise_seeds;
   o.noise_null_runs = a.noise_null_runs;
+  o.design_runs = a.design_runs;
   o.gap.alpha = a.alpha;
+  o.gap.family_rule = diagnosis::family_rule_from_key(a.family_rule).value_or(diagnosis::FamilyRule::kBenjaminiYekutieli);
   if (a.positions > 0) o.design = diagnosis::many_positions_design(a.positions);
   if (std::string why; !o.IsValid(&why)) throw InputError("stend gap validate: " + why);
   TaskProgress progress("gap validate");
@@ -137,13 +146,20 @@ void add_gap_command(CLI::App& app, std::vector<Command>& out) {
   add_json_flag(sub, "the diagnosis's outcome and results document");
   sub->add_option("--db", args->db, std::string(kDbOptionHelp) +
                                         "; given (or $STEND_RESULTS_DB), the run is recorded there with its gap.json");
-  sub->add_option("--fold-by", args->fold_by, "Held-out groups: auto | orientation | temperature | ramp")
+  sub->add_option("--fold-by", args->fold_by,
+                  "Held-out folds: auto (the first scheme that fits the design) | orientation | temperature | ramp | "
+                  "segment | time")
       ->check(CLI::IsMember(fold_by_keys()));
   sub->add_option("--max-steps", args->max_steps, "Forward-selection steps (default 4)")->check(at_least(1));
   sub->add_option("--max-folds", args->max_folds, "Held-out folds, groups dealt round-robin beyond (default 12; 0 = one per group)")
       ->check(at_least(0));
-  sub->add_option("--alpha", args->alpha, "Family-wise significance level (Bonferroni over candidates)")
+  sub->add_option("--alpha", args->alpha,
+                  "Level of the candidate family (false discovery rate with --family-rule by, family-wise with "
+                  "bonferroni; default 0.05)")
       ->check(strictly_within(0, 1));
+  sub->add_option("--family-rule", args->family_rule,
+                  "Multiple-testing rule over the candidates: by (Benjamini-Yekutieli, default) | bonferroni")
+      ->check(CLI::IsMember(family_rule_keys()));
 
   auto* val = sub->add_subcommand("validate", "Check the diagnoser on planted, null and out-of-vocabulary effects");
   val->add_option("--seeds", args->seeds, "Runs per candidate and size (default 20)")->check(at_least(1));
@@ -162,6 +178,9 @@ void add_gap_command(CLI::App& app, std::vector<Command>& out) {
                   "Noise-stage experiments (quantization, saturation, coloured noise): runs per size (default 10; 0 = skip)")
       ->check(at_least(0));
   val->add_option("--noise-null", args->noise_null_runs, "Noise-stage null runs (default 40)")->check(at_least(0));
+  val->add_option("--design-runs", args->design_runs,
+                  "Design cases (folds, aliases, placement): runs per case (default 20; 0 = skip)")
+      ->check(at_least(0));
 
   out.push_back({sub, [args, val] {
                    if (*val) return run_validate(*args);

@@ -210,7 +210,7 @@ calibration::Calibration load_stated_calibration(const std::string& cal, const s
 // `stend gap` (cmd_gap.cpp); the validate fields are `stend gap validate`'s.
 struct GapArgs {
   DatasetArgs data;
-  std::string model, json, fold_by = "auto", db;
+  std::string model, json, fold_by = "auto", db, family_rule = "by";
   int max_steps = 4, max_folds = 12;
   double alpha = 0.05;
   // validate
@@ -220,6 +220,7 @@ struct GapArgs {
   std::string vjson;
   std::uint64_t seed = 1;
   int noise_seeds = 10, noise_null_runs = 40;  // noise-stage experiments (sample level)
+  int design_runs = 20;  // design cases (folds, aliases, placement): runs per case
 };
 Outcome run_gap(const GapArgs& a);
 

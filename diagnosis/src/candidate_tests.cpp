@@ -101,6 +101,12 @@ void newey_west_test(const Rows& rows, const MatrixXd& A0, const MatrixXd& C, co
 // Held-out RMS without and with the candidate on the rows both predict, and the relative gain.
 void heldout_gain(const Heldout& without, const Heldout& with, CandidateResult& r) {
   const CvCompare cc = compare(without, with);
+  if (cc.n == 0) {
+    r.reason += std::string(r.reason.empty() ? "" : "; ") +
+                "held out: no row is determined by its training fold with this candidate (its parameters are seen "
+                "only in the held-out fold, or extrapolated beyond 3x the floor) — it cannot be tested held out here";
+    return;
+  }
   r.heldout_rms_before = cc.before;
   r.heldout_rms = cc.after;
   if (cc.n > 0 && cc.before > 0) r.heldout_improvement = 1.0 - cc.after / cc.before;

@@ -47,6 +47,10 @@ std::string separating_experiment(TermKind a, TermKind b) {
   const auto mag = {TermKind::kScale, TermKind::kNonlinearK3, TermKind::kOddQuadratic, TermKind::kGravityError,
                     TermKind::kNonlinearK2, TermKind::kBias};
   std::string A = model::term_name(a), B = model::term_name(b);
+  // Two orders of one polynomial (the higher nests the lower): more levels over a wider span.
+  if (a == b && model::reads_temperature(a))
+    return A + " at two orders: more temperature levels over a wider span (the orders separate with the number "
+           "and spread of the levels)";
   // A wrong local g is a common scale of a static design (tumbles do not help); a known input apart
   // from gravity does: the centripetal ω×(ω×r) on a rate table, the offset r known (stend gap validate).
   if (is(TermKind::kGravityError, TermKind::kLeverArm))

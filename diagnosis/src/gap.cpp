@@ -179,6 +179,10 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
   rep.fit = fit_model(in);
   if (!rep.fit.ok()) {
     rep.message = "the model could not be fitted: " + rep.fit.message;
+    // As many parameters as rows: nothing is left to test, held out or in-sample.
+    if (rep.fit.lsq.rank > 0 && rep.fit.lsq.dof <= 0)
+      rep.message += ". No fold scheme can test this design either: every held-out row needs parameters that only "
+                     "its own segment determines. " + untestable_design_advice();
     return rep;
   }
   const std::vector<bool> fitted = fitted_axes(in);
@@ -187,14 +191,7 @@ GapReport diagnose(const GapInput& in, const GapOptions& opt) {
   gap_and_noise(in, fitted, rep);
   // 2. Where.
   locate_gap(in, rows, rep);
-  // 3. Folds.
-  rep.fold_by = fold_grouping(in, opt.fold_by);
-  rep.folds = deal_folds(in, rep.fold_by, opt.max_folds, rows);
-  if (rep.folds < 2) {
-    rep.message = std::string("the held-out comparison needs at least two ") + to_string(rep.fold_by) + " groups";
-    return rep;
-  }
-  // 4.–5. Which, and how far.
+  // 3.–5. The folds that fit the design, which, and how far.
   explain_gap(in, rows, opt, rep);
   return rep;
 }

@@ -28,17 +28,26 @@ Heldout cross_validate(const MatrixXd& A, const Rows& rows) {
         wt[j] = rows.w[r];
         ++j;
       }
-    const Fit f = solve(At, yt, wt);
-    if (!f.lsq.ok()) continue;
-    const double s2 = f.lsq.sigma2 > 0 ? f.lsq.sigma2 : 1.0;
+    const Fit f = solve(At, yt, wt, {}, {}, /*known_variance=*/true);  // covariance (AᵀWA)⁺ [unit²]
+    if (!f.lsq.ok()) {
+      ++h.failed_folds;
+      continue;
+    }
     for (int r : fold) {
       const VectorXd a = A.row(r).transpose();
       if (a.norm() > 0 && f.lsq.null_space.cols() > 0 &&
-          (f.lsq.null_space.transpose() * a).norm() > 1e-7 * a.norm())
+          (f.lsq.null_space.transpose() * a).norm() > 1e-7 * a.norm()) {
+        ++h.not_estimable;
         continue;
+      }
+      // pinv_covariance = (AᵀWA)⁺ with the weights 1/floor² as known variances.
+      const double prediction_var = a.dot(f.lsq.pinv_covariance * a);
+      if (prediction_var * rows.w[r] > kMaxPredictionVariance) {
+        ++h.extrapolated;
+        continue;
+      }
       h.err[r] = rows.y[r] - a.dot(f.lsq.min_norm_solution);
-      // pinv_covariance = σ²·(AᵀWA)⁺ with relative weights 1/floor²: divide σ² out.
-      h.var0[r] = 1.0 / rows.w[r] + a.dot(f.lsq.pinv_covariance * a) / s2;
+      h.var0[r] = 1.0 / rows.w[r] + prediction_var;
     }
   }
   return h;

@@ -66,7 +66,7 @@ MatrixXd column_basis(const MatrixXd& A) {
 }
 
 Fit solve(const MatrixXd& A, const VectorXd& y, const VectorXd& w, const std::vector<std::string>& names,
-          const std::vector<std::string>& units) {
+          const std::vector<std::string>& units, bool known_variance) {
   estimation::LsqProblem pr;
   pr.design = A;
   pr.observations = y;
@@ -75,6 +75,7 @@ Fit solve(const MatrixXd& A, const VectorXd& y, const VectorXd& w, const std::ve
   pr.units = units;
   estimation::LsqOptions o;
   o.observations_per_parameter_warning = 0.0;
+  o.known_variance = known_variance;
   Fit f;
   f.lsq = estimation::solve_lsq(pr, o);
   if (f.lsq.ok()) {

@@ -43,14 +43,16 @@ MatrixXd column_basis(const MatrixXd& A);
 // A with every non-zero column scaled to unit norm.
 MatrixXd unit_columns(const MatrixXd& A);
 
-// A weighted least-squares fit of some columns (estimation::solve_lsq, no few-rows warning).
+// A weighted least-squares fit of some columns (estimation::solve_lsq, no few-rows warning). With
+// known_variance the weights are taken as 1/variance (the floor's): covariances are (AᵀWA)⁺, not
+// scaled by the residual variance (defined even for a fit without residual degrees of freedom).
 struct Fit {
   estimation::LsqResult lsq;
   double rss = kNaN;  // weighted
   int rank = 0;
 };
 Fit solve(const MatrixXd& A, const VectorXd& y, const VectorXd& w, const std::vector<std::string>& names = {},
-          const std::vector<std::string>& units = {});
+          const std::vector<std::string>& units = {}, bool known_variance = false);
 
 // Parameter names and units of a term list, in design-column order.
 struct ParamLabels {

@@ -13,7 +13,8 @@ double magnitude_std_error(const SegmentData& segment);
 
 // The model as given, fitted on one row per segment: û·(measured − g·û) = û·R(θ; stimulus)·θ
 // (R the vocabulary's regressor), uniform weights 1/floor². The fit holds every model parameter
-// (param_index = 0…p−1); rotations of the sensor frame come out not identifiable.
-estimation::StaticFit fit_magnitude_rows(const GapInput& input);
+// (param_index = 0…p−1); rotations of the sensor frame come out not identifiable. known_variance:
+// the weights as known variances (covariance (AᵀWA)⁺, defined without residual degrees of freedom).
+estimation::StaticFit fit_magnitude_rows(const GapInput& input, bool known_variance = false);
 
 }  // namespace stend::diagnosis

@@ -88,7 +88,9 @@ json steps_json(const GapReport& r) {
                      {"added", s.added.empty() ? json(nullptr) : json(s.added)},
                      {"heldout_rms_mps2", num(s.heldout_rms)},
                      {"in_sample_rms_mps2", num(s.in_sample_rms)},
-                     {"noise_floor_mps2", num(s.floor_rms)}});
+                     {"noise_floor_mps2", num(s.floor_rms)},
+                     {"heldout_rows", s.heldout_rows},
+                     {"rows", s.rows}});
   return steps;
 }
 
@@ -158,6 +160,7 @@ void print_noise_candidate(std::ostream& os, const CandidateResult& c) {
 // 3. Which: the evaluated vocabulary candidates ranked, those not assessable, the noise stage.
 void print_which(std::ostream& os, const GapReport& r) {
   os << "\n3. WHICH — candidates the model lacks, held out by " << to_string(r.fold_by) << " (" << r.folds << " folds)\n";
+  if (!r.fold_reason.empty()) os << "   folds: " << r.fold_reason << "\n";
   os << "   rank  term                          axis  held-out gain  dBIC      p          size [unit] (95% CI)\n";
   int rank = 0;
   for (const auto& c : r.candidates)
@@ -178,7 +181,18 @@ void print_how_far(std::ostream& os, const GapReport& r) {
   for (const auto& s : r.steps)
     os << "   step " << s.step << "  " << (s.added.empty() ? std::string("(model as given)") : "+ " + s.added)
        << ": held-out " << f(s.heldout_rms * k, "%.4f") << " " << du << ", in-sample " << f(s.in_sample_rms * k, "%.4f")
-       << " " << du << ", floor " << f(s.floor_rms * k, "%.4f") << " " << du << "\n";
+       << " " << du << ", floor " << f(s.floor_rms * k, "%.4f") << " " << du
+       << (s.heldout_rows < s.rows
+               ? " (held out on " + std::to_string(s.heldout_rows) + " of " + std::to_string(s.rows) +
+                     " rows: the others are not determined by their training folds)"
+               : std::string())
+       << "\n";
+  for (const auto& a : r.alias_resolution) os << "   aliases: " << a << "\n";
+  if (r.placement.assessed) {
+    os << "   placement (a rotation per face, in-sample): " << r.placement.reason << "\n     faces placed off by";
+    for (const auto& [face, deg] : r.placement.face_deg) os << " " << face << " " << f(deg, "%.2f") << " deg;";
+    os << "\n";
+  }
   os << "\n   " << r.statement << "\n";
 }
 
@@ -205,7 +219,24 @@ std::string to_json(const GapReport& r, int indent) {
   for (const auto& c : r.candidates) cands.push_back(candidate_json(c));
   j["candidates"] = cands;
   j["steps"] = steps_json(r);
-  j["heldout"] = {{"fold_by", to_string(r.fold_by)}, {"folds", r.folds}};
+  j["heldout"] = {{"fold_by", to_string(r.fold_by)},
+                  {"folds", r.folds},
+                  {"fold_reason", r.fold_reason},
+                  {"rows_not_predicted", r.heldout_dropped}};
+  j["alias_resolution"] = r.alias_resolution;
+  {
+    const PlacementResult& p = r.placement;
+    json faces = json::array();
+    for (const auto& [face, deg] : p.face_deg) faces.push_back({{"face", face}, {"deg", num(deg)}});
+    j["placement"] = {{"assessed", p.assessed},        {"reason", p.reason},
+                      {"faces", p.faces},              {"added_rank", p.added_rank},
+                      {"dof", p.dof},                  {"p_value", num(p.p_value)},
+                      {"delta_bic", num(p.delta_bic)}, {"across_share", num(p.across_share)},
+                      {"rms_deg", num(p.rms_deg)},     {"max_deg", num(p.max_deg)},
+                      {"max_face", p.max_face},        {"per_face", faces},
+                      {"significant", p.significant},  {"consistent", p.consistent},
+                      {"aliases", p.aliases}};
+  }
   j["unexplained"] = {{"heldout_rms_mps2", num(r.unexplained_heldout_rms)},
                       {"over_floor", num(r.unexplained_over_floor)},
                       {"at_noise_floor", r.at_floor},

@@ -1,12 +1,14 @@
 // Which effect, and how far the gap shrinks: every candidate against the model as given, their
 // significance and aliases, forward selection on the held-out gap, the verdict. See steps.hpp
 // (explain_gap) and candidate_tests.hpp (one candidate).
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 
 #include "candidate_tests.hpp"
 #include "noise_stage.hpp"
+#include "stend/stats/hypothesis_tests.hpp"
 #include "steps.hpp"
 #include "text.hpp"
 
@@ -14,11 +16,33 @@ namespace stend::diagnosis {
 
 namespace {
 
-// A candidate is significant when its p value is below the per-candidate level, BIC favours it
-// and it lowers the held-out gap.
-bool significant(const CandidateResult& r, double alpha_each) {
-  return r.evaluated && std::isfinite(r.p_value) && r.p_value < alpha_each && r.delta_bic < 0 &&
-         r.heldout_improvement > 0;
+// A candidate is significant when the family's false-discovery rule rejects its p value, BIC
+// favours it and it lowers the held-out gap.
+bool significant(const CandidateResult& r, bool rejected) {
+  return r.evaluated && rejected && r.delta_bic < 0 && r.heldout_improvement > 0;
+}
+
+// The candidates (not yet used) the family's rule rejects: Benjamini–Yekutieli at level alpha over
+// the p values of those evaluated (dependence between the candidates — scale with gravity_error,
+// cross-axis with table angles — is allowed by the rule; with no real effect it bounds the chance
+// of naming any).
+std::vector<bool> family_rejections(const std::vector<Evaluation>& evals, const std::vector<bool>& used, double alpha,
+                                    FamilyRule rule) {
+  std::vector<double> p;
+  std::vector<std::size_t> idx;
+  for (std::size_t i = 0; i < evals.size(); ++i)
+    if (!used[i] && evals[i].result.evaluated) {
+      p.push_back(evals[i].result.p_value);
+      idx.push_back(i);
+    }
+  std::vector<bool> rej(p.size(), false);
+  if (rule == FamilyRule::kBonferroni)
+    for (std::size_t k = 0; k < p.size(); ++k) rej[k] = std::isfinite(p[k]) && p[k] < alpha / static_cast<double>(p.size());
+  else
+    rej = stats::benjamini_yekutieli(p, alpha);
+  std::vector<bool> out(evals.size(), false);
+  for (std::size_t k = 0; k < idx.size(); ++k) out[idx[k]] = rej[k];
+  return out;
 }
 
 // One row of the selection table: held-out RMS and its floor, in-sample RMS [unit].
@@ -27,6 +51,8 @@ Step make_step(int step, const std::string& added, const Rows& rows, const Curre
   s.step = step;
   s.added = added;
   s.heldout_rms = rms_finite(model.heldout, &s.floor_rms);
+  s.rows = static_cast<int>(rows.y.size());
+  s.heldout_rows = static_cast<int>(model.heldout.err.array().isFinite().count());
   s.in_sample_rms = std::sqrt((rows.y - model.columns * model.fit.lsq.min_norm_solution).squaredNorm() /
                               static_cast<double>(rows.y.size()));
   return s;
@@ -41,11 +67,10 @@ std::vector<Evaluation> evaluate_all(const CandidateSearch& search, const Curren
   return out;
 }
 
-// Significance of each evaluated candidate at α / (number evaluated) (Bonferroni).
-void mark_significant(std::vector<Evaluation>& evals, double alpha) {
-  int evaluated = 0;
-  for (const auto& e : evals) evaluated += e.result.evaluated ? 1 : 0;
-  for (auto& e : evals) e.result.significant = significant(e.result, alpha / std::max(1, evaluated));
+// Significance of each evaluated candidate under the family's rule.
+void mark_significant(std::vector<Evaluation>& evals, double alpha, FamilyRule rule) {
+  const std::vector<bool> rej = family_rejections(evals, std::vector<bool>(evals.size(), false), alpha, rule);
+  for (std::size_t i = 0; i < evals.size(); ++i) evals[i].result.significant = significant(evals[i].result, rej[i]);
 }
 
 // Pairwise aliases among evaluated candidates of different kinds: the joint design has a lower
@@ -89,22 +114,170 @@ std::vector<CandidateResult> ranked(const std::vector<Evaluation>& evals) {
   return out;
 }
 
-// The significant unused candidate with the largest held-out improvement (α split over those
-// evaluated); −1 when none.
-int best_candidate(const std::vector<Evaluation>& evals, const std::vector<bool>& used, double alpha) {
-  int evaluated = 0;
-  for (std::size_t i = 0; i < evals.size(); ++i) evaluated += !used[i] && evals[i].result.evaluated ? 1 : 0;
+// The significant unused candidate with the largest held-out improvement; −1 when none.
+int best_candidate(const std::vector<Evaluation>& evals, const std::vector<bool>& used, double alpha, FamilyRule rule) {
+  const std::vector<bool> rej = family_rejections(evals, used, alpha, rule);
   int best = -1;
   double best_gain = 0;
   for (std::size_t i = 0; i < evals.size(); ++i) {
     const auto& r = evals[i].result;
-    if (used[i] || !significant(r, alpha / std::max(1, evaluated))) continue;
+    if (used[i] || !significant(r, rej[i])) continue;
     if (r.heldout_improvement > best_gain) {
       best_gain = r.heldout_improvement;
       best = static_cast<int>(i);
     }
   }
   return best;
+}
+
+// Near-collinear candidates: one candidate's part outside the current model lies (almost) within
+// another's — the smallest canonical correlation of the smaller projected column space with the
+// larger at least this. Such a pair is an alias on this design even when not exactly singular.
+constexpr double kNearAliasCorrelation = 0.95;
+
+// Orthonormal basis of the weighted candidate columns with the model projected out; directions
+// below 1e-8 of the columns' own size (exactly aliased with the model) are dropped.
+MatrixXd projected_basis(const CandidateSearch& sr, const MatrixXd& model_columns, std::size_t i) {
+  const VectorXd sw = sr.rows.w.cwiseSqrt();
+  MatrixXd C = sw.asDiagonal() * sr.columns[i];
+  const double size = C.norm();
+  if (model_columns.cols() > 0) {
+    const MatrixXd Q = column_basis(sw.asDiagonal() * model_columns);
+    C -= Q * (Q.transpose() * C);
+  }
+  Eigen::JacobiSVD<MatrixXd> svd(C, Eigen::ComputeThinU);
+  int q = 0;
+  while (q < svd.singularValues().size() && svd.singularValues()[q] > 1e-8 * size) ++q;
+  return svd.matrixU().leftCols(q);
+}
+
+// Is the smaller of the two projected spaces (almost) inside the larger?
+bool near_collinear(const MatrixXd& Ua, const MatrixXd& Ub) {
+  if (Ua.cols() == 0 || Ub.cols() == 0) return false;
+  const MatrixXd M = Ua.cols() <= Ub.cols() ? MatrixXd(Ua.transpose() * Ub) : MatrixXd(Ub.transpose() * Ua);
+  Eigen::JacobiSVD<MatrixXd> svd(M);
+  return svd.singularValues().minCoeff() >= kNearAliasCorrelation;
+}
+
+// Whether the recording excites what tells a term from its base term: a temperature spread for the
+// terms that read the temperature, an input of known size apart from gravity (|f| not the same in
+// every segment, e.g. centripetal on a rate table) for a wrong local g. Other terms need nothing
+// beyond their own columns. Empty: excited; else what is missing.
+std::string missing_excitation(const GapInput& in, model::TermKind k) {
+  if (model::reads_temperature(k) && !has_temperature_spread(in.segments))
+    return "it reads the temperature and this recording has no temperature spread";
+  if (k == model::TermKind::kGravityError) {
+    double lo = 1e300, hi = 0;
+    for (const auto& s : in.segments) {
+      const double f = s.point.stimulus.specific_force.norm();
+      lo = std::min(lo, f);
+      hi = std::max(hi, f);
+    }
+    if (!(hi - lo > 0.01 * hi)) return "a wrong local g needs a reference input apart from gravity, and every segment here sees |f| = g";
+  }
+  return {};
+}
+
+// Is candidate b significant beyond the current model plus candidate a — can the data tell b from
+// a? Judged as any candidate is (candidate_tests.hpp): the largest p of the partial F test (shrunk
+// by the residuals' lag-1 correlation), Newey–West and the GLS test under the segments' time
+// covariance, below alpha, with BIC favouring b and a held-out gain beyond a. A bare F test on
+// independent segment means would take a slow bias wander that follows the temperature for a
+// temperature term. p is 1 when b adds no rank beyond them.
+struct Beyond {
+  double p = 1.0;
+  bool significant = false;
+};
+Beyond significant_beyond(const CandidateSearch& sr, const CurrentModel& model, const std::vector<Evaluation>& evals,
+                          std::size_t a, std::size_t b, double alpha) {
+  CurrentModel with_a;
+  with_a.terms = model.terms;
+  with_a.terms.push_back(sr.candidates[a].term);
+  with_a.columns = hstack(model.columns, sr.columns[a]);
+  with_a.fit = solve(with_a.columns, sr.rows.y, sr.rows.w);
+  if (!with_a.fit.lsq.ok()) return {};
+  with_a.heldout = evals[a].heldout;
+  const Evaluation e = evaluate(sr, with_a, gls_prepare(sr.covariance, sr.rows, with_a.columns), b);
+  const CandidateResult& r = e.result;
+  if (!r.evaluated || !std::isfinite(r.p_value)) return {};
+  return {r.p_value, r.p_value < alpha && r.delta_bic < 0 && r.heldout_improvement > 0};
+}
+
+// More basic: earlier in the vocabulary's order (model::TermKind: scale before its temperature
+// polynomial, cross-axis before the table angles, a wrong g last), and of one kind the lower order
+// (a temperature polynomial of order 1 before order 2, which nests it).
+bool more_basic(const model::TermSpec& a, const model::TermSpec& b) {
+  if (a.kind != b.kind) return static_cast<int>(a.kind) < static_cast<int>(b.kind);
+  return a.order < b.order;
+}
+
+// Among the candidates near-collinear with the best one on this design, the one the data can
+// support, stepping down from the most basic: a member the data favour (held-out gain > 0, BIC < 0)
+// and the recording excites is named unless the best one is excited and significant beyond it
+// (significant_beyond), in which case the next more basic member is tried; the best itself when
+// it is significant beyond every more basic member. So an order-1 temperature effect is named at
+// order 1 unless the order-2 part is significant, and scale unless its temperature polynomial is.
+// The others are listed as its aliases, with why and what experiment would separate them
+// (report.alias_resolution, the named candidate's aliases).
+std::size_t resolve_aliases(const CandidateSearch& sr, const CurrentModel& model, const std::vector<Evaluation>& evals,
+                            const std::vector<bool>& used, std::size_t best, double alpha, GapReport& rep) {
+  const MatrixXd Ub = projected_basis(sr, model.columns, best);
+  std::vector<std::size_t> group;
+  for (std::size_t j = 0; j < evals.size(); ++j) {
+    if (j == best || used[j] || !evals[j].result.evaluated) continue;
+    if (near_collinear(Ub, projected_basis(sr, model.columns, j))) group.push_back(j);
+  }
+  if (group.empty()) return best;
+  std::vector<std::size_t> order = group;
+  order.push_back(best);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return more_basic(sr.candidates[a].term, sr.candidates[b].term);
+  });
+  const std::string missing = missing_excitation(sr.input, sr.candidates[best].term.kind);
+  std::string why, beyond;
+  std::size_t named = best;
+  for (std::size_t m : order) {
+    if (m == best) break;
+    const auto& r = evals[m].result;
+    if (!(r.heldout_improvement > 0 && r.delta_bic < 0) || !missing_excitation(sr.input, sr.candidates[m].term.kind).empty())
+      continue;
+    const Beyond bt = missing.empty() ? significant_beyond(sr, model, evals, m, best, alpha) : Beyond{};
+    const double p = bt.p;
+    if (bt.significant) {
+      beyond += (beyond.empty() ? "" : ", ") + sr.candidates[m].name + " (p " + fmt(p, 2) + ")";
+      continue;
+    }
+    named = m;
+    why = sr.candidates[best].name + " (the largest held-out gain) is not named: " +
+          (missing.empty() ? "the data cannot tell it from " + sr.candidates[m].name + " (p " + fmt(p, 2) + " beyond it)"
+                           : missing) +
+          (beyond.empty() ? "" : " (it is significant beyond " + beyond + ")") + "; the more basic term " +
+          sr.candidates[m].name + " is named";
+    break;
+  }
+  if (named == best)
+    why = beyond.empty() ? sr.candidates[best].name + " is the base term of the group"
+                         : sr.candidates[best].name + " is significant beyond " + beyond;
+  std::ostringstream os;
+  os << sr.candidates[named].name << " stands for its near-collinear aliases on this design (";
+  std::vector<std::size_t> others = group;
+  if (named != best) {
+    others.erase(std::remove(others.begin(), others.end(), named), others.end());
+    others.insert(others.begin(), best);
+  }
+  for (std::size_t k = 0; k < others.size(); ++k) os << (k ? ", " : "") << sr.candidates[others[k]].name;
+  os << "): " << why << ". Separate by: ";
+  for (std::size_t k = 0; k < others.size(); ++k)
+    os << (k ? "; " : "") << separating_experiment(sr.candidates[named].term.kind, sr.candidates[others[k]].term.kind);
+  rep.alias_resolution.push_back(os.str());
+  for (auto& c : rep.candidates)
+    if (c.term == sr.candidates[named].name)
+      for (std::size_t o : others)
+        if (std::find(c.aliases.begin(), c.aliases.end(), sr.candidates[o].name) == c.aliases.end()) {
+          c.aliases.push_back(sr.candidates[o].name);
+          c.separate.push_back(separating_experiment(sr.candidates[named].term.kind, sr.candidates[o].term.kind));
+        }
+  return named;
 }
 
 // Forward selection on the held-out gap: add the best significant candidate, refit, until the
@@ -118,9 +291,9 @@ CurrentModel forward_select(const CandidateSearch& search, CurrentModel model, c
     const std::vector<Evaluation> evals =
         step == 1 ? first
                   : evaluate_all(search, model, gls_prepare(search.covariance, search.rows, model.columns), used);
-    const int best = best_candidate(evals, used, opt.alpha);
+    const int best = best_candidate(evals, used, opt.alpha, opt.family_rule);
     if (best < 0) break;
-    const auto b = static_cast<std::size_t>(best);
+    const std::size_t b = resolve_aliases(search, model, evals, used, static_cast<std::size_t>(best), opt.alpha, report);
     used[b] = true;
     model.terms.push_back(search.candidates[b].term);
     model.columns = hstack(model.columns, search.columns[b]);
@@ -176,9 +349,42 @@ std::string statement(const GapReport& rep, bool at_floor_as_given) {
   return st.str();
 }
 
+// Held out much worse than in-sample: say why. If the model were right, the held-out mean square
+// would be the held-out floor² (the row floor² plus the training fit's prediction variance) and
+// the in-sample one row floor²·(1 − p/n); a ratio within 1.5× of that is the small design, beyond
+// it the in-sample fit absorbs what it cannot predict across folds.
+constexpr double kHeldoutOverInSample = 3.0;
+void explain_heldout_ratio(const GapReport& rep, int rank_first, int rank_last, const Rows& rows,
+                           std::vector<std::string>& notes) {
+  const double n = static_cast<double>(rows.y.size());
+  const double row_floor = std::sqrt(rows.w.cwiseInverse().mean());
+  std::vector<std::size_t> steps = {0};
+  if (rep.steps.size() > 1) steps.push_back(rep.steps.size() - 1);
+  for (std::size_t k : steps) {
+    const Step& s = rep.steps[k];
+    if (!(s.heldout_rms > kHeldoutOverInSample * s.in_sample_rms)) continue;
+    const double p = k == 0 ? rank_first : rank_last;
+    const double expected = s.floor_rms / (row_floor * std::sqrt(std::max(1e-12, 1.0 - p / n)));
+    const double ratio = s.heldout_rms / s.in_sample_rms;
+    std::ostringstream os;
+    os << "held-out gap " << fmt(s.heldout_rms * rep.display_per_unit, 3) << " " << rep.display_unit << " is "
+       << fmt(ratio, 3) << "x the in-sample gap " << fmt(s.in_sample_rms * rep.display_per_unit, 3) << " "
+       << rep.display_unit << (k == 0 ? " (model as given)" : " (after " + s.added + ")") << ": ";
+    if (ratio <= 1.5 * expected)
+      os << "what noise gives on this small design (" << p << " parameters on " << n
+         << " rows: the fit takes up noise in-sample, the held-out predictions carry their own error; expected ratio "
+         << fmt(expected, 3) << ")";
+    else
+      os << "the fit absorbs in-sample what it cannot predict across folds (an effect aliased with the fitted terms "
+            "on the whole design, not within the training folds; expected ratio from noise "
+         << fmt(expected, 3) << ")";
+    notes.push_back(os.str());
+  }
+}
+
 }  // namespace
 
-void explain_gap(const GapInput& in, const Rows& rows, const GapOptions& opt, GapReport& rep) {
+void explain_gap(const GapInput& in, Rows& rows, const GapOptions& opt, GapReport& rep) {
   const std::vector<Candidate> candidates =
       opt.candidates.empty() ? default_candidates(in.spec.model, has_temperature_spread(in.segments)) : opt.candidates;
   CurrentModel as_given;
@@ -196,6 +402,15 @@ void explain_gap(const GapInput& in, const Rows& rows, const GapOptions& opt, Ga
     rep.message = "baseline fit failed: " + as_given.fit.lsq.message;
     return;
   }
+  // The folds that fit the design (the model's and every candidate's training folds).
+  CandidateSearchColumns fold_columns{as_given.columns, columns, {}, {}};
+  const int model_rank = rank_of(scale_rows(as_given.columns, rows.w));
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    fold_columns.adds_rank.push_back(columns[i].norm() > 0 &&
+                                     rank_of(scale_rows(hstack(as_given.columns, columns[i]), rows.w)) > model_rank);
+    fold_columns.names.push_back(candidates[i].name);
+  }
+  if (!choose_folds(in, opt, fold_columns, rows, rep)) return;
   as_given.heldout = cross_validate(as_given.columns, rows);
   const SegmentCovariance covariance = estimate_segment_covariance(in, rows, all_columns);
   const CandidateSearch search{in, rows, candidates, columns, covariance};
@@ -203,7 +418,7 @@ void explain_gap(const GapInput& in, const Rows& rows, const GapOptions& opt, Ga
   const bool at_floor_as_given = at_noise_floor(as_given.heldout);
   std::vector<Evaluation> evals = evaluate_all(search, as_given, gls_prepare(covariance, rows, as_given.columns),
                                                std::vector<bool>(candidates.size(), false));
-  mark_significant(evals, opt.alpha);
+  mark_significant(evals, opt.alpha, opt.family_rule);
   if (opt.check_aliases) candidate_aliases(search, as_given.columns, evals);
   // Noise and output-stage candidates (they cannot move the static means' fit; judged on the
   // raw samples — tests, levels and sizes in noise_stage.hpp).
@@ -216,6 +431,15 @@ void explain_gap(const GapInput& in, const Rows& rows, const GapOptions& opt, Ga
   rep.unexplained_over_floor = floor_rms > 0 ? rep.unexplained_heldout_rms / floor_rms : kNaN;
   rep.explanation = explanation(rep, opt.explain_fraction);
   rep.statement = statement(rep, at_floor_as_given);
+  if (!at_floor_as_given) assess_placement(in, rows, last.terms, last.columns, opt, rep);
+  // The first named term leads the ranking (it may be an alias's base term, not the top gain).
+  if (!rep.selected.empty()) {
+    const auto it = std::find_if(rep.candidates.begin(), rep.candidates.end(),
+                                 [&](const CandidateResult& c) { return c.term == rep.selected.front(); });
+    if (it != rep.candidates.end()) std::rotate(rep.candidates.begin(), it, it + 1);
+  }
+  if (!rep.fold_reason.empty()) rep.notes.push_back("held-out folds: " + rep.fold_reason);
+  explain_heldout_ratio(rep, rep.fit.lsq.rank, last.fit.rank, rows, rep.notes);
   rep.ok = true;
 }
 

@@ -334,3 +334,129 @@ TEST(GapSimBench, TemperatureSweepNamesTheTemperaturePolynomials) {
       break;
     }
 }
+
+// Issue 40 — folds that fit the design. A hand-held six-face session (faces near the axes, each
+// placed 5 times; magnitude form; model bias + scale): holding out a whole face leaves bias and
+// scale of its axis to the opposite face alone, so the orientation folds cannot determine the
+// held-out rows; the diagnosis re-folds (leave-one-segment-out), says why, names nothing on null
+// data and keeps the held-out gap near the floor. Forced orientation folds say how many rows
+// they could not predict.
+TEST(GapFolds, HandHeldFacesAreReFoldedAndTheReasonIsGiven) {
+  const estimation::ModelSpec bs = validation_model();
+  Planted truth;
+  truth.model = bs.model;
+  truth.theta = Eigen::VectorXd(6);
+  truth.theta << 0.05, -0.03, 0.02, 0.002, -0.001, 0.0007;
+  const GapInput in = magnitude_form(generate_hand_faces(5, 3.0, bs, truth, 11), physics::kStandardGravity);
+  const GapReport r = diagnose(in);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_NE(r.fold_by, FoldBy::kOrientation);
+  EXPECT_NE(r.fold_reason.find("orientation"), std::string::npos) << r.fold_reason;
+  EXPECT_TRUE(r.selected.empty()) << r.statement;
+  ASSERT_FALSE(r.steps.empty());
+  EXPECT_LT(r.steps[0].heldout_rms, 2.0 * r.steps[0].floor_rms);
+  GapOptions forced;
+  forced.fold_by = FoldBy::kOrientation;
+  const GapReport f = diagnose(in, forced);
+  EXPECT_EQ(f.fold_by, FoldBy::kOrientation);
+  EXPECT_GT(f.heldout_dropped, 0);
+  // One segment per face and a model that needs them all: no scheme can test it — refused, with
+  // the experiment that would make it testable.
+  const GapInput once = magnitude_form(generate_hand_faces(1, 3.0, bs, truth, 12), physics::kStandardGravity);
+  const GapReport n = diagnose(once);
+  EXPECT_FALSE(n.ok);
+  EXPECT_NE(n.message.find("repeat each orientation"), std::string::npos) << n.message;
+}
+
+// Issue 40 — aliases resolved by what the experiment excites, and the false discovery rate over
+// the candidate family: the design cases of `stend gap validate` (fold, alias, placement) at a
+// reduced, deterministic seed count; each planted case passes in >= 90 % of its runs and each
+// null case fails in <= 5 %.
+// The issue's 100 runs a case (~10 s): a null case may fail 5 times (<= 5 %), a planted one 10
+// (>= 90 %). With a handful of runs a null case would have to be perfect, which a 5 % rule does not
+// promise: the fold null case, "a term marked significant" counted as a failure, fails in 1.25 %
+// of 400 runs, 3 of them among the first 40 of this seed.
+TEST(GapDesignCases, FoldAliasAndPlacementCasesMeetTheirTargets) {
+  const std::vector<DesignCase> cases = run_design_cases(100, 3);
+  ASSERT_EQ(cases.size(), 6u);
+  for (const auto& c : cases) {
+    std::string named;
+    for (const auto& [n, k] : c.named) named += n + " " + std::to_string(k) + "; ";
+    EXPECT_TRUE(design_case_met(c)) << c.name << ": " << c.passed << "/" << c.runs << " — " << named;
+  }
+}
+
+// Issue 40 on real data: imucal's hand-placed six faces with bias + scale. The sensor terms leave
+// a gap of ~80x the floor; a rotation per face (placement) accounts for it, and the verdict says
+// so instead of "unexplained" (untestable here: 18 rows, 18 parameters; cross_axis lies within
+// the per-face rotations and the statement says so). Scale withheld (bias only): imucal's own
+// calibration (example_cal.json) has a 2.8 % z scale error *and* misalignments of 1-2 %; on six
+// segments neither scale nor cross_axis alone leaves a residual small enough to be significant
+// (the other stays in it), so nothing is named — but never a third term, and the placement
+// family, which acts across f only, is not significant: the gap left lies along f (the scale).
+TEST(GapRealData, ImucalHandPlacedFacesNamePlacementAndScaleWhenWithheld) {
+  const fs::path csv = stend::testing::shared_data("imucal/annotated_session.csv");
+  STEND_SKIP_IF_ABSENT(csv) << "; real-data check skipped";
+  const Recording rec = io::import_imucal_session(csv);
+  estimation::ModelSpec spec =
+      estimation::load_model_spec(stend::testing::source_path("diagnosis/examples/imucal_bias_scale.yaml"));
+  const GapReport r = diagnose(build_input(rec, spec));
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_TRUE(r.placement.assessed) << r.placement.reason;
+  EXPECT_TRUE(r.placement.significant || r.placement.consistent) << r.placement.reason;
+  EXPECT_NE(r.statement.find("PLACEMENT"), std::string::npos) << r.statement;
+  EXPECT_LT(r.placement.max_deg, 5.0);
+  EXPECT_NE(std::find(r.placement.aliases.begin(), r.placement.aliases.end(), "cross_axis"), r.placement.aliases.end());
+  EXPECT_EQ(r.statement.find("UNEXPLAINED"), std::string::npos) << r.statement;
+  spec.model.terms = {model::TermSpec{model::TermKind::kBias, 1, 25.0}};
+  const GapReport b = diagnose(build_input(rec, spec));
+  ASSERT_TRUE(b.ok) << b.message;
+  EXPECT_TRUE(b.selected.empty() || b.selected.front() == "scale" || b.selected.front() == "cross_axis")
+      << b.statement;
+  EXPECT_TRUE(b.placement.assessed) << b.placement.reason;
+  EXPECT_FALSE(b.placement.significant) << b.placement.reason;
+}
+
+// Issue 40 on real data: the hand-held MPU-6050 session (magnitude form). Scale withheld → scale
+// named first (its near-collinear aliases listed), the held-out gap after it near the floor;
+// cross-axis withheld (bias + scale) → cross_axis named, or not testable on these ten segments
+// (not assessable, or no row determined held out) — that project's own misalignments are
+// ~1e-5 rad, far below the floor, so nothing else may be named either. In every case a held-out
+// gap over 3x the in-sample one comes with its reason in the notes.
+TEST(GapRealData, Mpu6050HeldOutGapIsExplainedWhenFarAboveInSample) {
+  const fs::path csv = stend::testing::shared_data("mpu6050_multipos/calibration_session.csv");
+  STEND_SKIP_IF_ABSENT(csv);
+  const Recording rec = io::import_mpu6050_multipos(csv);
+  estimation::ModelSpec spec =
+      estimation::load_model_spec(stend::testing::source_path("diagnosis/examples/mpu6050_multipos_bias.yaml"));
+  const auto ratio_explained = [](const GapReport& r) {
+    for (const auto& s : r.steps)
+      if (s.heldout_rms > 3.0 * s.in_sample_rms) {
+        bool noted = false;
+        for (const auto& n : r.notes) noted = noted || n.find("x the in-sample gap") != std::string::npos;
+        if (!noted) return false;
+      }
+    return true;
+  };
+  const GapReport b = diagnose(build_input(rec, spec));
+  ASSERT_TRUE(b.ok) << b.message;
+  ASSERT_FALSE(b.selected.empty()) << b.statement;
+  EXPECT_EQ(b.selected.front(), "scale");
+  EXPECT_FALSE(b.alias_resolution.empty());
+  ASSERT_GE(b.steps.size(), 2u);
+  EXPECT_LT(b.steps[1].heldout_rms, 2.5 * b.steps[1].floor_rms);
+  EXPECT_TRUE(ratio_explained(b));
+  spec.model.terms.push_back(model::TermSpec{model::TermKind::kScale, 1, 25.0});
+  const GapReport s = diagnose(build_input(rec, spec));
+  if (!s.ok) {
+    EXPECT_NE(s.message.find("no fold scheme"), std::string::npos) << s.message;
+    return;
+  }
+  EXPECT_TRUE(ratio_explained(s));
+  bool cross_named = !s.selected.empty() && s.selected.front() == "cross_axis", cross_untestable = false;
+  for (const auto& c : s.candidates)
+    if (c.term == "cross_axis")
+      cross_untestable = !c.evaluated || c.reason.find("cannot be tested held out") != std::string::npos;
+  EXPECT_TRUE(cross_named || cross_untestable || s.at_floor) << s.statement;
+  EXPECT_TRUE(s.selected.empty() || cross_named) << s.statement;
+}

@@ -29,6 +29,7 @@ const ValidationReport& reduced_run() {
     o.seed = 2026;
     o.noise_seeds = 0;  // the noise-stage experiments have their own test
     o.noise_null_runs = 0;
+    o.design_runs = 0;  // the design cases have their own test (gap_test, GapDesignCases)
     return run_validation(o);
   }();
   return r;
@@ -145,6 +146,7 @@ TEST(GapValidate, OneMountCannotTellGravityFromScaleAndRadius) {
   o.rate_oov_runs = 0;
   o.noise_seeds = 0;
   o.noise_null_runs = 0;
+  o.design_runs = 0;
   o.only = {"gravity_error"};
   o.rate_accel_design = default_rate_design();
   o.seed = 7;

@@ -56,4 +56,21 @@ double projected_f_p_value(const Eigen::MatrixXd& Q, const Eigen::VectorXd& r, c
   return f_sf(F, q, static_cast<double>(dof));
 }
 
+std::vector<bool> benjamini_yekutieli(const std::vector<double>& p, double q) {
+  const std::size_t m = p.size();
+  std::vector<bool> reject(m, false);
+  if (m == 0) return reject;
+  double cm = 0;
+  for (std::size_t i = 1; i <= m; ++i) cm += 1.0 / static_cast<double>(i);
+  std::vector<double> sorted;
+  for (double v : p)
+    if (std::isfinite(v)) sorted.push_back(v);
+  std::sort(sorted.begin(), sorted.end());
+  double cut = -1;  // the largest p rejected
+  for (std::size_t k = 1; k <= sorted.size(); ++k)
+    if (sorted[k - 1] <= static_cast<double>(k) * q / (static_cast<double>(m) * cm)) cut = sorted[k - 1];
+  for (std::size_t i = 0; i < m; ++i) reject[i] = std::isfinite(p[i]) && p[i] <= cut;
+  return reject;
+}
+
 }  // namespace stend::stats

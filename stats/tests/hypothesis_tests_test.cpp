@@ -90,3 +90,16 @@ TEST(ProjectedFTest, EqualsTheNestedFTestOfOrdinaryFits) {
   EXPECT_NEAR(projected_f_p_value(Eigen::MatrixXd(n, 0), y, C, n),
               nested_f_test(y.squaredNorm(), rss_c, 2, n - 2).p_value, 1e-10);
 }
+
+// Benjamini–Yekutieli: m = 4, c(4) = 25/12; the step-up thresholds k·q/(m·c) at q = 0.05 are
+// 0.006, 0.012, 0.018, 0.024. The largest k under its threshold sets the cut (step-up: p_(1)
+// rides along), NaN is never rejected but counts in m.
+TEST(BenjaminiYekutieli, StepUpWithTheDependenceFactor) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(stend::stats::benjamini_yekutieli({0.007, 0.011, 0.5, nan}, 0.05),
+            (std::vector<bool>{true, true, false, false}));
+  EXPECT_EQ(stend::stats::benjamini_yekutieli({0.007, 0.5, 0.9, 0.9}, 0.05),
+            (std::vector<bool>{false, false, false, false}));
+  EXPECT_EQ(stend::stats::benjamini_yekutieli({0.0059}, 0.05), (std::vector<bool>{true}));
+  EXPECT_TRUE(stend::stats::benjamini_yekutieli({}, 0.05).empty());
+}

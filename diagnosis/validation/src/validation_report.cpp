@@ -86,20 +86,43 @@ void print_totals(std::ostream& os, const ValidationReport& r) {
                 "\ntop-1 (identifiable, >= 5x floor): %.3f   [target >= 0.9]\n"
                 "explainable held-out gap closed (>= 5x): %.3f   [target >= 0.8]\n"
                 "95%% interval coverage of the recovered size (>= 5x): %.3f\n"
-                "null runs: %d, false positives %d (rate %.3f)   [target <= 0.05]\n"
+                "null runs: %d, false positives (a term named or marked significant) %d (rate %.3f)   [target <= 0.05]\n"
                 "out of vocabulary: %d runs, %d said unexplained, %d named a term\n"
                 "time: %.1f s\n",
                 r.top1_at5, r.closed_at5, r.coverage, r.null_runs, r.null_false_positives, r.false_positive_rate,
                 r.oov_runs, r.oov_unexplained, r.oov_wrong_name, r.seconds);
   os << line;
   if (!r.null_named.empty()) {
-    os << "false positives named:";
+    os << "false positives:";
     for (const auto& [n, k] : r.null_named) os << " " << n << ":" << k;
     os << "\n";
   }
 }
 
+// The design cases: runs passed, and what was named first.
+void print_design_cases(std::ostream& os, const ValidationReport& r) {
+  if (r.design_cases.empty()) return;
+  os << "\ndesign cases (folds, aliases, placement): passed / runs — expected\n";
+  for (const auto& c : r.design_cases) {
+    os << "  " << c.name << ": " << c.passed << "/" << c.runs << " — " << c.expected << "\n    first named:";
+    for (const auto& [n, k] : c.named) os << " " << n << " " << k << ";";
+    os << "\n";
+  }
+}
+
 }  // namespace
+
+bool claims_an_effect(const GapReport& r) {
+  if (!r.selected.empty() || r.placement.significant) return true;
+  for (const auto& c : r.candidates)
+    if (!c.noise_stage && c.significant) return true;
+  return false;
+}
+
+bool design_case_met(const DesignCase& c) {
+  // Planted: the expected thing in >= 90 % of runs; null: a false positive in <= 5 %.
+  return c.runs > 0 && (c.null_case ? c.runs - c.passed <= 0.05 * c.runs : c.passed >= 0.9 * c.runs);
+}
 
 void print_validation(std::ostream& os, const ValidationReport& r) {
   os << "stend gap validate — segment-level generator; per experiment: the fitted model, the planted effect "
@@ -107,6 +130,7 @@ void print_validation(std::ostream& os, const ValidationReport& r) {
   print_planted(os, r);
   print_per_experiment(os, r);
   print_totals(os, r);
+  print_design_cases(os, r);
   noise_stage::print_validation(os, r.noise_stage, r.noise_seconds);
 }
 
@@ -149,6 +173,11 @@ std::string validation_json(const ValidationReport& r, int indent) {
                   {"oov_unexplained", r.oov_unexplained},
                   {"oov_wrong_name", r.oov_wrong_name},
                   {"seconds", r.seconds}};
+  json dc = json::array();
+  for (const auto& c : r.design_cases)
+    dc.push_back({{"case", c.name}, {"expected", c.expected}, {"null_case", c.null_case}, {"runs", c.runs},
+                  {"passed", c.passed}, {"first_named", c.named}, {"met", design_case_met(c)}});
+  j["design_cases"] = dc;
   noise_stage::add_json(j, r.noise_stage, r.noise_seconds);
   return j.dump(indent);
 }

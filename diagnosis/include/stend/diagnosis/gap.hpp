@@ -47,24 +47,47 @@ struct Candidate {
 std::vector<Candidate> default_candidates(const model::ErrorModel& model, bool temperature_spread = true);
 
 // How the held-out folds are formed: by the segments' orientation, temperature level or ramp
-// direction; auto = temperature with ≥ 3 levels, else orientation.
-enum class FoldBy { kAuto, kOrientation, kTemperature, kRamp };
+// direction, one segment each (leave-one-segment-out), or contiguous blocks of segments in time.
+// auto = the first scheme of (temperature with ≥ 3 levels, orientation, segment, time) whose
+// training folds determine every held-out row (see choose_folds in diagnosis/src/steps.hpp).
+enum class FoldBy { kAuto, kOrientation, kTemperature, kRamp, kSegment, kTime };
 // The one name table: the key (`stend gap --fold-by`) and the name the report and JSON use.
 struct FoldByName {
   FoldBy value;
   const char* key;
   const char* name;
 };
-inline constexpr std::array<FoldByName, 4> kFoldByNames = {{{FoldBy::kAuto, "auto", "auto"},
+inline constexpr std::array<FoldByName, 6> kFoldByNames = {{{FoldBy::kAuto, "auto", "auto"},
                                                            {FoldBy::kOrientation, "orientation", "orientation"},
                                                            {FoldBy::kTemperature, "temperature", "temperature"},
-                                                           {FoldBy::kRamp, "ramp", "ramp direction"}}};
+                                                           {FoldBy::kRamp, "ramp", "ramp direction"},
+                                                           {FoldBy::kSegment, "segment", "segment (leave-one-segment-out)"},
+                                                           {FoldBy::kTime, "time", "blocks in time"}}};
 const char* to_string(FoldBy f);  // the name
 std::optional<FoldBy> fold_by_from_key(std::string_view key);
 
+// The rule over the candidate family of a selection step (the unused candidates with a p value).
+// Benjamini–Yekutieli: false discovery rate at alpha under any dependence between the tests (with
+// no real effect, the chance of naming any). Bonferroni: p < alpha / m, the family-wise rate under
+// any dependence (the rule before issue 40; kept to measure what BY costs or gains).
+enum class FamilyRule { kBenjaminiYekutieli, kBonferroni };
+struct FamilyRuleName {
+  FamilyRule value;
+  const char* key;
+  const char* name;
+};
+inline constexpr std::array<FamilyRuleName, 2> kFamilyRuleNames = {
+    {{FamilyRule::kBenjaminiYekutieli, "by", "Benjamini-Yekutieli (FDR under any dependence)"},
+     {FamilyRule::kBonferroni, "bonferroni", "Bonferroni (family-wise)"}}};
+const char* to_string(FamilyRule r);  // the name
+std::optional<FamilyRule> family_rule_from_key(std::string_view key);
+
 struct GapOptions {
-  FoldBy fold_by = FoldBy::kAuto;   // auto: temperature when ≥ 3 levels, else orientation
-  double alpha = 0.05;              // family-wise level (Bonferroni over candidates), in (0, 1)
+  FoldBy fold_by = FoldBy::kAuto;   // auto: the first scheme whose folds fit the design (FoldBy)
+  // Level of the candidate family: false discovery rate by Benjamini–Yekutieli over the assessed
+  // candidates (valid under any dependence; with no real effect, the chance of naming any), in (0, 1).
+  double alpha = 0.05;
+  FamilyRule family_rule = FamilyRule::kBenjaminiYekutieli;
   int max_steps = 4;                // forward-selection steps (0: the candidates ranked, none added)
   // A candidate is named as *the* explanation only when it also closes at least this fraction of
   // the held-out squared gap above the floor; otherwise it is reported as partial. In [0, 1].
@@ -104,6 +127,8 @@ struct Step {
   int step = 0;
   std::string added;                // empty = the model as given (step 0)
   double heldout_rms = kNaN, in_sample_rms = kNaN, floor_rms = kNaN;
+  // Held-out rows scored (the others are not determined by their training folds) and all rows.
+  int heldout_rows = 0, rows = 0;
 };
 
 struct Place {
@@ -111,6 +136,30 @@ struct Place {
   double share = 0.0;  // of the squared gap
   double rms = 0.0;    // [unit]
   int rows = 0;
+};
+
+// Placement of hand-placed faces (nominal orientations, no table angles): each face's stated
+// orientation off by a small rotation, δf = δθ_face × f (3 parameters a face, the 2 across f seen),
+// fitted with the final model. Per-face parameters cannot be predicted from the other faces, so
+// held-out evidence is impossible by construction: the evidence is in-sample (partial F test when
+// degrees of freedom remain) and where the remaining gap lies (across the stated gravity
+// directions, where a rotation acts, or along them, where it cannot).
+struct PlacementResult {
+  bool assessed = false;
+  std::string reason;            // why not assessed / what the evidence is
+  int faces = 0, added_rank = 0, dof = 0;
+  double p_value = kNaN, delta_bic = kNaN;
+  double across_share = kNaN;    // share of the remaining squared gap across the stated gravity directions
+  double rms_deg = kNaN, max_deg = kNaN;  // fitted rotations across f [deg], RMS over faces and largest
+  std::string max_face;
+  std::vector<std::pair<std::string, double>> face_deg;  // per face [deg]
+  double in_sample_after = kNaN;  // in-sample RMS with placement [unit]
+  bool significant = false;       // partial F test at alpha, angles plausible
+  bool consistent = false;        // untestable (no dof) but the gap lies across f and the angles are plausible
+  // Sensor terms that lie within the per-face rotations on this design (with the model as given):
+  // the named ones, and cross_axis (a misalignment is one setting of the per-face rotations when
+  // no face is seen at two orientations). The data cannot tell them from a placement error.
+  std::vector<std::string> aliases;
 };
 
 struct GapReport {
@@ -129,6 +178,12 @@ struct GapReport {
   std::vector<Place> where;
   FoldBy fold_by = FoldBy::kAuto;  // the grouping the held-out folds used (never kAuto once diagnosed)
   int folds = 0;
+  std::string fold_reason;         // why this scheme: what the schemes tried before it left undetermined
+  int heldout_dropped = 0;         // rows of the model as given not predicted held out (aliased or extrapolated)
+  // Near-collinear candidates on this design (after projecting out the model), resolved: the term
+  // named stands for its aliases; why that one (what the experiment excites) and how to separate.
+  std::vector<std::string> alias_resolution;
+  PlacementResult placement;       // hand-placed faces (assessed when the model leaves a gap)
   std::vector<CandidateResult> candidates;  // ranked
   std::vector<Step> steps;
   std::vector<std::string> selected;        // terms added by the forward selection

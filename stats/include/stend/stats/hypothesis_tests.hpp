@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <limits>
+#include <vector>
 
 namespace stend::stats {
 
@@ -39,5 +40,12 @@ int numerical_rank(const Eigen::VectorXd& singular_values, double relative = 1e-
 // degree of freedom is left or the residual vanishes.
 double projected_f_p_value(const Eigen::MatrixXd& Q, const Eigen::VectorXd& r, const Eigen::MatrixXd& C,
                            Eigen::Index rows);
+
+// Benjamini–Yekutieli step-up over a family of m p values: with p_(1) ≤ … ≤ p_(m) and
+// c(m) = Σ_{i≤m} 1/i, reject the k smallest for the largest k with p_(k) ≤ k·q/(m·c(m)). Controls
+// the false discovery rate at q under ANY dependence between the tests (Benjamini & Yekutieli
+// 2001, Thm 1.3); when no effect is real the FDR is the probability of any rejection. NaN p
+// values count in m and are never rejected. Returns one flag per p value.
+std::vector<bool> benjamini_yekutieli(const std::vector<double>& p_values, double q);
 
 }  // namespace stend::stats

@@ -131,6 +131,8 @@ struct ValidateOptions {
   // `stend gap validate` uses --noise-seeds 10 --noise-null 40.
   int noise_seeds = 3;
   int noise_null_runs = 20;
+  // Design cases (fold, alias, placement): seeds per case; 0 = skip.
+  int design_runs = 10;
   // Called as the validation goes on with the share done (0…1) and the experiment in progress,
   // for a progress display (`stend gap validate`); empty: not called.
   std::function<void(double done, const std::string& stage)> on_progress;
@@ -207,6 +209,40 @@ Recording noise_stage_run(const NoisePlant& plant, std::uint64_t seed, NoiseRunT
 // All noise-stage experiments of `options` (noise_seeds per size, noise_null_runs).
 std::vector<NoiseStageValidation> run_noise_validation(const ValidateOptions& options);
 
+// Design cases (validate_design_cases.cpp): what the folds, the alias resolution and the placement
+// family must do on designs where the plain scheme fails. Each case runs `runs` seeds and counts
+// those that do the expected thing.
+//   fold     — a hand-held six-face session (faces near the axes, each placed 5 times with 3° hand
+//              tilts; magnitude form, model bias + scale): orientation folds leave bias and scale of
+//              an axis inseparable, the diagnosis must re-fold (and name nothing on null data);
+//   alias    — the static tumble at one warm temperature (die 38–43 °C: a spread, but the scale's
+//              temperature polynomial is near-collinear with scale), model bias only: planted scale,
+//              scale_temperature(order 1) or gravity_error must be named as scale (or as itself when
+//              the data separate it) with the others listed as its aliases;
+//   placement — six faces placed twice each, each face off by a planted rotation (1° RMS), model
+//              bias + scale: the placement family must be significant (null: not).
+struct DesignCase {
+  std::string name;         // "fold: hand-held faces, null"
+  std::string expected;     // what counts as passed
+  bool null_case = false;   // passed = no effect claimed (claims_an_effect; failures are false positives)
+  int runs = 0, passed = 0;
+  std::map<std::string, int> named;  // first term named → runs
+};
+
+// The six-face hand-held session of the fold case: faces near ±x, ±y, ±z (table positions), each
+// placed `repeats` times with a hand tilt of `tilt_deg` RMS per placement; orientation group =
+// face. Axes form (generate's truth) — magnitude_form() it for the hand-held case.
+GapInput generate_hand_faces(int repeats, double tilt_deg, const estimation::ModelSpec& fit_model, const Planted& truth,
+                             std::uint64_t seed);
+std::vector<DesignCase> run_design_cases(int runs, std::uint64_t seed, const GapOptions& gap = {});
+// A planted case passes in >= 90 % of its runs, a null case fails in <= 5 %.
+bool design_case_met(const DesignCase& c);
+// The report claims an unmodelled effect: a term named, a static candidate marked significant
+// (listed as SIGNIFICANT even when the selection stops at the floor), or the placement family
+// significant. A null run that does any of these is a false positive (issue 40: "report any
+// significant term"); the noise-stage candidates have their own null runs.
+bool claims_an_effect(const GapReport& r);
+
 struct ValidationReport {
   std::vector<CandidateValidation> candidates;
   std::map<std::string, std::map<std::string, int>> confusion;  // planted → named (≥ 5× floor)
@@ -220,6 +256,7 @@ struct ValidationReport {
   double floor_mps2 = 0; // averaged noise floor of a segment mean in the design
   std::vector<ExperimentValidation> experiments;  // per design; the totals above span them all
   double seconds = 0;
+  std::vector<DesignCase> design_cases;            // fold, alias, placement (empty when design_runs = 0)
   std::vector<NoiseStageValidation> noise_stage;  // empty when noise_seeds = 0
   double noise_seconds = 0;
 };
