@@ -359,8 +359,19 @@ void require_inputs_exist(const Inputs& inputs) {
 
 }  // namespace
 
+namespace {
+
+// The options say nothing contradictory (ImportOptions::IsValid), checked before anything reads them.
+void require_valid_options(const ImportOptions& options) {
+  std::string problem;
+  if (!options.IsValid(&problem)) throw std::invalid_argument("import options: " + problem);
+}
+
+}  // namespace
+
 const Format& detect_format(const Inputs& inputs, const ImportOptions& options) {
   if (inputs.empty()) throw std::invalid_argument("no input file");
+  require_valid_options(options);
   require_inputs_exist(inputs);
   if (!options.record_layout.empty()) return find_format("records");  // raw records say nothing of themselves
   for (const auto& f : formats()) {
@@ -378,8 +389,7 @@ namespace {
 
 // The format to read `inputs` with, after checking the options and the input count.
 const Format& choose_format(const Inputs& inputs, const std::string& format, const ImportOptions& options) {
-  std::string problem;
-  if (!options.IsValid(&problem)) throw std::invalid_argument("import options: " + problem);
+  require_valid_options(options);
   require_inputs_exist(inputs);
   const Format& f = format.empty() || format == "auto" ? detect_format(inputs, options) : find_format(format);
   if (inputs.empty() || inputs.size() > f.max_inputs)

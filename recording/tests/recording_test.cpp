@@ -637,7 +637,7 @@ TEST_F(RecordingTest, TickFlushesAfterOneSecondOfRunTime) {
 // same at any load.
 TEST_F(RecordingTest, FlushEverySamplesIgnoresTheClock) {
   const fs::path dir = root_ / "run";
-  RecordingWriterOptions options = kCsv;
+  stend::RecordingWriterOptions options = kCsv;
   options.flush_every_samples = 1000;
   RecordingWriter w(dir, make_header(), "", options);
   std::vector<ImuSample> s;
