@@ -4,7 +4,8 @@
 #
 #   bench/allantools_vs_stend.sh [RUN] [RUNS]   (RUN: a run folder; default: a fresh
 #                                               `stend run configs/long_static.yaml`; RUNS: 3)
-#   BUILD=build dir, ALLANTOOLS=allantools source dir (default ../shared/peers/allantools)
+#   BUILD=build dir, ALLANTOOLS=allantools source dir (default ../shared/peers/allantools),
+#   LIMITS_BENCH=limits program (default BUILD/bin/limits_bench)
 #
 # 1. Stend: `stend fit RUN --model estimators/allan/example/allan.yaml --out F` without the
 #    example's further deviations (read the run, octave OADEV of all six channels, EDF and
@@ -13,7 +14,9 @@
 #    allantools.oadev at the same octave τ, Greenhall EDF and chi-squared intervals), run with
 #    Debian's python3 (numpy, pandas, scipy: scripts/install-deps.sh);
 # 3. each is timed RUNS times, alternating, with /usr/bin/time; prints medians of wall and CPU
-#    time and peak RSS, and the largest relative ADEV difference over all channels and τ.
+#    time and peak RSS, and the largest relative ADEV difference over all channels and τ;
+# 4. closes with the same-run ratio to allantools and the limit: one memory pass over the samples
+#    (6 channels of doubles) at the bandwidth bench/limits_bench measures (bench/lib.sh).
 # Skips allantools with a message when ../shared/peers is absent (Stend is then timed alone).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -27,6 +30,8 @@ python=/usr/bin/python3
 
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+# shellcheck source=bench/lib.sh
+. "$root/bench/lib.sh"
 model=$tmp/allan.yaml
 grep -vE '^ *(deviations|tau):' "$root/estimators/allan/example/allan.yaml" >"$model"
 if [ -z "$run" ]; then
@@ -45,15 +50,6 @@ else
   echo "allantools (../shared/peers/allantools) or Debian's python3-numpy/pandas/scipy absent: timing Stend alone"
 fi
 
-timed() {  # appends "wall cpu maxrss_kb" to FILE
-  local file=$1
-  shift
-  /usr/bin/time -f "%e %U %S %M" -o "$tmp/t" "$@" >/dev/null 2>"$tmp/err" || { cat "$tmp/err" >&2; exit 1; }
-  awk '{ printf "%s %.3f %s\n", $1, $2 + $3, $4 }' "$tmp/t" >>"$file"
-}
-median() { sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
-column_median() { awk -v c="$2" '{ print $c }' "$1" | median; }
-
 for _ in $(seq "$runs"); do
   timed "$tmp/stend.times" "$stend" fit "$run" --model "$model" --out "$tmp/stend.json"
   [ -z "$peer" ] || timed "$tmp/allantools.times" "$python" "$root/bench/allantools_octave.py" \
@@ -69,8 +65,6 @@ for who in stend allantools; do
     "$(column_median "$tmp/$who.times" 2)" "$(column_median "$tmp/$who.times" 3 | awk '{ printf "%.1f", $1 / 1024 }')"
 done
 if [ -n "$peer" ]; then
-  awk -v sw="$(column_median "$tmp/stend.times" 1)" -v aw="$(column_median "$tmp/allantools.times" 1)" \
-    'BEGIN { printf "allantools / Stend wall: %.1fx\n", aw / sw }'
   "$python" - "$tmp/stend.json" "$tmp/allantools.json" <<'PY'
 import json, sys
 stend = json.load(open(sys.argv[1]))
@@ -87,3 +81,5 @@ for ch in channels:
 print(f"ADEV compared at {compared} (channel, tau) points: largest relative difference {worst:.2e}")
 PY
 fi
+[ -z "$peer" ] || peer_line allantools "$tmp/allantools.times" "$tmp/stend.times"
+if limits --memory; then memory_limit_line "$samples" "$(column_median "$tmp/stend.times" 1)"; fi

@@ -8,7 +8,9 @@
 # parts, the second half of the session first, --rate-hz 1000), mpu6050 (Fs,1000 header) and imutk
 # (accelerometer and gyro files, the gyro half a period later: interpolated)), then imports it into a
 # run folder under /usr/bin/time; prints samples, log size, wall [s], user + system CPU [s], peak RSS
-# [MiB]. STEND may be any build of `stend` (e.g. an older one).
+# [MiB]; then the limits (bench/limits_bench, LIMITS_BENCH; bench/lib.sh): reading the log's bytes
+# once and, for the text formats, parsing them at std::from_chars speed (no peer in ../shared/peers).
+# STEND may be any build of `stend` (e.g. an older one).
 #
 #   bench/import_log_bench.sh ulog|dataflash|rosbag1|db3|mcap|imucal|mpu6050|imutk [STEND] [SAMPLES]
 #                                                  (defaults: build/bin/stend 10000000)
@@ -17,8 +19,10 @@ cd "$(dirname "$0")/.."
 format=$1
 stend=${2:-build/bin/stend}
 n=${3:-10000000}
+root=$PWD
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+. bench/lib.sh
 
 extra=()
 case $format in
@@ -137,8 +141,15 @@ PY
 esac
 log_mb=$(du -cm "$tmp"/log* | tail -1 | cut -f1)
 
-/usr/bin/time -f "%e %U %S %M" -o "$tmp/time" "$stend" import "$tmp/log" "${extra[@]}" -o "$tmp/run" >/dev/null
-awk -v n="$n" -v log_mb="$log_mb" '{
-  printf "%-10s %8s %8s %8s %10s\n", "samples", "log_MB", "wall_s", "cpu_s", "peak_MiB"
-  printf "%-10s %8s %8s %8.2f %10.1f\n", n, log_mb, $1, $2 + $3, $4 / 1024
-}' "$tmp/time"
+timed "$tmp/stend.times" "$stend" import "$tmp/log" "${extra[@]}" -o "$tmp/run"
+read -r wall cpu rss <"$tmp/stend.times"
+printf "%-10s %8s %8s %8s %10s\n" samples log_MB wall_s cpu_s peak_MiB
+printf "%-10s %8s %8s %8.2f %10s\n" "$n" "$log_mb" "$wall" "$cpu" "$(echo "$rss" | mib)"
+no_peer "$format import"
+args=()
+for f in "$tmp"/log*; do args+=(--read "$f"); done
+case $format in imucal|mpu6050|imutk) args+=(--parse-file "$tmp/log") ;; esac  # text: parsing is a limit too
+if limits "${args[@]}" --passes 5; then
+  read_limit_line "$wall"
+  [ -z "$(limit parse_MBps)" ] || parse_limit_line "$(limit read_bytes)" "$wall"
+fi

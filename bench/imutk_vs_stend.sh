@@ -17,7 +17,9 @@
 #    write the results);
 # 5. prints medians of wall and CPU (user + system) time, peak RSS, the ratios, and one residual for
 #    both: RMS of |calibrated interval mean| − g over the static intervals Stend's fit used (the same
-#    intervals for both; stend_imutk_peer residual).
+#    intervals for both; stend_imutk_peer residual), then the same-run ratio and the limit: one
+#    memory pass over the samples (6 channels of doubles) at the bandwidth bench/limits_bench
+#    measures (LIMITS_BENCH, default BUILD/bin/limits_bench; bench/lib.sh).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${BUILD:-$root/build}
@@ -32,6 +34,8 @@ done
 
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+# shellcheck source=bench/lib.sh
+. "$root/bench/lib.sh"
 "$stend" run "$root/configs/multi_position_38.yaml" -o "$tmp" --name mp38 -q >/dev/null
 run=$tmp/mp38
 csv=$tmp/mp38_csv  # the same run in the CSV layout, for awk
@@ -54,22 +58,13 @@ else
   echo "IMU-TK not found at $imutk_src (../shared/peers/imu_tk): timing Stend alone"
 fi
 
-# One timed run: appends "wall cpu maxrss_kb" to FILE.
-timed() {
-  local file=$1
-  shift
-  /usr/bin/time -f "%e %U %S %M" -o "$tmp/t" "$@" >/dev/null 2>&1
-  awk '{ printf "%s %.3f %s\n", $1, $2 + $3, $4 }' "$tmp/t" >>"$file"
-}
-median() { sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
-column_median() { awk -v c="$2" '{ print $c }' "$1" | median; }
-
 for _ in $(seq "$runs"); do
   timed "$tmp/stend.times" "$stend" fit "$run" --model "$model" --out "$tmp/stend.json"
   [ -z "$imutk" ] || timed "$tmp/imutk.times" "$imutk" "$tmp/acc.txt" "$tmp/gyro.txt" "$gravity" 2 0 1 "$tmp/imutk_out"
 done
 
-echo "record: configs/multi_position_38.yaml, $(($(wc -l <"$csv/imu.csv") - 1)) samples; $runs runs each, alternating"
+samples=$(($(wc -l <"$csv/imu.csv") - 1))
+echo "record: configs/multi_position_38.yaml, $samples samples; $runs runs each, alternating"
 echo "load average: $(cut -d' ' -f1-3 /proc/loadavg), $(nproc) cores"
 printf '%-8s %12s %12s %14s\n' "" "wall med [s]" "CPU med [s]" "peak RSS [MiB]"
 for who in stend imutk; do
@@ -78,8 +73,7 @@ for who in stend imutk; do
     "$(column_median "$tmp/$who.times" 2)" "$(column_median "$tmp/$who.times" 3 | awk '{ printf "%.1f", $1 / 1024 }')"
 done
 if [ -n "$imutk" ]; then
-  awk -v sw="$(column_median "$tmp/stend.times" 1)" -v iw="$(column_median "$tmp/imutk.times" 1)" \
-    -v sc="$(column_median "$tmp/stend.times" 2)" -v ic="$(column_median "$tmp/imutk.times" 2)" \
-    'BEGIN { printf "IMU-TK / Stend: wall %.2fx, CPU %.2fx\n", iw / sw, ic / sc }'
   "$peer" residual "$run" "$tmp/stend.json" "$tmp/imutk_out"
+  peer_line IMU-TK "$tmp/imutk.times" "$tmp/stend.times"
 fi
+if limits --memory; then memory_limit_line "$samples" "$(column_median "$tmp/stend.times" 1)"; fi

@@ -15,7 +15,8 @@
 #    --out WORK/fit.json` three times each with /usr/bin/time (medians of wall, CPU, peak RSS);
 # 3. runs bench/allantools_vs_stend.sh on the same run when that script exists
 #    (`BUILD=… bench/allantools_vs_stend.sh RUN`), otherwise says it is skipped;
-# 4. prints the table.
+# 4. prints the table, and the limits of fit (bench/limits_bench, LIMITS_BENCH; bench/lib.sh): one
+#    memory pass over the samples, and reading the run's bytes once (the Allan peer: step 3).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=$(cd "${1:-$root/build}" && pwd)
@@ -41,7 +42,11 @@ duration_s=$(awk -v n="$samples" -v r="$rate_hz" 'BEGIN { printf "%.3f", n / r }
 sed "s/duration_s: 100000,/duration_s: $duration_s,/" "$config" >"$work/experiment.yaml"
 grep -q "duration_s: $duration_s," "$work/experiment.yaml" || { echo "$config: no 'duration_s: 100000,' to replace" >&2; exit 1; }
 
-# One timed command: appends "wall cpu maxrss_kb" to FILE; its output goes to FILE.out.
+tmp=$work
+# shellcheck source=bench/lib.sh
+. "$root/bench/lib.sh"
+# One timed command: appends "wall cpu maxrss_kb" to FILE; its output goes to FILE.out (this
+# script's own timed: lib.sh's drops the output).
 timed() {
   local file=$1
   shift
@@ -52,9 +57,6 @@ timed() {
   fi
   awk '{ printf "%s %.3f %s\n", $1, $2 + $3, $4 }' "$work/t" >>"$file"
 }
-median() { sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
-column_median() { awk -v c="$2" '{ print $c }' "$1" | median; }
-mib() { awk '{ printf "%.1f", $1 / 1024 }'; }
 
 echo "recording $samples samples ($duration_s s at $rate_hz Hz) into $work/run …"
 timed "$work/write.times" "$stend" run "$work/experiment.yaml" -o "$work" --name run -q
@@ -86,6 +88,14 @@ for what in info fit; do
   printf '%-34s %10s %10s %12s\n' "$label" "$(column_median "$work/$what.times" 1)" \
     "$(column_median "$work/$what.times" 2)" "$(column_median "$work/$what.times" 3 | mib) MiB"
 done
+
+fit_wall=$(column_median "$work/fit.times" 1)
+files=()
+while IFS= read -r f; do files+=(--read "$f"); done < <(find "$run" -type f)
+if limits --memory "${files[@]}" --passes 5; then
+  memory_limit_line "$recorded" "$fit_wall" "stend fit"
+  read_limit_line "$fit_wall" "stend fit"
+fi
 
 echo
 if [ -x "$peer" ] || [ -f "$peer" ]; then

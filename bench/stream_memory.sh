@@ -3,8 +3,10 @@
 # (configs/six_position.yaml, 200 Hz) with each position recorded SHORT_S and LONG_S seconds, then
 # `stend info` (loading only), `stend fit` (batch_lsq, bias and scale) and `stend gap` on each run,
 # under /usr/bin/time -v. Prints one line per command and length: samples, wall time [s], peak RSS
-# [MiB]. The analyses read the samples through the run store's SampleSource, so their own memory
-# does not grow with the record; what grows is the store's (a CSV run folder is read whole).
+# [MiB]; then the limit (bench/limits_bench, LIMITS_BENCH; bench/lib.sh): one memory pass over the
+# long record's samples, beside fit and gap. The analyses read the samples through the run store's
+# SampleSource, so their own memory does not grow with the record; what grows is the store's (a CSV
+# run folder is read whole).
 #
 #   bench/stream_memory.sh [STEND] [SHORT_S] [LONG_S]    (defaults: build/bin/stend 20 2000)
 set -euo pipefail
@@ -13,8 +15,10 @@ stend=${1:-build/bin/stend}
 short_s=${2:-20}
 long_s=${3:-2000}
 model=diagnosis/examples/bias_scale.yaml
+root=$PWD
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+. bench/lib.sh
 
 peak() {  # command… → "wall_s peak_MiB"
   /usr/bin/time -v "$@" >"$tmp/out" 2>"$tmp/time" || { cat "$tmp/out" "$tmp/time" >&2; exit 1; }
@@ -36,5 +40,10 @@ for record_s in "$short_s" "$long_s"; do
     esac
     read -r wall rss < <(peak "$stend" "${args[@]}")
     printf '%-6s %10d %8s %10s %10s\n' "$cmd" "$samples" "$record_s" "$wall" "$rss"
+    echo "$wall" >"$tmp/$cmd.wall"  # the long record's, kept for the limit
   done
 done
+no_peer "fit and gap"
+if limits --memory; then
+  for cmd in fit gap; do memory_limit_line "$samples" "$(cat "$tmp/$cmd.wall")" "stend $cmd"; done
+fi

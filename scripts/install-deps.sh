@@ -11,7 +11,7 @@ packages=(
   librosbag-storage-dev librosbag-dev lz4  # io tests: ROS 1 bags written with rosbag::Bag; lz4 MCAP chunks (npm packages: install-node-test-deps.sh)
   zlib1g-dev chromium  # reporting: PNG check of report screenshots; headless-browser test of the reports
   octave  # reporting: octave-cli loads the MATLAB export in a test (~1 min to install, no recommends)
-  python3-numpy python3-pandas python3-scipy  # bench: allantools (the Allan peer, ../shared/peers) on Debian's numpy, pandas, scipy
+  python3-numpy python3-pandas python3-scipy  # bench: allantools (the Allan peer, ../shared/peers) on Debian's numpy, pandas, scipy; pandas + h5py: the CSV import peer (bench/pandas_import.py)
   python3-rosbag  # bench: import_log_bench.sh writes a long ROS 1 bag
   libpq-dev  # reporting: the PostgreSQL results store (libpq)
   postgresql slurm-wlm munge  # tests and bench: a real PostgreSQL cluster and a single-node Slurm started in a temp dir (docs/lab-scale.md)
