@@ -20,14 +20,14 @@ namespace detail {
 
 namespace {
 
-// Whether the intervals hold no gyroscope readings: rows of a table of means (held values), or gyro
-// samples that do not spread at all (a recording without a gyroscope). Intervals whose spread is
-// simply not known (NaN) hold readings.
+// Whether the intervals hold no gyroscope readings: rows of a table of means (held values), a
+// recording without a gyroscope (its values NaN), or gyro samples that do not spread at all.
+// Intervals whose spread alone is not known (NaN) hold readings.
 bool no_gyro_readings(const std::vector<processing::StaticPoint>& ivs) {
   if (ivs.empty()) return false;
   return std::all_of(ivs.begin(), ivs.end(), [](const processing::StaticPoint& p) {
     const processing::AxesValue& g = p.gyro;
-    return p.held.has_value() ||
+    return p.held.has_value() || !g.mean.allFinite() ||
            (g.sample_std.allFinite() && (g.sample_std.array() <= 1e-12 * g.mean.array().abs()).all());
   });
 }
@@ -38,8 +38,8 @@ void estimate_gyro_bias(CalibrationResult& r, const CalibrationOptions& o) {
   r.gyro_bias.clear();
   if (!o.estimate_gyro_bias) return;
   if (no_gyro_readings(r.intervals)) {
-    r.notes.push_back("gyroscope bias not estimated: the intervals' gyro samples do not spread at all (no "
-                      "gyroscope readings, or a table of means), so there is nothing to average");
+    r.notes.push_back("gyroscope bias not estimated: the intervals hold no gyroscope readings (no gyroscope, a "
+                      "table of means, or samples that do not spread at all), so there is nothing to average");
     return;
   }
   const std::size_t n = r.intervals.size();

@@ -233,7 +233,7 @@ CalibrationResult known_impl(const std::vector<processing::StaticPoint>& interva
   };
   if (truth_f.size() != intervals.size() || (off.count() > 0 && angles.size() != intervals.size()))
     return done("known orientations: one truth vector (or encoder angle pair) per static interval is needed");
-  if (!finite_intervals(intervals)) return done("non-finite (NaN) readings in a static interval");
+  if (!finite_accel_means(intervals)) return done("non-finite (NaN) readings in a static interval");
   if (3 * n < p + 1)
     return done(fmt::format("too few static intervals: {} found, need at least {} (3 equations each) for {} "
                             "parameters plus noise",

@@ -124,7 +124,7 @@ CalibrationResult fit_unknown(const std::vector<processing::StaticPoint>& interv
     norm_rms(r);
     return r;
   }
-  if (!finite_intervals(intervals)) {
+  if (!finite_accel_means(intervals)) {
     fail_all(r, "non-finite (NaN) readings in a static interval");
     norm_rms(r);
     return r;

@@ -158,7 +158,7 @@ CalibrationResult calibrate_gyro_rate_table(const std::vector<processing::Static
   };
   if (truth_w.size() != intervals.size() || truth_f.size() != intervals.size())
     return done("rate table: one truth rate and specific force per interval is needed");
-  if (!finite_intervals(intervals)) return done("non-finite (NaN) readings in an interval");
+  if (!finite_gyro_means(intervals)) return done("non-finite (NaN) readings in an interval");
   for (std::size_t k = 0; k < truth_w.size(); ++k) {
     if (!truth_w[k].allFinite()) return done("non-finite rate truth (w_*_radps) in an interval");
     if (go.estimate_g_sensitivity && !truth_f[k].allFinite())

@@ -326,10 +326,16 @@ std::string HeldWeights::text() const {
   return {};
 }
 
+bool finite_accel_means(const std::vector<processing::StaticPoint>& ivs) {
+  return std::all_of(ivs.begin(), ivs.end(), [](const processing::StaticPoint& iv) { return iv.accel.mean.allFinite(); });
+}
+
+bool finite_gyro_means(const std::vector<processing::StaticPoint>& ivs) {
+  return std::all_of(ivs.begin(), ivs.end(), [](const processing::StaticPoint& iv) { return iv.gyro.mean.allFinite(); });
+}
+
 bool finite_intervals(const std::vector<processing::StaticPoint>& ivs) {
-  for (const auto& iv : ivs)
-    if (!iv.accel.mean.allFinite() || !iv.gyro.mean.allFinite()) return false;
-  return true;
+  return finite_accel_means(ivs) && finite_gyro_means(ivs);
 }
 
 // Per-axis RMS of reading − truth, raw and calibrated (known orientations, rate table).

@@ -82,8 +82,12 @@ void solve(ceres::Problem& problem, std::vector<double>& x, const std::vector<in
 // samples), at least 1 (1 when nothing is known). The a-priori noise of a mean is σ/√N times this.
 double noise_correlation_factor(const std::vector<processing::StaticPoint>& points, bool gyro);
 
-// Whether every interval's accelerometer and gyro means are finite.
+// Whether every interval's accelerometer and gyro means are finite (a method reading both).
 bool finite_intervals(const std::vector<processing::StaticPoint>& intervals);
+// Whether every interval's mean of one instrument is finite (a method reading that one alone: the
+// other may be absent from the recording, its values NaN).
+bool finite_accel_means(const std::vector<processing::StaticPoint>& intervals);
+bool finite_gyro_means(const std::vector<processing::StaticPoint>& intervals);
 
 // Whether the noise of the intervals' means of the instrument (gyro or accelerometer) is unknown:
 // no interval's standard error is a number above rounding (1e-12 of the mean) — a table of means
