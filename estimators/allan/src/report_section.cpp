@@ -154,22 +154,17 @@ bool has_channels(const json& al, const std::string& inst) {
 estimation::Paragraph kalibr_paragraph(const json& al) {
   const json& kb = al["kalibr"];
   std::string text = "Kalibr:";
-  if (has_channels(al, "accelerometer"))
-    text += fmt::format(" accelerometer_noise_density {}{}, accelerometer_random_walk {}{},",
-                        g3(num(kb, "accelerometer_noise_density")),
-                        kb.value("accelerometer_noise_identified", false) ? "" : " (not identified)",
-                        g3(num(kb, "accelerometer_random_walk")),
-                        kb.value("accelerometer_random_walk_is_upper_bound", false) ? " (UPPER BOUND)" : "");
-  else
-    text += " no accelerometer in the recording,";
-  if (has_channels(al, "gyroscope"))
-    text += fmt::format(" gyroscope_noise_density {}{}, gyroscope_random_walk {}{},",
-                        g3(num(kb, "gyroscope_noise_density")),
-                        kb.value("gyroscope_noise_identified", false) ? "" : " (not identified)",
-                        g3(num(kb, "gyroscope_random_walk")),
-                        kb.value("gyroscope_random_walk_is_upper_bound", false) ? " (UPPER BOUND)" : "");
-  else
-    text += " no gyroscope in the recording,";
+  for (const std::string instrument : {"accelerometer", "gyroscope"}) {
+    if (!has_channels(al, instrument)) {
+      text += " no " + instrument + " in the recording,";
+      continue;
+    }
+    text += fmt::format(" {0}_noise_density {1}{2}, {0}_random_walk {3}{4},", instrument,
+                        g3(num(kb, (instrument + "_noise_density").c_str())),
+                        kb.value(instrument + "_noise_identified", false) ? "" : " (not identified)",
+                        g3(num(kb, (instrument + "_random_walk").c_str())),
+                        kb.value(instrument + "_random_walk_is_upper_bound", false) ? " (UPPER BOUND)" : "");
+  }
   text += fmt::format(" update_rate {} Hz (", g(num(kb, "update_rate")));
   return {{Span{text}, Span{"stend export RUN --to kalibr", Span::Kind::kCode}, Span{")."}}};
 }
