@@ -327,6 +327,12 @@ std::string statement(const GapReport& rep, bool at_floor_as_given) {
     st << "The model as given is at the noise floor on held-out data (" << fmt(rep.steps[0].heldout_rms * dpu, 3)
        << " " << rep.display_unit << " held-out RMS vs " << fmt(rep.steps[0].floor_rms * dpu, 3)
        << " expected from noise): no gap to explain.";
+    std::string significant;
+    for (const CandidateResult& c : rep.candidates)
+      if (c.significant && c.evaluated && !c.noise_stage) significant += (significant.empty() ? "" : ", ") + c.term;
+    if (!significant.empty())
+      st << " Significant by their own tests: " << significant
+         << "; what they would add is within the noise of held-out prediction, so none is named.";
     return st.str();
   }
   if (rep.selected.empty()) {
