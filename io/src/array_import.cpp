@@ -83,6 +83,7 @@ std::vector<ColumnRef> resolve(const std::vector<const ArrayFile*>& files, const
   }
   if (auto found = find_array(files, c.name)) {
     const auto& [f, a] = *found;
+    if (a.cols == 0 || a.rows == 0) return fail("'" + c.name + "' is " + shape(a) + ": it holds no values");
     if (a.cols == 1) return {{f, a, 0}};
     if (!whole) return fail("'" + c.name + "' is " + shape(a) + "; name one column as " + c.name + ":K (0-based)");
     std::vector<ColumnRef> cols;

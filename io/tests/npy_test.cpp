@@ -372,6 +372,26 @@ TEST(NpyDamage, AnArrayStendDoesNotReadIsListedAsSuchNotRefused) {
   EXPECT_THROW(f->open("z"), ImportError);
 }
 
+// Fuzz finding (import_npy_named): an array named for a sensor with no columns or no rows was taken
+// as a triad or column of nothing and indexed as one.
+TEST(NpyDamage, ANamedArrayWithoutValuesIsRefusedByName) {
+  TempDir dir("npy-empty");
+  write_text(dir / "A.npy", npy_bytes("{'descr': '<f8', 'fortran_order': False, 'shape': (40, 3), }", f8_values(120)));
+  for (const char* shape : {"(40, 0)", "(0, 3)", "(0,)"}) {
+    SCOPED_TRACE(shape);
+    write_text(dir / "T.npy", npy_bytes(std::string("{'descr': '<f8', 'fortran_order': False, 'shape': ") + shape + ", }", ""));
+    for (const char* role : {"temperature", "time", "gyro"}) {
+      ImportOptions o;
+      o.set("accel", "A");
+      o.set(role, "T");
+      o.set("rate_hz", "100");
+      const ImportError e = import_error([&] { open_dataset({dir / "A.npy", dir / "T.npy"}, "npy", o); });
+      EXPECT_NE(std::string(e.what()).find("'T' is "), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("it holds no values"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST_F(NumpyFiles, DamagedArchivesAreRefusedAtTheirByteOffsets) {
   const std::string good = read_text(path("deflated.npz"));
   const auto members = io::detail::zip_members(io::detail::BinaryReader(path("deflated.npz")));
