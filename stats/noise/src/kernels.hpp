@@ -37,24 +37,23 @@ inline void store8(double* p, const v8d& v) { std::memcpy(p, &v, sizeof v); }
 // (pairwise, independent of carry).
 STEND_NOISE_KERNEL
 inline double prefix_scan8(const double* y, double* x, std::size_t n, double carry, double offset) {
-  const v8d zero = {};
-  v8d c = zero + carry;
-  v8d total = zero;
-  for (std::size_t i = 0; i < n; i += 8) {
-    v8d v;
-    load8(v, y + i);
+  // 4-wide: an 8-wide generic vector's cross-half shuffles went through the stack on AVX2.
+  using v4d = double __attribute__((vector_size(32)));
+  const v4d zero = {};
+  v4d c = zero + carry;
+  v4d total = zero;
+  for (std::size_t i = 0; i < n; i += 4) {
+    v4d v;
+    std::memcpy(&v, y + i, sizeof v);
     v -= offset;
     total += v;
-    v += __builtin_shufflevector(zero, v, 0, 8, 9, 10, 11, 12, 13, 14);
-    v += __builtin_shufflevector(zero, v, 0, 1, 8, 9, 10, 11, 12, 13);
-    v += __builtin_shufflevector(zero, v, 0, 1, 2, 3, 8, 9, 10, 11);
+    v += __builtin_shufflevector(zero, v, 0, 4, 5, 6);
+    v += __builtin_shufflevector(zero, v, 0, 1, 4, 5);
     v += c;
-    store8(x + i, v);
-    c = __builtin_shufflevector(v, v, 7, 7, 7, 7, 7, 7, 7, 7);
+    std::memcpy(x + i, &v, sizeof v);
+    c = __builtin_shufflevector(v, v, 3, 3, 3, 3);
   }
-  const double a = (total[0] + total[1]) + (total[2] + total[3]);
-  const double b = (total[4] + total[5]) + (total[6] + total[7]);
-  return a + b;
+  return (total[0] + total[1]) + (total[2] + total[3]);
 }
 
 // For g < G: out[g] += Σ_{i<n} (c[i] − 2·lag[g][i] + lag[g+1][i])², where lag[g] points at
@@ -63,27 +62,30 @@ inline double prefix_scan8(const double* y, double* x, std::size_t n, double car
 template <int G>
 STEND_NOISE_KERNEL inline void fused_octaves(const double* c, const double* const* lag,
                                              std::size_t n, double* out) {
-  v8d acc[G];
-  for (int g = 0; g < G; ++g) acc[g] = v8d{};
+  // 4-wide: G accumulators and the temporaries stay in the 16 AVX2 registers (8-wide ones spilled
+  // to the stack for G = 8).
+  using v4d = double __attribute__((vector_size(32)));
+  v4d acc[G];
+  for (int g = 0; g < G; ++g) acc[g] = v4d{};
   std::size_t i = 0;
-  for (; i + 8 <= n; i += 8) {
-    v8d cv, a;
-    load8(cv, c + i);
-    load8(a, lag[0] + i);
-    v8d u = cv - a;
+  for (; i + 4 <= n; i += 4) {
+    v4d cv, a;
+    std::memcpy(&cv, c + i, sizeof cv);
+    std::memcpy(&a, lag[0] + i, sizeof a);
+    v4d u = cv - a;
 #pragma GCC unroll 8
     for (int g = 0; g < G; ++g) {
-      v8d b;
-      load8(b, lag[g + 1] + i);
-      const v8d w = cv - b;
-      const v8d d = 2.0 * u - w;
+      v4d b;
+      std::memcpy(&b, lag[g + 1] + i, sizeof b);
+      const v4d w = cv - b;
+      const v4d d = 2.0 * u - w;
       acc[g] += d * d;
       u = w;
     }
   }
   for (int g = 0; g < G; ++g) {
-    const v8d& v = acc[g];
-    double s = ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
+    const v4d& v = acc[g];
+    double s = (v[0] + v[1]) + (v[2] + v[3]);
     for (std::size_t j = i; j < n; ++j) {
       const double d = c[j] - 2.0 * lag[g][j] + lag[g + 1][j];
       s += d * d;

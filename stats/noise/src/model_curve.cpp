@@ -49,9 +49,10 @@ double WhiteTerm::operator()(double m) const {
   return fs_ * s / (2.0 * m * m);
 }
 
+double gm_basis(double tau, double tc) { return tc > 0.0 ? model::allan::gauss_markov(1.0, tc, tau) : 0.0; }
+
 std::array<double, kTerms> basis(double tau, double m, const WhiteTerm& white, double tc) {
-  return {3.0 / (tau * tau), white(m), kFlickerFloor * kFlickerFloor, tau / 3.0, tau * tau / 2.0,
-          tc > 0.0 ? model::allan::gauss_markov(1.0, tc, tau) : 0.0};
+  return {3.0 / (tau * tau), white(m), kFlickerFloor * kFlickerFloor, tau / 3.0, tau * tau / 2.0, gm_basis(tau, tc)};
 }
 
 }  // namespace stend::noise

@@ -39,5 +39,7 @@ class WhiteTerm {
 // The six terms' AVAR per unit coefficient² at τ [s], m samples per cluster, Gauss–Markov τc [s]
 // (0: no G).
 std::array<double, kTerms> basis(double tau, double m, const WhiteTerm& white, double tc);
+// Its last element alone: G's AVAR per unit σ_G² at τ [s] for τc [s] (0: no G).
+double gm_basis(double tau, double tc);
 
 }  // namespace stend::noise

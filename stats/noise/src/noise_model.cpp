@@ -46,7 +46,23 @@ struct FitPoint {
 struct FitSet {
   std::vector<FitPoint> pts;
   Eigen::MatrixXd L;
-  Eigen::MatrixXd whiten(Eigen::MatrixXd x) const { return L.triangularView<Eigen::Lower>().solve(x); }
+  // x ← L⁻¹x, column by column (forward substitution: the sizes are a few tens of points, where a
+  // plain loop beats a blocked solver).
+  void whiten_in_place(Eigen::MatrixXd& x) const {
+    const Eigen::Index n = L.rows();
+    for (Eigen::Index c = 0; c < x.cols(); ++c) {
+      double* col = x.col(c).data();
+      for (Eigen::Index j = 0; j < n; ++j) {
+        const double y = col[j] /= L(j, j);
+        const double* l = L.col(j).data();
+        for (Eigen::Index i = j + 1; i < n; ++i) col[i] -= l[i] * y;
+      }
+    }
+  }
+  Eigen::MatrixXd whiten(Eigen::MatrixXd x) const {
+    whiten_in_place(x);
+    return x;
+  }
 };
 
 // Correlation of two points' AVAR estimates: the mean of the correlations for each point's noise
@@ -66,8 +82,14 @@ void set_correlation(FitSet& set, double n_samples) {
   set.L = stats::shrunk_cholesky(std::move(R));
 }
 
+// The basis of every term at each point, G at τc.
 void set_basis(FitSet& set, const WhiteTerm& white, double tc) {
   for (auto& p : set.pts) p.a = basis(p.tau, p.m, white, tc);
+}
+
+// G's column at τc (0: no G); the other terms do not depend on τc.
+void set_tc(FitSet& set, double tc) {
+  for (auto& p : set.pts) p.a[kGm] = gm_basis(p.tau, tc);
 }
 
 // One candidate model: the terms in `mask`, τc for G.
@@ -117,27 +139,27 @@ Candidate fit_terms(const FitSet& set, unsigned mask, double tc) {
     if (mask & (1u << j)) cols.push_back(j);
   const int n = static_cast<int>(pts.size()), k = static_cast<int>(cols.size());
   if (k == 0 || k > n) return cand;
-  Eigen::MatrixXd A(n, k);
-  Eigen::VectorXd b(n), scale(k);
+  Eigen::MatrixXd Ab(n, k + 1);  // [A | b], whitened together
+  Eigen::VectorXd scale(k);
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(n, k);
+  qr.setThreshold(1e-12);
   std::vector<double> v(pts.size());
   for (int i = 0; i < n; ++i) v[i] = pts[i].avar;
   for (int iter = 0; iter < 12; ++iter) {
     for (int i = 0; i < n; ++i) {
       const double w = std::sqrt(pts[i].edf / 2.0) / v[i];
-      for (int q = 0; q < k; ++q) A(i, q) = w * pts[i].a[cols[q]];
-      b(i) = w * pts[i].avar;
+      for (int q = 0; q < k; ++q) Ab(i, q) = w * pts[i].a[cols[q]];
+      Ab(i, k) = w * pts[i].avar;
     }
-    A = set.whiten(A);
-    b = set.whiten(b);
+    set.whiten_in_place(Ab);
     for (int q = 0; q < k; ++q) {
-      scale(q) = A.col(q).norm();
+      scale(q) = Ab.col(q).norm();
       if (!(scale(q) > 0.0)) return cand;
-      A.col(q) /= scale(q);
+      Ab.col(q) /= scale(q);
     }
-    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
-    qr.setThreshold(1e-12);
+    qr.compute(Ab.leftCols(k));
     if (qr.rank() < k) return cand;
-    const Eigen::VectorXd x = qr.solve(b);
+    const Eigen::VectorXd x = qr.solve(Ab.col(k));
     std::array<double, kTerms> c{};
     for (int q = 0; q < k; ++q) c[cols[q]] = x(q) / scale(q);
     double change = 0.0;
@@ -159,7 +181,7 @@ Candidate fit_terms(const FitSet& set, unsigned mask, double tc) {
 
 // Best τc for the terms in `mask` (which contains G) on a log grid, 2 nodes per octave over the
 // fitted τ range widened by 4× each way; `step` is the grid's spacing in ln τc.
-Candidate fit_with_gm(FitSet& set, unsigned mask, const WhiteTerm& white, double& step) {
+Candidate fit_with_gm(FitSet& set, unsigned mask, double& step) {
   const auto& pts = set.pts;
   const double l0 = std::log(pts.front().tau / 4.0), l1 = std::log(pts.back().tau * 4.0);
   const int nodes = std::max(4, static_cast<int>(std::ceil((l1 - l0) / std::log(2.0) * 2.0)));
@@ -167,7 +189,7 @@ Candidate fit_with_gm(FitSet& set, unsigned mask, const WhiteTerm& white, double
   Candidate best;
   for (int i = 0; i <= nodes; ++i) {
     const double tc = std::exp(l0 + step * i);
-    set_basis(set, white, tc);
+    set_tc(set, tc);
     Candidate c = fit_terms(set, mask, tc);
     if (c.valid && c.deviance < best.deviance) best = c;
   }
@@ -175,9 +197,9 @@ Candidate fit_with_gm(FitSet& set, unsigned mask, const WhiteTerm& white, double
 }
 
 // Golden-section refinement of ln τc within one grid step either side of the candidate's τc.
-Candidate refine_gm(FitSet& set, Candidate best, const WhiteTerm& white, double step) {
+Candidate refine_gm(FitSet& set, Candidate best, double step) {
   auto at = [&](double l) {
-    set_basis(set, white, std::exp(l));
+    set_tc(set, std::exp(l));
     return fit_terms(set, best.mask, std::exp(l));
   };
   double a = std::log(best.tc) - step, b = std::log(best.tc) + step;
@@ -196,9 +218,9 @@ Candidate refine_gm(FitSet& set, Candidate best, const WhiteTerm& white, double 
 // B and G both make the plateau, so choosing between them is a choice of its shape (flat over
 // decades, or rising as τ/τc then falling as 1/√τ), not of one more term: the shape that fits
 // better (the lower deviance) is kept, τc not counted against G.
-Candidate plateau_shape(FitSet& set, const Candidate& with_b, const WhiteTerm& white) {
+Candidate plateau_shape(FitSet& set, const Candidate& with_b) {
   double step = 0.0;
-  const Candidate with_g = fit_with_gm(set, (with_b.mask & ~(1u << 2)) | (1u << kGm), white, step);
+  const Candidate with_g = fit_with_gm(set, (with_b.mask & ~(1u << 2)) | (1u << kGm), step);
   return with_g.valid && with_g.deviance < with_b.deviance ? with_g : with_b;
 }
 
@@ -208,19 +230,20 @@ Candidate plateau_shape(FitSet& set, const Candidate& with_b, const WhiteTerm& w
 // their place, the simpler explanation of a rise (G with τc → ∞ is K): the plateau is kept only
 // when it lowers the deviance by more than a 0.1 % likelihood-ratio test allows, i.e. when the
 // data show it level off or fall.
-Candidate walk_or_plateau(FitSet& set, const Candidate& best, const WhiteTerm& white) {
+Candidate walk_or_plateau(FitSet& set, const Candidate& best) {
   const unsigned plateau = (1u << kGm) | (1u << 2), walk = 1u << 3;
   if (!(best.mask & plateau) || (best.mask & walk)) return best;
-  set_basis(set, white, 0.0);
+  set_tc(set, 0.0);
   const Candidate with_k = fit_terms(set, (best.mask & ~plateau) | walk, 0.0);
-  set_basis(set, white, best.tc);
+  set_tc(set, best.tc);
   return with_k.valid && with_k.deviance - best.deviance <= kPlateauOverWalk ? with_k : best;
 }
 
 // The candidate with the least penalised deviance over every non-empty subset of the terms.
-Candidate select_model(FitSet& set, const WhiteTerm& white) {
+// The basis of terms other than G must be set (set_basis); G's column is left at the best τc.
+Candidate select_model(FitSet& set) {
   Candidate best;
-  set_basis(set, white, 0.0);
+  set_tc(set, 0.0);
   for (unsigned mask = 1; mask < (1u << kGm); ++mask) {
     const Candidate c = fit_terms(set, mask, 0.0);
     if (c.valid && c.score() < best.score()) best = c;
@@ -229,13 +252,13 @@ Candidate select_model(FitSet& set, const WhiteTerm& white) {
   for (unsigned mask = 1u << kGm; mask < (1u << kTerms); ++mask) {
     if (__builtin_popcount(mask) + 1 > static_cast<int>(set.pts.size()) - 1) continue;
     if (mask & (1u << 2)) continue;  // B and G both make the plateau: the data cannot split them
-    const Candidate c = fit_with_gm(set, mask, white, step);
+    const Candidate c = fit_with_gm(set, mask, step);
     if (c.valid && c.score() < best.score()) best = c;
   }
-  if ((best.mask >> 2) & 1u) best = plateau_shape(set, best, white);
-  if ((best.mask >> kGm) & 1u) best = refine_gm(set, best, white, step);
-  best = walk_or_plateau(set, best, white);
-  set_basis(set, white, best.tc);
+  if ((best.mask >> 2) & 1u) best = plateau_shape(set, best);
+  if ((best.mask >> kGm) & 1u) best = refine_gm(set, best, step);
+  best = walk_or_plateau(set, best);
+  set_tc(set, best.tc);
   return best;
 }
 
@@ -385,10 +408,10 @@ std::vector<FitPoint> usable_points(const AllanCurve& curve) {
   return pts;
 }
 
-// EDF of each point for the noise type `type_at(τ)` and its interval at `confidence`. The output
-// filter leaves ρ = white.independent() independent values per sample: the EDF is Greenhall's for
-// ρ·N samples at ρ·m (at least 1) per cluster — unchanged where m ≫ 1/ρ, lower at the shortest τ,
-// where neighbouring filtered samples repeat each other.
+// EDF of each point for the noise type `type_at(τ)`. The output filter leaves ρ =
+// white.independent() independent values per sample: the EDF is Greenhall's for ρ·N samples at
+// ρ·m (at least 1) per cluster — unchanged where m ≫ 1/ρ, lower at the shortest τ, where
+// neighbouring filtered samples repeat each other.
 template <class TypeAt>
 void set_edf(std::vector<FitPoint>& pts, const AllanCurve& curve, const WhiteTerm& white, TypeAt type_at) {
   const double rho = white.independent();
@@ -397,7 +420,13 @@ void set_edf(std::vector<FitPoint>& pts, const AllanCurve& curve, const WhiteTer
     p.noise = type_at(p.tau);
     p.edf = edf_overlapping_adev(p.noise, n_phase, std::max(1.0, rho * p.m));
     if (!(std::isfinite(p.edf) && p.edf > 0.0)) p.edf = 1.0;
-    const auto ci = deviation_interval(p.adev, p.edf, curve.confidence);
+  }
+}
+
+// Each point's interval at `confidence` from its EDF (for the read-offs; the fit uses the EDF).
+void set_intervals(std::vector<FitPoint>& pts, double confidence) {
+  for (auto& p : pts) {
+    const auto ci = deviation_interval(p.adev, p.edf, confidence);
     p.lo = ci.lo;
     p.hi = ci.hi;
   }
@@ -432,12 +461,14 @@ void mark_dominance(const NoiseModel& model, const WhiteTerm& white, NoiseModel&
 // the fitted range, where the data can see a Gauss–Markov bias). The upper limits are each point's
 // 95 % limit, the level of the intervals.
 void identify_and_bound(const std::vector<FitPoint>& pts, const WhiteTerm& white, NoiseModel& model) {
+  std::vector<double> upper(pts.size());  // each point's upper limit, computed once
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    upper[i] = std::isfinite(pts[i].edf) ? deviation_interval(pts[i].adev, pts[i].edf, kCoverage).hi : pts[i].adev;
   auto bound_of = [&](int j, double tc) {
     double bound = std::numeric_limits<double>::infinity();
-    for (const auto& p : pts) {
-      const double hi = std::isfinite(p.edf) ? deviation_interval(p.adev, p.edf, kCoverage).hi : p.adev;
-      const double a = basis(p.tau, p.m, white, tc)[j];
-      if (a > 0.0) bound = std::min(bound, hi * hi / a);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const double a = basis(pts[i].tau, pts[i].m, white, tc)[j];
+      if (a > 0.0) bound = std::min(bound, upper[i] * upper[i] / a);
     }
     return std::sqrt(bound);
   };
@@ -557,8 +588,9 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AnalysisOptions& opt) 
   // it); the EDF from them, then again from the dominant term of the selected model.
   Candidate best;
   set_correlation(set, static_cast<double>(curve.samples));
+  set_basis(set, white, 0.0);
   for (int pass = 0; pass < 2; ++pass) {
-    best = select_model(set, white);
+    best = select_model(set);
     if (!best.valid) break;
     for (int j = 0; j < kTerms; ++j) coefficient(model, j)->fitted = std::sqrt(best.c[j]);
     model.correlation_time.fitted = best.tc;
@@ -579,6 +611,7 @@ NoiseModel fit_noise_model(const AllanCurve& curve, const AnalysisOptions& opt) 
   NoiseModel snapshot = model;
   mark_dominance(snapshot, white, model);
   set_edf(all, curve, white, [&](double tau) { return model.dominant(tau); });
+  set_intervals(all, curve.confidence);
   identify_and_bound(all, white, model);
   model.white_line = slope_readoff(model.white_line.name, curve.units.white, all, slope, -0.5, 1.0, opt);
   model.random_walk_line =

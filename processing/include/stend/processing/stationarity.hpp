@@ -91,6 +91,8 @@ class BlockSummary {
     double origin = 0.0, sum = 0.0, sum2 = 0.0;  // the block being summed, about its first sample
     bool added = false;
   };
+  // Samples [in_block, in_block + n) of block `block` into col; the block's summary once it is whole.
+  void add_run(Column& col, std::size_t block, std::size_t in_block, const double* x, std::size_t n);
   std::size_t per_block_ = 0, blocks_ = 0;
   std::array<Column, 9> columns_;  // indexed by Channel
 };
