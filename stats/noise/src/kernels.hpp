@@ -217,52 +217,58 @@ inline double steady_sums(const double* c, const double* a, const double* b, con
 // sums[0] += Σ d2², sums[1] += Σ d3², sums[2] += Σ e²; with kMasked also
 // sums[3] += Σ mask·d2², sums[4] += Σ mask·d3² (mask[i mod 8]: 1 where k ≡ 0 mod m, m ≤ 8);
 // with kNext the next level's V^{2m}_k = V_k + 2V_{k−m} + V_{k−2m} into vn. Two sets of
-// accumulators, 16 points a step, so that no add waits on the previous one.
+// accumulators, 8 points a step, so that no add waits on the previous one.
 template <bool kMasked, bool kNext>
 STEND_NOISE_KERNEL inline void level_sums(const double* v, const double* v1, const double* q,
                                           const double* q1, const double* r, double* vn,
                                           std::size_t n, const double* mask, double* sums) {
-  v8d acc[2][5] = {};
-  v8d mk{};
-  if constexpr (kMasked) load8(mk, mask);
-  // V_{k−1} and V_{k−m−1}: lane 7 of the previous vector shifted in (an aligned load and a
+  // 4-wide (8-wide generic vectors spilled to the stack on AVX2): two steps of 4 points cover the
+  // mask's period of 8.
+  using v4d = double __attribute__((vector_size(32)));
+  v4d acc[2][5] = {};
+  v4d mk[2] = {};
+  if constexpr (kMasked) {
+    std::memcpy(&mk[0], mask, sizeof mk[0]);
+    std::memcpy(&mk[1], mask + 4, sizeof mk[1]);
+  }
+  // V_{k−1} and V_{k−m−1}: lane 3 of the previous vector shifted in (an aligned load and a
   // lane shift instead of a load across two cache lines).
-  const v8d zero{};
-  v8d pa = zero + v1[0], pb = zero + q1[0];
-  auto step = [&](std::size_t i, v8d* s) {
-    v8d a, b;
-    load8(a, v + i);
-    load8(b, q + i);
-    const v8d a1 = __builtin_shufflevector(pa, a, 7, 8, 9, 10, 11, 12, 13, 14);
-    const v8d b1 = __builtin_shufflevector(pb, b, 7, 8, 9, 10, 11, 12, 13, 14);
+  const v4d zero{};
+  v4d pa = zero + v1[0], pb = zero + q1[0];
+  auto step = [&](std::size_t i, v4d* s, const v4d& m) {
+    v4d a, b;
+    std::memcpy(&a, v + i, sizeof a);
+    std::memcpy(&b, q + i, sizeof b);
+    const v4d a1 = __builtin_shufflevector(pa, a, 3, 4, 5, 6);
+    const v4d b1 = __builtin_shufflevector(pb, b, 3, 4, 5, 6);
     pa = a;
     pb = b;
     if constexpr (kNext) {
-      v8d c;
-      load8(c, r + i);
-      store8(vn + i, (a + c) + 2.0 * b);
+      v4d c;
+      std::memcpy(&c, r + i, sizeof c);
+      const v4d next = (a + c) + 2.0 * b;
+      std::memcpy(vn + i, &next, sizeof next);
     }
-    const v8d d2 = a - a1;
-    const v8d e = a - b;
-    const v8d d3 = e - (a1 - b1);
+    const v4d d2 = a - a1;
+    const v4d e = a - b;
+    const v4d d3 = e - (a1 - b1);
     s[0] += d2 * d2;
     s[1] += d3 * d3;
     s[2] += e * e;
     if constexpr (kMasked) {
-      s[3] += (mk * d2) * d2;
-      s[4] += (mk * d3) * d3;
+      s[3] += (m * d2) * d2;
+      s[4] += (m * d3) * d3;
     }
   };
   std::size_t i = 0;
-  for (; i + 16 <= n; i += 16) {
-    step(i, acc[0]);
-    step(i + 8, acc[1]);
+  for (; i + 8 <= n; i += 8) {
+    step(i, acc[0], mk[0]);
+    step(i + 4, acc[1], mk[1]);
   }
-  for (; i + 8 <= n; i += 8) step(i, acc[0]);
   double t[5];
   for (int j = 0; j < 5; ++j) {
-    const v8d w = acc[0][j] + acc[1][j];
-    t[j] = ((w[0] + w[1]) + (w[2] + w[3])) + ((w[4] + w[5]) + (w[6] + w[7]));
+    const v4d w = acc[0][j] + acc[1][j];
+    t[j] = (w[0] + w[1]) + (w[2] + w[3]);
   }
   for (; i < n; ++i) {
     const double d2 = v[i] - v1[i];
