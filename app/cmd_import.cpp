@@ -147,6 +147,7 @@ Outcome run_import(const ImportArgs& a) {
   }
   Recording rec;
   io::RunSink sink(rec, dir, yaml_text, a.name.empty() && procedure ? procedure->name : a.name);
+  if (!io::find_format(format).reads_hdf5) sink.write_in_background();
   try {
     std::optional<AligningSink> aligning;
     if (procedure) aligning.emplace(rec, sink, *procedure);
@@ -158,6 +159,7 @@ Outcome run_import(const ImportArgs& a) {
     rec.header.status = RunStatus::kComplete;
     sink.finish();
   } catch (...) {
+    sink.abandon();
     std::error_code ec;
     std::filesystem::remove_all(dir, ec);  // the folder did not exist before: nothing else is lost
     throw;

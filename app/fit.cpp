@@ -114,6 +114,8 @@ stend::Recording open_through_store(const io::Inputs& inputs, const std::string&
   const std::filesystem::path dir = scratch.make();
   stend::Recording rec;
   io::RunSink sink(rec, dir, "name: " + inputs[0].stem().string() + "\n");
+  const bool detect = format.empty() || format == "auto";
+  if (!(detect ? io::detect_format(inputs, o) : io::find_format(format)).reads_hdf5) sink.write_in_background();
   io::import_dataset(inputs, format, rec, sink, o);
   rec.header.status = RunStatus::kComplete;
   sink.finish();

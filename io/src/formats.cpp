@@ -287,10 +287,10 @@ RosbagOptions rosbag_options(const ImportOptions& o) {
 
 const std::vector<Format>& formats() {
   static const std::vector<Format> table = {
-      {"run", "a Stend run folder (run.json, imu.csv, ...)", looks_like_run, open_run},
+      {"run", "a Stend run folder (run.json, imu.csv, ...)", looks_like_run, open_run, 1, nullptr, false, true},
       {"mat", "MATLAB .mat (v4, v5, 7.3): t|fs, acc, gyro, temp, counts, segments; or the variables --accel, --gyro, "
               "--time, --temperature name (one file per sensor too)",
-       looks_like_mat, open_mat, 4, stream_mat, true},
+       looks_like_mat, open_mat, 4, stream_mat, true, true},
       {"npy", "NumPy .npy / .npz (np.save, np.savez, np.savez_compressed): the arrays --accel, --gyro, --time, "
               "--temperature name (one file per sensor too)",
        looks_like_npy, open_npy, 4, stream_npy, true},

@@ -93,7 +93,7 @@ void expect_bounded_growth(long growth_kib) {
 // Imports `log` (as `format`) into the new run folder `run` in a child process; returns the growth
 // of its peak resident memory [KiB] over the import (−1 when the import failed).
 long import_in_child(const Inputs& log, const fs::path& run, const std::string& format = "csv",
-                     const ImportOptions& options = csv_options()) {
+                     const ImportOptions& options = csv_options(), bool background = false) {
   int fds[2];
   if (::pipe(fds) != 0) return -1;
   const pid_t pid = ::fork();
@@ -104,6 +104,7 @@ long import_in_child(const Inputs& log, const fs::path& run, const std::string& 
       const long before = peak_rss_kib();
       Recording rec;
       RunSink sink(rec, run, "name: streamed\n");
+      if (background) sink.write_in_background();
       import_dataset(log, format, rec, sink, options);
       sink.finish();
       growth = peak_rss_kib() - before;
@@ -169,6 +170,39 @@ TEST(ImportStream, LongCsvLogInBoundedMemoryWithTheSamplesOfAnInMemoryImport) {
   const Recording short_run = Recording::open(tmp / "short_run", SampleLoading::kStream);
   ASSERT_EQ(short_run.sample_count(), kShort);
   expect_same_samples(short_run.sample_source(), run.sample_source(), kShort);
+}
+
+// `stend import` writes the run store on a thread of its own (RunSink::write_in_background): the
+// same samples as written on the importer's thread, in bounded memory; a sink given up mid-way
+// (a failed import) stops its thread without writing what waits.
+TEST(ImportStream, WrittenInTheBackgroundTheRunHoldsTheSamplesOfAForegroundImport) {
+  TempDir tmp("import-background");
+  constexpr std::size_t kSamples = 300'000;  // many batches of RunSink::kBackgroundBatch
+  write_log(tmp / "log.csv", kSamples);
+  ASSERT_GE(import_in_child({tmp / "log.csv"}, tmp / "fg"), 0) << "the foreground import failed";
+  const long growth_kib = import_in_child({tmp / "log.csv"}, tmp / "bg", "csv", csv_options(), true);
+  ASSERT_GE(growth_kib, 0) << "the background import failed";
+  expect_bounded_growth(growth_kib);
+  const Recording fg = Recording::open(tmp / "fg", SampleLoading::kStream);
+  const Recording bg = Recording::open(tmp / "bg", SampleLoading::kStream);
+  ASSERT_EQ(fg.sample_count(), kSamples);
+  ASSERT_EQ(bg.sample_count(), kSamples);
+  expect_same_samples(fg.sample_source(), bg.sample_source(), kSamples);
+  EXPECT_EQ(bg.events.size(), fg.events.size());
+
+  Recording rec = open_dataset({tmp / "log.csv"}, "csv", csv_options());
+  std::vector<ImuSample> all(kSamples);
+  rec.sample_source().read(0, kSamples, all.data());
+  {
+    RunSink given_up(rec, tmp / "given_up", "name: x\n");
+    given_up.write_in_background();
+    for (std::size_t i = 0; i < kSamples; i += 1000) given_up.add_samples(all.data() + i, 1000);
+    given_up.abandon();
+    EXPECT_EQ(given_up.sample_count(), kSamples);  // handed over, not all written
+  }
+  std::error_code ec;
+  fs::remove_all(tmp / "given_up", ec);
+  EXPECT_FALSE(ec) << ec.message();
 }
 
 // Repeated timestamps over several windows: each window is rebuilt from the rate the first one

@@ -327,7 +327,9 @@ Hdf5Run open_hdf5_run(const fs::path& path, TruthLoading truth) {
 
 namespace stend {
 void silence_hdf5_error_printing() {
-  static std::once_flag once;
-  std::call_once(once, [] { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); });
+  // Per thread: a thread-safe libhdf5 (Debian's) keeps the printing setting per thread.
+  thread_local bool silenced = false;
+  if (!silenced) H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  silenced = true;
 }
 }  // namespace stend

@@ -215,6 +215,7 @@ Hdf5RunWriter::~Hdf5RunWriter() {
 void Hdf5RunWriter::add_samples(const ImuSample* s, std::size_t n) {
   Impl& I = *impl_;
   if (n == 0) return;
+  silence_hdf5_error_printing();  // on this thread (an import writes on a thread of its own)
   if (!I.file) I.create(s, n);
   if (std::isnan(I.t_first)) I.t_first = s[0].t_s;
   for (std::size_t i = 0; i < n; ++i) {
@@ -256,6 +257,7 @@ void Hdf5RunWriter::add_event_record(std::string_view r) { impl_->event_bytes.ap
 void Hdf5RunWriter::flush() {
   Impl& I = *impl_;
   if (!I.file) return;  // nothing to flush into until the first samples
+  silence_hdf5_error_printing();
   I.write_pending();
   I.write_records();
   // The rows reach the file before /summary counts them: /summary is contiguous, so its values go

@@ -38,6 +38,9 @@ struct Format {
   // inside (variables, arrays, fields): such a format is still detected by content when they are
   // given; otherwise given columns mean the generic csv format.
   bool takes_names = false;
+  // Whether the source is read through libhdf5 (a run.h5, MAT 7.3 through matio): then nothing
+  // else may call libhdf5 while it is read (RunSink::write_in_background).
+  bool reads_hdf5 = false;
 };
 
 // Every format, in detection order (the first whose detect() accepts the input wins).

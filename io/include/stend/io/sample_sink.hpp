@@ -46,22 +46,38 @@ class RunSink final : public SampleSink {
  public:
   // `recording` must outlive the sink; `dir` must not exist.
   RunSink(const Recording& recording, std::filesystem::path dir, std::string experiment_yaml,
-          std::string experiment_name = {}, RecordingWriterOptions options = {})
-      : rec_(&recording), dir_(std::move(dir)), yaml_(std::move(experiment_yaml)),
-        name_(std::move(experiment_name)), options_(options) {}
+          std::string experiment_name = {}, RecordingWriterOptions options = {});
+  ~RunSink() override;
+  RunSink(const RunSink&) = delete;
+  RunSink& operator=(const RunSink&) = delete;
+
+  // Before the first samples: the samples are written (compressed, checksummed) on a thread of
+  // their own, batches of kBackgroundBatch samples handed over with at most two waiting, so that
+  // reading the source overlaps writing the store. Only for sources not read through libhdf5
+  // (Format::reads_hdf5): libhdf5 built without thread safety takes one thread at a time.
+  void write_in_background();
   void add_samples(const ImuSample* samples, std::size_t count) override;
   // Truth, segments, events, status (the recording's; kComplete when it says kRunning). Creates
-  // the folder when no sample came.
+  // the folder when no sample came. Rethrows a failure of the background writer.
   void finish();
-  std::uint64_t sample_count() const { return writer_ ? writer_->sample_count() : 0; }
+  // Stops the background writer without writing what waits (after a failed import, before its
+  // folder is removed); finish() may not follow.
+  void abandon();
+  std::uint64_t sample_count() const { return samples_; }
+
+  static constexpr std::size_t kBackgroundBatch = std::size_t{1} << 14;  // 1.8 MB of samples
 
  private:
+  struct Background;
   void open();
+  void write(const ImuSample* samples, std::size_t count);
   const Recording* rec_;
   std::filesystem::path dir_;
   std::string yaml_, name_;
   RecordingWriterOptions options_;
   std::unique_ptr<RecordingWriter> writer_;
+  std::unique_ptr<Background> background_;
+  std::uint64_t samples_ = 0;
   double first_t_s_ = 0.0;  // the first sample's time [s]
 };
 

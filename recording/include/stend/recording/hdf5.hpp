@@ -2,7 +2,9 @@
 
 namespace stend {
 // libhdf5 prints its error stack to stderr by default; Stend reports what failed itself (file,
-// byte, reason). Turns libhdf5's printing off for the process; every reader of HDF5 files calls it
-// before opening one (run.h5, MATLAB 7.3 files through matio). Safe to call again and from threads.
+// byte, reason). Turns libhdf5's printing off for the calling thread (a thread-safe libhdf5, as
+// Debian's, keeps the setting per thread; otherwise for the process); every reader and writer of
+// HDF5 files calls it on its thread before using one (run.h5, MATLAB 7.3 files through matio).
+// Cheap to call again.
 void silence_hdf5_error_printing();
 }  // namespace stend
