@@ -5,6 +5,7 @@ packages=(
   cmake ninja-build g++ pkg-config git
   libeigen3-dev libceres-dev libyaml-cpp-dev nlohmann-json3-dev libfmt-dev libspdlog-dev
   libcli11-dev libmodbus-dev libhidapi-dev libmatio-dev libhdf5-dev libsqlite3-dev libssl-dev
+  libdeflate-dev  # recording: run.h5's sample chunks deflated by Stend (hdf5_chunks.hpp)
   python3-h5py python3-numpy  # core tests: a run.h5 read with h5py alone
   libgtest-dev libgmock-dev libbenchmark-dev
   libbz2-dev libzstd-dev liblz4-dev  # io: chunk compression of ROS 1 bags (bz2, lz4) and MCAP (lz4, zstd)

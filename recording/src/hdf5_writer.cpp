@@ -1,6 +1,7 @@
 // The HDF5 run store's writer (hdf5_store.hpp): run.h5 appended to while the run goes, in SWMR
 // mode, each channel stored as counts with the counts→SI rule, or counts and SI side by side.
 // Layout and durability rules: docs/recording-format.md.
+#include "hdf5_chunks.hpp"
 #include "hdf5_common.hpp"
 #include "hdf5_store.hpp"
 
@@ -61,6 +62,7 @@ struct Hdf5RunWriter::Impl {
   std::vector<std::int32_t> counts[kChannels];
   std::vector<double> si[kChannels];
   std::vector<std::uint32_t> flags;
+  ChunkWriter chunks;  // the sample columns' whole chunks
   std::vector<double> exceptions;  // rows of (index, channel, counts, si)
   std::vector<double> truth_rows;  // rows of (t_s, values…)
   std::string segment_bytes, event_bytes;
@@ -152,15 +154,14 @@ void Hdf5RunWriter::Impl::create(const ImuSample* first, std::size_t n) {
 void Hdf5RunWriter::Impl::write_pending() {
   const hsize_t n = pending();
   if (n == 0) return;
-  write_rows(ds_t.get(), H5T_NATIVE_DOUBLE, written, n, 0, t.data(), path, "t_s");
+  chunks.write(ds_t.get(), H5T_NATIVE_DOUBLE, written, n, t.data(), path, "t_s");
   for (int ch = 0; ch < kChannels; ++ch) {
-    write_rows(ds_counts[ch].get(), H5T_NATIVE_INT32, written, n, 0, counts[ch].data(), path,
-               kCountsNames[ch]);
-    if (ds_si[ch]) write_rows(ds_si[ch].get(), H5T_NATIVE_DOUBLE, written, n, 0, si[ch].data(), path, kSiNames[ch]);
+    chunks.write(ds_counts[ch].get(), H5T_NATIVE_INT32, written, n, counts[ch].data(), path, kCountsNames[ch]);
+    if (ds_si[ch]) chunks.write(ds_si[ch].get(), H5T_NATIVE_DOUBLE, written, n, si[ch].data(), path, kSiNames[ch]);
     counts[ch].clear();
     si[ch].clear();
   }
-  write_rows(ds_flags.get(), H5T_NATIVE_UINT32, written, n, 0, flags.data(), path, "flags");
+  chunks.write(ds_flags.get(), H5T_NATIVE_UINT32, written, n, flags.data(), path, "flags");
   written += n;
   t.clear();
   flags.clear();
@@ -242,7 +243,8 @@ void Hdf5RunWriter::add_samples(const ImuSample* s, std::size_t n) {
     I.gaps += (x.flags & kGapBefore) != 0;
     if (index > 0) I.irregular += interval_irregular(x.t_s - I.t_last, I.header.info.output_rate_hz);
     I.t_last = x.t_s;
-    if (I.pending() == kChunkSamples) I.write_pending();
+    // At each chunk boundary, so that after a flush mid-chunk the chunks are again written whole.
+    if ((I.written + I.pending()) % kChunkSamples == 0) I.write_pending();
   }
 }
 

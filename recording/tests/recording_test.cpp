@@ -1206,6 +1206,68 @@ with h5py.File(sys.argv[1], "r", swmr=True) as f:
   EXPECT_NEAR(py_t, t, 1e-9 * t);
 }
 
+TEST_F(RecordingTest, Hdf5ChunksEncodedByStendAreStandardShuffleDeflateFletcher32) {
+  // Whole sample chunks are encoded by the writer itself (hdf5_chunks.hpp); any HDF5 reader must
+  // decode them as its own: h5py reads every column (libhdf5 checks each chunk's Fletcher-32), and
+  // each chunk's stored bytes are the dataset's values shuffled and deflated, all filters applied.
+  const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  if (stend::testing::run_command(python + " -c 'import h5py, numpy' 2>&1").code != 0)
+    GTEST_SKIP() << "python3-h5py / python3-numpy are not installed (scripts/install-deps.sh installs them)";
+  constexpr std::uint64_t kN = 3 * 65'536 + 777;  // three whole chunks and a partial one
+  RecordingHeader si_only = make_header();        // an import: SI values, compressed float64
+  si_only.info.accel_lsb_mps2 = si_only.info.gyro_lsb_radps = si_only.info.temperature_lsb_c = 0.0;
+  for (const auto& [name, header] : {std::pair{"counts", make_header()}, std::pair{"si", si_only}}) {
+    const fs::path dir = root_ / name;
+    std::vector<ImuSample> s;
+    for (std::uint64_t k = 1; k <= kN; ++k) s.push_back(mpu_sample(k));
+    {
+      RecordingWriter w(dir, header, "name: chunks\n");
+      w.add_samples(s.data(), 1000);
+      w.flush();  // mid-chunk: the next chunks are still written whole, at their boundaries
+      w.add_samples(s.data() + 1000, s.size() - 1000);
+      w.finish(stend::RunStatus::kComplete);
+    }
+    const Recording r = Recording::open(dir, stend::SampleLoading::kStream);
+    ASSERT_EQ(r.sample_count(), kN);
+    std::vector<ImuSample> got(kN);
+    r.source->read(0, kN, got.data());
+    for (std::size_t i = 0; i < kN; ++i) {
+      expect_same_sample(got[i], s[i], i);
+      if (HasFatalFailure()) return;
+    }
+    const std::string script = R"(
+import sys, zlib, h5py, numpy as np
+with h5py.File(sys.argv[1], "r") as f:
+    for name, d in f["samples"].items():
+        if d.shape[0] < 65536: continue
+        values = d[:]  # libhdf5 decodes every chunk and checks its Fletcher-32
+        chunks = d.id.get_num_chunks()
+        assert chunks == -(-d.shape[0] // 65536), (name, chunks)
+        for i in range(chunks - 1):  # the whole chunks
+            info = d.id.get_chunk_info(i)
+            mask, raw = d.id.read_direct_chunk(info.chunk_offset)
+            assert mask == 0, (name, i, mask)  # every filter applied
+            body = raw[:-4] if d.fletcher32 else raw
+            want = values[info.chunk_offset[0]:info.chunk_offset[0] + 65536]
+            if d.compression == "gzip":
+                assert d.shuffle, name
+                plain = np.frombuffer(zlib.decompress(body), np.uint8)
+                body = plain.reshape(d.dtype.itemsize, -1).T.tobytes()  # unshuffled
+                assert len(raw) < want.nbytes, (name, len(raw), want.nbytes)
+            assert body == want.tobytes(), (name, i)
+        print(name, chunks, d.compression)
+)";
+    write_text(root_ / "chunks.py", script);
+    const auto out = stend::testing::run_command(python + " " + (root_ / "chunks.py").string() + " " +
+                                                 (dir / "run.h5").string() + " 2>&1");
+    ASSERT_EQ(out.code, 0) << name << ": " << out.text;
+    EXPECT_NE(out.text.find("t_s 4 gzip"), std::string::npos) << out.text;
+    EXPECT_NE(out.text.find(std::string("ax_") + (name == std::string("si") ? "mps2 4 gzip" : "counts 4 None")),
+              std::string::npos)
+        << out.text;
+  }
+}
+
 TEST_F(RecordingTest, Hdf5ExportsToTheCsvLayoutAndBack) {
   // HDF5 → CSV (what `stend export --to csv` does) → HDF5: the same recording at every step.
   const fs::path h5 = root_ / "h5";

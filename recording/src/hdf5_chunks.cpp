@@ -1,0 +1,144 @@
+// Whole chunks encoded by Stend and written with H5Dwrite_chunk (see hdf5_chunks.hpp).
+#include "hdf5_chunks.hpp"
+
+#include <fmt/format.h>
+#include <libdeflate.h>
+
+#include <algorithm>
+#include <cstring>
+#include <new>
+#include <optional>
+
+namespace stend::detail {
+
+namespace fs = std::filesystem;
+
+std::uint32_t hdf5_fletcher32(const unsigned char* bytes, std::size_t size) {
+  std::uint32_t sum1 = 0, sum2 = 0;
+  std::size_t words = size / 2;
+  while (words > 0) {
+    const std::size_t block = std::min<std::size_t>(words, 360);  // the most sums without overflow
+    words -= block;
+    for (std::size_t i = 0; i < block; ++i, bytes += 2) {
+      sum1 += static_cast<std::uint32_t>(bytes[0]) << 8 | bytes[1];
+      sum2 += sum1;
+    }
+    sum1 = (sum1 & 0xffff) + (sum1 >> 16);
+    sum2 = (sum2 & 0xffff) + (sum2 >> 16);
+  }
+  if (size % 2 != 0) {
+    sum1 += static_cast<std::uint32_t>(bytes[0]) << 8;
+    sum2 += sum1;
+    sum1 = (sum1 & 0xffff) + (sum1 >> 16);
+    sum2 = (sum2 & 0xffff) + (sum2 >> 16);
+  }
+  sum1 = (sum1 & 0xffff) + (sum1 >> 16);
+  sum2 = (sum2 & 0xffff) + (sum2 >> 16);
+  return sum2 << 16 | sum1;
+}
+
+namespace {
+
+struct Pipeline {
+  hsize_t chunk_rows = 0;
+  bool shuffle = false, deflate = false, fletcher32 = false;
+};
+
+// The dataset's chunking and filters, when Stend can encode them: shuffle, deflate, Fletcher-32,
+// each at most once and in that order (as create_dataset sets them).
+std::optional<Pipeline> pipeline_of(hid_t ds) {
+  const Handle dcpl(H5Dget_create_plist(ds), H5Pclose);
+  hsize_t chunk[1] = {0};
+  if (!dcpl || H5Pget_layout(dcpl.get()) != H5D_CHUNKED || H5Pget_chunk(dcpl.get(), 1, chunk) != 1)
+    return std::nullopt;
+  Pipeline p;
+  p.chunk_rows = chunk[0];
+  int stage = 0;
+  for (int i = 0, n = H5Pget_nfilters(dcpl.get()); i < n; ++i) {
+    unsigned flags = 0;
+    std::size_t values = 0;
+    unsigned config = 0;
+    const H5Z_filter_t id = H5Pget_filter2(dcpl.get(), static_cast<unsigned>(i), &flags, &values, nullptr, 0,
+                                           nullptr, &config);
+    const int order = id == H5Z_FILTER_SHUFFLE ? 1 : id == H5Z_FILTER_DEFLATE ? 2 : id == H5Z_FILTER_FLETCHER32 ? 3 : 0;
+    if (order <= stage) return std::nullopt;
+    stage = order;
+    (order == 1 ? p.shuffle : order == 2 ? p.deflate : p.fletcher32) = true;
+  }
+  return p;
+}
+
+// Byte j of value i to position j·n + i (HDF5's shuffle filter; values of one byte stay).
+void shuffle_bytes(const unsigned char* in, std::size_t n, std::size_t value_bytes, unsigned char* out) {
+  for (std::size_t j = 0; j < value_bytes; ++j) {
+    unsigned char* to = out + j * n;
+    for (std::size_t i = 0; i < n; ++i) to[i] = in[i * value_bytes + j];
+  }
+}
+
+}  // namespace
+
+ChunkWriter::ChunkWriter() : deflate_(libdeflate_alloc_compressor(1)) {
+  if (deflate_ == nullptr) throw std::bad_alloc();
+}
+
+ChunkWriter::~ChunkWriter() { libdeflate_free_compressor(deflate_); }
+
+void ChunkWriter::write(hid_t ds, hid_t mem_type, hsize_t at, hsize_t rows, const void* data, const fs::path& file,
+                        const char* name) {
+  if (rows == 0) return;
+  if (!encode(ds, mem_type, at, rows, data)) {
+    write_rows(ds, mem_type, at, rows, 0, data, file, name);
+    return;
+  }
+  const hsize_t dims[1] = {at + rows};
+  check_write(H5Dset_extent(ds, dims), file, fmt::format("cannot extend dataset '{}'", name));
+  const hsize_t offset[1] = {at};
+  check_write(H5Dwrite_chunk(ds, H5P_DEFAULT, 0, offset, encoded_.size(), encoded_.data()), file,
+              fmt::format("cannot write dataset '{}'", name));
+}
+
+// encoded_ ← the chunk's bytes as the pipeline stores them; false when this writer cannot make them.
+bool ChunkWriter::encode(hid_t ds, hid_t mem_type, hsize_t at, hsize_t rows, const void* data) {
+  const std::optional<Pipeline> p = pipeline_of(ds);
+  if (!p || rows != p->chunk_rows || at % p->chunk_rows != 0) return false;
+  const Handle stored(H5Dget_type(ds), H5Tclose);
+  if (!stored) return false;
+  const auto n = static_cast<std::size_t>(rows);
+  const std::size_t value_bytes = H5Tget_size(stored.get());
+  const auto* bytes = static_cast<const unsigned char*>(data);
+  if (H5Tequal(stored.get(), mem_type) <= 0) {
+    if (H5Tequal(stored.get(), H5T_STD_I16LE) <= 0 || H5Tequal(mem_type, H5T_NATIVE_INT32) <= 0 ||
+        H5Tequal(H5T_NATIVE_INT16, H5T_STD_I16LE) <= 0)
+      return false;
+    stored_.resize(n * sizeof(std::int16_t));  // int32 counts stored as int16, clipped as libhdf5 does
+    const auto* wide = static_cast<const std::int32_t*>(data);
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto v = static_cast<std::int16_t>(std::clamp<std::int32_t>(wide[i], INT16_MIN, INT16_MAX));
+      std::memcpy(stored_.data() + i * sizeof v, &v, sizeof v);
+    }
+    bytes = stored_.data();
+  }
+  std::size_t size = n * value_bytes;
+  if (p->shuffle && value_bytes > 1) {
+    shuffled_.resize(size);
+    shuffle_bytes(bytes, n, value_bytes, shuffled_.data());
+    bytes = shuffled_.data();
+  }
+  if (p->deflate) {
+    encoded_.resize(libdeflate_zlib_compress_bound(deflate_, size) + 4);
+    size = libdeflate_zlib_compress(deflate_, bytes, size, encoded_.data(), encoded_.size() - 4);
+    if (size == 0) return false;
+  } else {
+    encoded_.resize(size + 4);
+    std::memcpy(encoded_.data(), bytes, size);
+  }
+  if (p->fletcher32) {
+    const std::uint32_t sum = hdf5_fletcher32(encoded_.data(), size);
+    for (int k = 0; k < 4; ++k) encoded_[size++] = static_cast<unsigned char>(sum >> (8 * k));  // little-endian
+  }
+  encoded_.resize(size);
+  return true;
+}
+
+}  // namespace stend::detail
