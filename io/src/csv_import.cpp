@@ -112,7 +112,11 @@ CsvColumns resolve_csv_columns(const LineReader& r, const CsvMapping& map, std::
 // the mapping reads counts.
 ImuSample csv_sample(const LineReader& r, const std::vector<std::string_view>& f, const CsvMapping& map,
                      const CsvColumns& c, std::size_t index) {
-  auto field = [&](int idx) { return number(r, f[static_cast<std::size_t>(idx)], c.name(idx)); };
+  auto field = [&](int idx) {
+    const std::string_view text = f[static_cast<std::size_t>(idx)];
+    double v = 0.0;
+    return parse_double(text, v) ? v : number(r, text, c.name(idx));  // number() fails naming the column
+  };
   ImuSample s;
   s.t_s = c.time >= 0 ? field(c.time) * map.time_scale_s : static_cast<double>(index) / map.rate_hz;
   for (int k = 0; k < 3; ++k) {
@@ -159,12 +163,13 @@ std::size_t read_csv_samples(LineReader& r, const CsvMapping& map, const CsvColu
   std::size_t count = 0;
   double prev_t = 0.0;
   std::string line;
+  std::vector<std::string_view> f;
   while (r.next(line)) {
     if (is_blank(line)) continue;
     if (!map.comment_prefix.empty() && trim(line).substr(0, map.comment_prefix.size()) == map.comment_prefix) {
       continue;
     }
-    const auto f = split(line, map.delimiter);
+    split(line, map.delimiter, f);
     if (static_cast<int>(f.size()) < needed) {
       r.fail("expected at least " + std::to_string(needed) + " fields, found " + std::to_string(f.size()));
     }

@@ -81,6 +81,12 @@ std::string_view trim(std::string_view s) {
 
 std::vector<std::string_view> split(std::string_view line, char delim) {
   std::vector<std::string_view> out;
+  split(line, delim, out);
+  return out;
+}
+
+void split(std::string_view line, char delim, std::vector<std::string_view>& out) {
+  out.clear();
   if (delim == ' ') {
     std::size_t i = 0;
     while (i < line.size()) {
@@ -91,7 +97,7 @@ std::vector<std::string_view> split(std::string_view line, char delim) {
       out.push_back(line.substr(i, j - i));
       i = j;
     }
-    return out;
+    return;
   }
   std::size_t start = 0;
   for (std::size_t i = 0; i <= line.size(); ++i) {
@@ -100,7 +106,6 @@ std::vector<std::string_view> split(std::string_view line, char delim) {
       start = i + 1;
     }
   }
-  return out;
 }
 
 bool parse_double(std::string_view s, double& out) {

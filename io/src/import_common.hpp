@@ -60,8 +60,10 @@ class LineReader {
 };
 
 std::string_view trim(std::string_view s);
-// Splits on `delim`; ' ' splits on runs of spaces and tabs.
+// Splits on `delim`; ' ' splits on runs of spaces and tabs. The second form fills `out` (its
+// memory kept from line to line).
 std::vector<std::string_view> split(std::string_view line, char delim);
+void split(std::string_view line, char delim, std::vector<std::string_view>& out);
 bool parse_double(std::string_view s, double& out);
 // "%.6g"
 std::string fmt_g(double v);

@@ -222,20 +222,4 @@ std::string read_text(hid_t loc, const char* name, const fs::path& file) {
   return v;
 }
 
-// --- the counts→SI rule -------------------------------------------------------------------------
-
-void set_channel(ImuSample& s, int ch, std::int32_t c, double v) {
-  if (ch < 3) {
-    s.accel_counts[ch] = c;
-    s.accel_mps2[ch] = v;
-  } else if (ch < 6) {
-    s.gyro_counts[ch - 3] = c;
-    s.gyro_radps[ch - 3] = v;
-  } else {
-    s.temperature_counts = c;
-    s.temperature_c = v;
-  }
-}
-
-
 }  // namespace stend::detail

@@ -142,6 +142,17 @@ inline std::int32_t counts_of(const ImuSample& s, int ch) {
 inline double si_of(const ImuSample& s, int ch) {
   return ch < 3 ? s.accel_mps2[ch] : ch < 6 ? s.gyro_radps[ch - 3] : s.temperature_c;
 }
-void set_channel(ImuSample& s, int ch, std::int32_t c, double v);
+inline void set_channel(ImuSample& s, int ch, std::int32_t c, double v) {
+  if (ch < 3) {
+    s.accel_counts[ch] = c;
+    s.accel_mps2[ch] = v;
+  } else if (ch < 6) {
+    s.gyro_counts[ch - 3] = c;
+    s.gyro_radps[ch - 3] = v;
+  } else {
+    s.temperature_counts = c;
+    s.temperature_c = v;
+  }
+}
 
 }  // namespace stend::detail

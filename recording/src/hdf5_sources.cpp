@@ -6,6 +6,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
+#include <cstring>
+#include <mutex>
 #include <stdexcept>
 #include <utility>
 
@@ -25,11 +28,95 @@ void counts_to_si(const Count* __restrict in, std::size_t n, double lsb, double 
   for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<double>(in[i]) * lsb + offset;
 }
 
+// Rows of one dataset as `mem_type` (the type it is stored in, or counts widened). A small read
+// (a time search's one sample or truth row, a pose's few hundred samples) is served from the whole
+// chunks it falls in, read once and kept (the last used, up to kHeldBytes, at least two):
+// libhdf5 spends 15–20 k instructions on every H5Dread whatever its size, and a calibration makes
+// thousands of small ones. Reads of half a chunk or more go straight to the library. Safe to call
+// from several threads.
+class ChunkedRows {
+ public:
+  ChunkedRows() = default;
+  ChunkedRows(Handle ds, hid_t mem_type, hsize_t cols, std::uint64_t rows)
+      : ds_(std::move(ds)), mem_type_(mem_type), cols_(cols), rows_(rows),
+        row_bytes_(H5Tget_size(mem_type) * std::max<hsize_t>(cols, 1)), chunk_rows_(chunk_rows_of(ds_.get())) {}
+  explicit operator bool() const { return static_cast<bool>(ds_); }
+
+  // Rows [first, first + count) into out; false when the library cannot read them (damage).
+  bool read(std::uint64_t first, std::size_t count, void* out) const {
+    if (count == 0) return true;
+    if (count >= chunk_rows_ / 2) {
+      Hdf5Lock lock;
+      return read_rows(ds_.get(), mem_type_, first, count, cols_, out) >= 0;
+    }
+    auto* to = static_cast<unsigned char*>(out);
+    std::lock_guard<std::mutex> guard(held_->mutex);
+    for (std::uint64_t at = first, end = first + count; at < end;) {
+      const std::uint64_t k = at / chunk_rows_, chunk_end = std::min<std::uint64_t>(end, (k + 1) * chunk_rows_);
+      const Held* h = held(k);
+      if (h == nullptr) return false;
+      const auto bytes = static_cast<std::size_t>(chunk_end - at) * row_bytes_;
+      std::memcpy(to, h->rows.data() + static_cast<std::size_t>(at - k * chunk_rows_) * row_bytes_, bytes);
+      to += bytes;
+      at = chunk_end;
+    }
+    return true;
+  }
+
+ private:
+  struct Held {
+    std::uint64_t chunk = UINT64_MAX;
+    std::vector<unsigned char> rows;
+  };
+  struct HeldChunks {
+    std::mutex mutex;
+    std::vector<Held> chunks;  // the most recently used last
+  };
+  static constexpr std::size_t kHeldBytes = std::size_t{1} << 20;
+  static hsize_t chunk_rows_of(hid_t ds) {
+    const Handle dcpl(H5Dget_create_plist(ds), H5Pclose);
+    hsize_t dims[2] = {0, 0};
+    const bool chunked = dcpl && H5Pget_layout(dcpl.get()) == H5D_CHUNKED && H5Pget_chunk(dcpl.get(), 2, dims) >= 1;
+    return chunked && dims[0] > 0 ? dims[0] : kChunkSamples;
+  }
+  // Chunk k's rows (those below rows_), read whole when not held; nullptr when unreadable.
+  const Held* held(std::uint64_t k) const {
+    std::vector<Held>& chunks = held_->chunks;
+    auto it = std::find_if(chunks.begin(), chunks.end(), [k](const Held& h) { return h.chunk == k; });
+    if (it == chunks.end()) {
+      const std::size_t most = std::max<std::size_t>(2, kHeldBytes / (static_cast<std::size_t>(chunk_rows_) * row_bytes_));
+      if (chunks.size() < most) chunks.emplace_back();
+      it = chunks.begin();  // the least recently used, or the new one
+      if (chunks.back().chunk == UINT64_MAX) it = chunks.end() - 1;
+    }
+    std::rotate(it, it + 1, chunks.end());
+    Held& h = chunks.back();
+    if (h.chunk == k) return &h;
+    const std::uint64_t begin = k * chunk_rows_, n = std::min<std::uint64_t>(chunk_rows_, rows_ - begin);
+    h.chunk = UINT64_MAX;
+    h.rows.resize(static_cast<std::size_t>(n) * row_bytes_);
+    {
+      Hdf5Lock lock;
+      if (read_rows(ds_.get(), mem_type_, begin, n, cols_, h.rows.data()) < 0) return nullptr;
+    }
+    h.chunk = k;
+    return &h;
+  }
+
+  Handle ds_;
+  hid_t mem_type_ = H5I_INVALID_HID;
+  hsize_t cols_ = 0;
+  std::uint64_t rows_ = 0;
+  std::size_t row_bytes_ = 0;
+  hsize_t chunk_rows_ = kChunkSamples;
+  std::unique_ptr<HeldChunks> held_ = std::make_unique<HeldChunks>();
+};
+
 // The bench truth on the file: dataset /truth, rows of (t_s, values…), read a window at a time.
 class Hdf5Truth final : public RecordedTruth {
  public:
   Hdf5Truth(fs::path path, Handle ds, std::uint64_t rows, std::size_t width)
-      : path_(std::move(path)), ds_(std::move(ds)), rows_(rows), width_(width) {}
+      : path_(std::move(path)), rows_(rows), width_(width), ds_(std::move(ds), H5T_NATIVE_DOUBLE, width, rows) {}
   std::uint64_t rows() const override { return rows_; }
   std::size_t columns() const override { return width_ > 0 ? width_ - 1 : 0; }
   void read(std::uint64_t first, std::size_t count, double* t, double* values, bool* whole) const override {
@@ -39,11 +126,8 @@ class Hdf5Truth final : public RecordedTruth {
                                           first + count, rows_));
     thread_local std::vector<double> v;
     v.resize(count * width_);
-    {
-      Hdf5Lock lock;
-      if (read_rows(ds_.get(), H5T_NATIVE_DOUBLE, first, count, width_, v.data()) < 0)
-        fail(path_, fmt::format("dataset /truth is damaged (rows {}..{})", first, first + count));
-    }
+    if (!ds_.read(first, count, v.data()))
+      fail(path_, fmt::format("dataset /truth is damaged (rows {}..{})", first, first + count));
     const std::size_t cols = columns();
     for (std::size_t i = 0; i < count; ++i) {
       t[i] = v[i * width_];
@@ -54,18 +138,26 @@ class Hdf5Truth final : public RecordedTruth {
 
  private:
   fs::path path_;
-  Handle ds_;
   std::uint64_t rows_;
   std::size_t width_;
+  ChunkedRows ds_;
 };
 
 // The samples of run.h5, read a chunk at a time from the file.
 class Hdf5Samples final : public SampleSource {
  public:
   Hdf5Samples(fs::path path, Handle file, std::uint64_t size, Hdf5SampleColumns c)
-      : path_(std::move(path)), file_(std::move(file)), size_(size), t_(std::move(c.t)),
-        flags_(std::move(c.flags)), counts_(std::move(c.counts)), si_(std::move(c.si)),
-        codec_(c.codec), exceptions_(std::move(c.exceptions)) {}
+      : path_(std::move(path)), file_(std::move(file)), size_(size),
+        t_(std::move(c.t), H5T_NATIVE_DOUBLE, 0, size), flags_(std::move(c.flags), H5T_NATIVE_UINT32, 0, size),
+        codec_(c.codec), exceptions_(std::move(c.exceptions)) {
+    for (std::size_t k = 0; k < kChannels; ++k) {
+      // Counts are read in their stored width: a read that converts makes libhdf5 zero a whole
+      // type-conversion buffer (1 MiB) per call.
+      const bool narrow = codec_[k].int16 && !codec_[k].si_stored;
+      counts_[k] = ChunkedRows(std::move(c.counts[k]), narrow ? H5T_NATIVE_INT16 : H5T_NATIVE_INT32, 0, size);
+      if (c.si[k]) si_[k] = ChunkedRows(std::move(c.si[k]), H5T_NATIVE_DOUBLE, 0, size);
+    }
+  }
 
   std::uint64_t size() const override { return size_; }
 
@@ -75,16 +167,15 @@ class Hdf5Samples final : public SampleSource {
     std::vector<double> d(count);
     std::vector<std::int32_t> c(count);
     std::vector<std::uint32_t> f(count);
-    Hdf5Lock lock;
-    read_into(t_.get(), H5T_NATIVE_DOUBLE, first, count, d.data(), "t_s");
+    read_into(t_, first, count, d.data(), "t_s");
     for (std::size_t i = 0; i < count; ++i) out[i].t_s = d[i];
-    read_into(flags_.get(), H5T_NATIVE_UINT32, first, count, f.data(), "flags");
+    read_into(flags_, first, count, f.data(), "flags");
     for (std::size_t i = 0; i < count; ++i) out[i].flags = f[i];
     for (int ch = 0; ch < kChannels; ++ch) {
       const Codec& k = codec_[static_cast<std::size_t>(ch)];
       read_counts(ch, first, count, c.data());
       if (k.si_stored) {
-        read_into(si_[static_cast<std::size_t>(ch)].get(), H5T_NATIVE_DOUBLE, first, count, d.data(), kSiNames[ch]);
+        read_into(si_[static_cast<std::size_t>(ch)], first, count, d.data(), kSiNames[ch]);
         for (std::size_t i = 0; i < count; ++i) set_channel(out[i], ch, c[i], d[i]);
       } else {
         for (std::size_t i = 0; i < count; ++i) set_channel(out[i], ch, c[i], k.si(c[i]));
@@ -100,37 +191,36 @@ class Hdf5Samples final : public SampleSource {
   void read_column(Channel ch, std::uint64_t first, std::size_t count, double* out) const override {
     if (count == 0) return;
     check_range(first, count);
-    Hdf5Lock lock;
     if (ch == Channel::kTime) {
-      read_into(t_.get(), H5T_NATIVE_DOUBLE, first, count, out, "t_s");
+      read_into(t_, first, count, out, "t_s");
       return;
     }
     if (ch == Channel::kFlags) {
       thread_local std::vector<std::uint32_t> f;
       f.resize(count);
-      read_into(flags_.get(), H5T_NATIVE_UINT32, first, count, f.data(), "flags");
+      read_into(flags_, first, count, f.data(), "flags");
       std::copy(f.begin(), f.end(), out);
       return;
     }
     const int k = static_cast<int>(ch) - static_cast<int>(Channel::kAx);
     const Codec& c = codec_[static_cast<std::size_t>(k)];
     if (c.si_stored) {
-      read_into(si_[static_cast<std::size_t>(k)].get(), H5T_NATIVE_DOUBLE, first, count, out, kSiNames[k]);
+      read_into(si_[static_cast<std::size_t>(k)], first, count, out, kSiNames[k]);
       return;
     }
     // Counts read in their stored width (no conversion inside the library, which serialises
     // callers) and turned into SI here, in parallel across threads.
-    auto from_counts = [&](auto stored, hid_t mem_type) {
+    auto from_counts = [&](auto stored) {
       // One buffer per thread, kept between calls (a fresh one per chunk is a page-zeroing mmap).
       thread_local std::vector<decltype(stored)> raw;
       raw.resize(count);
-      read_into(counts_[static_cast<std::size_t>(k)].get(), mem_type, first, count, raw.data(), kCountsNames[k]);
+      read_into(counts_[static_cast<std::size_t>(k)], first, count, raw.data(), kCountsNames[k]);
       counts_to_si(raw.data(), count, c.lsb, c.offset, out);
     };
     if (c.int16) {
-      from_counts(std::int16_t{}, H5T_NATIVE_INT16);
+      from_counts(std::int16_t{});
     } else {
-      from_counts(std::int32_t{}, H5T_NATIVE_INT32);
+      from_counts(std::int32_t{});
     }
     for (const auto* e = exceptions_in(first); e != exceptions_.data() + exceptions_.size() &&
                                                (*e)[0] < static_cast<double>(first + count); ++e) {
@@ -146,23 +236,21 @@ class Hdf5Samples final : public SampleSource {
     }
   }
   // Channel ch's counts of samples [first, first + count), read in their stored width and widened
-  // here. Every read in this class asks for the type as stored: a read that converts makes libhdf5
-  // zero a whole type-conversion buffer (1 MiB) per call, which small reads (a pose, one sample of a
-  // time search) then spend their time on.
+  // here.
   void read_counts(int ch, std::uint64_t first, std::size_t count, std::int32_t* out) const {
     const auto k = static_cast<std::size_t>(ch);
     if (!codec_[k].int16 || codec_[k].si_stored) {
-      read_into(counts_[k].get(), H5T_NATIVE_INT32, first, count, out, kCountsNames[ch]);
+      read_into(counts_[k], first, count, out, kCountsNames[ch]);
       return;
     }
     thread_local std::vector<std::int16_t> narrow;
     narrow.resize(count);
-    read_into(counts_[k].get(), H5T_NATIVE_INT16, first, count, narrow.data(), kCountsNames[ch]);
+    read_into(counts_[k], first, count, narrow.data(), kCountsNames[ch]);
     std::copy(narrow.begin(), narrow.end(), out);
   }
-  void read_into(hid_t ds, hid_t mem_type, std::uint64_t first, std::size_t count, void* out,
+  void read_into(const ChunkedRows& column, std::uint64_t first, std::size_t count, void* out,
                  const char* name) const {
-    if (read_rows(ds, mem_type, first, count, 0, out) < 0) {
+    if (!column.read(first, count, out)) {
       throw InputError(fmt::format(
           "{}: dataset /samples/{} is damaged: samples {}..{} cannot be read ({})", path_.string(),
           name, first, first + count - 1, hdf5_error()));
@@ -177,8 +265,8 @@ class Hdf5Samples final : public SampleSource {
   fs::path path_;
   Handle file_;
   std::uint64_t size_;
-  Handle t_, flags_;
-  std::array<Handle, kChannels> counts_, si_;
+  ChunkedRows t_, flags_;
+  std::array<ChunkedRows, kChannels> counts_, si_;
   std::array<Codec, kChannels> codec_;
   std::vector<std::array<double, 4>> exceptions_;  // sorted by index
 };

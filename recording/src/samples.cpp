@@ -70,6 +70,36 @@ void MemorySamples::read_column(Channel c, std::uint64_t first, std::size_t coun
   for (std::size_t i = 0; i < count; ++i) out[i] = value_of((*data_)[first + i], c);
 }
 
+namespace {
+
+// A pass's chunk of samples, its memory kept on the thread for the next pass (a fresh one is up to
+// 6.8 MB of pages for the kernel to map and zero, once per pass); a pass inside a pass takes another.
+class ChunkBuffer {
+ public:
+  explicit ChunkBuffer(std::size_t n) : size_(n) {
+    if (!kept_.empty()) {
+      samples_ = std::move(kept_.back());
+      kept_.pop_back();
+    }
+    if (samples_.size() < n) samples_.resize(n);
+  }
+  ~ChunkBuffer() {
+    if (kept_.size() < 2) kept_.push_back(std::move(samples_));
+  }
+  ChunkBuffer(const ChunkBuffer&) = delete;
+  ChunkBuffer& operator=(const ChunkBuffer&) = delete;
+  std::size_t size() const { return size_; }
+  ImuSample* data() const { return samples_.data(); }
+
+ private:
+  static thread_local std::vector<std::vector<ImuSample>> kept_;
+  std::size_t size_;
+  mutable std::vector<ImuSample> samples_;
+};
+thread_local std::vector<std::vector<ImuSample>> ChunkBuffer::kept_;
+
+}  // namespace
+
 void for_each_chunk(const SampleSource& src, std::uint64_t first, std::uint64_t last,
                     const ChunkFn& fn, std::size_t chunk_samples) {
   last = std::min(last, src.size());
@@ -81,7 +111,7 @@ void for_each_chunk(const SampleSource& src, std::uint64_t first, std::uint64_t 
       fn(data + i, static_cast<std::size_t>(std::min<std::uint64_t>(chunk_samples, last - i)), i);
     return;
   }
-  std::vector<ImuSample> buf(static_cast<std::size_t>(std::min<std::uint64_t>(chunk_samples, last - first)));
+  const ChunkBuffer buf(static_cast<std::size_t>(std::min<std::uint64_t>(chunk_samples, last - first)));
   for (std::uint64_t i = first; i < last;) {
     const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(buf.size(), last - i));
     src.read(i, n, buf.data());

@@ -1206,6 +1206,55 @@ with h5py.File(sys.argv[1], "r", swmr=True) as f:
   EXPECT_NEAR(py_t, t, 1e-9 * t);
 }
 
+TEST_F(RecordingTest, Hdf5SmallReadsFromHeldChunksGiveTheSamplesAndTruthWritten) {
+  // Small reads are served from whole chunks kept by the source (hdf5_sources.cpp): reads of every
+  // size, inside a chunk and across chunk boundaries, from four threads at once, give what was
+  // written; so do truth rows and the time searches over them.
+  const fs::path dir = root_ / "run";
+  constexpr std::uint64_t kN = 3 * 65'536 + 1'000;
+  std::vector<ImuSample> s;
+  for (std::uint64_t k = 1; k <= kN; ++k) s.push_back(mpu_sample(k));
+  RecordingHeader h = make_header();
+  h.truth_columns = {"a", "b"};
+  constexpr std::uint64_t kTruthRows = 20'000;  // 10 Hz, many chunks of /truth
+  {
+    RecordingWriter w(dir, h, "name: small reads\n");
+    w.add_samples(s.data(), s.size());
+    for (std::uint64_t i = 0; i < kTruthRows; ++i) w.add_truth(0.1 * static_cast<double>(i), {static_cast<double>(i), -static_cast<double>(i)});
+    w.finish(stend::RunStatus::kComplete);
+  }
+  const Recording r = Recording::open(dir, stend::SampleLoading::kStream, stend::TruthLoading::kStream);
+  ASSERT_TRUE(r.source && r.truth_store);
+  std::atomic<int> wrong{0};
+  auto reader = [&](std::uint64_t seed) {
+    std::uint64_t x = seed;
+    std::vector<ImuSample> got;
+    std::vector<double> col;
+    for (int k = 0; k < 400; ++k) {
+      x = splitmix(x);
+      const std::size_t count = 1 + static_cast<std::size_t>(x % (k % 4 == 0 ? 40'000 : 300));
+      const std::uint64_t first = splitmix(x) % (kN - count);
+      got.resize(count);
+      col.resize(count);
+      r.source->read(first, count, got.data());
+      r.source->read_column(stend::Channel::kTime, first, count, col.data());
+      for (std::size_t i = 0; i < count; ++i) {
+        const ImuSample& w = s[static_cast<std::size_t>(first) + i];
+        wrong += got[i].t_s != w.t_s || col[i] != w.t_s || got[i].accel_counts[2] != w.accel_counts[2] ||
+                 got[i].gyro_radps[1] != w.gyro_radps[1] || got[i].temperature_c != w.temperature_c;
+      }
+      const double t = 0.1 * static_cast<double>(splitmix(x + 1) % (kTruthRows - 3));
+      const stend::TruthRows rows = stend::truth_rows_in(*r.truth_store, t, t + 0.25);
+      wrong += rows.lo != static_cast<std::uint64_t>(std::llround(t / 0.1)) || rows.hi - rows.lo != 3;
+      wrong += r.truth_store->time(rows.lo) != 0.1 * static_cast<double>(rows.lo);
+    }
+  };
+  std::vector<std::thread> threads;
+  for (std::uint64_t t = 1; t <= 4; ++t) threads.emplace_back(reader, t);
+  for (auto& t : threads) t.join();
+  EXPECT_EQ(wrong.load(), 0);
+}
+
 TEST_F(RecordingTest, Hdf5ChunksEncodedByStendAreStandardShuffleDeflateFletcher32) {
   // Whole sample chunks are encoded by the writer itself (hdf5_chunks.hpp); any HDF5 reader must
   // decode them as its own: h5py reads every column (libhdf5 checks each chunk's Fletcher-32), and
