@@ -131,18 +131,20 @@ struct DfMessage {
 bool next_message(const BinaryReader& f, std::size_t& pos, DfFormats& formats, std::size_t& resyncs,
                   std::size_t& skipped_bytes, DfMessage& m, DfCut& cut) {
   constexpr std::uint8_t kHead[2] = {kHead1, kHead2};
-  const auto ends_inside = [&](std::size_t length, const std::string& what) {
+  // `what` names the cut-off part, built only when there is a cut (this runs once per message).
+  const auto ends_inside = [&](std::size_t length, const auto& what) {
     if (pos + length <= f.size()) return false;
-    cut = DfCut{pos, f.size() - pos, what};
+    cut = DfCut{pos, f.size() - pos, what()};
     pos = f.size();
     return true;
   };
   while (pos < f.size()) {
-    if (ends_inside(kHeaderBytes, "a message header")) return false;
+    if (ends_inside(kHeaderBytes, [] { return std::string("a message header"); })) return false;
     f.need(pos, kHeaderBytes, "a message header (A3 95 <type>)");
     const std::uint8_t type = *f.at(pos + 2);
     const bool header_ok = *f.at(pos) == kHead1 && *f.at(pos + 1) == kHead2;
-    if (header_ok && type == kFmtType && ends_inside(kFmtLength, "an FMT message")) return false;
+    if (header_ok && type == kFmtType && ends_inside(kFmtLength, [] { return std::string("an FMT message"); }))
+      return false;
     if (header_ok && type == kFmtType) {
       formats.all.push_back(read_fmt(f, pos));
       formats.all.back().index = formats.all.size() - 1;
@@ -165,8 +167,9 @@ bool next_message(const BinaryReader& f, std::size_t& pos, DfFormats& formats, s
     }
     const DfFormat& fmt = *it->second;
     if (fmt.length < kHeaderBytes) f.fail(fmt.defined_at, "FMT for '" + fmt.name + "' gives a length below 3");
-    if (ends_inside(fmt.length, "a '" + fmt.name + "' message")) return false;
-    f.need(pos, fmt.length, "a '" + fmt.name + "' message");
+    const auto what = [&fmt] { return "a '" + fmt.name + "' message"; };
+    if (ends_inside(fmt.length, what)) return false;
+    f.need(pos, fmt.length, what);
     m = DfMessage{&fmt, pos};
     pos += fmt.length;
     return true;

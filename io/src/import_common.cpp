@@ -185,12 +185,12 @@ BinaryReader::BinaryReader(const fs::path& file) : file_(file), in_(file, std::i
   size_ = static_cast<std::size_t>(in_.tellg());
 }
 
-void BinaryReader::need(std::size_t offset, std::size_t count, const std::string& what) const {
+void BinaryReader::load(std::size_t offset, std::size_t count, std::string_view what_text) const {
+  const std::string what(what_text);
   if (offset > size_ || count > size_ - offset) {
     fail(offset, "the file ends inside " + what + " (expected " + std::to_string(count) + " bytes, " +
                      std::to_string(offset > size_ ? 0 : size_ - offset) + " remain; truncated?)");
   }
-  if (offset >= start_ && offset + count <= start_ + buffer_.size()) return;
   start_ = offset;
   buffer_.resize(std::min(std::max(count, kBinaryWindow), size_ - offset));
   in_.clear();

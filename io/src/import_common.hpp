@@ -19,6 +19,7 @@
 #include <fstream>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 namespace stend::io::detail {
@@ -114,9 +115,18 @@ class BinaryReader {
   const std::filesystem::path& file() const { return file_; }
   std::size_t size() const { return size_; }
   const std::uint8_t* at(std::size_t offset) const { return buffer_.data() + (offset - start_); }
-  void need(std::size_t offset, std::size_t count, const std::string& what) const;
+  // `what` names the bytes in a failure's message: text, or a function that makes it, called only
+  // when the bytes must be read from the file (a message's name joined per message cost a heap
+  // allocation per record).
+  void need(std::size_t offset, std::size_t count, std::string_view what) const {
+    if (!buffered(offset, count)) load(offset, count, what);
+  }
+  template <class Describe, class = std::enable_if_t<std::is_invocable_r_v<std::string, const Describe&>>>
+  void need(std::size_t offset, std::size_t count, const Describe& what) const {
+    if (!buffered(offset, count)) load(offset, count, what());
+  }
   template <class T>
-  T get(std::size_t offset, const std::string& what) const {
+  T get(std::size_t offset, std::string_view what) const {
     need(offset, sizeof(T), what);
     return load_le<T>(at(offset));
   }
@@ -127,6 +137,11 @@ class BinaryReader {
   }
 
  private:
+  bool buffered(std::size_t offset, std::size_t count) const {
+    return offset >= start_ && offset <= size_ && count <= size_ - offset && offset + count <= start_ + buffer_.size();
+  }
+  void load(std::size_t offset, std::size_t count, std::string_view what) const;
+
   std::filesystem::path file_;
   std::size_t size_ = 0;
   mutable std::ifstream in_;

@@ -243,7 +243,7 @@ class McapFile final : public StorageFile {
     std::string topic, type, encoding;
   };
 
-  const std::uint8_t* read(std::uint64_t pos, std::uint64_t n, const std::string& what) {
+  const std::uint8_t* read(std::uint64_t pos, std::uint64_t n, std::string_view what) {
     in_.need(pos, n, what);
     return in_.at(pos);
   }

@@ -30,7 +30,7 @@ namespace {
 class RecordView {
  public:
   RecordView(const BinaryReader& f, const Format& fmt, const DataRecord& r) : f_(f), fmt_(fmt), r_(r) {
-    f_.need(r_.offset, r_.size, "a '" + fmt_.name + "' data message");
+    f_.need(r_.offset, r_.size, [this] { return "a '" + fmt_.name + "' data message"; });
   }
 
   double number(const std::string& name, std::size_t index = 0) const {

@@ -210,16 +210,17 @@ const Field* find_field(const Format& fmt, const std::string& name) {
 
 bool next_message(const BinaryReader& f, const std::vector<std::uint64_t>& appended_offsets, std::size_t& pos,
                   Losses& losses, Message& m) {
-  const auto ends_inside = [&](std::size_t length, const std::string& what) {
+  // `what` names the cut-off part, built only when there is a cut (this runs once per message).
+  const auto ends_inside = [&](std::size_t length, const auto& what) {
     if (pos + length <= f.size()) return false;
     losses.cut_at = pos;
     losses.cut_bytes = f.size() - pos;
-    losses.cut_what = what;
+    losses.cut_what = what();
     pos = f.size();
     return true;
   };
   while (pos < f.size()) {
-    if (ends_inside(kMessageHeader, "a message header")) return false;
+    if (ends_inside(kMessageHeader, [] { return std::string("a message header"); })) return false;
     const auto size = f.get<std::uint16_t>(pos, "a message header (uint16 size, uint8 type)");
     const auto type = static_cast<char>(f.get<std::uint8_t>(pos + 2, "a message header (uint16 size, uint8 type)"));
     const std::size_t end = pos + kMessageHeader + size;
@@ -242,8 +243,10 @@ bool next_message(const BinaryReader& f, const std::vector<std::uint64_t>& appen
       pos = *sync + sizeof kSyncMagic;
       continue;
     }
-    if (ends_inside(kMessageHeader + size, std::string("a '") + type + "' message")) return false;
-    f.need(pos, kMessageHeader + size, std::string("a '") + type + "' message (3-byte header + " + std::to_string(size) + " bytes)");
+    if (ends_inside(kMessageHeader + size, [type] { return std::string("a '") + type + "' message"; })) return false;
+    f.need(pos, kMessageHeader + size, [type, size] {
+      return std::string("a '") + type + "' message (3-byte header + " + std::to_string(size) + " bytes)";
+    });
     m = Message{type, pos, pos + kMessageHeader, size};
     if (type == 'O') ++losses.lost;
     pos = end;

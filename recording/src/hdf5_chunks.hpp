@@ -27,9 +27,10 @@ class ChunkWriter {
   ChunkWriter& operator=(const ChunkWriter&) = delete;
 
   // Rows [at, at + rows) of the 1-D dataset `ds` from `data` (of `mem_type`), extending it to
-  // at + rows, as write_rows does. Rows that are one whole chunk at a chunk boundary, of a type
-  // stored as given (or int32 counts stored as int16) through a pipeline of shuffle, deflate and
-  // Fletcher-32 or a part of it, are encoded here; any other write goes through libhdf5.
+  // at + rows, as write_rows does. Rows that start a chunk — a whole one, or the first rows of one
+  // the dataset does not reach yet — of a type stored as given (or int32 counts stored as int16)
+  // through a pipeline of shuffle, deflate and Fletcher-32 or a part of it, are encoded here; any
+  // other write goes through libhdf5.
   void write(hid_t ds, hid_t mem_type, hsize_t at, hsize_t rows, const void* data,
              const std::filesystem::path& file, const char* name);
 
