@@ -44,6 +44,25 @@ constexpr char kSqliteMagic[16] = "SQLite format 3";  // with its terminating NU
 
 std::string byte_at(std::uint64_t offset) { return "byte " + std::to_string(offset); }
 
+// Where a record lies in its storage file, put into words only for a message ("byte 1234",
+// "chunk at byte 99, byte 12 of its records", "messages row id 17"): words made per record cost
+// more than decoding it.
+struct Place {
+  enum class Kind { kByte, kChunkRecord, kRow };
+  Kind kind = Kind::kByte;
+  std::uint64_t at = 0;      // kByte: the file's byte; kChunkRecord: the chunk's
+  std::uint64_t record = 0;  // kChunkRecord: the byte in the chunk's records
+  std::int64_t row = 0;      // kRow: the messages table's row id
+  std::string text() const {
+    switch (kind) {
+      case Kind::kChunkRecord: return "chunk at " + byte_at(at) + ", byte " + std::to_string(record) + " of its records";
+      case Kind::kRow: return "messages row id " + std::to_string(row);
+      case Kind::kByte: break;
+    }
+    return byte_at(at);
+  }
+};
+
 // "Message record (opcode 0x05)".
 std::string mcap_record_name(std::uint8_t op) {
   static const char* const names[] = {"?",           "Header",          "Footer",     "Schema",        "Channel",
@@ -70,8 +89,8 @@ Bytes read_prefix(const fs::path& file, std::size_t n) {
 
 class CdrReader {
  public:
-  CdrReader(const std::uint8_t* data, std::size_t size, std::string where)
-      : data_(data), size_(size), where_(std::move(where)) {
+  CdrReader(const std::uint8_t* data, std::size_t size, const Place& where)
+      : data_(data), size_(size), where_(where) {
     if (size_ < 4 || data_[0] != 0x00 || data_[1] > 0x01) {
       fail(size_ < 4 ? "shorter than the 4-byte CDR encapsulation header"
                             : "encapsulation " + std::to_string(data_[0]) + "," + std::to_string(data_[1]) +
@@ -103,7 +122,7 @@ class CdrReader {
   void skip_f64(int n) {
     for (int i = 0; i < n; ++i) f64();
   }
-  [[noreturn]] void fail(const std::string& what) const { throw Failure{where_, what}; }
+  [[noreturn]] void fail(const std::string& what) const { throw Failure{where_.text(), what}; }
 
   struct Failure {
     std::string where, what;
@@ -132,7 +151,7 @@ class CdrReader {
 
   const std::uint8_t* data_;
   std::size_t size_;
-  std::string where_;
+  const Place& where_;
   bool little_ = true;
   std::size_t pos_ = 4;
 };
@@ -147,7 +166,7 @@ std::int64_t read_header(CdrReader& in, std::string& frame_id) {
 
 // sensor_msgs/msg/Imu: header, orientation (4 float64), covariance (9), angular_velocity (3),
 // covariance (9), linear_acceleration (3), covariance (9).
-ImuMessage decode_imu(const std::uint8_t* data, std::size_t size, std::int64_t record_ns, const std::string& where) {
+ImuMessage decode_imu(const std::uint8_t* data, std::size_t size, std::int64_t record_ns, const Place& where) {
   CdrReader in(data, size, where);
   ImuMessage m;
   m.record_ns = record_ns;
@@ -162,7 +181,7 @@ ImuMessage decode_imu(const std::uint8_t* data, std::size_t size, std::int64_t r
 
 // sensor_msgs/msg/Temperature: header, temperature [°C], variance.
 TemperatureMessage decode_temperature(const std::uint8_t* data, std::size_t size, std::int64_t record_ns,
-                                      const std::string& where) {
+                                      const Place& where) {
   CdrReader in(data, size, where);
   TemperatureMessage m;
   m.record_ns = record_ns;
@@ -181,7 +200,7 @@ struct RawMessage {
   std::int64_t record_ns = 0;
   const std::uint8_t* data = nullptr;
   std::size_t size = 0;
-  std::string where;  // "byte 1234" / "messages row id 17" in its storage file
+  Place where;  // in its storage file
 };
 
 // Only Imu and Temperature messages are kept; the topic is chosen once every file is read.
@@ -252,9 +271,9 @@ class McapFile final : public StorageFile {
   bool top_record(RawMessage& m) {
     const fs::path& file = in_.file();
     const std::uint64_t pos = pos_;
-    const std::string where = byte_at(pos);
+    const Place where{Place::Kind::kByte, pos};
     if (in_.size() - pos < 9) {
-      throw ImportError(file, pos == in_.size() ? byte_at(pos) : where,
+      throw ImportError(file, byte_at(pos),
                         pos == in_.size() ? "file ends without the MCAP Footer record (truncated file?)"
                                           : "truncated record header (expected opcode and 8-byte length)");
     }
@@ -262,7 +281,7 @@ class McapFile final : public StorageFile {
     const std::uint8_t op = head[0];
     const std::uint64_t len = le(head + 1, 8);
     if (len > in_.size() - pos - 9) {
-      throw ImportError(file, where,
+      throw ImportError(file, where.text(),
                         mcap_record_name(op) + " declares " + std::to_string(len) + " bytes, only " +
                             std::to_string(in_.size() - pos - 9) + " follow (truncated file?)");
     }
@@ -287,12 +306,12 @@ class McapFile final : public StorageFile {
   bool chunk_record(RawMessage& m) {
     const fs::path& file = in_.file();
     const std::uint64_t pos = chunk_pos_, end = records_.size();
-    const std::string where = "chunk at " + byte_at(chunk_at_) + ", byte " + std::to_string(pos) + " of its records";
-    if (end - pos < 9) throw ImportError(file, where, "truncated record header (expected opcode and 8-byte length)");
+    const Place where{Place::Kind::kChunkRecord, chunk_at_, pos};
+    if (end - pos < 9) throw ImportError(file, where.text(), "truncated record header (expected opcode and 8-byte length)");
     const std::uint8_t op = records_[pos];
     const std::uint64_t len = le(records_.data() + pos + 1, 8);
     if (len > end - pos - 9) {
-      throw ImportError(file, where,
+      throw ImportError(file, where.text(),
                         mcap_record_name(op) + " declares " + std::to_string(len) + " bytes, only " +
                             std::to_string(end - pos - 9) + " follow (truncated file?)");
     }
@@ -313,9 +332,9 @@ class McapFile final : public StorageFile {
     const std::uint8_t* d;
     std::uint64_t pos, end;
     const fs::path& file;
-    const std::string& where;
+    const Place& where;
     void need(std::uint64_t n) const {
-      if (end - pos < n) throw ImportError(file, where, "record content shorter than its fields");
+      if (end - pos < n) throw ImportError(file, where.text(), "record content shorter than its fields");
     }
     std::uint64_t uint(int n) {
       need(static_cast<std::uint64_t>(n));
@@ -353,11 +372,11 @@ class McapFile final : public StorageFile {
     f.uint(8);  // publish_time
     const auto c = channels_.find(id);
     if (c == channels_.end()) {
-      throw ImportError(in_.file(), f.where, "message on channel " + std::to_string(id) + " before its Channel record");
+      throw ImportError(in_.file(), f.where.text(), "message on channel " + std::to_string(id) + " before its Channel record");
     }
     if (!kept_type(c->second.type)) return false;
     if (c->second.encoding != "cdr") {
-      throw ImportError(in_.file(), f.where,
+      throw ImportError(in_.file(), f.where.text(),
                         "topic " + c->second.topic + " has message encoding '" + c->second.encoding + "', expected cdr");
     }
     m.topic = &c->second.topic;
@@ -389,9 +408,9 @@ class McapFile final : public StorageFile {
     const std::string compression = f.string();
     const std::uint64_t stored_size = f.uint(8);
     const std::uint8_t* stored = f.bytes(stored_size);
-    decompress(stored, stored_size, compression, size, f.where);
+    decompress(stored, stored_size, compression, size, f.where.text());
     if (crc != 0 && static_cast<std::uint32_t>(crc32(0, records_.data(), static_cast<uInt>(records_.size()))) != crc) {
-      throw ImportError(in_.file(), f.where, "chunk CRC mismatch (corrupt data)");
+      throw ImportError(in_.file(), f.where.text(), "chunk CRC mismatch (corrupt data)");
     }
     ++chunks_[compression.empty() ? "none" : compression];
     chunk_at_ = offset;
@@ -498,7 +517,7 @@ class Db3File final : public StorageFile {
       m.record_ns = sqlite3_column_int64(messages_.s, 2);
       m.data = static_cast<const std::uint8_t*>(sqlite3_column_blob(messages_.s, 3));
       m.size = static_cast<std::size_t>(sqlite3_column_bytes(messages_.s, 3));
-      m.where = "messages row id " + std::to_string(sqlite3_column_int64(messages_.s, 0));
+      m.where = Place{Place::Kind::kRow, 0, 0, sqlite3_column_int64(messages_.s, 0)};
       return true;
     }
   }
@@ -623,7 +642,7 @@ class StorageCursor {
 template <class Message>
 class TopicCursor final : public MessageCursor<Message> {
  public:
-  using Decode = Message (*)(const std::uint8_t*, std::size_t, std::int64_t, const std::string&);
+  using Decode = Message (*)(const std::uint8_t*, std::size_t, std::int64_t, const Place&);
   TopicCursor(const std::vector<fs::path>& files, std::string topic, Decode decode)
       : storage_(files), topic_(std::move(topic)), decode_(decode) {}
   bool next(Message& out) override {
