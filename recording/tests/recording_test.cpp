@@ -130,6 +130,18 @@ void expect_same_sample(const ImuSample& a, const ImuSample& b, std::size_t i) {
   ASSERT_EQ(a.flags, b.flags) << "sample " << i;
 }
 
+// The run in `dir` streams back exactly the samples `s`, in order.
+void expect_streams_back(const fs::path& dir, const std::vector<ImuSample>& s) {
+  const Recording r = Recording::open(dir, stend::SampleLoading::kStream);
+  ASSERT_EQ(r.sample_count(), s.size());
+  std::vector<ImuSample> got(s.size());
+  r.source->read(0, s.size(), got.data());
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    expect_same_sample(got[i], s[i], i);
+    if (::testing::Test::HasFatalFailure()) return;
+  }
+}
+
 class RecordingTest : public ::testing::Test {
  protected:
   const TempDir tmp_{"recording"};
@@ -934,14 +946,8 @@ TEST_F(RecordingTest, Hdf5StoresCountsInNativeWidthAndDerivesSi) {
     for (std::size_t b = 0; b < s.size(); b += 10) w.add_samples(s.data() + b, 10);
     w.finish(stend::RunStatus::kComplete);
   }
-  const Recording r = Recording::open(dir, stend::SampleLoading::kStream);
-  ASSERT_EQ(r.sample_count(), kN);
-  std::vector<ImuSample> got(kN);
-  r.source->read(0, kN, got.data());
-  for (std::size_t i = 0; i < kN; ++i) {
-    expect_same_sample(got[i], s[i], i);
-    if (HasFatalFailure()) return;
-  }
+  expect_streams_back(dir, s);
+  if (HasFatalFailure()) return;
   const double bytes_per_sample = static_cast<double>(fs::file_size(dir / "run.h5")) / kN;
   std::printf("[          ] %llu samples: %.2f bytes per sample on disk\n",
               static_cast<unsigned long long>(kN), bytes_per_sample);
@@ -1276,14 +1282,8 @@ TEST_F(RecordingTest, Hdf5ChunksEncodedByStendAreStandardShuffleDeflateFletcher3
       w.add_samples(s.data() + 1000, s.size() - 1000);
       w.finish(stend::RunStatus::kComplete);
     }
-    const Recording r = Recording::open(dir, stend::SampleLoading::kStream);
-    ASSERT_EQ(r.sample_count(), kN);
-    std::vector<ImuSample> got(kN);
-    r.source->read(0, kN, got.data());
-    for (std::size_t i = 0; i < kN; ++i) {
-      expect_same_sample(got[i], s[i], i);
-      if (HasFatalFailure()) return;
-    }
+    expect_streams_back(dir, s);
+    if (HasFatalFailure()) return;
     const std::string script = R"(
 import sys, zlib, h5py, numpy as np
 with h5py.File(sys.argv[1], "r") as f:
