@@ -442,6 +442,11 @@ class McapFile final : public StorageFile {
   // Refuses a declared uncompressed size the stored bytes cannot produce, before allocating it:
   // a zstd frame states its content size (when it does, the two must agree); lz4 expands at most
   // 255:1.
+  // A chunk is decompressed whole, so its declared size is held to kMaxChunkBytes: a zstd frame can
+  // state any size and fill it with run-length blocks of a few bytes each (50 kB of input made
+  // 1 GB), and memory must stay bounded on any input. MCAP writers make chunks of 1 MiB or less
+  // by default.
+  static constexpr std::uint64_t kMaxChunkBytes = std::uint64_t{256} << 20;
   void check_declared_size(const std::uint8_t* in, std::uint64_t in_size, const std::string& compression,
                            std::uint64_t size, const std::string& where) const {
     std::uint64_t most = 255 * in_size + 64;  // lz4, and a zstd frame that does not state its size
@@ -453,6 +458,10 @@ class McapFile final : public StorageFile {
     if (size > most) {
       throw ImportError(in_.file(), where, "chunk declares " + std::to_string(size) + " uncompressed bytes, more than its " +
                                                std::to_string(in_size) + " " + compression + " bytes can hold (damaged header)");
+    }
+    if (size > kMaxChunkBytes) {
+      throw ImportError(in_.file(), where, "chunk declares " + std::to_string(size) + " uncompressed bytes, more than the " +
+                                               std::to_string(kMaxChunkBytes >> 20) + " MiB Stend reads in one chunk");
     }
   }
 

@@ -521,3 +521,30 @@ TEST(Rosbag2Mcap, ChunkDeclaringMoreThanItsBytesHoldIsRefused) {
   EXPECT_NE(msg.find("uncompressed bytes, more than its"), std::string::npos) << msg;
   EXPECT_NE(msg.find("(damaged header)"), std::string::npos) << msg;
 }
+
+// A zstd frame can state any content size and fill it with run-length blocks of a few bytes each
+// (the fuzz target made 1 GB from 50 kB): a chunk is decompressed whole, so one declaring more than
+// 256 MiB is refused by its size before anything is allocated, naming the limit.
+TEST(Rosbag2Mcap, ChunkLargerThanTheChunkLimitIsRefusedBeforeItIsAllocated) {
+  const stend::testing::TempDir dir("mcap-limit");
+  auto put = [](std::string& to, std::uint64_t v, int bytes) {  // little-endian
+    for (int i = 0; i < bytes; ++i) to.push_back(static_cast<char>(v >> (8 * i)));
+  };
+  constexpr std::uint64_t kDeclared = std::uint64_t{300} << 20;
+  std::string frame("\x28\xB5\x2F\xFD\xE0", 5);  // zstd magic; one segment, an 8-byte content size
+  put(frame, kDeclared, 8);
+  frame += std::string("\x0B\x00\x00\x00", 4);  // the last block: run-length, 1 byte
+  std::string chunk;  // start and end time, uncompressed size, crc 0, compression, records
+  put(chunk, 0, 8), put(chunk, 0, 8), put(chunk, kDeclared, 8), put(chunk, 0, 4), put(chunk, 4, 4);
+  chunk += "zstd";
+  put(chunk, frame.size(), 8);
+  chunk += frame;
+  std::string file("\x89MCAP0\r\n\x06", 9);  // magic, then a Chunk record
+  put(file, chunk.size(), 8);
+  file += chunk;
+  const fs::path mcap = dir.path() / "big_chunk.mcap";
+  stend::testing::write_text(mcap, file);
+  const std::string msg = import_error([&] { stend::io::import_rosbag2(mcap); });
+  EXPECT_NE(msg.find("chunk declares 314572800 uncompressed bytes, more than the 256 MiB Stend reads in one chunk"),
+            std::string::npos) << msg;
+}
