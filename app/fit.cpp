@@ -311,12 +311,35 @@ class CountingSource final : public stend::SampleSource {
   mutable std::atomic<std::uint64_t> values_{0};
 };
 
-// The recording with its samples in memory (a copy when they are in the store).
-stend::Recording with_samples_in_memory(const stend::Recording& rec) {
+// A recording whose samples and truth take at most this much memory is read into memory once
+// before its fit: an estimator's many passes over a short record (a calibration makes about
+// twenty) then cost no decoding. Longer records stay in the store, read a chunk at a time.
+constexpr std::uint64_t kHeldInMemoryBytes = std::uint64_t{64} << 20;
+
+bool small_enough_to_hold(const stend::Recording& rec) {
+  const std::uint64_t truth_values = rec.truth_rows * (rec.header.truth_columns.size() + 1);
+  return rec.sample_count() * sizeof(stend::ImuSample) + truth_values * sizeof(double) <= kHeldInMemoryBytes;
+}
+
+// The recording with its samples and truth in memory (a copy of what is in the store).
+stend::Recording held_in_memory(const stend::Recording& rec) {
   stend::Recording out = rec;
   out.source.reset();
   out.samples.resize(static_cast<std::size_t>(rec.sample_count()));
   if (!out.samples.empty()) rec.sample_source().read(0, out.samples.size(), out.samples.data());
+  if (!rec.truth_store) return out;
+  out.truth_store.reset();
+  const stend::RecordedTruth& store = *rec.truth_store;
+  const auto rows = static_cast<std::size_t>(store.rows());
+  const std::size_t columns = store.columns();
+  std::vector<double> values(rows * columns);
+  const auto whole = std::make_unique<bool[]>(rows);
+  out.truth_t.resize(rows);
+  if (rows) store.read(0, rows, out.truth_t.data(), values.data(), whole.get());
+  out.truth.assign(rows, {});
+  for (std::size_t i = 0; i < rows; ++i)  // a row with fewer values stays short, as it was read
+    if (whole[i]) out.truth[i].assign(values.begin() + static_cast<std::ptrdiff_t>(i * columns),
+                                      values.begin() + static_cast<std::ptrdiff_t>((i + 1) * columns));
   return out;
 }
 
@@ -379,7 +402,8 @@ FitOutcome fit_recording(const stend::Recording& rec, const std::string& model_f
       });
   const stend::Recording& input = counted ? *counted : rec;
   std::optional<stend::Recording> in_memory;
-  if (input.source && !reads_sample_source(registry, entry)) in_memory = with_samples_in_memory(input);
+  if ((input.source || input.truth_store) && (!reads_sample_source(registry, entry) || small_enough_to_hold(input)))
+    in_memory = held_in_memory(input);
   EstimatorRequest request;
   request.recording = in_memory ? &*in_memory : &input;
   request.input = rec.dir.string();
@@ -400,7 +424,7 @@ FitOutcome fit_recording(const stend::Recording& rec, const std::string& model_f
   out.ok = r.ok();
   out.status = r.status();
   out.estimator = entry.name;
-  out.document = nlohmann::json::parse(document, nullptr, false);
+  out.document = r.document;
   out.result = r;
   if (r.status() == estimation::FitStatus::kNotApplicable) {
     fmt::print(human(), "results:    none — not applicable: {}; nothing written\n", r.summary.message);

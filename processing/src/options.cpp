@@ -213,19 +213,14 @@ void emit_options(YAML::Emitter& out, const ProcessingOptions& o) {
 
 namespace {
 
-// The experiment's YAML parsed: an analysis resolves its options several times on one recording,
-// and the parse is most of the cost, so the last text parsed (per thread) is kept with its tree.
+// The experiment's YAML parsed (once per text: an analysis resolves its options several times on
+// one recording, and the recording's reader has parsed it already).
 YAML::Node parsed_experiment(const std::string& text, const std::string& file) {
-  thread_local std::string last_text;
-  thread_local YAML::Node last_root;
-  if (text == last_text && last_root) return last_root;
   try {
-    last_root = YAML::Load(text);
+    return yaml::parse_kept(text);
   } catch (const YAML::ParserException& e) {
     throw ExperimentError({file, e.mark.line + 1, e.mark.column + 1}, "", "YAML syntax error: " + e.msg);
   }
-  last_text = text;
-  return last_root;
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include "store_files.hpp"
 
 #include "stend/errors.hpp"
+#include "stend/yaml/reader.hpp"
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
@@ -29,7 +30,7 @@ namespace {
 // The experiment's YAML, checked.
 void check_experiment_yaml(const fs::path& where, const std::string& text) {
   try {
-    (void)YAML::Load(text);
+    (void)yaml::parse_kept(text);  // kept: the analyses read it next
   } catch (const YAML::Exception& e) {
     throw InputError(fmt::format("{}:{}:{}: invalid YAML: {}", where.string(), e.mark.line + 1,
                                  e.mark.column + 1, e.msg));

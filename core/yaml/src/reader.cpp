@@ -105,6 +105,15 @@ YAML::Node load_file(const std::string& file, const std::string& what) {
   }
 }
 
+YAML::Node parse_kept(const std::string& text) {
+  thread_local std::string last_text;
+  thread_local YAML::Node last_root;
+  if (text == last_text && last_root) return last_root;
+  last_root = YAML::Load(text);
+  last_text = text;
+  return last_root;
+}
+
 SourceLocation location_of(const YAML::Node& node, const std::string& file) {
   SourceLocation loc;
   loc.file = file;

@@ -12,12 +12,13 @@ namespace stend::ceres_nonlinear {
 
 namespace {
 
-// The typed fit: ceres.json written, then read back by read_results, so a fit and its results
-// file give the same typed result.
+// The typed fit: the results document as ceres.json holds it, read back by read_results, so a fit
+// and its results file give the same typed result (the document holds no value its text would
+// change: non-finite numbers are written as null).
 estimation::FitResult fit_typed(const EstimatorRequest& req) {
   if (req.recording == nullptr) throw std::invalid_argument("ceres_nonlinear: no recording given");
   const ModelFileFit f = fit_model_file(*req.recording, load_model_file(req.model_file));
-  estimation::FitResult r = read_results(nlohmann::json::parse(f.json));
+  estimation::FitResult r = read_results(f.document);
   r.document_text = f.json;
   r.text = f.text;
   return r;

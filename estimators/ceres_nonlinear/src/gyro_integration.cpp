@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <optional>
 #include <tuple>
 
 namespace stend::ceres_nonlinear {
@@ -89,8 +90,7 @@ class MoveCost final : public ceres::SizedCostFunction<2, 9> {
       : m_(m), base_(std::move(base)), inc_(std::move(inc)), g0_(g0), e1_(e1), e2_(e2) {}
 
   bool Evaluate(double const* const* p, double* residual, double** jacobian) const override {
-    std::vector<double> theta = base_;
-    for (std::size_t k = 0; k < 9; ++k) theta[3 + k] = p[0][k];
+    std::vector<double> theta = theta_at(p[0]);
     const Eigen::Matrix3d ai = m_.affine<double>(theta.data()).a_inv;
     const std::size_t n = inc_.size();
     std::vector<Eigen::Vector3d> v(n + 1);  // v[i]: the direction before step i
@@ -102,7 +102,26 @@ class MoveCost final : public ceres::SizedCostFunction<2, 9> {
     return true;
   }
 
+  // The map that carries a start direction through the move at the stage-2 parameters p (the
+  // steps applied to the unit vectors): v_end = carried(p)·v_start.
+  Eigen::Matrix3d carried(const double* p) const {
+    const Eigen::Matrix3d ai = m_.affine<double>(theta_at(p).data()).a_inv;
+    Eigen::Matrix3d m = Eigen::Matrix3d::Identity();
+    for (const Eigen::Vector3d& inc : inc_) {
+      const RotationStep step(ai * inc);
+      for (int c = 0; c < 3; ++c) m.col(c) = step.apply(m.col(c));
+    }
+    return m;
+  }
+
  private:
+  // The full θ: `base` with the stage-2 parameters p.
+  std::vector<double> theta_at(const double* p) const {
+    std::vector<double> theta = base_;
+    for (std::size_t k = 0; k < 9; ++k) theta[3 + k] = p[k];
+    return theta;
+  }
+
   void jacobian_by_adjoint(std::vector<double>& theta, const Eigen::Matrix3d& ai, const std::vector<Eigen::Vector3d>& v,
                            double* jac) const {
     Eigen::Vector3d l1 = e1_, l2 = e2_;
@@ -243,14 +262,28 @@ CalibrationResult solve_static_stage(const IntegrationData& d, const Calibration
   return r1;
 }
 
-// Gyro reading of sample i of turn k minus the bias (+ G·f, f the calibrated specific force) of θ
-// [rad/s].
-Eigen::Vector3d bias_corrected_rate(const IntegrationData& d, const model::ErrorModel& m, const double* theta,
-                                    std::size_t k, std::size_t i) {
+// What θ adds to the gyro reading whatever the rate: the bias, plus G·f with f the calibrated
+// specific force when g-sensitivity is estimated. The gyro model's only term that reads f is
+// g-sensitivity, linear in f, so this is offset(f) = c + G·f: built from four evaluations of the
+// model per θ, it costs each sample one 3×3 product instead of the model's terms.
+struct RateOffset {
+  Eigen::Vector3d c;
+  Eigen::Matrix3d g;
+  RateOffset(const model::ErrorModel& m, const double* theta) {
+    model::Stimulus<double> st;
+    c = m.measure<double>(theta, st);
+    for (int j = 0; j < 3; ++j) {
+      st.specific_force = Eigen::Vector3d::Unit(j);
+      g.col(j) = m.measure<double>(theta, st) - c;
+    }
+  }
+};
+
+// Gyro reading of sample i of turn k minus the bias (+ G·f) of θ [rad/s].
+Eigen::Vector3d bias_corrected_rate(const IntegrationData& d, const RateOffset& off, std::size_t k, std::size_t i) {
   const Turn& t = d.turns[k];
-  model::Stimulus<double> st;
-  if (d.go.estimate_g_sensitivity) st.specific_force = t.f_cal[i - t.a];
-  return t.at(i).gyro_radps - m.measure<double>(theta, st);
+  if (!d.go.estimate_g_sensitivity) return t.at(i).gyro_radps - off.c;
+  return t.at(i).gyro_radps - off.c - off.g * t.f_cal[i - t.a];
 }
 
 // Rate increments of a move's bias-corrected readings w (θ's bias and G removed), trapezoidal:
@@ -258,10 +291,11 @@ Eigen::Vector3d bias_corrected_rate(const IntegrationData& d, const model::Error
 std::vector<Eigen::Vector3d> move_increments(const IntegrationData& d, const model::ErrorModel& m, const double* theta,
                                              const Move& mv) {
   const Turn& turn = d.turns[mv.k];
+  const RateOffset off(m, theta);
   std::vector<Eigen::Vector3d> inc(mv.b - mv.a);
-  Eigen::Vector3d w_prev = bias_corrected_rate(d, m, theta, mv.k, mv.a);
+  Eigen::Vector3d w_prev = bias_corrected_rate(d, off, mv.k, mv.a);
   for (std::size_t i = mv.a; i < mv.b; ++i) {
-    const Eigen::Vector3d w_next = bias_corrected_rate(d, m, theta, mv.k, i + 1);
+    const Eigen::Vector3d w_next = bias_corrected_rate(d, off, mv.k, i + 1);
     inc[i - mv.a] = (w_prev + w_next) * (0.5 * (turn.at(i + 1).t_s - turn.at(i).t_s));
     w_prev = w_next;
   }
@@ -308,45 +342,75 @@ void merge_stages(const IntegrationData& d, const CalibrationResult& r1, const C
 }
 
 // Move residuals [rad] as a function of the upstream parameters z = [accelerometer free
-// parameters, stage-1 parameters] and the stage-2 parameters x. The bias-corrected rates are
-// recomputed only when a stage-1 parameter (or, with G, anything upstream) moved; otherwise the
-// ones of the first evaluation are reused.
+// parameters, stage-1 parameters] and the stage-2 parameters x, with their Jacobian in x when
+// asked. The bias-corrected rates are recomputed only when a stage-1 parameter (or, with G,
+// anything upstream) moved; otherwise the ones of the first evaluation are reused, and so is the
+// map each move then carries a direction through (at the first x asked with them): a change of
+// the accelerometer's parameters moves only the start and end directions, and costs no integration.
 class MoveResiduals {
  public:
   MoveResiduals(const IntegrationData& d, const model::ErrorModel& gyro)
-      : d_(d), gyro_(gyro), increment_cache_(d.moves.size()) {}
+      : d_(d), gyro_(gyro), increment_cache_(d.moves.size()), carried_(d.moves.size()) {}
 
-  Eigen::VectorXd operator()(const Eigen::VectorXd& z, const std::vector<double>& x, bool rates_moved) {
+  Eigen::VectorXd operator()(const Eigen::VectorXd& z, const std::vector<double>& x, bool rates_moved,
+                             Eigen::MatrixXd* jacobian_x = nullptr) {
     const std::size_t na = d_.accel.free_index.size();
     std::vector<double> ta = d_.accel.theta, tb(static_cast<std::size_t>(gyro_.size()), 0.0);
     for (std::size_t j = 0; j < na; ++j) ta[static_cast<std::size_t>(d_.accel.free_index[j])] = z[static_cast<Eigen::Index>(j)];
     for (std::size_t j = 0; j < d_.s1_index.size(); ++j)
       tb[static_cast<std::size_t>(d_.s1_index[j])] = z[static_cast<Eigen::Index>(na + j)];
-    auto cal = [&](const Eigen::Vector3d& y) { return d_.accel.model.correct(ta.data(), y, model::Stimulus<double>{}); };
-    Eigen::VectorXd out(static_cast<Eigen::Index>(2 * d_.moves.size()));
+    const std::vector<Eigen::Vector3d> up = interval_directions(ta);
+    const auto rows = static_cast<Eigen::Index>(2 * d_.moves.size());
+    Eigen::VectorXd out(rows);
+    if (jacobian_x) jacobian_x->resize(rows, 9);
     for (std::size_t q = 0; q < d_.moves.size(); ++q) {
       const Move& mv = d_.moves[q];
+      const Eigen::Vector3d &g0 = up[mv.k], &g1 = up[mv.k + 1];
+      const Eigen::Vector3d e1 = g1.unitOrthogonal(), e2 = g1.cross(e1);
+      const auto row = static_cast<Eigen::Index>(2 * q);
       // G·f during the turns with the baseline calibrated f (the accelerometer's uncertainty
       // reaches the rates through G·δf only at second order).
-      const bool use_cache = !rates_moved && !increment_cache_[q].empty();
-      std::vector<Eigen::Vector3d> inc = use_cache ? increment_cache_[q] : move_increments(d_, gyro_, tb.data(), mv);
+      const bool rates_kept = !rates_moved && !increment_cache_[q].empty();
+      if (rates_kept && !jacobian_x && (carried_x_.empty() || x == carried_x_)) {
+        if (carried_x_.empty()) carried_x_ = x;
+        if (!carried_[q]) carried_[q] = MoveCost(gyro_, tb, increment_cache_[q], g0, e1, e2).carried(x.data());
+        const Eigen::Vector3d v = *carried_[q] * g0;
+        out[row] = e1.dot(v);
+        out[row + 1] = e2.dot(v);
+        continue;
+      }
+      std::vector<Eigen::Vector3d> inc = rates_kept ? increment_cache_[q] : move_increments(d_, gyro_, tb.data(), mv);
       if (increment_cache_[q].empty()) increment_cache_[q] = inc;
-      const Eigen::Vector3d g0 = cal(d_.ivs[mv.k].accel.mean).normalized(), g1 = cal(d_.ivs[mv.k + 1].accel.mean).normalized();
-      const Eigen::Vector3d e1 = g1.unitOrthogonal(), e2 = g1.cross(e1);
       const MoveCost c(gyro_, tb, std::move(inc), g0, e1, e2);
       const double* p[] = {x.data()};
-      double res[2];
-      c.Evaluate(p, res, nullptr);
-      out[static_cast<Eigen::Index>(2 * q)] = res[0];
-      out[static_cast<Eigen::Index>(2 * q + 1)] = res[1];
+      double res[2], jac[18];
+      double* jacobians[] = {jac};
+      c.Evaluate(p, res, jacobian_x ? jacobians : nullptr);
+      out[row] = res[0];
+      out[row + 1] = res[1];
+      if (jacobian_x)
+        for (Eigen::Index k = 0; k < 9; ++k) {
+          (*jacobian_x)(row, k) = jac[k];
+          (*jacobian_x)(row + 1, k) = jac[9 + k];
+        }
     }
     return out;
   }
 
  private:
+  // The direction of each interval's specific force calibrated with the accelerometer's θ `ta`.
+  std::vector<Eigen::Vector3d> interval_directions(const std::vector<double>& ta) const {
+    std::vector<Eigen::Vector3d> up;
+    for (const auto& iv : d_.ivs)
+      up.push_back(d_.accel.model.correct(ta.data(), iv.accel.mean, model::Stimulus<double>{}).normalized());
+    return up;
+  }
+
   const IntegrationData& d_;
   const model::ErrorModel& gyro_;
   std::vector<std::vector<Eigen::Vector3d>> increment_cache_;
+  std::vector<std::optional<Eigen::Matrix3d>> carried_;  // with the cached increments, at carried_x_
+  std::vector<double> carried_x_;
 };
 
 // Covariance Cz of the upstream parameters z: the accelerometer's and stage 1's, uncorrelated.
@@ -362,8 +426,8 @@ bool upstream_covariance(const IntegrationData& d, const CalibrationResult& r1, 
 }
 
 // Stage-2 covariance with the uncertainty the accelerometer calibration and stage 1 pass on
-// (delta method, forward differences of the move residuals): C = C2 + S·Cz·Sᵀ with
-// S = −(J2ᵀJ2)⁻¹·J2ᵀ·Rz; fills the stage-2 standard errors and bounds in r.
+// (delta method: Rz = ∂r/∂z by forward differences of the move residuals, J2 = ∂r/∂x exact):
+// C = C2 + S·Cz·Sᵀ with S = −(J2ᵀJ2)⁻¹·J2ᵀ·Rz; fills the stage-2 standard errors and bounds in r.
 void add_upstream_uncertainty(const IntegrationData& d, const CalibrationResult& r1, const CalibrationResult& r2,
                               const std::vector<double>& x1, const std::vector<double>& x2,
                               const GyroOptions& go, CalibrationResult& r) {
@@ -375,18 +439,14 @@ void add_upstream_uncertainty(const IntegrationData& d, const CalibrationResult&
   for (std::size_t j = 0; j < na; ++j) z0[static_cast<Eigen::Index>(j)] = d.accel.theta[static_cast<std::size_t>(d.accel.free_index[j])];
   for (std::size_t j = 0; j < d.s1_index.size(); ++j) z0[static_cast<Eigen::Index>(na + j)] = x1[j];
   MoveResiduals residuals(d, r.model);
-  const Eigen::VectorXd r0 = residuals(z0, x2, true);
-  Eigen::MatrixXd Rz(r0.size(), nz), J2(r0.size(), 9);
+  Eigen::MatrixXd J2;  // ∂r/∂x, exact (the moves' adjoint pass)
+  const Eigen::VectorXd r0 = residuals(z0, x2, true, &J2);
+  Eigen::MatrixXd Rz(r0.size(), nz);
   for (Eigen::Index j = 0; j < nz; ++j) {
     const double h = 1e-6 * std::max(1.0, std::abs(z0[j]));
     Eigen::VectorXd z = z0;
     z[j] += h;
     Rz.col(j) = (residuals(z, x2, j >= static_cast<Eigen::Index>(na)) - r0) / h;
-  }
-  for (int j = 0; j < 9; ++j) {
-    std::vector<double> x = x2;
-    x[static_cast<std::size_t>(j)] += 1e-7;
-    J2.col(j) = (residuals(z0, x, false) - r0) / 1e-7;
   }
   const Eigen::MatrixXd S = -(J2.transpose() * J2).ldlt().solve(J2.transpose() * Rz);
   const Eigen::MatrixXd C = r2.covariance + S * Cz * S.transpose();
@@ -409,10 +469,10 @@ std::pair<double, Eigen::Vector3d> gravity_mismatch(const IntegrationData& d, co
   const auto& ivs = d.ivs;
   // Calibrated: A⁻¹·(y − b − G·f) (the gyro model is affine in the rate; G·f only moves its offset).
   const Eigen::Matrix3d ai = raw ? Eigen::Matrix3d::Identity() : m.affine<double>(th.data()).a_inv;
+  const RateOffset off(m, th.data());
   std::size_t k = 0;  // the turn being integrated
   auto rate = [&](std::size_t i) {
-    return raw ? Eigen::Vector3d(d.turns[k].at(i).gyro_radps)
-               : Eigen::Vector3d(ai * bias_corrected_rate(d, m, th.data(), k, i));
+    return raw ? Eigen::Vector3d(d.turns[k].at(i).gyro_radps) : Eigen::Vector3d(ai * bias_corrected_rate(d, off, k, i));
   };
   Eigen::Vector3d acc = Eigen::Vector3d::Zero();
   double sum = 0.0;

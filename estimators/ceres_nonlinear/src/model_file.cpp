@@ -299,7 +299,8 @@ ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& option
   detail::conclude(f);
   text += "\n" + detail::status_line(f);
   f.text = text;
-  f.json = results_document(o, f);
+  f.document = results_document(o, f);
+  f.json = f.document.dump(2);
   return f;
 }
 

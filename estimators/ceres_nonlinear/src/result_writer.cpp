@@ -138,7 +138,7 @@ std::string CalibrationResult::to_json() const {
 }
 
 
-std::string results_document(const ModelFileOptions& o, const ModelFileFit& f) {
+json results_document(const ModelFileOptions& o, const ModelFileFit& f) {
   json j;
   j["schema"] = kResultsSchema;
   j["estimator"] = {{"name", kEstimatorName}, {"version", kEstimatorVersion}};
@@ -173,7 +173,7 @@ std::string results_document(const ModelFileOptions& o, const ModelFileFit& f) {
       j["notes"].push_back("gyroscope (" + std::string(method_name(f.gyro.method)) + "): " + f.gyro.uncertainty);
     for (const auto& n : f.gyro.notes) j["notes"].push_back("gyroscope: " + n);
   }
-  return j.dump(2);
+  return j;
 }
 
 }  // namespace stend::ceres_nonlinear

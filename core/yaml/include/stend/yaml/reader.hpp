@@ -23,6 +23,12 @@ std::string read_file(const std::string& file, const std::string& what);
 // read_file, parsed as YAML; a syntax error is an ExperimentError at FILE:LINE:COLUMN.
 YAML::Node load_file(const std::string& file, const std::string& what);
 
+// `text` parsed as YAML (YAML::Exception on a syntax error), for a text that several steps read —
+// a recording's experiment is checked when the run is opened and read again for its processing
+// options: the last text parsed on this thread is kept with its tree, so it is parsed once. The
+// tree is shared with the next caller of the same text: read it, do not change it.
+YAML::Node parse_kept(const std::string& text);
+
 // 1-based location of a node (line 0 when the node has no mark, e.g. undefined or empty doc).
 SourceLocation location_of(const YAML::Node& node, const std::string& file);
 

@@ -15,6 +15,7 @@
 #include <stend/errors.hpp>  // ExperimentError
 #include <stend/recording/recording.hpp>
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 #include <yaml-cpp/yaml.h>
@@ -66,7 +67,8 @@ struct ModelFileFit {
   CalibrationResult accel, gyro;
   bool has_accel = false, has_gyro = false;
   std::string text;  // options echo + both reports
-  std::string json;  // the results document (results_document)
+  nlohmann::json document;  // the results document (results_document)
+  std::string json;         // the same, as written (document.dump(2))
 
   bool ok() const { return status == estimation::FitStatus::kOk; }
 };
@@ -74,7 +76,7 @@ struct ModelFileFit {
 // The results document of a model-file fit (schema kResultsSchema, README.md): the options used,
 // each part's result, a flat parameter list (accel_*, gyro_*, table_offset_*) and the summary
 // fields (src/result_writer.cpp; read back by read_results, estimator.hpp).
-std::string results_document(const ModelFileOptions& options, const ModelFileFit& fit);
+nlohmann::json results_document(const ModelFileOptions& options, const ModelFileFit& fit);
 
 // Runs what the options ask for: accelerometer first (the integration method needs it), then the
 // gyroscope — not applicable, with no gyro bias estimated either, when the recording has no
