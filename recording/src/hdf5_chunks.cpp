@@ -44,19 +44,20 @@ std::uint32_t hdf5_fletcher32(const unsigned char* bytes, std::size_t size) {
 namespace {
 
 struct Pipeline {
-  hsize_t chunk_rows = 0;
+  hsize_t chunk_rows = 0, chunk_cols = 0;  // chunk_cols 0: a 1-D dataset
   bool shuffle = false, deflate = false, fletcher32 = false;
 };
 
-// The dataset's chunking and filters, when Stend can encode them: shuffle, deflate, Fletcher-32,
-// each at most once and in that order (as create_dataset sets them).
+// The dataset's chunking and filters, when Stend can encode or decode them: shuffle, deflate,
+// Fletcher-32, each at most once and in that order (as create_dataset sets them).
 std::optional<Pipeline> pipeline_of(hid_t ds) {
   const Handle dcpl(H5Dget_create_plist(ds), H5Pclose);
-  hsize_t chunk[1] = {0};
-  if (!dcpl || H5Pget_layout(dcpl.get()) != H5D_CHUNKED || H5Pget_chunk(dcpl.get(), 1, chunk) != 1)
-    return std::nullopt;
+  hsize_t chunk[2] = {0, 0};
+  const int rank = dcpl && H5Pget_layout(dcpl.get()) == H5D_CHUNKED ? H5Pget_chunk(dcpl.get(), 2, chunk) : -1;
+  if (rank != 1 && rank != 2) return std::nullopt;
   Pipeline p;
   p.chunk_rows = chunk[0];
+  p.chunk_cols = rank == 2 ? chunk[1] : 0;
   int stage = 0;
   for (int i = 0, n = H5Pget_nfilters(dcpl.get()); i < n; ++i) {
     unsigned flags = 0;
@@ -114,7 +115,115 @@ void shuffle(const unsigned char* in, std::size_t n, std::size_t value_bytes, un
   shuffle_bytes(in, n, value_bytes, out);
 }
 
+// The inverse: byte j·n + i back to byte j of value i, from value `from` on.
+void unshuffle_bytes(const unsigned char* in, std::size_t n, std::size_t value_bytes, unsigned char* out,
+                     std::size_t from = 0) {
+  for (std::size_t j = 0; j < value_bytes; ++j) {
+    const unsigned char* plane = in + j * n;
+    for (std::size_t i = from; i < n; ++i) out[i * value_bytes + j] = plane[i];
+  }
+}
+
+#if defined(__SSE2__)
+// The same for values of B = 2, 4 or 8 bytes, 16 values at a time: register j holds byte j of the
+// 16 values; log2(B) rounds interleave registers 2m and 2m + 1 by 1, 2 then 4 bytes (low halves to
+// m, high halves to m + B/2), which leaves the values' bytes in order, two, four or eight values per
+// register, the registers in bit-reversed order.
+template <int B>
+void unshuffle_16_at_once(const unsigned char* in, std::size_t n, unsigned char* out) {
+  constexpr int kRounds = B == 2 ? 1 : B == 4 ? 2 : 3;
+  std::size_t i = 0;
+  for (; i + 16 <= n; i += 16) {
+    __m128i r[B], t[B];
+    for (int j = 0; j < B; ++j) r[j] = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + j * n + i));
+    for (int round = 0; round < kRounds; ++round) {
+      for (int m = 0; m < B / 2; ++m) {
+        const __m128i a = r[2 * m], b = r[2 * m + 1];
+        t[m] = round == 0 ? _mm_unpacklo_epi8(a, b) : round == 1 ? _mm_unpacklo_epi16(a, b) : _mm_unpacklo_epi32(a, b);
+        t[m + B / 2] = round == 0 ? _mm_unpackhi_epi8(a, b) : round == 1 ? _mm_unpackhi_epi16(a, b) : _mm_unpackhi_epi32(a, b);
+      }
+      std::copy(t, t + B, r);
+    }
+    for (int m = 0; m < B; ++m) {
+      int reversed = 0;
+      for (int bit = 0; bit < kRounds; ++bit) reversed |= ((m >> bit) & 1) << (kRounds - 1 - bit);
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i * B + 16 * m), r[reversed]);
+    }
+  }
+  unshuffle_bytes(in, n, B, out, i);
+}
+#endif
+
+void unshuffle(const unsigned char* in, std::size_t n, std::size_t value_bytes, unsigned char* out) {
+#if defined(__SSE2__)
+  if (value_bytes == 8) return unshuffle_16_at_once<8>(in, n, out);
+  if (value_bytes == 4) return unshuffle_16_at_once<4>(in, n, out);
+  if (value_bytes == 2) return unshuffle_16_at_once<2>(in, n, out);
+#endif
+  unshuffle_bytes(in, n, value_bytes, out);
+}
+
 }  // namespace
+
+std::optional<ChunkLayout> decodable_layout(hid_t ds, hid_t mem_type) {
+  const std::optional<Pipeline> p = pipeline_of(ds);
+  const Handle stored(H5Dget_type(ds), H5Tclose);
+  if (!p || !stored || H5Tequal(stored.get(), mem_type) <= 0) return std::nullopt;
+  const Handle space(H5Dget_space(ds), H5Sclose);
+  hsize_t dims[2] = {0, 0};
+  const int rank = space ? H5Sget_simple_extent_dims(space.get(), dims, nullptr) : -1;
+  if (rank != (p->chunk_cols == 0 ? 1 : 2) || (rank == 2 && p->chunk_cols != dims[1]) || p->chunk_rows == 0)
+    return std::nullopt;  // a 2-D dataset whose chunks cut its rows
+  ChunkLayout l;
+  l.rows = p->chunk_rows;
+  l.value_bytes = H5Tget_size(stored.get());
+  l.row_bytes = l.value_bytes * static_cast<std::size_t>(std::max<hsize_t>(p->chunk_cols, 1));
+  l.shuffle = p->shuffle;
+  l.deflate = p->deflate;
+  l.fletcher32 = p->fletcher32;
+  return l;
+}
+
+bool decode_chunk(hid_t ds, const ChunkLayout& l, std::uint64_t k, unsigned char* out) {
+  struct Decompressor {
+    libdeflate_decompressor* d = libdeflate_alloc_decompressor();
+    ~Decompressor() { libdeflate_free_decompressor(d); }
+  };
+  thread_local Decompressor inflate;
+  thread_local std::vector<unsigned char> stored, shuffled;
+  const hsize_t offset[2] = {k * l.rows, 0};
+  hsize_t size = 0;
+  std::uint32_t skipped = 0;
+  {
+    Hdf5Lock lock;
+    if (H5Dget_chunk_storage_size(ds, offset, &size) < 0 || size == 0) return false;
+    stored.resize(static_cast<std::size_t>(size));
+    if (H5Dread_chunk(ds, H5P_DEFAULT, offset, &skipped, stored.data()) < 0 || skipped != 0) return false;
+  }
+  std::size_t n = stored.size();
+  if (l.fletcher32) {
+    if (n < 4) return false;
+    n -= 4;
+    std::uint32_t sum = 0;
+    for (int b = 0; b < 4; ++b) sum |= static_cast<std::uint32_t>(stored[n + static_cast<std::size_t>(b)]) << (8 * b);
+    if (hdf5_fletcher32(stored.data(), n) != sum) return false;
+  }
+  const std::size_t bytes = static_cast<std::size_t>(l.rows) * l.row_bytes;
+  const bool unshuffled = l.shuffle && l.value_bytes > 1;
+  if (unshuffled) shuffled.resize(bytes);
+  unsigned char* plain = unshuffled ? shuffled.data() : out;
+  if (l.deflate) {
+    std::size_t got = 0;
+    if (inflate.d == nullptr ||
+        libdeflate_zlib_decompress(inflate.d, stored.data(), n, plain, bytes, &got) != LIBDEFLATE_SUCCESS || got != bytes)
+      return false;
+  } else {
+    if (n != bytes) return false;
+    std::memcpy(plain, stored.data(), n);
+  }
+  if (unshuffled) unshuffle(plain, bytes / l.value_bytes, l.value_bytes, out);
+  return true;
+}
 
 ChunkWriter::ChunkWriter() : deflate_(libdeflate_alloc_compressor(1)) {
   if (deflate_ == nullptr) throw std::bad_alloc();
@@ -141,7 +250,8 @@ bool ChunkWriter::encode(hid_t ds, hid_t mem_type, hsize_t at, hsize_t rows, con
   // A whole chunk, or the first rows of one the dataset does not reach yet: padded with zeros (the
   // fill value), as libhdf5 pads an edge chunk; a later write into it goes through libhdf5.
   const std::optional<Pipeline> p = pipeline_of(ds);
-  if (!p || at % p->chunk_rows != 0 || rows > p->chunk_rows || (rows < p->chunk_rows && extent_rows(ds) != at))
+  if (!p || p->chunk_cols != 0 || at % p->chunk_rows != 0 || rows > p->chunk_rows ||
+      (rows < p->chunk_rows && extent_rows(ds) != at))
     return false;
   const Handle stored(H5Dget_type(ds), H5Tclose);
   if (!stored) return false;

@@ -1,6 +1,8 @@
 // The samples and truth of run.h5 read where they lie (see hdf5_sources.hpp).
 #include "hdf5_sources.hpp"
 
+#include "hdf5_chunks.hpp"
+
 #include "stend/errors.hpp"
 
 #include <fmt/format.h>
@@ -9,6 +11,7 @@
 #include <array>
 #include <cstring>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
@@ -28,28 +31,26 @@ void counts_to_si(const Count* __restrict in, std::size_t n, double lsb, double 
   for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<double>(in[i]) * lsb + offset;
 }
 
-// Rows of one dataset as `mem_type` (the type it is stored in, or counts widened). A small read
-// (a time search's one sample or truth row, a pose's few hundred samples) is served from the whole
-// chunks it falls in, read once and kept (the last used, up to kHeldBytes, at least two):
-// libhdf5 spends 15–20 k instructions on every H5Dread whatever its size, and a calibration makes
-// thousands of small ones. Reads of half a chunk or more go straight to the library. Safe to call
-// from several threads.
+// Rows of one dataset as `mem_type` (the type it is stored in). Whole chunks are read as stored and
+// decoded here (hdf5_chunks.hpp: outside the library's lock, so threads decode in parallel); a
+// chunk this cannot decode, or a dataset whose pipeline it does not know, is read by libhdf5. A
+// small read (a time search's one sample or truth row, a pose's few hundred samples) is served from
+// the whole chunks it falls in, kept (the last used, up to kHeldBytes, at least two): a chunk is
+// decoded once for the many small reads in it. Safe to call from several threads.
 class ChunkedRows {
  public:
   ChunkedRows() = default;
   ChunkedRows(Handle ds, hid_t mem_type, hsize_t cols, std::uint64_t rows)
       : ds_(std::move(ds)), mem_type_(mem_type), cols_(cols), rows_(rows),
-        row_bytes_(H5Tget_size(mem_type) * std::max<hsize_t>(cols, 1)), chunk_rows_(chunk_rows_of(ds_.get())) {}
+        row_bytes_(H5Tget_size(mem_type) * std::max<hsize_t>(cols, 1)), chunk_rows_(chunk_rows_of(ds_.get())),
+        layout_(decodable_layout(ds_.get(), mem_type)) {}
   explicit operator bool() const { return static_cast<bool>(ds_); }
 
-  // Rows [first, first + count) into out; false when the library cannot read them (damage).
+  // Rows [first, first + count) into out; false when they cannot be read (damage).
   bool read(std::uint64_t first, std::size_t count, void* out) const {
     if (count == 0) return true;
-    if (count >= chunk_rows_ / 2) {
-      Hdf5Lock lock;
-      return read_rows(ds_.get(), mem_type_, first, count, cols_, out) >= 0;
-    }
     auto* to = static_cast<unsigned char*>(out);
+    if (count >= chunk_rows_ / 2) return read_chunks(first, count, to);
     std::lock_guard<std::mutex> guard(held_->mutex);
     for (std::uint64_t at = first, end = first + count; at < end;) {
       const std::uint64_t k = at / chunk_rows_, chunk_end = std::min<std::uint64_t>(end, (k + 1) * chunk_rows_);
@@ -79,6 +80,37 @@ class ChunkedRows {
     const bool chunked = dcpl && H5Pget_layout(dcpl.get()) == H5D_CHUNKED && H5Pget_chunk(dcpl.get(), 2, dims) >= 1;
     return chunked && dims[0] > 0 ? dims[0] : kChunkSamples;
   }
+  // Rows [first, first + count) that lie in one chunk: decoded by Stend, else read by libhdf5.
+  // A whole chunk below the dataset's end is decoded straight into `out`.
+  bool read_in_chunk(std::uint64_t first, std::uint64_t count, unsigned char* out) const {
+    const std::uint64_t k = first / chunk_rows_, begin = k * chunk_rows_;
+    if (layout_ && first == begin && count == chunk_rows_ && decode_chunk(ds_.get(), *layout_, k, out)) return true;
+    if (layout_) {
+      thread_local std::vector<unsigned char> chunk;
+      chunk.resize(static_cast<std::size_t>(chunk_rows_) * row_bytes_);
+      if (decode_chunk(ds_.get(), *layout_, k, chunk.data())) {
+        std::memcpy(out, chunk.data() + static_cast<std::size_t>(first - begin) * row_bytes_,
+                    static_cast<std::size_t>(count) * row_bytes_);
+        return true;
+      }
+    }
+    Hdf5Lock lock;
+    return read_rows(ds_.get(), mem_type_, first, count, cols_, out) >= 0;
+  }
+  // Rows [first, first + count), chunk by chunk.
+  bool read_chunks(std::uint64_t first, std::uint64_t count, unsigned char* out) const {
+    if (!layout_) {
+      Hdf5Lock lock;
+      return read_rows(ds_.get(), mem_type_, first, count, cols_, out) >= 0;
+    }
+    for (std::uint64_t at = first, end = first + count; at < end;) {
+      const std::uint64_t chunk_end = std::min<std::uint64_t>(end, (at / chunk_rows_ + 1) * chunk_rows_);
+      if (!read_in_chunk(at, chunk_end - at, out)) return false;
+      out += static_cast<std::size_t>(chunk_end - at) * row_bytes_;
+      at = chunk_end;
+    }
+    return true;
+  }
   // Chunk k's rows (those below rows_), read whole when not held; nullptr when unreadable.
   const Held* held(std::uint64_t k) const {
     std::vector<Held>& chunks = held_->chunks;
@@ -95,10 +127,7 @@ class ChunkedRows {
     const std::uint64_t begin = k * chunk_rows_, n = std::min<std::uint64_t>(chunk_rows_, rows_ - begin);
     h.chunk = UINT64_MAX;
     h.rows.resize(static_cast<std::size_t>(n) * row_bytes_);
-    {
-      Hdf5Lock lock;
-      if (read_rows(ds_.get(), mem_type_, begin, n, cols_, h.rows.data()) < 0) return nullptr;
-    }
+    if (!read_in_chunk(begin, n, h.rows.data())) return nullptr;
     h.chunk = k;
     return &h;
   }
@@ -109,6 +138,7 @@ class ChunkedRows {
   std::uint64_t rows_ = 0;
   std::size_t row_bytes_ = 0;
   hsize_t chunk_rows_ = kChunkSamples;
+  std::optional<ChunkLayout> layout_;
   std::unique_ptr<HeldChunks> held_ = std::make_unique<HeldChunks>();
 };
 
