@@ -84,7 +84,7 @@ void import_euroc(const fs::path& path, const EurocOptions& opt, Recording& rec,
     if (!parse_ns(f[0], t_ns)) r.fail("timestamp '" + excerpt(f[0]) + "' is not an integer [ns]");
     if (count++ == 0) t0_ns = t_ns;
     ImuSample s;
-    s.t_s = static_cast<double>(t_ns - t0_ns) * 1e-9;  // difference first: ns since 1970 exceed a double's 53 bits
+    s.t_s = seconds_since_ns(t0_ns, t_ns);
     for (int k = 0; k < 3; ++k) {
       double g = 0.0, a = 0.0;
       if (!parse_double(f[1 + k], g) || !parse_double(f[4 + k], a)) {

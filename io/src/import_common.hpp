@@ -193,7 +193,14 @@ class SampleChunker {
 
 // Seconds from t0_us to t_us (timestamps in µs), exact to the microsecond.
 inline double seconds_since_us(std::uint64_t t0_us, std::uint64_t t_us) {
-  return static_cast<double>(static_cast<std::int64_t>(t_us - t0_us)) * 1e-6;
+  return (t_us >= t0_us ? static_cast<double>(t_us - t0_us) : -static_cast<double>(t0_us - t_us)) * 1e-6;
+}
+// The same for signed nanoseconds (ROS, EuRoC). Two times further apart than int64 holds (a
+// corrupt timestamp, centuries off) are subtracted as doubles: never an overflow.
+inline double seconds_since_ns(std::int64_t t0_ns, std::int64_t t_ns) {
+  std::int64_t d = 0;
+  if (!__builtin_sub_overflow(t_ns, t0_ns, &d)) return static_cast<double>(d) * 1e-9;
+  return (static_cast<double>(t_ns) - static_cast<double>(t0_ns)) * 1e-9;
 }
 
 double median_interval(const std::vector<ImuSample>& s);

@@ -42,9 +42,6 @@ void check_named_topic(const fs::path& file, const std::vector<TopicInfo>& topic
   }
 }
 
-// Nanoseconds since the first message → seconds (the difference is exact in int64).
-double seconds_since(std::int64_t t_ns, std::int64_t t0_ns) { return 1e-9 * static_cast<double>(t_ns - t0_ns); }
-
 // What the first pass over the messages finds.
 struct BagScan {
   std::size_t imu = 0, temperature = 0;
@@ -204,7 +201,7 @@ void stream_recording(const fs::path& file, const BagReader& bag, const RosbagOp
   const auto imu = bag.imu();
   for (ImuMessage m; imu->next(m);) {
     ImuSample s;
-    s.t_s = seconds_since(time_of(m), t0_ns);
+    s.t_s = seconds_since_ns(t0_ns, time_of(m));
     s.accel_mps2 = m.accel_mps2;
     s.gyro_radps = m.gyro_radps;
     if (scan.temperature > 0) s.temperature_c = temperature.at(time_of(m));

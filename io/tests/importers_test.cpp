@@ -5,9 +5,12 @@
 #include <stend/testing/files.hpp>
 #include <stend/testing/paths.hpp>
 
+#include "import_common.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <numbers>
@@ -20,6 +23,19 @@ using namespace stend::io;
 using stend::testing::shared_data;
 using stend::testing::TempDir;
 using stend::testing::write_text;
+
+// Seconds between integer timestamps: exact for times close together, and of the right sign for
+// any two (a corrupt timestamp centuries off subtracted in int64 overflowed: the fuzzed ROS 2 bag
+// fuzz/regressions/import_rosbag2_db3/timestamp_difference_overflows_int64.db3).
+TEST(ImportTimes, DifferencesOfAnyTwoTimestampsKeepTheirSign) {
+  EXPECT_DOUBLE_EQ(io::detail::seconds_since_ns(1'700'000'000'000'000'000, 1'700'000'000'000'000'001), 1e-9);
+  EXPECT_DOUBLE_EQ(io::detail::seconds_since_ns(1'700'000'000'000'000'000, 1'699'999'999'000'000'000), -1.0);
+  EXPECT_GT(io::detail::seconds_since_ns(INT64_MIN, INT64_MAX), 1.8e10);
+  EXPECT_LT(io::detail::seconds_since_ns(1'700'000'000'006'000'000, -8'553'106'169'509'442'294), -1.0e10);
+  EXPECT_DOUBLE_EQ(io::detail::seconds_since_us(5, 3), -2e-6);
+  EXPECT_GT(io::detail::seconds_since_us(0, UINT64_MAX), 1.8e13);
+  EXPECT_LT(io::detail::seconds_since_us(UINT64_MAX, 0), -1.8e13);
+}
 
 namespace {
 
