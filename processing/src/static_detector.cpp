@@ -80,21 +80,24 @@ Triad still_triad(const SensorInfo& info) {
 // `mean`; rate_i [rad/s] is the norm of the window-mean gyro reading less `*bias` (0 when bias is
 // null). The prefix sums of the last 2·half + 2 indices and the last half + 1 samples are kept, so
 // memory is the window's.
-using WindowFn = std::function<void(std::uint64_t i, const ImuSample& s, double var, double rate)>;
+// fn: void(std::uint64_t i, const ImuSample& s, double var, double rate), called inline per sample.
+template <class WindowFn>
 void for_each_window(const Stream& in, std::size_t half, Triad triad, const Eigen::Vector3d& mean,
                      const Eigen::Vector3d* bias, std::uint64_t end, const WindowFn& fn) {
   const std::uint64_t n = in.size();
   end = std::min(end, n);
-  const std::size_t R = 2 * half + 2, H = half + 1;
-  std::vector<Eigen::Vector3d> s1(R, Eigen::Vector3d::Zero()), s2(R, Eigen::Vector3d::Zero()), g1(R, Eigen::Vector3d::Zero());
-  std::vector<ImuSample> recent(H);
+  // Rings of at least 2·half + 2 and half + 1 entries, their sizes powers of two (index & mask).
+  const std::uint64_t R = std::bit_ceil(2 * half + 2) - 1, H = std::bit_ceil(half + 1) - 1;
+  std::vector<Eigen::Vector3d> s1(R + 1, Eigen::Vector3d::Zero()), s2(R + 1, Eigen::Vector3d::Zero()),
+      g1(R + 1, Eigen::Vector3d::Zero());
+  std::vector<ImuSample> recent(H + 1);
   auto emit = [&](std::uint64_t i) {
     const std::uint64_t a = i >= half ? i - half : 0, b = std::min(n, i + half + 1);
     const double m = static_cast<double>(b - a);
-    const Eigen::Vector3d mu = (s1[b % R] - s1[a % R]) / m;
-    const double var = ((s2[b % R] - s2[a % R]) / m - mu.cwiseAbs2()).sum() * m / std::max(1.0, m - 1.0);
-    const double rate = bias ? ((g1[b % R] - g1[a % R]) / m).norm() : 0.0;
-    fn(i, recent[i % H], var, rate);
+    const Eigen::Vector3d mu = (s1[b & R] - s1[a & R]) / m;
+    const double var = ((s2[b & R] - s2[a & R]) / m - mu.cwiseAbs2()).sum() * m / std::max(1.0, m - 1.0);
+    const double rate = bias ? ((g1[b & R] - g1[a & R]) / m).norm() : 0.0;
+    fn(i, recent[i & H], var, rate);
   };
   std::uint64_t next = 0;  // next sample to emit
   const std::uint64_t read_end = std::min(n, end + half);
@@ -102,10 +105,10 @@ void for_each_window(const Stream& in, std::size_t half, Triad triad, const Eige
     for (std::size_t k = 0; k < count; ++k) {
       const std::uint64_t j = at + k;
       const Eigen::Vector3d d = c[k].*triad - mean;
-      s1[(j + 1) % R] = s1[j % R] + d;
-      s2[(j + 1) % R] = s2[j % R] + d.cwiseAbs2();
-      if (bias) g1[(j + 1) % R] = g1[j % R] + (c[k].gyro_radps - *bias);
-      recent[j % H] = c[k];
+      s1[(j + 1) & R] = s1[j & R] + d;
+      s2[(j + 1) & R] = s2[j & R] + d.cwiseAbs2();
+      if (bias) g1[(j + 1) & R] = g1[j & R] + (c[k].gyro_radps - *bias);
+      recent[j & H] = c[k];
       if (j >= half && next < end) emit(next++);
     }
   }, in.chunk);

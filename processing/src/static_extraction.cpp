@@ -9,6 +9,8 @@
 
 #include "stend/processing/butterworth.hpp"
 
+#include <Eigen/Core>
+
 namespace stend::processing {
 
 namespace {
@@ -26,10 +28,11 @@ double correlated_std_error(std::span<const double> x, double mean) {
   const std::size_t n = x.size();
   if (n < 2) return 0.0;
   const auto lags = std::min<std::size_t>((n - 1) / 4, static_cast<std::size_t>(std::ceil(2.0 * std::cbrt(static_cast<double>(n)))));
+  const Eigen::ArrayXd d = Eigen::Map<const Eigen::ArrayXd>(x.data(), static_cast<Eigen::Index>(n)) - mean;
   double v = 0.0;
   for (std::size_t k = 0; k <= lags; ++k) {
-    double g = 0.0;
-    for (std::size_t i = k; i < n; ++i) g += (x[i] - mean) * (x[i - k] - mean);
+    const auto m = static_cast<Eigen::Index>(n - k);  // γ_k = Σ d[i]·d[i−k] / n, a vectorised dot product
+    const double g = d.tail(m).matrix().dot(d.head(m).matrix());
     v += (k == 0 ? 1.0 : 2.0) * g / static_cast<double>(n);
   }
   v /= 1.0 - static_cast<double>(2 * lags + 1) / static_cast<double>(n);

@@ -19,7 +19,7 @@ estimation::FitResult fit_typed(const EstimatorRequest& req) {
   if (req.recording == nullptr) throw std::invalid_argument("ceres_nonlinear: no recording given");
   const ModelFileFit f = fit_model_file(*req.recording, load_model_file(req.model_file));
   estimation::FitResult r = read_results(f.document);
-  r.document_text = f.json;
+  r.document_text = f.document.dump(2);
   r.text = f.text;
   return r;
 }

@@ -300,7 +300,6 @@ ModelFileFit fit_model_file(const Recording& rec, const ModelFileOptions& option
   text += "\n" + detail::status_line(f);
   f.text = text;
   f.document = results_document(o, f);
-  f.json = f.document.dump(2);
   return f;
 }
 

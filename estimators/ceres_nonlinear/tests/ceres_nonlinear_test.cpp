@@ -379,7 +379,7 @@ TEST(CeresNonlinear, AbsentGyroscopeIsNotApplicableAndTheAccelerometerStands) {
     ASSERT_GE(f.notes.size(), 1u);  // then the accelerometer's |a| − g check on 3 dof (12 poses, 9 parameters)
     EXPECT_NE(f.notes[0].find("gyroscope: not applicable — the recording has no gyroscope"), std::string::npos);
     EXPECT_NE(f.text.find("ceres_nonlinear: ok\nnote: gyroscope: not applicable"), std::string::npos) << f.text;
-    const estimation::FitResult r = read_results(nlohmann::json::parse(f.json));
+    const estimation::FitResult r = read_results(nlohmann::json::parse(f.document.dump(2)));
     EXPECT_TRUE(r.ok());
     ASSERT_TRUE(r.accelerometer && r.gyroscope);
     EXPECT_TRUE(r.accelerometer->ok());
@@ -420,7 +420,7 @@ TEST(CeresNonlinear, TenStillsForNineParametersGiveImpreciseVerdictsAndNoAccurac
   EXPECT_NE(f.text.find("dof: 1"), std::string::npos) << f.text;
   EXPECT_NE(f.text.find("calibrated"), std::string::npos);
   EXPECT_NE(f.text.find("1 degree of freedom left: no measure of accuracy"), std::string::npos) << f.text;
-  const nlohmann::json doc = nlohmann::json::parse(f.json);
+  const nlohmann::json& doc = f.document;
   EXPECT_EQ(doc["dof"], 1);
   const estimation::FitResult r = read_results(doc);
   ASSERT_TRUE(r.summary.dof.has_value());
@@ -680,7 +680,7 @@ TEST(CeresNonlinear, ATableOfMeansGetsItsStandardErrorsFromTheScatterAndNoGyroBi
     EXPECT_LT(se, sigma / std::sqrt(rows) * 2.5);  // σ/√rows widened a little by the scales and cross terms
   }
   EXPECT_TRUE(f.accel.gyro_bias.empty());
-  const estimation::FitResult r = read_results(nlohmann::json::parse(f.json));
+  const estimation::FitResult r = read_results(nlohmann::json::parse(f.document.dump(2)));
   EXPECT_EQ(r.summary.find("gyro_bias_x"), nullptr);
   EXPECT_TRUE(!r.gyroscope || r.gyroscope->status == estimation::FitStatus::kNotApplicable);
   // The same table through the API with the gyro bias asked for: still none, and said why.

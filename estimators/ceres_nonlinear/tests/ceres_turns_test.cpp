@@ -368,7 +368,7 @@ TEST(CeresTurnsModelFile, ResultsDocumentReadsBackThroughTheRegistryReader) {
   const ModelFileFit fit = fit_model_file(rec, o);
   ASSERT_TRUE(fit.ok()) << fit.text;
   EXPECT_NE(fit.text.find("Ceres gyroscope calibration (turns)"), std::string::npos);
-  const estimation::FitResult back = read_results(nlohmann::json::parse(fit.json));
+  const estimation::FitResult back = read_results(nlohmann::json::parse(fit.document.dump(2)));
   ASSERT_TRUE(back.gyroscope.has_value());
   ASSERT_TRUE(back.gyroscope->ok());
   ASSERT_EQ(back.gyroscope->theta.size(), 21u);
@@ -377,7 +377,7 @@ TEST(CeresTurnsModelFile, ResultsDocumentReadsBackThroughTheRegistryReader) {
   EXPECT_TRUE(std::any_of(notes.begin(), notes.end(), [](const std::string& n) { return n.find("uncertainty (turns)") == 0; }));
   EXPECT_TRUE(std::any_of(back.summary.notes.begin(), back.summary.notes.end(),
                           [](const std::string& n) { return n.find("gyroscope (turns): ") == 0; }));
-  const nlohmann::json doc = nlohmann::json::parse(fit.json);
+  const nlohmann::json& doc = fit.document;
   EXPECT_EQ(doc["gyroscope"]["method"], "turns");
   EXPECT_EQ(doc["gyroscope"]["turns"].size(), 3u);
   EXPECT_TRUE(doc["gyroscope"].contains("rms_turn_after_rad"));
@@ -390,7 +390,7 @@ TEST(CeresTurnsModelFile, ResultsDocumentReadsBackThroughTheRegistryReader) {
   eo.gyro.estimate_g_sensitivity = false;
   const ModelFileFit ef = fit_model_file(er, eo);
   ASSERT_TRUE(ef.ok()) << ef.text;
-  const estimation::FitResult eb = read_results(nlohmann::json::parse(ef.json));
+  const estimation::FitResult eb = read_results(nlohmann::json::parse(ef.document.dump(2)));
   ASSERT_TRUE(eb.gyroscope && eb.gyroscope->ok());
   EXPECT_EQ(eb.gyroscope->theta[0], 0.0);  // bias_x held
   EXPECT_TRUE(eb.gyroscope->find("scale_x")->held);

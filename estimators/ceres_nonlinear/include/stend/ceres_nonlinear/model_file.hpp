@@ -67,8 +67,7 @@ struct ModelFileFit {
   CalibrationResult accel, gyro;
   bool has_accel = false, has_gyro = false;
   std::string text;  // options echo + both reports
-  nlohmann::json document;  // the results document (results_document)
-  std::string json;         // the same, as written (document.dump(2))
+  nlohmann::json document;  // the results document (results_document); written as document.dump(2)
 
   bool ok() const { return status == estimation::FitStatus::kOk; }
 };
