@@ -97,7 +97,7 @@ nlohmann::json trained(const synthetic::Spec& spec, const std::string& gyroscope
   o.accel.processing.detector.max_gyro_radps = 0.05;
   const auto fit = ceres_nonlinear::fit_model_file(rec.recording, o);
   EXPECT_TRUE(fit.ok()) << fit.message;
-  return nlohmann::json::parse(fit.json);
+  return fit.document;
 }
 
 // From z up: gravity to +y, +x, +z, +y, +z — every turn moves gravity, so every pose is detected
