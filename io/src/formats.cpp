@@ -182,14 +182,16 @@ void stream_csv(const Inputs& in, const ImportOptions& o, Recording& rec, Sample
   import_csv(in[0], o.csv_mapping(), rec, out);
 }
 
-std::string sha256_hex(const fs::path& p) {
+std::string sha256_hex(const fs::path& p, const std::atomic<bool>* stop) {
   std::ifstream in(p, std::ios::binary);
   if (!in) throw InputError(p.string() + ": cannot read it to fingerprint it");
   std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx(EVP_MD_CTX_new(), EVP_MD_CTX_free);
   EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr);
   std::array<char, 1 << 16> buf{};
-  while (in.read(buf.data(), buf.size()) || in.gcount() > 0)
+  while (in.read(buf.data(), buf.size()) || in.gcount() > 0) {
+    if (stop != nullptr && *stop) throw InputError(p.string() + ": fingerprinting abandoned");
     EVP_DigestUpdate(ctx.get(), buf.data(), static_cast<std::size_t>(in.gcount()));
+  }
   std::array<unsigned char, EVP_MAX_MD_SIZE> md{};
   unsigned int len = 0;
   EVP_DigestFinal_ex(ctx.get(), md.data(), &len);
@@ -443,10 +445,10 @@ void import_dataset(const Inputs& inputs, const std::string& format, Recording& 
   if (f.name != "run") add_format_event(rec, f, format, options);
 }
 
-void add_provenance(Recording& rec, const Inputs& inputs, const std::string& format) {
+void add_provenance(Recording& rec, const Inputs& inputs, const std::string& format, const std::atomic<bool>* stop) {
   for (const auto& p : inputs) {
     add_import_event(rec, "source " + fs::absolute(p).lexically_normal().string() + ": " +
-                              std::to_string(fs::file_size(p)) + " bytes, sha256 " + sha256_hex(p) + ", format " +
+                              std::to_string(fs::file_size(p)) + " bytes, sha256 " + sha256_hex(p, stop) + ", format " +
                               format + ", imported by stend " + stend::version());
   }
 }

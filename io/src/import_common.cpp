@@ -6,8 +6,9 @@
 #include <cmath>
 #include <cerrno>
 #include <charconv>
-#include <limits>
+#include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <system_error>
 #include <utility>
 
@@ -108,10 +109,46 @@ void split(std::string_view line, char delim, std::vector<std::string_view>& out
   }
 }
 
+namespace {
+
+// A plain decimal — [-]digits[.digits], no exponent — of at most 19 digits is m / 10^k; when
+// m < 2^53 and k ≤ 22 both are exact doubles and the one correctly rounded division is the double
+// nearest the decimal, the value std::from_chars gives (Clinger's fast path). A text log's
+// fields are nearly all such; false sends anything else to std::from_chars.
+bool parse_plain_decimal(std::string_view s, double& out) {
+  static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
+                                      1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+  const char* p = s.data();
+  const char* const end = p + s.size();
+  const bool negative = p != end && *p == '-';
+  p += negative;
+  std::uint64_t m = 0;
+  int digits = 0, fraction = -1;  // fraction: digits after the point (-1: no point yet)
+  for (; p != end; ++p) {
+    const auto d = static_cast<unsigned>(*p - '0');
+    if (d < 10) {
+      if (++digits > 19) return false;
+      m = m * 10 + d;
+      fraction += fraction >= 0;
+    } else if (*p == '.' && fraction < 0) {
+      fraction = 0;
+    } else {
+      return false;
+    }
+  }
+  if (digits == 0 || m >= (std::uint64_t{1} << 53) || fraction > 22) return false;
+  const double v = fraction > 0 ? static_cast<double>(m) / kPow10[fraction] : static_cast<double>(m);
+  out = negative ? -v : v;
+  return true;
+}
+
+}  // namespace
+
 bool parse_double(std::string_view s, double& out) {
   s = trim(s);
   if (!s.empty() && s.front() == '+') s.remove_prefix(1);
   if (s.empty()) return false;
+  if (parse_plain_decimal(s, out)) return true;
   const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
   return ec == std::errc() && p == s.data() + s.size();
 }

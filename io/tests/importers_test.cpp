@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -16,6 +18,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <system_error>
 
 namespace fs = std::filesystem;
 using namespace stend;
@@ -35,6 +38,40 @@ TEST(ImportTimes, DifferencesOfAnyTwoTimestampsKeepTheirSign) {
   EXPECT_DOUBLE_EQ(io::detail::seconds_since_us(5, 3), -2e-6);
   EXPECT_GT(io::detail::seconds_since_us(0, UINT64_MAX), 1.8e13);
   EXPECT_LT(io::detail::seconds_since_us(UINT64_MAX, 0), -1.8e13);
+}
+
+// A text log's numbers parse to the double std::from_chars gives, bit for bit, whether they take
+// parse_double's plain-decimal path or not; what from_chars refuses is refused.
+TEST(ImportNumbers, ParseDoubleIsFromCharsBitForBit) {
+  const auto from_chars_of = [](const std::string& t, double& v) {
+    const auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+    return ec == std::errc() && p == t.data() + t.size();
+  };
+  const auto same = [&](const std::string& t) {
+    double ours = -1.0, theirs = -1.0;
+    const bool ok = io::detail::parse_double(t, ours);
+    ASSERT_EQ(ok, from_chars_of(t, theirs)) << "'" << t << "'";
+    if (ok) {
+      EXPECT_EQ(std::bit_cast<std::uint64_t>(ours), std::bit_cast<std::uint64_t>(theirs)) << "'" << t << "'";
+    }
+  };
+  for (const char* t : {"0", "-0", "0.0", "-0.000", "5.", ".5", "-.5", ".", "-", "--1", "1.2.3", "1e5", "-2.5E-3", "inf",
+                        "nan", "0x10", "9007199254740991", "9007199254740993", "0.1", "0.3", "1234567890123456789",
+                        "12345678901234567890", "0.0000000000000000000001", "0.00000000000000000000001",
+                        "00000000000000000000001.5", "9.81", "-0.00123", "1 2", "1,5", "٣"})
+    same(t);
+  std::mt19937_64 rng(38);
+  for (int i = 0; i < 200000; ++i) {  // up to 20 digits, the point anywhere, either sign
+    const int digits = 1 + static_cast<int>(rng() % 20);
+    std::string t = rng() % 2 ? "-" : "";
+    const int point = static_cast<int>(rng() % static_cast<unsigned>(digits + 2)) - 1;  // -1: none
+    for (int k = 0; k < digits; ++k) {
+      if (k == point) t += '.';
+      t += static_cast<char>('0' + rng() % 10);
+    }
+    if (point == digits) t += '.';
+    same(t);
+  }
 }
 
 namespace {

@@ -9,13 +9,63 @@
 #endif
 
 #include <algorithm>
+#include <atomic>
 #include <cstring>
+#include <functional>
+#include <future>
 #include <new>
 #include <optional>
+#include <system_error>
+#include <thread>
+#include <tuple>
 
 namespace stend::detail {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+// Adds words [0, 8·steps) of `bytes` (big-endian 16-bit) to a Fletcher-32 block's sums as the
+// word-by-word loop would: sum2 += 8K·sum1 + Σ (8K − i)·w_i and sum1 += Σ w_i, K = steps. Eight
+// lanes: a_l sums lane l's words, b_l the a_l before each step, so Σ (K − k)·w over a lane is
+// a_l + b_l and Σ (8K − i)·w_i = 8·Σ (a_l + b_l) − Σ l·a_l. In a block of ≤ 360 words no lane
+// overflows; the sums are exact in 64 bits and wrap to 32 as the word loop's would.
+void fletcher32_steps(const unsigned char* bytes, std::size_t steps, std::uint32_t& sum1, std::uint32_t& sum2) {
+#if defined(__SSE2__)
+  const __m128i zero = _mm_setzero_si128();
+  __m128i a_lo = zero, a_hi = zero, b_lo = zero, b_hi = zero;
+  for (std::size_t k = 0; k < steps; ++k, bytes += 16) {
+    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(bytes));
+    const __m128i w = _mm_or_si128(_mm_slli_epi16(v, 8), _mm_srli_epi16(v, 8));
+    b_lo = _mm_add_epi32(b_lo, a_lo);
+    b_hi = _mm_add_epi32(b_hi, a_hi);
+    a_lo = _mm_add_epi32(a_lo, _mm_unpacklo_epi16(w, zero));
+    a_hi = _mm_add_epi32(a_hi, _mm_unpackhi_epi16(w, zero));
+  }
+  std::uint32_t a[8], b[8];
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(a), a_lo);
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(a + 4), a_hi);
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(b), b_lo);
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(b + 4), b_hi);
+#else
+  std::uint32_t a[8] = {}, b[8] = {};
+  for (std::size_t k = 0; k < steps; ++k, bytes += 16) {
+    for (int l = 0; l < 8; ++l) {
+      b[l] += a[l];
+      a[l] += static_cast<std::uint32_t>(bytes[2 * l]) << 8 | bytes[2 * l + 1];
+    }
+  }
+#endif
+  std::uint64_t words = 0, weighted = 0;
+  for (int l = 0; l < 8; ++l) {
+    words += a[l];
+    weighted += 8 * (static_cast<std::uint64_t>(a[l]) + b[l]) - static_cast<std::uint64_t>(l) * a[l];
+  }
+  sum2 = static_cast<std::uint32_t>(sum2 + 8 * steps * static_cast<std::uint64_t>(sum1) + weighted);
+  sum1 = static_cast<std::uint32_t>(sum1 + words);
+}
+
+}  // namespace
 
 std::uint32_t hdf5_fletcher32(const unsigned char* bytes, std::size_t size) {
   std::uint32_t sum1 = 0, sum2 = 0;
@@ -23,7 +73,10 @@ std::uint32_t hdf5_fletcher32(const unsigned char* bytes, std::size_t size) {
   while (words > 0) {
     const std::size_t block = std::min<std::size_t>(words, 360);  // the most sums without overflow
     words -= block;
-    for (std::size_t i = 0; i < block; ++i, bytes += 2) {
+    const std::size_t steps = block / 8;
+    fletcher32_steps(bytes, steps, sum1, sum2);
+    bytes += 16 * steps;
+    for (std::size_t i = 8 * steps; i < block; ++i, bytes += 2) {
       sum1 += static_cast<std::uint32_t>(bytes[0]) << 8 | bytes[1];
       sum2 += sum1;
     }
@@ -225,73 +278,142 @@ bool decode_chunk(hid_t ds, const ChunkLayout& l, std::uint64_t k, unsigned char
   return true;
 }
 
-ChunkWriter::ChunkWriter() : deflate_(libdeflate_alloc_compressor(1)) {
-  if (deflate_ == nullptr) throw std::bad_alloc();
-}
+namespace {
 
-ChunkWriter::~ChunkWriter() { libdeflate_free_compressor(deflate_); }
+// How rows of one column are encoded into a chunk, found from its dataset (libhdf5 calls: made on
+// the writing thread, before any encoding).
+struct ChunkEncoding {
+  Pipeline pipeline;
+  std::size_t value_bytes = 0;  // of the stored type
+  bool narrowed = false;        // int32 counts stored as int16
+};
 
-void ChunkWriter::write(hid_t ds, hid_t mem_type, hsize_t at, hsize_t rows, const void* data, const fs::path& file,
-                        const char* name) {
-  if (rows == 0) return;
-  if (!encode(ds, mem_type, at, rows, data)) {
-    write_rows(ds, mem_type, at, rows, 0, data, file, name);
-    return;
-  }
-  const hsize_t dims[1] = {at + rows};
-  check_write(H5Dset_extent(ds, dims), file, fmt::format("cannot extend dataset '{}'", name));
-  const hsize_t offset[1] = {at};
-  check_write(H5Dwrite_chunk(ds, H5P_DEFAULT, 0, offset, encoded_.size(), encoded_.data()), file,
-              fmt::format("cannot write dataset '{}'", name));
-}
-
-// encoded_ ← the chunk's bytes as the pipeline stores them; false when this writer cannot make them.
-bool ChunkWriter::encode(hid_t ds, hid_t mem_type, hsize_t at, hsize_t rows, const void* data) {
-  // A whole chunk, or the first rows of one the dataset does not reach yet: padded with zeros (the
-  // fill value), as libhdf5 pads an edge chunk; a later write into it goes through libhdf5.
+// The encoding of rows [at, at + rows) of `ds` given as `mem_type`: a whole chunk, or the first rows
+// of one the dataset does not reach yet (padded with zeros, the fill value, as libhdf5 pads an edge
+// chunk; a later write into it goes through libhdf5). Nothing when this writer cannot make them.
+std::optional<ChunkEncoding> encoding_of(hid_t ds, hid_t mem_type, hsize_t at, hsize_t rows) {
   const std::optional<Pipeline> p = pipeline_of(ds);
   if (!p || p->chunk_cols != 0 || at % p->chunk_rows != 0 || rows > p->chunk_rows ||
       (rows < p->chunk_rows && extent_rows(ds) != at))
-    return false;
+    return std::nullopt;
   const Handle stored(H5Dget_type(ds), H5Tclose);
-  if (!stored) return false;
-  const auto n = static_cast<std::size_t>(p->chunk_rows), given = static_cast<std::size_t>(rows);
-  const std::size_t value_bytes = H5Tget_size(stored.get());
-  const auto* bytes = static_cast<const unsigned char*>(data);
+  if (!stored) return std::nullopt;
   const bool as_given = H5Tequal(stored.get(), mem_type) > 0;
   const bool narrowed = !as_given && H5Tequal(stored.get(), H5T_STD_I16LE) > 0 &&
                         H5Tequal(mem_type, H5T_NATIVE_INT32) > 0 && H5Tequal(H5T_NATIVE_INT16, H5T_STD_I16LE) > 0;
-  if (!as_given && !narrowed) return false;
-  if (narrowed || given < n) {
-    stored_.assign(n * value_bytes, 0);
-    if (as_given) std::memcpy(stored_.data(), data, given * value_bytes);
-    const auto* wide = static_cast<const std::int32_t*>(data);
-    for (std::size_t i = 0; narrowed && i < given; ++i) {  // int32 counts stored as int16, clipped as libhdf5 does
-      const auto v = static_cast<std::int16_t>(std::clamp<std::int32_t>(wide[i], INT16_MIN, INT16_MAX));
-      std::memcpy(stored_.data() + i * sizeof v, &v, sizeof v);
+  if (!as_given && !narrowed) return std::nullopt;
+  return ChunkEncoding{*p, H5Tget_size(stored.get()), narrowed};
+}
+
+// Whether a second thread can encode beside the writing one.
+bool second_core() {
+  static const bool two = std::thread::hardware_concurrency() > 1;
+  return two;
+}
+
+}  // namespace
+
+// A compressor and its buffers; encodes without calling libhdf5, so on any thread.
+class ChunkWriter::Encoder {
+ public:
+  Encoder() : deflate_(libdeflate_alloc_compressor(1)) {
+    if (deflate_ == nullptr) throw std::bad_alloc();
+  }
+  ~Encoder() { libdeflate_free_compressor(deflate_); }
+  Encoder(const Encoder&) = delete;
+  Encoder& operator=(const Encoder&) = delete;
+
+  // out ← `rows` rows of `data` as the pipeline stores them in a chunk; false when deflate fails.
+  bool encode(const ChunkEncoding& e, hsize_t rows, const void* data, std::vector<unsigned char>& out) {
+    const Pipeline& p = e.pipeline;
+    const auto n = static_cast<std::size_t>(p.chunk_rows), given = static_cast<std::size_t>(rows);
+    const auto* bytes = static_cast<const unsigned char*>(data);
+    if (e.narrowed || given < n) {
+      stored_.assign(n * e.value_bytes, 0);
+      if (!e.narrowed) std::memcpy(stored_.data(), data, given * e.value_bytes);
+      const auto* wide = static_cast<const std::int32_t*>(data);
+      for (std::size_t i = 0; e.narrowed && i < given; ++i) {  // int32 counts stored as int16, clipped as libhdf5 does
+        const auto v = static_cast<std::int16_t>(std::clamp<std::int32_t>(wide[i], INT16_MIN, INT16_MAX));
+        std::memcpy(stored_.data() + i * sizeof v, &v, sizeof v);
+      }
+      bytes = stored_.data();
     }
-    bytes = stored_.data();
+    std::size_t size = n * e.value_bytes;
+    const bool zeros = bytes[0] == 0 && std::memcmp(bytes, bytes + 1, size - 1) == 0;
+    if (zeros && zeros_.size == size && zeros_.pipeline == std::tuple(p.shuffle, p.deflate, p.fletcher32)) {
+      out = zeros_.encoded;
+      return true;
+    }
+    if (p.shuffle && e.value_bytes > 1) {
+      shuffled_.resize(size);
+      shuffle(bytes, n, e.value_bytes, shuffled_.data());
+      bytes = shuffled_.data();
+    }
+    if (p.deflate) {  // into this encoder's buffer: `out` (one per column) keeps only what deflate made
+      deflated_.resize(libdeflate_zlib_compress_bound(deflate_, size));
+      size = libdeflate_zlib_compress(deflate_, bytes, size, deflated_.data(), deflated_.size());
+      if (size == 0) return false;
+      bytes = deflated_.data();
+    }
+    out.resize(size + (p.fletcher32 ? 4 : 0));
+    std::memcpy(out.data(), bytes, size);
+    if (p.fletcher32) {
+      const std::uint32_t sum = hdf5_fletcher32(out.data(), size);
+      for (int k = 0; k < 4; ++k) out[size + static_cast<std::size_t>(k)] = static_cast<unsigned char>(sum >> (8 * k));  // little-endian
+    }
+    if (zeros) zeros_ = {n * e.value_bytes, std::tuple(p.shuffle, p.deflate, p.fletcher32), out};
+    return true;
   }
-  std::size_t size = n * value_bytes;
-  if (p->shuffle && value_bytes > 1) {
-    shuffled_.resize(size);
-    shuffle(bytes, n, value_bytes, shuffled_.data());
-    bytes = shuffled_.data();
+
+ private:
+  libdeflate_compressor* deflate_;
+  std::vector<unsigned char> stored_, shuffled_, deflated_;
+  // The last chunk of zeros encoded (the counts an import keeps beside SI values are zeros, chunk
+  // after chunk): reused for the next of the same size and pipeline instead of deflated again.
+  struct {
+    std::size_t size = 0;
+    std::tuple<bool, bool, bool> pipeline;  // shuffle, deflate, Fletcher-32
+    std::vector<unsigned char> encoded;
+  } zeros_;
+};
+
+ChunkWriter::ChunkWriter() : here_(std::make_unique<Encoder>()) {}
+
+ChunkWriter::~ChunkWriter() = default;
+
+void ChunkWriter::write(std::span<const ChunkColumn> columns, hsize_t at, hsize_t rows, const fs::path& file) {
+  if (rows == 0) return;
+  const std::size_t n = columns.size();
+  std::vector<std::optional<ChunkEncoding>> how(n);
+  for (std::size_t k = 0; k < n; ++k) how[k] = encoding_of(columns[k].ds, columns[k].mem_type, at, rows);
+  encoded_.resize(std::max(encoded_.size(), n));
+  std::vector<char> ok(n, 0);  // column k's chunk is in encoded_[k]
+  std::atomic<std::size_t> next{0};
+  const auto encode = [&](Encoder& e) {
+    for (std::size_t k; (k = next.fetch_add(1)) < n;) ok[k] = how[k] && e.encode(*how[k], rows, columns[k].data, encoded_[k]);
+  };
+  std::future<void> beside;
+  if (second_core() && std::count_if(how.begin(), how.end(), [](const auto& h) { return h.has_value(); }) > 1) {
+    if (!beside_) beside_ = std::make_unique<Encoder>();
+    try {
+      beside = std::async(std::launch::async, encode, std::ref(*beside_));
+    } catch (const std::system_error&) {
+      // No thread to be had: this one encodes them all.
+    }
   }
-  if (p->deflate) {
-    encoded_.resize(libdeflate_zlib_compress_bound(deflate_, size) + 4);
-    size = libdeflate_zlib_compress(deflate_, bytes, size, encoded_.data(), encoded_.size() - 4);
-    if (size == 0) return false;
-  } else {
-    encoded_.resize(size + 4);
-    std::memcpy(encoded_.data(), bytes, size);
+  encode(*here_);
+  if (beside.valid()) beside.get();
+  const hsize_t dims[1] = {at + rows}, offset[1] = {at};
+  for (std::size_t k = 0; k < n; ++k) {
+    const ChunkColumn& c = columns[k];
+    if (!ok[k]) {
+      write_rows(c.ds, c.mem_type, at, rows, 0, c.data, file, c.name);
+      continue;
+    }
+    check_write(H5Dset_extent(c.ds, dims), file, fmt::format("cannot extend dataset '{}'", c.name));
+    check_write(H5Dwrite_chunk(c.ds, H5P_DEFAULT, 0, offset, encoded_[k].size(), encoded_[k].data()), file,
+                fmt::format("cannot write dataset '{}'", c.name));
   }
-  if (p->fletcher32) {
-    const std::uint32_t sum = hdf5_fletcher32(encoded_.data(), size);
-    for (int k = 0; k < 4; ++k) encoded_[size++] = static_cast<unsigned char>(sum >> (8 * k));  // little-endian
-  }
-  encoded_.resize(size);
-  return true;
 }
 
 }  // namespace stend::detail

@@ -10,10 +10,10 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
+#include <span>
 #include <vector>
-
-struct libdeflate_compressor;
 
 namespace stend::detail {
 
@@ -37,6 +37,14 @@ std::optional<ChunkLayout> decodable_layout(hid_t ds, hid_t mem_type);
 // then reads it, and says what is damaged. Takes the library lock to read the stored bytes only.
 bool decode_chunk(hid_t ds, const ChunkLayout& layout, std::uint64_t k, unsigned char* out);
 
+// One column of a write: rows of the 1-D dataset `ds` from `data` (of `mem_type`).
+struct ChunkColumn {
+  hid_t ds = -1;
+  hid_t mem_type = -1;
+  const void* data = nullptr;
+  const char* name = "";  // the dataset's name, for errors
+};
+
 class ChunkWriter {
  public:
   ChunkWriter();
@@ -44,19 +52,17 @@ class ChunkWriter {
   ChunkWriter(const ChunkWriter&) = delete;
   ChunkWriter& operator=(const ChunkWriter&) = delete;
 
-  // Rows [at, at + rows) of the 1-D dataset `ds` from `data` (of `mem_type`), extending it to
-  // at + rows, as write_rows does. Rows that start a chunk — a whole one, or the first rows of one
-  // the dataset does not reach yet — of a type stored as given (or int32 counts stored as int16)
-  // through a pipeline of shuffle, deflate and Fletcher-32 or a part of it, are encoded here; any
-  // other write goes through libhdf5.
-  void write(hid_t ds, hid_t mem_type, hsize_t at, hsize_t rows, const void* data,
-             const std::filesystem::path& file, const char* name);
+  // Rows [at, at + rows) of each column, extending its dataset to at + rows, as write_rows does.
+  // Rows that start a chunk — a whole one, or the first rows of one the dataset does not reach yet —
+  // of a type stored as given (or int32 counts stored as int16) through a pipeline of shuffle,
+  // deflate and Fletcher-32 or a part of it, are encoded here, the columns shared between this
+  // thread and one more where the machine has a second core (deflate is an import's longest step);
+  // any other write goes through libhdf5. The datasets are written in the order given.
+  void write(std::span<const ChunkColumn> columns, hsize_t at, hsize_t rows, const std::filesystem::path& file);
 
  private:
-  bool encode(hid_t ds, hid_t mem_type, hsize_t at, hsize_t rows, const void* data);
-
-  libdeflate_compressor* deflate_ = nullptr;
-  std::vector<unsigned char> stored_, shuffled_, encoded_;
+  class Encoder;
+  std::unique_ptr<Encoder> here_, beside_;            // one per encoding thread: a compressor, its buffers
+  std::vector<std::vector<unsigned char>> encoded_;  // each column's chunk as stored
 };
-
 }  // namespace stend::detail

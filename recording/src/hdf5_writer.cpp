@@ -154,14 +154,17 @@ void Hdf5RunWriter::Impl::create(const ImuSample* first, std::size_t n) {
 void Hdf5RunWriter::Impl::write_pending() {
   const hsize_t n = pending();
   if (n == 0) return;
-  chunks.write(ds_t.get(), H5T_NATIVE_DOUBLE, written, n, t.data(), path, "t_s");
+  std::vector<ChunkColumn> columns{{ds_t.get(), H5T_NATIVE_DOUBLE, t.data(), "t_s"}};
   for (int ch = 0; ch < kChannels; ++ch) {
-    chunks.write(ds_counts[ch].get(), H5T_NATIVE_INT32, written, n, counts[ch].data(), path, kCountsNames[ch]);
-    if (ds_si[ch]) chunks.write(ds_si[ch].get(), H5T_NATIVE_DOUBLE, written, n, si[ch].data(), path, kSiNames[ch]);
+    columns.push_back({ds_counts[ch].get(), H5T_NATIVE_INT32, counts[ch].data(), kCountsNames[ch]});
+    if (ds_si[ch]) columns.push_back({ds_si[ch].get(), H5T_NATIVE_DOUBLE, si[ch].data(), kSiNames[ch]});
+  }
+  columns.push_back({ds_flags.get(), H5T_NATIVE_UINT32, flags.data(), "flags"});
+  chunks.write(columns, written, n, path);
+  for (int ch = 0; ch < kChannels; ++ch) {
     counts[ch].clear();
     si[ch].clear();
   }
-  chunks.write(ds_flags.get(), H5T_NATIVE_UINT32, written, n, flags.data(), path, "flags");
   written += n;
   t.clear();
   flags.clear();

@@ -16,6 +16,7 @@
 #include <stend/io/sample_sink.hpp>
 #include <stend/recording/recording.hpp>
 
+#include <atomic>
 #include <cstddef>
 #include <filesystem>
 #include <string>
@@ -72,8 +73,10 @@ void import_dataset(const Inputs& inputs, const std::string& format, Recording& 
                     const ImportOptions& options = {}, std::string* used = nullptr);
 
 // Provenance of the inputs as events (source "import"): path, size, SHA-256, format, Stend
-// version. For `stend import`, which makes a run folder of the recording.
-void add_provenance(Recording& rec, const Inputs& inputs, const std::string& format);
+// version. For `stend import`, which makes a run folder of the recording. The SHA-256 is a pass
+// over every byte of the inputs: setting `*stop` abandons it (an InputError) within 64 KiB.
+void add_provenance(Recording& rec, const Inputs& inputs, const std::string& format,
+                    const std::atomic<bool>* stop = nullptr);
 
 // Content checks the formats use, exposed for tests.
 bool looks_like_run(const std::filesystem::path& p);
