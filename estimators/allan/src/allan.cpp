@@ -13,6 +13,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <atomic>
 #include <filesystem>
 #include <array>
 #include <cmath>
@@ -359,27 +360,35 @@ ChannelResult analyze_channel(const SampleSource& src, IndexRange range, Channel
   return analyze(s, rate, info, options);
 }
 
-// The channels (noise_channels) on two threads (the c-th on thread c mod 2), each thread with one
-// stream for all its channels, so that memory stays at two streams' state; the block summary of
-// the stationarity check gathers every channel read, the time (thread 0) and the temperature
-// (thread 1, when recorded).
+// The channels (noise_channels) on two threads, each taking the next channel when done with one
+// (the channels' noise fits differ in length), with one stream for all its channels, so that
+// memory stays at two streams' state; after the channels, the block summary of the stationarity
+// check gathers the time and the temperature (when recorded) besides every channel read.
 std::vector<ChannelResult> analyze_channels(const SampleSource& src, IndexRange range,
                                             const std::vector<Channel>& columns, bool temperature, double rate,
                                             const AllanOptions& options, processing::BlockSummary& blocks) {
   const int channels = static_cast<int>(columns.size());
+  const int items = channels + 1 + (temperature ? 1 : 0);  // the channels, the time, the temperature
   std::vector<ChannelResult> out(columns.size());
+  std::atomic<int> next{0};
   std::exception_ptr error[2];
-  auto work = [&](int parity) {
+  auto work = [&](int thread) {
     try {
-      if (parity == 0) blocks.add_column(src, range, Channel::kTime);
-      if (parity == 1 && temperature) blocks.add_column(src, range, Channel::kTemperature);
-      OverlappingAllanStream s(options.max_m, range.size());
-      for (int ch = parity; ch < channels; ch += 2) {
-        const auto at = static_cast<std::size_t>(ch);
-        out[at] = analyze_channel(src, range, columns[at], rate, options, s, blocks);
+      std::optional<OverlappingAllanStream> s;  // made with this thread's first channel
+      for (int item; (item = next.fetch_add(1)) < items;) {
+        if (item == channels) {
+          blocks.add_column(src, range, Channel::kTime);
+        } else if (item > channels) {
+          blocks.add_column(src, range, Channel::kTemperature);
+        } else {
+          if (!s) s.emplace(options.max_m, range.size());
+          const auto at = static_cast<std::size_t>(item);
+          out[at] = analyze_channel(src, range, columns[at], rate, options, *s, blocks);
+        }
       }
     } catch (...) {
-      error[parity] = std::current_exception();
+      error[thread] = std::current_exception();
+      next = items;  // the other thread stops after its current item
     }
   };
   std::thread second(work, 1);
