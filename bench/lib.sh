@@ -6,13 +6,13 @@
 #   LIMITS_BENCH=path/to/limits_bench   (default BUILD/bin/limits_bench: build/bin/limits_bench)
 limits_bench=${LIMITS_BENCH:-${build:-$root/build}/bin/limits_bench}
 
-# timed FILE COMMAND…: runs COMMAND under /usr/bin/time, appends "wall cpu maxrss_kb" to FILE;
-# on failure prints COMMAND's errors and exits.
+# timed FILE COMMAND…: runs COMMAND, appends "wall cpu maxrss_kb" to FILE (seconds to the
+# microsecond, bench/rusage.py: wait4's user + system time); on failure prints COMMAND's errors
+# and exits.
 timed() {
   local file=$1
   shift
-  /usr/bin/time -f "%e %U %S %M" -o "$tmp/t" "$@" >/dev/null 2>"$tmp/err" || { cat "$tmp/err" >&2; exit 1; }
-  awk '{ printf "%s %.3f %s\n", $1, $2 + $3, $4 }' "$tmp/t" >>"$file"
+  python3 "$root/bench/rusage.py" "$file" "$tmp/err" "$@" || { cat "$tmp/err" >&2; exit 1; }
 }
 median() { sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
 column_median() { awk -v c="$2" '{ print $c }' "$1" | median; }  # FILE COLUMN (1 wall, 2 CPU, 3 RSS)

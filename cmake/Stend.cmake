@@ -134,3 +134,15 @@ function(stend_add_estimator name)
   set_property(GLOBAL APPEND PROPERTY STEND_ESTIMATORS ${name})
   set_property(GLOBAL APPEND PROPERTY STEND_ESTIMATOR_LIBRARIES ${ARG_LIBRARY})
 endfunction()
+
+# stend_soname(VAR LIBRARY_FILE): the SONAME of a shared library (readelf -d), what dlopen is
+# given for a library opened on demand (core/on_demand/); fails the configuration without one.
+function(stend_soname var file)
+  get_filename_component(real "${file}" REALPATH)
+  execute_process(COMMAND ${CMAKE_READELF} -d "${real}" OUTPUT_VARIABLE dynamic RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0 OR NOT dynamic MATCHES "Library soname: \\[([^]]+)\\]")
+    message(FATAL_ERROR "cannot read the SONAME of ${file} (readelf -d)")
+  endif()
+  set(${var} "${CMAKE_MATCH_1}" PARENT_SCOPE)
+  set_property(GLOBAL APPEND PROPERTY STEND_ON_DEMAND_FILES "${real}")  # the .deb depends on it: StendPackage.cmake
+endfunction()

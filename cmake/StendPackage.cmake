@@ -51,6 +51,18 @@ set(CPACK_DEBIAN_PACKAGE_HOMEPAGE "https://example.invalid/stend")
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS OFF)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS_PRIVATE_DIRS ${CMAKE_BINARY_DIR}/lib)
+# Libraries opened on demand (core/on_demand/: libpq, matio) are not in any binary's NEEDED, so
+# dpkg-shlibdeps cannot see them: their packages are named here, found with dpkg-query.
+get_property(on_demand_files GLOBAL PROPERTY STEND_ON_DEMAND_FILES)
+set(on_demand_packages "")
+foreach(file IN LISTS on_demand_files)
+  execute_process(COMMAND dpkg-query -S "${file}" OUTPUT_VARIABLE owner RESULT_VARIABLE rc ERROR_QUIET)
+  if(rc EQUAL 0 AND owner MATCHES "^([^:,]+)")
+    list(APPEND on_demand_packages "${CMAKE_MATCH_1}")
+  endif()
+endforeach()
+list(REMOVE_DUPLICATES on_demand_packages)
+list(JOIN on_demand_packages ", " CPACK_DEBIAN_PACKAGE_DEPENDS)
 # The SDK's headers include these (a plugin built against the installed Stend needs them).
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS "libeigen3-dev, cmake, g++")
 # The Python module (python/, /usr/lib/python3/dist-packages/stend) needs Debian's Python and NumPy.

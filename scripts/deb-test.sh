@@ -19,7 +19,7 @@ depends=$(dpkg-deb -f "$deb" Depends)
 echo "depends:  $depends"
 # (Ceres is linked statically by its CMake package here; its own run-time libraries — glog, cholmod,
 # spqr — appear instead.)
-for lib in libhdf5 libyaml-cpp libmodbus libhidapi libmatio libgoogle-glog libcholmod libc6 libstdc++6; do
+for lib in libsz2 libyaml-cpp libmodbus libhidapi libmatio libpq5 libgoogle-glog libcholmod libc6 libstdc++6; do
   [[ "$depends" == *"$lib"* ]] || fail "Depends lacks $lib"
 done
 if dpkg-deb -c "$deb" | grep -E 'stend_test|test_mean_accel|test-plugins'; then fail "test plugins in the package"; fi

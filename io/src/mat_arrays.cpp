@@ -52,8 +52,8 @@ class MatArrays final : public ArrayFile {
           if (auto fa = array_info(name + "." + field, fv)) arrays_.push_back(*fa);
       }
     }
-    version_ = Mat_GetVersion(top_.mat()) == MAT_FT_MAT73 ? "MAT 7.3 (HDF5)"
-             : Mat_GetVersion(top_.mat()) == MAT_FT_MAT4  ? "MAT v4"
+    version_ = matio().Mat_GetVersion(top_.mat()) == MAT_FT_MAT73 ? "MAT 7.3 (HDF5)"
+             : matio().Mat_GetVersion(top_.mat()) == MAT_FT_MAT4  ? "MAT v4"
                                                           : "MAT v5";
   }
   const fs::path& file() const override { return file_; }

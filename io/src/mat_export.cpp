@@ -23,15 +23,15 @@ namespace {
 
 MatVar make_double(const char* name, std::size_t rows, std::size_t cols, const double* data) {
   std::size_t dims[2] = {rows, cols};
-  return MatVar(Mat_VarCreate(name, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, const_cast<double*>(data), 0));
+  return MatVar(matio().Mat_VarCreate(name, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, const_cast<double*>(data), 0));
 }
 MatVar make_int32(const char* name, std::size_t rows, std::size_t cols, const std::int32_t* data) {
   std::size_t dims[2] = {rows, cols};
-  return MatVar(Mat_VarCreate(name, MAT_C_INT32, MAT_T_INT32, 2, dims, const_cast<std::int32_t*>(data), 0));
+  return MatVar(matio().Mat_VarCreate(name, MAT_C_INT32, MAT_T_INT32, 2, dims, const_cast<std::int32_t*>(data), 0));
 }
 MatVar make_text(const char* name, const std::string& s) {
   std::size_t dims[2] = {1, s.size()};
-  return MatVar(Mat_VarCreate(name, MAT_C_CHAR, MAT_T_UINT8, 2, dims, const_cast<char*>(s.data()), 0));
+  return MatVar(matio().Mat_VarCreate(name, MAT_C_CHAR, MAT_T_UINT8, 2, dims, const_cast<char*>(s.data()), 0));
 }
 
 // The samples as column-major N x 1 / N x 3 arrays: time [s], acceleration [m/s²], rate [rad/s],
@@ -64,14 +64,14 @@ MatColumns mat_columns(const Recording& rec) {
 MatVar segments_struct(const Recording& rec, const fs::path& file) {
   const char* segment_fields[] = {"kind", "label", "t_start_s", "t_end_s", nullptr};
   std::size_t dims[2] = {rec.segments.size(), 1};
-  MatVar s(Mat_VarCreateStruct2("segments", 2, dims, segment_fields));
+  MatVar s(matio().Mat_VarCreateStruct2("segments", 2, dims, segment_fields));
   if (!s) write_failed(file, "matio failed to create 'segments'");
   for (std::size_t i = 0; i < rec.segments.size(); ++i) {
     const Segment& seg = rec.segments[i];
-    Mat_VarSetStructFieldByName(s.get(), "kind", i, make_text("kind", to_string(seg.kind)).release());
-    Mat_VarSetStructFieldByName(s.get(), "label", i, make_text("label", seg.label).release());
-    Mat_VarSetStructFieldByName(s.get(), "t_start_s", i, make_double("t_start_s", 1, 1, &seg.t_start_s).release());
-    Mat_VarSetStructFieldByName(s.get(), "t_end_s", i, make_double("t_end_s", 1, 1, &seg.t_end_s).release());
+    matio().Mat_VarSetStructFieldByName(s.get(), "kind", i, make_text("kind", to_string(seg.kind)).release());
+    matio().Mat_VarSetStructFieldByName(s.get(), "label", i, make_text("label", seg.label).release());
+    matio().Mat_VarSetStructFieldByName(s.get(), "t_start_s", i, make_double("t_start_s", 1, 1, &seg.t_start_s).release());
+    matio().Mat_VarSetStructFieldByName(s.get(), "t_end_s", i, make_double("t_end_s", 1, 1, &seg.t_end_s).release());
   }
   return s;
 }
@@ -89,7 +89,7 @@ class MatWriter {
       fields_.emplace_back(what, std::move(v));
       return;
     }
-    if (Mat_VarWrite(mat_, v.get(), MAT_COMPRESSION_NONE) != 0) {
+    if (matio().Mat_VarWrite(mat_, v.get(), MAT_COMPRESSION_NONE) != 0) {
       write_failed(file_, std::string("matio failed to write '") + what + "'");
     }
   }
@@ -100,10 +100,10 @@ class MatWriter {
     for (const auto& f : fields_) names.push_back(f.first.c_str());
     names.push_back(nullptr);
     std::size_t dims[2] = {1, 1};
-    MatVar root(Mat_VarCreateStruct2(struct_name_.c_str(), 2, dims, names.data()));
+    MatVar root(matio().Mat_VarCreateStruct2(struct_name_.c_str(), 2, dims, names.data()));
     if (!root) write_failed(file_, "matio failed to create struct '" + struct_name_ + "'");
-    for (auto& f : fields_) Mat_VarSetStructFieldByName(root.get(), f.first.c_str(), 0, f.second.release());
-    if (Mat_VarWrite(mat_, root.get(), MAT_COMPRESSION_NONE) != 0) {
+    for (auto& f : fields_) matio().Mat_VarSetStructFieldByName(root.get(), f.first.c_str(), 0, f.second.release());
+    if (matio().Mat_VarWrite(mat_, root.get(), MAT_COMPRESSION_NONE) != 0) {
       write_failed(file_, "matio failed to write struct '" + struct_name_ + "'");
     }
   }
@@ -118,7 +118,7 @@ class MatWriter {
 }  // namespace
 
 void export_mat(const Recording& rec, const fs::path& file, const std::string& struct_name) {
-  MatFile mat(Mat_CreateVer(file.c_str(), nullptr, MAT_FT_MAT5));
+  MatFile mat(matio().Mat_CreateVer(file.c_str(), nullptr, MAT_FT_MAT5));
   if (!mat) write_failed(file, "matio cannot create it");
   const std::size_t n = rec.samples.size();
   const MatColumns c = mat_columns(rec);

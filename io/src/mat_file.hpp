@@ -9,7 +9,7 @@
 
 #include "arrays.hpp"
 
-#include <matio.h>
+#include <stend/matio_library.hpp>
 #include <zlib.h>
 
 #include <cstddef>
@@ -27,12 +27,12 @@ namespace stend::io::detail {
 
 struct MatFileCloser {
   void operator()(mat_t* m) const {
-    if (m) Mat_Close(m);
+    if (m) matio().Mat_Close(m);
   }
 };
 struct MatVarFree {
   void operator()(matvar_t* v) const {
-    if (v) Mat_VarFree(v);
+    if (v) matio().Mat_VarFree(v);
   }
 };
 using MatFile = std::unique_ptr<mat_t, MatFileCloser>;

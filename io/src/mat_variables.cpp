@@ -5,7 +5,6 @@
 
 #include "import_common.hpp"
 
-#include <stend/recording/hdf5.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -89,13 +88,13 @@ class MatioSeries final : public MatSeries {
         along_first_(along_first) {}
   void read(std::size_t n, double* out) override {
     if (n == 0) return;
-    std::vector<char> raw(n * cols * Mat_SizeOfClass(info_->class_type));
+    std::vector<char> raw(n * cols * matio().Mat_SizeOfClass(info_->class_type));
     int start[2] = {0, 0}, stride[2] = {1, 1}, edge[2] = {0, 0};
     const int k = along_first_ ? 0 : 1;
     start[k] = static_cast<int>(next_);
     edge[k] = static_cast<int>(n);
     edge[1 - k] = static_cast<int>(cols);
-    if (Mat_VarReadData(mat_, info_, raw.data(), start, stride, edge) != 0)
+    if (matio().Mat_VarReadData(mat_, info_, raw.data(), start, stride, edge) != 0)
       throw ImportError(file_, 0, "matio cannot read rows " + std::to_string(next_ + 1) + "… of '" + name + "'");
     // Column-major: rows first (n × cols) when the samples run along the first dimension.
     for (std::size_t i = 0; i < n; ++i)
@@ -194,8 +193,8 @@ class Mat5Series final : public MatSeries {
 
 std::size_t struct_elements(const fs::path& file, matvar_t* s) {
   const auto count = declared_elements(s);
-  const unsigned nfields = Mat_VarGetNumberOfFields(s);
-  char* const* names = Mat_VarGetStructFieldnames(s);
+  const unsigned nfields = matio().Mat_VarGetNumberOfFields(s);
+  char* const* names = matio().Mat_VarGetStructFieldnames(s);
   const bool whole = count && (nfields == 0 || (names && s->data && s->nbytes / sizeof(matvar_t*) / nfields >= *count &&
                                                 std::all_of(names, names + nfields, [](const char* n) { return n != nullptr; })));
   if (!whole)
@@ -206,28 +205,28 @@ std::size_t struct_elements(const fs::path& file, matvar_t* s) {
 }
 
 matvar_t* struct_field(const fs::path& file, matvar_t* s, const char* name, std::size_t index) {
-  return index < struct_elements(file, s) ? Mat_VarGetStructFieldByName(s, name, index) : nullptr;
+  return index < struct_elements(file, s) ? matio().Mat_VarGetStructFieldByName(s, name, index) : nullptr;
 }
 
 MatSource::MatSource(const fs::path& file, const std::string& struct_name, MatRoot root) : file_(file) {
   layout_ = check_mat5_elements(file);
-  silence_hdf5_error_printing();  // a MAT 7.3 file is HDF5: its errors are this importer's to report
-  mat_.reset(Mat_Open(file.c_str(), MAT_ACC_RDONLY));
+  matio().silence_hdf5_error_printing();  // a MAT 7.3 file is HDF5: its errors are this importer's to report
+  mat_.reset(matio().Mat_Open(file.c_str(), MAT_ACC_RDONLY));
   if (!mat_) throw ImportError(file, 0, "matio cannot open it as a MATLAB file (missing, or not a .mat)");
   std::size_t n = 0;
-  char** dir = Mat_GetDir(mat_.get(), &n);
+  char** dir = matio().Mat_GetDir(mat_.get(), &n);
   if (!dir) throw ImportError(file, 0, "matio cannot list its variables");
   std::vector<std::string> names(dir, dir + n);
   for (const auto& nm : names) check_declared_size(nm);
   if (!struct_name.empty()) {
-    root_.reset(Mat_VarReadInfo(mat_.get(), struct_name.c_str()));
+    root_.reset(matio().Mat_VarReadInfo(mat_.get(), struct_name.c_str()));
     if (!root_ || root_->class_type != MAT_C_STRUCT) {
       throw ImportError(file, 0, "no struct variable named '" + struct_name + "'");
     }
     return;
   }
   for (const auto& nm : names) {
-    MatVar v(Mat_VarReadInfo(mat_.get(), nm.c_str()));
+    MatVar v(matio().Mat_VarReadInfo(mat_.get(), nm.c_str()));
     if (!v) continue;
     top_[nm] = std::move(v);
   }
@@ -248,12 +247,12 @@ MatSource::MatSource(const fs::path& file, const std::string& struct_name, MatRo
 // Refuses a variable whose header declares more data than the file can hold (compressed
 // variables: zlib's largest expansion) before matio allocates it.
 void MatSource::check_declared_size(const std::string& name) const {
-  MatVar info(Mat_VarReadInfo(mat_.get(), name.c_str()));
+  MatVar info(matio().Mat_VarReadInfo(mat_.get(), name.c_str()));
   if (!info) return;  // unreadable: Mat_VarRead says so, or skips it
   const double file_bytes = static_cast<double>(fs::file_size(file_));
-  const double declared = static_cast<double>(Mat_VarGetSize(info.get()));
+  const double declared = static_cast<double>(matio().Mat_VarGetSize(info.get()));
   if (declared > static_cast<double>(kMaxZlibExpansion) * file_bytes + 4096.0) {
-    throw ImportError(file_, 0, "variable '" + name + "' declares " + std::to_string(Mat_VarGetSize(info.get())) +
+    throw ImportError(file_, 0, "variable '" + name + "' declares " + std::to_string(matio().Mat_VarGetSize(info.get())) +
                                     " bytes of data, more than a file of " + std::to_string(fs::file_size(file_)) +
                                     " bytes can hold (damaged header?)");
   }
@@ -265,8 +264,8 @@ std::vector<std::pair<std::string, matvar_t*>> MatSource::variables() const {
     for (const auto& [name, v] : top_) out.emplace_back(name, v.get());
     return out;
   }
-  const unsigned n = Mat_VarGetNumberOfFields(root_.get());
-  char* const* names = Mat_VarGetStructFieldnames(root_.get());
+  const unsigned n = matio().Mat_VarGetNumberOfFields(root_.get());
+  char* const* names = matio().Mat_VarGetStructFieldnames(root_.get());
   for (unsigned i = 0; names && i < n; ++i)
     if (names[i]) out.emplace_back(names[i], struct_field(file_, root_.get(), names[i], 0));
   return out;
@@ -313,11 +312,11 @@ std::unique_ptr<MatSeries> MatSource::series(matvar_t* v, const std::string& whi
 const matvar_t* MatSource::segments() {
   if (!root_) {
     if (!top_.count("segments")) return nullptr;
-    whole_.reset(Mat_VarRead(mat_.get(), "segments"));
+    whole_.reset(matio().Mat_VarRead(mat_.get(), "segments"));
     return whole_.get();
   }
   if (!struct_field(file_, root_.get(), "segments", 0) || !root_->name) return nullptr;
-  whole_.reset(Mat_VarRead(mat_.get(), root_->name));
+  whole_.reset(matio().Mat_VarRead(mat_.get(), root_->name));
   segments_in_root_ = true;
   return whole_ ? struct_field(file_, whole_.get(), "segments", 0) : nullptr;
 }

@@ -6,7 +6,7 @@
 #include "stend/recording/files.hpp"
 
 #include <fmt/format.h>
-#include <matio.h>
+#include <stend/matio_library.hpp>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -30,22 +30,22 @@ struct MatStruct {
   void add(const std::string& n, std::vector<double> v, std::size_t rows, std::size_t cols) {
     std::size_t dims[2] = {rows, cols};
     names.push_back(n);
-    values.push_back(Mat_VarCreate(nullptr, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, v.data(), 0));
+    values.push_back(matio().Mat_VarCreate(nullptr, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, v.data(), 0));
   }
   void add_text(const std::string& n, const std::string& s) {
     std::size_t dims[2] = {1, s.size()};
     std::string copy = s;
     names.push_back(n);
-    values.push_back(Mat_VarCreate(nullptr, MAT_C_CHAR, MAT_T_UINT8, 2, dims, copy.data(), 0));
+    values.push_back(matio().Mat_VarCreate(nullptr, MAT_C_CHAR, MAT_T_UINT8, 2, dims, copy.data(), 0));
   }
   void write(mat_t* mat, const char* name) {
     std::vector<const char*> fields;
     for (const auto& n : names) fields.push_back(n.c_str());
     std::size_t dims[2] = {1, 1};
-    matvar_t* st = Mat_VarCreateStruct(name, 2, dims, fields.data(), static_cast<unsigned>(fields.size()));
-    for (std::size_t i = 0; i < names.size(); ++i) Mat_VarSetStructFieldByName(st, names[i].c_str(), 0, values[i]);
-    const int failed = Mat_VarWrite(mat, st, MAT_COMPRESSION_NONE);
-    Mat_VarFree(st);  // frees the fields too
+    matvar_t* st = matio().Mat_VarCreateStruct(name, 2, dims, fields.data(), static_cast<unsigned>(fields.size()));
+    for (std::size_t i = 0; i < names.size(); ++i) matio().Mat_VarSetStructFieldByName(st, names[i].c_str(), 0, values[i]);
+    const int failed = matio().Mat_VarWrite(mat, st, MAT_COMPRESSION_NONE);
+    matio().Mat_VarFree(st);  // frees the fields too
     if (failed != 0) throw IoError(fmt::format("cannot write the variable {} to the .mat file", name));
   }
 };
@@ -149,7 +149,7 @@ ExportResult export_matlab(const RunData& run, const fs::path& out, const Export
                      run.dir.string() + ": nothing to export for MATLAB");
   std::string not_estimated;
   write_file_atomic(out, [&](const fs::path& tmp) {
-    mat_t* mat = Mat_CreateVer(tmp.c_str(), nullptr, MAT_FT_MAT5);
+    mat_t* mat = matio().Mat_CreateVer(tmp.c_str(), nullptr, MAT_FT_MAT5);
     if (!mat) throw IoError("cannot write " + out.string() + ": matio could not create the .mat file");
     try {
       for (const char* inst : {"accelerometer", "gyroscope"}) {
@@ -162,10 +162,10 @@ ExportResult export_matlab(const RunData& run, const fs::path& out, const Export
       }
       write_matlab_info(mat, run.identity, not_estimated);
     } catch (...) {
-      Mat_Close(mat);
+      matio().Mat_Close(mat);
       throw;
     }
-    if (Mat_Close(mat) != 0) throw IoError("cannot write " + out.string() + ": matio could not close the .mat file");
+    if (matio().Mat_Close(mat) != 0) throw IoError("cannot write " + out.string() + ": matio could not close the .mat file");
   });
   if (!not_estimated.empty()) res.warnings.push_back("exported as 0 (not estimated): " + not_estimated);
   res.files.push_back(out);

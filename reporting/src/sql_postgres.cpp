@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 #include <libpq-fe.h>
+#include <stend/on_demand.hpp>
 
 #include <cstdlib>
 #include <vector>
@@ -16,6 +17,34 @@
 namespace stend::reporting::sql {
 
 namespace {
+
+// libpq, opened the first time a command uses a PostgreSQL results store (core/on_demand/: libpq
+// loads OpenSSL, Kerberos and LDAP, which no other command needs).
+struct LibPq {
+  OnDemandLibrary lib{STEND_LIBPQ_SONAME, "the PostgreSQL results store"};
+  STEND_ON_DEMAND(lib, PQclear);
+  STEND_ON_DEMAND(lib, PQconnectdbParams);
+  STEND_ON_DEMAND(lib, PQconninfoFree);
+  STEND_ON_DEMAND(lib, PQconninfoParse);
+  STEND_ON_DEMAND(lib, PQerrorMessage);
+  STEND_ON_DEMAND(lib, PQexec);
+  STEND_ON_DEMAND(lib, PQexecParams);
+  STEND_ON_DEMAND(lib, PQfinish);
+  STEND_ON_DEMAND(lib, PQfreemem);
+  STEND_ON_DEMAND(lib, PQftype);
+  STEND_ON_DEMAND(lib, PQgetisnull);
+  STEND_ON_DEMAND(lib, PQgetvalue);
+  STEND_ON_DEMAND(lib, PQnfields);
+  STEND_ON_DEMAND(lib, PQntuples);
+  STEND_ON_DEMAND(lib, PQresultErrorMessage);
+  STEND_ON_DEMAND(lib, PQresultStatus);
+  STEND_ON_DEMAND(lib, PQsetNoticeProcessor);
+  STEND_ON_DEMAND(lib, PQstatus);
+};
+const LibPq& pq() {
+  static const LibPq table;
+  return table;
+}
 
 // PostgreSQL type OIDs of the columns the store reads (catalog/pg_type.h).
 constexpr Oid kOidBool = 16, kOidInt8 = 20, kOidInt2 = 21, kOidInt4 = 23, kOidFloat4 = 700, kOidFloat8 = 701,
@@ -29,12 +58,12 @@ constexpr int kStatementTimeout_ms = 300000;    // server statement_timeout: one
 // (or cannot be parsed: PQconnectdbParams then says why).
 std::string url_value(const std::string& url, std::string_view keyword) {
   char* err = nullptr;
-  PQconninfoOption* opts = PQconninfoParse(url.c_str(), &err);
-  PQfreemem(err);
+  PQconninfoOption* opts = pq().PQconninfoParse(url.c_str(), &err);
+  pq().PQfreemem(err);
   std::string value;
   for (PQconninfoOption* o = opts; o != nullptr && o->keyword != nullptr; ++o)
     if (keyword == o->keyword && o->val != nullptr) value = o->val;
-  PQconninfoFree(opts);
+  pq().PQconninfoFree(opts);
   return value;
 }
 
@@ -67,7 +96,7 @@ PGconn* connect_with_timeout(const std::string& url) {
   values.push_back(url.c_str());
   keys.push_back(nullptr);
   values.push_back(nullptr);
-  return PQconnectdbParams(keys.data(), values.data(), 1);
+  return pq().PQconnectdbParams(keys.data(), values.data(), 1);
 }
 
 // Any two concurrent `stend db migrate` / store opens serialize their schema changes on this key.
@@ -77,17 +106,17 @@ class PostgresConnection final : public Connection {
  public:
   explicit PostgresConnection(const std::string& url) : where_(redact_url(url)) {
     conn_ = connect_with_timeout(url);
-    if (!conn_ || PQstatus(conn_) != CONNECTION_OK) {
-      const std::string msg = conn_ ? PQerrorMessage(conn_) : "out of memory";
-      PQfinish(conn_);
+    if (!conn_ || pq().PQstatus(conn_) != CONNECTION_OK) {
+      const std::string msg = conn_ ? pq().PQerrorMessage(conn_) : "out of memory";
+      pq().PQfinish(conn_);
       throw IoError(where_ + ": cannot connect to the results store: " + trimmed(msg) +
                     " (check the server runs and the URL; the password comes from PGPASSWORD or ~/.pgpass; " +
                     timeout_note(url) + ")");
     }
-    PQsetNoticeProcessor(conn_, [](void*, const char*) {}, nullptr);  // "relation exists, skipping"
+    pq().PQsetNoticeProcessor(conn_, [](void*, const char*) {}, nullptr);  // "relation exists, skipping"
     if (!states_statement_timeout(url)) set_statement_timeout();
   }
-  ~PostgresConnection() override { PQfinish(conn_); }
+  ~PostgresConnection() override { pq().PQfinish(conn_); }
   PostgresConnection(const PostgresConnection&) = delete;
   PostgresConnection& operator=(const PostgresConnection&) = delete;
 
@@ -97,9 +126,9 @@ class PostgresConnection final : public Connection {
   void lock_schema() override { exec(fmt::format("SELECT pg_advisory_xact_lock({})", kSchemaLockKey)); }
 
   void exec(const std::string& statements) override {
-    PGresult* r = PQexec(conn_, statements.c_str());
+    PGresult* r = pq().PQexec(conn_, statements.c_str());
     check(r);
-    PQclear(r);
+    pq().PQclear(r);
   }
 
   std::vector<Row> query(const std::string& statement, const std::vector<Value>& params) override {
@@ -110,11 +139,11 @@ class PostgresConnection final : public Connection {
       texts[i] = params[i].kind == Value::Kind::kReal ? fmt::format("{}", params[i].real) : params[i].as_text();
       values[i] = texts[i].c_str();
     }
-    PGresult* r = PQexecParams(conn_, statement.c_str(), static_cast<int>(params.size()), nullptr, values.data(),
+    PGresult* r = pq().PQexecParams(conn_, statement.c_str(), static_cast<int>(params.size()), nullptr, values.data(),
                                nullptr, nullptr, 0);
     check(r);
     std::vector<Row> rows;
-    const int n = PQntuples(r), m = PQnfields(r);
+    const int n = pq().PQntuples(r), m = pq().PQnfields(r);
     rows.reserve(static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i) {
       Row row;
@@ -122,7 +151,7 @@ class PostgresConnection final : public Connection {
       for (int c = 0; c < m; ++c) row.push_back(cell(r, i, c));
       rows.push_back(std::move(row));
     }
-    PQclear(r);
+    pq().PQclear(r);
     return rows;
   }
 
@@ -131,7 +160,7 @@ class PostgresConnection final : public Connection {
     try {
       exec(fmt::format("SET statement_timeout = {}", kStatementTimeout_ms));
     } catch (...) {
-      PQfinish(conn_);
+      pq().PQfinish(conn_);
       throw;
     }
   }
@@ -145,16 +174,16 @@ class PostgresConnection final : public Connection {
     return s;
   }
   void check(PGresult* r) const {
-    const ExecStatusType st = PQresultStatus(r);
+    const ExecStatusType st = pq().PQresultStatus(r);
     if (st == PGRES_COMMAND_OK || st == PGRES_TUPLES_OK) return;
-    const std::string msg = trimmed(r ? PQresultErrorMessage(r) : PQerrorMessage(conn_));
-    PQclear(r);
+    const std::string msg = trimmed(r ? pq().PQresultErrorMessage(r) : pq().PQerrorMessage(conn_));
+    pq().PQclear(r);
     throw IoError(where_ + ": " + msg);
   }
   static Value cell(PGresult* r, int i, int c) {
-    if (PQgetisnull(r, i, c)) return Value::null();
-    const char* t = PQgetvalue(r, i, c);
-    switch (PQftype(r, c)) {
+    if (pq().PQgetisnull(r, i, c)) return Value::null();
+    const char* t = pq().PQgetvalue(r, i, c);
+    switch (pq().PQftype(r, c)) {
       case kOidInt2:
       case kOidInt4:
       case kOidInt8: return Value::of(static_cast<long long>(std::atoll(t)));
