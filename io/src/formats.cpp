@@ -9,6 +9,7 @@
 #include <stend/recording/version.hpp>
 
 #include <openssl/evp.h>
+#include <stend/on_demand.hpp>
 
 #include "arrays.hpp"
 #include "import_common.hpp"
@@ -182,19 +183,36 @@ void stream_csv(const Inputs& in, const ImportOptions& o, Recording& rec, Sample
   import_csv(in[0], o.csv_mapping(), rec, out);
 }
 
+// OpenSSL's libcrypto, opened when an import first fingerprints its sources (core/on_demand/: only
+// `stend import` needs it; loaded by every command, it costs each a millisecond at start).
+struct LibCrypto {
+  OnDemandLibrary lib{STEND_LIBCRYPTO_SONAME, "fingerprinting imported files (SHA-256)"};
+  STEND_ON_DEMAND(lib, EVP_MD_CTX_new);
+  STEND_ON_DEMAND(lib, EVP_MD_CTX_free);
+  STEND_ON_DEMAND(lib, EVP_sha256);
+  STEND_ON_DEMAND(lib, EVP_DigestInit_ex);
+  STEND_ON_DEMAND(lib, EVP_DigestUpdate);
+  STEND_ON_DEMAND(lib, EVP_DigestFinal_ex);
+};
+const LibCrypto& crypto() {
+  static const LibCrypto table;
+  return table;
+}
+
 std::string sha256_hex(const fs::path& p, const std::atomic<bool>* stop) {
   std::ifstream in(p, std::ios::binary);
   if (!in) throw InputError(p.string() + ": cannot read it to fingerprint it");
-  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx(EVP_MD_CTX_new(), EVP_MD_CTX_free);
-  EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr);
+  const LibCrypto& c = crypto();
+  std::unique_ptr<EVP_MD_CTX, decltype(c.EVP_MD_CTX_free)> ctx(c.EVP_MD_CTX_new(), c.EVP_MD_CTX_free);
+  c.EVP_DigestInit_ex(ctx.get(), c.EVP_sha256(), nullptr);
   std::array<char, 1 << 16> buf{};
   while (in.read(buf.data(), buf.size()) || in.gcount() > 0) {
     if (stop != nullptr && *stop) throw InputError(p.string() + ": fingerprinting abandoned");
-    EVP_DigestUpdate(ctx.get(), buf.data(), static_cast<std::size_t>(in.gcount()));
+    c.EVP_DigestUpdate(ctx.get(), buf.data(), static_cast<std::size_t>(in.gcount()));
   }
   std::array<unsigned char, EVP_MAX_MD_SIZE> md{};
   unsigned int len = 0;
-  EVP_DigestFinal_ex(ctx.get(), md.data(), &len);
+  c.EVP_DigestFinal_ex(ctx.get(), md.data(), &len);
   std::string hex;
   char two[3];
   for (unsigned int i = 0; i < len; ++i) {

@@ -1,340 +1,37 @@
 #include "stend/live/server.hpp"
 
+#include "stend/live/live_state.hpp"
+
+#include "http_server.hpp"
 #include "stend/errors.hpp"
-#include "web_assets.hpp"
 
 #include <fmt/format.h>
-#include <httplib.h>
+#include <stend/on_demand.hpp>
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
-#include <poll.h>
-#include <sys/socket.h>
-#include <unistd.h>
 
-#include <algorithm>
-#include <atomic>
-#include <chrono>
-#include <cctype>
-#include <cerrno>
-#include <condition_variable>
-#include <cstring>
-#include <deque>
 #include <functional>
-#include <map>
-#include <mutex>
-#include <string_view>
-#include <thread>
-#include <vector>
 
 namespace stend::live {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-constexpr int kListenBacklog = 128;  // connections the kernel holds before they are accepted
-
-std::string content_type(std::string_view url) {
-  const auto ends = [&](std::string_view tail) {
-    return url.size() >= tail.size() && url.substr(url.size() - tail.size()) == tail;
-  };
-  if (ends(".js")) return "text/javascript; charset=utf-8";
-  if (ends(".css")) return "text/css; charset=utf-8";
-  return "text/html; charset=utf-8";
-}
 
 bool is_ip_literal(const std::string& address) {
   unsigned char buf[sizeof(in6_addr)];
   return inet_pton(AF_INET, address.c_str(), buf) == 1 || inet_pton(AF_INET6, address.c_str(), buf) == 1;
 }
 
-// ---- the Host check ----------------------------------------------------------------------------
-
-// The host part of a Host header: "[::1]:8765" → "::1", "localhost:8765" → "localhost", lower case.
-std::string host_name(std::string host) {
-  std::transform(host.begin(), host.end(), host.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (!host.empty() && host.front() == '[') {
-    const auto close = host.find(']');
-    return close == std::string::npos ? std::string() : host.substr(1, close - 1);
-  }
-  const auto colon = host.find(':');
-  if (colon != std::string::npos && host.find(':', colon + 1) == std::string::npos) host.resize(colon);
-  return host;
-}
-
-bool is_loopback_literal(const std::string& name) {
-  in_addr v4{};
-  if (inet_pton(AF_INET, name.c_str(), &v4) == 1) return (ntohl(v4.s_addr) >> 24) == 127;  // 127.0.0.0/8
-  in6_addr v6{};
-  return inet_pton(AF_INET6, name.c_str(), &v6) == 1 && IN6_IS_ADDR_LOOPBACK(&v6);
-}
-
-// Whether a request's Host names this machine's loopback or the address the server is bound to:
-// a page served under another name (DNS rebinding) is refused.
-bool host_allowed(const std::string& header, const std::string& bound) {
-  const std::string name = host_name(header);
-  return name == "localhost" || is_loopback_literal(name) || (!name.empty() && name == host_name(bound));
-}
-
-// ---- one connection: reads and writes within its deadline and byte budget ----------------------
-
-// A connection's socket as httplib's Stream: every read and write waits at most until the
-// connection's deadline, and no more than `max_bytes` are read from it in all.
-class DeadlineStream final : public httplib::Stream {
- public:
-  DeadlineStream(int fd, Clock::time_point deadline, std::size_t max_bytes)
-      : fd_(fd), deadline_(deadline), max_bytes_(max_bytes) {}
-
-  bool is_readable() const override { return pos_ < end_ || wait_for(POLLIN); }
-  bool is_writable() const override { return wait_for(POLLOUT); }
-
-  ssize_t read(char* ptr, size_t size) override {
-    if (pos_ == end_ && !fill()) return -1;
-    const std::size_t n = std::min(size, end_ - pos_);
-    std::memcpy(ptr, buf_ + pos_, n);
-    pos_ += n;
-    return static_cast<ssize_t>(n);
-  }
-
-  ssize_t write(const char* ptr, size_t size) override {
-    if (!wait_for(POLLOUT)) return -1;
-    return ::send(fd_, ptr, size, MSG_NOSIGNAL);
-  }
-
-  void get_remote_ip_and_port(std::string& ip, int& port) const override { address_of(::getpeername, ip, port); }
-  void get_local_ip_and_port(std::string& ip, int& port) const override { address_of(::getsockname, ip, port); }
-  socket_t socket() const override { return fd_; }
-
- private:
-  // Waits for `events` until the deadline; false when it passed or the socket failed.
-  bool wait_for(short events) const {
-    for (;;) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline_ - Clock::now()).count();
-      if (left <= 0) return false;
-      pollfd p{fd_, events, 0};
-      const int r = ::poll(&p, 1, static_cast<int>(left));
-      if (r < 0 && errno == EINTR) continue;
-      return r > 0;
-    }
-  }
-
-  // Refills the buffer from the socket; false at the deadline, the end, an error or the budget.
-  bool fill() {
-    if (read_ >= max_bytes_ || !wait_for(POLLIN)) return false;
-    const std::size_t want = std::min(sizeof buf_, max_bytes_ - read_);
-    const ssize_t n = ::recv(fd_, buf_, want, 0);
-    if (n <= 0) return false;
-    read_ += static_cast<std::size_t>(n);
-    pos_ = 0;
-    end_ = static_cast<std::size_t>(n);
-    return true;
-  }
-
-  template <typename F>
-  void address_of(F get, std::string& ip, int& port) const {
-    sockaddr_storage a{};
-    socklen_t len = sizeof a;
-    ip.clear();
-    port = 0;
-    if (get(fd_, reinterpret_cast<sockaddr*>(&a), &len) != 0) return;
-    char text[INET6_ADDRSTRLEN] = {};
-    if (a.ss_family == AF_INET) {
-      const auto* v4 = reinterpret_cast<const sockaddr_in*>(&a);
-      inet_ntop(AF_INET, &v4->sin_addr, text, sizeof text);
-      port = ntohs(v4->sin_port);
-    } else if (a.ss_family == AF_INET6) {
-      const auto* v6 = reinterpret_cast<const sockaddr_in6*>(&a);
-      inet_ntop(AF_INET6, &v6->sin6_addr, text, sizeof text);
-      port = ntohs(v6->sin6_port);
-    }
-    ip = text;
-  }
-
-  int fd_;
-  Clock::time_point deadline_;
-  std::size_t max_bytes_;
-  std::size_t read_ = 0;
-  char buf_[4096];
-  std::size_t pos_ = 0, end_ = 0;
+// The HTTP server (cpp-httplib, and through it OpenSSL) lives in its own library, opened when a
+// live view is first served (core/on_demand/): every other command starts without them.
+struct HttpModule {
+  OnDemandLibrary lib{STEND_LIVE_HTTP_MODULE, "the live view"};
+  STEND_ON_DEMAND(lib, stend_live_http_start);
+  STEND_ON_DEMAND(lib, stend_live_http_stop);
 };
-
-// ---- the open connections: cut at once on stop, the oldest cut when all are taken --------------
-
-class Connections {
- public:
-  // Registers a connection being served; false once stopping (it is then closed unserved).
-  bool add(int fd) {
-    const std::lock_guard<std::mutex> lock(m_);
-    if (stopping_) return false;
-    opened_[fd] = Clock::now();
-    return true;
-  }
-  void remove(int fd) {
-    const std::lock_guard<std::mutex> lock(m_);
-    opened_.erase(fd);
-  }
-  // Cuts the connection open longest: its thread ends within a poll, free for a new client.
-  void cut_oldest() {
-    const std::lock_guard<std::mutex> lock(m_);
-    const auto oldest = std::min_element(opened_.begin(), opened_.end(),
-                                         [](const auto& a, const auto& b) { return a.second < b.second; });
-    if (oldest == opened_.end()) return;
-    ::shutdown(oldest->first, SHUT_RDWR);
-    opened_.erase(oldest);
-  }
-  // Cuts every connection and refuses new ones: no client is waited for.
-  void cut_all() {
-    const std::lock_guard<std::mutex> lock(m_);
-    stopping_ = true;
-    for (const auto& [fd, since] : opened_) ::shutdown(fd, SHUT_RDWR);
-    opened_.clear();
-  }
-
- private:
-  std::mutex m_;
-  std::map<int, Clock::time_point> opened_;
-  bool stopping_ = false;
-};
-
-// ---- the worker threads: a fixed number, none ever queued behind a busy one --------------------
-
-thread_local bool t_refuse_connection = false;  // set while a connection is closed unserved
-
-// httplib's task queue with `threads` workers: a connection that finds them all busy makes room
-// by cutting the oldest connection (`make_room`) and waits for that worker; beyond one queued
-// connection per worker it is closed unserved at once, on the accepting thread.
-class BoundedPool final : public httplib::TaskQueue {
- public:
-  BoundedPool(std::size_t threads, std::function<void()> make_room) : make_room_(std::move(make_room)) {
-    for (std::size_t i = 0; i < threads; ++i) threads_.emplace_back([this] { work(); });
-  }
-  void enqueue(std::function<void()> fn) override {
-    {
-      std::unique_lock<std::mutex> lock(m_);
-      if (busy_ + jobs_.size() >= threads_.size()) {
-        lock.unlock();
-        make_room_();
-        lock.lock();
-      }
-      if (jobs_.size() < threads_.size()) {
-        jobs_.push_back(std::move(fn));
-        cv_.notify_one();
-        return;
-      }
-    }
-    t_refuse_connection = true;
-    fn();
-    t_refuse_connection = false;
-  }
-  void shutdown() override {
-    {
-      const std::lock_guard<std::mutex> lock(m_);
-      shutdown_ = true;
-    }
-    cv_.notify_all();
-    for (auto& t : threads_) t.join();
-  }
-
- private:
-  void work() {
-    std::unique_lock<std::mutex> lock(m_);
-    for (;;) {
-      cv_.wait(lock, [this] { return shutdown_ || !jobs_.empty(); });
-      if (jobs_.empty()) return;  // shutting down, nothing left
-      std::function<void()> fn = std::move(jobs_.front());
-      jobs_.pop_front();
-      ++busy_;
-      lock.unlock();
-      fn();
-      lock.lock();
-      --busy_;
-    }
-  }
-
-  std::function<void()> make_room_;
-  std::vector<std::thread> threads_;
-  std::deque<std::function<void()>> jobs_;
-  std::size_t busy_ = 0;
-  bool shutdown_ = false;
-  std::mutex m_;
-  std::condition_variable cv_;
-};
-
-// httplib's server with each connection served by DeadlineStream (one request, then closed) and
-// registered in Connections.
-class BoundedServer final : public httplib::Server {
- public:
-  explicit BoundedServer(const LiveServerLimits& limits) : limits_(limits) {
-    new_task_queue = [this] {
-      return new BoundedPool(static_cast<std::size_t>(limits_.max_connections), [this] { connections_.cut_oldest(); });
-    };
-  }
-  void cut_all_connections() { connections_.cut_all(); }
-  // httplib listens with a backlog of 5: a burst of connections (a page's assets, a reload) would
-  // see SYNs dropped and retried a second later. Listening again widens it.
-  void widen_backlog() { ::listen(svr_sock_, kListenBacklog); }
-
- private:
-  bool process_and_close_socket(socket_t sock) override {
-    const bool serve = !t_refuse_connection && connections_.add(sock);
-    if (serve) {
-      serve_one_request(sock);
-      connections_.remove(sock);
-    } else {
-      refuse_busy(sock);
-    }
-    ::shutdown(sock, SHUT_RDWR);
-    ::close(sock);
-    return serve;
-  }
-
-  void serve_one_request(int sock) {
-    const auto deadline =
-        Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limits_.request_deadline_s));
-    DeadlineStream stream(sock, deadline, limits_.max_request_bytes);
-    bool closed = false;
-    process_request(stream, /*close_connection=*/true, closed, nullptr);
-  }
-
-  // Says 503 without waiting (the socket's buffer takes it, or nothing is said) and closes.
-  static void refuse_busy(int sock) {
-    static constexpr std::string_view kBusy =
-        "HTTP/1.1 503 Service Unavailable\r\nContent-Length: 5\r\nConnection: close\r\n\r\nbusy\n";
-    (void)::send(sock, kBusy.data(), kBusy.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
-  }
-
-  LiveServerLimits limits_;
-  Connections connections_;
-};
-
-bool read_only(const std::string& method) { return method == "GET" || method == "HEAD"; }
-
-bool has_body(const httplib::Request& req) {
-  return req.has_header("Transfer-Encoding") ||
-         (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0");
-}
-
-void refuse(httplib::Response& res, int status, const std::string& why) {
-  res.status = status;
-  res.set_header("Connection", "close");
-  res.set_content(why, "text/plain");
-}
-
-// Refuses, before any body is read: a method other than GET/HEAD (405), a body (413), a Host that
-// does not name this machine (403).
-httplib::Server::HandlerResponse screen(const httplib::Request& req, httplib::Response& res, const std::string& bound) {
-  if (!read_only(req.method)) {
-    res.set_header("Allow", "GET, HEAD");
-    refuse(res, 405, "the live view is read-only\n");
-  } else if (has_body(req)) {
-    refuse(res, 413, "the live view takes no request body\n");
-  } else if (!host_allowed(req.get_header_value("Host"), bound)) {
-    refuse(res, 403, "the live view answers only to localhost, a loopback address or the address it is bound to\n");
-  } else {
-    return httplib::Server::HandlerResponse::Unhandled;
-  }
-  return httplib::Server::HandlerResponse::Handled;
+const HttpModule& http_module() {
+  static const HttpModule module;
+  return module;
 }
 
 }  // namespace
@@ -355,86 +52,19 @@ bool LiveServerOptions::IsValid(std::string* error) const {
 bool charts_built_in() { return STEND_LIVE_CHARTS != 0; }
 
 struct LiveServer::Impl {
-  explicit Impl(const LiveServerLimits& limits) : server(limits) {}
-  BoundedServer server;
-  std::thread thread;
-  std::atomic<bool> listening_ended{false};
+  void* http = nullptr;  // the module's server
   std::string address;
   int port = 0;
 };
 
-namespace {
-
-void add_routes(httplib::Server& s, const LiveState& state, const std::string& bound) {
-  // Read-only: only GET (and HEAD) are routed; the page loads nothing from elsewhere.
-  s.set_default_headers({{"Cache-Control", "no-store"},
-                         {"X-Content-Type-Options", "nosniff"},
-                         {"Content-Security-Policy", "default-src 'self'; img-src 'self' data:; style-src 'self' 'unsafe-inline'"}});
-  s.set_pre_routing_handler([bound](const httplib::Request& req, httplib::Response& res) { return screen(req, res, bound); });
-  for (const WebAsset& a : web_assets()) {
-    const std::string url(a.url);
-    const std::string type = content_type(a.url);
-    const std::string_view bytes = a.bytes;
-    s.Get(url, [bytes, type](const httplib::Request&, httplib::Response& res) {
-      res.set_content(bytes.data(), bytes.size(), type.c_str());
-    });
-  }
-  s.Get("/api/state", [&state](const httplib::Request&, httplib::Response& res) {
-    res.set_content(state.to_json().dump(), "application/json");
-  });
-}
-
-// httplib's own limits set to ours: no body, timeouts no longer than a connection's deadline.
-void set_limits(httplib::Server& s, const LiveServerLimits& limits) {
-  const auto deadline = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::duration<double>(limits.request_deadline_s));
-  s.set_payload_max_length(0);
-  s.set_read_timeout(deadline);
-  s.set_write_timeout(deadline);
-  s.set_keep_alive_max_count(1);
-}
-
-}  // namespace
-
-LiveServer::LiveServer(const LiveState& state, const LiveServerOptions& options)
-    : impl_(std::make_unique<Impl>(options.limits)) {
+LiveServer::LiveServer(const LiveState& state, const LiveServerOptions& options) : impl_(std::make_unique<Impl>()) {
   if (std::string why; !options.IsValid(&why)) throw InputError(why);
-  httplib::Server& s = impl_->server;
-  // SO_REUSEADDR only: httplib's default adds SO_REUSEPORT, which would let a second stend listen
-  // on a port that is taken (and share its requests) instead of being told so.
-  s.set_socket_options([](socket_t sock) {
-    int yes = 1;
-    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
-  });
-  set_limits(s, options.limits);
-  add_routes(s, state, options.address);
-
+  std::function<std::string()> state_json = [&state] { return state.to_json().dump(); };
+  impl_->http = http_module().stend_live_http_start(&options, &state_json, &impl_->port);
   impl_->address = options.address;
-  if (options.port == 0) {
-    impl_->port = s.bind_to_any_port(options.address);
-    if (impl_->port <= 0)
-      throw IoError(fmt::format("live view: cannot listen on {} (any port); check the address", options.address));
-  } else {
-    if (!s.bind_to_port(options.address, options.port))
-      throw IoError(fmt::format("live view: cannot listen on {}:{} (in use?); choose another with --port, or "
-                                "--port 0 for any free port",
-                                options.address, options.port));
-    impl_->port = options.port;
-  }
-  impl_->server.widen_backlog();
-  impl_->thread = std::thread([impl = impl_.get()] {
-    impl->server.listen_after_bind();
-    impl->listening_ended = true;
-  });
 }
 
-// stop() is a no-op before the thread has started listening: wait for that first. Open
-// connections are cut first, so that no worker waits on a client.
-LiveServer::~LiveServer() {
-  while (!impl_->server.is_running() && !impl_->listening_ended) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  impl_->server.cut_all_connections();
-  impl_->server.stop();
-  if (impl_->thread.joinable()) impl_->thread.join();
-}
+LiveServer::~LiveServer() { http_module().stend_live_http_stop(impl_->http); }
 
 int LiveServer::port() const { return impl_->port; }
 

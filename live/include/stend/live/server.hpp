@@ -5,13 +5,16 @@
 // fill its memory, or keep it (and so the run serving it) from stopping.
 #pragma once
 
-#include <stend/live/live_state.hpp>
+// LiveState: stend/live/live_state.hpp (not included here: the HTTP module, src/http_server.hpp,
+// needs only the options).
 
 #include <cstddef>
 #include <memory>
 #include <string>
 
 namespace stend::live {
+
+class LiveState;
 
 // What one client may take of the server; the defaults are the documented limits.
 struct LiveServerLimits {
