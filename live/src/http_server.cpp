@@ -161,10 +161,15 @@ class DeadlineStream final : public httplib::Stream {
 
 class Connections {
  public:
-  // Registers a connection being served; false once stopping (it is then closed unserved).
+  // Registers a connection being served; false once stopping, or when it is owed a cut (below):
+  // it is then closed unserved.
   bool add(int fd) {
     const std::lock_guard<std::mutex> lock(m_);
     if (stopping_) return false;
+    if (owed_cuts_ > 0) {
+      --owed_cuts_;
+      return false;
+    }
     opened_[fd] = Clock::now();
     return true;
   }
@@ -172,12 +177,18 @@ class Connections {
     const std::lock_guard<std::mutex> lock(m_);
     opened_.erase(fd);
   }
-  // Cuts the connection open longest: its thread ends within a poll, free for a new client.
+  // Cuts the connection open longest: its thread ends within a poll, free for a new client. In a
+  // burst the workers may not have registered their connections yet; the next to register is then
+  // the oldest and is owed the cut (without it, the burst's idle connections, queued ahead of a
+  // new client, would each hold a worker to its deadline first).
   void cut_oldest() {
     const std::lock_guard<std::mutex> lock(m_);
     const auto oldest = std::min_element(opened_.begin(), opened_.end(),
                                          [](const auto& a, const auto& b) { return a.second < b.second; });
-    if (oldest == opened_.end()) return;
+    if (oldest == opened_.end()) {
+      ++owed_cuts_;
+      return;
+    }
     ::shutdown(oldest->first, SHUT_RDWR);
     opened_.erase(oldest);
   }
@@ -192,6 +203,7 @@ class Connections {
  private:
   std::mutex m_;
   std::map<int, Clock::time_point> opened_;
+  std::size_t owed_cuts_ = 0;  // cuts asked for while no connection was registered
   bool stopping_ = false;
 };
 
