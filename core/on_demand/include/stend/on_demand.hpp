@@ -9,11 +9,13 @@
 //     STEND_ON_DEMAND(lib, PQexec);  // a member PQexec of type decltype(&::PQexec)
 //   };
 //
-// A missing library or function throws std::runtime_error naming both and what needed them.
+// A missing library or function throws IoError (exit 4, docs/errors.md: an installation that lacks
+// it) naming both and what needed them.
+#include <stend/errors.hpp>
+
 #include <dlfcn.h>
 
 #include <cstring>
-#include <stdexcept>
 #include <string>
 
 namespace stend {
@@ -26,7 +28,7 @@ class OnDemandLibrary {
       : soname_(soname), needed_for_(needed_for), handle_(::dlopen(soname, RTLD_NOW | RTLD_LOCAL)) {
     if (!handle_) {
       const char* why = ::dlerror();
-      throw std::runtime_error(needed_for_ + " needs the library " + soname_ + ", which cannot be loaded: " +
+      throw IoError(needed_for_ + " needs the library " + soname_ + ", which cannot be loaded: " +
                                (why ? why : "dlopen failed"));
     }
   }
@@ -40,7 +42,7 @@ class OnDemandLibrary {
     ::dlerror();
     void* symbol = ::dlsym(handle_, name);
     if (!symbol) {
-      throw std::runtime_error(needed_for_ + ": the library " + soname_ + " has no function " + name +
+      throw IoError(needed_for_ + ": the library " + soname_ + " has no function " + name +
                                " (a version other than the one Stend was built against?)");
     }
     F f = nullptr;

@@ -52,13 +52,13 @@ struct MatioLibrary {
   F optional_function(const char* name) const {
     try {
       return lib.function<F>(name);
-    } catch (const std::runtime_error&) {
+    } catch (const IoError&) {
       return nullptr;  // a matio without HDF5 support reads no MAT 7.3 file: nothing to silence
     }
   }
 };
 
-// The one table, made by the first caller; throws std::runtime_error when matio cannot be loaded.
+// The one table, made by the first caller; throws IoError when matio cannot be loaded.
 inline const MatioLibrary& matio() {
   static const MatioLibrary table;
   return table;
