@@ -3,6 +3,7 @@
 #include "stend/live/live_state.hpp"
 
 #include "http_server.hpp"
+#include "stend/core/modules.hpp"
 #include "stend/errors.hpp"
 
 #include <fmt/format.h>
@@ -25,7 +26,7 @@ bool is_ip_literal(const std::string& address) {
 // The HTTP server (cpp-httplib, and through it OpenSSL) lives in its own library, opened when a
 // live view is first served (core/on_demand/): every other command starts without them.
 struct HttpModule {
-  OnDemandLibrary lib{STEND_LIVE_HTTP_MODULE, "the live view"};
+  OnDemandLibrary lib{module_path(STEND_LIVE_HTTP_MODULE).c_str(), "the live view"};
   STEND_ON_DEMAND(lib, stend_live_http_start);
   STEND_ON_DEMAND(lib, stend_live_http_stop);
 };
