@@ -8,6 +8,7 @@
 #include "stend/estimation/registry.hpp"
 #include "stend/estimators/builtin.hpp"
 #include "stend/recording/files.hpp"
+#include "stend/core/memory.hpp"
 #include "stend/core/plugin_host.hpp"
 #include "stend/recording/samples.hpp"
 #include "stend/yaml/reader.hpp"
@@ -325,6 +326,8 @@ bool small_enough_to_hold(const stend::Recording& rec) {
 stend::Recording held_in_memory(const stend::Recording& rec) {
   stend::Recording out = rec;
   out.source.reset();
+  out.samples.reserve(static_cast<std::size_t>(rec.sample_count()));
+  stend::prefault(out.samples.data(), out.samples.capacity() * sizeof(stend::ImuSample));
   out.samples.resize(static_cast<std::size_t>(rec.sample_count()));
   if (!out.samples.empty()) rec.sample_source().read(0, out.samples.size(), out.samples.data());
   if (!rec.truth_store) return out;

@@ -5,6 +5,7 @@
 
 #include "stend/estimators/builtin.hpp"
 #include "stend/core/experiment.hpp"
+#include "stend/core/memory.hpp"
 #include "stend/core/plugin_host.hpp"
 #include "stend/recording/recording.hpp"
 #include "stend/core/runner.hpp"
@@ -170,6 +171,7 @@ std::string version_text() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  stend::keep_freed_memory();  // a command's passes reuse their buffers' pages (stend/core/memory.hpp)
   CLI::App app{"stend — characterize MEMS inertial sensors on a lab bench"};
   app.set_version_flag("--version", version_text);
   app.require_subcommand(1);

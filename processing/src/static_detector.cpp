@@ -90,14 +90,18 @@ void for_each_window(const Stream& in, std::size_t half, Triad triad, const Eige
   const std::uint64_t R = std::bit_ceil(2 * half + 2) - 1, H = std::bit_ceil(half + 1) - 1;
   std::vector<Eigen::Vector3d> s1(R + 1, Eigen::Vector3d::Zero()), s2(R + 1, Eigen::Vector3d::Zero()),
       g1(R + 1, Eigen::Vector3d::Zero());
-  std::vector<ImuSample> recent(H + 1);
+  // The last half + 1 samples, for fn: where the source holds its samples in memory its chunks
+  // stay valid and are pointed to; else copied (the next chunk reuses the buffer).
+  const bool held = dynamic_cast<const MemorySamples*>(&in.src) != nullptr;
+  std::vector<ImuSample> copies(held ? 0 : H + 1);
+  std::vector<const ImuSample*> recent(H + 1);
   auto emit = [&](std::uint64_t i) {
     const std::uint64_t a = i >= half ? i - half : 0, b = std::min(n, i + half + 1);
     const double m = static_cast<double>(b - a);
     const Eigen::Vector3d mu = (s1[b & R] - s1[a & R]) / m;
     const double var = ((s2[b & R] - s2[a & R]) / m - mu.cwiseAbs2()).sum() * m / std::max(1.0, m - 1.0);
     const double rate = bias ? ((g1[b & R] - g1[a & R]) / m).norm() : 0.0;
-    fn(i, recent[i & H], var, rate);
+    fn(i, *recent[i & H], var, rate);
   };
   std::uint64_t next = 0;  // next sample to emit
   const std::uint64_t read_end = std::min(n, end + half);
@@ -108,7 +112,12 @@ void for_each_window(const Stream& in, std::size_t half, Triad triad, const Eige
       s1[(j + 1) & R] = s1[j & R] + d;
       s2[(j + 1) & R] = s2[j & R] + d.cwiseAbs2();
       if (bias) g1[(j + 1) & R] = g1[j & R] + (c[k].gyro_radps - *bias);
-      recent[j & H] = c[k];
+      if (held) {
+        recent[j & H] = &c[k];
+      } else {
+        copies[j & H] = c[k];
+        recent[j & H] = &copies[j & H];
+      }
       if (j >= half && next < end) emit(next++);
     }
   }, in.chunk);
@@ -122,7 +131,9 @@ void for_each_window(const Stream& in, std::size_t half, Triad triad, const Eige
 // fit in memory.
 class StreamSelect {
  public:
-  explicit StreamSelect(double q) : q_(q) {}
+  // `most`: at most how many values a pass adds (its room is taken at once, so the values are
+  // neither copied nor their pages faulted in twice as they grow).
+  StreamSelect(double q, std::uint64_t most) : q_(q) { held_.reserve(static_cast<std::size_t>(std::min<std::uint64_t>(most, kHeld + 1))); }
   void add(double v) {
     const std::uint64_t key = key_of(v);
     if (level_ > 0 && (key >> (64 - level_)) != prefix_) return;
@@ -268,8 +279,9 @@ Prepared prepare(const Recording& rec, const Stream& in, const StaticDetectorOpt
 // The base variance the multiplier scales.
 void choose_noise(const Stream& in, const Prepared& p, DetectionSummary& s) {
   const bool init = p.init > 0;
-  std::vector<StreamSelect> sel{StreamSelect(init ? 0.5 : kNoisePercentile)};
   const std::uint64_t from = init ? p.half : 0, to = init ? p.init - p.half : in.size();
+  std::vector<StreamSelect> sel;  // built in place: a copy would not keep the room taken
+  sel.emplace_back(init ? 0.5 : kNoisePercentile, to - from);
   select_all(sel, [&] {
     for_each_window(in, p.half, p.triad, p.mean, nullptr, to, [&](std::uint64_t i, const ImuSample&, double var, double) {
       if (i >= from) sel[0].add(var);
@@ -288,7 +300,8 @@ void choose_gyro_bias(const Stream& in, const Prepared& p, double still_threshol
     s.gyro_bias_source = "mean over the first " + num(s.init_duration_s) + " s";
     return;
   }
-  std::vector<StreamSelect> axis(3, StreamSelect(0.5));
+  std::vector<StreamSelect> axis;
+  for (int a = 0; a < 3; ++a) axis.emplace_back(0.5, in.size());
   select_all(axis, [&] {
     for_each_window(in, p.half, p.triad, p.mean, nullptr, in.size(), [&](std::uint64_t, const ImuSample& x, double var, double) {
       if (var <= still_threshold)

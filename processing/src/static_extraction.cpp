@@ -73,8 +73,26 @@ double median_sample_rate(std::span<const double> t) {
   return 1.0 / *mid;
 }
 
+namespace {
+// The samples of t in [t_start, t_end].
+std::span<const double> segment_of(std::span<const double> t, double t_start_s, double t_end_s) {
+  const auto lo = std::lower_bound(t.begin(), t.end(), t_start_s);
+  const auto hi = std::upper_bound(t.begin(), t.end(), t_end_s);
+  return hi > lo ? t.subspan(static_cast<std::size_t>(lo - t.begin()), static_cast<std::size_t>(hi - lo)) : t.subspan(0, 0);
+}
+}  // namespace
+
+double segment_sample_rate(std::span<const double> t, double t_start_s, double t_end_s) {
+  return median_sample_rate(segment_of(t, t_start_s, t_end_s));
+}
+
 StaticValue extract_static(std::span<const double> t, std::span<const double> x, double t_start_s,
                            double t_end_s, const StaticExtractionSettings& settings) {
+  return extract_static(t, x, t_start_s, t_end_s, settings, segment_sample_rate(t, t_start_s, t_end_s));
+}
+
+StaticValue extract_static(std::span<const double> t, std::span<const double> x, double t_start_s,
+                           double t_end_s, const StaticExtractionSettings& settings, double sample_rate_hz) {
   if (t.size() != x.size())
     throw std::invalid_argument("extract_static: time and value arrays differ in length");
   if (!(t_end_s > t_start_s))
@@ -82,19 +100,15 @@ StaticValue extract_static(std::span<const double> t, std::span<const double> x,
                     "extract_static: segment [" + num(t_start_s) + ", " + num(t_end_s) + "] s is empty");
   if (!(settings.settle_s >= 0.0))
     throw std::invalid_argument("extract_static: settle_s must be >= 0");
-  const auto lo = std::lower_bound(t.begin(), t.end(), t_start_s);
-  const auto hi = std::upper_bound(t.begin(), t.end(), t_end_s);
-  const std::size_t i0 = static_cast<std::size_t>(lo - t.begin());
-  const std::size_t i1 = static_cast<std::size_t>(hi - t.begin());
+  const std::span<const double> ts = segment_of(t, t_start_s, t_end_s);
   StaticValue out;
-  out.n_segment = i1 > i0 ? i1 - i0 : 0;
+  out.n_segment = ts.size();
   const std::string where = "segment [" + num(t_start_s) + ", " + num(t_end_s) + "] s";
   if (out.n_segment < 8)
     throw SkipError(SkipReason::kTooFewSamples, where + " holds " + std::to_string(out.n_segment) +
                                                     " samples; static extraction needs at least 8");
-  const std::span<const double> ts = t.subspan(i0, out.n_segment);
-  const std::span<const double> xs = x.subspan(i0, out.n_segment);
-  out.sample_rate_hz = median_sample_rate(ts);
+  const std::span<const double> xs = x.subspan(static_cast<std::size_t>(ts.data() - t.data()), out.n_segment);
+  out.sample_rate_hz = sample_rate_hz;
   const std::vector<double> y = low_pass(xs, settings, out.sample_rate_hz, where);
 
   const double keep_lo = t_start_s + settings.settle_s, keep_hi = t_end_s - settings.settle_s;

@@ -149,17 +149,20 @@ class PointBuilder {
     const std::uint64_t first = lower_bound_time(src, p.segment.t_start_s);
     const std::uint64_t end = std::max(first, lower_bound_time(src, std::nextafter(p.segment.t_end_s, kInf)));
     const std::vector<double> t = read_column(src, Channel::kTime, first, end);
-    if (req_.accel) p.accel = axes(first, end, t, Channel::kAx, p);
-    if (req_.gyro) p.gyro = axes(first, end, t, Channel::kGx, p);
+    const double rate_hz = segment_sample_rate(t, p.segment.t_start_s, p.segment.t_end_s);
+    if (req_.accel) p.accel = axes(first, end, t, rate_hz, Channel::kAx, p);
+    if (req_.gyro) p.gyro = axes(first, end, t, rate_hz, Channel::kGx, p);
   }
 
-  // One instrument's three axes (channels x, x + 1, x + 2) over samples [first, end) at times t.
-  AxesValue axes(std::uint64_t first, std::uint64_t end, const std::vector<double>& t, Channel x, StaticPoint& p) const {
+  // One instrument's three axes (channels x, x + 1, x + 2) over samples [first, end) at times t
+  // (their segment's sample rate rate_hz).
+  AxesValue axes(std::uint64_t first, std::uint64_t end, const std::vector<double>& t, double rate_hz, Channel x,
+                 StaticPoint& p) const {
     AxesValue v;
     for (int a = 0; a < 3; ++a) {
       const auto c = static_cast<Channel>(static_cast<int>(x) + a);
       const StaticValue s = extract_static(t, read_column(rec_.sample_source(), c, first, end), p.segment.t_start_s,
-                                           p.segment.t_end_s, o_.extraction);
+                                           p.segment.t_end_s, o_.extraction, rate_hz);
       v.mean[a] = s.mean;
       v.sample_std[a] = s.raw_std;
       v.std_error[a] = s.white_std_error;

@@ -124,6 +124,17 @@ void for_each_chunk(const SampleSource& src, const ChunkFn& fn, std::size_t chun
   for_each_chunk(src, 0, src.size(), fn, chunk_samples);
 }
 
+std::span<const ImuSample> samples_view(const SampleSource& src, std::uint64_t first, std::size_t count,
+                                        std::vector<ImuSample>& storage) {
+  if (const auto* memory = dynamic_cast<const MemorySamples*>(&src)) {
+    check_range(src, first, count);
+    return {memory->samples().data() + first, count};
+  }
+  storage.resize(count);
+  src.read(first, count, storage.data());
+  return storage;
+}
+
 ImuSample sample_at(const SampleSource& src, std::uint64_t i) {
   ImuSample s;
   src.read(i, 1, &s);

@@ -33,6 +33,35 @@ TEST(Samples, ChunksCoverTheRangeOnceInOrder) {
   EXPECT_DOUBLE_EQ(sum, (10.0 + 994.0) * 985.0 / 2.0);
 }
 
+// A source that holds nothing in memory: each read copies from a vector it owns.
+class CopyingSource final : public SampleSource {
+ public:
+  explicit CopyingSource(std::vector<ImuSample> v) : v_(std::move(v)) {}
+  std::uint64_t size() const override { return v_.size(); }
+  void read(std::uint64_t first, std::size_t count, ImuSample* out) const override {
+    std::copy_n(v_.begin() + static_cast<std::ptrdiff_t>(first), count, out);
+  }
+
+ private:
+  std::vector<ImuSample> v_;
+};
+
+TEST(Samples, AViewIsTheHeldSamplesThemselvesElseACopy) {
+  const std::vector<ImuSample> v = ramp(300, 0.01);
+  const MemorySamples held(v);
+  std::vector<ImuSample> storage;
+  const std::span<const ImuSample> view = samples_view(held, 20, 100, storage);
+  EXPECT_EQ(view.data(), v.data() + 20);  // no copy
+  EXPECT_EQ(view.size(), 100u);
+  EXPECT_TRUE(storage.empty());
+  const CopyingSource read(v);
+  const std::span<const ImuSample> copy = samples_view(read, 20, 100, storage);
+  EXPECT_EQ(copy.data(), storage.data());
+  ASSERT_EQ(copy.size(), 100u);
+  for (std::size_t i = 0; i < copy.size(); ++i) EXPECT_EQ(copy[i].t_s, v[20 + i].t_s);
+  EXPECT_THROW(samples_view(held, 250, 100, storage), std::out_of_range);
+}
+
 TEST(Samples, TimeSearchAndIntervalsMatchALinearScan) {
   const std::vector<ImuSample> v = ramp(777, 0.01);
   const MemorySamples src(v);

@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <optional>
+#include <span>
 #include <tuple>
 
 namespace stend::ceres_nonlinear {
@@ -67,12 +68,37 @@ struct RotationStep {
     const Eigen::Vector3d a1 = th.cross(l);
     return l + c1 * a1 + c2 * th.cross(a1);
   }
-  // (∂(R·v)/∂θ)ᵀ·l.
-  Eigen::Vector3d gradient(const Eigen::Vector3d& v, const Eigen::Vector3d& l) const {
+  // (∂(R·v)/∂θ)ᵀ·l for the two l of a move's residuals:
+  //   −c1·(v × l) + θ·(2·dc2·(a2·l) − 2·dc1·(a1·l)) + c2·((a1 × l) − v × (θ × l)),
+  // a1 = θ × v, a2 = θ × a1, and by a × (b × c) = b(a·c) − c(a·b) the last bracket is
+  // v(θ·l) + l(v·θ) − 2θ(v·l).
+  void gradients(const Eigen::Vector3d& v, const Eigen::Vector3d& l1, const Eigen::Vector3d& l2,
+                 Eigen::Vector3d& g1, Eigen::Vector3d& g2) const {
     const Eigen::Vector3d a1 = th.cross(v), a2 = th.cross(a1);
-    return -c1 * v.cross(l) + th * (2.0 * dc2 * a2.dot(l) - 2.0 * dc1 * a1.dot(l)) +
-           c2 * (a1.cross(l) - v.cross(th.cross(l)));
+    const double vth = v.dot(th);
+    auto one = [&](const Eigen::Vector3d& l) {
+      return Eigen::Vector3d(-c1 * v.cross(l) + (2.0 * (dc2 * a2.dot(l) - dc1 * a1.dot(l) - c2 * v.dot(l))) * th +
+                             (c2 * th.dot(l)) * v + (c2 * vth) * l);
+    };
+    g1 = one(l1);
+    g2 = one(l2);
   }
+};
+
+// What the stage-1 parameters move in a move's increments: Δ_i = ½(w_i + w_{i+1})·dt_i with
+// w = y − c − G·f, so ∂Δ_i/∂c = −dt_i·I and ∂Δ_i/∂G = −φ_iᵀ ⊗ I, φ_i = ½dt_i·(f_i + f_{i+1}) [m/s·s]
+// (f the calibrated specific force; φ empty without g-sensitivity).
+struct IncrementWeights {
+  std::vector<double> dt;           // t_{i+1} − t_i [s]
+  std::vector<Eigen::Vector3d> phi;
+};
+
+// Sums of a move's adjoint over the steps against IncrementWeights, for residual m:
+// s_m = Σ_i dt_i·h_mi and M_m = Σ_i h_mi·φ_iᵀ with h_mi = ∂r_m/∂Δ_i = A⁻ᵀ·∂r_m/∂θ_i; then
+// ∂r_m/∂z = −(s_m·∂c/∂z + ⟨M_m, ∂G/∂z⟩) for a stage-1 parameter z.
+struct UpstreamSums {
+  Eigen::Vector3d s[2];
+  Eigen::Matrix3d m[2];
 };
 
 // Stage 2 of the integration method: p = scale(3) + cross(6), the rest of the gyro model's θ
@@ -92,13 +118,22 @@ class MoveCost final : public ceres::SizedCostFunction<2, 9> {
   bool Evaluate(double const* const* p, double* residual, double** jacobian) const override {
     std::vector<double> theta = theta_at(p[0]);
     const Eigen::Matrix3d ai = m_.affine<double>(theta.data()).a_inv;
-    const std::size_t n = inc_.size();
-    std::vector<Eigen::Vector3d> v(n + 1);  // v[i]: the direction before step i
-    v[0] = g0_;
-    for (std::size_t i = 0; i < n; ++i) v[i + 1] = RotationStep(ai * inc_[i]).apply(v[i]);
-    residual[0] = e1_.dot(v[n]);
-    residual[1] = e2_.dot(v[n]);
-    if (jacobian && jacobian[0]) jacobian_by_adjoint(theta, ai, v, jacobian[0]);
+    if (!jacobian || !jacobian[0]) {  // the end direction only: nothing kept for a backward pass
+      Eigen::Vector3d v = g0_;
+      for (const Eigen::Vector3d& inc : inc_) v = RotationStep(ai * inc).apply(v);
+      residual[0] = e1_.dot(v);
+      residual[1] = e2_.dot(v);
+      return true;
+    }
+    const Path path = carry(ai);
+    residual[0] = e1_.dot(path.v.back());
+    residual[1] = e2_.dot(path.v.back());
+    Eigen::Matrix3d d1 = Eigen::Matrix3d::Zero(), d2 = Eigen::Matrix3d::Zero();  // ∂r_m/∂A⁻¹
+    backward(path, [&](std::size_t i, const Eigen::Vector3d& g1, const Eigen::Vector3d& g2) {
+      d1.noalias() += g1 * inc_[i].transpose();
+      d2.noalias() += g2 * inc_[i].transpose();
+    });
+    jacobian_in_p(theta, ai, d1, d2, jacobian[0]);
     return true;
   }
 
@@ -114,7 +149,52 @@ class MoveCost final : public ceres::SizedCostFunction<2, 9> {
     return m;
   }
 
+  // UpstreamSums at p for the increments' weights w.
+  UpstreamSums upstream(const double* p, const IncrementWeights& w) const {
+    const Eigen::Matrix3d ai = m_.affine<double>(theta_at(p).data()).a_inv;
+    UpstreamSums u{{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}, {Eigen::Matrix3d::Zero(), Eigen::Matrix3d::Zero()}};
+    backward(carry(ai), [&](std::size_t i, const Eigen::Vector3d& g1, const Eigen::Vector3d& g2) {
+      const Eigen::Vector3d h[2] = {ai.transpose() * g1, ai.transpose() * g2};
+      for (int m = 0; m < 2; ++m) {
+        u.s[m] += w.dt[i] * h[m];
+        if (!w.phi.empty()) u.m[m].noalias() += h[m] * w.phi[i].transpose();
+      }
+    });
+    return u;
+  }
+
  private:
+  // The steps at A⁻¹ and the direction before each (v[n]: at the end).
+  struct Path {
+    std::vector<RotationStep> steps;
+    std::vector<Eigen::Vector3d> v;
+  };
+  Path carry(const Eigen::Matrix3d& ai) const {
+    Path path;
+    path.steps.reserve(inc_.size());
+    path.v.reserve(inc_.size() + 1);
+    path.v.push_back(g0_);
+    for (const Eigen::Vector3d& inc : inc_) {
+      path.steps.emplace_back(ai * inc);
+      path.v.push_back(path.steps.back().apply(path.v.back()));
+    }
+    return path;
+  }
+
+  // The backward pass: at_step(i, ∂r_1/∂θ_i, ∂r_2/∂θ_i) from the last step to the first.
+  template <class StepFn>
+  void backward(const Path& path, const StepFn& at_step) const {
+    Eigen::Vector3d l1 = e1_, l2 = e2_;
+    for (std::size_t i = path.steps.size(); i-- > 0;) {
+      const RotationStep& step = path.steps[i];
+      Eigen::Vector3d g1, g2;
+      step.gradients(path.v[i], l1, l2, g1, g2);
+      at_step(i, g1, g2);
+      l1 = step.apply_transpose(l1);
+      l2 = step.apply_transpose(l2);
+    }
+  }
+
   // The full θ: `base` with the stage-2 parameters p.
   std::vector<double> theta_at(const double* p) const {
     std::vector<double> theta = base_;
@@ -122,17 +202,9 @@ class MoveCost final : public ceres::SizedCostFunction<2, 9> {
     return theta;
   }
 
-  void jacobian_by_adjoint(std::vector<double>& theta, const Eigen::Matrix3d& ai, const std::vector<Eigen::Vector3d>& v,
-                           double* jac) const {
-    Eigen::Vector3d l1 = e1_, l2 = e2_;
-    Eigen::Matrix3d d1 = Eigen::Matrix3d::Zero(), d2 = Eigen::Matrix3d::Zero();  // ∂r_m/∂A⁻¹
-    for (std::size_t i = inc_.size(); i-- > 0;) {
-      const RotationStep step(ai * inc_[i]);
-      d1 += step.gradient(v[i], l1) * inc_[i].transpose();
-      d2 += step.gradient(v[i], l2) * inc_[i].transpose();
-      l1 = step.apply_transpose(l1);
-      l2 = step.apply_transpose(l2);
-    }
+  // ∂r_m/∂p_k = ⟨∂r_m/∂A⁻¹, ∂A⁻¹/∂p_k⟩.
+  void jacobian_in_p(std::vector<double>& theta, const Eigen::Matrix3d& ai, const Eigen::Matrix3d& d1,
+                     const Eigen::Matrix3d& d2, double* jac) const {
     for (std::size_t k = 0; k < 9; ++k) {
       const double keep = theta[3 + k];
       theta[3 + k] = 1.0;
@@ -168,7 +240,8 @@ struct Move {
 // next), read from the recording, and their calibrated specific force [m/s²] (with G only).
 struct Turn {
   std::size_t a = 0;
-  std::vector<ImuSample> samples;
+  std::span<const ImuSample> samples;  // the recording's own where it holds them, else `read`
+  std::vector<ImuSample> read;
   std::vector<Eigen::Vector3d> f_cal;
   const ImuSample& at(std::size_t i) const { return samples[i - a]; }
 };
@@ -219,8 +292,7 @@ IntegrationData integration_data(const Recording& rec, const CalibrationResult& 
     t.a = d.ivs[k].last;
     const std::size_t b = d.ivs[k + 1].first;
     if (b <= t.a || b >= rec.sample_count()) continue;  // nothing between, or not this recording's
-    t.samples.resize(b - t.a + 1);
-    rec.sample_source().read(t.a, t.samples.size(), t.samples.data());
+    t.samples = samples_view(rec.sample_source(), t.a, b - t.a + 1, t.read);
     if (go.estimate_g_sensitivity)
       for (const ImuSample& x : t.samples) t.f_cal.push_back(cal.correct(x.accel_mps2));
   }
@@ -341,76 +413,117 @@ void merge_stages(const IntegrationData& d, const CalibrationResult& r1, const C
                     r2.solver_report;
 }
 
-// Move residuals [rad] as a function of the upstream parameters z = [accelerometer free
-// parameters, stage-1 parameters] and the stage-2 parameters x, with their Jacobian in x when
-// asked. The bias-corrected rates are recomputed only when a stage-1 parameter (or, with G,
-// anything upstream) moved; otherwise the ones of the first evaluation are reused, and so is the
-// map each move then carries a direction through (at the first x asked with them): a change of
-// the accelerometer's parameters moves only the start and end directions, and costs no integration.
+// The weights of a move's increments (IncrementWeights): dt_i and, with g-sensitivity, φ_i.
+IncrementWeights increment_weights(const IntegrationData& d, const Move& mv) {
+  const Turn& turn = d.turns[mv.k];
+  IncrementWeights w;
+  for (std::size_t i = mv.a; i < mv.b; ++i) {
+    w.dt.push_back(turn.at(i + 1).t_s - turn.at(i).t_s);
+    if (d.go.estimate_g_sensitivity) w.phi.push_back(0.5 * w.dt.back() * (turn.f_cal[i - turn.a] + turn.f_cal[i + 1 - turn.a]));
+  }
+  return w;
+}
+
+// Move residuals [rad] at the stage-2 parameters x with the rates bias-corrected by stage 1's θ
+// `tb`: as a function of the accelerometer's free parameters (which move only each move's start
+// and end directions: each move's map is carried once, and a change costs no integration), and
+// with their exact derivatives in x and in the stage-1 parameters (the moves' adjoint pass).
 class MoveResiduals {
  public:
-  MoveResiduals(const IntegrationData& d, const model::ErrorModel& gyro)
-      : d_(d), gyro_(gyro), increment_cache_(d.moves.size()), carried_(d.moves.size()) {}
+  MoveResiduals(const IntegrationData& d, const model::ErrorModel& gyro, std::vector<double> tb, std::vector<double> x)
+      : d_(d), gyro_(gyro), tb_(std::move(tb)), x_(std::move(x)) {
+    for (const Move& mv : d_.moves) {
+      increments_.push_back(move_increments(d_, gyro_, tb_.data(), mv));
+      const Eigen::Vector3d unused = Eigen::Vector3d::Zero();  // carried() reads no direction
+      carried_.push_back(cost(increments_.size() - 1, unused, unused, unused).carried(x_.data()));
+    }
+  }
 
-  Eigen::VectorXd operator()(const Eigen::VectorXd& z, const std::vector<double>& x, bool rates_moved,
-                             Eigen::MatrixXd* jacobian_x = nullptr) {
-    const std::size_t na = d_.accel.free_index.size();
-    std::vector<double> ta = d_.accel.theta, tb(static_cast<std::size_t>(gyro_.size()), 0.0);
-    for (std::size_t j = 0; j < na; ++j) ta[static_cast<std::size_t>(d_.accel.free_index[j])] = z[static_cast<Eigen::Index>(j)];
-    for (std::size_t j = 0; j < d_.s1_index.size(); ++j)
-      tb[static_cast<std::size_t>(d_.s1_index[j])] = z[static_cast<Eigen::Index>(na + j)];
-    const std::vector<Eigen::Vector3d> up = interval_directions(ta);
-    const auto rows = static_cast<Eigen::Index>(2 * d_.moves.size());
-    Eigen::VectorXd out(rows);
-    if (jacobian_x) jacobian_x->resize(rows, 9);
+  // The residuals with the accelerometer's free parameters at za.
+  Eigen::VectorXd at(const Eigen::VectorXd& za) const {
+    const std::vector<Eigen::Vector3d> up = interval_directions(za);
+    Eigen::VectorXd out(static_cast<Eigen::Index>(2 * d_.moves.size()));
     for (std::size_t q = 0; q < d_.moves.size(); ++q) {
-      const Move& mv = d_.moves[q];
-      const Eigen::Vector3d &g0 = up[mv.k], &g1 = up[mv.k + 1];
-      const Eigen::Vector3d e1 = g1.unitOrthogonal(), e2 = g1.cross(e1);
-      const auto row = static_cast<Eigen::Index>(2 * q);
-      // G·f during the turns with the baseline calibrated f (the accelerometer's uncertainty
-      // reaches the rates through G·δf only at second order).
-      const bool rates_kept = !rates_moved && !increment_cache_[q].empty();
-      if (rates_kept && !jacobian_x && (carried_x_.empty() || x == carried_x_)) {
-        if (carried_x_.empty()) carried_x_ = x;
-        if (!carried_[q]) carried_[q] = MoveCost(gyro_, tb, increment_cache_[q], g0, e1, e2).carried(x.data());
-        const Eigen::Vector3d v = *carried_[q] * g0;
-        out[row] = e1.dot(v);
-        out[row + 1] = e2.dot(v);
-        continue;
-      }
-      std::vector<Eigen::Vector3d> inc = rates_kept ? increment_cache_[q] : move_increments(d_, gyro_, tb.data(), mv);
-      if (increment_cache_[q].empty()) increment_cache_[q] = inc;
-      const MoveCost c(gyro_, tb, std::move(inc), g0, e1, e2);
-      const double* p[] = {x.data()};
-      double res[2], jac[18];
-      double* jacobians[] = {jac};
-      c.Evaluate(p, res, jacobian_x ? jacobians : nullptr);
-      out[row] = res[0];
-      out[row + 1] = res[1];
-      if (jacobian_x)
-        for (Eigen::Index k = 0; k < 9; ++k) {
-          (*jacobian_x)(row, k) = jac[k];
-          (*jacobian_x)(row + 1, k) = jac[9 + k];
-        }
+      const auto [e1, e2] = across(up[d_.moves[q].k + 1]);
+      const Eigen::Vector3d v = carried_[q] * up[d_.moves[q].k];
+      out[static_cast<Eigen::Index>(2 * q)] = e1.dot(v);
+      out[static_cast<Eigen::Index>(2 * q + 1)] = e2.dot(v);
     }
     return out;
   }
 
+  // ∂r/∂x (2·moves × 9) and ∂r/∂z1 (2·moves × stage-1 parameters) with the accelerometer's
+  // parameters at za.
+  void jacobians(const Eigen::VectorXd& za, Eigen::MatrixXd& jx, Eigen::MatrixXd& jz1) const {
+    const std::vector<Eigen::Vector3d> up = interval_directions(za);
+    const auto rows = static_cast<Eigen::Index>(2 * d_.moves.size());
+    const auto n1 = static_cast<Eigen::Index>(d_.s1_index.size());
+    jx.resize(rows, 9);
+    jz1.resize(rows, n1);
+    const auto [dc, dg] = offset_derivatives();
+    for (std::size_t q = 0; q < d_.moves.size(); ++q) {
+      const Move& mv = d_.moves[q];
+      const auto [e1, e2] = across(up[mv.k + 1]);
+      const MoveCost c = cost(q, up[mv.k], e1, e2);
+      const double* p[] = {x_.data()};
+      double res[2], jac[18];
+      double* jacobian[] = {jac};
+      c.Evaluate(p, res, jacobian);
+      const UpstreamSums u = c.upstream(x_.data(), increment_weights(d_, mv));
+      for (Eigen::Index m = 0; m < 2; ++m) {
+        const Eigen::Index row = static_cast<Eigen::Index>(2 * q) + m;
+        for (Eigen::Index k = 0; k < 9; ++k) jx(row, k) = jac[9 * m + k];
+        for (Eigen::Index j = 0; j < n1; ++j)
+          jz1(row, j) = -(u.s[m].dot(dc[static_cast<std::size_t>(j)]) + u.m[m].cwiseProduct(dg[static_cast<std::size_t>(j)]).sum());
+      }
+    }
+  }
+
  private:
-  // The direction of each interval's specific force calibrated with the accelerometer's θ `ta`.
-  std::vector<Eigen::Vector3d> interval_directions(const std::vector<double>& ta) const {
+  // Move q's cost from start direction g0 with the residuals' axes e1, e2.
+  MoveCost cost(std::size_t q, const Eigen::Vector3d& g0, const Eigen::Vector3d& e1, const Eigen::Vector3d& e2) const {
+    return MoveCost(gyro_, tb_, increments_[q], g0, e1, e2);
+  }
+
+  // e1, e2 ⊥ the end direction g1 (the residuals' axes).
+  static std::pair<Eigen::Vector3d, Eigen::Vector3d> across(const Eigen::Vector3d& g1) {
+    const Eigen::Vector3d e1 = g1.unitOrthogonal();
+    return {e1, g1.cross(e1)};
+  }
+
+  // The direction of each interval's specific force calibrated with the accelerometer's free
+  // parameters at za.
+  std::vector<Eigen::Vector3d> interval_directions(const Eigen::VectorXd& za) const {
+    std::vector<double> ta = d_.accel.theta;
+    for (std::size_t j = 0; j < d_.accel.free_index.size(); ++j)
+      ta[static_cast<std::size_t>(d_.accel.free_index[j])] = za[static_cast<Eigen::Index>(j)];
     std::vector<Eigen::Vector3d> up;
     for (const auto& iv : d_.ivs)
       up.push_back(d_.accel.model.correct(ta.data(), iv.accel.mean, model::Stimulus<double>{}).normalized());
     return up;
   }
 
+  // ∂c/∂z_j and ∂G/∂z_j of the rate offset c + G·f for each stage-1 parameter z_j: exact as
+  // differences at a unit step, the offset being linear in them.
+  std::pair<std::vector<Eigen::Vector3d>, std::vector<Eigen::Matrix3d>> offset_derivatives() const {
+    const RateOffset at(gyro_, tb_.data());
+    std::vector<Eigen::Vector3d> dc;
+    std::vector<Eigen::Matrix3d> dg;
+    for (int i : d_.s1_index) {
+      std::vector<double> t = tb_;
+      t[static_cast<std::size_t>(i)] += 1.0;
+      const RateOffset moved(gyro_, t.data());
+      dc.push_back(moved.c - at.c);
+      dg.push_back(moved.g - at.g);
+    }
+    return {dc, dg};
+  }
+
   const IntegrationData& d_;
   const model::ErrorModel& gyro_;
-  std::vector<std::vector<Eigen::Vector3d>> increment_cache_;
-  std::vector<std::optional<Eigen::Matrix3d>> carried_;  // with the cached increments, at carried_x_
-  std::vector<double> carried_x_;
+  std::vector<double> tb_, x_;
+  std::vector<std::vector<Eigen::Vector3d>> increments_;  // each move's, at tb
+  std::vector<Eigen::Matrix3d> carried_;                  // each move's map at x
 };
 
 // Covariance Cz of the upstream parameters z: the accelerometer's and stage 1's, uncorrelated.
@@ -426,28 +539,31 @@ bool upstream_covariance(const IntegrationData& d, const CalibrationResult& r1, 
 }
 
 // Stage-2 covariance with the uncertainty the accelerometer calibration and stage 1 pass on
-// (delta method: Rz = ∂r/∂z by forward differences of the move residuals, J2 = ∂r/∂x exact):
-// C = C2 + S·Cz·Sᵀ with S = −(J2ᵀJ2)⁻¹·J2ᵀ·Rz; fills the stage-2 standard errors and bounds in r.
+// (delta method: Rz = ∂r/∂z, by forward differences in the accelerometer's parameters and exact in
+// stage 1's; J2 = ∂r/∂x exact): C = C2 + S·Cz·Sᵀ with S = −(J2ᵀJ2)⁻¹·J2ᵀ·Rz; fills the stage-2
+// standard errors and bounds in r.
 void add_upstream_uncertainty(const IntegrationData& d, const CalibrationResult& r1, const CalibrationResult& r2,
                               const std::vector<double>& x1, const std::vector<double>& x2,
                               const GyroOptions& go, CalibrationResult& r) {
   Eigen::MatrixXd Cz;
   if (!upstream_covariance(d, r1, Cz)) return;
-  const std::size_t na = d.accel.free_index.size();
-  const auto nz = static_cast<Eigen::Index>(na + d.s1_index.size());
-  Eigen::VectorXd z0(nz);
-  for (std::size_t j = 0; j < na; ++j) z0[static_cast<Eigen::Index>(j)] = d.accel.theta[static_cast<std::size_t>(d.accel.free_index[j])];
-  for (std::size_t j = 0; j < d.s1_index.size(); ++j) z0[static_cast<Eigen::Index>(na + j)] = x1[j];
-  MoveResiduals residuals(d, r.model);
-  Eigen::MatrixXd J2;  // ∂r/∂x, exact (the moves' adjoint pass)
-  const Eigen::VectorXd r0 = residuals(z0, x2, true, &J2);
-  Eigen::MatrixXd Rz(r0.size(), nz);
-  for (Eigen::Index j = 0; j < nz; ++j) {
-    const double h = 1e-6 * std::max(1.0, std::abs(z0[j]));
-    Eigen::VectorXd z = z0;
+  const auto na = static_cast<Eigen::Index>(d.accel.free_index.size());
+  Eigen::VectorXd za(na);
+  for (Eigen::Index j = 0; j < na; ++j) za[j] = d.accel.theta[static_cast<std::size_t>(d.accel.free_index[static_cast<std::size_t>(j)])];
+  std::vector<double> tb(static_cast<std::size_t>(r.model.size()), 0.0);
+  for (std::size_t j = 0; j < d.s1_index.size(); ++j) tb[static_cast<std::size_t>(d.s1_index[j])] = x1[j];
+  const MoveResiduals residuals(d, r.model, tb, x2);
+  Eigen::MatrixXd J2, J1;
+  residuals.jacobians(za, J2, J1);
+  const Eigen::VectorXd r0 = residuals.at(za);
+  Eigen::MatrixXd Rz(r0.size(), Cz.rows());
+  for (Eigen::Index j = 0; j < na; ++j) {
+    const double h = 1e-6 * std::max(1.0, std::abs(za[j]));
+    Eigen::VectorXd z = za;
     z[j] += h;
-    Rz.col(j) = (residuals(z, x2, j >= static_cast<Eigen::Index>(na)) - r0) / h;
+    Rz.col(j) = (residuals.at(z) - r0) / h;
   }
+  Rz.rightCols(J1.cols()) = J1;
   const Eigen::MatrixXd S = -(J2.transpose() * J2).ldlt().solve(J2.transpose() * Rz);
   const Eigen::MatrixXd C = r2.covariance + S * Cz * S.transpose();
   r.covariance = C;

@@ -62,6 +62,12 @@ struct StaticValue {
 // arrays of different lengths or a negative settle_s.
 StaticValue extract_static(std::span<const double> t, std::span<const double> x, double t_start_s,
                            double t_end_s, const StaticExtractionSettings& settings);
+// The same for one of several channels sampled at the times t: `sample_rate_hz` is
+// segment_sample_rate(t, t_start_s, t_end_s), found once for all of them.
+StaticValue extract_static(std::span<const double> t, std::span<const double> x, double t_start_s,
+                           double t_end_s, const StaticExtractionSettings& settings, double sample_rate_hz);
+// The sample rate extract_static filters at: median_sample_rate of the samples in [t_start, t_end].
+double segment_sample_rate(std::span<const double> t, double t_start_s, double t_end_s);
 
 // Estimated sample rate from the median of the positive intervals of t (0 when < 2 samples).
 double median_sample_rate(std::span<const double> t);

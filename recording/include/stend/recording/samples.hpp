@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <span>
 #include <vector>
 
 namespace stend {
@@ -76,6 +77,11 @@ void for_each_chunk(const SampleSource& src, std::uint64_t first, std::uint64_t 
 // All samples.
 void for_each_chunk(const SampleSource& src, const ChunkFn& fn,
                     std::size_t chunk_samples = kDefaultChunkSamples);
+
+// Samples [first, first + count): a view of them where the source holds them in memory
+// (MemorySamples), else read into `storage` and a view of that. Requires first + count ≤ size().
+std::span<const ImuSample> samples_view(const SampleSource& src, std::uint64_t first, std::size_t count,
+                                        std::vector<ImuSample>& storage);
 
 // Sample i (one read: for the ends of an interval, not for loops).
 ImuSample sample_at(const SampleSource& src, std::uint64_t i);
