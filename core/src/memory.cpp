@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cstdint>
+#include <cstdlib>
 
 namespace stend {
 
@@ -19,6 +20,13 @@ void prefault(void* data, std::size_t bytes) {
   (void)data;
   (void)bytes;
 #endif
+}
+
+void warm_heap(std::size_t bytes) {
+  void* block = std::malloc(bytes);
+  if (block == nullptr) return;
+  prefault(block, bytes);
+  std::free(block);
 }
 
 void keep_freed_memory() {

@@ -11,6 +11,10 @@ namespace stend {
 // MADV_POPULATE_WRITE, Linux ≥ 5.14); a no-op where the kernel cannot.
 void prefault(void* data, std::size_t bytes);
 
+// Makes the next `bytes` of heap allocations free of page faults: a block of that size taken,
+// prefaulted and given back to the heap (where keep_freed_memory keeps it) for them to reuse.
+void warm_heap(std::size_t bytes);
+
 // Keeps freed blocks of up to 32 MiB in the process for reuse (glibc: mallopt M_MMAP_THRESHOLD,
 // M_TRIM_THRESHOLD) instead of returning each block ≥ 128 KiB to the kernel at once.
 void keep_freed_memory();
