@@ -81,11 +81,15 @@ Triad still_triad(const SensorInfo& info) {
 // null). The prefix sums of the last 2·half + 2 indices and the last half + 1 samples are kept, so
 // memory is the window's.
 // fn: void(std::uint64_t i, const ImuSample& s, double var, double rate), called inline per sample.
+// `memo`, when given, holds var_i for every sample: filled by a pass over all of them, then read
+// instead of the triad's sums.
 template <class WindowFn>
 void for_each_window(const Stream& in, std::size_t half, Triad triad, const Eigen::Vector3d& mean,
-                     const Eigen::Vector3d* bias, std::uint64_t end, const WindowFn& fn) {
+                     const Eigen::Vector3d* bias, std::uint64_t end, std::vector<double>* memo, const WindowFn& fn) {
   const std::uint64_t n = in.size();
   end = std::min(end, n);
+  const bool reuse = memo != nullptr && memo->size() == n, keep = memo != nullptr && !reuse && end == n;
+  if (keep) memo->resize(static_cast<std::size_t>(n));
   // Rings of at least 2·half + 2 and half + 1 entries, their sizes powers of two (index & mask).
   const std::uint64_t R = std::bit_ceil(2 * half + 2) - 1, H = std::bit_ceil(half + 1) - 1;
   std::vector<Eigen::Vector3d> s1(R + 1, Eigen::Vector3d::Zero()), s2(R + 1, Eigen::Vector3d::Zero()),
@@ -98,8 +102,14 @@ void for_each_window(const Stream& in, std::size_t half, Triad triad, const Eige
   auto emit = [&](std::uint64_t i) {
     const std::uint64_t a = i >= half ? i - half : 0, b = std::min(n, i + half + 1);
     const double m = static_cast<double>(b - a);
-    const Eigen::Vector3d mu = (s1[b & R] - s1[a & R]) / m;
-    const double var = ((s2[b & R] - s2[a & R]) / m - mu.cwiseAbs2()).sum() * m / std::max(1.0, m - 1.0);
+    double var = 0.0;
+    if (reuse) {
+      var = (*memo)[static_cast<std::size_t>(i)];
+    } else {
+      const Eigen::Vector3d mu = (s1[b & R] - s1[a & R]) / m;
+      var = ((s2[b & R] - s2[a & R]) / m - mu.cwiseAbs2()).sum() * m / std::max(1.0, m - 1.0);
+      if (keep) (*memo)[static_cast<std::size_t>(i)] = var;
+    }
     const double rate = bias ? ((g1[b & R] - g1[a & R]) / m).norm() : 0.0;
     fn(i, *recent[i & H], var, rate);
   };
@@ -108,9 +118,11 @@ void for_each_window(const Stream& in, std::size_t half, Triad triad, const Eige
   for_each_chunk(in.src, 0, read_end, [&](const ImuSample* c, std::size_t count, std::uint64_t at) {
     for (std::size_t k = 0; k < count; ++k) {
       const std::uint64_t j = at + k;
-      const Eigen::Vector3d d = c[k].*triad - mean;
-      s1[(j + 1) & R] = s1[j & R] + d;
-      s2[(j + 1) & R] = s2[j & R] + d.cwiseAbs2();
+      if (!reuse) {
+        const Eigen::Vector3d d = c[k].*triad - mean;
+        s1[(j + 1) & R] = s1[j & R] + d;
+        s2[(j + 1) & R] = s2[j & R] + d.cwiseAbs2();
+      }
       if (bias) g1[(j + 1) & R] = g1[j & R] + (c[k].gyro_radps - *bias);
       if (held) {
         recent[j & H] = &c[k];
@@ -247,6 +259,11 @@ struct Prepared {
   double trim_s = 0.0;
   Triad triad = &ImuSample::accel_mps2;                  // whose variance: still_triad
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();        // of that triad over the recording [m/s², rad/s]
+  // Where the samples are held in memory, the window variance of each, kept by the first pass over
+  // them all for the next passes (n doubles beside the samples' n × 104 bytes).
+  bool held = false;
+  mutable std::vector<double> window_var;
+  std::vector<double>* var_memo() const { return held ? &window_var : nullptr; }
 };
 
 Prepared prepare(const Recording& rec, const Stream& in, const StaticDetectorOptions& o, DetectionSummary& s) {
@@ -261,6 +278,7 @@ Prepared prepare(const Recording& rec, const Stream& in, const StaticDetectorOpt
   s.min_duration_s = o.min_duration_s > 0.0 ? o.min_duration_s : std::max(kAutoMinDurationS, 2.0 * s.window_s);
   p.window = 2 * p.half + 1;
   p.triad = still_triad(rec.header.info);
+  p.held = dynamic_cast<const MemorySamples*>(&in.src) != nullptr;
   s.by_gyroscope = p.triad == &ImuSample::gyro_radps;
   for_each_chunk(in.src, [&](const ImuSample* c, std::size_t count, std::uint64_t) {
     for (std::size_t k = 0; k < count; ++k) p.mean += c[k].*p.triad;
@@ -283,7 +301,7 @@ void choose_noise(const Stream& in, const Prepared& p, DetectionSummary& s) {
   std::vector<StreamSelect> sel;  // built in place: a copy would not keep the room taken
   sel.emplace_back(init ? 0.5 : kNoisePercentile, to - from);
   select_all(sel, [&] {
-    for_each_window(in, p.half, p.triad, p.mean, nullptr, to, [&](std::uint64_t i, const ImuSample&, double var, double) {
+    for_each_window(in, p.half, p.triad, p.mean, nullptr, to, p.var_memo(), [&](std::uint64_t i, const ImuSample&, double var, double) {
       if (i >= from) sel[0].add(var);
     });
   });
@@ -303,7 +321,7 @@ void choose_gyro_bias(const Stream& in, const Prepared& p, double still_threshol
   std::vector<StreamSelect> axis;
   for (int a = 0; a < 3; ++a) axis.emplace_back(0.5, in.size());
   select_all(axis, [&] {
-    for_each_window(in, p.half, p.triad, p.mean, nullptr, in.size(), [&](std::uint64_t, const ImuSample& x, double var, double) {
+    for_each_window(in, p.half, p.triad, p.mean, nullptr, in.size(), p.var_memo(), [&](std::uint64_t, const ImuSample& x, double var, double) {
       if (var <= still_threshold)
         for (int a = 0; a < 3; ++a) axis[static_cast<std::size_t>(a)].add(x.gyro_radps[a]);
     });
@@ -384,7 +402,7 @@ std::vector<Pass> detect_at(const Stream& in, const Prepared& p, const std::vect
   std::vector<Runs> runs(thresholds.size());
   for (std::size_t t = 0; t < thresholds.size(); ++t) runs[t].threshold = thresholds[t];
   const bool gate = s.max_gyro_radps > 0.0;
-  for_each_window(in, p.half, p.triad, p.mean, gate ? &s.gyro_bias_radps : nullptr, in.size(),
+  for_each_window(in, p.half, p.triad, p.mean, gate ? &s.gyro_bias_radps : nullptr, in.size(), p.var_memo(),
                   [&](std::uint64_t i, const ImuSample& x, double var, double rate) {
                     const bool turning = gate && rate > s.max_gyro_radps;
                     for (Runs& r : runs) r.feed(i, var, x.flags & kGapBefore, turning);
