@@ -128,12 +128,8 @@ class MoveCost final : public ceres::SizedCostFunction<2, 9> {
     const Path path = carry(ai);
     residual[0] = e1_.dot(path.v.back());
     residual[1] = e2_.dot(path.v.back());
-    Eigen::Matrix3d d1 = Eigen::Matrix3d::Zero(), d2 = Eigen::Matrix3d::Zero();  // ∂r_m/∂A⁻¹
-    backward(path, [&](std::size_t i, const Eigen::Vector3d& g1, const Eigen::Vector3d& g2) {
-      d1.noalias() += g1 * inc_[i].transpose();
-      d2.noalias() += g2 * inc_[i].transpose();
-    });
-    jacobian_in_p(theta, ai, d1, d2, jacobian[0]);
+    const Adjoint a = adjoint(path, ai, nullptr);
+    jacobian_in_p(theta, ai, a.d[0], a.d[1], jacobian[0]);
     return true;
   }
 
@@ -149,18 +145,14 @@ class MoveCost final : public ceres::SizedCostFunction<2, 9> {
     return m;
   }
 
-  // UpstreamSums at p for the increments' weights w.
-  UpstreamSums upstream(const double* p, const IncrementWeights& w) const {
-    const Eigen::Matrix3d ai = m_.affine<double>(theta_at(p).data()).a_inv;
-    UpstreamSums u{{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}, {Eigen::Matrix3d::Zero(), Eigen::Matrix3d::Zero()}};
-    backward(carry(ai), [&](std::size_t i, const Eigen::Vector3d& g1, const Eigen::Vector3d& g2) {
-      const Eigen::Vector3d h[2] = {ai.transpose() * g1, ai.transpose() * g2};
-      for (int m = 0; m < 2; ++m) {
-        u.s[m] += w.dt[i] * h[m];
-        if (!w.phi.empty()) u.m[m].noalias() += h[m] * w.phi[i].transpose();
-      }
-    });
-    return u;
+  // Evaluate's Jacobian in p (jac, 2 × 9 row-major) and the UpstreamSums for the increments'
+  // weights w, from the same backward pass.
+  UpstreamSums jacobians(const double* p, const IncrementWeights& w, double* jac) const {
+    std::vector<double> theta = theta_at(p);
+    const Eigen::Matrix3d ai = m_.affine<double>(theta.data()).a_inv;
+    const Adjoint a = adjoint(carry(ai), ai, &w);
+    jacobian_in_p(theta, ai, a.d[0], a.d[1], jac);
+    return a.u;
   }
 
  private:
@@ -193,6 +185,27 @@ class MoveCost final : public ceres::SizedCostFunction<2, 9> {
       l1 = step.apply_transpose(l1);
       l2 = step.apply_transpose(l2);
     }
+  }
+
+  // What the backward pass sums: ∂r_m/∂A⁻¹ = Σ_i ∂r_m/∂θ_i·Δ_iᵀ and, with weights, the
+  // UpstreamSums.
+  struct Adjoint {
+    Eigen::Matrix3d d[2] = {Eigen::Matrix3d::Zero(), Eigen::Matrix3d::Zero()};
+    UpstreamSums u{{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}, {Eigen::Matrix3d::Zero(), Eigen::Matrix3d::Zero()}};
+  };
+  Adjoint adjoint(const Path& path, const Eigen::Matrix3d& ai, const IncrementWeights* w) const {
+    Adjoint a;
+    backward(path, [&](std::size_t i, const Eigen::Vector3d& g1, const Eigen::Vector3d& g2) {
+      a.d[0].noalias() += g1 * inc_[i].transpose();
+      a.d[1].noalias() += g2 * inc_[i].transpose();
+      if (w == nullptr) return;
+      const Eigen::Vector3d h[2] = {ai.transpose() * g1, ai.transpose() * g2};
+      for (int m = 0; m < 2; ++m) {
+        a.u.s[m] += w->dt[i] * h[m];
+        if (!w->phi.empty()) a.u.m[m].noalias() += h[m] * w->phi[i].transpose();
+      }
+    });
+    return a;
   }
 
   // The full θ: `base` with the stage-2 parameters p.
@@ -464,12 +477,8 @@ class MoveResiduals {
     for (std::size_t q = 0; q < d_.moves.size(); ++q) {
       const Move& mv = d_.moves[q];
       const auto [e1, e2] = across(up[mv.k + 1]);
-      const MoveCost c = cost(q, up[mv.k], e1, e2);
-      const double* p[] = {x_.data()};
-      double res[2], jac[18];
-      double* jacobian[] = {jac};
-      c.Evaluate(p, res, jacobian);
-      const UpstreamSums u = c.upstream(x_.data(), increment_weights(d_, mv));
+      double jac[18];
+      const UpstreamSums u = cost(q, up[mv.k], e1, e2).jacobians(x_.data(), increment_weights(d_, mv), jac);
       for (Eigen::Index m = 0; m < 2; ++m) {
         const Eigen::Index row = static_cast<Eigen::Index>(2 * q) + m;
         for (Eigen::Index k = 0; k < 9; ++k) jx(row, k) = jac[9 * m + k];
@@ -601,9 +610,7 @@ std::pair<double, Eigen::Vector3d> gravity_mismatch(const IntegrationData& d, co
     Eigen::Vector3d wp = rate(a);
     for (std::size_t i = a; i < b; ++i) {
       const Eigen::Vector3d wn = rate(i + 1);
-      const Eigen::Vector3d t = (wp + wn) * 0.5 * (turn.at(i + 1).t_s - turn.at(i).t_s);
-      const double ang = t.norm();
-      if (ang > 0.0) v = Eigen::AngleAxisd(-ang, t / ang).toRotationMatrix() * v;
+      v = RotationStep((wp + wn) * 0.5 * (turn.at(i + 1).t_s - turn.at(i).t_s)).apply(v);  // the fit's own step
       wp = wn;
     }
     const Eigen::Vector3d target = raw ? ivs[k + 1].accel.mean.normalized() : d.gdir[k + 1];
