@@ -2,6 +2,8 @@
 // stend/noise/edf.hpp (avar_correlation).
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <tuple>
 #include <vector>
 
 #include "stend/noise/edf.hpp"
@@ -70,8 +72,15 @@ double avar_cross_moment(NoiseType type, long m1, long m2, long n = 0) {
 
 // The correlation in a record of n samples, computed directly (see avar_correlation).
 double avar_correlation_finite(NoiseType type, long m1, long m2, long n) {
-  return avar_cross_moment(type, m1, m2, n) /
-         std::sqrt(avar_cross_moment(type, m1, m1, n) * avar_cross_moment(type, m2, m2, n));
+  // A fit asks for every pair of its points: each point's own moment is computed once (per thread).
+  thread_local std::map<std::tuple<NoiseType, long, long>, double> own;
+  auto self = [&](long m) {
+    const auto key = std::make_tuple(type, m, n);
+    auto it = own.find(key);
+    if (it == own.end()) it = own.emplace(key, avar_cross_moment(type, m, m, n)).first;
+    return it->second;
+  };
+  return avar_cross_moment(type, m1, m2, n) / std::sqrt(self(m1) * self(m2));
 }
 
 // compute_avar_correlation_table()'s output, kept so that no process pays its ≈ 0.15 s

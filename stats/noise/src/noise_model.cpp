@@ -46,15 +46,18 @@ struct FitPoint {
 struct FitSet {
   std::vector<FitPoint> pts;
   Eigen::MatrixXd L;
-  // x ← L⁻¹x by forward substitution, all columns at once: row j solved, then removed from the rows
-  // below it as one rank-1 update (Eigen's vectorised columns; the sizes are a few tens of points,
-  // where this beats a blocked solver, and each element sees the same operations in the same order
-  // as a scalar loop would).
+  // x ← L⁻¹x by forward substitution, a column at a time: element j solved, then removed from the
+  // elements below it as one vectorised axpy with L's column j (both contiguous; no temporary).
+  // The sizes are a few tens of points, where this beats a blocked solver, and each element sees
+  // the same operations in the same order as a scalar loop would.
   void whiten_in_place(Eigen::MatrixXd& x) const {
     const Eigen::Index n = L.rows();
-    for (Eigen::Index j = 0; j < n; ++j) {
-      x.row(j) /= L(j, j);
-      x.bottomRows(n - j - 1).noalias() -= L.col(j).tail(n - j - 1) * x.row(j);
+    for (Eigen::Index q = 0; q < x.cols(); ++q) {
+      auto col = x.col(q);
+      for (Eigen::Index j = 0; j < n; ++j) {
+        col(j) /= L(j, j);
+        col.tail(n - j - 1) -= col(j) * L.col(j).tail(n - j - 1);
+      }
     }
   }
   Eigen::MatrixXd whiten(Eigen::MatrixXd x) const {
@@ -73,8 +76,8 @@ void set_correlation(FitSet& set, double n_samples) {
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < i; ++j) {
       const auto &p = pts[static_cast<std::size_t>(i)], &q = pts[static_cast<std::size_t>(j)];
-      R(i, j) = R(j, i) =
-          0.5 * (avar_correlation(p.noise, p.m, q.m, n_samples) + avar_correlation(q.noise, p.m, q.m, n_samples));
+      const double a = avar_correlation(p.noise, p.m, q.m, n_samples);  // the same type: computed once
+      R(i, j) = R(j, i) = 0.5 * (a + (q.noise == p.noise ? a : avar_correlation(q.noise, p.m, q.m, n_samples)));
     }
   }
   set.L = stats::shrunk_cholesky(std::move(R));
