@@ -13,7 +13,6 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
-#include <optional>
 #include <span>
 #include <tuple>
 
@@ -441,6 +440,8 @@ IncrementWeights increment_weights(const IntegrationData& d, const Move& mv) {
 // `tb`: as a function of the accelerometer's free parameters (which move only each move's start
 // and end directions: each move's map is carried once, and a change costs no integration), and
 // with their exact derivatives in x and in the stage-1 parameters (the moves' adjoint pass).
+// G·f during the turns uses the baseline calibrated f: the accelerometer's uncertainty reaches the
+// rates through G·δf only at second order.
 class MoveResiduals {
  public:
   MoveResiduals(const IntegrationData& d, const model::ErrorModel& gyro, std::vector<double> tb, std::vector<double> x)
