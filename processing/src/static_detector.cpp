@@ -96,7 +96,7 @@ void for_each_window(const Stream& in, std::size_t half, Triad triad, const Eige
       g1(R + 1, Eigen::Vector3d::Zero());
   // The last half + 1 samples, for fn: where the source holds its samples in memory its chunks
   // stay valid and are pointed to; else copied (the next chunk reuses the buffer).
-  const bool held = dynamic_cast<const MemorySamples*>(&in.src) != nullptr;
+  const bool held = held_samples(in.src) != nullptr;
   std::vector<ImuSample> copies(held ? 0 : H + 1);
   std::vector<const ImuSample*> recent(H + 1);
   auto emit = [&](std::uint64_t i) {
@@ -278,7 +278,7 @@ Prepared prepare(const Recording& rec, const Stream& in, const StaticDetectorOpt
   s.min_duration_s = o.min_duration_s > 0.0 ? o.min_duration_s : std::max(kAutoMinDurationS, 2.0 * s.window_s);
   p.window = 2 * p.half + 1;
   p.triad = still_triad(rec.header.info);
-  p.held = dynamic_cast<const MemorySamples*>(&in.src) != nullptr;
+  p.held = held_samples(in.src) != nullptr;
   s.by_gyroscope = p.triad == &ImuSample::gyro_radps;
   for_each_chunk(in.src, [&](const ImuSample* c, std::size_t count, std::uint64_t) {
     for (std::size_t k = 0; k < count; ++k) p.mean += c[k].*p.triad;

@@ -100,13 +100,17 @@ thread_local std::vector<std::vector<ImuSample>> ChunkBuffer::kept_;
 
 }  // namespace
 
+const ImuSample* held_samples(const SampleSource& src) {
+  const auto* memory = dynamic_cast<const MemorySamples*>(&src);
+  return memory != nullptr ? memory->samples().data() : nullptr;
+}
+
 void for_each_chunk(const SampleSource& src, std::uint64_t first, std::uint64_t last,
                     const ChunkFn& fn, std::size_t chunk_samples) {
   last = std::min(last, src.size());
   if (first >= last) return;
   chunk_samples = std::max<std::size_t>(chunk_samples, 1);
-  if (const auto* memory = dynamic_cast<const MemorySamples*>(&src)) {  // the same chunks, not copied
-    const ImuSample* data = memory->samples().data();
+  if (const ImuSample* data = held_samples(src)) {  // the same chunks, not copied
     for (std::uint64_t i = first; i < last; i += chunk_samples)
       fn(data + i, static_cast<std::size_t>(std::min<std::uint64_t>(chunk_samples, last - i)), i);
     return;
@@ -126,9 +130,9 @@ void for_each_chunk(const SampleSource& src, const ChunkFn& fn, std::size_t chun
 
 std::span<const ImuSample> samples_view(const SampleSource& src, std::uint64_t first, std::size_t count,
                                         std::vector<ImuSample>& storage) {
-  if (const auto* memory = dynamic_cast<const MemorySamples*>(&src)) {
+  if (const ImuSample* data = held_samples(src)) {
     check_range(src, first, count);
-    return {memory->samples().data() + first, count};
+    return {data + first, count};
   }
   storage.resize(count);
   src.read(first, count, storage.data());

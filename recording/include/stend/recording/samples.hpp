@@ -78,6 +78,10 @@ void for_each_chunk(const SampleSource& src, std::uint64_t first, std::uint64_t 
 void for_each_chunk(const SampleSource& src, const ChunkFn& fn,
                     std::size_t chunk_samples = kDefaultChunkSamples);
 
+// The samples themselves where the source holds them in memory (MemorySamples; a pointer into
+// them stays valid while the source lives), else null (a store: each read is a copy).
+const ImuSample* held_samples(const SampleSource& src);
+
 // Samples [first, first + count): a view of them where the source holds them in memory
 // (MemorySamples), else read into `storage` and a view of that. Requires first + count ≤ size().
 std::span<const ImuSample> samples_view(const SampleSource& src, std::uint64_t first, std::size_t count,
