@@ -33,10 +33,11 @@ class RecordView {
     f_.need(r_.offset, r_.size, [this] { return "a '" + fmt_.name + "' data message"; });
   }
 
-  double number(const std::string& name, std::size_t index = 0) const {
-    const Field& fld = field(name, index);
-    const std::uint8_t* p = f_.at(r_.offset + fld.offset + index * fld.element_size);  // checked by field()
-    switch (fld.basic) {
+  double number(std::string_view name, std::size_t index = 0) const { return number(find_field(fmt_, name), name, index); }
+  // Element `index` of field `fld` of the record's format (nullptr: the format has no field `name`).
+  double number(const Field* fld, std::string_view name, std::size_t index = 0) const {
+    const std::uint8_t* p = at(fld, name, index);
+    switch (fld->basic) {
       case Basic::kInt8: return load_le<std::int8_t>(p);
       case Basic::kUInt8: case Basic::kBool: case Basic::kChar: return load_le<std::uint8_t>(p);
       case Basic::kInt16: return load_le<std::int16_t>(p);
@@ -49,53 +50,55 @@ class RecordView {
       case Basic::kDouble: return load_le<double>(p);
       case Basic::kNested: break;
     }
-    f_.fail(r_.offset, "field '" + name + "' of '" + fmt_.name + "' is a nested type, expected a number");
+    f_.fail(r_.offset, "field '" + std::string(name) + "' of '" + fmt_.name + "' is a nested type, expected a number");
   }
 
   // A 32-bit device id field; fails when the record holds a value that is not one.
-  std::uint32_t id(const std::string& name) const {
+  std::uint32_t id(std::string_view name) const {
     const double v = number(name);
     if (!(v >= 0.0 && v <= 4294967295.0) || v != std::floor(v)) {
-      f_.fail(r_.offset, "field '" + name + "' of '" + fmt_.name + "' is " + fmt_g(v) + ", not a 32-bit id");
+      f_.fail(r_.offset, "field '" + std::string(name) + "' of '" + fmt_.name + "' is " + fmt_g(v) + ", not a 32-bit id");
     }
     return static_cast<std::uint32_t>(v);
   }
 
   // `base` [us] moved by `offset` [us], read from field `name` (a relative timestamp, int32 in
   // PX4's messages); fails when that is not a 32-bit offset or moves the time out of 0 … 2^64 µs.
-  std::uint64_t shifted(std::uint64_t base, double offset, const std::string& name) const {
+  std::uint64_t shifted(std::uint64_t base, double offset, std::string_view name) const {
     constexpr double kMin = std::numeric_limits<std::int32_t>::min(), kMax = std::numeric_limits<std::int32_t>::max();
     const bool offset_ok = offset >= kMin && offset <= kMax && offset == std::floor(offset);
     const auto magnitude = offset_ok ? static_cast<std::uint64_t>(std::fabs(offset)) : 0;
     if (!offset_ok || (offset < 0 && base < magnitude) ||
         (offset > 0 && base > std::numeric_limits<std::uint64_t>::max() - magnitude)) {
-      f_.fail(r_.offset, "field '" + name + "' of '" + fmt_.name + "' is " + fmt_g(offset) +
+      f_.fail(r_.offset, "field '" + std::string(name) + "' of '" + fmt_.name + "' is " + fmt_g(offset) +
                              ", not a 32-bit offset from the record's timestamp " + std::to_string(base) + " us");
     }
     return offset < 0 ? base - magnitude : base + magnitude;
   }
 
-  std::uint64_t timestamp(const std::string& name) const {
-    const Field& fld = field(name, 0);
-    if (fld.basic != Basic::kUInt64) {
-      f_.fail(fmt_.defined_at, "field '" + name + "' of '" + fmt_.name + "' is " + fld.type + ", expected uint64_t [us]");
+  std::uint64_t timestamp(const Field* fld, std::string_view name) const {
+    const std::uint8_t* p = at(fld, name, 0);
+    if (fld->basic != Basic::kUInt64) {
+      f_.fail(fmt_.defined_at, "field '" + std::string(name) + "' of '" + fmt_.name + "' is " + fld->type +
+                                   ", expected uint64_t [us]");
     }
-    return load_le<std::uint64_t>(f_.at(r_.offset + fld.offset));  // checked by field()
+    return load_le<std::uint64_t>(p);
   }
 
  private:
-  const Field& field(const std::string& name, std::size_t index) const {
-    const Field* fld = find_field(fmt_, name);
+  // The bytes of element `index` of `fld` in this record, checked: the field exists, has that
+  // element, and the record holds it.
+  const std::uint8_t* at(const Field* fld, std::string_view name, std::size_t index) const {
     if (!fld || index >= fld->count) {
-      f_.fail(fmt_.defined_at, "format '" + fmt_.name + "' has no field '" + name + "'" +
+      f_.fail(fmt_.defined_at, "format '" + fmt_.name + "' has no field '" + std::string(name) + "'" +
                                    (index ? "[" + std::to_string(index) + "]" : std::string()));
     }
     if (fld->offset + (index + 1) * fld->element_size > r_.size) {
       f_.fail(r_.offset, "'" + fmt_.name + "' data of " + std::to_string(r_.size) + " bytes ends before field '" +
-                             name + "' (bytes " + std::to_string(fld->offset) + "…" +
+                             std::string(name) + "' (bytes " + std::to_string(fld->offset) + "…" +
                              std::to_string(fld->offset + (index + 1) * fld->element_size) + ")");
     }
-    return *fld;
+    return f_.at(r_.offset + fld->offset + index * fld->element_size);
   }
 
   const BinaryReader& f_;
@@ -161,7 +164,8 @@ enum class Part {
   kCombinedGyro,    // sensor_combined: gyro_rad at timestamp
 };
 
-// One sensor's samples in file order, decoded a record at a time.
+// One sensor's samples in file order, decoded a record at a time; the fields it reads are looked
+// up in the format once (a record missing one fails when it is read, naming the field).
 class SeriesReader {
  public:
   SeriesReader(const fs::path& file, const UlogLog& log, std::string topic_name, int instance, Part part)
@@ -170,7 +174,16 @@ class SeriesReader {
     what = topic + " instance " + std::to_string(instance) +
            (part == Part::kCombinedAccel ? " accelerometer_m_s2" : part == Part::kCombinedGyro ? " gyro_rad" : "");
     has_temperature = part == Part::kSensor && find_field(*fmt_, "temperature") != nullptr;
-    time_field_ = part == Part::kSensor && find_field(*fmt_, "timestamp_sample") ? "timestamp_sample" : "timestamp";
+    const bool sample_time = part == Part::kSensor && find_field(*fmt_, "timestamp_sample");
+    time_ = named(sample_time ? "timestamp_sample" : "timestamp");
+    temperature_ = named("temperature");
+    relative_ = named("accelerometer_timestamp_relative");
+    constexpr const char* kAxes[] = {"x", "y", "z"};
+    for (std::size_t k = 0; k < 3; ++k) {
+      vector_[k] = part == Part::kSensor        ? named(kAxes[k])
+                   : part == Part::kCombinedGyro ? named("gyro_rad", k)
+                                                 : named("accelerometer_m_s2", k);
+    }
   }
   std::string topic, what;  // "sensor_accel", "sensor_accel instance 1"
   bool has_temperature = false;
@@ -180,19 +193,14 @@ class SeriesReader {
     DataRecord r{};
     while (cursor_.next(r, p.lost_before)) {
       const RecordView v(cursor_.reader(), *fmt_, r);
-      p.t_us = v.timestamp(time_field_);
-      if (part_ == Part::kSensor) {
-        p.v = Eigen::Vector3d(v.number("x"), v.number("y"), v.number("z"));
-        if (has_temperature) p.temperature_c = v.number("temperature");
-      } else if (part_ == Part::kCombinedGyro) {
-        p.v = Eigen::Vector3d(v.number("gyro_rad", 0), v.number("gyro_rad", 1), v.number("gyro_rad", 2));
-      } else {
-        const double rel = v.number("accelerometer_timestamp_relative");
+      p.t_us = v.timestamp(time_.field, time_.name);
+      if (part_ == Part::kCombinedAccel) {
+        const double rel = number(v, relative_);
         if (rel == kRelativeTimestampInvalid) continue;
-        p.t_us = v.shifted(p.t_us, rel, "accelerometer_timestamp_relative");
-        p.v = Eigen::Vector3d(v.number("accelerometer_m_s2", 0), v.number("accelerometer_m_s2", 1),
-                              v.number("accelerometer_m_s2", 2));
+        p.t_us = v.shifted(p.t_us, rel, relative_.name);
       }
+      p.v = Eigen::Vector3d(number(v, vector_[0]), number(v, vector_[1]), number(v, vector_[2]));
+      if (has_temperature) p.temperature_c = number(v, temperature_);
       p.index = count_++;
       return true;
     }
@@ -200,10 +208,19 @@ class SeriesReader {
   }
 
  private:
+  // A field of the format by name (nullptr when it has none), and which element of it.
+  struct Named {
+    const Field* field = nullptr;
+    std::string_view name;
+    std::size_t index = 0;
+  };
+  Named named(std::string_view name, std::size_t index = 0) const { return {find_field(*fmt_, name), name, index}; }
+  static double number(const RecordView& v, const Named& n) { return v.number(n.field, n.name, n.index); }
+
   RecordCursor cursor_;
   const Format* fmt_;
   Part part_;
-  const char* time_field_;
+  Named time_, temperature_, relative_, vector_[3];
   std::size_t count_ = 0;
 };
 

@@ -172,6 +172,7 @@ void read_subscription(const BinaryReader& f, std::size_t at, std::size_t body, 
   sub.instance = *f.at(body);
   const auto id = f.get<std::uint16_t>(body + 1, "a subscription id");
   sub.topic = fixed_string(f.at(body + 3), size - 3);
+  sub.imu = kImuTopics.count(sub.topic) > 0;
   if (!log.formats.count(sub.topic)) {
     f.fail(at, "subscription to '" + sub.topic + "', which no format message defines");
   }
@@ -185,7 +186,7 @@ void read_data(const BinaryReader& f, std::size_t at, std::size_t body, std::siz
   const auto it = log.subscriptions.find(id);
   if (it == log.subscriptions.end()) return;  // pyulog too ignores data without a subscription
   Subscription& sub = it->second;
-  if (!kImuTopics.count(sub.topic)) return;
+  if (!sub.imu) return;
   if (!sub.first) sub.first = DataRecord{body + 2, size - 2};
   ++sub.records;
 }
@@ -199,9 +200,18 @@ void check_header(const BinaryReader& f) {
   f.need(0, kUlogHeaderBytes, "the ULog header");
 }
 
+// One of the message types F I M P Q B A R D L C S O.
+bool known_type(char type) {
+  switch (type) {
+    case 'F': case 'I': case 'M': case 'P': case 'Q': case 'B': case 'A': case 'R': case 'D': case 'L': case 'C':
+    case 'S': case 'O': return true;
+    default: return false;
+  }
+}
+
 }  // namespace
 
-const Field* find_field(const Format& fmt, const std::string& name) {
+const Field* find_field(const Format& fmt, std::string_view name) {
   for (const auto& fld : fmt.fields) {
     if (fld.name == name) return &fld;
   }
@@ -231,7 +241,7 @@ bool next_message(const BinaryReader& f, const std::vector<std::uint64_t>& appen
       pos = static_cast<std::size_t>(*cut);
       continue;
     }
-    if (std::string_view("FIMPQBARDLCSO").find(type) == std::string_view::npos) {
+    if (!known_type(type)) {
       const auto sync = f.find(pos + 1, kSyncMagic, sizeof kSyncMagic);
       if (!sync) {
         f.fail(pos, "unknown message type " + fmt_hex(static_cast<std::uint8_t>(type), 2) +

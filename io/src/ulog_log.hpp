@@ -12,6 +12,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace stend::io::detail {
@@ -42,7 +43,7 @@ struct Format {
 };
 
 // The field of `fmt` called `name`, or nullptr.
-const Field* find_field(const Format& fmt, const std::string& name);
+const Field* find_field(const Format& fmt, std::string_view name);
 
 // ---------------------------------------------------------------------------------------------
 // The log: formats, subscriptions with the number of data messages of each, info messages.
@@ -55,6 +56,7 @@ struct DataRecord {
 struct Subscription {
   std::string topic;
   int instance = 0;
+  bool imu = false;                       // a topic an IMU import reads (its data counted)
   std::size_t records = 0;                // data messages
   std::optional<DataRecord> first;        // the first of them
 };
