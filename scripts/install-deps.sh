@@ -9,6 +9,7 @@ packages=(
   python3-h5py python3-numpy  # core tests: a run.h5 read with h5py alone
   libgtest-dev libgmock-dev libbenchmark-dev
   libbz2-dev libzstd-dev liblz4-dev  # io: chunk compression of ROS 1 bags (bz2, lz4) and MCAP (lz4, zstd)
+  libxxhash-dev  # io: lz4 frames' content checksums (XXH32), verified by Stend
   librosbag-storage-dev librosbag-dev lz4  # io tests: ROS 1 bags written with rosbag::Bag; lz4 MCAP chunks (npm packages: install-node-test-deps.sh)
   zlib1g-dev chromium  # reporting: PNG check of report screenshots; headless-browser test of the reports
   octave  # reporting: octave-cli loads the MATLAB export in a test (~1 min to install, no recommends)

@@ -25,6 +25,7 @@
 #include <bzlib.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
@@ -357,6 +358,30 @@ void read_chunk(const fs::path& path, const Chunk& c, Bytes& out) {
   }
 }
 
+// The chunks decompressed last, shared by a bag's cursors: the Imu and Temperature cursors walk
+// the chunks side by side, so that each chunk is decompressed once per pass rather than once per
+// topic. A cursor keeps the chunk it reads from alive after it leaves the cache.
+class ChunkCache {
+ public:
+  std::shared_ptr<const Bytes> get(const fs::path& path, const Chunk& c) {
+    for (const Entry& e : entries_)
+      if (e.bytes && e.pos == c.pos) return e.bytes;
+    auto bytes = std::make_shared<Bytes>();
+    read_chunk(path, c, *bytes);
+    entries_[next_] = {c.pos, bytes};
+    next_ = (next_ + 1) % entries_.size();
+    return bytes;
+  }
+
+ private:
+  struct Entry {
+    std::uint64_t pos = 0;
+    std::shared_ptr<const Bytes> bytes;
+  };
+  std::array<Entry, 2> entries_;
+  std::size_t next_ = 0;
+};
+
 // A message record inside a chunk.
 struct MessageRecord {
   std::uint32_t conn = 0;
@@ -414,8 +439,9 @@ template <class Message>
 class TopicCursor final : public MessageCursor<Message> {
  public:
   using Decode = Message (*)(MessageReader, std::int64_t);
-  TopicCursor(const fs::path& file, const BagLayout& bag, const std::string& topic, const char* md5, Decode decode)
-      : file_(file), bag_(bag), topic_(topic), md5_(md5), decode_(decode) {
+  TopicCursor(const fs::path& file, const BagLayout& bag, ChunkCache& chunks, const std::string& topic, const char* md5,
+              Decode decode)
+      : file_(file), bag_(bag), chunks_(chunks), topic_(topic), md5_(md5), decode_(decode) {
     for (const Connection& c : bag.connections)
       if (c.topic == topic) connections_.push_back(&c);
     if (bag.chunks_overlap) gather_in_time_order();
@@ -425,10 +451,10 @@ class TopicCursor final : public MessageCursor<Message> {
     if (bag_.chunks_overlap) return next_in_time_order(out);
     while (at_ == pending_.size()) {
       if (chunk_ == bag_.chunks.size()) return false;
-      read_chunk(file_, bag_.chunks[chunk_], bytes_);
+      bytes_ = chunks_.get(file_, bag_.chunks[chunk_]);
       pending_.clear();
       at_ = 0;
-      for (const MessageRecord& m : message_records(file_, bag_.chunks[chunk_], bytes_))
+      for (const MessageRecord& m : message_records(file_, bag_.chunks[chunk_], *bytes_))
         if (ours(m)) pending_.push_back(decoded(m, chunk_));
       std::stable_sort(pending_.begin(), pending_.end(),
                        [](const Message& a, const Message& b) { return a.record_ns < b.record_ns; });
@@ -454,7 +480,7 @@ class TopicCursor final : public MessageCursor<Message> {
                             " (sensor_msgs as released with ROS 1)");
     }
     try {
-      return decode_(MessageReader(bytes_.data() + m.data, m.len), m.time_ns);
+      return decode_(MessageReader(bytes_->data() + m.data, m.len), m.time_ns);
     } catch (const MessageReader::Overrun&) {
       throw ImportError(file_, "message " + std::to_string(index_) + " of topic " + topic_ + " (chunk at byte " +
                                    std::to_string(bag_.chunks[chunk].pos) + ")",
@@ -469,8 +495,8 @@ class TopicCursor final : public MessageCursor<Message> {
   };
   void gather_in_time_order() {
     for (std::size_t k = 0; k < bag_.chunks.size(); ++k) {
-      read_chunk(file_, bag_.chunks[k], bytes_);
-      const auto records = message_records(file_, bag_.chunks[k], bytes_);
+      bytes_ = chunks_.get(file_, bag_.chunks[k]);
+      const auto records = message_records(file_, bag_.chunks[k], *bytes_);
       for (std::size_t r = 0; r < records.size(); ++r)
         if (ours(records[r])) places_.push_back({records[r].time_ns, k, r});
     }
@@ -481,8 +507,8 @@ class TopicCursor final : public MessageCursor<Message> {
     if (at_ == places_.size()) return false;
     const Place& p = places_[at_++];
     if (loaded_ != p.chunk) {
-      read_chunk(file_, bag_.chunks[p.chunk], bytes_);
-      records_ = message_records(file_, bag_.chunks[p.chunk], bytes_);
+      bytes_ = chunks_.get(file_, bag_.chunks[p.chunk]);
+      records_ = message_records(file_, bag_.chunks[p.chunk], *bytes_);
       loaded_ = p.chunk;
     }
     out = decoded(records_[p.record], p.chunk);
@@ -491,11 +517,12 @@ class TopicCursor final : public MessageCursor<Message> {
 
   fs::path file_;
   const BagLayout& bag_;
+  ChunkCache& chunks_;
   std::string topic_;
   const char* md5_;
   Decode decode_;
   std::vector<const Connection*> connections_;
-  Bytes bytes_;                  // the chunk read last, decompressed
+  std::shared_ptr<const Bytes> bytes_;  // the chunk read last, decompressed
   std::size_t chunk_ = 0;        // the next chunk (in time order)
   std::vector<Message> pending_;  // its messages of the topic, in time order
   std::size_t at_ = 0;
@@ -515,18 +542,19 @@ class Ros1Reader final : public BagReader {
                                            "through a list of all of them");
   }
   std::unique_ptr<MessageCursor<ImuMessage>> imu() const override {
-    return std::make_unique<TopicCursor<ImuMessage>>(file_, bag_, imu_topic, kImuMd5, decode_imu);
+    return std::make_unique<TopicCursor<ImuMessage>>(file_, bag_, chunks_, imu_topic, kImuMd5, decode_imu);
   }
   std::unique_ptr<MessageCursor<TemperatureMessage>> temperature() const override {
     if (temperature_topic_.empty()) return nullptr;
-    return std::make_unique<TopicCursor<TemperatureMessage>>(file_, bag_, temperature_topic_, kTemperatureMd5,
-                                                             decode_temperature);
+    return std::make_unique<TopicCursor<TemperatureMessage>>(file_, bag_, chunks_, temperature_topic_,
+                                                             kTemperatureMd5, decode_temperature);
   }
 
  private:
   fs::path file_;
   const BagLayout& bag_;
   std::string temperature_topic_;
+  mutable ChunkCache chunks_;  // shared by the cursors it hands out (one thread)
 };
 
 std::vector<TopicInfo> bag_topics(const BagLayout& bag) {

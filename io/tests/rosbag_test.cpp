@@ -513,6 +513,30 @@ TEST(Rosbag1, ChunkContentsAreCheckedAndTheirDamageNamed) {
   EXPECT_NE(msg.find("past the chunk's end (damaged chunk)"), std::string::npos) << msg;
 }
 
+// An lz4 chunk's content checksum (XXH32 of the records, after the frame's end mark; verified by
+// Stend, not liblz4) is checked: one bit of it changed, the chunk is refused as damaged.
+TEST(Rosbag1, Lz4ChunkContentChecksumIsVerified) {
+  stend::testing::TempDir dir("rosbag1");
+  const fs::path good = dir / "lz4.bag";
+  write_ros1_bag(good, {"/imu"}, 50, false, rosbag::compression::LZ4);
+  ASSERT_EQ(stend::io::import_rosbag1(good).samples.size(), 50u);
+  std::string bytes = stend::testing::read_text(good);
+  auto u32 = [&](std::size_t at) {
+    std::uint32_t v = 0;
+    for (int i = 3; i >= 0; --i) v = v << 8 | static_cast<std::uint8_t>(bytes[at + static_cast<std::size_t>(i)]);
+    return v;
+  };
+  const std::size_t chunk = 13 + 4 + u32(13) + 4 + u32(13 + 4 + u32(13));
+  const std::size_t data_len_at = chunk + 4 + u32(chunk);
+  const std::size_t frame_end = data_len_at + 4 + u32(data_len_at);
+  bytes[frame_end - 1] = static_cast<char>(bytes[frame_end - 1] ^ 0x01);  // the checksum's last byte
+  const fs::path damaged = dir / "damaged.bag";
+  stend::testing::write_text(damaged, bytes);
+  const std::string msg = import_error([&] { stend::io::import_rosbag1(damaged); });
+  EXPECT_NE(msg.find("chunk at byte " + std::to_string(chunk) + ": lz4 chunk: its content checksum does not match"),
+            std::string::npos) << msg;
+}
+
 // An MCAP file the fuzz target found: a chunk declaring an uncompressed size its stored bytes
 // cannot hold is refused with its place before the size is allocated (was std::bad_alloc).
 TEST(Rosbag2Mcap, ChunkDeclaringMoreThanItsBytesHoldIsRefused) {
