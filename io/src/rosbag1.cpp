@@ -358,30 +358,6 @@ void read_chunk(const fs::path& path, const Chunk& c, Bytes& out) {
   }
 }
 
-// The chunks decompressed last, shared by a bag's cursors: the Imu and Temperature cursors walk
-// the chunks side by side, so that each chunk is decompressed once per pass rather than once per
-// topic. A cursor keeps the chunk it reads from alive after it leaves the cache.
-class ChunkCache {
- public:
-  std::shared_ptr<const Bytes> get(const fs::path& path, const Chunk& c) {
-    for (const Entry& e : entries_)
-      if (e.bytes && e.pos == c.pos) return e.bytes;
-    auto bytes = std::make_shared<Bytes>();
-    read_chunk(path, c, *bytes);
-    entries_[next_] = {c.pos, bytes};
-    next_ = (next_ + 1) % entries_.size();
-    return bytes;
-  }
-
- private:
-  struct Entry {
-    std::uint64_t pos = 0;
-    std::shared_ptr<const Bytes> bytes;
-  };
-  std::array<Entry, 2> entries_;
-  std::size_t next_ = 0;
-};
-
 // A message record inside a chunk.
 struct MessageRecord {
   std::uint32_t conn = 0;
@@ -432,6 +408,40 @@ std::vector<MessageRecord> message_records(const fs::path& path, const Chunk& c,
   return out;
 }
 
+// A chunk decompressed, with its message records.
+struct ChunkData {
+  Bytes bytes;
+  std::vector<MessageRecord> records;
+};
+
+// The chunks read last, shared by a bag's cursors: the Imu and Temperature cursors walk the chunks
+// side by side, so that each chunk is decompressed and its records listed once per pass rather
+// than once per topic. A cursor keeps the chunk it reads from alive after it leaves the cache.
+class ChunkCache {
+ public:
+  std::shared_ptr<const ChunkData> get(const fs::path& path, const Chunk& c) {
+    for (const Entry& e : entries_)
+      if (e.data && e.pos == c.pos) return e.data;
+    Entry& e = entries_[next_];
+    // The evicted chunk's buffer is reused when no cursor holds it any more.
+    auto data = e.data.use_count() == 1 ? std::const_pointer_cast<ChunkData>(e.data) : std::make_shared<ChunkData>();
+    e = {};
+    read_chunk(path, c, data->bytes);
+    data->records = message_records(path, c, data->bytes);
+    e = {c.pos, data};
+    next_ = (next_ + 1) % entries_.size();
+    return data;
+  }
+
+ private:
+  struct Entry {
+    std::uint64_t pos = 0;
+    std::shared_ptr<const ChunkData> data;
+  };
+  std::array<Entry, 2> entries_;
+  std::size_t next_ = 0;
+};
+
 // ---------------------------------------------------------------------------------------------
 // Reading one topic.
 
@@ -451,13 +461,14 @@ class TopicCursor final : public MessageCursor<Message> {
     if (bag_.chunks_overlap) return next_in_time_order(out);
     while (at_ == pending_.size()) {
       if (chunk_ == bag_.chunks.size()) return false;
-      bytes_ = chunks_.get(file_, bag_.chunks[chunk_]);
+      chunk_data_ = chunks_.get(file_, bag_.chunks[chunk_]);
       pending_.clear();
       at_ = 0;
-      for (const MessageRecord& m : message_records(file_, bag_.chunks[chunk_], *bytes_))
+      for (const MessageRecord& m : chunk_data_->records)
         if (ours(m)) pending_.push_back(decoded(m, chunk_));
-      std::stable_sort(pending_.begin(), pending_.end(),
-                       [](const Message& a, const Message& b) { return a.record_ns < b.record_ns; });
+      const auto by_time = [](const Message& a, const Message& b) { return a.record_ns < b.record_ns; };
+      if (!std::is_sorted(pending_.begin(), pending_.end(), by_time))  // as rosbag record writes them
+        std::stable_sort(pending_.begin(), pending_.end(), by_time);
       ++chunk_;
     }
     out = pending_[at_++];
@@ -480,7 +491,7 @@ class TopicCursor final : public MessageCursor<Message> {
                             " (sensor_msgs as released with ROS 1)");
     }
     try {
-      return decode_(MessageReader(bytes_->data() + m.data, m.len), m.time_ns);
+      return decode_(MessageReader(chunk_data_->bytes.data() + m.data, m.len), m.time_ns);
     } catch (const MessageReader::Overrun&) {
       throw ImportError(file_, "message " + std::to_string(index_) + " of topic " + topic_ + " (chunk at byte " +
                                    std::to_string(bag_.chunks[chunk].pos) + ")",
@@ -495,8 +506,8 @@ class TopicCursor final : public MessageCursor<Message> {
   };
   void gather_in_time_order() {
     for (std::size_t k = 0; k < bag_.chunks.size(); ++k) {
-      bytes_ = chunks_.get(file_, bag_.chunks[k]);
-      const auto records = message_records(file_, bag_.chunks[k], *bytes_);
+      chunk_data_ = chunks_.get(file_, bag_.chunks[k]);
+      const std::vector<MessageRecord>& records = chunk_data_->records;
       for (std::size_t r = 0; r < records.size(); ++r)
         if (ours(records[r])) places_.push_back({records[r].time_ns, k, r});
     }
@@ -507,11 +518,10 @@ class TopicCursor final : public MessageCursor<Message> {
     if (at_ == places_.size()) return false;
     const Place& p = places_[at_++];
     if (loaded_ != p.chunk) {
-      bytes_ = chunks_.get(file_, bag_.chunks[p.chunk]);
-      records_ = message_records(file_, bag_.chunks[p.chunk], *bytes_);
+      chunk_data_ = chunks_.get(file_, bag_.chunks[p.chunk]);
       loaded_ = p.chunk;
     }
-    out = decoded(records_[p.record], p.chunk);
+    out = decoded(chunk_data_->records[p.record], p.chunk);
     return true;
   }
 
@@ -522,13 +532,12 @@ class TopicCursor final : public MessageCursor<Message> {
   const char* md5_;
   Decode decode_;
   std::vector<const Connection*> connections_;
-  std::shared_ptr<const Bytes> bytes_;  // the chunk read last, decompressed
+  std::shared_ptr<const ChunkData> chunk_data_;  // the chunk read last
   std::size_t chunk_ = 0;        // the next chunk (in time order)
   std::vector<Message> pending_;  // its messages of the topic, in time order
   std::size_t at_ = 0;
   std::size_t index_ = 0;        // messages decoded
   std::vector<Place> places_;    // chunks overlapping: every message of the topic, in time order
-  std::vector<MessageRecord> records_;
   std::size_t loaded_ = 0;
 };
 
