@@ -37,7 +37,18 @@ class RecordView {
   // Element `index` of field `fld` of the record's format (nullptr: the format has no field `name`).
   double number(const Field* fld, std::string_view name, std::size_t index = 0) const {
     const std::uint8_t* p = at(fld, name, index);
-    switch (fld->basic) {
+    if (fld->basic == Basic::kNested) {
+      f_.fail(r_.offset, "field '" + std::string(name) + "' of '" + fmt_.name + "' is a nested type, expected a number");
+    }
+    return value_of(fld->basic, p);
+  }
+
+  // The record's bytes, unchecked, when it holds at least `size` of them; else nullptr.
+  const std::uint8_t* holding(std::size_t size) const { return r_.size >= size ? f_.at(r_.offset) : nullptr; }
+
+  // A basic-typed value at p.
+  static double value_of(Basic basic, const std::uint8_t* p) {
+    switch (basic) {
       case Basic::kInt8: return load_le<std::int8_t>(p);
       case Basic::kUInt8: case Basic::kBool: case Basic::kChar: return load_le<std::uint8_t>(p);
       case Basic::kInt16: return load_le<std::int16_t>(p);
@@ -50,7 +61,7 @@ class RecordView {
       case Basic::kDouble: return load_le<double>(p);
       case Basic::kNested: break;
     }
-    f_.fail(r_.offset, "field '" + std::string(name) + "' of '" + fmt_.name + "' is a nested type, expected a number");
+    return std::numeric_limits<double>::quiet_NaN();
   }
 
   // A 32-bit device id field; fails when the record holds a value that is not one.
@@ -184,6 +195,7 @@ class SeriesReader {
                    : part == Part::kCombinedGyro ? named("gyro_rad", k)
                                                  : named("accelerometer_m_s2", k);
     }
+    direct_bytes_ = direct_size();
   }
   std::string topic, what;  // "sensor_accel", "sensor_accel instance 1"
   bool has_temperature = false;
@@ -193,14 +205,18 @@ class SeriesReader {
     DataRecord r{};
     while (cursor_.next(r, p.lost_before)) {
       const RecordView v(cursor_.reader(), *fmt_, r);
-      p.t_us = v.timestamp(time_.field, time_.name);
-      if (part_ == Part::kCombinedAccel) {
-        const double rel = number(v, relative_);
-        if (rel == kRelativeTimestampInvalid) continue;
-        p.t_us = v.shifted(p.t_us, rel, relative_.name);
+      if (const std::uint8_t* bytes = v.holding(direct_bytes_)) {  // every field there: read directly
+        p.t_us = load_le<std::uint64_t>(bytes + time_.offset);
+        if (part_ == Part::kCombinedAccel) {
+          const double rel = value(bytes, relative_);
+          if (rel == kRelativeTimestampInvalid) continue;
+          p.t_us = v.shifted(p.t_us, rel, relative_.name);
+        }
+        p.v = Eigen::Vector3d(value(bytes, vector_[0]), value(bytes, vector_[1]), value(bytes, vector_[2]));
+        if (has_temperature) p.temperature_c = value(bytes, temperature_);
+      } else if (!read_checked(v, p)) {
+        continue;
       }
-      p.v = Eigen::Vector3d(number(v, vector_[0]), number(v, vector_[1]), number(v, vector_[2]));
-      if (has_temperature) p.temperature_c = number(v, temperature_);
       p.index = count_++;
       return true;
     }
@@ -208,19 +224,61 @@ class SeriesReader {
   }
 
  private:
-  // A field of the format by name (nullptr when it has none), and which element of it.
+  // A field of the format by name (nullptr when it has none), which element of it, and where that
+  // element lies in a record.
   struct Named {
     const Field* field = nullptr;
     std::string_view name;
     std::size_t index = 0;
+    std::size_t offset = 0, end = 0;  // bytes [offset, end) of the record
   };
-  Named named(std::string_view name, std::size_t index = 0) const { return {find_field(*fmt_, name), name, index}; }
+  Named named(std::string_view name, std::size_t index = 0) const {
+    Named n{find_field(*fmt_, name), name, index};
+    if (n.field) {
+      n.offset = n.field->offset + index * n.field->element_size;
+      n.end = n.offset + n.field->element_size;
+    }
+    return n;
+  }
   static double number(const RecordView& v, const Named& n) { return v.number(n.field, n.name, n.index); }
+  static double value(const std::uint8_t* bytes, const Named& n) {
+    return RecordView::value_of(n.field->basic, bytes + n.offset);
+  }
+
+  // The record size from which every field this series reads can be read directly: each exists,
+  // holds the element asked for, is a number (the time a uint64_t); kNoDirect when one does not
+  // (every record is then read through the checks, which name what is wrong).
+  static constexpr std::size_t kNoDirect = std::numeric_limits<std::size_t>::max();
+  std::size_t direct_size() const {
+    std::vector<const Named*> used = {&time_, &vector_[0], &vector_[1], &vector_[2]};
+    if (has_temperature) used.push_back(&temperature_);
+    if (part_ == Part::kCombinedAccel) used.push_back(&relative_);
+    std::size_t size = 0;
+    for (const Named* n : used) {
+      if (!n->field || n->index >= n->field->count || n->field->basic == Basic::kNested) return kNoDirect;
+      size = std::max(size, n->end);
+    }
+    return time_.field->basic == Basic::kUInt64 ? size : kNoDirect;
+  }
+
+  // A record read field by field with every check; false when it is to be skipped.
+  bool read_checked(const RecordView& v, Point& p) const {
+    p.t_us = v.timestamp(time_.field, time_.name);
+    if (part_ == Part::kCombinedAccel) {
+      const double rel = number(v, relative_);
+      if (rel == kRelativeTimestampInvalid) return false;
+      p.t_us = v.shifted(p.t_us, rel, relative_.name);
+    }
+    p.v = Eigen::Vector3d(number(v, vector_[0]), number(v, vector_[1]), number(v, vector_[2]));
+    if (has_temperature) p.temperature_c = number(v, temperature_);
+    return true;
+  }
 
   RecordCursor cursor_;
   const Format* fmt_;
   Part part_;
   Named time_, temperature_, relative_, vector_[3];
+  std::size_t direct_bytes_ = kNoDirect;
   std::size_t count_ = 0;
 };
 
