@@ -119,8 +119,12 @@ class CdrReader {
     for (int k = 0; k < 3; ++k) v[k] = f64();
     return v;
   }
+  // n float64s passed over unread (they are contiguous once the first is aligned).
   void skip_f64(int n) {
-    for (int i = 0; i < n; ++i) f64();
+    if (n <= 0) return;
+    align(8);
+    need(8 * static_cast<std::size_t>(n));
+    pos_ += 8 * static_cast<std::size_t>(n);
   }
   [[noreturn]] void fail(const std::string& what) const { throw Failure{where_.text(), what}; }
 
@@ -136,9 +140,13 @@ class CdrReader {
            "-byte message too short for its type)");
     }
   }
-  std::uint64_t unsigned_of(std::size_t size) {
+  // Moves to the next multiple of `size` bytes from the end of the encapsulation header.
+  void align(std::size_t size) {
     const std::size_t body = pos_ - 4;
     pos_ += (size - body % size) % size;
+  }
+  std::uint64_t unsigned_of(std::size_t size) {
+    align(size);
     need(size);
     std::uint64_t v = 0;
     for (std::size_t i = 0; i < size; ++i) {
