@@ -56,10 +56,22 @@ struct DfFormat {
   std::string name, format;
   std::vector<std::string> columns;
   std::vector<std::size_t> offsets;  // of each column in the message, header included
+  std::vector<const TypeChar*> types;  // of each column
+  bool imu = false;                    // an IMU, IMU2 or IMU3 message
+  std::optional<std::size_t> instance_column;  // its I column, if it has one
   std::size_t defined_at = 0;        // byte offset of the FMT message
   std::size_t index = 0;             // among the log's FMT messages, in file order
   std::string problem;               // why the format cannot be decoded (empty = it can)
 };
+
+// Column index by name, if the format has that column.
+std::optional<std::size_t> column(const DfFormat& fmt, const std::string& name) {
+  const auto it = std::find(fmt.columns.begin(), fmt.columns.end(), name);
+  if (it == fmt.columns.end()) return std::nullopt;
+  return static_cast<std::size_t>(it - fmt.columns.begin());
+}
+
+bool is_imu(const std::string& name) { return name == "IMU" || name == "IMU2" || name == "IMU3"; }
 
 // An FMT message at `pos`.
 DfFormat read_fmt(const BinaryReader& f, std::size_t pos) {
@@ -72,6 +84,8 @@ DfFormat read_fmt(const BinaryReader& f, std::size_t pos) {
   const std::string columns = fixed_string(f.at(pos + 25), 64);
   for (auto c : split(columns, ',')) fmt.columns.emplace_back(c);
   fmt.defined_at = pos;
+  fmt.imu = is_imu(fmt.name);
+  fmt.instance_column = column(fmt, "I");
   std::size_t offset = kHeaderBytes;
   for (char c : fmt.format) {
     const TypeChar* t = type_char(c);
@@ -81,6 +95,7 @@ DfFormat read_fmt(const BinaryReader& f, std::size_t pos) {
       return fmt;
     }
     fmt.offsets.push_back(offset);
+    fmt.types.push_back(t);
     offset += t->size;
   }
   if (offset != fmt.length) {
@@ -177,12 +192,6 @@ bool next_message(const BinaryReader& f, std::size_t& pos, DfFormats& formats, s
   return false;
 }
 
-std::optional<std::size_t> column(const DfFormat& fmt, const std::string& name) {
-  const auto it = std::find(fmt.columns.begin(), fmt.columns.end(), name);
-  if (it == fmt.columns.end()) return std::nullopt;
-  return static_cast<std::size_t>(it - fmt.columns.begin());
-}
-
 // Column index by name; fails naming the format's columns when absent.
 std::size_t required_column(const BinaryReader& f, const DfFormat& fmt, const std::string& name) {
   const auto c = column(fmt, name);
@@ -197,7 +206,7 @@ std::size_t required_column(const BinaryReader& f, const DfFormat& fmt, const st
 // Numeric value of column c of the message at `msg`, with the type's own scale (c, e, L...). The
 // message is in the reader's buffer (next_message brought it whole) and its FMT adds up to that length.
 double value(const BinaryReader& f, const DfFormat& fmt, std::size_t msg, std::size_t c) {
-  const TypeChar& t = *type_char(fmt.format[c]);
+  const TypeChar& t = *fmt.types[c];
   const std::uint8_t* p = f.at(msg + fmt.offsets[c]);
   double v = 0.0;
   switch (t.storage) {
@@ -223,7 +232,7 @@ double value(const BinaryReader& f, const DfFormat& fmt, std::size_t msg, std::s
 }
 
 std::string text(const BinaryReader& f, const DfFormat& fmt, std::size_t msg, std::size_t c) {
-  return fixed_string(f.at(msg + fmt.offsets[c]), type_char(fmt.format[c])->size);
+  return fixed_string(f.at(msg + fmt.offsets[c]), fmt.types[c]->size);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -295,11 +304,10 @@ double si_factor(const BinaryReader& f, const DfUnits& u, const DfFormat& fmt, s
 
 // One IMU message's instance: its I column, else the message name (IMU, IMU2, IMU3 → 0, 1, 2).
 int instance_of(const BinaryReader& f, const DfFormat& fmt, std::size_t msg) {
-  if (const auto c = column(fmt, "I")) return integer_value<int>(f, fmt, msg, *c);
+  if (fmt.instance_column) return integer_value<int>(f, fmt, msg, *fmt.instance_column);
   return fmt.name == "IMU" ? 0 : fmt.name[3] - '1';
 }
 
-bool is_imu(const std::string& name) { return name == "IMU" || name == "IMU2" || name == "IMU3"; }
 
 // An IMU format's columns (T may be absent) and their SI factors, with the unit note.
 struct ImuColumns {
@@ -364,7 +372,7 @@ DfLog read_dataflash(const BinaryReader& f) {
     if (!m.fmt || !wanted(m.fmt->name)) continue;
     const DfFormat& fmt = *m.fmt;
     if (!fmt.problem.empty()) f.fail(fmt.defined_at, "FMT for '" + fmt.name + "': " + fmt.problem);
-    if (is_imu(fmt.name)) {
+    if (fmt.imu) {
       DfInstance& imu = log.imu[instance_of(f, fmt, m.offset)];
       ++imu.messages;
       imu.has_temperature = imu.has_temperature && column(fmt, "T").has_value();
@@ -448,7 +456,7 @@ void import_dataflash(const fs::path& file, const DataflashOptions& opt, Recordi
   DfMessage m{};
   DfCut cut;  // the first pass's, again
   while (next_message(f, pos, formats, resyncs, skipped_bytes, m, cut)) {
-    if (!m.fmt || !is_imu(m.fmt->name) || instance_of(f, *m.fmt, m.offset) != instance) continue;
+    if (!m.fmt || !m.fmt->imu || instance_of(f, *m.fmt, m.offset) != instance) continue;
     const DfFormat& fmt = *m.fmt;
     const ImuColumns& c = columns.at(fmt.index);
     const auto t_us = integer_value<std::uint64_t>(f, fmt, m.offset, c.time);
