@@ -9,7 +9,8 @@
 # (accelerometer and gyro files, the gyro half a period later: interpolated)), then imports it into a
 # run folder under /usr/bin/time; prints samples, log size, wall [s], user + system CPU [s], peak RSS
 # [MiB]; then the limits (bench/limits_bench, LIMITS_BENCH; bench/lib.sh): reading the log's bytes
-# once and, for the text formats, parsing them at std::from_chars speed (no peer in ../shared/peers).
+# once (page cache warm, and from the device uncached) and, for the text formats, parsing them at
+# std::from_chars speed (no peer in ../shared/peers).
 # STEND may be any build of `stend` (e.g. an older one).
 #
 #   bench/import_log_bench.sh ulog|dataflash|rosbag1|db3|mcap|imucal|mpu6050|imutk [STEND] [SAMPLES]

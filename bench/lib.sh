@@ -54,12 +54,17 @@ memory_limit_line() {
   limit_line "one memory pass over the samples ($1 x 6 doubles, $(awk -v b="$bytes" 'BEGIN { printf "%.1f", b / 1e6 }') MB at $gbps GB/s)" \
     "$(awk -v b="$bytes" -v g="$gbps" 'BEGIN { print b / (g * 1e9) }')" "$2" "${3:-}"
 }
-# read_limit_line STEND_S [WHO]: reading the files given to `limits --read` once (page cache warm).
+# read_limit_line STEND_S [WHO]: reading the files given to `limits --read` once, page cache warm,
+# and again from the device past the page cache (O_DIRECT: a file not read lately), where the
+# file system allows that.
 read_limit_line() {
-  local files="the file's"
+  local files="the file's" mb
   [ "$(limit read_files)" = 1 ] || files="the $(limit read_files) files'"
-  limit_line "reading $files bytes once ($(awk -v b="$(limit read_bytes)" 'BEGIN { printf "%.1f", b / 1e6 }') MB at $(limit read_MBps) MB/s)" \
-    "$(limit read_s)" "$1" "${2:-}"
+  mb=$(awk -v b="$(limit read_bytes)" 'BEGIN { printf "%.1f", b / 1e6 }')
+  limit_line "reading $files bytes once ($mb MB at $(limit read_MBps) MB/s)" "$(limit read_s)" "$1" "${2:-}"
+  [ -z "$(limit read_direct_s)" ] ||
+    limit_line "reading $files bytes once from the device, uncached ($mb MB at $(limit read_direct_MBps) MB/s, O_DIRECT)" \
+      "$(limit read_direct_s)" "$1" "${2:-}"
 }
 # parse_limit_line BYTES STEND_S: parsing BYTES of text at the from_chars speed measured by `limits
 # --parse-file`.

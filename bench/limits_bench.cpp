@@ -3,7 +3,9 @@
 //   parse   std::from_chars of CSV (or blank-separated) doubles, from memory [MB/s of text, values/s]: a generated log
 //           like bench/import_bench.sh's, or the first --parse-mib MiB of --parse-file FILE (then
 //           also the time to parse the whole file at that speed);
-//   read    read() of the given files into a 1 MiB buffer, page cache warm [s, MB/s, median].
+//   read    read() of the given files into a 1 MiB buffer, page cache warm [s, MB/s, median]; and
+//           once more from the device, bypassing the page cache (O_DIRECT) [s, MB/s, median] —
+//           what an import of a file not read lately waits for (where the file system allows it).
 // Standard C++20 and POSIX read() only: no project library. Prints `key value` lines.
 //
 //   limits_bench [--memory] [--parse] [--parse-file FILE] [--read FILE]... [--memory-mib N]
@@ -20,6 +22,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -174,17 +177,23 @@ void measure_parse(const std::string& file, std::size_t rows, std::size_t max_mi
   if (!file.empty()) std::printf("parse_file_bytes %zu\nparse_file_s %.6f\n", file_bytes, static_cast<double>(file_bytes) / mbps / 1e6);
 }
 
-// Bytes read from every file, read() into one 1 MiB buffer.
-std::size_t read_files(const std::vector<std::string>& files, std::vector<char>& buffer) {
+// Bytes read from every file, read() into one 1 MiB buffer (aligned for O_DIRECT); `flags` added
+// to open()'s. 0 when a file cannot be read so (O_DIRECT where the file system refuses it).
+std::size_t read_files(const std::vector<std::string>& files, char* buffer, std::size_t size, int flags) {
   std::size_t total = 0;
   for (const auto& path : files) {
-    const int fd = ::open(path.c_str(), O_RDONLY);
+    const int fd = ::open(path.c_str(), O_RDONLY | flags);
+    if (fd < 0 && flags != 0) return 0;
     if (fd < 0) {
       std::cerr << "limits_bench: cannot open " << path << "\n";
       std::exit(2);
     }
     for (;;) {
-      const ssize_t n = ::read(fd, buffer.data(), buffer.size());
+      const ssize_t n = ::read(fd, buffer, size);
+      if (n < 0 && flags != 0) {
+        ::close(fd);
+        return 0;
+      }
       if (n < 0) {
         std::cerr << "limits_bench: cannot read " << path << "\n";
         std::exit(2);
@@ -198,18 +207,30 @@ std::size_t read_files(const std::vector<std::string>& files, std::vector<char>&
   return total;
 }
 
-void measure_read(const std::vector<std::string>& files, int passes) {
-  std::vector<char> buffer(std::size_t{1} << 20);
-  std::size_t bytes = read_files(files, buffer);  // warms the page cache
+// The median time of `passes` reads of every file with open() flags `flags`; 0 when they cannot be read so.
+double read_time(const std::vector<std::string>& files, char* buffer, std::size_t size, int flags, int passes,
+                 std::size_t& bytes) {
   std::vector<double> times;
   for (int i = 0; i < passes; ++i) {
     const auto start = Clock::now();
-    bytes = read_files(files, buffer);
+    bytes = read_files(files, buffer, size, flags);
+    if (bytes == 0) return 0.0;
     times.push_back(seconds_since(start));
   }
-  const double s = median(times);
+  return median(times);
+}
+
+void measure_read(const std::vector<std::string>& files, int passes) {
+  constexpr std::size_t kBuffer = std::size_t{1} << 20;
+  const std::unique_ptr<char, decltype(&std::free)> buffer(static_cast<char*>(std::aligned_alloc(4096, kBuffer)), std::free);
+  std::size_t bytes = read_files(files, buffer.get(), kBuffer, 0);  // warms the page cache
+  const double s = read_time(files, buffer.get(), kBuffer, 0, passes, bytes);
   std::printf("read_files %zu\nread_bytes %zu\nread_passes %d\nread_s %.6f\nread_MBps %.1f\n", files.size(), bytes,
               passes, s, static_cast<double>(bytes) / s / 1e6);
+  std::size_t direct_bytes = 0;
+  const double d = read_time(files, buffer.get(), kBuffer, O_DIRECT, passes, direct_bytes);
+  if (d > 0.0 && direct_bytes == bytes)
+    std::printf("read_direct_s %.6f\nread_direct_MBps %.1f\n", d, static_cast<double>(bytes) / d / 1e6);
 }
 
 [[noreturn]] void usage() {
