@@ -126,7 +126,7 @@ std::string value_text(const BinaryReader& f, std::size_t at, const Field& fld, 
     case Basic::kUInt32: return std::to_string(f.get<std::uint32_t>(at, "an info value"));
     case Basic::kInt64: return std::to_string(f.get<std::int64_t>(at, "an info value"));
     case Basic::kUInt64: return std::to_string(f.get<std::uint64_t>(at, "an info value"));
-    case Basic::kFloat: return fmt_g(f.get<float>(at, "an info value"));
+    case Basic::kFloat: return fmt_g(static_cast<double>(f.get<float>(at, "an info value")));
     case Basic::kDouble: return fmt_g(f.get<double>(at, "an info value"));
     default: return {};
   }

@@ -177,9 +177,9 @@ enum class CommandMode { kPosition, kRate, kSetpoint };
 struct AxisSpec {
   std::string name;   // "angle", "tilt", "temperature", "amplitude"
   std::string unit;   // unit of positions/setpoints: "deg", "degC", "g", "Hz"
-  double min = -INFINITY;
-  double max = INFINITY;
-  double max_rate = INFINITY;  // unit per second; rate commands beyond it are refused
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+  double max_rate = std::numeric_limits<double>::infinity();  // unit per second; rate commands beyond it are refused
   bool supports_rate = false;
 };
 

@@ -29,6 +29,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <iosfwd>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -105,8 +106,8 @@ struct Segment {
   bool settled = true;     // fixture/chamber were settled for the whole interval
   bool complete = true;    // false when the run stopped inside the segment
   std::string targets;     // "table.angle=10 deg; chamber.temperature=25 degC"
-  double setpoint_c = NAN; // chamber setpoint during the segment, NaN when none
-  double rate = NAN;       // commanded rate (axis unit/s), NaN when none
+  double setpoint_c = std::numeric_limits<double>::quiet_NaN();  // chamber setpoint during the segment, NaN when none
+  double rate = std::numeric_limits<double>::quiet_NaN();        // commanded rate (axis unit/s), NaN when none
 
   // "#3 orientation 'tilt 10' 12.00–22.00 s [unsettled]": id, kind, label, interval, flags.
   void print(std::ostream& os) const;
