@@ -486,6 +486,24 @@ TEST(Rosbag1, EveryRecordTheIndexReachesIsCheckedBeforeOpening) {
 // What is inside a chunk is checked too (librosbag read a message at an offset the index gave,
 // past its chunk: ASan SEGV in Bag::readHeaderFromBuffer, found by the fuzz target): a chunk that
 // does not decompress to its declared size, and a record inside a chunk longer than the chunk.
+namespace {
+
+// A little-endian uint32 at `at` of a bag's bytes.
+std::uint32_t le32(const std::string& bytes, std::size_t at) {
+  std::uint32_t v = 0;
+  for (int i = 3; i >= 0; --i) v = v << 8 | static_cast<std::uint8_t>(bytes[at + static_cast<std::size_t>(i)]);
+  return v;
+}
+
+// Where a bag's first chunk record starts: after the 13-byte magic line and the bag header record
+// (header length, header, data length, data).
+std::size_t first_chunk(const std::string& bytes) {
+  const std::size_t data_len_at = 13 + 4 + le32(bytes, 13);
+  return data_len_at + 4 + le32(bytes, data_len_at);
+}
+
+}  // namespace
+
 TEST(Rosbag1, ChunkContentsAreCheckedAndTheirDamageNamed) {
   const fs::path found = stend::testing::source_path("fuzz/regressions/import_rosbag1/message_index_into_damaged_chunk.bag");
   std::string msg = import_error([&] { stend::io::import_rosbag1(found); });
@@ -496,14 +514,8 @@ TEST(Rosbag1, ChunkContentsAreCheckedAndTheirDamageNamed) {
   const fs::path plain = dir / "plain.bag";
   write_ros1_bag(plain, {"/imu"}, 50, false, rosbag::compression::Uncompressed);
   std::string bytes = stend::testing::read_text(plain);
-  auto u32 = [&](std::size_t at) {
-    std::uint32_t v = 0;
-    for (int i = 3; i >= 0; --i) v = v << 8 | static_cast<std::uint8_t>(bytes[at + static_cast<std::size_t>(i)]);
-    return v;
-  };
-  // The bag header record, then the first chunk: its data (the records inside) after its header.
-  const std::size_t chunk = 13 + 4 + u32(13) + 4 + u32(13 + 4 + u32(13));
-  const std::size_t inside = chunk + 4 + u32(chunk) + 4;
+  const std::size_t chunk = first_chunk(bytes);
+  const std::size_t inside = chunk + 4 + le32(bytes, chunk) + 4;  // the records inside, after its header
   bytes[inside + 3] = '\x7f';  // the first inner record's header length: ~2 GB
   const fs::path damaged = dir / "damaged.bag";
   stend::testing::write_text(damaged, bytes);
@@ -521,14 +533,9 @@ TEST(Rosbag1, Lz4ChunkContentChecksumIsVerified) {
   write_ros1_bag(good, {"/imu"}, 50, false, rosbag::compression::LZ4);
   ASSERT_EQ(stend::io::import_rosbag1(good).samples.size(), 50u);
   std::string bytes = stend::testing::read_text(good);
-  auto u32 = [&](std::size_t at) {
-    std::uint32_t v = 0;
-    for (int i = 3; i >= 0; --i) v = v << 8 | static_cast<std::uint8_t>(bytes[at + static_cast<std::size_t>(i)]);
-    return v;
-  };
-  const std::size_t chunk = 13 + 4 + u32(13) + 4 + u32(13 + 4 + u32(13));
-  const std::size_t data_len_at = chunk + 4 + u32(chunk);
-  const std::size_t frame_end = data_len_at + 4 + u32(data_len_at);
+  const std::size_t chunk = first_chunk(bytes);
+  const std::size_t data_len_at = chunk + 4 + le32(bytes, chunk);
+  const std::size_t frame_end = data_len_at + 4 + le32(bytes, data_len_at);
   bytes[frame_end - 1] = static_cast<char>(bytes[frame_end - 1] ^ 0x01);  // the checksum's last byte
   const fs::path damaged = dir / "damaged.bag";
   stend::testing::write_text(damaged, bytes);
