@@ -205,18 +205,11 @@ class SeriesReader {
     DataRecord r{};
     while (cursor_.next(r, p.lost_before)) {
       const RecordView v(cursor_.reader(), *fmt_, r);
-      if (const std::uint8_t* bytes = v.holding(direct_bytes_)) {  // every field there: read directly
-        p.t_us = load_le<std::uint64_t>(bytes + time_.offset);
-        if (part_ == Part::kCombinedAccel) {
-          const double rel = value(bytes, relative_);
-          if (rel == kRelativeTimestampInvalid) continue;
-          p.t_us = v.shifted(p.t_us, rel, relative_.name);
-        }
-        p.v = Eigen::Vector3d(value(bytes, vector_[0]), value(bytes, vector_[1]), value(bytes, vector_[2]));
-        if (has_temperature) p.temperature_c = value(bytes, temperature_);
-      } else if (!read_checked(v, p)) {
-        continue;
-      }
+      const std::uint8_t* bytes = v.holding(direct_bytes_);  // every field there: read directly
+      const bool kept =
+          bytes ? decode(v, load_le<std::uint64_t>(bytes + time_.offset), [&](const Named& n) { return value(bytes, n); }, p)
+                : decode(v, v.timestamp(time_.field, time_.name), [&](const Named& n) { return number(v, n); }, p);
+      if (!kept) continue;
       p.index = count_++;
       return true;
     }
@@ -261,16 +254,18 @@ class SeriesReader {
     return time_.field->basic == Basic::kUInt64 ? size : kNoDirect;
   }
 
-  // A record read field by field with every check; false when it is to be skipped.
-  bool read_checked(const RecordView& v, Point& p) const {
-    p.t_us = v.timestamp(time_.field, time_.name);
+  // A record's point from its time [µs] and its fields' values as `get` reads them (directly, or
+  // through the checks); false when the record is to be skipped.
+  template <class Get>
+  bool decode(const RecordView& v, std::uint64_t t_us, const Get& get, Point& p) const {
+    p.t_us = t_us;
     if (part_ == Part::kCombinedAccel) {
-      const double rel = number(v, relative_);
+      const double rel = get(relative_);
       if (rel == kRelativeTimestampInvalid) return false;
       p.t_us = v.shifted(p.t_us, rel, relative_.name);
     }
-    p.v = Eigen::Vector3d(number(v, vector_[0]), number(v, vector_[1]), number(v, vector_[2]));
-    if (has_temperature) p.temperature_c = number(v, temperature_);
+    p.v = Eigen::Vector3d(get(vector_[0]), get(vector_[1]), get(vector_[2]));
+    if (has_temperature) p.temperature_c = get(temperature_);
     return true;
   }
 
