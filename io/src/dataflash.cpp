@@ -71,6 +71,7 @@ std::optional<std::size_t> column(const DfFormat& fmt, const std::string& name) 
   return static_cast<std::size_t>(it - fmt.columns.begin());
 }
 
+// Whether a message of this name is an IMU's (IMU, IMU2, IMU3).
 bool is_imu(const std::string& name) { return name == "IMU" || name == "IMU2" || name == "IMU3"; }
 
 // An FMT message at `pos`.
@@ -288,7 +289,7 @@ double si_factor(const BinaryReader& f, const DfUnits& u, const DfFormat& fmt, s
     f.fail(fmt.defined_at, "'" + fmt.name + "' column " + fmt.columns[c] + " is in '" + unit + "' (FMTU), expected " + list);
   }
   double factor = unit == "deg/s" ? physics::kDegPerSecond : 1.0;
-  const TypeChar& t = *type_char(fmt.format[c]);
+  const TypeChar& t = *fmt.types[c];
   const char mult_id = c < it->second.second.size() ? it->second.second[c] : '-';
   const auto mult = u.mults.find(mult_id);
   // '-' and '?' mean "no multiplier"; the c/C/e/E/L types carry their own scale.

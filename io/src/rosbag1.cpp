@@ -425,7 +425,7 @@ class ChunkCache {
     Entry& e = entries_[next_];
     // The evicted chunk's buffer is reused when no cursor holds it any more.
     auto data = e.data.use_count() == 1 ? std::const_pointer_cast<ChunkData>(e.data) : std::make_shared<ChunkData>();
-    e = {};
+    e = {};  // a read that fails leaves no half-read chunk in the cache
     read_chunk(path, c, data->bytes);
     data->records = message_records(path, c, data->bytes);
     e = {c.pos, data};
