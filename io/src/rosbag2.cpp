@@ -214,22 +214,24 @@ struct RawMessage {
 // Only Imu and Temperature messages are kept; the topic is chosen once every file is read.
 bool kept_type(const std::string& type) { return type == kRos2Types.imu || type == kRos2Types.temperature; }
 
-void add_topic(std::vector<TopicInfo>& topics, const std::string& name, const std::string& type) {
-  for (const TopicInfo& t : topics) {
-    if (t.name == name) return;
-  }
-  topics.push_back({name, type});
-}
-
 // One storage file's kept messages in storage order.
 class StorageFile {
  public:
+  // Every topic the file declares is added to `topics` when given (the first pass: the later ones
+  // need only their kept topics, and a crafted bag may declare hundreds of thousands).
+  explicit StorageFile(TopicList* topics) : topics_(topics) {}
   virtual ~StorageFile() = default;
   virtual bool next(RawMessage& m) = 0;
-  // The topics seen so far (MCAP: those whose Channel record came before the cursor).
-  virtual const std::vector<TopicInfo>& topics() const = 0;
   // What was read, for the info event.
   virtual std::string note() const = 0;
+
+ protected:
+  void saw_topic(const std::string& name, const std::string& type) {
+    if (topics_) topics_->add(name, type);
+  }
+
+ private:
+  TopicList* topics_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -237,7 +239,7 @@ class StorageFile {
 
 class McapFile final : public StorageFile {
  public:
-  explicit McapFile(const fs::path& file) : in_(file) {
+  McapFile(const fs::path& file, TopicList* topics) : StorageFile(topics), in_(file) {
     if (in_.size() < 8 || std::memcmp(read(0, 8, "the magic"), kMcapMagic, 8) != 0) {
       throw ImportError(file, "byte 0", "not an MCAP file: expected the magic \\x89MCAP0\\r\\n");
     }
@@ -254,8 +256,6 @@ class McapFile final : public StorageFile {
       }
     }
   }
-
-  const std::vector<TopicInfo>& topics() const override { return topics_; }
 
   std::string note() const override {
     const std::string name = in_.file().filename().string();
@@ -403,7 +403,7 @@ class McapFile final : public StorageFile {
     c.encoding = f.string();
     const auto s = schemas_.find(schema_id);
     c.type = s == schemas_.end() ? std::string("(no schema)") : s->second;
-    add_topic(topics_, c.topic, c.type);
+    saw_topic(c.topic, c.type);
     channels_[id] = c;
   }
 
@@ -485,7 +485,6 @@ class McapFile final : public StorageFile {
   std::uint64_t chunk_pos_ = 0, chunk_at_ = 0;  // the next record in it; the chunk's file offset
   std::map<std::uint16_t, std::string> schemas_;
   std::map<std::uint16_t, Channel> channels_;
-  std::vector<TopicInfo> topics_;
   std::map<std::string, int> chunks_;
 };
 
@@ -515,7 +514,7 @@ std::string column_text(sqlite3_stmt* s, int i) {
 
 class Db3File final : public StorageFile {
  public:
-  explicit Db3File(const fs::path& file) : file_(file) {
+  Db3File(const fs::path& file, TopicList* topics) : StorageFile(topics), file_(file) {
     if (sqlite3_open_v2(file.c_str(), &db_.db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
       throw ImportError(file, "SQLite", std::string("cannot open: ") + sqlite3_errmsg(db_.db));
     }
@@ -539,7 +538,6 @@ class Db3File final : public StorageFile {
     }
   }
 
-  const std::vector<TopicInfo>& topics() const override { return topics_; }
   std::string note() const override { return "SQLite3 storage " + file_.filename().string(); }
 
  private:
@@ -549,7 +547,7 @@ class Db3File final : public StorageFile {
     int rc;
     while ((rc = sqlite3_step(st.s)) == SQLITE_ROW) {
       const std::string name = column_text(st.s, 1), type = column_text(st.s, 2), format = column_text(st.s, 3);
-      add_topic(topics_, name, type);
+      saw_topic(name, type);
       if (kept_type(type) && format != "cdr") {
         throw ImportError(file_, "topics row " + std::to_string(sqlite3_column_int64(st.s, 0)),
                           "topic " + name + " serialized as '" + format + "', expected cdr");
@@ -563,7 +561,6 @@ class Db3File final : public StorageFile {
   Db db_;
   Stmt messages_;
   std::map<std::int64_t, std::string> topic_of_;
-  std::vector<TopicInfo> topics_;
 };
 
 bool is_sqlite(const fs::path& file) {
@@ -619,38 +616,35 @@ std::vector<fs::path> storage_files(const fs::path& dir) {
   return files;
 }
 
-std::unique_ptr<StorageFile> open_storage(const fs::path& f) {
-  if (is_mcap(f)) return std::make_unique<McapFile>(f);
-  if (is_sqlite(f)) return std::make_unique<Db3File>(f);  // says why when it is not a readable rosbag2 database
+std::unique_ptr<StorageFile> open_storage(const fs::path& f, TopicList* topics) {
+  if (is_mcap(f)) return std::make_unique<McapFile>(f, topics);
+  if (is_sqlite(f)) return std::make_unique<Db3File>(f, topics);  // says why when it is not a readable rosbag2 database
   throw ImportError(f, "byte 0", "neither MCAP (magic \\x89MCAP0\\r\\n) nor a rosbag2 SQLite3 database");
 }
 
 // The kept messages of every storage file of the bag, in order, one at a time; each message with
-// the file it is in.
+// the file it is in. Every topic the files declare is added to `topics` when given.
 class StorageCursor {
  public:
-  explicit StorageCursor(const std::vector<fs::path>& files) : files_(&files) {}
+  explicit StorageCursor(const std::vector<fs::path>& files, TopicList* topics = nullptr)
+      : files_(&files), topics_(topics) {}
   bool next(RawMessage& m) {
     for (;;) {
       if (!current_) {
         if (index_ == files_->size()) return false;
-        current_ = open_storage((*files_)[index_++]);
+        current_ = open_storage((*files_)[index_++], topics_);
       }
       if (current_->next(m)) return true;
-      finished(*current_);
+      notes.push_back(current_->note());
       current_.reset();
     }
   }
   const fs::path& file() const { return (*files_)[index_ - 1]; }
-  std::vector<TopicInfo> topics;    // of the files read to the end
-  std::vector<std::string> notes;   // of the files read to the end
+  std::vector<std::string> notes;  // of the files read to the end
 
  private:
-  void finished(const StorageFile& f) {
-    for (const TopicInfo& t : f.topics()) add_topic(topics, t.name, t.type);
-    notes.push_back(f.note());
-  }
   const std::vector<fs::path>* files_;
+  TopicList* topics_;
   std::size_t index_ = 0;
   std::unique_ptr<StorageFile> current_;
 };
@@ -719,12 +713,13 @@ void import_rosbag2(const fs::path& path, const RosbagOptions& options, Recordin
   if (files.empty()) throw ImportError(path, "folder", "no rosbag2 storage file (expected metadata.yaml, .db3 or MCAP)");
   // The first pass reads every file to the end for its topics (an MCAP file may declare a channel
   // anywhere) and checks its records.
-  StorageCursor all(files);
+  TopicList topics;
+  StorageCursor all(files, &topics);
   for (RawMessage m; all.next(m);) {
   }
   Ros2Reader reader(files, options.temperature_topic);
-  reader.imu_topic = choose_imu_topic(path, all.topics, options, kRos2Types);
-  check_temperature_topic(path, all.topics, options, kRos2Types);
+  reader.imu_topic = choose_imu_topic(path, topics.all(), options, kRos2Types);
+  check_temperature_topic(path, topics.all(), options, kRos2Types);
   reader.notes = std::move(all.notes);
   reader.notes.push_back("CDR payloads");
   stream_recording(path, reader, options, rec, out);

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <unordered_set>
 #include <utility>
 
 namespace stend::io::rosbag_detail {
@@ -73,6 +74,7 @@ BagScan scan_messages(const BagReader& bag) {
   Ordered imu_stamp, imu_record, stamp, record;
   const auto imu = bag.imu();
   const auto temperature = bag.temperature();
+  std::unordered_set<std::string> frames;  // scan.frame_ids as a set: a lookup per message, not a scan
   ImuMessage m;
   TemperatureMessage t;
   bool more_imu = imu->next(m), more_temperature = temperature && temperature->next(t);
@@ -80,8 +82,7 @@ BagScan scan_messages(const BagReader& bag) {
     if (more_imu && (!more_temperature || m.record_ns <= t.record_ns)) {
       if (scan.imu == 0) scan.first = m;
       scan.zero_stamps += m.stamp_ns == 0 ? 1 : 0;
-      if (std::find(scan.frame_ids.begin(), scan.frame_ids.end(), m.frame_id) == scan.frame_ids.end())
-        scan.frame_ids.push_back(m.frame_id);
+      if (frames.insert(m.frame_id).second) scan.frame_ids.push_back(m.frame_id);
       imu_stamp.add(m.stamp_ns);
       imu_record.add(m.record_ns);
       ++scan.imu;

@@ -11,6 +11,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <unordered_set>
 #include <vector>
 
 namespace stend::io::rosbag_detail {
@@ -32,6 +33,21 @@ struct TemperatureMessage {
 struct TopicInfo {
   std::string name;
   std::string type;  // "sensor_msgs/Imu" (ROS 1), "sensor_msgs/msg/Imu" (ROS 2)
+};
+
+// Topics in order of first appearance, each name once with the type it first came with. Names are
+// looked up in a set beside the list: a crafted bag's many topics cost one lookup each, not a scan
+// of the list (quadratic in the bag's size).
+class TopicList {
+ public:
+  void add(const std::string& name, const std::string& type) {
+    if (names_.insert(name).second) list_.push_back({name, type});
+  }
+  const std::vector<TopicInfo>& all() const { return list_; }
+
+ private:
+  std::vector<TopicInfo> list_;
+  std::unordered_set<std::string> names_;
 };
 
 // The type names of one ROS generation.

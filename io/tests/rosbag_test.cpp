@@ -13,8 +13,10 @@
 #include <rosbag/bag.h>
 #include <topic_tools/shape_shifter.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -115,12 +117,14 @@ TEST(Rosbag1, RobotLocalizationRealBag) {
 
 // A bag written by librosbag: Imu messages on `topics` (stamp i·10 ms from 100 s, or 0;
 // accel (0.1 i, 0, 9.8), gyro (0, 0.01 i, 0); record time 200 s + i·10 ms) and Temperature at
-// 1 Hz (20 + k °C) on /temp; written in the order `order` gives the i (empty: 0 … n−1).
+// 1 Hz (20 + k °C) on /temp; written in the order `order` gives the i (empty: 0 … n−1), in chunks
+// of about `chunk_bytes`; frame_id "imu_frame", or "f<i as 8 digits>" with frame_per_message.
 void write_ros1_bag(const fs::path& file, const std::vector<std::string>& topics, int n, bool zero_stamps,
-                    rosbag::compression::CompressionType compression, std::vector<int> order = {}) {
+                    rosbag::compression::CompressionType compression, std::vector<int> order = {},
+                    std::uint32_t chunk_bytes = 2048, bool frame_per_message = false) {
   rosbag::Bag bag(file.string(), rosbag::bagmode::Write);
   bag.setCompression(compression);
-  bag.setChunkThreshold(2048);
+  bag.setChunkThreshold(chunk_bytes);
   auto message = [](const char* md5, const char* type, std::vector<std::uint8_t> bytes) {
     topic_tools::ShapeShifter s;
     s.morph(md5, type, "(definition not needed by the reader)", "");
@@ -128,11 +132,13 @@ void write_ros1_bag(const fs::path& file, const std::vector<std::string>& topics
     s.read(in);
     return s;
   };
-  auto header = [](ros::serialization::OStream& o, std::uint32_t sec, std::uint32_t nsec) {
+  auto header = [&](ros::serialization::OStream& o, std::uint32_t sec, std::uint32_t nsec, int i) {
     o.next(std::uint32_t{0});
     o.next(sec);
     o.next(nsec);
-    o.next(std::string("imu_frame"));
+    char frame[16];
+    std::snprintf(frame, sizeof frame, "f%08d", i);
+    o.next(std::string(frame_per_message ? frame : "imu_frame"));  // 9 characters either way
   };
   if (order.empty()) {
     for (int i = 0; i < n; ++i) order.push_back(i);
@@ -141,7 +147,7 @@ void write_ros1_bag(const fs::path& file, const std::vector<std::string>& topics
     const ros::Time stamp = zero_stamps ? ros::Time(0, 0) : ros::Time(100.0 + 0.01 * i);
     std::vector<std::uint8_t> b(4 * 3 + 4 + 9 + 8 * (4 + 9 + 3 + 9 + 3 + 9));
     ros::serialization::OStream o(b.data(), static_cast<std::uint32_t>(b.size()));
-    header(o, stamp.sec, stamp.nsec);
+    header(o, stamp.sec, stamp.nsec, i);
     const double values[] = {0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0};
     for (double v : values) o.next(v);
     for (double v : {0.0, 0.01 * i, 0.0}) o.next(v);
@@ -153,7 +159,7 @@ void write_ros1_bag(const fs::path& file, const std::vector<std::string>& topics
     if (i % 100 == 0) {
       std::vector<std::uint8_t> tb(4 * 3 + 4 + 9 + 16);
       ros::serialization::OStream ot(tb.data(), static_cast<std::uint32_t>(tb.size()));
-      header(ot, stamp.sec, stamp.nsec);
+      header(ot, stamp.sec, stamp.nsec, i);
       ot.next(20.0 + i / 100);
       ot.next(0.0);
       bag.write("/temp", record, message("ff71b307acdbe7c871a5a6d7ed359100", "sensor_msgs/Temperature", tb));
@@ -184,6 +190,41 @@ TEST(Rosbag1, MessagesComeInTimeOrderWhateverTheFileOrder) {
     const bool overlap = info_event(r).message.find("chunks overlap in time") != std::string::npos;
     EXPECT_EQ(overlap, std::string(name) == "interleaved") << info_event(r).message;
   }
+}
+
+// Crafted: three chunks of 10 000 messages each, every third message in each (all three span the
+// whole bag): the messages are decoded once in storage order and then sorted. Taken in time order
+// from the chunks, each message switched chunk and decompressed one again (2 of 3 held): quadratic
+// in the bag's size: 66 s here (the bound is 5 s), 9 s for 12 000 messages.
+TEST(Rosbag1, InterleavedChunksAreReadOnce) {
+  stend::testing::TempDir dir("rosbag1");
+  constexpr int kMessages = 30000;
+  std::vector<int> order;
+  for (int r = 0; r < 3; ++r)
+    for (int i = r; i < kMessages; i += 3) order.push_back(i);
+  const fs::path file = dir / "interleaved3.bag";
+  write_ros1_bag(file, {"/imu"}, kMessages, false, rosbag::compression::LZ4, order, 10000 * 390);
+  const auto start = std::chrono::steady_clock::now();
+  const Recording r = stend::io::import_rosbag1(file);
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+  ASSERT_EQ(r.samples.size(), static_cast<std::size_t>(kMessages));
+  for (std::size_t k = 0; k < r.samples.size(); k += 997) EXPECT_NEAR(r.samples[k].accel_mps2.x(), 0.1 * static_cast<double>(k), 1e-9) << k;
+  EXPECT_NE(info_event(r).message.find("chunks overlap in time"), std::string::npos) << info_event(r).message;
+}
+
+// Crafted: a frame_id per message, 100 000 of them. The first pass keeps the distinct ones in a set
+// beside their list (they were searched for in the list: quadratic, 14 s for these, 3 s for half).
+TEST(Rosbag1, AFrameIdPerMessageIsLinearInTime) {
+  stend::testing::TempDir dir("rosbag1");
+  constexpr int kMessages = 100000;
+  const fs::path file = dir / "frames.bag";
+  write_ros1_bag(file, {"/imu"}, kMessages, false, rosbag::compression::Uncompressed, {}, 1 << 20, true);
+  const auto start = std::chrono::steady_clock::now();
+  const Recording r = stend::io::import_rosbag1(file);
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+  ASSERT_EQ(r.samples.size(), static_cast<std::size_t>(kMessages));
+  EXPECT_EQ(r.header.identity.serial, "f00000000");
+  EXPECT_NE(info_event(r).message.find("(100000 different frame_ids)"), std::string::npos) << info_event(r).message;
 }
 
 TEST(Rosbag1, WrittenBagKnownValuesAndTemperature) {
@@ -380,6 +421,19 @@ TEST_F(Rosbag2, SqliteBagFolderAndFile) {
   EXPECT_NE(msg.find(short_db.string() + ": messages row id 5: topic /imu/data: ends at byte 40 of the payload"),
             std::string::npos)
       << msg;
+}
+
+// Crafted: 100 000 topics besides the bag's own, none with a message. Every topic is listed once,
+// looked up in a set, in the first pass only (each pass listed them all, each searched for in the
+// list: 84 s for these, 18 s for half).
+TEST_F(Rosbag2, ManyTopicsAreListedInLinearTime) {
+  const auto start = std::chrono::steady_clock::now();
+  expect_written_content(stend::io::import_rosbag2(bag("many_topics.db3")), false);
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+  RosbagOptions missing;
+  missing.topic = "/none";
+  const std::string msg = import_error([&] { stend::io::import_rosbag2(bag("many_topics.db3"), missing); });
+  EXPECT_NE(msg.find("/crafted/topic_99999 (std_msgs/msg/String)"), std::string::npos) << msg.substr(0, 300);
 }
 
 TEST_F(Rosbag2, TopicChoiceAndZeroStamps) {
