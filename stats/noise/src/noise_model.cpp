@@ -180,16 +180,28 @@ Candidate fit_terms(const FitSet& set, unsigned mask, double tc) {
   return cand;
 }
 
-// Best τc for the terms in `mask` (which contains G) on a log grid, 2 nodes per octave over the
-// fitted τ range widened by 4× each way; `step` is the grid's spacing in ln τc.
-Candidate fit_with_gm(FitSet& set, unsigned mask, double& step) {
+// The τc grid: 2 nodes per octave over the fitted τ range widened by 4× each way, from l0 = ln τc
+// of the first node in steps of `step`.
+struct TcGrid {
+  double l0 = 0.0, step = 0.0;
+  int nodes = 0;
+};
+
+TcGrid tc_grid(const FitSet& set) {
   const auto& pts = set.pts;
-  const double l0 = std::log(pts.front().tau / 4.0), l1 = std::log(pts.back().tau * 4.0);
-  const int nodes = std::max(4, static_cast<int>(std::ceil((l1 - l0) / std::log(2.0) * 2.0)));
-  step = (l1 - l0) / nodes;
+  TcGrid g;
+  g.l0 = std::log(pts.front().tau / 4.0);
+  const double l1 = std::log(pts.back().tau * 4.0);
+  g.nodes = std::max(4, static_cast<int>(std::ceil((l1 - g.l0) / std::log(2.0) * 2.0)));
+  g.step = (l1 - g.l0) / g.nodes;
+  return g;
+}
+
+// Best τc on the grid for the terms in `mask` (which contains G).
+Candidate fit_with_gm(FitSet& set, unsigned mask, const TcGrid& grid) {
   Candidate best;
-  for (int i = 0; i <= nodes; ++i) {
-    const double tc = std::exp(l0 + step * i);
+  for (int i = 0; i <= grid.nodes; ++i) {
+    const double tc = std::exp(grid.l0 + grid.step * i);
     set_tc(set, tc);
     Candidate c = fit_terms(set, mask, tc);
     if (c.valid && c.deviance < best.deviance) best = c;
@@ -219,9 +231,8 @@ Candidate refine_gm(FitSet& set, Candidate best, double step) {
 // B and G both make the plateau, so choosing between them is a choice of its shape (flat over
 // decades, or rising as τ/τc then falling as 1/√τ), not of one more term: the shape that fits
 // better (the lower deviance) is kept, τc not counted against G.
-Candidate plateau_shape(FitSet& set, const Candidate& with_b) {
-  double step = 0.0;
-  const Candidate with_g = fit_with_gm(set, (with_b.mask & ~(1u << 2)) | (1u << kGm), step);
+Candidate plateau_shape(FitSet& set, const Candidate& with_b, const TcGrid& grid) {
+  const Candidate with_g = fit_with_gm(set, (with_b.mask & ~(1u << 2)) | (1u << kGm), grid);
   return with_g.valid && with_g.deviance < with_b.deviance ? with_g : with_b;
 }
 
@@ -249,15 +260,17 @@ Candidate select_model(FitSet& set) {
     const Candidate c = fit_terms(set, mask, 0.0);
     if (c.valid && c.score() < best.score()) best = c;
   }
-  double step = 0.0;
+  const TcGrid grid = tc_grid(set);
   for (unsigned mask = 1u << kGm; mask < (1u << kTerms); ++mask) {
     if (__builtin_popcount(mask) + 1 > static_cast<int>(set.pts.size()) - 1) continue;
     if (mask & (1u << 2)) continue;  // B and G both make the plateau: the data cannot split them
-    const Candidate c = fit_with_gm(set, mask, step);
+    // The deviance is ≥ 0: a model whose penalty alone reaches the best score cannot win.
+    if (kTermPenalty * Candidate{mask}.parameters() >= best.score()) continue;
+    const Candidate c = fit_with_gm(set, mask, grid);
     if (c.valid && c.score() < best.score()) best = c;
   }
-  if ((best.mask >> 2) & 1u) best = plateau_shape(set, best);
-  if ((best.mask >> kGm) & 1u) best = refine_gm(set, best, step);
+  if ((best.mask >> 2) & 1u) best = plateau_shape(set, best, grid);
+  if ((best.mask >> kGm) & 1u) best = refine_gm(set, best, grid.step);
   best = walk_or_plateau(set, best);
   set_tc(set, best.tc);
   return best;
