@@ -23,11 +23,13 @@
 #include <iterator>
 #include <cstdint>
 #include <cstring>
+#include <deque>
 #include <fstream>
 #include <map>
 #include <limits>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace stend::io {
@@ -649,32 +651,124 @@ class StorageCursor {
   std::unique_ptr<StorageFile> current_;
 };
 
-// The messages of one topic, decoded.
-template <class Message>
-class TopicCursor final : public MessageCursor<Message> {
+// One pass over the storage for a pass's Imu and Temperature cursors together: each pulls the
+// storage on for its own topic and leaves the other topic's messages it passes, decoded, in the
+// other's queue, so that the storage is read once per pass instead of once per topic. A queue that
+// grows past kMaxAhead messages (its cursor not pulling: a temperature topic out of time order is
+// read whole first, or Temperature messages are further apart than that) is dropped and its side leaves the pass; its cursor goes on alone (see
+// TopicCursor).
+class SharedPass {
  public:
-  using Decode = Message (*)(const std::uint8_t*, std::size_t, std::int64_t, const Place&);
-  TopicCursor(const std::vector<fs::path>& files, std::string topic, Decode decode)
-      : storage_(files), topic_(std::move(topic)), decode_(decode) {}
-  bool next(Message& out) override {
-    RawMessage m;
-    do {
-      if (!storage_.next(m)) return false;
-    } while (*m.topic != topic_);
-    try {
-      out = decode_(m.data, m.size, m.record_ns, m.where);
-    } catch (const CdrReader::Failure& e) {
-      throw ImportError(storage_.file(), e.where, "topic " + topic_ + ": " + e.what);
+  static constexpr std::size_t kMaxAhead = 16384;  // messages held for the cursor behind (≈ 1.6 MB of Imu)
+
+  // A topic left empty has no side in the pass.
+  SharedPass(const std::vector<fs::path>& files, std::string imu_topic, std::string temperature_topic)
+      : storage_(files),
+        imu_{std::move(imu_topic), decode_imu, {}, false},
+        temperature_{std::move(temperature_topic), decode_temperature, {}, false} {
+    imu_.shared = !imu_.topic.empty();
+    temperature_.shared = !temperature_.topic.empty();
+  }
+
+  // Whether the topic of Message is still read through this pass.
+  template <class Message>
+  bool shared() const { return side<Message>().shared; }
+
+  // The next message of Message's topic, from its queue or the storage.
+  template <class Message>
+  bool next(Message& out) {
+    Side<Message>& me = side<Message>();
+    if (!me.ahead.empty()) {
+      out = std::move(me.ahead.front());
+      me.ahead.pop_front();
+      return true;
     }
-    return true;
+    for (RawMessage m; storage_.next(m);) {
+      if (*m.topic == me.topic) {
+        out = decoded(me, m);
+        return true;
+      }
+      hold(imu_, m);
+      hold(temperature_, m);
+    }
+    return false;
   }
 
  private:
+  template <class Message>
+  struct Side {
+    std::string topic;
+    Message (*decode)(const std::uint8_t*, std::size_t, std::int64_t, const Place&);
+    std::deque<Message> ahead;  // passed by the other side's cursor, not yet taken
+    bool shared = true;
+  };
+
+  template <class Message>
+  Side<Message>& side() {
+    if constexpr (std::is_same_v<Message, ImuMessage>) return imu_;
+    else return temperature_;
+  }
+  template <class Message>
+  const Side<Message>& side() const {
+    if constexpr (std::is_same_v<Message, ImuMessage>) return imu_;
+    else return temperature_;
+  }
+
+  template <class Message>
+  Message decoded(const Side<Message>& s, const RawMessage& m) {
+    try {
+      return s.decode(m.data, m.size, m.record_ns, m.where);
+    } catch (const CdrReader::Failure& e) {
+      throw ImportError(storage_.file(), e.where, "topic " + s.topic + ": " + e.what);
+    }
+  }
+
+  template <class Message>
+  void hold(Side<Message>& s, const RawMessage& m) {
+    if (!s.shared || *m.topic != s.topic) return;
+    s.ahead.push_back(decoded(s, m));
+    if (s.ahead.size() > kMaxAhead) {
+      s.shared = false;
+      std::deque<Message>().swap(s.ahead);
+    }
+  }
+
   StorageCursor storage_;
-  std::string topic_;
-  Decode decode_;
+  Side<ImuMessage> imu_;
+  Side<TemperatureMessage> temperature_;
 };
 
+// The messages of one topic, decoded: through the pass it shares with the other topic's cursor
+// while it can, then through a pass of its own that skips the messages already taken.
+template <class Message>
+class TopicCursor final : public MessageCursor<Message> {
+ public:
+  TopicCursor(std::shared_ptr<SharedPass> pass, const std::vector<fs::path>& files, std::string topic)
+      : pass_(std::move(pass)), files_(files), topic_(std::move(topic)) {}
+  bool next(Message& out) override {
+    if (!alone_ && pass_->shared<Message>()) {
+      if (!pass_->next(out)) return false;
+      ++taken_;
+      return true;
+    }
+    if (!alone_) {
+      const bool imu = std::is_same_v<Message, ImuMessage>;
+      alone_ = std::make_unique<SharedPass>(files_, imu ? topic_ : "", imu ? "" : topic_);
+      for (Message skipped; taken_ > 0 && alone_->next(skipped);) --taken_;
+    }
+    return alone_->next(out);
+  }
+
+ private:
+  std::shared_ptr<SharedPass> pass_;
+  const std::vector<fs::path>& files_;
+  std::string topic_;
+  std::uint64_t taken_ = 0;              // from the shared pass
+  std::unique_ptr<SharedPass> alone_;    // once the shared pass has dropped this topic
+};
+
+// The bag's two passes (stream_recording's scan, then its conversion) each ask for an Imu and a
+// Temperature cursor, in either order: the second of a pair joins the pass the first opened.
 class Ros2Reader final : public BagReader {
  public:
   Ros2Reader(std::vector<fs::path> files, std::string temperature_topic)
@@ -682,16 +776,30 @@ class Ros2Reader final : public BagReader {
     format = "rosbag2";
   }
   std::unique_ptr<MessageCursor<ImuMessage>> imu() const override {
-    return std::make_unique<TopicCursor<ImuMessage>>(files_, imu_topic, decode_imu);
+    return std::make_unique<TopicCursor<ImuMessage>>(pass_for(open_imu_, open_temperature_), files_, imu_topic);
   }
   std::unique_ptr<MessageCursor<TemperatureMessage>> temperature() const override {
     if (temperature_topic_.empty()) return nullptr;
-    return std::make_unique<TopicCursor<TemperatureMessage>>(files_, temperature_topic_, decode_temperature);
+    return std::make_unique<TopicCursor<TemperatureMessage>>(pass_for(open_temperature_, open_imu_), files_,
+                                                             temperature_topic_);
   }
 
  private:
+  // The pass a cursor joins: the one the other topic's cursor opened, if it is still open and this
+  // topic has no cursor in it yet; else a new one, open for the other topic.
+  std::shared_ptr<SharedPass> pass_for(std::weak_ptr<SharedPass>& mine, std::weak_ptr<SharedPass>& other) const {
+    if (auto pass = mine.lock()) {
+      mine.reset();
+      return pass;
+    }
+    auto pass = std::make_shared<SharedPass>(files_, imu_topic, temperature_topic_);
+    other = pass;
+    return pass;
+  }
+
   std::vector<fs::path> files_;
   std::string temperature_topic_;
+  mutable std::weak_ptr<SharedPass> open_imu_, open_temperature_;  // a pass waiting for that topic's cursor
 };
 
 }  // namespace

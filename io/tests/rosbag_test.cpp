@@ -436,6 +436,28 @@ TEST_F(Rosbag2, ManyTopicsAreListedInLinearTime) {
   EXPECT_NE(msg.find("/crafted/topic_99999 (std_msgs/msg/String)"), std::string::npos) << msg.substr(0, 300);
 }
 
+// The Imu and Temperature cursors of a pass share one read of the storage while neither runs
+// more than 16 384 messages ahead; past that the one behind reads a pass of its own, skipping what
+// it took. Temperature 17 000 Imu messages apart, in time order (the Imu side leaves the shared
+// pass after its first message) and reversed (the Temperature topic read whole first): the same
+// samples and temperatures either way.
+TEST_F(Rosbag2, SparseTemperatureBesideALongImuTopic) {
+  RosbagOptions opt;
+  opt.temperature_topic = "/imu/temperature";
+  for (const char* name : {"long_temperature_sorted.db3", "long_temperature_reversed.db3"}) {
+    SCOPED_TRACE(name);
+    const Recording r = stend::io::import_rosbag2(bag(name), opt);
+    ASSERT_EQ(r.samples.size(), 51000u);
+    for (std::size_t i = 0; i < r.samples.size(); i += 1999) {
+      EXPECT_NEAR(r.samples[i].t_s, 0.001 * static_cast<double>(i), 1e-9) << i;
+      EXPECT_NEAR(r.samples[i].accel_mps2.x(), 0.1 * static_cast<double>(i), 1e-9) << i;
+      EXPECT_DOUBLE_EQ(r.samples[i].temperature_c, 20.0 + static_cast<double>(i / 17000)) << i;
+    }
+    const bool whole = info_event(r).message.find("out of time order") != std::string::npos;
+    EXPECT_EQ(whole, std::string(name) == "long_temperature_reversed.db3") << info_event(r).message;
+  }
+}
+
 TEST_F(Rosbag2, TopicChoiceAndZeroStamps) {
   std::string msg = import_error([&] { stend::io::import_rosbag2(bag("two_imu.mcap")); });
   EXPECT_NE(msg.find("2 sensor_msgs/msg/Imu topics: /imu/data /imu2/data"), std::string::npos) << msg;
