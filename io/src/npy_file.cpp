@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
+#include <unordered_set>
 
 namespace stend::io {
 
@@ -175,8 +176,8 @@ class NpyFile final : public ArrayFile {
       skipped_.push_back("'" + m.name + "' (zip method " + std::to_string(m.method) + ")");
       return;
     }
-    for (const NpyArray& a : arrays_)
-      if (a.info.name == name) throw ImportError(file_, ByteOffset{m.header}, "a second member named '" + m.name + "' (damaged)");
+    if (names_.count(name))  // a set beside arrays_: a crafted archive may hold very many
+      throw ImportError(file_, ByteOffset{m.header}, "a second member named '" + m.name + "' (damaged)");
     ZipMemberReader in(file_, m);
     NpyArray a;
     a.info.name = name;
@@ -202,11 +203,13 @@ class NpyFile final : public ArrayFile {
     a.info.cols = static_cast<std::size_t>(o.cols);
     a.info.type = type_name(h.type);
     a.sequential = o.cols == 1 || h.fortran_order == o.transposed;
+    names_.insert(name);
     arrays_.push_back(std::move(a));
   }
 
   fs::path file_;
   std::vector<NpyArray> arrays_;
+  std::unordered_set<std::string> names_;  // of arrays_
   std::vector<std::string> skipped_;  // "'names' (dtype '<U5' …)"
   std::string layout_;
   int version_ = 1;

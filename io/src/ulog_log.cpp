@@ -147,7 +147,12 @@ void read_info(const BinaryReader& f, std::size_t at, std::size_t body, std::siz
 }
 
 // B message: incompatible flags this reader does not know stop it; appended-data offsets are kept.
+// The first flag-bits message only (the format puts one right after the header; pyulog reads no
+// other): a crafted log of many would otherwise list appended-data offsets without bound, each
+// checked against every message.
 void read_flag_bits(const BinaryReader& f, std::size_t at, std::size_t body, std::size_t size, UlogLog& log) {
+  if (log.flag_bits_read) return;
+  log.flag_bits_read = true;
   if (size < 40) f.fail(at, "flag-bits message of " + std::to_string(size) + " bytes (expected 40)");
   const std::uint8_t incompat0 = *f.at(body + 8);
   for (std::size_t i = 0; i < 8; ++i) {
@@ -162,6 +167,7 @@ void read_flag_bits(const BinaryReader& f, std::size_t at, std::size_t body, std
       const auto off = f.get<std::uint64_t>(body + 16 + 8 * i, "an appended-data offset");
       if (off > 0) log.appended_offsets.push_back(off);
     }
+    std::sort(log.appended_offsets.begin(), log.appended_offsets.end());  // a message is cut at the first
   }
 }
 

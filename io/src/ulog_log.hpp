@@ -84,7 +84,8 @@ struct UlogLog {
   std::size_t parameters = 0;
   std::size_t dropouts = 0, dropout_ms = 0;
   Losses losses;
-  std::vector<std::uint64_t> appended_offsets;
+  bool flag_bits_read = false;
+  std::vector<std::uint64_t> appended_offsets;  // ascending, at most 3
 };
 
 // One message: type, offsets of its header and body, body size. In the reader's buffer whole.

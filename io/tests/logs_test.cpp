@@ -270,6 +270,95 @@ TEST(ImportUlog, WrittenLogAppendedDataAndResync) {
   EXPECT_NE(r.events[0].message.find("1 resync(s) (16 bytes skipped)"), std::string::npos) << r.events[0].message;
 }
 
+// Crafted logs that were quadratic, each imported within 5 s (the times are the old ones):
+// 16 000 subscriptions of one topic instance (a pass over the file per msg_id: 18 s); 80 000
+// flag-bits messages (their appended-data offsets checked against every message: 18 s); 160 000
+// gyro records before the accelerometer's first time, in decreasing time (the gyro window held
+// them all: 9 s); 200 000 records all at one time (each pairing searched the window: 14 s).
+TEST(ImportUlog, CraftedLogsAreLinearInTime) {
+  const std::string accel_fmt = "sensor_accel:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;"
+                                "float x;float y;float z;float temperature;";
+  const std::string gyro_fmt = "sensor_gyro:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;"
+                               "float x;float y;float z;float temperature;";
+  auto record = [](std::uint64_t t, float z) { return le(t) + le(t) + le<std::uint32_t>(1) + vec3(0.f, 0.f, z) + le(25.f); };
+  auto formats = [&](UlogWriter& w) {
+    w.format(accel_fmt);
+    w.format(gyro_fmt);
+  };
+  TempDir dir("ulog-crafted");
+  auto import_timed = [&](const std::string& name, const UlogWriter& w) {
+    write_text(dir / name, w.bytes);
+    const auto start = std::chrono::steady_clock::now();
+    Recording r = import_ulog(dir / name);
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5)) << name;
+    return r;
+  };
+  {
+    constexpr int kIds = 16000;
+    UlogWriter w;
+    formats(w);
+    for (int i = 0; i < kIds; ++i) {
+      w.subscribe(0, static_cast<std::uint16_t>(i), "sensor_accel");
+      w.subscribe(0, static_cast<std::uint16_t>(kIds + i), "sensor_gyro");
+    }
+    for (int i = 0; i < kIds; ++i) {
+      const std::uint64_t t = 1000000 + 1000 * static_cast<std::uint64_t>(i);
+      w.data(static_cast<std::uint16_t>(i), record(t, -9.8f));
+      w.data(static_cast<std::uint16_t>(kIds + i), record(t, static_cast<float>(i)));
+    }
+    const Recording r = import_timed("subscriptions.ulg", w);
+    ASSERT_EQ(r.samples.size(), static_cast<std::size_t>(kIds));
+    EXPECT_EQ(r.samples[12345].gyro_radps.z(), 12345.0);  // in file order across the msg_ids
+  }
+  auto imu_after = [&](UlogWriter& w, std::uint64_t t0, int n) {
+    for (int i = 0; i < n; ++i) {
+      const std::uint64_t t = t0 + 1000 * static_cast<std::uint64_t>(i);
+      w.data(0, record(t, -9.8f));
+      w.data(1, record(t, static_cast<float>(i)));
+    }
+  };
+  {
+    UlogWriter w;
+    const std::string flags = std::string(8, '\0') + std::string(1, '\x01') + std::string(7, '\0');
+    for (std::uint64_t i = 0; i < 80000; ++i)  // offsets past the file's end: they cut nothing
+      w.message('B', flags + le(std::uint64_t{1} << 62 | 3 * i) + le((std::uint64_t{1} << 62) + 3 * i + 1) +
+                         le((std::uint64_t{1} << 62) + 3 * i + 2));
+    formats(w);
+    w.subscribe(0, 0, "sensor_accel");
+    w.subscribe(0, 1, "sensor_gyro");
+    imu_after(w, 1000000, 200);
+    EXPECT_EQ(import_timed("flag_bits.ulg", w).samples.size(), 200u);
+  }
+  {
+    UlogWriter w;
+    formats(w);
+    w.subscribe(0, 0, "sensor_accel");
+    w.subscribe(0, 1, "sensor_gyro");
+    constexpr std::uint64_t kT0 = 10000000000;
+    for (std::uint64_t i = 0; i < 160000; ++i) w.data(1, record(kT0 - 1000 - 10 * i, 0.f));
+    imu_after(w, kT0, 200);
+    const Recording r = import_timed("gyro_before.ulg", w);
+    ASSERT_EQ(r.samples.size(), 200u);
+    EXPECT_EQ(r.samples[199].gyro_radps.z(), 199.0);
+  }
+  {
+    constexpr int kRecords = 200000;
+    UlogWriter w;
+    formats(w);
+    w.subscribe(0, 0, "sensor_accel");
+    w.subscribe(0, 1, "sensor_gyro");
+    for (int i = 0; i < kRecords; ++i) {
+      w.data(0, record(10000000, -9.8f));
+      w.data(1, record(10000000, static_cast<float>(i)));
+    }
+    const Recording r = import_timed("one_time.ulg", w);
+    ASSERT_EQ(r.samples.size(), static_cast<std::size_t>(kRecords));
+    for (int i : {0, 4095, 4096, 123457, kRecords - 1})  // each paired with its own record's gyro
+      EXPECT_EQ(r.samples[static_cast<std::size_t>(i)].gyro_radps.z(), static_cast<double>(i)) << i;
+    EXPECT_NE(r.events[0].message.find("gyro logged at the accelerometer times"), std::string::npos) << r.events[0].message;
+  }
+}
+
 TEST(ImportUlog, BadFilesNameTheOffsetAndWhatWasExpected) {
   TempDir dir("ulog-bad");
   {  // wrong magic
