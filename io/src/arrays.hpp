@@ -19,6 +19,12 @@
 
 namespace stend::io::detail {
 
+// An array stored a component after the other (a Fortran-order N×C .npy, a C-order 3×N read
+// transposed, a MATLAB N×C matrix) is read by one cursor per component, each inflating a compressed
+// array anew from its start up to its component: at most this many (a crafted wide array made the
+// reading cubic in its width).
+inline constexpr std::size_t kMaxComponentCursors = 64;
+
 // The rows of one array read forward a block at a time, so that no array is held whole.
 class ArraySeries {
  public:

@@ -77,7 +77,7 @@ class MatArrays final : public ArrayFile {
  private:
   const MatSource& source(const std::string& struct_name) const {
     auto& s = structs_[struct_name];
-    if (!s) s = std::make_unique<MatSource>(file_, struct_name);
+    if (!s) s = std::make_unique<MatSource>(top_, struct_name);
     return *s;
   }
   fs::path file_;

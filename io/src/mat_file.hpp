@@ -125,6 +125,10 @@ class MatSource {
   // fields; without, the top-level variables, or the fields of the only struct when there is no
   // accelerometer at the top level.
   MatSource(const std::filesystem::path& file, const std::string& struct_name, MatRoot root = MatRoot::kAuto);
+  // The fields of struct variable `struct_name` of `top` (a top-level source), sharing its file,
+  // its checked layout and the struct's header (each struct opened and walked anew made a file of
+  // many structs quadratic or worse); `top` must outlive it.
+  MatSource(const MatSource& top, const std::string& struct_name);
   // The variables read (the top level's, or the struct's fields), by name, in name order.
   std::vector<std::pair<std::string, matvar_t*>> variables() const;
   // The header of the first of `names` present (a struct field's, with a struct root).
@@ -136,16 +140,19 @@ class MatSource {
   // is read whole as well (matio reads a struct's fields together).
   const matvar_t* segments();
   bool segments_in_root() const { return segments_in_root_; }
-  mat_t* mat() const { return mat_.get(); }
+  mat_t* mat() const { return mat_; }
   const std::filesystem::path& file() const { return file_; }
 
  private:
-  void check_declared_size(const std::string& name) const;
+  std::map<std::string, MatVar> read_headers() const;
+  void check_declared_size(const std::string& name, matvar_t* info) const;
 
   std::filesystem::path file_;
-  Mat5Layout layout_;
-  MatFile mat_;
-  MatVar root_;
+  std::shared_ptr<const Mat5Layout> layout_;
+  MatFile owned_mat_;
+  mat_t* mat_ = nullptr;  // owned_mat_, or the top-level source's
+  MatVar owned_root_;
+  matvar_t* root_ = nullptr;  // owned_root_, or a header the top-level source holds; nullptr: top level
   std::map<std::string, MatVar> top_;
   MatVar whole_;
   bool segments_in_root_ = false;

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <map>
 #include <utility>
 
 namespace stend::io::detail {
@@ -209,26 +210,35 @@ matvar_t* struct_field(const fs::path& file, matvar_t* s, const char* name, std:
 }
 
 MatSource::MatSource(const fs::path& file, const std::string& struct_name, MatRoot root) : file_(file) {
-  layout_ = check_mat5_elements(file);
+  layout_ = std::make_shared<const Mat5Layout>(check_mat5_elements(file));
   matio().silence_hdf5_error_printing();  // a MAT 7.3 file is HDF5: its errors are this importer's to report
-  mat_.reset(matio().Mat_Open(file.c_str(), MAT_ACC_RDONLY));
+  owned_mat_.reset(matio().Mat_Open(file.c_str(), MAT_ACC_RDONLY));
+  mat_ = owned_mat_.get();
   if (!mat_) throw ImportError(file, 0, "matio cannot open it as a MATLAB file (missing, or not a .mat)");
   std::size_t n = 0;
-  char** dir = matio().Mat_GetDir(mat_.get(), &n);
+  char** dir = matio().Mat_GetDir(mat_, &n);
   if (!dir) throw ImportError(file, 0, "matio cannot list its variables");
   std::vector<std::string> names(dir, dir + n);
-  for (const auto& nm : names) check_declared_size(nm);
+  std::map<std::string, MatVar> headers = read_headers();
+  for (const auto& nm : names) {
+    auto it = headers.find(nm);
+    if (it == headers.end())  // not reached by the walk (a damaged header before it): by name
+      it = headers.emplace(nm, MatVar(matio().Mat_VarReadInfo(mat_, nm.c_str()))).first;
+    if (it->second) check_declared_size(nm, it->second.get());
+  }
   if (!struct_name.empty()) {
-    root_.reset(matio().Mat_VarReadInfo(mat_.get(), struct_name.c_str()));
+    const auto it = headers.find(struct_name);
+    if (it != headers.end()) owned_root_ = std::move(it->second);
+    root_ = owned_root_.get();
     if (!root_ || root_->class_type != MAT_C_STRUCT) {
       throw ImportError(file, 0, "no struct variable named '" + struct_name + "'");
     }
     return;
   }
   for (const auto& nm : names) {
-    MatVar v(matio().Mat_VarReadInfo(mat_.get(), nm.c_str()));
-    if (!v) continue;
-    top_[nm] = std::move(v);
+    auto it = headers.find(nm);
+    if (it == headers.end() || !it->second) continue;
+    top_[nm] = std::move(it->second);
   }
   if (root == MatRoot::kTopLevel) return;
   bool has_acc = top_.count("acc") || top_.count("accel") || top_.count("accelerometer") ||
@@ -236,7 +246,8 @@ MatSource::MatSource(const fs::path& file, const std::string& struct_name, MatRo
   if (!has_acc) {
     for (auto& [nm, v] : top_) {
       if (v->class_type == MAT_C_STRUCT) {
-        root_ = std::move(v);
+        owned_root_ = std::move(v);
+        root_ = owned_root_.get();
         top_.clear();
         break;
       }
@@ -244,15 +255,33 @@ MatSource::MatSource(const fs::path& file, const std::string& struct_name, MatRo
   }
 }
 
+MatSource::MatSource(const MatSource& top, const std::string& struct_name)
+    : file_(top.file_), layout_(top.layout_), mat_(top.mat_) {
+  const auto it = top.top_.find(struct_name);
+  root_ = it == top.top_.end() ? nullptr : it->second.get();
+  if (!root_ || root_->class_type != MAT_C_STRUCT) throw ImportError(file_, 0, "no struct variable named '" + struct_name + "'");
+}
+
+// Every variable's header, read once in file order, by name (the first of a name). Mat_VarReadInfo
+// finds a name by reading the headers from the file's start: a pass per variable, quadratic in a
+// crafted file of many (19 s for 2000).
+std::map<std::string, MatVar> MatSource::read_headers() const {
+  std::map<std::string, MatVar> out;
+  if (matio().Mat_Rewind(mat_) != 0) return out;
+  while (matvar_t* v = matio().Mat_VarReadNextInfo(mat_)) {
+    MatVar header(v);
+    if (header->name) out.emplace(header->name, std::move(header));
+  }
+  return out;
+}
+
 // Refuses a variable whose header declares more data than the file can hold (compressed
 // variables: zlib's largest expansion) before matio allocates it.
-void MatSource::check_declared_size(const std::string& name) const {
-  MatVar info(matio().Mat_VarReadInfo(mat_.get(), name.c_str()));
-  if (!info) return;  // unreadable: Mat_VarRead says so, or skips it
+void MatSource::check_declared_size(const std::string& name, matvar_t* info) const {
   const double file_bytes = static_cast<double>(fs::file_size(file_));
-  const double declared = static_cast<double>(matio().Mat_VarGetSize(info.get()));
+  const double declared = static_cast<double>(matio().Mat_VarGetSize(info));
   if (declared > static_cast<double>(kMaxZlibExpansion) * file_bytes + 4096.0) {
-    throw ImportError(file_, 0, "variable '" + name + "' declares " + std::to_string(matio().Mat_VarGetSize(info.get())) +
+    throw ImportError(file_, 0, "variable '" + name + "' declares " + std::to_string(matio().Mat_VarGetSize(info)) +
                                     " bytes of data, more than a file of " + std::to_string(fs::file_size(file_)) +
                                     " bytes can hold (damaged header?)");
   }
@@ -264,17 +293,19 @@ std::vector<std::pair<std::string, matvar_t*>> MatSource::variables() const {
     for (const auto& [name, v] : top_) out.emplace_back(name, v.get());
     return out;
   }
-  const unsigned n = matio().Mat_VarGetNumberOfFields(root_.get());
-  char* const* names = matio().Mat_VarGetStructFieldnames(root_.get());
-  for (unsigned i = 0; names && i < n; ++i)
-    if (names[i]) out.emplace_back(names[i], struct_field(file_, root_.get(), names[i], 0));
+  const unsigned n = matio().Mat_VarGetNumberOfFields(root_);
+  char* const* names = matio().Mat_VarGetStructFieldnames(root_);
+  if (!names || n == 0) return out;
+  const bool held = struct_elements(file_, root_) > 0;  // checked once, not per field
+  for (unsigned i = 0; i < n; ++i)  // by index: by name, matio searches the names (quadratic in a crafted struct)
+    if (names[i]) out.emplace_back(names[i], held ? matio().Mat_VarGetStructFieldByIndex(root_, i, 0) : nullptr);
   return out;
 }
 
 matvar_t* MatSource::get(std::initializer_list<const char*> names) const {
   for (const char* n : names) {
     if (root_) {
-      matvar_t* f = struct_field(file_, root_.get(), n, 0);
+      matvar_t* f = struct_field(file_, root_, n, 0);
       if (f) return f;
     } else {
       auto it = top_.find(n);
@@ -295,28 +326,33 @@ std::unique_ptr<MatSeries> MatSource::series(matvar_t* v, const std::string& whi
   // inflate state reading a damaged compressed one: the fuzz target's find): it must have been
   // found by the element walk, and its data must hold what its dimensions declare.
   const bool walked = !root_ || (root_->rank == 2 && root_->dims[0] == 1 && root_->dims[1] == 1);
-  if (layout_.read_by_stend && walked) {
-    const auto it = layout_.vars.find(key);
-    if (it == layout_.vars.end())
+  if (layout_->read_by_stend && walked) {
+    const auto it = layout_->vars.find(key);
+    if (it == layout_->vars.end())
       throw ImportError(file_, 0, "'" + which + "': its data element was not found where its matrix declares it (damaged)");
     const std::uint64_t needed = mat_value_bytes(it->second.type) * rows * cols;
     if (needed != it->second.bytes)
       throw ImportError(file_, 0, "'" + which + "' is " + std::to_string(r) + "x" + std::to_string(c) + ", " +
                                       std::to_string(needed) + " bytes of data, but its data element holds " +
                                       std::to_string(it->second.bytes) + " (damaged)");
+    if (along_first && it->second.compressed && cols > kMaxComponentCursors)
+      throw ImportError(file_, 0, "'" + which + "' is " + std::to_string(r) + "x" + std::to_string(c) +
+                                      ", compressed: its " + std::to_string(cols) + " components lie one after the other, "
+                                      "and at most " + std::to_string(kMaxComponentCursors) +
+                                      " are read so (save it uncompressed, or as components x samples)");
     return std::make_unique<Mat5Series>(file_, which, it->second, rows, cols, along_first);
   }
-  return std::make_unique<MatioSeries>(file_, mat_.get(), v, rows, cols, along_first);
+  return std::make_unique<MatioSeries>(file_, mat_, v, rows, cols, along_first);
 }
 
 const matvar_t* MatSource::segments() {
   if (!root_) {
     if (!top_.count("segments")) return nullptr;
-    whole_.reset(matio().Mat_VarRead(mat_.get(), "segments"));
+    whole_.reset(matio().Mat_VarRead(mat_, "segments"));
     return whole_.get();
   }
-  if (!struct_field(file_, root_.get(), "segments", 0) || !root_->name) return nullptr;
-  whole_.reset(matio().Mat_VarRead(mat_.get(), root_->name));
+  if (!struct_field(file_, root_, "segments", 0) || !root_->name) return nullptr;
+  whole_.reset(matio().Mat_VarRead(mat_, root_->name));
   segments_in_root_ = true;
   return whole_ ? struct_field(file_, whole_.get(), "segments", 0) : nullptr;
 }

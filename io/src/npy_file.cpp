@@ -31,9 +31,6 @@ namespace detail {
 
 namespace {
 
-// A Fortran-order N×C array, or a C-order 3×N read transposed, is read by one cursor per
-// component (each inflating its member anew for a deflated one): at most this many.
-constexpr std::size_t kMaxComponentCursors = 64;
 // Values converted per step of a read: bounds the buffer of raw bytes (8 bytes each at most).
 constexpr std::size_t kBlockValues = 8192;
 // The most components (columns, once samples run along the rows) of an array read: an IMU log's

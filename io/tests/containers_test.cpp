@@ -14,6 +14,7 @@
 
 #include <matio.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -107,6 +108,34 @@ TEST(Containers, AnUnknownNameListsTheVariablesPresent) {
   ASSERT_NO_FATAL_FAILURE(octave(dir.path(), "A = ones(100, 3); W = ones(50, 3); save('-v7', 'b.mat', 'A', 'W');"));
   EXPECT_THROW(open_dataset({dir / "b.mat"}, "auto", options({{"accel", "A"}, {"gyro", "W"}, {"rate_hz", "50"}})),
                InputError);
+}
+
+// Crafted .mat files (Octave's -v7): 2000 variables beside the IMU's (each found by name from the
+// file's start, twice: 28 s), 200 one-field structs (each opened and walked as a file of its own:
+// 45 s), each read within 5 s; a compressed 250×250 matrix read a column at a time would inflate
+// it from its start for each of the 250: refused, saying why.
+TEST(Containers, CraftedMatFilesAreLinearInTime) {
+  if (!have_octave()) GTEST_SKIP() << "octave-cli not installed (scripts/install-deps.sh installs Debian's octave)";
+  TempDir dir("containers");
+  ASSERT_NO_FATAL_FAILURE(octave(dir.path(),
+                                 "t = (0:199)' * 10; acc = [zeros(200, 2), ones(200, 1)]; gyro = zeros(200, 3); "
+                                 "for k = 1:2000, eval(sprintf('v%d = k;', k)); end; save('-v7', 'many.mat'); clear v*; "
+                                 "for k = 1:200, eval(sprintf('s%d.f = k;', k)); end; "
+                                 "save('-v7', 'structs.mat', 't', 'acc', 'gyro', 's*'); "
+                                 "tw = (0:249)' * 10; wide = zeros(250); save('-v7', 'wide.mat', 'wide', 'tw');"));
+  const ImportOptions imu = options({{"accel", "acc"}, {"accel_unit", "g"}, {"gyro", "gyro"}, {"time", "t"}, {"time_unit", "ms"}});
+  for (const char* name : {"many.mat", "structs.mat"}) {
+    const auto start = std::chrono::steady_clock::now();
+    const Recording r = open_dataset({dir / name}, "auto", imu);
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5)) << name;
+    EXPECT_EQ(r.samples.size(), 200u) << name;
+  }
+  try {
+    open_dataset({dir / "wide.mat"}, "auto", options({{"accel", "wide:0,wide:1,wide:2"}, {"time", "tw"}, {"time_unit", "ms"}}));
+    FAIL() << "a compressed 250-component matrix was read a column at a time";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("at most 64 are read so"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Containers, MatV4WideArrayColumnsAndStructFields) {

@@ -19,6 +19,7 @@ struct MatioLibrary {
   STEND_ON_DEMAND(lib, Mat_GetDir);
   STEND_ON_DEMAND(lib, Mat_GetVersion);
   STEND_ON_DEMAND(lib, Mat_Open);
+  STEND_ON_DEMAND(lib, Mat_Rewind);
   STEND_ON_DEMAND(lib, Mat_SizeOfClass);
   STEND_ON_DEMAND(lib, Mat_VarCreate);
   STEND_ON_DEMAND(lib, Mat_VarCreateStruct);
@@ -26,11 +27,13 @@ struct MatioLibrary {
   STEND_ON_DEMAND(lib, Mat_VarFree);
   STEND_ON_DEMAND(lib, Mat_VarGetNumberOfFields);
   STEND_ON_DEMAND(lib, Mat_VarGetSize);
+  STEND_ON_DEMAND(lib, Mat_VarGetStructFieldByIndex);
   STEND_ON_DEMAND(lib, Mat_VarGetStructFieldByName);
   STEND_ON_DEMAND(lib, Mat_VarGetStructFieldnames);
   STEND_ON_DEMAND(lib, Mat_VarRead);
   STEND_ON_DEMAND(lib, Mat_VarReadData);
   STEND_ON_DEMAND(lib, Mat_VarReadInfo);
+  STEND_ON_DEMAND(lib, Mat_VarReadNextInfo);
   STEND_ON_DEMAND(lib, Mat_VarSetStructFieldByName);
   STEND_ON_DEMAND(lib, Mat_VarWrite);
 
