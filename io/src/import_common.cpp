@@ -44,15 +44,22 @@ LineReader::LineReader(const fs::path& file) : file_(file), in_(file, std::ios::
 
 bool read_bounded_line(std::istream& in, std::vector<char>& buf, std::string& line, bool& cut) {
   cut = false;
-  in.getline(buf.data(), static_cast<std::streamsize>(buf.size()));
-  const auto got = static_cast<std::size_t>(in.gcount());
-  if (got == 0 && in.eof()) return false;
-  const bool delimited = !in.fail() && !in.eof();  // the '\n' was read (and counted in gcount)
-  cut = in.fail() && !in.eof();                    // buf filled before any '\n'
-  line.assign(buf.data(), delimited ? got - 1 : got);
-  if (cut) {
+  line.clear();
+  for (bool any = false;; any = true) {
+    in.getline(buf.data(), static_cast<std::streamsize>(buf.size()));
+    const auto got = static_cast<std::size_t>(in.gcount());
+    if (got == 0 && in.eof() && !any) return false;
+    const bool delimited = !in.fail() && !in.eof();  // the '\n' was read (and counted in gcount)
+    const bool full = in.fail() && !in.eof();        // buf filled before any '\n': more of the line follows
+    line.append(buf.data(), delimited ? got - 1 : got);
+    if (line.size() > kMaxLineBytes) {
+      cut = true;
+      in.clear();
+      if (full) in.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
+      break;
+    }
+    if (!full) break;
     in.clear();
-    in.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
   }
   if (!line.empty() && line.back() == '\r') line.pop_back();
   return true;

@@ -31,9 +31,13 @@ namespace stend::io::detail {
 // one (a column-name line or a field of megabytes) is refused, never held whole.
 inline constexpr std::size_t kMaxLineBytes = std::size_t{1} << 20;  // 1 MiB
 
-// One line of `in` into `line` ('\n' and a '\r' before it removed) through `buf` (its size − 1:
-// the most kept of a line): true when a line was read; `cut` when it was longer (its rest skipped,
-// not stored).
+// A line reader's buffer [bytes]: a line is read through it a piece at a time (a crafted imucal file
+// of 1024 runs, a reader each, took a gigabyte with a buffer of kMaxLineBytes per reader).
+inline constexpr std::size_t kLinePieceBytes = 4096;
+
+// One line of `in` into `line` ('\n' and a '\r' before it removed) through `buf` a piece of its
+// size − 1 at a time (≥ 2 bytes): true when a line was read; `cut` when it was longer than
+// kMaxLineBytes (its rest skipped, not stored).
 bool read_bounded_line(std::istream& in, std::vector<char>& buf, std::string& line, bool& cut);
 
 // Lines of a text file with their 1-based numbers (CR and a UTF-8 byte-order mark removed); a line
@@ -57,7 +61,7 @@ class LineReader {
   std::filesystem::path file_;
   std::ifstream in_;
   std::size_t line_ = 0;
-  std::vector<char> buf_ = std::vector<char>(kMaxLineBytes + 1);
+  std::vector<char> buf_ = std::vector<char>(kLinePieceBytes);
 };
 
 std::string_view trim(std::string_view s);
